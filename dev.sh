@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# One entry point for a fresh machine:  bash dev.sh render [ARGS...]  |  bash dev.sh test [PYTEST ARGS...]
+# The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because
+# Dr.Jit 1.5 aborts on Debian's default LLVM 15), a virtual environment in .venv, and styletrace with
+# versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ...).
+set -euo pipefail
+cd "$(dirname "$0")"
+VENV=${STYLETRACE_VENV:-.venv}
+
+as_root() {
+  if [ "$(id -u)" = 0 ]; then "$@"; elif command -v sudo >/dev/null; then sudo "$@"; else
+    echo "dev.sh: need root to run: $*" >&2; exit 1; fi
+}
+
+apt_install() {
+  command -v apt-get >/dev/null || { echo "dev.sh: no apt-get here; install $* by hand" >&2; exit 1; }
+  if [ -z "${APT_UPDATED:-}" ]; then as_root apt-get update -qq; APT_UPDATED=1; fi
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null
+}
+
+have_llvm() {  # a libLLVM of major version >= 16 anywhere the package looks
+  local f
+  for f in /usr/lib/*-linux-gnu/libLLVM*.so* /usr/lib64/libLLVM*.so* /usr/lib/libLLVM*.so* /usr/lib/llvm-*/lib/libLLVM*.so*; do
+    [ -e "$f" ] || continue
+    local major
+    major=$(basename "$f" | sed -nE 's/^libLLVM-([0-9]+).*/\1/p; s/^libLLVM\.so\.([0-9]+).*/\1/p')
+    [ -n "$major" ] && [ "$major" -ge 16 ] && return 0
+  done
+  return 1
+}
+
+setup() {
+  command -v python3 >/dev/null || apt_install python3 python3-venv
+  python3 -c 'import ensurepip, venv' 2>/dev/null || apt_install python3-venv
+  have_llvm || apt_install libllvm19
+  if [ ! -x "$VENV/bin/python" ]; then python3 -m venv "$VENV"; fi
+  local stamp="$VENV/.styletrace-installed"
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints.txt -nt "$stamp" ]; then
+    "$VENV/bin/python" -m pip install -q --upgrade pip
+    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots]"
+    touch "$stamp"
+  fi
+}
+
+cmd=${1:-}
+[ $# -gt 0 ] && shift
+case "$cmd" in
+  render) setup; exec "$VENV/bin/styletrace" render "${@:---spp=64}" ;;
+  test)   setup; exec "$VENV/bin/python" -m pytest -q "$@" ;;
+  setup)  setup ;;
+  *) echo "usage: bash dev.sh render [styletrace render args] | bash dev.sh test [pytest args] | bash dev.sh setup" >&2; exit 2 ;;
+esac

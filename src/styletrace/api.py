@@ -1,0 +1,181 @@
+"""The Python API: load a scene, build the `stylized` integrator, render in passes.
+
+    import styletrace
+    img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)   # H x W x 3 float32, linear
+
+Large renders run as several passes of at most `LANES_PER_PASS` camera samples, so memory stays
+bounded whatever spp and inner sample counts are; each pass has its own seed derived from `seed`,
+so the same seed reproduces the same image exactly.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from .render.integrator import StylizedIntegrator
+from .render.scenes import BUILTIN, DEFAULT
+from .styles import StyleError
+
+#: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
+LANES_PER_PASS = 1 << 20
+
+
+class SceneError(ValueError):
+    """A scene that cannot be found or loaded; the message is one line."""
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    # Mitsuba prefixes the real cause with context lines; the last line is the most specific.
+    return lines[-1] if lines else type(exc).__name__
+
+
+def scene_dict(name: str, width: int | None = None, height: int | None = None) -> dict[str, Any]:
+    if name not in BUILTIN:
+        raise SceneError(f"unknown built-in scene '{name}': available are {', '.join(sorted(BUILTIN))}")
+    kwargs = {}
+    if width:
+        kwargs["width"] = width
+    if height:
+        kwargs["height"] = height
+    return BUILTIN[name](**kwargs)
+
+
+def load_scene(scene: Any = None, width: int | None = None, height: int | None = None) -> mi.Scene:
+    """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene."""
+    if scene is None:
+        scene = DEFAULT
+    if isinstance(scene, mi.Scene):
+        if width or height:
+            size = scene.sensors()[0].film().size()
+            if (width and width != size[0]) or (height and height != size[1]):
+                raise SceneError("width/height cannot change an already loaded mi.Scene; pass a dict or file")
+        return scene
+    if isinstance(scene, dict):
+        if width or height:
+            raise SceneError("width/height apply to built-in scenes and XML files; set the film size in the dict")
+        try:
+            return mi.load_dict(scene)
+        except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
+            raise SceneError(f"cannot load scene dict: {_first_line(exc)}") from None
+    name = os.fspath(scene)
+    if name in BUILTIN:
+        try:
+            return mi.load_dict(scene_dict(name, width, height))
+        except Exception as exc:
+            raise SceneError(f"cannot load built-in scene '{name}': {_first_line(exc)}") from None
+    if not name.lower().endswith(".xml") and not os.path.exists(name):
+        raise SceneError(f"unknown scene '{name}': expected a built-in scene ({', '.join(sorted(BUILTIN))}) "
+                         f"or a Mitsuba XML file")
+    if not os.path.isfile(name):
+        raise SceneError(f"scene file '{name}' does not exist")
+    params = {}
+    if width:
+        params["resx"] = width
+    if height:
+        params["resy"] = height
+    try:
+        loaded = mi.load_file(name, **params)
+    except Exception as exc:
+        raise SceneError(f"cannot load scene file '{name}': {_first_line(exc)}") from None
+    if width or height:
+        size = loaded.sensors()[0].film().size()
+        if (width and width != size[0]) or (height and height != size[1]):
+            raise SceneError(f"scene file '{name}' fixes its film size {size[0]}x{size[1]}; to resize it, "
+                             f"write the film's width/height as $resx/$resy in the XML")
+    return loaded
+
+
+def make_integrator(style: str = "identity", inner: Any = None, estimator: str = "direct",
+                    stylize: str = "first_hit", stylize_depth: int = 1, max_depth: int = -1,
+                    rr_depth: int = 5, **params: Any) -> mi.Integrator:
+    """Build a `stylized` integrator; style parameters go in **params under their registry names."""
+    desc = {"type": "stylized", "style": style, "estimator": estimator, "stylize": stylize,
+            "stylize_depth": stylize_depth, "max_depth": max_depth, "rr_depth": rr_depth}
+    if inner is not None:
+        desc["inner_samples"] = ",".join(str(int(n)) for n in inner) if isinstance(inner, (list, tuple)) else inner
+    for key, value in params.items():
+        desc[key] = value if isinstance(value, (int, float, str, bool)) else _as_string(value)
+    # Validate here first: errors raised inside a Mitsuba plugin constructor come back wrapped.
+    from .render.properties import settings_from
+    settings_from({k: v for k, v in desc.items() if k != "type"})
+    return mi.load_dict(desc)
+
+
+def _as_string(value: Any) -> str:
+    if isinstance(value, (list, tuple)):
+        if value and isinstance(value[0], (list, tuple)) and len(value[0]) == 2 and isinstance(value[0][1], (list, tuple)):
+            return ";".join(f"{p}:{','.join(map(str, c))}" for p, c in value)  # gradient stops
+        return ",".join(str(v) for v in value)
+    return str(value)
+
+
+def pass_seed(seed: int, index: int) -> int:
+    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams."""
+    return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
+
+
+@dataclass
+class Progress:
+    spp_done: int
+    spp_total: int
+    image: np.ndarray  # the average of all passes so far
+
+
+def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
+           lanes_per_pass: int = LANES_PER_PASS) -> Iterator[Progress]:
+    """Render `spp` samples per pixel in passes; yield the running average after each pass."""
+    if spp < 1:
+        raise StyleError(f"bad value {spp!r} for spp: expected an integer >= 1")
+    size = scene.sensors()[0].film().crop_size()
+    pixels = int(size[0]) * int(size[1])
+    per_pass = max(1, min(spp, lanes_per_pass // max(pixels, 1)))
+    total = None
+    done = 0
+    index = 0
+    while done < spp:
+        n = min(per_pass, spp - done)
+        img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
+        arr = np.array(img, dtype=np.float64)[..., :3]
+        total = arr * n if total is None else total + arr * n
+        done += n
+        index += 1
+        yield Progress(done, spp, (total / done).astype(np.float32))
+
+
+def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS) -> int:
+    size = scene.sensors()[0].film().crop_size()
+    per_pass = max(1, min(spp, lanes_per_pass // max(int(size[0]) * int(size[1]), 1)))
+    return math.ceil(spp / per_pass)
+
+
+def render(scene: Any = None, style: str = "identity", spp: int = 16, inner: Any = None,
+           estimator: str = "direct", seed: int = 0, width: int | None = None, height: int | None = None,
+           integrator: mi.Integrator | None = None, callback: Callable[[Progress], None] | None = None,
+           **params: Any) -> np.ndarray:
+    """Render with a style; returns float32 H x W x 3 linear radiance.
+
+    `scene`: built-in name ('cornell-box', 'dragon', 'furnace'), XML path, scene dict or mi.Scene.
+    Integrator keywords (stylize, stylize_depth, max_depth, rr_depth) and the style's parameters go
+    in **params. Pass `integrator=` to use a prebuilt one (then style and params are ignored).
+    """
+    sc = load_scene(scene, width, height)
+    if integrator is None:
+        integrator = make_integrator(style=style, inner=inner, estimator=estimator, **params)
+    image = None
+    for prog in passes(sc, integrator, spp, seed):
+        image = prog.image
+        if callback is not None:
+            callback(prog)
+    return image
+
+
+__all__ = ["render", "load_scene", "make_integrator", "passes", "pass_count", "SceneError", "Progress",
+           "StylizedIntegrator"]

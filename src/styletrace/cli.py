@@ -1,0 +1,191 @@
+"""Command line: `styletrace render`, `styletrace styles`.
+
+Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
+unwritable output) ends with one line on stderr and exit status 2. Ctrl-C during a multi-pass
+render writes the average of the passes finished so far, then exits with status 130.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from typing import Sequence
+
+IMAGE_TYPES = (".exr", ".png")
+
+
+class UsageError(ValueError):
+    pass
+
+
+def _parse_set(items: Sequence[str]) -> dict[str, str]:
+    out = {}
+    for item in items:
+        if "=" not in item or not item.split("=", 1)[0].strip():
+            raise UsageError(f"bad --set {item!r}: expected KEY=VALUE, e.g. --set threshold=0.6")
+        key, value = item.split("=", 1)
+        out[key.strip()] = value.strip()
+    return out
+
+
+def check_output(path: str) -> None:
+    """Fail before rendering, not after, if the image could not be written."""
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in IMAGE_TYPES:
+        raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
+                         f"(.exr is linear, .png is sRGB)")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
+    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+        raise UsageError(f"cannot write {path!r}: permission denied")
+
+
+def write_image(image, path: str) -> None:
+    """EXR: linear float32. PNG: sRGB-encoded 8 bit (values clipped to [0, 1] only here)."""
+    import mitsuba as mi
+    import numpy as np
+
+    bmp = mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
+    if path.lower().endswith(".png"):
+        bmp = bmp.convert(pixel_format=mi.Bitmap.PixelFormat.RGB, component_format=mi.Struct.Type.UInt8,
+                          srgb_gamma=True)
+    bmp.write(path)
+
+
+def save_safely(image, path: str) -> str:
+    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it."""
+    try:
+        write_image(image, path)
+        return path
+    except Exception as exc:  # the render must survive an I/O failure
+        fd, fallback = tempfile.mkstemp(prefix="styletrace-", suffix=".exr")
+        os.close(fd)
+        write_image(image, fallback)
+        print(f"styletrace: could not write {path!r} ({exc}); saved the render to {fallback}", file=sys.stderr)
+        return fallback
+
+
+def cmd_styles(args) -> int:
+    import styletrace  # noqa: F401  (registers everything)
+    from styletrace.styles import get, names
+
+    for name in names():
+        cls = get(name)
+        inner = "closed form, 0 samples" if cls.default_inner == 0 else f"default inner samples {cls.default_inner}"
+        print(f"{name}: {cls.summary} [{inner}]")
+        for p in cls.params:
+            print(f"    {p.name} = {p.show(p.default)}    {p.doc}; {p.allowed()}")
+    return 0
+
+
+def cmd_render(args) -> int:
+    check_output(args.output)
+    params = _parse_set(args.set)
+    for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp),
+                        ("--pass-spp", args.pass_spp)):
+        if value is not None and value < 1:
+            raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
+
+    import styletrace
+    from styletrace import api
+    from styletrace.render.integrator import StylizedIntegrator
+
+    scene = api.load_scene(args.scene, args.width, args.height)
+    own = scene.integrator()
+    if args.style is None and isinstance(own, StylizedIntegrator) and not params and args.inner is None:
+        integrator = own
+    else:
+        integrator = api.make_integrator(
+            style=args.style or "cel", inner=args.inner, estimator=args.estimator, stylize=args.stylize,
+            stylize_depth=args.stylize_depth, max_depth=args.max_depth, rr_depth=args.rr_depth, **params)
+
+    lanes = api.LANES_PER_PASS
+    if args.pass_spp:
+        size = scene.sensors()[0].film().crop_size()
+        lanes = args.pass_spp * int(size[0]) * int(size[1])
+    total = api.pass_count(scene, args.spp, lanes)
+    bar = None
+    if total > 1 and not args.quiet:
+        from tqdm import tqdm
+        bar = tqdm(total=args.spp, unit="spp", desc="rendering", file=sys.stderr)
+    latest = None
+    try:
+        for prog in api.passes(scene, integrator, args.spp, args.seed, lanes):
+            if bar is not None:
+                bar.update(prog.spp_done - (latest.spp_done if latest else 0))
+            latest = prog
+    except KeyboardInterrupt:
+        if bar is not None:
+            bar.close()
+        if latest is None:
+            print("styletrace: interrupted before the first pass finished; nothing written", file=sys.stderr)
+            return 130
+        out = save_safely(latest.image, args.output)
+        print(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp", file=sys.stderr)
+        return 130
+    if bar is not None:
+        bar.close()
+    out = save_safely(latest.image, args.output)
+    if not args.quiet:
+        print(f"wrote {out} ({styletrace.variant}, {integrator.settings.style.describe()}, spp {args.spp})",
+              file=sys.stderr)
+    return 0 if out == args.output else 1
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="styletrace", description="Stylized global illumination as a function of expectation.")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    r = sub.add_parser("render", help="render a scene with a style")
+    r.add_argument("scene", nargs="?", default="cornell-box",
+                   help="built-in scene (cornell-box, dragon, furnace) or a Mitsuba XML file (default: cornell-box)")
+    r.add_argument("--style", default=None, help="style name (see `styletrace styles`; default: the scene's "
+                   "stylized integrator if it has one, else cel)")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
+    r.add_argument("--inner", default=None, help="inner samples per stylized vertex, or one per level: 8,4")
+    r.add_argument("--spp", type=int, default=16, help="camera samples per pixel (default 16)")
+    r.add_argument("--estimator", default="direct", help="estimator of g(E[L]) (default direct)")
+    r.add_argument("--stylize", default="first_hit", help="first_hit or first_n_hits")
+    r.add_argument("--stylize-depth", type=int, default=1, help="N for first_n_hits")
+    r.add_argument("--max-depth", type=int, default=-1, help="longest path (-1: unbounded)")
+    r.add_argument("--rr-depth", type=int, default=5, help="depth where Russian roulette starts")
+    r.add_argument("--width", type=int, default=None, help="image width (built-in scenes; XML with $resx)")
+    r.add_argument("--height", type=int, default=None, help="image height (built-in scenes; XML with $resy)")
+    r.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same image")
+    r.add_argument("--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)")
+    r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    r.set_defaults(func=cmd_render)
+
+    s = sub.add_parser("styles", help="list the styles and their parameters")
+    s.set_defaults(func=cmd_styles)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        print("styletrace: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:
+        from styletrace.jit import BackendError
+        known = (UsageError, BackendError)
+        try:
+            from styletrace.api import SceneError
+            from styletrace.styles import StyleError
+            known = known + (SceneError, StyleError)
+        except Exception:
+            pass
+        if isinstance(exc, known):
+            print(f"styletrace: error: {exc}", file=sys.stderr)
+            return 2
+        raise
+
+
+if __name__ == "__main__":
+    sys.exit(main())

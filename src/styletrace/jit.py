@@ -1,0 +1,107 @@
+"""Choosing the Dr.Jit backend before Mitsuba is imported.
+
+The LLVM backend `dlopen`s a system libLLVM. Dr.Jit 1.5 aborts the whole process on libLLVM 15
+(instruction selection fails on `fminimum`) and refuses 14, so we look for a newer library ourselves
+and hand it to Dr.Jit through `DRJIT_LIBLLVM_PATH` before the first `import drjit`.
+Then the variant: `cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`, unless the user chose one.
+"""
+from __future__ import annotations
+
+import glob
+import os
+import re
+import sys
+
+#: Oldest libLLVM major version that Dr.Jit 1.5 runs correctly with (15 aborts, 14 is refused).
+MIN_LLVM_MAJOR = 16
+
+SEARCH_DIRS = (
+    "/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib64", "/usr/lib",
+    "/usr/local/lib", "/opt/homebrew/opt/llvm/lib", "/usr/local/opt/llvm/lib",
+)
+
+FIX = ("install a newer LLVM (Debian/Ubuntu: `apt-get install libllvm19`) or point "
+       "DRJIT_LIBLLVM_PATH at a libLLVM.so of version >= %d" % MIN_LLVM_MAJOR)
+
+
+class BackendError(RuntimeError):
+    """No usable JIT backend; the message says how to get one."""
+
+
+def llvm_major(path: str) -> int | None:
+    """Major version encoded in a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1, libLLVM-15.0.7.so...)."""
+    name = os.path.basename(path)
+    m = re.match(r"libLLVM(?:-(\d+)[.\d]*\.(?:so|dylib)|\.so\.(\d+)|\.(\d+)\.dylib)", name)
+    if not m:
+        return None
+    return int(next(g for g in m.groups() if g))
+
+
+def find_libllvm(dirs=None) -> str | None:
+    """Newest libLLVM with major >= MIN_LLVM_MAJOR in `dirs` (default SEARCH_DIRS), or None."""
+    best = None
+    for d in SEARCH_DIRS if dirs is None else dirs:
+        for path in glob.glob(os.path.join(d, "libLLVM*")) + glob.glob(os.path.join(d, "llvm-*", "lib", "libLLVM*")):
+            major = llvm_major(path)
+            if major is None or major < MIN_LLVM_MAJOR or not os.path.isfile(path):
+                continue
+            if best is None or major > best[0]:
+                best = (major, path)
+    return best[1] if best else None
+
+
+def configure_llvm() -> str:
+    """Set DRJIT_LIBLLVM_PATH to a working libLLVM (keeping a user's good choice) and return it."""
+    user = os.environ.get("DRJIT_LIBLLVM_PATH")
+    if user:
+        major = llvm_major(user)
+        if not os.path.isfile(user):
+            raise BackendError(f"DRJIT_LIBLLVM_PATH={user} does not exist; {FIX}")
+        if major is not None and major < MIN_LLVM_MAJOR:
+            raise BackendError(f"DRJIT_LIBLLVM_PATH={user} is LLVM {major}, which crashes Dr.Jit 1.5; {FIX}")
+        return user
+    found = find_libllvm()
+    if found is None:
+        raise BackendError(f"styletrace found no libLLVM >= {MIN_LLVM_MAJOR} for the CPU backend; {FIX}")
+    os.environ["DRJIT_LIBLLVM_PATH"] = found
+    return found
+
+
+def cuda_usable() -> bool:
+    """True when Dr.Jit can run CUDA kernels here (checked without creating a CUDA context if the driver is absent)."""
+    if os.environ.get("STYLETRACE_NO_CUDA"):
+        return False
+    if not any(glob.glob(os.path.join(d, "libcuda.so*")) for d in SEARCH_DIRS):
+        return False
+    import drjit as dr
+    try:
+        return bool(dr.has_backend(dr.JitBackend.CUDA))
+    except Exception:  # the driver exists but refuses to start: same as no GPU
+        return False
+
+
+def select_variant() -> str:
+    """Pick and set the Mitsuba variant unless one is already set; return the active variant."""
+    if "drjit" not in sys.modules:
+        need_llvm = True
+    else:  # drjit already imported by the user: it has read DRJIT_LIBLLVM_PATH already
+        need_llvm = False
+    if need_llvm:
+        try:
+            configure_llvm()
+        except BackendError:
+            if not cuda_usable():
+                raise
+    import mitsuba as mi
+    current = mi.variant()
+    if current:
+        if current.startswith("scalar"):
+            raise BackendError(f"styletrace needs a JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active variant is {current}")
+        return current
+    variant = "cuda_ad_rgb" if cuda_usable() else "llvm_ad_rgb"
+    if variant == "llvm_ad_rgb":
+        import drjit as dr
+        if not dr.has_backend(dr.JitBackend.LLVM):
+            raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
+    mi.set_variant(variant)
+    return variant

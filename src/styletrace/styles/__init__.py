@@ -1,0 +1,12 @@
+"""Style functions g_theta and their registry.
+
+Each style lives in a module of its own and registers itself on import; this package imports them
+all, so `registry.names()` lists every style. Styles evaluate inside the render kernel on Dr.Jit
+arrays (see `base.Style`).
+"""
+from . import acp, cel, color_map, contrast, gamma, gooch, halftone, hatching, identity, saturation, sepia, tie_dye, xtoon  # noqa: F401  (registration side effects)
+from .base import Style, Vertex, brightness
+from .params import Param, StyleError
+from .registry import create, get, names
+
+__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "create", "get", "names"]

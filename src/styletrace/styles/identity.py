@@ -1,0 +1,21 @@
+"""identity: g(I) = I.
+
+Physically based rendering as a special case of the stylized rendering equation. No parameters.
+With it, the `stylized` integrator converges to Mitsuba's `path` integrator (a test checks this).
+"""
+from __future__ import annotations
+
+import mitsuba as mi
+
+from .base import Style, Vertex
+from .registry import register
+
+
+@register
+class Identity(Style):
+    name = "identity"
+    summary = "physically based rendering: g(I) = I"
+    default_inner = 1
+
+    def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
+        return I

@@ -1,0 +1,75 @@
+"""tie_dye: per-channel cosine waves (supplement S5.5, the polynomial-approximation example).
+
+Parameters
+- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all channels)
+- phases (floats, default 1,1.13,1.29): phi_r, phi_g, phi_b (one value: all channels)
+- domain_min (float, default -1), domain_max (float, default 4): the interval [lo, hi] on which the
+  estimator library fits the channel functions (Chebyshev, degree 20 in the paper); lo < hi
+
+Per channel c in {r, g, b}, with x_c the channel of the inner estimate <I>:
+    g_c(x_c) = (1 - cos(pi f_c (clamp(x_c, lo, hi) + phi_c))) / 2
+With the defaults: r' = (1 - cos(2 pi (r + 1)))/2, g' = (1 - cos(2.15 pi (g + 1.13)))/2,
+b' = (1 - cos(2.3 pi (b + 1.29)))/2, as printed in the supplement.
+The supplement clamps samples above the fit interval's maximum 4 (radiance may exceed 1); the input is
+clamped to the whole interval [lo, hi] here, so direct application and the fitted polynomial see the
+same function. `apply` evaluates the exact cosines (direct application); `channel_functions()` gives the
+three channel functions, clamp included, as numpy callables for the polynomial fit, and `domain()` the
+interval.
+"""
+from __future__ import annotations
+
+import math
+from typing import Callable
+
+import drjit as dr
+import mitsuba as mi
+
+from .base import Param, Style, StyleError, Vertex
+from .registry import register
+
+
+@register
+class TieDye(Style):
+    name = "tie_dye"
+    summary = "per-channel cosine waves (1 - cos(pi f (x + phi)))/2 (S5.5)"
+    params = (
+        Param("frequencies", "floats", (2.0, 2.15, 2.3), "angular frequency per channel, in units of pi",
+              low=0.0, low_open=True),
+        Param("phases", "floats", (1.0, 1.13, 1.29), "phase offset per channel"),
+        Param("domain_min", "float", -1.0, "lower end of the clamp / fit interval"),
+        Param("domain_max", "float", 4.0, "upper end of the clamp / fit interval"),
+    )
+    default_inner = 16
+
+    def validate(self) -> None:
+        for key in ("frequencies", "phases"):
+            vals = self.values[key]
+            if len(vals) == 1:
+                self.values[key] = vals * 3
+            elif len(vals) != 3:
+                raise StyleError(f"bad value {','.join(f'{x:g}' for x in vals)!r} for parameter '{key}': "
+                                 f"expected 1 or 3 numbers (r,g,b)")
+        if not self.domain_min < self.domain_max:
+            raise StyleError(f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
+                             f"domain_min = {self.domain_min:g}")
+
+    def domain(self) -> tuple[float, float]:
+        return (self.domain_min, self.domain_max)
+
+    def channel_functions(self) -> tuple[Callable, Callable, Callable]:
+        """g_r, g_g, g_b as numpy callables (array in, array out), clamp to the domain included."""
+        import numpy as np
+        lo, hi = self.domain()
+
+        def make(f: float, phi: float) -> Callable:
+            def g(x):
+                return (1.0 - np.cos(math.pi * f * (np.clip(x, lo, hi) + phi))) * 0.5
+            return g
+
+        return tuple(make(f, phi) for f, phi in zip(self.frequencies, self.phases))
+
+    def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
+        x = dr.clip(I, self.domain_min, self.domain_max)
+        f = mi.Color3f(*(math.pi * f for f in self.frequencies))
+        phi = mi.Color3f(*self.phases)
+        return (1.0 - dr.cos(f * (x + phi))) * 0.5

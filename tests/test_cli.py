@@ -1,0 +1,164 @@
+"""The command line: outputs, determinism, progress, errors and Ctrl-C."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+import styletrace
+from styletrace.cli import main
+from styletrace.styles import get, names
+
+SRC = os.path.join(os.path.dirname(__file__), "..", "src")
+ENV = dict(os.environ, PYTHONPATH=os.path.abspath(SRC))
+SMALL = ["--width", "24", "--height", "16", "--spp", "4", "--inner", "2", "-q"]
+
+
+def run_cli(*args, timeout=120):
+    return subprocess.run([sys.executable, "-m", "styletrace", *args], capture_output=True, text=True,
+                          env=ENV, timeout=timeout)
+
+
+def read(path):
+    bmp = mi.Bitmap(str(path))
+    scale = 255.0 if bmp.component_format() == mi.Struct.Type.UInt8 else 1.0
+    return np.array(bmp, dtype=np.float64) / scale
+
+
+def srgb(x):
+    x = np.clip(x, 0, 1)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
+
+
+def test_styles_lists_every_style_with_parameters(capsys):
+    assert main(["styles"]) == 0
+    out = capsys.readouterr().out
+    for name in names():
+        assert f"{name}:" in out
+        for p in get(name).params:
+            assert f"    {p.name} = " in out
+
+
+def test_exr_is_linear_and_png_is_srgb(tmp_path):
+    exr, png = tmp_path / "a.exr", tmp_path / "a.png"
+    assert main(["render", "--style", "gamma", *SMALL, "--seed", "5", "-o", str(exr)]) == 0
+    assert main(["render", "--style", "gamma", *SMALL, "--seed", "5", "-o", str(png)]) == 0
+    direct = styletrace.render("cornell-box", style="gamma", spp=4, inner=2, seed=5, width=24, height=16)
+    linear = read(exr)
+    assert linear.shape == (16, 24, 3)
+    np.testing.assert_allclose(linear, direct, rtol=1e-6, atol=0)
+    encoded = read(png)
+    # 8-bit quantization: within one code value of the sRGB encoding of the linear image
+    assert np.abs(encoded - srgb(linear)).max() <= 1 / 255 + 1e-6
+
+
+def test_same_seed_same_image(tmp_path):
+    a, b, c = (tmp_path / f"{k}.exr" for k in "abc")
+    for path, seed in ((a, 1), (b, 1), (c, 2)):
+        assert main(["render", "--style", "cel", *SMALL, "--seed", str(seed), "--pass-spp", "1", "-o", str(path)]) == 0
+    assert np.array_equal(read(a), read(b))
+    assert not np.array_equal(read(a), read(c))
+
+
+def test_progress_bar_for_multi_pass_renders(tmp_path):
+    r = run_cli("render", "--width", "24", "--height", "16", "--spp", "4", "--inner", "2", "--pass-spp", "1",
+                "-o", str(tmp_path / "p.png"))
+    assert r.returncode == 0, r.stderr
+    assert "4/4" in r.stderr and "spp" in r.stderr
+
+
+BAD = [
+    (["--style", "nope"], "unknown style 'nope'"),
+    (["--style", "cel", "--set", "foo=1"], "unknown property 'foo'"),
+    (["--style", "cel", "--set", "thresholds=abc"], "bad value 'abc' for parameter 'thresholds'"),
+    (["--style", "gamma", "--set", "gamma=-1"], "bad value '-1' for parameter 'gamma'"),
+    (["--style", "cel", "--set", "levels"], "bad --set 'levels'"),
+    (["--inner", "0"], "bad value '0' for 'inner_samples'"),
+    (["--spp", "0"], "bad value 0 for --spp"),
+    (["--stylize", "everywhere"], "bad value 'everywhere' for 'stylize'"),
+    (["--estimator", "magic"], "unknown estimator 'magic'"),
+    (["no-such-scene"], "unknown scene 'no-such-scene'"),
+    (["missing.xml"], "scene file 'missing.xml' does not exist"),
+    (["-o", "/no/such/folder/x.png"], "folder '/no/such/folder' does not exist"),
+    (["-o", "out.jpg"], "bad output 'out.jpg'"),
+]
+
+
+@pytest.mark.parametrize("args,message", BAD, ids=[m for _, m in BAD])
+def test_bad_input_one_line_and_exit_2(args, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["render", "-q", *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("styletrace: error: ") and message in err
+    assert "\n" not in err
+
+
+@pytest.mark.parametrize("text,message", [
+    ('<scene version="3.0.0"><shape type="sphere">', "Parsing of XML file"),
+    ('<scene version="3.0.0"><shape type="spheer"/></scene>', 'Plugin "spheer" not found'),
+])
+def test_broken_xml_one_line_and_exit_2(text, message, tmp_path):
+    path = tmp_path / "scene.xml"
+    path.write_text(text)
+    r = run_cli("render", str(path), "-o", str(tmp_path / "x.png"))
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], r.stderr
+
+
+def test_unwritable_output_fails_before_rendering(tmp_path):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o500)
+    if os.access(folder, os.W_OK):  # root ignores permissions; make the target a directory instead
+        target = folder / "x.png"
+        target.mkdir()
+        r = run_cli("render", "-q", "-o", str(target))
+        assert r.returncode != 0
+        return
+    r = run_cli("render", "-q", "-o", str(folder / "x.png"))
+    assert r.returncode == 2 and "permission denied" in r.stderr
+
+
+def test_xml_scene_with_stylized_integrator(tmp_path):
+    path = tmp_path / "s.xml"
+    path.write_text("""<scene version="3.0.0">
+      <default name="resx" value="20"/><default name="resy" value="12"/>
+      <integrator type="stylized"><string name="style" value="cel"/><string name="levels" value="0.2,0.9"/>
+        <integer name="inner_samples" value="2"/></integrator>
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
+        <rfilter type="box"/></film></sensor>
+      <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>""")
+    out = tmp_path / "o.exr"
+    r = run_cli("render", str(path), "--width", "10", "--spp", "2", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    img = read(out)
+    assert img.shape == (12, 10, 3)
+    assert "levels=0.2,0.9" in r.stderr
+    # the sphere (albedo 0.5 under a white sky: brightness 0.5 < 0.75) is cel-shaded to exactly 0.2;
+    # the sky, seen directly, stays unstylized at 1
+    u = img.mean(axis=2)
+    np.testing.assert_allclose(u[5:7, 4:6], 0.2, atol=1e-5)
+    np.testing.assert_allclose(u[0, 0], 1.0, atol=1e-5)
+
+
+def test_ctrl_c_writes_the_finished_passes(tmp_path):
+    out = tmp_path / "partial.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
+                             "--spp", "100000", "--inner", "4", "--pass-spp", "1", "-o", str(out)],
+                            stderr=subprocess.PIPE, env=ENV)
+    seen = b""
+    deadline = time.time() + 120
+    while b"2/100000" not in seen and time.time() < deadline:  # tqdm has reported finished passes
+        seen += os.read(proc.stderr.fileno(), 4096)
+    proc.send_signal(signal.SIGINT)
+    rest = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130, (seen + rest).decode()
+    assert b"interrupted; wrote" in rest
+    img = read(out)
+    assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0

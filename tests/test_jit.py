@@ -1,0 +1,63 @@
+"""Backend selection: a working libLLVM, never LLVM <= 15, and a clear error without one."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from styletrace import jit
+
+SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
+
+
+@pytest.mark.parametrize("name,major", [("libLLVM-19.so", 19), ("libLLVM.so.19.1", 19), ("libLLVM-15.so.1", 15),
+                                        ("libLLVM-14.0.6.so.1", 14), ("libLLVM.so.22.1", 22), ("libfoo.so", None)])
+def test_llvm_major(name, major):
+    assert jit.llvm_major("/x/" + name) == major
+
+
+def test_prefers_newest_and_skips_old(tmp_path):
+    for name in ("libLLVM-15.so", "libLLVM-19.so", "libLLVM.so.22.1", "libLLVM-14.so"):
+        (tmp_path / name).write_bytes(b"")
+    assert jit.find_libllvm([str(tmp_path)]).endswith("libLLVM.so.22.1")
+
+
+def test_only_old_llvm_finds_nothing(tmp_path):
+    for name in ("libLLVM-15.so", "libLLVM-14.so"):
+        (tmp_path / name).write_bytes(b"")
+    assert jit.find_libllvm([str(tmp_path)]) is None
+
+
+def _import_in_child(env_extra, code="import styletrace; print(styletrace.variant)"):
+    env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
+    env.update(env_extra, PYTHONPATH=SRC)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+
+
+def test_import_selects_llvm_variant():
+    r = _import_in_child({"STYLETRACE_NO_CUDA": "1"})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "llvm_ad_rgb"
+
+
+def test_user_variant_is_kept():
+    r = _import_in_child({"DRJIT_LIBLLVM_PATH": jit.find_libllvm()},
+                         "import mitsuba as mi; mi.set_variant('llvm_ad_mono'); import styletrace; "
+                         "print(styletrace.variant)")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "llvm_ad_mono"
+
+
+def test_llvm15_is_refused_with_a_clear_error(tmp_path):
+    fake = tmp_path / "libLLVM-15.so"
+    fake.write_bytes(b"")
+    r = _import_in_child({"DRJIT_LIBLLVM_PATH": str(fake), "STYLETRACE_NO_CUDA": "1"})
+    assert r.returncode != 0
+    assert "apt-get install libllvm19" in r.stderr and "DRJIT_LIBLLVM_PATH" in r.stderr
+
+
+def test_no_llvm_at_all_is_a_clear_error(monkeypatch):
+    monkeypatch.delenv("DRJIT_LIBLLVM_PATH", raising=False)
+    monkeypatch.setattr(jit, "SEARCH_DIRS", ())
+    with pytest.raises(jit.BackendError, match=r"apt-get install libllvm19.*DRJIT_LIBLLVM_PATH"):
+        jit.configure_llvm()
