@@ -53,12 +53,12 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         m = self.settings.max_depth
         return -1 if m < 0 else m - level
 
-    def child(self, level: int, scene, sampler, si, ray, active) -> mi.Spectrum:
-        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex si."""
+    def child(self, level: int, scene, sampler, pi, si, ray, active) -> mi.Spectrum:
+        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`)."""
         s = self.settings
         remaining = self._remaining_depth(level)
         if level + 1 >= s.stylize_depth:
-            return exitant(scene, sampler, si, ray, active, remaining, s.rr_depth)
+            return exitant(scene, sampler, pi, ray, active, remaining, s.rr_depth)
         # The next vertex is stylized as well: its whole exitant radiance, emission included, goes
         # through g, so it cannot be split by next-event estimation; sample the BSDF alone.
         L = emission(scene, si, active)
@@ -68,12 +68,13 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         bs, weight = bsdf.sample(mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d(), active)
         ray2 = si.spawn_ray(si.to_world(bs.wo))
         go = active & (dr.max(weight) > 0)
-        si2 = scene.ray_intersect(ray2, ray_flags=mi.RayFlags.All, coherent=False, active=go)
+        pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+        si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
         hit = go & si2.is_valid()
-        deeper = self.stylized(level + 1, scene, sampler, si2, ray2, hit)
+        deeper = self.stylized(level + 1, scene, sampler, pi2, si2, ray2, hit)
         return L + weight * dr.select(hit, deeper, environment(scene, si2, go))
 
-    def stylized(self, level: int, scene, sampler, si, ray, active) -> mi.Spectrum:
+    def stylized(self, level: int, scene, sampler, pi, si, ray, active) -> mi.Spectrum:
         """g_theta(E[L_o]) at the level-`level` vertex si, estimated from child samples."""
         style = self.settings.style
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
@@ -81,11 +82,11 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         if style.closed_form:
             return dr.select(active, style.apply(mi.Color3f(0.0), v), 0.0)
 
-        per_sample = getattr(style, "per_sample", False)
+        per_sample = style.per_sample
 
         def draw(carry):
             (smp,) = carry
-            x = self.child(level, scene, smp, si, ray, active)
+            x = self.child(level, scene, smp, pi, si, ray, active)
             if per_sample:
                 x = style.apply(x, v)
             return x, (smp,)
@@ -102,9 +103,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self.view = camera_forward(scene)
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
-        si = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=True, active=active)
+        pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
+        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
         hit = active & si.is_valid()
-        value = self.stylized(0, scene, sampler, si, ray, hit)
+        value = self.stylized(0, scene, sampler, pi, si, ray, hit)
         L = dr.select(hit, value, environment(scene, si, active))
         return L, active, []
 

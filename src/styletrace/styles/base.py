@@ -47,6 +47,8 @@ class Style:
     summary: ClassVar[str] = ""
     params: ClassVar[tuple[Param, ...]] = ()
     default_inner: ClassVar[int] = 8
+    #: True for baselines that apply g to every child sample and average (not a function of expectation).
+    per_sample: ClassVar[bool] = False
 
     def __init__(self, **values: Any):
         known = {p.name: p for p in self.params}

@@ -1,0 +1,113 @@
+"""Affine style functions and the (optionally comb-stratified) sample mean.
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement Eqs. S1-S3:
+        g(I) = a1 I + a0,   <g(I)> = a1 <I> + a0,
+    unbiased for any unbiased <I>; here <I> is the mean of n draws. ``Mean(m)`` (a1 = 1, a0 = 0) is the
+    building block for multi-sample inner estimates (Kettunen, d'Eon, Pantaleoni, Novak, "An Unbiased
+    Ray-Marching Transmittance Estimator", 2021): compose a polynomial or series estimator with
+    ``Mean(m)`` and each of its samples becomes the mean of m draws (``algebra.inner_mean``).
+
+Stratified comb (what exactly is implemented)
+    With ``comb=True`` one uniform xi is drawn per estimate (per lane) and the i-th of the n draws is
+    requested as draw(carry, u_i) with u_i = (xi + i) / n, i = 0..n-1: a discrete comb of n equally
+    spaced points with one random offset. Each u_i alone is uniform on [0, 1), so every draw is an
+    unbiased sample of I and so is their mean; the n draws of one estimate are negatively
+    correlated (stratified in the first primary dimension that draw() maps u to), while different
+    estimates use independent offsets, so estimates stay independent of each other, which is what
+    the polynomial and series estimators require of their samples. What "first primary dimension"
+    means is up to draw(): in the renderer, e.g., the first uniform of the BSDF/light sample.
+
+Parameters
+    a1     scalar, one value per channel (C,), or a (C, C) matrix (y = A x, mixing channels).
+    a0     scalar or one value per channel. Default 0.
+    n      draws averaged per estimate (>= 1). Default 1.
+    comb   stratify the n draws with the comb above. Default False.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import arrays as A
+from .base import Context, Estimator, check_count
+
+__all__ = ["Affine", "Mean", "apply_linear"]
+
+
+def apply_linear(a1: np.ndarray, x):
+    """a1 x for a scalar, per-channel vector or (C, C) matrix a1; x numpy (..., C) or Dr.Jit."""
+    if a1.ndim < 2:
+        return A.const_like(a1, x) * x if a1.ndim == 1 else float(a1) * x
+    C = a1.shape[0]
+    if A.is_drjit(x):
+        dr = A.drjit()
+        if dr.depth_v(x) < 2 or len(x) != C:
+            raise ValueError(f"a ({C}, {C}) matrix needs {C}-channel values, got {type(x).__name__}")
+        return type(x)(*[sum(float(a1[i, j]) * x[j] for j in range(C)) for i in range(C)])
+    x = np.asarray(x)
+    if x.shape[-1] != C:
+        raise ValueError(f"a ({C}, {C}) matrix needs values with {C} channels, got shape {x.shape}")
+    return x @ a1.T
+
+
+class Affine(Estimator):
+    def __init__(self, a1=1.0, a0=0.0, n: int = 1, comb: bool = False):
+        self.a1 = np.asarray(a1, dtype=np.float64)
+        self.a0 = np.asarray(a0, dtype=np.float64)
+        if self.a1.ndim > 2 or (self.a1.ndim == 2 and self.a1.shape[0] != self.a1.shape[1]):
+            raise ValueError(f"a1 must be a scalar, a per-channel vector or a square matrix, got shape {self.a1.shape}")
+        if self.a0.ndim > 1:
+            raise ValueError(f"a0 must be a scalar or a per-channel vector, got shape {self.a0.shape}")
+        if not (np.all(np.isfinite(self.a1)) and np.all(np.isfinite(self.a0))):
+            raise ValueError(f"a1 and a0 must be finite, got a1={a1!r}, a0={a0!r}")
+        self.n = check_count("n", n)
+        self.comb = bool(comb)
+        self.name = f"affine(n={self.n}{', comb' if comb else ''})"
+
+    def start(self, ctx: Context, carry):
+        state = {"sum": ctx.vzero(), "count": ctx.lane(0.0)}
+        if self.comb:
+            state["offset"], carry = ctx.uniform(carry)
+        return state, carry
+
+    def wants(self, ctx, state):
+        return state["count"] < self.n
+
+    def next_u(self, ctx, state):
+        if not self.comb:
+            return None
+        return (state["offset"] + state["count"]) * (1.0 / self.n)
+
+    def feed(self, ctx, state, x, mask, carry):
+        state = dict(state)
+        state["sum"] = A.select(mask, state["sum"] + x, state["sum"])
+        state["count"] = A.select(mask, state["count"] + 1.0, state["count"])
+        return state, carry
+
+    def value(self, ctx, state):
+        mean = state["sum"] * (1.0 / self.n)
+        return apply_linear(self.a1, mean) + ctx.vconst(self.a0)
+
+    def exact(self, I):
+        I = np.asarray(I, dtype=np.float64) if not A.is_drjit(I) else I
+        y = apply_linear(self.a1, I)
+        return y + (A.const_like(self.a0, y) if self.a0.ndim else float(self.a0))
+
+    @property
+    def mean_samples(self):
+        return float(self.n)
+
+    @property
+    def fixed_samples(self):
+        return True
+
+    @property
+    def uses_comb(self):
+        return self.comb
+
+
+def Mean(m: int = 1, comb: bool = False) -> Affine:
+    """The mean of m draws (optionally comb-stratified): a gu estimator of I itself."""
+    est = Affine(1.0, 0.0, n=m, comb=comb)
+    est.name = f"mean(m={est.n}{', comb' if comb else ''})"
+    return est

@@ -1,0 +1,226 @@
+"""Build-your-own group-unbiased estimators: sum, product and composition (Theorem 4.1).
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", Theorem 4.1: for gu
+    estimators <A> of gA(I) and <B> of gB(I),
+      Sum          <A> + <B> is gu for gA + gB; the two may share samples (linearity of expectation).
+      Product      <A> <B> is gu for gA gB when their sample groups are independent.
+      Composition  gA(gB(I)): independent gu estimates of gB(I) become the samples of a gu estimator
+                   of gA, e.g. a polynomial of an affine map of I (sepia, contrast).
+
+Parameters
+    Sum(*parts, shared=True)  shared: every draw goes to every part that still wants samples, so the
+                              cost is the largest part's; shared=False: parts draw in turn.
+                              A shared sum cannot contain comb-stratified parts (two combs cannot
+                              share one draw).
+    Product(*factors)         factors draw in turn (independent groups); values multiply elementwise.
+    Compose(outer, inner)     each sample the outer estimator wants is a fresh, complete estimate of
+                              the inner one; inner estimators that need no draws are evaluated inside
+                              a nested loop, so the outer one never waits for a draw that is not needed.
+    inner_mean(estimator, m, comb=False)  = Compose(estimator, Mean(m, comb)): multi-sample inner
+                              estimates (Kettunen et al. 2021), optionally comb-stratified.
+
+mean_samples: Sum(shared) -> max of the parts when all are fixed, else None; Sum(unshared) and
+Product -> the sum; Compose -> outer mean x inner mean (Wald's identity).
+"""
+from __future__ import annotations
+
+from . import arrays as A
+from .affine import Mean
+from .base import Context, Estimator
+
+__all__ = ["Sum", "Product", "Compose", "inner_mean"]
+
+
+def _check_parts(parts, what):
+    if not parts:
+        raise ValueError(f"{what} needs at least one estimator")
+    for p in parts:
+        if not isinstance(p, Estimator):
+            raise ValueError(f"{what} takes Estimator instances, got {p!r}")
+    return tuple(parts)
+
+
+class _Sequential(Estimator):
+    """Parts that draw one after the other (independent sample groups)."""
+
+    def start(self, ctx: Context, carry):
+        states = []
+        for p in self.parts:
+            s, carry = p.start(ctx, carry)
+            states.append(s)
+        return tuple(states), carry
+
+    def wants(self, ctx, state):
+        w = self.parts[0].wants(ctx, state[0])
+        for p, s in zip(self.parts[1:], state[1:]):
+            w = w | p.wants(ctx, s)
+        return w
+
+    def feed(self, ctx, state, x, mask, carry):
+        states = list(state)
+        free = mask
+        for i, p in enumerate(self.parts):
+            w = p.wants(ctx, states[i])
+            take = free & w
+            states[i], carry = p.feed(ctx, states[i], x, take, carry)
+            free = free & ~w
+        return tuple(states), carry
+
+    def next_u(self, ctx, state):
+        us = [p.next_u(ctx, s) for p, s in zip(self.parts, state)]
+        if all(u is None for u in us):
+            return None
+        out = us[-1]
+        for p, s, u in reversed(list(zip(self.parts[:-1], state[:-1], us[:-1]))):
+            out = A.select(p.wants(ctx, s), u, out)
+        return out
+
+    @property
+    def uses_comb(self):
+        return any(p.uses_comb for p in self.parts)
+
+    @property
+    def fixed_samples(self):
+        return all(p.fixed_samples for p in self.parts)
+
+    def _check_comb(self):
+        flags = [p.uses_comb for p in self.parts]
+        if any(flags) and not all(flags):
+            raise ValueError("either all or none of the parts may use a comb: the draw signature "
+                             "draw(carry, u) vs draw(carry) is fixed per kernel")
+
+    @property
+    def mean_samples(self):
+        ms = [p.mean_samples for p in self.parts]
+        return None if any(m is None for m in ms) else float(sum(ms))
+
+
+class Sum(_Sequential):
+    def __init__(self, *parts, shared: bool = True):
+        self.parts = _check_parts(parts, "Sum")
+        self.shared = bool(shared)
+        if self.shared and any(p.uses_comb for p in self.parts):
+            raise ValueError("a shared Sum cannot hold comb-stratified parts; use shared=False")
+        if not self.shared:
+            self._check_comb()
+        self.name = ("sum(" if self.shared else "sum-unshared(") + ", ".join(p.name for p in self.parts) + ")"
+
+    def feed(self, ctx, state, x, mask, carry):
+        if not self.shared:
+            return super().feed(ctx, state, x, mask, carry)
+        wants = [p.wants(ctx, s) for p, s in zip(self.parts, state)]
+        states = list(state)
+        for i, p in enumerate(self.parts):
+            states[i], carry = p.feed(ctx, states[i], x, mask & wants[i], carry)
+        return tuple(states), carry
+
+    def next_u(self, ctx, state):
+        return None if self.shared else super().next_u(ctx, state)
+
+    def value(self, ctx, state):
+        out = self.parts[0].value(ctx, state[0])
+        for p, s in zip(self.parts[1:], state[1:]):
+            out = out + p.value(ctx, s)
+        return out
+
+    def exact(self, I):
+        out = self.parts[0].exact(I)
+        for p in self.parts[1:]:
+            out = out + p.exact(I)
+        return out
+
+    @property
+    def mean_samples(self):
+        if not self.shared:
+            return super().mean_samples
+        if all(p.fixed_samples for p in self.parts):
+            return float(max(p.mean_samples for p in self.parts))
+        return None
+
+
+class Product(_Sequential):
+    def __init__(self, *factors):
+        self.parts = _check_parts(factors, "Product")
+        self._check_comb()
+        self.name = "product(" + ", ".join(p.name for p in self.parts) + ")"
+
+    def value(self, ctx, state):
+        out = self.parts[0].value(ctx, state[0])
+        for p, s in zip(self.parts[1:], state[1:]):
+            out = out * p.value(ctx, s)
+        return out
+
+    def exact(self, I):
+        out = self.parts[0].exact(I)
+        for p in self.parts[1:]:
+            out = out * p.exact(I)
+        return out
+
+
+class Compose(Estimator):
+    def __init__(self, outer: Estimator, inner: Estimator):
+        _check_parts((outer, inner), "Compose")
+        if outer.uses_comb:
+            raise ValueError("the outer estimator of a composition receives inner estimates, not draws: "
+                             "it cannot use a comb (put the comb on the inner estimator)")
+        self.outer, self.inner = outer, inner
+        self.name = f"{outer.name} o {inner.name}"
+
+    def _settle(self, ctx, so, si, carry, mask):
+        """Feed finished inner estimates to the outer one until the inner one needs a draw."""
+        def cond(so, si, carry, mask):
+            return mask & self.outer.wants(ctx, so) & ~self.inner.wants(ctx, si)
+
+        def body(so, si, carry, mask):
+            m = mask & self.outer.wants(ctx, so) & ~self.inner.wants(ctx, si)
+            y = self.inner.value(ctx, si)
+            so, carry = self.outer.feed(ctx, so, y, m, carry)
+            fresh, carry = self.inner.start(ctx, carry)
+            si = A.tree_select(m, fresh, si)
+            return so, si, carry, mask
+
+        so, si, carry, mask = ctx.while_loop((so, si, carry, mask), cond, body)
+        return so, si, carry
+
+    def start(self, ctx: Context, carry):
+        so, carry = self.outer.start(ctx, carry)
+        si, carry = self.inner.start(ctx, carry)
+        so, si, carry = self._settle(ctx, so, si, carry, ctx.mask(True))
+        return (so, si), carry
+
+    def wants(self, ctx, state):
+        return self.outer.wants(ctx, state[0])
+
+    def next_u(self, ctx, state):
+        return self.inner.next_u(ctx, state[1])
+
+    def feed(self, ctx, state, x, mask, carry):
+        so, si = state
+        si, carry = self.inner.feed(ctx, si, x, mask & self.inner.wants(ctx, si), carry)
+        so, si, carry = self._settle(ctx, so, si, carry, mask)
+        return (so, si), carry
+
+    def value(self, ctx, state):
+        return self.outer.value(ctx, state[0])
+
+    def exact(self, I):
+        return self.outer.exact(self.inner.exact(I))
+
+    @property
+    def uses_comb(self):
+        return self.inner.uses_comb
+
+    @property
+    def fixed_samples(self):
+        return self.outer.fixed_samples and self.inner.fixed_samples
+
+    @property
+    def mean_samples(self):
+        mo, mi = self.outer.mean_samples, self.inner.mean_samples
+        return None if mo is None or mi is None else float(mo * mi)
+
+
+def inner_mean(estimator: Estimator, m: int, comb: bool = False) -> Compose:
+    """Feed `estimator` means of m draws (comb-stratified if asked) instead of single draws."""
+    return Compose(estimator, Mean(m, comb))

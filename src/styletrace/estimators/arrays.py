@@ -1,0 +1,207 @@
+"""Array backend: one small vocabulary over numpy and Dr.Jit.
+
+What it is
+    The estimators are written once against these helpers and then run unchanged on numpy arrays
+    (float32/float64) and on Dr.Jit arrays inside a symbolic kernel (drjit.llvm.Float, Array3f,
+    mitsuba.Color3f, ... anything with elementwise arithmetic).
+
+Conventions
+    * numpy: the estimators see per-lane scalars as (lanes, 1) arrays and values as (lanes, C)
+      arrays, so that numpy broadcasting behaves like Dr.Jit's ``Float * Array3f``. The driver in
+      ``base.py`` reshapes user arrays on the way in and out.
+    * Dr.Jit: per-lane scalars are the value type's leaf Float (``dr.leaf_t``); masks are its Bool.
+    * Dr.Jit is imported lazily and only if the caller already imported it, so the numpy path needs
+      neither Dr.Jit nor Mitsuba (and never triggers Dr.Jit's libLLVM loading).
+
+Loops
+    ``numpy_while_loop`` emulates ``drjit.while_loop``: the body runs on the lanes whose condition
+    holds, the others keep their state. It compacts the active lanes first, so a loop where a few
+    lanes need many iterations (random truncation) stays cheap. Leaves of the state whose first
+    axis has the lane count are per-lane; other leaves (a numpy Generator, constants) are shared.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+
+__all__ = [
+    "is_drjit", "drjit", "select", "abs", "exp", "log", "sqrt", "cos", "sin", "minimum", "maximum",
+    "clip", "hmax", "tree_map", "tree_select", "numpy_while_loop", "const_like",
+]
+
+_pyabs = abs
+
+
+def drjit():
+    """The drjit module if it has been imported by someone, else None (we never import it first)."""
+    return sys.modules.get("drjit")
+
+
+def is_drjit(x) -> bool:
+    dr = drjit()
+    return dr is not None and isinstance(x, dr.ArrayBase)
+
+
+def _any_drjit(*xs) -> bool:
+    return any(is_drjit(x) for x in xs)
+
+
+def select(mask, a, b):
+    """Elementwise ``a if mask else b``; a (lanes, 1) numpy mask broadcasts over channels."""
+    if _any_drjit(mask, a, b):
+        return drjit().select(mask, a, b)
+    return np.where(mask, a, b)
+
+
+def _unary(np_fn, dr_name):
+    def fn(x):
+        if is_drjit(x):
+            return getattr(drjit(), dr_name)(x)
+        return np_fn(x)
+    fn.__name__ = dr_name
+    return fn
+
+
+abs = _unary(np.abs, "abs")  # noqa: A001  (mirrors numpy/drjit naming on purpose)
+exp = _unary(np.exp, "exp")
+log = _unary(np.log, "log")
+sqrt = _unary(np.sqrt, "sqrt")
+cos = _unary(np.cos, "cos")
+sin = _unary(np.sin, "sin")
+
+
+def minimum(a, b):
+    if _any_drjit(a, b):
+        return drjit().minimum(a, b)
+    return np.minimum(a, b)
+
+
+def maximum(a, b):
+    if _any_drjit(a, b):
+        return drjit().maximum(a, b)
+    return np.maximum(a, b)
+
+
+def clip(x, lo, hi):
+    """Clamp x to [lo, hi]; either bound may be None (unbounded)."""
+    if lo is not None:
+        x = maximum(x, lo)
+    if hi is not None:
+        x = minimum(x, hi)
+    return x
+
+
+def hmax(v):
+    """Largest channel per lane: a per-lane scalar from a value (random decisions are per lane)."""
+    if is_drjit(v):
+        dr = drjit()
+        if dr.depth_v(v) > 1:
+            out = v[0]
+            for i in range(1, len(v)):
+                out = dr.maximum(out, v[i])
+            return out
+        return v
+    if isinstance(v, np.ndarray) and v.ndim >= 2:
+        return v.max(axis=-1, keepdims=True)
+    return v
+
+
+def const_like(c, x):
+    """Constant c (scalar or one value per channel) in a form that combines elementwise with x."""
+    c = np.asarray(c, dtype=np.float64)
+    if c.ndim == 0:
+        return float(c)
+    if c.ndim != 1:
+        raise ValueError(f"a per-channel constant must be 1-D, got shape {c.shape}")
+    if is_drjit(x):
+        dr = drjit()
+        n = dr.size_v(type(x)) if dr.depth_v(x) > 1 else 1
+        if n != c.shape[0]:
+            raise ValueError(f"{c.shape[0]} per-channel constants for a value of type {type(x).__name__} with {n} channel(s)")
+        return type(x)(*[float(v) for v in c])
+    x = np.asarray(x)
+    if x.ndim == 0 or x.shape[-1] != c.shape[0]:
+        raise ValueError(f"{c.shape[0]} per-channel constants for an array of shape {x.shape}: "
+                         f"the last axis must hold the channels")
+    return c.astype(x.dtype) if np.issubdtype(x.dtype, np.floating) else c
+
+
+# ---------------------------------------------------------------------------------------------
+# pytrees (tuple / list / dict) for loop states
+
+
+def tree_map(fn, *trees):
+    t0 = trees[0]
+    if isinstance(t0, dict):
+        return {k: tree_map(fn, *[t[k] for t in trees]) for k in t0}
+    if isinstance(t0, tuple) and hasattr(t0, "_fields"):  # namedtuple
+        return type(t0)(*[tree_map(fn, *xs) for xs in zip(*trees)])
+    if isinstance(t0, (tuple, list)):
+        return type(t0)(tree_map(fn, *xs) for xs in zip(*trees))
+    return fn(*trees)
+
+
+def tree_select(mask, a, b):
+    """``select`` over two pytrees of the same structure; non-array leaves are taken from a."""
+    def pick(x, y):
+        if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or is_drjit(x) or is_drjit(y)):
+            return x
+        return select(mask, x, y)
+    return tree_map(pick, a, b)
+
+
+def _lane_leaf(x, lanes) -> bool:
+    return isinstance(x, np.ndarray) and x.ndim >= 1 and x.shape[0] == lanes
+
+
+def _take(tree, idx, lanes):
+    return tree_map(lambda x: x[idx] if _lane_leaf(x, lanes) else x, tree)
+
+
+def _put(old_tree, new_tree, idx, lanes):
+    def put(old, new):
+        if not isinstance(new, np.ndarray) and not isinstance(old, np.ndarray):
+            return new  # shared leaf (generator, python constant): the body's version wins
+        new = np.asarray(new)
+        old = np.asarray(old)
+        if not _lane_leaf(old, lanes) and not _lane_leaf(new, idx.size) and old.shape == new.shape \
+                and np.array_equal(old, new):
+            return old  # an unchanged broadcast literal stays a literal
+        trail = np.broadcast_shapes(old.shape[1:] if old.ndim else (), new.shape[1:] if new.ndim else ())
+        dtype = np.result_type(old, new)
+        out = np.array(np.broadcast_to(old, (lanes,) + trail), dtype=dtype)
+        out[idx] = np.broadcast_to(new, (idx.size,) + trail)
+        return out
+    return tree_map(put, old_tree, new_tree)
+
+
+def numpy_while_loop(state: tuple, cond, body, set_lanes=None, max_iterations: int = 10_000_000) -> tuple:
+    """Masked, lane-compacting emulation of ``drjit.while_loop`` for numpy states.
+
+    ``set_lanes(k)`` (optional) is told the number of lanes the body is about to see, and the full
+    count again afterwards, so that code creating fresh per-lane arrays inside the body matches.
+    """
+    state = tuple(state)
+    for _ in range(max_iterations):
+        mask = np.asarray(cond(*state))
+        if mask.ndim == 0:
+            if not mask:
+                return state
+            state = tuple(body(*state))
+            continue
+        flat = mask.reshape(mask.shape[0], -1)[:, 0]
+        lanes = flat.shape[0]
+        idx = np.flatnonzero(flat)
+        if idx.size == 0:
+            return state
+        sub = state if idx.size == lanes else _take(state, idx, lanes)
+        if set_lanes is not None:
+            set_lanes(idx.size)
+        try:
+            new = tuple(body(*sub))
+        finally:
+            if set_lanes is not None:
+                set_lanes(lanes)
+        state = _put(state, new, idx, lanes)
+    raise RuntimeError(f"numpy_while_loop: no termination after {max_iterations} iterations")

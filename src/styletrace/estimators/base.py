@@ -1,0 +1,319 @@
+"""The estimator protocol and the kernel driver that every estimator shares.
+
+What it is
+    ``Estimator`` is a per-lane state machine fed one input sample at a time:
+
+        start(ctx, carry)                 -> (state, carry)   initial state; may draw uniforms
+        wants(ctx, state)                 -> mask             lanes that need another input sample
+        feed(ctx, state, x, mask, carry)  -> (state, carry)   consume x on the lanes in mask
+        value(ctx, state)                 -> estimate of g(I)
+        next_u(ctx, state)                -> None, or the stratified first dimension of the next draw
+
+    ``Estimator.run`` is the kernel contract used by the integrator (see the package docstring):
+    one loop, one ``draw`` per iteration and lane, only on lanes that want a sample. Composite
+    estimators (``algebra.py``) are state machines made of state machines, so the whole tree still
+    runs in one loop and calls ``draw`` at exactly one place in the traced code.
+
+Parameters of ``run``
+    draw(carry[, u]) -> (x, carry), uniform(carry) -> (u, carry), carry (opaque pytree),
+    active=None (lanes that take part; others return 0 and draw nothing),
+    like=None (the type or an instance of x: required for Dr.Jit, optional for numpy).
+
+The ``Context`` hides the backend: per-lane constants, tables looked up by a per-lane index,
+uniforms, and the while loop (``drjit.while_loop`` or the numpy emulation in ``arrays.py``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import arrays as A
+
+__all__ = ["Context", "Estimator", "check_count"]
+
+#: A float32 uniform is a multiple of 2**-24, so a truncation decision cannot resolve
+#: probabilities below this; terms the truncation would reach less often are never evaluated.
+UNIFORM_RESOLUTION = 2.0 ** -24
+
+
+def check_count(name: str, value, minimum: int = 1) -> int:
+    """An integer parameter >= minimum, or a ValueError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+class Context:
+    """Backend-specific helpers for one ``run`` (numpy lanes or a Dr.Jit value type)."""
+
+    def __init__(self, backend: str, *, lanes=None, like_t=None, dtype=None, channels=None, ndim=None,
+                 uniform=None):
+        self.backend = backend
+        self.lanes = lanes
+        self.like_t = like_t
+        self.dtype = dtype
+        self.channels = channels
+        self.ndim = ndim
+        self._uniform = uniform
+        self._tables = {}
+        if backend == "drjit":
+            dr = A.drjit()
+            self.float_t = dr.leaf_t(like_t)
+            self.uint_t = dr.uint32_array_t(self.float_t)
+            self.bool_t = dr.mask_t(self.float_t)
+
+    # -- construction ------------------------------------------------------------------------
+    @classmethod
+    def for_run(cls, like, active, uniform, carry):
+        """Pick the backend from `like` / `active`; numpy may probe `uniform` for the lane count."""
+        dr = A.drjit()
+        like_t = like if isinstance(like, type) else (type(like) if like is not None else None)
+        if like_t is not None and dr is not None and issubclass(like_t, dr.ArrayBase):
+            return cls("drjit", like_t=like_t, uniform=uniform), carry
+        if A.is_drjit(active):
+            raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>, "
+                             "e.g. like=mitsuba.Color3f or like=drjit.llvm.Float")
+        lanes = dtype = channels = ndim = None
+        if like is not None and not isinstance(like, type):
+            arr = np.asarray(like)
+            if arr.ndim not in (1, 2):
+                raise ValueError(f"like must have shape (lanes,) or (lanes, C), got {arr.shape}")
+            lanes, dtype, ndim = arr.shape[0], arr.dtype, arr.ndim
+            channels = arr.shape[1] if arr.ndim == 2 else 1
+        if active is not None:
+            active = np.asarray(active)
+            if lanes is not None and active.shape[0] != lanes:
+                raise ValueError(f"active has {active.shape[0]} lanes but like has {lanes}")
+            lanes = active.shape[0]
+        if lanes is None:  # nothing says how many lanes: ask the random stream
+            u, carry = uniform(carry)
+            if A.is_drjit(u):
+                raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>")
+            lanes = np.asarray(u).shape[0]
+        return cls("numpy", lanes=lanes, dtype=dtype, channels=channels, ndim=ndim, uniform=uniform), carry
+
+    @property
+    def is_drjit(self) -> bool:
+        return self.backend == "drjit"
+
+    # -- per-lane scalars, masks, values -------------------------------------------------------
+    def lane(self, v: float):
+        if self.is_drjit:
+            return self.float_t(float(v))
+        return np.full((self.lanes, 1), float(v))
+
+    def mask(self, v: bool):
+        if self.is_drjit:
+            return self.bool_t(bool(v))
+        return np.full((self.lanes, 1), bool(v))
+
+    def vzero(self):
+        if self.is_drjit:
+            return self.like_t(0.0)
+        return np.zeros((self.lanes, 1))
+
+    def vconst(self, c):
+        """c (scalar or per-channel) as something that combines with values."""
+        c = np.asarray(c, dtype=np.float64)
+        if c.ndim == 0:
+            return float(c)
+        if c.ndim != 1:
+            raise ValueError(f"per-channel constants must be 1-D, got shape {c.shape}")
+        if self.is_drjit:
+            return A.const_like(c, self.like_t(0.0))
+        if self.channels is not None and self.channels != c.shape[0]:
+            raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} channel(s)")
+        self.channels = c.shape[0]
+        return c
+
+    def value_array(self, c):
+        """A per-lane value holding constant c (state entries must be arrays, never Python floats)."""
+        return self.vzero() + self.vconst(c)
+
+    # -- randomness and samples -----------------------------------------------------------------
+    def uniform(self, carry):
+        u, carry = self._uniform(carry)
+        if not self.is_drjit:
+            u = np.asarray(u, dtype=np.float64).reshape(-1, 1)
+        return u, carry
+
+    def adopt(self, x):
+        """A sample from draw() in the estimators' layout, checked against what we expect."""
+        if self.is_drjit:
+            if not A.is_drjit(x):
+                raise ValueError(f"draw() returned {type(x).__name__}; like={self.like_t.__name__} promised a Dr.Jit array")
+            if type(x) is not self.like_t:
+                x = self.like_t(x)
+            return x
+        x = np.asarray(x)
+        if x.ndim not in (1, 2):
+            raise ValueError(f"draw() must return shape (lanes,) or (lanes, C), got {x.shape}")
+        channels = x.shape[1] if x.ndim == 2 else 1
+        if self.ndim is None:
+            self.ndim, self.dtype = x.ndim, x.dtype
+        if self.channels is None:
+            self.channels = channels
+        elif self.channels != channels:
+            raise ValueError(f"draw() returned {channels} channel(s) where {self.channels} were expected "
+                             f"(per-channel coefficients or like= say so)")
+        return x.reshape(x.shape[0], -1)
+
+    def user_u(self, u):
+        """The comb's first-dimension uniform in the layout draw() receives."""
+        return u if self.is_drjit else np.asarray(u).reshape(-1)
+
+    # -- tables indexed per lane --------------------------------------------------------------
+    def _table(self, table):
+        key = id(table)
+        if key not in self._tables:
+            self._tables[key] = (table, self.float_t(np.asarray(table, dtype=np.float64)))
+        return self._tables[key][1]
+
+    def lookup(self, table: np.ndarray, k):
+        """table[k] per lane (k a per-lane integer-valued float, clamped into the table)."""
+        n = len(table)
+        if self.is_drjit:
+            dr = A.drjit()
+            idx = self.uint_t(dr.clip(k, 0, n - 1))
+            return dr.gather(self.float_t, self._table(table), idx)
+        idx = np.clip(np.asarray(k), 0, n - 1).astype(np.int64)
+        return np.asarray(table, dtype=np.float64)[idx]
+
+    def count_above(self, survival: np.ndarray, u):
+        """#{k >= 1 : survival[k] > u} for a non-increasing table with survival[0] = 1 > u.
+
+        A binary search with a fixed number of steps, so the traced kernel has no data-dependent loop.
+        """
+        K = len(survival) - 1
+        lo = self.lane(0.0)            # survival[lo] > u holds
+        hi = self.lane(float(K + 1))   # first index known to fail (K + 1: past the table)
+        for _ in range(int(np.ceil(np.log2(K + 1))) + 1):
+            mid = self._floor((lo + hi) * 0.5)  # == lo once converged, which keeps lo
+            ok = self.lookup(survival, mid) > u
+            lo = A.select(ok, mid, lo)
+            hi = A.select(ok, hi, mid)
+        return lo
+
+    def _floor(self, x):
+        if self.is_drjit:
+            return A.drjit().floor(x)
+        return np.floor(x)
+
+    def when(self, mask, compute, otherwise):
+        """select(mask, compute(), otherwise), skipping the computation on numpy when no lane needs it.
+
+        (A traced Dr.Jit kernel evaluates both sides anyway; numpy can save expensive per-estimate work,
+        like re-expanding a polynomial about a pilot b, on the iterations where no lane finished.)
+        """
+        if not self.is_drjit and not np.any(mask):
+            return otherwise
+        return A.tree_select(mask, compute(), otherwise)
+
+    # -- loops ----------------------------------------------------------------------------------
+    def while_loop(self, state: tuple, cond, body) -> tuple:
+        if self.is_drjit:
+            return tuple(A.drjit().while_loop(state=tuple(state), cond=cond, body=body))
+        def set_lanes(k):
+            self.lanes = k
+        return A.numpy_while_loop(tuple(state), cond, body, set_lanes)
+
+    def finish(self, value, active):
+        """The estimate in the caller's layout: inactive lanes 0, numpy reshaped and cast back."""
+        if self.is_drjit:
+            if not isinstance(value, self.like_t):
+                value = self.like_t(value)
+            if active is not None:
+                value = A.drjit().select(active, value, self.like_t(0.0))
+            return value
+        value = np.asarray(value, dtype=np.float64)
+        value = np.broadcast_to(value, (self.lanes, value.shape[1] if value.ndim == 2 else 1))
+        if self.channels is not None and value.shape[1] != self.channels:
+            value = np.broadcast_to(value, (self.lanes, self.channels))
+        if active is not None:
+            value = np.where(np.asarray(active).reshape(-1, 1), value, 0.0)
+        if self.ndim == 1 or (self.ndim is None and value.shape[1] == 1):
+            value = value[:, 0]
+        return np.array(value, dtype=self.dtype if self.dtype is not None else np.float64)
+
+
+class Estimator:
+    """Base class: a group-unbiased (or, for ``Direct``, consistent) estimator of g(I)."""
+
+    name = "estimator"
+
+    # -- protocol (overridden) ------------------------------------------------------------------
+    def start(self, ctx: Context, carry):
+        raise NotImplementedError
+
+    def wants(self, ctx: Context, state):
+        raise NotImplementedError
+
+    def feed(self, ctx: Context, state, x, mask, carry):
+        raise NotImplementedError
+
+    def value(self, ctx: Context, state):
+        raise NotImplementedError
+
+    def next_u(self, ctx: Context, state):
+        return None
+
+    def exact(self, I):
+        """The function this estimator's expectation equals (for Direct: the target g)."""
+        raise NotImplementedError
+
+    @property
+    def mean_samples(self):
+        """Expected draw() calls per estimate; None where it depends on the data (adaptive truncation)."""
+        raise NotImplementedError
+
+    @property
+    def fixed_samples(self) -> bool:
+        """True when every estimate draws exactly ``mean_samples`` samples."""
+        return False
+
+    @property
+    def uses_comb(self) -> bool:
+        return False
+
+    # -- algebra sugar ----------------------------------------------------------------------------
+    def __add__(self, other):
+        from .algebra import Sum
+        return Sum(self, other)
+
+    def __mul__(self, other):
+        from .algebra import Product
+        return Product(self, other)
+
+    def __repr__(self):
+        return f"<{type(self).__name__} {self.name}>"
+
+    # -- the kernel contract ----------------------------------------------------------------------
+    def run(self, draw, carry, uniform, active=None, like=None):
+        """value, carry = estimator.run(draw, carry, uniform, active=None, like=None)
+
+        Runs one estimate per lane. ``draw`` is called once per loop iteration, inside the loop
+        body only, and only on lanes that still want a sample; when this estimator (or a part of it)
+        uses a stratified comb, it is called as ``draw(carry, u)`` with ``u`` the first primary
+        dimension to use. ``like`` (type or instance of x) is required for Dr.Jit.
+        """
+        ctx, carry = Context.for_run(like, active, uniform, carry)
+        if ctx.is_drjit:
+            act = active if active is not None else ctx.mask(True)
+        else:
+            act = np.ones((ctx.lanes, 1), bool) if active is None else np.asarray(active, bool).reshape(-1, 1)
+        state, carry = self.start(ctx, carry)
+
+        def cond(state, carry, act):
+            return self.wants(ctx, state) & act
+
+        def body(state, carry, act):
+            u = self.next_u(ctx, state)
+            if u is None:
+                x, carry = draw(carry)
+            else:
+                x, carry = draw(carry, ctx.user_u(u))
+            x = ctx.adopt(x)
+            state, carry = self.feed(ctx, state, x, self.wants(ctx, state), carry)
+            return state, carry, act
+
+        state, carry, act = ctx.while_loop((state, carry, act), cond, body)
+        return ctx.finish(self.value(ctx, state), active), carry

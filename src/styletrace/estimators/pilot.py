@@ -1,0 +1,96 @@
+"""Expansion points: a fixed b, or b estimated from separate pilot samples.
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3: "one
+    reasonable choice for the expansion point b is an estimate <I> of the integral I". The series
+    estimators stay unbiased only if b is independent of the samples used for the terms, so the
+    pilot consumes its own first n samples and the terms use later, independent ones.
+
+Parameters
+    Pilot(n=1, lo=None, hi=None): b = clamp(mean of n pilot draws, lo, hi), then moved into the
+    series' convergence region by ``Series.clamp_center`` (see coefficients.py). Clamping a pilot
+    estimate keeps unbiasedness: b is still independent of the term samples.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import arrays as A
+from .base import check_count
+
+__all__ = ["Pilot", "ExpansionPoint"]
+
+
+class Pilot:
+    def __init__(self, n: int = 1, lo=None, hi=None):
+        self.n = check_count("pilot n", n)
+        for name, v in (("lo", lo), ("hi", hi)):
+            if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
+                raise ValueError(f"pilot {name} must be a finite number or None, got {v!r}")
+        if lo is not None and hi is not None and not lo < hi:
+            raise ValueError(f"pilot clamp needs lo < hi, got lo={lo}, hi={hi}")
+        self.lo, self.hi = lo, hi
+
+    def __repr__(self):
+        return f"Pilot(n={self.n})"
+
+
+class ExpansionPoint:
+    """The b of an estimator: fixed (checked against the series) or a pilot (clamped per lane)."""
+
+    def __init__(self, b, default=0.0, series=None):
+        self.series = series
+        if isinstance(b, Pilot):
+            self.pilot, self.fixed = b, None
+        else:
+            self.pilot = None
+            b = default if b is None else b
+            arr = np.asarray(b, dtype=np.float64)
+            if arr.ndim > 1 or not np.all(np.isfinite(arr)):
+                raise ValueError(f"expansion point b must be a finite scalar, a per-channel vector or Pilot(...), got {b!r}")
+            if series is not None:
+                series.check_center(arr)
+            self.fixed = arr
+
+    @property
+    def samples(self) -> int:
+        return self.pilot.n if self.pilot else 0
+
+    def describe(self) -> str:
+        if self.pilot:
+            return f"b=pilot({self.pilot.n})"
+        return f"b={np.array2string(self.fixed, precision=3)}" if self.fixed.ndim else f"b={float(self.fixed):g}"
+
+    # -- kernel side --------------------------------------------------------------------------
+    def start(self, ctx) -> dict:
+        if not self.pilot:
+            return {}
+        # b = 1 until the pilot is done keeps the unused (masked) series arithmetic finite
+        return {"psum": ctx.vzero(), "pcount": ctx.lane(0.0), "b": ctx.value_array(1.0)}
+
+    def in_pilot(self, state):
+        """Lanes still collecting pilot samples (None when b is fixed)."""
+        if not self.pilot:
+            return None
+        return state["pcount"] < self.pilot.n
+
+    def feed(self, ctx, state, x, mask):
+        """Take x on pilot lanes of mask; returns (state, lanes whose b became known now)."""
+        state = dict(state)
+        take = mask & (state["pcount"] < self.pilot.n)
+        state["psum"] = A.select(take, state["psum"] + x, state["psum"])
+        state["pcount"] = A.select(take, state["pcount"] + 1.0, state["pcount"])
+        done = take & (state["pcount"] >= self.pilot.n)
+        b = A.clip(state["psum"] * (1.0 / self.pilot.n), self.pilot.lo, self.pilot.hi)
+        if self.series is not None:
+            b = self.series.clamp_center(b)
+        state["b"] = A.select(done, b, state["b"])
+        return state, done
+
+    def value(self, ctx, state):
+        """b as a value array (pilot) or a constant (fixed)."""
+        if self.pilot:
+            return state["b"]
+        return ctx.vconst(self.fixed)

@@ -1,0 +1,187 @@
+"""Unbiased estimators of polynomials of I: naive products (S6) and the U-statistic (S7-S8).
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.2:
+      naive        <I^k> = x_1 x_2 ... x_k, the product of k independent samples        (S6)
+      U-statistic  <I^k> = mean over all k-subsets of n samples of their product
+                         = e_k(x_1..x_n) / C(n, k)                                   (S7-S8)
+    (Lee, Tiberi, Zanella, "Unbiased approximations of products of expectations", 2019; the
+    U-statistic is the minimum-variance unbiased estimator, Halmos 1946.)
+    The running-mean recurrence is Algorithm 1 of Kettunen, d'Eon, Pantaleoni, Novak, "An Unbiased
+    Ray-Marching Transmittance Estimator", 2021: keep m_k = e_k / C(n, k), m_0 = 1; for each new
+    sample x_n and k = min(n, K) down to 1:  m_k += (k / n) (x_n m_(k-1) - m_k).
+    Every update is a weighted average of O(1) quantities: no binomials, no overflow, and all
+    terms k = 1..K come out of the same pass.
+
+Parameters
+    PolynomialNaive(poly, b=None)
+        poly   PolynomialSeries, a fit (anything with .series()), or coefficients of I^k.
+        b      expansion point: None (the polynomial's own center), a fixed float / per-channel vector,
+               or Pilot(n). The samples fed to the terms are y = x - b.
+        Cost: degree K samples. Term k is the product of the first k samples: each term's k factors
+        are independent, and the terms share their prefix (Theorem 4.1 allows sums to share samples).
+    PolynomialU(poly, n, b=None)
+        n      samples (>= degree K). Cost: n samples (plus the pilot).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import arrays as A
+from .base import Context, Estimator, check_count
+from .coefficients import PolynomialSeries
+from .pilot import ExpansionPoint
+
+__all__ = ["ustat_update", "u_statistic_means", "PolynomialNaive", "PolynomialU", "as_polynomial"]
+
+
+def ustat_update(m: list, y, j) -> list:
+    """One step of the running-mean recurrence: m = [m_1..m_K] after j-1 samples -> after j.
+
+    j may be a Python int or a per-lane array; terms with k > j stay exactly 0 because their inputs are 0.
+    """
+    inv_j = 1.0 / j
+    out = list(m)
+    for k in range(len(out), 0, -1):
+        prev = out[k - 2] if k >= 2 else 1.0
+        out[k - 1] = out[k - 1] + (k * inv_j) * (y * prev - out[k - 1])
+    return out
+
+
+def u_statistic_means(samples, K: int) -> list:
+    """[m_0, ..., m_K] for samples[0..n-1] (axis 0), with m_k = e_k / C(n, k), in the samples' precision."""
+    K = check_count("K", K, 0)
+    n = len(samples)
+    if n < K:
+        raise ValueError(f"a U-statistic of order K={K} needs at least K samples, got n={n}")
+    zero = samples[0] * 0.0
+    m = [zero for _ in range(K)]
+    for j in range(1, n + 1):
+        m = ustat_update(m, samples[j - 1], j)
+    return [zero + 1.0] + m
+
+
+def as_polynomial(poly) -> PolynomialSeries:
+    if isinstance(poly, PolynomialSeries):
+        return poly
+    if hasattr(poly, "series") and callable(poly.series):
+        return poly.series()
+    return PolynomialSeries(poly, 0.0)
+
+
+class _PolynomialBase(Estimator):
+    def __init__(self, poly, b):
+        self.poly = as_polynomial(poly)
+        self.point = ExpansionPoint(b, default=self.poly.center)
+        self.K = self.poly.degree
+        if not self.point.pilot:
+            self.fixed_coeffs = self.poly.shifted(self.point.fixed).coeffs
+
+    def exact(self, I):
+        return self.poly.function(I)
+
+    def _y(self, ctx, state, x):
+        return x - self.point.value(ctx, state)
+
+    def _coefficients(self, ctx, state):
+        """a_0..a_K about b: host constants for a fixed b, re-expanded per lane for a pilot b."""
+        if self.point.pilot:
+            return self.poly.start(ctx, state["b"])
+        return [ctx.vconst(c) for c in self.fixed_coeffs]
+
+
+class PolynomialNaive(_PolynomialBase):
+    def __init__(self, poly, b=None):
+        super().__init__(poly, b)
+        self.name = f"poly-naive(K={self.K}, {self.point.describe()})"
+
+    def start(self, ctx: Context, carry):
+        state = self.point.start(ctx)
+        # P[k-1] = product of the first k samples of (x - b); coefficients are applied at the end,
+        # so a pilot b costs one re-expansion per estimate, not one per sample
+        state["P"] = tuple(ctx.vzero() for _ in range(self.K))
+        state["prod"] = ctx.value_array(1.0)
+        state["k"] = ctx.lane(0.0)
+        return state, carry
+
+    def wants(self, ctx, state):
+        w = state["k"] < self.K
+        inp = self.point.in_pilot(state)
+        return w if inp is None else (w | inp)
+
+    def feed(self, ctx, state, x, mask, carry):
+        inp = self.point.in_pilot(state)
+        if inp is not None:
+            state, _ = self.point.feed(ctx, state, x, mask)
+            mask = mask & ~inp
+        else:
+            state = dict(state)
+        prod = state["prod"] * self._y(ctx, state, x)
+        k = state["k"] + 1.0
+        state["P"] = tuple(A.select(mask & (k == float(j + 1)), prod, P) for j, P in enumerate(state["P"]))
+        state["prod"] = A.select(mask, prod, state["prod"])
+        state["k"] = A.select(mask, k, state["k"])
+        return state, carry
+
+    def value(self, ctx, state):
+        coef = self._coefficients(ctx, state)
+        out = ctx.vzero() + coef[0]
+        for k in range(1, self.K + 1):
+            out = out + coef[k] * state["P"][k - 1]
+        return out
+
+    @property
+    def mean_samples(self):
+        return float(self.point.samples + self.K)
+
+    @property
+    def fixed_samples(self):
+        return True
+
+
+class PolynomialU(_PolynomialBase):
+    def __init__(self, poly, n: int, b=None):
+        super().__init__(poly, b)
+        self.n = check_count("n", n)
+        if self.n < self.K:
+            raise ValueError(f"the U-statistic of a degree-{self.K} polynomial needs n >= {self.K} samples, got n={self.n}")
+        self.name = f"poly-U(K={self.K}, n={self.n}, {self.point.describe()})"
+
+    def start(self, ctx: Context, carry):
+        state = self.point.start(ctx)
+        state["m"] = tuple(ctx.vzero() for _ in range(self.K))
+        state["j"] = ctx.lane(0.0)
+        return state, carry
+
+    def wants(self, ctx, state):
+        w = state["j"] < self.n
+        inp = self.point.in_pilot(state)
+        return w if inp is None else (w | inp)
+
+    def feed(self, ctx, state, x, mask, carry):
+        inp = self.point.in_pilot(state)
+        if inp is not None:
+            state, _ = self.point.feed(ctx, state, x, mask)
+            mask = mask & ~inp
+        else:
+            state = dict(state)
+        j = state["j"] + 1.0
+        m = ustat_update(list(state["m"]), self._y(ctx, state, x), A.maximum(j, 1.0))
+        state["m"] = tuple(A.select(mask, new, old) for new, old in zip(m, state["m"]))
+        state["j"] = A.select(mask, j, state["j"])
+        return state, carry
+
+    def value(self, ctx, state):
+        coef = self._coefficients(ctx, state)
+        out = ctx.vzero() + coef[0]
+        for k in range(1, self.K + 1):
+            out = out + coef[k] * state["m"][k - 1]
+        return out
+
+    @property
+    def mean_samples(self):
+        return float(self.point.samples + self.n)
+
+    @property
+    def fixed_samples(self):
+        return True

@@ -1,0 +1,212 @@
+"""Power-series estimators: sum_k a_k (I - b)^k with randomly selected, reweighted terms.
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3 (S9-S13),
+    after Georgiev, Misso, Hachisuka, Nowrouzezahrai, Krivanek, Jarosz, "Integral Formulations of
+    Volumetric Transmittance", 2019:
+      single      <h> = a_k <(I-b)^k> / P(k),           one term k ~ P            (S11)
+      iterative   <h> = sum_{k<=N} a_k <(I-b)^k> / P(N >= k), N drawn first      (S12)
+      recursive   <h> = sum_{k<=N} a_k <(I-b)^k> / prod_{j<=k} q_j, Russian roulette with
+                  continuation probability q_j decided after each term            (S13)
+    Term estimates <(I-b)^k>: "naive" = product of k samples of (x - b) (S6), the terms sharing their
+    prefix, so N terms cost N samples; "ustat" (iterative only: N must be known before the samples) =
+    the U-statistic of order k over all N samples via the running-mean recurrence of Kettunen,
+    d'Eon, Pantaleoni, Novak, "An Unbiased Ray-Marching Transmittance Estimator", 2021 (S7-S8).
+    Unbiased when b is independent of the term samples: a fixed b, or Pilot(n) (its own samples).
+
+Parameters (defaults)
+    series       a coefficients.Series (exp_series, reciprocal_series, gamma_series, taylor_series,
+                 a fit's .series(), ...).
+    b            Pilot(1) (default), a fixed float or per-channel vector (checked by the series).
+    selection    "iterative" (default), "recursive" or "single".
+    truncation   a truncation.Truncation or its name; default per selection: iterative ->
+                 PoissonCMF(tau=2), recursive -> Cumulative(), single -> Poisson(tau=2).
+    terms        "ustat" (default for iterative) or "naive" (recursive and single are always naive).
+    max_terms    64: no term beyond this (nor beyond a finite series' degree, nor where the truncation
+                 probability is below 2^-24) is ever evaluated; the estimate is then unbiased for the
+                 series truncated there. "ustat" keeps max_terms running means per lane.
+
+Cost: pilot + (number of terms after the zeroth) samples for prefix sums, pilot + k for single-term.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import arrays as A
+from .base import Context, Estimator, check_count
+from .coefficients import Series
+from .pilot import ExpansionPoint, Pilot
+from .polynomial import ustat_update
+from .truncation import Cumulative, Poisson, PoissonCMF, resolve_truncation
+
+__all__ = ["SeriesEstimator", "SELECTIONS"]
+
+SELECTIONS = ("single", "iterative", "recursive")
+MAX_USTAT_TERMS = 64
+
+
+class SeriesEstimator(Estimator):
+    def __init__(self, series, b=None, selection: str = "iterative", truncation=None, terms=None,
+                 max_terms: int = 64):
+        if not isinstance(series, Series):
+            if hasattr(series, "series") and callable(series.series):
+                series = series.series()
+            else:
+                raise ValueError(f"series must be a coefficients.Series (or a fit), got {series!r}")
+        self.series = series
+        if selection not in SELECTIONS:
+            raise ValueError(f"unknown selection {selection!r}; allowed: {', '.join(SELECTIONS)}")
+        self.selection = selection
+        if truncation is None:
+            truncation = {"iterative": PoissonCMF(2.0), "recursive": Cumulative(), "single": Poisson(2.0)}[selection]
+        self.truncation = resolve_truncation(truncation)
+        if terms is None:
+            terms = "ustat" if selection == "iterative" else "naive"
+        if terms not in ("naive", "ustat"):
+            raise ValueError(f"unknown term estimator {terms!r}; allowed: 'naive', 'ustat'")
+        if terms == "ustat" and selection != "iterative":
+            raise ValueError(f"terms='ustat' needs the number of terms before the samples are drawn: use "
+                             f"selection='iterative' (got selection={selection!r})")
+        self.terms = terms
+        if self.truncation.adaptive and selection != "recursive":
+            raise ValueError(f"{self.truncation.name} truncation adapts to the samples, so only "
+                             f"selection='recursive' can use it (got {selection!r})")
+        self.max_terms = check_count("max_terms", max_terms, 1)
+        self.point = ExpansionPoint(Pilot(1) if b is None else b, series=series)
+
+        limit = self.max_terms if series.degree is None else min(self.max_terms, series.degree)
+        if self.truncation.adaptive:
+            self.K = limit
+        else:
+            self.K, self.S, self.invS, self.q, self.pmf = self.truncation.tables(limit)
+            if selection == "single":
+                bad = np.flatnonzero(self.pmf <= 0.0)
+                if bad.size:
+                    raise ValueError(f"single-term selection needs P(k) > 0 for every term k <= {self.K}, but "
+                                     f"{self.truncation.name} gives P(k) = 0 for k in {bad.tolist()}; use "
+                                     f"Poisson(tau) or Geometric(p)")
+                self.inv_pmf = 1.0 / self.pmf
+        if terms == "ustat" and self.K > MAX_USTAT_TERMS:
+            raise ValueError(f"terms='ustat' keeps one running mean per term; K={self.K} > {MAX_USTAT_TERMS}: "
+                             f"lower max_terms")
+        self.name = f"series[{series.name}; {selection}/{self.truncation.name}/{terms}; {self.point.describe()}]"
+
+    # -- helpers ----------------------------------------------------------------------------------
+    def _b(self, ctx, state):
+        return self.point.value(ctx, state)
+
+    def _cs_start(self, ctx, state=None):
+        if self.point.pilot:
+            if state is None:
+                return tuple(ctx.vzero() for _ in range(self.series.state_len))
+            return tuple(self.series.start(ctx, state["b"]))
+        return tuple(self.series.start_fixed(ctx, self.point.fixed))
+
+    def exact(self, I):
+        return self.series.function(I)
+
+    # -- protocol -------------------------------------------------------------------------------
+    def start(self, ctx: Context, carry):
+        state = self.point.start(ctx)
+        state["cs"] = self._cs_start(ctx)
+        state["k"] = ctx.lane(0.0)
+        state["prod"] = ctx.value_array(1.0)
+        sel = self.selection
+        if sel in ("recursive", "iterative") and self.terms == "naive":
+            state["acc"] = ctx.vzero() + self.series.coefficient(state["cs"])
+        if sel == "recursive":
+            u, carry = ctx.uniform(carry)
+            q1 = 1.0 if self.truncation.adaptive else float(self.q[1])
+            alive = (u < q1) & ctx.mask(self.K >= 1)
+            state["alive"] = alive
+            state["Q"] = A.select(alive, ctx.lane(q1), ctx.lane(1.0))
+            if self.truncation.adaptive:
+                state["scale"] = self._scale(ctx, state["acc"])
+        else:
+            u, carry = ctx.uniform(carry)
+            state["N"] = ctx.count_above(self.S, u)
+            if sel == "single":
+                state["w"] = ctx.lookup(self.inv_pmf, state["N"])
+            elif self.terms == "ustat":
+                state["m"] = tuple(ctx.vzero() for _ in range(self.K))
+        return state, carry
+
+    def _scale(self, ctx, a0):
+        s = A.abs(a0)
+        return A.select(s > 0.0, s, s * 0.0 + 1.0)
+
+    def wants(self, ctx, state):
+        w = state["alive"] if self.selection == "recursive" else state["k"] < state["N"]
+        inp = self.point.in_pilot(state)
+        return w if inp is None else (w | inp)
+
+    def feed(self, ctx, state, x, mask, carry):
+        inp = self.point.in_pilot(state)
+        if inp is not None:
+            state, done = self.point.feed(ctx, state, x, mask)
+            state["cs"] = ctx.when(done, lambda: self._cs_start(ctx, state), state["cs"])
+            if "acc" in state:
+                a0 = ctx.vzero() + self.series.coefficient(state["cs"])
+                state["acc"] = A.select(done, a0, state["acc"])
+                if "scale" in state:
+                    state["scale"] = A.select(done, self._scale(ctx, a0), state["scale"])
+            mask = mask & ~inp
+        else:
+            state = dict(state)
+        b = self._b(ctx, state)
+        y = x - b
+        k = state["k"]
+        k1 = k + 1.0
+        new = {"k": k1}
+        if self.selection == "iterative" and self.terms == "ustat":
+            m = ustat_update(list(state["m"]), y, k1)
+            new["m"] = tuple(m)
+        else:
+            prod = state["prod"] * y
+            cs = tuple(self.series.advance(ctx, state["cs"], k, b))
+            new["prod"], new["cs"] = prod, cs
+            if self.selection != "single":
+                term = self.series.coefficient(cs) * prod
+                if self.selection == "iterative":
+                    new["acc"] = state["acc"] + term * ctx.lookup(self.invS, k1)
+                else:
+                    Q = state["Q"]
+                    new["acc"] = state["acc"] + term * (1.0 / Q)
+                    if self.truncation.adaptive:
+                        W = A.hmax(A.abs(term) / (state["scale"] * Q))
+                        q = A.clip(W, self.truncation.min_continue, 1.0)
+                    else:
+                        q = ctx.lookup(self.q, k1 + 1.0)
+                    u, carry = ctx.uniform(carry)
+                    alive = (u < q) & (k1 < float(self.K))
+                    new["alive"] = alive
+                    new["Q"] = A.select(alive, Q * q, Q)
+        for key, v in new.items():
+            if isinstance(v, tuple):
+                state[key] = tuple(A.select(mask, a, o) for a, o in zip(v, state[key]))
+            else:
+                state[key] = A.select(mask, v, state[key])
+        return state, carry
+
+    def value(self, ctx, state):
+        if self.selection == "single":
+            return self.series.coefficient(state["cs"]) * state["prod"] * state["w"]
+        if self.terms == "naive":
+            return state["acc"]
+        b = self._b(ctx, state)
+        cs = self._cs_start(ctx, state)
+        out = ctx.vzero() + self.series.coefficient(cs)
+        for k in range(1, self.K + 1):
+            cs = self.series.advance(ctx, cs, ctx.lane(float(k - 1)), b)
+            out = out + self.series.coefficient(cs) * state["m"][k - 1] * float(self.invS[k])
+        return out
+
+    @property
+    def mean_samples(self):
+        if self.truncation.adaptive:
+            return None
+        if self.selection == "single":
+            terms = float(np.dot(np.arange(len(self.pmf)), self.pmf))
+        else:
+            terms = float(np.sum(self.S[1:]))
+        return self.point.samples + terms

@@ -1,0 +1,51 @@
+"""The tie-dye style of the paper's Fig. 11 and its degree-20 Chebyshev fit.
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S5.5:
+        r' = (1 - cos(2 pi (r + 1))) / 2
+        g' = (1 - cos(2.15 pi (g + 1.13))) / 2
+        b' = (1 - cos(2.3 pi (b + 1.29))) / 2
+    fitted per channel with a degree-20 Chebyshev basis on [-1, 4]; the paper clamps samples above 4
+    (that clamp belongs to the caller, before the samples reach the estimator, and is a bias).
+
+Parameters
+    tie_dye_fit(degree=20, lo=-1, hi=4, nodes="chebyshev"): a 3-channel fits.Fit (interpolation at
+    degree+1 Chebyshev nodes). Its measured maximum error on [lo, hi] is in docs/estimators.md; the
+    blue channel, with the highest frequency, is the worst.
+"""
+from __future__ import annotations
+
+import math
+
+from . import arrays as A
+from .fits import Fit, chebyshev_fit
+
+__all__ = ["tie_dye_r", "tie_dye_g", "tie_dye_b", "TIE_DYE", "tie_dye", "tie_dye_fit"]
+
+
+def tie_dye_r(r):
+    return (1.0 - A.cos((2.0 * math.pi) * (r + 1.0))) * 0.5
+
+
+def tie_dye_g(g):
+    return (1.0 - A.cos((2.15 * math.pi) * (g + 1.13))) * 0.5
+
+
+def tie_dye_b(b):
+    return (1.0 - A.cos((2.3 * math.pi) * (b + 1.29))) * 0.5
+
+
+TIE_DYE = (tie_dye_r, tie_dye_g, tie_dye_b)
+
+
+def tie_dye(x):
+    """All three channels of a value: numpy (..., 3) or a 3-channel Dr.Jit array."""
+    if A.is_drjit(x):
+        return type(x)(tie_dye_r(x[0]), tie_dye_g(x[1]), tie_dye_b(x[2]))
+    import numpy as np
+    x = np.asarray(x)
+    return np.stack([tie_dye_r(x[..., 0]), tie_dye_g(x[..., 1]), tie_dye_b(x[..., 2])], axis=-1)
+
+
+def tie_dye_fit(degree: int = 20, lo: float = -1.0, hi: float = 4.0, nodes: str = "chebyshev") -> Fit:
+    return chebyshev_fit(list(TIE_DYE), degree, lo, hi, nodes=nodes)

@@ -1,0 +1,174 @@
+"""Truncation distributions: which terms of an infinite sum get evaluated, and with what weight.
+
+Reference
+    Georgiev, Misso, Hachisuka, Nowrouzezahrai, Krivanek, Jarosz, "Integral Formulations of
+    Volumetric Transmittance", 2019 (single-term, prefix-sum, Russian roulette; "cumulative" and
+    "CMF" power-series estimators), and Kettunen, d'Eon, Pantaleoni, Novak, "An Unbiased
+    Ray-Marching Transmittance Estimator", 2021 (deterministic terms up to a Poisson CMF threshold).
+
+Notation
+    N is the last term index evaluated (terms 0..N). S(k) = P(N >= k), S(0) = 1; a prefix-sum
+    estimator weights term k by 1 / S(k); Russian roulette continues from term k-1 to term k with
+    probability q_k = S(k) / S(k-1). Any rule with S(k) > 0 for every needed term is unbiased.
+
+Distributions (parameters, defaults)
+    Cumulative(min_continue=0.0)  adaptive: after term k (k >= 0) continue to k+1 with probability
+        q = clamp(W_k, min_continue, 1), W_k = max over channels of |a_k <(I-b)^k>| / (Q_k |a_0|)
+        (|a_0| replaced by 1 where a_0 = 0), Q_k = product of the continuation probabilities so far:
+        the running term weight relative to the zeroth term. W_0 = 1, so term 1 is always reached.
+        Depends on the samples, so only recursive (Russian roulette) selection can use it. A series
+        with an interior zero coefficient (a_k = 0 but a_j != 0 for some j > k) stops there unless
+        min_continue > 0: use a positive floor for such series.
+    PoissonCMF(tau=2.0, threshold=0.99)  terms 0..K0 always, K0 = the first k where the Poisson(tau)
+        CMF reaches `threshold`; beyond, continue to term k with probability min(1, tau / k).
+    Poisson(tau=2.0)      N ~ Poisson(tau): S(k) = P(Poisson(tau) >= k). Full support: usable by
+        single-term selection (term k chosen with probability e^-tau tau^k / k!).
+    Geometric(p=0.5, min_terms=0)   S(k) = 1 for k <= min_terms, p^(k - min_terms) beyond.
+    PowerLaw(alpha=1.5, min_terms=0) S(k) = 1 for k <= min_terms, (k - min_terms + 1)^(-alpha) beyond:
+        heavy tails for the telescoping estimator, whose differences shrink only like 1/k.
+
+Effective cap
+    Terms with S(k) < 2^-24 are never evaluated (a float32 uniform cannot resolve them), nor terms
+    beyond `max_terms`; the estimate is then exactly unbiased for the series truncated there.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["Truncation", "Cumulative", "PoissonCMF", "Poisson", "Geometric", "PowerLaw", "resolve_truncation"]
+
+RESOLUTION = 2.0 ** -24
+
+
+def _positive(name, v, upper=None):
+    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v) or v <= 0:
+        raise ValueError(f"{name} must be a positive finite number, got {v!r}")
+    if upper is not None and v >= upper:
+        raise ValueError(f"{name} must be < {upper}, got {v!r}")
+    return float(v)
+
+
+def _min_terms(v):
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
+        raise ValueError(f"min_terms must be an integer >= 0, got {v!r}")
+    return int(v)
+
+
+class Truncation:
+    adaptive = False
+    name = "truncation"
+
+    def survival(self, kmax: int) -> np.ndarray:
+        """S(0..kmax) as float64."""
+        raise NotImplementedError
+
+    def cap(self, max_terms: int) -> int:
+        """Largest k <= max_terms with S(k) >= 2^-24."""
+        S = self.survival(max_terms)
+        ok = np.flatnonzero(S >= RESOLUTION)
+        return int(ok[-1])
+
+    def tables(self, max_terms: int):
+        """(K, S[0..K], 1/S[0..K], q[0..K] with q_k = S(k)/S(k-1), pmf[0..K]) after the cap."""
+        K = self.cap(max_terms)
+        S = self.survival(K + 1)
+        q = np.ones(K + 2)
+        q[1:] = S[1:] / S[:-1]
+        q[K + 1] = 0.0  # the cap: never beyond K
+        pmf = S[:K + 1] - np.append(S[1:K + 1], 0.0)
+        return K, S[:K + 1], 1.0 / S[:K + 1], q, pmf
+
+    def __repr__(self):
+        return self.name
+
+
+class Cumulative(Truncation):
+    adaptive = True
+
+    def __init__(self, min_continue: float = 0.0):
+        if not (isinstance(min_continue, (int, float)) and 0.0 <= min_continue <= 1.0):
+            raise ValueError(f"min_continue must be in [0, 1], got {min_continue!r}")
+        self.min_continue = float(min_continue)
+        self.name = "cumulative" + (f"(min={self.min_continue:g})" if self.min_continue else "")
+
+    def survival(self, kmax):
+        raise ValueError("cumulative truncation adapts to the samples: it has no fixed distribution "
+                         "(use selection='recursive')")
+
+    def cap(self, max_terms):
+        return max_terms
+
+
+class PoissonCMF(Truncation):
+    def __init__(self, tau: float = 2.0, threshold: float = 0.99):
+        self.tau = _positive("tau", tau)
+        self.threshold = _positive("threshold", threshold, upper=1.0)
+        cmf, pk, k = 0.0, math.exp(-self.tau), 0
+        while True:
+            cmf += pk
+            if cmf >= self.threshold:
+                break
+            k += 1
+            pk *= self.tau / k
+        self.deterministic = k
+        self.name = f"poisson-cmf(tau={self.tau:g}, K0={k})"
+
+    def survival(self, kmax):
+        S = np.ones(kmax + 1)
+        for k in range(self.deterministic + 1, kmax + 1):
+            S[k] = S[k - 1] * min(1.0, self.tau / k)
+        return S
+
+
+class Poisson(Truncation):
+    def __init__(self, tau: float = 2.0):
+        self.tau = _positive("tau", tau)
+        self.name = f"poisson(tau={self.tau:g})"
+
+    def survival(self, kmax):
+        M = kmax + 64 + int(10 * self.tau)  # far enough that the neglected tail is below float64 resolution
+        pk = np.empty(M + 1)
+        pk[0] = math.exp(-self.tau)
+        for k in range(1, M + 1):
+            pk[k] = pk[k - 1] * self.tau / k
+        # S(k) = 1 - CMF(k-1); in the tail, summing the pmf is more accurate than 1 minus a CMF near 1
+        tail = np.cumsum(pk[::-1])[::-1]
+        head = 1.0 - np.concatenate([[0.0], np.cumsum(pk)[:-1]])
+        return np.where(head > 0.5, head, tail)[:kmax + 1]
+
+
+class Geometric(Truncation):
+    def __init__(self, p: float = 0.5, min_terms: int = 0):
+        self.p = _positive("p", p, upper=1.0)
+        self.min_terms = _min_terms(min_terms)
+        self.name = f"geometric(p={self.p:g}, min={self.min_terms})"
+
+    def survival(self, kmax):
+        k = np.arange(kmax + 1)
+        return np.where(k <= self.min_terms, 1.0, self.p ** np.maximum(k - self.min_terms, 0))
+
+
+class PowerLaw(Truncation):
+    def __init__(self, alpha: float = 1.5, min_terms: int = 0):
+        self.alpha = _positive("alpha", alpha)
+        self.min_terms = _min_terms(min_terms)
+        self.name = f"power-law(alpha={self.alpha:g}, min={self.min_terms})"
+
+    def survival(self, kmax):
+        k = np.arange(kmax + 1)
+        return np.where(k <= self.min_terms, 1.0, (np.maximum(k - self.min_terms, 0) + 1.0) ** -self.alpha)
+
+
+_NAMES = {"cumulative": Cumulative, "poisson_cmf": PoissonCMF, "poisson": Poisson,
+          "geometric": Geometric, "power_law": PowerLaw}
+
+
+def resolve_truncation(spec) -> Truncation:
+    """A Truncation instance from an instance or a name (default parameters)."""
+    if isinstance(spec, Truncation):
+        return spec
+    if isinstance(spec, str) and spec in _NAMES:
+        return _NAMES[spec]()
+    raise ValueError(f"unknown truncation {spec!r}; allowed: a Truncation instance or one of {sorted(_NAMES)}")
