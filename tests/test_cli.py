@@ -162,3 +162,21 @@ def test_ctrl_c_writes_the_finished_passes(tmp_path):
     assert b"interrupted; wrote" in rest
     img = read(out)
     assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0
+
+
+def test_second_ctrl_c_abandons_the_pass_under_way(tmp_path):
+    out = tmp_path / "partial.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
+                             "--spp", "100000", "--inner", "4", "--pass-spp", "400", "-o", str(out)],
+                            stderr=subprocess.PIPE, env=ENV)
+    seen = b""
+    deadline = time.time() + 120
+    while b"400/100000" not in seen and time.time() < deadline:  # the first pass has finished
+        seen += os.read(proc.stderr.fileno(), 4096)
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGINT)
+    rest = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130, (seen + rest).decode()
+    assert b"wrote" in rest and b"of 100000 spp" in rest
+    assert read(out).shape == (64, 64, 3)

@@ -2,12 +2,14 @@
 
 Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
 unwritable output) ends with one line on stderr and exit status 2. Ctrl-C during a multi-pass
-render writes the average of the passes finished so far, then exits with status 130.
+render finishes the pass under way (a second Ctrl-C abandons it), writes the average of the finished
+passes, then exits with status 130.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 import tempfile
 from typing import Sequence
@@ -67,6 +69,29 @@ def save_safely(image, path: str) -> str:
         return fallback
 
 
+class InterruptFlag:
+    """Ctrl-C handling for the pass loop: the first Ctrl-C finishes the pass under way, the second
+    abandons it. Either way the passes already finished are written (an exception raised by a signal
+    handler inside a running kernel would otherwise surface as an unrelated RuntimeError)."""
+
+    def __enter__(self):
+        self.count = 0
+        self._old = signal.getsignal(signal.SIGINT)
+        signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum, frame):
+        self.count += 1
+        if self.count == 1:
+            print("\nstyletrace: stopping after this pass (Ctrl-C again to stop now)", file=sys.stderr)
+        else:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc):
+        signal.signal(signal.SIGINT, self._old)
+        return False
+
+
 def cmd_styles(args) -> int:
     import styletrace  # noqa: F401  (registers everything)
     from styletrace.styles import get, names
@@ -111,12 +136,19 @@ def cmd_render(args) -> int:
         from tqdm import tqdm
         bar = tqdm(total=args.spp, unit="spp", desc="rendering", file=sys.stderr)
     latest = None
-    try:
-        for prog in api.passes(scene, integrator, args.spp, args.seed, lanes):
-            if bar is not None:
-                bar.update(prog.spp_done - (latest.spp_done if latest else 0))
-            latest = prog
-    except KeyboardInterrupt:
+    with InterruptFlag() as stop:
+        try:
+            for prog in api.passes(scene, integrator, args.spp, args.seed, lanes):
+                if bar is not None:
+                    bar.update(prog.spp_done - (latest.spp_done if latest else 0))
+                latest = prog
+                if stop.count:
+                    break
+        except (KeyboardInterrupt, RuntimeError):
+            # A second Ctrl-C abandons the pass under way; Dr.Jit may wrap it in a RuntimeError.
+            if not stop.count:
+                raise
+    if stop.count:
         if bar is not None:
             bar.close()
         if latest is None:

@@ -160,6 +160,8 @@ def _take(tree, idx, lanes):
 
 
 def _put(old_tree, new_tree, idx, lanes):
+    """Write the body's results for lanes idx back; per-lane leaves are updated in place when they can
+    hold the result exactly (the loop owns them: ``numpy_while_loop`` copies the caller's arrays first)."""
     def put(old, new):
         if not isinstance(new, np.ndarray) and not isinstance(old, np.ndarray):
             return new  # shared leaf (generator, python constant): the body's version wins
@@ -169,39 +171,53 @@ def _put(old_tree, new_tree, idx, lanes):
                 and np.array_equal(old, new):
             return old  # an unchanged broadcast literal stays a literal
         trail = np.broadcast_shapes(old.shape[1:] if old.ndim else (), new.shape[1:] if new.ndim else ())
-        dtype = np.result_type(old, new)
-        out = np.array(np.broadcast_to(old, (lanes,) + trail), dtype=dtype)
+        if _lane_leaf(old, lanes) and old.shape[1:] == trail and np.can_cast(new.dtype, old.dtype, "safe"):
+            if new is not old:
+                old[idx] = np.broadcast_to(new, (idx.size,) + trail)
+            return old
+        out = np.array(np.broadcast_to(old, (lanes,) + trail), dtype=np.result_type(old, new))
         out[idx] = np.broadcast_to(new, (idx.size,) + trail)
         return out
     return tree_map(put, old_tree, new_tree)
 
 
+def _flat_mask(mask):
+    return mask.reshape(mask.shape[0], -1)[:, 0]
+
+
 def numpy_while_loop(state: tuple, cond, body, set_lanes=None, max_iterations: int = 10_000_000) -> tuple:
     """Masked, lane-compacting emulation of ``drjit.while_loop`` for numpy states.
 
-    ``set_lanes(k)`` (optional) is told the number of lanes the body is about to see, and the full
-    count again afterwards, so that code creating fresh per-lane arrays inside the body matches.
+    As in Dr.Jit, a lane whose condition fails keeps its state and so never runs again; only the
+    lanes still running are gathered for ``cond`` and ``body``. ``set_lanes(k)`` (optional) is told
+    how many lanes those functions see, and the full count afterwards, so that code creating fresh
+    per-lane arrays inside them matches.
     """
-    state = tuple(state)
-    for _ in range(max_iterations):
-        mask = np.asarray(cond(*state))
-        if mask.ndim == 0:
-            if not mask:
-                return state
-            state = tuple(body(*state))
-            continue
-        flat = mask.reshape(mask.shape[0], -1)[:, 0]
-        lanes = flat.shape[0]
-        idx = np.flatnonzero(flat)
-        if idx.size == 0:
-            return state
-        sub = state if idx.size == lanes else _take(state, idx, lanes)
+    def call(fn, args, k, lanes):
         if set_lanes is not None:
-            set_lanes(idx.size)
+            set_lanes(k)
         try:
-            new = tuple(body(*sub))
+            return fn(*args)
         finally:
             if set_lanes is not None:
                 set_lanes(lanes)
-        state = _put(state, new, idx, lanes)
+
+    state = tuple(state)
+    mask = np.asarray(cond(*state))
+    if mask.ndim == 0:  # no per-lane data at all: a plain loop
+        while mask:
+            state = tuple(body(*state))
+            mask = np.asarray(cond(*state))
+        return state
+    lanes = mask.shape[0]
+    state = tree_map(lambda x: np.array(x) if _lane_leaf(x, lanes) else x, state)  # own what we update
+    running = np.flatnonzero(_flat_mask(mask))
+    for _ in range(max_iterations):
+        if running.size == 0:
+            return state
+        sub = state if running.size == lanes else _take(state, running, lanes)
+        new = tuple(call(body, sub, running.size, lanes))
+        state = _put(state, new, running, lanes)
+        sub = state if running.size == lanes else _take(state, running, lanes)
+        running = running[_flat_mask(np.asarray(call(cond, sub, running.size, lanes)))]
     raise RuntimeError(f"numpy_while_loop: no termination after {max_iterations} iterations")
