@@ -6,7 +6,7 @@ pure math, array-generic (numpy or Dr.Jit), no Mitsuba. Guide: docs/estimators.m
 
 Kernel contract (stable; what the integrator calls)
 ------------------------------------------------------
-    value, carry = estimator.run(draw, carry, uniform, active=None, like=None)
+    value, carry = estimator.run(draw, carry, uniform, active=None, *, like=None)
 
     draw(carry) -> (x, carry)
         ONE new independent unbiased sample of I per lane and the updated carry. numpy: shape

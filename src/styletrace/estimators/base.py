@@ -30,10 +30,6 @@ from . import arrays as A
 
 __all__ = ["Context", "Estimator", "check_count"]
 
-#: A float32 uniform is a multiple of 2**-24, so a truncation decision cannot resolve
-#: probabilities below this; terms the truncation would reach less often are never evaluated.
-UNIFORM_RESOLUTION = 2.0 ** -24
-
 
 def check_count(name: str, value, minimum: int = 1) -> int:
     """An integer parameter >= minimum, or a ValueError naming it."""
@@ -69,12 +65,16 @@ class Context:
         like_t = like if isinstance(like, type) else (type(like) if like is not None else None)
         if like_t is not None and dr is not None and issubclass(like_t, dr.ArrayBase):
             return cls("drjit", like_t=like_t, uniform=uniform), carry
+        if like is not None and not isinstance(like, np.ndarray):
+            raise ValueError(f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
+                             f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
+                             f"got {like!r}")
         if A.is_drjit(active):
             raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>, "
                              "e.g. like=mitsuba.Color3f or like=drjit.llvm.Float")
         lanes = dtype = channels = ndim = None
-        if like is not None and not isinstance(like, type):
-            arr = np.asarray(like)
+        if like is not None:
+            arr = like
             if arr.ndim not in (1, 2):
                 raise ValueError(f"like must have shape (lanes,) or (lanes, C), got {arr.shape}")
             lanes, dtype, ndim = arr.shape[0], arr.dtype, arr.ndim
@@ -287,7 +287,7 @@ class Estimator:
         return f"<{type(self).__name__} {self.name}>"
 
     # -- the kernel contract ----------------------------------------------------------------------
-    def run(self, draw, carry, uniform, active=None, like=None):
+    def run(self, draw, carry, uniform, active=None, *, like=None):
         """value, carry = estimator.run(draw, carry, uniform, active=None, like=None)
 
         Runs one estimate per lane. ``draw`` is called once per loop iteration, inside the loop

@@ -25,8 +25,6 @@ Parameters
 """
 from __future__ import annotations
 
-import numpy as np
-
 from . import arrays as A
 from .base import Context, Estimator, check_count
 from .coefficients import PolynomialSeries

@@ -39,6 +39,8 @@ import numpy as np
 
 __all__ = ["Truncation", "Cumulative", "PoissonCMF", "Poisson", "Geometric", "PowerLaw", "resolve_truncation"]
 
+#: A float32 uniform is a multiple of 2**-24, so a truncation decision cannot resolve probabilities
+#: below this; terms the truncation would reach less often are never evaluated.
 RESOLUTION = 2.0 ** -24
 
 

@@ -12,6 +12,8 @@ def register() -> None:
     import mitsuba as mi
 
     from .integrator import StylizedIntegrator
+    from .styled_bsdf import StyledBSDF
 
     mi.register_integrator("stylized", lambda props: StylizedIntegrator(props))
+    mi.register_bsdf("styled", lambda props: StyledBSDF(props))
     _registered = True

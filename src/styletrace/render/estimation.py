@@ -1,9 +1,9 @@
-"""Glue between a style and the estimator that turns n child samples into g(E[L]).
+"""Glue between a style and the estimator that turns child samples into g(E[L]).
 
-`build_estimator(name, style, n)` returns an object with
-    run(draw, carry, uniform, active, vertex) -> (value, carry)
-where `draw(carry)` traces one child sample (it carries the sampler), `uniform(carry)` draws a
-uniform number for random truncation, and `vertex` is the style context.
+`make_estimator(slot, level, vertex)` returns an object with
+    run(draw, carry, uniform, active) -> (value, carry)
+where `draw(carry)` traces one child sample (the carry holds the sampler), `uniform(carry)` draws a
+uniform number for random truncation, and `active` masks the lanes to stylize.
 """
 from __future__ import annotations
 
@@ -22,11 +22,11 @@ class DirectApplication:
 
     name = "direct"
 
-    def __init__(self, style: Style, n: int):
-        self.style, self.n = style, n
+    def __init__(self, g, n: int):
+        self.g, self.n = g, n
         self.mean_samples = n
 
-    def run(self, draw, carry, uniform, active, vertex):
+    def run(self, draw, carry, uniform, active):
         n = self.n
 
         def cond(carry, i, total):
@@ -38,14 +38,18 @@ class DirectApplication:
 
         carry, _, total = dr.while_loop((carry, mi.UInt32(0), mi.Spectrum(0.0)), cond, body,
                                         labels=("carry", "i", "total"), label="styletrace inner samples")
-        return self.style.apply(total * (1.0 / n), vertex), carry
+        return self.g(total * (1.0 / n)), carry
 
 
-ESTIMATORS = {"direct": DirectApplication}
+ESTIMATORS = ("direct",)
 
 
-def build_estimator(name: str, style: Style, n: int):
+def check_estimator(name: str, style: Style) -> None:
     if name not in ESTIMATORS:
         raise StyleError(f"unknown estimator '{name}' for style '{style.name}': available are "
-                         f"{', '.join(sorted(ESTIMATORS))}")
-    return ESTIMATORS[name](style, n)
+                         f"{', '.join(ESTIMATORS)}")
+
+
+def make_estimator(slot, level: int, vertex):
+    style = slot.style
+    return DirectApplication(lambda I: style.apply(I, vertex), slot.n(level))

@@ -7,19 +7,30 @@ Properties (XML, Python dict, or the CLI's --set):
 | style         | string | identity         | registry name of the style g_theta (`styletrace styles`) |
 | <param>       | any    | style default    | the style's own parameters, under their registry names |
 | inner_samples | int / list | style default | n: child estimates per stylized vertex; '8,4' gives one per level |
-| estimator     | string | direct           | how g(E[L]) is estimated from the n children |
-| stylize       | string | first_hit        | first_hit: the camera ray's first hit; first_n_hits: the first N vertices |
-| stylize_depth | int    | 1                | N for first_n_hits |
+| estimator     | string | direct           | how g(E[L]) is estimated from the children |
+| stylize       | string | first_hit        | where styles apply, see below |
+| stylize_depth | int    | 1                | number of stylized levels N (first_n_hits, first_object_hit) |
 | max_depth     | int    | -1               | longest path, Mitsuba's convention (-1: unbounded) |
 | rr_depth      | int    | 5                | depth at which Russian roulette starts |
 
 The radiance leaving a stylized vertex x towards the viewer is
     L(x, wo) = g_theta( L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi )
-(the stylized rendering equation, emission inside g). Per camera sample the integrator draws n child
-estimates of the argument of g in a nested symbolic loop in the same SIMD lane (no lane replication,
-so memory does not grow with n), and hands them to the estimator. Children of the last stylized level
-are ordinary path-traced samples (`path.exitant`); children of earlier levels take one BSDF-sampled
-bounce and recurse into the next stylized vertex. Rays that escape see the environment unstylized.
+(the stylized rendering equation, emission inside g). At a stylized vertex the integrator draws n
+child estimates of the argument of g in a nested symbolic loop in the same SIMD lane (no lane
+replication, so memory does not grow with n) and hands them to the estimator.
+
+Where styles apply (`stylize`):
+- first_hit: the camera ray's first hit. Objects whose BSDF is a `styled` wrapper use their own style
+  there; all other objects use the integrator's style.
+- first_n_hits: the first N = stylize_depth vertices of every path, recursively (a child of a level-l
+  vertex takes one BSDF-sampled bounce to the level-(l+1) vertex; children of the last level are
+  ordinary path-traced samples). Cost per camera sample is the product of the per-level counts.
+- first_object_hit: the first vertex *on a styled object* along each path, at any depth: a stylized
+  object seen through a mirror or a glass is still stylized. Paths are ordinary path-traced walks that
+  halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
+  The integrator's own style must be identity here.
+
+Rays that escape see the environment unstylized.
 """
 from __future__ import annotations
 
@@ -27,20 +38,28 @@ import drjit as dr
 import mitsuba as mi
 
 from ..styles.base import Vertex, camera_forward
-from .path import exitant
-from .properties import Settings, props_to_dict, settings_from
+from .estimation import make_estimator
+from .path import depth_limit, exitant, walk
+from .properties import Settings, StyleSlot, props_to_dict, settings_from
+from .styled_bsdf import StyledBSDF
 
 
 def environment(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
     """Radiance the environment sends along an escaped ray (zero where there is none)."""
-    ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.SurfaceInteraction3f))
+    ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
     return ds.emitter.eval(si, active & ~si.is_valid())
 
 
 def emission(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
     """Radiance emitted at si towards si.wi (or by the environment where si escaped)."""
-    ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.SurfaceInteraction3f))
-    return ds.emitter.eval(si, active)
+    return si.emitter(scene).eval(si, active)
+
+
+class Target:
+    """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with these BSDFs."""
+
+    def __init__(self, slot: StyleSlot, bsdfs=(), emitters=()):
+        self.slot, self.bsdfs, self.emitters = slot, list(bsdfs), list(emitters)
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
@@ -48,46 +67,87 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         super().__init__(props)
         self.settings: Settings = settings_from(props_to_dict(props))
 
-    # Depth of a vertex of stylized level l along the camera path is l (the camera hit is level 0).
-    def _remaining_depth(self, level: int) -> int:
-        m = self.settings.max_depth
-        return -1 if m < 0 else m - level
+    # ---- which styles apply where --------------------------------------------------------------
+    def _targets(self, scene: mi.Scene) -> list[Target]:
+        groups: dict[int, Target] = {}
+        for shape in scene.shapes():
+            bsdf = shape.bsdf()
+            if isinstance(bsdf, StyledBSDF):
+                t = groups.setdefault(id(bsdf), Target(bsdf.slot, [bsdf]))
+                if shape.emitter() is not None:
+                    t.emitters.append(shape.emitter())
+        targets = list(groups.values())
+        if self.settings.stylize != "first_object_hit":
+            targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
+        return targets
 
-    def child(self, level: int, scene, sampler, pi, si, ray, active) -> mi.Spectrum:
+    def _styled(self, si) -> mi.Bool:
+        return _any_ptr(si.bsdf(), [b for t in self.targets for b in t.bsdfs])
+
+    def _skip_emitter(self, ds) -> mi.Bool:
+        ems = [e for t in self.targets for e in t.emitters]
+        mask = mi.Bool(False)
+        for e in ems:
+            mask |= ds.emitter == mi.EmitterPtr(e)
+        return mask
+
+    # ---- the tree ------------------------------------------------------------------------------
+    def child(self, level: int, scene, sampler, pi, si, ray, active, depth) -> mi.Spectrum:
         """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`)."""
         s = self.settings
-        remaining = self._remaining_depth(level)
         if level + 1 >= s.stylize_depth:
-            return exitant(scene, sampler, pi, ray, active, remaining, s.rr_depth)
-        # The next vertex is stylized as well: its whole exitant radiance, emission included, goes
-        # through g, so it cannot be split by next-event estimation; sample the BSDF alone.
+            return exitant(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth)
+        if s.stylize == "first_object_hit":
+            return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
+        # first_n_hits: the next vertex is stylized as well; its whole exitant radiance, emission
+        # included, goes through g, so it cannot be split by next-event estimation: sample the BSDF alone.
         L = emission(scene, si, active)
-        if remaining == 1:
-            return L
+        go = active & (depth + 1 < depth_limit(s.max_depth))
         bsdf = si.bsdf(ray)
-        bs, weight = bsdf.sample(mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d(), active)
+        bs, weight = bsdf.sample(mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d(), go)
         ray2 = si.spawn_ray(si.to_world(bs.wo))
-        go = active & (dr.max(weight) > 0)
+        go &= dr.max(weight) > 0
         pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
         si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
         hit = go & si2.is_valid()
-        deeper = self.stylized(level + 1, scene, sampler, pi2, si2, ray2, hit)
-        return L + weight * dr.select(hit, deeper, environment(scene, si2, go))
+        deeper = self.stylized(level + 1, scene, sampler, pi2, si2, ray2, hit, depth + 1)
+        return L + dr.select(go, weight * dr.select(hit, deeper, environment(scene, si2, go)), 0.0)
 
-    def stylized(self, level: int, scene, sampler, pi, si, ray, active) -> mi.Spectrum:
-        """g_theta(E[L_o]) at the level-`level` vertex si, estimated from child samples."""
-        style = self.settings.style
+    def walk(self, level: int, scene, sampler, pi, ray, active, depth, halt_at_start: bool) -> mi.Spectrum:
+        """A path-traced walk that halts on styled objects and stylizes them at `level`."""
+        s = self.settings
+        start = mi.UInt32(depth)
+
+        def stop(si, d):
+            return self._styled(si) & (d > start) if not halt_at_start else self._styled(si)
+
+        w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
+                 skip_emitter=self._skip_emitter)
+        si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
+        value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
+        return w.L + dr.select(w.halted, w.beta * value, 0.0)
+
+    def stylized(self, level: int, scene, sampler, pi, si, ray, active, depth) -> mi.Spectrum:
+        """g(E[L_o]) at the level-`level` vertex si, each object with its own style."""
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
-                   depth=mi.UInt32(level))
-        if style.closed_form:
-            return dr.select(active, style.apply(mi.Color3f(0.0), v), 0.0)
+                   depth=mi.UInt32(depth))
+        styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
+        total = mi.Spectrum(0.0)
+        for target in self.targets:
+            here = active & (_any_ptr(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
+            total = dr.select(here, self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v),
+                              total)
+        return total
 
-        per_sample = style.per_sample
+    def _estimate(self, slot: StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
+        style = slot.style
+        if style.closed_form:
+            return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
             (smp,) = carry
-            x = self.child(level, scene, smp, pi, si, ray, active)
-            if per_sample:
+            x = self.child(level, scene, smp, pi, si, ray, active, depth)
+            if style.per_sample:
                 x = style.apply(x, v)
             return x, (smp,)
 
@@ -95,25 +155,36 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        value, _ = self.settings.estimators[level].run(draw, (sampler,), uniform, active, v)
-        return dr.select(active, value, 0.0)
+        value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active)
+        return value
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        self.settings.style.prepare(scene)
+        self.targets = self._targets(scene)
+        for t in self.targets:
+            t.slot.style.prepare(scene)
         self.view = camera_forward(scene)
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
+        if self.settings.stylize == "first_object_hit":
+            return self.walk(0, scene, sampler, pi, ray, active, mi.UInt32(0), halt_at_start=True), active, []
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
         hit = active & si.is_valid()
-        value = self.stylized(0, scene, sampler, pi, si, ray, hit)
-        L = dr.select(hit, value, environment(scene, si, active))
-        return L, active, []
+        value = self.stylized(0, scene, sampler, pi, si, ray, hit, mi.UInt32(0))
+        return dr.select(hit, value, environment(scene, si, active)), active, []
 
     def aov_names(self):
         return []
 
     def to_string(self):
         s = self.settings
-        return (f"StylizedIntegrator[style={s.style.describe()}, inner={list(s.inner)}, estimator={s.estimator}, "
-                f"stylize={s.stylize}, stylize_depth={s.stylize_depth}, max_depth={s.max_depth}]")
+        return (f"StylizedIntegrator[style={s.style.describe()}, inner={list(s.inner)}, "
+                f"estimator={s.slot.estimator}, stylize={s.stylize}, stylize_depth={s.stylize_depth}, "
+                f"max_depth={s.max_depth}]")
+
+
+def _any_ptr(ptr, objects) -> mi.Bool:
+    mask = mi.Bool(False)
+    for obj in objects:
+        mask |= ptr == mi.BSDFPtr(obj)
+    return mask
