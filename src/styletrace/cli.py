@@ -122,9 +122,14 @@ def cmd_render(args) -> int:
     if args.style is None and isinstance(own, StylizedIntegrator) and not params and args.inner is None:
         integrator = own
     else:
-        integrator = api.make_integrator(
-            style=args.style or "cel", inner=args.inner, estimator=args.estimator, stylize=args.stylize,
-            stylize_depth=args.stylize_depth, max_depth=args.max_depth, rr_depth=args.rr_depth, **params)
+        options = dict(style=args.style or "cel", inner=args.inner, estimator=args.estimator, stylize=args.stylize,
+                       stylize_depth=args.stylize_depth, max_depth=args.max_depth, rr_depth=args.rr_depth)
+        # integrator properties given with --set win over the flags' defaults
+        aliases = {"inner_samples": "inner"}
+        for key in ("style", "inner_samples", "estimator", "stylize", "stylize_depth", "max_depth", "rr_depth"):
+            if key in params:
+                options[aliases.get(key, key)] = params.pop(key)
+        integrator = api.make_integrator(**options, **params)
 
     lanes = api.LANES_PER_PASS
     if args.pass_spp:
@@ -166,6 +171,24 @@ def cmd_render(args) -> int:
     return 0 if out == args.output else 1
 
 
+def cmd_gallery(args) -> int:
+    from styletrace import gallery
+
+    opts = gallery.QUICK if args.quick else gallery.Options()
+    if args.size:
+        opts.size = args.size
+    if os.path.exists(args.output) and not os.path.isdir(args.output):
+        raise UsageError(f"bad output {args.output!r}: expected a folder")
+    only = [k.strip() for k in args.only.split(",")] if args.only else None
+    try:
+        res = gallery.run(args.output, opts, only, log=lambda m: print(m, file=sys.stderr))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    print(f"wrote {os.path.join(args.output, 'index.html')} ({len(res['setups'])} setups, {res['seconds']:.0f} s)",
+          file=sys.stderr)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="styletrace", description="Stylized global illumination as a function of expectation.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -190,6 +213,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     r.set_defaults(func=cmd_render)
+
+    g = sub.add_parser("gallery", help="reproduce the paper's result setups on the dragon scene")
+    g.add_argument("-o", "--output", default="gallery", help="output folder (default: gallery)")
+    g.add_argument("--quick", action="store_true", help="small and fast (under a minute)")
+    g.add_argument("--size", type=int, default=None, help="image size in pixels (square)")
+    g.add_argument("--only", default=None, help="comma-separated setup keys to run")
+    g.set_defaults(func=cmd_gallery)
 
     s = sub.add_parser("styles", help="list the styles and their parameters")
     s.set_defaults(func=cmd_styles)

@@ -131,3 +131,35 @@ def test_mitsuba_color3f_values():
     est = PolynomialU([0.0, 0.0, 1.0], n=3, b=Pilot(1))
     r = estimate_drjit(est, dist, 100_000, like=mi.Color3f, channels=3)
     assert_unbiased(r.values, channel_means(dist, 3) ** 2, what="Color3f")
+
+
+def test_a_mitsuba_sampler_in_the_carry_advances_every_iteration():
+    """The integrator's set-up: carry = (sampler,), draw returns mi.Color3f, uniform uses the sampler."""
+    mi = pytest.importorskip("mitsuba")
+    if not mi.variant():
+        mi.set_variant("llvm_ad_rgb")
+    if not hasattr(mi, "Color3f") or mi.variant().startswith("scalar"):
+        pytest.skip("needs a JIT Mitsuba variant")
+    import drjit as dr
+    lanes = 100_000
+    sampler = mi.load_dict({"type": "independent"})
+    sampler.seed(7, lanes)
+
+    def draw(carry):
+        (s,) = carry
+        u = s.next_1d()
+        return mi.Color3f(u, 2.0 * u, 0.5), (s,)
+
+    def uniform(carry):
+        (s,) = carry
+        return s.next_1d(), (s,)
+
+    for m in (1, 16):
+        value, _ = Mean(m).run(draw, (sampler,), uniform, mi.Bool(True), like=mi.Color3f)
+        v = np.asarray(value, dtype=np.float64).T
+        var, se = variance_and_se(v[:, 0])
+        assert abs(var - 1.0 / 12.0 / m) <= Z * se
+    est = SeriesEstimator(gamma_series(2.2, lo=0.0, hi=3.0), b=Pilot(2))
+    value, _ = est.run(draw, (sampler,), uniform, mi.Bool(True), like=mi.Color3f)
+    dr.eval(value)
+    assert_unbiased(np.asarray(value, dtype=np.float64).T, np.array([0.5, 1.0, 0.5]) ** (1 / 2.2))

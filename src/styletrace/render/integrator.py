@@ -155,7 +155,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active)
+        value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active, like=mi.Color3f)
         return value
 
     def sample(self, scene, sampler, ray, medium=None, active=True):

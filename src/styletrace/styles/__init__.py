@@ -4,7 +4,8 @@ Each style lives in a module of its own and registers itself on import; this pac
 all, so `registry.names()` lists every style. Styles evaluate inside the render kernel on Dr.Jit
 arrays (see `base.Style`).
 """
-from . import acp, cel, color_map, contrast, gamma, gooch, halftone, hatching, identity, saturation, sepia, tie_dye, xtoon  # noqa: F401  (registration side effects)
+from . import (acp, cel, color_map, contrast, exp_tone, gamma, gooch, halftone, hatching,  # noqa: F401
+               identity, reinhard, saturation, sepia, tie_dye, xtoon)  # (registration side effects)
 from .base import Style, Vertex, brightness
 from .params import Param, StyleError
 from .registry import create, get, names

@@ -8,7 +8,8 @@ A style declares
 - `apply(I, v)`: g_theta(I) for a radiance estimate I (mi.Color3f) at vertex `v` (`Vertex`).
   It runs inside the render kernel on Dr.Jit arrays, so it must be branch-free (dr.select, no `if`
   on array values).
-- optionally `series()`: the polynomial / power-series form that the unbiased estimators consume.
+- optionally `form()`: g as an affine map, a power series or a polynomial fit, which the unbiased
+  estimators consume (`forms.py`).
 """
 from __future__ import annotations
 
@@ -80,8 +81,9 @@ class Style:
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         raise NotImplementedError
 
-    def series(self):
-        """The form unbiased estimators need, or None where only direct application applies."""
+    def form(self):
+        """g as an AffineForm, SeriesForm or PolynomialForm (see `forms`) for the unbiased estimators, or
+        None where only direct application (and nothing unbiased) applies."""
         return None
 
     def describe(self) -> str:

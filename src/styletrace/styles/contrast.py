@@ -11,6 +11,7 @@ from __future__ import annotations
 import mitsuba as mi
 
 from .base import Param, Style, Vertex
+from .forms import AffineForm
 from .registry import register
 
 
@@ -26,3 +27,6 @@ class Contrast(Style):
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return (I - self.pivot) * self.c + self.pivot
+
+    def form(self):
+        return AffineForm(self.c, (1.0 - self.c) * self.pivot)

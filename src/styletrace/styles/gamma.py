@@ -6,6 +6,8 @@ Parameters
     g(<I>) = max(<I>, 0)^(1/gamma)        per channel.
 
 Negative inputs (possible with unbiased inner estimates) are clamped to 0 before the power.
+Unbiased estimators use the binomial series of I^(1/gamma) about a pilot estimate b of I
+(a_k = C(1/gamma, k) b^(1/gamma - k)), which converges for 0 < I < 2b.
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .base import Param, Style, Vertex
+from .forms import SeriesForm
 from .registry import register
 
 
@@ -25,3 +28,8 @@ class Gamma(Style):
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return dr.power(dr.maximum(I, 0.0), 1.0 / self.gamma)
+
+    def form(self):
+        from ..estimators import gamma_series
+        # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24)
+        return SeriesForm(gamma_series(self.gamma), pilot_lo=1e-3)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import mitsuba as mi
 
 from .base import Style, Vertex
+from .forms import AffineForm
 from .registry import register
 
 
@@ -19,3 +20,6 @@ class Identity(Style):
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return I
+
+    def form(self):
+        return AffineForm(1.0, 0.0)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import mitsuba as mi
 
 from .base import Param, Style, StyleError, Vertex, brightness
+from .forms import AffineForm
 from .gradient import Gradient
 from .registry import register
 
@@ -44,6 +45,10 @@ class Sepia(Style):
         A = [[s / 3.0] * 3 for s in slope]
         b = [a - s * p0 for a, s in zip(c0, slope)]
         return A, b
+
+    def form(self):
+        A, b = self.affine()
+        return AffineForm(A, b)
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return self.gradient.eval(brightness(I), extrapolate=True)

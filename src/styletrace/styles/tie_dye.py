@@ -25,7 +25,12 @@ import drjit as dr
 import mitsuba as mi
 
 from .base import Param, Style, StyleError, Vertex
+from .forms import PolynomialForm
 from .registry import register
+
+
+#: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
+FIT_DEGREE = 20
 
 
 @register
@@ -55,6 +60,12 @@ class TieDye(Style):
 
     def domain(self) -> tuple[float, float]:
         return (self.domain_min, self.domain_max)
+
+    def form(self):
+        from ..estimators import chebyshev_fit
+        lo, hi = self.domain()
+        # the paper's Fig. 11 setup: a degree-20 Chebyshev fit per channel on the clamp interval
+        return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:
         """g_r, g_g, g_b as numpy callables (array in, array out), clamp to the domain included."""

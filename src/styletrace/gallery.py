@@ -1,0 +1,197 @@
+"""`styletrace gallery`: the paper's result setups (supplement S5, Figs. 7-12) on the built-in dragon.
+
+Each setup renders the dragon scene with one style at several inner sample counts n. Setups with a
+brute-force reference (the colour map at 1024 samples per style evaluation and cel at 4096, as in the
+supplement) also get the mean squared error of every render against it, plotted against n. The
+results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a contact
+sheet `index.html` / `index.md`.
+
+Quick mode (`--quick`) shrinks image size, counts and references so that it finishes in well under a
+minute; CI runs it.
+"""
+from __future__ import annotations
+
+import html
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+
+@dataclass
+class Setup:
+    key: str
+    title: str            # what it shows, with the paper's figure
+    style: str
+    counts: tuple[int, ...]
+    reference: int = 0    # inner samples of the brute-force reference (0: none)
+    reference_note: str = ""
+    params: dict[str, Any] = field(default_factory=dict)
+    integrator: dict[str, Any] = field(default_factory=dict)
+    scene: str = "dragon"
+    estimator: str = "direct"
+
+
+SETUPS = [
+    Setup("color_map", "Colour mapping, direct estimator (Fig. 7)", "color_map", (1, 4, 16, 64), reference=1024,
+          params={"gradient": "dusk"}),
+    Setup("acp", "ACP baseline: colour map per path sample (Fig. 7, Doi et al. 2021)", "acp", (1, 4, 16, 64),
+          params={"gradient": "dusk"}),
+    Setup("cel", "GI cel shading, direct estimator (Fig. 8)", "cel", (1, 4, 16, 64), reference=4096,
+          params={"thresholds": "0.3", "levels": "0.25,0.85"}),
+    Setup("saturation", "Recursive saturation, first 2 hits, 8 samples per evaluation, w = 0.5 (Fig. 9)",
+          "saturation", (8,), params={"w": 0.5}, integrator={"stylize": "first_n_hits", "stylize_depth": 2}),
+    Setup("gamma_direct", "Gamma 1/2.2, direct application (biased) (Fig. 10)", "gamma", (1, 4, 16)),
+    Setup("gamma_series", "Gamma 1/2.2, unbiased power series: iterative prefix sum, pilot of n (Fig. 10)",
+          "gamma", (1, 4), estimator="series"),
+    Setup("gamma_roulette", "Gamma 1/2.2, unbiased power series: Russian roulette prefix sum (Fig. 10)",
+          "gamma", (1, 4), estimator="series_recursive"),
+    Setup("contrast", "Contrast c(I - p) + p, affine, unbiased (Fig. 10)", "contrast", (1, 8),
+          params={"c": 1.6, "pivot": 0.3}, estimator="affine"),
+    Setup("sepia", "Sepia: affine colour map over [0, inf), unbiased (Fig. 10)", "sepia", (1, 8), estimator="affine"),
+    Setup("tie_dye", "Tie-dye via its degree-20 Chebyshev fit, U-statistic, unbiased for the fit (Fig. 11)",
+          "tie_dye", (20, 64), estimator="ustat"),
+    Setup("gooch", "Gooch shading, closed form, 0 samples (Fig. 12)", "gooch", (0,),
+          params={"light_dir": "0.2,1,0.3"}),
+    Setup("xtoon", "X-Toon, closed form, 0 samples (Fig. 12)", "xtoon", (0,), params={"light_dir": "0.2,1,0.3"}),
+    Setup("hatching", "Cross-hatching (Fig. 12)", "hatching", (16,),
+          params={"spacing": 0.035, "u_min": 0.1, "u_max": 0.75}),
+    Setup("halftone", "Half-tone (Fig. 12)", "halftone", (16,), params={"spacing": 0.03}),
+    Setup("mixed", "Per object: cel dragon, hatched floor, PBR glass; seen through the glass too", "identity", (1,),
+          integrator={"stylize": "first_object_hit"}, scene="mixed"),
+]
+
+
+@dataclass
+class Options:
+    size: int = 192
+    spp: int = 8
+    reference_spp: int = 4
+    quick: bool = False
+
+
+QUICK = Options(size=48, spp=2, reference_spp=2, quick=True)
+
+
+def _quick(setup: Setup) -> Setup:
+    counts = tuple(sorted({min(n, 20 if setup.estimator == "ustat" else 4) for n in setup.counts}))
+    ref = min(setup.reference, 64) if setup.reference else 0
+    note = f"quick mode: {ref} samples per evaluation instead of {setup.reference}" if ref else ""
+    return Setup(**{**setup.__dict__, "counts": counts, "reference": ref, "reference_note": note})
+
+
+def write_png(image: np.ndarray, path: str) -> None:
+    from .cli import write_image
+    write_image(image, path)
+
+
+def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
+        log: Callable[[str], None] = print) -> dict[str, Any]:
+    from . import api
+
+    os.makedirs(out_dir, exist_ok=True)
+    setups = [s for s in SETUPS if only is None or s.key in only]
+    if only:
+        unknown = sorted(set(only) - {s.key for s in SETUPS})
+        if unknown:
+            raise ValueError(f"unknown gallery setup(s) {', '.join(unknown)}: available are "
+                             f"{', '.join(s.key for s in SETUPS)}")
+    results: dict[str, Any] = {"options": options.__dict__, "setups": []}
+    t_all = time.perf_counter()
+    for setup in setups:
+        if options.quick:
+            setup = _quick(setup)
+        scene = api.load_scene(setup.scene, options.size, options.size)
+        entry: dict[str, Any] = {"key": setup.key, "title": setup.title, "style": setup.style,
+                                 "estimator": setup.estimator,
+                                 "params": setup.params, "integrator": setup.integrator, "renders": []}
+        reference = None
+        if setup.reference:
+            t = time.perf_counter()
+            integ = api.make_integrator(setup.style, inner=setup.reference, **setup.integrator, **setup.params)
+            reference = api.render(scene, integrator=integ, spp=options.reference_spp, seed=10_000)
+            name = f"{setup.key}_reference.png"
+            write_png(reference, os.path.join(out_dir, name))
+            entry["reference"] = {"file": name, "inner": setup.reference, "spp": options.reference_spp,
+                                  "seconds": time.perf_counter() - t, "note": setup.reference_note}
+            log(f"{setup.key}: reference n={setup.reference} in {entry['reference']['seconds']:.1f} s")
+        for n in setup.counts:
+            t = time.perf_counter()
+            inner = None if n == 0 else n
+            integ = api.make_integrator(setup.style, inner=inner, estimator=setup.estimator if n else "direct",
+                                        **setup.integrator, **setup.params)
+            img = api.render(scene, integrator=integ, spp=options.spp, seed=n)
+            secs = time.perf_counter() - t
+            name = f"{setup.key}_n{n}.png"
+            write_png(img, os.path.join(out_dir, name))
+            r = {"n": n, "file": name, "seconds": secs, "spp": options.spp}
+            if reference is not None:
+                r["mse"] = float(np.mean((img.astype(np.float64) - reference) ** 2))
+            entry["renders"].append(r)
+            log(f"{setup.key}: n={n} in {secs:.1f} s" + (f", MSE {r['mse']:.3g}" if "mse" in r else ""))
+        results["setups"].append(entry)
+    results["seconds"] = time.perf_counter() - t_all
+    plot_mse(results, os.path.join(out_dir, "mse.png"))
+    with open(os.path.join(out_dir, "gallery.json"), "w") as f:
+        json.dump(results, f, indent=1)
+    write_sheets(results, out_dir)
+    return results
+
+
+def plot_mse(results: dict[str, Any], path: str) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5, 3.6), dpi=120)
+    for e in results["setups"]:
+        pts = [(r["n"], r["mse"]) for r in e["renders"] if "mse" in r]
+        if pts:
+            ns, mses = zip(*pts)
+            ax.loglog(ns, mses, "o-", label=f"{e['style']} (ref n={e['reference']['inner']})")
+    ax.set_xlabel("inner samples per style evaluation n")
+    ax.set_ylabel("MSE against the reference")
+    ax.set_title("Direct estimator: error vs n")
+    ax.grid(True, which="both", alpha=0.3)
+    if ax.lines:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def write_sheets(results: dict[str, Any], out_dir: str) -> None:
+    o = results["options"]
+    md = ["# styletrace gallery", "",
+          f"Dragon scene, {o['size']}x{o['size']}, {o['spp']} camera samples per pixel; total "
+          f"{results['seconds']:.0f} s. `mse.png` plots the error of each render against its reference.", "",
+          "![MSE vs n](mse.png)", ""]
+    h = ["<!doctype html><meta charset='utf-8'><title>styletrace gallery</title>",
+         "<style>body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:4px;text-align:center}"
+         "img{image-rendering:pixelated;width:192px}figcaption{font-size:12px}</style>",
+         "<h1>styletrace gallery</h1>",
+         f"<p>Dragon scene, {o['size']}x{o['size']}, {o['spp']} spp; total {results['seconds']:.0f} s.</p>",
+         "<img src='mse.png' style='width:480px'>"]
+    for e in results["setups"]:
+        params = ", ".join(f"{k}={v}" for k, v in {**e["params"], **e["integrator"],
+                                                   "estimator": e["estimator"]}.items())
+        md += [f"## {e['title']}", "", f"`{e['style']}` {params}", ""]
+        h += [f"<h2>{html.escape(e['title'])}</h2><p><code>{html.escape(e['style'])}</code> {html.escape(params)}</p>"]
+        cells = []
+        for r in e["renders"]:
+            cap = f"n={r['n']}, {r['seconds']:.1f} s" + (f", MSE {r['mse']:.2e}" if "mse" in r else "")
+            cells.append((r["file"], cap))
+        if "reference" in e:
+            ref = e["reference"]
+            cells.append((ref["file"], f"reference n={ref['inner']}" + (f" ({ref['note']})" if ref["note"] else "")))
+        md += [" | ".join(c for _, c in cells), " | ".join("---" for _ in cells),
+               " | ".join(f"![{c}]({f})" for f, c in cells), ""]
+        h += ["<div>" + "".join(f"<figure><img src='{f}'><figcaption>{html.escape(c)}</figcaption></figure>"
+                                for f, c in cells) + "</div>"]
+    with open(os.path.join(out_dir, "index.md"), "w") as f:
+        f.write("\n".join(md) + "\n")
+    with open(os.path.join(out_dir, "index.html"), "w") as f:
+        f.write("\n".join(h) + "\n")

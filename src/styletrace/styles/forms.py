@@ -1,0 +1,48 @@
+"""Forms of a style function that the unbiased estimators can take (main paper Sec. 4, Theorem 4.1).
+
+A style whose g is affine, a power series or a polynomial fit returns one of these from `form()`;
+`styletrace.render.estimation` turns it into the estimator the user picked. Styles with
+discontinuities (cel, colour maps, hatching, ...) have no form: only direct application applies.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional, Sequence
+
+
+@dataclass(frozen=True)
+class AffineForm:
+    """g(I) = a1 I + a0; a1 a scalar, per-channel vector or 3x3 matrix, a0 a scalar or per-channel vector."""
+
+    a1: Any
+    a0: Any = 0.0
+
+
+@dataclass(frozen=True)
+class SeriesForm:
+    """g(I) = scale * h(I + shift) + offset with h a power series (`estimators.Series`).
+
+    `shift` moves the samples into the series' convergence region (e.g. 1/(1+I) is the reciprocal series
+    of 1 + I); `pilot_lo` bounds the pilot expansion point from below (a pilot b of 0 would make a
+    power series of I^p diverge).
+    """
+
+    series: Any
+    shift: float = 0.0
+    scale: Any = 1.0
+    offset: Any = 0.0
+    pilot_lo: Optional[float] = None
+
+
+@dataclass(frozen=True)
+class PolynomialForm:
+    """g(I) ~ fit(clamp(I, lo, hi)): a fitted polynomial (`estimators.Fit`), samples clamped to its domain
+    first (the clamp is part of the style, as in the paper's tie-dye setup)."""
+
+    fit: Any
+    lo: float
+    hi: float
+
+
+Form = Any
+__all__: Sequence[str] = ["AffineForm", "SeriesForm", "PolynomialForm", "Form"]
