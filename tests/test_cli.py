@@ -111,17 +111,27 @@ def test_broken_xml_one_line_and_exit_2(text, message, tmp_path):
 
 
 def test_unwritable_output_fails_before_rendering(tmp_path):
+    target = tmp_path / "x.png"
+    target.mkdir()
+    r = run_cli("render", "-q", "-o", str(target))
+    assert r.returncode == 2 and "it is a folder" in r.stderr
     folder = tmp_path / "ro"
     folder.mkdir()
     folder.chmod(0o500)
-    if os.access(folder, os.W_OK):  # root ignores permissions; make the target a directory instead
-        target = folder / "x.png"
-        target.mkdir()
-        r = run_cli("render", "-q", "-o", str(target))
-        assert r.returncode != 0
-        return
-    r = run_cli("render", "-q", "-o", str(folder / "x.png"))
-    assert r.returncode == 2 and "permission denied" in r.stderr
+    if not os.access(folder, os.W_OK):  # root ignores permission bits; the check above covers it
+        r = run_cli("render", "-q", "-o", str(folder / "x.png"))
+        assert r.returncode == 2 and "permission denied" in r.stderr
+
+
+def test_a_failed_write_keeps_the_render(tmp_path, capsys):
+    """If writing fails after rendering (e.g. the folder vanished), the image goes to a temporary EXR."""
+    from styletrace.cli import save_safely
+    img = np.full((4, 6, 3), 0.25, dtype=np.float32)
+    out = save_safely(img, str(tmp_path / "gone" / "x.png"))
+    assert out != str(tmp_path / "gone" / "x.png") and out.endswith(".exr")
+    np.testing.assert_array_equal(read(out), img)
+    assert "saved the render to" in capsys.readouterr().err
+    os.remove(out)
 
 
 def test_xml_scene_with_stylized_integrator(tmp_path):

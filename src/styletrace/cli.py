@@ -37,6 +37,8 @@ def check_output(path: str) -> None:
     if ext not in IMAGE_TYPES:
         raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
                          f"(.exr is linear, .png is sRGB)")
+    if os.path.isdir(path):
+        raise UsageError(f"cannot write {path!r}: it is a folder")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
