@@ -157,18 +157,29 @@ def test_xml_scene_with_stylized_integrator(tmp_path):
     np.testing.assert_allclose(u[0, 0], 1.0, atol=1e-5)
 
 
-def test_ctrl_c_writes_the_finished_passes(tmp_path):
-    out = tmp_path / "partial.exr"
+def interrupt(out, pass_spp, ctrl_c):
+    """Start a long render, wait until tqdm reports `pass_spp * 2` (resp. one pass) done, press Ctrl-C
+    `ctrl_c` times, and return (exit status, stderr after the signal)."""
     proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
-                             "--spp", "100000", "--inner", "4", "--pass-spp", "1", "-o", str(out)],
+                             "--spp", "100000", "--inner", "4", "--pass-spp", str(pass_spp), "-o", str(out)],
                             stderr=subprocess.PIPE, env=ENV)
+    wait_for = f"{2 * pass_spp if pass_spp == 1 else pass_spp}/100000".encode()
     seen = b""
     deadline = time.time() + 120
-    while b"2/100000" not in seen and time.time() < deadline:  # tqdm has reported finished passes
+    while wait_for not in seen and time.time() < deadline:
         seen += os.read(proc.stderr.fileno(), 4096)
-    proc.send_signal(signal.SIGINT)
+    for i in range(ctrl_c):
+        if i:
+            time.sleep(0.3)
+        proc.send_signal(signal.SIGINT)
     rest = proc.communicate(timeout=120)[1]
-    assert proc.returncode == 130, (seen + rest).decode()
+    return proc.returncode, seen + rest, rest
+
+
+def test_ctrl_c_writes_the_finished_passes(tmp_path):
+    out = tmp_path / "partial.exr"
+    code, log, rest = interrupt(out, 1, 1)
+    assert code == 130, log.decode()
     assert b"interrupted; wrote" in rest
     img = read(out)
     assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0
@@ -176,17 +187,7 @@ def test_ctrl_c_writes_the_finished_passes(tmp_path):
 
 def test_second_ctrl_c_abandons_the_pass_under_way(tmp_path):
     out = tmp_path / "partial.exr"
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
-                             "--spp", "100000", "--inner", "4", "--pass-spp", "400", "-o", str(out)],
-                            stderr=subprocess.PIPE, env=ENV)
-    seen = b""
-    deadline = time.time() + 120
-    while b"400/100000" not in seen and time.time() < deadline:  # the first pass has finished
-        seen += os.read(proc.stderr.fileno(), 4096)
-    proc.send_signal(signal.SIGINT)
-    time.sleep(0.3)
-    proc.send_signal(signal.SIGINT)
-    rest = proc.communicate(timeout=120)[1]
-    assert proc.returncode == 130, (seen + rest).decode()
+    code, log, rest = interrupt(out, 400, 2)
+    assert code == 130, log.decode()
     assert b"wrote" in rest and b"of 100000 spp" in rest
     assert read(out).shape == (64, 64, 3)

@@ -37,15 +37,15 @@ def _first_line(exc: BaseException) -> str:
     return lines[-1] if lines else type(exc).__name__
 
 
+def _size(width, height, keys=("width", "height")) -> dict[str, int]:
+    """The given image size as keyword arguments, leaving out what was not given."""
+    return {k: v for k, v in zip(keys, (width, height)) if v}
+
+
 def scene_dict(name: str, width: int | None = None, height: int | None = None) -> dict[str, Any]:
     if name not in BUILTIN:
         raise SceneError(f"unknown built-in scene '{name}': available are {', '.join(sorted(BUILTIN))}")
-    kwargs = {}
-    if width:
-        kwargs["width"] = width
-    if height:
-        kwargs["height"] = height
-    return BUILTIN[name](**kwargs)
+    return BUILTIN[name](**_size(width, height))
 
 
 def load_scene(scene: Any = None, width: int | None = None, height: int | None = None) -> mi.Scene:
@@ -76,13 +76,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
                          f"or a Mitsuba XML file")
     if not os.path.isfile(name):
         raise SceneError(f"scene file '{name}' does not exist")
-    params = {}
-    if width:
-        params["resx"] = width
-    if height:
-        params["resy"] = height
     try:
-        loaded = mi.load_file(name, **params)
+        loaded = mi.load_file(name, **_size(width, height, ("resx", "resy")))
     except Exception as exc:
         raise SceneError(f"cannot load scene file '{name}': {_first_line(exc)}") from None
     if width or height:

@@ -98,12 +98,15 @@ def cmd_styles(args) -> int:
     import styletrace  # noqa: F401  (registers everything)
     from styletrace.styles import get, names
 
+    from styletrace.render.estimation import applicable
+
     for name in names():
         cls = get(name)
         inner = "closed form, 0 samples" if cls.default_inner == 0 else f"default inner samples {cls.default_inner}"
         print(f"{name}: {cls.summary} [{inner}]")
         for p in cls.params:
             print(f"    {p.name} = {p.show(p.default)}    {p.doc}; {p.allowed()}")
+        print(f"    estimators: {', '.join(applicable(cls()))}")
     return 0
 
 

@@ -7,36 +7,17 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import load_scene, make_integrator, passes
-from styletrace.render.scenes import FURNACE_ALBEDO, FURNACE_RADIANCE
+from helpers import furnace
+from helpers.furnace import I, z_score
+from styletrace.api import make_integrator
 from styletrace.styles import StyleError, create
 
 RES = 96
-I = np.array(FURNACE_ALBEDO) * FURNACE_RADIANCE
 Z = 4.0
 
 
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene("furnace", RES, RES)
-
-
-@pytest.fixture(scope="module")
-def mask():
-    rpix = np.tan(np.arcsin(0.25)) / np.tan(np.radians(17.5)) * RES / 2
-    yy, xx = np.mgrid[0:RES, 0:RES]
-    c = (RES - 1) / 2
-    return (xx - c) ** 2 + (yy - c) ** 2 < (0.85 * rpix) ** 2
-
-
 def estimates(scene, mask, style, estimator, n, seeds, **params):
-    integ = make_integrator(style, inner=n, estimator=estimator, **params)
-    return np.concatenate([list(passes(scene, integ, 1, seed=1000 * s + n))[-1].image[mask]
-                           for s in range(seeds)]).astype(np.float64)
-
-
-def z_score(vals, exact):
-    return (vals.mean(0) - exact) / (vals.std(0, ddof=1) / np.sqrt(len(vals)))
+    return furnace.draws(scene, mask, style, n, seeds, n, estimator=estimator, **params)
 
 
 def gamma(x, g=2.2):

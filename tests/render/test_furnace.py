@@ -9,33 +9,12 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import load_scene, make_integrator, passes
-from styletrace.render.scenes import FURNACE_ALBEDO, FURNACE_RADIANCE
+from helpers import furnace
+from helpers.furnace import I, draws
 
 RES = 128
 GAMMA = 2.2
-I = np.array(FURNACE_ALBEDO) * FURNACE_RADIANCE
 Z = 4.0
-
-
-@pytest.fixture(scope="module")
-def scene():
-    return load_scene("furnace", RES, RES)
-
-
-@pytest.fixture(scope="module")
-def mask():
-    # projected sphere radius (camera at distance 4, fov 35 deg on the smaller axis); keep the centre 85%
-    rpix = np.tan(np.arcsin(0.25)) / np.tan(np.radians(17.5)) * RES / 2
-    yy, xx = np.mgrid[0:RES, 0:RES]
-    c = (RES - 1) / 2
-    return (xx - c) ** 2 + (yy - c) ** 2 < (0.85 * rpix) ** 2
-
-
-def draws(scene, mask, style, n, seeds, seed0):
-    """One value per sphere pixel per seed, each from one camera sample (spp = 1)."""
-    integ = make_integrator(style, inner=n)
-    return np.concatenate([list(passes(scene, integ, 1, seed=seed0 + s))[-1].image[mask] for s in range(seeds)])
 
 
 @pytest.fixture(scope="module")

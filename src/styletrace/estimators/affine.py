@@ -31,7 +31,7 @@ import numpy as np
 from . import arrays as A
 from .base import Context, Estimator, check_count
 
-__all__ = ["Affine", "Mean", "apply_linear"]
+__all__ = ["Affine", "Mean", "MeanOfN", "apply_linear"]
 
 
 def apply_linear(a1: np.ndarray, x):
@@ -50,19 +50,12 @@ def apply_linear(a1: np.ndarray, x):
     return x @ a1.T
 
 
-class Affine(Estimator):
-    def __init__(self, a1=1.0, a0=0.0, n: int = 1, comb: bool = False):
-        self.a1 = np.asarray(a1, dtype=np.float64)
-        self.a0 = np.asarray(a0, dtype=np.float64)
-        if self.a1.ndim > 2 or (self.a1.ndim == 2 and self.a1.shape[0] != self.a1.shape[1]):
-            raise ValueError(f"a1 must be a scalar, a per-channel vector or a square matrix, got shape {self.a1.shape}")
-        if self.a0.ndim > 1:
-            raise ValueError(f"a0 must be a scalar or a per-channel vector, got shape {self.a0.shape}")
-        if not (np.all(np.isfinite(self.a1)) and np.all(np.isfinite(self.a0))):
-            raise ValueError(f"a1 and a0 must be finite, got a1={a1!r}, a0={a0!r}")
+class MeanOfN(Estimator):
+    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish from."""
+
+    def __init__(self, n: int, comb: bool = False):
         self.n = check_count("n", n)
         self.comb = bool(comb)
-        self.name = f"affine(n={self.n}{', comb' if comb else ''})"
 
     def start(self, ctx: Context, carry):
         state = {"sum": ctx.vzero(), "count": ctx.lane(0.0)}
@@ -84,14 +77,8 @@ class Affine(Estimator):
         state["count"] = A.select(mask, state["count"] + 1.0, state["count"])
         return state, carry
 
-    def value(self, ctx, state):
-        mean = state["sum"] * (1.0 / self.n)
-        return apply_linear(self.a1, mean) + ctx.vconst(self.a0)
-
-    def exact(self, I):
-        I = np.asarray(I, dtype=np.float64) if not A.is_drjit(I) else I
-        y = apply_linear(self.a1, I)
-        return y + (A.const_like(self.a0, y) if self.a0.ndim else float(self.a0))
+    def mean(self, state):
+        return state["sum"] * (1.0 / self.n)
 
     @property
     def mean_samples(self):
@@ -104,6 +91,28 @@ class Affine(Estimator):
     @property
     def uses_comb(self):
         return self.comb
+
+
+class Affine(MeanOfN):
+    def __init__(self, a1=1.0, a0=0.0, n: int = 1, comb: bool = False):
+        self.a1 = np.asarray(a1, dtype=np.float64)
+        self.a0 = np.asarray(a0, dtype=np.float64)
+        if self.a1.ndim > 2 or (self.a1.ndim == 2 and self.a1.shape[0] != self.a1.shape[1]):
+            raise ValueError(f"a1 must be a scalar, a per-channel vector or a square matrix, got shape {self.a1.shape}")
+        if self.a0.ndim > 1:
+            raise ValueError(f"a0 must be a scalar or a per-channel vector, got shape {self.a0.shape}")
+        if not (np.all(np.isfinite(self.a1)) and np.all(np.isfinite(self.a0))):
+            raise ValueError(f"a1 and a0 must be finite, got a1={a1!r}, a0={a0!r}")
+        super().__init__(n, comb)
+        self.name = f"affine(n={self.n}{', comb' if comb else ''})"
+
+    def value(self, ctx, state):
+        return apply_linear(self.a1, self.mean(state)) + ctx.vconst(self.a0)
+
+    def exact(self, I):
+        I = np.asarray(I, dtype=np.float64) if not A.is_drjit(I) else I
+        y = apply_linear(self.a1, I)
+        return y + (A.const_like(self.a0, y) if self.a0.ndim else float(self.a0))
 
 
 def Mean(m: int = 1, comb: bool = False) -> Affine:

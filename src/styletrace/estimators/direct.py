@@ -14,55 +14,21 @@ Parameters
 """
 from __future__ import annotations
 
-from . import arrays as A
-from .base import Context, Estimator, check_count
+from .affine import MeanOfN
 
 __all__ = ["Direct"]
 
 
-class Direct(Estimator):
+class Direct(MeanOfN):
     def __init__(self, g, n: int, comb: bool = False):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")
+        super().__init__(n, comb)
         self.g = g
-        self.n = check_count("n", n)
-        self.comb = bool(comb)
         self.name = f"direct(n={self.n}{', comb' if comb else ''})"
 
-    def start(self, ctx: Context, carry):
-        state = {"sum": ctx.vzero(), "count": ctx.lane(0.0)}
-        if self.comb:
-            state["offset"], carry = ctx.uniform(carry)
-        return state, carry
-
-    def wants(self, ctx, state):
-        return state["count"] < self.n
-
-    def next_u(self, ctx, state):
-        if not self.comb:
-            return None
-        return (state["offset"] + state["count"]) * (1.0 / self.n)
-
-    def feed(self, ctx, state, x, mask, carry):
-        state = dict(state)
-        state["sum"] = A.select(mask, state["sum"] + x, state["sum"])
-        state["count"] = A.select(mask, state["count"] + 1.0, state["count"])
-        return state, carry
-
     def value(self, ctx, state):
-        return self.g(state["sum"] * (1.0 / self.n))
+        return self.g(self.mean(state))
 
     def exact(self, I):
         return self.g(I)
-
-    @property
-    def mean_samples(self):
-        return float(self.n)
-
-    @property
-    def fixed_samples(self):
-        return True
-
-    @property
-    def uses_comb(self):
-        return self.comb

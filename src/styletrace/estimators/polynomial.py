@@ -81,6 +81,22 @@ class _PolynomialBase(Estimator):
     def _y(self, ctx, state, x):
         return x - self.point.value(ctx, state)
 
+    def _feed_pilot(self, ctx, state, x, mask):
+        """Give x to the pilot on lanes still collecting it; returns (state copy, lanes for the terms)."""
+        inp = self.point.in_pilot(state)
+        if inp is None:
+            return dict(state), mask
+        state, _ = self.point.feed(ctx, state, x, mask)
+        return state, mask & ~inp
+
+    def _combine(self, ctx, state, terms):
+        """sum_k a_k term_k, the term estimates of (x - b)^k for k = 1..K."""
+        coef = self._coefficients(ctx, state)
+        out = ctx.vzero() + coef[0]
+        for k in range(1, self.K + 1):
+            out = out + coef[k] * terms[k - 1]
+        return out
+
     def _coefficients(self, ctx, state):
         """a_0..a_K about b: host constants for a fixed b, re-expanded per lane for a pilot b."""
         if self.point.pilot:
@@ -108,12 +124,7 @@ class PolynomialNaive(_PolynomialBase):
         return w if inp is None else (w | inp)
 
     def feed(self, ctx, state, x, mask, carry):
-        inp = self.point.in_pilot(state)
-        if inp is not None:
-            state, _ = self.point.feed(ctx, state, x, mask)
-            mask = mask & ~inp
-        else:
-            state = dict(state)
+        state, mask = self._feed_pilot(ctx, state, x, mask)
         prod = state["prod"] * self._y(ctx, state, x)
         k = state["k"] + 1.0
         state["P"] = tuple(A.select(mask & (k == float(j + 1)), prod, P) for j, P in enumerate(state["P"]))
@@ -122,11 +133,7 @@ class PolynomialNaive(_PolynomialBase):
         return state, carry
 
     def value(self, ctx, state):
-        coef = self._coefficients(ctx, state)
-        out = ctx.vzero() + coef[0]
-        for k in range(1, self.K + 1):
-            out = out + coef[k] * state["P"][k - 1]
-        return out
+        return self._combine(ctx, state, state["P"])
 
     @property
     def mean_samples(self):
@@ -157,12 +164,7 @@ class PolynomialU(_PolynomialBase):
         return w if inp is None else (w | inp)
 
     def feed(self, ctx, state, x, mask, carry):
-        inp = self.point.in_pilot(state)
-        if inp is not None:
-            state, _ = self.point.feed(ctx, state, x, mask)
-            mask = mask & ~inp
-        else:
-            state = dict(state)
+        state, mask = self._feed_pilot(ctx, state, x, mask)
         j = state["j"] + 1.0
         m = ustat_update(list(state["m"]), self._y(ctx, state, x), A.maximum(j, 1.0))
         state["m"] = tuple(A.select(mask, new, old) for new, old in zip(m, state["m"]))
@@ -170,11 +172,7 @@ class PolynomialU(_PolynomialBase):
         return state, carry
 
     def value(self, ctx, state):
-        coef = self._coefficients(ctx, state)
-        out = ctx.vzero() + coef[0]
-        for k in range(1, self.K + 1):
-            out = out + coef[k] * state["m"][k - 1]
-        return out
+        return self._combine(ctx, state, state["m"])
 
     @property
     def mean_samples(self):

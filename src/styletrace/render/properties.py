@@ -98,6 +98,9 @@ def style_slot_from(values: dict[str, Any], context: str = "the stylized integra
 
 def settings_from(values: dict[str, Any]) -> Settings:
     """Validated integrator settings from a flat name -> value mapping (property values or CLI strings)."""
+    if str(values.get("hide_emitters", False)).lower() in ("true", "1"):
+        raise StyleError("bad value True for 'hide_emitters': the stylized integrator does not support hiding "
+                         "emitters (their emission is part of the stylized radiance)")
     slot = style_slot_from(values, extra_keys=OWN_KEYS[len(SLOT_KEYS):] + BASE_KEYS)
     stylize = str(values.get("stylize", "first_hit"))
     if stylize not in PARAMETRIZATIONS:

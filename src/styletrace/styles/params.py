@@ -134,7 +134,9 @@ class Param:
         raise AssertionError(f"unknown parameter kind {k}")
 
     def show(self, value: Any) -> str:
-        """Format a value the way `parse` reads it back."""
+        """Format a value the way `parse` reads it back ('auto' for a default the style derives itself)."""
+        if value is None:
+            return "auto"
         if isinstance(value, Gradient):
             return value.spec
         if isinstance(value, tuple):

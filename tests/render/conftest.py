@@ -1,0 +1,15 @@
+import pytest
+
+from helpers import furnace
+
+
+@pytest.fixture(scope="module")
+def scene(request):
+    """The furnace scene at the test module's RES."""
+    return furnace.scene(request.module.RES)
+
+
+@pytest.fixture(scope="module")
+def mask(request):
+    """Pixels inside the furnace sphere's silhouette at the test module's RES."""
+    return furnace.sphere_mask(request.module.RES)
