@@ -41,7 +41,8 @@ def machine_description() -> str:
             pass
     try:
         import mitsuba as mi
-        versions.append(f"variant {mi.variant()}")
+        if mi.variant():
+            versions.append(f"variant {mi.variant()}")
     except Exception:
         pass
     llvm = os.environ.get("DRJIT_LIBLLVM_PATH")

@@ -39,6 +39,7 @@ import mitsuba as mi
 
 from ..styles.base import Vertex, camera_forward
 from .estimation import make_estimator
+from .lane_sampler import LaneSampler
 from .path import depth_limit, exitant, walk
 from .properties import Settings, StyleSlot, props_to_dict, settings_from
 from .styled_bsdf import StyledBSDF
@@ -165,6 +166,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self.view = camera_forward(scene)
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
+        # every random decision below the camera ray comes from an independent stream per lane
+        sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
         if self.settings.stylize == "first_object_hit":
             return self.walk(0, scene, sampler, pi, ray, active, mi.UInt32(0), halt_at_start=True), active, []

@@ -95,16 +95,31 @@ def key_in(values: Mapping[str, Any], key: str) -> bool:
     return key in values and values[key] is not None
 
 
-def camera_forward(scene: mi.Scene) -> tuple[float, float, float]:
-    """World-space viewing direction of the scene's first sensor (the sensor looks along local +z)."""
+@dataclass(frozen=True)
+class Camera:
+    """World-space frame of a scene's first sensor: position, unit forward (local +z) and up (local +y)."""
+
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    forward: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
+
+
+def camera(scene: mi.Scene) -> Camera:
+    """The frame of the scene's first sensor (Mitsuba's default frame if it has none)."""
     import numpy as np
     sensors = scene.sensors()
     if not sensors:
-        return (0.0, 0.0, -1.0)
+        return Camera()
     m = np.array(sensors[0].world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-    d = m[:3, 2]
-    d = d / np.linalg.norm(d)
-    return (float(d[0]), float(d[1]), float(d[2]))
+
+    def unit(v):
+        return tuple(float(x) for x in v / np.linalg.norm(v))
+    return Camera(position=tuple(float(x) for x in m[:3, 3]), forward=unit(m[:3, 2]), up=unit(m[:3, 1]))
 
 
-__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "camera_forward"]
+def camera_forward(scene: mi.Scene) -> tuple[float, float, float]:
+    """World-space viewing direction of the scene's first sensor."""
+    return camera(scene).forward
+
+
+__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward"]

@@ -31,7 +31,7 @@ from typing import Sequence
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex, brightness, camera_forward
+from .base import Param, Style, StyleError, Vertex, brightness, camera, camera_forward
 from .registry import register
 
 Vec = tuple[float, float, float]
@@ -39,12 +39,7 @@ Vec = tuple[float, float, float]
 
 def camera_up(scene: mi.Scene) -> Vec:
     """World-space up vector of the scene's first sensor (its local +y); +y if there is none."""
-    import numpy as np
-    sensors = scene.sensors()
-    if not sensors:
-        return (0.0, 1.0, 0.0)
-    m = np.array(sensors[0].world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-    return tuple(float(x) for x in m[:3, 1])
+    return camera(scene).up
 
 
 def _cross(a: Sequence[float], b: Sequence[float]) -> Vec:

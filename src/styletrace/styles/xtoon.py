@@ -35,7 +35,7 @@ import math
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex
+from .base import Param, Style, StyleError, Vertex, camera
 from .gooch import facing, unit
 from .gradient import Gradient
 from .registry import register
@@ -46,12 +46,7 @@ BANDS = "0:#4a2c2a;0.32:#4a2c2a;0.34:#b5563a;0.64:#b5563a;0.66:#f4c98b;1:#f4c98b
 
 def camera_position(scene: mi.Scene) -> tuple[float, float, float]:
     """World-space position of the scene's first sensor (origin if there is none)."""
-    import numpy as np
-    sensors = scene.sensors()
-    if not sensors:
-        return (0.0, 0.0, 0.0)
-    m = np.array(sensors[0].world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-    return (float(m[0, 3]), float(m[1, 3]), float(m[2, 3]))
+    return camera(scene).position
 
 
 @register
