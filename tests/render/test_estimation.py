@@ -74,3 +74,13 @@ def test_inapplicable_estimator_is_refused():
         make_integrator("cel", estimator="series")
     with pytest.raises(StyleError, match="unknown estimator 'magic'"):
         make_integrator("gamma", estimator="magic")
+
+
+def test_per_sample_baseline_is_styled_once(scene, mask):
+    """acp applies g to every child and averages: E[g(X)] does not depend on n (a second application of g
+    to the average would make n = 1 and n = 8 disagree)."""
+    one = estimates(scene, mask, "acp", "direct", 1, 6)
+    eight = estimates(scene, mask, "acp", "direct", 8, 2)
+    se = np.sqrt(one.var(0, ddof=1) / len(one) + eight.var(0, ddof=1) / len(eight))
+    z = (one.mean(0) - eight.mean(0)) / se
+    assert np.all(np.abs(z) < Z), f"acp means at n=1 {one.mean(0)} and n=8 {eight.mean(0)}: z = {z}"

@@ -88,6 +88,8 @@ def make_estimator(slot, level: int, vertex):
     form = style.form()
 
     if name == "direct":
+        if style.per_sample:  # the children arrive already styled (a baseline): just average them
+            return Transformed(E.Mean(n))
         return Transformed(E.Direct(lambda I: style.apply(I, vertex), n))
     if name == "telescoping":
         return Transformed(E.Telescoping(lambda I: style.apply(I, vertex), n0=n))
