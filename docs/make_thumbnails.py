@@ -1,7 +1,7 @@
 """Render the thumbnail of every style for docs/styles.md: `python docs/make_thumbnails.py`.
 
-Each style is rendered on the built-in dragon scene at 160x160 with its default parameters (the
-hatching and half-tone spacings are scaled to the dragon's unit height) and default inner sample count.
+Each style is rendered on the built-in dragon scene at 160x160 with its default parameters except those in
+OVERRIDES, and its default inner sample count (at least 8, so affine styles are not shown at 1).
 """
 import os
 import sys
@@ -13,14 +13,20 @@ from styletrace.cli import write_image  # noqa: E402
 from styletrace.styles import get, names  # noqa: E402
 
 SIZE, SPP = 160, 8
-OVERRIDES = {"hatching": {"spacing": 0.025}, "halftone": {"spacing": 0.03}}
+# spacings in the dragon's units (1 = its height) and brightness ranges of the dragon scene, so that lit and
+# shaded parts differ; cel gets three bands for the same reason
+OVERRIDES = {
+    "hatching": {"spacing": 0.05, "u_min": 0.05, "u_max": 0.45},
+    "halftone": {"spacing": 0.05, "u_min": 0.05, "u_max": 0.6},
+    "cel": {"thresholds": "0.2,0.45", "levels": "0.1,0.4,0.9"},
+}
 
 
 def main():
     out = os.path.join(os.path.dirname(__file__), "styles")
     os.makedirs(out, exist_ok=True)
     for name in names():
-        inner = max(get(name).default_inner, 1)
+        inner = max(get(name).default_inner, 8)
         img = styletrace.render("dragon", style=name, spp=SPP, inner=inner, width=SIZE, height=SIZE,
                                 **OVERRIDES.get(name, {}))
         write_image(img, os.path.join(out, f"{name}.png"))

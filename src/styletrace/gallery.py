@@ -58,8 +58,8 @@ SETUPS = [
           params={"light_dir": "0.2,1,0.3"}),
     Setup("xtoon", "X-Toon, closed form, 0 samples (Fig. 12)", "xtoon", (0,), params={"light_dir": "0.2,1,0.3"}),
     Setup("hatching", "Cross-hatching (Fig. 12)", "hatching", (16,),
-          params={"spacing": 0.035, "u_min": 0.1, "u_max": 0.75}),
-    Setup("halftone", "Half-tone (Fig. 12)", "halftone", (16,), params={"spacing": 0.03}),
+          params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.45}),
+    Setup("halftone", "Half-tone (Fig. 12)", "halftone", (16,), params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.6}),
     Setup("mixed", "Per object: cel dragon, hatched floor, PBR glass; seen through the glass too", "identity", (1,),
           integrator={"stylize": "first_object_hit"}, scene="mixed"),
 ]
