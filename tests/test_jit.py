@@ -61,3 +61,9 @@ def test_no_llvm_at_all_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(jit, "SEARCH_DIRS", ())
     with pytest.raises(jit.BackendError, match=r"apt-get install libllvm19.*DRJIT_LIBLLVM_PATH"):
         jit.configure_llvm()
+
+
+def test_the_loaded_llvm_is_new_enough():
+    import styletrace  # noqa: F401
+    loaded = jit.loaded_libllvm()
+    assert loaded is not None and jit.llvm_major(loaded) >= jit.MIN_LLVM_MAJOR

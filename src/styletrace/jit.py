@@ -80,6 +80,19 @@ def cuda_usable() -> bool:
         return False
 
 
+def loaded_libllvm() -> str | None:
+    """Path of the libLLVM this process has mapped (Linux), or None."""
+    try:
+        with open("/proc/self/maps") as f:
+            for line in f:
+                path = line.split()[-1]
+                if os.path.basename(path).startswith("libLLVM"):
+                    return path
+    except OSError:
+        pass
+    return None
+
+
 def select_variant() -> str:
     """Pick and set the Mitsuba variant unless one is already set; return the active variant."""
     if "drjit" not in sys.modules:
@@ -103,5 +116,11 @@ def select_variant() -> str:
         import drjit as dr
         if not dr.has_backend(dr.JitBackend.LLVM):
             raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
+        # Dr.Jit picks its own libLLVM when it was imported before styletrace; refuse one that crashes
+        loaded = loaded_libllvm()
+        major = llvm_major(loaded) if loaded else None
+        if major is not None and major < MIN_LLVM_MAJOR:
+            raise BackendError(f"Dr.Jit loaded {loaded} (LLVM {major}), which crashes it; import styletrace before "
+                               f"drjit/mitsuba, or {FIX}")
     mi.set_variant(variant)
     return variant
