@@ -45,7 +45,12 @@ setup() {
 cmd=${1:-}
 [ $# -gt 0 ] && shift
 case "$cmd" in
-  render) setup; exec "$VENV/bin/styletrace" render "${@:---spp=64}" ;;
+  render) setup
+          if [ $# -eq 0 ]; then  # the demo: the default scene (Cornell box) with four cel bands tuned to it
+            set -- --style cel --set thresholds=0.05,0.12,0.3 --set levels=0.03,0.09,0.2,0.6 --inner 32 --spp 32 \
+                   -o render.png
+          fi
+          exec "$VENV/bin/styletrace" render "$@" ;;
   test)   setup; exec "$VENV/bin/python" -m pytest -q "$@" ;;
   setup)  setup ;;
   *) echo "usage: bash dev.sh render [styletrace render args] | bash dev.sh test [pytest args] | bash dev.sh setup" >&2; exit 2 ;;
