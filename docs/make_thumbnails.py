@@ -12,7 +12,7 @@ import styletrace  # noqa: E402
 from styletrace.cli import write_image  # noqa: E402
 from styletrace.styles import get, names  # noqa: E402
 
-SIZE, SPP = 160, 8
+SIZE, SPP = 160, 32
 # spacings in the dragon's units (1 = its height) and brightness ranges of the dragon scene, so that lit and
 # shaded parts differ; cel gets three bands for the same reason
 OVERRIDES = {
@@ -22,15 +22,24 @@ OVERRIDES = {
 }
 
 
+#: styles side by side in docs/teaser.png, the README's first picture
+TEASER = ("identity", "cel", "color_map", "hatching", "tie_dye")
+
+
 def main():
+    import numpy as np
+
     out = os.path.join(os.path.dirname(__file__), "styles")
     os.makedirs(out, exist_ok=True)
+    images = {}
     for name in names():
         inner = max(get(name).default_inner, 8)
         img = styletrace.render("dragon", style=name, spp=SPP, inner=inner, width=SIZE, height=SIZE,
                                 **OVERRIDES.get(name, {}))
         write_image(img, os.path.join(out, f"{name}.png"))
+        images[name] = img
         print(name, flush=True)
+    write_image(np.concatenate([images[n] for n in TEASER], axis=1), os.path.join(os.path.dirname(__file__), "teaser.png"))
 
 
 if __name__ == "__main__":

@@ -200,15 +200,19 @@ def build_parser() -> argparse.ArgumentParser:
 
     r = sub.add_parser("render", help="render a scene with a style")
     r.add_argument("scene", nargs="?", default="cornell-box",
-                   help="built-in scene (cornell-box, dragon, furnace) or a Mitsuba XML file (default: cornell-box)")
+                   help="built-in scene (cornell-box, dragon, mixed, furnace) or a Mitsuba XML file "
+                        "(default: cornell-box)")
     r.add_argument("--style", default=None, help="style name (see `styletrace styles`; default: the scene's "
                    "stylized integrator if it has one, else cel)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
     r.add_argument("--inner", default=None, help="inner samples per stylized vertex, or one per level: 8,4")
     r.add_argument("--spp", type=int, default=16, help="camera samples per pixel (default 16)")
-    r.add_argument("--estimator", default="direct", help="estimator of g(E[L]) (default direct)")
-    r.add_argument("--stylize", default="first_hit", help="first_hit or first_n_hits")
-    r.add_argument("--stylize-depth", type=int, default=1, help="N for first_n_hits")
+    r.add_argument("--estimator", default="direct",
+                   help="estimator of g(E[L]): direct (default), affine, series, series_recursive, series_single, "
+                        "ustat, naive, telescoping; `styletrace styles` lists which apply to each style")
+    r.add_argument("--stylize", default="first_hit",
+                   help="where styles apply: first_hit (default), first_n_hits, first_object_hit")
+    r.add_argument("--stylize-depth", type=int, default=1, help="number of stylized levels N (default 1)")
     r.add_argument("--max-depth", type=int, default=-1, help="longest path (-1: unbounded)")
     r.add_argument("--rr-depth", type=int, default=5, help="depth where Russian roulette starts")
     r.add_argument("--width", type=int, default=None, help="image width (built-in scenes; XML with $resx)")
