@@ -38,7 +38,7 @@ class StyledBSDF(mi.BSDF):
         if "style" not in values:
             raise StyleError("a 'styled' BSDF needs a 'style' property")
         self.nested = nested[0]
-        self.slot = style_slot_from(values)
+        self.slot = style_slot_from(values, context="a 'styled' BSDF")
         self.m_flags = self.nested.m_flags
         self.m_components = list(self.nested.m_components)
 
