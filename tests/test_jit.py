@@ -41,11 +41,20 @@ def test_import_selects_llvm_variant():
 
 
 def test_user_variant_is_kept():
-    r = _import_in_child({"DRJIT_LIBLLVM_PATH": jit.find_libllvm()},
-                         "import mitsuba as mi; mi.set_variant('llvm_ad_mono'); import styletrace; "
-                         "print(styletrace.variant)")
+    r = _import_in_child({"DRJIT_LIBLLVM_PATH": jit.find_libllvm(), "STYLETRACE_NO_CUDA": "1"},
+                         "import mitsuba as mi; mi.set_variant('llvm_ad_rgb'); import styletrace; "
+                         "print(styletrace.variant, mi.variant())")
     assert r.returncode == 0, r.stderr
-    assert r.stdout.strip() == "llvm_ad_mono"
+    assert r.stdout.split() == ["llvm_ad_rgb", "llvm_ad_rgb"]
+
+
+@pytest.mark.parametrize("variant", ["llvm_ad_mono", "llvm_ad_spectral", "scalar_rgb"])
+def test_a_user_variant_styles_cannot_run_on_is_a_clear_error(variant):
+    """Not silently replaced, not an obscure failure at render time: one error naming the variant."""
+    r = _import_in_child({"DRJIT_LIBLLVM_PATH": jit.find_libllvm()},
+                         f"import mitsuba as mi; mi.set_variant('{variant}'); import styletrace")
+    assert r.returncode != 0
+    assert f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active variant is {variant}" in r.stderr
 
 
 def test_llvm15_is_refused_with_a_clear_error(tmp_path):
@@ -67,3 +76,10 @@ def test_the_loaded_llvm_is_new_enough():
     import styletrace  # noqa: F401
     loaded = jit.loaded_libllvm()
     assert loaded is not None and jit.llvm_major(loaded) >= jit.MIN_LLVM_MAJOR
+
+
+def test_a_chosen_variant_wins_over_cuda(monkeypatch):
+    """Even where CUDA would be usable, a variant the user already set is kept."""
+    import mitsuba as mi
+    monkeypatch.setattr(jit, "cuda_usable", lambda: True)
+    assert jit.select_variant() == "llvm_ad_rgb" and mi.variant() == "llvm_ad_rgb"

@@ -108,8 +108,10 @@ def select_variant() -> str:
     import mitsuba as mi
     current = mi.variant()
     if current:
-        if current.startswith("scalar"):
-            raise BackendError(f"styletrace needs a JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active variant is {current}")
+        # styles act on RGB radiance inside JIT-compiled loops: scalar, mono and spectral variants cannot run them
+        if current.startswith("scalar") or not current.endswith("_rgb"):
+            raise BackendError(f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active "
+                               f"variant is {current}")
         return current
     variant = "cuda_ad_rgb" if cuda_usable() else "llvm_ad_rgb"
     if variant == "llvm_ad_rgb":
