@@ -96,3 +96,12 @@ def test_per_object_estimator(mask):
     vals = furnace.draws(mi.load_dict(d), mask, "identity", 1, 6, 77, stylize="first_object_hit")
     z = z_score(vals, gamma(I))
     assert np.all(np.abs(z) < Z), f"mean {vals.mean(0)} vs {gamma(I)}: z = {z}"
+
+
+@pytest.mark.parametrize("estimator", ["series", "series_recursive", "series_single"])
+def test_series_estimators_stay_finite_with_fireflies(estimator):
+    """In the Cornell box some children hit the light (radiance 18, far outside the convergence region
+    about a pilot b ~ 0.3): the estimates get huge, but every pixel stays finite (no inf * 0 = NaN from an
+    overflowing coefficient, no overflowing products past the renderer's term cap)."""
+    img = styletrace.render("cornell-box", style="gamma", estimator=estimator, inner=4, spp=4, width=32, height=32)
+    assert np.isfinite(img).all()

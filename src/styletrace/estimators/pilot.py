@@ -7,9 +7,11 @@ Reference
     pilot consumes its own first n samples and the terms use later, independent ones.
 
 Parameters
-    Pilot(n=1, lo=None, hi=None): b = clamp(mean of n pilot draws, lo, hi), then moved into the
-    series' convergence region by ``Series.clamp_center`` (see coefficients.py). Clamping a pilot
-    estimate keeps unbiasedness: b is still independent of the term samples.
+    Pilot(n=1, lo=None, hi=None, scale=1): b = clamp(scale * mean of n pilot draws, lo, hi), then moved
+    into the series' convergence region by ``Series.clamp_center`` (see coefficients.py). Clamping or
+    scaling a pilot estimate keeps unbiasedness: b is still independent of the term samples. A scale
+    above 1 widens the convergence region (0, 2b) of series such as I^p beyond the pilot's own estimate,
+    which guards against pilots that underestimate I (few or sparse samples) at some cost in variance.
 """
 from __future__ import annotations
 
@@ -24,8 +26,11 @@ __all__ = ["Pilot", "ExpansionPoint"]
 
 
 class Pilot:
-    def __init__(self, n: int = 1, lo=None, hi=None):
+    def __init__(self, n: int = 1, lo=None, hi=None, scale: float = 1.0):
         self.n = check_count("pilot n", n)
+        if not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
+            raise ValueError(f"pilot scale must be a finite number > 0, got {scale!r}")
+        self.scale = float(scale)
         for name, v in (("lo", lo), ("hi", hi)):
             if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v)):
                 raise ValueError(f"pilot {name} must be a finite number or None, got {v!r}")
@@ -34,7 +39,7 @@ class Pilot:
         self.lo, self.hi = lo, hi
 
     def __repr__(self):
-        return f"Pilot(n={self.n})"
+        return f"Pilot(n={self.n}" + (f", scale={self.scale:g}" if self.scale != 1.0 else "") + ")"
 
 
 class ExpansionPoint:
@@ -83,7 +88,7 @@ class ExpansionPoint:
         state["psum"] = A.select(take, state["psum"] + x, state["psum"])
         state["pcount"] = A.select(take, state["pcount"] + 1.0, state["pcount"])
         done = take & (state["pcount"] >= self.pilot.n)
-        b = A.clip(state["psum"] * (1.0 / self.pilot.n), self.pilot.lo, self.pilot.hi)
+        b = A.clip(state["psum"] * (self.pilot.scale / self.pilot.n), self.pilot.lo, self.pilot.hi)
         if self.series is not None:
             b = self.series.clamp_center(b)
         state["b"] = A.select(done, b, state["b"])

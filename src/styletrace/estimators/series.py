@@ -45,6 +45,12 @@ SELECTIONS = ("single", "iterative", "recursive")
 MAX_USTAT_TERMS = 64
 
 
+def _term(coefficient, estimate):
+    """a_k * <(I - b)^k>, exactly 0 where the term estimate is 0: a_k itself may overflow to inf in float32
+    (e.g. C(p, k) b^(p - k) for small b and large k), and inf * 0 would turn a zero term into NaN."""
+    return A.select(estimate == 0, estimate * 0.0, coefficient * estimate)
+
+
 class SeriesEstimator(Estimator):
     def __init__(self, series, b=None, selection: str = "iterative", truncation=None, terms=None,
                  max_terms: int = 64):
@@ -166,7 +172,7 @@ class SeriesEstimator(Estimator):
             cs = tuple(self.series.advance(ctx, state["cs"], k, b))
             new["prod"], new["cs"] = prod, cs
             if self.selection != "single":
-                term = self.series.coefficient(cs) * prod
+                term = _term(self.series.coefficient(cs), prod)
                 if self.selection == "iterative":
                     new["acc"] = state["acc"] + term * ctx.lookup(self.invS, k1)
                 else:
@@ -190,7 +196,7 @@ class SeriesEstimator(Estimator):
 
     def value(self, ctx, state):
         if self.selection == "single":
-            return self.series.coefficient(state["cs"]) * state["prod"] * state["w"]
+            return _term(self.series.coefficient(state["cs"]), state["prod"]) * state["w"]
         if self.terms == "naive":
             return state["acc"]
         b = self._b(ctx, state)
@@ -198,7 +204,7 @@ class SeriesEstimator(Estimator):
         out = ctx.vzero() + self.series.coefficient(cs)
         for k in range(1, self.K + 1):
             cs = self.series.advance(ctx, cs, ctx.lane(float(k - 1)), b)
-            out = out + self.series.coefficient(cs) * state["m"][k - 1] * float(self.invS[k])
+            out = out + _term(self.series.coefficient(cs), state["m"][k - 1]) * float(self.invS[k])
         return out
 
     @property

@@ -28,6 +28,11 @@ from ..styles import StyleError
 from ..styles.base import Style
 from ..styles.forms import AffineForm, PolynomialForm, SeriesForm
 
+#: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with fireflies
+#: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased for the
+#: series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| < b/2).
+SERIES_MAX_TERMS = 24
+
 ESTIMATORS = {
     "direct": None,
     "affine": AffineForm,
@@ -97,7 +102,8 @@ def make_estimator(slot, level: int, vertex):
         return Transformed(E.Affine(form.a1, form.a0, n=n))
     if isinstance(form, SeriesForm):
         selection = {"series": "iterative", "series_recursive": "recursive", "series_single": "single"}[name]
-        est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo), selection=selection)
+        est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
+                                selection=selection, max_terms=SERIES_MAX_TERMS)
         shift = form.shift
         return Transformed(est, (lambda x: x + shift) if shift else None, form.scale, form.offset)
     if isinstance(form, PolynomialForm):

@@ -23,8 +23,10 @@ class SeriesForm:
     """g(I) = scale * h(I + shift) + offset with h a power series (`estimators.Series`).
 
     `shift` moves the samples into the series' convergence region (e.g. 1/(1+I) is the reciprocal series
-    of 1 + I); `pilot_lo` bounds the pilot expansion point from below (a pilot b of 0 would make a
-    power series of I^p diverge).
+    of 1 + I). The expansion point is b = max(pilot_scale * mean of the pilot children, pilot_lo):
+    `pilot_lo` keeps b away from 0 (a power series of I^p about b converges only for 0 < I < 2b, so a
+    pilot of zeros would make it diverge), and `pilot_scale` > 1 widens that region beyond a pilot that
+    underestimates I.
     """
 
     series: Any
@@ -32,6 +34,7 @@ class SeriesForm:
     scale: Any = 1.0
     offset: Any = 0.0
     pilot_lo: Optional[float] = None
+    pilot_scale: float = 1.0
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,8 @@ Parameters
 
 Unbiased estimators use the reciprocal series of the shifted samples w + X (supplement S16-S17):
 w/(w + I) = sum_k w b^(-k-1) (b - (w + I))^k about a pilot estimate b of w + I, which converges for
-0 < w + I < 2b. Samples of w + X are >= w > 0, so the expansion never straddles 0.
+0 < w + I < 2b; b = max(1.5 <w + I>_pilot, w) leaves a margin above a pilot that underestimates. Samples of
+w + X are >= w > 0, so the expansion never straddles 0.
 """
 from __future__ import annotations
 
@@ -31,4 +32,5 @@ class Reinhard(Style):
     def form(self):
         from ..estimators import reciprocal_series
         # samples of w + X are >= w, so a pilot b >= w keeps the expansion on the positive side
-        return SeriesForm(reciprocal_series(self.white), shift=self.white, scale=-1.0, offset=1.0, pilot_lo=self.white)
+        return SeriesForm(reciprocal_series(self.white), shift=self.white, scale=-1.0, offset=1.0, pilot_lo=self.white,
+                          pilot_scale=1.5)
