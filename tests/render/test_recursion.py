@@ -15,7 +15,7 @@ def renders(scene, integrator, spp, seed0):
 
 
 def sky_scene(res, styled=False):
-    """Two diffuse spheres on a ground plane, an emitting panel and a sky: every level of a recursive
+    """Two diffuse spheres on a ground plane, an emitting panel, a point light, a sun and a sky: every level of a recursive
     tree finds light often, so per-block statistics are close to normal at small sample counts (a
     Cornell box lit by a small light is not: without next-event estimation at the stylized levels, its
     direct light arrives in rare, large samples). `styled` wraps every BSDF, the panel's included, in
@@ -37,6 +37,9 @@ def sky_scene(res, styled=False):
         "panel": {"type": "rectangle", "to_world": T().translate([0, 1.6, -1.2]) @ T().rotate([1, 0, 0], 60) @ T().scale(0.6),
                   "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [4, 3.5, 3]}}, "bsdf": bsdf([0.5, 0.5, 0.5])},
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.5, 0.6, 0.8]}},
+        # delta lights: no BSDF sample reaches them, so they test the next-event estimation of every level
+        "bulb": {"type": "point", "position": [1.2, 1.4, 1.2], "intensity": {"type": "rgb", "value": [1.5, 1.2, 0.9]}},
+        "sun": {"type": "directional", "direction": [-0.3, -1, -0.4], "irradiance": {"type": "rgb", "value": 0.4}},
     })
 
 

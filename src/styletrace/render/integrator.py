@@ -101,11 +101,18 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
         # first_n_hits: the next vertex is stylized as well; its whole exitant radiance, emission
-        # included, goes through g, so it cannot be split by next-event estimation: sample the BSDF alone.
+        # included, goes through g, so surface lights cannot be split off by next-event estimation: the
+        # BSDF sample reaches them. Point, spot and directional lights are no vertex (never stylized) and
+        # no BSDF sample can hit them, so they alone get next-event estimation here, with weight 1.
         L = emission(scene, si, active)
         go = active & (depth + 1 < depth_limit(s.max_depth))
         bsdf = si.bsdf(ray)
-        bs, weight = bsdf.sample(mi.BSDFContext(), si, sampler.next_1d(), sampler.next_2d(), go)
+        ctx = mi.BSDFContext()
+        to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, to_light)
+        to_light &= ds.delta & (ds.pdf != 0.0)
+        L += dr.select(to_light, bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
+        bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), go)
         ray2 = si.spawn_ray(si.to_world(bs.wo))
         go &= dr.max(weight) > 0
         pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
