@@ -191,3 +191,51 @@ def test_second_ctrl_c_abandons_the_pass_under_way(tmp_path):
     assert code == 130, log.decode()
     assert b"wrote" in rest and b"of 100000 spp" in rest
     assert read(out).shape == (64, 64, 3)
+
+
+GAMMA_XML = """<scene version="3.0.0">
+  <integrator type="stylized"><string name="style" value="gamma"/><float name="gamma" value="4"/>
+    <integer name="inner_samples" value="2"/></integrator>
+  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+  <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>"""
+
+
+def test_flags_refine_the_scenes_own_integrator(tmp_path, capsys):
+    path = tmp_path / "g.xml"
+    path.write_text(GAMMA_XML)
+    out = tmp_path / "o.exr"
+    assert main(["render", str(path), "--inner", "4", "--spp", "1", "-o", str(out)]) == 0
+    assert "gamma(gamma=4)" in capsys.readouterr().err  # --inner alone keeps the scene's style
+    # the sphere (albedo 0.5 under a white sky) is 0.5^(1/4) with gamma 4; --max-depth 1 leaves emission only
+    np.testing.assert_allclose(read(out)[3:5, 3:5], 0.5 ** 0.25, rtol=0.05)
+    assert main(["render", str(path), "--max-depth", "1", "--spp", "1", "-q", "-o", str(out)]) == 0
+    np.testing.assert_allclose(read(out)[3:5, 3:5], 0.0, atol=1e-6)
+    assert main(["render", str(path), "--style", "cel", "--spp", "1", "-o", str(out)]) == 0
+    assert "cel(thresholds=0.75" in capsys.readouterr().err  # a new style drops the old one's parameters
+
+
+@pytest.mark.parametrize("args", [["--spp", "abc"], ["--no-such-flag"], []])
+def test_malformed_arguments_are_one_line(args, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["render", *args] if args else [])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("styletrace: error: ") and "\n" not in err
+
+
+def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypatch):
+    from styletrace import api
+    real = api.passes
+
+    def failing(*a, **k):
+        gen = real(*a, **k)
+        yield next(gen)
+        raise RuntimeError("jit_malloc(): out of memory\nsecond line")
+
+    monkeypatch.setattr(api, "passes", failing)
+    out = tmp_path / "p.exr"
+    assert main(["render", *SMALL, "--pass-spp", "1", "-o", str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "error after 1 of 4 spp (second line)" in err and "wrote the finished passes" in err
+    assert read(out).shape == (16, 24, 3)

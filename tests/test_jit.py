@@ -83,3 +83,14 @@ def test_a_chosen_variant_wins_over_cuda(monkeypatch):
     import mitsuba as mi
     monkeypatch.setattr(jit, "cuda_usable", lambda: True)
     assert jit.select_variant() == "llvm_ad_rgb" and mi.variant() == "llvm_ad_rgb"
+
+
+def test_command_without_llvm_is_one_line_and_exit_2(tmp_path):
+    """The console entry point turns a backend failure during `import styletrace` into the CLI's error."""
+    fake = tmp_path / "libLLVM-15.so"
+    fake.write_bytes(b"")
+    r = _import_in_child({"DRJIT_LIBLLVM_PATH": str(fake), "STYLETRACE_NO_CUDA": "1"},
+                         "import sys, styletrace_cli; sys.argv = ['styletrace', 'render']; sys.exit(styletrace_cli.main())")
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("styletrace: error: ") and "apt-get install libllvm19" in lines[0]

@@ -98,10 +98,16 @@ def make_integrator(style: str = "identity", inner: Any = None, estimator: str =
         desc["inner_samples"] = ",".join(str(int(n)) for n in inner) if isinstance(inner, (list, tuple)) else inner
     for key, value in params.items():
         desc[key] = value if isinstance(value, (int, float, str, bool)) else _as_string(value)
-    # Validate here first: errors raised inside a Mitsuba plugin constructor come back wrapped.
+    return make_integrator_from(desc)
+
+
+def make_integrator_from(values: dict[str, Any]) -> mi.Integrator:
+    """A `stylized` integrator from its properties (style, style parameters, inner_samples, ...)."""
     from .render.properties import settings_from
-    settings_from({k: v for k, v in desc.items() if k != "type"})
-    return mi.load_dict(desc)
+    values = {k: v for k, v in values.items() if k != "type"}
+    # Validate here first: errors raised inside a Mitsuba plugin constructor come back wrapped.
+    settings_from(values)
+    return mi.load_dict({"type": "stylized", **values})
 
 
 def _as_string(value: Any) -> str:
@@ -172,5 +178,5 @@ def render(scene: Any = None, style: str = "identity", spp: int = 16, inner: Any
     return image
 
 
-__all__ = ["render", "load_scene", "make_integrator", "passes", "pass_count", "SceneError", "Progress",
+__all__ = ["render", "load_scene", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError", "Progress",
            "StylizedIntegrator"]

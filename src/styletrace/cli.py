@@ -1,7 +1,8 @@
 """Command line: `styletrace render`, `styletrace styles`.
 
 Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
-unwritable output) ends with one line on stderr and exit status 2. Ctrl-C during a multi-pass
+unwritable output, malformed arguments) ends with one line on stderr and exit status 2. Flags override
+the scene's own `stylized` integrator only where given. A failure after some passes still writes them. Ctrl-C during a multi-pass
 render finishes the pass under way (a second Ctrl-C abandons it), writes the average of the finished
 passes, then exits with status 130.
 """
@@ -120,21 +121,9 @@ def cmd_render(args) -> int:
 
     import styletrace
     from styletrace import api
-    from styletrace.render.integrator import StylizedIntegrator
 
     scene = api.load_scene(args.scene, args.width, args.height)
-    own = scene.integrator()
-    if args.style is None and isinstance(own, StylizedIntegrator) and not params and args.inner is None:
-        integrator = own
-    else:
-        options = dict(style=args.style or "cel", inner=args.inner, estimator=args.estimator, stylize=args.stylize,
-                       stylize_depth=args.stylize_depth, max_depth=args.max_depth, rr_depth=args.rr_depth)
-        # integrator properties given with --set win over the flags' defaults
-        aliases = {"inner_samples": "inner"}
-        for key in ("style", "inner_samples", "estimator", "stylize", "stylize_depth", "max_depth", "rr_depth"):
-            if key in params:
-                options[aliases.get(key, key)] = params.pop(key)
-        integrator = api.make_integrator(**options, **params)
+    integrator = choose_integrator(scene, args, params)
 
     lanes = api.LANES_PER_PASS
     if args.pass_spp:
@@ -145,7 +134,7 @@ def cmd_render(args) -> int:
     if total > 1 and not args.quiet:
         from tqdm import tqdm
         bar = tqdm(total=args.spp, unit="spp", desc="rendering", file=sys.stderr)
-    latest = None
+    latest, failure = None, None
     with InterruptFlag() as stop:
         try:
             for prog in api.passes(scene, integrator, args.spp, args.seed, lanes):
@@ -154,26 +143,63 @@ def cmd_render(args) -> int:
                 latest = prog
                 if stop.count:
                     break
-        except (KeyboardInterrupt, RuntimeError):
-            # A second Ctrl-C abandons the pass under way; Dr.Jit may wrap it in a RuntimeError.
-            if not stop.count:
+        except (KeyboardInterrupt, RuntimeError) as exc:
+            # A second Ctrl-C abandons the pass under way (Dr.Jit may wrap it in a RuntimeError); any other
+            # failure of a later pass must not cost the passes already finished.
+            if not stop.count and latest is None:
                 raise
+            failure = None if stop.count else exc
+    if bar is not None:
+        bar.close()
+    if failure is not None:
+        out = save_safely(latest.image, args.output)
+        print(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({one_line(failure)}); wrote the "
+              f"finished passes to {out}", file=sys.stderr)
+        return 1
     if stop.count:
-        if bar is not None:
-            bar.close()
         if latest is None:
             print("styletrace: interrupted before the first pass finished; nothing written", file=sys.stderr)
             return 130
         out = save_safely(latest.image, args.output)
         print(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp", file=sys.stderr)
         return 130
-    if bar is not None:
-        bar.close()
     out = save_safely(latest.image, args.output)
     if not args.quiet:
         print(f"wrote {out} ({styletrace.variant}, {integrator.settings.style.describe()}, spp {args.spp})",
               file=sys.stderr)
     return 0 if out == args.output else 1
+
+
+#: command-line flag -> integrator property
+FLAG_PROPERTIES = {"style": "style", "inner": "inner_samples", "estimator": "estimator", "stylize": "stylize",
+                   "stylize_depth": "stylize_depth", "max_depth": "max_depth", "rr_depth": "rr_depth"}
+
+
+def choose_integrator(scene, args, params):
+    """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
+    (a scene without one starts from the `cel` style)."""
+    from styletrace import api
+    from styletrace.render.integrator import StylizedIntegrator
+    from styletrace.styles import get
+
+    own = scene.integrator()
+    base = dict(own.values) if isinstance(own, StylizedIntegrator) else {"style": "cel"}
+    given = {prop: getattr(args, flag) for flag, prop in FLAG_PROPERTIES.items() if getattr(args, flag) is not None}
+    given.update(params)
+    if isinstance(own, StylizedIntegrator) and not given:
+        return own
+    values = dict(base)
+    new_style = given.get("style")
+    if new_style is not None and new_style != base.get("style"):
+        old_params = {p.name for p in get(str(base.get("style", "identity"))).params}
+        values = {k: v for k, v in values.items() if k not in old_params}  # they belong to the old style
+    values.update(given)
+    return api.make_integrator_from(values)
+
+
+def one_line(exc: BaseException) -> str:
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    return lines[-1] if lines else type(exc).__name__
 
 
 def cmd_gallery(args) -> int:
@@ -194,8 +220,15 @@ def cmd_gallery(args) -> int:
     return 0
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with the project's error format: one line, exit status 2 (no usage dump)."""
+
+    def error(self, message):
+        self.exit(2, f"styletrace: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="styletrace", description="Stylized global illumination as a function of expectation.")
+    p = Parser(prog="styletrace", description="Stylized global illumination as a function of expectation.")
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("render", help="render a scene with a style")
@@ -207,14 +240,14 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
     r.add_argument("--inner", default=None, help="inner samples per stylized vertex, or one per level: 8,4")
     r.add_argument("--spp", type=int, default=16, help="camera samples per pixel (default 16)")
-    r.add_argument("--estimator", default="direct",
+    r.add_argument("--estimator", default=None,
                    help="estimator of g(E[L]): direct (default), affine, series, series_recursive, series_single, "
                         "ustat, naive, telescoping; `styletrace styles` lists which apply to each style")
-    r.add_argument("--stylize", default="first_hit",
+    r.add_argument("--stylize", default=None,
                    help="where styles apply: first_hit (default), first_n_hits, first_object_hit")
-    r.add_argument("--stylize-depth", type=int, default=1, help="number of stylized levels N (default 1)")
-    r.add_argument("--max-depth", type=int, default=-1, help="longest path (-1: unbounded)")
-    r.add_argument("--rr-depth", type=int, default=5, help="depth where Russian roulette starts")
+    r.add_argument("--stylize-depth", type=int, default=None, help="number of stylized levels N (default 1)")
+    r.add_argument("--max-depth", type=int, default=None, help="longest path (default -1: unbounded)")
+    r.add_argument("--rr-depth", type=int, default=None, help="depth where Russian roulette starts (default 5)")
     r.add_argument("--width", type=int, default=None, help="image width (built-in scenes; XML with $resx)")
     r.add_argument("--height", type=int, default=None, help="image height (built-in scenes; XML with $resy)")
     r.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same image")

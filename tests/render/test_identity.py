@@ -5,14 +5,14 @@ import pytest
 
 import styletrace  # noqa: F401
 from styletrace.api import load_scene, make_integrator, passes
-from helpers.stats import mean_z, pixel_t_test
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K = 16          # independent renders per side
 SPP, INNER = 8, 8
 RES = 40
 # Family-wise error of the per-pixel test; the mean test uses a Bonferroni bound over 3 channels.
 ALPHA = 1e-3
-Z_MAX = 3.9  # two-sided 1e-4 / 3 channels
+Z_MAX = mean_threshold(K)  # two-sided 1e-4 over 3 channels, Student's t with 2K - 2 degrees of freedom
 
 
 def renders(scene, integrator, spp, seed0):

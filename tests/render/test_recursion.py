@@ -5,7 +5,7 @@ import pytest
 
 import styletrace
 from styletrace.api import make_integrator, passes
-from helpers.stats import mean_z, pixel_t_test
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K, RES, SPP = 12, 24, 8
 
@@ -45,7 +45,7 @@ def sky_scene(res, styled=False):
 
 def assert_pbr(ours, ref):
     z = mean_z(ours, ref)
-    assert np.all(np.abs(z) < 3.9), f"image means differ: z = {z}"
+    assert np.all(np.abs(z) < mean_threshold(K)), f"image means differ: z = {z}"
     tmax, thr, frac = pixel_t_test(ours, ref, block=2)
     assert tmax < thr, f"max |t| {tmax:.2f} over {thr:.2f}"
 
@@ -78,4 +78,4 @@ def test_recursion_test_detects_missing_emission():
     ref = renders(scene, mi.load_dict({"type": "path"}), SPP * 4, 9000)
     integ = make_integrator("identity", inner="2", stylize="first_n_hits", stylize_depth=2, max_depth=2)
     ours = renders(scene, integ, SPP, 1)
-    assert np.any(np.abs(mean_z(ours, ref)) > 3.9)
+    assert np.any(np.abs(mean_z(ours, ref)) > mean_threshold(K))

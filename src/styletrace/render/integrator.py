@@ -66,7 +66,8 @@ class Target:
 class StylizedIntegrator(mi.SamplingIntegrator):
     def __init__(self, props: mi.Properties):
         super().__init__(props)
-        self.settings: Settings = settings_from(props_to_dict(props))
+        self.values = props_to_dict(props)  # as given, so front ends can derive a variant of this integrator
+        self.settings: Settings = settings_from(self.values)
 
     # ---- which styles apply where --------------------------------------------------------------
     def _targets(self, scene: mi.Scene) -> list[Target]:
@@ -168,6 +169,15 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         self.targets = self._targets(scene)
+        try:
+            return self._sample(scene, sampler, ray, active)
+        finally:
+            # Keep no reference to this scene's objects once traced: Dr.Jit traces calls on every live
+            # instance of a class, and a lingering BSDF or emitter of a scene that the garbage collector
+            # is tearing down crashed a later trace (measured: segfault in pdf_emitter_direction).
+            self.targets = []
+
+    def _sample(self, scene, sampler, ray, active):
         for t in self.targets:
             t.slot.style.prepare(scene)
         self.view = camera_forward(scene)

@@ -113,8 +113,8 @@ def settings_from(values: dict[str, Any]) -> Settings:
         raise StyleError(f"bad value {slot.style.name!r} for 'style': with stylize=first_object_hit the styles "
                          f"come from 'styled' BSDFs, so the integrator's own style must be identity")
     if len(slot.inner) not in (1, depth):
-        raise StyleError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': expected 1 or {depth} "
-                         f"counts (one per stylized level)")
+        expected = "1 count (one stylized level)" if depth == 1 else f"1 or {depth} counts (one per stylized level)"
+        raise StyleError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': expected {expected}")
     max_depth = _int("max_depth", values.get("max_depth", -1), -1)
     if max_depth == 0:
         raise StyleError("bad value 0 for 'max_depth': expected -1 (unbounded) or an integer >= 1")
