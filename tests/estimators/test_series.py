@@ -121,3 +121,17 @@ def test_refusals_name_the_problem():
         SeriesEstimator(exp_series(), terms="exact")
     with pytest.raises(ValueError, match="expansion point b must be"):
         SeriesEstimator(exp_series(), b=[[1.0]])
+
+
+@pytest.mark.parametrize("selection", ["iterative", "recursive", "single"])
+def test_random_counts_are_drawn_per_lane_inside_the_kernel(selection):
+    import styletrace.estimators as E
+    """Inside one Dr.Jit loop each lane draws its own random number of samples (the renderer relies on this:
+    no lane is replicated, lanes just loop longer or shorter), with the mean the estimator predicts."""
+    est = E.SeriesEstimator(E.exp_series(), b=E.Pilot(1), selection=selection)
+    r = E.estimate_drjit(est, E.Uniform(0.2, 1.0), 20000, seed=3)
+    counts = r.draws.astype(np.float64)
+    assert len(np.unique(counts)) > 3
+    if est.mean_samples is not None:
+        se = counts.std(ddof=1) / np.sqrt(len(counts))
+        assert abs(counts.mean() - est.mean_samples) < 4 * se, (counts.mean(), est.mean_samples)
