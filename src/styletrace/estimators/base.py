@@ -114,12 +114,8 @@ class Context:
     def vconst(self, c):
         """c (scalar or per-channel) as something that combines with values."""
         c = np.asarray(c, dtype=np.float64)
-        if c.ndim == 0:
-            return float(c)
-        if c.ndim != 1:
-            raise ValueError(f"per-channel constants must be 1-D, got shape {c.shape}")
-        if self.is_drjit:
-            return A.const_like(c, self.like_t(0.0))
+        if self.is_drjit or c.ndim != 1:  # scalars, bad shapes and Dr.Jit values: const_like's checks
+            return A.const_like(c, self.like_t(0.0) if self.is_drjit else np.zeros(c.shape[-1:] or (1,)))
         if self.channels is not None and self.channels != c.shape[0]:
             raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} channel(s)")
         self.channels = c.shape[0]
