@@ -30,7 +30,7 @@ class SceneError(ValueError):
     """A scene that cannot be found or loaded; the message is one line."""
 
 
-def _first_line(exc: BaseException) -> str:
+def first_line(exc: BaseException) -> str:
     text = str(exc).strip()
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     # Mitsuba prefixes the real cause with context lines; the last line is the most specific.
@@ -64,13 +64,13 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         try:
             return mi.load_dict(scene)
         except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
-            raise SceneError(f"cannot load scene dict: {_first_line(exc)}") from None
+            raise SceneError(f"cannot load scene dict: {first_line(exc)}") from None
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
             return mi.load_dict(scene_dict(name, width, height))
         except Exception as exc:
-            raise SceneError(f"cannot load built-in scene '{name}': {_first_line(exc)}") from None
+            raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
         raise SceneError(f"unknown scene '{name}': expected a built-in scene ({', '.join(sorted(BUILTIN))}) "
                          f"or a Mitsuba XML file")
@@ -79,7 +79,7 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     try:
         loaded = mi.load_file(name, **_size(width, height, ("resx", "resy")))
     except Exception as exc:
-        raise SceneError(f"cannot load scene file '{name}': {_first_line(exc)}") from None
+        raise SceneError(f"cannot load scene file '{name}': {first_line(exc)}") from None
     if width or height:
         size = loaded.sensors()[0].film().size()
         if (width and width != size[0]) or (height and height != size[1]):

@@ -153,7 +153,7 @@ def cmd_render(args) -> int:
         bar.close()
     if failure is not None:
         out = save_safely(latest.image, args.output)
-        print(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({one_line(failure)}); wrote the "
+        print(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "
               f"finished passes to {out}", file=sys.stderr)
         return 1
     if stop.count:
@@ -195,11 +195,6 @@ def choose_integrator(scene, args, params):
         values = {k: v for k, v in values.items() if k not in old_params}  # they belong to the old style
     values.update(given)
     return api.make_integrator_from(values)
-
-
-def one_line(exc: BaseException) -> str:
-    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-    return lines[-1] if lines else type(exc).__name__
 
 
 def cmd_gallery(args) -> int:

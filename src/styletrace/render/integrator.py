@@ -84,14 +84,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return targets
 
     def _styled(self, si) -> mi.Bool:
-        return _any_ptr(si.bsdf(), [b for t in self.targets for b in t.bsdfs])
+        return _any_ptr(si.bsdf(), [b for t in self.targets for b in t.bsdfs], mi.BSDFPtr)
 
     def _skip_emitter(self, ds) -> mi.Bool:
-        ems = [e for t in self.targets for e in t.emitters]
-        mask = mi.Bool(False)
-        for e in ems:
-            mask |= ds.emitter == mi.EmitterPtr(e)
-        return mask
+        return _any_ptr(ds.emitter, [e for t in self.targets for e in t.emitters], mi.EmitterPtr)
 
     # ---- the tree ------------------------------------------------------------------------------
     def child(self, level: int, scene, sampler, pi, si, ray, active, depth) -> mi.Spectrum:
@@ -128,7 +124,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         start = mi.UInt32(depth)
 
         def stop(si, d):
-            return self._styled(si) & (d > start) if not halt_at_start else self._styled(si)
+            styled = self._styled(si)
+            return styled if halt_at_start else styled & (d > start)
 
         w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
                  skip_emitter=self._skip_emitter)
@@ -143,7 +140,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
         total = mi.Spectrum(0.0)
         for target in self.targets:
-            here = active & (_any_ptr(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
+            here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
             total = dr.select(here, self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v),
                               total)
         return total
@@ -203,8 +200,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                 f"max_depth={s.max_depth}]")
 
 
-def _any_ptr(ptr, objects) -> mi.Bool:
+def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:
+    """Lanes whose pointer (BSDF, emitter, ...) is one of `objects`."""
     mask = mi.Bool(False)
     for obj in objects:
-        mask |= ptr == mi.BSDFPtr(obj)
+        mask |= ptr == ptr_type(obj)
     return mask
