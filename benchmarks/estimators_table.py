@@ -15,23 +15,13 @@ import math
 import os
 import sys
 import time
-import types
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so")
 sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-try:
-    import styletrace  # noqa: F401
-except Exception:  # the package __init__ is not importable: the estimators need none of it
-    for name in [m for m in sys.modules if m == "styletrace" or m.startswith("styletrace.")]:
-        del sys.modules[name]
-    pkg = types.ModuleType("styletrace")
-    pkg.__path__ = [str(ROOT / "src" / "styletrace")]
-    sys.modules["styletrace"] = pkg
 
 from _report import machine_description, write_section  # noqa: E402
 
@@ -178,7 +168,8 @@ def tie_dye_section(seed):
 def float32_section(seed):
     """The same estimators in a float32 Dr.Jit kernel versus float64 numpy."""
     try:
-        import drjit  # noqa: F401
+        from styletrace.jit import prepare_drjit
+        prepare_drjit()  # a working libLLVM first; estimate_drjit follows the backend it picks
     except Exception as exc:  # pragma: no cover - reported in the table instead
         return [f"(Dr.Jit unavailable: {exc})"]
     fit = E.tie_dye_fit()

@@ -21,7 +21,9 @@ import time
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
 sys.path.insert(0, os.path.dirname(__file__))
 
-import styletrace  # noqa: E402,F401  (first: it points Dr.Jit at a working libLLVM)
+import styletrace  # noqa: E402
+
+styletrace.init()  # first: it points Dr.Jit at a working libLLVM
 import mitsuba as mi  # noqa: E402
 from styletrace.api import load_scene, make_integrator, passes  # noqa: E402
 from _report import machine_description, write_section  # noqa: E402

@@ -9,7 +9,9 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
 
 import styletrace  # noqa: E402
-from styletrace.cli import write_image  # noqa: E402
+
+styletrace.init()
+from styletrace.images import write_image  # noqa: E402
 from styletrace.styles import get, names  # noqa: E402
 
 SIZE, SPP = 160, 32

@@ -1,6 +1,16 @@
 import os
 import sys
 
-# Tests run against the source tree; importing styletrace selects the JIT variant and libLLVM.
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
+# Tests run against the source tree. The suites that render call styletrace.init() in their conftest
+# (it picks libLLVM and the variant, and registers the plugins); the estimator tests need neither.
+SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
+sys.path.insert(0, SRC)
 sys.path.insert(0, os.path.dirname(__file__))
+
+
+def child_env(**extra):
+    """The environment for a test's subprocess: our source tree put first on PYTHONPATH, what was there kept
+    (a GPU machine carries its packages on it)."""
+    env = dict(os.environ, **extra)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
+    return env

@@ -5,7 +5,7 @@ import pytest
 
 import styletrace
 from styletrace import api
-from styletrace.styles import StyleError
+from styletrace.errors import SettingsError, StyleError
 
 
 def test_render_returns_linear_float32_hwc():
@@ -51,11 +51,11 @@ def test_loaded_scene_cannot_be_resized():
 def test_make_integrator_validates_before_mitsuba():
     with pytest.raises(StyleError, match="bad value 'x' for parameter 'gamma'"):
         api.make_integrator("gamma", gamma="x")
-    with pytest.raises(StyleError, match="expected 1 or 2 counts"):
+    with pytest.raises(SettingsError, match="expected 1 or 2 counts"):
         api.make_integrator("cel", inner=(2, 3, 4), stylize="first_n_hits", stylize_depth=2)
-    with pytest.raises(StyleError, match="stylize_depth"):
+    with pytest.raises(SettingsError, match="stylize_depth"):
         api.make_integrator("cel", stylize_depth=2)
-    with pytest.raises(StyleError, match="the integrator's own style must be identity"):
+    with pytest.raises(SettingsError, match="the integrator's own style must be identity"):
         api.make_integrator("cel", stylize="first_object_hit")
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from styletrace import jit
 
-SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
+from conftest import child_env
 
 
 @pytest.mark.parametrize("name,major", [("libLLVM-19.so", 19), ("libLLVM.so.19.1", 19), ("libLLVM-15.so.1", 15),
@@ -29,8 +29,7 @@ def test_only_old_llvm_finds_nothing(tmp_path):
 
 
 def _import_in_child(env_extra, code="import styletrace; print(styletrace.variant)"):
-    env = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
-    env.update(env_extra, PYTHONPATH=SRC)
+    env = {k: v for k, v in child_env(**env_extra).items() if k != "DRJIT_LIBLLVM_PATH" or k in env_extra}
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
 
 
@@ -52,7 +51,7 @@ def test_user_variant_is_kept():
 def test_a_user_variant_styles_cannot_run_on_is_a_clear_error(variant):
     """Not silently replaced, not an obscure failure at render time: one error naming the variant."""
     r = _import_in_child({"DRJIT_LIBLLVM_PATH": jit.find_libllvm()},
-                         f"import mitsuba as mi; mi.set_variant('{variant}'); import styletrace")
+                         f"import mitsuba as mi; mi.set_variant('{variant}'); import styletrace; styletrace.init()")
     assert r.returncode != 0
     assert f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active variant is {variant}" in r.stderr
 
@@ -86,11 +85,11 @@ def test_a_chosen_variant_wins_over_cuda(monkeypatch):
 
 
 def test_command_without_llvm_is_one_line_and_exit_2(tmp_path):
-    """The console entry point turns a backend failure during `import styletrace` into the CLI's error."""
+    """The command line turns a backend failure (no usable libLLVM) into its one-line error."""
     fake = tmp_path / "libLLVM-15.so"
     fake.write_bytes(b"")
     r = _import_in_child({"DRJIT_LIBLLVM_PATH": str(fake), "STYLETRACE_NO_CUDA": "1"},
-                         "import sys, styletrace_cli; sys.argv = ['styletrace', 'render']; sys.exit(styletrace_cli.main())")
+                         "import sys; from styletrace.cli import main; sys.exit(main(['render']))")
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("styletrace: error: ") and "apt-get install libllvm19" in lines[0]

@@ -1,20 +1,31 @@
 """styletrace: stylized global illumination as a function of expectation, on Mitsuba 3.
 
-Importing the package chooses a JIT variant (see `styletrace.jit`) and registers the Mitsuba plugins.
-The estimator library `styletrace.estimators` needs neither and can be imported on its own.
+`import styletrace` loads neither Dr.Jit nor Mitsuba. The first use of the rendering API
+(`styletrace.render`, `styletrace.variant`, ...) or an explicit `styletrace.init()` picks a working
+libLLVM and the JIT variant (`cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`; a variant you set
+before is kept) and registers the Mitsuba plugins `stylized` and `styled` (see `styletrace.runtime`).
+The estimator library `styletrace.estimators` needs none of it and runs on numpy alone.
 """
 from __future__ import annotations
 
+from .errors import BackendError, SceneError, SettingsError, StyleError, StyletraceError, UsageError
+from .runtime import init
+
 __version__ = "0.1.0"
 
-from .jit import BackendError, select_variant
+#: names served by `styletrace.api`, loaded (and the backend initialised) on first use
+_API = ("render", "load_scene", "make_integrator", "passes", "write_image")
 
-variant = select_variant()
 
-from .render import register as _register  # noqa: E402  (needs the variant set above)
+def __getattr__(name: str):
+    if name == "variant":
+        return init()
+    if name in _API:
+        init()
+        from . import api
+        return getattr(api, name)
+    raise AttributeError(f"module 'styletrace' has no attribute {name!r}")
 
-_register()
 
-from .api import render  # noqa: E402
-
-__all__ = ["render", "variant", "BackendError", "__version__"]
+__all__ = ["init", "variant", "StyletraceError", "BackendError", "StyleError", "SettingsError", "SceneError",
+           "UsageError", "__version__", *_API]

@@ -14,20 +14,21 @@ import os
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-import drjit as dr
-import mitsuba as mi
-import numpy as np
+from .jit import backend
+from .runtime import init
 
-from .render.integrator import StylizedIntegrator
-from .render.scenes import BUILTIN, DEFAULT
-from .styles import StyleError
+backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .errors import SceneError, UsageError  # noqa: E402
+from .images import save_safely, write_image  # noqa: E402
+from .plugins.integrator import StylizedIntegrator  # noqa: E402
+from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
 LANES_PER_PASS = 1 << 20
-
-
-class SceneError(ValueError):
-    """A scene that cannot be found or loaded; the message is one line."""
 
 
 def first_line(exc: BaseException) -> str:
@@ -50,6 +51,7 @@ def scene_dict(name: str, width: int | None = None, height: int | None = None) -
 
 def load_scene(scene: Any = None, width: int | None = None, height: int | None = None) -> mi.Scene:
     """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene."""
+    init()
     if scene is None:
         scene = DEFAULT
     if isinstance(scene, mi.Scene):
@@ -88,34 +90,19 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     return loaded
 
 
-def make_integrator(style: str = "identity", inner: Any = None, estimator: str = "direct",
-                    stylize: str = "first_hit", stylize_depth: int = 1, max_depth: int = -1,
-                    rr_depth: int = 5, **params: Any) -> mi.Integrator:
-    """Build a `stylized` integrator; style parameters go in **params under their registry names."""
-    desc = {"type": "stylized", "style": style, "estimator": estimator, "stylize": stylize,
-            "stylize_depth": stylize_depth, "max_depth": max_depth, "rr_depth": rr_depth}
-    if inner is not None:
-        desc["inner_samples"] = ",".join(str(int(n)) for n in inner) if isinstance(inner, (list, tuple)) else inner
-    for key, value in params.items():
-        desc[key] = value if isinstance(value, (int, float, str, bool)) else _as_string(value)
-    return make_integrator_from(desc)
+def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,
+                    **params: Any) -> StylizedIntegrator:
+    """A `stylized` integrator. Integrator properties (stylize, stylize_depth, max_depth, rr_depth) and the
+    style's parameters go in **params under their names; what is not given takes the default of
+    `plugins.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
+    given = {"style": style, "inner_samples": inner, "estimator": estimator, **params}
+    return make_integrator_from({k: v for k, v in given.items() if v is not None})
 
 
-def make_integrator_from(values: dict[str, Any]) -> mi.Integrator:
-    """A `stylized` integrator from its properties (style, style parameters, inner_samples, ...)."""
-    from .render.properties import settings_from
-    values = {k: v for k, v in values.items() if k != "type"}
-    # Validate here first: errors raised inside a Mitsuba plugin constructor come back wrapped.
-    settings_from(values)
-    return mi.load_dict({"type": "stylized", **values})
-
-
-def _as_string(value: Any) -> str:
-    if isinstance(value, (list, tuple)):
-        if value and isinstance(value[0], (list, tuple)) and len(value[0]) == 2 and isinstance(value[0][1], (list, tuple)):
-            return ";".join(f"{p}:{','.join(map(str, c))}" for p, c in value)  # gradient stops
-        return ",".join(str(v) for v in value)
-    return str(value)
+def make_integrator_from(values: dict[str, Any]) -> StylizedIntegrator:
+    """A `stylized` integrator from its property values (style, style parameters, inner_samples, ...)."""
+    init()
+    return StylizedIntegrator.from_values(values)
 
 
 def pass_seed(seed: int, index: int) -> int:
@@ -134,7 +121,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lanes_per_pass: int = LANES_PER_PASS) -> Iterator[Progress]:
     """Render `spp` samples per pixel in passes; yield the running average after each pass."""
     if spp < 1:
-        raise StyleError(f"bad value {spp!r} for spp: expected an integer >= 1")
+        raise UsageError(f"bad value {spp!r} for spp: expected an integer >= 1")
     size = scene.sensors()[0].film().crop_size()
     pixels = int(size[0]) * int(size[1])
     per_pass = max(1, min(spp, lanes_per_pass // max(pixels, 1)))
@@ -157,15 +144,16 @@ def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS) 
     return math.ceil(spp / per_pass)
 
 
-def render(scene: Any = None, style: str = "identity", spp: int = 16, inner: Any = None,
-           estimator: str = "direct", seed: int = 0, width: int | None = None, height: int | None = None,
+def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+           estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: mi.Integrator | None = None, callback: Callable[[Progress], None] | None = None,
            **params: Any) -> np.ndarray:
     """Render with a style; returns float32 H x W x 3 linear radiance.
 
     `scene`: built-in name ('cornell-box', 'dragon', 'furnace'), XML path, scene dict or mi.Scene.
     Integrator keywords (stylize, stylize_depth, max_depth, rr_depth) and the style's parameters go
-    in **params. Pass `integrator=` to use a prebuilt one (then style and params are ignored).
+    in **params; what is not given takes the integrator's defaults (`plugins.settings`: identity, direct,
+    the style's inner count). Pass `integrator=` to use a prebuilt one (then style and params are ignored).
     """
     sc = load_scene(scene, width, height)
     if integrator is None:
@@ -178,5 +166,5 @@ def render(scene: Any = None, style: str = "identity", spp: int = 16, inner: Any
     return image
 
 
-__all__ = ["render", "load_scene", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError", "Progress",
-           "StylizedIntegrator"]
+__all__ = ["render", "load_scene", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError",
+           "Progress", "StylizedIntegrator", "write_image", "save_safely"]

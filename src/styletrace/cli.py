@@ -1,4 +1,4 @@
-"""Command line: `styletrace render`, `styletrace styles`.
+"""Command line: `styletrace render`, `styletrace styles`, `styletrace estimators`, `styletrace gallery`.
 
 Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
 unwritable output, malformed arguments) ends with one line on stderr and exit status 2. Flags override
@@ -12,14 +12,10 @@ import argparse
 import os
 import signal
 import sys
-import tempfile
 from typing import Sequence
 
-IMAGE_TYPES = (".exr", ".png")
-
-
-class UsageError(ValueError):
-    pass
+from .errors import StyletraceError, UsageError
+from .images import IMAGE_TYPES, save_safely
 
 
 def _parse_set(items: Sequence[str]) -> dict[str, str]:
@@ -47,31 +43,6 @@ def check_output(path: str) -> None:
         raise UsageError(f"cannot write {path!r}: permission denied")
 
 
-def write_image(image, path: str) -> None:
-    """EXR: linear float32. PNG: sRGB-encoded 8 bit (values clipped to [0, 1] only here)."""
-    import mitsuba as mi
-    import numpy as np
-
-    bmp = mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
-    if path.lower().endswith(".png"):
-        bmp = bmp.convert(pixel_format=mi.Bitmap.PixelFormat.RGB, component_format=mi.Struct.Type.UInt8,
-                          srgb_gamma=True)
-    bmp.write(path)
-
-
-def save_safely(image, path: str) -> str:
-    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it."""
-    try:
-        write_image(image, path)
-        return path
-    except Exception as exc:  # the render must survive an I/O failure
-        fd, fallback = tempfile.mkstemp(prefix="styletrace-", suffix=".exr")
-        os.close(fd)
-        write_image(image, fallback)
-        print(f"styletrace: could not write {path!r} ({exc}); saved the render to {fallback}", file=sys.stderr)
-        return fallback
-
-
 class InterruptFlag:
     """Ctrl-C handling for the pass loop: the first Ctrl-C finishes the pass under way, the second
     abandons it. Either way the passes already finished are written (an exception raised by a signal
@@ -96,10 +67,10 @@ class InterruptFlag:
 
 
 def cmd_styles(args) -> int:
-    import styletrace  # noqa: F401  (registers everything)
-    from styletrace.styles import get, names
-
-    from styletrace.render.estimation import applicable
+    from .runtime import init
+    init()
+    from .plugins.estimation import applicable
+    from .styles import get, names
 
     for name in names():
         cls = get(name)
@@ -111,6 +82,19 @@ def cmd_styles(args) -> int:
     return 0
 
 
+def cmd_estimators(args) -> int:
+    from .runtime import init
+    init()
+    from .plugins.estimation import kinds
+
+    for k in kinds():
+        print(f"{k.name}: {k.doc}")
+        print(f"    forms: {k.describe_forms()}; inner_samples n: {k.inner}")
+        for key, value in k.params.items():
+            print(f"    {key} = {value}")
+    return 0
+
+
 def cmd_render(args) -> int:
     check_output(args.output)
     params = _parse_set(args.set)
@@ -119,8 +103,7 @@ def cmd_render(args) -> int:
         if value is not None and value < 1:
             raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
 
-    import styletrace
-    from styletrace import api
+    from . import api
 
     scene = api.load_scene(args.scene, args.width, args.height)
     integrator = choose_integrator(scene, args, params)
@@ -165,40 +148,32 @@ def cmd_render(args) -> int:
         return 130
     out = save_safely(latest.image, args.output)
     if not args.quiet:
-        print(f"wrote {out} ({styletrace.variant}, {integrator.settings.style.describe()}, spp {args.spp})",
+        import mitsuba as mi
+        print(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})",
               file=sys.stderr)
     return 0 if out == args.output else 1
 
 
-#: command-line flag -> integrator property
-FLAG_PROPERTIES = {"style": "style", "inner": "inner_samples", "estimator": "estimator", "stylize": "stylize",
-                   "stylize_depth": "stylize_depth", "max_depth": "max_depth", "rr_depth": "rr_depth"}
-
-
 def choose_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
-    (a scene without one starts from the `cel` style)."""
-    from styletrace import api
-    from styletrace.render.integrator import StylizedIntegrator
-    from styletrace.styles import get
+    (a scene without one starts from the command line's default style)."""
+    from .plugins import settings
+    from .plugins.integrator import StylizedIntegrator
 
     own = scene.integrator()
-    base = dict(own.values) if isinstance(own, StylizedIntegrator) else {"style": "cel"}
-    given = {prop: getattr(args, flag) for flag, prop in FLAG_PROPERTIES.items() if getattr(args, flag) is not None}
+    given = {p.name: getattr(args, p.name) for p in settings.PROPERTIES if getattr(args, p.name) is not None}
     given.update(params)
-    if isinstance(own, StylizedIntegrator) and not given:
-        return own
-    values = dict(base)
-    new_style = given.get("style")
-    if new_style is not None and new_style != base.get("style"):
-        old_params = {p.name for p in get(str(base.get("style", "identity"))).params}
-        values = {k: v for k, v in values.items() if k not in old_params}  # they belong to the old style
-    values.update(given)
-    return api.make_integrator_from(values)
+    if isinstance(own, StylizedIntegrator):
+        if not given:
+            return own
+        base = own.values
+    else:
+        base = {"style": settings.COMMAND_LINE_STYLE}
+    return StylizedIntegrator.from_values(settings.refine(base, given))
 
 
 def cmd_gallery(args) -> int:
-    from styletrace import gallery
+    from . import gallery
 
     opts = gallery.QUICK if args.quick else gallery.Options()
     if args.size:
@@ -230,19 +205,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("scene", nargs="?", default="cornell-box",
                    help="built-in scene (cornell-box, dragon, mixed, furnace) or a Mitsuba XML file "
                         "(default: cornell-box)")
-    r.add_argument("--style", default=None, help="style name (see `styletrace styles`; default: the scene's "
-                   "stylized integrator if it has one, else cel)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
-    r.add_argument("--inner", default=None, help="inner samples per stylized vertex, or one per level: 8,4")
+    add_setting_flags(r)
     r.add_argument("--spp", type=int, default=16, help="camera samples per pixel (default 16)")
-    r.add_argument("--estimator", default=None,
-                   help="estimator of g(E[L]): direct (default), affine, series, series_recursive, series_single, "
-                        "ustat, naive, telescoping; `styletrace styles` lists which apply to each style")
-    r.add_argument("--stylize", default=None,
-                   help="where styles apply: first_hit (default), first_n_hits, first_object_hit")
-    r.add_argument("--stylize-depth", type=int, default=None, help="number of stylized levels N (default 1)")
-    r.add_argument("--max-depth", type=int, default=None, help="longest path (default -1: unbounded)")
-    r.add_argument("--rr-depth", type=int, default=None, help="depth where Russian roulette starts (default 5)")
     r.add_argument("--width", type=int, default=None, help="image width (built-in scenes; XML with $resx)")
     r.add_argument("--height", type=int, default=None, help="image height (built-in scenes; XML with $resy)")
     r.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same image")
@@ -260,30 +225,34 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("styles", help="list the styles and their parameters")
     s.set_defaults(func=cmd_styles)
+    e = sub.add_parser("estimators", help="list the estimators of g(E[L]) and the forms they need")
+    e.set_defaults(func=cmd_estimators)
     return p
 
 
+def add_setting_flags(parser) -> None:
+    """One flag per integrator property that has one; help and defaults come from the settings table."""
+    from .plugins import settings
+    for p in settings.PROPERTIES:
+        if not p.flag:
+            continue
+        default = f"the scene's stylized integrator's, else {settings.COMMAND_LINE_STYLE}" if p.name == "style" \
+            else p.show_default()
+        parser.add_argument(p.flag, dest=p.name, default=None, metavar=p.metavar,
+                            type=int if p.kind == "int" else str, help=f"{p.doc} (default: {default})")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
     try:
+        # the flags' help comes from the settings table, which needs the backend: errors there are one line too
+        args = build_parser().parse_args(argv)
         return args.func(args)
     except KeyboardInterrupt:
         print("styletrace: interrupted", file=sys.stderr)
         return 130
-    except Exception as exc:
-        from styletrace.jit import BackendError
-        known = (UsageError, BackendError)
-        try:
-            from styletrace.api import SceneError
-            from styletrace.styles import StyleError
-            known = known + (SceneError, StyleError)
-        except Exception:
-            pass
-        if isinstance(exc, known):
-            print(f"styletrace: error: {exc}", file=sys.stderr)
-            return 2
-        raise
+    except StyletraceError as exc:
+        print(f"styletrace: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -84,7 +84,7 @@ def _quick(setup: Setup) -> Setup:
 
 
 def write_png(image: np.ndarray, path: str) -> None:
-    from .cli import write_image
+    from .images import write_image
     write_image(image, path)
 
 

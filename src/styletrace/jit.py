@@ -24,8 +24,7 @@ FIX = ("install a newer LLVM (Debian/Ubuntu: `apt-get install libllvm19`) or poi
        "DRJIT_LIBLLVM_PATH at a libLLVM.so of version >= %d" % MIN_LLVM_MAJOR)
 
 
-class BackendError(RuntimeError):
-    """No usable JIT backend; the message says how to get one."""
+from .errors import BackendError  # noqa: E402  (re-exported: callers catch it from here)
 
 
 def llvm_major(path: str) -> int | None:
@@ -93,36 +92,64 @@ def loaded_libllvm() -> str | None:
     return None
 
 
-def select_variant() -> str:
-    """Pick and set the Mitsuba variant unless one is already set; return the active variant."""
-    if "drjit" not in sys.modules:
-        need_llvm = True
-    else:  # drjit already imported by the user: it has read DRJIT_LIBLLVM_PATH already
-        need_llvm = False
-    if need_llvm:
+def prepare_drjit() -> str:
+    """Point Dr.Jit at a working libLLVM (unless it was imported already) and import it; return the
+    backend kernels should use: 'cuda' where CUDA works, else 'llvm'. Needs no Mitsuba."""
+    if "drjit" not in sys.modules:  # once imported, Dr.Jit has read DRJIT_LIBLLVM_PATH already
         try:
             configure_llvm()
         except BackendError:
             if not cuda_usable():
                 raise
+    import drjit as dr
+    if cuda_usable():
+        return "cuda"
+    if not dr.has_backend(dr.JitBackend.LLVM):
+        raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
+    # Dr.Jit picks its own libLLVM when it was imported before styletrace; refuse one that crashes
+    loaded = loaded_libllvm()
+    major = llvm_major(loaded) if loaded else None
+    if major is not None and major < MIN_LLVM_MAJOR:
+        raise BackendError(f"Dr.Jit loaded {loaded} (LLVM {major}), which crashes it; import styletrace before "
+                           f"drjit/mitsuba, or {FIX}")
+    return "llvm"
+
+
+def check_variant(variant: str) -> str:
+    """Refuse variants styles cannot run on: they act on RGB radiance inside JIT-compiled loops."""
+    if variant.startswith("scalar") or not variant.endswith("_rgb"):
+        raise BackendError(f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active "
+                           f"variant is {variant}")
+    return variant
+
+
+def select_variant(requested: str | None = None) -> str:
+    """Set the Mitsuba variant and return it: `requested` if given, else the one the user already set,
+    else `cuda_ad_rgb` where CUDA works and `llvm_ad_rgb` otherwise."""
+    if requested is not None:
+        check_variant(requested)
+    backend = prepare_drjit()
     import mitsuba as mi
+    if requested is not None:
+        if requested not in mi.variants():
+            raise BackendError(f"unknown variant {requested!r}: this Mitsuba has {', '.join(mi.variants())}")
+        if mi.variant() != requested:
+            mi.set_variant(requested)
+        return requested
     current = mi.variant()
     if current:
-        # styles act on RGB radiance inside JIT-compiled loops: scalar, mono and spectral variants cannot run them
-        if current.startswith("scalar") or not current.endswith("_rgb"):
-            raise BackendError(f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active "
-                               f"variant is {current}")
-        return current
-    variant = "cuda_ad_rgb" if cuda_usable() else "llvm_ad_rgb"
-    if variant == "llvm_ad_rgb":
-        import drjit as dr
-        if not dr.has_backend(dr.JitBackend.LLVM):
-            raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
-        # Dr.Jit picks its own libLLVM when it was imported before styletrace; refuse one that crashes
-        loaded = loaded_libllvm()
-        major = llvm_major(loaded) if loaded else None
-        if major is not None and major < MIN_LLVM_MAJOR:
-            raise BackendError(f"Dr.Jit loaded {loaded} (LLVM {major}), which crashes it; import styletrace before "
-                               f"drjit/mitsuba, or {FIX}")
+        return check_variant(current)
+    variant = f"{backend}_ad_rgb"
     mi.set_variant(variant)
     return variant
+
+
+def backend(variant: str | None = None) -> str:
+    """Choose libLLVM and the Mitsuba variant once (`variant` switches to another) and return the variant.
+
+    Idempotent and cheap once chosen; every styletrace module that imports Dr.Jit or Mitsuba when it
+    loads calls it first. A variant the user set before is kept (and refused if styles cannot run on it)."""
+    mi = sys.modules.get("mitsuba")
+    if variant is None and mi is not None and mi.variant():
+        return check_variant(mi.variant())
+    return select_variant(variant)

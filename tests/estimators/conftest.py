@@ -1,27 +1,24 @@
 """Local setup for the estimator tests.
 
-Dr.Jit must find a working libLLVM before anything imports it (LLVM 15 crashes Dr.Jit 1.5), and
-``styletrace.estimators`` must be importable even while the package ``__init__`` (which selects a
-Mitsuba variant and registers plugins) is unavailable: the estimators need neither.
+The estimators run on numpy without Dr.Jit or Mitsuba; the Dr.Jit tests get their array types from the
+``jit`` fixture: the Dr.Jit module of the backend in use (``drjit.llvm`` or ``drjit.cuda``, or their
+``.ad`` submodules once a Mitsuba variant is active), obtained after ``styletrace.jit.prepare_drjit()``
+pointed Dr.Jit at a working libLLVM. So the suite runs unchanged on a CPU-only or a CUDA-only machine.
+(tests/conftest.py puts the source tree on sys.path; this folder goes there too, for ``estimator_stats``.)
 """
 import os
 import sys
-import types
-from pathlib import Path
 
-os.environ.setdefault("DRJIT_LIBLLVM_PATH", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so")
+import pytest
 
-HERE = Path(__file__).resolve().parent
-SRC = HERE.parents[1] / "src"
-for p in (str(SRC), str(HERE)):
-    if p not in sys.path:
-        sys.path.insert(0, p)
+HERE = os.path.dirname(os.path.abspath(__file__))
+if HERE not in sys.path:
+    sys.path.insert(0, HERE)
 
-try:
-    import styletrace  # noqa: F401
-except Exception:  # the package __init__ is not importable yet: expose the subpackage on its own
-    for name in [m for m in sys.modules if m == "styletrace" or m.startswith("styletrace.")]:
-        del sys.modules[name]
-    pkg = types.ModuleType("styletrace")
-    pkg.__path__ = [str(SRC / "styletrace")]
-    sys.modules["styletrace"] = pkg
+from estimator_stats import drjit_backend  # noqa: E402
+
+
+@pytest.fixture
+def jit():
+    """The Dr.Jit array module to build test arrays with (Float, Array3f, Bool, UInt32, ...)."""
+    return drjit_backend()

@@ -51,9 +51,21 @@ def variance_and_se(values):
 BACKENDS = ("numpy", "drjit")
 
 
+def drjit_backend():
+    """The Dr.Jit array module in use (drjit.llvm / drjit.cuda, or .ad under a Mitsuba AD variant), after
+    ``styletrace.jit.prepare_drjit()`` (a working libLLVM) when Dr.Jit is not loaded yet."""
+    import sys
+    if "drjit" not in sys.modules:
+        from styletrace.jit import prepare_drjit
+        prepare_drjit()
+    from styletrace.estimators.arrays import backend_module
+    return backend_module()
+
+
 def run_estimates(estimator, dist, lanes, backend="numpy", seed=0, channels=None, dtype=np.float64):
     """One estimate per lane on the chosen backend (Dr.Jit: float32 kernel with a PCG32 carry)."""
     from styletrace.estimators import estimate_drjit, estimate_numpy
     if backend == "numpy":
         return estimate_numpy(estimator, dist, lanes, np.random.default_rng(seed), channels=channels, dtype=dtype)
+    drjit_backend()  # Dr.Jit loaded with a working libLLVM
     return estimate_drjit(estimator, dist, lanes, seed=seed, channels=channels)

@@ -11,8 +11,8 @@ def test_select_broadcasts_a_lane_mask_over_channels():
     np.testing.assert_array_equal(out, [[1, 1, 1], [0, 0, 0]])
 
 
-def test_hmax_and_const_like_on_both_backends():
-    from drjit.llvm import Array3f, Float
+def test_hmax_and_const_like_on_both_backends(jit):
+    Array3f, Float = jit.Array3f, jit.Float
     v = np.array([[1.0, 5.0, 2.0], [0.0, -1.0, 3.0]])
     np.testing.assert_array_equal(A.hmax(v), [[5.0], [3.0]])
     d = Array3f(Float([1, 0]), Float([5, -1]), Float([2, 3]))
@@ -69,11 +69,35 @@ def test_tree_select_and_map_follow_dicts_and_tuples():
     assert out["t"][1] == "keep"
 
 
-def test_math_helpers_dispatch():
-    from drjit.llvm import Float
+def test_math_helpers_dispatch(jit):
+    Float = jit.Float
     x = np.array([0.25, 1.0])
     for fn, ref in ((A.exp, np.exp), (A.log, np.log), (A.sqrt, np.sqrt), (A.cos, np.cos), (A.abs, np.abs)):
         np.testing.assert_allclose(fn(x), ref(x))
         np.testing.assert_allclose(np.asarray(fn(Float(x))), ref(x), rtol=1e-6)
     np.testing.assert_array_equal(A.clip(np.array([-1.0, 0.5, 9.0]), 0.0, 1.0), [0.0, 0.5, 1.0])
     assert A.clip(np.array([3.0]), None, None)[0] == 3.0
+
+
+def test_backend_module_follows_like_then_the_mitsuba_variant_then_cuda(jit, monkeypatch):
+    import sys
+    import types
+
+    import drjit as dr
+    assert A.backend_module(jit.Float) is jit and A.backend_module(jit.Array3f(1, 2, 3)) is jit
+    # explicitly about backends: like decides, whatever is in use (types of any JIT backend exist everywhere)
+    assert A.backend_module(dr.cuda.ad.Array3f) is dr.cuda.ad and A.backend_module(dr.llvm.Float) is dr.llvm
+    with pytest.raises(TypeError, match="not a JIT"):
+        A.backend_module(dr.scalar.Array3f)
+    # no like: an active Mitsuba variant decides (a stand-in module: the estimators never import mitsuba)
+    for variant, expected in (("cuda_ad_rgb", dr.cuda.ad), ("llvm_ad_rgb", dr.llvm.ad), ("llvm_rgb", dr.llvm)):
+        monkeypatch.setitem(sys.modules, "mitsuba", types.SimpleNamespace(variant=lambda v=variant: v))
+        assert A.backend_module() is expected, variant
+    # no variant set: CUDA where it works (the package's own test, which honours STYLETRACE_NO_CUDA), else LLVM
+    from styletrace import jit as backend_choice
+    monkeypatch.setitem(sys.modules, "mitsuba", types.SimpleNamespace(variant=lambda: None))
+    assert A.backend_module() is (dr.cuda if backend_choice.cuda_usable() else dr.llvm)
+    monkeypatch.setattr(backend_choice, "cuda_usable", lambda: True)
+    assert A.backend_module() is dr.cuda
+    monkeypatch.setattr(backend_choice, "cuda_usable", lambda: False)
+    assert A.backend_module() is dr.llvm

@@ -2,15 +2,15 @@
 import numpy as np
 import pytest
 
-from estimator_stats import DISTS, Z, assert_unbiased, run_estimates, variance_and_se
+from estimator_stats import DISTS, Z, assert_unbiased, drjit_backend, run_estimates, variance_and_se
 from styletrace.estimators import (Cumulative, Mean, Pilot, PolynomialU, SeriesEstimator, Uniform,
                                    channel_means, estimate_drjit, estimate_numpy, gamma_series)
 
 
 def hash_uniform(seed, index):
     """A per-lane uniform from (seed, draw index): a stateless stand-in for a sampler."""
-    import drjit as dr
-    from drjit.llvm import Float, UInt32
+    jit = drjit_backend()
+    Float, UInt32 = jit.Float, jit.UInt32
     h = seed * UInt32(747796405) + index * UInt32(2891336453) + UInt32(12345)
     for _ in range(3):
         h = h ^ (h >> 16)
@@ -19,8 +19,9 @@ def hash_uniform(seed, index):
 
 
 def mean_of_n_in_drjit(n, thread_carry=True, lanes=100_000):
+    jit = drjit_backend()  # first: it loads Dr.Jit with a working libLLVM
     import drjit as dr
-    from drjit.llvm import Float, UInt32
+    Float, UInt32 = jit.Float, jit.UInt32
     calls = []
 
     def draw(carry):
@@ -73,8 +74,7 @@ def test_inactive_lanes_draw_nothing_and_return_zero(backend):
     if backend == "numpy":
         r = estimate_numpy(est, DISTS["uniform"], lanes, np.random.default_rng(0), channels=3, active=active)
     else:
-        from drjit.llvm import Bool
-        r = estimate_drjit(est, DISTS["uniform"], lanes, channels=3, active=Bool(active))
+        r = estimate_drjit(est, DISTS["uniform"], lanes, channels=3, active=drjit_backend().Bool(active))
     assert np.all(r.values[~active] == 0.0) and np.all(r.draws[~active] == 0)
     assert np.all(r.draws[active] == 3) and np.all(r.values[active] != 0.0)
 
@@ -103,9 +103,9 @@ def test_numpy_run_without_like_or_active_learns_the_lanes_from_uniform():
     assert value.shape == (500,) and np.all(carry["n"] == 3)
 
 
-def test_drjit_needs_like_and_checks_the_type():
+def test_drjit_needs_like_and_checks_the_type(jit):
     import drjit as dr
-    from drjit.llvm import Array3f, Bool, Float
+    Array3f, Bool, Float = jit.Array3f, jit.Bool, jit.Float
     with pytest.raises(ValueError, match="needs like="):
         Mean(1).run(lambda c: (Float(1.0), c), (), lambda c: (Float(0.5), c), active=Bool(True))
     with pytest.raises((ValueError, RuntimeError)) as err:  # Dr.Jit re-raises errors from a loop body
@@ -121,10 +121,21 @@ def test_drjit_needs_like_and_checks_the_type():
     assert dr.width(v) == 1
 
 
+def mitsuba_with_variant():
+    """Mitsuba with the variant styletrace.init() chose (cuda_ad_rgb where CUDA works, else llvm_ad_rgb,
+    or the one set before): the tests follow the backend instead of naming one."""
+    import importlib.util
+    if importlib.util.find_spec("mitsuba") is None:
+        pytest.skip("Mitsuba is not installed")
+    import styletrace
+    variant = styletrace.init()  # before `import mitsuba`: it loads Dr.Jit, which needs a working libLLVM
+    import mitsuba as mi
+    assert mi.variant() == variant
+    return mi
+
+
 def test_mitsuba_color3f_values():
-    mi = pytest.importorskip("mitsuba")
-    if not mi.variant():
-        mi.set_variant("llvm_ad_rgb")
+    mi = mitsuba_with_variant()
     if not hasattr(mi, "Color3f"):
         pytest.skip("scalar Mitsuba variant")
     dist = Uniform(0.2, 1.0)
@@ -135,9 +146,7 @@ def test_mitsuba_color3f_values():
 
 def test_a_mitsuba_sampler_in_the_carry_advances_every_iteration():
     """The integrator's set-up: carry = (sampler,), draw returns mi.Color3f, uniform uses the sampler."""
-    mi = pytest.importorskip("mitsuba")
-    if not mi.variant():
-        mi.set_variant("llvm_ad_rgb")
+    mi = mitsuba_with_variant()
     if not hasattr(mi, "Color3f") or mi.variant().startswith("scalar"):
         pytest.skip("needs a JIT Mitsuba variant")
     import drjit as dr

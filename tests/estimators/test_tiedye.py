@@ -31,8 +31,8 @@ def test_degree20_fit_holds_its_stated_maximum_error():
     assert np.all(tie_dye_fit(28).max_error(list(TIE_DYE)) < 5e-5)
 
 
-def test_fit_evaluates_the_same_on_drjit():
-    from drjit.llvm import Array3f, Float
+def test_fit_evaluates_the_same_on_drjit(jit):
+    Array3f, Float = jit.Array3f, jit.Float
     fit = tie_dye_fit()
     x = np.linspace(-1, 4, 101)
     y = fit(np.stack([x, x, x], -1))

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from estimator_stats import Z
+from estimator_stats import Z, drjit_backend
 from styletrace.estimators import Context, Cumulative, Geometric, Poisson, PoissonCMF, PowerLaw, resolve_truncation
 
 
@@ -47,7 +47,7 @@ def test_sampled_counts_follow_the_distribution(backend, trunc):
         ctx = Context("numpy", lanes=lanes)
         N = ctx.count_above(S, u.reshape(-1, 1))[:, 0]
     else:
-        from drjit.llvm import Float
+        Float = drjit_backend().Float
         ctx = Context("drjit", like_t=Float)
         N = np.asarray(ctx.count_above(S, Float(u.astype(np.float32))))
     assert N.min() >= 0 and N.max() <= K and np.all(N == np.floor(N))

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from . import arrays as A
 from .affine import Mean
-from .base import Context, Estimator
+from .base import Context, Estimator, register_combinator
 
 __all__ = ["Sum", "Product", "Compose", "inner_mean"]
 
@@ -224,3 +224,8 @@ class Compose(Estimator):
 def inner_mean(estimator: Estimator, m: int, comb: bool = False) -> Compose:
     """Feed `estimator` means of m draws (comb-stratified if asked) instead of single draws."""
     return Compose(estimator, Mean(m, comb))
+
+
+# the operator sugar on every Estimator (base.py imports nothing from here: it looks these up)
+register_combinator("sum", Sum)
+register_combinator("product", Product)

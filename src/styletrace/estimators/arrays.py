@@ -12,6 +12,10 @@ Conventions
     * Dr.Jit: per-lane scalars are the value type's leaf Float (``dr.leaf_t``); masks are its Bool.
     * Dr.Jit is imported lazily and only if the caller already imported it, so the numpy path needs
       neither Dr.Jit nor Mitsuba (and never triggers Dr.Jit's libLLVM loading).
+    * Backend: ``backend_module(like)`` is the Dr.Jit array module (``drjit.llvm``, ``drjit.cuda`` or
+      their ``.ad`` submodules) that code creating fresh Dr.Jit arrays should use: the one ``like``
+      belongs to, else the one of the active Mitsuba variant, else CUDA where it works and LLVM
+      otherwise. It never imports Mitsuba.
 
 Loops
     ``numpy_while_loop`` emulates ``drjit.while_loop``: the body runs on the lanes whose condition
@@ -26,7 +30,7 @@ import sys
 import numpy as np
 
 __all__ = [
-    "is_drjit", "drjit", "select", "abs", "exp", "log", "sqrt", "cos", "sin", "minimum", "maximum",
+    "is_drjit", "drjit", "backend_module", "select", "abs", "exp", "log", "sqrt", "cos", "sin", "minimum", "maximum",
     "clip", "hmax", "tree_map", "tree_select", "numpy_while_loop", "const_like",
 ]
 
@@ -36,6 +40,50 @@ _pyabs = abs
 def drjit():
     """The drjit module if it has been imported by someone, else None (we never import it first)."""
     return sys.modules.get("drjit")
+
+
+def _import_drjit():
+    """drjit, imported through ``styletrace.jit.prepare_drjit`` (a working libLLVM) if nobody did yet."""
+    dr = drjit()
+    if dr is None:
+        from ..jit import prepare_drjit  # stdlib-only module: loads Dr.Jit, never Mitsuba
+        prepare_drjit()
+        import drjit as dr
+    return dr
+
+
+def _module_for(dr, backend, diff: bool):
+    mod = dr.cuda if backend == dr.JitBackend.CUDA else dr.llvm
+    return mod.ad if diff else mod
+
+
+def backend_module(like=None):
+    """The Dr.Jit array module to build arrays with (``drjit.llvm``, ``drjit.cuda``, or their ``.ad``).
+
+    ``like`` (a Dr.Jit array type or instance, e.g. ``mitsuba.Color3f``): its own backend and AD-ness.
+    Otherwise the backend of the active Mitsuba variant if Mitsuba is loaded and has one (``.ad`` for
+    ``*_ad_*`` variants), else ``drjit.cuda`` where CUDA works (``jit.prepare_drjit``) and ``drjit.llvm`` otherwise. Imports
+    Dr.Jit if needed (after pointing it at a working libLLVM), never Mitsuba.
+    """
+    dr = _import_drjit()
+    if like is not None:
+        tp = like if isinstance(like, type) else type(like)
+        if not issubclass(tp, dr.ArrayBase) or dr.backend_v(tp) not in (dr.JitBackend.CUDA, dr.JitBackend.LLVM):
+            raise TypeError(f"backend_module: {tp.__name__} is not a JIT (CUDA or LLVM) Dr.Jit array type")
+        return _module_for(dr, dr.backend_v(tp), bool(dr.is_diff_v(tp)))
+    mi = sys.modules.get("mitsuba")
+    variant = None
+    if mi is not None:
+        try:
+            variant = mi.variant()
+        except Exception:  # a half-imported Mitsuba: fall back to Dr.Jit's own view
+            variant = None
+    if variant and (variant.startswith("cuda") or variant.startswith("llvm")):
+        backend = dr.JitBackend.CUDA if variant.startswith("cuda") else dr.JitBackend.LLVM
+        return _module_for(dr, backend, "_ad_" in variant)
+    from ..jit import prepare_drjit  # the package's one answer: CUDA where it works (STYLETRACE_NO_CUDA honoured)
+    cuda = prepare_drjit() == "cuda"
+    return _module_for(dr, dr.JitBackend.CUDA if cuda else dr.JitBackend.LLVM, False)
 
 
 def is_drjit(x) -> bool:

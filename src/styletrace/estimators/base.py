@@ -28,7 +28,26 @@ import numpy as np
 
 from . import arrays as A
 
-__all__ = ["Context", "Estimator", "check_count"]
+__all__ = ["Context", "Estimator", "check_count", "register_combinator", "combinator"]
+
+#: Composite estimators behind the operator sugar (``a + b``, ``a * b``), keyed "sum" / "product".
+#: ``algebra.py`` fills this in when it is imported (the package ``__init__`` always imports it), so
+#: that this module needs neither ``algebra`` nor ``affine`` (which both build on it).
+_COMBINATORS: dict = {}
+
+
+def register_combinator(name: str, cls) -> None:
+    """Make ``cls(a, b)`` the estimator that operator ``name`` ("sum": +, "product": *) builds."""
+    _COMBINATORS[name] = cls
+
+
+def combinator(name: str):
+    """The estimator class registered for operator ``name`` (see ``register_combinator``)."""
+    try:
+        return _COMBINATORS[name]
+    except KeyError:
+        raise RuntimeError(f"no {name!r} combinator registered: import styletrace.estimators "
+                           f"(its algebra module provides them)") from None
 
 
 def check_count(name: str, value, minimum: int = 1) -> int:
@@ -272,12 +291,10 @@ class Estimator:
 
     # -- algebra sugar ----------------------------------------------------------------------------
     def __add__(self, other):
-        from .algebra import Sum
-        return Sum(self, other)
+        return combinator("sum")(self, other)
 
     def __mul__(self, other):
-        from .algebra import Product
-        return Product(self, other)
+        return combinator("product")(self, other)
 
     def __repr__(self):
         return f"<{type(self).__name__} {self.name}>"

@@ -15,7 +15,8 @@ Parameters
     estimate_drjit(estimator, dist, lanes, seed=0, channels=None, like=None, active=None)
         the same inside a Dr.Jit kernel: the carry is (PCG32, per-lane draw counter), x uses the
         distribution's quantile of a PCG32 uniform (channels=3: Array3f, or like=, with channel c = (1 + c) x);
-        returns NumpyEstimate with numpy copies. Needs drjit already importable (libLLVM configured).
+        returns NumpyEstimate with numpy copies. The Dr.Jit types come from like's backend, else from
+        the backend in use (``arrays.backend_module``); Dr.Jit is imported (libLLVM configured) if needed.
 """
 from __future__ import annotations
 
@@ -143,12 +144,14 @@ def estimate_numpy(estimator, dist, lanes: int, rng, channels=None, dtype=np.flo
 def estimate_drjit(estimator, dist: Distribution, lanes: int, seed: int = 0, channels=None, like=None,
                    active=None) -> NumpyEstimate:
     """One estimate per lane inside a Dr.Jit loop whose carry holds a PCG32 and a draw counter."""
-    import drjit as dr
-    from drjit.llvm import Array3f, Float, PCG32, UInt32
-
     if channels not in (None, 3):
         raise ValueError(f"estimate_drjit supports channels=None (Float) or 3 (Array3f), got {channels!r}")
-    vt = like if like is not None else (Float if channels is None else Array3f)
+    m = A.backend_module(like)  # like's backend, else the one in use (drjit.llvm, drjit.cuda, .ad)
+    dr = A.drjit()
+    PCG32, UInt32 = m.PCG32, m.UInt32
+    if like is not None and not isinstance(like, type):
+        like = type(like)  # an instance stands for its type
+    vt = like if like is not None else (m.Float if channels is None else m.Array3f)
     scale = 1.0 + np.arange(3)
 
     def draw(carry, u=None):

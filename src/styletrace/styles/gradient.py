@@ -12,6 +12,8 @@ from typing import Any
 import drjit as dr
 import mitsuba as mi
 
+from ..errors import StyleError
+
 PRESETS = {
     # dark blue -> terracotta -> warm sand: reads well on the built-in scenes' brightness range
     "dusk": "0:#161a3a;0.25:#4b3f72;0.5:#e07a5f;0.9:#f2cc8f;1.2:#fffbe6",
@@ -58,7 +60,6 @@ class Gradient:
     @classmethod
     def parse(cls, raw: Any) -> "Gradient":
         """From a preset name, a 'pos:colour;...' string, or a sequence of (pos, colour) pairs."""
-        from .params import StyleError
         allowed = ("expected 'pos:colour;pos:colour;...' with increasing positions and colours "
                    "'#rrggbb' or 'r,g,b', or a preset: " + ", ".join(cls.presets()))
         try:

@@ -9,11 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
+from ..errors import StyleError
 from .gradient import Gradient
-
-
-class StyleError(ValueError):
-    """A bad style name or parameter; the message is one line naming the value and what is allowed."""
 
 
 def _is_seq(value: Any) -> bool:

@@ -1,6 +1,9 @@
 import pytest
+import styletrace
 
-from helpers import furnace
+styletrace.init()  # the plugin tests render: pick the backend and register the plugins first
+
+from helpers import furnace  # noqa: E402
 
 
 @pytest.fixture(scope="module")

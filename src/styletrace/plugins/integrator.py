@@ -1,17 +1,8 @@
 """`stylized`: Mitsuba integrator for the stylized rendering equation (depth-first tree sampling).
 
-Properties (XML, Python dict, or the CLI's --set):
-
-| name          | type   | default          | meaning |
-|---------------|--------|------------------|---------|
-| style         | string | identity         | registry name of the style g_theta (`styletrace styles`) |
-| <param>       | any    | style default    | the style's own parameters, under their registry names |
-| inner_samples | int / list | style default | n: child estimates per stylized vertex; '8,4' gives one per level |
-| estimator     | string | direct           | how g(E[L]) is estimated from the children |
-| stylize       | string | first_hit        | where styles apply, see below |
-| stylize_depth | int    | 1                | number of stylized levels N (first_n_hits, first_object_hit) |
-| max_depth     | int    | -1               | longest path, Mitsuba's convention (-1: unbounded) |
-| rr_depth      | int    | 5                | depth at which Russian roulette starts |
+Properties (XML, Python dict, or the CLI's --set): `style`, the style's own parameters under their
+registry names, `inner_samples`, `estimator`, `stylize`, `stylize_depth`, `max_depth`, `rr_depth`.
+Their defaults, parsing and docs live in `settings` (the table in the README is generated from it).
 
 The radiance leaving a stylized vertex x towards the viewer is
     L(x, wo) = g_theta( L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi )
@@ -38,36 +29,34 @@ import drjit as dr
 import mitsuba as mi
 
 from ..styles.base import Vertex, camera_forward
+from . import settings as S
 from .estimation import make_estimator
 from .lane_sampler import LaneSampler
-from .path import depth_limit, exitant, walk
-from .properties import Settings, StyleSlot, props_to_dict, settings_from
+from .path import bounce, environment, exitant, walk
 from .styled_bsdf import StyledBSDF
-
-
-def environment(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
-    """Radiance the environment sends along an escaped ray (zero where there is none)."""
-    ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
-    return ds.emitter.eval(si, active & ~si.is_valid())
-
-
-def emission(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
-    """Radiance emitted at si towards si.wi (or by the environment where si escaped)."""
-    return si.emitter(scene).eval(si, active)
 
 
 class Target:
     """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with these BSDFs."""
 
-    def __init__(self, slot: StyleSlot, bsdfs=(), emitters=()):
+    def __init__(self, slot: S.StyleSlot, bsdfs=(), emitters=()):
         self.slot, self.bsdfs, self.emitters = slot, list(bsdfs), list(emitters)
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
-    def __init__(self, props: mi.Properties):
+    def __init__(self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None):
+        """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
+        (`S.parse(values)`; the Python API and the CLI build it this way, parsing once)."""
         super().__init__(props)
-        self.values = props_to_dict(props)  # as given, so front ends can derive a variant of this integrator
-        self.settings: Settings = settings_from(self.values)
+        # the values as given, so front ends can refine this integrator (`settings.refine`)
+        self.values = S.properties_of(props) if values is None else dict(values)
+        self.settings: S.Settings = settings if settings is not None else S.parse(self.values)
+
+    @classmethod
+    def from_values(cls, values: dict) -> "StylizedIntegrator":
+        """A `stylized` integrator from property values (style, style parameters, inner_samples, ...)."""
+        values = {k: v for k, v in values.items() if k != "type"}
+        return cls(mi.Properties(), S.parse(values), values)
 
     # ---- which styles apply where --------------------------------------------------------------
     def _targets(self, scene: mi.Scene) -> list[Target]:
@@ -97,26 +86,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return exitant(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth)
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
-        # first_n_hits: the next vertex is stylized as well; its whole exitant radiance, emission
-        # included, goes through g, so surface lights cannot be split off by next-event estimation: the
-        # BSDF sample reaches them. Point, spot and directional lights are no vertex (never stylized) and
-        # no BSDF sample can hit them, so they alone get next-event estimation here, with weight 1.
-        L = emission(scene, si, active)
-        go = active & (depth + 1 < depth_limit(s.max_depth))
-        bsdf = si.bsdf(ray)
-        ctx = mi.BSDFContext()
-        to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-        ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, to_light)
-        to_light &= ds.delta & (ds.pdf != 0.0)
-        L += dr.select(to_light, bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
-        bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), go)
-        ray2 = si.spawn_ray(si.to_world(bs.wo))
-        go &= dr.max(weight) > 0
-        pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
-        si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
-        hit = go & si2.is_valid()
-        deeper = self.stylized(level + 1, scene, sampler, pi2, si2, ray2, hit, depth + 1)
-        return L + dr.select(go, weight * dr.select(hit, deeper, environment(scene, si2, go)), 0.0)
+        # first_n_hits: one bounce to the next vertex, which is stylized as well
+        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth)
+        deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
+        return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
     def walk(self, level: int, scene, sampler, pi, ray, active, depth, halt_at_start: bool) -> mi.Spectrum:
         """A path-traced walk that halts on styled objects and stylizes them at `level`."""
@@ -145,7 +118,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                               total)
         return total
 
-    def _estimate(self, slot: StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
+    def _estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
         style = slot.style
         if style.closed_form:
             return style.apply(mi.Color3f(0.0), v)
@@ -194,10 +167,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return []
 
     def to_string(self):
-        s = self.settings
-        return (f"StylizedIntegrator[style={s.style.describe()}, inner={list(s.inner)}, "
-                f"estimator={s.slot.estimator}, stylize={s.stylize}, stylize_depth={s.stylize_depth}, "
-                f"max_depth={s.max_depth}]")
+        return f"StylizedIntegrator[{self.settings.describe()}]"
 
 
 def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:

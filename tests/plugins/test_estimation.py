@@ -10,7 +10,8 @@ import styletrace
 from helpers import furnace
 from helpers.furnace import I, z_score
 from styletrace.api import make_integrator
-from styletrace.styles import StyleError, create
+from styletrace.errors import SettingsError
+from styletrace.styles import create
 
 RES = 96
 Z = 4.0
@@ -61,9 +62,9 @@ def test_direct_with_one_sample_is_measurably_biased(scene, mask):
 
 
 def test_inapplicable_estimator_is_refused():
-    with pytest.raises(StyleError, match="estimator 'series' does not apply to style 'cel'"):
+    with pytest.raises(SettingsError, match="estimator 'series' does not apply to style 'cel'"):
         make_integrator("cel", estimator="series")
-    with pytest.raises(StyleError, match="unknown estimator 'magic'"):
+    with pytest.raises(SettingsError, match="unknown estimator 'magic'"):
         make_integrator("gamma", estimator="magic")
 
 

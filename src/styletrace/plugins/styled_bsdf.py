@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import mitsuba as mi
 
-from ..styles import StyleError
-from .properties import style_slot_from
+from ..errors import SettingsError
+from .settings import parse_slot
 
 
 class StyledBSDF(mi.BSDF):
@@ -34,11 +34,11 @@ class StyledBSDF(mi.BSDF):
             else:
                 values[key] = value
         if len(nested) != 1:
-            raise StyleError(f"a 'styled' BSDF needs exactly one nested BSDF, found {len(nested)}")
+            raise SettingsError(f"a 'styled' BSDF needs exactly one nested BSDF, found {len(nested)}")
         if "style" not in values:
-            raise StyleError("a 'styled' BSDF needs a 'style' property")
+            raise SettingsError("a 'styled' BSDF needs a 'style' property")
         self.nested = nested[0]
-        self.slot = style_slot_from(values, context="a 'styled' BSDF")
+        self.slot = parse_slot(values, context="a 'styled' BSDF")
         self.m_flags = self.nested.m_flags
         self.m_components = list(self.nested.m_components)
 

@@ -3,8 +3,9 @@ import os
 import subprocess
 import sys
 
+from conftest import child_env
+
 TESTS = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-SRC = os.path.abspath(os.path.join(TESTS, "..", "src"))
 
 SCENARIO = """
 import gc, sys
@@ -35,7 +36,7 @@ print("survived")
 def test_no_scene_objects_outlive_the_trace():
     """An integrator kept alive after its scene is collected must not make the next trace crash (it did:
     Dr.Jit traces calls on every live emitter, and one of a half-collected scene segfaulted)."""
-    code = SCENARIO.format(tests=TESTS, render=os.path.join(TESTS, "render"))
+    code = SCENARIO.format(tests=TESTS, render=os.path.join(TESTS, "plugins"))
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
-                       env=dict(os.environ, PYTHONPATH=SRC))
+                       env=child_env())
     assert r.returncode == 0 and "survived" in r.stdout, (r.returncode, r.stderr[-2000:])

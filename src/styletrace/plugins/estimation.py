@@ -1,0 +1,180 @@
+"""The estimator registry: how the `stylized` integrator turns n child samples into g(E[L]).
+
+Each entry names the forms of g it accepts (`styles.forms`), what `inner_samples` n means for it, its
+fixed parameters and a doc line; `styletrace styles` and the docs print this table, the settings check
+names against it, and `make_estimator` builds the kernel object from it. It mirrors the style registry.
+
+    make_estimator(slot, level, vertex).run(draw, carry, uniform, active, like=mi.Color3f) -> (value, carry)
+
+Series and telescoping estimators draw a random number of children per lane; the draws happen inside
+the lane's own loop, so lanes are never widened.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import drjit as dr
+
+from .. import estimators as E
+from ..errors import SettingsError
+from ..styles.base import Style
+from ..styles.forms import AffineForm, PolynomialForm, SeriesForm
+
+#: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with fireflies
+#: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased for the
+#: series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| < b/2).
+SERIES_MAX_TERMS = 24
+
+#: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth g)
+ANY_FORM = (AffineForm, SeriesForm, PolynomialForm)
+FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial"}
+
+
+@dataclass(frozen=True)
+class EstimatorKind:
+    """One registry entry; `forms` None means every style (no form needed)."""
+
+    name: str
+    forms: tuple[type, ...] | None
+    doc: str
+    inner: str                                   # what inner_samples n means for it
+    params: dict[str, str] = field(default_factory=dict)  # fixed internals, for the docs
+    build: Callable | None = None                # (style, n, vertex) -> Transformed
+
+    def accepts(self, style: Style) -> bool:
+        if self.forms is None:
+            return True
+        return isinstance(style.form(), self.forms)
+
+    def describe_forms(self) -> str:
+        if self.forms is None:
+            return "any"
+        if self.forms == ANY_FORM:
+            return "any form"
+        return ", ".join(FORM_NAMES[f] for f in self.forms)
+
+
+_REGISTRY: dict[str, EstimatorKind] = {}
+
+
+def estimator(name: str, forms, doc: str, inner: str, **params: str):
+    """Register the decorated builder `(style, n, vertex) -> Transformed` under `name`."""
+    def deco(build):
+        _REGISTRY[name] = EstimatorKind(name, forms, doc, inner, dict(params), build)
+        return build
+    return deco
+
+
+def names() -> list[str]:
+    return list(_REGISTRY)
+
+
+def get(name: str) -> EstimatorKind:
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise SettingsError(f"unknown estimator '{name}': available are {', '.join(_REGISTRY)}") from None
+
+
+def kinds() -> list[EstimatorKind]:
+    return list(_REGISTRY.values())
+
+
+def applicable(style: Style) -> list[str]:
+    """Estimator names that apply to `style`."""
+    return [k.name for k in _REGISTRY.values() if k.accepts(style)]
+
+
+def check(name: str, style: Style) -> str:
+    """`name` if it is an estimator that applies to `style`; a SettingsError otherwise."""
+    if not get(name).accepts(style):
+        what = FORM_NAMES.get(type(style.form()), "no unbiased") + " form"
+        raise SettingsError(f"estimator '{name}' does not apply to style '{style.name}' (it has {what}): "
+                            f"use one of {', '.join(applicable(style))}")
+    return name
+
+
+class Transformed:
+    """An estimator of h(X') with X' = f(X) per sample and the result mapped by scale * value + offset."""
+
+    def __init__(self, inner, sample=None, scale=1.0, offset=0.0):
+        self.inner, self.sample, self.scale, self.offset = inner, sample, scale, offset
+        self.name, self.mean_samples = inner.name, getattr(inner, "mean_samples", None)
+
+    def run(self, draw, carry, uniform, active, like):
+        if self.sample is not None:
+            base = draw
+
+            def draw(c):  # noqa: F811 (wraps the caller's draw)
+                x, c = base(c)
+                return self.sample(x), c
+        value, carry = self.inner.run(draw, carry, uniform, active, like=like)
+        if self.scale != 1.0 or self.offset != 0.0:
+            value = value * self.scale + self.offset
+        return value, carry
+
+
+def make_estimator(slot, level: int, vertex) -> Transformed:
+    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time)."""
+    return get(slot.estimator).build(slot.style, slot.n(level), vertex)
+
+
+# ---- the registry ------------------------------------------------------------------------------
+
+@estimator("direct", None, "g(mean of n children), biased O(1/n) (Eq. 19)", "children per estimate")
+def _direct(style, n, vertex):
+    if style.per_sample:  # the children arrive already styled (a baseline): just average them
+        return Transformed(E.Mean(n))
+    return Transformed(E.Direct(lambda I: style.apply(I, vertex), n))
+
+
+@estimator("affine", (AffineForm,), "a1 <I>_n + a0, unbiased (S1-S3)", "children per estimate")
+def _affine(style, n, vertex):
+    form = style.form()
+    return Transformed(E.Affine(form.a1, form.a0, n=n))
+
+
+def _series(selection):
+    def build(style, n, vertex):
+        form = style.form()
+        est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
+                                selection=selection, max_terms=SERIES_MAX_TERMS)
+        shift = form.shift
+        return Transformed(est, (lambda x: x + shift) if shift else None, form.scale, form.offset)
+    return build
+
+
+_PILOT = "pilot samples for the expansion point b"
+estimator("series", (SeriesForm,), "power series, iterative prefix sum, Poisson-CMF truncation, U-statistic "
+          "terms (S12)", _PILOT, max_terms=str(SERIES_MAX_TERMS))(_series("iterative"))
+estimator("series_recursive", (SeriesForm,), "power series, recursive prefix sum (Russian roulette), "
+          "cumulative truncation, naive terms (S13)", _PILOT, max_terms=str(SERIES_MAX_TERMS))(_series("recursive"))
+estimator("series_single", (SeriesForm,), "power series, single term, Poisson truncation (S11)", _PILOT,
+          max_terms=str(SERIES_MAX_TERMS))(_series("single"))
+
+
+@estimator("ustat", (PolynomialForm,), "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
+           "children (at least the fit's degree)", pilot="1 sample")
+def _ustat(style, n, vertex):
+    form = style.form()
+    lo, hi = form.lo, form.hi
+    est = E.PolynomialU(form.fit, n=max(n, form.fit.degree), b=E.Pilot(1))
+    return Transformed(est, lambda x: dr.clip(x, lo, hi))
+
+
+@estimator("naive", (PolynomialForm,), "products of independent children per polynomial term (S6)", _PILOT)
+def _naive(style, n, vertex):
+    form = style.form()
+    lo, hi = form.lo, form.hi
+    return Transformed(E.PolynomialNaive(form.fit, b=E.Pilot(n)), lambda x: dr.clip(x, lo, hi))
+
+
+@estimator("telescoping", ANY_FORM, "debiased direct application (Eq. 15)", "n0, the first level",
+           truncation="power law 1.5")
+def _telescoping(style, n, vertex):
+    return Transformed(E.Telescoping(lambda I: style.apply(I, vertex), n0=n))
+
+
+__all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "make_estimator",
+           "Transformed", "SERIES_MAX_TERMS"]

@@ -1,0 +1,206 @@
+"""The inner path tracer every stylized vertex reuses: one sample of exitant radiance.
+
+`exitant(scene, sampler, pi, ray, active, ...)` returns one unbiased sample of
+    L_o(x, wo) = L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi
+at the vertex x that `ray` reaches (`pi`, its preliminary intersection; wo = -ray.d). Emission at x is
+counted in full: in the stylized rendering equation it sits inside g. Below x the estimator is an
+ordinary unidirectional path tracer with next-event estimation, multiple importance sampling (power
+heuristic on solid-angle densities, as Mitsuba's `path`) and Russian roulette from `rr_depth` on. An
+invalid `pi` means the ray escaped: the sample is then the environment's radiance.
+
+Depth follows Mitsuba's convention: x is at depth `depth0` (0 for a camera ray's first hit), so
+`max_depth` = 1 returns emission only, and the tree camera ray -> x -> this path has the same
+longest path as Mitsuba's `path` with the same `max_depth` (-1 = unbounded).
+
+`stop(si, depth)`, if given, marks vertices where the walk must halt because a style applies there
+(per-object stylization): their radiance is g(...), not emission plus reflection, so the walk neither
+adds their emission nor reflects there, and next-event estimation skips the emitters `skip_emitter(ds)`
+marks (their light reaches the path through g instead). The caller gets the halted lanes back with
+their throughput, intersection and ray.
+
+`bounce(scene, sampler, si, ray, active, depth, max_depth)` is the single step that the recursive
+`first_n_hits` parametrization takes between two stylized vertices: emission at x, next-event
+estimation towards delta lights only (no BSDF sample can reach them), one BSDF sample and the
+intersection of its ray.
+
+The loop carries the small preliminary intersection and rebuilds the full surface interaction at the
+top of each iteration, as Mitsuba's own path tracer does; the sampler is part of the loop state (a
+loop drawing random numbers without it would replay the same numbers in every iteration).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Optional
+
+import drjit as dr
+import mitsuba as mi
+
+
+def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:
+    """Power heuristic weight of strategy a against b (0 where both densities vanish)."""
+    a2 = dr.square(pdf_a)
+    return dr.detach(dr.select(pdf_a > 0, a2 / dr.fma(pdf_b, pdf_b, a2), 0.0))
+
+
+def depth_limit(max_depth: int) -> int:
+    return 0xFFFFFFFF if max_depth < 0 else max_depth
+
+
+def environment(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
+    """Radiance the environment sends along an escaped ray (zero where there is none)."""
+    ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
+    return ds.emitter.eval(si, active & ~si.is_valid())
+
+
+def emission(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
+    """Radiance emitted at si towards si.wi (or by the environment where si escaped)."""
+    return si.emitter(scene).eval(si, active)
+
+
+@dataclass
+class PathState:
+    """What the path loop carries from one vertex to the next (a Dr.Jit PyTree: the loop state)."""
+
+    sampler: Any                             # LaneSampler (or a Mitsuba sampler): must travel in the state
+    pi: mi.PreliminaryIntersection3f         # the vertex about to be shaded
+    ray: mi.Ray3f                            # the ray that reached it
+    active: mi.Bool
+    depth: mi.UInt32
+    L: mi.Spectrum                           # radiance gathered so far
+    beta: mi.Spectrum                        # throughput
+    eta: mi.Float                            # relative IOR along the path, for roulette
+    si_prev: mi.Interaction3f                # previous vertex, for the emitter density
+    pdf_prev: mi.Float                       # BSDF density of the direction that reached the vertex
+    delta_prev: mi.Bool                      # was that direction a delta (specular) sample?
+    halted: mi.Bool                          # halted at a stylized vertex
+
+
+@dataclass
+class Walk:
+    L: mi.Spectrum          # radiance gathered before any halt
+    beta: mi.Spectrum       # throughput at the halting vertex
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    depth: mi.UInt32
+    halted: mi.Bool
+
+
+def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
+            active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0) -> mi.Spectrum:
+    """One sample of L_o at the vertex `ray` reaches (see the module docstring)."""
+    return walk(scene, sampler, pi, ray, active, max_depth, rr_depth, depth0).L
+
+
+def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
+         active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
+         stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None) -> Walk:
+    ctx = mi.BSDFContext()
+    limit = depth_limit(max_depth)
+
+    # A starting vertex counts its emission in full: the previous vertex is treated as a delta
+    # scattering event, exactly like a camera ray in Mitsuba's path tracer.
+    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
+                      active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
+                      eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f), pdf_prev=mi.Float(1.0),
+                      delta_prev=mi.Bool(True), halted=mi.Bool(False))
+
+    def body(s: PathState):
+        si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
+        here = mi.Bool(s.active)
+        if stop is not None:
+            halt = s.active & si.is_valid() & stop(si, s.depth)
+            s.halted |= halt
+            here &= ~halt
+
+        # Emission at si (environment where the ray escaped), MIS-weighted against the light
+        # sampling done at the previous vertex.
+        emitter = si.emitter(scene)
+        hit_em = here & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
+        ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
+        em_pdf = scene.pdf_emitter_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
+        w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
+        s.L += s.beta * w_em * emitter.eval(si, hit_em)
+
+        active_next = here & si.is_valid() & (s.depth + 1 < limit)
+        bsdf = si.bsdf(s.ray)
+
+        # Next-event estimation.
+        active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        ds, em_weight = scene.sample_emitter_direction(si, s.sampler.next_2d(), True, active_em)
+        active_em &= ds.pdf != 0.0
+        if skip_emitter is not None:
+            active_em &= ~skip_emitter(ds)
+        wo = si.to_local(ds.d)
+        # One BSDF call both evaluates the light direction and samples the continuation.
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, s.sampler.next_1d(),
+                                                                   s.sampler.next_2d(), active_next)
+        w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, bsdf_pdf))
+        s.L += dr.select(active_em, s.beta * w_nee * bsdf_val * em_weight, 0.0)
+
+        # Continue the path along the sampled direction (halted lanes keep their vertex).
+        beta_next = s.beta * bsdf_weight
+        s.eta *= dr.select(active_next, bs.eta, 1.0)
+        ray_next = si.spawn_ray(si.to_world(bs.wo))
+        s.si_prev = mi.Interaction3f(dr.detach(si, True))
+        s.pdf_prev = bs.pdf
+        s.delta_prev = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+
+        # Russian roulette on the throughput, as in Mitsuba's path tracer (which counts the depth of
+        # the vertex about to be reached, hence the increment first).
+        depth_next = s.depth + 1
+        beta_max = dr.max(beta_next)
+        active_next &= beta_max != 0.0
+        q = dr.minimum(beta_max * dr.square(s.eta), 0.95)
+        roulette = depth_next >= rr_depth
+        beta_next[roulette] *= dr.rcp(q)
+        active_next &= ~roulette | (s.sampler.next_1d() < q)
+
+        pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=active_next)
+        if stop is not None:  # halted lanes keep their vertex
+            keep = ~here
+            pi_next = dr.select(keep, s.pi, pi_next)
+            ray_next = dr.select(keep, s.ray, ray_next)
+            beta_next = dr.select(keep, s.beta, beta_next)
+            depth_next = dr.select(keep, s.depth, depth_next)
+        s.pi, s.ray, s.beta, s.depth = pi_next, ray_next, beta_next, depth_next
+        s.active = active_next
+        return (s,)
+
+    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace path")
+    return Walk(L=out.L, beta=out.beta, pi=out.pi, ray=out.ray, depth=out.depth, halted=out.halted)
+
+
+@dataclass
+class Bounce:
+    L: mi.Spectrum                       # emission at x plus next-event estimation towards delta lights
+    weight: mi.Spectrum                  # BSDF sample weight f cos / pdf (valid where `go`)
+    pi: mi.PreliminaryIntersection3f     # the next vertex
+    si: mi.SurfaceInteraction3f
+    ray: mi.Ray3f
+    go: mi.Bool                          # lanes that took the bounce
+    hit: mi.Bool                         # ... and reached a surface (the others see the environment)
+
+
+def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
+           max_depth: int = -1) -> Bounce:
+    """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
+
+    The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
+    surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
+    spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
+    alone get next-event estimation here, with weight 1.
+    """
+    ctx = mi.BSDFContext()
+    L = emission(scene, si, active)
+    go = active & (depth + 1 < depth_limit(max_depth))
+    bsdf = si.bsdf(ray)
+    to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+    ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, to_light)
+    to_light &= ds.delta & (ds.pdf != 0.0)
+    L += dr.select(to_light, bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
+    bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), go)
+    ray2 = si.spawn_ray(si.to_world(bs.wo))
+    go &= dr.max(weight) > 0
+    pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+    si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
+    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid())

@@ -1,0 +1,194 @@
+"""The `stylized` integrator's settings: their names, defaults, parsing, docs and refinement, in one place.
+
+Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
+`--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
+bad values raise `SettingsError` (or `StyleError` for the style's own parameters) with one line.
+The integrator's property table in the README and the docs is generated from `PROPERTIES`.
+
+    settings = parse({"style": "cel", "inner_samples": "8,4", "stylize": "first_n_hits", "stylize_depth": 2})
+    values = refine(scene_integrator.values, {"inner_samples": 16})   # a scene's own integrator, refined
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from ..errors import SettingsError
+from ..styles import create, get
+from ..styles.base import Style
+from . import estimation
+
+
+@dataclass(frozen=True)
+class Property:
+    """One integrator property: its default, its type as the docs show it, its flag and its doc line."""
+
+    name: str
+    default: Any
+    kind: str
+    doc: str
+    flag: str = ""            # the `styletrace render` flag, if it has its own
+    metavar: str = ""
+
+    def show_default(self) -> str:
+        return "style's" if self.default is None else str(self.default)
+
+
+STYLIZE_MODES = {
+    "first_hit": "the camera ray's first hit; objects with a `styled` BSDF use their own style",
+    "first_n_hits": "the first N vertices of every path, recursively",
+    "first_object_hit": "the first vertex on a styled object at any depth (through mirrors and glass)",
+}
+
+PROPERTIES = (
+    Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
+    Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
+             "level", "--inner", "N"),
+    Property("estimator", "direct", "string", "how g(E[L]) is estimated from the children: "
+             + ", ".join(estimation.names()), "--estimator", "NAME"),
+    Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
+             "MODE"),
+    Property("stylize_depth", 1, "int", "N, the number of stylized levels", "--stylize-depth", "N"),
+    Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
+    Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
+)
+DEFAULTS = {p.name: p.default for p in PROPERTIES}
+#: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
+COMMAND_LINE_STYLE = "cel"
+#: what a `styled` BSDF accepts besides its style's parameters
+SLOT_KEYS = ("style", "inner_samples", "estimator")
+#: properties Mitsuba's SamplingIntegrator reads itself
+BASE_KEYS = ("samples_per_pass", "timeout", "hide_emitters")
+
+
+@dataclass(frozen=True)
+class StyleSlot:
+    """A style with its inner sample counts (one per stylized level, or one for all) and estimator."""
+
+    style: Style
+    inner: tuple[int, ...]
+    estimator: str = "direct"
+
+    def n(self, level: int) -> int:
+        return self.inner[min(level, len(self.inner) - 1)]
+
+
+@dataclass(frozen=True)
+class Settings:
+    slot: StyleSlot                 # the integrator's own style (identity: physically based)
+    stylize: str = "first_hit"
+    stylize_depth: int = 1
+    max_depth: int = -1
+    rr_depth: int = 5
+
+    @property
+    def style(self) -> Style:
+        return self.slot.style
+
+    @property
+    def inner(self) -> tuple[int, ...]:
+        return self.slot.inner
+
+    def describe(self) -> str:
+        return (f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
+                f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}")
+
+
+def integer(key: str, raw: Any, low: int) -> int:
+    """An integer >= low from a number or a string; exact (1.5 and '2.7' are refused, not truncated)."""
+    try:
+        if isinstance(raw, bool):
+            raise ValueError
+        if isinstance(raw, float) and not raw.is_integer():
+            raise ValueError
+        value = int(raw.strip()) if isinstance(raw, str) else int(raw)
+    except (TypeError, ValueError, OverflowError):
+        raise SettingsError(f"bad value {raw!r} for '{key}': expected an integer >= {low}") from None
+    if value < low:
+        raise SettingsError(f"bad value {raw!r} for '{key}': expected an integer >= {low}")
+    return value
+
+
+def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
+    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4))."""
+    if raw is None:
+        return (default,)
+    if isinstance(raw, str):
+        parts = [p for p in raw.replace(";", ",").split(",") if p.strip()]
+    elif isinstance(raw, (list, tuple)):
+        parts = list(raw)
+    else:
+        parts = [raw]
+    if not parts:
+        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer >= 1")
+    return tuple(integer("inner_samples", p, 1) for p in parts)
+
+
+def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrator",
+               extra_keys: tuple[str, ...] = ()) -> StyleSlot:
+    """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are errors."""
+    values = dict(values)
+    style_name = str(values.pop("style", DEFAULTS["style"]))
+    cls = get(style_name)
+    style_keys = {p.name for p in cls.params}
+    style_values = {k: values.pop(k) for k in list(values) if k in style_keys}
+    for k in values:
+        if k not in SLOT_KEYS and k not in extra_keys:
+            allowed = ", ".join(sorted(style_keys)) or "none"
+            own = ", ".join(k2 for k2 in SLOT_KEYS + extra_keys if k2 not in BASE_KEYS)
+            raise SettingsError(f"unknown property '{k}' for {context} with style '{style_name}': "
+                                f"the style's parameters are {allowed}; the others are {own}")
+    style = create(style_name, **style_values)
+    inner = parse_inner(values.get("inner_samples"), max(style.default_inner, 1))
+    name = str(values.get("estimator", DEFAULTS["estimator"]))
+    return StyleSlot(style=style, inner=inner, estimator=estimation.check(name, style))
+
+
+def parse(values: Mapping[str, Any]) -> Settings:
+    """Validated integrator settings from a flat name -> value mapping (property values, CLI strings or
+    Python values); missing names take DEFAULTS."""
+    if str(values.get("hide_emitters", False)).lower() in ("true", "1"):
+        raise SettingsError("bad value True for 'hide_emitters': the stylized integrator does not support hiding "
+                            "emitters (their emission is part of the stylized radiance)")
+    own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)
+    slot = parse_slot(values, extra_keys=own + BASE_KEYS)
+    get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
+    stylize = str(get_("stylize"))
+    if stylize not in STYLIZE_MODES:
+        raise SettingsError(f"bad value {stylize!r} for 'stylize': expected one of {', '.join(STYLIZE_MODES)}")
+    depth = integer("stylize_depth", get_("stylize_depth"), 1)
+    if stylize == "first_hit" and depth != 1:
+        raise SettingsError(f"bad value {depth!r} for 'stylize_depth': 'first_hit' stylizes one level; "
+                            f"use stylize=first_n_hits or first_object_hit for more")
+    if stylize == "first_object_hit" and slot.style.name != "identity":
+        raise SettingsError(f"bad value {slot.style.name!r} for 'style': with stylize=first_object_hit the "
+                            f"styles come from 'styled' BSDFs, so the integrator's own style must be identity")
+    if len(slot.inner) not in (1, depth):
+        expected = "1 count (one stylized level)" if depth == 1 else f"1 or {depth} counts (one per stylized level)"
+        raise SettingsError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': expected {expected}")
+    max_depth = integer("max_depth", get_("max_depth"), -1)
+    if max_depth == 0:
+        raise SettingsError("bad value 0 for 'max_depth': expected -1 (unbounded) or an integer >= 1")
+    rr_depth = integer("rr_depth", get_("rr_depth"), 1)
+    return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth)
+
+
+def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
+    """`base` property values (a scene's own integrator) with `changes` applied; a new style drops the old
+    style's parameters, which belong to it."""
+    values = dict(base)
+    new_style = changes.get("style")
+    if new_style is not None and new_style != values.get("style", DEFAULTS["style"]):
+        old = {p.name for p in get(str(values.get("style", DEFAULTS["style"]))).params}
+        values = {k: v for k, v in values.items() if k not in old}
+    values.update(changes)
+    return values
+
+
+def properties_of(props) -> dict[str, Any]:
+    """mi.Properties -> plain dict (reading marks each entry as used; `parse` validates them)."""
+    return {key: props[key] for key in props.keys()}
+
+
+__all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
+           "parse_inner", "integer", "refine", "properties_of"]

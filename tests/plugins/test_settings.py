@@ -1,0 +1,107 @@
+"""The integrator's settings: defaults, parsing once, refinement, the estimator registry, errors."""
+import pytest
+
+import styletrace
+from styletrace import api
+from styletrace.cli import main
+from styletrace.errors import SettingsError, StyleError
+from styletrace.plugins import estimation, settings
+from styletrace.styles import get, names
+
+styletrace.init()
+
+
+def test_defaults_come_from_the_table():
+    s = settings.parse({})
+    assert s.style.name == settings.DEFAULTS["style"] == "identity"
+    assert s.slot.estimator == settings.DEFAULTS["estimator"] == "direct"
+    assert (s.stylize, s.stylize_depth, s.max_depth, s.rr_depth) == ("first_hit", 1, -1, 5)
+    assert s.inner == (max(get("identity").default_inner, 1),)
+    assert settings.parse({"style": "cel"}).inner == (get("cel").default_inner,)
+
+
+@pytest.mark.parametrize("raw,expected", [(3, (3,)), ("8,4", (8, 4)), ((8, 4), (8, 4)), ([2, 3], (2, 3)),
+                                          ("5", (5,)), (4.0, (4,))])
+def test_inner_samples_spellings(raw, expected):
+    assert settings.parse_inner(raw, 1) == expected
+
+
+@pytest.mark.parametrize("raw", [0, "0", 2.7, "2.7", [2.7], "x", "", True])
+def test_bad_inner_samples_are_refused_not_truncated(raw):
+    with pytest.raises(SettingsError, match="bad value .* for 'inner_samples': expected an integer >= 1"):
+        settings.parse_inner(raw, 1)
+
+
+def test_the_api_hands_inner_counts_over_as_they_are():
+    integ = api.make_integrator("saturation", inner=(2, 3), stylize="first_n_hits", stylize_depth=2)
+    assert integ.settings.inner == (2, 3) and integ.values["inner_samples"] == (2, 3)
+
+
+def test_inner_samples_are_parsed_once_from_flag_to_kernel(monkeypatch, tmp_path):
+    calls = []
+    real = settings.parse_inner
+
+    def counting(raw, default):
+        calls.append(raw)
+        return real(raw, default)
+
+    monkeypatch.setattr(settings, "parse_inner", counting)
+    out = tmp_path / "x.exr"
+    assert main(["render", "--inner", "3", "--spp", "1", "--width", "8", "--height", "8", "-q", "-o", str(out)]) == 0
+    assert calls == ["3"]
+
+
+def test_refine_drops_the_old_styles_parameters_only_when_the_style_changes():
+    base = {"style": "cel", "levels": "0.1,0.9", "inner_samples": 8, "max_depth": 6}
+    same = settings.refine(base, {"inner_samples": 2})
+    assert same == {"style": "cel", "levels": "0.1,0.9", "inner_samples": 2, "max_depth": 6}
+    other = settings.refine(base, {"style": "gamma"})
+    assert other == {"style": "gamma", "inner_samples": 8, "max_depth": 6}
+    assert settings.parse(other).style.name == "gamma"
+
+
+def test_settings_errors_have_their_own_type():
+    with pytest.raises(SettingsError, match="bad value 'everywhere' for 'stylize'"):
+        settings.parse({"stylize": "everywhere"})
+    with pytest.raises(SettingsError, match="unknown property 'foo'"):
+        settings.parse({"foo": 1})
+    with pytest.raises(SettingsError, match="bad value 0 for 'max_depth'"):
+        settings.parse({"max_depth": 0})
+    with pytest.raises(StyleError, match="unknown style 'nope'"):
+        settings.parse({"style": "nope"})
+    assert not issubclass(SettingsError, StyleError) and not issubclass(StyleError, SettingsError)
+
+
+def test_the_estimator_registry_mirrors_the_forms():
+    assert estimation.names()[0] == "direct"
+    for name in names():
+        style = get(name)()
+        ok = estimation.applicable(style)
+        assert "direct" in ok
+        form = style.form()
+        assert ("telescoping" in ok) == (form is not None)
+        for kind in estimation.kinds():
+            assert kind.doc and kind.inner and callable(kind.build)
+            if kind.name in ok:
+                assert estimation.check(kind.name, style) == kind.name
+            else:
+                with pytest.raises(SettingsError, match=f"estimator '{kind.name}' does not apply to style '{name}'"):
+                    estimation.check(kind.name, style)
+    with pytest.raises(SettingsError, match="unknown estimator 'magic': available are direct, affine"):
+        estimation.get("magic")
+
+
+def test_every_property_with_a_flag_is_on_the_command_line(capsys):
+    with pytest.raises(SystemExit):
+        main(["render", "--help"])
+    helptext = capsys.readouterr().out
+    for p in settings.PROPERTIES:
+        if p.flag:
+            assert p.flag in helptext, p.flag
+
+
+def test_estimators_command_lists_the_registry(capsys):
+    assert main(["estimators"]) == 0
+    out = capsys.readouterr().out
+    for kind in estimation.kinds():
+        assert f"{kind.name}: {kind.doc}" in out

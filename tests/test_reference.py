@@ -1,0 +1,58 @@
+"""The reference tables in README.md and docs/ are generated from the registries and agree with them."""
+import os
+import re
+import sys
+
+import pytest
+
+import styletrace
+from styletrace import reference
+from styletrace.plugins.settings import PROPERTIES
+from styletrace.styles import get, names
+
+styletrace.init()
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+
+
+@pytest.mark.parametrize("path", reference.files(ROOT), ids=os.path.basename)
+def test_generated_blocks_are_up_to_date(path):
+    text = open(path, encoding="utf-8").read()
+    assert reference.render_file(text) == text, f"run: python -m styletrace.reference ({path} is stale)"
+
+
+def test_every_table_has_its_block():
+    readme = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
+    styles_md = open(os.path.join(ROOT, "docs", "styles.md"), encoding="utf-8").read()
+    estimators_md = open(os.path.join(ROOT, "docs", "estimators.md"), encoding="utf-8").read()
+    assert "<!-- reference:integrator -->" in readme
+    assert "<!-- reference:estimators -->" in estimators_md
+    for name in names():
+        if get(name).params:
+            assert f"<!-- reference:style:{name} -->" in styles_md, name
+
+
+def test_the_tables_carry_every_registry_entry():
+    table = reference.integrator_table()
+    for p in PROPERTIES:
+        assert f"`{p.name}`" in table and p.doc in table
+    for name in names():
+        for p in get(name).params:
+            assert p.doc.replace("|", "\\|") in reference.style_table(name)
+
+
+def test_a_stale_block_is_rewritten():
+    stale = "intro\n<!-- reference:style:cel -->\n| old | table |\n<!-- /reference -->\nend\n"
+    fresh = reference.render_file(stale)
+    assert "| old | table |" not in fresh and reference.style_table("cel") in fresh and fresh.endswith("end\n")
+
+
+@pytest.mark.parametrize("name", names())
+def test_each_style_module_opens_with_its_parameters_and_defaults(name):
+    """The third place a style's parameters appear, its module's reference block, names each with its default."""
+    cls = get(name)
+    doc = sys.modules[cls.__module__].__doc__
+    for p in cls.params:
+        assert f"- {p.name} (" in doc or f", {p.name} (" in doc, (name, p.name)
+        if isinstance(p.default, (int, float, tuple)):  # derived and gradient defaults are described in words
+            m = re.search(rf"\b{p.name} \([^)]*default ([^\s,)]+(?:,[^\s,)]+)*)", doc)
+            assert m and p.parse(m.group(1)) == p.default, (name, p.name, p.show(p.default))
