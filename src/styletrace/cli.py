@@ -79,6 +79,9 @@ def cmd_styles(args) -> int:
         for p in cls.params:
             print(f"    {p.name} = {p.show(p.default)}    {p.doc}; {p.allowed()}")
         print(f"    estimators: {', '.join(applicable(cls()))}")
+    print("compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. contrast+sepia; "
+          "parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or affine / combined / telescoping "
+          "where every operand has a form (docs/styles.md#compositions)")
     return 0
 
 

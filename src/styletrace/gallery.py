@@ -52,6 +52,8 @@ SETUPS = [
     Setup("contrast", "Contrast c(I - p) + p, affine, unbiased (Fig. 10)", "contrast", (1, 8),
           params={"c": 1.6, "pivot": 0.3}, estimator="affine"),
     Setup("sepia", "Sepia: affine colour map over [0, inf), unbiased (Fig. 10)", "sepia", (1, 8), estimator="affine"),
+    Setup("combined", "Sepia after contrast as one style, combined gu-estimator, 1 sample per operand (Fig. 10)",
+          "contrast+sepia", (1, 8), params={"contrast.c": 1.6, "contrast.pivot": 0.3}, estimator="combined"),
     Setup("tie_dye", "Tie-dye via its degree-20 Chebyshev fit, U-statistic, unbiased for the fit (Fig. 11)",
           "tie_dye", (20, 64), estimator="ustat"),
     Setup("gooch", "Gooch shading, closed form, 0 samples (Fig. 12)", "gooch", (0,),

@@ -56,6 +56,34 @@ def test_unbiased_estimator_in_the_renderer(scene, mask, style, estimator, n, pa
     assert np.all(np.abs(z) < Z), f"{style}/{estimator}: mean {vals.mean(0)} vs exact {exact}, z = {z}"
 
 
+def sepia(x):
+    A, b = create("sepia").affine()
+    return np.array(A) @ x + np.array(b)
+
+
+COMPOSED = [  # Fig. 10's combined gu-estimator and compositions with a power-series operand
+    ("contrast+sepia", "combined", 1, lambda x: sepia(1.6 * (x - 0.3) + 0.3)),
+    ("contrast+sepia", "affine", 1, lambda x: sepia(1.6 * (x - 0.3) + 0.3)),
+    ("gamma+sepia", "combined", 4, lambda x: sepia(gamma(x))),
+    ("contrast+gamma", "combined", 4, lambda x: gamma(1.6 * (x - 0.3) + 0.3)),
+]
+
+
+@pytest.mark.parametrize("style,estimator,n,g", COMPOSED, ids=[f"{c[0]}-{c[1]}" for c in COMPOSED])
+def test_composed_styles_are_unbiased_in_the_renderer(scene, mask, style, estimator, n, g):
+    vals = estimates(scene, mask, style, estimator, n, 6, **{"contrast.c": 1.6, "contrast.pivot": 0.3}
+                     if style.startswith("contrast") else {})
+    assert np.all(np.isfinite(vals))
+    z = z_score(vals, g(I))
+    assert np.all(np.abs(z) < Z), f"{style}/{estimator}: mean {vals.mean(0)} vs exact {g(I)}, z = {z}"
+
+
+def test_direct_application_of_a_nonlinear_composition_is_measurably_biased(scene, mask):
+    vals = estimates(scene, mask, "gamma+sepia", "direct", 1, 6)
+    z = z_score(vals, sepia(gamma(I)))
+    assert np.all(z < -Z), z
+
+
 def test_direct_with_one_sample_is_measurably_biased(scene, mask):
     vals = estimates(scene, mask, "gamma", "direct", 1, 6)
     assert np.all(z_score(vals, gamma(I)) < -Z)

@@ -19,7 +19,7 @@ import drjit as dr
 from .. import estimators as E
 from ..errors import SettingsError
 from ..styles.base import Style
-from ..styles.forms import AffineForm, PolynomialForm, SeriesForm
+from ..styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 
 #: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with fireflies
 #: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased for the
@@ -27,8 +27,9 @@ from ..styles.forms import AffineForm, PolynomialForm, SeriesForm
 SERIES_MAX_TERMS = 24
 
 #: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth g)
-ANY_FORM = (AffineForm, SeriesForm, PolynomialForm)
-FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial"}
+ANY_FORM = (AffineForm, SeriesForm, PolynomialForm, CompositeForm)
+FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial",
+              CompositeForm: "composite"}
 
 
 @dataclass(frozen=True)
@@ -41,27 +42,31 @@ class EstimatorKind:
     inner: str                                   # what inner_samples n means for it
     params: dict[str, str] = field(default_factory=dict)  # fixed internals, for the docs
     build: Callable | None = None                # (style, n, vertex) -> Transformed
+    when: Callable | None = None                 # a further condition on the form, if any
 
     def accepts(self, style: Style) -> bool:
         if self.forms is None:
             return True
-        return isinstance(style.form(), self.forms)
+        form = style.form()
+        return isinstance(form, self.forms) and (self.when is None or self.when(form))
 
     def describe_forms(self) -> str:
         if self.forms is None:
             return "any"
         if self.forms == ANY_FORM:
             return "any form"
+        if self.forms == (AffineForm, CompositeForm):
+            return "affine (or a composition of affine styles)"
         return ", ".join(FORM_NAMES[f] for f in self.forms)
 
 
 _REGISTRY: dict[str, EstimatorKind] = {}
 
 
-def estimator(name: str, forms, doc: str, inner: str, **params: str):
+def estimator(name: str, forms, doc: str, inner: str, when=None, **params: str):
     """Register the decorated builder `(style, n, vertex) -> Transformed` under `name`."""
     def deco(build):
-        _REGISTRY[name] = EstimatorKind(name, forms, doc, inner, dict(params), build)
+        _REGISTRY[name] = EstimatorKind(name, forms, doc, inner, dict(params), build, when)
         return build
     return deco
 
@@ -89,7 +94,10 @@ def applicable(style: Style) -> list[str]:
 def check(name: str, style: Style) -> str:
     """`name` if it is an estimator that applies to `style`; a SettingsError otherwise."""
     if not get(name).accepts(style):
-        what = FORM_NAMES.get(type(style.form()), "no unbiased") + " form"
+        form = style.form()
+        what = FORM_NAMES.get(type(form), "no unbiased") + " form"
+        if isinstance(form, CompositeForm) and form.affine is not None:
+            what = "an affine composite form"
         raise SettingsError(f"estimator '{name}' does not apply to style '{style.name}' (it has {what}): "
                             f"use one of {', '.join(applicable(style))}")
     return name
@@ -129,9 +137,15 @@ def _direct(style, n, vertex):
     return Transformed(E.Direct(lambda I: style.apply(I, vertex), n))
 
 
-@estimator("affine", (AffineForm,), "a1 <I>_n + a0, unbiased (S1-S3)", "children per estimate")
+def _affine_form(form):
+    """The AffineForm of a style: its own, or an all-affine composition's."""
+    return form.affine if isinstance(form, CompositeForm) else form
+
+
+@estimator("affine", (AffineForm, CompositeForm), "a1 <I>_n + a0, unbiased (S1-S3)", "children per estimate",
+           when=lambda form: _affine_form(form) is not None)
 def _affine(style, n, vertex):
-    form = style.form()
+    form = _affine_form(style.form())
     return Transformed(E.Affine(form.a1, form.a0, n=n))
 
 
@@ -174,6 +188,37 @@ def _naive(style, n, vertex):
            truncation="power law 1.5")
 def _telescoping(style, n, vertex):
     return Transformed(E.Telescoping(lambda I: style.apply(I, vertex), n0=n))
+
+
+def _operand(form, n: int):
+    """An estimator that consumes samples of an operand's input and returns an unbiased estimate of the
+    operand applied to their mean, as the single-style builders above do (sample maps become 1-sample
+    inner estimators: a shift is Affine(1, shift), a clamp is Direct(clip, 1))."""
+    if isinstance(form, AffineForm):
+        return E.Affine(form.a1, form.a0, n=1)
+    if isinstance(form, SeriesForm):
+        est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
+                                selection="iterative", max_terms=SERIES_MAX_TERMS)
+        if form.shift:
+            est = E.Compose(est, E.Affine(1.0, form.shift, n=1))
+        if form.scale != 1.0 or form.offset != 0.0:
+            est = E.Compose(E.Affine(form.scale, form.offset, n=1), est)
+        return est
+    if isinstance(form, PolynomialForm):
+        lo, hi = form.lo, form.hi
+        return E.Compose(E.PolynomialNaive(form.fit, b=E.Pilot(n)), E.Direct(lambda x: dr.clip(x, lo, hi), 1))
+    raise AssertionError(f"no operand estimator for {form!r}")
+
+
+@estimator("combined", (CompositeForm,), "a composition's operands' unbiased estimators nested (Theorem 4.1): "
+           "each outer operand consumes independent estimates of the inner ones", "pilot samples of series "
+           "and polynomial operands (affine operands take 1)")
+def _combined(style, n, vertex):
+    forms = style.form().forms
+    est = _operand(forms[0], n)
+    for form in forms[1:]:
+        est = E.Compose(_operand(form, n), est)
+    return Transformed(est)
 
 
 __all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "make_estimator",

@@ -47,5 +47,15 @@ class PolynomialForm:
     hi: float
 
 
+@dataclass(frozen=True)
+class CompositeForm:
+    """g = g_k o ... o g_1 with every operand's form known (`forms`, in application order). The `combined`
+    estimator nests their estimators; where every operand is affine, `affine` is the composite AffineForm
+    (and the `affine` estimator applies too)."""
+
+    forms: tuple
+    affine: Optional[AffineForm] = None
+
+
 Form = Any
-__all__: Sequence[str] = ["AffineForm", "SeriesForm", "PolynomialForm", "Form"]
+__all__: Sequence[str] = ["AffineForm", "SeriesForm", "PolynomialForm", "CompositeForm", "Form"]

@@ -7,6 +7,7 @@ from .base import Style
 from .params import StyleError
 
 _STYLES: dict[str, type[Style]] = {}
+_COMPOSITES: dict[str, type[Style]] = {}  # made on first use, one class per spelling
 
 
 def register(cls: type[Style]) -> type[Style]:
@@ -21,10 +22,18 @@ def names() -> list[str]:
 
 
 def get(name: str) -> type[Style]:
+    """The class of a registered style, or of a composition 'a+b+...' (see `compose`)."""
     try:
         return _STYLES[name]
     except KeyError:
-        raise StyleError(f"unknown style '{name}': available styles are {', '.join(names())}") from None
+        pass
+    from .compose import composite_class, is_composite
+    if is_composite(name):
+        if name not in _COMPOSITES:
+            _COMPOSITES[name] = composite_class(name, get)
+        return _COMPOSITES[name]
+    raise StyleError(f"unknown style '{name}': available styles are {', '.join(names())}, or a composition "
+                     f"such as contrast+sepia") from None
 
 
 def create(name: str, **values: Any) -> Style:

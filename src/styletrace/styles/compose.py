@@ -1,0 +1,106 @@
+"""compose: styles applied one after another as one style (supplement S5.4, Fig. 10; main paper Theorem 4.1).
+
+Spelling: `--style contrast+sepia` (or `"style": "contrast+sepia"`) applies contrast, then sepia:
+    g(<I>) = g_k( ... g_2(g_1(<I>)) ... )      for  `g_1+g_2+...+g_k`
+
+Parameters
+- OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name, e.g.
+  `contrast.c`, `contrast.pivot`, `sepia.gradient`. A style may appear once.
+
+Estimators
+- every operand affine (identity, contrast, sepia): the composite is affine, A = A_k ... A_1 and
+  b = A_k (... (A_2 b_1 + b_2) ...) + b_k, so `affine` is unbiased with n children, like a single affine
+  style (and `combined` applies as well).
+- every operand with a form (affine, power series, polynomial fit): `combined` nests the operands' own
+  unbiased estimators (Theorem 4.1, composition): each sample an outer operand's estimator consumes is an
+  independent unbiased estimate of the operands inside it. Affine operands take 1 sample, series and
+  polynomial operands a pilot of n (`inner_samples`) for their expansion point, as they do on their own.
+  This is the paper's combined gu-estimator of Fig. 10 (sepia after contrast, 1 sample per operand).
+- otherwise only `direct` (and `telescoping` where every operand has a form) apply.
+Per-sample baselines (acp) cannot be composed: they are not functions of an expectation.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import StyleError
+from .base import Style, Vertex
+from .forms import AffineForm, CompositeForm
+
+SEPARATOR = "+"
+
+
+def is_composite(name: str) -> bool:
+    return SEPARATOR in name
+
+
+def affine_matrix(form: AffineForm) -> tuple[np.ndarray, np.ndarray]:
+    """(A, b) as a 3x3 matrix and a 3-vector, whatever shapes the form's a1 and a0 have."""
+    a1 = np.asarray(form.a1, dtype=np.float64)
+    A = a1 if a1.ndim == 2 else np.diag(np.broadcast_to(a1, (3,)))
+    b = np.broadcast_to(np.asarray(form.a0, dtype=np.float64), (3,)).copy()
+    return A, b
+
+
+def composite_class(name: str, lookup) -> type[Style]:
+    """The Style class of `name` = 'a+b+...'; `lookup(op)` returns an operand's class."""
+    ops = [o.strip() for o in name.split(SEPARATOR)]
+    if len(ops) < 2 or any(not o for o in ops):
+        raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. contrast+sepia")
+    if len(set(ops)) != len(ops):
+        raise StyleError(f"bad style {name!r}: each style may appear once in a composition (its parameters are "
+                         f"named after it)")
+    classes = [lookup(o) for o in ops]
+    for cls in classes:
+        if cls.per_sample or is_composite(cls.name):
+            raise StyleError(f"bad style {name!r}: '{cls.name}' cannot be composed (it is not a function of "
+                             f"an expectation)" if cls.per_sample else f"bad style {name!r}: nested composition")
+    params = tuple(replace(p, name=f"{cls.name}.{p.name}", doc=f"{cls.name}: {p.doc}")
+                   for cls in classes for p in cls.params)
+    # the first operand sees the radiance: if it ignores it (closed form), so does the whole composition
+    inner = 0 if classes[0].default_inner == 0 else max(c.default_inner for c in classes)
+    summary = " then ".join(ops) + ", as one style g = " + " o ".join(reversed(ops))
+    return type(f"Composite[{name}]", (Composite,), {"name": name, "summary": summary, "params": params,
+                                                     "default_inner": inner, "operand_classes": tuple(classes)})
+
+
+class Composite(Style):
+    """Base of the classes `composite_class` makes; `operand_classes` in application order."""
+
+    operand_classes: tuple[type[Style], ...] = ()
+
+    def __init__(self, **values: Any):
+        super().__init__(**values)
+        self.operands = []
+        for cls in self.operand_classes:
+            prefix = cls.name + "."
+            own = {k[len(prefix):]: v for k, v in self.values.items() if k.startswith(prefix)}
+            self.operands.append(cls(**own))
+
+    def prepare(self, scene) -> None:
+        for op in self.operands:
+            op.prepare(scene)
+
+    def apply(self, I, v: Vertex):
+        for op in self.operands:
+            I = op.apply(I, v)
+        return I
+
+    def form(self):
+        forms = [op.form() for op in self.operands]
+        if any(f is None for f in forms):
+            return None
+        affine = None
+        if all(isinstance(f, AffineForm) for f in forms):
+            A, b = np.eye(3), np.zeros(3)
+            for f in forms:
+                Ak, bk = affine_matrix(f)
+                A, b = Ak @ A, Ak @ b + bk
+            affine = AffineForm(A.tolist(), b.tolist())
+        return CompositeForm(tuple(forms), affine)
+
+
+__all__ = ["Composite", "composite_class", "is_composite", "affine_matrix", "SEPARATOR"]
