@@ -22,7 +22,7 @@ backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the va
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .arguments import check_passes_args, check_render_args, check_scene  # noqa: E402
+from .arguments import check_passes_args, check_render_args, check_scene, scene_problem  # noqa: E402
 from .errors import SceneError  # noqa: E402
 from .images import save_safely, write_image  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
@@ -69,7 +69,11 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
             loaded = mi.load_dict(scene)
         except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
             raise SceneError(f"cannot load scene dict: {first_line(exc)}") from None
-        return check_scene(loaded, "the scene dict")
+        problem = scene_problem(loaded, "the scene dict")
+        if problem is not None:
+            del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
+            raise SceneError(problem)
+        return loaded
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"bad scene {scene!r}: expected a built-in name ({', '.join(sorted(BUILTIN))}), an XML "
                          f"path, a scene dict or an mi.Scene")
@@ -88,7 +92,10 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         loaded = mi.load_file(name, **_size(width, height, ("resx", "resy")))
     except Exception as exc:
         raise SceneError(f"cannot load scene file '{name}': {first_line(exc)}") from None
-    check_scene(loaded, f"scene file '{name}'")
+    problem = scene_problem(loaded, f"scene file '{name}'")
+    if problem is not None:
+        del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
+        raise SceneError(problem)
     if width or height:
         size = loaded.sensors()[0].film().size()
         if (width and width != size[0]) or (height and height != size[1]):

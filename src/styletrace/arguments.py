@@ -65,22 +65,34 @@ def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
         pass
 
 
-def check_scene(scene: Any, origin: str) -> mi.Scene:
-    """`scene` if it is an mi.Scene that styletrace can render; a SceneError naming `origin` otherwise."""
+def scene_problem(scene: Any, origin: str) -> str | None:
+    """Why `scene` (named `origin` in the message) cannot be rendered, or None if it is a renderable mi.Scene.
+
+    Returns the message rather than raising it, so that the caller can drop its reference to the scene
+    first: a refused scene kept alive by a traceback would still be part of every later kernel (Dr.Jit
+    traces virtual calls on all live instances), and its blackbody spectrum fails there."""
     if not isinstance(scene, mi.Scene):
         kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
-        raise SceneError(f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML "
-                         f"<scene>) holding a sensor, shapes and emitters")
+        return (f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
+                f"holding a sensor, shapes and emitters")
     if not scene.sensors():
-        raise SceneError(f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "
-                         f"<sensor type=\"perspective\"/>)")
+        return (f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "
+                f"<sensor type=\"perspective\"/>)")
     seen: dict[int, mi.Object] = {}
     _objects(scene, seen)
-    for obj in seen.values():
-        why = UNRENDERABLE.get(obj.class_name())
-        if why is not None:
-            raise SceneError(f"{origin} cannot be rendered in {mi.variant()}: {why}")
+    names = {obj.class_name() for obj in seen.values()}
+    seen.clear()
+    for name in sorted(names & set(UNRENDERABLE)):
+        return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
+    return None
+
+
+def check_scene(scene: Any, origin: str) -> mi.Scene:
+    """`scene` if it is renderable (a scene the caller keeps anyway); a SceneError naming `origin` otherwise."""
+    problem = scene_problem(scene, origin)
+    if problem is not None:
+        raise SceneError(problem)
     return scene
 
 
-__all__ = ["check_render_args", "check_passes_args", "check_integrator", "check_scene", "whole", "SEED_MAX"]
+__all__ = ["check_render_args", "check_passes_args", "check_integrator", "check_scene", "scene_problem", "whole", "SEED_MAX"]

@@ -129,7 +129,7 @@ def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
     else:
         parts = [raw]
     if not parts:
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer >= 1")
+        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer in [1, {COUNT_MAX}]")
     return tuple(integer("inner_samples", p, 1) for p in parts)
 
 
