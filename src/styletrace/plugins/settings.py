@@ -63,9 +63,10 @@ BASE_KEYS = ("samples_per_pass", "timeout", "hide_emitters")
 #: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
 #: "unbounded" (`path.depth_limit`), so larger values would wrap around.
 COUNT_MAX = 2 ** 32 - 2
-#: Most stylized levels for first_n_hits/first_object_hit. Each level is traced inside the draw of the one
-#: above, and the trace time doubles per level (measured in benchmarks/recursion: ~12 s at 12 levels,
-#: ~97 s at 15; 1000 levels overflow Python's recursion), so deeper trees are refused rather than hang.
+#: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the draw of
+#: the one above, and Dr.Jit traces a symbolic loop's body twice (JitFlag.OptimizeLoops), so the trace time
+#: doubles per level (measured, 8x8 Cornell box, inner 1: 3.3 s at 8 levels, 10 s at 10, 21 s at 11, 52 s
+#: at 12; 1000 levels overflow Python's recursion). Deeper trees are refused rather than left to hang.
 MAX_STYLIZE_DEPTH = 8
 
 
