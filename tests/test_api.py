@@ -62,3 +62,35 @@ def test_make_integrator_validates_before_mitsuba():
 def test_gradient_given_as_stops():
     integ = api.make_integrator("color_map", gradient=[(0, (0, 0, 0)), (1, (1, 0.5, 0))])
     assert "0:0,0,0;1:1,0.5,0" in integ.settings.style.describe()
+
+
+@pytest.mark.parametrize("kwargs,error,message", [
+    (dict(spp="16"), styletrace.UsageError, r"bad value '16' for spp: expected an integer in \[1, 4294967295\]"),
+    (dict(spp=1.5), styletrace.UsageError, "bad value 1.5 for spp"),
+    (dict(seed=None), styletrace.UsageError, r"bad value None for seed: expected an integer in \[0, 4294967295\]"),
+    (dict(seed=2 ** 32), styletrace.UsageError, "bad value 4294967296 for seed"),
+    (dict(integrator="path"), styletrace.UsageError, "bad value 'path' for integrator"),
+    (dict(inner=[2.7]), SettingsError, "bad value 2.7 for 'inner_samples'"),
+    (dict(scene={"type": "scene", "s": {"type": "sphere"}}), styletrace.SceneError, "the scene dict has no sensor"),
+    (dict(scene={"type": "sphere"}), styletrace.SceneError, "the scene dict is a Sphere, not a scene"),
+])
+def test_render_arguments_are_checked(kwargs, error, message):
+    call = {"scene": "furnace", "width": 4, "height": 4, "spp": 1, **kwargs}
+    if isinstance(call["scene"], dict):
+        del call["width"], call["height"]
+    with pytest.raises(error, match=message):
+        styletrace.render(**call)
+
+
+def test_the_largest_seed_is_its_own_image():
+    """Seeds are 32-bit: 2^32 - 1 renders and differs from seed 0 (2^32 would alias 0 and is refused)."""
+    a = styletrace.render("cornell-box", width=8, height=8, spp=1, seed=0)
+    b = styletrace.render("cornell-box", width=8, height=8, spp=1, seed=2 ** 32 - 1)
+    assert not np.array_equal(a, b)
+
+
+def test_a_scene_file_without_a_sensor_is_a_scene_error(tmp_path):
+    path = tmp_path / "empty.xml"
+    path.write_text('<scene version="3.0.0"/>')
+    with pytest.raises(styletrace.SceneError, match="has no sensor"):
+        api.load_scene(str(path))

@@ -93,3 +93,34 @@ def test_command_without_llvm_is_one_line_and_exit_2(tmp_path):
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("styletrace: error: ") and "apt-get install libllvm19" in lines[0]
+
+
+LIBDIR = "/usr/lib/x86_64-linux-gnu"
+
+
+@pytest.mark.skipif(not os.path.exists(f"{LIBDIR}/libLLVM-15.so.1"), reason="needs the system's libLLVM 15")
+def test_an_unversioned_libllvm_15_is_refused_by_its_contents(tmp_path):
+    """A copy of libLLVM 15 named plain libLLVM.so: its ELF symbol version LLVM_15 gives it away, so the
+    process ends with the one-line error instead of Dr.Jit aborting it (status 134)."""
+    copy = tmp_path / "libLLVM.so"
+    copy.write_bytes(open(f"{LIBDIR}/libLLVM-15.so.1", "rb").read())
+    assert jit.llvm_major(str(copy)) is None and jit.llvm_major_of_file(str(copy)) == 15
+    r = _import_in_child({"STYLETRACE_NO_CUDA": "1", "DRJIT_LIBLLVM_PATH": str(copy)})
+    assert r.returncode == 1, (r.returncode, r.stderr)
+    assert f"BackendError: DRJIT_LIBLLVM_PATH={copy} is LLVM 15, which crashes Dr.Jit 1.5" in r.stderr
+
+
+@pytest.mark.skipif(not os.path.exists(f"{LIBDIR}/libLLVM.so.19.1"), reason="needs the system's libLLVM 19")
+def test_an_unversioned_libllvm_19_is_accepted(tmp_path):
+    copy = tmp_path / "libLLVM.so"
+    copy.write_bytes(open(f"{LIBDIR}/libLLVM.so.19.1", "rb").read())
+    assert jit.llvm_major_of_file(str(copy)) == 19
+    r = _import_in_child({"STYLETRACE_NO_CUDA": "1", "DRJIT_LIBLLVM_PATH": str(copy)})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "llvm_ad_rgb"
+
+
+def test_a_file_without_a_version_marker_falls_back_to_its_name(tmp_path):
+    for name, major in (("libLLVM-15.so", 15), ("libLLVM.so", None)):
+        (tmp_path / name).write_bytes(b"\0not an ELF file\0")
+        assert jit.llvm_major_of_file(str(tmp_path / name)) == major

@@ -22,7 +22,8 @@ backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the va
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .errors import SceneError, UsageError  # noqa: E402
+from .arguments import check_passes_args, check_render_args, check_scene, scene_problem  # noqa: E402
+from .errors import SceneError  # noqa: E402
 from .images import save_safely, write_image  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
 from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
@@ -55,6 +56,7 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     if scene is None:
         scene = DEFAULT
     if isinstance(scene, mi.Scene):
+        check_scene(scene, "the mi.Scene")
         if width or height:
             size = scene.sensors()[0].film().size()
             if (width and width != size[0]) or (height and height != size[1]):
@@ -64,9 +66,17 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         if width or height:
             raise SceneError("width/height apply to built-in scenes and XML files; set the film size in the dict")
         try:
-            return mi.load_dict(scene)
+            loaded = mi.load_dict(scene)
         except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
             raise SceneError(f"cannot load scene dict: {first_line(exc)}") from None
+        problem = scene_problem(loaded, "the scene dict")
+        if problem is not None:
+            del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
+            raise SceneError(problem)
+        return loaded
+    if not isinstance(scene, (str, os.PathLike)):
+        raise SceneError(f"bad scene {scene!r}: expected a built-in name ({', '.join(sorted(BUILTIN))}), an XML "
+                         f"path, a scene dict or an mi.Scene")
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
@@ -82,6 +92,10 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         loaded = mi.load_file(name, **_size(width, height, ("resx", "resy")))
     except Exception as exc:
         raise SceneError(f"cannot load scene file '{name}': {first_line(exc)}") from None
+    problem = scene_problem(loaded, f"scene file '{name}'")
+    if problem is not None:
+        del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
+        raise SceneError(problem)
     if width or height:
         size = loaded.sensors()[0].film().size()
         if (width and width != size[0]) or (height and height != size[1]):
@@ -120,8 +134,7 @@ class Progress:
 def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lanes_per_pass: int = LANES_PER_PASS) -> Iterator[Progress]:
     """Render `spp` samples per pixel in passes; yield the running average after each pass."""
-    if spp < 1:
-        raise UsageError(f"bad value {spp!r} for spp: expected an integer >= 1")
+    check_passes_args(scene, integrator, spp, seed)
     size = scene.sensors()[0].film().crop_size()
     pixels = int(size[0]) * int(size[1])
     per_pass = max(1, min(spp, lanes_per_pass // max(pixels, 1)))
@@ -155,6 +168,7 @@ def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: An
     in **params; what is not given takes the integrator's defaults (`plugins.settings`: identity, direct,
     the style's inner count). Pass `integrator=` to use a prebuilt one (then style and params are ignored).
     """
+    check_render_args(spp, seed, integrator)
     sc = load_scene(scene, width, height)
     if integrator is None:
         integrator = make_integrator(style=style, inner=inner, estimator=estimator, **params)

@@ -8,6 +8,7 @@ Then the variant: `cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`, unless the
 from __future__ import annotations
 
 import glob
+import mmap
 import os
 import re
 import sys
@@ -36,6 +37,23 @@ def llvm_major(path: str) -> int | None:
     return int(next(g for g in m.groups() if g))
 
 
+def llvm_major_of_file(path: str) -> int | None:
+    """Major version of the libLLVM at `path`, read from the file itself: libLLVM exports its symbols under
+    an ELF symbol version named `LLVM_<major>[.<minor>]` (in .dynstr, near the start of the file), so a
+    copy renamed to plain libLLVM.so is still recognised. Falls back to the file name; None if neither says."""
+    try:
+        with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
+            at = data.find(b"\0LLVM_")
+            while at >= 0:
+                m = re.match(rb"\0LLVM_(\d+)(?:\.\d+)*\0", data[at:at + 32])
+                if m:
+                    return int(m.group(1))
+                at = data.find(b"\0LLVM_", at + 1)
+    except (OSError, ValueError):  # unreadable, or empty (mmap refuses empty files)
+        pass
+    return llvm_major(path)
+
+
 def find_libllvm(dirs=None) -> str | None:
     """Newest libLLVM with major >= MIN_LLVM_MAJOR in `dirs` (default SEARCH_DIRS), or None."""
     best = None
@@ -53,9 +71,9 @@ def configure_llvm() -> str:
     """Set DRJIT_LIBLLVM_PATH to a working libLLVM (keeping a user's good choice) and return it."""
     user = os.environ.get("DRJIT_LIBLLVM_PATH")
     if user:
-        major = llvm_major(user)
         if not os.path.isfile(user):
             raise BackendError(f"DRJIT_LIBLLVM_PATH={user} does not exist; {FIX}")
+        major = llvm_major_of_file(user)
         if major is not None and major < MIN_LLVM_MAJOR:
             raise BackendError(f"DRJIT_LIBLLVM_PATH={user} is LLVM {major}, which crashes Dr.Jit 1.5; {FIX}")
         return user
@@ -108,7 +126,7 @@ def prepare_drjit() -> str:
         raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
     # Dr.Jit picks its own libLLVM when it was imported before styletrace; refuse one that crashes
     loaded = loaded_libllvm()
-    major = llvm_major(loaded) if loaded else None
+    major = llvm_major_of_file(loaded) if loaded else None
     if major is not None and major < MIN_LLVM_MAJOR:
         raise BackendError(f"Dr.Jit loaded {loaded} (LLVM {major}), which crashes it; import styletrace before "
                            f"drjit/mitsuba, or {FIX}")

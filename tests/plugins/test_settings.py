@@ -1,4 +1,6 @@
 """The integrator's settings: defaults, parsing once, refinement, the estimator registry, errors."""
+import re
+
 import pytest
 
 import styletrace
@@ -28,7 +30,7 @@ def test_inner_samples_spellings(raw, expected):
 
 @pytest.mark.parametrize("raw", [0, "0", 2.7, "2.7", [2.7], "x", "", True])
 def test_bad_inner_samples_are_refused_not_truncated(raw):
-    with pytest.raises(SettingsError, match="bad value .* for 'inner_samples': expected an integer >= 1"):
+    with pytest.raises(SettingsError, match=r"bad value .* for 'inner_samples': expected an integer in \[1, 4294967294\]"):
         settings.parse_inner(raw, 1)
 
 
@@ -105,3 +107,29 @@ def test_estimators_command_lists_the_registry(capsys):
     out = capsys.readouterr().out
     for kind in estimation.kinds():
         assert f"{kind.name}: {kind.doc}" in out
+
+
+@pytest.mark.parametrize("key,value,allowed", [
+    ("max_depth", 2 ** 32, "[-1, 4294967294]"), ("rr_depth", 2 ** 40, "[1, 4294967294]"),
+    ("max_depth", "4294967296", "[-1, 4294967294]"), ("rr_depth", float("inf"), "[1, 4294967294]"),
+    ("inner_samples", 2 ** 32 - 1, "[1, 4294967294]"),
+])
+def test_integer_settings_fit_the_kernels_uint32_depth(key, value, allowed):
+    with pytest.raises(SettingsError, match=f"for '{key}': expected an integer in {re.escape(allowed)}"):
+        settings.parse({key: value})
+    assert settings.parse({key: 2 ** 32 - 2}).__getattribute__(key if key != "inner_samples" else "inner")
+
+
+def test_stylize_depth_is_capped():
+    assert settings.parse({"stylize": "first_n_hits", "stylize_depth": settings.MAX_STYLIZE_DEPTH}).stylize_depth == 8
+    with pytest.raises(SettingsError, match=r"for 'stylize_depth': expected an integer in \[1, 8\]"):
+        settings.parse({"stylize": "first_n_hits", "stylize_depth": 9})
+    row = next(p for p in settings.PROPERTIES if p.name == "stylize_depth")
+    assert "at most 8" in row.doc  # the generated settings table documents the cap
+
+
+@pytest.mark.parametrize("value", [0, 1, "4"])
+def test_samples_per_pass_is_refused(value):
+    """Mitsuba would split each of styletrace's passes again and throw when they do not divide evenly."""
+    with pytest.raises(SettingsError, match="for 'samples_per_pass': .*--pass-spp"):
+        settings.parse({"samples_per_pass": value})

@@ -48,7 +48,8 @@ PROPERTIES = (
              + ", ".join(estimation.names()), "--estimator", "NAME"),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
              "MODE"),
-    Property("stylize_depth", 1, "int", "N, the number of stylized levels", "--stylize-depth", "N"),
+    Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 8: tracing time doubles "
+             "per level)", "--stylize-depth", "N"),
     Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
 )
@@ -59,6 +60,14 @@ COMMAND_LINE_STYLE = "cel"
 SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
 BASE_KEYS = ("samples_per_pass", "timeout", "hide_emitters")
+#: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
+#: "unbounded" (`path.depth_limit`), so larger values would wrap around.
+COUNT_MAX = 2 ** 32 - 2
+#: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the draw of
+#: the one above, and Dr.Jit traces a symbolic loop's body twice (JitFlag.OptimizeLoops), so the trace time
+#: doubles per level (measured, 8x8 Cornell box, inner 1: 3.3 s at 8 levels, 10 s at 10, 21 s at 11, 52 s
+#: at 12; 1000 levels overflow Python's recursion). Deeper trees are refused rather than left to hang.
+MAX_STYLIZE_DEPTH = 8
 
 
 @dataclass(frozen=True)
@@ -94,8 +103,9 @@ class Settings:
                 f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}")
 
 
-def integer(key: str, raw: Any, low: int) -> int:
-    """An integer >= low from a number or a string; exact (1.5 and '2.7' are refused, not truncated)."""
+def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
+    """An integer in [low, high] from a number or a string; exact (1.5 and '2.7' are refused, not truncated)."""
+    expected = f"expected an integer in [{low}, {high}]"
     try:
         if isinstance(raw, bool):
             raise ValueError
@@ -103,9 +113,9 @@ def integer(key: str, raw: Any, low: int) -> int:
             raise ValueError
         value = int(raw.strip()) if isinstance(raw, str) else int(raw)
     except (TypeError, ValueError, OverflowError):
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected an integer >= {low}") from None
-    if value < low:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected an integer >= {low}")
+        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}") from None
+    if not low <= value <= high:
+        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
     return value
 
 
@@ -120,7 +130,7 @@ def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
     else:
         parts = [raw]
     if not parts:
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer >= 1")
+        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer in [1, {COUNT_MAX}]")
     return tuple(integer("inner_samples", p, 1) for p in parts)
 
 
@@ -147,6 +157,10 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
 def parse(values: Mapping[str, Any]) -> Settings:
     """Validated integrator settings from a flat name -> value mapping (property values, CLI strings or
     Python values); missing names take DEFAULTS."""
+    if "samples_per_pass" in values:
+        raise SettingsError(f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
+                            f"integrator renders in styletrace's own passes; set the samples per pass with "
+                            f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead")
     if str(values.get("hide_emitters", False)).lower() in ("true", "1"):
         raise SettingsError("bad value True for 'hide_emitters': the stylized integrator does not support hiding "
                             "emitters (their emission is part of the stylized radiance)")
@@ -156,7 +170,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
     stylize = str(get_("stylize"))
     if stylize not in STYLIZE_MODES:
         raise SettingsError(f"bad value {stylize!r} for 'stylize': expected one of {', '.join(STYLIZE_MODES)}")
-    depth = integer("stylize_depth", get_("stylize_depth"), 1)
+    depth = integer("stylize_depth", get_("stylize_depth"), 1, MAX_STYLIZE_DEPTH)
     if stylize == "first_hit" and depth != 1:
         raise SettingsError(f"bad value {depth!r} for 'stylize_depth': 'first_hit' stylizes one level; "
                             f"use stylize=first_n_hits or first_object_hit for more")
@@ -168,7 +182,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': expected {expected}")
     max_depth = integer("max_depth", get_("max_depth"), -1)
     if max_depth == 0:
-        raise SettingsError("bad value 0 for 'max_depth': expected -1 (unbounded) or an integer >= 1")
+        raise SettingsError(f"bad value 0 for 'max_depth': expected -1 (unbounded) or an integer in [1, {COUNT_MAX}]")
     rr_depth = integer("rr_depth", get_("rr_depth"), 1)
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth)
 

@@ -1,7 +1,7 @@
 """gamma: per-channel gamma correction of the expected radiance (main paper Eq. 24).
 
 Parameters
-- gamma (float, default 2.2): gamma > 0
+- gamma (float, default 2.2): gamma >= 0.1 (smaller gammas overflow float32 on bright radiance)
 
     g(<I>) = max(<I>, 0)^(1/gamma)        per channel.
 
@@ -24,13 +24,16 @@ from .registry import register
 #: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR) (radiance units).
 PILOT_FLOOR = 0.02
 PILOT_SCALE = 1.5
+#: Smallest gamma: the exponent 1/gamma <= 10 keeps I^(1/gamma) below float32's 3.4e38 for radiance up to
+#: 7e3, beyond what a scene's lights reach, while as gamma -> 0 it overflows for any I > 1.
+MIN_GAMMA = 0.1
 
 
 @register
 class Gamma(Style):
     name = "gamma"
     summary = "per-channel gamma I^(1/gamma) (Eq. 24)"
-    params = (Param("gamma", "float", 2.2, "gamma exponent", low=0.0, low_open=True),)
+    params = (Param("gamma", "float", 2.2, "gamma exponent", low=MIN_GAMMA),)
     default_inner = 16
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:

@@ -7,10 +7,12 @@ continues the end segments linearly, which keeps the map affine in u for a two-s
 """
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import drjit as dr
 import mitsuba as mi
+import numpy as np
 
 from ..errors import StyleError
 
@@ -31,8 +33,10 @@ class Gradient:
         if len(stops) < 2:
             raise ValueError(f"gradient {spec!r} needs at least two stops")
         pos = [p for p, _ in stops]
-        if any(b <= a for a, b in zip(pos, pos[1:])):
-            raise ValueError(f"gradient {spec!r}: stop positions must strictly increase")
+        # eval divides by the gaps in float32: they must be positive there too (not flushed to 0)
+        gaps = np.diff(np.asarray(pos, dtype=np.float32))
+        if not all(math.isfinite(p) for p in pos) or not np.all(gaps >= np.finfo(np.float32).tiny):
+            raise ValueError(f"gradient {spec!r}: stop positions must be finite and strictly increase")
         self.stops = stops
         self.spec = spec
 
@@ -60,7 +64,8 @@ class Gradient:
     @classmethod
     def parse(cls, raw: Any) -> "Gradient":
         """From a preset name, a 'pos:colour;...' string, or a sequence of (pos, colour) pairs."""
-        allowed = ("expected 'pos:colour;pos:colour;...' with increasing positions and colours "
+        allowed = ("expected 'pos:colour;pos:colour;...' with finite positions that strictly increase (in float32 "
+                   "too) and colours "
                    "'#rrggbb' or 'r,g,b', or a preset: " + ", ".join(cls.presets()))
         try:
             if isinstance(raw, str):

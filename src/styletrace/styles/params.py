@@ -3,14 +3,25 @@
 A style declares its parameters once; the CLI (`--set key=value` strings), Mitsuba properties
 (XML or dict values) and the docs all go through `Param.parse`, so every front end accepts the
 same spellings and rejects bad values with the same one-line message.
+
+Every real value (a number, a list entry, a colour or vector component) is finite and lies in
+[-LIMIT, LIMIT] unless the parameter's own range is narrower. The kernels compute in float32 (largest
+value 3.4e38): a product of two parameters and a radiance up to 1e20 then stays finite, and no value
+turns into inf when it is converted to float32. Parameters whose formula overflows sooner carry their
+own bounds, derived where they are declared.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 from ..errors import StyleError
 from .gradient import Gradient
+
+
+#: Default bound on the magnitude of every real parameter value (see the module's reference block).
+LIMIT = 1e6
 
 
 def _is_seq(value: Any) -> bool:
@@ -39,31 +50,37 @@ class Param:
         """Human description of the admissible values, used in errors and in `styletrace styles`."""
         if self.kind == "choice":
             return "one of " + ", ".join(self.choices)
-        if self.kind == "color":
-            return "an RGB colour: 'r,g,b' floats or '#rrggbb'"
-        if self.kind == "vector":
-            return "a 3D vector 'x,y,z'"
         if self.kind == "gradient":
             return "a gradient 'pos:colour;pos:colour;...' (colour '#rrggbb' or 'r,g,b') or a preset: " + \
                 ", ".join(Gradient.presets())
-        rng = ""
-        if self.low is not None or self.high is not None:
-            lo = "-inf" if self.low is None else f"{self.low:g}"
-            hi = "inf" if self.high is None else f"{self.high:g}"
-            rng = f" in {'(' if self.low_open else '['}{lo}, {hi}]"
+        if self.kind == "color":
+            return f"an RGB colour: 'r,g,b' with each value{self._range()}, or '#rrggbb'"
+        if self.kind == "vector":
+            return f"a non-zero 3D vector 'x,y,z' with each component{self._range()}"
         noun = {"float": "a number", "int": "an integer", "bool": "true or false",
                 "floats": "a comma-separated list of numbers"}[self.kind]
-        return noun + rng
+        return noun + (self._range() if self.kind != "bool" else "")
+
+    def bounds(self) -> tuple[float, float]:
+        """The closed range of admissible values; reals default to [-LIMIT, LIMIT]."""
+        if self.kind == "int":
+            return (-math.inf if self.low is None else self.low, math.inf if self.high is None else self.high)
+        return (-LIMIT if self.low is None else self.low, LIMIT if self.high is None else self.high)
+
+    def _range(self) -> str:
+        lo, hi = self.bounds()
+        if self.kind == "int" and self.low is None and self.high is None:
+            return ""
+        lo_text = "-inf" if lo == -math.inf else f"{lo:g}"
+        hi_text = "inf" if hi == math.inf else f"{hi:g}"
+        return f" in {'(' if self.low_open else '['}{lo_text}, {hi_text}{')' if hi == math.inf else ']'}"
 
     def fail(self, value: Any) -> StyleError:
         return StyleError(f"bad value {value!r} for parameter '{self.name}': expected {self.allowed()}")
 
     def _check_range(self, x: float, raw: Any) -> None:
-        if x != x:  # NaN
-            raise self.fail(raw)
-        if self.low is not None and (x < self.low or (self.low_open and x == self.low)):
-            raise self.fail(raw)
-        if self.high is not None and x > self.high:
+        lo, hi = self.bounds()
+        if not (lo <= x <= hi) or (self.low_open and x == lo):  # NaN fails every comparison
             raise self.fail(raw)
 
     def parse(self, raw: Any) -> Any:
@@ -72,7 +89,7 @@ class Param:
             value = self._convert(raw)
         except StyleError:
             raise
-        except (TypeError, ValueError, IndexError) as exc:
+        except (TypeError, ValueError, IndexError, OverflowError) as exc:
             raise self.fail(raw) from exc
         return value
 
@@ -120,9 +137,14 @@ class Param:
                 self._check_range(v, raw)
             return tuple(vals)
         if k == "gradient":
-            if isinstance(raw, Gradient):
-                return raw
-            return Gradient.parse(raw)
+            gradient = raw if isinstance(raw, Gradient) else Gradient.parse(raw)
+            for pos, colour in gradient.stops:
+                for v in (pos, *colour):
+                    if not -LIMIT <= v <= LIMIT:
+                        raise StyleError(f"bad gradient {gradient.spec!r} for parameter '{self.name}': stop "
+                                         f"positions and colour values must be finite numbers in "
+                                         f"[{-LIMIT:g}, {LIMIT:g}]")
+            return gradient
         if k == "choice":
             s = str(raw).strip()
             if s not in self.choices:

@@ -5,6 +5,7 @@ Parameters
 - phases (floats, default 1,1.13,1.29): phi_r, phi_g, phi_b (one value: all channels)
 - domain_min (float, default -1), domain_max (float, default 4): the interval [lo, hi] on which the
   estimator library fits the channel functions (Chebyshev, degree 20 in the paper); lo < hi
+- together: pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14, so float32 resolves the cosine's argument
 
 Per channel c in {r, g, b}, with x_c the channel of the inner estimate <I>:
     g_c(x_c) = (1 - cos(pi f_c (clamp(x_c, lo, hi) + phi_c))) / 2
@@ -33,6 +34,10 @@ from .registry import register
 
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20
+#: Largest cosine argument pi f (x + phi) the kernel is handed: float32 (24-bit mantissa) resolves an
+#: argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger arguments
+#: lose the radiance x in rounding, and huge ones make cos return NaN.
+MAX_ARGUMENT = float(2 ** 14)
 
 
 @register
@@ -59,6 +64,12 @@ class TieDye(Style):
         if not self.domain_min < self.domain_max:
             raise StyleError(f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
                              f"domain_min = {self.domain_min:g}")
+        largest = math.pi * max(self.frequencies) * (max(-self.domain_min, self.domain_max) + max(map(abs, self.phases)))
+        if largest > MAX_ARGUMENT:
+            raise StyleError(f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
+                             f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
+                             f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
+                             f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it")
 
     def domain(self) -> tuple[float, float]:
         return (self.domain_min, self.domain_max)

@@ -1,0 +1,98 @@
+"""Checks of the Python API's call arguments and of loaded scenes, before anything renders.
+
+    check_render_args(spp=16, seed=0, integrator=None)   # UsageError naming the argument and what is allowed
+    check_scene(scene, "scene file 'x.xml'")            # SceneError: no sensor, or a spectrum RGB cannot render
+
+`api.render`, `api.passes` and `api.load_scene` call these first, so a bad argument fails with one line
+instead of a TypeError deep in Mitsuba or a silently different image. Needs Mitsuba (a variant set).
+"""
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import mitsuba as mi
+
+from .errors import SceneError, UsageError
+
+#: Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one image.
+SEED_MAX = 2 ** 32 - 1
+#: spp is a UInt32 sample count in Mitsuba's samplers.
+SPP_MAX = 2 ** 32 - 1
+#: Plugin classes whose spectra an RGB variant cannot evaluate: the first pass fails inside the kernel.
+UNRENDERABLE = {"BlackBodySpectrum": "a 'blackbody' spectrum needs a spectral variant; give the emitter an RGB "
+                                     "radiance (<rgb name=\"radiance\" value=\"...\"/>) instead"}
+
+
+def whole(name: str, value: Any, low: int, high: int) -> int:
+    """An int argument in [low, high]; bools, floats and strings are refused, not converted."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value <= high:
+        raise UsageError(f"bad value {value!r} for {name}: expected an integer in [{low}, {high}]")
+    return int(value)
+
+
+def check_integrator(integrator: Any) -> None:
+    if integrator is not None and not isinstance(integrator, mi.Integrator):
+        raise UsageError(f"bad value {integrator!r} for integrator: expected None or an mi.Integrator such as "
+                         f"styletrace.make_integrator(...); choose a style with style=...")
+
+
+def check_render_args(spp: Any, seed: Any, integrator: Any = None) -> None:
+    """The arguments of `render` / `passes` that do not need the scene."""
+    whole("spp", spp, 1, SPP_MAX)
+    whole("seed", seed, 0, SEED_MAX)
+    check_integrator(integrator)
+
+
+def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
+    """The arguments of `passes`: a renderable scene as well."""
+    check_render_args(spp, seed, integrator)
+    check_scene(scene, "the scene")
+
+
+def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
+    """Every Mitsuba object reachable from `obj` through traverse(), into `seen` (by id)."""
+
+    class Collect(mi.TraversalCallback):
+        def put(self, name, value, *flags):
+            if isinstance(value, mi.Object) and id(value) not in seen:
+                seen[id(value)] = value
+                _objects(value, seen)
+
+    try:
+        obj.traverse(Collect())
+    except Exception:  # a Python plugin without a traversal of its own: nothing below it to find
+        pass
+
+
+def scene_problem(scene: Any, origin: str) -> str | None:
+    """Why `scene` (named `origin` in the message) cannot be rendered, or None if it is a renderable mi.Scene.
+
+    Returns the message rather than raising it, so that the caller can drop its reference to the scene
+    first: a refused scene kept alive by a traceback would still be part of every later kernel (Dr.Jit
+    traces virtual calls on all live instances), and its blackbody spectrum fails there."""
+    if not isinstance(scene, mi.Scene):
+        kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
+        return (f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
+                f"holding a sensor, shapes and emitters")
+    if not scene.sensors():
+        return (f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "
+                f"<sensor type=\"perspective\"/>)")
+    seen: dict[int, mi.Object] = {}
+    _objects(scene, seen)
+    names = {obj.class_name() for obj in seen.values()}
+    seen.clear()
+    for name in sorted(names & set(UNRENDERABLE)):
+        return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
+    return None
+
+
+def check_scene(scene: Any, origin: str) -> mi.Scene:
+    """`scene` if it is renderable (a scene the caller keeps anyway); a SceneError naming `origin` otherwise."""
+    problem = scene_problem(scene, origin)
+    if problem is not None:
+        raise SceneError(problem)
+    return scene
+
+
+__all__ = ["check_render_args", "check_passes_args", "check_integrator", "check_scene", "scene_problem", "whole", "SEED_MAX"]
