@@ -43,3 +43,12 @@ def test_one_line_refusals(tmp_path, capsys):
     assert "the extension must be .npz" in capsys.readouterr().err
     assert cli.main(["restyle", str(tmp_path / "none.npz"), "-o", str(tmp_path / "x.png")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_preview_refuses_a_bad_start_in_one_line(capsys):
+    assert cli.main(["preview", "--style", "nope", "--width", "8", "--height", "8"]) == 2
+    assert "unknown style 'nope'" in capsys.readouterr().err
+    assert cli.main(["preview", "--style", "acp", "--width", "8", "--height", "8"]) == 2
+    assert "style 'acp' cannot be previewed" in capsys.readouterr().err
+    assert cli.main(["preview", "--spp", "100000", "--width", "64", "--height", "64"]) == 2
+    assert "over the preview's cap" in capsys.readouterr().err

@@ -18,13 +18,12 @@ import tempfile
 import time
 from typing import Any
 
-from ..errors import StyletraceError
+from ..errors import StyletraceError, UsageError
 
 PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 
 def styles_table() -> list[dict[str, Any]]:
-    from ..lookdev.restyle import RESTYLABLE_ESTIMATORS
     from ..plugins.estimation import applicable
     from ..styles import get, names
     out = []
@@ -140,8 +139,12 @@ def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: 
     import uvicorn
 
     from .session import Session
+    from ..plugins.settings import parse_slot
+    slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
+    if slot.style.per_sample:
+        raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
+                         f"preview's buffer keeps only their mean")
     session = Session(scene, inner=inner, spp=spp, width=width, height=height)
-    session.check(style, None, params or {})  # a bad starting style fails here, in one line
     app = make_app(session)
     session.initial = {"style": style, "params": params or {}}
     config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")

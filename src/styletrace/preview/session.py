@@ -22,7 +22,7 @@ from .. import api  # noqa: E402
 from ..errors import UsageError  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
-from ..lookdev.restyle import restyle, slots_for  # noqa: E402
+from ..lookdev.restyle import restyle  # noqa: E402
 
 DEFAULT_SIZE, DEFAULT_SPP, DEFAULT_INNER = 256, 16, 8
 
@@ -91,12 +91,6 @@ class Session:
             if self.first_image_s is None:
                 self.first_image_s = time.perf_counter() - self.started
             return img, self.spp_done
-
-    def check(self, style: str, estimator: str | None, params: dict[str, Any]):
-        """Validate a request against the buffer's slots without restyling (raises the one-line error)."""
-        with self.jit:
-            if self.buffer is not None:
-                slots_for(self.buffer, style, estimator, None, **params)
 
     def state(self) -> dict[str, Any]:
         per = bytes_per_sample("first_hit")
