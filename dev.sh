@@ -2,7 +2,8 @@
 # One entry point for a fresh machine:  bash dev.sh render [ARGS...]  |  bash dev.sh test [PYTEST ARGS...]
 # The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because
 # Dr.Jit 1.5 aborts on Debian's default LLVM 15), a virtual environment in .venv, and styletrace with
-# versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ...).
+# versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ...); for `test` also Chromium (apt),
+# which the preview's browser test drives through Playwright.
 set -euo pipefail
 cd "$(dirname "$0")"
 VENV=${STYLETRACE_VENV:-.venv}
@@ -33,11 +34,13 @@ setup() {
   command -v python3 >/dev/null || apt_install python3 python3-venv
   python3 -c 'import ensurepip, venv' 2>/dev/null || apt_install python3-venv
   have_llvm || apt_install libllvm19
+  # the preview's browser test drives Debian's Chromium with Playwright (Playwright's own download cannot work here)
+  if [ "${1:-}" = test ] && ! command -v chromium >/dev/null; then apt_install chromium; fi
   if [ ! -x "$VENV/bin/python" ]; then python3 -m venv "$VENV"; fi
   local stamp="$VENV/.styletrace-installed"
   if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints.txt -nt "$stamp" ]; then
     "$VENV/bin/python" -m pip install -q --upgrade pip
-    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots]"
+    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots,preview]"
     touch "$stamp"
   fi
 }
@@ -51,7 +54,7 @@ case "$cmd" in
                    -o render.png
           fi
           exec "$VENV/bin/styletrace" render "$@" ;;
-  test)   setup; exec "$VENV/bin/python" -m pytest -q "$@" ;;
+  test)   setup test; exec "$VENV/bin/python" -m pytest -q "$@" ;;
   setup)  setup ;;
   *) echo "usage: bash dev.sh render [styletrace render args] | bash dev.sh test [pytest args] | bash dev.sh setup" >&2; exit 2 ;;
 esac

@@ -15,6 +15,9 @@ __version__ = "0.1.0"
 
 #: names served by `styletrace.api`, loaded (and the backend initialised) on first use
 _API = ("render", "load_scene", "make_integrator", "passes", "write_image")
+#: names served by `styletrace.lookdev` (module, name), loaded the same way
+_LOOKDEV = {"render_buffer": "record", "restyle": "restyle", "load_buffer": "buffer", "fit": "fit",
+            "Buffer": "buffer"}
 
 
 def __getattr__(name: str):
@@ -24,8 +27,12 @@ def __getattr__(name: str):
         init()
         from . import api
         return getattr(api, name)
+    if name in _LOOKDEV:
+        init()
+        from importlib import import_module
+        return getattr(import_module(f".lookdev.{_LOOKDEV[name]}", __name__), name)
     raise AttributeError(f"module 'styletrace' has no attribute {name!r}")
 
 
 __all__ = ["init", "variant", "StyletraceError", "BackendError", "StyleError", "SettingsError", "SceneError",
-           "UsageError", "__version__", *_API]
+           "UsageError", "__version__", *_API, *_LOOKDEV]

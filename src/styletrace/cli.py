@@ -110,6 +110,9 @@ def cmd_render(args) -> int:
 
     scene = api.load_scene(args.scene, args.width, args.height)
     integrator = choose_integrator(scene, args, params)
+    if args.buffer:
+        from .lookdev.commands import render_with_buffer
+        return render_with_buffer(args, scene, integrator)
 
     lanes = api.LANES_PER_PASS
     if args.pass_spp:
@@ -218,6 +221,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     r.set_defaults(func=cmd_render)
+
+    from .lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
+    r.add_argument("--buffer", default=None, metavar="FILE", help=lookdev.BUFFER_HELP)
+    lookdev.add_parsers(sub, parse_set=_parse_set, check_output=check_output)
 
     g = sub.add_parser("gallery", help="reproduce the paper's result setups on the dragon scene")
     g.add_argument("-o", "--output", default="gallery", help="output folder (default: gallery)")

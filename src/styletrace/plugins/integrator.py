@@ -104,6 +104,11 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                  skip_emitter=self._skip_emitter)
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
+        return self._through(w, value)
+
+    def _through(self, w, value) -> mi.Spectrum:
+        """The walk's radiance: what it gathered before halting plus its throughput times the stylized
+        value where it halted (a seam for `lookdev.record`, which keeps both per camera sample)."""
         return w.L + dr.select(w.halted, w.beta * value, 0.0)
 
     def stylized(self, level: int, scene, sampler, pi, si, ray, active, depth) -> mi.Spectrum:

@@ -1,0 +1,149 @@
+"""The expectation buffer: per camera sample, everything a stylized image depends on except θ.
+
+For `first_hit` and `first_object_hit` (one stylized level) with the `direct` or `affine` estimator, a
+camera sample's contribution to its pixel is
+
+    value = L_before + beta * g_θ(mean, vertex)          (L_before + 0 where no stylized vertex was found)
+
+so storing, per camera sample, its pixel, its stylized vertex, its style slot, the radiance gathered
+before the vertex, the throughput to it and the mean of its n child estimates lets any θ be evaluated
+again without tracing a ray (`lookdev.restyle`). None of it depends on θ.
+
+File format (`.npz`, written atomically: a temporary file in the target folder, then `os.replace`):
+
+    header   uint8 array: UTF-8 JSON, {"format": "styletrace-buffer", "version": 1, ...} (`Buffer.header`)
+    pixel    uint32 (N,)     row-major pixel index in the film's crop window (box filter: weight 1)
+    slot     int8   (N,)     index into header["slots"]; -1: the camera sample has no stylized vertex
+    p, n, wo float32 (3, N)  vertex position, shading normal, direction towards the viewer
+    mean     float32 (3, N)  mean of the n child estimates (0 for closed-form styles, n = 0)
+    L_before float32 (3, N)  radiance gathered before the vertex (first_hit: the environment on a miss)
+    beta     float32 (3, N)  throughput to the vertex (first_object_hit only; first_hit: 1 where slot >= 0)
+    depth    uint32 (N,)     path depth of the vertex (first_object_hit only; first_hit: 0)
+
+Size per camera sample: 65 bytes for first_hit, 81 bytes for first_object_hit (`bytes_per_sample`).
+The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each pass's
+spp and seed. The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see
+the same camera when restyling.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import UsageError
+
+FORMAT = "styletrace-buffer"
+VERSION = 1
+#: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
+#: bytes_per_sample times this (~270 MB for first_hit)
+MAX_SAMPLES = 1 << 22
+
+SCALAR = {"pixel": np.uint32, "slot": np.int8, "depth": np.uint32}
+VECTOR = ("p", "n", "wo", "mean", "L_before", "beta")
+
+
+def fields_for(stylize: str) -> tuple[str, ...]:
+    base = ("pixel", "slot", "p", "n", "wo", "mean", "L_before")
+    return base + (("beta", "depth") if stylize == "first_object_hit" else ())
+
+
+def bytes_per_sample(stylize: str) -> int:
+    return sum(4 if k in ("pixel", "depth") else 1 if k == "slot" else 12 for k in fields_for(stylize))
+
+
+@dataclass
+class Buffer:
+    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module doc)."""
+
+    header: dict[str, Any]
+    arrays: dict[str, np.ndarray]
+    #: Dr.Jit copies of the arrays, made by `lookdev.restyle` on first use and kept for later restyles
+    device: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+    #: the image rendered while recording (not saved; `restyle` with the recorded style reproduces it)
+    image: Any = field(default=None, repr=False, compare=False)
+
+    @property
+    def width(self) -> int:
+        return int(self.header["width"])
+
+    @property
+    def height(self) -> int:
+        return int(self.header["height"])
+
+    @property
+    def samples(self) -> int:
+        return int(self.arrays["pixel"].shape[0])
+
+    @property
+    def spp(self) -> int:
+        return sum(int(p["spp"]) for p in self.header["passes"])
+
+    @property
+    def stylize(self) -> str:
+        return self.header["stylize"]
+
+    @property
+    def nbytes(self) -> int:
+        return sum(a.nbytes for a in self.arrays.values())
+
+    def save(self, path: str) -> str:
+        """Write the buffer to `path` (.npz) atomically; returns the path."""
+        path = os.fspath(path)
+        if not path.lower().endswith(".npz"):
+            raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
+        folder = os.path.dirname(os.path.abspath(path))
+        if not os.path.isdir(folder):
+            raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
+        head = np.frombuffer(json.dumps(self.header).encode("utf-8"), dtype=np.uint8)
+        fd, tmp = tempfile.mkstemp(prefix=".buffer-", suffix=".npz", dir=folder)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez(f, header=head, **self.arrays)
+            os.replace(tmp, path)
+        except OSError as exc:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise UsageError(f"cannot write {path!r}: {exc.strerror or exc}") from None
+        return path
+
+    def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int) -> None:
+        """Add one pass's camera samples (in the order the render loop made them)."""
+        for k in fields_for(self.stylize):
+            a = arrays[k]
+            self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
+        self.header["passes"].append({"spp": int(spp), "seed": int(seed)})
+        self.device.clear()
+
+
+def load_buffer(path: str) -> Buffer:
+    """Read a buffer written by `Buffer.save`; one-line UsageError for a missing, foreign or newer file."""
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise UsageError(f"buffer file {path!r} does not exist")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            header = json.loads(bytes(z["header"]).decode("utf-8"))
+            if not isinstance(header, dict) or header.get("format") != FORMAT:
+                raise ValueError("not a styletrace buffer")
+            if header.get("version") != VERSION:
+                raise UsageError(f"buffer file {path!r} has format version {header.get('version')!r}; this "
+                                 f"styletrace reads version {VERSION}")
+            arrays = {k: z[k] for k in fields_for(header["stylize"])}
+    except UsageError:
+        raise
+    except (OSError, ValueError, KeyError, EOFError) as exc:
+        raise UsageError(f"cannot read buffer file {path!r}: {exc}") from None
+    n = arrays["pixel"].shape[0]
+    for k, a in arrays.items():
+        want = (n,) if k in SCALAR else (3, n)
+        if a.shape != want:
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
+    return Buffer(header, arrays)
+
+
+__all__ = ["Buffer", "load_buffer", "FORMAT", "VERSION", "MAX_SAMPLES", "fields_for", "bytes_per_sample"]

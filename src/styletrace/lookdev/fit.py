@@ -1,0 +1,256 @@
+"""Inverse stylization: θ that make a buffer's restyled image match a target image.
+
+    result = styletrace.fit(buf, style="cel", target=img)       # img: H x W x 3 linear, or an image file
+    result.params        # {'thresholds': (0.3,), 'levels': (0.1, 0.9)}, validated by the style
+    result.image         # restyle(buf, style="cel", **result.params)
+
+Gradient descent through the restyle kernel (`lookdev.restyle.sample_values` + `accumulate`) with Dr.Jit's
+automatic differentiation (an `_ad_` variant): the parameters are Dr.Jit arrays with gradients enabled,
+the loss is the mean squared error over the pixels' RGB values, `dr.backward` gives its gradient and
+Adam (`drjit.opt.Adam`, Kingma and Ba, "Adam: A Method for Stochastic Optimization", 2015) steps,
+with a learning rate falling geometrically from `lr` to `lr / 100` over the iterations.
+
+What is fitted: every parameter of kind float, floats and colour, and the colours of a gradient's stops
+(its positions stay where the initial gradient puts them). Integer, boolean, choice and vector
+parameters stay at their initial values, and so do hatching's angle, spacing and thickness (the line
+pattern is periodic in them: the loss has a minimum per period); `fixed=` holds any other parameter too. After each step each
+parameter is clamped to its declared range. Fitting uses the `direct` estimator (g of the children's mean).
+
+Step styles have no useful gradient (a step's derivative is zero almost everywhere), so during fitting
+they are replaced by a smoothed surrogate with temperature τ:
+- cel: the band target m(u) = m_0 + sum_j (m_j - m_{j-1}) H(u - t_j) with the Heaviside step H replaced
+  by the logistic sigmoid s((u - t_j) / τ); thresholds are kept sorted;
+- hatching: the line test dist_j < d/2 becomes s((d/2 - dist_j) / (τ spacing)) and the active-set test
+  m > j becomes s((m' - j - 1/2) / τ) with m' = coverage sets + 1/2 unrounded, lines combined as
+  1 - prod_j (1 - line_j active_j).
+τ falls geometrically from `tau` (default 0.1) to `tau_end` (default 1e-4) over the iterations, so late
+iterations fit nearly the true style. The loss reported (and the convergence test) uses the true style.
+Halftone's steps are not smoothed: fitting it is refused with one line.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from ..jit import backend
+
+backend()
+
+import drjit as dr  # noqa: E402
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..errors import BackendError, UsageError  # noqa: E402
+from ..plugins import settings as S  # noqa: E402
+from ..styles import create  # noqa: E402
+from ..styles.base import Style, brightness  # noqa: E402
+from ..styles.gradient import Gradient  # noqa: E402
+from ..styles.hatching import coverage  # noqa: E402
+from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for  # noqa: E402
+
+FITTABLE = ("float", "floats", "color", "gradient")
+#: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in Python)
+NOT_FITTED = {"hatching": ("angle", "spacing", "thickness")}
+#: styles whose steps have no smoothed surrogate
+NOT_SMOOTHED = ("halftone",)
+
+
+@dataclass
+class FitResult:
+    params: dict[str, Any]               # the fitted values, as the style's parameters take them
+    loss: float                          # mean squared error of the restyled image with `params`
+    iterations: int                      # iterations run (fewer than asked where the loss reached `tol`)
+    seconds: float
+    history: list[float] = field(default_factory=list)   # loss (true style) after each checked iteration
+    image: np.ndarray | None = None
+
+
+# ---- θ as Dr.Jit arrays ------------------------------------------------------------------------------
+
+def _flatten(kind: str, value: Any) -> list[float]:
+    if kind == "float":
+        return [float(value)]
+    if kind == "gradient":
+        return [float(c) for _, col in value.stops for c in col]
+    return [float(v) for v in value]
+
+
+def _unflatten(kind: str, flat: mi.Float, like: Any) -> Any:
+    """Parameter value from a flat Dr.Jit array (entries are width-1 arrays, so gradients flow)."""
+    parts = [dr.gather(mi.Float, flat, i) for i in range(dr.width(flat))]
+    if kind == "float":
+        return parts[0]
+    if kind == "gradient":
+        stops = [(pos, tuple(parts[3 * i:3 * i + 3])) for i, (pos, _) in enumerate(like.stops)]
+        return Gradient(stops, like.spec)
+    return tuple(parts)
+
+
+def _plain(kind: str, flat: np.ndarray, like: Any) -> Any:
+    """The fitted value as the style's parameter parser takes it."""
+    if kind == "float":
+        return float(flat[0])
+    if kind == "gradient":
+        return [(pos, tuple(float(c) for c in flat[3 * i:3 * i + 3])) for i, (pos, _) in enumerate(like.stops)]
+    return tuple(float(v) for v in flat)
+
+
+def _clamp(p, x: mi.Float) -> mi.Float:
+    if p.low is not None:
+        x = dr.maximum(x, p.low + (1e-6 if p.low_open else 0.0))
+    if p.high is not None:
+        x = dr.minimum(x, p.high)
+    return x
+
+
+# ---- smoothed surrogates -------------------------------------------------------------------------------
+
+def _sigmoid(x):
+    return dr.rcp(1.0 + dr.exp(-x))
+
+
+class Smoothed:
+    """A style whose `apply` is a smooth surrogate of temperature `tau` (everything else delegates)."""
+
+    def __init__(self, style: Style, tau: mi.Float):
+        self.style, self.tau = style, tau
+
+    def __getattr__(self, key):
+        return getattr(self.style, key)
+
+    def apply(self, I, v):
+        return SURROGATES[self.style.name](self.style, I, v, self.tau)
+
+
+def _smooth_cel(style, I, v, tau):
+    u = brightness(I)
+    m = style.levels
+    target = mi.Float(m[0])
+    for j, t in enumerate(style.thresholds):
+        target = target + (m[j + 1] - m[j]) * _sigmoid((u - t) / tau)
+    return dr.select(u > 0, I * (target / dr.maximum(u, 1e-30)), mi.Color3f(target))
+
+
+def _smooth_hatching(style, I, v, tau):
+    sets = len(style.normals)
+    m = coverage(brightness(I), style.u_min, style.u_max) * sets + 0.5
+    clear = mi.Float(1.0)
+    for j, nj in enumerate(style.normals):
+        s = dr.dot(mi.Vector3f(v.p), mi.Vector3f(*nj)) / style.spacing + 0.5
+        dist = dr.abs(s - dr.floor(s) - 0.5) * style.spacing
+        line = _sigmoid((0.5 * style.thickness - dist) / (tau * style.spacing))
+        active = _sigmoid((m - j - 1.0) / tau)
+        clear = clear * (1.0 - line * active)
+    return dr.lerp(mi.Color3f(*style.line_color), mi.Color3f(*style.background), clear)
+
+
+SURROGATES: dict[str, Callable] = {"cel": _smooth_cel, "hatching": _smooth_hatching}
+
+
+# ---- the loop ----------------------------------------------------------------------------------------
+
+def read_target(target: Any, width: int, height: int) -> np.ndarray:
+    if isinstance(target, np.ndarray):
+        img = np.asarray(target, dtype=np.float32)
+    else:
+        try:
+            bmp = mi.Bitmap(str(target)).convert(pixel_format=mi.Bitmap.PixelFormat.RGB,
+                                                 component_format=mi.Struct.Type.Float32, srgb_gamma=False)
+        except Exception as exc:
+            raise UsageError(f"cannot read target image {str(target)!r}: {str(exc).strip().splitlines()[-1]}") \
+                from None
+        img = np.array(bmp, dtype=np.float32)
+    if img.shape != (height, width, 3):
+        raise UsageError(f"bad target image of shape {img.shape}: expected {height}x{width}x3 like the buffer")
+    return img
+
+
+def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: int = 300, lr: float = 0.1,
+        tau: float = 0.1, tau_end: float = 1e-4, tol: float = 1e-9, fixed: tuple[str, ...] = (), check_every: int = 10,
+        callback: Callable[[int, float], None] | None = None, **initial: Any) -> FitResult:
+    """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled buffer matches
+    `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB). `initial` gives starting
+    values (the style's defaults otherwise); `fixed` names parameters to keep."""
+    if not mi.variant().endswith("_ad_rgb") and "_ad_" not in mi.variant():
+        raise BackendError(f"fitting needs an AD variant (llvm_ad_rgb or cuda_ad_rgb), not {mi.variant()}")
+    if target is None:
+        raise UsageError("fit needs a target image")
+    if iterations < 1:
+        raise UsageError(f"bad value {iterations!r} for iterations: expected an integer >= 1")
+    buf = as_buffer(buffer)
+    slots = slots_for(buf, style, "direct", None, **initial)
+    owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
+    if not owned:
+        raise UsageError("this buffer has no styled object to fit (first_object_hit without styled objects)")
+    base = slots[owned[0]].style
+    if base.name in NOT_SMOOTHED:
+        raise UsageError(f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one of "
+                         f"the other styles")
+    for k in fixed:
+        if k not in base.values:
+            raise UsageError(f"bad fixed parameter {k!r}: style '{base.name}' has {', '.join(base.values) or 'none'}")
+    free = [p for p in base.params if p.kind in FITTABLE and p.name not in fixed
+            and p.name not in NOT_FITTED.get(base.name, ()) and base.values[p.name] is not None]
+    if not free:
+        raise UsageError(f"style '{base.name}' has no parameter to fit (fittable kinds: {', '.join(FITTABLE)})")
+    goal = mi.Float(read_target(target, buf.width, buf.height).ravel())
+    prepare(buf, [slots[i] for i in owned])
+
+    opt = dr.opt.Adam(lr=lr)
+    for p in free:
+        opt[p.name] = mi.Float(_flatten(p.kind, base.values[p.name]))
+    tau_now = mi.Float(tau)
+
+    def restyled(smooth: bool) -> mi.Float:
+        style = create(base.name, **{k: v for k, v in base.values.items()})
+        style.__dict__.update({k: v for k, v in base.__dict__.items() if k != "values"})  # prepared camera etc.
+        for p in free:
+            style.values[p.name] = _unflatten(p.kind, opt[p.name], base.values[p.name])
+        used = Smoothed(style, tau_now) if smooth and base.name in SURROGATES else style
+        here = [S.StyleSlot(used, s.inner, s.estimator) if i in owned else s for i, s in enumerate(slots)]
+        return accumulate(buf, sample_values(buf, here))
+
+    def loss_of(img):
+        return dr.mean(dr.square(img - goal))
+
+    start = time.perf_counter()
+    history: list[float] = []
+    done = 0
+    for it in range(iterations):
+        frac = it / max(iterations - 1, 1)
+        opt.set_learning_rate(lr * 0.01 ** frac)
+        tau_now = dr.opaque(mi.Float, tau * (tau_end / tau) ** frac)
+        loss = loss_of(restyled(smooth=True))
+        dr.backward(loss)
+        opt.step()
+        for p in free:
+            x = _clamp(p, opt[p.name])
+            if base.name == "cel" and p.name == "thresholds":
+                x = mi.Float(np.sort(np.asarray(x)))
+            opt[p.name] = x
+        done = it + 1
+        if done % check_every == 0 or done == iterations:
+            with dr.suspend_grad():
+                exact = float(loss_of(restyled(smooth=False))[0])
+            history.append(exact)
+            if callback is not None:
+                callback(done, exact)
+            if exact <= tol:
+                break
+    seconds = time.perf_counter() - start
+    params = {p.name: _plain(p.kind, np.asarray(opt[p.name], dtype=np.float64), base.values[p.name]) for p in free}
+    fitted = create(base.name, **{**{k: v for k, v in base.values.items() if k not in params}, **params})
+    values = {p.name: fitted.values[p.name] for p in free}
+    from .restyle import restyle
+    image = restyle(buf, style=base.name, **{**_given(base), **values})
+    loss = float(np.mean(np.square(image.astype(np.float64) - np.asarray(goal, dtype=np.float64).reshape(image.shape))))
+    return FitResult(values, loss, done, seconds, history, image)
+
+
+def _given(style: Style) -> dict[str, Any]:
+    return {k: v for k, v in style.values.items() if v is not None}
+
+
+__all__ = ["fit", "FitResult", "SURROGATES", "Smoothed", "read_target"]

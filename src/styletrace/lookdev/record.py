@@ -1,0 +1,213 @@
+"""Recording an expectation buffer while rendering: `render_buffer` and the recording integrator.
+
+    buf = styletrace.render_buffer("cornell-box", style="cel", spp=16, inner=16, seed=0)
+    buf.save("box.npz")
+
+`RecordingIntegrator` is the `stylized` integrator that also keeps, per camera sample (SIMD lane), the
+θ-free data of `lookdev.buffer`. Mitsuba's render loop calls `sample()` once per pass for the whole
+wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
+and they are collected after each pass of `api.passes` (the same passes and pass seeds as `render`).
+Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
+SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1.
+
+What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
+stylized level, an estimator other than direct or affine, a per-sample style (acp), a film whose filter
+is not a box, more camera samples than the cap.
+"""
+from __future__ import annotations
+
+import os
+from typing import Any, Callable, Iterator
+
+from ..jit import backend
+
+backend()
+
+import drjit as dr  # noqa: E402
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .. import api  # noqa: E402
+from .. import estimators as E  # noqa: E402
+from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
+from ..plugins import settings as S  # noqa: E402
+from ..plugins.integrator import StylizedIntegrator  # noqa: E402
+from ..styles.base import Vertex, camera_forward  # noqa: E402
+from .buffer import FORMAT, MAX_SAMPLES, VERSION, Buffer, bytes_per_sample  # noqa: E402
+from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402
+
+
+def check_recordable(settings: S.Settings, slots) -> None:
+    if settings.stylize == "first_n_hits":
+        raise SettingsError("stylize=first_n_hits cannot be buffered: its styles nest (each level's children are "
+                            "styled again); use first_hit or first_object_hit")
+    if settings.stylize_depth != 1:
+        raise SettingsError(f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
+                            f"level (1)")
+    for slot in slots:
+        if slot.estimator not in RESTYLABLE_ESTIMATORS:
+            raise SettingsError(f"estimator '{slot.estimator}' cannot be buffered: it needs the children "
+                                f"themselves, a buffer keeps their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}")
+        if slot.style.per_sample:
+            raise SettingsError(f"style '{slot.style.name}' cannot be buffered: it applies g to every child "
+                                f"sample, a buffer keeps only their mean")
+
+
+def check_film(scene: mi.Scene) -> mi.Film:
+    film = scene.sensors()[0].film()
+    if not film.rfilter().is_box_filter():
+        raise SceneError(f"the film's reconstruction filter is '{film.rfilter().class_name()}': buffers need a "
+                         f"box filter (<rfilter type=\"box\"/>), where every camera sample lands in one pixel")
+    if film.sample_border():
+        raise SceneError("the film samples its border (sample_border=true): buffers need it off")
+    return film
+
+
+class RecordingIntegrator(StylizedIntegrator):
+    """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each `sample()`."""
+
+    def __init__(self, base: StylizedIntegrator):
+        super().__init__(mi.Properties(), base.settings, base.values)
+        self.kept: dict[str, Any] = {}
+
+    def sample(self, scene, sampler, ray, medium=None, active=True):
+        self.kept = {}
+        spec, valid, aovs = super().sample(scene, sampler, ray, medium, active)
+        kept = self.kept
+        if "slot" not in kept:  # no stylized vertex traced at all (first_object_hit without styled objects)
+            width = dr.width(ray.d)
+            zero = dr.zeros(mi.Vector3f, width)
+            kept.update(p=zero, n=zero, wo=zero, mean=mi.Color3f(zero), depth=dr.zeros(mi.UInt32, width),
+                        slot=dr.full(mi.Int32, -1, width), L_before=mi.Color3f(spec), beta=mi.Color3f(zero))
+        if self.settings.stylize == "first_hit":
+            kept["L_before"] = dr.select(kept["slot"] >= 0, 0.0, spec)  # the environment where nothing was hit
+        dr.schedule(*kept.values())  # evaluated by the same kernel as the image
+        return spec, valid, aovs
+
+    def stylized(self, level, scene, sampler, pi, si, ray, active, depth):
+        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
+                   depth=mi.UInt32(depth))
+        styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
+        total, slot, mean = mi.Spectrum(0.0), mi.Int32(-1), mi.Color3f(0.0)
+        for i, target in enumerate(self.targets):
+            here = active & (_any(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
+            m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth)
+            total = dr.select(here, finish(target.slot, m, v), total)
+            slot = dr.select(here, i, slot)
+            mean = dr.select(here, m, mean)
+        self.kept.update(p=mi.Vector3f(v.p), n=v.n, wo=v.wo, depth=v.depth, slot=slot, mean=mean)
+        return total
+
+    def _through(self, w, value):
+        self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
+        return super()._through(w, value)
+
+    def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth) -> mi.Color3f:
+        """The mean of the slot's n children: the same draws, in the same order, as the `direct` estimator."""
+        if slot.style.closed_form:
+            return mi.Color3f(0.0)
+
+        def draw(carry):
+            (smp,) = carry
+            return self.child(level, scene, smp, pi, si, ray, active, depth), (smp,)
+
+        def uniform(carry):
+            (smp,) = carry
+            return smp.next_1d(), (smp,)
+
+        value, _ = E.Direct(lambda x: x, slot.n(level)).run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        return value
+
+
+def _any(ptr, bsdfs) -> mi.Bool:
+    mask = mi.Bool(False)
+    for b in bsdfs:
+        mask |= ptr == mi.BSDFPtr(b)
+    return mask
+
+
+def _slots(integrator: StylizedIntegrator, scene: mi.Scene) -> list[dict]:
+    targets = integrator._targets(scene)
+    return [slot_record(t.slot, "object" if t.bsdfs else "integrator", t.bsdfs[0].id() if t.bsdfs else "")
+            for t in targets]
+
+
+def _vec(x) -> np.ndarray:
+    return np.stack([np.asarray(x[i], dtype=np.float32) for i in range(3)])
+
+
+def _pass_arrays(kept: dict, spp: int, stylize: str) -> dict[str, np.ndarray]:
+    dr.eval(*kept.values())
+    width = dr.width(kept["slot"])
+    out = {"pixel": (np.arange(width, dtype=np.uint32) // np.uint32(spp)).astype(np.uint32),
+           "slot": np.asarray(kept["slot"], dtype=np.int32).astype(np.int8)}
+    for k in ("p", "n", "wo", "mean", "L_before"):
+        out[k] = _vec(kept[k])
+    if stylize == "first_object_hit":
+        out["beta"] = _vec(kept["beta"])
+        out["depth"] = np.asarray(kept["depth"], dtype=np.uint32)
+    return out
+
+
+def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int = 0, label: str = "",
+           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = api.LANES_PER_PASS
+           ) -> Iterator[tuple[api.Progress, Buffer]]:
+    """Render like `api.passes`, yielding (progress, buffer so far) after each pass."""
+    film = check_film(scene)
+    rec = RecordingIntegrator(integrator)
+    slots = [t.slot for t in rec._targets(scene)]
+    check_recordable(rec.settings, slots)
+    size = film.crop_size()
+    w, h = int(size[0]), int(size[1])
+    total = w * h * spp
+    if total > max_samples:
+        per = bytes_per_sample(rec.settings.stylize)
+        raise UsageError(f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
+                         f"{max_samples} (~{max_samples * per / 2**20:.0f} MiB); lower spp or the image size")
+    sensor = scene.sensors()[0]
+    header = {
+        "format": FORMAT, "version": VERSION, "scene": label, "width": w, "height": h,
+        "crop_offset": [int(c) for c in film.crop_offset()], "filter": "box", "seed": int(seed),
+        "stylize": rec.settings.stylize, "max_depth": rec.settings.max_depth, "rr_depth": rec.settings.rr_depth,
+        "slots": _slots(rec, scene), "view": list(camera_forward(scene)),
+        "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
+        .tolist(), "passes": [],
+    }
+    buf = Buffer(header, {})
+    done = 0
+    for index, prog in enumerate(api.passes(scene, rec, spp, seed, lanes_per_pass)):
+        n = prog.spp_done - done
+        done = prog.spp_done
+        buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize), n, api.pass_seed(seed, index))
+        rec.kept = {}
+        yield prog, buf
+
+
+def scene_label(scene: Any) -> str:
+    """How the buffer names its scene (the equivalent command line uses it)."""
+    if scene is None:
+        return api.DEFAULT
+    if isinstance(scene, (str, os.PathLike)):
+        return os.fspath(scene)
+    return f"<{type(scene).__name__}>"
+
+
+def render_buffer(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+                  estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
+                  integrator: StylizedIntegrator | None = None, max_samples: int = MAX_SAMPLES,
+                  callback: Callable[[api.Progress], None] | None = None, **params: Any) -> Buffer:
+    """Render as `styletrace.render` does and return the expectation buffer of every camera sample.
+
+    `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments)."""
+    sc = api.load_scene(scene, width, height)
+    if integrator is None:
+        integrator = api.make_integrator(style=style, inner=inner, estimator=estimator, **params)
+    buf = None
+    for prog, buf in record(sc, integrator, spp, seed, scene_label(scene), max_samples):
+        buf.image = prog.image
+        if callback is not None:
+            callback(prog)
+    return buf
+
+
+__all__ = ["RecordingIntegrator", "record", "render_buffer", "check_recordable", "check_film"]

@@ -1,0 +1,196 @@
+"""Restyling an expectation buffer: g_θ evaluated again over the stored camera samples, no ray traced.
+
+    img = styletrace.restyle(buf, style="cel", thresholds=(0.2, 0.6), levels=(0.1, 0.5, 0.9))  # H x W x 3
+
+Per camera sample the value is L_before + beta g_θ(mean, vertex) (see `lookdev.buffer`), computed by
+`style.apply` on Dr.Jit arrays with a `Vertex` built from the stored data on the active backend, and
+accumulated into its pixel with the film's (box) filter: the pixel is the mean of its samples. With the
+same seed and the buffer's inner sample count this equals `styletrace.render` with the new style up to
+float rounding (tests/lookdev/test_restyle.py checks every style of the registry).
+
+Which slot changes: the integrator's own style for `first_hit` buffers, every styled object's style for
+`first_object_hit` buffers; other slots keep their recorded style. Parameters not given keep the
+recorded values while the style stays the same (a new style starts from its defaults). The estimator is
+the one given, else the recorded one where it applies to the style, else `direct`.
+
+Refused with one line: estimators other than direct and affine (they need the children themselves),
+another inner sample count than the buffer's, a per-sample style (acp), and a style that needs children
+on a buffer recorded with a closed-form style (0 children).
+"""
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from ..jit import backend
+
+backend()
+
+import drjit as dr  # noqa: E402
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..errors import UsageError  # noqa: E402
+from ..estimators import apply_linear  # noqa: E402
+from ..estimators.arrays import const_like  # noqa: E402
+from ..plugins import settings as S  # noqa: E402
+from ..plugins.estimation import applicable  # noqa: E402
+from ..styles import get  # noqa: E402
+from ..styles.base import Vertex  # noqa: E402
+from ..styles.gradient import Gradient  # noqa: E402
+from .buffer import Buffer, load_buffer  # noqa: E402
+
+#: estimators whose value is a function of the children's mean alone
+RESTYLABLE_ESTIMATORS = ("direct", "affine")
+
+
+# ---- the value of one camera sample ----------------------------------------------------------------
+
+def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
+    """The slot's estimate from the mean of its n children, as its estimator computes it in the kernel."""
+    style = slot.style
+    if style.closed_form:
+        return style.apply(mi.Color3f(0.0), v)
+    if slot.estimator == "affine":  # estimators.Affine.value: a1 <I> + a0
+        form = style.form()
+        a0 = np.asarray(form.a0, dtype=np.float64)
+        return apply_linear(np.asarray(form.a1, dtype=np.float64), mean) + const_like(a0, mean)
+    return style.apply(mean, v)
+
+
+# ---- slots: what the header records, and what a restyle makes of it ---------------------------------
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, Gradient):
+        return value.spec
+    if isinstance(value, tuple):
+        return [_jsonable(v) for v in value]
+    return value
+
+
+def slot_record(slot: S.StyleSlot, owner: str, ident: str = "") -> dict:
+    """A style slot as the buffer's header keeps it (exact parameter values, JSON)."""
+    style = slot.style
+    return {"owner": owner, "id": ident, "style": style.name,
+            "params": {p.name: _jsonable(style.values[p.name]) for p in style.params},
+            "inner": 0 if style.closed_form else slot.n(0), "estimator": slot.estimator}
+
+
+def changed_owner(buffer: Buffer) -> str:
+    return "object" if buffer.stylize == "first_object_hit" else "integrator"
+
+
+def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = None, inner: Any = None,
+              **params: Any) -> list[S.StyleSlot]:
+    """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they name."""
+    slots = []
+    for rec in buffer.header["slots"]:
+        values = {"style": rec["style"], **rec["params"]}
+        est = rec["estimator"]
+        n = int(rec["inner"])
+        if rec["owner"] == changed_owner(buffer):
+            values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
+            new = get(str(values["style"]))()
+            if inner is not None and S.parse_inner(inner, 1) != (n,):
+                raise UsageError(f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
+                                 f"per camera sample; another n needs a new render")
+            if new.per_sample:
+                raise UsageError(f"style '{new.name}' cannot restyle: it applies g to every child sample, and a "
+                                 f"buffer keeps only their mean")
+            if n == 0 and not new.closed_form:
+                raise UsageError(f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
+                                 f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
+                                 f"record the buffer with a style that traces children")
+            if estimator is not None:
+                est = estimator
+            elif est not in applicable(new):
+                est = "direct"
+        if est not in RESTYLABLE_ESTIMATORS:
+            raise UsageError(f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
+                             f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}")
+        slots.append(S.parse_slot({**values, "inner_samples": max(n, 1), "estimator": est},
+                                  context="restyle"))
+    return slots
+
+
+# ---- the kernel --------------------------------------------------------------------------------------
+
+def device(buffer: Buffer) -> dict[str, Any]:
+    """The buffer's arrays as Dr.Jit arrays (made once per buffer and kept)."""
+    d = buffer.device
+    if d:
+        return d
+    a = buffer.arrays
+
+    def vec(k, T):
+        return T(*(mi.Float(np.ascontiguousarray(a[k][i])) for i in range(3)))
+
+    d["p"], d["n"], d["wo"] = vec("p", mi.Point3f), vec("n", mi.Vector3f), vec("wo", mi.Vector3f)
+    d["mean"], d["L_before"] = vec("mean", mi.Color3f), vec("L_before", mi.Color3f)
+    d["slot"] = mi.Int32(a["slot"].astype(np.int32))
+    d["pixel"] = mi.UInt32(a["pixel"])
+    if "beta" in a:
+        d["beta"], d["depth"] = vec("beta", mi.Color3f), mi.UInt32(a["depth"])
+    else:
+        d["depth"] = dr.zeros(mi.UInt32, buffer.samples)
+    counts = np.bincount(a["pixel"], minlength=buffer.width * buffer.height).astype(np.float32)
+    d["inv_weight"] = mi.Float(np.repeat(1.0 / np.maximum(counts, 1.0), 3).astype(np.float32))
+    dr.eval(*[x for x in d.values()])
+    return d
+
+
+def camera_scene(buffer: Buffer) -> mi.Scene:
+    """A scene holding only the recorded camera, for styles that read it in `prepare` (hatching, xtoon)."""
+    m = mi.ScalarTransform4f(np.asarray(buffer.header["sensor_to_world"], dtype=np.float64))
+    return mi.load_dict({"type": "scene", "camera": {"type": "perspective", "to_world": m}})
+
+
+def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> None:
+    scene = camera_scene(buffer)
+    for slot in slots:
+        slot.style.prepare(scene)
+
+
+def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
+    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the styles' θ."""
+    d = device(buffer)
+    v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buffer.header["view"]), depth=d["depth"])
+    total = mi.Color3f(0.0)
+    for i, slot in enumerate(slots):
+        total = dr.select(d["slot"] == i, finish(slot, d["mean"], v), total)
+    found = d["slot"] >= 0
+    if "beta" in d:
+        return d["L_before"] + dr.select(found, d["beta"] * total, 0.0)
+    return dr.select(found, total, d["L_before"])
+
+
+def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
+    """Per-pixel mean of the samples (box filter), flat H*W*3, row-major RGB; differentiable."""
+    d = device(buffer)
+    out = dr.zeros(mi.Float, buffer.width * buffer.height * 3)
+    base = d["pixel"] * 3
+    for c in range(3):
+        dr.scatter_reduce(dr.ReduceOp.Add, out, values[c], base + c)
+    return out * d["inv_weight"]
+
+
+def as_buffer(buffer: Any) -> Buffer:
+    if isinstance(buffer, Buffer):
+        return buffer
+    if isinstance(buffer, (str, os.PathLike)):
+        return load_buffer(buffer)
+    raise UsageError(f"bad buffer {type(buffer).__name__}: expected a styletrace Buffer or a .npz path")
+
+
+def restyle(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
+            **params: Any) -> np.ndarray:
+    """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32, linear."""
+    buf = as_buffer(buffer)
+    slots = slots_for(buf, style, estimator, inner, **params)
+    prepare(buf, slots)
+    img = accumulate(buf, sample_values(buf, slots))
+    return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
+
+
+__all__ = ["restyle", "finish", "slot_record", "slots_for", "sample_values", "accumulate", "device", "prepare",
+           "RESTYLABLE_ESTIMATORS", "as_buffer"]

@@ -1,0 +1,170 @@
+"""`styletrace preview`: a local web page to tune a style live (Starlette app, served by uvicorn).
+
+Routes (JSON API documented in docs/preview.md):
+    GET  /              the page (page.html)
+    GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices) and
+                        the estimators that can restyle it
+    GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
+    POST /api/restyle   {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "ms", "command"}
+    POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
+A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
+"""
+from __future__ import annotations
+
+import base64
+import os
+import sys
+import tempfile
+import time
+from typing import Any
+
+from ..errors import StyletraceError, UsageError
+
+PAGE = os.path.join(os.path.dirname(__file__), "page.html")
+
+
+def styles_table() -> list[dict[str, Any]]:
+    from ..plugins.estimation import applicable
+    from ..styles import get, names
+    out = []
+    for name in names():
+        cls = get(name)
+        if cls.per_sample:
+            continue  # cannot restyle (a buffer keeps the children's mean)
+        style = cls()
+        out.append({
+            "name": name, "summary": cls.summary, "closed_form": style.closed_form,
+            "estimators": [e for e in applicable(style) if e in RESTYLABLE_ESTIMATORS],
+            "params": [{"name": p.name, "kind": p.kind, "default": p.show(style.values[p.name]), "doc": p.doc,
+                        "low": p.low, "high": p.high, "low_open": p.low_open, "choices": list(p.choices),
+                        "allowed": p.allowed()} for p in cls.params],
+        })
+    return out
+
+
+def encode(image, fmt: str) -> bytes:
+    """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by `images.write_image`."""
+    from ..images import write_image
+    fd, tmp = tempfile.mkstemp(suffix="." + fmt)
+    os.close(fd)
+    try:
+        write_image(image, tmp)
+        with open(tmp, "rb") as f:
+            return f.read()
+    finally:
+        os.unlink(tmp)
+
+
+def make_app(session):
+    from starlette.applications import Starlette
+    from starlette.requests import Request
+    from starlette.responses import FileResponse, JSONResponse, Response
+    from starlette.routing import Route
+    from starlette.concurrency import run_in_threadpool
+
+    table = styles_table()
+    known = {s["name"] for s in table}
+
+    def bad(message: str, status: int = 400) -> JSONResponse:
+        return JSONResponse({"error": message}, status_code=status)
+
+    async def parse(request: Request) -> tuple[str, str | None, dict[str, Any]]:
+        try:
+            body = await request.json()
+        except Exception:
+            raise ValueError("the request body must be JSON") from None
+        if not isinstance(body, dict):
+            raise ValueError("the request body must be a JSON object")
+        style = body.get("style")
+        if not isinstance(style, str) or style not in known:
+            raise ValueError(f"bad style {style!r}: expected one of {', '.join(sorted(known))}")
+        params = body.get("params") or {}
+        if not isinstance(params, dict) or not all(isinstance(v, (str, int, float, bool)) for v in params.values()):
+            raise ValueError("bad params: expected an object of name -> value (string, number or boolean)")
+        estimator = body.get("estimator") or None
+        if estimator is not None and not isinstance(estimator, str):
+            raise ValueError(f"bad estimator {estimator!r}: expected a name")
+        return style, estimator, {str(k): v for k, v in params.items()}
+
+    async def page(request):
+        return FileResponse(PAGE, media_type="text/html")
+
+    async def styles(request):
+        return JSONResponse({"styles": table})
+
+    async def state(request):
+        return JSONResponse(session.state())
+
+    async def do_restyle(request: Request):
+        try:
+            style, estimator, params = await parse(request)
+            t = time.perf_counter()
+            img, spp = await run_in_threadpool(session.restyle, style, estimator, params)
+            ms = (time.perf_counter() - t) * 1e3
+        except (ValueError, StyletraceError) as exc:
+            return bad(str(exc))
+        if img is None:
+            return bad("no image yet: the first pass is still rendering", 409)
+        png = await run_in_threadpool(encode, img, "png")
+        return JSONResponse({"image": "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
+                             "spp": spp, "ms": ms, "command": session.command(style, estimator, params)})
+
+    async def save(request: Request):
+        try:
+            style, estimator, params = await parse(request)
+            body = await request.json()
+            fmt = body.get("format", "png")
+            if fmt not in ("png", "exr"):
+                raise ValueError(f"bad format {fmt!r}: expected png or exr")
+            img, spp = await run_in_threadpool(session.restyle, style, estimator, params)
+        except (ValueError, StyletraceError) as exc:
+            return bad(str(exc))
+        if img is None:
+            return bad("no image yet: the first pass is still rendering", 409)
+        data = await run_in_threadpool(encode, img, fmt)
+        media = "image/png" if fmt == "png" else "image/x-exr"
+        return Response(data, media_type=media, headers={
+            "Content-Disposition": f'attachment; filename="{style}-{spp}spp.{fmt}"', "X-Spp": str(spp)})
+
+    return Starlette(routes=[
+        Route("/", page), Route("/api/styles", styles), Route("/api/state", state),
+        Route("/api/restyle", do_restyle, methods=["POST"]), Route("/api/save", save, methods=["POST"]),
+    ])
+
+
+def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: int | None = None,
+          width: int | None = None, height: int | None = None, port: int = 8765, params: dict | None = None,
+          open_browser: bool = False) -> int:
+    """Run the preview server until Ctrl-C; prints the page's URL once it listens."""
+    import uvicorn
+
+    from .session import Session
+    from ..plugins.settings import parse_slot
+    slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
+    if slot.style.per_sample:
+        raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
+                         f"preview's buffer keeps only their mean")
+    session = Session(scene, inner=inner, spp=spp, width=width, height=height)
+    app = make_app(session)
+    session.initial = {"style": style, "params": params or {}}
+    config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")
+    server = uvicorn.Server(config)
+
+    import threading
+
+    def announce():
+        while not server.started:
+            time.sleep(0.02)
+        sock = server.servers[0].sockets[0]
+        print(f"styletrace preview: http://127.0.0.1:{sock.getsockname()[1]}/", flush=True)
+    session.start()
+    threading.Thread(target=announce, daemon=True).start()
+    try:
+        server.run()
+    finally:
+        session.stop()
+    print("styletrace preview: stopped", file=sys.stderr)
+    return 0
+
+
+__all__ = ["make_app", "serve", "styles_table", "encode"]

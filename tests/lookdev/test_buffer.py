@@ -1,0 +1,58 @@
+"""The buffer file: round trip, version field, atomic writes, one-line errors."""
+import json
+import os
+
+import numpy as np
+import pytest
+
+import styletrace
+from styletrace.errors import UsageError
+from styletrace.lookdev.buffer import VERSION, bytes_per_sample, load_buffer
+from styletrace.lookdev.record import render_buffer
+from styletrace.lookdev.restyle import restyle
+
+
+@pytest.fixture(scope="module")
+def buf():
+    return render_buffer("cornell-box", style="cel", spp=2, inner=2, seed=1, width=12, height=10)
+
+
+def test_round_trip(buf, tmp_path):
+    path = buf.save(str(tmp_path / "b.npz"))
+    assert os.listdir(tmp_path) == ["b.npz"]  # no temporary file left behind
+    back = load_buffer(path)
+    assert back.header == buf.header and back.header["version"] == VERSION
+    for k, a in buf.arrays.items():
+        np.testing.assert_array_equal(back.arrays[k], a)
+    np.testing.assert_array_equal(restyle(path, style="color_map"), restyle(buf, style="color_map"))
+
+
+def test_size_per_camera_sample_is_what_the_docs_say(buf):
+    assert buf.samples == 12 * 10 * 2
+    assert buf.nbytes == buf.samples * bytes_per_sample("first_hit") == buf.samples * 65
+    assert bytes_per_sample("first_object_hit") == 81
+
+
+def test_the_api_names(buf, tmp_path):
+    path = buf.save(str(tmp_path / "c.npz"))
+    back = styletrace.load_buffer(path)
+    np.testing.assert_array_equal(styletrace.restyle(back, style="sepia"), restyle(buf, style="sepia"))
+    assert styletrace.render_buffer is render_buffer
+
+
+def test_bad_files(buf, tmp_path):
+    with pytest.raises(UsageError, match="does not exist"):
+        load_buffer(str(tmp_path / "none.npz"))
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"not a zip")
+    with pytest.raises(UsageError, match="cannot read buffer file"):
+        load_buffer(str(junk))
+    newer = dict(buf.header, version=VERSION + 1)
+    path = str(tmp_path / "newer.npz")
+    np.savez(path, header=np.frombuffer(json.dumps(newer).encode(), dtype=np.uint8), **buf.arrays)
+    with pytest.raises(UsageError, match=f"format version {VERSION + 1}; this styletrace reads version {VERSION}"):
+        load_buffer(path)
+    with pytest.raises(UsageError, match="the extension must be .npz"):
+        buf.save(str(tmp_path / "b.exr"))
+    with pytest.raises(UsageError, match="does not exist"):
+        buf.save(str(tmp_path / "no" / "b.npz"))
