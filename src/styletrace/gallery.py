@@ -12,6 +12,7 @@ minute; CI runs it.
 from __future__ import annotations
 
 import html
+import io
 import json
 import os
 import time
@@ -135,8 +136,7 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
         results["setups"].append(entry)
     results["seconds"] = time.perf_counter() - t_all
     plot_mse(results, os.path.join(out_dir, "mse.png"))
-    with open(os.path.join(out_dir, "gallery.json"), "w") as f:
-        json.dump(results, f, indent=1)
+    write_text(os.path.join(out_dir, "gallery.json"), json.dumps(results, indent=1))
     write_sheets(results, out_dir)
     return results
 
@@ -159,7 +159,10 @@ def plot_mse(results: dict[str, Any], path: str) -> None:
     if ax.lines:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    from .images import write_bytes_atomically
+    write_bytes_atomically(buf.getvalue(), path)
     plt.close(fig)
 
 
@@ -191,7 +194,10 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
                " | ".join(f"![{c}]({f})" for f, c in cells), ""]
         h += ["<div>" + "".join(f"<figure><img src='{f}'><figcaption>{html.escape(c)}</figcaption></figure>"
                                 for f, c in cells) + "</div>"]
-    with open(os.path.join(out_dir, "index.md"), "w") as f:
-        f.write("\n".join(md) + "\n")
-    with open(os.path.join(out_dir, "index.html"), "w") as f:
-        f.write("\n".join(h) + "\n")
+    write_text(os.path.join(out_dir, "index.md"), "\n".join(md) + "\n")
+    write_text(os.path.join(out_dir, "index.html"), "\n".join(h) + "\n")
+
+
+def write_text(path: str, text: str) -> None:
+    from .images import write_bytes_atomically
+    write_bytes_atomically(text.encode(), path)
