@@ -139,9 +139,10 @@ def _axis(length: int, tile: int) -> list[tuple[int, slice, slice]]:
     return out
 
 
-def tiles(width: int, height: int, max_pixels: int = LANES_PER_PASS) -> list[Tile]:
+def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
     """The film as one tile if it has at most `max_pixels` pixels, else as tiles of TILE_SIDE columns
-    (or the width, if narrower) and as many rows as fit into `max_pixels`."""
+    (or the width, if narrower) and as many rows as fit into `max_pixels` (default LANES_PER_PASS)."""
+    max_pixels = max_pixels or LANES_PER_PASS
     if width * height <= max_pixels:
         return [Tile((0, 0), (width, height), (slice(None), slice(None)), (slice(None), slice(None)))]
     tw = min(width, TILE_SIDE, max_pixels)

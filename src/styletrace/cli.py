@@ -256,8 +256,12 @@ def cmd_gallery(args) -> int:
     opts = gallery.QUICK if args.quick else gallery.Options()
     if args.size:
         opts.size = args.size
-    check_gallery_folder(args.output)
     only = [k.strip() for k in args.only.split(",")] if args.only else None
+    unknown = sorted(set(only or ()) - {s.key for s in gallery.SETUPS})
+    if unknown:
+        raise UsageError(f"unknown gallery setup(s) {', '.join(unknown)}: available are "
+                         f"{', '.join(s.key for s in gallery.SETUPS)}")
+    check_gallery_folder(args.output)
     try:
         res = gallery.run(args.output, opts, only, log=say)
     except ValueError as exc:
