@@ -36,8 +36,9 @@ from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
 LANES_PER_PASS = 1 << 20
 #: Width of a tile when an image has more than LANES_PER_PASS pixels (a tile is 1024 x 1024 then).
 TILE_SIDE = 1024
-#: Memory per lane of a pass, for the up-front estimate (measured: benchmarks/memory.py).
-LANE_BYTES = 1024
+#: Host memory per lane of a pass (the film's block, the output, the sampler), for the up-front estimate;
+#: a 1024 x 1024 pass at 1 spp measured about 50 MB more than a 256 x 256 one (BENCHMARKS.md, memory).
+LANE_BYTES = 256
 
 
 def first_line(exc: BaseException) -> str:
@@ -152,11 +153,12 @@ def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
 
 
 def memory_needed(width: int, height: int, ext: str = ".exr") -> int:
-    """Bytes of host memory a render of this size needs beyond the kernel's lanes: the float32 accumulator,
-    the averaged image, the encoder's copy of it and the encoded file."""
+    """Bytes of host memory a render of this size needs at its peak, while the file is written: the
+    float32 accumulator, the averaged image, Mitsuba's bitmap of it, and the encoded file (up to twice in
+    the growing memory stream, once more as bytes), plus the lanes of one pass."""
     image = width * height * 3 * 4
     encoded = width * height * 3 * (1 if ext == ".png" else 4)
-    return 3 * image + encoded + LANE_BYTES * LANES_PER_PASS
+    return 3 * image + 3 * encoded + LANE_BYTES * LANES_PER_PASS
 
 
 def memory_available() -> int | None:
