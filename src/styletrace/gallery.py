@@ -130,7 +130,7 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
             write_png(img, os.path.join(out_dir, name))
             r = {"n": n, "file": name, "seconds": secs, "spp": options.spp}
             if reference is not None:
-                r["mse"] = float(np.mean((img.astype(np.float64) - reference) ** 2))
+                r["mse"] = mse(img, reference)
             entry["renders"].append(r)
             log(f"{setup.key}: n={n} in {secs:.1f} s" + (f", MSE {r['mse']:.3g}" if "mse" in r else ""))
         results["setups"].append(entry)
@@ -139,6 +139,13 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
     write_text(os.path.join(out_dir, "gallery.json"), json.dumps(results, indent=1))
     write_sheets(results, out_dir)
     return results
+
+
+def mse(image: np.ndarray, reference: np.ndarray) -> float:
+    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest answer,
+    so numpy's warnings about it are silenced here rather than sent to stderr)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.mean((image.astype(np.float64) - reference) ** 2))
 
 
 def plot_mse(results: dict[str, Any], path: str) -> None:
