@@ -102,6 +102,7 @@ class StopSignals:
                 return self._give_up()
             data = os.read(self._r, 64)
             if not data:  # closed by __exit__
+                os.close(self._r)
                 return None
             for signum in (b for b in data if b in self.SIGNALS):
                 self.count += 1
@@ -122,7 +123,9 @@ class StopSignals:
     def __exit__(self, *exc):
         signal.set_wakeup_fd(self._old_fd)
         for s, handler in self._old.items():
-            signal.signal(s, handler)
+            # after a stop the render is saved and the exit status decided: a second Ctrl-C during the
+            # interpreter's shutdown (which restores the default handlers) must not turn it into a kill
+            signal.signal(s, signal.SIG_IGN if self.count else handler)
         os.close(self._w)
         return False
 
@@ -211,25 +214,25 @@ def cmd_render(args) -> int:
             failure = exc
         with stop.lock:
             stop.settled = True
-    if bar is not None:
-        bar.close()
-    if failure is not None:
-        out = write(latest)
-        say(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "
-            f"finished passes to {out}")
-        return 1
-    if stop.count:
-        if latest is None:
-            say("styletrace: interrupted before the first pass finished; nothing written")
+        if bar is not None:  # the final write happens under the watcher too: a signal now does not cut it
+            bar.close()
+        if failure is not None:
+            out = write(latest)
+            say(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "
+                f"finished passes to {out}")
+            return 1
+        if stop.count:
+            if latest is None:
+                say("styletrace: interrupted before the first pass finished; nothing written")
+                return stop.exit_status
+            out = write(latest)
+            say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
             return stop.exit_status
         out = write(latest)
-        say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
-        return stop.exit_status
-    out = write(latest)
-    if not args.quiet:
-        import mitsuba as mi
-        say(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})")
-    return 0 if out == args.output else 1
+        if not args.quiet:
+            import mitsuba as mi
+            say(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})")
+        return 0 if out == args.output else 1
 
 
 def choose_integrator(scene, args, params):
