@@ -71,7 +71,7 @@ def main():
         f"size; peak resident set size of that process (ru_maxrss), including Python, Mitsuba, the kernels and "
         f"writing the EXR. Images over 2^20 pixels render as 1024 x 1024 tiles; the running sum is one float32 "
         f"image. The estimate is `api.memory_needed`, which the command line compares with the available memory "
-        f"before rendering.",
+        f"before rendering. Seconds are indicative only: the cores were shared with other jobs during the run.",
         "",
         "| size | tiles | seconds | peak RSS (MiB) | estimate (MiB) |",
         "|---|---|---|---|---|",
