@@ -5,7 +5,7 @@ import pytest
 
 import styletrace
 from styletrace import api
-from styletrace.errors import SettingsError, StyleError
+from styletrace.errors import SettingsError, StyleError, UsageError
 
 
 def test_render_returns_linear_float32_hwc():
@@ -94,3 +94,55 @@ def test_a_scene_file_without_a_sensor_is_a_scene_error(tmp_path):
     path.write_text('<scene version="3.0.0"/>')
     with pytest.raises(styletrace.SceneError, match="has no sensor"):
         api.load_scene(str(path))
+
+
+def test_tiles_cover_the_image_once_with_one_size():
+    layout = api.tiles(24, 16, max_pixels=120)
+    cover = np.zeros((16, 24), int)
+    for t in layout:
+        assert t.size == layout[0].size
+        window = np.zeros((t.size[1], t.size[0]), int)
+        window[t.keep] = 1
+        cover[t.dest] += window[t.keep]
+        assert 0 <= t.offset[0] <= 24 - t.size[0] and 0 <= t.offset[1] <= 16 - t.size[1]
+    assert (cover == 1).all()
+    assert len(api.tiles(1024, 1024)) == 1 and len(api.tiles(8192, 8192)) == 64
+
+
+def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
+    """Tiles are crop windows: each must equal Mitsuba rendering that window of the film (its own
+    crop_offset/crop_width properties) with the tile's seed; shifted edge tiles keep only their new pixels."""
+    monkeypatch.setattr(api, "LANES_PER_PASS", 120)
+    monkeypatch.setattr(api, "TILE_SIDE", 10)
+    scene = api.load_scene("cornell-box", 24, 16)
+    integ = api.make_integrator("cel", inner=2)
+    layout = api.tiles(24, 16)
+    assert len(layout) == 6 and layout[0].size == (10, 12)
+    progress = list(api.passes(scene, integ, 2, seed=3, lanes_per_pass=1 << 20))
+    assert [p.spp_done for p in progress] == [0] * 5 + [2]
+    expect = np.zeros((16, 24, 3), np.float32)
+    for index, tile in enumerate(layout):
+        d = api.scene_dict("cornell-box", 24, 16)
+        d["sensor"]["film"].update(crop_offset_x=tile.offset[0], crop_offset_y=tile.offset[1],
+                                   crop_width=tile.size[0], crop_height=tile.size[1])
+        img = np.array(mi.render(mi.load_dict(d), integrator=integ, spp=2, seed=api.pass_seed(3, index)))
+        expect[tile.dest] = img[..., :3][tile.keep]
+    np.testing.assert_allclose(progress[-1].image, expect, rtol=1e-6, atol=0)
+    assert tuple(scene.sensors()[0].film().crop_size()) == (24, 16)  # the film is left as it was
+
+
+def test_memory_is_checked_up_front(monkeypatch):
+    monkeypatch.setattr(api, "memory_available", lambda: 1 << 30)
+    api.check_memory(1024, 1024)
+    with pytest.raises(UsageError, match=r"image 8192x8192 is too large: it needs about \d+\.\d GiB"):
+        api.check_memory(8192, 8192)
+    scene = api.load_scene("furnace", 8, 8)
+    monkeypatch.setattr(api, "memory_available", lambda: 1000)
+    with pytest.raises(UsageError, match="image 8x8 is too large"):
+        next(api.passes(scene, api.make_integrator("identity", inner=1), 1))
+
+
+def test_the_split_into_passes_depends_only_on_the_counts():
+    assert api.pass_size(64, 64, 100) == (api.tiles(64, 64), 100)
+    assert api.pass_size(2048, 2048, 100)[1] == 1 and len(api.pass_size(2048, 2048, 100)[0]) == 4
+    assert api.pass_size(64, 64, 100, pass_spp=7)[1] == 7

@@ -147,9 +147,9 @@ def test_xml_scene_with_stylized_integrator(tmp_path):
     np.testing.assert_allclose(u[0, 0], 1.0, atol=1e-5)
 
 
-def interrupt(out, pass_spp, ctrl_c):
-    """Start a long render, wait until tqdm reports `pass_spp * 2` (resp. one pass) done, press Ctrl-C
-    `ctrl_c` times, and return (exit status, stderr after the signal)."""
+def interrupt(out, pass_spp, ctrl_c, sig=signal.SIGINT):
+    """Start a long render, wait until tqdm reports `pass_spp * 2` (resp. one pass) done, send `sig`
+    (Ctrl-C: SIGINT) `ctrl_c` times, and return (exit status, stderr after the signal)."""
     proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
                              "--spp", "100000", "--inner", "4", "--pass-spp", str(pass_spp), "-o", str(out)],
                             stderr=subprocess.PIPE, env=ENV)
@@ -161,7 +161,7 @@ def interrupt(out, pass_spp, ctrl_c):
     for i in range(ctrl_c):
         if i:
             time.sleep(0.3)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
     rest = proc.communicate(timeout=120)[1]
     return proc.returncode, seen + rest, rest
 
@@ -181,6 +181,62 @@ def test_second_ctrl_c_abandons_the_pass_under_way(tmp_path):
     assert code == 130, log.decode()
     assert b"wrote" in rest and b"of 100000 spp" in rest
     assert read(out).shape == (64, 64, 3)
+
+
+def test_sigterm_is_like_ctrl_c_with_status_143(tmp_path):
+    out = tmp_path / "partial.exr"
+    code, log, rest = interrupt(out, 1, 1, signal.SIGTERM)
+    assert code == 143, log.decode()
+    assert b"SIGTERM" in rest and b"interrupted; wrote" in rest
+    img = read(out)
+    assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0
+
+
+@pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_one_signal_stops_a_long_pass(tmp_path, sig, status):
+    """A pass of 2^20 camera samples with 64 inner samples each runs for minutes on a CPU; one signal ends
+    the render after the grace period, not after the pass (the first pass: nothing to write)."""
+    out = tmp_path / "never.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
+                             "--spp", "512", "--inner", "64", "--pass-spp", "256", "-o", str(out)],
+                            stderr=subprocess.PIPE, env=ENV)
+    seen = b""
+    while b"0/512" not in seen:
+        chunk = os.read(proc.stderr.fileno(), 4096)
+        assert chunk, seen.decode()
+        seen += chunk
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    rest = proc.communicate(timeout=90)[1]
+    assert proc.returncode == status, (seen + rest).decode()
+    assert b"nothing written" in rest and not out.exists()
+
+
+def test_non_finite_pixels_are_counted_in_one_line(tmp_path, capsys, monkeypatch):
+    from styletrace import api
+
+    def nan_passes(scene, integrator, spp, seed, **kw):
+        layout = api.tiles(3, 2)
+        total = np.ones((2, 3, 3), np.float32)
+        total[0, 0, 1], total[1, 2, :] = np.nan, np.inf
+        yield api.Progress(spp, spp, total * spp, np.array([spp]), layout)
+
+    monkeypatch.setattr(api, "passes", nan_passes)
+    out = tmp_path / "n.png"
+    assert main(["render", *SMALL, "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "styletrace: warning: 2 pixel(s) are not finite (NaN or inf): NaN as 0 and +inf as 1 in the PNG" in err
+    assert (read(out)[..., 0] == [[1, 1, 1], [1, 1, 1]]).all() and read(out)[0, 0, 1] == 0
+
+
+def test_output_that_is_the_scene_is_refused_before_loading(tmp_path, capsys):
+    scene = tmp_path / "s.xml"
+    scene.write_text(GAMMA_XML)
+    before = scene.read_bytes()
+    (tmp_path / "s.exr").symlink_to(scene)
+    assert main(["render", str(scene), "-o", str(tmp_path / "s.exr")]) == 2
+    assert "it is the scene file being rendered" in capsys.readouterr().err
+    assert scene.read_bytes() == before
 
 
 GAMMA_XML = """<scene version="3.0.0">

@@ -31,3 +31,20 @@ def test_unknown_setup_is_one_line(tmp_path, capsys):
     assert main(["gallery", "--quick", "--only", "nope", "-o", str(tmp_path / "g")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("styletrace: error: unknown gallery setup(s) nope") and "\n" not in err
+
+
+def test_mse_of_non_finite_renders_is_honest_and_quiet():
+    """A render with an inf pixel has an infinite MSE, and computing it sends no numpy warning to stderr."""
+    import warnings
+
+    import numpy as np
+
+    from styletrace.gallery import mse
+    img = np.zeros((2, 2, 3), np.float32)
+    img[0, 0, 0] = np.inf
+    ref = np.zeros((2, 2, 3), np.float64)
+    ref[0, 0, 0] = np.inf
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert np.isinf(mse(img, np.zeros_like(ref))) and np.isnan(mse(img, ref))
+        assert mse(np.ones((2, 2, 3), np.float32), np.zeros_like(ref)) == 1.0

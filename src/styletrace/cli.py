@@ -1,21 +1,26 @@
 """Command line: `styletrace render`, `styletrace styles`, `styletrace estimators`, `styletrace gallery`.
 
 Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
-unwritable output, malformed arguments) ends with one line on stderr and exit status 2. Flags override
-the scene's own `stylized` integrator only where given. A failure after some passes still writes them. Ctrl-C during a multi-pass
-render finishes the pass under way (a second Ctrl-C abandons it), writes the average of the finished
-passes, then exits with status 130.
+unwritable output, an image too large for memory, malformed arguments) ends with one line on stderr
+(newlines in names are escaped) and exit status 2. Flags override the scene's own `stylized`
+integrator only where given. A failure after some passes still writes them. Ctrl-C or SIGTERM during
+a render stops after the pass under way, or within `StopSignals.GRACE` seconds if that pass takes
+longer (a second signal: at once); the average of the finished passes is written, then the exit
+status is 130 (Ctrl-C) or 143 (SIGTERM).
 """
 from __future__ import annotations
 
 import argparse
 import os
+import select
 import signal
 import sys
+import threading
+import time
 from typing import Sequence
 
 from .errors import StyletraceError, UsageError
-from .images import IMAGE_TYPES, save_safely
+from .images import IMAGE_TYPES, nonfinite_pixels, save_safely
 
 
 def _parse_set(items: Sequence[str]) -> dict[str, str]:
@@ -28,8 +33,20 @@ def _parse_set(items: Sequence[str]) -> dict[str, str]:
     return out
 
 
-def check_output(path: str) -> None:
-    """Fail before rendering, not after, if the image could not be written."""
+def one_line(text: str) -> str:
+    """A message as one line: newlines and carriage returns (say, in a file name) escaped."""
+    return str(text).replace("\r", "\\r").replace("\n", "\\n")
+
+
+def say(message: str) -> None:
+    print(one_line(message), file=sys.stderr, flush=True)
+
+
+def check_output(path: str, scene: str | None = None) -> None:
+    """Fail before rendering, not after, if the image could not be written or would overwrite the scene."""
+    if scene is not None and os.path.exists(scene) and os.path.exists(path) and os.path.samefile(scene, path) \
+            or scene is not None and os.path.realpath(scene) == os.path.realpath(path):
+        raise UsageError(f"bad output {path!r}: it is the scene file being rendered")
     ext = os.path.splitext(path)[1].lower()
     if ext not in IMAGE_TYPES:
         raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
@@ -43,26 +60,73 @@ def check_output(path: str) -> None:
         raise UsageError(f"cannot write {path!r}: permission denied")
 
 
-class InterruptFlag:
-    """Ctrl-C handling for the pass loop: the first Ctrl-C finishes the pass under way, the second
-    abandons it. Either way the passes already finished are written (an exception raised by a signal
-    handler inside a running kernel would otherwise surface as an unrelated RuntimeError)."""
+class StopSignals:
+    """Ctrl-C (SIGINT) and SIGTERM during a render.
+
+    The first signal asks the pass loop to stop after the pass under way. A kernel launch cannot be
+    interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns of
+    the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if the pass
+    has not finished `GRACE` seconds after the first signal, or a second signal comes, the watcher
+    calls `abandon(signum)`, which writes the finished passes and ends the process. Exit status: 128 + the
+    signal's number (130 for Ctrl-C, 143 for SIGTERM).
+    """
+
+    GRACE = 1.0
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self, abandon):
+        self._abandon = abandon
+        self.signum = 0  # the first signal received, 0 if none
+        self.count = 0
+        self.lock = threading.Lock()  # held by the loop while it settles, by the watcher while it abandons
+        self.settled = False
 
     def __enter__(self):
-        self.count = 0
-        self._old = signal.getsignal(signal.SIGINT)
-        signal.signal(signal.SIGINT, self._handle)
+        self._r, self._w = os.pipe()
+        os.set_blocking(self._w, False)
+        self._old = {s: signal.signal(s, lambda *_: None) for s in self.SIGNALS}
+        self._old_fd = signal.set_wakeup_fd(self._w)
+        threading.Thread(target=self._watch, daemon=True, name="styletrace-signals").start()
         return self
 
-    def _handle(self, signum, frame):
-        self.count += 1
-        if self.count == 1:
-            print("\nstyletrace: stopping after this pass (Ctrl-C again to stop now)", file=sys.stderr)
-        else:
-            raise KeyboardInterrupt
+    @property
+    def exit_status(self) -> int:
+        return 128 + self.signum
+
+    def _watch(self):
+        deadline = None
+        while True:
+            timeout = None if deadline is None else max(0.0, deadline - time.monotonic())
+            ready, _, _ = select.select([self._r], [], [], timeout)
+            if not ready:  # the grace period is over and the pass still runs
+                return self._give_up()
+            data = os.read(self._r, 64)
+            if not data:  # closed by __exit__
+                os.close(self._r)
+                return None
+            for signum in (b for b in data if b in self.SIGNALS):
+                self.count += 1
+                if self.count == 1:
+                    self.signum = signum
+                    deadline = time.monotonic() + self.GRACE
+                    say(f"styletrace: {signal.Signals(signum).name}: stopping after this pass "
+                        f"(at most {self.GRACE:g} s; again to stop now)")
+                else:
+                    return self._give_up()
+
+    def _give_up(self):
+        with self.lock:
+            if self.settled:  # the loop got there first and is writing
+                return
+            self._abandon(self.signum)
 
     def __exit__(self, *exc):
-        signal.signal(signal.SIGINT, self._old)
+        signal.set_wakeup_fd(self._old_fd)
+        for s, handler in self._old.items():
+            # after a stop the render is saved and the exit status decided: a second Ctrl-C during the
+            # interpreter's shutdown (which restores the default handlers) must not turn it into a kill
+            signal.signal(s, signal.SIG_IGN if self.count else handler)
+        os.close(self._w)
         return False
 
 
@@ -99,7 +163,7 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
-    check_output(args.output)
+    check_output(args.output, args.scene)
     params = _parse_set(args.set)
     for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                         ("--pass-spp", args.pass_spp)):
@@ -110,54 +174,71 @@ def cmd_render(args) -> int:
 
     scene = api.load_scene(args.scene, args.width, args.height)
     integrator = choose_integrator(scene, args, params)
+    size = scene.sensors()[0].film().crop_size()
+    api.check_memory(int(size[0]), int(size[1]), os.path.splitext(args.output)[1].lower())
     if args.buffer:
         from .lookdev.commands import render_with_buffer
         return render_with_buffer(args, scene, integrator)
 
-    lanes = api.LANES_PER_PASS
-    if args.pass_spp:
-        size = scene.sensors()[0].film().crop_size()
-        lanes = args.pass_spp * int(size[0]) * int(size[1])
-    total = api.pass_count(scene, args.spp, lanes)
+    total = api.pass_count(scene, args.spp, pass_spp=args.pass_spp)
     bar = None
     if total > 1 and not args.quiet:
         from tqdm import tqdm
         bar = tqdm(total=args.spp, unit="spp", desc="rendering", file=sys.stderr)
     latest, failure = None, None
-    with InterruptFlag() as stop:
+
+    def write(prog) -> str:
+        image = prog.image
+        out = save_safely(image, args.output)
+        bad = nonfinite_pixels(image)
+        if bad:
+            fix = "NaN as 0 and +inf as 1 in the PNG" if args.output.lower().endswith(".png") else "kept as they are"
+            say(f"styletrace: warning: {bad} pixel(s) are not finite (NaN or inf): {fix}")
+        return out
+
+    def abandon(signum):  # from the watcher thread: the pass under way is lost, the finished ones are not
+        if latest is None:
+            say("styletrace: interrupted before the first pass finished; nothing written")
+        else:
+            out = write(latest)
+            say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
+        sys.stderr.flush()
+        os._exit(128 + signum)
+
+    with StopSignals(abandon) as stop:
         try:
-            for prog in api.passes(scene, integrator, args.spp, args.seed, lanes):
+            for prog in api.passes(scene, integrator, args.spp, args.seed, pass_spp=args.pass_spp, lock=stop.lock):
                 if bar is not None:
                     bar.update(prog.spp_done - (latest.spp_done if latest else 0))
                 latest = prog
                 if stop.count:
                     break
         except (KeyboardInterrupt, RuntimeError) as exc:
-            # A second Ctrl-C abandons the pass under way (Dr.Jit may wrap it in a RuntimeError); any other
-            # failure of a later pass must not cost the passes already finished.
-            if not stop.count and latest is None:
+            # any failure of a later pass must not cost the passes already finished
+            if latest is None:
                 raise
-            failure = None if stop.count else exc
-    if bar is not None:
-        bar.close()
-    if failure is not None:
-        out = save_safely(latest.image, args.output)
-        print(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "
-              f"finished passes to {out}", file=sys.stderr)
-        return 1
-    if stop.count:
-        if latest is None:
-            print("styletrace: interrupted before the first pass finished; nothing written", file=sys.stderr)
-            return 130
-        out = save_safely(latest.image, args.output)
-        print(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp", file=sys.stderr)
-        return 130
-    out = save_safely(latest.image, args.output)
-    if not args.quiet:
-        import mitsuba as mi
-        print(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})",
-              file=sys.stderr)
-    return 0 if out == args.output else 1
+            failure = exc
+        with stop.lock:
+            stop.settled = True
+        if bar is not None:  # the final write happens under the watcher too: a signal now does not cut it
+            bar.close()
+        if failure is not None:
+            out = write(latest)
+            say(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "
+                f"finished passes to {out}")
+            return 1
+        if stop.count:
+            if latest is None:
+                say("styletrace: interrupted before the first pass finished; nothing written")
+                return stop.exit_status
+            out = write(latest)
+            say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
+            return stop.exit_status
+        out = write(latest)
+        if not args.quiet:
+            import mitsuba as mi
+            say(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})")
+        return 0 if out == args.output else 1
 
 
 def choose_integrator(scene, args, params):
@@ -184,23 +265,43 @@ def cmd_gallery(args) -> int:
     opts = gallery.QUICK if args.quick else gallery.Options()
     if args.size:
         opts.size = args.size
-    if os.path.exists(args.output) and not os.path.isdir(args.output):
-        raise UsageError(f"bad output {args.output!r}: expected a folder")
     only = [k.strip() for k in args.only.split(",")] if args.only else None
+    unknown = sorted(set(only or ()) - {s.key for s in gallery.SETUPS})
+    if unknown:
+        raise UsageError(f"unknown gallery setup(s) {', '.join(unknown)}: available are "
+                         f"{', '.join(s.key for s in gallery.SETUPS)}")
+    check_gallery_folder(args.output)
     try:
-        res = gallery.run(args.output, opts, only, log=lambda m: print(m, file=sys.stderr))
+        res = gallery.run(args.output, opts, only, log=say)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    print(f"wrote {os.path.join(args.output, 'index.html')} ({len(res['setups'])} setups, {res['seconds']:.0f} s)",
-          file=sys.stderr)
+    say(f"wrote {os.path.join(args.output, 'index.html')} ({len(res['setups'])} setups, {res['seconds']:.0f} s)")
     return 0
+
+
+def check_gallery_folder(path: str) -> None:
+    """The gallery's folder may be new, but like `render`'s output its parent folder must exist: fail (or
+    create it) before rendering, not after."""
+    if os.path.exists(path):
+        if not os.path.isdir(path):
+            raise UsageError(f"bad output {path!r}: expected a folder")
+        if not os.access(path, os.W_OK):
+            raise UsageError(f"cannot write into {path!r}: permission denied")
+        return
+    parent = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(parent):
+        raise UsageError(f"cannot create {path!r}: folder {parent!r} does not exist")
+    try:
+        os.mkdir(path)
+    except OSError as exc:
+        raise UsageError(f"cannot create {path!r}: {exc.strerror}") from None
 
 
 class Parser(argparse.ArgumentParser):
     """argparse with the project's error format: one line, exit status 2 (no usage dump)."""
 
     def error(self, message):
-        self.exit(2, f"styletrace: error: {message} (see '{self.prog} --help')\n")
+        self.exit(2, one_line(f"styletrace: error: {message} (see '{self.prog} --help')") + "\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -258,10 +359,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = build_parser().parse_args(argv)
         return args.func(args)
     except KeyboardInterrupt:
-        print("styletrace: interrupted", file=sys.stderr)
+        say("styletrace: interrupted")
         return 130
     except StyletraceError as exc:
-        print(f"styletrace: error: {exc}", file=sys.stderr)
+        say(f"styletrace: error: {exc}")
         return 2
 
 

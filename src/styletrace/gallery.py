@@ -12,6 +12,7 @@ minute; CI runs it.
 from __future__ import annotations
 
 import html
+import io
 import json
 import os
 import time
@@ -131,16 +132,22 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
             write_png(img, os.path.join(out_dir, name))
             r = {"n": n, "file": name, "seconds": secs, "spp": options.spp}
             if reference is not None:
-                r["mse"] = float(np.mean((img.astype(np.float64) - reference) ** 2))
+                r["mse"] = mse(img, reference)
             entry["renders"].append(r)
             log(f"{setup.key}: n={n} in {secs:.1f} s" + (f", MSE {r['mse']:.3g}" if "mse" in r else ""))
         results["setups"].append(entry)
     results["seconds"] = time.perf_counter() - t_all
     plot_mse(results, os.path.join(out_dir, "mse.png"))
-    with open(os.path.join(out_dir, "gallery.json"), "w") as f:
-        json.dump(results, f, indent=1)
+    write_text(os.path.join(out_dir, "gallery.json"), json.dumps(results, indent=1))
     write_sheets(results, out_dir)
     return results
+
+
+def mse(image: np.ndarray, reference: np.ndarray) -> float:
+    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest answer,
+    so numpy's warnings about it are silenced here rather than sent to stderr)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.mean((image.astype(np.float64) - reference) ** 2))
 
 
 def plot_mse(results: dict[str, Any], path: str) -> None:
@@ -161,7 +168,10 @@ def plot_mse(results: dict[str, Any], path: str) -> None:
     if ax.lines:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    from .images import write_bytes_atomically
+    write_bytes_atomically(buf.getvalue(), path)
     plt.close(fig)
 
 
@@ -193,7 +203,10 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
                " | ".join(f"![{c}]({f})" for f, c in cells), ""]
         h += ["<div>" + "".join(f"<figure><img src='{f}'><figcaption>{html.escape(c)}</figcaption></figure>"
                                 for f, c in cells) + "</div>"]
-    with open(os.path.join(out_dir, "index.md"), "w") as f:
-        f.write("\n".join(md) + "\n")
-    with open(os.path.join(out_dir, "index.html"), "w") as f:
-        f.write("\n".join(h) + "\n")
+    write_text(os.path.join(out_dir, "index.md"), "\n".join(md) + "\n")
+    write_text(os.path.join(out_dir, "index.html"), "\n".join(h) + "\n")
+
+
+def write_text(path: str, text: str) -> None:
+    from .images import write_bytes_atomically
+    write_bytes_atomically(text.encode(), path)

@@ -1,7 +1,19 @@
-"""Writing rendered images: EXR as linear float32, PNG as sRGB 8-bit.
+"""Writing rendered images: EXR as linear float32, PNG as sRGB 8-bit; atomic and checked.
 
-`save_safely` never loses a finished render: if the requested path cannot be written, the image goes
-to a temporary EXR instead and the caller is told where.
+    write_image(img, "out.png")      # H x W x 3 linear radiance -> file; raises OSError if it cannot
+    save_safely(img, "out.exr")      # never loses the render: falls back to a temporary EXR
+    nonfinite_pixels(img)            # how many pixels hold NaN or +-inf
+
+Encoding happens in memory (Mitsuba writes the EXR or PNG into a `MemoryStream`); the bytes then go
+through a Python file object into a temporary file in the destination's folder, which is flushed,
+checked for its full size, fsynced and only then renamed over the destination (`os.replace`, atomic on
+POSIX). So a full disk (ENOSPC), a short write or a kill during the write raises or leaves the old
+file intact; it never leaves a truncated file where a valid one was, and two writers of one path leave
+one of their images. (Mitsuba's own `Bitmap.write(path)` ignores ENOSPC and reports success.)
+
+PNG: the sRGB transfer function, clamping and 8-bit quantization are done here in numpy: linear values
+are clamped to [0, 1] first (NaN -> 0, +inf -> 1, -inf and negatives -> 0), because Mitsuba's own
+conversion wraps values above ~2410 round to black.
 """
 from __future__ import annotations
 
@@ -9,21 +21,78 @@ import os
 import sys
 import tempfile
 
+import numpy as np
+
 IMAGE_TYPES = (".exr", ".png")
 
 
-def write_image(image, path: str) -> None:
-    """EXR: linear float32. PNG: sRGB-encoded 8 bit (values clipped to [0, 1] only here)."""
+def nonfinite_pixels(image) -> int:
+    """Pixels with a NaN or infinite channel."""
+    arr = np.asarray(image)
+    return int(np.count_nonzero(~np.isfinite(arr).all(axis=-1)))
+
+
+def srgb8(image) -> np.ndarray:
+    """Linear radiance -> sRGB-encoded uint8: NaN -> 0, +inf -> 1 (255), everything clamped to [0, 1]."""
+    x = np.nan_to_num(np.asarray(image, dtype=np.float32), nan=0.0, posinf=1.0, neginf=0.0)
+    x = np.clip(x, 0.0, 1.0)  # before the power, so that no negative base reaches it
+    enc = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+    return np.round(enc * 255.0).astype(np.uint8)
+
+
+def encode(image, ext: str) -> bytes:
+    """The file contents of `image` as `.exr` (linear float32) or `.png` (sRGB 8 bit)."""
     import mitsuba as mi
-    import numpy as np
 
     from .jit import backend
     backend()
-    bmp = mi.Bitmap(np.ascontiguousarray(image, dtype=np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB)
-    if path.lower().endswith(".png"):
-        bmp = bmp.convert(pixel_format=mi.Bitmap.PixelFormat.RGB, component_format=mi.Struct.Type.UInt8,
-                          srgb_gamma=True)
-    bmp.write(path)
+    if ext == ".png":
+        data, fmt = srgb8(image), mi.Bitmap.FileFormat.PNG
+    elif ext == ".exr":
+        data, fmt = np.ascontiguousarray(image, dtype=np.float32), mi.Bitmap.FileFormat.OpenEXR
+    else:
+        raise ValueError(f"unknown image type {ext!r}: expected one of {', '.join(IMAGE_TYPES)}")
+    bmp = mi.Bitmap(np.ascontiguousarray(data), pixel_format=mi.Bitmap.PixelFormat.RGB)
+    if ext == ".png":
+        bmp.set_srgb_gamma(True)
+    stream = mi.MemoryStream()
+    bmp.write(stream, fmt)
+    del bmp
+    return stream.raw_buffer()
+
+
+def write_bytes_atomically(data: bytes, path: str) -> None:
+    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            written = f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+            size = os.fstat(f.fileno()).st_size
+        if written != len(data) or size != len(data):
+            raise OSError(f"short write: {size} of {len(data)} bytes reached the disk")
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.remove(tmp)
+        except OSError:
+            pass
+        raise
+    try:  # make the rename itself durable; not every file system lets a folder be opened
+        dfd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(dfd)
+        finally:
+            os.close(dfd)
+    except OSError:
+        pass
+
+
+def write_image(image, path: str) -> None:
+    """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write."""
+    write_bytes_atomically(encode(image, os.path.splitext(path)[1].lower()), path)
 
 
 def save_safely(image, path: str) -> str:
@@ -35,8 +104,10 @@ def save_safely(image, path: str) -> str:
         fd, fallback = tempfile.mkstemp(prefix="styletrace-", suffix=".exr")
         os.close(fd)
         write_image(image, fallback)
-        print(f"styletrace: could not write {path!r} ({exc}); saved the render to {fallback}", file=sys.stderr)
+        reason = str(exc).replace("\n", " ")
+        print(f"styletrace: could not write {path!r} ({reason}); saved the render to {fallback}", file=sys.stderr)
         return fallback
 
 
-__all__ = ["IMAGE_TYPES", "write_image", "save_safely"]
+__all__ = ["IMAGE_TYPES", "nonfinite_pixels", "srgb8", "encode", "write_bytes_atomically", "write_image",
+           "save_safely"]
