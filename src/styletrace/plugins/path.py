@@ -191,7 +191,8 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     # samples come from measure-zero events (degenerate geometry, 0 * inf), so dropping them costs a
     # bias no larger than their probability times their true value; the causes known are fixed at
     # their source (`mis_power`), this keeps an unknown one from destroying a render.
-    finite = dr.all(dr.isfinite(out.L)) & dr.all(dr.isfinite(out.beta))
+    # The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0).
+    finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
     return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
                 depth=out.depth, halted=out.halted)
 
@@ -230,6 +231,6 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
     si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
-    finite = dr.all(dr.isfinite(L)) & dr.all(dr.isfinite(weight))  # as at the end of `walk`
+    finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
     return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid())
