@@ -49,7 +49,7 @@ def stable_key(emitter: mi.Emitter) -> tuple:
 
 
 def estimated_power(emitter: mi.Emitter) -> float:
-    """Phi estimated as the mean luminance-free (channel mean) weight of `sample_ray` over fixed samples."""
+    """Phi estimated as the mean weight of `sample_ray` (averaged over the channels) over fixed samples."""
     n = POWER_SAMPLES
     rng = mi.PCG32(n, initseq=dr.arange(mi.UInt64, n))
     u = [rng.next_float32() for _ in range(5)]
