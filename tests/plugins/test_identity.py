@@ -5,6 +5,7 @@ import pytest
 
 import styletrace  # noqa: F401
 from styletrace.api import load_scene, make_integrator, passes
+from styletrace.plugins import emitter_sampler
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K = 16          # independent renders per side
@@ -26,6 +27,39 @@ def renders(scene, integrator, spp, seed0):
 @pytest.mark.parametrize("name", ["cornell-box", "dragon"])
 def test_identity_matches_path(name):
     scene = load_scene(name, RES, RES)
+    ours = renders(scene, make_integrator("identity", inner=INNER), SPP, 1000)
+    ref = renders(scene, mi.load_dict({"type": "path"}), SPP * INNER, 5000)
+    z = mean_z(ours, ref)
+    assert np.all(np.abs(z) < Z_MAX), f"image means differ: z = {z}"
+    tmax, thr, frac = pixel_t_test(ours, ref, ALPHA)
+    assert tmax < thr, f"max |t| {tmax:.2f} over Bonferroni threshold {thr:.2f} ({frac:.4%} of pixel channels)"
+
+
+def two_lights(res):
+    """A diffuse sphere on a floor under a large dim area light and a small one 400 times as powerful."""
+    T = mi.ScalarTransform4f
+    return {
+        "type": "scene",
+        "sensor": {"type": "perspective", "fov": 40,
+                   "to_world": T().look_at(origin=[0, 2.5, 4.5], target=[0, 0.4, 0], up=[0, 1, 0]),
+                   "sampler": {"type": "independent"},
+                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}}},
+        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90) @ T().scale(3),
+                  "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.6, 0.6, 0.6]}}},
+        "ball": {"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5,
+                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.4, 0.2]}}},
+        "dim": {"type": "rectangle", "to_world": T().translate([-1.0, 2.5, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(1.0),
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}}},
+        "bright": {"type": "rectangle", "to_world": T().translate([1.2, 2.0, 0.5]) @ T().rotate([1, 0, 0], 90)
+                   @ T().scale(0.1), "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2000.0] * 3}}},
+    }
+
+
+@pytest.mark.parametrize("mode", ["uniform", "power"])
+def test_identity_matches_path_with_lights_of_very_different_power(mode, monkeypatch):
+    """Our emitter selection (either mode) against Mitsuba's, with the same tests as above."""
+    monkeypatch.setattr(emitter_sampler, "DEFAULT_MODE", mode)
+    scene = mi.load_dict(two_lights(RES))
     ours = renders(scene, make_integrator("identity", inner=INNER), SPP, 1000)
     ref = renders(scene, mi.load_dict({"type": "path"}), SPP * INNER, 5000)
     z = mean_z(ours, ref)

@@ -133,3 +133,21 @@ def test_samples_per_pass_is_refused(value):
     """Mitsuba would split each of styletrace's passes again and throw when they do not divide evenly."""
     with pytest.raises(SettingsError, match="for 'samples_per_pass': .*--pass-spp"):
         settings.parse({"samples_per_pass": value})
+
+
+def test_emitter_sampling_is_a_setting():
+    assert settings.parse({}).emitter_sampling == "uniform"
+    assert settings.parse({"emitter_sampling": "power"}).emitter_sampling == "power"
+    with pytest.raises(SettingsError, match="bad value 'loud' for 'emitter_sampling': expected one of uniform, power"):
+        settings.parse({"emitter_sampling": "loud"})
+
+
+def test_the_integrator_samples_emitters_the_way_it_is_told(monkeypatch):
+    """The setting reaches the kernel's emitter sampler (power selection renders a different image)."""
+    from styletrace.plugins import integrator as module
+    modes = []
+    real = module.EmitterSampler
+    monkeypatch.setattr(module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode))
+    for mode in ("uniform", "power"):
+        styletrace.render("mixed", width=8, height=8, spp=1, inner=1, emitter_sampling=mode)
+    assert modes == ["uniform", "power"]

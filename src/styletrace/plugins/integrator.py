@@ -30,6 +30,7 @@ import mitsuba as mi
 
 from ..styles.base import Vertex, camera_forward
 from . import settings as S
+from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .lane_sampler import LaneSampler
 from .path import bounce, environment, exitant, walk
@@ -83,11 +84,11 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`)."""
         s = self.settings
         if level + 1 >= s.stylize_depth:
-            return exitant(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth)
+            return exitant(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, self.emitters)
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
-        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth)
+        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters)
         deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
         return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
@@ -101,7 +102,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return styled if halt_at_start else styled & (d > start)
 
         w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
-                 skip_emitter=self._skip_emitter)
+                 skip_emitter=self._skip_emitter, emitters=self.emitters)
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
         return self._through(w, value)
@@ -144,6 +145,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         self.targets = self._targets(scene)
+        # emitter selection in an order of the scene's own (its emitter list changes order between runs)
+        self.emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         try:
             return self._sample(scene, sampler, ray, active)
         finally:
@@ -151,6 +154,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             # instance of a class, and a lingering BSDF or emitter of a scene that the garbage collector
             # is tearing down crashed a later trace (measured: segfault in pdf_emitter_direction).
             self.targets = []
+            self.emitters = None
 
     def _sample(self, scene, sampler, ray, active):
         for t in self.targets:

@@ -8,6 +8,11 @@ ordinary unidirectional path tracer with next-event estimation, multiple importa
 heuristic on solid-angle densities, as Mitsuba's `path`) and Russian roulette from `rr_depth` on. An
 invalid `pi` means the ray escaped: the sample is then the environment's radiance.
 
+Next-event estimation picks its emitter with an `EmitterSampler` (emitter_sampler.py) rather than
+`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does not,
+so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples uses the
+same selection probabilities. Samples that are not finite are dropped at the end of a walk (see there).
+
 Depth follows Mitsuba's convention: x is at depth `depth0` (0 for a camera ray's first hit), so
 `max_depth` = 1 returns emission only, and the tree camera ray -> x -> this path has the same
 longest path as Mitsuba's `path` with the same `max_depth` (-1 = unbounded).
@@ -35,11 +40,22 @@ from typing import Any, Callable, Optional
 import drjit as dr
 import mitsuba as mi
 
+from .emitter_sampler import EmitterSampler
+
 
 def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:
-    """Power heuristic weight of strategy a against b (0 where both densities vanish)."""
-    a2 = dr.square(pdf_a)
-    return dr.detach(dr.select(pdf_a > 0, a2 / dr.fma(pdf_b, pdf_b, a2), 0.0))
+    """Power heuristic weight a^2 / (a^2 + b^2) of strategy a against b, finite for every input.
+
+    Written as 1 / (1 + (b/a)^2): squaring first overflows float32 for densities above ~1.8e19, which
+    a grazing direction towards an area light reaches (pdf = dist^2 / (cos * area) with cos ~ 1e-17
+    from a rotation's rounding), and inf / inf made the weight NaN and the sample with it, even where
+    it multiplied a zero contribution. The ratio form gives the right limits instead (a -> inf: 1,
+    b -> inf: 0); 0 where a vanishes, 1/2 where both are infinite (the two weights still sum to 1).
+    """
+    r = pdf_b / pdf_a
+    w = dr.rcp(dr.fma(r, r, 1.0))
+    w = dr.select(dr.isnan(r), 0.5, w)
+    return dr.detach(dr.select(pdf_a > 0, w, 0.0))
 
 
 def depth_limit(max_depth: int) -> int:
@@ -86,15 +102,18 @@ class Walk:
 
 
 def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
-            active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0) -> mi.Spectrum:
+            active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
+            emitters: Optional[EmitterSampler] = None) -> mi.Spectrum:
     """One sample of L_o at the vertex `ray` reaches (see the module docstring)."""
-    return walk(scene, sampler, pi, ray, active, max_depth, rr_depth, depth0).L
+    return walk(scene, sampler, pi, ray, active, max_depth, rr_depth, depth0, emitters=emitters).L
 
 
 def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
          active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
-         stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None) -> Walk:
+         stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
+         emitters: Optional[EmitterSampler] = None) -> Walk:
     ctx = mi.BSDFContext()
+    emitters = emitters if emitters is not None else EmitterSampler(scene)
     limit = depth_limit(max_depth)
 
     # A starting vertex counts its emission in full: the previous vertex is treated as a delta
@@ -117,7 +136,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
         emitter = si.emitter(scene)
         hit_em = here & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
         ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
-        em_pdf = scene.pdf_emitter_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
+        em_pdf = emitters.pdf_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
         w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
         s.L += s.beta * w_em * emitter.eval(si, hit_em)
 
@@ -126,7 +145,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
 
         # Next-event estimation.
         active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-        ds, em_weight = scene.sample_emitter_direction(si, s.sampler.next_2d(), True, active_em)
+        ds, em_weight = emitters.sample_direction(si, s.sampler.next_2d(), active_em)
         active_em &= ds.pdf != 0.0
         if skip_emitter is not None:
             active_em &= ~skip_emitter(ds)
@@ -167,7 +186,15 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
         return (s,)
 
     (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace path")
-    return Walk(L=out.L, beta=out.beta, pi=out.pi, ray=out.ray, depth=out.depth, halted=out.halted)
+    # A sample that is not finite is dropped here, before it reaches a style's estimator or the film:
+    # one NaN poisons its pixel for good (every pass is averaged in) and g of a mean containing it. Such
+    # samples come from measure-zero events (degenerate geometry, 0 * inf), so dropping them costs a
+    # bias no larger than their probability times their true value; the causes known are fixed at
+    # their source (`mis_power`), this keeps an unknown one from destroying a render.
+    # The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0).
+    finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
+    return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
+                depth=out.depth, halted=out.halted)
 
 
 @dataclass
@@ -182,7 +209,7 @@ class Bounce:
 
 
 def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
-           max_depth: int = -1) -> Bounce:
+           max_depth: int = -1, emitters: Optional[EmitterSampler] = None) -> Bounce:
     """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
 
     The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
@@ -195,7 +222,8 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     go = active & (depth + 1 < depth_limit(max_depth))
     bsdf = si.bsdf(ray)
     to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-    ds, em_weight = scene.sample_emitter_direction(si, sampler.next_2d(), True, to_light)
+    emitters = emitters if emitters is not None else EmitterSampler(scene)
+    ds, em_weight = emitters.sample_direction(si, sampler.next_2d(), to_light)
     to_light &= ds.delta & (ds.pdf != 0.0)
     L += dr.select(to_light, bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
     bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), go)
@@ -203,4 +231,6 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
     si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
+    finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
+    L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
     return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid())

@@ -17,6 +17,7 @@ from ..errors import SettingsError
 from ..styles import create, get
 from ..styles.base import Style
 from . import estimation
+from .emitter_sampler import MODES as EMITTER_MODES
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,9 @@ PROPERTIES = (
     Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 8: tracing time doubles "
              "per level)", "--stylize-depth", "N"),
     Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
+    Property("emitter_sampling", "uniform", "string", "how next-event estimation picks a light: uniform (as "
+             "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
+             "where a sky dominates the estimate; BENCHMARKS.md)", "--emitter-sampling", "MODE"),
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
@@ -89,6 +93,7 @@ class Settings:
     stylize_depth: int = 1
     max_depth: int = -1
     rr_depth: int = 5
+    emitter_sampling: str = "uniform"
 
     @property
     def style(self) -> Style:
@@ -184,7 +189,11 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if max_depth == 0:
         raise SettingsError(f"bad value 0 for 'max_depth': expected -1 (unbounded) or an integer in [1, {COUNT_MAX}]")
     rr_depth = integer("rr_depth", get_("rr_depth"), 1)
-    return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth)
+    lights = str(get_("emitter_sampling"))
+    if lights not in EMITTER_MODES:
+        raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
+    return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
+                    emitter_sampling=lights)
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:

@@ -24,6 +24,7 @@ PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 
 def styles_table() -> list[dict[str, Any]]:
+    from ..lookdev.restyle import RESTYLABLE_ESTIMATORS
     from ..plugins.estimation import applicable
     from ..styles import get, names
     out = []
