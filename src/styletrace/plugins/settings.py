@@ -52,6 +52,8 @@ PROPERTIES = (
              "per level)", "--stylize-depth", "N"),
     Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
+    Property("hide_emitters", False, "bool", "camera rays do not see emitters, as Mitsuba's `path`: they pass "
+             "through area lights and find black (alpha 0) where they escape", "--hide-emitters", "BOOL"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -59,7 +61,7 @@ COMMAND_LINE_STYLE = "cel"
 #: what a `styled` BSDF accepts besides its style's parameters
 SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
-BASE_KEYS = ("samples_per_pass", "timeout", "hide_emitters")
+BASE_KEYS = ("samples_per_pass", "timeout")
 #: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
 #: "unbounded" (`path.depth_limit`), so larger values would wrap around.
 COUNT_MAX = 2 ** 32 - 2
@@ -89,6 +91,7 @@ class Settings:
     stylize_depth: int = 1
     max_depth: int = -1
     rr_depth: int = 5
+    hide_emitters: bool = False
 
     @property
     def style(self) -> Style:
@@ -117,6 +120,14 @@ def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
     if not low <= value <= high:
         raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
     return value
+
+
+def boolean(key: str, raw: Any) -> bool:
+    """A bool from True/False, 1/0 or the strings 'true'/'false'/'1'/'0' (any case)."""
+    text = str(raw).strip().lower()
+    if isinstance(raw, bool) or text in ("true", "false", "1", "0") and not isinstance(raw, float):
+        return text in ("true", "1")
+    raise SettingsError(f"bad value {raw!r} for '{key}': expected true or false")
 
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
@@ -161,9 +172,6 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
                             f"integrator renders in styletrace's own passes; set the samples per pass with "
                             f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead")
-    if str(values.get("hide_emitters", False)).lower() in ("true", "1"):
-        raise SettingsError("bad value True for 'hide_emitters': the stylized integrator does not support hiding "
-                            "emitters (their emission is part of the stylized radiance)")
     own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)
     slot = parse_slot(values, extra_keys=own + BASE_KEYS)
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
@@ -184,7 +192,9 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if max_depth == 0:
         raise SettingsError(f"bad value 0 for 'max_depth': expected -1 (unbounded) or an integer in [1, {COUNT_MAX}]")
     rr_depth = integer("rr_depth", get_("rr_depth"), 1)
-    return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth)
+    hide = boolean("hide_emitters", get_("hide_emitters"))
+    return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
+                    hide_emitters=hide)
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -205,4 +215,4 @@ def properties_of(props) -> dict[str, Any]:
 
 
 __all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
-           "parse_inner", "integer", "refine", "properties_of"]
+           "parse_inner", "integer", "boolean", "refine", "properties_of"]
