@@ -16,6 +16,8 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import re
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
@@ -27,9 +29,10 @@ backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the va
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import scene_file  # noqa: E402
 from .arguments import check_passes_args, check_render_args, check_scene, scene_problem  # noqa: E402
 from .errors import SceneError, UsageError  # noqa: E402
-from .images import save_safely, write_image  # noqa: E402
+from .images import PIXEL_FORMATS, save_safely, write_image  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
 from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
 
@@ -60,11 +63,18 @@ def scene_dict(name: str, width: int | None = None, height: int | None = None) -
     return BUILTIN[name](**_size(width, height))
 
 
-def load_scene(scene: Any = None, width: int | None = None, height: int | None = None) -> mi.Scene:
-    """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene."""
+def load_scene(scene: Any = None, width: int | None = None, height: int | None = None,
+               defines: dict[str, Any] | None = None) -> mi.Scene:
+    """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene.
+
+    For an XML file, `defines` are the values of its `<default>` parameters (as `mitsuba -D name=value`),
+    and width/height resize its film; an integrator type Mitsuba does not know is replaced, with a
+    `SceneWarning` (see `scene_file`)."""
     init()
     if scene is None:
         scene = DEFAULT
+    if defines and not (isinstance(scene, (str, os.PathLike)) and os.fspath(scene) not in BUILTIN):
+        raise SceneError("defines apply to XML scene files (their <default> parameters) only")
     if isinstance(scene, mi.Scene):
         check_scene(scene, "the mi.Scene")
         if width or height:
@@ -99,19 +109,65 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     if not os.path.isfile(name):
         raise SceneError(f"scene file '{name}' does not exist")
     try:
-        loaded = mi.load_file(name, **_size(width, height, ("resx", "resy")))
+        loaded, notes = scene_file.load(name, width, height, defines)
+    except SceneError:
+        raise
     except Exception as exc:
+        if "unused parameters" in str(exc):  # Mitsuba lists them as "- $name=value"
+            unused = ", ".join(re.findall(r"\$(\w+)=", str(exc)))
+            raise SceneError(f"scene file '{name}' uses no parameter {unused}: -D/defines set only the file's "
+                             f"$parameters (its <default> names)") from None
         raise SceneError(f"cannot load scene file '{name}': {first_line(exc)}") from None
     problem = scene_problem(loaded, f"scene file '{name}'")
     if problem is not None:
         del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
         raise SceneError(problem)
-    if width or height:
-        size = loaded.sensors()[0].film().size()
-        if (width and width != size[0]) or (height and height != size[1]):
-            raise SceneError(f"scene file '{name}' fixes its film size {size[0]}x{size[1]}; to resize it, "
-                             f"write the film's width/height as $resx/$resy in the XML")
+    for note in notes:
+        warnings.warn(note, SceneWarning, stacklevel=2)
     return loaded
+
+
+class SceneWarning(UserWarning):
+    """A scene was changed to render (an unknown integrator replaced); the message names what changed."""
+
+
+def carried_settings(scene: mi.Scene) -> dict[str, Any]:
+    """The settings a scene's own Mitsuba integrator (path, volpath, prb, direct, ...) shares with `stylized`:
+    max_depth, rr_depth and hide_emitters, as Mitsuba resolved them (defaults and $parameters applied).
+    Mitsuba exposes hide_emitters as a method and the depths only in the integrator's description
+    (`PathIntegrator[max_depth = 6, rr_depth = 5]`); `direct` is emission plus direct light, max_depth 2.
+    Empty for a `stylized` integrator (its own values are used whole) or none."""
+    own = scene.integrator()
+    if own is None or isinstance(own, StylizedIntegrator):
+        return {}
+    text = str(own)
+    out: dict[str, Any] = {}
+    for key in ("max_depth", "rr_depth"):
+        found = re.search(rf"\b{key}\s*=\s*(\d+)", text)
+        if found:
+            value = int(found.group(1))
+            out[key] = -1 if value >= 2 ** 32 - 1 else value  # Mitsuba stores -1 (unbounded) as UInt32
+    if text.startswith("DirectIntegrator"):
+        out["max_depth"] = 2
+    if own.hide_emitters:  # a read-only property of every Mitsuba integrator
+        out["hide_emitters"] = True
+    return out
+
+
+def film_format(scene: mi.Scene) -> str:
+    """The pixel format of the scene's film as Mitsuba develops it ('rgb', 'rgba', 'y', 'ya', 'xyz', 'xyza'):
+    the kernel computes RGB radiance and the film converts it (luminance Y, CIE XYZ, alpha coverage)."""
+    found = re.search(r"pixel_format\s*=\s*(\w+)", str(scene.sensors()[0].film()))
+    name = found.group(1).lower() if found else "rgb"
+    if name not in PIXEL_FORMATS:
+        raise SceneError(f"the film's pixel format {name!r} cannot be written: expected one of "
+                         f"{', '.join(sorted(set(PIXEL_FORMATS)))}")
+    return name
+
+
+def scene_spp(scene: mi.Scene) -> int:
+    """The scene's own camera samples per pixel: its sampler's sample_count."""
+    return int(scene.sensors()[0].sampler().sample_count())
 
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,
@@ -244,7 +300,8 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     check_memory(width, height)
     layout, per_pass = pass_size(width, height, spp, lanes_per_pass, pass_spp)
     params = mi.traverse(sensor) if len(layout) > 1 else None
-    total = np.zeros((height, width, 3), dtype=np.float32)
+    channels = len(PIXEL_FORMATS[film_format(scene)])  # the film's own: RGB, Y, XYZ, with alpha or not
+    total = np.zeros((height, width, channels), dtype=np.float32)
     counts = np.zeros(len(layout), dtype=np.int64)
     index = 0
     try:
@@ -256,7 +313,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     params["film.crop_size"] = mi.ScalarVector2u(*tile.size)
                     params.update()
                 img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
-                arr = np.asarray(img, dtype=np.float32)[..., :3]
+                arr = np.asarray(img, dtype=np.float32)[..., :channels]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
                     counts[t] += n
@@ -277,28 +334,33 @@ def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, 
     return len(layout) * math.ceil(spp / per_pass)
 
 
-def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+def render(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
            estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: mi.Integrator | None = None, callback: Callable[[Progress], None] | None = None,
-           **params: Any) -> np.ndarray:
-    """Render with a style; returns float32 H x W x 3 linear radiance.
+           defines: dict[str, Any] | None = None, **params: Any) -> np.ndarray:
+    """Render with a style; returns float32 H x W x C: linear radiance in the film's pixel format (C = 3 for
+    the usual rgb film; 1 for luminance, 4 for rgba, ...; see `film_format`).
 
-    `scene`: built-in name ('cornell-box', 'dragon', 'furnace'), XML path, scene dict or mi.Scene.
-    Integrator keywords (stylize, stylize_depth, max_depth, rr_depth) and the style's parameters go
-    in **params; what is not given takes the integrator's defaults (`plugins.settings`: identity, direct,
-    the style's inner count). Pass `integrator=` to use a prebuilt one (then style and params are ignored).
+    `scene`: built-in name ('cornell-box', 'dragon', 'furnace'), XML path, scene dict or mi.Scene; `defines`:
+    the values of an XML file's `<default>` parameters. `spp`: camera samples per pixel (default: the
+    scene sampler's sample_count). Integrator keywords (stylize, stylize_depth, max_depth, rr_depth,
+    hide_emitters) and the style's parameters go in **params; what is not given takes the scene's own
+    Mitsuba integrator's max_depth/rr_depth/hide_emitters (`carried_settings`), else the integrator's
+    defaults (`plugins.settings`: identity, direct, the style's inner count). Pass `integrator=` to use a
+    prebuilt one (then style and params are ignored).
     """
-    check_render_args(spp, seed, integrator)
-    sc = load_scene(scene, width, height)
+    check_render_args(1 if spp is None else spp, seed, integrator)
+    sc = load_scene(scene, width, height, defines)
     if integrator is None:
-        integrator = make_integrator(style=style, inner=inner, estimator=estimator, **params)
+        integrator = make_integrator(style=style, inner=inner, estimator=estimator,
+                                     **{**carried_settings(sc), **params})
     image = None
-    for prog in passes(sc, integrator, spp, seed):
+    for prog in passes(sc, integrator, scene_spp(sc) if spp is None else spp, seed):
         image = prog.image
         if callback is not None:
             callback(prog)
     return image
 
 
-__all__ = ["render", "load_scene", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError",
+__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError",
            "Progress", "StylizedIntegrator", "write_image", "save_safely"]

@@ -17,10 +17,23 @@ import signal
 import sys
 import threading
 import time
+import warnings
 from typing import Sequence
 
 from .errors import StyletraceError, UsageError
 from .images import IMAGE_TYPES, nonfinite_pixels, save_safely
+
+
+def _parse_defines(items: Sequence[str]) -> dict[str, str]:
+    """`-D NAME=VALUE` (repeatable): values of the scene file's <default> parameters, as Mitsuba's own -D."""
+    out = {}
+    for item in items:
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip().isidentifier():
+            raise UsageError(f"bad -D {item!r}: expected NAME=VALUE for a <default name=\"NAME\"> of the scene, "
+                             f"e.g. -D spp=64")
+        out[key.strip()] = value.strip()
+    return out
 
 
 def _parse_set(items: Sequence[str]) -> dict[str, str]:
@@ -170,12 +183,26 @@ def cmd_render(args) -> int:
         if value is not None and value < 1:
             raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
 
+    defines = _parse_defines(args.define)
     from . import api
+    from .images import check_format
 
-    scene = api.load_scene(args.scene, args.width, args.height)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", api.SceneWarning)
+        scene = api.load_scene(args.scene, args.width, args.height, defines)
+    for w in caught:
+        say(f"styletrace: warning: {w.message}")
     integrator = choose_integrator(scene, args, params)
+    if args.spp is None:  # the scene author's count (its sampler's sample_count)
+        args.spp = api.scene_spp(scene)
     size = scene.sensors()[0].film().crop_size()
-    api.check_memory(int(size[0]), int(size[1]), os.path.splitext(args.output)[1].lower())
+    ext = os.path.splitext(args.output)[1].lower()
+    pixel_format = api.film_format(scene)
+    try:
+        check_format(pixel_format, ext)
+    except ValueError as exc:
+        raise UsageError(f"bad output {args.output!r}: {exc}") from None
+    api.check_memory(int(size[0]), int(size[1]), ext)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
         return render_with_buffer(args, scene, integrator)
@@ -189,7 +216,7 @@ def cmd_render(args) -> int:
 
     def write(prog) -> str:
         image = prog.image
-        out = save_safely(image, args.output)
+        out = save_safely(image, args.output, pixel_format)
         bad = nonfinite_pixels(image)
         if bad:
             fix = "NaN as 0 and +inf as 1 in the PNG" if args.output.lower().endswith(".png") else "kept as they are"
@@ -243,9 +270,12 @@ def cmd_render(args) -> int:
 
 def choose_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
-    (a scene without one starts from the command line's default style)."""
+    (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
+    and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise)."""
     from .plugins import settings
     from .plugins.integrator import StylizedIntegrator
+
+    from .api import carried_settings
 
     own = scene.integrator()
     given = {p.name: getattr(args, p.name) for p in settings.PROPERTIES if getattr(args, p.name) is not None}
@@ -254,8 +284,8 @@ def choose_integrator(scene, args, params):
         if not given:
             return own
         base = own.values
-    else:
-        base = {"style": settings.COMMAND_LINE_STYLE}
+    else:  # the scene's path/volpath/direct: its max_depth, rr_depth and hide_emitters still hold
+        base = {"style": settings.COMMAND_LINE_STYLE, **carried_settings(scene)}
     return StylizedIntegrator.from_values(settings.refine(base, given))
 
 
@@ -314,9 +344,12 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: cornell-box)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
     add_setting_flags(r)
-    r.add_argument("--spp", type=int, default=16, help="camera samples per pixel (default 16)")
-    r.add_argument("--width", type=int, default=None, help="image width (built-in scenes; XML with $resx)")
-    r.add_argument("--height", type=int, default=None, help="image height (built-in scenes; XML with $resy)")
+    r.add_argument("--spp", type=int, default=None, help="camera samples per pixel; overrides the scene sampler's "
+                   "sample_count (default: that count; 16 for the built-in scenes)")
+    r.add_argument("--width", type=int, default=None, help="image width (resizes the scene's film)")
+    r.add_argument("--height", type=int, default=None, help="image height (resizes the scene's film)")
+    r.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE",
+                   help="value of a <default> parameter of the scene file ($NAME), as Mitsuba's -D; repeatable")
     r.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same image")
     r.add_argument("--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)")
     r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")

@@ -1,6 +1,7 @@
 """Writing rendered images: EXR as linear float32, PNG as sRGB 8-bit; atomic and checked.
 
     write_image(img, "out.png")      # H x W x 3 linear radiance -> file; raises OSError if it cannot
+    write_image(y, "out.exr", "luminance")   # H x W x 1: the film's own pixel format (Y, YA, XYZ, RGBA, ...)
     save_safely(img, "out.exr")      # never loses the render: falls back to a temporary EXR
     nonfinite_pixels(img)            # how many pixels hold NaN or +-inf
 
@@ -40,19 +41,47 @@ def srgb8(image) -> np.ndarray:
     return np.round(enc * 255.0).astype(np.uint8)
 
 
-def encode(image, ext: str) -> bytes:
-    """The file contents of `image` as `.exr` (linear float32) or `.png` (sRGB 8 bit)."""
+#: a film's pixel format (as `hdrfilm` names it, or as its description shows it) -> Bitmap pixel format
+PIXEL_FORMATS = {"rgb": "RGB", "rgba": "RGBA", "luminance": "Y", "y": "Y", "luminance_alpha": "YA", "ya": "YA",
+                 "xyz": "XYZ", "xyza": "XYZA"}
+
+
+def bitmap_format(pixel_format: str, channels: int) -> str:
+    """The Bitmap pixel format name ('RGB', 'Y', 'XYZA', ...) of an image with `channels` channels."""
+    name = PIXEL_FORMATS.get(pixel_format.lower())
+    if name is None:
+        raise ValueError(f"unknown pixel format {pixel_format!r}: expected one of {', '.join(PIXEL_FORMATS)}")
+    if len(name) != channels:
+        raise ValueError(f"an image of {channels} channel(s) is not in pixel format {pixel_format!r}")
+    return name
+
+
+def check_format(pixel_format: str, ext: str) -> None:
+    """XYZ has no sRGB encoding: such a film is written as EXR only (ValueError otherwise)."""
+    if PIXEL_FORMATS.get(pixel_format.lower(), "").startswith("XYZ") and ext == ".png":
+        raise ValueError(f"the film's pixel_format is {pixel_format!r}: XYZ images are written as .exr only "
+                         f"(or set pixel_format=\"rgb\" for a .png)")
+
+
+def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
+    """The file contents of `image` as `.exr` (linear float32) or `.png` (sRGB 8 bit; alpha stays linear).
+    `image` is H x W x C in the film's `pixel_format`: rgb, rgba, luminance (Y), luminance_alpha, xyz, xyza."""
     import mitsuba as mi
 
     from .jit import backend
     backend()
+    image = np.asarray(image)
+    name = bitmap_format(pixel_format, image.shape[-1] if image.ndim == 3 else 1)
+    check_format(pixel_format, ext)
     if ext == ".png":
         data, fmt = srgb8(image), mi.Bitmap.FileFormat.PNG
+        if name.endswith("A"):  # coverage is no colour: quantized linearly
+            data[..., -1] = np.round(np.clip(np.nan_to_num(image[..., -1]), 0.0, 1.0) * 255.0).astype(np.uint8)
     elif ext == ".exr":
         data, fmt = np.ascontiguousarray(image, dtype=np.float32), mi.Bitmap.FileFormat.OpenEXR
     else:
         raise ValueError(f"unknown image type {ext!r}: expected one of {', '.join(IMAGE_TYPES)}")
-    bmp = mi.Bitmap(np.ascontiguousarray(data), pixel_format=mi.Bitmap.PixelFormat.RGB)
+    bmp = mi.Bitmap(np.ascontiguousarray(data), pixel_format=getattr(mi.Bitmap.PixelFormat, name))
     if ext == ".png":
         bmp.set_srgb_gamma(True)
     stream = mi.MemoryStream()
@@ -90,24 +119,30 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
         pass
 
 
-def write_image(image, path: str) -> None:
-    """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write."""
-    write_bytes_atomically(encode(image, os.path.splitext(path)[1].lower()), path)
+def write_image(image, path: str, pixel_format: str = "rgb") -> None:
+    """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write.
+    `pixel_format` is the film's (see `encode`)."""
+    write_bytes_atomically(encode(image, os.path.splitext(path)[1].lower(), pixel_format), path)
 
 
-def save_safely(image, path: str) -> str:
-    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it. Returns where it went."""
+def save_safely(image, path: str, pixel_format: str = "rgb") -> str:
+    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it. Returns where it went.
+    If even that fails, no empty temporary file is left behind and the error is raised."""
     try:
-        write_image(image, path)
+        write_image(image, path, pixel_format)
         return path
     except Exception as exc:  # the render must survive an I/O failure
         fd, fallback = tempfile.mkstemp(prefix="styletrace-", suffix=".exr")
         os.close(fd)
-        write_image(image, fallback)
+        try:
+            write_image(image, fallback, pixel_format)
+        except BaseException:
+            os.remove(fallback)
+            raise
         reason = str(exc).replace("\n", " ")
         print(f"styletrace: could not write {path!r} ({reason}); saved the render to {fallback}", file=sys.stderr)
         return fallback
 
 
-__all__ = ["IMAGE_TYPES", "nonfinite_pixels", "srgb8", "encode", "write_bytes_atomically", "write_image",
+__all__ = ["IMAGE_TYPES", "PIXEL_FORMATS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode", "write_bytes_atomically", "write_image",
            "save_safely"]

@@ -60,6 +60,8 @@ def check_film(scene: mi.Scene) -> mi.Film:
                          f"box filter (<rfilter type=\"box\"/>), where every camera sample lands in one pixel")
     if film.sample_border():
         raise SceneError("the film samples its border (sample_border=true): buffers need it off")
+    if api.film_format(scene) != "rgb":
+        raise SceneError(f"the film's pixel_format is '{api.film_format(scene)}': buffers need an rgb film")
     return film
 
 

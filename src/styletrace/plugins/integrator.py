@@ -1,7 +1,8 @@
 """`stylized`: Mitsuba integrator for the stylized rendering equation (depth-first tree sampling).
 
 Properties (XML, Python dict, or the CLI's --set): `style`, the style's own parameters under their
-registry names, `inner_samples`, `estimator`, `stylize`, `stylize_depth`, `max_depth`, `rr_depth`.
+registry names, `inner_samples`, `estimator`, `stylize`, `stylize_depth`, `max_depth`, `rr_depth`,
+`hide_emitters`.
 Their defaults, parsing and docs live in `settings` (the table in the README is generated from it).
 
 The radiance leaving a stylized vertex x towards the viewer is
@@ -21,7 +22,8 @@ Where styles apply (`stylize`):
   halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
   The integrator's own style must be identity here.
 
-Rays that escape see the environment unstylized.
+Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
+through area lights and see black where they escape, as in Mitsuba's `path`.
 """
 from __future__ import annotations
 
@@ -165,18 +167,39 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # every random decision below the camera ray comes from an independent stream per lane
         sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
+        hide = self.settings.hide_emitters
+        if hide:
+            ray, pi = past_area_emitters(scene, ray, pi, active)
+        # alpha, as Mitsuba's `path`: the camera ray found a surface, or a visible environment
+        valid = active & (pi.is_valid() | (scene.environment() is not None and not hide))
         if self.settings.stylize == "first_object_hit":
-            return self.walk(0, scene, sampler, pi, ray, active, mi.UInt32(0), halt_at_start=True), active, []
+            start = active & pi.is_valid() if hide else active  # a hidden environment is black
+            return self.walk(0, scene, sampler, pi, ray, start, mi.UInt32(0), halt_at_start=True), valid, []
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
         hit = active & si.is_valid()
         value = self.stylized(0, scene, sampler, pi, si, ray, hit, mi.UInt32(0))
-        return dr.select(hit, value, environment(scene, si, active)), active, []
+        return dr.select(hit, value, 0.0 if hide else environment(scene, si, active)), valid, []
 
     def aov_names(self):
         return []
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"
+
+
+def past_area_emitters(scene, ray, pi, active):
+    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the ray
+    spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance measured
+    from a ray it does not hand back, so the lights are stepped through here)."""
+    def through(ray, pi, skip):
+        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
+        ray = dr.select(skip, si.spawn_ray(ray.d), ray)
+        pi = dr.select(skip, scene.ray_intersect_preliminary(ray, coherent=True, active=skip), pi)
+        return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+
+    skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
+    return ray, pi
 
 
 def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:

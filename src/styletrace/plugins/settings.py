@@ -56,6 +56,8 @@ PROPERTIES = (
              "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
              "where a sky dominates the estimate; BENCHMARKS.md)", "--emitter-sampling", "MODE"),
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
+    Property("hide_emitters", False, "bool", "camera rays do not see emitters, as Mitsuba's `path`: they pass "
+             "through area lights and find black (alpha 0) where they escape", "--hide-emitters", "BOOL"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -63,7 +65,7 @@ COMMAND_LINE_STYLE = "cel"
 #: what a `styled` BSDF accepts besides its style's parameters
 SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
-BASE_KEYS = ("samples_per_pass", "timeout", "hide_emitters")
+BASE_KEYS = ("samples_per_pass", "timeout")
 #: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
 #: "unbounded" (`path.depth_limit`), so larger values would wrap around.
 COUNT_MAX = 2 ** 32 - 2
@@ -94,6 +96,7 @@ class Settings:
     max_depth: int = -1
     rr_depth: int = 5
     emitter_sampling: str = "uniform"
+    hide_emitters: bool = False
 
     @property
     def style(self) -> Style:
@@ -122,6 +125,14 @@ def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
     if not low <= value <= high:
         raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
     return value
+
+
+def boolean(key: str, raw: Any) -> bool:
+    """A bool from True/False, 1/0 or the strings 'true'/'false'/'1'/'0' (any case)."""
+    text = str(raw).strip().lower()
+    if isinstance(raw, bool) or text in ("true", "false", "1", "0") and not isinstance(raw, float):
+        return text in ("true", "1")
+    raise SettingsError(f"bad value {raw!r} for '{key}': expected true or false")
 
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
@@ -166,9 +177,6 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
                             f"integrator renders in styletrace's own passes; set the samples per pass with "
                             f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead")
-    if str(values.get("hide_emitters", False)).lower() in ("true", "1"):
-        raise SettingsError("bad value True for 'hide_emitters': the stylized integrator does not support hiding "
-                            "emitters (their emission is part of the stylized radiance)")
     own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)
     slot = parse_slot(values, extra_keys=own + BASE_KEYS)
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
@@ -192,8 +200,9 @@ def parse(values: Mapping[str, Any]) -> Settings:
     lights = str(get_("emitter_sampling"))
     if lights not in EMITTER_MODES:
         raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
+    hide = boolean("hide_emitters", get_("hide_emitters"))
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights)
+                    emitter_sampling=lights, hide_emitters=hide)
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -214,4 +223,4 @@ def properties_of(props) -> dict[str, Any]:
 
 
 __all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
-           "parse_inner", "integer", "refine", "properties_of"]
+           "parse_inner", "integer", "boolean", "refine", "properties_of"]

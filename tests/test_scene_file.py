@@ -1,0 +1,179 @@
+"""Mitsuba XML scenes render as their authors meant (issue 8): the scene's integrator settings carry over,
+-D parameters, resizing any film, the spp default, unknown integrators replaced, and every film format."""
+import os
+
+import mitsuba as mi
+import numpy as np
+import pytest
+
+import styletrace
+from styletrace import api
+from styletrace.cli import build_parser, choose_integrator, main
+from styletrace.errors import SceneError
+from styletrace.images import save_safely
+
+styletrace.init()
+
+#: Rec. 709 / sRGB primaries with a D65 white (IEC 61966-2-1): linear RGB -> CIE XYZ
+RGB_TO_XYZ = np.array([[0.412453, 0.357580, 0.180423],
+                       [0.212671, 0.715160, 0.072169],
+                       [0.019334, 0.119193, 0.950227]])
+
+
+def xml(integrator='<integrator type="path"><integer name="max_depth" value="6"/></integrator>',
+        film='<integer name="width" value="12"/><integer name="height" value="8"/>', pixel_format="rgb",
+        head='<default name="spp" value="3"/>'):
+    return f"""<scene version="3.0.0">{head}{integrator}
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm">{film}<string name="pixel_format" value="{pixel_format}"/><rfilter type="box"/></film>
+      </sensor>
+      <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.8,0.4,0.2"/></bsdf></shape>
+      <shape type="rectangle"><transform name="to_world"><translate value="0,0,-3"/></transform>
+        <emitter type="area"><rgb name="radiance" value="1,2,3"/></emitter></shape>
+      <emitter type="constant"><rgb name="radiance" value="0.3,0.5,0.7"/></emitter></scene>"""
+
+
+def write(tmp_path, text, name="s.xml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def read(path):
+    bmp = mi.Bitmap(str(path))
+    return bmp, np.array(bmp, dtype=np.float64).reshape(bmp.height(), bmp.width(), -1)
+
+
+# ---- 4: the scene's integrator settings ---------------------------------------------------------------
+def args_of(*argv):
+    return build_parser().parse_args(["render", *argv])
+
+
+def test_cli_keeps_the_scenes_depths_and_hide_emitters_and_a_flag_wins(tmp_path):
+    path = write(tmp_path, xml('<integrator type="volpath"><integer name="max_depth" value="6"/>'
+                               '<integer name="rr_depth" value="3"/><boolean name="hide_emitters" value="true"/>'
+                               '</integrator>'))
+    scene = api.load_scene(path)
+    s = choose_integrator(scene, args_of(path), {}).settings
+    assert (s.max_depth, s.rr_depth, s.hide_emitters, s.style.name) == (6, 3, True, "cel")
+    s = choose_integrator(scene, args_of(path, "--max-depth", "2", "--hide-emitters", "false"), {}).settings
+    assert (s.max_depth, s.rr_depth, s.hide_emitters) == (2, 3, False)
+
+
+# ---- 6: -D parameters, any film resized, spp ----------------------------------------------------------
+def test_defines_set_the_files_parameters(tmp_path):
+    path = write(tmp_path, xml(integrator='<integrator type="path"><integer name="max_depth" value="$d"/>'
+                                          '</integrator>', head='<default name="spp" value="3"/>'
+                                                                '<default name="d" value="4"/>'))
+    scene = api.load_scene(path, defines={"spp": 7, "d": "2"})
+    assert api.scene_spp(scene) == 7 and api.carried_settings(scene)["max_depth"] == 2
+    with pytest.raises(SceneError, match="uses no parameter nope: -D"):
+        api.load_scene(path, defines={"nope": 1})
+
+
+def test_width_and_height_resize_a_film_without_parameters(tmp_path):
+    path = write(tmp_path, xml())
+    assert list(api.load_scene(path, 20, 6).sensors()[0].film().size()) == [20, 6]
+    assert list(api.load_scene(path, 20).sensors()[0].film().size()) == [20, 8]
+    # a sensor without a film gets Mitsuba's default film at the new size
+    no_film = xml().replace('<film type="hdrfilm">', "<!--").replace('<rfilter type="box"/></film>', "-->")
+    assert list(api.load_scene(write(tmp_path, no_film, "n.xml"), 10, 4).sensors()[0].film().size()) == [10, 4]
+    with pytest.raises(SceneError, match="crop window"):
+        api.load_scene(write(tmp_path, xml(film='<integer name="crop_width" value="4"/>'), "c.xml"), 10, 4)
+
+
+def test_a_mesh_path_still_resolves_next_to_a_resized_scene(tmp_path):
+    """The edited XML is loaded from text; relative file names resolve in the scene's folder as before."""
+    (tmp_path / "m").mkdir()
+    mi.load_dict({"type": "cube"}).write_ply(str(tmp_path / "m" / "cube.ply"))
+    text = xml().replace('<shape type="sphere">', '<shape type="ply"><string name="filename" value="m/cube.ply"/>')
+    cwd = os.getcwd()
+    os.chdir("/")
+    try:
+        scene = api.load_scene(write(tmp_path, text), 6, 6)
+    finally:
+        os.chdir(cwd)
+    assert any(s.class_name() == "PLYMesh" for s in scene.shapes())
+
+
+def test_cli_spp_defaults_to_the_scenes_and_the_flag_wins(tmp_path, capsys):
+    path = write(tmp_path, xml())
+    out = str(tmp_path / "o.exr")
+    assert main(["render", path, "-o", out, "--inner", "1"]) == 0
+    assert "spp 3)" in capsys.readouterr().err
+    assert main(["render", path, "-o", out, "--inner", "1", "--spp", "2", "-D", "spp=5"]) == 0
+    assert "spp 2)" in capsys.readouterr().err
+    assert main(["render", path, "-o", out, "--inner", "1", "-D", "spp=5", "--width", "5"]) == 0
+    assert "spp 5)" in capsys.readouterr().err and read(out)[1].shape == (8, 5, 3)
+
+
+# ---- 7: an integrator Mitsuba does not know ------------------------------------------------------------
+def test_unknown_integrator_is_replaced_keeping_its_depths(tmp_path, capsys):
+    path = write(tmp_path, xml('<integrator type="sre"><integer name="max_depth" value="3"/>'
+                               '<integer name="rr_depth" value="2"/><string name="style" value="toon"/>'
+                               '<float name="sharpness" value="2"/></integrator>'))
+    with pytest.warns(api.SceneWarning, match="integrator 'sre' is not a Mitsuba plugin: rendering with stylized, "
+                                              "keeping max_depth=3, rr_depth=2; dropped style, sharpness"):
+        scene = api.load_scene(path)
+    assert api.carried_settings(scene) == {"max_depth": 3, "rr_depth": 2}
+    out = str(tmp_path / "o.png")
+    assert main(["render", path, "-o", out, "--inner", "1", "--spp", "1"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert [line for line in err if "warning" in line] == [
+        f"styletrace: warning: scene file '{path}': integrator 'sre' is not a Mitsuba plugin: rendering with "
+        f"stylized, keeping max_depth=3, rr_depth=2; dropped style, sharpness"]
+
+
+# ---- 5: every pixel format of hdrfilm -------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def rgb_reference(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("rgb")
+    path = write(folder, xml())
+    return api.render(path, style="identity", inner=1, spp=4, seed=7)
+
+
+@pytest.mark.parametrize("pixel_format, channels", [
+    ("rgb", "RGB"), ("rgba", "RGBA"), ("luminance", "Y"), ("luminance_alpha", "YA"), ("xyz", "XYZ"),
+    ("xyza", "XYZA")])
+def test_every_pixel_format_is_written_as_the_film_asks(tmp_path, rgb_reference, pixel_format, channels):
+    """Same seed, same samples: the film's channels are the RGB render converted (Y and XYZ by the sRGB/Rec.
+    709 matrix), and alpha is 1 everywhere (the sky is visible)."""
+    path = write(tmp_path, xml(pixel_format=pixel_format))
+    out = tmp_path / "o.exr"
+    assert main(["render", path, "-o", str(out), "--style", "identity", "--inner", "1", "--spp", "4", "--seed", "7",
+                 "-q"]) == 0
+    bmp, img = read(out)
+    assert bmp.pixel_format().name == channels
+    want = {"R": rgb_reference[..., 0], "G": rgb_reference[..., 1], "B": rgb_reference[..., 2],
+            "A": np.ones(rgb_reference.shape[:2])}
+    xyz = rgb_reference @ RGB_TO_XYZ.T
+    want.update({"X": xyz[..., 0], "Y": xyz[..., 1], "Z": xyz[..., 2]})
+    for i, c in enumerate(channels):
+        np.testing.assert_allclose(img[..., i], want[c], rtol=2e-3, atol=1e-5, err_msg=c)
+
+
+def test_alpha_is_zero_where_a_hidden_sky_is_seen(tmp_path):
+    path = write(tmp_path, xml('<integrator type="path"><boolean name="hide_emitters" value="true"/></integrator>',
+                               pixel_format="rgba"))
+    img = api.render(path, style="identity", inner=1, spp=2)
+    assert img.shape == (8, 12, 4)
+    assert img[0, 0, 3] == 0.0 and np.all(img[0, 0] == 0.0) and img[4, 6, 3] == 1.0
+
+
+def test_luminance_png_is_grey_and_xyz_png_is_refused_before_rendering(tmp_path, capsys):
+    out = tmp_path / "o.png"
+    assert main(["render", write(tmp_path, xml(pixel_format="luminance")), "-o", str(out), "--spp", "1",
+                 "--inner", "1", "-q"]) == 0
+    assert mi.Bitmap(str(out)).pixel_format() == mi.Bitmap.PixelFormat.Y
+    assert main(["render", write(tmp_path, xml(pixel_format="xyz"), "x.xml"), "-o", str(tmp_path / "x.png")]) == 2
+    assert "XYZ images are written as .exr only" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_a_failed_fallback_leaves_no_empty_file(tmp_path, monkeypatch):
+    import tempfile
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    with pytest.raises(ValueError):  # 2 channels are no rgb image: the write and the fallback both fail
+        save_safely(np.zeros((2, 2, 2), np.float32), str(tmp_path / "o.exr"))
+    assert os.listdir(tmp_path) == []
