@@ -40,8 +40,7 @@ def reference(scene):
 
 
 def measure(scene, ref, mode):
-    emitter_sampler.DEFAULT_MODE = mode
-    integrator = make_integrator("identity", inner=1)
+    integrator = make_integrator("identity", inner=1, emitter_sampling=mode)
     render(scene, integrator, SPP, 99)  # compile
     errs, times = [], []
     for k in range(RUNS):

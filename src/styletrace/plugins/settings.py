@@ -17,7 +17,7 @@ from ..errors import SettingsError
 from ..styles import create, get
 from ..styles.base import Style
 from . import estimation
-from .emitter_sampler import MODES as EMITTER_MODES
+from .emitter_sampler import DEFAULT_MODE as EMITTER_DEFAULT, MODES as EMITTER_MODES
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ PROPERTIES = (
     Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 8: tracing time doubles "
              "per level)", "--stylize-depth", "N"),
     Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
-    Property("emitter_sampling", "uniform", "string", "how next-event estimation picks a light: uniform (as "
+    Property("emitter_sampling", EMITTER_DEFAULT, "string", "how next-event estimation picks a light: uniform (as "
              "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
              "where a sky dominates the estimate; BENCHMARKS.md)", "--emitter-sampling", "MODE"),
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
@@ -95,7 +95,7 @@ class Settings:
     stylize_depth: int = 1
     max_depth: int = -1
     rr_depth: int = 5
-    emitter_sampling: str = "uniform"
+    emitter_sampling: str = EMITTER_DEFAULT
     hide_emitters: bool = False
 
     @property
