@@ -26,6 +26,7 @@ from .arguments import check_passes_args, check_render_args, check_scene, scene_
 from .errors import SceneError  # noqa: E402
 from .images import save_safely, write_image  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
+from .plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402
 from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
@@ -135,6 +136,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lanes_per_pass: int = LANES_PER_PASS) -> Iterator[Progress]:
     """Render `spp` samples per pixel in passes; yield the running average after each pass."""
     check_passes_args(scene, integrator, spp, seed)
+    integrator = resolve_defaults(scene, integrator)[0]  # scene-relative 'auto' style values (scene_defaults)
     size = scene.sensors()[0].film().crop_size()
     pixels = int(size[0]) * int(size[1])
     per_pass = max(1, min(spp, lanes_per_pass // max(pixels, 1)))
@@ -180,5 +182,5 @@ def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: An
     return image
 
 
-__all__ = ["render", "load_scene", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError",
+__all__ = ["render", "load_scene", "make_integrator", "make_integrator_from", "passes", "resolve_defaults", "pass_count", "SceneError",
            "Progress", "StylizedIntegrator", "write_image", "save_safely"]

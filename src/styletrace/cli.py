@@ -110,6 +110,9 @@ def cmd_render(args) -> int:
 
     scene = api.load_scene(args.scene, args.width, args.height)
     integrator = choose_integrator(scene, args, params)
+    integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
+    if chosen and not args.quiet:
+        print(f"styletrace: auto values: {chosen}", file=sys.stderr)
 
     lanes = api.LANES_PER_PASS
     if args.pass_spp:
