@@ -48,11 +48,8 @@ PILOT_SEED = 0x5EED
 
 
 def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
-    """Quantiles of the distribution putting mass `weights` on `values` (midpoint interpolation)."""
-    order = np.argsort(values)
-    v, w = values[order], weights[order].astype(np.float64)
-    cdf = (np.cumsum(w) - 0.5 * w) / w.sum()
-    return [float(np.interp(q, cdf, v)) for q in qs]
+    """Quantiles of the distribution putting mass `weights` on `values` (numpy's inverted CDF)."""
+    return [float(x) for x in np.quantile(values, qs, weights=weights, method="inverted_cdf")]
 
 
 class Pilot:
