@@ -77,7 +77,7 @@ def cmd_styles(args) -> int:
         inner = "closed form, 0 samples" if cls.default_inner == 0 else f"default inner samples {cls.default_inner}"
         print(f"{name}: {cls.summary} [{inner}]")
         for p in cls.params:
-            print(f"    {p.name} = {p.show(p.default)}    {p.doc}; {p.allowed()}")
+            print(f"    {p.name} = {p.show(p.default)}    {p.explain()}; {p.allowed()}")
         print(f"    estimators: {', '.join(applicable(cls()))}")
     print("compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. contrast+sepia; "
           "parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or affine / combined / telescoping "

@@ -32,7 +32,7 @@ class Cel(Style):
     summary = "GI cel shading: brightness quantized to levels, colour kept (S5.2)"
     params = (
         Param("thresholds", "floats", None, "brightness steps between levels, increasing",
-              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands)"),
+              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; unresolved: evenly spaced k/(K+1))"),
         Param("levels", "floats", (0.4, 0.95), "target brightness of each band (one more than thresholds)", low=0.0),
     )
     default_inner = 16

@@ -29,7 +29,8 @@ class ColorMap(Style):
     summary = "brightness mapped to a colour gradient, clamped to its ends (S5.1)"
     params = (Param("gradient", "gradient", Gradient.parse("dusk"), "colour stops over brightness"),
               Param("range", "floats", None, "brightness lo,hi mapped onto the first and last stop",
-                    auto="the 5% and 95% quantiles of the scene's first-hit brightness"))
+                    auto="the 5% and 95% quantiles of the scene's first-hit brightness (unresolved: the "
+                         "first and last stop)"))
     default_inner = 16
 
     def validate(self) -> None:

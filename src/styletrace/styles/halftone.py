@@ -65,7 +65,7 @@ def screen_halftone_mask(p: mi.Point3f, u: mi.Float, proj: Projection, spacing_p
 @register
 class Halftone(BrightnessRange, Style):
     name = "halftone"
-    summary = "half-tone: dark dots on a 3D grid, radius growing as brightness falls"
+    summary = "half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness falls"
     params = (
         Param("spacing_px", "float", 8.0, "grid interval on screen (pixels, a square grid of the image); used "
               "unless spacing is given", low=0.0, low_open=True),

@@ -162,6 +162,10 @@ class Param:
             return s
         raise AssertionError(f"unknown parameter kind {k}")
 
+    def explain(self) -> str:
+        """The doc line with the rule of an 'auto' default, as `styletrace styles` and the docs show it."""
+        return f"{self.doc}; auto: {self.auto}" if self.auto else self.doc
+
     def show(self, value: Any) -> str:
         """Format a value the way `parse` reads it back ('auto' for a default the style derives itself)."""
         if value is None:
