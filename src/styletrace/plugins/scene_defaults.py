@@ -36,7 +36,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from ..styles.base import Camera, Style, Vertex, brightness, camera
+from ..errors import StyleError
+from ..styles.base import Camera, Style, Vertex, camera
 from . import settings as S
 from .integrator import StylizedIntegrator
 from .styled_bsdf import StyledBSDF
@@ -157,10 +158,26 @@ class NothingSeen(Exception):
 
 
 def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
+    """The style's auto values that its parameters accept. A rule pushed past a parameter's range by an
+    extreme given value (u_min = 1e6 leaves no u_max above it) pins nothing: the style's unresolved
+    fallback applies, as it does when the camera sees nothing."""
     try:
-        return style.auto_values(facts)
+        chosen = style.auto_values(facts)
     except NothingSeen:
         return {}
+    params = {p.name: p for p in type(style).params}
+    out = {}
+    for key, value in chosen.items():
+        try:
+            params[key].parse(value)
+        except StyleError:
+            continue
+        out[key] = value
+    try:
+        style.pinned(out)
+    except StyleError:  # together they break a check across parameters: leave them all unresolved
+        return {}
+    return out
 
 
 def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
