@@ -206,7 +206,10 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator) -> tuple[mi.Integrator, 
         style = integrator.settings.style
         chosen = auto_values(style, Facts(scene, pilot, 0))
         if chosen:
-            integrator = StylizedIntegrator.from_values(S.refine(integrator.values, chosen))
+            # the parsed settings with only the style replaced (settings are parsed once, `settings` module)
+            s = integrator.settings
+            pinned = replace(s, slot=replace(s.slot, style=style.pinned(chosen)))
+            integrator = StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen})
             notes.append(describe(style, chosen))
     for k, bsdf in enumerate(unique_styled(scene), start=1):
         style = bsdf.slot.style
