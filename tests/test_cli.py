@@ -129,7 +129,7 @@ def test_xml_scene_with_stylized_integrator(tmp_path):
     path.write_text("""<scene version="3.0.0">
       <default name="resx" value="20"/><default name="resy" value="12"/>
       <integrator type="stylized"><string name="style" value="cel"/><string name="levels" value="0.2,0.9"/>
-        <integer name="inner_samples" value="2"/></integrator>
+        <string name="thresholds" value="0.75"/><integer name="inner_samples" value="2"/></integrator>
       <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
         <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
         <rfilter type="box"/></film></sensor>
@@ -258,7 +258,9 @@ def test_flags_refine_the_scenes_own_integrator(tmp_path, capsys):
     assert main(["render", str(path), "--max-depth", "1", "--spp", "1", "-q", "-o", str(out)]) == 0
     np.testing.assert_allclose(read(out)[3:5, 3:5], 0.0, atol=1e-6)
     assert main(["render", str(path), "--style", "cel", "--spp", "1", "-o", str(out)]) == 0
-    assert "cel(thresholds=0.75" in capsys.readouterr().err  # a new style drops the old one's parameters
+    err = capsys.readouterr().err
+    # a new style drops the old one's parameters: cel at its own defaults (auto thresholds, printed; levels)
+    assert "styletrace: auto values: cel thresholds=" in err and "levels=0.4,0.95)" in err and "gamma=" not in err
 
 
 @pytest.mark.parametrize("args", [["--spp", "abc"], ["--no-such-flag"], []])

@@ -34,6 +34,7 @@ from .arguments import check_passes_args, check_render_args, check_scene, scene_
 from .errors import SceneError, UsageError  # noqa: E402
 from .images import PIXEL_FORMATS, save_safely, write_image  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
+from .plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402
 from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
@@ -293,6 +294,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     float32, one image's worth of memory. `lock` (a context manager) is held while it is updated, so that
     another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher)."""
     check_passes_args(scene, integrator, spp, seed)
+    integrator = resolve_defaults(scene, integrator)[0]  # scene-relative 'auto' style values (scene_defaults)
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
@@ -362,5 +364,5 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     return image
 
 
-__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning", "make_integrator", "make_integrator_from", "passes", "pass_count", "SceneError",
+__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning", "make_integrator", "make_integrator_from", "passes", "resolve_defaults", "pass_count", "SceneError",
            "Progress", "StylizedIntegrator", "write_image", "save_safely"]

@@ -154,7 +154,7 @@ def cmd_styles(args) -> int:
         inner = "closed form, 0 samples" if cls.default_inner == 0 else f"default inner samples {cls.default_inner}"
         print(f"{name}: {cls.summary} [{inner}]")
         for p in cls.params:
-            print(f"    {p.name} = {p.show(p.default)}    {p.doc}; {p.allowed()}")
+            print(f"    {p.name} = {p.show(p.default)}    {p.explain()}; {p.allowed()}")
         print(f"    estimators: {', '.join(applicable(cls()))}")
     print("compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. contrast+sepia; "
           "parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or affine / combined / telescoping "
@@ -203,6 +203,9 @@ def cmd_render(args) -> int:
     except ValueError as exc:
         raise UsageError(f"bad output {args.output!r}: {exc}") from None
     api.check_memory(int(size[0]), int(size[1]), ext)
+    integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
+    if chosen and not args.quiet:
+        print(f"styletrace: auto values: {chosen}", file=sys.stderr)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
         return render_with_buffer(args, scene, integrator)

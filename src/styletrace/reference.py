@@ -58,7 +58,7 @@ def style_table(name: str) -> str:
         return "No parameters.\n"
     rows = [_row("parameter", "type", "default", "meaning", "allowed"), "|---|---|---|---|---|"]
     for p in cls.params:
-        rows.append(_row(p.name, p.kind, f"`{p.show(p.default)}`", p.doc, p.allowed()))
+        rows.append(_row(p.name, p.kind, f"`{p.show(p.default)}`", p.explain(), p.allowed()))
     return "\n".join(rows) + "\n"
 
 

@@ -32,7 +32,8 @@ XML = """<scene version="3.0.0">
 
 
 @pytest.mark.parametrize("inside,message", [
-    ('<string name="style" value="cel"/><string name="levels" value="0.5"/><bsdf type="diffuse"/>',
+    ('<string name="style" value="cel"/><string name="thresholds" value="0.5"/><string name="levels" value="0.5"/>'
+     '<bsdf type="diffuse"/>',
      "bad value '0.5' for parameter 'levels'"),
     ('<string name="style" value="cel"/>', "needs exactly one nested BSDF, found 0"),
     ('<bsdf type="diffuse"/>', "needs a 'style' property"),

@@ -6,8 +6,8 @@ from styletrace.styles import create
 from .support import rejects, rejects_unknown, run
 
 
-def test_default_bands_keep_colour():
-    c = create("cel")  # u < 0.75 -> 0.4, u >= 0.75 -> 0.95
+def test_bands_keep_colour():
+    c = create("cel", thresholds=0.75)  # u < 0.75 -> 0.4, u >= 0.75 -> 0.95 (the default levels)
     I = np.array([(0.3, 0.6, 0.9), (0.1, 0.2, 0.3), (1.5, 1.5, 3.0)], dtype=np.float32)
     u = I.astype(np.float64).mean(axis=1)
     target = np.array([0.4, 0.4, 0.95])
@@ -15,7 +15,7 @@ def test_default_bands_keep_colour():
 
 
 def test_band_edge_exactly_at_threshold():
-    c = create("cel")
+    c = create("cel", thresholds=0.75)
     I = np.array([(0.75, 0.75, 0.75), (0.75, 0.5, 1.0), (0.7499, 0.7499, 0.7499)], dtype=np.float32)
     assert np.float32(I[0].sum()) * np.float32(1 / 3) == np.float32(0.75)   # u is exactly the threshold
     out = run(c, I)
@@ -30,6 +30,16 @@ def test_zero_brightness_is_grey_at_first_level():
     assert np.all(np.isfinite(out))
 
 
+def test_unresolved_auto_thresholds_are_evenly_spaced():
+    # thresholds default to auto (scene quantiles, tests/plugins/test_scene_defaults.py); a style never
+    # resolved on a scene splits [0, 1] evenly: 0.5 for two levels, 1/3 and 2/3 for three
+    assert create("cel").thresholds is None
+    out = run(create("cel"), [(0.49,) * 3, (0.5,) * 3])
+    np.testing.assert_allclose(out, [(0.4,) * 3, (0.95,) * 3], rtol=1e-6)
+    c = create("cel", levels="0.1,0.5,0.9")
+    np.testing.assert_allclose(run(c, [(0.3,) * 3, (0.34,) * 3, (0.67,) * 3])[:, 0], [0.1, 0.5, 0.9], rtol=1e-6)
+
+
 def test_several_thresholds():
     c = create("cel", thresholds="0.2,0.5", levels="0.1,0.4,0.9")
     u = np.array([0.1, 0.2, 0.35, 0.5, 2.0])
@@ -40,7 +50,7 @@ def test_several_thresholds():
 def test_parameters():
     msg = rejects("cel", "thresholds", "0.5,0.2", levels="0.1,0.2,0.3")
     assert "increase" in msg
-    msg = rejects("cel", "levels", "0.1,0.2,0.3")      # 1 threshold needs 2 levels
+    msg = rejects("cel", "levels", "0.1,0.2,0.3", thresholds="0.5")      # 1 threshold needs 2 levels
     assert "expected 2 levels" in msg
     rejects("cel", "levels", "-0.1,0.5")
     rejects("cel", "thresholds", "")

@@ -1,4 +1,6 @@
+import mitsuba as mi
 import numpy as np
+import pytest
 
 from styletrace.styles import create
 
@@ -44,9 +46,27 @@ def test_matches_closed_form_on_random_vertices():
 
 def test_defaults_match_the_brief():
     g = create("gooch")
-    assert g.light_dir == (0.0, 1.0, 0.3) and g.k_d == (0.8, 0.8, 0.8)
+    # light_dir is auto: from the camera (test_auto_light_follows_the_camera); unprepared: the brief's 0,1,0.3
+    assert g.light_dir is None and np.allclose(g.light(), np.array([0, 1, 0.3]) / np.hypot(1, 0.3))
+    assert g.k_d == (0.8, 0.8, 0.8)
     assert g.blue == (0.0, 0.0, 0.55) and g.yellow == (0.3, 0.3, 0.0) and g.alpha == 0.25 and g.beta == 0.5
     assert g.default_inner == 0
+
+
+@pytest.mark.parametrize("style", ["gooch", "xtoon"])
+@pytest.mark.parametrize("origin, up", [((0, 1, 5), (0, 1, 0)), ((4, -3, 1.5), (0, 0, 1))])
+def test_auto_light_follows_the_camera(style, origin, up):
+    # light_dir auto = normalize(up - 0.3 forward): above the picture for y-up and z-up scenes alike
+    scene = mi.load_dict({"type": "scene", "sensor": {
+        "type": "perspective", "to_world": mi.ScalarTransform4f().look_at(origin=origin, target=[0, 0, 0], up=up)}})
+    g = create(style)
+    g.prepare(scene)
+    f = -np.array(origin, dtype=float) / np.linalg.norm(origin)
+    cam_up = np.array(up, dtype=float) - (np.array(up) @ f) * f
+    want = cam_up / np.linalg.norm(cam_up) - 0.3 * f
+    np.testing.assert_allclose(g.light(), want / np.linalg.norm(want), atol=1e-3)
+    assert np.dot(g.light(), up) > 0.9                       # the light is above, not beside the scene
+    assert create(style, light_dir="1,0,0").light() == (1.0, 0.0, 0.0)   # an explicit value wins
 
 
 def test_parameters():

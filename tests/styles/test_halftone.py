@@ -54,11 +54,13 @@ def test_apply_hand_values():
 
 def test_parameters_and_defaults():
     h = create("halftone")
-    assert h.spacing == 0.05 and math.isclose(h.r_max, 0.75 * 0.5 * math.sqrt(3) * 0.05)
+    # spacing is auto: a screen grid spacing_px = 8 pixels apart, radius up to 0.75 of half its diagonal
+    assert h.spacing is None and h.spacing_px == 8 and math.isclose(h.r_max, 0.75 * 0.5 * math.sqrt(2) * 8)
+    assert math.isclose(create("halftone", spacing=0.05).r_max, 0.75 * 0.5 * math.sqrt(3) * 0.05)
     rejects("halftone", "spacing", -1.0)
     rejects("halftone", "max_radius_fraction", 0.0)
     rejects("halftone", "max_radius_fraction", 1.5)
-    msg = rejects("halftone", "u_max", 0.0)
+    msg = rejects("halftone", "u_max", 0.0, u_min=0.05)
     assert "u_min" in msg
     rejects("halftone", "dark", "red")
     rejects_unknown("halftone")

@@ -88,15 +88,19 @@ def test_prepare_reads_camera():
 
 def test_parameters_and_defaults():
     h = create("hatching")
-    assert h.sets == 3 and h.spacing == 0.04 and abs(h.thickness - 0.012) < 1e-12
-    assert abs(create("hatching", spacing=0.1).thickness - 0.03) < 1e-12
+    # spacing is auto: lines spacing_px = 8 pixels apart, 0.3 * 8 thick; a given spacing is in scene units
+    assert h.sets == 3 and h.spacing is None and h.spacing_px == 8 and abs(h.line_thickness - 2.4) < 1e-12
+    assert abs(create("hatching", spacing=0.1).line_thickness - 0.03) < 1e-12
+    assert abs(create("hatching", spacing_px=20).line_thickness - 6.0) < 1e-12
+    msg = rejects("hatching", "thickness", 8.5)          # >= default spacing_px 8
+    assert "spacing_px" in msg
     rejects("hatching", "sets", 0)
     rejects("hatching", "sets", 9)
     rejects("hatching", "sets", 2.5)
     rejects("hatching", "spacing", 0.0)
-    msg = rejects("hatching", "thickness", 0.05)          # >= default spacing 0.04
+    msg = rejects("hatching", "thickness", 0.05, spacing=0.04)          # >= spacing 0.04
     assert "spacing" in msg
-    msg = rejects("hatching", "u_max", 0.01)
+    msg = rejects("hatching", "u_max", 0.01, u_min=0.05)
     assert "u_min" in msg
     rejects("hatching", "line_color", "#12345")
     rejects_unknown("hatching")

@@ -86,8 +86,12 @@ def test_parameters():
     rejects("xtoon", "mode", "fancy")
     rejects("xtoon", "r", -1.0)
     rejects("xtoon", "z_min", 0.0)
-    msg = rejects("xtoon", "z_max", 0.5)   # below the default z_min = 1
+    msg = rejects("xtoon", "z_max", 0.5, z_min=1.0)   # below z_min
     assert "z_min" in msg
+    # unresolved auto ends (mi.render called directly): 1 and 10, a decade from the end that is given
+    assert create("xtoon").depth_range() == (1.0, 10.0)
+    assert create("xtoon", z_max=0.5).depth_range() == (0.05, 0.5)
+    assert create("xtoon", z_min=20).depth_range() == (20.0, 200.0)
     rejects("xtoon", "light_dir", "0,0,0")
     rejects("xtoon", "gradient", "not a gradient")
     rejects_unknown("xtoon")

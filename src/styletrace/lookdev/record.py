@@ -156,6 +156,9 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
            ) -> Iterator[tuple[api.Progress, Buffer]]:
     """Render like `api.passes`, yielding (progress, buffer so far) after each pass."""
     film = check_film(scene)
+    # pin the scene-relative defaults first: `api.passes` would otherwise pin them on a plain copy of the
+    # integrator, losing the recording
+    integrator = api.resolve_defaults(scene, integrator)[0]
     rec = RecordingIntegrator(integrator)
     slots = [t.slot for t in rec._targets(scene)]
     check_recordable(rec.settings, slots)

@@ -98,6 +98,39 @@ def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO, radiance: 
     }
 
 
+def scaled(scene: dict[str, Any], factor: float, light: float = 1.0) -> dict[str, Any]:
+    """`scene` (a dict) scaled by `factor` about the origin, camera included, with every area emitter's
+    radiance times `light`. Shapes get a scale before their `to_world` (spheres: centre and radius); the
+    perspective sensor keeps its orientation and field of view, moves its position (Mitsuba refuses
+    scale in a camera transform) and scales its clip and focus distances. Radiance is scale-free, so with light = 1 the image is unchanged: only
+    the scene's units differ (the built-in scenes' test of scene-relative style defaults)."""
+    T = mi.ScalarTransform4f
+
+    def visit(node):
+        if not isinstance(node, dict):
+            return node
+        out = {k: visit(v) for k, v in node.items()}
+        kind = out.get("type")
+        if kind in ("perspective", "thinlens"):
+            m = mi.ScalarMatrix4f(out.get("to_world", T()).matrix)
+            for i in range(3):
+                m[i, 3] *= factor
+            out["to_world"] = T(m)
+            for key in ("near_clip", "far_clip", "focus_distance"):
+                if key in out:
+                    out[key] = factor * out[key]
+        elif "to_world" in out:
+            out["to_world"] = T().scale(factor) @ out["to_world"]
+        if kind == "sphere":
+            out["center"] = [factor * c for c in out.get("center", [0, 0, 0])]
+            out["radius"] = factor * out.get("radius", 1.0)
+        if kind == "area" and isinstance(out.get("radiance"), dict):
+            out["radiance"] = {**out["radiance"], "value": [light * v for v in out["radiance"]["value"]]}
+        return out
+
+    return visit(scene)
+
+
 BUILTIN: dict[str, Callable[..., dict[str, Any]]] = {
     "cornell-box": cornell_box,
     "dragon": dragon,

@@ -58,6 +58,8 @@ class Style:
                 allowed = ", ".join(known) if known else "none"
                 raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are {allowed}")
         self.values: dict[str, Any] = {}
+        #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in auto values
+        self.given: dict[str, Any] = {k: v for k, v in values.items() if v is not None}
         for p in self.params:
             self.values[p.name] = p.parse(values[p.name]) if key_in(values, p.name) else p.default
         self.validate()
@@ -77,6 +79,16 @@ class Style:
 
     def prepare(self, scene: mi.Scene) -> None:
         """Called once per render before the kernel is traced (e.g. to read the camera)."""
+
+    def auto_values(self, facts) -> dict[str, Any]:
+        """Values for the parameters left at 'auto' whose rule needs the scene (`plugins.scene_defaults`
+        computes them before rendering). `facts` offers `camera` (a `Camera`), `brightness(qs)` and
+        `depth(qs)`: quantiles of the first-hit brightness and camera depth of what this style covers."""
+        return {}
+
+    def pinned(self, values: Mapping[str, Any]) -> "Style":
+        """A new style of the same kind: the given parameters kept, `values` filling in auto ones."""
+        return type(self)(**{**self.given, **values})
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         raise NotImplementedError
@@ -117,9 +129,83 @@ def camera(scene: mi.Scene) -> Camera:
     return Camera(position=tuple(float(x) for x in m[:3, 3]), forward=unit(m[:3, 2]), up=unit(m[:3, 1]))
 
 
+@dataclass(frozen=True)
+class Projection:
+    """The first sensor's mapping of world points to screen pixels. A point p at camera depth
+    z = (p - position) . forward spans `a z + b` scene units per pixel there (perspective: a = twice the
+    tangent of half a pixel's angle, b = 0; orthographic: a = 0, b = the pixel's width)."""
+
+    camera: Camera = Camera()
+    right: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    #: until `projection(scene)` is read: a 45-degree field of view over 256 pixels
+    a: float = 2.0 * 0.41421356237 / 256
+    b: float = 0.0
+
+    def footprint(self, p: mi.Point3f) -> tuple[mi.Vector3f, mi.Float]:
+        """(p - camera position, the scene units per pixel at p's depth) on Dr.Jit arrays."""
+        rel = mi.Vector3f(p - mi.Point3f(*self.camera.position))
+        z = dr.maximum(dr.dot(rel, mi.Vector3f(*self.camera.forward)), 1e-6)  # points behind: finite, tiny
+        return rel, z * self.a + self.b
+
+    def pixels(self, p: mi.Point3f) -> tuple[mi.Float, mi.Float]:
+        """Screen coordinates of p in pixels (right, up), relative to the image centre."""
+        rel, fp = self.footprint(p)
+        inv = dr.rcp(fp)
+        return dr.dot(rel, mi.Vector3f(*self.right)) * inv, dr.dot(rel, mi.Vector3f(*self.camera.up)) * inv
+
+
+def projection(scene: mi.Scene) -> Projection:
+    """Measured on the sensor itself: the rays through the film centre and one pixel to its right."""
+    import numpy as np
+    sensors = scene.sensors()
+    if not sensors:
+        return Projection()
+    cam = camera(scene)
+    sensor = sensors[0]
+    width = max(int(sensor.film().crop_size()[0]), 1)
+    ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f([0.5, 0.5 + 1.0 / width], [0.5, 0.5]),
+                               mi.Point2f(0.5, 0.5))
+    d, o = np.array(ray.d, dtype=np.float64), np.array(ray.o, dtype=np.float64)
+    f = np.array(cam.forward)
+    a = float(np.linalg.norm(d[:, 1] / (d[:, 1] @ f) - d[:, 0] / (d[:, 0] @ f)))
+    b = 0.0
+    if a < 1e-12:  # parallel rays: orthographic
+        a, b = 0.0, float(np.linalg.norm(o[:, 1] - o[:, 0]))
+    up, fw = np.array(cam.up), f
+    right = np.cross(up, fw)
+    right /= np.linalg.norm(right)
+    return Projection(camera=cam, right=tuple(float(x) for x in right), a=a, b=b)
+
+
 def camera_forward(scene: mi.Scene) -> tuple[float, float, float]:
     """World-space viewing direction of the scene's first sensor."""
     return camera(scene).forward
 
 
-__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward"]
+def rounded(x: float) -> float:
+    """x to 4 significant digits: auto values are pinned as printed, so the printed line reproduces them."""
+    return float(f"{x:.4g}")
+
+
+def increasing(values) -> tuple[float, ...]:
+    """Quantiles, rounded and made strictly increasing (ties, e.g. a scene of one brightness, are spread by a
+    relative 1e-3, at least 1e-6), so that they are valid thresholds."""
+    out: list[float] = []
+    for x in values:
+        x = rounded(x)
+        if out and x <= out[-1]:
+            x = rounded(out[-1] + max(abs(out[-1]) * 1e-3, 1e-6))
+        out.append(x)
+    return tuple(out)
+
+
+def light_from_camera(cam: Camera) -> tuple[float, float, float]:
+    """The 'auto' light direction of gooch and xtoon: the camera's up vector tilted a little towards the
+    camera, normalize(up - 0.3 forward) (the old fixed default 0,1,0.3 for a y-up camera looking along -z)."""
+    v = [u - 0.3 * f for u, f in zip(cam.up, cam.forward)]
+    n = sum(x * x for x in v) ** 0.5
+    return tuple(round(x / n, 4) for x in v)
+
+
+__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward",
+           "Projection", "projection", "light_from_camera", "rounded", "increasing"]

@@ -1,8 +1,16 @@
 """cel: global-illumination cel shading (supplement S5.2).
 
 Parameters
-- thresholds (floats, default 0.75): increasing brightness steps t_1 < ... < t_K
+- thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K
 - levels (floats, default 0.4,0.95): K+1 target brightnesses m_0..m_K
+
+Auto thresholds (scene-relative, `plugins.scene_defaults`): the brightness quantiles 1/(K+1), ...,
+K/(K+1) of what the camera sees of the objects this style covers, from a pilot of Mitsuba's `path`
+integrator (32 cells along the film, 16 samples each, brightness averaged per cell), so the K+1 bands
+hold about equal shares of the image whatever the scene's light level. A fixed brightness cannot: on
+Mitsuba's test scenes the old default 0.75 put 87-92% of the pixels in one band. The chosen values are
+printed (`styletrace render` logs them unless -q) and can be pinned with `thresholds=...`. A style that
+was never resolved (rendered by calling mi.render directly) uses evenly spaced k/(K+1), i.e. 0.5.
 
 With u = (r+g+b)/3 of the inner estimate <I>, the target brightness is
     u' = m(u) = m_j  where j = number of thresholds t_i <= u,
@@ -14,7 +22,7 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex, brightness
+from .base import Param, Style, StyleError, Vertex, brightness, increasing
 from .registry import register
 
 
@@ -23,22 +31,38 @@ class Cel(Style):
     name = "cel"
     summary = "GI cel shading: brightness quantized to levels, colour kept (S5.2)"
     params = (
-        Param("thresholds", "floats", (0.75,), "brightness steps between levels, increasing"),
+        Param("thresholds", "floats", None, "brightness steps between levels, increasing",
+              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; unresolved: evenly spaced k/(K+1))"),
         Param("levels", "floats", (0.4, 0.95), "target brightness of each band (one more than thresholds)", low=0.0),
     )
     default_inner = 16
 
     def validate(self) -> None:
         t, m = self.thresholds, self.levels
+        if t is None:
+            return
         if any(b <= a for a, b in zip(t, t[1:])):
             raise StyleError(f"bad value {','.join(map(str, t))!r} for parameter 'thresholds': must increase")
         if len(m) != len(t) + 1:
             raise StyleError(f"bad value {','.join(map(str, m))!r} for parameter 'levels': "
                              f"expected {len(t) + 1} levels for {len(t)} thresholds")
 
+    def steps(self) -> tuple[float, ...]:
+        """The thresholds in use: the given or resolved ones, else evenly spaced k/(K+1)."""
+        if self.thresholds is not None:
+            return self.thresholds
+        k = len(self.levels)
+        return tuple(i / k for i in range(1, k))
+
+    def auto_values(self, facts) -> dict:
+        if self.thresholds is not None:
+            return {}
+        k = len(self.levels)
+        return {"thresholds": increasing(facts.brightness([i / k for i in range(1, k)]))}
+
     def target(self, u: mi.Float) -> mi.Float:
         out = mi.Float(self.levels[0])
-        for t, m in zip(self.thresholds, self.levels[1:]):
+        for t, m in zip(self.steps(), self.levels[1:]):
             out = dr.select(u >= t, m, out)
         return out
 

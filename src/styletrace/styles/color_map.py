@@ -1,17 +1,24 @@
 """color_map: brightness mapped through a colour gradient (supplement S5.1).
 
 Parameters
-- gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over brightness
+- gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over (rescaled) brightness
+- range (floats lo,hi, default auto): the brightness mapped onto the gradient's first and last stop
 
-With u = (r+g+b)/3 of the inner estimate <I>:
-    g(<I>) = G(clamp(u, u_first, u_last))
+With u = (r+g+b)/3 of the inner estimate <I>, u_0 and u_last the first and last stop positions:
+    u' = u_0 + (u - lo) (u_last - u_0) / (hi - lo),      g(<I>) = G(clamp(u', u_0, u_last))
 where G interpolates the gradient's stops linearly.
+
+Auto range (scene-relative, `plugins.scene_defaults`): lo and hi are the 5% and 95% quantiles of what the
+camera sees of the objects this style covers (pilot of Mitsuba's `path`, brightness averaged per cell of a
+32-cell grid), so the whole gradient shows on a dim or a bright scene alike. `range` set to the first and
+last stop positions maps brightness absolutely, as the stops say (the behaviour before auto ranges, and
+what an unresolved style, rendered by calling mi.render directly, does).
 """
 from __future__ import annotations
 
 import mitsuba as mi
 
-from .base import Param, Style, Vertex, brightness
+from .base import Param, Style, StyleError, Vertex, brightness, increasing
 from .gradient import Gradient
 from .registry import register
 
@@ -20,8 +27,28 @@ from .registry import register
 class ColorMap(Style):
     name = "color_map"
     summary = "brightness mapped to a colour gradient, clamped to its ends (S5.1)"
-    params = (Param("gradient", "gradient", Gradient.parse("dusk"), "colour stops over brightness"),)
+    params = (Param("gradient", "gradient", Gradient.parse("dusk"), "colour stops over brightness"),
+              Param("range", "floats", None, "brightness lo,hi mapped onto the first and last stop",
+                    auto="the 5% and 95% quantiles of the scene's first-hit brightness (unresolved: the "
+                         "first and last stop)"))
     default_inner = 16
 
+    def validate(self) -> None:
+        r = self.range
+        if r is not None and (len(r) != 2 or not r[1] > r[0]):
+            raise StyleError(f"bad value {','.join(map(str, r))!r} for parameter 'range': expected two "
+                             f"increasing numbers lo,hi")
+
+    def span(self) -> tuple[float, float]:
+        """(lo, hi) in use: the given or resolved range, else the gradient's own ends."""
+        if self.range is not None:
+            return self.range
+        return self.gradient.stops[0][0], self.gradient.stops[-1][0]
+
+    def auto_values(self, facts) -> dict:
+        return {} if self.range is not None else {"range": increasing(facts.brightness([0.05, 0.95]))}
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        return self.gradient.eval(brightness(I))
+        lo, hi = self.span()
+        u0, u1 = self.gradient.stops[0][0], self.gradient.stops[-1][0]
+        return self.gradient.eval(u0 + (brightness(I) - lo) * ((u1 - u0) / (hi - lo)))

@@ -84,6 +84,16 @@ class Composite(Style):
         for op in self.operands:
             op.prepare(scene)
 
+    def auto_values(self, facts) -> dict:
+        """Each operand's auto values, under its prefix; an operand's brightness is that of the operands
+        before it applied to the scene (`facts.mapped`), as it sees it in the kernel."""
+        out = {}
+        for op in self.operands:
+            own = op.auto_values(facts)
+            out.update({f"{op.name}.{k}": v for k, v in own.items()})
+            facts = facts.mapped(op.pinned(own) if own else op)
+        return out
+
     def apply(self, I, v: Vertex):
         for op in self.operands:
             I = op.apply(I, v)

@@ -4,9 +4,12 @@ Reference: "A Non-Photorealistic Lighting Model for Automatic Technical Illustra
 Amy Gooch, Bruce Gooch, Peter Shirley, Elaine Cohen (1998).
 
 Parameters
-- light_dir (vector, default 0,1,0.3): direction TOWARDS the light, normalised here; a global
+- light_dir (vector, default auto): direction TOWARDS the light, normalised here; a global
   illumination scene has no single light, so it is a user parameter (the paper points it at the area
-  lights above the model)
+  lights above the model). Auto: the camera's up vector tilted towards the camera,
+  normalize(up - 0.3 forward), read in `prepare` (and pinned and printed by `plugins.scene_defaults`):
+  light from above the picture whichever world axis is up (a fixed 0,1,0.3 lit z-up scenes from the
+  side). For a y-up camera looking along -z it is the old default 0,1,0.3 (normalised).
 - k_d (colour, default 0.8,0.8,0.8): the object's diffuse colour
 - blue (colour, default 0,0,0.55): k_blue, the cool tone
 - yellow (colour, default 0.3,0.3,0): k_yellow, the warm tone
@@ -28,7 +31,7 @@ import math
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, Vertex
+from .base import Param, Style, Vertex, camera, light_from_camera
 from .registry import register
 
 
@@ -43,12 +46,32 @@ def facing(n: mi.Vector3f, wo: mi.Vector3f) -> mi.Vector3f:
     return dr.select(dr.dot(n, wo) < 0, -n, n)
 
 
+AUTO_LIGHT = "the camera's up vector tilted towards the camera, normalize(up - 0.3 forward)"
+#: the light of a style never prepared on a scene (Mitsuba's default camera would give 0,1,-0.3)
+FALLBACK_LIGHT = (0.0, 1.0, 0.3)
+
+
+class CameraLight:
+    """Mixin of gooch and xtoon: light_dir 'auto' follows the camera (see gooch's reference block)."""
+
+    def light(self) -> tuple[float, float, float]:
+        if self.light_dir is not None:
+            return unit(self.light_dir)
+        return unit(self.__dict__.get("camera_light", FALLBACK_LIGHT))
+
+    def read_light(self, scene: mi.Scene) -> None:
+        self.camera_light = light_from_camera(camera(scene))
+
+    def auto_values(self, facts) -> dict:
+        return {} if self.light_dir is not None else {"light_dir": light_from_camera(facts.camera)}
+
+
 @register
-class Gooch(Style):
+class Gooch(CameraLight, Style):
     name = "gooch"
     summary = "Gooch cool-to-warm shading from a user light direction, closed form (Gooch et al. 1998)"
     params = (
-        Param("light_dir", "vector", (0.0, 1.0, 0.3), "direction towards the light (normalised)"),
+        Param("light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT),
         Param("k_d", "color", (0.8, 0.8, 0.8), "diffuse colour of the object", low=0.0),
         Param("blue", "color", (0.0, 0.0, 0.55), "cool tone k_blue", low=0.0),
         Param("yellow", "color", (0.3, 0.3, 0.0), "warm tone k_yellow", low=0.0),
@@ -63,8 +86,11 @@ class Gooch(Style):
         warm = tuple(y + self.beta * k for y, k in zip(self.yellow, self.k_d))
         return cool, warm
 
+    def prepare(self, scene: mi.Scene) -> None:
+        self.read_light(scene)
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         n = facing(v.n, v.wo)
-        t = (1.0 + dr.dot(n, mi.Vector3f(*unit(self.light_dir)))) * 0.5
+        t = (1.0 + dr.dot(n, mi.Vector3f(*self.light()))) * 0.5
         cool, warm = self.tones()
         return dr.lerp(mi.Color3f(*cool), mi.Color3f(*warm), t)

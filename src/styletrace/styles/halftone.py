@@ -3,11 +3,14 @@
 Reference: "Non-photorealistic Rendering by Q-mapping", Peter Hall (1999).
 
 Parameters
-- spacing (float, default 0.05, > 0): grid interval d, in scene units; grid points are k d, k in Z^3
-- max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot radius as a fraction of
-  sqrt(3) d / 2 (half the cell diagonal, the radius at which the spheres cover all space):
-  r_max = max_radius_fraction sqrt(3) d / 2
-- u_min (float, default 0.05), u_max (float, default 0.9, > u_min): brightness of the largest / no dot
+- spacing_px (float, default 8, > 0): grid interval on screen, in pixels (see "Screen grid" below)
+- spacing (float, default auto, > 0): grid interval d, in scene units; grid points are k d, k in Z^3;
+  given, it replaces spacing_px; auto: spacing_px is used
+- max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot radius as a fraction of half
+  the cell diagonal, the radius at which the dots cover everything: r_max = max_radius_fraction sqrt(3) d / 2
+  on the 3D grid, max_radius_fraction sqrt(2) d / 2 on the screen grid
+- u_min (float, default auto), u_max (float, default auto, > u_min): brightness of the largest / no dot;
+  auto: the 5% and 95% quantiles of the scene's first-hit brightness (as in `hatching`)
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
 
 With u = (r+g+b)/3 of the inner estimate <I> and the vertex position p:
@@ -15,6 +18,14 @@ With u = (r+g+b)/3 of the inner estimate <I> and the vertex position p:
     r   = (1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) r_max
     g(<I>) = dark if |p - g_p| < r else light
 `halftone_mask` is that predicate on Dr.Jit arrays.
+
+Screen grid (spacing_px, the default). A 3D grid of fixed interval is pixel noise on a large scene (0.05
+against a 550-unit box) and one dot on a small one, and a 3D grid whose interval followed depth would not
+be a grid. So by default the dots lie on a square grid of the screen, as in print: q = the vertex's
+screen position in pixels (`Projection.pixels`: its camera-space offset over the scene units per pixel
+at its depth, measured on the sensor), g_q = round(q / spacing_px) spacing_px, and the vertex is in a
+dot when |q - g_q| < r(u) with r_max = max_radius_fraction sqrt(2) spacing_px / 2. Dots keep their
+screen size at every depth; they belong to the screen, not to the objects.
 """
 from __future__ import annotations
 
@@ -23,8 +34,8 @@ import math
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex, brightness
-from .hatching import coverage
+from .base import Param, Projection, Style, Vertex, brightness, projection
+from .hatching import AUTO_U_MAX, AUTO_U_MIN, BrightnessRange, coverage
 from .registry import register
 
 
@@ -41,29 +52,55 @@ def halftone_mask(p: mi.Point3f, u: mi.Float, spacing: float, r_max: float,
     return dr.squared_norm(mi.Vector3f(p) - g) < r * r
 
 
+def screen_halftone_mask(p: mi.Point3f, u: mi.Float, proj: Projection, spacing_px: float, r_max_px: float,
+                         u_min: float = 0.05, u_max: float = 0.9) -> mi.Bool:
+    """True where p's screen position is closer than r(u) pixels to its nearest screen grid point."""
+    x, y = proj.pixels(p)
+    gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
+    gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
+    r = dot_radius(u, r_max_px, u_min, u_max)
+    return dr.square(x - gx) + dr.square(y - gy) < r * r
+
+
 @register
-class Halftone(Style):
+class Halftone(BrightnessRange, Style):
     name = "halftone"
-    summary = "half-tone: dark dots on a 3D grid, radius growing as brightness falls"
+    summary = "half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness falls"
     params = (
-        Param("spacing", "float", 0.05, "grid interval d (scene units)", low=0.0, low_open=True),
-        Param("max_radius_fraction", "float", 0.75, "largest radius as a fraction of sqrt(3) d / 2",
-              low=0.0, high=1.0, low_open=True),
-        Param("u_min", "float", 0.05, "brightness at and below which dots are largest"),
-        Param("u_max", "float", 0.9, "brightness at and above which dots vanish"),
+        Param("spacing_px", "float", 8.0, "grid interval on screen (pixels, a square grid of the image); used "
+              "unless spacing is given", low=0.0, low_open=True),
+        Param("spacing", "float", None, "grid interval d of a 3D grid (scene units), replacing spacing_px",
+              low=0.0, low_open=True, auto="not used: a screen grid spacing_px apart"),
+        Param("max_radius_fraction", "float", 0.75, "largest radius as a fraction of half the cell diagonal "
+              "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)", low=0.0, high=1.0, low_open=True),
+        Param("u_min", "float", None, "brightness at and below which dots are largest", auto=AUTO_U_MIN),
+        Param("u_max", "float", None, "brightness at and above which dots vanish", auto=AUTO_U_MAX),
         Param("dark", "color", (0.1, 0.1, 0.15), "colour inside the dots", low=0.0),
         Param("light", "color", (0.97, 0.95, 0.9), "colour outside the dots", low=0.0),
     )
     default_inner = 16
 
+    def __init__(self, **values):
+        super().__init__(**values)
+        self.projection = Projection()
+
     def validate(self) -> None:
-        if not self.u_max > self.u_min:
-            raise StyleError(f"bad value {self.u_max:g} for parameter 'u_max': must exceed u_min = {self.u_min:g}")
+        self.check_u_range()
 
     @property
     def r_max(self) -> float:
+        """Largest dot radius: scene units on the 3D grid (spacing given), pixels on the screen grid."""
+        if self.spacing is None:
+            return self.max_radius_fraction * 0.5 * math.sqrt(2.0) * self.spacing_px
         return self.max_radius_fraction * 0.5 * math.sqrt(3.0) * self.spacing
 
+    def prepare(self, scene: mi.Scene) -> None:
+        self.projection = projection(scene)
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        dot = halftone_mask(v.p, brightness(I), self.spacing, self.r_max, self.u_min, self.u_max)
+        u_min, u_max = self.u_range()
+        if self.spacing is None:
+            dot = screen_halftone_mask(v.p, brightness(I), self.projection, self.spacing_px, self.r_max, u_min, u_max)
+        else:
+            dot = halftone_mask(v.p, brightness(I), self.spacing, self.r_max, u_min, u_max)
         return dr.select(dot, mi.Color3f(*self.dark), mi.Color3f(*self.light))

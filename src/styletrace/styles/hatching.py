@@ -5,10 +5,16 @@ Oliver Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte
 
 Parameters
 - sets (int, default 3, in [1, 8]): number of hatching directions n
-- spacing (float, default 0.04, > 0): distance between neighbouring planes of a set, in scene units
-- thickness (float, default 0.3 * spacing, in (0, spacing)): line thickness d
+- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in pixels
+- spacing (float, default auto, > 0): distance between neighbouring planes of a set, in scene units;
+  given, it replaces spacing_px (the fixed world-space planes below); auto: spacing_px is used
+- thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d, in the
+  units of the spacing in use (pixels with spacing_px, scene units with spacing)
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
-- u_min (float, default 0.05), u_max (float, default 0.9, > u_min): brightness of full / no hatching
+- u_min (float, default auto), u_max (float, default auto, > u_min): brightness of full / no hatching;
+  auto: the 5% and 95% quantiles of the scene's first-hit brightness (`plugins.scene_defaults`: a pilot
+  of Mitsuba's `path` integrator), so every scene shows the whole range from fully to not hatched;
+  unresolved (mi.render called directly): 0.05 and 0.9
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
 
 Set j (j = 0..n-1) is the family of parallel planes {x : x . n_j = k spacing, k integer} whose unit normal
@@ -22,6 +28,18 @@ sets 0..m-1 are active, and the vertex p is on a line when, for some active j,
 (the distance to the nearest plane of set j). g = line_color on a line, background elsewhere.
 `hatch_mask` is that predicate on Dr.Jit arrays; the camera is read in `prepare` (until then the
 camera of Mitsuba's default sensor is assumed: looking along +z, up +y).
+
+Screen spacing (spacing_px, the default). A fixed world spacing is pixel noise on a large scene and a
+few strokes on a small one (0.04 against a 550-unit box), so by default the planes of set j are
+    {x : (x - c) . n_j = k spacing_px s (x - c) . f,  k integer}
+with c the camera position, f its forward direction and s the scene units per pixel per unit depth
+(`Projection`, measured on the sensor: one pixel's ray angle; an orthographic sensor has a fixed
+width per pixel instead). Each is still a plane, but the family is now a pencil of planes through the
+camera (all containing the line through c along f x n_j) rather than parallel planes: the slab spacing
+grows with depth exactly as perspective shrinks it, so the lines land evenly, spacing_px apart, on the
+screen, and a vertex's distance to its nearest plane is measured in pixels at its own depth. The lines
+belong to the screen, not to the objects (moving the camera slides them over the surfaces; `spacing`
+fixes them in the world instead), the usual look of screen-space hatching.
 """
 from __future__ import annotations
 
@@ -31,7 +49,8 @@ from typing import Sequence
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex, brightness, camera, camera_forward
+from .base import (Param, Projection, Style, StyleError, Vertex, brightness, camera, camera_forward, increasing,
+                   projection)
 from .registry import register
 
 Vec = tuple[float, float, float]
@@ -80,29 +99,73 @@ def active_sets(u: mi.Float, sets: int, u_min: float, u_max: float) -> mi.Float:
 
 
 def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], spacing: float,
-               thickness: float, u_min: float = 0.05, u_max: float = 0.9) -> mi.Bool:
-    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module doc)."""
+               thickness: float, u_min: float = 0.05, u_max: float = 0.9,
+               projection: Projection | None = None) -> mi.Bool:
+    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module doc).
+    With `projection`, spacing and thickness are in pixels: the planes form pencils through the camera."""
     m = active_sets(u, len(normals), u_min, u_max)
     hit = dr.zeros(mi.Bool, dr.width(p))
+    if projection is None:
+        rel, scale = mi.Vector3f(p), 1.0 / spacing
+    else:
+        rel, fp = projection.footprint(p)
+        scale = dr.rcp(fp) * (1.0 / spacing)
     for j, nj in enumerate(normals):
-        s = dr.dot(mi.Vector3f(p), mi.Vector3f(*nj)) * (1.0 / spacing) + 0.5
+        s = dr.dot(rel, mi.Vector3f(*nj)) * scale + 0.5
         dist = dr.abs(s - dr.floor(s) - 0.5) * spacing
         hit |= (dist < 0.5 * thickness) & (m > j)
     return hit
 
 
+AUTO_U_MIN = "the 5% quantile of the scene's first-hit brightness (unresolved: 0.05)"
+AUTO_U_MAX = "the 95% quantile of the scene's first-hit brightness (unresolved: 0.9)"
+
+
+class BrightnessRange:
+    """Mixin of hatching and halftone: u_min/u_max 'auto' are the 5% / 95% brightness quantiles."""
+
+    def u_range(self) -> tuple[float, float]:
+        lo = 0.05 if self.u_min is None else self.u_min
+        hi = 0.9 if self.u_max is None else self.u_max
+        if self.u_min is None and self.u_max is not None and not hi > lo:
+            lo = hi - 0.85
+        if self.u_max is None and self.u_min is not None and not hi > lo:
+            hi = lo + 0.85
+        return lo, hi
+
+    def check_u_range(self) -> None:
+        lo, hi = self.u_range()
+        if not hi > lo:
+            raise StyleError(f"bad value {hi:g} for parameter 'u_max': must exceed u_min = {lo:g}")
+
+    def auto_values(self, facts) -> dict:
+        if self.u_min is not None and self.u_max is not None:
+            return {}
+        lo, hi = increasing(facts.brightness([0.05, 0.95]))
+        if self.u_min is not None:
+            lo = self.u_min
+            hi = hi if hi > lo else lo + max(abs(lo), 1e-3)
+        if self.u_max is not None:
+            hi = self.u_max
+            lo = lo if hi > lo else hi - max(abs(hi), 1e-3)
+        return {k: v for k, v in (("u_min", lo), ("u_max", hi)) if self.values[k] is None}
+
+
 @register
-class Hatching(Style):
+class Hatching(BrightnessRange, Style):
     name = "hatching"
     summary = "cross-hatching: brightness picks how many plane sets around the view direction draw lines"
     params = (
         Param("sets", "int", 3, "number of hatching directions", low=1, high=8),
-        Param("spacing", "float", 0.04, "distance between planes (scene units)", low=0.0, low_open=True),
-        Param("thickness", "float", None, "line thickness d (default 0.3 * spacing), < spacing",
-              low=0.0, low_open=True),
+        Param("spacing_px", "float", 8.0, "distance between lines on screen (pixels, projected at each "
+              "vertex's depth); used unless spacing is given", low=0.0, low_open=True),
+        Param("spacing", "float", None, "distance between planes (scene units), replacing spacing_px",
+              low=0.0, low_open=True, auto="not used: lines spacing_px apart on screen"),
+        Param("thickness", "float", None, "line thickness d, in the units of the spacing in use, < spacing",
+              low=0.0, low_open=True, auto="0.3 * the spacing in use"),
         Param("angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"),
-        Param("u_min", "float", 0.05, "brightness at and below which all sets are drawn"),
-        Param("u_max", "float", 0.9, "brightness at and above which no set is drawn"),
+        Param("u_min", "float", None, "brightness at and below which all sets are drawn", auto=AUTO_U_MIN),
+        Param("u_max", "float", None, "brightness at and above which no set is drawn", auto=AUTO_U_MAX),
         Param("line_color", "color", (0.05, 0.05, 0.08), "colour of the lines", low=0.0),
         Param("background", "color", (0.97, 0.95, 0.9), "colour between the lines", low=0.0),
     )
@@ -111,15 +174,23 @@ class Hatching(Style):
     def __init__(self, **values):
         super().__init__(**values)
         self.set_camera((0.0, 0.0, 1.0), (0.0, 1.0, 0.0))
+        self.projection = Projection()
+
+    @property
+    def pitch(self) -> float:
+        """The spacing in use: `spacing` (scene units) if given, else `spacing_px` (pixels)."""
+        return self.spacing_px if self.spacing is None else self.spacing
+
+    @property
+    def line_thickness(self) -> float:
+        return 0.3 * self.pitch if self.thickness is None else self.thickness
 
     def validate(self) -> None:
-        if self.thickness is None:
-            self.values["thickness"] = 0.3 * self.spacing
-        if not self.thickness < self.spacing:
-            raise StyleError(f"bad value {self.thickness:g} for parameter 'thickness': must be less than "
-                             f"spacing = {self.spacing:g}")
-        if not self.u_max > self.u_min:
-            raise StyleError(f"bad value {self.u_max:g} for parameter 'u_max': must exceed u_min = {self.u_min:g}")
+        if not self.line_thickness < self.pitch:
+            which = "spacing_px" if self.spacing is None else "spacing"
+            raise StyleError(f"bad value {self.line_thickness:g} for parameter 'thickness': must be less than "
+                             f"{which} = {self.pitch:g}")
+        self.check_u_range()
 
     def set_camera(self, view: Sequence[float], up: Sequence[float]) -> None:
         self.view = tuple(float(x) for x in view)
@@ -127,7 +198,10 @@ class Hatching(Style):
 
     def prepare(self, scene: mi.Scene) -> None:
         self.set_camera(camera_forward(scene), camera_up(scene))
+        self.projection = projection(scene)
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        line = hatch_mask(v.p, brightness(I), self.normals, self.spacing, self.thickness, self.u_min, self.u_max)
+        u_min, u_max = self.u_range()
+        line = hatch_mask(v.p, brightness(I), self.normals, self.pitch, self.line_thickness, u_min, u_max,
+                          projection=self.projection if self.spacing is None else None)
         return dr.select(line, mi.Color3f(*self.line_color), mi.Color3f(*self.background))

@@ -45,9 +45,16 @@ class Param:
     high: float | None = None
     low_open: bool = False  # True: the bound itself is not allowed (e.g. gamma > 0)
     choices: Sequence[str] = field(default_factory=tuple)
+    #: for a default of None ('auto'): the rule that derives the value (from the scene or other parameters)
+    auto: str = ""
 
     def allowed(self) -> str:
         """Human description of the admissible values, used in errors and in `styletrace styles`."""
+        if self.default is None:
+            return self._allowed() + ", or auto"
+        return self._allowed()
+
+    def _allowed(self) -> str:
         if self.kind == "choice":
             return "one of " + ", ".join(self.choices)
         if self.kind == "gradient":
@@ -84,7 +91,10 @@ class Param:
             raise self.fail(raw)
 
     def parse(self, raw: Any) -> Any:
-        """Turn a string, number, sequence or Mitsuba colour into the validated Python value."""
+        """Turn a string, number, sequence or Mitsuba colour into the validated Python value ('auto': None, for
+        a parameter whose default is derived)."""
+        if self.default is None and isinstance(raw, str) and raw.strip().lower() == "auto":
+            return None
         try:
             value = self._convert(raw)
         except StyleError:
@@ -151,6 +161,10 @@ class Param:
                 raise self.fail(raw)
             return s
         raise AssertionError(f"unknown parameter kind {k}")
+
+    def explain(self) -> str:
+        """The doc line with the rule of an 'auto' default, as `styletrace styles` and the docs show it."""
+        return f"{self.doc}; auto: {self.auto}" if self.auto else self.doc
 
     def show(self, value: Any) -> str:
         """Format a value the way `parse` reads it back ('auto' for a default the style derives itself)."""

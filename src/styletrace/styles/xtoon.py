@@ -16,11 +16,15 @@ Written with the "abstraction" A = 1 - D (so that A grows at silhouettes / far a
 T = (1 - A) G(tone) + A detail_color.
 
 Parameters
-- light_dir (vector, default 0,1,0.3): direction TOWARDS the light, normalised; a user parameter
-  because a global illumination scene has no single light
+- light_dir (vector, default auto): direction TOWARDS the light, normalised; a user parameter
+  because a global illumination scene has no single light. Auto: as in `gooch`, the camera's up vector
+  tilted towards the camera, normalize(up - 0.3 forward)
 - mode (choice orientation|depth, default orientation): the detail attribute
 - r (float, default 2, >= 0): exponent of the orientation mode (larger: thinner rim)
-- z_min (float, default 1, > 0), z_max (float, default 10, > z_min): depth range of the depth mode
+- z_min (float, default auto, > 0), z_max (float, default auto, > z_min): depth range of the depth mode.
+  Auto (depth mode, `plugins.scene_defaults`): the 5% and 95% quantiles of the camera depth of the first
+  hits on the objects this style covers (pilot rays through a 32-cell grid of the film), so the fade
+  spans the visible depth at any scene scale; unresolved (mi.render called directly): 1 and 10
 - gradient (gradient, default a 3-band warm ramp over tone in [0, 1]): G; tone = n.l in [-1, 1] is
   clamped to the gradient's end stops, so with stops on [0, 1] the back side gets the first colour
 - detail_color (colour, default 0.95,0.92,0.85): colour at zero detail
@@ -35,8 +39,8 @@ import math
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex, camera
-from .gooch import facing, unit
+from .base import Param, Style, StyleError, Vertex, camera, increasing
+from .gooch import AUTO_LIGHT, CameraLight, facing
 from .gradient import Gradient
 from .registry import register
 
@@ -50,15 +54,17 @@ def camera_position(scene: mi.Scene) -> tuple[float, float, float]:
 
 
 @register
-class XToon(Style):
+class XToon(CameraLight, Style):
     name = "xtoon"
     summary = "X-Toon: toon ramp over n.l faded by an orientation or depth detail, closed form (Barla et al. 2006)"
     params = (
-        Param("light_dir", "vector", (0.0, 1.0, 0.3), "direction towards the light (normalised)"),
+        Param("light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT),
         Param("mode", "choice", "orientation", "detail attribute", choices=("orientation", "depth")),
         Param("r", "float", 2.0, "orientation exponent: D = |n.wo|^r", low=0.0),
-        Param("z_min", "float", 1.0, "depth of full detail (depth mode)", low=0.0, low_open=True),
-        Param("z_max", "float", 10.0, "depth of zero detail (depth mode)", low=0.0, low_open=True),
+        Param("z_min", "float", None, "depth of full detail (depth mode)", low=0.0, low_open=True,
+              auto="depth mode: the 5% quantile of the first hits' camera depth (unresolved: 1)"),
+        Param("z_max", "float", None, "depth of zero detail (depth mode)", low=0.0, low_open=True,
+              auto="depth mode: the 95% quantile of the first hits' camera depth (unresolved: 10)"),
         Param("gradient", "gradient", Gradient.parse(BANDS), "toon colours over tone n.l"),
         Param("detail_color", "color", (0.95, 0.92, 0.85), "colour at zero detail", low=0.0),
     )
@@ -69,22 +75,46 @@ class XToon(Style):
         self.camera = (0.0, 0.0, 0.0)
 
     def validate(self) -> None:
-        if not self.z_max > self.z_min:
-            raise StyleError(f"bad value {self.z_max:g} for parameter 'z_max': must exceed z_min = {self.z_min:g}")
+        lo, hi = self.depth_range()
+        if not hi > lo:
+            raise StyleError(f"bad value {hi:g} for parameter 'z_max': must exceed z_min = {lo:g}")
+
+    def depth_range(self) -> tuple[float, float]:
+        """(z_min, z_max) in use; an unresolved auto end is 1 or 10 (the other end times or over 10 where
+        only one is given)."""
+        lo, hi = self.z_min, self.z_max
+        if lo is None:
+            lo = 1.0 if hi is None else min(1.0, hi / 10)
+        if hi is None:
+            hi = max(10.0, lo * 10)
+        return lo, hi
+
+    def auto_values(self, facts) -> dict:
+        out = super().auto_values(facts)
+        if self.mode == "depth" and (self.z_min is None or self.z_max is None):
+            lo, hi = increasing(facts.depth([0.05, 0.95]))
+            lo = max(lo, 1e-6) if self.z_min is None else self.z_min
+            hi = hi if self.z_max is None else self.z_max
+            if not hi > lo:  # one end given beyond the scene's depth range: keep a decade
+                lo, hi = (lo, lo * 10) if self.z_max is None else (hi / 10, hi)
+            out.update({k: v for k, v in (("z_min", lo), ("z_max", hi)) if self.values[k] is None})
+        return out
 
     def prepare(self, scene: mi.Scene) -> None:
         self.camera = camera_position(scene)
+        self.read_light(scene)
 
     def detail(self, n: mi.Vector3f, v: Vertex) -> mi.Float:
         """D in [0, 1] for the unit, viewer-facing normal n."""
         if self.mode == "orientation":
             return dr.power(dr.clip(dr.abs(dr.dot(n, v.wo)), 0.0, 1.0), self.r)
         z = dr.dot(v.p - mi.Point3f(*self.camera), v.view)
-        z = dr.clip(z, self.z_min, self.z_max)
-        return 1.0 - dr.log(z * (1.0 / self.z_min)) * (1.0 / math.log(self.z_max / self.z_min))
+        z_min, z_max = self.depth_range()
+        z = dr.clip(z, z_min, z_max)
+        return 1.0 - dr.log(z * (1.0 / z_min)) * (1.0 / math.log(z_max / z_min))
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         n = facing(v.n, v.wo)
-        tone = dr.dot(n, mi.Vector3f(*unit(self.light_dir)))
+        tone = dr.dot(n, mi.Vector3f(*self.light()))
         D = self.detail(n, v)
         return dr.lerp(mi.Color3f(*self.detail_color), self.gradient.eval(tone), D)

@@ -1,0 +1,52 @@
+"""Contact sheet of every style at its defaults on three scenes of very different scale:
+`python docs/make_contact_sheet.py` writes docs/defaults_contact_sheet.png (shown in docs/styles.md).
+
+Scenes: the built-in cornell-box (about 2 units across), the built-in dragon (unit height) and the Cornell
+box scaled x100 with its light x0.1 (`plugins.scenes.scaled`: 200 units across and a tenth as bright), so
+the scales differ by 200x and the brightness by 10x. Every style is rendered with no parameter given: its
+scene-relative 'auto' values are resolved per scene (`plugins.scene_defaults`) and printed here.
+"""
+import os
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
+
+import styletrace  # noqa: E402
+
+styletrace.init()
+import numpy as np  # noqa: E402
+
+from styletrace import api  # noqa: E402
+from styletrace.images import write_image  # noqa: E402
+from styletrace.plugins.scenes import cornell_box, dragon, scaled  # noqa: E402
+from styletrace.styles import get, names  # noqa: E402
+
+SIZE, SPP, GAP = 96, 16, 4
+SCENES = {
+    "cornell-box": lambda: cornell_box(SIZE, SIZE),
+    "dragon": lambda: dragon(SIZE, SIZE),
+    "cornell-box x100, light x0.1": lambda: scaled(cornell_box(SIZE, SIZE), 100.0, light=0.1),
+}
+
+
+def main():
+    rows = []
+    for scene_name, make in SCENES.items():
+        row = []
+        for name in names():
+            inner = max(get(name).default_inner, 8)
+            scene = api.load_scene(make())
+            integrator, chosen = api.resolve_defaults(scene, api.make_integrator(style=name, inner=inner))
+            print(f"{scene_name:>28} {name:>10}: {chosen or '-'}", flush=True)
+            img = None
+            for prog in api.passes(scene, integrator, SPP, seed=1):
+                img = prog.image
+            row.append(np.pad(img, ((GAP, GAP), (GAP, GAP), (0, 0)), constant_values=1.0))
+        rows.append(np.concatenate(row, axis=1))
+    sheet = np.concatenate(rows, axis=0)
+    write_image(sheet, os.path.join(os.path.dirname(__file__), "defaults_contact_sheet.png"))
+    print("columns:", ", ".join(names()))
+
+
+if __name__ == "__main__":
+    main()
