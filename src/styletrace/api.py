@@ -64,6 +64,20 @@ def scene_dict(name: str, width: int | None = None, height: int | None = None) -
     return BUILTIN[name](**_size(width, height))
 
 
+@contextlib.contextmanager
+def one_thread():
+    """Load scenes on one Dr.Jit thread: a parallel acceleration-structure build (Embree's, Mitsuba's
+    `path` shows it too) changes the last bit of a few pixels from run to run, and the same seed must give
+    the same image. Loading is a small part of a render (about 0.1 s for the built-in scenes either way)."""
+    import drjit as dr
+    threads = dr.thread_count()
+    dr.set_thread_count(1)
+    try:
+        yield
+    finally:
+        dr.set_thread_count(threads)
+
+
 def load_scene(scene: Any = None, width: int | None = None, height: int | None = None,
                defines: dict[str, Any] | None = None) -> mi.Scene:
     """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene.
@@ -87,7 +101,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         if width or height:
             raise SceneError("width/height apply to built-in scenes and XML files; set the film size in the dict")
         try:
-            loaded = mi.load_dict(scene)
+            with one_thread():
+                loaded = mi.load_dict(scene)
         except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
             raise SceneError(f"cannot load scene dict: {first_line(exc)}") from None
         problem = scene_problem(loaded, "the scene dict")
@@ -101,7 +116,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
-            return mi.load_dict(scene_dict(name, width, height))
+            with one_thread():
+                return mi.load_dict(scene_dict(name, width, height))
         except Exception as exc:
             raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
@@ -110,7 +126,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     if not os.path.isfile(name):
         raise SceneError(f"scene file '{name}' does not exist")
     try:
-        loaded, notes = scene_file.load(name, width, height, defines)
+        with one_thread():
+            loaded, notes = scene_file.load(name, width, height, defines)
     except SceneError:
         raise
     except Exception as exc:

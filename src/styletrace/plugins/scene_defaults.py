@@ -13,7 +13,7 @@ What the rules may read (`Facts`, per style slot):
 - `camera`: the first sensor's frame (gooch, xtoon: the light follows the camera's up vector);
 - `brightness(qs)`: quantiles of the first-hit brightness (r+g+b)/3 the camera sees on the objects the
   style covers: the integrator's style covers the objects without a `styled` BSDF, a `styled` BSDF its own.
-  A pilot of Mitsuba's own `path` integrator (the scene's max_depth and rr_depth) traces PILOT_SPP
+  A pilot of the path kernel (`path.exitant`, the scene's max_depth and rr_depth) traces PILOT_SPP
   jittered camera rays in each cell of a grid of PILOT_CELLS cells along the film's longer side, and the
   brightness is averaged per cell and slot (a cell estimate, like a stylized vertex's inner estimate
   rather than one noisy path), the cells weighted by their number of samples on the slot's objects;
@@ -21,7 +21,7 @@ What the rules may read (`Facts`, per style slot):
 A composition's later operand sees the brightness of the earlier operands' output (`Facts.mapped`).
 
 Where the pilot runs: here, before Mitsuba's render call, never inside the integrator's `sample`; the pilot
-costs one small `path` render (32 x 32 x 16 paths) and runs only if some style has a brightness rule left.
+costs one small path-traced render (32 x 32 x 16 paths) and runs only if some style has a brightness rule left.
 Stylized levels below the first (first_n_hits, first_object_hit through glass) are resolved with the
 first hits' statistics. Rendering through mi.render directly skips this module: camera rules still apply
 (in `Style.prepare`), brightness and depth rules fall back to the fixed values each style documents.
@@ -39,7 +39,9 @@ import numpy as np
 from ..errors import StyleError
 from ..styles.base import Camera, Style, Vertex, camera
 from . import settings as S
+from .emitter_sampler import EmitterSampler
 from .integrator import StylizedIntegrator
+from .path import exitant
 from .styled_bsdf import StyledBSDF
 
 #: cells of the pilot grid along the film's longer side, and camera samples per cell
@@ -75,10 +77,13 @@ class Pilot:
         ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
                                    mi.Point2f(0.5, 0.5))
         si = scene.ray_intersect(ray)
-        path = mi.load_dict({"type": "path", "max_depth": self.settings.max_depth, "rr_depth": self.settings.rr_depth})
         sampler = mi.load_dict({"type": "independent"})
         sampler.seed(PILOT_SEED, n)
-        L, _, _ = path.sample(scene, sampler, mi.RayDifferential3f(ray), None, mi.Bool(True))
+        # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order Mitsuba
+        # lists the emitters in, so the auto values (and the image) are the same for the same seed
+        pi = scene.ray_intersect_preliminary(ray, coherent=True)
+        L = exitant(scene, sampler, pi, ray, mi.Bool(True), self.settings.max_depth, self.settings.rr_depth,
+                    emitters=EmitterSampler(scene, self.settings.emitter_sampling))
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
         styled = unique_styled(scene)
