@@ -4,8 +4,10 @@
   (`render_buffer`); each restyle (cel, colour map, gamma) is warmed up once (kernel compilation), then
   timed `--runs` times (median, end to end: the H x W x 3 numpy image). The fresh render is
   `styletrace.render` with the same settings (one timed run after a warm-up at 64x64).
-- Preview: a `Session` of the Cornell box at 256x256 (16 spp, n = 8) and its server in this process;
-  the time from the server listening to the first 200 of /api/restyle (polled every 20 ms).
+- Preview: a `Session` of the Cornell box at 256x256 (16 spp, n = 8) and its server, in a fresh process;
+  the time from the server listening to the first 200 of /api/restyle (polled every 20 ms: the draft,
+  1 spp with n = 1) and to the first restyle of the first full pass. Twice: with a cold Dr.Jit kernel
+  cache (HOME pointed at an empty folder, so ~/.drjit is empty) and with a warm one.
 - Memory: bytes per camera sample of the buffer (numpy) and of its Dr.Jit copy used by restyles.
 - Fit: a 128x128, 4 spp, n = 4 buffer; targets restyled with known θ; iterations and seconds until the
   loss reaches 1e-9 (or the 300 iterations end), and the error of the recovered θ.
@@ -46,7 +48,7 @@ def timed(fn, runs):
     return statistics.median(out)
 
 
-def preview_first_image() -> float:
+def preview_first_image() -> tuple[float, float]:
     import httpx
     import uvicorn
 
@@ -61,22 +63,46 @@ def preview_first_image() -> float:
     t0 = time.perf_counter()
     session.start()
     url = f"http://127.0.0.1:{srv.servers[0].sockets[0].getsockname()[1]}/api/restyle"
-    while True:
+    first = full = None
+    while full is None:
         r = httpx.post(url, json={"style": "cel", "params": {}}, timeout=60)
         if r.status_code == 200:
-            break
+            first = first or time.perf_counter() - t0
+            if not r.json()["draft"]:
+                full = time.perf_counter() - t0
         time.sleep(0.02)
-    first = time.perf_counter() - t0
     session.stop()
     srv.should_exit = True
     thread.join(timeout=10)
-    return first
+    return first, full
+
+
+def preview_in_a_fresh_process(cold: bool) -> tuple[float, float]:
+    """`preview_first_image` in a new Python process; cold: with an empty Dr.Jit kernel cache."""
+    import json
+    import subprocess
+    import tempfile
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as home:
+        if cold:
+            env["HOME"] = home
+        out = subprocess.run([sys.executable, __file__, "--preview-only"], env=env, check=True,
+                             capture_output=True, text=True).stdout
+    return tuple(json.loads(out.strip().splitlines()[-1]))
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--preview-only", action="store_true", help="print the preview's times as JSON and stop")
     args = ap.parse_args()
+    if args.preview_only:
+        import json
+        print(json.dumps(preview_first_image()))
+        return
+    preview_in_a_fresh_process(cold=False)  # fills the kernel cache for the warm measurement
+    cold = preview_in_a_fresh_process(cold=True)
+    warm = preview_in_a_fresh_process(cold=False)
     kw = dict(spp=16, inner=16, seed=0, width=512, height=512)
     t = time.perf_counter()
     buf = render_buffer("cornell-box", style="cel", **kw)
@@ -91,7 +117,15 @@ def main():
         rows.append(f"| {style} | {s * 1e3:.0f} ms | {fresh_s / s:.0f}x |")
     d = device(buf)
     dev_bytes = sum(int(np.asarray(x).nbytes) for k, x in d.items() if k != "inv_weight")
-    first = preview_first_image()
+
+    seq_rows = []
+    for style, est in (("gamma", "series"), ("gamma", "series_recursive"), ("gamma", "series_single"),
+                       ("gamma", "telescoping"), ("tie_dye", "ustat"), ("tie_dye", "naive"),
+                       ("gamma+sepia", "combined")):
+        sb = render_buffer("cornell-box", style=style, estimator=est, spp=4, inner=8, seed=1, width=64, height=64)
+        kinds = sb.arrays["seq_kind"]
+        seq_rows.append(f"| {style} | {est} | {kinds.sum() / sb.samples:.1f} | {(kinds.size - kinds.sum()) / sb.samples:.1f} "
+                        f"| {sb.nbytes / sb.samples:.0f} |")
 
     small = render_buffer("cornell-box", style="cel", spp=4, inner=4, seed=3, width=128, height=128)
     fits = []
@@ -124,8 +158,17 @@ def main():
         f"({buf.nbytes / 2**20:.0f} MiB here), plus {dev_bytes / buf.samples:.0f} bytes per sample for the Dr.Jit "
         f"copy restyles work on; the default cap of 4194304 camera samples bounds both.",
         "",
-        f"Preview, Cornell box 256x256 (n = 8): first image {first:.2f} s after the server listens "
-        f"(goal <= 3 s); it includes the first 1-spp pass and its kernel compilation.",
+        f"Preview, Cornell box 256x256 (n = 8), each in a fresh process, time after the server listens (goal: "
+        f"first image <= 3 s). Warm kernel cache (~/.drjit filled by an earlier run): first image {warm[0]:.2f} s "
+        f"(the draft: 1 spp, n = 1), first full pass (1 spp, n = 8) {warm[1]:.2f} s. Cold cache (empty ~/.drjit, "
+        f"every kernel compiled): first image {cold[0]:.2f} s, first full pass {cold[1]:.2f} s.",
+        "",
+        "Sequence buffers (the unbiased estimators; docs/lookdev.md): Cornell box 64x64, 4 spp, n = 8, bytes per "
+        "camera sample = 57 + 13 per child + 5 per uniform:",
+        "",
+        "| style | estimator | children per sample | uniforms per sample | bytes per sample |",
+        "|---|---|---|---|---|",
+        *seq_rows,
         "",
         "Fit on a 128x128, 4 spp, n = 4 buffer to targets restyled with known θ (Adam, 300 iterations at most, "
         "stopping at a loss of 1e-9):",

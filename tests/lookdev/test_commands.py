@@ -35,10 +35,16 @@ def test_render_buffer_restyle_fit(tmp_path, capsys):
 
 
 def test_one_line_refusals(tmp_path, capsys):
-    assert cli.main(["render", "--style", "gamma", "--estimator", "series", *SMALL, "--buffer",
-                     str(tmp_path / "b.npz"), "-o", str(tmp_path / "r.png")]) == 2
+    seq = str(tmp_path / "s.npz")
+    assert cli.main(["render", "--style", "gamma", "--estimator", "series", *SMALL, "--buffer", seq,
+                     "-o", str(tmp_path / "r.png")]) == 0
+    capsys.readouterr()
+    assert cli.main(["restyle", seq, "--set", "gamma=1.8", "-o", str(tmp_path / "g.png")]) == 0
+    capsys.readouterr()
+    assert cli.main(["restyle", seq, "--estimator", "direct", "-o", str(tmp_path / "d.png")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "estimator 'series' cannot be buffered" in err
+    assert err.count("\n") == 1 and "estimator 'direct' cannot restyle this buffer" in err
+    assert "this estimator needs more" in err
     assert cli.main(["render", *SMALL, "--buffer", str(tmp_path / "b.bin"), "-o", str(tmp_path / "r.png")]) == 2
     assert "the extension must be .npz" in capsys.readouterr().err
     assert cli.main(["restyle", str(tmp_path / "none.npz"), "-o", str(tmp_path / "x.png")]) == 2

@@ -1,5 +1,8 @@
 """The expectation buffer: per camera sample, everything a stylized image depends on except θ.
 
+Two kinds (`header["stores"]`): "mean" for the `direct` and `affine` estimators, "sequence" for the
+unbiased ones (series, series_recursive, series_single, ustat, naive, telescoping, combined).
+
 For `first_hit` and `first_object_hit` (one stylized level) with the `direct` or `affine` estimator, a
 camera sample's contribution to its pixel is
 
@@ -21,6 +24,16 @@ File format (`.npz`, written atomically: a temporary file in the target folder, 
     depth    uint32 (N,)     path depth of the vertex (first_object_hit only; first_hit: 0)
 
 Size per camera sample: 65 bytes for first_hit, 81 bytes for first_object_hit (`bytes_per_sample`).
+
+A "sequence" buffer keeps, instead of `mean`, what the estimator consumed in call order (`lookdev.sequence`):
+
+    seq_count uint32 (N,)    events per camera sample
+    seq_kind  uint8  (E,)    1: a child, 0: a uniform number
+    child     float32 (3, C) the children, uniform float32 (U,) the uniform numbers
+
+Size per camera sample: 53 bytes (69 with first_object_hit) + 4 + 13 per child + 5 per uniform, e.g.
+~200 bytes for `series` on gamma with n = 8 (BENCHMARKS.md); capped at MAX_SEQUENCE_SAMPLES camera samples
+and MAX_EVENTS_PER_SAMPLE (64) events per camera sample on average.
 The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each pass's
 spp and seed. The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see
 the same camera when restyling.
@@ -38,22 +51,28 @@ import numpy as np
 from ..errors import UsageError
 
 FORMAT = "styletrace-buffer"
-VERSION = 1
+VERSION = 2  # 2: "sequence" buffers; version 1 files (the children's mean) still read
 #: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
 #: bytes_per_sample times this (~270 MB for first_hit)
 MAX_SAMPLES = 1 << 22
+#: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 17 x 64 bytes per camera sample more
+MAX_SEQUENCE_SAMPLES = 1 << 20
+SEQUENCE = ("seq_count", "seq_kind", "child", "uniform")
 
 SCALAR = {"pixel": np.uint32, "slot": np.int8, "depth": np.uint32}
 VECTOR = ("p", "n", "wo", "mean", "L_before", "beta")
 
 
-def fields_for(stylize: str) -> tuple[str, ...]:
-    base = ("pixel", "slot", "p", "n", "wo", "mean", "L_before")
-    return base + (("beta", "depth") if stylize == "first_object_hit" else ())
+def fields_for(stylize: str, stores: str = "mean") -> tuple[str, ...]:
+    base = ("pixel", "slot", "p", "n", "wo") + (("mean",) if stores == "mean" else ()) + ("L_before",)
+    return base + (("beta", "depth") if stylize == "first_object_hit" else ()) + (
+        SEQUENCE if stores == "sequence" else ())
 
 
-def bytes_per_sample(stylize: str) -> int:
-    return sum(4 if k in ("pixel", "depth") else 1 if k == "slot" else 12 for k in fields_for(stylize))
+def bytes_per_sample(stylize: str, stores: str = "mean") -> int:
+    """Bytes per camera sample of the fixed fields (a sequence buffer adds its events)."""
+    return sum(4 if k in ("pixel", "depth", "seq_count") else 1 if k == "slot" else 12
+               for k in fields_for(stylize, stores) if k not in SEQUENCE[1:])
 
 
 @dataclass
@@ -88,6 +107,11 @@ class Buffer:
         return self.header["stylize"]
 
     @property
+    def stores(self) -> str:
+        """"mean" (direct / affine) or "sequence" (the children and uniforms in call order)."""
+        return self.header.get("stores", "mean")
+
+    @property
     def nbytes(self) -> int:
         return sum(a.nbytes for a in self.arrays.values())
 
@@ -113,7 +137,7 @@ class Buffer:
 
     def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int) -> None:
         """Add one pass's camera samples (in the order the render loop made them)."""
-        for k in fields_for(self.stylize):
+        for k in fields_for(self.stylize, self.stores):
             a = arrays[k]
             self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
         self.header["passes"].append({"spp": int(spp), "seed": int(seed)})
@@ -130,20 +154,24 @@ def load_buffer(path: str) -> Buffer:
             header = json.loads(bytes(z["header"]).decode("utf-8"))
             if not isinstance(header, dict) or header.get("format") != FORMAT:
                 raise ValueError("not a styletrace buffer")
-            if header.get("version") != VERSION:
+            if header.get("version") not in range(1, VERSION + 1):
                 raise UsageError(f"buffer file {path!r} has format version {header.get('version')!r}; this "
-                                 f"styletrace reads version {VERSION}")
-            arrays = {k: z[k] for k in fields_for(header["stylize"])}
+                                 f"styletrace reads version {VERSION} and earlier")
+            arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"))}
     except UsageError:
         raise
     except (OSError, ValueError, KeyError, EOFError) as exc:
         raise UsageError(f"cannot read buffer file {path!r}: {exc}") from None
     n = arrays["pixel"].shape[0]
+    if "seq_kind" in arrays:
+        events, children = int(arrays["seq_count"].sum()), int(arrays["seq_kind"].sum())
+        seq = {"seq_count": (n,), "seq_kind": (events,), "child": (3, children), "uniform": (events - children,)}
     for k, a in arrays.items():
-        want = (n,) if k in SCALAR else (3, n)
+        want = seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (3, n)
         if a.shape != want:
             raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
     return Buffer(header, arrays)
 
 
-__all__ = ["Buffer", "load_buffer", "FORMAT", "VERSION", "MAX_SAMPLES", "fields_for", "bytes_per_sample"]
+__all__ = ["Buffer", "load_buffer", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
+           "bytes_per_sample"]

@@ -17,7 +17,10 @@ from functools import partial
 from ..errors import UsageError
 
 BUFFER_HELP = ("also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
-               "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit)")
+               "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
+               "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's children "
+               "and uniforms: at most 1048576 camera samples and 64 children per sample on average, 57 bytes + 13 "
+               "per child + 5 per uniform each")
 
 
 def check_buffer_path(path: str) -> None:
@@ -127,7 +130,9 @@ def add_parsers(sub, parse_set, check_output) -> None:
     r = sub.add_parser("restyle", help="restyle an expectation buffer (from render --buffer) without tracing")
     r.add_argument("buffer", help="buffer file (.npz) written by `styletrace render --buffer`")
     r.add_argument("--style", default=None, help="new style (default: the recorded one)")
-    r.add_argument("--estimator", default=None, help="direct or affine (default: the recorded one where it applies)")
+    r.add_argument("--estimator", default=None, help="direct or affine on a buffer of means; on a buffer recorded with an unbiased "
+                   "estimator, any estimator whose requests the stored children and uniforms cover (refused "
+                   "otherwise) (default: the recorded one where it applies)")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style parameter")
     r.add_argument("-o", "--output", default="restyle.png", help="output image: .exr (linear) or .png (sRGB)")
     r.set_defaults(func=partial(cmd_restyle, parse_set=parse_set, check_output=check_output))

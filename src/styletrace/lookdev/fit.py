@@ -180,6 +180,10 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
     if iterations < 1:
         raise UsageError(f"bad value {iterations!r} for iterations: expected an integer >= 1")
     buf = as_buffer(buffer)
+    if buf.stores != "mean":
+        raise UsageError("fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
+                         "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
+                         "through")
     slots = slots_for(buf, style, "direct", None, **initial)
     owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
     if not owned:

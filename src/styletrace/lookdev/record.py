@@ -10,9 +10,14 @@ and they are collected after each pass of `api.passes` (the same passes and pass
 Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
 SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1.
 
+With `direct` or `affine` the buffer keeps the mean of each camera sample's n children. With any other
+estimator (series*, ustat, naive, telescoping, combined) it keeps the sequence of children and uniform
+numbers the estimator consumed, in call order (`lookdev.sequence`), and the recorded image is still
+exactly the render's: the recording wraps the same `draw` and `uniform` around the same stream.
+
 What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
-stylized level, an estimator other than direct or affine, a per-sample style (acp), a film whose filter
-is not a box, more camera samples than the cap.
+stylized level, a per-sample style (acp), a film whose filter is not a box, more camera samples than the
+cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
 """
 from __future__ import annotations
 
@@ -31,10 +36,12 @@ from .. import api  # noqa: E402
 from .. import estimators as E  # noqa: E402
 from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
 from ..plugins import settings as S  # noqa: E402
+from ..plugins.estimation import make_estimator  # noqa: E402
 from ..plugins.integrator import StylizedIntegrator  # noqa: E402
 from ..styles.base import Vertex, camera_forward  # noqa: E402
-from .buffer import FORMAT, MAX_SAMPLES, VERSION, Buffer, bytes_per_sample  # noqa: E402
+from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, VERSION, Buffer, bytes_per_sample  # noqa: E402
 from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402
+from .sequence import Recorder, budget  # noqa: E402
 
 
 def check_recordable(settings: S.Settings, slots) -> None:
@@ -45,9 +52,6 @@ def check_recordable(settings: S.Settings, slots) -> None:
         raise SettingsError(f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
                             f"level (1)")
     for slot in slots:
-        if slot.estimator not in RESTYLABLE_ESTIMATORS:
-            raise SettingsError(f"estimator '{slot.estimator}' cannot be buffered: it needs the children "
-                                f"themselves, a buffer keeps their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}")
         if slot.style.per_sample:
             raise SettingsError(f"style '{slot.style.name}' cannot be buffered: it applies g to every child "
                                 f"sample, a buffer keeps only their mean")
@@ -68,12 +72,17 @@ def check_film(scene: mi.Scene) -> mi.Film:
 class RecordingIntegrator(StylizedIntegrator):
     """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each `sample()`."""
 
-    def __init__(self, base: StylizedIntegrator):
+    def __init__(self, base: StylizedIntegrator, sequence: bool = False, per_sample: int = 0):
         super().__init__(mi.Properties(), base.settings, base.values)
         self.kept: dict[str, Any] = {}
+        #: keep each camera sample's sequence of children and uniforms (else the children's mean)
+        self.sequence, self.per_sample = sequence, per_sample
+        self.recorder: Recorder | None = None
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         self.kept = {}
+        if self.sequence:
+            self.recorder = Recorder(dr.width(ray.d), self.per_sample)
         spec, valid, aovs = super().sample(scene, sampler, ray, medium, active)
         kept = self.kept
         if "slot" not in kept:  # no stylized vertex traced at all (first_object_hit without styled objects)
@@ -93,16 +102,46 @@ class RecordingIntegrator(StylizedIntegrator):
         total, slot, mean = mi.Spectrum(0.0), mi.Int32(-1), mi.Color3f(0.0)
         for i, target in enumerate(self.targets):
             here = active & (_any(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
-            m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth)
-            total = dr.select(here, finish(target.slot, m, v), total)
+            if self.sequence:
+                value = self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v)
+            else:
+                m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth)
+                value = finish(target.slot, m, v)
+                mean = dr.select(here, m, mean)
+            total = dr.select(here, value, total)
             slot = dr.select(here, i, slot)
-            mean = dr.select(here, m, mean)
         self.kept.update(p=mi.Vector3f(v.p), n=v.n, wo=v.wo, depth=v.depth, slot=slot, mean=mean)
         return total
 
     def _through(self, w, value):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
         return super()._through(w, value)
+
+    def _estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
+        """`StylizedIntegrator._estimate` with every draw and uniform also noted in the recorder's pool.
+        The same calls on the same stream in the same order: the estimate is the render's."""
+        if not self.sequence:
+            return super()._estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v)
+        style, rec = slot.style, self.recorder
+        if style.closed_form:
+            return style.apply(mi.Color3f(0.0), v)
+
+        def draw(carry):
+            smp, count, ucount = carry
+            x = self.child(level, scene, smp, pi, si, ray, active, depth)
+            count = rec.child(count, x)
+            if style.per_sample:
+                x = style.apply(x, v)
+            return x, (smp, count, ucount)
+
+        def uniform(carry):
+            smp, count, ucount = carry
+            u = smp.next_1d()
+            return u, (smp, *rec.uniform(count, ucount, u))
+
+        value, (_, rec.count, rec.ucount) = make_estimator(slot, level, v).run(
+            draw, (sampler, rec.count, rec.ucount), uniform, active, like=mi.Color3f)
+        return value
 
     def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth) -> mi.Color3f:
         """The mean of the slot's n children: the same draws, in the same order, as the `direct` estimator."""
@@ -138,13 +177,15 @@ def _vec(x) -> np.ndarray:
     return np.stack([np.asarray(x[i], dtype=np.float32) for i in range(3)])
 
 
-def _pass_arrays(kept: dict, spp: int, stylize: str) -> dict[str, np.ndarray]:
+def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) -> dict[str, np.ndarray]:
     dr.eval(*kept.values())
     width = dr.width(kept["slot"])
     out = {"pixel": (np.arange(width, dtype=np.uint32) // np.uint32(spp)).astype(np.uint32),
            "slot": np.asarray(kept["slot"], dtype=np.int32).astype(np.int8)}
-    for k in ("p", "n", "wo", "mean", "L_before"):
+    for k in ("p", "n", "wo", "L_before") + (() if recorder else ("mean",)):
         out[k] = _vec(kept[k])
+    if recorder is not None:
+        out.update(recorder.collect())
     if stylize == "first_object_hit":
         out["beta"] = _vec(kept["beta"])
         out["depth"] = np.asarray(kept["depth"], dtype=np.uint32)
@@ -159,22 +200,29 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     # pin the scene-relative defaults first: `api.passes` would otherwise pin them on a plain copy of the
     # integrator, losing the recording
     integrator = api.resolve_defaults(scene, integrator)[0]
-    rec = RecordingIntegrator(integrator)
-    slots = [t.slot for t in rec._targets(scene)]
-    check_recordable(rec.settings, slots)
+    slots = [t.slot for t in integrator._targets(scene)]
+    check_recordable(integrator.settings, slots)
+    sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
+    per_sample = budget(slots) if sequence else 0
+    rec = RecordingIntegrator(integrator, sequence, per_sample)
     size = film.crop_size()
     w, h = int(size[0]), int(size[1])
     total = w * h * spp
+    if sequence and max_samples == MAX_SAMPLES:
+        max_samples = MAX_SEQUENCE_SAMPLES
     if total > max_samples:
-        per = bytes_per_sample(rec.settings.stylize)
+        what = (f"~{max_samples * bytes_per_sample(rec.settings.stylize) / 2**20:.0f} MiB" if not sequence else
+                f"the children and uniforms of the '{slots[0].estimator}' estimator take up to "
+                f"up to {4 + per_sample * 18} bytes each")
         raise UsageError(f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
-                         f"{max_samples} (~{max_samples * per / 2**20:.0f} MiB); lower spp or the image size")
+                         f"{max_samples} ({what}); lower spp or the image size")
     sensor = scene.sensors()[0]
     header = {
         "format": FORMAT, "version": VERSION, "scene": label, "width": w, "height": h,
         "crop_offset": [int(c) for c in film.crop_offset()], "filter": "box", "seed": int(seed),
         "stylize": rec.settings.stylize, "max_depth": rec.settings.max_depth, "rr_depth": rec.settings.rr_depth,
-        "slots": _slots(rec, scene), "view": list(camera_forward(scene)),
+        "slots": _slots(rec, scene), "stores": "sequence" if sequence else "mean",
+        "events_per_sample": per_sample, "view": list(camera_forward(scene)),
         "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
         .tolist(), "passes": [],
     }
@@ -183,8 +231,8 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     for index, prog in enumerate(api.passes(scene, rec, spp, seed, lanes_per_pass)):
         n = prog.spp_done - done
         done = prog.spp_done
-        buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize), n, api.pass_seed(seed, index))
-        rec.kept = {}
+        buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize, rec.recorder), n, api.pass_seed(seed, index))
+        rec.kept, rec.recorder = {}, None
         yield prog, buf
 
 

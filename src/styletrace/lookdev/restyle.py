@@ -13,9 +13,16 @@ Which slot changes: the integrator's own style for `first_hit` buffers, every st
 recorded values while the style stays the same (a new style starts from its defaults). The estimator is
 the one given, else the recorded one where it applies to the style, else `direct`.
 
-Refused with one line: estimators other than direct and affine (they need the children themselves),
-another inner sample count than the buffer's, a per-sample style (acp), and a style that needs children
-on a buffer recorded with a closed-form style (0 children).
+A "sequence" buffer (recorded with an unbiased estimator) is restyled by replaying the estimator over
+each camera sample's stored children and uniform numbers (`lookdev.sequence.replay`). Where the new
+estimator asks for what is not stored, or in another order (another estimator, a larger n, a truncation
+that goes further), the result would not be a render's: refused in one line, naming how many camera
+samples it concerns.
+
+Refused with one line: estimators other than direct and affine on a "mean" buffer (they need the children
+themselves), another inner sample count than a mean buffer's, a per-sample style (acp), a style that needs
+children on a buffer recorded with a closed-form style (0 children), and a replay that needs more than
+the sequence buffer stores.
 """
 from __future__ import annotations
 
@@ -39,6 +46,7 @@ from ..styles import get  # noqa: E402
 from ..styles.base import Vertex  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402
 from .buffer import Buffer, load_buffer  # noqa: E402
+from .sequence import device_arrays, replay  # noqa: E402
 
 #: estimators whose value is a function of the children's mean alone
 RESTYLABLE_ESTIMATORS = ("direct", "affine")
@@ -91,7 +99,9 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
         if rec["owner"] == changed_owner(buffer):
             values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
             new = get(str(values["style"]))()
-            if inner is not None and S.parse_inner(inner, 1) != (n,):
+            if inner is not None and buffer.stores == "sequence":
+                n = S.parse_inner(inner, 1)[0]  # the replay finds out whether the stored sequence suffices
+            elif inner is not None and S.parse_inner(inner, 1) != (n,):
                 raise UsageError(f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
                                  f"per camera sample; another n needs a new render")
             if new.per_sample:
@@ -105,7 +115,7 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
                 est = estimator
             elif est not in applicable(new):
                 est = "direct"
-        if est not in RESTYLABLE_ESTIMATORS:
+        if est not in RESTYLABLE_ESTIMATORS and buffer.stores == "mean":
             raise UsageError(f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
                              f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}")
         slots.append(S.parse_slot({**values, "inner_samples": max(n, 1), "estimator": est},
@@ -126,7 +136,11 @@ def device(buffer: Buffer) -> dict[str, Any]:
         return T(*(mi.Float(np.ascontiguousarray(a[k][i])) for i in range(3)))
 
     d["p"], d["n"], d["wo"] = vec("p", mi.Point3f), vec("n", mi.Vector3f), vec("wo", mi.Vector3f)
-    d["mean"], d["L_before"] = vec("mean", mi.Color3f), vec("L_before", mi.Color3f)
+    d["L_before"] = vec("L_before", mi.Color3f)
+    if buffer.stores == "mean":
+        d["mean"] = vec("mean", mi.Color3f)
+    else:
+        d.update(device_arrays(a))
     d["slot"] = mi.Int32(a["slot"].astype(np.int32))
     d["pixel"] = mi.UInt32(a["pixel"])
     if "beta" in a:
@@ -152,16 +166,59 @@ def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> None:
 
 
 def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
-    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the styles' θ."""
+    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the styles' θ
+    for "mean" buffers."""
     d = device(buffer)
     v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buffer.header["view"]), depth=d["depth"])
-    total = mi.Color3f(0.0)
-    for i, slot in enumerate(slots):
-        total = dr.select(d["slot"] == i, finish(slot, d["mean"], v), total)
+    if buffer.stores == "sequence":
+        total = replayed(buffer, d, slots, v)
+    else:
+        total = mi.Color3f(0.0)
+        for i, slot in enumerate(slots):
+            total = dr.select(d["slot"] == i, finish(slot, d["mean"], v), total)
     found = d["slot"] >= 0
     if "beta" in d:
         return d["L_before"] + dr.select(found, d["beta"] * total, 0.0)
     return dr.select(found, total, d["L_before"])
+
+
+def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi.Color3f:
+    """The slots' estimators replayed over the stored sequences; refused where one needs more than is stored."""
+    total, bad = replay(d, d["slot"], slots, v)
+    bad = bad & (d["slot"] >= 0)
+    dr.eval(total, bad)
+    missing = int(dr.count(bad)[0]) if dr.width(bad) else 0
+    if missing:
+        a = buffer.arrays
+        children, events = int(a["seq_kind"].sum()), int(a["seq_count"].sum())
+        names = sorted({s.estimator for s in slots})
+        recorded = sorted({r["estimator"] for r in buffer.header["slots"]})
+        raise UsageError(
+            f"estimator {', '.join(repr(n) for n in names)} cannot restyle this buffer: on {missing} of "
+            f"{buffer.samples} camera samples it asks for a child or uniform number beyond the stored ones or in "
+            f"another order than the recorded {', '.join(repr(n) for n in recorded)} (the buffer stores "
+            f"{children / buffer.samples:.1f} children and {(events - children) / buffer.samples:.1f} uniform "
+            f"numbers per camera sample on average); this estimator needs more: record a buffer with it")
+    return total
+
+
+def replay_lanes(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
+                 **params: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A sequence buffer's per-camera-sample contributions with a new style, and the samples whose
+    replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and tests)."""
+    buf = as_buffer(buffer)
+    if buf.stores != "sequence":
+        raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased estimator)")
+    slots = slots_for(buf, style, estimator, inner, **params)
+    prepare(buf, slots)
+    d = device(buf)
+    v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buf.header["view"]), depth=d["depth"])
+    total, bad = replay(d, d["slot"], slots, v)
+    found = d["slot"] >= 0
+    value = (d["L_before"] + dr.select(found, d["beta"] * total, 0.0) if "beta" in d
+             else dr.select(found, total, d["L_before"]))
+    return (np.stack([np.asarray(value[i], dtype=np.float32) for i in range(3)], axis=1),
+            np.asarray(bad & found, dtype=bool))
 
 
 def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
@@ -193,4 +250,4 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
 
 
 __all__ = ["restyle", "finish", "slot_record", "slots_for", "sample_values", "accumulate", "device", "prepare",
-           "RESTYLABLE_ESTIMATORS", "as_buffer"]
+           "RESTYLABLE_ESTIMATORS", "as_buffer", "replay_lanes"]

@@ -5,7 +5,7 @@ Routes (JSON API documented in docs/preview.md):
     GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices) and
                         the estimators that can restyle it
     GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
-    POST /api/restyle   {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "ms", "command"}
+    POST /api/restyle   {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "draft", "ms", "command"}
     POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
 A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
 """
@@ -24,7 +24,7 @@ PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 
 def styles_table() -> list[dict[str, Any]]:
-    from ..lookdev.restyle import RESTYLABLE_ESTIMATORS
+    from ..lookdev.restyle import RESTYLABLE_ESTIMATORS  # the preview's buffer keeps the children's mean
     from ..plugins.estimation import applicable
     from ..styles import get, names
     out = []
@@ -100,15 +100,17 @@ def make_app(session):
         try:
             style, estimator, params = await parse(request)
             t = time.perf_counter()
-            img, spp = await run_in_threadpool(session.restyle, style, estimator, params)
+            img, spp, inner = await run_in_threadpool(session.restyle, style, estimator, params)
             ms = (time.perf_counter() - t) * 1e3
         except (ValueError, StyletraceError) as exc:
             return bad(str(exc))
         if img is None:
             return bad("no image yet: the first pass is still rendering", 409)
         png = await run_in_threadpool(encode, img, "png")
+        draft = inner != session.inner
+        command = session.command(style, estimator, params, *((spp, inner) if draft else ()))
         return JSONResponse({"image": "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
-                             "spp": spp, "ms": ms, "command": session.command(style, estimator, params)})
+                             "spp": 0 if draft else spp, "draft": draft, "ms": ms, "command": command})
 
     async def save(request: Request):
         try:
@@ -117,7 +119,7 @@ def make_app(session):
             fmt = body.get("format", "png")
             if fmt not in ("png", "exr"):
                 raise ValueError(f"bad format {fmt!r}: expected png or exr")
-            img, spp = await run_in_threadpool(session.restyle, style, estimator, params)
+            img, spp, _ = await run_in_threadpool(session.restyle, style, estimator, params)
         except (ValueError, StyletraceError) as exc:
             return bad(str(exc))
         if img is None:

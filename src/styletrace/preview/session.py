@@ -1,8 +1,11 @@
 """One preview session: a scene, a growing expectation buffer rendered in the background, restyles of it.
 
-The background thread records the buffer pass by pass (1 spp per pass, `lookdev.record`) with the
-`identity` style and n children per camera sample, so every style that needs children can restyle it;
-after each pass the page's next restyle shows the refined image. Dr.Jit work of both threads (a render
+The background thread first records a **draft**: 1 spp with one child per camera sample (n = 1), a
+fifth of a full pass's work (measured: 0.2 s against 1.1 s for the Cornell box at 256² with n = 8), so
+the first image arrives early; restyles use it until the first full pass is done. Then it records the
+buffer pass by pass (1 spp per pass, `lookdev.record`) with the `identity` style and n children per
+camera sample, so every style that needs children can restyle it; after each pass the page's next
+restyle shows the refined image. Dr.Jit work of both threads (a render
 pass, a restyle) runs under one lock, `jit`: requests from several browsers are served one at a time and
 never see a buffer half appended. The buffer is capped (`MAX_SAMPLES` camera samples; the page says so).
 """
@@ -25,6 +28,11 @@ from ..lookdev.record import record, scene_label  # noqa: E402
 from ..lookdev.restyle import restyle  # noqa: E402
 
 DEFAULT_SIZE, DEFAULT_SPP, DEFAULT_INNER = 256, 16, 8
+DRAFT_INNER = 1  # children per camera sample of the draft pass
+#: how long the render thread waits, after the draft, for a restyle to show it before the first full pass
+#: takes the lock for about a second (the page polls every 0.3 s; measured: the first request can arrive
+#: 0.2 s after the draft is done)
+DRAFT_GRACE_S = 1.0
 
 
 class Session:
@@ -47,7 +55,11 @@ class Session:
                              f"camera samples, over the preview's cap of {max_samples}; lower --spp or the size")
         self.integrator = api.make_integrator("identity", inner=self.inner)
         self.jit = threading.Lock()
+        self._waiting = 0                      # restyles waiting for `jit`: the render thread lets them first
+        self._count = threading.Lock()
+        self._draft_shown = threading.Event()
         self.buffer: Buffer | None = None
+        self.draft: Buffer | None = None   # 1 spp, n = DRAFT_INNER; shown until the first full pass is done
         self.spp_done = 0
         self.error: str | None = None
         self.initial: dict[str, Any] = {"style": "cel", "params": {}}   # what the page starts with
@@ -62,13 +74,22 @@ class Session:
 
     def stop(self) -> None:
         self._stop.set()
+        self._draft_shown.set()
         self._thread.join(timeout=60)
 
     def _render(self) -> None:
+        lanes = self.width * self.height
         passes = record(self.scene, self.integrator, self.spp, self.seed, self.label, self.max_samples,
-                        lanes_per_pass=self.width * self.height)
+                        lanes_per_pass=lanes)
         try:
+            if self.inner > DRAFT_INNER and not self._stop.is_set():
+                draft = record(self.scene, api.make_integrator("identity", inner=DRAFT_INNER), 1, self.seed,
+                               self.label, self.max_samples, lanes_per_pass=lanes)
+                with self.jit:
+                    _, self.draft = next(draft)
+                self._draft_shown.wait(DRAFT_GRACE_S)
             while not self._stop.is_set():
+                self._yield_to_restyles()
                 with self.jit:
                     step = next(passes, None)
                     if step is None:
@@ -78,19 +99,38 @@ class Session:
         except Exception as exc:  # shown on the page; the passes done stay usable
             self.error = api.first_line(exc)
 
+    def _yield_to_restyles(self) -> None:
+        """Wait while restyles are queued for the lock: a pass takes about a second, a restyle a few ms, and
+        Python's lock is not fair (the render thread would take it again at once and starve the page)."""
+        while self._waiting and not self._stop.is_set():
+            time.sleep(0.002)
+
     @property
     def done(self) -> bool:
         return self.spp_done >= self.spp
 
-    def restyle(self, style: str, estimator: str | None, params: dict[str, Any]) -> tuple[np.ndarray, int]:
-        """The current buffer restyled (and its spp); None image before the first pass finished."""
+    def restyle(self, style: str, estimator: str | None, params: dict[str, Any]) -> tuple[np.ndarray, int, int]:
+        """The current buffer (or the draft before the first full pass) restyled, its spp and n; None image
+        before the draft finished."""
+        with self._count:
+            self._waiting += 1
+        try:
+            return self._restyle(style, estimator, params)
+        finally:
+            with self._count:
+                self._waiting -= 1
+
+    def _restyle(self, style: str, estimator: str | None, params: dict[str, Any]) -> tuple[np.ndarray, int, int]:
         with self.jit:
-            if self.buffer is None:
-                return None, 0
-            img = restyle(self.buffer, style=style, estimator=estimator, **params)
+            buf = self.buffer if self.buffer is not None else self.draft
+            if buf is None:
+                return None, 0, 0
+            img = restyle(buf, style=style, estimator=estimator, **params)
+            if buf is self.draft:
+                self._draft_shown.set()
             if self.first_image_s is None:
                 self.first_image_s = time.perf_counter() - self.started
-            return img, self.spp_done
+            return img, buf.spp, int(buf.header["slots"][0]["inner"])
 
     def state(self) -> dict[str, Any]:
         per = bytes_per_sample("first_hit")
@@ -98,13 +138,16 @@ class Session:
                 "spp": self.spp, "inner": self.inner, "samples": self.width * self.height * self.spp_done,
                 "cap_samples": self.max_samples, "bytes_per_sample": per,
                 "bytes": self.width * self.height * self.spp_done * per, "error": self.error,
+                "draft": self.buffer is None and self.draft is not None,
                 "initial": self.initial}
 
-    def command(self, style: str, estimator: str | None, params: dict[str, Any]) -> str:
-        """The `styletrace render` command line that renders what the page shows."""
+    def command(self, style: str, estimator: str | None, params: dict[str, Any], spp: int | None = None,
+                inner: int | None = None) -> str:
+        """The `styletrace render` command line that renders what the page shows (spp and n: the session's,
+        or those of the image shown, e.g. the draft's)."""
         import shlex
-        words = ["styletrace", "render", self.label, "--style", style, "--inner", str(self.inner),
-                 "--spp", str(self.spp), "--seed", str(self.seed), "--pass-spp", "1"]
+        words = ["styletrace", "render", self.label, "--style", style, "--inner", str(inner or self.inner),
+                 "--spp", str(spp or self.spp), "--seed", str(self.seed), "--pass-spp", "1"]
         if estimator:
             words += ["--estimator", estimator]
         if self.size[0]:

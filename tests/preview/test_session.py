@@ -1,0 +1,28 @@
+"""The preview session: a draft (1 spp, n = 1) is shown before the first full pass."""
+import numpy as np
+
+import styletrace
+from styletrace.lookdev.restyle import restyle
+
+from .conftest import wait_until
+
+
+def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkeypatch):
+    from styletrace.preview import session as module
+    monkeypatch.setattr(module, "DRAFT_GRACE_S", 120.0)  # the render thread waits for the draft to be shown
+    s = module.Session("cornell-box", inner=2, spp=2, width=24, height=20)
+    assert s.restyle("cel", None, {}) == (None, 0, 0)  # nothing rendered yet
+    s.start()
+    wait_until(lambda: s.draft is not None, 120, "the draft")
+    assert s.buffer is None and s.state()["draft"]
+    img, spp, inner = s.restyle("cel", None, {})
+    assert (spp, inner) == (1, module.DRAFT_INNER)
+    want = styletrace.render("cornell-box", style="cel", spp=1, inner=module.DRAFT_INNER, seed=0, width=24, height=20)
+    np.testing.assert_array_equal(img, want)
+    assert "--inner 1 --spp 1" in s.command("cel", None, {}, spp, inner)
+    wait_until(lambda: s.done or s.error, 120, "the background render")
+    assert s.error is None
+    img, spp, inner = s.restyle("cel", None, {})
+    assert (spp, inner) == (2, 2) and not s.state()["draft"]
+    np.testing.assert_array_equal(img, restyle(s.buffer, style="cel"))
+    s.stop()
