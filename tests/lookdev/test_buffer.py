@@ -56,3 +56,11 @@ def test_bad_files(buf, tmp_path):
         buf.save(str(tmp_path / "b.exr"))
     with pytest.raises(UsageError, match="does not exist"):
         buf.save(str(tmp_path / "no" / "b.npz"))
+
+
+def test_a_saved_buffer_keeps_its_pilot_and_camera(buf, tmp_path):
+    """Auto values (cel thresholds, hatching's pixel spacing) resolve from what the file keeps, as before saving."""
+    back = load_buffer(buf.save(str(tmp_path / "p.npz")))
+    assert back.pilot_nbytes == buf.pilot_nbytes > 0 and back.header["sensor"] == buf.header["sensor"]
+    for style in ("cel", "hatching"):
+        np.testing.assert_array_equal(restyle(back, style=style), restyle(buf, style=style))

@@ -37,10 +37,12 @@ def test_contrast(buf):
 
 
 def test_color_map(buf, u):
-    target = restyle(buf, style="color_map", gradient="heat")
-    r = fit(buf, style="color_map", target=target, gradient=GREY5)
-    got = r.params["gradient"].stops
     truth = Gradient.parse("heat").stops
+    # the gradient's own span as the range (absolute mapping), so a stop is identifiable where u reaches it
+    span = (truth[0][0], truth[-1][0])
+    target = restyle(buf, style="color_map", gradient="heat", range=span)
+    r = fit(buf, style="color_map", target=target, gradient=GREY5, range=span, fixed=("range",))
+    got = r.params["gradient"].stops
     pos = [p for p, _ in truth]
     checked = 0
     for i, ((p, want), (q, col)) in enumerate(zip(truth, got)):

@@ -63,7 +63,7 @@ def test_restyle_returns_a_png_and_the_command(client):
 
 @pytest.mark.parametrize("body,status,message", [
     ({"style": "nope"}, 400, "bad style 'nope'"),
-    ({"style": "cel", "params": {"levels": "0.1"}}, 400, "expected 2 levels for 1 thresholds"),
+    ({"style": "cel", "params": {"levels": "0.1,0.5", "thresholds": "0.3,0.6"}}, 400, "expected 3 levels for 2 thresholds"),
     ({"style": "cel", "params": {"nope": "1"}}, 400, "unknown property 'nope'"),
     ({"style": "gamma", "estimator": "series"}, 400, "estimator 'series' cannot restyle"),
     ({"style": "cel", "params": ["x"]}, 400, "bad params"),

@@ -75,6 +75,11 @@ def bytes_per_sample(stylize: str, stores: str = "mean") -> int:
                for k in fields_for(stylize, stores) if k not in SEQUENCE[1:])
 
 
+#: prefix of the arrays that keep the scene-defaults pilot (`plugins.scene_defaults.Pilot.samples`), so that
+#: a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
+PILOT = "pilot_"
+
+
 @dataclass
 class Buffer:
     """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module doc)."""
@@ -113,7 +118,12 @@ class Buffer:
 
     @property
     def nbytes(self) -> int:
-        return sum(a.nbytes for a in self.arrays.values())
+        """Bytes of the camera samples' arrays (the fixed-size pilot aside: `pilot_nbytes`)."""
+        return sum(a.nbytes for k, a in self.arrays.items() if not k.startswith(PILOT))
+
+    @property
+    def pilot_nbytes(self) -> int:
+        return sum(a.nbytes for k, a in self.arrays.items() if k.startswith(PILOT))
 
     def save(self, path: str) -> str:
         """Write the buffer to `path` (.npz) atomically; returns the path."""
@@ -158,6 +168,7 @@ def load_buffer(path: str) -> Buffer:
                 raise UsageError(f"buffer file {path!r} has format version {header.get('version')!r}; this "
                                  f"styletrace reads version {VERSION} and earlier")
             arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"))}
+            pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
     except UsageError:
         raise
     except (OSError, ValueError, KeyError, EOFError) as exc:
@@ -170,7 +181,9 @@ def load_buffer(path: str) -> Buffer:
         want = seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (3, n)
         if a.shape != want:
             raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
-    return Buffer(header, arrays)
+    if len({a.shape[0] for a in pilot.values()}) > 1:
+        raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
+    return Buffer(header, {**arrays, **pilot})
 
 
 __all__ = ["Buffer", "load_buffer", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",

@@ -184,7 +184,8 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
         raise UsageError("fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
                          "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
                          "through")
-    slots = slots_for(buf, style, "direct", None, **initial)
+    # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a render would)
+    slots = prepare(buf, slots_for(buf, style, "direct", None, **initial))
     owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
     if not owned:
         raise UsageError("this buffer has no styled object to fit (first_object_hit without styled objects)")
@@ -200,7 +201,6 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
     if not free:
         raise UsageError(f"style '{base.name}' has no parameter to fit (fittable kinds: {', '.join(FITTABLE)})")
     goal = mi.Float(read_target(target, buf.width, buf.height).ravel())
-    prepare(buf, [slots[i] for i in owned])
 
     opt = dr.opt.Adam(lr=lr)
     for p in free:

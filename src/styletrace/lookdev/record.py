@@ -38,8 +38,9 @@ from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
 from ..plugins import settings as S  # noqa: E402
 from ..plugins.estimation import make_estimator  # noqa: E402
 from ..plugins.integrator import StylizedIntegrator  # noqa: E402
+from ..plugins.scene_defaults import Pilot, unique_styled  # noqa: E402
 from ..styles.base import Vertex, camera_forward  # noqa: E402
-from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, VERSION, Buffer, bytes_per_sample  # noqa: E402
+from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, PILOT, VERSION, Buffer, bytes_per_sample  # noqa: E402
 from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402
 from .sequence import Recorder, budget  # noqa: E402
 
@@ -167,6 +168,16 @@ def _any(ptr, bsdfs) -> mi.Bool:
     return mask
 
 
+def sensor_description(sensor) -> dict:
+    """What a restyle needs to rebuild the camera (`restyle.camera_scene`): its kind, field of view and film."""
+    params = mi.traverse(sensor)
+    film = sensor.film()
+    return {"kind": "perspective" if "x_fov" in params else "orthographic",
+            "x_fov": float(params["x_fov"][0]) if "x_fov" in params else None,
+            "size": [int(v) for v in film.size()], "crop_size": [int(v) for v in film.crop_size()],
+            "crop_offset": [int(v) for v in film.crop_offset()]}
+
+
 def _slots(integrator: StylizedIntegrator, scene: mi.Scene) -> list[dict]:
     targets = integrator._targets(scene)
     return [slot_record(t.slot, "object" if t.bsdfs else "integrator", t.bsdfs[0].id() if t.bsdfs else "")
@@ -224,9 +235,14 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
         "slots": _slots(rec, scene), "stores": "sequence" if sequence else "mean",
         "events_per_sample": per_sample, "view": list(camera_forward(scene)),
         "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-        .tolist(), "passes": [],
+        .tolist(), "sensor": sensor_description(sensor), "passes": [],
     }
-    buf = Buffer(header, {})
+    # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
+    pilot = Pilot(scene, rec.settings).samples
+    owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
+    for rec_slot, target in zip(header["slots"], rec._targets(scene)):
+        rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
+    buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     done = 0
     for index, prog in enumerate(api.passes(scene, rec, spp, seed, lanes_per_pass)):
         n = prog.spp_done - done

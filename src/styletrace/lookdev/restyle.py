@@ -27,6 +27,8 @@ the sequence buffer stores.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
+from types import SimpleNamespace
 from typing import Any
 
 from ..jit import backend
@@ -42,10 +44,11 @@ from ..estimators import apply_linear  # noqa: E402
 from ..estimators.arrays import const_like  # noqa: E402
 from ..plugins import settings as S  # noqa: E402
 from ..plugins.estimation import applicable  # noqa: E402
+from ..plugins.scene_defaults import Facts, auto_values  # noqa: E402
 from ..styles import get  # noqa: E402
 from ..styles.base import Vertex  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402
-from .buffer import Buffer, load_buffer  # noqa: E402
+from .buffer import PILOT, Buffer, load_buffer  # noqa: E402
 from .sequence import device_arrays, replay  # noqa: E402
 
 #: estimators whose value is a function of the children's mean alone
@@ -154,15 +157,43 @@ def device(buffer: Buffer) -> dict[str, Any]:
 
 
 def camera_scene(buffer: Buffer) -> mi.Scene:
-    """A scene holding only the recorded camera, for styles that read it in `prepare` (hatching, xtoon)."""
+    """A scene holding only the recorded camera (kind, field of view, film), for styles that read it in
+    `prepare` (hatching and halftone project their spacing through it, gooch and xtoon take its frame)."""
     m = mi.ScalarTransform4f(np.asarray(buffer.header["sensor_to_world"], dtype=np.float64))
-    return mi.load_dict({"type": "scene", "camera": {"type": "perspective", "to_world": m}})
+    sensor = buffer.header.get("sensor")
+    if sensor is None:  # a buffer written before the sensor was kept: its frame alone
+        return mi.load_dict({"type": "scene", "camera": {"type": "perspective", "to_world": m}})
+    w, h = sensor["size"]
+    (cw, ch), (cx, cy) = sensor["crop_size"], sensor["crop_offset"]
+    film = {"type": "hdrfilm", "width": w, "height": h, "crop_offset_x": cx, "crop_offset_y": cy,
+            "crop_width": cw, "crop_height": ch}
+    camera = {"type": sensor["kind"], "to_world": m, "film": film}
+    if sensor["kind"] == "perspective":
+        camera.update(fov=sensor["x_fov"], fov_axis="x")
+    return mi.load_dict({"type": "scene", "camera": camera})
 
 
-def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> None:
+def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> list[S.StyleSlot]:
+    """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render of the
+    scene pins them (`plugins.scene_defaults`); unchanged for a buffer without a pilot."""
+    pilot = {k[len(PILOT):]: v for k, v in buffer.arrays.items() if k.startswith(PILOT)}
+    if not pilot:
+        return slots
+    stored = SimpleNamespace(samples=pilot)
+    out = []
+    for rec, slot in zip(buffer.header["slots"], slots):
+        chosen = auto_values(slot.style, Facts(scene, stored, int(rec.get("pilot_owner", 0))))
+        out.append(replace(slot, style=slot.style.pinned(chosen)) if chosen else slot)
+    return out
+
+
+def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]:
+    """The slots ready to evaluate: auto values resolved, each style prepared on the recorded camera."""
     scene = camera_scene(buffer)
+    slots = resolve_auto(buffer, slots, scene)
     for slot in slots:
         slot.style.prepare(scene)
+    return slots
 
 
 def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
@@ -209,8 +240,7 @@ def replay_lanes(buffer: Any, style: str | None = None, estimator: str | None = 
     buf = as_buffer(buffer)
     if buf.stores != "sequence":
         raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased estimator)")
-    slots = slots_for(buf, style, estimator, inner, **params)
-    prepare(buf, slots)
+    slots = prepare(buf, slots_for(buf, style, estimator, inner, **params))
     d = device(buf)
     v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buf.header["view"]), depth=d["depth"])
     total, bad = replay(d, d["slot"], slots, v)
@@ -243,8 +273,7 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
             **params: Any) -> np.ndarray:
     """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32, linear."""
     buf = as_buffer(buffer)
-    slots = slots_for(buf, style, estimator, inner, **params)
-    prepare(buf, slots)
+    slots = prepare(buf, slots_for(buf, style, estimator, inner, **params))
     img = accumulate(buf, sample_values(buf, slots))
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
