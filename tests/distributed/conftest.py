@@ -3,7 +3,7 @@ import os
 import pytest
 
 import styletrace
-SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "src"))
+from conftest import SRC
 
 styletrace.init()
 

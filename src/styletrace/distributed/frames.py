@@ -74,7 +74,7 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], spp: int, see
             for ref in done:
                 i = refs.pop(ref)
                 image, _pid = _result(ray, ref)
-                out = save_safely(image, paths[i])
+                out = save_safely(image.copy(), paths[i])  # Ray hands out read-only arrays; Mitsuba needs writable
                 if out == paths[i]:
                     manifest.add(i)
                 written.append(i)

@@ -22,7 +22,7 @@ def camera_target(scene) -> np.ndarray:
     import mitsuba as mi
     m = sensor_to_world(scene)
     origin, forward = m[:3, 3], m[:3, 2] / np.linalg.norm(m[:3, 2])
-    si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*origin), mi.Vector3f(*forward)))
+    si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, origin)), mi.Vector3f(*map(float, forward))))
     if bool(np.array(si.is_valid())[0]):
         return np.array(si.p, dtype=np.float64).reshape(3, -1)[:, 0]
     box = scene.bbox()
