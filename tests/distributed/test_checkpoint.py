@@ -99,3 +99,25 @@ def test_killed_driver_then_resume_equals_the_undisturbed_render(ray_cluster, tm
     assert r.returncode == 0, r.stderr
     assert np.array_equal(read(out), read(ref))
     assert not os.path.exists(manifest)
+
+
+def test_ctrl_c_keeps_the_finished_passes_in_the_image_and_the_checkpoint(ray_cluster, tmp_path):
+    out = str(tmp_path / "out.exr")
+    args = cli("-o", out, "--checkpoint-every", "0", "--ray", ray_cluster)
+    proc = subprocess.Popen(args, env=child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    manifest, done, deadline = out + ".checkpoint.json", 0, time.monotonic() + 240
+    while done < 2 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+        try:
+            done = sum(json.load(open(manifest))["rounds_done"])
+        except (OSError, ValueError):
+            pass
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "interrupted; wrote" in err and os.path.exists(out)
+    kept = sum(json.load(open(manifest))["rounds_done"])
+    assert 2 <= kept < 10 and np.isfinite(read(out)).all()
+    again = subprocess.run(args, env=child_env(), capture_output=True, text=True, timeout=300)
+    assert again.returncode == 2 and "add --resume to continue it" in again.stderr
+    assert again.stderr.count("\n") == 1

@@ -21,7 +21,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from .. import api
-from ..errors import StyletraceError
+from ..errors import StyletraceError, UsageError
 from .checkpoint import Checkpoint
 from .cluster import connect, cpus
 from .describe import SceneSpec
@@ -53,6 +53,9 @@ class Render:
         if output is not None:
             self.checkpoint = Checkpoint(output, settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
                                                               len(self.layout)))
+        if self.checkpoint is not None and not resume and self.checkpoint.exists():
+            raise UsageError(f"{output!r} has the checkpoint of an unfinished render ({self.checkpoint.manifest}): add "
+                             f"--resume to continue it, or delete that file to start over")
         total, rounds = self.checkpoint.load() if resume else (None, None)
         self.merge = Merge(width, height, spp, self.layout, total, rounds)
         self.merge.restore_counts(self.units)
@@ -133,7 +136,6 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
 
 def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
     """The Job of a scene argument and a `stylized` integrator (its property values travel, not the object)."""
-    from ..errors import UsageError
     from ..runtime import init
     from .tasks import Job
     values = getattr(integrator, "values", None)
