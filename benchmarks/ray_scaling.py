@@ -72,9 +72,17 @@ def main():
         for _ in Render(job, spp, 0, w, h, cluster="local"):
             pass
 
-    t_local = timed(local, args.runs)
+    # alternate the two so that load from other processes (a shared machine) falls on both alike
     t_init = start(cores)
-    t_ray = timed(on_ray, args.runs)
+    local(), on_ray()  # warm-up: kernels compiled, workers started and their scenes loaded
+    t_local, t_ray, loads = [], [], [os.getloadavg()[0]]
+    for _ in range(args.runs):
+        for fn, out in ((local, t_local), (on_ray, t_ray)):
+            t = time.perf_counter()
+            fn()
+            out.append(time.perf_counter() - t)
+        loads.append(os.getloadavg()[0])
+    t_local, t_ray = statistics.median(t_local), statistics.median(t_ray)
     units = len(Render(job, spp, 0, w, h).units)
 
     # resume: stop after half the passes, then finish from the checkpoint
@@ -117,7 +125,8 @@ Machine: {machine_description()}. This machine has **{cores} cores**, shared wit
 the scaling rows above {cores} workers measure oversubscription, not a cluster.
 
 **Overhead of `--ray` on one machine**, cornell-box 256x256, cel, S=64 camera samples, n=16 inner samples
-({units} passes of 2^20 samples), warm, median of {args.runs}: local path (`api.passes`, Dr.Jit on {cores} threads)
+({units} passes of 2^20 samples), warm, median of {args.runs} runs alternating local and Ray (1-minute load
+average {min(loads):.1f} to {max(loads):.1f} meanwhile): local path (`api.passes`, Dr.Jit on {cores} threads)
 **{t_local:.2f} s**; Ray tasks on a local instance ({cores} workers of one thread) **{t_ray:.2f} s**, ratio
 **{t_ray / t_local:.3f}** (goal <= 1.10). Starting the local Ray instance took {t_init:.1f} s more, once per
 process (not in the ratio); a worker's first task also loads the scene and compiles the kernel (Dr.Jit's

@@ -28,7 +28,7 @@ import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .arguments import check_passes_args, check_render_args, check_scene, scene_problem  # noqa: E402
-from .errors import SceneError  # noqa: E402
+from .errors import SceneError, UsageError  # noqa: E402
 from .images import save_safely, write_image  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
 from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402

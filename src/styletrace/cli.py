@@ -224,7 +224,8 @@ def cmd_render(args) -> int:
                 from .distributed.command import passes as ray_passes
                 source = ray_passes(args, args.scene, integrator, int(size[0]), int(size[1]), lanes, stop.lock)
             else:
-                source = api.passes(scene, integrator, args.spp, args.seed, lanes, args.pass_spp, lock=stop.lock)
+                source = api.passes(scene, integrator, args.spp, args.seed, lanes_per_pass=lanes, pass_spp=args.pass_spp,
+                                    lock=stop.lock)
             for prog in source:
                 if bar is not None:
                     bar.update(prog.spp_done - (latest.spp_done if latest else 0))

@@ -9,6 +9,8 @@ need styletrace, Mitsuba and Dr.Jit installed in the same versions as here.
 """
 from __future__ import annotations
 
+import os
+
 from ..errors import UsageError
 
 LOCAL = "local"
@@ -27,6 +29,9 @@ def connect(cluster: str):
     ray = ray_module()
     if not isinstance(cluster, str) or not cluster.strip():
         raise UsageError(f"bad cluster {cluster!r}: expected None, 'local' or a Ray address such as HOST:6379")
+    # every result the driver wants it gets (and raises); the only results left unread are those of units
+    # cancelled on Ctrl-C, whose KeyboardInterrupt tracebacks Ray would otherwise print at exit
+    os.environ.setdefault("RAY_IGNORE_UNHANDLED_ERRORS", "1")
     if ray.is_initialized():
         return ray
     try:
