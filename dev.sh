@@ -2,7 +2,7 @@
 # One entry point for a fresh machine:  bash dev.sh render [ARGS...]  |  bash dev.sh test [PYTEST ARGS...]
 # The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because
 # Dr.Jit 1.5 aborts on Debian's default LLVM 15), a virtual environment in .venv, and styletrace with
-# versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ...); for `test` also Chromium (apt),
+# versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ray, ...); for `test` also Chromium (apt),
 # which the preview's browser test drives through Playwright.
 set -euo pipefail
 cd "$(dirname "$0")"
@@ -40,7 +40,7 @@ setup() {
   local stamp="$VENV/.styletrace-installed"
   if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints.txt -nt "$stamp" ]; then
     "$VENV/bin/python" -m pip install -q --upgrade pip
-    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots,preview]"
+    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots,preview,ray]"
     touch "$stamp"
   fi
 }

@@ -23,6 +23,10 @@ _LOOKDEV = {"render_buffer": "record", "restyle": "restyle", "load_buffer": "buf
 def __getattr__(name: str):
     if name == "variant":
         return init()
+    if name == "render":  # api.render, or the same on Ray with cluster= (styletrace.distributed.run)
+        init()
+        from .distributed.run import render
+        return render
     if name in _API:
         init()
         from . import api

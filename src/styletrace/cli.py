@@ -176,6 +176,10 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
+    if len(args.scene) > 1 or args.frames is not None or args.orbit is not None:  # numbered images, on Ray
+        from .distributed.command import frames_command
+        return frames_command(args, _parse_set, choose_integrator, check_output, say)
+    args.scene = args.scene[0] if args.scene else "cornell-box"
     check_output(args.output, args.scene)
     params = _parse_set(args.set)
     for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp),
@@ -210,7 +214,12 @@ def cmd_render(args) -> int:
         from .lookdev.commands import render_with_buffer
         return render_with_buffer(args, scene, integrator)
 
-    total = api.pass_count(scene, args.spp, pass_spp=args.pass_spp)
+    from .sizing import lanes_per_pass
+    from .runtime import init
+    lanes, note = lanes_per_pass(init())
+    if note and not args.quiet:
+        say(f"styletrace: {note}")
+    total = api.pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp)
     bar = None
     if total > 1 and not args.quiet:
         from tqdm import tqdm
@@ -226,7 +235,11 @@ def cmd_render(args) -> int:
             say(f"styletrace: warning: {bad} pixel(s) are not finite (NaN or inf): {fix}")
         return out
 
+    source = None
+
     def abandon(signum):  # from the watcher thread: the pass under way is lost, the finished ones are not
+        if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass
+            source.save()
         if latest is None:
             say("styletrace: interrupted before the first pass finished; nothing written")
         else:
@@ -237,7 +250,13 @@ def cmd_render(args) -> int:
 
     with StopSignals(abandon) as stop:
         try:
-            for prog in api.passes(scene, integrator, args.spp, args.seed, pass_spp=args.pass_spp, lock=stop.lock):
+            if args.ray is not None or args.resume:  # the passes as Ray tasks, checkpointed
+                from .distributed.command import passes as ray_passes
+                source = ray_passes(args, args.scene, integrator, int(size[0]), int(size[1]), lanes, stop.lock)
+            else:
+                source = api.passes(scene, integrator, args.spp, args.seed, lanes_per_pass=lanes, pass_spp=args.pass_spp,
+                                    lock=stop.lock)
+            for prog in source:
                 if bar is not None:
                     bar.update(prog.spp_done - (latest.spp_done if latest else 0))
                 latest = prog
@@ -265,6 +284,8 @@ def cmd_render(args) -> int:
             say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
             return stop.exit_status
         out = write(latest)
+        if out == args.output and hasattr(source, "finish"):
+            source.finish()
         if not args.quiet:
             import mitsuba as mi
             say(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})")
@@ -342,9 +363,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("render", help="render a scene with a style")
-    r.add_argument("scene", nargs="?", default="cornell-box",
+    r.add_argument("scene", nargs="*", default=[],
                    help="built-in scene (cornell-box, dragon, mixed, furnace) or a Mitsuba XML file "
-                        "(default: cornell-box)")
+                        "(default: cornell-box); several XML files render as numbered frames on Ray")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
     add_setting_flags(r)
     r.add_argument("--spp", type=int, default=None, help="camera samples per pixel; overrides the scene sampler's "
@@ -358,6 +379,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     r.set_defaults(func=cmd_render)
+    add_ray_flags(r)
 
     from .lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
     r.add_argument("--buffer", default=None, metavar="FILE", help=lookdev.BUFFER_HELP)
@@ -375,6 +397,21 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("estimators", help="list the estimators of g(E[L]) and the forms they need")
     e.set_defaults(func=cmd_estimators)
     return p
+
+
+def add_ray_flags(parser) -> None:
+    """Rendering on Ray (styletrace.distributed): passes and frames as tasks, checkpoints, resume."""
+    parser.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
+                        help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at ADDRESS "
+                             "(HOST:PORT, as printed by `ray start --head`); give it after the scene")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue an interrupted --ray render of the same output from its checkpoint")
+    parser.add_argument("--checkpoint-every", type=float, default=None, metavar="SECONDS",
+                        help="write the --ray checkpoint at most this often (default 10; 0: after every pass)")
+    parser.add_argument("--frames", type=int, default=None, metavar="N",
+                        help="render N frames of a turntable around the camera's target (numbered images, on Ray)")
+    parser.add_argument("--orbit", type=float, default=None, metavar="DEGREES",
+                        help="the turntable's total rotation about the up axis (default 360)")
 
 
 def add_setting_flags(parser) -> None:

@@ -1,0 +1,117 @@
+"""The command line's hand-off: `styletrace render --ray [ADDRESS] [--resume]` and `--frames`.
+
+    source = passes(args, scene, integrator, lanes, lock)   # iterable like api.passes, plus save()/finish()
+    status = frames_command(args, scenes, parse_set, choose_integrator)
+
+`cli.cmd_render` keeps its loop, progress bar and signal handling; for `--ray` it iterates a `run.Render`
+instead of `api.passes` and calls its `save()` before it abandons a render on a second Ctrl-C, so the
+checkpoint holds every finished pass. Frames have their own loop here (one image per task).
+"""
+from __future__ import annotations
+
+import os
+import re
+
+from ..errors import UsageError
+from .cluster import LOCAL
+
+_ADDRESS = re.compile(r"^(auto|ray://.+|[^\s:/]+:\d+)$")
+
+
+def cluster_of(args) -> str:
+    """The cluster of `--ray [ADDRESS]` (and of `--resume` alone: a local one)."""
+    address = args.ray if args.ray is not None else LOCAL
+    if address != LOCAL and not _ADDRESS.match(address):
+        raise UsageError(f"bad --ray address {address!r}: expected HOST:PORT, ray://HOST:PORT or auto (written "
+                         f"after the scene, or as --ray=ADDRESS)")
+    return address
+
+
+def passes(args, scene_arg, integrator, width: int, height: int, lanes: int, lock):
+    """A `run.Render` of the command's scene on the cluster, checkpointed next to the output."""
+    from .run import Render, job_for
+    if args.checkpoint_every is not None and args.checkpoint_every < 0:
+        raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected seconds >= 0")
+    job = job_for(scene_arg, integrator, args.width, args.height)
+    return Render(job, args.spp, args.seed, width, height, cluster_of(args), lanes, args.pass_spp,
+                  output=args.output, resume=args.resume,
+                  checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every, lock=lock)
+
+
+def frame_paths(output: str, count: int) -> list[str]:
+    """out.png -> out_0000.png, out_0001.png, ..."""
+    stem, ext = os.path.splitext(output)
+    return [f"{stem}_{i:04d}{ext}" for i in range(count)]
+
+
+def frames_command(args, parse_set, choose_integrator, check_output, say) -> int:
+    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`."""
+    from .. import api
+    from ..runtime import init
+    from ..sizing import lanes_per_pass
+    from .frames import Manifest, frame_settings, render_frames
+    from .orbit import turntable
+    from .run import job_for
+
+    scenes = args.scene or ["cornell-box"]
+    if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
+        raise UsageError("--frames/--orbit turn one scene into a turntable; with several scene files each file is "
+                         "one frame")
+    if args.frames is not None and args.frames < 1:
+        raise UsageError(f"bad value {args.frames} for --frames: expected an integer >= 1")
+    if args.orbit is not None and args.frames is None:
+        raise UsageError("--orbit needs --frames N (how many frames the rotation is split into)")
+    for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp),
+                        ("--pass-spp", args.pass_spp)):
+        if value is not None and value < 1:
+            raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
+    for scene in scenes:
+        check_output(args.output, scene)
+    count = args.frames if len(scenes) == 1 else len(scenes)
+    paths = frame_paths(args.output, count)
+    params = parse_set(args.set)
+    cluster = cluster_of(args)
+    variant = init()
+    lanes, note = lanes_per_pass(variant)
+    if note and not args.quiet:
+        say(f"styletrace: {note}")
+    frames, values = [], []
+    if len(scenes) == 1:
+        scene = api.load_scene(scenes[0], args.width, args.height)
+        integrator = choose_integrator(scene, args, params)
+        job = job_for(scenes[0], integrator, args.width, args.height)
+        degrees = 360.0 if args.orbit is None else args.orbit
+        frames = [(job, m) for m in turntable(scene, count, degrees)]
+        values = [job.values]
+        del scene
+    else:
+        for name in scenes:  # each file loaded here once: a broken one fails before any task runs
+            scene = api.load_scene(name, args.width, args.height)
+            job = job_for(name, choose_integrator(scene, args, params), args.width, args.height)
+            frames.append((job, None))
+            values.append(job.values)
+            del scene
+    settings = frame_settings("orbit" if len(scenes) == 1 else "files", [f[0].spec.describe() for f in frames[:1]]
+                              if len(scenes) == 1 else [f[0].spec.describe() for f in frames], values, args.spp,
+                              args.seed, count, args.orbit, lanes, args.pass_spp, variant)
+    manifest = Manifest(args.output, settings)
+    bar = None
+    if not args.quiet:
+        from tqdm import tqdm
+        bar = tqdm(total=count, unit="frame", desc="rendering", file=__import__("sys").stderr)
+    try:
+        written = render_frames(frames, paths, args.spp, args.seed, cluster, lanes, args.pass_spp, manifest,
+                                resume=args.resume, on_frame=lambda i, out: bar.update(1) if bar else None)
+    except KeyboardInterrupt:
+        if bar is not None:
+            bar.close()
+        say(f"styletrace: interrupted; {len(manifest.done)} of {count} frames written (--resume continues)")
+        return 130
+    if bar is not None:
+        bar.close()
+    if not args.quiet:
+        say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {args.spp})")
+    return 0
+
+
+__all__ = ["cluster_of", "passes", "frame_paths", "frames_command"]

@@ -1,0 +1,113 @@
+"""Scene descriptions that travel to Ray workers, and loading them there (cached per worker process).
+
+    spec = SceneSpec.of("cornell-box", width=256, height=256)   # or an XML path, or a scene dict
+    scene = load(spec)                                            # in a worker: api.load_scene(...), cached
+
+An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in name,
+an XML path, or a scene dict, plus the width/height and any further keyword arguments of `load_scene`
+(`load_kwargs`, forwarded as they are: defines for XML, once `load_scene` takes them). Scene dicts may
+hold Mitsuba scalar values (`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either:
+`SceneSpec.of` replaces each by its class name and numbers, and `load` builds it again. A worker keeps the
+last few scenes and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import pickle
+from collections import OrderedDict
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import UsageError
+
+#: Scenes (with their integrators) a worker process keeps loaded; frames of an XML list go through it in turn.
+CACHE_SIZE = 2
+CACHE: "OrderedDict[bytes, Any]" = OrderedDict()
+
+_TAG = "__styletrace_mitsuba_value__"
+
+
+def _encode(value: Any, where: str) -> Any:
+    """A scene dict with its Mitsuba scalar values as (tag, class name, nested lists)."""
+    if isinstance(value, dict):
+        return {k: _encode(v, f"{where}.{k}") for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_encode(v, where) for v in value)
+    module = type(value).__module__ or ""
+    if module.startswith(("mitsuba", "drjit")):
+        import numpy as np
+        name = type(value).__name__
+        if name.startswith("ScalarAffineTransform") or name.startswith("ScalarTransform"):
+            return (_TAG, "ScalarTransform4f", np.asarray(value.matrix, dtype=np.float64).tolist())
+        if name.startswith("Scalar") and hasattr(value, "__len__"):
+            return (_TAG, name, np.asarray(value, dtype=np.float64).tolist())
+        raise UsageError(f"cannot send the scene dict to Ray workers: {where[1:]} holds a {name}; use plain "
+                         f"numbers, Mitsuba scalar values, or an XML file")
+    return value
+
+
+def _decode(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _decode(v) for k, v in value.items()}
+    if isinstance(value, tuple) and len(value) == 3 and value[0] == _TAG:
+        import mitsuba as mi
+        import numpy as np
+        cls = getattr(mi, value[1])
+        return cls(np.asarray(value[2])) if value[1] == "ScalarTransform4f" else cls(*value[2])
+    if isinstance(value, (list, tuple)):
+        return type(value)(_decode(v) for v in value)
+    return value
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """What `api.load_scene` needs, in a picklable form."""
+    scene: Any  # a built-in name, an absolute XML path, or an encoded scene dict
+    width: int | None = None
+    height: int | None = None
+    load_kwargs: dict = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, scene: Any, width: int | None = None, height: int | None = None, **load_kwargs: Any) -> "SceneSpec":
+        if scene is None or isinstance(scene, dict):
+            return cls(_encode(scene, "") if scene else scene, width, height, dict(load_kwargs))
+        if isinstance(scene, (str, os.PathLike)):
+            name = os.fspath(scene)
+            # a relative path means the driver's folder; workers of a local cluster run elsewhere
+            if os.path.isfile(name):
+                name = os.path.abspath(name)
+            return cls(name, width, height, dict(load_kwargs))
+        raise UsageError(f"bad scene {type(scene).__name__} for a cluster render: Ray workers cannot receive an "
+                         f"mi.Scene; pass a built-in name, an XML path or a scene dict")
+
+    def describe(self) -> Any:
+        """A JSON-able summary for a checkpoint's manifest (dict scenes by their hash)."""
+        scene = self.scene if not isinstance(self.scene, dict) else "dict:" + self.key().hex()[:16]
+        return {"scene": scene, "width": self.width, "height": self.height,
+                "load_kwargs": {k: repr(v) for k, v in sorted(self.load_kwargs.items())}}
+
+    def key(self) -> bytes:
+        return hashlib.sha256(pickle.dumps((self.scene, self.width, self.height, sorted(self.load_kwargs.items())),
+                                           protocol=4)).digest()
+
+
+def load(spec: SceneSpec, values: dict, variant: str):
+    """(scene, integrator) for a worker: `init(variant)`, then `api.load_scene` and `make_integrator_from`,
+    cached by the scene and the integrator's values."""
+    from .. import runtime
+    runtime.init(variant)
+    key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
+    if key in CACHE:
+        CACHE.move_to_end(key)
+        return CACHE[key]
+    from .. import api
+    scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
+    loaded = (api.load_scene(scene, spec.width, spec.height, **spec.load_kwargs), api.make_integrator_from(values))
+    CACHE[key] = loaded
+    while len(CACHE) > CACHE_SIZE:
+        CACHE.popitem(last=False)
+    return loaded
+
+
+__all__ = ["SceneSpec", "load", "CACHE", "CACHE_SIZE"]

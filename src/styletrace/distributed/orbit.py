@@ -1,0 +1,57 @@
+"""A turntable: the camera rotated about the up axis through the point it looks at.
+
+    target = camera_target(scene)                       # where the camera's central ray hits the scene
+    mats = orbit(to_world, target, up, frames=120, degrees=360)   # 4x4 sensor to_world of each frame
+
+The target is the first hit of the ray through the image centre (Mitsuba cameras look along their local
++Z), so the turntable turns about what the picture is centred on; if that ray hits nothing, the centre of
+the scene's bounding box. The axis is the camera's own up vector (its local +Y) through the target.
+Frame k is turned by degrees * k / frames: a full 360 over N frames loops without a repeated frame.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def sensor_to_world(scene) -> np.ndarray:
+    m = scene.sensors()[0].world_transform().matrix
+    return np.array(m, dtype=np.float64).reshape(4, 4, -1)[..., 0]
+
+
+def camera_target(scene) -> np.ndarray:
+    import mitsuba as mi
+    m = sensor_to_world(scene)
+    origin, forward = m[:3, 3], m[:3, 2] / np.linalg.norm(m[:3, 2])
+    si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, origin)), mi.Vector3f(*map(float, forward))))
+    if bool(np.array(si.is_valid())[0]):
+        return np.array(si.p, dtype=np.float64).reshape(3, -1)[:, 0]
+    box = scene.bbox()
+    return (np.array(box.min, dtype=np.float64) + np.array(box.max, dtype=np.float64)) / 2
+
+
+def rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
+    """3x3 rotation by `degrees` about unit `axis` (right-handed; Rodrigues' formula)."""
+    a = axis / np.linalg.norm(axis)
+    t = np.radians(degrees)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + np.sin(t) * k + (1 - np.cos(t)) * (k @ k)
+
+
+def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int, degrees: float) -> list[np.ndarray]:
+    """The sensor's to_world for each frame: T(target) R(up, angle) T(-target) to_world."""
+    out = []
+    for k in range(frames):
+        about = np.eye(4)
+        r = rotation(up, degrees * k / frames)
+        about[:3, :3] = r
+        about[:3, 3] = target - r @ target
+        out.append(about @ to_world)
+    return out
+
+
+def turntable(scene, frames: int, degrees: float) -> list[np.ndarray]:
+    m = sensor_to_world(scene)
+    return orbit(m, camera_target(scene), m[:3, 1], frames, degrees)
+
+
+__all__ = ["camera_target", "rotation", "orbit", "turntable", "sensor_to_world"]

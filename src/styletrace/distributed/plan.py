@@ -1,0 +1,79 @@
+"""A render as independent (tile, pass) units, and their sum in the single-process order.
+
+    layout, units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
+    merge = Merge(width, height, spp, layout)
+    merge.add(unit, rendered_tile)     # any order; summed per tile in the order of `api.passes`
+    merge.progress()                   # an api.Progress: spp_done, image
+
+The units are exactly the kernel launches of `api.passes`: its tiles and pass size (`api.pass_size`) and,
+for launch number `index` (round r of tile t is index r * tiles + t), the seed `api.pass_seed(seed, index)`
+and min(per_pass, spp - r * per_pass) samples per pixel. So which worker renders a unit changes nothing.
+Results arrive in any order; `Merge` keeps the early ones aside and adds each tile's passes in round order,
+with the same float32 operations as `api.passes`, so the merged image is bit-identical to the
+single-process render of the same seed and split (not merely equal up to the order of summation).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import api
+
+
+@dataclass(frozen=True)
+class Unit:
+    index: int   # the launch number in api.passes: round * tiles + tile
+    tile: int
+    round: int
+    spp: int
+    seed: int
+
+
+def plan(width: int, height: int, spp: int, seed: int, lanes_per_pass: int = api.LANES_PER_PASS,
+         pass_spp: int | None = None) -> tuple[list[api.Tile], list[Unit]]:
+    """The tiles of the film and every unit of the render, in launch order."""
+    layout, per_pass = api.pass_size(width, height, spp, lanes_per_pass, pass_spp)
+    rounds = -(-spp // per_pass)
+    units = [Unit(r * len(layout) + t, t, r, min(per_pass, spp - r * per_pass),
+                  api.pass_seed(seed, r * len(layout) + t))
+             for r in range(rounds) for t in range(len(layout))]
+    return layout, units
+
+
+class Merge:
+    """The running float32 sum of the finished units, added per tile in round order."""
+
+    def __init__(self, width: int, height: int, spp: int, layout: list[api.Tile],
+                 total: np.ndarray | None = None, rounds_done: list[int] | None = None):
+        self.spp, self.layout = spp, layout
+        self.total = np.zeros((height, width, 3), dtype=np.float32) if total is None else total
+        self.rounds_done = list(rounds_done) if rounds_done is not None else [0] * len(layout)
+        self.counts = np.zeros(len(layout), dtype=np.int64)
+        self._pending: dict[tuple[int, int], tuple[Unit, np.ndarray]] = {}
+
+    def restore_counts(self, units: list[Unit]) -> None:
+        """Samples per tile of the rounds already done (after a resume)."""
+        for u in units:
+            if u.round < self.rounds_done[u.tile]:
+                self.counts[u.tile] += u.spp
+
+    def add(self, unit: Unit, tile_image: np.ndarray) -> int:
+        """Take a unit's rendered crop window (float32 h x w x 3); returns how many units were summed."""
+        self._pending[(unit.tile, unit.round)] = (unit, tile_image)
+        added = 0
+        t = unit.tile
+        while (t, self.rounds_done[t]) in self._pending:
+            u, arr = self._pending.pop((t, self.rounds_done[t]))
+            tile = self.layout[t]
+            self.total[tile.dest] += arr[tile.keep] * np.float32(u.spp)  # as api.passes does
+            self.counts[t] += u.spp
+            self.rounds_done[t] += 1
+            added += 1
+        return added
+
+    def progress(self) -> api.Progress:
+        return api.Progress(int(self.counts.min()), self.spp, self.total, self.counts, self.layout)
+
+
+__all__ = ["Unit", "plan", "Merge"]

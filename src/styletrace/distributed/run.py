@@ -1,0 +1,180 @@
+"""The driver of a render on Ray: hand out (tile, pass) units, merge them, checkpoint, report progress.
+
+    run = Render(job, spp=256, seed=0, width=512, height=512, cluster="local", checkpoint=ck)
+    for prog in run:          # an api.Progress after each finished unit, as api.passes yields
+        ...
+    image = render("cornell-box", style="cel", spp=64, cluster="local")   # the API's one call
+
+Units are submitted in launch order, at most `window` at a time (twice the tasks the cluster can run at
+once), so the driver holds a bounded number of results. A task whose worker dies is run again by Ray
+(`MAX_RETRIES`); one that fails in styletrace (a bad scene) raises its own one-line error here. Breaking
+out of the loop (Ctrl-C in the command line) cancels the units under way and checkpoints the finished
+ones. Checkpoints are written at most every `checkpoint_every` seconds and when the loop ends; their
+timing changes nothing in the image, because the checkpoint holds the exact float32 sum.
+"""
+from __future__ import annotations
+
+import contextlib
+import time
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from .. import api
+from ..errors import StyletraceError, UsageError
+from .checkpoint import Checkpoint
+from .cluster import connect, cpus
+from .describe import SceneSpec
+from .plan import Merge, plan
+
+#: Retries of a task whose worker process died (Ray re-runs it elsewhere; the unit's seed is fixed).
+MAX_RETRIES = 3
+
+
+def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, per_pass: int, tiles: int) -> dict:
+    """What a checkpoint must match to be resumed."""
+    return {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
+            "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass, "tiles": tiles,
+            "variant": job.variant}
+
+
+class Render:
+    """Iterating renders; `progress()` after the loop is the final state, `worker_pids` who rendered."""
+
+    def __init__(self, job, spp: int, seed: int, width: int, height: int, cluster: str = "local",
+                 lanes_per_pass: int = api.LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
+                 resume: bool = False, checkpoint_every: float = 10.0, cpus_per_task: int = 1,
+                 gpus_per_task: float = 0, lock: Any = contextlib.nullcontext()):
+        self.job, self.spp, self.seed, self.width, self.height = job, spp, seed, width, height
+        self.cluster, self.lock = cluster, lock
+        self.layout, self.units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
+        per_pass = self.units[0].spp
+        self.checkpoint = None
+        if output is not None:
+            self.checkpoint = Checkpoint(output, settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
+                                                              len(self.layout)))
+        if self.checkpoint is not None and not resume and self.checkpoint.exists():
+            raise UsageError(f"{output!r} has the checkpoint of an unfinished render ({self.checkpoint.manifest}): add "
+                             f"--resume to continue it, or delete that file to start over")
+        total, rounds = self.checkpoint.load() if resume else (None, None)
+        self.merge = Merge(width, height, spp, self.layout, total, rounds)
+        self.merge.restore_counts(self.units)
+        self.resumed_units = sum(rounds) if rounds else 0
+        self.checkpoint_every, self.cpus_per_task, self.gpus_per_task = checkpoint_every, cpus_per_task, gpus_per_task
+        self.worker_pids: set[int] = set()
+        self.on_result: Callable[[int], None] | None = None  # called with the worker's pid after each result
+        self._last_save = time.monotonic()
+
+    @property
+    def total_units(self) -> int:
+        return len(self.units)
+
+    def progress(self) -> api.Progress:
+        return self.merge.progress()
+
+    def save(self) -> None:
+        """Checkpoint the finished units now (the command line's watcher calls it before it abandons)."""
+        if self.checkpoint is not None and int(self.merge.counts.min()) < self.spp:
+            self.checkpoint.save(self.merge.total, self.merge.rounds_done)
+        self._last_save = time.monotonic()
+
+    def finish(self) -> None:
+        """The final image is written: the checkpoint has served."""
+        if self.checkpoint is not None:
+            self.checkpoint.remove()
+
+    def __iter__(self) -> Iterator[api.Progress]:
+        ray = connect(self.cluster)
+        from .tasks import render_unit
+        todo = [u for u in self.units if u.round >= self.merge.rounds_done[u.tile]]
+        todo.reverse()  # pop() from the end takes them in launch order
+        window = max(2, 2 * cpus() // max(1, self.cpus_per_task))
+        task = render_unit.options(num_cpus=self.cpus_per_task, num_gpus=self.gpus_per_task,
+                                   max_retries=MAX_RETRIES)
+        job = ray.put(self.job)
+        running: dict[Any, Any] = {}
+        if self.resumed_units:  # the passes of the checkpoint are the first progress
+            yield self.merge.progress()
+        try:
+            while todo or running:
+                while todo and len(running) < window:
+                    u = todo.pop()
+                    tile = self.layout[u.tile]
+                    running[task.remote(job, u.spp, u.seed, tile.offset, tile.size)] = u
+                done, _ = ray.wait(list(running), num_returns=1)
+                for ref in done:
+                    unit = running.pop(ref)
+                    arr, pid = _result(ray, ref)
+                    with self.lock:
+                        self.merge.add(unit, arr)
+                    self.worker_pids.add(pid)
+                    if self.on_result is not None:
+                        self.on_result(pid)
+                    if self.checkpoint is not None and time.monotonic() - self._last_save >= self.checkpoint_every:
+                        with self.lock:
+                            self.save()
+                    yield self.merge.progress()
+        finally:
+            for ref in running:
+                ray.cancel(ref)
+            with self.lock:
+                self.save()
+
+
+def _result(ray, ref) -> tuple[np.ndarray, int]:
+    """A task's result; its styletrace error as that error (one line), any other failure as RuntimeError."""
+    try:
+        return ray.get(ref)
+    except ray.exceptions.RayTaskError as exc:
+        cause = getattr(exc, "cause", None)
+        if isinstance(cause, StyletraceError):
+            raise cause from None
+        raise RuntimeError(f"a Ray task failed: {api.first_line(cause or exc)}") from None
+    except ray.exceptions.RayError as exc:
+        raise RuntimeError(f"a Ray task failed: {api.first_line(exc)}") from None
+
+
+def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
+    """The Job of a scene argument and a `stylized` integrator (its property values travel, not the object)."""
+    from ..runtime import init
+    from .tasks import Job
+    values = getattr(integrator, "values", None)
+    if not isinstance(values, dict):
+        raise UsageError(f"bad integrator {type(integrator).__name__} for a cluster render: Ray workers rebuild the "
+                         f"`stylized` integrator from its property values; pass style= and parameters instead")
+    return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init())
+
+
+def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+           estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
+           integrator: Any = None, callback: Callable[[api.Progress], None] | None = None,
+           cluster: str | None = None, pass_spp: int | None = None, **params: Any) -> np.ndarray:
+    """`styletrace.render`: `api.render` with passes sized for the device (`sizing`) and an optional
+    `pass_spp`; with `cluster` ("local" or a Ray address) the passes become Ray tasks, and the image is
+    bit-identical to the one rendered here with the same seed and split."""
+    from ..arguments import check_render_args
+    from ..sizing import lanes_per_pass
+    from ..runtime import init
+    check_render_args(spp, seed, integrator)
+    sc = api.load_scene(scene, width, height)  # checks the scene here, once, with the driver's one-line errors
+    if integrator is None:
+        integrator = api.make_integrator(style=style, inner=inner, estimator=estimator, **params)
+    lanes, _ = lanes_per_pass(init())
+    if cluster is None:  # api.render's loop, with the device's pass size and the given split
+        image = None
+        for prog in api.passes(sc, integrator, spp, seed, lanes_per_pass=lanes, pass_spp=pass_spp):
+            image = prog.image
+            if callback is not None:
+                callback(prog)
+        return image
+    size = sc.sensors()[0].film().crop_size()
+    job = job_for(scene, integrator, width, height)
+    del sc
+    run = Render(job, spp, seed, int(size[0]), int(size[1]), cluster, lanes, pass_spp)
+    for prog in run:
+        if callback is not None:
+            callback(prog)
+    return run.progress().image
+
+
+__all__ = ["Render", "render", "job_for", "settings_of", "MAX_RETRIES"]

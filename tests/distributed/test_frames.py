@@ -1,0 +1,80 @@
+"""Turntables and lists of scenes as numbered frames, one Ray task each; the orbit's geometry."""
+import os
+import pickle
+import subprocess
+import sys
+
+import mitsuba as mi
+import numpy as np
+
+from styletrace import api
+from styletrace.distributed.describe import SceneSpec, _decode
+from styletrace.distributed.orbit import camera_target, orbit, rotation, sensor_to_world
+
+from conftest import child_env
+
+
+def test_target_is_where_the_central_ray_hits_and_the_orbit_turns_about_it():
+    """The furnace's camera at (0, 0, 4) looks at its unit sphere at the origin: the target is (0, 0, 1)."""
+    scene = api.load_scene("furnace", 16, 16)
+    m = sensor_to_world(scene)
+    target = camera_target(scene)
+    np.testing.assert_allclose(target, [0, 0, 1], atol=1e-5)
+    mats = orbit(m, target, m[:3, 1], 4, 360.0)
+    assert np.array_equal(mats[0], m)
+    np.testing.assert_allclose(mats[2][:3, 3], [0, 0, -2], atol=1e-5)  # half a turn about the y axis through it
+    np.testing.assert_allclose(mats[1][:3, 3], [3, 0, 1], atol=1e-5)   # a quarter turn (right-handed about +y)
+    for k in range(4):  # the camera keeps its distance to the target and still looks at it
+        fwd = mats[k][:3, 2] / np.linalg.norm(mats[k][:3, 2])
+        np.testing.assert_allclose(np.cross(fwd, target - mats[k][:3, 3]), 0, atol=1e-6)
+
+
+def test_target_falls_back_to_the_bbox_centre_when_the_central_ray_misses():
+    scene = mi.load_dict({"type": "scene", "sensor": {"type": "perspective", "to_world": mi.ScalarTransform4f()
+                          .look_at(origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0])},
+                          "s": {"type": "sphere", "center": [3, 0, 0], "radius": 1.0}})
+    np.testing.assert_allclose(camera_target(scene), [3, 0, 0], atol=1e-5)
+
+
+def test_rotation_matches_mitsubas():
+    axis = np.array([1.0, 2.0, 0.5])
+    r = rotation(axis, 33.0)
+    unit = (axis / np.linalg.norm(axis)).tolist()  # Mitsuba's rotate() takes a unit axis
+    mit = np.array(mi.ScalarTransform4f().rotate(unit, 33.0).matrix, dtype=np.float64)
+    np.testing.assert_allclose(r, mit[:3, :3], atol=1e-6)
+
+
+def test_scene_dicts_with_transforms_travel_to_workers():
+    d = api.scene_dict("cornell-box", 8, 8)
+    spec = SceneSpec.of(d)
+    back = _decode(pickle.loads(pickle.dumps(spec)).scene)
+    a = np.array(d["sensor"]["to_world"].matrix)
+    assert np.array_equal(np.array(back["sensor"]["to_world"].matrix), a)
+    assert np.array_equal(api.load_scene(back).sensors()[0].world_transform().matrix,
+                          api.load_scene(d).sensors()[0].world_transform().matrix)
+
+
+def render_cli(*args):
+    return subprocess.run([sys.executable, "-m", "styletrace", "render", "--width", "24", "--height", "16",
+                           "--spp", "2", "--style", "cel", "--inner", "2", "-q", *args],
+                          env=child_env(), capture_output=True, text=True, timeout=300)
+
+
+def test_turntable_frames_are_numbered_and_frame_zero_is_the_still(ray_cluster, tmp_path):
+    out = str(tmp_path / "spin.exr")
+    r = render_cli("cornell-box", "--frames", "3", "--orbit", "90", "-o", out, "--ray", ray_cluster)
+    assert r.returncode == 0, r.stderr
+    names = sorted(f for f in os.listdir(tmp_path) if f.endswith(".exr"))
+    assert names == ["spin_0000.exr", "spin_0001.exr", "spin_0002.exr"]
+    still = str(tmp_path / "still.exr")
+    assert render_cli("cornell-box", "-o", still).returncode == 0
+    frames = [np.array(mi.Bitmap(str(tmp_path / n))) for n in names]
+    assert np.array_equal(frames[0], np.array(mi.Bitmap(still)))
+    assert not np.array_equal(frames[1], frames[0])
+
+
+def test_bad_frame_arguments_are_one_line(tmp_path):
+    r = render_cli("cornell-box", "--orbit", "90", "-o", str(tmp_path / "a.png"))
+    assert r.returncode == 2 and "--orbit needs --frames N" in r.stderr and r.stderr.count("\n") == 1
+    r = render_cli("cornell-box", "--ray", "cornell-box", "-o", str(tmp_path / "a.png"))
+    assert r.returncode == 2 and "bad --ray address 'cornell-box'" in r.stderr
