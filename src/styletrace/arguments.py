@@ -84,6 +84,11 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     seen.clear()
     for name in sorted(names & set(UNRENDERABLE)):
         return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
+    from .plugins.scene_graph import SceneGraph  # needs a variant set, as the plugins do
+    try:
+        SceneGraph(scene)  # styled BSDFs where no style can apply
+    except SceneError as exc:
+        return f"{origin}: {exc}"
     return None
 
 
