@@ -34,6 +34,7 @@ from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .lane_sampler import LaneSampler
 from .path import bounce, environment, first_scattering, walk
+from ..errors import SceneError
 from .scene_graph import SceneGraph
 
 
@@ -64,6 +65,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # styled BSDFs wherever they sit: on shapes, inside wrappers (twosided, mask, blendbsdf) and in
         # shapegroups seen through instances (scene_graph.py); `bsdfs[0]` is the styled BSDF itself
         graph = SceneGraph(scene)
+        if graph.has_media:  # refused, not ignored (also checked before rendering: arguments.check_passes_args)
+            raise SceneError(MEDIA_REFUSED)
         # plain flags only: a kept reference to a scene's objects breaks later traces (see `sample`)
         self.nulls, self.media = graph.has_null, graph.has_media
         targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
@@ -183,6 +186,15 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"
+
+
+MEDIA_REFUSED = ("the scene has participating media (a shape's interior/exterior medium or the sensor's), which "
+                 "the 'stylized' integrator does not support yet: render it with Mitsuba's 'volpath'")
+
+
+def media_problem(scene: mi.Scene) -> str | None:
+    """Why `stylized` cannot render `scene` (participating media), or None."""
+    return MEDIA_REFUSED if SceneGraph(scene).has_media else None
 
 
 def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:
