@@ -48,6 +48,11 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     """The arguments of `passes`: a renderable scene as well."""
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
+    from .plugins.integrator import StylizedIntegrator, media_problem  # needs a variant set, as the plugins do
+    if isinstance(integrator, StylizedIntegrator):
+        problem = media_problem(scene)
+        if problem is not None:
+            raise SceneError(problem)
 
 
 def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
@@ -84,6 +89,11 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     seen.clear()
     for name in sorted(names & set(UNRENDERABLE)):
         return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
+    from .plugins.scene_graph import SceneGraph  # needs a variant set, as the plugins do
+    try:
+        SceneGraph(scene)  # styled BSDFs where no style can apply
+    except SceneError as exc:
+        return f"{origin}: {exc}"
     return None
 
 

@@ -35,8 +35,9 @@ from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .lane_sampler import LaneSampler
-from .path import bounce, environment, exitant, walk
-from .styled_bsdf import StyledBSDF
+from .path import bounce, environment, first_scattering, walk
+from ..errors import SceneError
+from .scene_graph import SceneGraph
 
 
 class Target:
@@ -63,14 +64,14 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     # ---- which styles apply where --------------------------------------------------------------
     def _targets(self, scene: mi.Scene) -> list[Target]:
-        groups: dict[int, Target] = {}
-        for shape in scene.shapes():
-            bsdf = shape.bsdf()
-            if isinstance(bsdf, StyledBSDF):
-                t = groups.setdefault(id(bsdf), Target(bsdf.slot, [bsdf]))
-                if shape.emitter() is not None:
-                    t.emitters.append(shape.emitter())
-        targets = list(groups.values())
+        # styled BSDFs wherever they sit: on shapes, inside wrappers (twosided, mask, blendbsdf) and in
+        # shapegroups seen through instances (scene_graph.py); `bsdfs[0]` is the styled BSDF itself
+        graph = SceneGraph(scene)
+        if graph.has_media:  # refused, not ignored (also checked before rendering: arguments.check_passes_args)
+            raise SceneError(MEDIA_REFUSED)
+        # plain flags only: a kept reference to a scene's objects breaks later traces (see `sample`)
+        self.nulls, self.media = graph.has_null, graph.has_media
+        targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
         if self.settings.stylize != "first_object_hit":
             targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
         return targets
@@ -86,11 +87,12 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`)."""
         s = self.settings
         if level + 1 >= s.stylize_depth:
-            return exitant(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, self.emitters)
+            return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
+                        nulls=self.nulls, opaque_start=True).L
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
-        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters)
+        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls)
         deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
         return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
@@ -104,7 +106,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return styled if halt_at_start else styled & (d > start)
 
         w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
-                 skip_emitter=self._skip_emitter, emitters=self.emitters)
+                 skip_emitter=self._skip_emitter, emitters=self.emitters, nulls=self.nulls,
+                 opaque_start=not halt_at_start)
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
         return self._through(w, value)
@@ -175,10 +178,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         if self.settings.stylize == "first_object_hit":
             start = active & pi.is_valid() if hide else active  # a hidden environment is black
             return self.walk(0, scene, sampler, pi, ray, start, mi.UInt32(0), halt_at_start=True), valid, []
+        if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
+            front = first_scattering(scene, sampler, pi, ray, active)
+            pi, ray = front.pi, front.ray
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
         hit = active & si.is_valid()
         value = self.stylized(0, scene, sampler, pi, si, ray, hit, mi.UInt32(0))
-        return dr.select(hit, value, 0.0 if hide else environment(scene, si, active)), valid, []
+        value = dr.select(hit, value, 0.0 if hide else environment(scene, si, active))
+        if self.nulls:
+            value = front.beta * value
+        return value, valid, []
 
     def aov_names(self):
         return []
@@ -200,6 +209,15 @@ def past_area_emitters(scene, ray, pi, active):
     skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
     ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
     return ray, pi
+
+
+MEDIA_REFUSED = ("the scene has participating media (a shape's interior/exterior medium or the sensor's), which "
+                 "the 'stylized' integrator does not support yet: render it with Mitsuba's 'volpath'")
+
+
+def media_problem(scene: mi.Scene) -> str | None:
+    """Why `stylized` cannot render `scene` (participating media), or None."""
+    return MEDIA_REFUSED if SceneGraph(scene).has_media else None
 
 
 def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:

@@ -73,6 +73,79 @@ def emission(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> m
     return si.emitter(scene).eval(si, active)
 
 
+def null_split(si: mi.SurfaceInteraction3f, bsdf, u: mi.Float, active: mi.Bool):
+    """Where a surface lets light through unscattered (a `mask`'s transparent part, a `null` BSDF), choose
+    between passing through and scattering: (passes, pass weight, stay weight).
+
+    The null transmission T = `eval_null_transmission` is the part of the BSDF that continues straight
+    on; the ray passes with probability p = mean(T) and weight T/p, else it scatters here with weight
+    (1 - T)/(1 - p) (both 1 where T is grey, as for masks). Mitsuba's BSDFs sample their null component
+    with probability T, so this choice is the one their own `sample` would make.
+    """
+    T = bsdf.eval_null_transmission(si, active)
+    p = dr.clip(dr.mean(T), 0.0, 1.0)
+    passes = active & (u < p)
+    w_pass = dr.select(p > 0, T / p, 0.0)
+    w_stay = dr.select(p < 1, (1.0 - T) / (1.0 - p), 0.0)
+    return passes, w_pass, w_stay
+
+
+def opaque_part(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Spectrum:
+    """1 / (1 - T): the factor that turns a BSDF's scattering into that of its opaque part alone (the part
+    a stylized vertex stands for, see `first_scattering`); 0 where nothing scatters."""
+    keep = 1.0 - bsdf.eval_null_transmission(si, active)
+    return dr.select(keep > 0, dr.rcp(keep), 0.0)
+
+
+@dataclass
+class Front:
+    """The first scattering vertex along a ray, past surfaces it went straight through."""
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    beta: mi.Spectrum       # weight of the passes (1 where none)
+
+
+@dataclass
+class FrontState:
+    sampler: Any
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    beta: mi.Spectrum
+    active: mi.Bool
+
+
+def first_scattering(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
+                     active: mi.Bool) -> Front:
+    """Follow `ray` through null interactions (masks, `null` BSDFs) to the first vertex that scatters.
+
+    A stylized vertex is a scattering vertex: a ray that meets a mask passes it with probability T (its
+    null transmission) and goes on; otherwise the mask is an opaque surface there, and the lane's weight
+    is (1 - T)/(1 - p) (1 for grey T). The stylized value at that vertex is the radiance of the opaque part
+    (`opaque_part`), so for the identity style the mixture is exactly the physically based one. Null
+    interactions add no depth. Emitters on see-through surfaces are refused with the scene
+    (scene_graph.py): evaluating emission in this loop as well made Dr.Jit 1.5's LLVM backend emit one
+    emitter callable twice into a kernel ("invalid redefinition of function"), a crash.
+    """
+    state = FrontState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
+                       beta=mi.Spectrum(1.0), active=mi.Bool(active))
+
+    def body(s: FrontState):
+        si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
+        bsdf = si.bsdf(s.ray)
+        nullish = s.active & si.is_valid() & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
+        passes, w_pass, w_stay = null_split(si, bsdf, s.sampler.next_1d(nullish), nullish)
+        s.beta *= dr.select(passes, w_pass, dr.select(nullish, w_stay, 1.0))
+        ray_next = si.spawn_ray(s.ray.d)
+        pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=passes)
+        s.pi = dr.select(passes, pi_next, s.pi)
+        s.ray = dr.select(passes, ray_next, s.ray)
+        s.active = passes & (dr.max(s.beta) > 0)
+        return (s,)
+
+    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace null passes")
+    return Front(pi=out.pi, ray=out.ray, beta=out.beta)
+
+
 @dataclass
 class PathState:
     """What the path loop carries from one vertex to the next (a Dr.Jit PyTree: the loop state)."""
@@ -89,6 +162,7 @@ class PathState:
     pdf_prev: mi.Float                       # BSDF density of the direction that reached the vertex
     delta_prev: mi.Bool                      # was that direction a delta (specular) sample?
     halted: mi.Bool                          # halted at a stylized vertex
+    first: Optional[mi.Bool]                 # at the starting vertex (only where `opaque_start` needs it)
 
 
 @dataclass
@@ -111,7 +185,11 @@ def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection
 def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
          active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
          stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
-         emitters: Optional[EmitterSampler] = None) -> Walk:
+         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False) -> Walk:
+    """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
+    `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
+    vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
+    so scenes without such surfaces trace the plain loop."""
     ctx = mi.BSDFContext()
     emitters = emitters if emitters is not None else EmitterSampler(scene)
     limit = depth_limit(max_depth)
@@ -121,13 +199,20 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
                       active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
                       eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f), pdf_prev=mi.Float(1.0),
-                      delta_prev=mi.Bool(True), halted=mi.Bool(False))
+                      delta_prev=mi.Bool(True), halted=mi.Bool(False),
+                      first=mi.Bool(True) if nulls and opaque_start else None)
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
         here = mi.Bool(s.active)
+        passes, w_pass = mi.Bool(False), mi.Spectrum(1.0)
         if stop is not None:
             halt = s.active & si.is_valid() & stop(si, s.depth)
+            if nulls:  # a stylized vertex is a scattering one: pass through the null part first
+                nullish = halt & mi.has_flag(si.bsdf(s.ray).flags(), mi.BSDFFlags.Null)
+                passes, w_pass, w_stay = null_split(si, si.bsdf(s.ray), s.sampler.next_1d(nullish), nullish)
+                halt &= ~passes
+                s.beta *= dr.select(nullish & halt, w_stay, 1.0)
             s.halted |= halt
             here &= ~halt
 
@@ -154,15 +239,27 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
         bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, s.sampler.next_1d(),
                                                                    s.sampler.next_2d(), active_next)
         w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, bsdf_pdf))
-        s.L += dr.select(active_em, s.beta * w_nee * bsdf_val * em_weight, 0.0)
+        scale = mi.Spectrum(1.0)
+        if nulls and opaque_start:  # the stylized starting vertex: its opaque part only
+            scale = dr.select(s.first, opaque_part(si, bsdf, active_next & s.first), 1.0)
+            bsdf_weight[s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)] = 0.0
+        if nulls and stop is not None:
+            active_em &= ~passes
+        s.L += dr.select(active_em, s.beta * scale * w_nee * bsdf_val * em_weight, 0.0)
 
         # Continue the path along the sampled direction (halted lanes keep their vertex).
-        beta_next = s.beta * bsdf_weight
-        s.eta *= dr.select(active_next, bs.eta, 1.0)
+        beta_next = s.beta * scale * bsdf_weight
+        s.eta *= dr.select(active_next & ~passes, bs.eta, 1.0)
         ray_next = si.spawn_ray(si.to_world(bs.wo))
         s.si_prev = mi.Interaction3f(dr.detach(si, True))
         s.pdf_prev = bs.pdf
         s.delta_prev = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        if nulls and stop is not None:  # straight on through the null part, like a sampled null component
+            beta_next = dr.select(passes, s.beta * w_pass, beta_next)
+            ray_next = dr.select(passes, si.spawn_ray(s.ray.d), ray_next)
+            s.delta_prev |= passes
+        if nulls and opaque_start:
+            s.first = mi.Bool(False)
 
         # Russian roulette on the throughput, as in Mitsuba's path tracer (which counts the depth of
         # the vertex about to be reached, hence the increment first).
@@ -209,13 +306,16 @@ class Bounce:
 
 
 def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
-           max_depth: int = -1, emitters: Optional[EmitterSampler] = None) -> Bounce:
+           max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False) -> Bounce:
     """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
 
     The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
     surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
     spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
     alone get next-event estimation here, with weight 1.
+
+    With `nulls` (the scene has null-scattering surfaces) x scatters by its opaque part only and the
+    next vertex is the first scattering one past null interactions (`first_scattering`).
     """
     ctx = mi.BSDFContext()
     L = emission(scene, si, active)
@@ -225,11 +325,17 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     emitters = emitters if emitters is not None else EmitterSampler(scene)
     ds, em_weight = emitters.sample_direction(si, sampler.next_2d(), to_light)
     to_light &= ds.delta & (ds.pdf != 0.0)
-    L += dr.select(to_light, bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
+    scale = opaque_part(si, bsdf, go) if nulls else 1.0
+    L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
     bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), go)
     ray2 = si.spawn_ray(si.to_world(bs.wo))
+    if nulls:
+        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null), 0.0, scale * weight)
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+    if nulls:
+        front = first_scattering(scene, sampler, pi2, ray2, go)
+        pi2, ray2, weight = front.pi, front.ray, weight * front.beta
     si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)

@@ -57,6 +57,9 @@ class StyledBSDF(mi.BSDF):
     def eval_pdf_sample(self, ctx, si, wo, sample1, sample2, active=True):
         return self.nested.eval_pdf_sample(ctx, si, wo, sample1, sample2, active)
 
+    def eval_null_transmission(self, si, active=True):
+        return self.nested.eval_null_transmission(si, active)
+
     def eval_diffuse_reflectance(self, si, active=True):
         return self.nested.eval_diffuse_reflectance(si, active)
 
