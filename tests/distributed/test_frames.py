@@ -78,3 +78,35 @@ def test_bad_frame_arguments_are_one_line(tmp_path):
     assert r.returncode == 2 and "--orbit needs --frames N" in r.stderr and r.stderr.count("\n") == 1
     r = render_cli("cornell-box", "--ray", "cornell-box", "-o", str(tmp_path / "a.png"))
     assert r.returncode == 2 and "bad --ray address 'cornell-box'" in r.stderr
+
+
+SPHERE_XML = """<scene version="3.0.0">
+    <integrator type="path"/>
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="2"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/>
+            <rfilter type="box"/></film>
+    </sensor>
+    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+    <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="{colour}"/></bsdf></shape>
+</scene>
+"""
+
+
+def test_a_list_of_scene_files_renders_one_numbered_frame_each(ray_cluster, tmp_path):
+    """Each file is one frame (a task on the cluster); frame k equals rendering file k on its own."""
+    files = []
+    for k, colour in enumerate(("0.8,0.2,0.2", "0.2,0.2,0.8")):
+        path = tmp_path / f"s{k}.xml"
+        path.write_text(SPHERE_XML.format(colour=colour))
+        files.append(str(path))
+    out = str(tmp_path / "seq.exr")
+    r = render_cli(*files, "--style", "cel", "-o", out, "--ray", ray_cluster)
+    assert r.returncode == 0, r.stderr
+    for k, path in enumerate(files):
+        alone = str(tmp_path / f"alone{k}.exr")
+        assert render_cli(path, "--style", "cel", "-o", alone).returncode == 0
+        assert np.array_equal(np.array(mi.Bitmap(str(tmp_path / f"seq_{k:04d}.exr"))), np.array(mi.Bitmap(alone)))
+    first, second = (np.array(mi.Bitmap(str(tmp_path / f"seq_{k:04d}.exr"))) for k in range(2))
+    assert not np.array_equal(first, second)
