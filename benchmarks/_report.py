@@ -66,3 +66,16 @@ def write_section(name: str, body: str) -> None:
     pattern = re.compile(re.escape(start) + ".*?" + re.escape(end), re.S)
     text = pattern.sub(lambda _: block, text) if pattern.search(text) else text.rstrip() + "\n\n" + block + "\n"
     REPORT.write_text(text)
+
+
+def median_time(fn, runs: int) -> float:
+    """Median wall time of `runs` calls of `fn` after one warm-up call (kernels compiled, caches filled)."""
+    import statistics
+    import time
+    fn()
+    out = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t)
+    return statistics.median(out)

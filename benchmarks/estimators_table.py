@@ -12,7 +12,6 @@ Run: python benchmarks/estimators_table.py   (about a minute on 2 cores)
 from __future__ import annotations
 
 import math
-import os
 import sys
 import time
 from pathlib import Path

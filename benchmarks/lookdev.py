@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
 import threading
 import time
@@ -30,22 +29,12 @@ import styletrace  # noqa: E402
 
 styletrace.init()
 import numpy as np  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
+from _report import machine_description, median_time, write_section  # noqa: E402
 from styletrace.lookdev.fit import fit  # noqa: E402
 from styletrace.lookdev.record import render_buffer  # noqa: E402
 from styletrace.lookdev.restyle import device, restyle  # noqa: E402
 
 GREY5 = "0:0.5,0.5,0.5;0.3:0.5,0.5,0.5;0.6:0.5,0.5,0.5;0.9:0.5,0.5,0.5;1.2:0.5,0.5,0.5"
-
-
-def timed(fn, runs):
-    fn()
-    out = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t)
-    return statistics.median(out)
 
 
 def preview_first_image() -> tuple[float, float]:
@@ -113,7 +102,7 @@ def main():
     fresh_s = time.perf_counter() - t
     rows = []
     for style, params in (("cel", {}), ("color_map", {"gradient": "heat"}), ("gamma", {"gamma": 2.2})):
-        s = timed(lambda: restyle(buf, style=style, **params), args.runs)
+        s = median_time(lambda: restyle(buf, style=style, **params), args.runs)
         rows.append(f"| {style} | {s * 1e3:.0f} ms | {fresh_s / s:.0f}x |")
     d = device(buf)
     dev_bytes = sum(int(np.asarray(x).nbytes) for k, x in d.items() if k != "inv_weight")

@@ -29,19 +29,9 @@ import ray  # noqa: E402
 from styletrace import api  # noqa: E402
 from styletrace.distributed.checkpoint import Checkpoint  # noqa: E402
 from styletrace.distributed.run import Render, job_for  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
+from _report import machine_description, median_time, write_section  # noqa: E402
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
-
-
-def timed(fn, runs):
-    fn()  # warm-up: kernels compiled, workers started and their scenes loaded
-    out = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t)
-    return statistics.median(out)
 
 
 def start(cpus):
@@ -113,7 +103,7 @@ def main():
     rows = []
     for workers in (1, 2, 4):
         start(workers)
-        secs = timed(lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)], args.runs)
+        secs = median_time(lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)], args.runs)
         rows.append((workers, secs, 60.0 / secs))
     ray.shutdown()
 
