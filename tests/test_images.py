@@ -193,3 +193,22 @@ def test_kill_9_during_writes_never_leaves_a_broken_file(tmp_path):
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=60)
         assert read(dest).shape == (1024, 1024, 3)
+
+
+def test_a_written_file_gets_ordinary_permissions(tmp_path):
+    """The temporary file is private (0o600); the image must not stay so: a new file gets 0o666 less the
+    umask, a replaced one keeps its own bits."""
+    from styletrace.images import write_image
+    img = np.full((4, 6, 3), 0.25, dtype=np.float32)
+    umask = os.umask(0o022)
+    try:
+        fresh = tmp_path / "fresh.png"
+        write_image(img, str(fresh))
+        assert fresh.stat().st_mode & 0o777 == 0o644
+        kept = tmp_path / "kept.exr"
+        kept.write_bytes(b"")
+        kept.chmod(0o640)
+        write_image(img, str(kept))
+        assert kept.stat().st_mode & 0o777 == 0o640
+    finally:
+        os.umask(umask)

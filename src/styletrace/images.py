@@ -90,11 +90,24 @@ def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
     return stream.raw_buffer()
 
 
+def creation_mode(path: str) -> int:
+    """The permission bits `path` should get: those of the file it replaces, else what `open` would give a
+    new file (0o666 less the umask). A temporary file is created 0o600, which a rename would keep."""
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 def write_bytes_atomically(data: bytes, path: str) -> None:
     """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`."""
     folder = os.path.dirname(os.path.abspath(path))
+    mode = creation_mode(path)
     fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part", dir=folder)
     try:
+        os.fchmod(fd, mode)
         with os.fdopen(fd, "wb") as f:
             written = f.write(data)
             f.flush()

@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
+from ..images import creation_mode
 
 FORMAT = "styletrace-buffer"
 VERSION = 2  # 2: "sequence" buffers; version 1 files (the children's mean) still read
@@ -134,8 +135,10 @@ class Buffer:
         if not os.path.isdir(folder):
             raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
         head = np.frombuffer(json.dumps(self.header).encode("utf-8"), dtype=np.uint8)
+        mode = creation_mode(path)
         fd, tmp = tempfile.mkstemp(prefix=".buffer-", suffix=".npz", dir=folder)
         try:
+            os.fchmod(fd, mode)
             with os.fdopen(fd, "wb") as f:
                 np.savez(f, header=head, **self.arrays)
             os.replace(tmp, path)
