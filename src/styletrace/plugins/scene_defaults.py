@@ -87,12 +87,13 @@ class Pilot:
                     emitters=EmitterSampler(scene, self.settings.emitter_sampling))
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
-        styled = unique_styled(scene)
         owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
         hit = np.array(si.is_valid(), dtype=bool)
         owner[hit] = 0
-        for k, bsdf in enumerate(styled, start=1):
-            for ptr in pointers_of(scene, bsdf):  # the styled BSDF, and the wrappers that hold it
+        # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for it (itself
+        # and the wrappers that hold it): one traversal of the scene
+        for k, (_, pointers, _) in enumerate(SceneGraph(scene).styled, start=1):
+            for ptr in pointers:
                 owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
         n_sh = dr.normalize(si.sh_frame.n)
         return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
@@ -190,11 +191,6 @@ def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
 def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
     """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups), in a fixed order."""
     return [styled for styled, _, _ in SceneGraph(scene).styled]
-
-
-def pointers_of(scene: mi.Scene, bsdf: StyledBSDF) -> list:
-    """What an intersection reports for the surfaces `bsdf` styles: itself and the wrappers holding it."""
-    return next(pointers for styled, pointers, _ in SceneGraph(scene).styled if styled is bsdf)
 
 
 def describe(style: Style, values: dict[str, Any]) -> str:
