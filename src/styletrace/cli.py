@@ -302,7 +302,8 @@ def choose_integrator(scene, args, params):
     from .api import carried_settings
 
     own = scene.integrator()
-    given = {p.name: getattr(args, p.name) for p in settings.PROPERTIES if getattr(args, p.name) is not None}
+    given = {p.name: getattr(args, p.name, None) for p in settings.PROPERTIES
+             if getattr(args, p.name, None) is not None}  # (properties without a flag come by --set)
     given.update(params)
     if isinstance(own, StylizedIntegrator):
         if not given:
@@ -422,8 +423,9 @@ def add_setting_flags(parser) -> None:
             continue
         default = f"the scene's stylized integrator's, else {settings.COMMAND_LINE_STYLE}" if p.name == "style" \
             else p.show_default()
+        bare = {"nargs": "?", "const": "true"} if p.bare else {}  # `--lines` alone: on
         parser.add_argument(p.flag, dest=p.name, default=None, metavar=p.metavar,
-                            type=int if p.kind == "int" else str, help=f"{p.doc} (default: {default})")
+                            type=int if p.kind == "int" else str, help=f"{p.doc} (default: {default})", **bare)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -35,6 +35,7 @@ from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .lane_sampler import LaneSampler
+from .lines import Lines
 from .path import bounce, environment, first_scattering, walk
 from ..errors import SceneError
 from .scene_graph import SceneGraph
@@ -48,6 +49,8 @@ class Target:
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
+    lines = line_start = None   # feature lines bound to the scene being traced (lines.py), else None
+
     def __init__(self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None):
         """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
         (`S.parse(values)`; the Python API and the CLI build it this way, parsing once)."""
@@ -88,7 +91,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         s = self.settings
         if level + 1 >= s.stylize_depth:
             return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
-                        nulls=self.nulls, opaque_start=True).L
+                        nulls=self.nulls, opaque_start=True, lines=self._lines_below(level)).L
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
@@ -107,7 +110,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
         w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
                  skip_emitter=self._skip_emitter, emitters=self.emitters, nulls=self.nulls,
-                 opaque_start=not halt_at_start)
+                 opaque_start=not halt_at_start, lines=self._lines_below(level) if halt_at_start else None)
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
         return self._through(w, value)
@@ -148,7 +151,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active, like=mi.Color3f)
         return value
 
+    def _lines_below(self, level: int):
+        """Feature lines on the edges of a walk that starts at the camera's first vertex (lines.py): the
+        children of a first_hit vertex, the camera walk of first_object_hit. Deeper walks (first_n_hits
+        levels, first_object_hit children) test no edge (docs/lines.md)."""
+        if self.lines is None or level != 0 or self.settings.stylize == "first_n_hits":
+            return None
+        return self.lines, self.line_start
+
     def sample(self, scene, sampler, ray, medium=None, active=True):
+        self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene)
         self.targets = self._targets(scene)
         # emitter selection in an order of the scene's own (its emitter list changes order between runs)
         self.emitters = EmitterSampler(scene, self.settings.emitter_sampling)
@@ -160,15 +172,25 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             # is tearing down crashed a later trace (measured: segfault in pdf_emitter_direction).
             self.targets = []
             self.emitters = None
+            self.lines = self.line_start = None
 
     def _sample(self, scene, sampler, ray, active):
         for t in self.targets:
             t.slot.style.prepare(scene)
         self.view = camera_forward(scene)
+        camera_ray, spp = ray, sampler.sample_count()
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
         # every random decision below the camera ray comes from an independent stream per lane
         sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
+        if self.lines is None:
+            return self._stylize(scene, sampler, ray, active)
+        # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
+        seen, self.line_start = self.lines.camera(scene, sampler, camera_ray, spp, active)
+        value, valid, aovs = self._stylize(scene, sampler, ray, active & ~seen.fired)
+        return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
+
+    def _stylize(self, scene, sampler, ray, active):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
         hide = self.settings.hide_emitters
         if hide:

@@ -163,6 +163,7 @@ class PathState:
     delta_prev: mi.Bool                      # was that direction a delta (specular) sample?
     halted: mi.Bool                          # halted at a stylized vertex
     first: Optional[mi.Bool]                 # at the starting vertex (only where `opaque_start` needs it)
+    lines: Optional[Any] = None              # lines.LineState where feature lines are on (lines.py)
 
 
 @dataclass
@@ -185,11 +186,13 @@ def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection
 def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
          active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
          stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
-         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False) -> Walk:
+         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
+         lines=None) -> Walk:
     """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
     `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
     vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
-    so scenes without such surfaces trace the plain loop."""
+    so scenes without such surfaces trace the plain loop. `lines`: (lines.Lines, lines.LineState at the
+    starting vertex) to detect feature lines on the walk's edges, or None (no line code is traced)."""
     ctx = mi.BSDFContext()
     emitters = emitters if emitters is not None else EmitterSampler(scene)
     limit = depth_limit(max_depth)
@@ -200,7 +203,8 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
                       active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
                       eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f), pdf_prev=mi.Float(1.0),
                       delta_prev=mi.Bool(True), halted=mi.Bool(False),
-                      first=mi.Bool(True) if nulls and opaque_start else None)
+                      first=mi.Bool(True) if nulls and opaque_start else None,
+                      lines=None if lines is None else lines[1])
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
@@ -272,6 +276,11 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
         active_next &= ~roulette | (s.sampler.next_1d() < q)
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=active_next)
+        if lines is not None:  # a feature line on the new edge absorbs the path (lines.py)
+            seen, s.lines = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
+                                          active_next)
+            s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
+            active_next &= ~seen.fired
         if stop is not None:  # halted lanes keep their vertex
             keep = ~here
             pi_next = dr.select(keep, s.pi, pi_next)

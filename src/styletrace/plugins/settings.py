@@ -18,6 +18,7 @@ from ..styles import create, get
 from ..styles.base import Style
 from . import estimation
 from .emitter_sampler import DEFAULT_MODE as EMITTER_DEFAULT, MODES as EMITTER_MODES
+from .lines import DEFAULT_TESTS as LINE_TESTS_DEFAULT, TESTS as LINE_TESTS, LineSettings
 
 
 @dataclass(frozen=True)
@@ -30,6 +31,7 @@ class Property:
     doc: str
     flag: str = ""            # the `styletrace render` flag, if it has its own
     metavar: str = ""
+    bare: bool = False        # the flag alone means true (`--lines`)
 
     def show_default(self) -> str:
         return "style's" if self.default is None else str(self.default)
@@ -58,6 +60,23 @@ PROPERTIES = (
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
     Property("hide_emitters", False, "bool", "camera rays do not see emitters, as Mitsuba's `path`: they pass "
              "through area lights and find black (alpha 0) where they escape", "--hide-emitters", "BOOL"),
+    # feature lines (plugins/lines.py, docs/lines.md)
+    Property("lines", False, "bool", "physically based feature lines on path edges (docs/lines.md)", "--lines",
+             "BOOL", bare=True),
+    Property("line_width", 2.0, "float", "a line's width in pixels at the camera (kept in mirrors)"),
+    Property("line_samples", 8, "int", "N, auxiliary rays per tested edge (coverage 1 - (1 - q)^N)"),
+    Property("line_depth", 1, "int", "edges tested: 0 .. line_depth - 1 (1: the camera ray only; 2: also what a "
+             "mirror or glass at the first hit shows)"),
+    Property("line_tests", ",".join(LINE_TESTS_DEFAULT), "list", "which tests draw lines: "
+             + ", ".join(LINE_TESTS)),
+    Property("line_crease", 0.3, "float", "crease test: 1 - |n.n'| above this draws a line"),
+    Property("line_albedo", 0.1, "float", "albedo test: a luminance difference above this draws a line"),
+    Property("line_slope", 2.0, "float", "depth test: a point's distance from the other's tangent plane above this "
+             "times the stencil radius draws a line"),
+    Property("line_color", "0,0,0", "rgb", "the lines' colour"),
+    Property("line_gradient", "", "string", "instead of line_color, a gradient over world y: `r,g,b;r,g,b` (over "
+             "the scene's bounding box) or `r,g,b;r,g,b;y0;y1`"),
+    Property("line_objects", "", "list", "ids of the shapes that draw lines (empty: all)"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -97,6 +116,7 @@ class Settings:
     rr_depth: int = 5
     emitter_sampling: str = EMITTER_DEFAULT
     hide_emitters: bool = False
+    lines: LineSettings | None = None   # None: no line code is traced
 
     @property
     def style(self) -> Style:
@@ -108,7 +128,8 @@ class Settings:
 
     def describe(self) -> str:
         return (f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
-                f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}")
+                f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
+                + ("" if self.lines is None else f", {self.lines.describe()}"))
 
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
@@ -125,6 +146,72 @@ def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
     if not low <= value <= high:
         raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
     return value
+
+
+def number(key: str, raw: Any, low: float, high: float = float("inf"), low_open: bool = False) -> float:
+    """A finite float in [low, high] (or (low, high] with `low_open`) from a number or a string."""
+    expected = f"expected a number in {'(' if low_open else '['}{low:g}, {high:g}]"
+    try:
+        if isinstance(raw, bool):
+            raise ValueError
+        value = float(raw.strip()) if isinstance(raw, str) else float(raw)
+    except (TypeError, ValueError, OverflowError):
+        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}") from None
+    if value != value or not (low < value if low_open else low <= value) or not value <= high:
+        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
+    return value
+
+
+def names(key: str, raw: Any) -> tuple[str, ...]:
+    """A list of names from 'a,b' or a list/tuple of strings."""
+    parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else None
+    if parts is None:
+        raise SettingsError(f"bad value {raw!r} for '{key}': expected a comma-separated list of names")
+    return tuple(str(p).strip() for p in parts if str(p).strip())
+
+
+def rgb(key: str, raw: Any) -> tuple[float, float, float]:
+    """An RGB colour from 'r,g,b', a list of three numbers, or one grey number."""
+    parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else [raw]
+    if len(parts) == 1:
+        parts = parts * 3
+    if len(parts) != 3:
+        raise SettingsError(f"bad value {raw!r} for '{key}': expected a colour r,g,b (three numbers >= 0)")
+    try:
+        return tuple(number(key, p, 0.0) for p in parts)
+    except SettingsError:
+        raise SettingsError(f"bad value {raw!r} for '{key}': expected a colour r,g,b (three numbers >= 0)") from None
+
+
+def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
+    """The `line_*` properties: None where `lines` is off (then the others are still checked)."""
+    get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
+    on = boolean("lines", get_("lines"))
+    tests = names("line_tests", get_("line_tests"))
+    for t in tests:
+        if t not in LINE_TESTS:
+            raise SettingsError(f"bad value {t!r} in 'line_tests': expected some of {', '.join(LINE_TESTS)}")
+    gradient = None
+    raw = get_("line_gradient")
+    if raw not in ("", None):
+        parts = raw.split(";") if isinstance(raw, str) else list(raw)
+        if len(parts) not in (2, 4):
+            raise SettingsError(f"bad value {raw!r} for 'line_gradient': expected r,g,b;r,g,b or r,g,b;r,g,b;y0;y1")
+        ys = [number("line_gradient", y, -float("inf")) for y in parts[2:]] or [None, None]
+        gradient = (rgb("line_gradient", parts[0]), rgb("line_gradient", parts[1]), ys[0], ys[1])
+    lines = LineSettings(width=number("line_width", get_("line_width"), 0.0, 64.0, low_open=True),
+                         samples=integer("line_samples", get_("line_samples"), 1, 256),
+                         depth=integer("line_depth", get_("line_depth"), 1, 64),
+                         tests=tests,
+                         crease=number("line_crease", get_("line_crease"), 0.0, 1.0),
+                         albedo=number("line_albedo", get_("line_albedo"), 0.0),
+                         slope=number("line_slope", get_("line_slope"), 0.0),
+                         color=rgb("line_color", get_("line_color")), gradient=gradient,
+                         objects=names("line_objects", get_("line_objects")))
+    if on and not tests:
+        raise SettingsError(f"bad value {get_('line_tests')!r} for 'line_tests': lines need at least one of "
+                            f"{', '.join(LINE_TESTS)}")
+    return lines if on else None
 
 
 def boolean(key: str, raw: Any) -> bool:
@@ -202,7 +289,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
     hide = boolean("hide_emitters", get_("hide_emitters"))
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights, hide_emitters=hide)
+                    emitter_sampling=lights, hide_emitters=hide, lines=parse_lines(values))
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -223,4 +310,4 @@ def properties_of(props) -> dict[str, Any]:
 
 
 __all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
-           "parse_inner", "integer", "boolean", "refine", "properties_of"]
+           "parse_inner", "parse_lines", "integer", "number", "boolean", "refine", "properties_of"]
