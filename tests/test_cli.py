@@ -86,6 +86,9 @@ BAD = [
     (["missing.xml"], "scene file 'missing.xml' does not exist"),
     (["-o", "/no/such/folder/x.png"], "folder '/no/such/folder' does not exist"),
     (["-o", "out.jpg"], "bad output 'out.jpg'"),
+    (["--lines", "--set", "line_width=-2"], "bad value '-2' for 'line_width'"),
+    (["--lines", "maybe"], "bad value 'maybe' for 'lines'"),
+    (["--lines", "--set", "line_tests=outline"], "bad value 'outline' in 'line_tests'"),
 ]
 
 
@@ -287,3 +290,17 @@ def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypa
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "error after 1 of 4 spp (second line)" in err and "wrote the finished passes" in err
     assert read(out).shape == (16, 24, 3)
+
+
+def test_lines_flag_and_set_draw_lines(tmp_path, capsys):
+    """`--lines` alone turns lines on; `--set line_color=...` reaches them; `styletrace lines` lists the settings."""
+    args = ["render", "furnace", "--style", "identity", "--width", "24", "--height", "24", "--spp", "2", "-q"]
+    assert main([*args, "-o", str(tmp_path / "plain.exr")]) == 0
+    assert main([*args, "--lines", "--set", "line_color=0,9,0", "--set", "line_width=3",
+                 "-o", str(tmp_path / "lines.exr")]) == 0
+    plain, lines = read(tmp_path / "plain.exr"), read(tmp_path / "lines.exr")
+    green = lines[..., 1] > 5   # the furnace's radiance is at most 1: only a line is this green
+    assert green.sum() > 20 and not (plain[..., 1] > 5).any()
+    assert main(["lines"]) == 0
+    out = capsys.readouterr().out
+    assert "line_width = 2.0" in out and "line_samples" in out and "docs/lines.md" in out

@@ -159,6 +159,20 @@ def cmd_styles(args) -> int:
     print("compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. contrast+sepia; "
           "parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or affine / combined / telescoping "
           "where every operand has a form (docs/styles.md#compositions)")
+    print("feature lines: any style with --lines (`styletrace lines` lists their settings)")
+    return 0
+
+
+def cmd_lines(args) -> int:
+    from .runtime import init
+    init()
+    from .plugins import settings
+
+    print("feature lines (West 2021) on path edges, with any style and stylize mode: `render --lines` and "
+          "`--set NAME=VALUE` (Python: styletrace.render(..., lines=True, line_width=2)); docs/lines.md")
+    for p in settings.PROPERTIES:
+        if p.name == "lines" or p.name.startswith("line_"):
+            print(f"    {p.name} = {p.show_default()}    {p.doc}")
     return 0
 
 
@@ -395,6 +409,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("styles", help="list the styles and their parameters")
     s.set_defaults(func=cmd_styles)
+    ln = sub.add_parser("lines", help="list the feature line settings (--lines, --set line_width=2, ...)")
+    ln.set_defaults(func=cmd_lines)
     e = sub.add_parser("estimators", help="list the estimators of g(E[L]) and the forms they need")
     e.set_defaults(func=cmd_estimators)
     return p

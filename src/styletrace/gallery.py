@@ -36,6 +36,10 @@ class Setup:
     estimator: str = "direct"
 
 
+#: feature lines (docs/lines.md): on, with a gradient from deep blue at the feet to warm red at the top
+LINES = {"lines": True, "line_width": 1.5}
+LINE_GRADIENT = "0.05,0.1,0.5;0.8,0.15,0.05;0;1"
+
 SETUPS = [
     Setup("color_map", "Colour mapping, direct estimator (Fig. 7)", "color_map", (1, 4, 16, 64), reference=1024,
           params={"gradient": "dusk"}),
@@ -65,6 +69,10 @@ SETUPS = [
     Setup("halftone", "Half-tone (Fig. 12)", "halftone", (16,), params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.6}),
     Setup("mixed", "Per object: cel dragon, hatched floor, PBR glass; seen through the glass too", "identity", (1,),
           integrator={"stylize": "first_object_hit"}, scene="mixed"),
+    Setup("lines", "Colour map with physically based feature lines, colour over world y (Fig. 12 middle, West 2021)",
+          "color_map", (8,), params={"gradient": "dusk"}, integrator=dict(LINES, line_gradient=LINE_GRADIENT)),
+    Setup("lines_mirror", "Feature lines seen in a mirror and through a glass sphere (line_depth 3)", "identity", (1,),
+          integrator=dict(LINES, line_gradient=LINE_GRADIENT, line_depth=3), scene="lines"),
 ]
 
 

@@ -4,6 +4,8 @@
 - `dragon`: the bundled scanned dragon, normalized to unit height, on a ground plane under two area
   lights with a dim sky, in the spirit of the paper's result setups (Figs. 7-12).
 - `mixed`: the dragon scene with per-object styles (cel dragon, hatched floor, PBR glass sphere).
+- `lines`: the dragon scene with a mirror behind the dragon and a glass sphere in front, for feature lines
+  seen in reflection and through glass (docs/lines.md).
 - `furnace`: a diffuse sphere of albedo rho under a constant environment E. Every first hit then has
   exitant radiance exactly rho*E (a convex object sees only the environment), so g(I) is known exactly.
 
@@ -88,6 +90,19 @@ def mixed(width: int = 256, height: int = 256) -> dict[str, Any]:
     return scene
 
 
+def lines(width: int = 256, height: int = 256) -> dict[str, Any]:
+    """The dragon scene with a standing mirror behind the dragon and a glass sphere in front of it: feature
+    lines (`--lines --set line_depth=3`) show in the reflection and through the glass (docs/lines.md)."""
+    T = mi.ScalarTransform4f
+    scene = dragon(width, height)
+    scene["mirror"] = {"type": "rectangle", "to_world": T().look_at(origin=[-0.75, 0.62, -0.75], target=[1.4, 0.55, 1.2],
+                                                                     up=[0, 1, 0]) @ T().scale([0.75, 0.6, 1.0]),
+                       "bsdf": {"type": "conductor", "material": "Ag"}}
+    scene["glass"] = {"type": "sphere", "center": [0.75, 0.22, 0.15], "radius": 0.2,
+                      "bsdf": {"type": "dielectric", "int_ior": 1.5}}
+    return scene
+
+
 def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO, radiance: float = FURNACE_RADIANCE) -> dict[str, Any]:
     return {
         "type": "scene",
@@ -136,5 +151,6 @@ BUILTIN: dict[str, Callable[..., dict[str, Any]]] = {
     "dragon": dragon,
     "furnace": furnace,
     "mixed": mixed,
+    "lines": lines,
 }
 DEFAULT = "cornell-box"
