@@ -212,13 +212,10 @@ def test_a_thin_rod_is_detected():
 
 
 # ---- coverage against N ---------------------------------------------------------------------------------
-def test_coverage_rises_with_n_as_one_minus_one_minus_q_to_the_n():
-    """Identical camera rays at a fixed distance delta from a straight outline: each auxiliary ray is an
-    independent uniform point of the stencil disc, so P(line) = 1 - (1 - q)^N with q the disc's share
-    beyond the outline (a circular segment)."""
-    mi_scene = mi.load_dict({"type": "scene", "wall": {"type": "rectangle", "bsdf": BLACK,
-                                                        "to_world": T().translate([-1.0, 0, -5])}})
-    m, pixel, delta, width = 40000, 0.002, 0.6, 2.0   # a pixel is 0.002 rad; the ray sits 0.6 px right of the wall's edge x = 0
+def straddling_rays(m, delta, pixel=0.002):
+    """A wall whose edge x = 0 lies `delta` pixels left of m identical camera rays (pixel: 0.002 rad)."""
+    scene = mi.load_dict({"type": "scene", "wall": {"type": "rectangle", "bsdf": BLACK,
+                                                     "to_world": T().translate([-1.0, 0, -5])}})
     x = delta * pixel * 5.0
     zero, one = dr.zeros(mi.Float, m), dr.full(mi.Float, 1.0, m)
     ray = mi.RayDifferential3f(mi.Point3f(zero, zero, zero), dr.normalize(mi.Vector3f(x * one, zero, -5.0 * one)))
@@ -226,29 +223,77 @@ def test_coverage_rises_with_n_as_one_minus_one_minus_q_to_the_n():
     ray.d_x = dr.normalize(mi.Vector3f((x + pixel * 5.0) * one, zero, -5.0 * one))
     ray.d_y = dr.normalize(mi.Vector3f(x * one, pixel * 5.0 * one, -5.0 * one))
     ray.has_differentials = True
+    return scene, ray
 
-    def fired(n):
-        lines = Lines(LineSettings(width=width, samples=n), mi_scene)
-        rng = LaneSampler(mi.PCG32(m, initstate=7 + n, initseq=dr.arange(mi.UInt64, m)))
-        seen, _ = lines.camera(mi_scene, rng, ray, 1, mi.Bool(True))
-        return float(np.mean(np.asarray(seen.fired)))
 
-    r = width / 2
-    q_exact = (r * r * math.acos(delta / r) - delta * math.sqrt(r * r - delta * delta)) / (math.pi * r * r)
-    q = fired(1)
-    assert abs(q - q_exact) < 4 * math.sqrt(q_exact * (1 - q_exact) / m) + 0.01  # 0.01: perspective, not parallel rays
+def fired_share(scene, ray, m, seed, **line):
+    lines = Lines(LineSettings(**line), scene)
+    rng = LaneSampler(mi.PCG32(m, initstate=seed, initseq=dr.arange(mi.UInt64, m)))
+    seen, _ = lines.camera(scene, rng, ray, 1, mi.Bool(True))
+    return float(np.mean(np.asarray(seen.fired)))
+
+
+def segment_share(delta, r):
+    """The share of a disc of radius r beyond a line at distance delta from its centre."""
+    return (r * r * math.acos(delta / r) - delta * math.sqrt(r * r - delta * delta)) / (math.pi * r * r)
+
+
+M, DELTA, WIDTH = 40000, 0.6, 2.0
+#: perspective: the stencil is a disc of directions, not of parallel rays; measured shares differ from the
+#: flat-disc formula by less than this
+FLAT = 0.01
+
+
+def test_coverage_rises_with_n_as_one_minus_one_minus_q_to_the_n():
+    """Identical camera rays at a fixed distance delta from a straight outline: each auxiliary ray is an
+    independent uniform point of the stencil disc, so P(line) = 1 - (1 - q)^N with q the disc's share
+    beyond the outline (a circular segment)."""
+    scene, ray = straddling_rays(M, DELTA)
+    q_exact = segment_share(DELTA, WIDTH / 2)
+    q = fired_share(scene, ray, M, 7, width=WIDTH, samples=1)
+    assert abs(q - q_exact) < 4 * math.sqrt(q_exact * (1 - q_exact) / M) + FLAT
     for n in (2, 4, 8):
         want = 1 - (1 - q) ** n
         # binomial noise of p_N plus that of q carried through the curve
-        sd = math.sqrt(want * (1 - want) / m + (n * (1 - q) ** (n - 1)) ** 2 * q * (1 - q) / m)
-        assert abs(fired(n) - want) < 4 * sd, n
+        sd = math.sqrt(want * (1 - want) / M + (n * (1 - q) ** (n - 1)) ** 2 * q * (1 - q) / M)
+        assert abs(fired_share(scene, ray, M, 7 + n, width=WIDTH, samples=n) - want) < 4 * sd, n
+
+
+def test_expectation_mode_weight_is_the_kth_power_of_the_pair_metric():
+    """line_mode=expectation: a random pair of stencil points straddles the outline with probability
+    2 q (1 - q), so E[m] = 1 - 2 q (1 - q) and the product of k metric samples is 1 with probability E[m]^k:
+    the share of samples that become line colour is 1 - E[m]^k."""
+    scene, ray = straddling_rays(M, DELTA)
+    q = segment_share(DELTA, WIDTH / 2)
+    p1 = fired_share(scene, ray, M, 3, width=WIDTH, mode="expectation", k=1)
+    assert abs(p1 - 2 * q * (1 - q)) < 4 * math.sqrt(p1 * (1 - p1) / M) + 2 * FLAT
+    for k in (3, 12):
+        want = 1 - (1 - p1) ** k
+        sd = math.sqrt(want * (1 - want) / M + (k * (1 - p1) ** (k - 1)) ** 2 * p1 * (1 - p1) / M)
+        assert abs(fired_share(scene, ray, M, 3 + k, width=WIDTH, mode="expectation", k=k) - want) < 4 * sd, k
+
+
+def test_expectation_mode_blends_line_colour_and_radiance():
+    """g = (1 - w) c + w L per sample: two renders with the same seed and line colours 0 and (0, 5, 0) differ
+    by 5 x (share of samples where a pair fired) in green alone, the radiance part being the same; the
+    share is 0 away from the sphere's outline and positive along it."""
+    from styletrace.plugins.scenes import furnace
+    common = dict(spp=4, seed=5, style="identity", lines=True, line_mode="expectation", line_k=4)
+    black = styletrace.render(furnace(32, 32), line_color="0,0,0", **common)
+    green = styletrace.render(furnace(32, 32), line_color="0,5,0", **common)
+    share = (green[..., 1] - black[..., 1]) / 5.0
+    assert np.array_equal(green[..., 0], black[..., 0]) and np.array_equal(green[..., 2], black[..., 2])
+    assert share.min() >= -1e-6 and share.max() <= 1 + 1e-6
+    gap = ring_distance(32, (16, 16), focal(32) * math.tan(math.asin(1 / 4.0)) * math.tan(math.radians(20))
+                        / math.tan(math.radians(17.5)))
+    assert share[gap > 1.5].max() == 0.0 and share[gap == 0].mean() > 0.3
 
 
 # ---- settings --------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("key,value,match", [
     ("line_width", "0", "line_width"), ("line_width", "wide", "line_width"), ("line_samples", 0, "line_samples"),
     ("line_depth", 0, "line_depth"), ("line_tests", "outline", "outline"), ("line_crease", 2, "line_crease"),
-    ("line_color", "1,2", "line_color"), ("line_gradient", "1,1,1", "line_gradient"), ("lines", "maybe", "lines"),
+    ("line_color", "1,2", "line_color"), ("line_mode", "smooth", "line_mode"), ("line_k", 0, "line_k"), ("line_gradient", "1,1,1", "line_gradient"), ("lines", "maybe", "lines"),
 ])
 def test_bad_line_values_get_one_line(key, value, match):
     with pytest.raises(SettingsError, match=match) as err:

@@ -50,6 +50,9 @@ class Target:
 
 class StylizedIntegrator(mi.SamplingIntegrator):
     lines = line_start = None   # feature lines bound to the scene being traced (lines.py), else None
+    #: lanes where a line fired on the camera ray trace nothing more (False only to measure the saving:
+    #: benchmarks/lines_cost.py)
+    line_short_circuit = True
 
     def __init__(self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None):
         """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
@@ -187,7 +190,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return self._stylize(scene, sampler, ray, active)
         # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
         seen, self.line_start = self.lines.camera(scene, sampler, camera_ray, spp, active)
-        value, valid, aovs = self._stylize(scene, sampler, ray, active & ~seen.fired)
+        live = active & ~seen.fired if self.line_short_circuit else active
+        value, valid, aovs = self._stylize(scene, sampler, ray, live)
         return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
 
     def _stylize(self, scene, sampler, ray, active):

@@ -27,6 +27,14 @@ Tests between the base hit q and an auxiliary hit s (any one fires; each can be 
 The line point is the nearest (along its ray) of the points of the pairs that fire; its world y picks the
 colour of a `gradient`. `objects`: ids of the shapes that draw lines (empty: all); a pair draws where
 either of its hits is on one of them.
+
+`mode` expectation (LLaT, West, Mukherjee and Yue 2026): lines as a style of expectation,
+    g = (1 - w) c + w L,  w = E[m]^k,
+m(u, v) = "no line between the stencil points u and v" for a random pair of auxiliary rays (the same tests
+between their two hits). The product of k independent metric samples estimates E[m]^k without bias, and,
+m being binary, it is 0 as soon as one pair fires: the sample is then c and L is never traced (the
+integrator masks those lanes off). k is the opacity control. The absorbing mode is the same composition
+with N rays tested against the base ray, so both share `Seen` and the integrator's and walk's hooks.
 """
 from __future__ import annotations
 
@@ -40,7 +48,7 @@ from ..errors import SceneError
 
 TESTS = ("silhouette", "boundary", "crease", "albedo", "depth")
 DEFAULT_TESTS = ("silhouette", "boundary", "crease", "depth")
-MODES = ("absorb",)
+MODES = ("absorb", "expectation")
 
 
 @dataclass(frozen=True)
@@ -56,6 +64,8 @@ class LineSettings:
     color: tuple[float, float, float] = (0.0, 0.0, 0.0)
     gradient: tuple | None = None            # ((r,g,b), (r,g,b), y0 or None, y1 or None)
     objects: tuple[str, ...] = ()
+    mode: str = "absorb"                     # or "expectation" (LLaT): k stencil pairs
+    k: int = 12
 
     def describe(self) -> str:
         return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, tests={','.join(self.tests)})")
@@ -128,7 +138,7 @@ class Lines:
         def aux(a, b):
             return mi.Ray3f(o + a * ox + b * oy, dr.normalize(d + a * dx + b * dy))
 
-        seen = self._detect(scene, sampler, q, aux, angle * q.t, active)
+        seen = self._detect(scene, sampler, q, aux, lambda t: angle * t, active)
         return seen, LineState(D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle)
 
     def edge(self, scene, sampler, state: LineState, si, bs, ray: mi.Ray3f, pi: mi.PreliminaryIntersection3f,
@@ -153,51 +163,55 @@ class Lines:
             o = o + n * side * (1.0 + dr.max(dr.abs(o))) * mi.math.RayEpsilon
             return mi.Ray3f(o, dr.normalize(d + offset))
 
-        seen = self._detect(scene, sampler, q, aux, state.angle * (D0 + q.t), go)
+        seen = self._detect(scene, sampler, q, aux, lambda t: state.angle * (D0 + t), go)
         after = LineState(D=D0 + dr.select(pi.is_valid(), pi.t, dr.inf), alive=alive, angle=state.angle)
         return seen, after
 
-    def _detect(self, scene, sampler, q, aux, radius_q, active) -> Seen:
-        """N auxiliary rays `aux(a, b)`, (a, b) uniform in the disc of radius width/2 pixels; `radius_q`:
-        the cone's radius per pixel at q (for the depth test)."""
+    def _pair(self, a, b, radius_at, active):
+        """Does a line separate the hits a and b? (fires, the pair's point, its distance)"""
+        s = self.s
+        a_valid, b_valid = a.is_valid(), b.is_valid()
+        both = active & a_valid & b_valid
+        fire = mi.Bool(False)
+        if "silhouette" in s.tests:
+            fire |= active & (a_valid != b_valid)
+        if "boundary" in s.tests:
+            fire |= both & (a.shape != b.shape)
+        if "crease" in s.tests:
+            fire |= both & (1.0 - dr.abs(dr.dot(a.n, b.n)) > s.crease)
+        if "albedo" in s.tests:
+            lum_a = mi.luminance(a.bsdf().eval_diffuse_reflectance(a, both))
+            lum_b = mi.luminance(b.bsdf().eval_diffuse_reflectance(b, both))
+            fire |= both & (dr.abs(lum_a - lum_b) > s.albedo)
+        # the pair's point: the nearer of its two hits (an occluder's outline is drawn over what is behind)
+        use_b = b_valid & (~a_valid | (b.t < a.t))
+        t = dr.select(use_b, b.t, a.t)
+        if "depth" in s.tests:
+            gap = dr.maximum(dr.abs(dr.dot(a.n, b.p - a.p)), dr.abs(dr.dot(b.n, a.p - b.p)))
+            fire |= both & (gap > s.slope * 0.5 * s.width * radius_at(t))
+        fire &= self._draws(a) | self._draws(b)
+        return fire, dr.select(use_b, b.p, a.p), t
+
+    def _detect(self, scene, sampler, q, aux, radius_at, active) -> Seen:
+        """absorb: N auxiliary rays `aux(a, b)` against the base hit q; expectation: k pairs of auxiliary
+        rays against each other. (a, b) uniform in the disc of radius width/2 pixels; `radius_at(t)`: the
+        cone's radius per pixel at distance t along the edge (for the depth test)."""
         s = self.s
         half = 0.5 * s.width
-        q_valid, q_draws = q.is_valid(), self._draws(q)
-        q_n = mi.Vector3f(q.n)
-        q_lum = mi.luminance(q.bsdf().eval_diffuse_reflectance(q, active & q_valid)) if "albedo" in s.tests else None
-        tol = s.slope * half * radius_q
+        pairs = s.mode == "expectation"
+
+        def hit(smp):
+            uv = mi.warp.square_to_uniform_disk(smp.next_2d(active)) * half
+            return scene.ray_intersect(aux(uv.x, uv.y), ray_flags=mi.RayFlags.All, coherent=False, active=active)
 
         def body(j, smp, fired, best_t, best_p):
-            uv = mi.warp.square_to_uniform_disk(smp.next_2d(active)) * half
-            ray = aux(uv.x, uv.y)
-            h = scene.ray_intersect(ray, ray_flags=mi.RayFlags.All, coherent=False, active=active)
-            h_valid = h.is_valid()
-            both = active & q_valid & h_valid
-            fire = mi.Bool(False)
-            if "silhouette" in s.tests:
-                fire |= active & (q_valid != h_valid)
-            if "boundary" in s.tests:
-                fire |= both & (h.shape != q.shape)
-            if "crease" in s.tests:
-                fire |= both & (1.0 - dr.abs(dr.dot(q_n, h.n)) > s.crease)
-            if "albedo" in s.tests:
-                h_lum = mi.luminance(h.bsdf().eval_diffuse_reflectance(h, both))
-                fire |= both & (dr.abs(h_lum - q_lum) > s.albedo)
-            if "depth" in s.tests:
-                gap = dr.maximum(dr.abs(dr.dot(q_n, h.p - q.p)), dr.abs(dr.dot(h.n, q.p - h.p)))
-                fire |= both & (gap > tol)
-            fire &= q_draws | self._draws(h)
-            # the pair's point: the nearer of its two hits (an occluder's outline is drawn over what is behind)
-            use_h = h_valid & (~q_valid | (h.t < q.t))
-            t = dr.select(use_h, h.t, q.t)
-            p = dr.select(use_h, h.p, q.p)
+            fire, p, t = self._pair(hit(smp) if pairs else q, hit(smp), radius_at, active)
             better = fire & (t < best_t)
-            best_t = dr.select(better, t, best_t)
-            best_p = dr.select(better, p, best_p)
-            return j + 1, smp, fired | fire, best_t, best_p
+            return j + 1, smp, fired | fire, dr.select(better, t, best_t), dr.select(better, p, best_p)
 
+        count = s.k if pairs else s.samples
         state = (mi.UInt32(0), sampler, mi.Bool(False), mi.Float(dr.inf), mi.Point3f(0.0))
-        _, _, fired, _, point = dr.while_loop(state, lambda j, *rest: j < s.samples, body, label="styletrace lines")
+        _, _, fired, _, point = dr.while_loop(state, lambda j, *rest: j < count, body, label="styletrace lines")
         return Seen(fired=fired, color=self.color(point))
 
 

@@ -18,7 +18,7 @@ from ..styles import create, get
 from ..styles.base import Style
 from . import estimation
 from .emitter_sampler import DEFAULT_MODE as EMITTER_DEFAULT, MODES as EMITTER_MODES
-from .lines import DEFAULT_TESTS as LINE_TESTS_DEFAULT, TESTS as LINE_TESTS, LineSettings
+from .lines import DEFAULT_TESTS as LINE_TESTS_DEFAULT, MODES as LINE_MODES, TESTS as LINE_TESTS, LineSettings
 
 
 @dataclass(frozen=True)
@@ -77,6 +77,9 @@ PROPERTIES = (
     Property("line_gradient", "", "string", "instead of line_color, a gradient over world y: `r,g,b;r,g,b` (over "
              "the scene's bounding box) or `r,g,b;r,g,b;y0;y1`"),
     Property("line_objects", "", "list", "ids of the shapes that draw lines (empty: all)"),
+    Property("line_mode", "absorb", "string", "absorb (West 2021: N rays against the path's own ray; a line ends "
+             "the path) or expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs)"),
+    Property("line_k", 12, "int", "expectation mode: k, the opacity control (more: lines darker and wider)"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -207,7 +210,10 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
                          albedo=number("line_albedo", get_("line_albedo"), 0.0),
                          slope=number("line_slope", get_("line_slope"), 0.0),
                          color=rgb("line_color", get_("line_color")), gradient=gradient,
-                         objects=names("line_objects", get_("line_objects")))
+                         objects=names("line_objects", get_("line_objects")),
+                         mode=str(get_("line_mode")), k=integer("line_k", get_("line_k"), 1, 256))
+    if lines.mode not in LINE_MODES:
+        raise SettingsError(f"bad value {lines.mode!r} for 'line_mode': expected one of {', '.join(LINE_MODES)}")
     if on and not tests:
         raise SettingsError(f"bad value {get_('line_tests')!r} for 'line_tests': lines need at least one of "
                             f"{', '.join(LINE_TESTS)}")
