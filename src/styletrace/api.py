@@ -363,9 +363,9 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     `scene`: built-in name ('cornell-box', 'dragon', 'furnace'), XML path, scene dict or mi.Scene; `defines`:
     the values of an XML file's `<default>` parameters. `spp`: camera samples per pixel (default: the
     scene sampler's sample_count). Integrator keywords (stylize, stylize_depth, max_depth, rr_depth,
-    hide_emitters) and the style's parameters go in **params; what is not given takes the scene's own
-    Mitsuba integrator's max_depth/rr_depth/hide_emitters (`carried_settings`), else the integrator's
-    defaults (`plugins.settings`: identity, direct, the style's inner count). Pass `integrator=` to use a
+    hide_emitters, lines and the line_* settings of docs/lines.md) and the style's parameters go in
+    **params; what is not given takes the scene's own Mitsuba integrator's max_depth/rr_depth/hide_emitters
+    (`carried_settings`), else the integrator's defaults (`plugins.settings`: identity, direct, the style's inner count). Pass `integrator=` to use a
     prebuilt one (then style and params are ignored).
     """
     check_render_args(1 if spp is None else spp, seed, integrator)

@@ -1,0 +1,98 @@
+"""Cost of feature lines (plugins/lines.py, docs/lines.md): render time with lines against without.
+
+The colour map style at n = 8 samples per style evaluation on the dragon and on the mirror/glass scene
+(`lines`), with lines off, and on at N = 8 and 16 auxiliary rays per tested edge, at line_depth 1 (the
+camera ray) and 3 (also two edges below: mirror and glass). The LLaT expectation mode (k = 12) is timed with
+its short-circuit (lanes where a stencil pair fires trace no radiance) and without it, which is what the
+short-circuit saves. Each configuration runs in a fresh process, renders once to compile, then the median
+of RUNS warm renders is taken.
+
+    python benchmarks/lines_cost.py
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(__file__))
+from _report import machine_description, write_section  # noqa: E402
+
+SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
+RES, SPP, INNER, RUNS = 128, 4, 8, 3
+LINES = [("off", {}), ("N=8, depth 1", {"lines": True, "line_samples": 8, "line_depth": 1}),
+         ("N=16, depth 1", {"lines": True, "line_samples": 16, "line_depth": 1}),
+         ("N=8, depth 3", {"lines": True, "line_samples": 8, "line_depth": 3}),
+         ("N=16, depth 3", {"lines": True, "line_samples": 16, "line_depth": 3}),
+         ("expectation k=12, short-circuit", {"lines": True, "line_mode": "expectation", "line_k": 12}),
+         ("expectation k=12, no short-circuit", {"lines": True, "line_mode": "expectation", "line_k": 12,
+                                                  "_no_short_circuit": True})]
+
+CHILD = """
+import json, sys
+sys.path.insert(0, {src!r}); sys.path.insert(0, {bench!r})
+import numpy as np
+import styletrace
+from styletrace.api import load_scene, make_integrator, render
+from _report import median_time
+values = {values!r}
+slow = values.pop('_no_short_circuit', False)
+scene = load_scene({scene!r}, {res}, {res})
+integ = make_integrator('color_map', inner={inner}, **values)
+integ.line_short_circuit = not slow
+seconds = median_time(lambda: render(scene, integrator=integ, spp={spp}, seed=1), {runs})
+out = {{'seconds': seconds}}
+if values.get('lines'):  # the share of camera samples a line took: two line colours, one seed
+    v = {{k: x for k, x in values.items() if k != 'line_color'}}
+    a = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,0,0'), spp={spp}, seed=1)
+    b = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,1000,0'), spp={spp}, seed=1)
+    out['line_share'] = float((b[..., 1] - a[..., 1]).mean() / 1000.0)
+print(json.dumps(out))
+"""
+
+
+def measure(scene: str, values: dict) -> dict:
+    code = CHILD.format(src=SRC, bench=os.path.dirname(os.path.abspath(__file__)), values=values, scene=scene,
+                        res=RES, spp=SPP, inner=INNER, runs=RUNS)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def main():
+    rows = []
+    for scene in ("dragon", "lines"):
+        base = None
+        for name, values in LINES:
+            r = measure(scene, dict(values))
+            base = r["seconds"] if base is None else base
+            rows.append((scene, name, r["seconds"], r["seconds"] / base, r.get("line_share")))
+            print(rows[-1], flush=True)
+    load = os.getloadavg()[0]
+    text = [
+        "## Feature lines: cost (`benchmarks/lines_cost.py`)", "",
+        f"Machine: {machine_description()}. The machine was shared with other engineers' jobs while this ran "
+        f"(load average {load:.1f} on {os.cpu_count()} cores at the end), so the times are noisy; the ratios "
+        f"come from renders taken minutes apart under similar load.", "",
+        f"`color_map` at n = {INNER}, {RES}x{RES}, {SPP} camera samples per pixel, first hit; the median of "
+        f"{RUNS} warm renders. Line share: the fraction of camera samples that a line took (their radiance is "
+        f"not traced).", "",
+        "| scene | lines | time (s) | vs. off | line share |", "|---|---|---|---|---|",
+    ]
+    for scene, name, secs, ratio, share in rows:
+        text.append(f"| {scene} | {name} | {secs:.2f} | {ratio:.2f} | {'' if share is None else f'{share:.3f}'} |")
+    by = {(s, n): t for s, n, t, _, _ in rows}
+    notes = []
+    for scene in ("dragon", "lines"):
+        on, off = by[(scene, "N=8, depth 1")], by[(scene, "off")]
+        notes.append(f"{scene}: lines at N = 8 cost {on / off:.2f}x the render without (target <= 1.5x)")
+        fast, slow = by[(scene, "expectation k=12, short-circuit")], by[(scene, "expectation k=12, no short-circuit")]
+        notes.append(f"{scene}: the expectation mode's short-circuit saves {100 * (1 - fast / slow):.0f}% "
+                     f"({slow:.2f} s -> {fast:.2f} s)")
+    text += ["", "; ".join(notes) + "."]
+    write_section("lines_cost", "\n".join(text))
+    print("\n".join(text))
+
+
+if __name__ == "__main__":
+    main()
