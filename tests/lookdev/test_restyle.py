@@ -81,6 +81,7 @@ def test_first_object_hit_restyles_the_styled_objects():
 @pytest.mark.parametrize("kwargs,error,message", [
     (dict(stylize="first_n_hits", stylize_depth=2, inner=(2, 2)), SettingsError, "first_n_hits cannot be buffered"),
     (dict(style="acp"), SettingsError, "style 'acp' cannot be buffered"),
+    (dict(lines=True), SettingsError, "feature lines"),
 ])
 def test_what_cannot_be_recorded_is_refused(kwargs, error, message):
     kwargs = {"style": "cel", "inner": 2, **kwargs}

@@ -87,7 +87,9 @@ def test_lines_off_is_the_image_without_the_property():
 
 
 # ---- a flat mirror -------------------------------------------------------------------------------
-def test_a_reflected_silhouette_keeps_its_screen_width():
+@pytest.mark.parametrize("mode", [{}, {"stylize": "first_n_hits", "stylize_depth": 2},
+                                  {"stylize": "first_object_hit"}], ids=["first_hit", "first_n_hits", "first_object_hit"])
+def test_a_reflected_silhouette_keeps_its_screen_width(mode):
     """The camera looks down -z at a mirror tilted 45 degrees that shows a sphere 3 units to its side: the
     sphere's mirror image sits where a sphere 8 units in front of the camera would. The same sphere seen
     directly at 8 units draws the same outline; the line mass per pixel of outline is the line's width."""
@@ -100,11 +102,11 @@ def test_a_reflected_silhouette_keeps_its_screen_width():
               "sphere": {"type": "sphere", "center": [0, 0, -8], "radius": radius, "bsdf": BLACK}}
     perimeter = 2 * math.pi * sphere_outline(res, 8.0, radius)
     seen = render(direct, spp=8, line_depth=2).sum() / perimeter
-    mirrored = render(reflected, spp=8, line_depth=2).sum() / perimeter
+    mirrored = render(reflected, spp=8, line_depth=2, **mode).sum() / perimeter
     assert 1.0 < seen < 3.0                       # about line_width (2) pixels
     assert abs(mirrored / seen - 1.0) <= 0.3
     # with line_depth 1 only the camera ray is tested: the mirror shows no line
-    assert render(reflected, spp=2, line_depth=1).max() == 0.0
+    assert render(reflected, spp=2, line_depth=1, **mode).max() == 0.0
 
 
 # ---- a cube: creases ------------------------------------------------------------------------------

@@ -52,6 +52,9 @@ def check_recordable(settings: S.Settings, slots) -> None:
     if settings.stylize_depth != 1:
         raise SettingsError(f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
                             f"level (1)")
+    if settings.lines is not None:
+        raise SettingsError("feature lines (lines=true) cannot be buffered: a buffer keeps the radiance before g, "
+                            "not where lines replaced it; record without lines")
     for slot in slots:
         if slot.style.per_sample:
             raise SettingsError(f"style '{slot.style.name}' cannot be buffered: it applies g to every child "

@@ -49,7 +49,8 @@ class Target:
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
-    lines = line_start = None   # feature lines bound to the scene being traced (lines.py), else None
+    lines = None         # feature lines bound to the scene being traced (lines.py), else None
+    line_states = {}     # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
     #: lanes where a line fired on the camera ray trace nothing more (False only to measure the saving:
     #: benchmarks/lines_cost.py)
     line_short_circuit = True
@@ -94,11 +95,14 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         s = self.settings
         if level + 1 >= s.stylize_depth:
             return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
-                        nulls=self.nulls, opaque_start=True, lines=self._lines_below(level)).L
+                        nulls=self.nulls, opaque_start=True, lines=self._lines_from(level)).L
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
-        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls)
+        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls,
+                   lines=self._lines_from(level))
+        if self.lines is not None:
+            self.line_states[level + 1] = b.lines
         deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
         return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
@@ -113,7 +117,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
         w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
                  skip_emitter=self._skip_emitter, emitters=self.emitters, nulls=self.nulls,
-                 opaque_start=not halt_at_start, lines=self._lines_below(level) if halt_at_start else None)
+                 opaque_start=not halt_at_start, lines=self._lines_from(level - 1))
+        if self.lines is not None:
+            self.line_states[level] = w.lines
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
         return self._through(w, value)
@@ -154,13 +160,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active, like=mi.Color3f)
         return value
 
-    def _lines_below(self, level: int):
-        """Feature lines on the edges of a walk that starts at the camera's first vertex (lines.py): the
-        children of a first_hit vertex, the camera walk of first_object_hit. Deeper walks (first_n_hits
-        levels, first_object_hit children) test no edge (docs/lines.md)."""
-        if self.lines is None or level != 0 or self.settings.stylize == "first_n_hits":
-            return None
-        return self.lines, self.line_start
+    def _lines_from(self, level: int):
+        """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's first
+        vertex, where first_object_hit's camera walk starts): the line settings and that vertex's state."""
+        return None if self.lines is None else (self.lines, self.line_states[level])
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
         self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene)
@@ -175,7 +178,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             # is tearing down crashed a later trace (measured: segfault in pdf_emitter_direction).
             self.targets = []
             self.emitters = None
-            self.lines = self.line_start = None
+            self.lines, self.line_states = None, {}
 
     def _sample(self, scene, sampler, ray, active):
         for t in self.targets:
@@ -189,7 +192,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         if self.lines is None:
             return self._stylize(scene, sampler, ray, active)
         # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
-        seen, self.line_start = self.lines.camera(scene, sampler, camera_ray, spp, active)
+        seen, camera = self.lines.camera(scene, sampler, camera_ray, spp, active)
+        # the camera ray's first hit: where first_object_hit's walk starts and the first_hit/first_n_hits vertex
+        self.line_states = {-1: camera, 0: camera}
         live = active & ~seen.fired if self.line_short_circuit else active
         value, valid, aovs = self._stylize(scene, sampler, ray, live)
         return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs

@@ -164,7 +164,9 @@ class Lines:
             return mi.Ray3f(o, dr.normalize(d + offset))
 
         seen = self._detect(scene, sampler, q, aux, lambda t: state.angle * (D0 + t), go)
-        after = LineState(D=D0 + dr.select(pi.is_valid(), pi.t, dr.inf), alive=alive, angle=state.angle)
+        # lanes that do not take this edge (halted at a stylized vertex, ended) keep their state
+        after = LineState(D=dr.select(active, D0 + dr.select(pi.is_valid(), pi.t, dr.inf), D0),
+                          alive=dr.select(active, alive, state.alive), angle=state.angle)
         return seen, after
 
     def _pair(self, a, b, radius_at, active):

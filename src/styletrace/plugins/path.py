@@ -174,6 +174,7 @@ class Walk:
     ray: mi.Ray3f
     depth: mi.UInt32
     halted: mi.Bool
+    lines: Optional[Any] = None     # lines.LineState at the halting vertex (where lines are on)
 
 
 def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
@@ -300,7 +301,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     # The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0).
     finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
     return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
-                depth=out.depth, halted=out.halted)
+                depth=out.depth, halted=out.halted, lines=out.lines)
 
 
 @dataclass
@@ -312,10 +313,12 @@ class Bounce:
     ray: mi.Ray3f
     go: mi.Bool                          # lanes that took the bounce
     hit: mi.Bool                         # ... and reached a surface (the others see the environment)
+    lines: Optional[Any] = None          # lines.LineState at the next vertex (where lines are on)
 
 
 def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
-           max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False) -> Bounce:
+           max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False,
+           lines=None) -> Bounce:
     """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
 
     The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
@@ -325,6 +328,7 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
 
     With `nulls` (the scene has null-scattering surfaces) x scatters by its opaque part only and the
     next vertex is the first scattering one past null interactions (`first_scattering`).
+    `lines`: as in `walk`; a line on the bounce's edge ends it (weight x line colour joins L).
     """
     ctx = mi.BSDFContext()
     L = emission(scene, si, active)
@@ -342,10 +346,15 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
         weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null), 0.0, scale * weight)
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+    line_state = None
+    if lines is not None:  # a feature line on this edge absorbs the path (lines.py)
+        seen, line_state = lines[0].edge(scene, sampler, lines[1], si, bs, ray2, pi2, depth + 1, go)
+        L += dr.select(seen.fired, weight * seen.color, 0.0)
+        go &= ~seen.fired
     if nulls:
         front = first_scattering(scene, sampler, pi2, ray2, go)
         pi2, ray2, weight = front.pi, front.ray, weight * front.beta
     si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
-    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid())
+    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state)
