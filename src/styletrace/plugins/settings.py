@@ -69,7 +69,7 @@ PROPERTIES = (
              "mirror or glass at the first hit shows)"),
     Property("line_tests", ",".join(LINE_TESTS_DEFAULT), "list", "which tests draw lines: "
              + ", ".join(LINE_TESTS)),
-    Property("line_crease", 0.3, "float", "crease test: 1 - |n.n'| above this draws a line"),
+    Property("line_crease", 0.3, "float", "crease test: 1 - abs(n . n') above this draws a line"),
     Property("line_albedo", 0.1, "float", "albedo test: a luminance difference above this draws a line"),
     Property("line_slope", 2.0, "float", "depth test: a point's distance from the other's tangent plane above this "
              "times the stencil radius draws a line"),
