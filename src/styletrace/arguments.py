@@ -53,6 +53,9 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
         problem = media_problem(scene)
         if problem is not None:
             raise SceneError(problem)
+        if integrator.settings.lines is not None:  # line_objects names shapes of this scene (else refused)
+            from .plugins.lines import Lines
+            Lines(integrator.settings.lines, scene)
 
 
 def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:

@@ -86,6 +86,41 @@ def test_lines_off_is_the_image_without_the_property():
     assert not np.array_equal(plain, on)
 
 
+def test_gradient_colours_a_line_by_the_world_y_of_its_point():
+    """line_gradient black -> white over y in [-1, 1]: a line pixel's colour is (y + 1) / 2 at the sphere's
+    outline point it shows (the nearer hit of the pair: the sphere, not the plane). Same seed with a white
+    constant colour gives the coverage, so the ratio of the two renders is the colour alone."""
+    res, dist, radius = 48, 4.0, 1.0
+    scene = sphere_scene(res, dist, radius)
+    shade = render(scene, seed=2, line_gradient="0,0,0;1,1,1;-1;1")
+    cover = render(scene, seed=2)
+    line = cover > 0.25
+    y_px = (np.mgrid[0:res, 0:res][0] + 0.5 - res / 2)
+    # the outline circle: the sphere's points where the view ray grazes it lie at height (sin of the image
+    # angle) x radius x sqrt(1 - (radius/dist)^2), on the circle of radius `outline` pixels
+    outline = sphere_outline(res, dist, radius)
+    x_px = (np.mgrid[0:res, 0:res][1] + 0.5 - res / 2)
+    y_world = -y_px / np.hypot(x_px, y_px).clip(1e-9) * radius * math.sqrt(1 - (radius / dist) ** 2)
+    near = line & (abs(np.hypot(x_px, y_px) - outline) < 1.0)
+    assert near.sum() > 50
+    err = abs(shade[near] / cover[near] - (y_world[near] + 1) / 2)
+    assert err.max() < 0.08   # a pixel spans 0.07 in y here, its samples' points differ by that much
+
+
+def test_line_objects_choose_the_shapes_that_draw():
+    res = 48
+    scene = {"type": "scene", "sensor": camera([0, 0, 4], [0, 0, 0], res),
+             "left": {"type": "sphere", "center": [-0.8, 0, 0], "radius": 0.5, "bsdf": BLACK},
+             "right": {"type": "sphere", "center": [0.8, 0, 0], "radius": 0.5, "bsdf": BLACK}}
+    both = render(scene)
+    only = render(scene, line_objects="left")
+    assert both[:, : res // 2].max() > 0 and both[:, res // 2:].max() > 0
+    assert only[:, : res // 2].max() > 0 and only[:, res // 2:].max() == 0.0
+    from styletrace.errors import SceneError
+    with pytest.raises(SceneError, match="bad value 'middle' in 'line_objects': the scene's shape ids are left, right"):
+        render(scene, line_objects="left,middle")
+
+
 # ---- a flat mirror -------------------------------------------------------------------------------
 @pytest.mark.parametrize("mode", [{}, {"stylize": "first_n_hits", "stylize_depth": 2},
                                   {"stylize": "first_object_hit"}], ids=["first_hit", "first_n_hits", "first_object_hit"])
