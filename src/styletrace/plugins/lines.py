@@ -94,6 +94,8 @@ class Lines:
     def __init__(self, settings: LineSettings, scene: mi.Scene):
         self.s = settings
         self.draw_all = not settings.objects
+        # positions, geometric normals and shapes are all the tests need; the albedo test evaluates textures
+        self.flags = mi.RayFlags.All if "albedo" in settings.tests else mi.RayFlags.Minimal
         self.shapes = []
         if settings.objects:
             by_id = {shape.id(): shape for shape in scene.shapes()}
@@ -133,7 +135,7 @@ class Lines:
         dx, dy = (ray.d_x - d) * scale, (ray.d_y - d) * scale
         angle = dr.norm(dx)
         base = mi.Ray3f(o, d)
-        q = scene.ray_intersect(base, ray_flags=mi.RayFlags.All, coherent=True, active=active)
+        q = scene.ray_intersect(base, ray_flags=self.flags, coherent=True, active=active)
 
         def aux(a, b):
             return mi.Ray3f(o + a * ox + b * oy, dr.normalize(d + a * dx + b * dy))
@@ -148,7 +150,7 @@ class Lines:
         alive = state.alive & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Diffuse)
         go = active & alive & (index < self.s.depth)
         D0 = state.D
-        q = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=go)
+        q = pi.compute_surface_interaction(ray, ray_flags=self.flags, active=go)
         d, n = mi.Vector3f(ray.d), mi.Vector3f(si.n)
         u, v = mi.coordinate_system(d)
         cos = dr.dot(d, n)
@@ -204,7 +206,7 @@ class Lines:
 
         def hit(smp):
             uv = mi.warp.square_to_uniform_disk(smp.next_2d(active)) * half
-            return scene.ray_intersect(aux(uv.x, uv.y), ray_flags=mi.RayFlags.All, coherent=False, active=active)
+            return scene.ray_intersect(aux(uv.x, uv.y), ray_flags=self.flags, coherent=False, active=active)
 
         def body(j, smp, fired, best_t, best_p):
             fire, p, t = self._pair(hit(smp) if pairs else q, hit(smp), radius_at, active)
