@@ -215,7 +215,9 @@ class Lines:
 
         count = s.k if pairs else s.samples
         state = (mi.UInt32(0), sampler, mi.Bool(False), mi.Float(dr.inf), mi.Point3f(0.0))
-        _, _, fired, _, point = dr.while_loop(state, lambda j, *rest: j < count, body, label="styletrace lines")
+        # lanes that test nothing (past line_depth, after a diffuse vertex, ended) leave the loop at once
+        _, _, fired, _, point = dr.while_loop(state, lambda j, *rest: active & (j < count), body,
+                                              label="styletrace lines")
         return Seen(fired=fired, color=self.color(point))
 
 
