@@ -5,7 +5,8 @@ The colour map style at n = 8 samples per style evaluation on the dragon and on 
 camera ray) and 3 (also two edges below: mirror and glass). The LLaT expectation mode (k = 12) is timed with
 its short-circuit (lanes where a stencil pair fires trace no radiance) and without it, which is what the
 short-circuit saves. Each configuration runs in a fresh process, renders once to compile, then the median
-of RUNS warm renders is taken.
+of RUNS warm renders is taken, the configurations of a scene timed in turn in each round (one process
+per scene) so that a change of the machine's load falls on all of them alike.
 
     python benchmarks/lines_cost.py
 """
@@ -20,7 +21,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from _report import machine_description, write_section  # noqa: E402
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
-RES, SPP, INNER, RUNS = 128, 4, 8, 3
+RES, SPP, INNER, RUNS = 128, 4, 8, 7
 LINES = [("off", {}), ("N=8, depth 1", {"lines": True, "line_samples": 8, "line_depth": 1}),
          ("N=16, depth 1", {"lines": True, "line_samples": 16, "line_depth": 1}),
          ("N=8, depth 3", {"lines": True, "line_samples": 8, "line_depth": 3}),
@@ -30,31 +31,42 @@ LINES = [("off", {}), ("N=8, depth 1", {"lines": True, "line_samples": 8, "line_
                                                   "_no_short_circuit": True})]
 
 CHILD = """
-import json, sys
-sys.path.insert(0, {src!r}); sys.path.insert(0, {bench!r})
-import numpy as np
+import json, statistics, sys, time
+sys.path.insert(0, {src!r})
 import styletrace
 from styletrace.api import load_scene, make_integrator, render
-from _report import median_time
-values = {values!r}
-slow = values.pop('_no_short_circuit', False)
 scene = load_scene({scene!r}, {res}, {res})
-integ = make_integrator('color_map', inner={inner}, **values)
-integ.line_short_circuit = not slow
-seconds = median_time(lambda: render(scene, integrator=integ, spp={spp}, seed=1), {runs})
-out = {{'seconds': seconds}}
-if values.get('lines'):  # the share of camera samples a line took: two line colours, one seed
-    v = {{k: x for k, x in values.items() if k != 'line_color'}}
-    a = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,0,0'), spp={spp}, seed=1)
-    b = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,1000,0'), spp={spp}, seed=1)
-    out['line_share'] = float((b[..., 1] - a[..., 1]).mean() / 1000.0)
+configs = {configs!r}
+integs = []
+for name, values in configs:
+    values = dict(values)
+    slow = values.pop('_no_short_circuit', False)
+    integ = make_integrator('color_map', inner={inner}, **values)
+    integ.line_short_circuit = not slow
+    render(scene, integrator=integ, spp={spp}, seed=1)   # compile
+    integs.append(integ)
+# rounds that time every configuration once each, so that a change of the machine's load hits all alike
+times = [[] for _ in configs]
+for r in range({runs}):
+    for i, integ in enumerate(integs):
+        t = time.perf_counter()
+        render(scene, integrator=integ, spp={spp}, seed=1)
+        times[i].append(time.perf_counter() - t)
+out = []
+for (name, values), ts in zip(configs, times):
+    row = {{'name': name, 'seconds': statistics.median(ts)}}
+    if values.get('lines'):  # the share of camera samples a line took: two line colours, one seed
+        v = {{k: x for k, x in values.items() if k not in ('line_color', '_no_short_circuit')}}
+        a = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,0,0'), spp={spp}, seed=1)
+        b = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,1000,0'), spp={spp}, seed=1)
+        row['line_share'] = float((b[..., 1] - a[..., 1]).mean() / 1000.0)
+    out.append(row)
 print(json.dumps(out))
 """
 
 
-def measure(scene: str, values: dict) -> dict:
-    code = CHILD.format(src=SRC, bench=os.path.dirname(os.path.abspath(__file__)), values=values, scene=scene,
-                        res=RES, spp=SPP, inner=INNER, runs=RUNS)
+def measure(scene: str) -> list:
+    code = CHILD.format(src=SRC, configs=LINES, scene=scene, res=RES, spp=SPP, inner=INNER, runs=RUNS)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -62,20 +74,19 @@ def measure(scene: str, values: dict) -> dict:
 def main():
     rows = []
     for scene in ("dragon", "lines"):
-        base = None
-        for name, values in LINES:
-            r = measure(scene, dict(values))
-            base = r["seconds"] if base is None else base
-            rows.append((scene, name, r["seconds"], r["seconds"] / base, r.get("line_share")))
+        results = measure(scene)
+        base = results[0]["seconds"]
+        for r in results:
+            rows.append((scene, r["name"], r["seconds"], r["seconds"] / base, r.get("line_share")))
             print(rows[-1], flush=True)
     load = os.getloadavg()[0]
     text = [
         "## Feature lines: cost (`benchmarks/lines_cost.py`)", "",
         f"Machine: {machine_description()}. The machine was shared with other engineers' jobs while this ran "
-        f"(load average {load:.1f} on {os.cpu_count()} cores at the end), so the times are noisy; the ratios "
-        f"come from renders taken minutes apart under similar load.", "",
+        f"(load average {load:.1f} on {os.cpu_count()} cores at the end), so the times are noisy; each ratio "
+        f"compares medians of renders timed in turn, round after round.", "",
         f"`color_map` at n = {INNER}, {RES}x{RES}, {SPP} camera samples per pixel, first hit; the median of "
-        f"{RUNS} warm renders. Line share: the fraction of camera samples that a line took (their radiance is "
+        f"{RUNS} warm renders (taken in rounds, every configuration once per round). Line share: the fraction of camera samples that a line took (their radiance is "
         f"not traced).", "",
         "| scene | lines | time (s) | vs. off | line share |", "|---|---|---|---|---|",
     ]

@@ -87,7 +87,7 @@ BAD = [
     (["-o", "/no/such/folder/x.png"], "folder '/no/such/folder' does not exist"),
     (["-o", "out.jpg"], "bad output 'out.jpg'"),
     (["--lines", "--set", "line_width=-2"], "bad value '-2' for 'line_width'"),
-    (["--lines", "maybe"], "bad value 'maybe' for 'lines'"),
+    (["--lines", "--set", "lines=maybe"], "bad value 'maybe' for 'lines'"),
     (["--lines", "--set", "line_tests=outline"], "bad value 'outline' in 'line_tests'"),
 ]
 
@@ -294,9 +294,9 @@ def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypa
 
 def test_lines_flag_and_set_draw_lines(tmp_path, capsys):
     """`--lines` alone turns lines on; `--set line_color=...` reaches them; `styletrace lines` lists the settings."""
-    args = ["render", "furnace", "--style", "identity", "--width", "24", "--height", "24", "--spp", "2", "-q"]
-    assert main([*args, "-o", str(tmp_path / "plain.exr")]) == 0
-    assert main([*args, "--lines", "--set", "line_color=0,9,0", "--set", "line_width=3",
+    args = ["render", "--style", "identity", "--width", "24", "--height", "24", "--spp", "2", "-q"]
+    assert main([*args, "furnace", "-o", str(tmp_path / "plain.exr")]) == 0
+    assert main([*args, "--lines", "furnace", "--set", "line_color=0,9,0", "--set", "line_width=3",
                  "-o", str(tmp_path / "lines.exr")]) == 0
     plain, lines = read(tmp_path / "plain.exr"), read(tmp_path / "lines.exr")
     green = lines[..., 1] > 5   # the furnace's radiance is at most 1: only a line is this green

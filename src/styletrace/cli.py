@@ -439,9 +439,12 @@ def add_setting_flags(parser) -> None:
             continue
         default = f"the scene's stylized integrator's, else {settings.COMMAND_LINE_STYLE}" if p.name == "style" \
             else p.show_default()
-        bare = {"nargs": "?", "const": "true"} if p.bare else {}  # `--lines` alone: on
+        if p.bare:  # a switch (`--lines`): no value, so it never takes the scene's name; off with --set NAME=false
+            parser.add_argument(p.flag, dest=p.name, default=None, action="store_const", const="true",
+                                help=f"{p.doc} (default: off)")
+            continue
         parser.add_argument(p.flag, dest=p.name, default=None, metavar=p.metavar,
-                            type=int if p.kind == "int" else str, help=f"{p.doc} (default: {default})", **bare)
+                            type=int if p.kind == "int" else str, help=f"{p.doc} (default: {default})")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

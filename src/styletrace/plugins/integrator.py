@@ -2,7 +2,7 @@
 
 Properties (XML, Python dict, or the CLI's --set): `style`, the style's own parameters under their
 registry names, `inner_samples`, `estimator`, `stylize`, `stylize_depth`, `max_depth`, `rr_depth`,
-`hide_emitters`.
+`hide_emitters`, `lines` and the `line_*` settings.
 Their defaults, parsing and docs live in `settings` (the table in the README is generated from it).
 
 The radiance leaving a stylized vertex x towards the viewer is
@@ -21,6 +21,11 @@ Where styles apply (`stylize`):
   object seen through a mirror or a glass is still stylized. Paths are ordinary path-traced walks that
   halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
   The integrator's own style must be identity here.
+
+Feature lines (`lines`, plugins/lines.py, docs/lines.md): a line on the camera ray replaces the camera
+sample (nothing else is traced for it); walks and bounces carry the line state of the vertex they leave
+(`line_states`, one per stylized level) and end where a line absorbs them, so lines on later edges enter
+the expectation before g. With `lines` off no line code is traced.
 
 Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
 through area lights and see black where they escape, as in Mitsuba's `path`.

@@ -31,7 +31,7 @@ class Property:
     doc: str
     flag: str = ""            # the `styletrace render` flag, if it has its own
     metavar: str = ""
-    bare: bool = False        # the flag alone means true (`--lines`)
+    bare: bool = False        # the flag is a switch without a value (`--lines`)
 
     def show_default(self) -> str:
         return "style's" if self.default is None else str(self.default)
