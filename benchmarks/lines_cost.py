@@ -4,9 +4,9 @@ The colour map style at n = 8 samples per style evaluation on the dragon and on 
 (`lines`), with lines off, and on at N = 8 and 16 auxiliary rays per tested edge, at line_depth 1 (the
 camera ray) and 3 (also two edges below: mirror and glass). The LLaT expectation mode (k = 12) is timed with
 its short-circuit (lanes where a stencil pair fires trace no radiance) and without it, which is what the
-short-circuit saves. Each configuration runs in a fresh process, renders once to compile, then the median
-of RUNS warm renders is taken, the configurations of a scene timed in turn in each round (one process
-per scene) so that a change of the machine's load falls on all of them alike.
+short-circuit saves. Each configuration renders once to compile, then the median of RUNS warm renders is
+taken, the configurations of a scene timed in turn in each round (one process per scene) so that a change
+of the machine's load falls on all of them alike.
 
     python benchmarks/lines_cost.py
 """
