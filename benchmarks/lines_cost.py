@@ -46,15 +46,16 @@ for name, values in configs:
     render(scene, integrator=integ, spp={spp}, seed=1)   # compile
     integs.append(integ)
 # rounds that time every configuration once each, so that a change of the machine's load hits all alike
-times = [[] for _ in configs]
+times, cpu = [[] for _ in configs], [[] for _ in configs]
 for r in range({runs}):
     for i, integ in enumerate(integs):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         render(scene, integrator=integ, spp={spp}, seed=1)
         times[i].append(time.perf_counter() - t)
+        cpu[i].append(time.process_time() - c)
 out = []
-for (name, values), ts in zip(configs, times):
-    row = {{'name': name, 'seconds': statistics.median(ts)}}
+for (name, values), ts, cs in zip(configs, times, cpu):
+    row = {{'name': name, 'seconds': statistics.median(ts), 'cpu': statistics.median(cs)}}
     if values.get('lines'):  # the share of camera samples a line took: two line colours, one seed
         v = {{k: x for k, x in values.items() if k not in ('line_color', '_no_short_circuit')}}
         a = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,0,0'), spp={spp}, seed=1)
@@ -75,31 +76,33 @@ def main():
     rows = []
     for scene in ("dragon", "lines"):
         results = measure(scene)
-        base = results[0]["seconds"]
+        base = results[0]["cpu"]
         for r in results:
-            rows.append((scene, r["name"], r["seconds"], r["seconds"] / base, r.get("line_share")))
+            rows.append((scene, r["name"], r["seconds"], r["cpu"], r["cpu"] / base, r.get("line_share")))
             print(rows[-1], flush=True)
     load = os.getloadavg()[0]
     text = [
         "## Feature lines: cost (`benchmarks/lines_cost.py`)", "",
         f"Machine: {machine_description()}. The machine was shared with other engineers' jobs while this ran "
-        f"(load average {load:.1f} on {os.cpu_count()} cores at the end), so the times are noisy; each ratio "
-        f"compares medians of renders timed in turn, round after round.", "",
+        f"(load average {load:.1f} on {os.cpu_count()} cores at the end): wall times are inflated by the "
+        f"others' work, so the ratios use the process's CPU time (all its threads), which the load disturbs "
+        f"less, and compare medians of renders timed in turn, round after round.", "",
         f"`color_map` at n = {INNER}, {RES}x{RES}, {SPP} camera samples per pixel, first hit; the median of "
         f"{RUNS} warm renders (taken in rounds, every configuration once per round). Line share: the fraction of camera samples that a line took (their radiance is "
         f"not traced).", "",
-        "| scene | lines | time (s) | vs. off | line share |", "|---|---|---|---|---|",
+        "| scene | lines | wall time (s) | CPU time (s) | CPU time vs. off | line share |", "|---|---|---|---|---|---|",
     ]
-    for scene, name, secs, ratio, share in rows:
-        text.append(f"| {scene} | {name} | {secs:.2f} | {ratio:.2f} | {'' if share is None else f'{share:.3f}'} |")
-    by = {(s, n): t for s, n, t, _, _ in rows}
+    for scene, name, secs, cpu, ratio, share in rows:
+        text.append(f"| {scene} | {name} | {secs:.2f} | {cpu:.2f} | {ratio:.2f} | "
+                    f"{'' if share is None else f'{share:.3f}'} |")
+    by = {(s, n): c for s, n, _, c, _, _ in rows}
     notes = []
     for scene in ("dragon", "lines"):
         on, off = by[(scene, "N=8, depth 1")], by[(scene, "off")]
         notes.append(f"{scene}: lines at N = 8 cost {on / off:.2f}x the render without (target <= 1.5x)")
         fast, slow = by[(scene, "expectation k=12, short-circuit")], by[(scene, "expectation k=12, no short-circuit")]
         notes.append(f"{scene}: the expectation mode's short-circuit saves {100 * (1 - fast / slow):.0f}% "
-                     f"({slow:.2f} s -> {fast:.2f} s)")
+                     f"({slow:.2f} s -> {fast:.2f} s CPU)")
     text += ["", "; ".join(notes) + "."]
     write_section("lines_cost", "\n".join(text))
     print("\n".join(text))
