@@ -77,8 +77,17 @@ def test_sphere_silhouette_is_covered_and_interiors_are_clean():
     assert off.sum() > 0.8 * res * res
 
 
-def test_lines_off_is_the_image_without_the_property():
+def test_lines_off_is_the_image_without_the_property(monkeypatch):
+    """Off, no line code is traced at all (a Python switch): the kernels are those of a build without lines."""
+    from styletrace.plugins import lines
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("line code traced with lines off")
+
     scene = sphere_scene(16)
+    with monkeypatch.context() as m:
+        m.setattr(lines.Lines, "__init__", refuse)
+        styletrace.render(scene, spp=1, lines=False, stylize="first_n_hits", stylize_depth=2, inner=(1, 1))
     plain = styletrace.render(scene, spp=2, seed=3)
     off = styletrace.render(scene, spp=2, seed=3, lines=False, line_width=3, line_samples=2)
     assert np.array_equal(plain, off)
