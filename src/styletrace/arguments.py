@@ -48,11 +48,6 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     """The arguments of `passes`: a renderable scene as well."""
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
-    from .plugins.integrator import StylizedIntegrator, media_problem  # needs a variant set, as the plugins do
-    if isinstance(integrator, StylizedIntegrator):
-        problem = media_problem(scene)
-        if problem is not None:
-            raise SceneError(problem)
 
 
 def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:

@@ -173,6 +173,7 @@ class Walk:
     ray: mi.Ray3f
     depth: mi.UInt32
     halted: mi.Bool
+    medium: Any = None      # MediumPtr: the medium each lane stands in (volume.py's walk only)
 
 
 def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
