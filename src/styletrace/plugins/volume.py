@@ -149,8 +149,8 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         p_real = channel_of(mei.sigma_t, channel) / channel_of(mei.combined_extinction, channel)
         null_coll = real & (s.sampler.next_1d(real) >= p_real)
         sigma_n_c = channel_of(mei.sigma_n, channel)
-        s.beta = dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * channel_of(mei.combined_extinction, channel)
-                                                / sigma_n_c, 0.0), s.beta)
+        s.beta *= dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * channel_of(mei.combined_extinction, channel)
+                                                 / sigma_n_c, 0.0), 1.0)
         scat = real & ~null_coll
         depth_m = s.depth + 1
         scat &= depth_m < limit                  # a collision past the last depth ends the path
@@ -184,7 +184,9 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
         s.L += s.beta * w_em * emitter.eval(si, hit_em)
 
-        active_s = here & ~passes & si.is_valid() & (s.depth + 1 < limit)
+        # the BSDF is sampled at the last depth too: a null component sampled there goes on at the same depth
+        sample_s = here & ~passes & si.is_valid()
+        active_s = sample_s & (s.depth + 1 < limit)
 
         # ---- next-event estimation from the medium collision or the surface vertex, one light sample
         sample_m = scat & mei.medium.use_emitter_sampling()
@@ -201,11 +203,11 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         phase = mei.medium.phase_function()
         phase_val, phase_pdf = phase.eval_pdf(pctx, mei, ds.d, sample_m)
         wo = si.to_local(ds.d)
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, s.sampler.next_1d(active_s),
-                                                                   s.sampler.next_2d(active_s), active_s)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, s.sampler.next_1d(sample_s),
+                                                                   s.sampler.next_2d(sample_s), sample_s)
         scale = mi.Spectrum(1.0)
         if nulls and opaque_start:  # the stylized starting vertex: its opaque part only
-            scale = dr.select(s.first, opaque_part(si, bsdf, active_s & s.first), 1.0)
+            scale = dr.select(s.first, opaque_part(si, bsdf, sample_s & s.first), 1.0)
             bsdf_weight[s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)] = 0.0
         f_val = dr.select(scat, phase_val, scale * bsdf_val)
         f_pdf = dr.select(scat, phase_pdf, bsdf_pdf)
@@ -217,7 +219,7 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
                                                        scat)
         scat &= phase_pdf_m > 0.0
         null_s = passes | mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
-        go_s = active_s | (here & passes)
+        go_s = (sample_s & (null_s | active_s)) | (here & passes)
         ray_s = dr.select(passes, si.spawn_ray(s.ray.d), si.spawn_ray(si.to_world(bs.wo)))
         beta_s = dr.select(passes, s.beta * w_pass, s.beta * scale * bsdf_weight)
         delta_s = dr.select(null_s, s.delta_prev, mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta) |
