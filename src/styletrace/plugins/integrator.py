@@ -22,6 +22,13 @@ Where styles apply (`stylize`):
   halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
   The integrator's own style must be identity here.
 
+Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
+trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
+to one (the camera ray, the bounce between first_n_hits levels, a first_object_hit walk) a lane whose free
+flight ends in a real medium collision first goes on as an ordinary volumetric path, unstylized; the
+others reach the surface with the transmittance weight and are stylized there. Children are full
+volumetric paths, so with the identity style the image is Mitsuba's `volpath`.
+
 Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
 through area lights and see black where they escape, as in Mitsuba's `path`.
 """
