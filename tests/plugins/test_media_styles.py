@@ -5,7 +5,7 @@ import numpy as np
 
 import styletrace  # noqa: F401
 from styletrace.api import make_integrator, passes
-from helpers.media import INNER, SPP, assert_matches_volpath, fog_ball
+from helpers.media import INNER, SPP, T, assert_matches_volpath, fog_ball
 
 
 def test_first_n_hits_through_media_matches_volpath():
@@ -21,9 +21,13 @@ def test_first_object_hit_through_media_matches_volpath():
 
 
 def test_hidden_emitters_in_a_foggy_scene_match_volpath():
-    """`hide_emitters`: the environment seen directly (through the glass's fog too) is black, as in volpath."""
+    """`hide_emitters`: the environment and an area light seen directly are black (camera rays pass the light),
+    what is seen through the glass's fog is not, as in volpath."""
+    d = fog_ball()
+    d["panel"] = {"type": "rectangle", "to_world": T().translate([0.9, 0.3, 2.0]) @ T().scale(0.3),
+                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [3.0, 3.0, 3.0]}}}
     integrator = make_integrator("identity", inner=INNER, hide_emitters=True)
-    assert_matches_volpath(mi.load_dict(fog_ball()), integrator, {"hide_emitters": True})
+    assert_matches_volpath(mi.load_dict(d), integrator, {"hide_emitters": True})
 
 
 def test_a_style_renders_a_scene_with_media():
