@@ -36,9 +36,11 @@ def lit(d):
     d["sensor"] = {"type": "perspective", "fov": 40, "sampler": {"type": "independent"},
                    "to_world": T().look_at(origin=[0, 0.6, 4.0], target=[0, 0.1, 0], up=[0, 1, 0]),
                    "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}}}
-    d["floor"] = {"type": "rectangle", "to_world": T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90) @ T().scale(4),
+    floor = T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90) @ T().scale(4)
+    d["floor"] = {"type": "rectangle", "to_world": floor,
                   "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.6, 0.6, 0.6]}}}
-    d["light"] = {"type": "rectangle", "to_world": T().translate([0.5, 2.5, 0.5]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.8),
+    light = T().translate([0.5, 2.5, 0.5]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.8)
+    d["light"] = {"type": "rectangle", "to_world": light,
                   "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [5.0, 4.5, 4.0]}}}
     d["point"] = {"type": "point", "position": [-1.5, 1.5, 1.5], "intensity": {"type": "rgb", "value": [3.0, 3.0, 3.0]}}
     d["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.35, 0.4]}}

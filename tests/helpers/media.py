@@ -41,9 +41,11 @@ def diffuse(rgb, styled=False):
 
 def lit(d, env=True):
     """Floor, an area light above, a point light and (optionally) a constant environment."""
-    d["floor"] = {"type": "rectangle", "to_world": T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90) @ T().scale(4),
+    floor = T().translate([0, -1, 0]) @ T().rotate([1, 0, 0], -90) @ T().scale(4)
+    d["floor"] = {"type": "rectangle", "to_world": floor,
                   "bsdf": d.pop("floor_bsdf", diffuse([0.6, 0.6, 0.6]))}
-    d["light"] = {"type": "rectangle", "to_world": T().translate([0.5, 2.5, 0.5]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.8),
+    light = T().translate([0.5, 2.5, 0.5]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.8)
+    d["light"] = {"type": "rectangle", "to_world": light,
                   "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [5.0, 4.5, 4.0]}}}
     d["point"] = {"type": "point", "position": [-1.5, 1.5, 1.5], "intensity": {"type": "rgb", "value": [3.0, 3.0, 3.0]}}
     if env:

@@ -146,17 +146,14 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         mei.t = dr.select(mei.t > t_surf, dr.inf, mei.t)
         s.beta *= free_flight_weight(s.medium, mei, t_surf, channel, in_med)
         real = in_med & mei.is_valid()
-        p_real = channel_of(mei.sigma_t, channel) / channel_of(mei.combined_extinction, channel)
-        null_coll = real & (s.sampler.next_1d(real) >= p_real)
+        majorant_c, sigma_t_c = channel_of(mei.combined_extinction, channel), channel_of(mei.sigma_t, channel)
+        null_coll = real & (s.sampler.next_1d(real) >= sigma_t_c / majorant_c)
         sigma_n_c = channel_of(mei.sigma_n, channel)
-        s.beta *= dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * channel_of(mei.combined_extinction, channel)
-                                                 / sigma_n_c, 0.0), 1.0)
+        s.beta *= dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0)
         scat = real & ~null_coll
         depth_m = s.depth + 1
         scat &= depth_m < limit                  # a collision past the last depth ends the path
-        sigma_t_c = channel_of(mei.sigma_t, channel)
-        beta_m = s.beta * dr.select(sigma_t_c > 0, mei.sigma_s * channel_of(mei.combined_extinction, channel)
-                                    / sigma_t_c, 0.0)
+        beta_m = s.beta * dr.select(sigma_t_c > 0, mei.sigma_s * majorant_c / sigma_t_c, 0.0)
         it_m = medium_vertex(mei)
 
         # ---- the surface, for lanes whose flight reached it (or that travel in no medium)
