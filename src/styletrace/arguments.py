@@ -48,14 +48,14 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     """The arguments of `passes`: a renderable scene as well."""
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
-    from .plugins.integrator import StylizedIntegrator, media_problem  # needs a variant set, as the plugins do
-    if isinstance(integrator, StylizedIntegrator):
-        problem = media_problem(scene)
+    from .plugins.integrator import StylizedIntegrator, line_problem  # needs a variant set, as the plugins do
+    if isinstance(integrator, StylizedIntegrator) and integrator.settings.lines is not None:
+        from .plugins.lines import Lines
+        from .plugins.scene_graph import SceneGraph
+        problem = line_problem(integrator.settings, SceneGraph(scene).has_media)
         if problem is not None:
             raise SceneError(problem)
-        if integrator.settings.lines is not None:  # line_objects names shapes of this scene (else refused)
-            from .plugins.lines import Lines
-            Lines(integrator.settings.lines, scene)
+        Lines(integrator.settings.lines, scene)  # line_objects names shapes of this scene (else refused)
 
 
 def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:

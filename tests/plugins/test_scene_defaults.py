@@ -90,3 +90,29 @@ def test_light_follows_a_z_up_camera():
     out, chosen = resolve_defaults(load_scene(d), make_integrator(style="xtoon"))
     light = np.array(out.settings.style.light_dir)
     assert light @ [0, 0, 1] > 0.9 and "light_dir=" in chosen
+
+
+
+def test_the_pilot_sees_through_participating_media():
+    """With the camera in an absorbing fog (the sensor's medium) the pilot's brightness is that of the light
+    reaching the camera: the sky behind the spheres arrives through at least 9 units of fog, times
+    exp(-0.2 * 9) < 0.17, and the spheres' light is dimmed as well, so the mean falls below a third of the
+    clear scene's. A pilot that ignored the medium would see no change."""
+    from styletrace.plugins.scene_defaults import Pilot
+    grey = lambda a: {"type": "diffuse", "reflectance": {"type": "rgb", "value": [a, a, a]}}  # noqa: E731
+
+    def scene(fog):
+        sensor = {"type": "perspective", "fov": 60, "film": {"type": "hdrfilm", "width": RES, "height": RES},
+                  "to_world": T().look_at(origin=[0, 0, 9], target=[0, 0, 0], up=[0, 1, 0])}
+        d = {"type": "scene", "sensor": sensor,
+             "dark": {"type": "sphere", "center": [-3, 0, 0], "radius": 1.0, "bsdf": grey(0.2)},
+             "bright": {"type": "sphere", "center": [3, 0, 0], "radius": 1.0, "bsdf": grey(0.8)},
+             "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [1, 1, 1]}}}
+        if fog:
+            d["fog"] = {"type": "homogeneous", "sigma_t": 0.2, "albedo": 0.0}
+            sensor["medium"] = {"type": "ref", "id": "fog"}
+        return mi.load_dict(d)
+
+    settings = make_integrator("cel").settings
+    foggy, clear = (Pilot(scene(f), settings).samples["colour"].mean() for f in (True, False))
+    assert np.isfinite(foggy) and 0 < foggy < clear / 3, (foggy, clear)

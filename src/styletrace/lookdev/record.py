@@ -99,7 +99,7 @@ class RecordingIntegrator(StylizedIntegrator):
         dr.schedule(*kept.values())  # evaluated by the same kernel as the image
         return spec, valid, aovs
 
-    def stylized(self, level, scene, sampler, pi, si, ray, active, depth):
+    def stylized(self, level, scene, sampler, pi, si, ray, active, depth, medium=None):
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
         styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
@@ -107,9 +107,9 @@ class RecordingIntegrator(StylizedIntegrator):
         for i, target in enumerate(self.targets):
             here = active & (_any(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
             if self.sequence:
-                value = self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v)
+                value = self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
             else:
-                m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth)
+                m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth, medium)
                 value = finish(target.slot, m, v)
                 mean = dr.select(here, m, mean)
             total = dr.select(here, value, total)
@@ -121,18 +121,18 @@ class RecordingIntegrator(StylizedIntegrator):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
         return super()._through(w, value)
 
-    def _estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
+    def _estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
         """`StylizedIntegrator._estimate` with every draw and uniform also noted in the recorder's pool.
         The same calls on the same stream in the same order: the estimate is the render's."""
         if not self.sequence:
-            return super()._estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v)
+            return super()._estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
         style, rec = slot.style, self.recorder
         if style.closed_form:
             return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
             smp, count, ucount = carry
-            x = self.child(level, scene, smp, pi, si, ray, active, depth)
+            x = self.child(level, scene, smp, pi, si, ray, active, depth, medium)
             count = rec.child(count, x)
             if style.per_sample:
                 x = style.apply(x, v)
@@ -147,14 +147,14 @@ class RecordingIntegrator(StylizedIntegrator):
             draw, (sampler, rec.count, rec.ucount), uniform, active, like=mi.Color3f)
         return value
 
-    def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth) -> mi.Color3f:
+    def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
         """The mean of the slot's n children: the same draws, in the same order, as the `direct` estimator."""
         if slot.style.closed_form:
             return mi.Color3f(0.0)
 
         def draw(carry):
             (smp,) = carry
-            return self.child(level, scene, smp, pi, si, ray, active, depth), (smp,)
+            return self.child(level, scene, smp, pi, si, ray, active, depth, medium), (smp,)
 
         def uniform(carry):
             (smp,) = carry

@@ -92,8 +92,9 @@ class EmitterSampler:
         self.prob_by_id = mi.Float(prob)
         self.probabilities = [w / total for w in weights]  # in key order, for tests and reports
 
-    def sample_direction(self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool):
-        """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded or none."""
+    def sample_direction(self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True):
+        """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded (with `visible`; without,
+        the caller estimates the transmittance: volume.py) or none."""
         if self.count == 0:
             return dr.zeros(mi.DirectionSample3f), mi.Spectrum(0.0)
         index, x, pmf = self.distr.sample_reuse_pmf(sample.x, active)
@@ -103,6 +104,8 @@ class EmitterSampler:
         weight *= dr.rcp(pmf)
         active &= ds.pdf != 0.0
         weight = dr.select(active, weight, 0.0)
+        if not visible:
+            return ds, weight
         occluded = self.scene.ray_test(si.spawn_ray_to(ds.p), active & (dr.max(weight) > 0.0))
         return ds, dr.select(occluded, 0.0, weight)
 

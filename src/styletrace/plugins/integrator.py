@@ -25,7 +25,15 @@ Where styles apply (`stylize`):
 Feature lines (`lines`, plugins/lines.py, docs/lines.md): a line on the camera ray replaces the camera
 sample (nothing else is traced for it); walks and bounces carry the line state of the vertex they leave
 (`line_states`, one per stylized level) and end where a line absorbs them, so lines on later edges enter
-the expectation before g. With `lines` off no line code is traced.
+the expectation before g. With `lines` off no line code is traced. In scenes with participating media lines
+are detected on the camera ray only (`line_depth` above 1 is refused there).
+
+Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
+trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
+to one (the camera ray, the bounce between first_n_hits levels, a first_object_hit walk) a lane whose free
+flight ends in a real medium collision first goes on as an ordinary volumetric path, unstylized; the
+others reach the surface with the transmittance weight and are stylized there. Children are full
+volumetric paths, so with the identity style the image is Mitsuba's `volpath`.
 
 Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
 through area lights and see black where they escape, as in Mitsuba's `path`.
@@ -41,9 +49,10 @@ from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .lane_sampler import LaneSampler
 from .lines import Lines
-from .path import bounce, environment, first_scattering, walk
 from ..errors import SceneError
+from .path import bounce, environment, first_scattering, walk
 from .scene_graph import SceneGraph
+from .volume import volume_walk
 
 
 class Target:
@@ -79,8 +88,6 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # styled BSDFs wherever they sit: on shapes, inside wrappers (twosided, mask, blendbsdf) and in
         # shapegroups seen through instances (scene_graph.py); `bsdfs[0]` is the styled BSDF itself
         graph = SceneGraph(scene)
-        if graph.has_media:  # refused, not ignored (also checked before rendering: arguments.check_passes_args)
-            raise SceneError(MEDIA_REFUSED)
         # plain flags only: a kept reference to a scene's objects breaks later traces (see `sample`)
         self.nulls, self.media = graph.has_null, graph.has_media
         targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
@@ -95,14 +102,36 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return _any_ptr(ds.emitter, [e for t in self.targets for e in t.emitters], mi.EmitterPtr)
 
     # ---- the tree ------------------------------------------------------------------------------
-    def child(self, level: int, scene, sampler, pi, si, ray, active, depth) -> mi.Spectrum:
-        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`)."""
+    def _walk(self, scene, sampler, pi, ray, active, depth, medium=None, flight=False, **kw):
+        """path.walk, or volume.py's walk where the scene has media (a trace-time switch: scenes without
+        media trace exactly the plain kernel)."""
+        s = self.settings
+        if self.media:  # lines on the camera ray only (`line_problem`): the volume walk tests no edges
+            kw.pop("lines", None)
+            return volume_walk(scene, sampler, pi, ray, active, medium, flight, s.max_depth, s.rr_depth, depth,
+                               emitters=self.emitters, nulls=self.nulls, **kw)
+        return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
+                    nulls=self.nulls, **kw)
+
+    def child(self, level: int, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Spectrum:
+        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`; `medium`:
+        the medium on the side `ray` came from, in scenes with media)."""
         s = self.settings
         if level + 1 >= s.stylize_depth:
-            return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
-                        nulls=self.nulls, opaque_start=True, lines=self._lines_from(level)).L
+            return self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True,
+                              lines=self._lines_from(level)).L
         if s.stylize == "first_object_hit":
-            return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False)
+            return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False, medium=medium)
+        if self.media:
+            # first_n_hits through media: x samples delta lights only, its BSDF sample flies through the media
+            # to the next surface vertex, stylized at the next level; a lane that scatters in a medium on
+            # the way goes on as an ordinary volumetric path (volume.py)
+            start = mi.UInt32(depth)
+            w = self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True, delta_start=True,
+                           stop=lambda si2, d: d == start + 1)
+            si2 = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
+            deeper = self.stylized(level + 1, scene, sampler, w.pi, si2, w.ray, w.halted, w.depth, w.medium)
+            return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
         b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls,
                    lines=self._lines_from(level))
@@ -111,22 +140,23 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
         return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
-    def walk(self, level: int, scene, sampler, pi, ray, active, depth, halt_at_start: bool) -> mi.Spectrum:
-        """A path-traced walk that halts on styled objects and stylizes them at `level`."""
-        s = self.settings
+    def walk(self, level: int, scene, sampler, pi, ray, active, depth, halt_at_start: bool, medium=None,
+             flight: bool = False, hide: bool = False) -> mi.Spectrum:
+        """A path-traced walk that halts on styled objects and stylizes them at `level` (with media: from
+        `medium`, flying along `ray` first where `flight`; `hide`: no emission before the first scattering)."""
         start = mi.UInt32(depth)
 
         def stop(si, d):
             styled = self._styled(si)
             return styled if halt_at_start else styled & (d > start)
 
-        w = walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, stop=stop,
-                 skip_emitter=self._skip_emitter, emitters=self.emitters, nulls=self.nulls,
-                 opaque_start=not halt_at_start, lines=self._lines_from(level - 1))
+        extra = dict(medium=medium, flight=flight, hide_first=hide) if self.media else {}
+        w = self._walk(scene, sampler, pi, ray, active, depth, stop=stop, skip_emitter=self._skip_emitter,
+                       opaque_start=not halt_at_start, lines=self._lines_from(level - 1), **extra)
         if self.lines is not None:
             self.line_states[level] = w.lines
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-        value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth)
+        value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth, w.medium)
         return self._through(w, value)
 
     def _through(self, w, value) -> mi.Spectrum:
@@ -134,7 +164,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         value where it halted (a seam for `lookdev.record`, which keeps both per camera sample)."""
         return w.L + dr.select(w.halted, w.beta * value, 0.0)
 
-    def stylized(self, level: int, scene, sampler, pi, si, ray, active, depth) -> mi.Spectrum:
+    def stylized(self, level: int, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Spectrum:
         """g(E[L_o]) at the level-`level` vertex si, each object with its own style."""
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
@@ -142,18 +172,19 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         total = mi.Spectrum(0.0)
         for target in self.targets:
             here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
-            total = dr.select(here, self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v),
-                              total)
+            total = dr.select(here, self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v,
+                                                   medium), total)
         return total
 
-    def _estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
+    def _estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v,
+                  medium=None) -> mi.Spectrum:
         style = slot.style
         if style.closed_form:
             return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
             (smp,) = carry
-            x = self.child(level, scene, smp, pi, si, ray, active, depth)
+            x = self.child(level, scene, smp, pi, si, ray, active, depth, medium)
             if style.per_sample:
                 x = style.apply(x, v)
             return x, (smp,)
@@ -168,15 +199,22 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     def _lines_from(self, level: int):
         """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's first
         vertex, where first_object_hit's camera walk starts): the line settings and that vertex's state."""
-        return None if self.lines is None else (self.lines, self.line_states[level])
+        if self.lines is None or self.media:  # with media, lines on the camera ray only (`line_problem`)
+            return None
+        return self.lines, self.line_states[level]
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene)
         self.targets = self._targets(scene)
+        problem = line_problem(self.settings, self.media)
+        if problem is not None:
+            raise SceneError(problem)
+        self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene)
         # emitter selection in an order of the scene's own (its emitter list changes order between runs)
         self.emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         try:
-            return self._sample(scene, sampler, ray, active)
+            if medium is None and scene.sensors():
+                medium = scene.sensors()[0].get_medium()
+            return self._sample(scene, sampler, ray, active, medium)
         finally:
             # Keep no reference to this scene's objects once traced: Dr.Jit traces calls on every live
             # instance of a class, and a lingering BSDF or emitter of a scene that the garbage collector
@@ -185,7 +223,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             self.emitters = None
             self.lines, self.line_states = None, {}
 
-    def _sample(self, scene, sampler, ray, active):
+    def _sample(self, scene, sampler, ray, active, medium=None):
         for t in self.targets:
             t.slot.style.prepare(scene)
         self.view = camera_forward(scene)
@@ -195,16 +233,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # every random decision below the camera ray comes from an independent stream per lane
         sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
         if self.lines is None:
-            return self._stylize(scene, sampler, ray, active)
+            return self._stylize(scene, sampler, ray, active, medium)
         # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
         seen, camera = self.lines.camera(scene, sampler, camera_ray, spp, active)
         # the camera ray's first hit: where first_object_hit's walk starts and the first_hit/first_n_hits vertex
         self.line_states = {-1: camera, 0: camera}
         live = active & ~seen.fired if self.line_short_circuit else active
-        value, valid, aovs = self._stylize(scene, sampler, ray, live)
+        value, valid, aovs = self._stylize(scene, sampler, ray, live, medium)
         return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
 
-    def _stylize(self, scene, sampler, ray, active):
+    def _stylize(self, scene, sampler, ray, active, medium=None):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
         hide = self.settings.hide_emitters
         if hide:
@@ -212,8 +250,21 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # alpha, as Mitsuba's `path`: the camera ray found a surface, or a visible environment
         valid = active & (pi.is_valid() | (scene.environment() is not None and not hide))
         if self.settings.stylize == "first_object_hit":
+            if self.media:  # the walk hides what it meets before its first scattering (a medium scatters too)
+                value = self.walk(0, scene, sampler, pi, ray, active, mi.UInt32(0), halt_at_start=True, medium=medium,
+                                  flight=True, hide=hide)
+                return value, valid, []
             start = active & pi.is_valid() if hide else active  # a hidden environment is black
             return self.walk(0, scene, sampler, pi, ray, start, mi.UInt32(0), halt_at_start=True), valid, []
+        if self.media:
+            # the stylized vertex is the first surface that scatters; lanes that scatter in a medium before
+            # reaching it go on as ordinary volumetric paths (volume.py), the others carry the transmittance
+            w = volume_walk(scene, sampler, pi, ray, active, medium, True, self.settings.max_depth,
+                            self.settings.rr_depth, 0, stop=lambda si, d: d == 0, emitters=self.emitters,
+                            nulls=self.nulls, hide_first=hide)
+            si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
+            value = self.stylized(0, scene, sampler, w.pi, si, w.ray, w.halted, mi.UInt32(0), w.medium)
+            return self._through(w, value), valid | w.halted | (active & (w.depth > 0)), []
         if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
             front = first_scattering(scene, sampler, pi, ray, active)
             pi, ray = front.pi, front.ray
@@ -247,13 +298,13 @@ def past_area_emitters(scene, ray, pi, active):
     return ray, pi
 
 
-MEDIA_REFUSED = ("the scene has participating media (a shape's interior/exterior medium or the sensor's), which "
-                 "the 'stylized' integrator does not support yet: render it with Mitsuba's 'volpath'")
-
-
-def media_problem(scene: mi.Scene) -> str | None:
-    """Why `stylized` cannot render `scene` (participating media), or None."""
-    return MEDIA_REFUSED if SceneGraph(scene).has_media else None
+def line_problem(settings: S.Settings, media: bool) -> str | None:
+    """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`), or None."""
+    lines = settings.lines
+    if media and lines is not None and lines.depth > 1:
+        return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: lines are detected "
+                "on the camera ray only there (line_depth 1)")
+    return None
 
 
 def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:

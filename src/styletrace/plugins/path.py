@@ -28,6 +28,9 @@ their throughput, intersection and ray.
 estimation towards delta lights only (no BSDF sample can reach them), one BSDF sample and the
 intersection of its ray.
 
+Scenes with participating media use volume.py's walk instead (same interface, a `Walk` with the medium);
+the integrator chooses at trace time, so this kernel has no medium code at all.
+
 The loop carries the small preliminary intersection and rebuilds the full surface interaction at the
 top of each iteration, as Mitsuba's own path tracer does; the sampler is part of the loop state (a
 loop drawing random numbers without it would replay the same numbers in every iteration).
@@ -175,6 +178,7 @@ class Walk:
     depth: mi.UInt32
     halted: mi.Bool
     lines: Optional[Any] = None     # lines.LineState at the halting vertex (where lines are on)
+    medium: Any = None              # MediumPtr: the medium each lane stands in (volume.py's walk only)
 
 
 def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,

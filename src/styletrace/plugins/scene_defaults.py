@@ -16,7 +16,9 @@ What the rules may read (`Facts`, per style slot):
   A pilot of the path kernel (`path.exitant`, the scene's max_depth and rr_depth) traces PILOT_SPP
   jittered camera rays in each cell of a grid of PILOT_CELLS cells along the film's longer side, and the
   brightness is averaged per cell and slot (a cell estimate, like a stylized vertex's inner estimate
-  rather than one noisy path), the cells weighted by their number of samples on the slot's objects;
+  rather than one noisy path), the cells weighted by their number of samples on the slot's objects; in a
+  scene with participating media the pilot is volume.py's walk from the camera (through the sensor's
+  medium), so a sample's brightness is what reaches the camera along its ray;
 - `depth(qs)`: quantiles of the camera depth (p - c) . forward of those first hits (xtoon's depth mode).
 A composition's later operand sees the brightness of the earlier operands' output (`Facts.mapped`).
 
@@ -44,6 +46,7 @@ from .integrator import StylizedIntegrator
 from .path import exitant
 from .scene_graph import SceneGraph
 from .styled_bsdf import StyledBSDF
+from .volume import volume_walk
 
 #: cells of the pilot grid along the film's longer side, and camera samples per cell
 PILOT_CELLS = 32
@@ -83,8 +86,14 @@ class Pilot:
         # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order Mitsuba
         # lists the emitters in, so the auto values (and the image) are the same for the same seed
         pi = scene.ray_intersect_preliminary(ray, coherent=True)
-        L = exitant(scene, sampler, pi, ray, mi.Bool(True), self.settings.max_depth, self.settings.rr_depth,
-                    emitters=EmitterSampler(scene, self.settings.emitter_sampling))
+        graph = SceneGraph(scene)
+        emitters = EmitterSampler(scene, self.settings.emitter_sampling)
+        if graph.has_media:
+            L = volume_walk(scene, sampler, pi, ray, mi.Bool(True), sensor.get_medium(), True, self.settings.max_depth,
+                            self.settings.rr_depth, emitters=emitters, nulls=graph.has_null).L
+        else:
+            L = exitant(scene, sampler, pi, ray, mi.Bool(True), self.settings.max_depth, self.settings.rr_depth,
+                        emitters=emitters)
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
         owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
@@ -92,7 +101,7 @@ class Pilot:
         owner[hit] = 0
         # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for it (itself
         # and the wrappers that hold it): one traversal of the scene
-        for k, (_, pointers, _) in enumerate(SceneGraph(scene).styled, start=1):
+        for k, (_, pointers, _) in enumerate(graph.styled, start=1):
             for ptr in pointers:
                 owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
         n_sh = dr.normalize(si.sh_frame.n)
