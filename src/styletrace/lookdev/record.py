@@ -52,7 +52,13 @@ def check_recordable(settings: S.Settings, slots) -> None:
     if settings.stylize_depth != 1:
         raise SettingsError(f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
                             f"level (1)")
+    if settings.aovs:
+        raise SettingsError("bad value True for 'aovs': a buffer keeps the children's means, not the error AOVs; "
+                            "render with aovs instead")
     for slot in slots:
+        if S.adaptive(slot.inner):
+            raise SettingsError(f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples': a buffer "
+                                f"keeps one fixed count of children per vertex; use a fixed count")
         if slot.style.per_sample:
             raise SettingsError(f"style '{slot.style.name}' cannot be buffered: it applies g to every child "
                                 f"sample, a buffer keeps only their mean")

@@ -131,7 +131,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def _estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v) -> mi.Spectrum:
         style = slot.style
-        if style.closed_form:
+        if style.closed_form:  # no children: the AOVs keep 0 here
             return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
@@ -145,7 +145,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        est = make_estimator(slot, level, v, self.settings)
+        value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        if level == 0 and self.settings.aovs:
+            self._stats.append((active, est.inner.stats))
         return value
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -162,6 +165,22 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             self.emitters = None
 
     def _sample(self, scene, sampler, ray, active):
+        self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
+        value, valid, _ = self._radiance(scene, sampler, ray, active)
+        return value, valid, self._aovs(value) if self.settings.aovs else []
+
+    def _aovs(self, value) -> list:
+        """The error AOVs of one camera sample (see `aov_names`): its value squared per channel (the film's
+        average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias
+        prediction and the number of children."""
+        bias, children = mi.Float(0.0), mi.Float(0.0)
+        for lanes, stats in self._stats:
+            bias = dr.select(lanes, stats["bias"], bias)
+            children = dr.select(lanes, stats["children"], children)
+        self._stats = []
+        return [value.x * value.x, value.y * value.y, value.z * value.z, bias, children]
+
+    def _radiance(self, scene, sampler, ray, active):
         for t in self.targets:
             t.slot.style.prepare(scene)
         self.view = camera_forward(scene)
@@ -190,7 +209,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return value, valid, []
 
     def aov_names(self):
-        return []
+        return list(AOV_NAMES) if self.settings.aovs else []
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"
@@ -210,6 +229,9 @@ def past_area_emitters(scene, ray, pi, active):
     ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
     return ray, pi
 
+
+#: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
+AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
 
 MEDIA_REFUSED = ("the scene has participating media (a shape's interior/exterior medium or the sensor's), which "
                  "the 'stylized' integrator does not support yet: render it with Mitsuba's 'volpath'")
