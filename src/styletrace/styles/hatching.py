@@ -221,12 +221,15 @@ class Hatching(BrightnessRange, Style):
         return dr.select(line, mi.Color3f(*self.line_color), mi.Color3f(*self.background))
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """Set j's threshold where v lies on one of its lines (elsewhere its drawing changes nothing)."""
+        """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover v; v turns
+        line-coloured there and stays so below it. +inf where v is on no line (g is constant there)."""
         u_min, u_max = self.u_range()
         masks = line_masks(v.p, self.normals, self.pitch, self.line_thickness,
                            projection=self.projection if self.spacing is None else None)
-        return tuple(dr.select(on, mi.Float(t), mi.Float(dr.inf))
-                     for on, t in zip(masks, set_thresholds(len(self.normals), u_min, u_max)))
+        out = mi.Float(dr.inf)
+        for on, t in reversed(list(zip(masks, set_thresholds(len(self.normals), u_min, u_max)))):
+            out = dr.select(on, t, out)
+        return (out,)
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
         return mi.Color3f(0.0)  # piecewise constant in brightness: all of it is in the thresholds
