@@ -26,8 +26,8 @@ def step(x):
 
 
 def test_stops_at_n0_far_from_the_threshold_and_goes_to_n_max_at_it():
-    # samples within 0.1 of mu: at n0 = 4, s <= 0.1 sqrt(4/3) and the band z s / sqrt(n) <= 0.116, while a
-    # mean of a lane at mu = 0.05 or 0.95 is at least 0.35 from the threshold: those never draw past n0
+    # samples within 0.1 of mu: at n0 = 4, s <= 0.1 sqrt(4/3) and the band t s / sqrt(n) <= 3.17 * 0.058 =
+    # 0.183, while a mean of a lane at mu = 0.05 or 0.95 is at least 0.35 from the threshold: never past n0
     mu = np.repeat([0.05, 0.95, 0.5], 2000)
     est = AdaptiveDirect(step, 4, 64, thresholds=(0.5,), z=2.0)
     draw, uniform, carry = lanes_with_means(mu, 0.1, seed=1)
@@ -42,13 +42,14 @@ def test_stops_at_n0_far_from_the_threshold_and_goes_to_n_max_at_it():
 
 def test_the_stop_rule_holds_where_each_lane_stopped():
     # replay: a lane that stopped before n_max has its mean outside the band, one at n_max may be inside
+    # (the band in standard errors is Student's t quantile for z = 2, at least 2)
     rng = np.random.default_rng(2)
     mu = rng.uniform(0.0, 1.0, 5000)
     est = AdaptiveDirect(lambda x: x, 4, 32, thresholds=(0.5,), z=2.0)
     draw, uniform, carry = lanes_with_means(mu, 0.5, seed=3)
     value, _ = est.run(draw, carry, uniform, like=np.zeros(len(mu)))  # g = identity: value is the mean
     n, var = est.stats["children"][:, 0], est.stats["variance"][:, 0]
-    inside = np.abs(value - 0.5) < 2.0 * np.sqrt(var / n)
+    inside = np.abs(value - 0.5) < est.band_width(n) * np.sqrt(var / n)
     assert not np.any(inside & (n < 32))
     assert np.any(inside & (n == 32)) and np.any(n == 4) and np.any((n > 4) & (n < 32))
 
@@ -120,6 +121,36 @@ def test_on_drjit_arrays(jit):
     n = np.array(est.stats["children"])
     assert np.all(n[: lanes // 2] == 4) and np.mean(n[lanes // 2:] == 64) > 0.5
     assert np.allclose(np.array(channel_mean(value)), np.array(value[0]))
+
+
+def t_quantile(p, v):
+    """Student's t quantile by bisection on its CDF, the density integrated numerically (Simpson)."""
+    import math
+    c = math.gamma((v + 1) / 2) / (math.sqrt(v * math.pi) * math.gamma(v / 2))
+
+    def cdf(x):
+        t = np.linspace(0.0, x, 20001)
+        f = c * (1 + t * t / v) ** (-(v + 1) / 2)
+        return 0.5 + (t[1] - t[0]) / 3 * (f[0] + f[-1] + 4 * f[1:-1:2].sum() + 2 * f[2:-1:2].sum())
+    lo, hi = 0.0, 50.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if cdf(mid) < p else (lo, mid)
+    return lo
+
+
+def test_the_band_is_students_t_for_few_children():
+    # an asymptotic expansion whose terms shrink: its error is below the last term it keeps,
+    # (79z^9 + 776z^7 + 1482z^5 - 1920z^3 - 945z) / (92160 v^4)
+    import math
+    z = 2.0
+    est = AdaptiveDirect(step, 4, 64, z=z)
+    for n in (4, 8, 16, 64):
+        v = n - 1
+        exact = t_quantile(0.5 * (1 + math.erf(z / math.sqrt(2))), v)
+        next_term = (79 * z ** 9 + 776 * z ** 7 + 1482 * z ** 5 - 1920 * z ** 3 - 945 * z) / (92160 * v ** 4)
+        assert abs(est.band_width(float(n)) - exact) <= next_term, (n, est.band_width(float(n)), exact)
+    assert est.band_width(1e6) == pytest.approx(z, rel=1e-5)
 
 
 def test_invalid_parameters():

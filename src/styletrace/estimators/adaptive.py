@@ -9,11 +9,14 @@ Reference
 
 What it does
     Every lane draws n0 samples, then keeps drawing, one per loop iteration, while n < n_max and
-        step rule:   |m - tau_k| < z * s / sqrt(n)                          for some threshold tau_k, or
+        step rule:   |m - tau_k| < t_(n-1)(z) * s / sqrt(n)                 for some threshold tau_k, or
         smooth rule: max_c |g_c''(<I>_n)| * s^2 / (2n) > bias
     where m and s^2 are the running mean and sample variance (Welford) of the samples' brightness, the
     mean of their channels (styletrace's styles threshold brightness, and one scalar per lane keeps the
-    rule cheap), and g'' is what ``curvature`` returns. The estimate is g(<I>_n) with the lane's own n.
+    rule cheap), g'' is what ``curvature`` returns, and t_(n-1)(z) is Student's t quantile with n - 1
+    degrees of freedom at the confidence of z standard normal deviations (``band_width``): with few children
+    s is often far too small (radiance is heavy-tailed: four children that all miss a light), and a plain
+    z band then stops lanes near a threshold. The estimate is g(<I>_n) with the lane's own n.
 
     Stopping depends on the data, so the estimate's bias differs from that of a fixed n: still O(1/n0)
     and vanishing as n0 grows (consistent), but not g''Var/(2n) for any one n. Unbiased estimators lose
@@ -29,7 +32,7 @@ Parameters
                 h = s / sqrt(n) per lane, the standard error: a finite difference over +-h measures the
                 curvature a Jensen gap of that spread sees (for a kink, |jump of g'|/h). On numpy the loop
                 compacts lanes, so a curvature callable there must not depend on per-lane data it closes over.
-    z           half-width of the confidence band in standard errors (default 2).
+    z           confidence of the band, in standard normal deviations (default 2; t_(n-1)(z) standard errors).
     bias        target of the smooth rule, in g's units (default 1e-3).
 
 After ``run``, ``stats`` holds per-lane arrays of that run (the estimators' layout: numpy (lanes, 1)):
@@ -117,9 +120,21 @@ class AdaptiveDirect(Estimator):
         per = channel_mean(curv) if signed else A.hmax(A.abs(curv))
         return per * var / (2.0 * n)
 
+    def band_width(self, n):
+        """The band's half-width in standard errors at n children: Student's t quantile with n - 1 degrees of
+        freedom at z's normal confidence (s is estimated from the same few children), by its expansion in 1/v
+        (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3, where the exact quantile is
+        3.307), tending to z as n grows."""
+        z = self.z
+        w = 1.0 / A.maximum(n - 1.0, 1.0)
+        terms = [(z ** 3 + z) / 4.0, (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96.0,
+                 (3 * z ** 7 + 19 * z ** 5 + 17 * z ** 3 - 15 * z) / 384.0,
+                 (79 * z ** 9 + 776 * z ** 7 + 1482 * z ** 5 - 1920 * z ** 3 - 945 * z) / 92160.0]
+        return z + w * (terms[0] + w * (terms[1] + w * (terms[2] + w * terms[3])))
+
     def needs_more(self, state):
         n = A.maximum(state["count"], 1.0)
-        band = self.z * A.sqrt(self.variance(state) / n)
+        band = self.band_width(n) * A.sqrt(self.variance(state) / n)
         near = state["count"] < 0.0  # all False, as a per-lane mask
         for tau in state["tau"]:
             near = near | (A.abs(state["mean_u"] - tau) < band)

@@ -147,8 +147,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
         est = make_estimator(slot, level, v, self.settings)
         value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
-        if level == 0 and self.settings.aovs:
-            self._stats.append((active, est.inner.stats))
+        stats = getattr(est.inner, "stats", None)  # AdaptiveDirect's; none for a styled object's other estimator
+        if level == 0 and self.settings.aovs and stats is not None:
+            self._stats.append((active, stats))
         return value
 
     def sample(self, scene, sampler, ray, medium=None, active=True):

@@ -47,7 +47,8 @@ PROPERTIES = (
              "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
              "docs/adaptive.md)", "--inner", "N"),
     Property("adaptive_z", 2.0, "float", "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
-             "lies within adaptive_z standard errors of the children's mean brightness", "", ""),
+             "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
+             "confidence, Student's t standard errors", "", ""),
     Property("adaptive_bias", 2e-3, "float", "adaptive `n0:n_max`: keep drawing while a smooth style's predicted "
              "direct-application bias, the magnitude of g'' Var / (2n) (Eq. 21), exceeds this", "", ""),
     Property("aovs", False, "bool", "also output per-pixel error channels: the variance of the pixel's estimate, "
