@@ -92,3 +92,12 @@ def test_the_smooth_rule_spends_where_the_curvature_is(scene, mask):
     t = tight["children"][mask]
     assert np.all((t >= 4) & (t <= 128)) and np.median(t) > 16
     assert np.all(np.abs(tight["bias"][mask]) < np.abs(loose["bias"][mask]).mean())
+
+
+def test_adaptive_counts_per_level_under_first_n_hits():
+    # the second level's adaptive loop runs inside the first's draws; the AOVs describe the first level
+    image, aovs = api.render("cornell-box", style="cel", stylize="first_n_hits", stylize_depth=2, inner="2:4,2:8",
+                             spp=2, width=8, height=8, aovs=True)
+    assert np.all(np.isfinite(image))
+    c = aovs["children"]
+    assert np.all(c <= 4) and c.max() >= 2
