@@ -339,7 +339,9 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film); a pass
     is then one tile at a time, and every tile gets its passes in turn. The sum of the passes is kept in
     float32, one image's worth of memory. `lock` (a context manager) is held while it is updated, so that
-    another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher)."""
+    another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher).
+    An integrator with `aovs=True` adds its AOV channels (`aov_names`) to the film; they are summed with the
+    image and read as `Progress.aovs` (docs/adaptive.md)."""
     check_passes_args(scene, integrator, spp, seed)
     integrator = resolve_defaults(scene, integrator)[0]  # scene-relative 'auto' style values (scene_defaults)
     sensor = scene.sensors()[0]
