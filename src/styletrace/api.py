@@ -279,16 +279,46 @@ class Progress:
     """State after a pass: `spp_done` is what every pixel has at least (tiles of a pass under way may
     have one more pass); `image` is the average of the finished passes, computed when asked for."""
 
-    def __init__(self, spp_done: int, spp_total: int, total: np.ndarray, counts: np.ndarray, layout: list[Tile]):
+    def __init__(self, spp_done: int, spp_total: int, total: np.ndarray, counts: np.ndarray, layout: list[Tile],
+                 channels: int | None = None):
         self.spp_done, self.spp_total = spp_done, spp_total
         self._total, self._counts, self._tiles = total, counts, layout
+        #: the image's channels in `total`; the error AOVs' sums follow them (`AOV_NAMES`)
+        self._channels = total.shape[-1] if channels is None else channels
 
-    @property
-    def image(self) -> np.ndarray:
+    def _mean(self) -> np.ndarray:
         out = np.empty_like(self._total)
         for tile, n in zip(self._tiles, self._counts):
             np.divide(self._total[tile.dest], max(int(n), 1), out=out[tile.dest])
         return out
+
+    @property
+    def image(self) -> np.ndarray:
+        if self._channels == self._total.shape[-1]:
+            return self._mean()
+        return np.ascontiguousarray(self._mean()[..., :self._channels])
+
+    @property
+    def aovs(self) -> dict[str, np.ndarray] | None:
+        """The error AOVs of an integrator with `aovs=True` (else None), float32 H x W (x 3):
+        `variance`: the variance of each pixel's estimate (its mean over the camera samples), per RGB channel:
+        (mean of the squared samples - squared mean) / (spp - 1), the unbiased sample variance over spp;
+        NaN where a pixel has fewer than 2 samples. `bias`: the predicted direct-application bias of Eq. 21,
+        g''(<I>_n) s^2 / (2n), at the first stylized vertex, averaged over the pixel's samples (0 where no
+        child was drawn). `children`: the children used there, averaged (n for a fixed count)."""
+        if self._channels == self._total.shape[-1]:
+            return None
+        mean = self._mean().astype(np.float64)
+        c = self._channels
+        counts = np.zeros(mean.shape[:2])
+        for tile, n in zip(self._tiles, self._counts):
+            counts[tile.dest] = n
+        rgb, square = mean[..., :3], mean[..., c:c + 3]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            var = np.maximum(square - rgb * rgb, 0.0) / (counts[..., None] - 1.0)
+        var[counts < 2] = np.nan
+        return {"variance": var.astype(np.float32), "bias": mean[..., c + 3].astype(np.float32),
+                "children": mean[..., c + 4].astype(np.float32)}
 
 
 def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER_PASS,
@@ -309,7 +339,9 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film); a pass
     is then one tile at a time, and every tile gets its passes in turn. The sum of the passes is kept in
     float32, one image's worth of memory. `lock` (a context manager) is held while it is updated, so that
-    another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher)."""
+    another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher).
+    An integrator with `aovs=True` adds its AOV channels (`aov_names`) to the film; they are summed with the
+    image and read as `Progress.aovs` (docs/adaptive.md)."""
     check_passes_args(scene, integrator, spp, seed)
     integrator = resolve_defaults(scene, integrator)[0]  # scene-relative 'auto' style values (scene_defaults)
     sensor = scene.sensors()[0]
@@ -320,7 +352,11 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     layout, per_pass = pass_size(width, height, spp, lanes_per_pass, pass_spp)
     params = mi.traverse(sensor) if len(layout) > 1 else None
     channels = len(PIXEL_FORMATS[film_format(scene)])  # the film's own: RGB, Y, XYZ, with alpha or not
-    total = np.zeros((height, width, channels), dtype=np.float32)
+    extra = len(integrator.aov_names())  # error AOVs (StylizedIntegrator.aov_names), after the film's channels
+    if extra and film_format(scene) not in ("rgb", "rgba"):
+        raise UsageError(f"aovs need an rgb or rgba film (the variance is per RGB channel); the scene's film is "
+                         f"{film_format(scene)!r}")
+    total = np.zeros((height, width, channels + extra), dtype=np.float32)
     counts = np.zeros(len(layout), dtype=np.int64)
     index = 0
     try:
@@ -332,13 +368,13 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     params["film.crop_size"] = mi.ScalarVector2u(*tile.size)
                     params.update()
                 img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
-                arr = np.asarray(img, dtype=np.float32)[..., :channels]
+                arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
                     counts[t] += n
                 del img, arr
                 index += 1
-                yield Progress(int(counts.min()), spp, total, counts, layout)
+                yield Progress(int(counts.min()), spp, total, counts, layout, channels)
     finally:
         if params is not None:  # leave the scene's film as it was
             params["film.crop_offset"] = mi.ScalarPoint2u(*base)
@@ -358,7 +394,9 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
            integrator: mi.Integrator | None = None, callback: Callable[[Progress], None] | None = None,
            defines: dict[str, Any] | None = None, **params: Any) -> np.ndarray:
     """Render with a style; returns float32 H x W x C: linear radiance in the film's pixel format (C = 3 for
-    the usual rgb film; 1 for luminance, 4 for rgba, ...; see `film_format`).
+    the usual rgb film; 1 for luminance, 4 for rgba, ...; see `film_format`). With `aovs=True` (an integrator
+    property) it returns `(image, aovs)`, aovs a dict of the error AOVs (`Progress.aovs`: variance, bias,
+    children).
 
     `scene`: built-in name ('cornell-box', 'dragon', 'furnace'), XML path, scene dict or mi.Scene; `defines`:
     the values of an XML file's `<default>` parameters. `spp`: camera samples per pixel (default: the
@@ -373,11 +411,16 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     if integrator is None:
         integrator = make_integrator(style=style, inner=inner, estimator=estimator,
                                      **{**carried_settings(sc), **params})
-    image = None
-    for prog in passes(sc, integrator, scene_spp(sc) if spp is None else spp, seed):
+    spp = scene_spp(sc) if spp is None else spp
+    if integrator.aov_names() and spp < 2:
+        raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples per pixel")
+    image = prog = None
+    for prog in passes(sc, integrator, spp, seed):
         image = prog.image
         if callback is not None:
             callback(prog)
+    if integrator.aov_names():
+        return image, prog.aovs
     return image
 
 

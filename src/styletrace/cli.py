@@ -221,6 +221,14 @@ def cmd_render(args) -> int:
     except ValueError as exc:
         raise UsageError(f"bad output {args.output!r}: {exc}") from None
     api.check_memory(int(size[0]), int(size[1]), ext)
+    if integrator.settings.aovs:
+        if ext != ".exr":
+            raise UsageError(f"bad output {args.output!r}: --aovs writes its channels into an .exr; a {ext} image "
+                             f"has no room for them")
+        if args.ray is not None or args.resume or args.buffer:
+            raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
+        if args.spp < 2:
+            raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
     integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
     if chosen and not args.quiet:
         print(f"styletrace: auto values: {chosen}", file=sys.stderr)
@@ -242,7 +250,7 @@ def cmd_render(args) -> int:
 
     def write(prog) -> str:
         image = prog.image
-        out = save_safely(image, args.output, pixel_format)
+        out = save_safely(image, args.output, pixel_format, getattr(prog, "aovs", None))
         bad = nonfinite_pixels(image)
         if bad:
             fix = "NaN as 0 and +inf as 1 in the PNG" if args.output.lower().endswith(".png") else "kept as they are"
@@ -383,6 +391,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: cornell-box); several XML files render as numbered frames on Ray")
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
     add_setting_flags(r)
+    r.add_argument("--aovs", dest="aovs", action="store_const", const=True, default=None,
+                   help="also write the error AOVs (variance, predicted bias, children used) as channels of the "
+                        "EXR output (refused with a PNG output); docs/adaptive.md")
     r.add_argument("--spp", type=int, default=None, help="camera samples per pixel; overrides the scene sampler's "
                    "sample_count (default: that count; 16 for the built-in scenes)")
     r.add_argument("--width", type=int, default=None, help="image width (resizes the scene's film)")

@@ -90,6 +90,33 @@ def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
     return stream.raw_buffer()
 
 
+#: the EXR channels of the error AOVs, after the image's own (R, G, B[, A]); see `api.Progress.aovs`
+AOV_CHANNELS = (("variance", ("variance.R", "variance.G", "variance.B")), ("bias", ("bias",)),
+                ("children", ("children",)))
+
+
+def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
+    """A multi-channel float32 EXR: the image's channels (R, G, B[, A]) and then the error AOVs under the
+    names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a PNG output.)"""
+    import mitsuba as mi
+
+    from .jit import backend
+    backend()
+    image = np.asarray(image, dtype=np.float32)
+    names = list(bitmap_format(pixel_format, image.shape[-1]))
+    layers = [image]
+    for key, channels in AOV_CHANNELS:
+        arr = np.asarray(aovs[key], dtype=np.float32)
+        layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
+        names.extend(channels)
+    data = np.ascontiguousarray(np.concatenate(layers, axis=-1))
+    bmp = mi.Bitmap(data, pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
+    stream = mi.MemoryStream()
+    bmp.write(stream, mi.Bitmap.FileFormat.OpenEXR)
+    del bmp
+    return stream.raw_buffer()
+
+
 def creation_mode(path: str) -> int:
     """The permission bits `path` should get: those of the file it replaces, else what `open` would give a
     new file (0o666 less the umask). A temporary file is created 0o600, which a rename would keep."""
@@ -132,23 +159,29 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
         pass
 
 
-def write_image(image, path: str, pixel_format: str = "rgb") -> None:
+def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None) -> None:
     """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write.
-    `pixel_format` is the film's (see `encode`)."""
-    write_bytes_atomically(encode(image, os.path.splitext(path)[1].lower(), pixel_format), path)
+    `pixel_format` is the film's (see `encode`). `aovs` (EXR only): the error AOVs as extra channels."""
+    ext = os.path.splitext(path)[1].lower()
+    if aovs is not None:
+        if ext != ".exr":
+            raise ValueError(f"error AOVs are written to .exr files only, not {ext!r}")
+        write_bytes_atomically(encode_with_aovs(image, aovs, pixel_format), path)
+        return
+    write_bytes_atomically(encode(image, ext, pixel_format), path)
 
 
-def save_safely(image, path: str, pixel_format: str = "rgb") -> str:
+def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None) -> str:
     """Write `image`; if that fails, keep it in a temporary EXR instead of losing it. Returns where it went.
     If even that fails, no empty temporary file is left behind and the error is raised."""
     try:
-        write_image(image, path, pixel_format)
+        write_image(image, path, pixel_format, aovs)
         return path
     except Exception as exc:  # the render must survive an I/O failure
         fd, fallback = tempfile.mkstemp(prefix="styletrace-", suffix=".exr")
         os.close(fd)
         try:
-            write_image(image, fallback, pixel_format)
+            write_image(image, fallback, pixel_format, aovs)
         except BaseException:
             os.remove(fallback)
             raise
@@ -157,5 +190,6 @@ def save_safely(image, path: str, pixel_format: str = "rgb") -> str:
         return fallback
 
 
-__all__ = ["IMAGE_TYPES", "PIXEL_FORMATS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode", "write_bytes_atomically", "write_image",
+__all__ = ["IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
+           "encode_with_aovs", "write_bytes_atomically", "write_image",
            "save_safely"]

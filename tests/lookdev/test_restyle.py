@@ -82,6 +82,8 @@ def test_first_object_hit_restyles_the_styled_objects():
     (dict(stylize="first_n_hits", stylize_depth=2, inner=(2, 2)), SettingsError, "first_n_hits cannot be buffered"),
     (dict(style="acp"), SettingsError, "style 'acp' cannot be buffered"),
     (dict(lines=True), SettingsError, "feature lines"),
+    (dict(inner="2:8"), SettingsError, "a buffer keeps one fixed count of children"),
+    (dict(aovs=True), SettingsError, "a buffer keeps the children's means, not the error AOVs"),
 ])
 def test_what_cannot_be_recorded_is_refused(kwargs, error, message):
     kwargs = {"style": "cel", "inner": 2, **kwargs}
@@ -106,6 +108,8 @@ def test_what_cannot_restyle_is_refused(buf):
         restyle(buf, style="gamma", estimator="series")
     with pytest.raises(UsageError, match="the buffer holds the mean of n = 2 children"):
         restyle(buf, inner=4)
+    with pytest.raises(UsageError, match="adaptive counts n0:n_max need a new render"):
+        restyle(buf, inner="2:8")
     with pytest.raises(StyleError, match="bad value -1.0 for parameter 'gamma'"):
         restyle(buf, style="gamma", gamma=-1.0)
     closed = render_buffer("cornell-box", style="xtoon", spp=1, width=8, height=8)

@@ -160,13 +160,18 @@ def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: An
     if integrator is None:
         integrator = api.make_integrator(style=style, inner=inner, estimator=estimator, **params)
     lanes, _ = lanes_per_pass(init())
+    aovs = bool(integrator.aov_names())
+    if aovs and spp < 2:
+        raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples per pixel")
     if cluster is None:  # api.render's loop, with the device's pass size and the given split
-        image = None
+        image = prog = None
         for prog in api.passes(sc, integrator, spp, seed, lanes_per_pass=lanes, pass_spp=pass_spp):
             image = prog.image
             if callback is not None:
                 callback(prog)
-        return image
+        return (image, prog.aovs) if aovs else image
+    if aovs:
+        raise UsageError("aovs=True renders without cluster=: the Ray passes keep the image only")
     size = sc.sensors()[0].film().crop_size()
     job = job_for(scene, integrator, width, height)
     del sc

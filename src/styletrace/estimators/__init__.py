@@ -37,6 +37,8 @@ Kernel contract (stable; what the integrator calls)
 Public API
 ----------
     Direct(g, n, comb=False)                       g(<I>_n), biased O(1/n)
+    AdaptiveDirect(g, n0, n_max, thresholds=(), curvature=None, z=2, bias=1e-3)
+                                                   g(<I>_n) with n in [n0, n_max] chosen per lane (adaptive.py)
     Affine(a1, a0=0, n=1, comb=False), Mean(m, comb=False)
     PolynomialNaive(poly, b=None)                  products of k samples per term (S6)
     PolynomialU(poly, n, b=None)                   U-statistic, Kettunen et al. 2021 recurrence (S7-S8)
@@ -52,6 +54,7 @@ Public API
 """
 from __future__ import annotations
 
+from .adaptive import AdaptiveDirect, channel_mean
 from .affine import Affine, Mean, apply_linear
 from .algebra import Compose, Product, Sum, inner_mean
 from .base import Context, Estimator
@@ -71,7 +74,7 @@ from .tiedye import TIE_DYE, tie_dye, tie_dye_b, tie_dye_fit, tie_dye_g, tie_dye
 from .truncation import Cumulative, Geometric, Poisson, PoissonCMF, PowerLaw, Truncation, resolve_truncation
 
 __all__ = [
-    "Estimator", "Context", "Direct", "Affine", "Mean", "apply_linear", "PolynomialNaive", "PolynomialU",
+    "Estimator", "Context", "Direct", "AdaptiveDirect", "channel_mean", "Affine", "Mean", "apply_linear", "PolynomialNaive", "PolynomialU",
     "u_statistic_means", "ustat_update", "SeriesEstimator", "Telescoping", "Sum", "Product", "Compose",
     "inner_mean", "Pilot", "Truncation", "Cumulative", "PoissonCMF", "Poisson", "Geometric", "PowerLaw",
     "resolve_truncation", "Series", "PolynomialSeries", "ExpSeries", "ReciprocalSeries", "PowerFunctionSeries",

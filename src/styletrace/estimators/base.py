@@ -308,6 +308,10 @@ class Estimator:
         uses a stratified comb, it is called as ``draw(carry, u)`` with ``u`` the first primary
         dimension to use. ``like`` (type or instance of x) is required for Dr.Jit.
         """
+        return self._run(draw, carry, uniform, active, like)
+
+    def _run(self, draw, carry, uniform, active, like, observe=None):
+        """``run``'s loop; ``observe(state)`` (optional) sees the final state before the value is taken."""
         ctx, carry = Context.for_run(like, active, uniform, carry)
         if ctx.is_drjit:
             act = active if active is not None else ctx.mask(True)
@@ -329,4 +333,6 @@ class Estimator:
             return state, carry, act
 
         state, carry, act = ctx.while_loop((state, carry, act), cond, body)
+        if observe is not None:
+            observe(state)
         return ctx.finish(self.value(ctx, state), active), carry

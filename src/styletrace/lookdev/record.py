@@ -55,7 +55,13 @@ def check_recordable(settings: S.Settings, slots) -> None:
     if settings.lines is not None:
         raise SettingsError("feature lines (lines=true) cannot be buffered: a buffer keeps the radiance before g, "
                             "not where lines replaced it; record without lines")
+    if settings.aovs:
+        raise SettingsError("bad value True for 'aovs': a buffer keeps the children's means, not the error AOVs; "
+                            "render with aovs instead")
     for slot in slots:
+        if S.adaptive(slot.inner):
+            raise SettingsError(f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples': a buffer "
+                                f"keeps one fixed count of children per vertex; use a fixed count")
         if slot.style.per_sample:
             raise SettingsError(f"style '{slot.style.name}' cannot be buffered: it applies g to every child "
                                 f"sample, a buffer keeps only their mean")

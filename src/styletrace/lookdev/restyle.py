@@ -102,6 +102,9 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
         if rec["owner"] == changed_owner(buffer):
             values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
             new = get(str(values["style"]))()
+            if inner is not None and S.adaptive(S.parse_inner(inner, 1)):
+                raise UsageError(f"bad value {inner!r} for inner: a buffer replays a fixed count of children; "
+                                 f"adaptive counts n0:n_max need a new render")
             if inner is not None and buffer.stores == "sequence":
                 n = S.parse_inner(inner, 1)[0]  # the replay finds out whether the stored sequence suffices
             elif inner is not None and S.parse_inner(inner, 1) != (n,):

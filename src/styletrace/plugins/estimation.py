@@ -123,14 +123,43 @@ class Transformed:
         return value, carry
 
 
-def make_estimator(slot, level: int, vertex) -> Transformed:
-    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time)."""
-    return get(slot.estimator).build(slot.style, slot.n(level), vertex)
+def check_adaptive(name: str, style: Style, raw) -> None:
+    """Adaptive inner counts (`n0:n_max`) only with direct application of a function of expectation: the
+    unbiased estimators' guarantee does not survive a data-dependent number of children (docs/adaptive.md)."""
+    if name != "direct":
+        raise SettingsError(f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
+                            f"n0:n_max stop on the data, which makes the unbiased estimators biased; use estimator "
+                            f"direct or a fixed count")
+    if style.per_sample:
+        raise SettingsError(f"bad value {raw!r} for 'inner_samples' with style '{style.name}': it averages "
+                            f"g over its children (not g of their mean), which adaptive stopping would bias; use a "
+                            f"fixed count")
+
+
+def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
+    """Direct application with adaptive stopping (`estimators.AdaptiveDirect`), told by the style where its
+    steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`)."""
+    return E.AdaptiveDirect(lambda I: style.apply(I, vertex), n0, n_max, thresholds=style.step_thresholds(vertex),
+                            curvature=lambda I, h: style.curvature(I, vertex, h), z=z, bias=bias)
+
+
+def make_estimator(slot, level: int, vertex, settings=None) -> Transformed:
+    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time). An adaptive
+    count (`settings.AdaptiveCount`), or error AOVs asked for in `settings`, give `AdaptiveDirect` (its
+    `stats` feed the AOVs); a fixed count without AOVs takes the registry's builder as before."""
+    n = slot.n(level)
+    n_max = getattr(n, "n_max", None)
+    aovs = settings is not None and settings.aovs and level == 0
+    if (n_max is not None or aovs) and slot.estimator == "direct" and not slot.style.per_sample:
+        z, bias = (settings.adaptive_z, settings.adaptive_bias) if settings is not None else (2.0, 2e-3)
+        return Transformed(adaptive_direct(slot.style, int(n), n_max or int(n), vertex, z, bias))
+    return get(slot.estimator).build(slot.style, int(n), vertex)
 
 
 # ---- the registry ------------------------------------------------------------------------------
 
-@estimator("direct", None, "g(mean of n children), biased O(1/n) (Eq. 19)", "children per estimate")
+@estimator("direct", None, "g(mean of n children), biased O(1/n) (Eq. 19); with n0:n_max adaptive, n chosen per "
+           "vertex (estimators/adaptive.py)", "children per estimate (or n0:n_max)")
 def _direct(style, n, vertex):
     if style.per_sample:  # the children arrive already styled (a baseline): just average them
         return Transformed(E.Mean(n))
@@ -221,5 +250,6 @@ def _combined(style, n, vertex):
     return Transformed(est)
 
 
-__all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "make_estimator",
+__all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "check_adaptive",
+           "adaptive_direct", "make_estimator",
            "Transformed", "SERIES_MAX_TERMS"]

@@ -179,7 +179,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     def _estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v,
                   medium=None) -> mi.Spectrum:
         style = slot.style
-        if style.closed_form:
+        if style.closed_form:  # no children: the AOVs keep 0 here
             return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
@@ -193,7 +193,11 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        est = make_estimator(slot, level, v, self.settings)
+        value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        stats = getattr(est.inner, "stats", None)  # AdaptiveDirect's; none for a styled object's other estimator
+        if level == 0 and self.settings.aovs and stats is not None:
+            self._stats.append((active, stats))
         return value
 
     def _lines_from(self, level: int):
@@ -224,6 +228,22 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             self.lines, self.line_states = None, {}
 
     def _sample(self, scene, sampler, ray, active, medium=None):
+        self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
+        value, valid, _ = self._radiance(scene, sampler, ray, active, medium)
+        return value, valid, self._aovs(value) if self.settings.aovs else []
+
+    def _aovs(self, value) -> list:
+        """The error AOVs of one camera sample (see `aov_names`): its value squared per channel (the film's
+        average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias
+        prediction and the number of children."""
+        bias, children = mi.Float(0.0), mi.Float(0.0)
+        for lanes, stats in self._stats:
+            bias = dr.select(lanes, stats["bias"], bias)
+            children = dr.select(lanes, stats["children"], children)
+        self._stats = []
+        return [value.x * value.x, value.y * value.y, value.z * value.z, bias, children]
+
+    def _radiance(self, scene, sampler, ray, active, medium=None):
         for t in self.targets:
             t.slot.style.prepare(scene)
         self.view = camera_forward(scene)
@@ -277,7 +297,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return value, valid, []
 
     def aov_names(self):
-        return []
+        return list(AOV_NAMES) if self.settings.aovs else []
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"
@@ -305,6 +325,10 @@ def line_problem(settings: S.Settings, media: bool) -> str | None:
         return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: lines are detected "
                 "on the camera ray only there (line_depth 1)")
     return None
+
+
+#: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
+AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
 
 
 def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:

@@ -46,7 +46,16 @@ STYLIZE_MODES = {
 PROPERTIES = (
     Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
     Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
-             "level", "--inner", "N"),
+             "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
+             "docs/adaptive.md)", "--inner", "N"),
+    Property("adaptive_z", 2.0, "float", "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
+             "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
+             "confidence, Student's t standard errors", "", ""),
+    Property("adaptive_bias", 2e-3, "float", "adaptive `n0:n_max`: keep drawing while a smooth style's predicted "
+             "direct-application bias, the magnitude of g'' Var / (2n) (Eq. 21), exceeds this", "", ""),
+    Property("aovs", False, "bool", "also output per-pixel error channels: the variance of the pixel's estimate, "
+             "the predicted bias (Eq. 21) and the children used at the first stylized vertex (direct only; "
+             "`--aovs`)", "", ""),
     Property("estimator", "direct", "string", "how g(E[L]) is estimated from the children: "
              + ", ".join(estimation.names()), "--estimator", "NAME"),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
@@ -98,6 +107,30 @@ COUNT_MAX = 2 ** 32 - 2
 MAX_STYLIZE_DEPTH = 8
 
 
+class AdaptiveCount(int):
+    """An adaptive inner count `n0:n_max`: an int equal to n0 (what code that wants one count sees), with n_max."""
+
+    def __new__(cls, n0: int, n_max: int):
+        out = super().__new__(cls, n0)
+        out.n_max = n_max
+        return out
+
+    def __repr__(self) -> str:
+        return f"{int(self)}:{self.n_max}"
+
+    __str__ = __repr__
+
+    def __eq__(self, other):
+        return isinstance(other, AdaptiveCount) and (int(self), self.n_max) == (int(other), other.n_max)
+
+    def __hash__(self):
+        return hash((int(self), self.n_max))
+
+
+def adaptive(inner: tuple[int, ...]) -> bool:
+    return any(isinstance(n, AdaptiveCount) for n in inner)
+
+
 @dataclass(frozen=True)
 class StyleSlot:
     """A style with its inner sample counts (one per stylized level, or one for all) and estimator."""
@@ -120,6 +153,9 @@ class Settings:
     emitter_sampling: str = EMITTER_DEFAULT
     hide_emitters: bool = False
     lines: LineSettings | None = None   # None: no line code is traced
+    adaptive_z: float = 2.0
+    adaptive_bias: float = 2e-3
+    aovs: bool = False
 
     @property
     def style(self) -> Style:
@@ -229,7 +265,8 @@ def boolean(key: str, raw: Any) -> bool:
 
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
-    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4))."""
+    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4)); a count `n0:n_max`
+    (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'."""
     if raw is None:
         return (default,)
     if isinstance(raw, str):
@@ -240,7 +277,20 @@ def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
         parts = [raw]
     if not parts:
         raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer in [1, {COUNT_MAX}]")
-    return tuple(integer("inner_samples", p, 1) for p in parts)
+    return tuple(_count(p) for p in parts)
+
+
+def _count(part: Any) -> int:
+    if isinstance(part, AdaptiveCount):
+        return part
+    if isinstance(part, str) and ":" in part:
+        lo, _, hi = part.partition(":")
+        n0, n_max = integer("inner_samples", lo, 1), integer("inner_samples", hi, 1)
+        if n_max < n0:
+            raise SettingsError(f"bad value {part.strip()!r} for 'inner_samples': an adaptive count n0:n_max "
+                                f"needs n0 <= n_max")
+        return AdaptiveCount(n0, n_max)
+    return integer("inner_samples", part, 1)
 
 
 def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrator",
@@ -260,7 +310,10 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
     style = create(style_name, **style_values)
     inner = parse_inner(values.get("inner_samples"), max(style.default_inner, 1))
     name = str(values.get("estimator", DEFAULTS["estimator"]))
-    return StyleSlot(style=style, inner=inner, estimator=estimation.check(name, style))
+    slot = StyleSlot(style=style, inner=inner, estimator=estimation.check(name, style))
+    if adaptive(inner):
+        estimation.check_adaptive(name, style, values.get("inner_samples"))
+    return slot
 
 
 def parse(values: Mapping[str, Any]) -> Settings:
@@ -294,8 +347,15 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if lights not in EMITTER_MODES:
         raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
     hide = boolean("hide_emitters", get_("hide_emitters"))
+    z = number("adaptive_z", get_("adaptive_z"), 0.0, 1e6, low_open=True)
+    target = number("adaptive_bias", get_("adaptive_bias"), 0.0, 1e6, low_open=True)
+    aovs = boolean("aovs", get_("aovs"))
+    if aovs and slot.estimator != "direct":
+        raise SettingsError(f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
+                            f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct")
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights, hide_emitters=hide, lines=parse_lines(values))
+                    emitter_sampling=lights, hide_emitters=hide, lines=parse_lines(values), adaptive_z=z,
+                    adaptive_bias=target, aovs=aovs)
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -316,4 +376,5 @@ def properties_of(props) -> dict[str, Any]:
 
 
 __all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
-           "parse_inner", "parse_lines", "integer", "number", "boolean", "refine", "properties_of"]
+           "parse_inner", "parse_lines", "AdaptiveCount", "adaptive", "integer", "number", "boolean", "refine",
+           "properties_of"]

@@ -10,6 +10,10 @@ A style declares
   on array values).
 - optionally `form()`: g as an affine map, a power series or a polynomial fit, which the unbiased
   estimators consume (`forms.py`).
+- what adaptive inner counts (`--inner 4:64`, estimators/adaptive.py) need to know: `step_thresholds(v)`, the
+  brightness values at which g jumps at vertex v (step styles: cel, hatching, halftone), and
+  `curvature(I, v, h)`, g'' along the grey direction (smooth styles; a second difference over +-h by
+  default, 0 for affine styles and step styles).
 """
 from __future__ import annotations
 
@@ -97,6 +101,24 @@ class Style:
         """g as an AffineForm, SeriesForm or PolynomialForm (see `forms`) for the unbiased estimators, or
         None where only direct application (and nothing unbiased) applies."""
         return None
+
+    def step_thresholds(self, v: Vertex) -> tuple:
+        """Brightness values (numbers or per-lane mi.Float; +inf: none at that lane) at which g jumps at the
+        vertices `v`. The adaptive controller keeps drawing children while the mean's brightness is within a
+        confidence band of one. Default: none (a continuous g)."""
+        return ()
+
+    def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
+        """g'' along the grey direction at I, d^2/dt^2 g(I + t (1, 1, 1)) per output channel, as the adaptive
+        controller's smooth rule and the bias AOV (Eq. 21) use it. Default: 0 for an affine g (its form says
+        so), else the central second difference over +-h, h the children's standard error, which is g''(I)
+        for a smooth g and |jump of g'|/h at a kink (colour-map stops, clamps): the Jensen gap that spread sees."""
+        from .forms import AffineForm, CompositeForm
+        form = self.form()
+        if isinstance(form, AffineForm) or (isinstance(form, CompositeForm) and form.affine is not None):
+            return mi.Color3f(0.0)
+        h = dr.maximum(h, 1e-4 * dr.maximum(brightness(I), 1.0))  # no 0/0 where the children agree
+        return (self.apply(I + h, v) - 2.0 * self.apply(I, v) + self.apply(I - h, v)) / (h * h)
 
     def describe(self) -> str:
         vals = ", ".join(f"{p.name}={p.show(self.values[p.name])}" for p in self.params)

@@ -66,6 +66,14 @@ class Cel(Style):
             out = dr.select(u >= t, m, out)
         return out
 
+    def step_thresholds(self, v: Vertex) -> tuple:
+        return self.steps()
+
+    def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
+        # constant along grey inside a band (I * level / u of a grey shift keeps the band's level); its
+        # jumps are the thresholds
+        return mi.Color3f(0.0)
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         u = brightness(I)
         target = self.target(u)

@@ -52,6 +52,20 @@ def halftone_mask(p: mi.Point3f, u: mi.Float, spacing: float, r_max: float,
     return dr.squared_norm(mi.Vector3f(p) - g) < r * r
 
 
+def grid_distance(p: mi.Point3f, spacing: float) -> mi.Float:
+    """Distance from p to its nearest point of the 3D grid."""
+    g = dr.round(mi.Vector3f(p) * (1.0 / spacing)) * spacing
+    return dr.norm(mi.Vector3f(p) - g)
+
+
+def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float) -> mi.Float:
+    """Distance in pixels from p's screen position to its nearest screen grid point."""
+    x, y = proj.pixels(p)
+    gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
+    gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
+    return dr.sqrt(dr.square(x - gx) + dr.square(y - gy))
+
+
 def screen_halftone_mask(p: mi.Point3f, u: mi.Float, proj: Projection, spacing_px: float, r_max_px: float,
                          u_min: float = 0.05, u_max: float = 0.9) -> mi.Bool:
     """True where p's screen position is closer than r(u) pixels to its nearest screen grid point."""
@@ -104,3 +118,15 @@ class Halftone(BrightnessRange, Style):
         else:
             dot = halftone_mask(v.p, brightness(I), self.spacing, self.r_max, u_min, u_max)
         return dr.select(dot, mi.Color3f(*self.dark), mi.Color3f(*self.light))
+
+    def step_thresholds(self, v: Vertex) -> tuple:
+        """The brightness at which the dot's edge passes v: r(u) = d, u = u_max - (d / r_max)(u_max - u_min);
+        none (+inf) where v is farther than r_max from its grid point (never inside a dot)."""
+        u_min, u_max = self.u_range()
+        d = screen_distance(v.p, self.projection, self.spacing_px) if self.spacing is None \
+            else grid_distance(v.p, self.spacing)
+        t = u_max - d * ((u_max - u_min) / self.r_max)
+        return (dr.select(d < self.r_max, t, mi.Float(dr.inf)),)
+
+    def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
+        return mi.Color3f(0.0)  # two colours: all of g's change is at the threshold

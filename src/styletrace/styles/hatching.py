@@ -105,16 +105,30 @@ def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], s
     With `projection`, spacing and thickness are in pixels: the planes form pencils through the camera."""
     m = active_sets(u, len(normals), u_min, u_max)
     hit = dr.zeros(mi.Bool, dr.width(p))
+    for j, on_line in enumerate(line_masks(p, normals, spacing, thickness, projection)):
+        hit |= on_line & (m > j)
+    return hit
+
+
+def line_masks(p: mi.Point3f, normals: Sequence[Sequence[float]], spacing: float, thickness: float,
+               projection: Projection | None = None) -> list[mi.Bool]:
+    """Per set j: True where p lies within thickness/2 of one of its planes (drawn or not)."""
     if projection is None:
         rel, scale = mi.Vector3f(p), 1.0 / spacing
     else:
         rel, fp = projection.footprint(p)
         scale = dr.rcp(fp) * (1.0 / spacing)
-    for j, nj in enumerate(normals):
+    out = []
+    for nj in normals:
         s = dr.dot(rel, mi.Vector3f(*nj)) * scale + 0.5
         dist = dr.abs(s - dr.floor(s) - 0.5) * spacing
-        hit |= (dist < 0.5 * thickness) & (m > j)
-    return hit
+        out.append(dist < 0.5 * thickness)
+    return out
+
+
+def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
+    """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) > j)."""
+    return [u_max - (j + 0.5) * (u_max - u_min) / sets for j in range(sets)]
 
 
 AUTO_U_MIN = "the 5% quantile of the scene's first-hit brightness (unresolved: 0.05)"
@@ -205,3 +219,17 @@ class Hatching(BrightnessRange, Style):
         line = hatch_mask(v.p, brightness(I), self.normals, self.pitch, self.line_thickness, u_min, u_max,
                           projection=self.projection if self.spacing is None else None)
         return dr.select(line, mi.Color3f(*self.line_color), mi.Color3f(*self.background))
+
+    def step_thresholds(self, v: Vertex) -> tuple:
+        """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover v; v turns
+        line-coloured there and stays so below it. +inf where v is on no line (g is constant there)."""
+        u_min, u_max = self.u_range()
+        masks = line_masks(v.p, self.normals, self.pitch, self.line_thickness,
+                           projection=self.projection if self.spacing is None else None)
+        out = mi.Float(dr.inf)
+        for on, t in reversed(list(zip(masks, set_thresholds(len(self.normals), u_min, u_max)))):
+            out = dr.select(on, t, out)
+        return (out,)
+
+    def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
+        return mi.Color3f(0.0)  # piecewise constant in brightness: all of it is in the thresholds

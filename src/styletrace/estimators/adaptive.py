@@ -1,0 +1,169 @@
+"""Direct application with adaptive stopping: n0 children, then more only where the predicted error is large.
+
+Reference
+    West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eq. 19 (direct application
+    g(<I>_n)) and Eq. 21 (its bias, g''(I) Var[x] / (2n) to first order).
+    The stopping rule for a piecewise-constant g is the sequential rule of nested simulation (Broadie, Du
+    and Moallemi, "Efficient risk estimation via nested sequential simulation", Management Science 2011):
+    keep sampling while the mean lies within a confidence band of a threshold.
+
+What it does
+    Every lane draws n0 samples, then keeps drawing, one per loop iteration, while n < n_max and
+        step rule:   |m - tau_k| < t_(n-1)(z) * s / sqrt(n)                 for some threshold tau_k, or
+        smooth rule: max_c |g_c''(<I>_n)| * s^2 / (2n) > bias
+    where m and s^2 are the running mean and sample variance (Welford) of the samples' brightness, the
+    mean of their channels (styletrace's styles threshold brightness, and one scalar per lane keeps the
+    rule cheap), g'' is what ``curvature`` returns, and t_(n-1)(z) is Student's t quantile with n - 1
+    degrees of freedom at the confidence of z standard normal deviations (``band_width``): with few children
+    s is often far too small (radiance is heavy-tailed: four children that all miss a light), and a plain
+    z band then stops lanes near a threshold. The estimate is g(<I>_n) with the lane's own n.
+
+    Stopping depends on the data, so the estimate's bias differs from that of a fixed n: still O(1/n0)
+    and vanishing as n0 grows (consistent), but not g''Var/(2n) for any one n. Unbiased estimators lose
+    their unbiasedness under such a rule (the number of terms depends on the samples they average), so
+    nothing but direct application uses it (plugins/estimation.py refuses the others).
+
+Parameters
+    g           callable g(x) -> y, array-generic as for ``Direct``.
+    n0, n_max   1 <= n0 <= n_max; n0 == n_max is a fixed count that still reports statistics.
+    thresholds  brightness values where g jumps: numbers, or per-lane arrays (Dr.Jit Float; numpy
+                (lanes,) / (lanes, 1)); +inf for "none at this lane". Default ().
+    curvature   None (no smooth rule), or a callable (mean, h) -> g''(mean) per channel (or per lane) with
+                h = s / sqrt(n) per lane, the standard error: a finite difference over +-h measures the
+                curvature a Jensen gap of that spread sees (for a kink, |jump of g'|/h). On numpy the loop
+                compacts lanes, so a curvature callable there must not depend on per-lane data it closes over.
+    z           confidence of the band, in standard normal deviations (default 2; t_(n-1)(z) standard errors).
+    bias        target of the smooth rule, in g's units (default 1e-3).
+
+After ``run``, ``stats`` holds per-lane arrays of that run (the estimators' layout: numpy (lanes, 1)):
+``children`` (n used), ``variance`` (sample variance s^2 of the children's brightness, 0 for n < 2) and
+``bias`` (the Eq. 21 prediction g''(<I>_n) s^2 / (2n), the channels' mean; 0 without ``curvature``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import arrays as A
+from .base import Context, Estimator, check_count
+
+__all__ = ["AdaptiveDirect", "channel_mean"]
+
+
+def channel_mean(x):
+    """The mean of a value's channels per lane: Dr.Jit Float from Color3f/Array3f, numpy (lanes, 1)."""
+    if A.is_drjit(x):
+        dr = A.drjit()
+        if dr.depth_v(x) > 1:
+            total = x[0]
+            for i in range(1, len(x)):
+                total = total + x[i]
+            return total * (1.0 / len(x))
+        return x
+    x = np.asarray(x)
+    return x.mean(axis=-1, keepdims=True) if x.ndim >= 2 else x
+
+
+class AdaptiveDirect(Estimator):
+    def __init__(self, g, n0: int, n_max: int, thresholds=(), curvature=None, z: float = 2.0, bias: float = 1e-3):
+        if not callable(g):
+            raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")
+        if curvature is not None and not callable(curvature):
+            raise ValueError(f"curvature must be None or a callable (mean, h) -> g''(mean), got {curvature!r}")
+        self.n0 = check_count("n0", n0)
+        self.n_max = check_count("n_max", n_max, self.n0)
+        if not (np.isfinite(z) and z > 0) or not (np.isfinite(bias) and bias > 0):
+            raise ValueError(f"z and bias must be positive and finite, got z={z!r}, bias={bias!r}")
+        self.g, self.curvature, self.z, self.target = g, curvature, float(z), float(bias)
+        self.thresholds = tuple(thresholds)
+        self.stats = None
+        self.name = f"direct(n={self.n0}:{self.n_max})"
+
+    # -- running statistics ---------------------------------------------------------------------
+    def start(self, ctx: Context, carry):
+        zero = ctx.lane(0.0)
+        state = {"sum": ctx.vzero(), "count": zero, "mean_u": zero, "m2_u": zero,
+                 # per-lane copies, so that numpy's lane compaction carries them along with the lanes
+                 "tau": tuple(zero + (t if not isinstance(t, np.ndarray) else np.reshape(t, (-1, 1)))
+                              for t in self.thresholds)}
+        return state, carry
+
+    def feed(self, ctx, state, x, mask, carry):
+        state = dict(state)
+        n = state["count"] + 1.0
+        u = channel_mean(x)
+        delta = u - state["mean_u"]
+        mean_u = state["mean_u"] + delta / n
+        m2_u = state["m2_u"] + delta * (u - mean_u)
+        state["sum"] = A.select(mask, state["sum"] + x, state["sum"])
+        state["count"] = A.select(mask, n, state["count"])
+        state["mean_u"] = A.select(mask, mean_u, state["mean_u"])
+        state["m2_u"] = A.select(mask, m2_u, state["m2_u"])
+        return state, carry
+
+    def mean(self, state):
+        if self.n0 == self.n_max:  # as Direct computes it: a fixed count gives Direct's estimate bit for bit
+            return state["sum"] * (1.0 / self.n0)
+        return state["sum"] / A.maximum(state["count"], 1.0)
+
+    def variance(self, state):
+        """Sample variance of the children's brightness (0 below 2 children)."""
+        n = state["count"]
+        return A.select(n > 1.5, A.maximum(state["m2_u"], 0.0) / A.maximum(n - 1.0, 1.0), 0.0 * n)
+
+    def predicted_bias(self, state, signed: bool):
+        """g''(<I>_n) s^2 / (2n): per-channel magnitudes' largest (the rule) or the channels' signed mean."""
+        n = A.maximum(state["count"], 1.0)
+        var = self.variance(state)
+        if self.curvature is None:
+            return 0.0 * var
+        curv = self.curvature(self.mean(state), A.sqrt(var / n))
+        per = channel_mean(curv) if signed else A.hmax(A.abs(curv))
+        return per * var / (2.0 * n)
+
+    def band_width(self, n):
+        """The band's half-width in standard errors at n children: Student's t quantile with n - 1 degrees of
+        freedom at z's normal confidence (s is estimated from the same few children), by its expansion in 1/v
+        (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3, where the exact quantile is
+        3.307), tending to z as n grows."""
+        z = self.z
+        w = 1.0 / A.maximum(n - 1.0, 1.0)
+        terms = [(z ** 3 + z) / 4.0, (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96.0,
+                 (3 * z ** 7 + 19 * z ** 5 + 17 * z ** 3 - 15 * z) / 384.0,
+                 (79 * z ** 9 + 776 * z ** 7 + 1482 * z ** 5 - 1920 * z ** 3 - 945 * z) / 92160.0]
+        return z + w * (terms[0] + w * (terms[1] + w * (terms[2] + w * terms[3])))
+
+    def needs_more(self, state):
+        n = A.maximum(state["count"], 1.0)
+        band = self.band_width(n) * A.sqrt(self.variance(state) / n)
+        near = state["count"] < 0.0  # all False, as a per-lane mask
+        for tau in state["tau"]:
+            near = near | (A.abs(state["mean_u"] - tau) < band)
+        if self.curvature is not None:
+            near = near | (self.predicted_bias(state, signed=False) > self.target)
+        return near
+
+    # -- the protocol ---------------------------------------------------------------------------
+    def wants(self, ctx, state):
+        count = state["count"]
+        return (count < self.n0) | ((count < self.n_max) & self.needs_more(state))
+
+    def value(self, ctx, state):
+        return self.g(self.mean(state))
+
+    def exact(self, I):
+        return self.g(I)
+
+    @property
+    def mean_samples(self):
+        return None if self.n0 != self.n_max else float(self.n0)
+
+    @property
+    def fixed_samples(self):
+        return self.n0 == self.n_max
+
+    def run(self, draw, carry, uniform, active=None, *, like=None):
+        """As ``Estimator.run``; afterwards ``self.stats`` holds this run's per-lane statistics."""
+        def observe(state):
+            self.stats = {"children": state["count"], "variance": self.variance(state),
+                          "bias": self.predicted_bias(state, signed=True)}
+        return self._run(draw, carry, uniform, active, like, observe)
