@@ -287,3 +287,15 @@ def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypa
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "error after 1 of 4 spp (second line)" in err and "wrote the finished passes" in err
     assert read(out).shape == (16, 24, 3)
+
+
+def test_wild_series_estimates_are_reported_after_the_render(tmp_path, capsys):
+    """One warning line on stderr, after the image is written (styletrace.wild); none for direct."""
+    out = tmp_path / "g.exr"
+    common = ["render", "--style", "gamma", "--width", "32", "--height", "32", "--spp", "4", "--inner", "16",
+              "--seed", "0", "-q", "-o", str(out)]
+    assert main([*common, "--estimator", "series"]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "are wild" in ln]
+    assert out.exists() and len(lines) == 1 and lines[0].startswith("styletrace: warning: the 'series' estimator")
+    assert main([*common, "--estimator", "direct"]) == 0
+    assert "are wild" not in capsys.readouterr().err
