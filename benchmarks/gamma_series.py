@@ -225,7 +225,8 @@ def main():
         "|---|---|---:|---:|---:|---|---:|---:|",
         *rows,
         "",
-        f"Rendered (`stylized`, {RES}x{RES}, gamma {GAMMA}) at equal wall-clock time; reference: direct application "
+        f"Rendered (`stylized`, {RES}x{RES}, gamma {GAMMA}) at about equal wall-clock time (the series spp from a "
+        f"4-spp timing: compare the seconds); reference: direct application "
         f"with inner {REF_INNER} at {REF_SPP} spp.",
         "",
         "| scene | estimator | spp | seconds | image MSE | values |",
