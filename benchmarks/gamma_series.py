@@ -19,6 +19,10 @@ Efficiency = MSE_direct x 16 / (MSE x draws) per estimate (above 1: better at eq
 separate pass's m). "64 spp" compares images of 64 estimates per pixel at equal time: direct keeps its
 squared bias (bias^2 + Var/64), the unbiased rows scale as MSE x draws / (16 x 64).
 
+Then the renderer itself (`stylized`, RES x RES): direct n=16 at SPP spp against the renderer's `series`
+(inner 16) at the spp that takes about as long (set from a 4-spp timing; kernels compiled first), MSE
+against direct application with inner REF_INNER at REF_SPP spp.
+
     python benchmarks/gamma_series.py
 """
 from __future__ import annotations
