@@ -16,7 +16,7 @@ Parameters
     spread: a term estimate is a product of (x_i - b) / b over children, whose second moment grows like
     rho^k, rho = E[(X - b)^2] / b^2; b* = E[X^2] / E[X] minimizes rho, to cv^2 / (1 + cv^2) < 1
     (docs/estimators.md, "Gamma and the series estimators"). spread = 1 aims at b*; it needs a pilot that
-    sees the rare bright children (measured: 64 children on path-traced fireflies, not 16).
+    sees the rare bright children (measured on path-traced fireflies: 16 fail, 64 suffice on some scenes only).
 """
 from __future__ import annotations
 
