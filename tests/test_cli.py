@@ -304,3 +304,15 @@ def test_lines_flag_and_set_draw_lines(tmp_path, capsys):
     assert main(["lines"]) == 0
     out = capsys.readouterr().out
     assert "line_width = 2.0" in out and "line_samples" in out and "docs/lines.md" in out
+
+
+def test_wild_series_estimates_are_reported_after_the_render(tmp_path, capsys):
+    """One warning line on stderr, after the image is written (styletrace.wild); none for direct."""
+    out = tmp_path / "g.exr"
+    common = ["render", "--style", "gamma", "--width", "32", "--height", "32", "--spp", "4", "--inner", "16",
+              "--seed", "0", "-q", "-o", str(out)]
+    assert main([*common, "--estimator", "series"]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "are wild" in ln]
+    assert out.exists() and len(lines) == 1 and lines[0].startswith("styletrace: warning: the 'series' estimator")
+    assert main([*common, "--estimator", "direct"]) == 0
+    assert "are wild" not in capsys.readouterr().err

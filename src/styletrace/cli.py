@@ -22,6 +22,7 @@ from typing import Sequence
 
 from .errors import StyletraceError, UsageError
 from .images import IMAGE_TYPES, nonfinite_pixels, save_safely
+from .wild import warning as wild_warning
 
 
 def _parse_defines(items: Sequence[str]) -> dict[str, str]:
@@ -308,6 +309,9 @@ def cmd_render(args) -> int:
         out = write(latest)
         if out == args.output and hasattr(source, "finish"):
             source.finish()
+        wild = wild_warning(latest.image, integrator.settings)  # after the write: the image is kept either way
+        if wild:
+            say(f"styletrace: warning: {wild}")
         if not args.quiet:
             import mitsuba as mi
             say(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})")

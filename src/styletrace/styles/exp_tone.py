@@ -37,4 +37,4 @@ class ExpTone(Style):
 
     def form(self):
         from ..estimators import exp_series
-        return SeriesForm(exp_series(math.exp(-self.exposure)), scale=-1.0, offset=1.0)
+        return SeriesForm(exp_series(math.exp(-self.exposure)), scale=-1.0, offset=1.0, values=(0.0, 1.0))

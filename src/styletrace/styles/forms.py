@@ -26,7 +26,8 @@ class SeriesForm:
     of 1 + I). The expansion point is b = max(pilot_scale * mean of the pilot children, pilot_lo):
     `pilot_lo` keeps b away from 0 (a power series of I^p about b converges only for 0 < I < 2b, so a
     pilot of zeros would make it diverge), and `pilot_scale` > 1 widens that region beyond a pilot that
-    underestimates I.
+    underestimates I. `values` is the range (lo, hi) g takes on radiance >= 0 (hi None:
+    unbounded), if known: an unbiased estimate outside it is measured noise (`styletrace.wild`).
     """
 
     series: Any
@@ -35,6 +36,7 @@ class SeriesForm:
     offset: Any = 0.0
     pilot_lo: Optional[float] = None
     pilot_scale: float = 1.0
+    values: Optional[tuple] = None
 
 
 @dataclass(frozen=True)

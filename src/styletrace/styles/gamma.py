@@ -8,8 +8,9 @@ Parameters
 Negative inputs (possible with unbiased inner estimates) are clamped to 0 before the power.
 Unbiased estimators use the binomial series of I^(1/gamma) about b = max(1.5 <I>_pilot, 0.02), <I>_pilot
 the mean of `inner_samples` separate children (a_k = C(1/gamma, k) b^(1/gamma - k)); it converges for
-0 < I < 2b. Radiance with heavy tails (fireflies) makes these estimators' variance very large: that is
-the method's, not the implementation's, limit.
+0 < I < 2b. Radiance with heavy tails (fireflies) makes these estimators' variance unbounded in practice
+(docs/estimators.md, "Gamma and the series estimators": a child far beyond 2b enters every term's products);
+the CLI warns when a render's values leave g's range [0, inf) (`styletrace.wild`).
 """
 from __future__ import annotations
 
@@ -44,4 +45,4 @@ class Gamma(Style):
         # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the 1.5x
         # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured in
         # tests/styles/test_gamma.py and docs/estimators.md)
-        return SeriesForm(gamma_series(self.gamma), pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE)
+        return SeriesForm(gamma_series(self.gamma), pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE, values=(0.0, None))

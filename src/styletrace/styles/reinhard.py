@@ -37,4 +37,4 @@ class Reinhard(Style):
         from ..estimators import reciprocal_series
         # samples of w + X are >= w, so a pilot b >= w keeps the expansion on the positive side
         return SeriesForm(reciprocal_series(self.white), shift=self.white, scale=-1.0, offset=1.0, pilot_lo=self.white,
-                          pilot_scale=1.5)
+                          pilot_scale=1.5, values=(0.0, 1.0))

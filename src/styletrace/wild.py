@@ -1,0 +1,58 @@
+"""Wild estimates: pixel values an unbiased estimator put outside the range its style function can take.
+
+Reference
+    An unbiased estimator of g(I) with a random number of terms (power series, telescoping) is exact on
+    average, yet a single estimate can land far outside g's range: the gamma series on radiance with
+    fireflies gives pixels of -600 where g >= 0 (docs/estimators.md, "Gamma and the series estimators").
+    Such an image is unusable even though its expectation is right, so the CLI measures it and says so.
+
+What it measures
+    For the integrator's own style slot, when its estimator is not `direct` and its form declares the values
+    g takes on radiance >= 0 (`SeriesForm.values`, e.g. gamma [0, inf), exp_tone and reinhard [0, 1]): the
+    fraction of finite channel values outside that range by more than TOLERANCE times the image's median
+    |value| (less is invisible noise). It reports when that fraction is at least WILD_FRACTION.
+    Styles on per-object `styled` BSDFs are not checked.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["WILD_FRACTION", "TOLERANCE", "measure", "warning"]
+
+#: report when at least this fraction of channel values is wild (1 in 1000)
+WILD_FRACTION = 1e-3
+#: a value is wild when outside g's range by more than this times the image's median |value|
+TOLERANCE = 0.1
+
+
+def measure(image, lo, hi):
+    """(wild fraction, observed min, observed max, median |value|) of the finite channel values."""
+    x = np.asarray(image, dtype=np.float64)
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return 0.0, 0.0, 0.0, 0.0
+    med = float(np.median(np.abs(x)))
+    tol = TOLERANCE * med
+    wild = x < lo - tol
+    if hi is not None:
+        wild |= x > hi + tol
+    return float(np.count_nonzero(wild)) / x.size, float(x.min()), float(x.max()), med
+
+
+def warning(image, settings) -> str | None:
+    """A one-line warning when the render's estimates are wild, else None."""
+    slot = settings.slot
+    if slot.estimator == "direct":
+        return None
+    values = getattr(slot.style.form(), "values", None)
+    if values is None:
+        return None
+    lo, hi = values
+    fraction, vmin, vmax, med = measure(image, lo, hi)
+    if fraction < WILD_FRACTION:
+        return None
+    span = f"[{lo:g}, inf)" if hi is None else f"[{lo:g}, {hi:g}]"
+    return (f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: {100 * fraction:.2g}% of "
+            f"pixel values lie outside {slot.style.name}'s range {span} (observed {vmin:.3g} to {vmax:.3g}, median "
+            f"|value| {med:.3g}); its variance is unbounded on radiance with fireflies (small bright lights, glossy "
+            f"highlights): use --estimator direct, or see docs/estimators.md (Gamma and the series estimators)")
