@@ -148,6 +148,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         value, _ = make_estimator(slot, level, v).run(draw, (sampler,), uniform, active, like=mi.Color3f)
         return value
 
+    def render(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
+        """Mitsuba's own render loop (one `sample` call per pass), except with reuse=pixels: then a pass is
+        rendered by `reuse.render`, which needs every camera sample's neighbours at once."""
+        if self.settings.reuse == "off":
+            return super().render(scene, sensor, seed, spp, develop, evaluate)
+        from . import reuse
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
+        return image if develop else mi.TensorXf()
+
     def sample(self, scene, sampler, ray, medium=None, active=True):
         self.targets = self._targets(scene)
         # emitter selection in an order of the scene's own (its emitter list changes order between runs)

@@ -185,21 +185,26 @@ def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection
 def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
          active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
          stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
-         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False) -> Walk:
+         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
+         came_from: Optional[tuple] = None) -> Walk:
     """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
     `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
     vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
-    so scenes without such surfaces trace the plain loop."""
+    so scenes without such surfaces trace the plain loop. `came_from` = (interaction, BSDF pdf, delta) of
+    a vertex the caller sampled `ray` from: emission at the starting vertex is then MIS-weighted against
+    that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse.py`)."""
     ctx = mi.BSDFContext()
     emitters = emitters if emitters is not None else EmitterSampler(scene)
     limit = depth_limit(max_depth)
 
     # A starting vertex counts its emission in full: the previous vertex is treated as a delta
     # scattering event, exactly like a camera ray in Mitsuba's path tracer.
+    si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
+        else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
     state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
                       active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
-                      eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f), pdf_prev=mi.Float(1.0),
-                      delta_prev=mi.Bool(True), halted=mi.Bool(False),
+                      eta=mi.Float(1.0), si_prev=si_prev, pdf_prev=pdf_prev,
+                      delta_prev=delta_prev, halted=mi.Bool(False),
                       first=mi.Bool(True) if nulls and opaque_start else None)
 
     def body(s: PathState):

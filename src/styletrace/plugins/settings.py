@@ -41,6 +41,13 @@ STYLIZE_MODES = {
     "first_object_hit": "the first vertex on a styled object at any depth (through mirrors and glass)",
 }
 
+REUSE_MODES = {
+    "off": "every camera sample uses its own children (the tree sampler)",
+    "pixels": "first_hit only: pool the children of neighbouring pixels' first hits (docs/reuse.md)",
+}
+#: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
+MAX_REUSE_RADIUS = 8
+
 PROPERTIES = (
     Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
     Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
@@ -58,6 +65,12 @@ PROPERTIES = (
     Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
     Property("hide_emitters", False, "bool", "camera rays do not see emitters, as Mitsuba's `path`: they pass "
              "through area lights and find black (alpha 0) where they escape", "--hide-emitters", "BOOL"),
+    Property("reuse", "off", "string", "sample reuse at the stylized vertex: " + ", ".join(REUSE_MODES)
+             + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
+    Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
+             f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})", "--reuse-radius", "R"),
+    Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
+             "(at most (2r+1)^2 - 1); cost grows as (K+1)^2", "--reuse-k", "K"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -97,6 +110,9 @@ class Settings:
     rr_depth: int = 5
     emitter_sampling: str = EMITTER_DEFAULT
     hide_emitters: bool = False
+    reuse: str = "off"
+    reuse_radius: int = 2
+    reuse_k: int = 8
 
     @property
     def style(self) -> Style:
@@ -108,7 +124,8 @@ class Settings:
 
     def describe(self) -> str:
         return (f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
-                f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}")
+                f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
+                + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k})" if self.reuse != "off" else ""))
 
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
@@ -201,8 +218,34 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if lights not in EMITTER_MODES:
         raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
     hide = boolean("hide_emitters", get_("hide_emitters"))
+    reuse, radius, k = parse_reuse(values, slot, stylize)
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights, hide_emitters=hide)
+                    emitter_sampling=lights, hide_emitters=hide, reuse=reuse, reuse_radius=radius, reuse_k=k)
+
+
+def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int]:
+    """`reuse`, `reuse_radius`, `reuse_k`; reuse=pixels only where it is implemented."""
+    mode = str(values.get("reuse", DEFAULTS["reuse"])).strip().lower()
+    if mode not in REUSE_MODES:
+        raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of {', '.join(REUSE_MODES)}")
+    radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1, MAX_REUSE_RADIUS)
+    k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, (2 * radius + 1) ** 2 - 1)
+    if mode != "off":
+        if stylize != "first_hit":
+            raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
+                                f"only; use stylize=first_hit or reuse=off")
+        check_reusable(slot)
+    return mode, radius, k
+
+
+def check_reusable(slot: StyleSlot, where: str = "the integrator's style") -> None:
+    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation."""
+    if slot.style.per_sample:
+        raise SettingsError(f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
+                            f"every child sample, reuse pools samples before g")
+    if slot.estimator != "direct":
+        raise SettingsError(f"bad value {slot.estimator!r} for 'estimator' ({where}): reuse=pixels supports "
+                            f"'direct' only (g of the pooled mean)")
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -222,5 +265,5 @@ def properties_of(props) -> dict[str, Any]:
     return {key: props[key] for key in props.keys()}
 
 
-__all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
+__all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "REUSE_MODES", "check_reusable", "StyleSlot", "Settings", "parse", "parse_slot",
            "parse_inner", "integer", "boolean", "refine", "properties_of"]

@@ -1,0 +1,185 @@
+"""reuse=pixels (plugins/reuse.py): pooled children at the first hit.
+
+Truth from outside the pooling code: an analytic plane under a uniform sky, Mitsuba's `path`, the tree
+sampler at a large n on the same camera rays, and the pools checked against the scene's geometry.
+Pooled pixels are correlated, so standard errors come from independent seeds (one image mean each).
+"""
+import mitsuba as mi
+import numpy as np
+import pytest
+
+import styletrace
+from styletrace import api
+from styletrace.cli import main
+from styletrace.errors import SceneError, SettingsError
+from styletrace.plugins import reuse
+
+T = mi.ScalarTransform4f
+Z = 4.0
+
+
+def film(res):
+    return {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}, "pixel_format": "rgb"}
+
+
+def plane_scene(res=24, albedo=0.6):
+    """A diffuse plane filling the view, seen at an angle, under a constant sky of radiance 1: every
+    first hit has exitant radiance albedo exactly (the plane sees only the sky)."""
+    return {"type": "scene",
+            "sensor": {"type": "perspective", "fov": 40, "film": film(res),
+                       "to_world": T().look_at(origin=[0, 1.5, 2.0], target=[0, 0, 0], up=[0, 1, 0]),
+                       "sampler": {"type": "independent", "sample_count": 4}},
+            "plane": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90) @ T().scale(50.0),
+                      "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": albedo}}},
+            "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}}}
+
+
+def room_scene(res=16):
+    """A small diffuse ball in a large diffuse room lit by a light that faces away from the ball: the ball
+    gets no direct light, only the room's indirect light, and its normals turn fast from pixel to pixel."""
+    return {"type": "scene",
+            "sensor": {"type": "perspective", "fov": 30, "film": film(res),
+                       "to_world": T().look_at(origin=[0, 0, 3], target=[0, 0, 0], up=[0, 1, 0]),
+                       "sampler": {"type": "independent", "sample_count": 4}},
+            "room": {"type": "sphere", "radius": 6.0, "flip_normals": True,
+                     "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.5}}},
+            "ball": {"type": "sphere", "radius": 0.5,
+                     "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.8}}},
+            "light": {"type": "rectangle", "to_world": T().translate([0, 2.0, 0]) @ T().rotate([1, 0, 0], -90)
+                      @ T().scale(0.5), "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 20.0}}}}
+
+
+def seed_means(scene, integ, seeds, spp, mask=None, **kw):
+    sensor = scene.sensors()[0]
+    out = []
+    for s in range(seeds):
+        img = np.asarray(reuse.render(integ, scene, sensor, 1000 + s, spp, **kw), dtype=np.float64)[..., :3]
+        out.append(img[mask].mean() if mask is not None else img.mean())
+    return np.array(out)
+
+
+def test_identity_on_a_plane_under_a_uniform_sky_is_exact():
+    scene = mi.load_dict(plane_scene())
+    integ = api.make_integrator("identity", inner=2, reuse="pixels", reuse_radius=2, reuse_k=12)
+    means = seed_means(scene, integ, 6, 8)
+    z = (means.mean() - 0.6) / (means.std(ddof=1) / np.sqrt(len(means)))
+    assert abs(z) < Z, f"image mean {means.mean()} vs exact 0.6: z = {z}"
+
+
+@pytest.fixture(scope="module")
+def room():
+    scene = mi.load_dict(room_scene())
+    res = 16
+    yy, xx = np.mgrid[0:res, 0:res]
+    c = (res - 1) / 2
+    rpix = np.tan(np.arcsin(0.5 / 3)) / np.tan(np.radians(15)) * res / 2
+    mask = (xx - c) ** 2 + (yy - c) ** 2 < (0.85 * rpix) ** 2   # inside the ball's silhouette
+    path = mi.load_dict({"type": "path"})
+    refs = np.array([np.asarray(mi.render(scene, integrator=path, spp=1024, seed=s), dtype=np.float64)[..., :3][mask]
+                     .mean() for s in range(4)])
+    return scene, mask, refs
+
+
+def test_mixture_pdf_is_unbiased_where_own_pdf_weights_are_not(room, monkeypatch):
+    """Neighbours accepted whatever their normals (a wide-open acceptance): the mixture-pdf weights stay
+    unbiased against Mitsuba's `path` (v itself covers its whole hemisphere); dividing each pooled sample by
+    its own density misses the directions a neighbour cannot sample, and the same 4-sigma test rejects it."""
+    scene, mask, refs = room
+    monkeypatch.setattr(reuse, "NORMAL_MIN", -1.0)
+    monkeypatch.setattr(reuse, "DEPTH_TOL", 10.0)
+    integ = api.make_integrator("identity", inner=1, reuse="pixels", reuse_radius=3, reuse_k=48)
+
+    def z(means):
+        se = np.hypot(means.std(ddof=1) / np.sqrt(len(means)), refs.std(ddof=1) / np.sqrt(len(refs)))
+        return (means.mean() - refs.mean()) / se
+
+    z_mixture = z(seed_means(scene, integ, 6, 64, mask))
+    z_own = z(seed_means(scene, integ, 6, 64, mask, mixture=False))
+    assert abs(z_mixture) < Z, f"mixture pdf: z = {z_mixture}"
+    assert z_own < -Z, f"own pdf: z = {z_own} (expected darker than path)"
+
+
+def test_cel_with_reuse_has_lower_error_than_the_tree_at_equal_children():
+    """Same seed, so the same camera rays in all three renders: the error is the inner estimate's alone.
+    Reference: the tree sampler at n = 256 children per camera sample."""
+    kw = dict(style="cel", width=32, height=32, spp=2, seed=3)
+    ref = styletrace.render("cornell-box", inner=256, **kw)
+    tree = styletrace.render("cornell-box", inner=4, **kw)
+    pooled = styletrace.render("cornell-box", inner=4, reuse="pixels", reuse_k=8, **kw)
+    mse_tree, mse_pooled = ((tree - ref) ** 2).mean(), ((pooled - ref) ** 2).mean()
+    assert mse_pooled < 0.75 * mse_tree, f"MSE with reuse {mse_pooled:.3e}, tree {mse_tree:.3e}"
+
+
+def two_slots_scene(res=32):
+    """Two coplanar rectangles meeting at x = 0 (the film's middle column boundary), each with its own
+    `styled` style, seen straight down under a sky."""
+    def half(x, style):
+        return {"type": "rectangle", "to_world": T().translate([x, 0, 0]) @ T().rotate([1, 0, 0], -90)
+                @ T().scale([1.0, 2.0, 1.0]),
+                "bsdf": {"type": "styled", "style": style, "inner_samples": 2,
+                         "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.5}}}}
+    return {"type": "scene",
+            "sensor": {"type": "orthographic", "film": film(res),
+                       "to_world": T().look_at(origin=[0, 3, 0], target=[0, 0, 0], up=[0, 0, -1]) @ T().scale(1.0),
+                       "sampler": {"type": "independent", "sample_count": 4}},
+            "left": half(-1.0, "cel"), "right": half(1.0, "identity"),
+            "sky": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}}}
+
+
+def test_pools_never_cross_style_slots():
+    scene = mi.load_dict(two_slots_scene())
+    integ = api.make_integrator("identity", inner=2, reuse="pixels", reuse_radius=2, reuse_k=24)
+    keep = {}
+    reuse.render(integ, scene, scene.sensors()[0], 0, 2, keep=keep)
+    half = keep["width"] // 2
+    sizes, crossing = [], 0
+    for members in reuse.pools(keep):
+        side = members[0][0] < half
+        crossing += sum((x < half) != side for x, _ in members)
+        sizes.append(len(members))
+    assert crossing == 0
+    assert np.mean(sizes) > 10  # the pools are not trivially empty: a neighbour on the same side is taken
+
+
+def test_null_surfaces_refused_in_one_line():
+    d = plane_scene(8)
+    d["plane"]["bsdf"] = {"type": "mask", "opacity": 0.5, "material": d["plane"]["bsdf"]}
+    scene = mi.load_dict(d)
+    integ = api.make_integrator("identity", reuse="pixels")
+    with pytest.raises(SceneError, match="null-scattering") as err:
+        reuse.render(integ, scene, scene.sensors()[0], 0, 1)
+    assert "\n" not in str(err.value)
+
+
+BAD = [
+    (dict(reuse="neighbours"), "bad value 'neighbours' for 'reuse'"),
+    (dict(reuse="pixels", reuse_radius=0), "bad value 0 for 'reuse_radius'"),
+    (dict(reuse="pixels", reuse_radius=1, reuse_k=9), "bad value 9 for 'reuse_k'"),
+    (dict(reuse="pixels", stylize="first_n_hits", stylize_depth=2), "reuse=pixels pools samples at the first hit"),
+    (dict(reuse="pixels", style="gamma", estimator="series"), "supports 'direct' only"),
+    (dict(reuse="pixels", style="acp"), "cannot be used with reuse=pixels"),
+]
+
+
+@pytest.mark.parametrize("values,message", BAD, ids=[m for _, m in BAD])
+def test_bad_settings_one_line(values, message):
+    with pytest.raises(SettingsError) as err:
+        api.make_integrator(**values)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_command_line(tmp_path, capsys):
+    out = tmp_path / "r.exr"
+    assert main(["render", "-q", "--style", "cel", "--width", "16", "--height", "16", "--spp", "2", "--inner", "2",
+                 "--set", "reuse=pixels", "--reuse-k", "4", "-o", str(out)]) == 0
+    assert out.exists()
+    assert main(["render", "-q", "--reuse", "pixels", "--stylize", "first_n_hits", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("styletrace: error: ") and "first hit" in err and "\n" not in err
+
+
+def test_expectation_buffers_refuse_reuse():
+    from styletrace.lookdev.record import render_buffer
+    with pytest.raises(SettingsError, match="cannot be buffered") as err:
+        render_buffer("cornell-box", style="cel", spp=1, inner=2, width=8, height=8, reuse="pixels")
+    assert "\n" not in str(err.value)
