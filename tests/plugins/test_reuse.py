@@ -99,15 +99,17 @@ def test_mixture_pdf_is_unbiased_where_own_pdf_weights_are_not(room, monkeypatch
     assert z_own < -Z, f"own pdf: z = {z_own} (expected darker than path)"
 
 
-def test_cel_with_reuse_has_lower_error_than_the_tree_at_equal_children():
-    """Same seed, so the same camera rays in all three renders: the error is the inner estimate's alone.
-    Reference: the tree sampler at n = 256 children per camera sample."""
+def test_cel_with_reuse_beats_the_tree_with_twice_the_children():
+    """Same seed, so the same camera rays in every render: the error is the inner estimate's alone.
+    Reference: the tree sampler at n = 256 children per camera sample. Pooling K = 8 neighbours' 4 children
+    must beat doubling the tree's children (4 -> 8); with the pool switched off it is the tree at n = 4
+    (measured MSE 0.032 pooled, 0.038 tree n = 8, 0.052 tree n = 4)."""
     kw = dict(style="cel", width=32, height=32, spp=2, seed=3)
     ref = styletrace.render("cornell-box", inner=256, **kw)
-    tree = styletrace.render("cornell-box", inner=4, **kw)
-    pooled = styletrace.render("cornell-box", inner=4, reuse="pixels", reuse_k=8, **kw)
-    mse_tree, mse_pooled = ((tree - ref) ** 2).mean(), ((pooled - ref) ** 2).mean()
-    assert mse_pooled < 0.75 * mse_tree, f"MSE with reuse {mse_pooled:.3e}, tree {mse_tree:.3e}"
+    mse = {n: ((styletrace.render("cornell-box", inner=n, **kw) - ref) ** 2).mean() for n in (4, 8)}
+    pooled = ((styletrace.render("cornell-box", inner=4, reuse="pixels", reuse_k=8, **kw) - ref) ** 2).mean()
+    assert mse[8] < mse[4]
+    assert pooled < mse[8], f"MSE with reuse {pooled:.3e}, tree n=8 {mse[8]:.3e}, n=4 {mse[4]:.3e}"
 
 
 def two_slots_scene(res=32):

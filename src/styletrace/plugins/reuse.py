@@ -49,8 +49,6 @@ NORMAL_MIN = 0.9
 DEPTH_TOL = 0.05
 #: children stored per batch of a pass (about 60 MB of child data)
 BATCH_CHILDREN = 1 << 20
-#: most neighbours a pool can hold (one bit each in a UInt64 mask, bit 0 for v itself)
-MAX_K = 63
 
 
 def window(radius: int) -> np.ndarray:
@@ -180,7 +178,7 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, mixture, k
     base = dr.select(hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit))
     own = _children(integ, scene, lanes, si, bsdf, hit & (m > 0), pool, m, M, kids)
     W = (2 * s.reuse_radius + 1) ** 2 - 1
-    K = min(s.reuse_k, W, MAX_K)
+    K = min(s.reuse_k, W)  # settings.parse keeps K <= MAX_REUSE_K
     start = mi.UInt32(dr.minimum(lanes.next_1d() * W, W - 1)) if K < W else dr.zeros(mi.UInt32, N)
     depth = dr.norm(si.p - origin)
     dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos)

@@ -47,6 +47,9 @@ REUSE_MODES = {
 }
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
+#: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
+#: itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums K+1 terms).
+MAX_REUSE_K = 63
 
 PROPERTIES = (
     Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
@@ -70,7 +73,7 @@ PROPERTIES = (
     Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
              f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})", "--reuse-radius", "R"),
     Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
-             "(at most (2r+1)^2 - 1); cost grows as (K+1)^2", "--reuse-k", "K"),
+             f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K}); cost grows as (K+1)^2", "--reuse-k", "K"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -229,7 +232,7 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
     if mode not in REUSE_MODES:
         raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of {', '.join(REUSE_MODES)}")
     radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1, MAX_REUSE_RADIUS)
-    k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, (2 * radius + 1) ** 2 - 1)
+    k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
     if mode != "off":
         if stylize != "first_hit":
             raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
