@@ -63,10 +63,11 @@ def batch_seed(seed: int, batch: int) -> int:
     return seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
 
 
-def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, mixture: bool = True,
+def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weights: str | None = None,
            keep: dict | None = None) -> mi.TensorXf:
     """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render` returns).
-    `mixture=False` divides each pooled BSDF sample by its own density (wrong: the tests' negative control);
+    `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
+    by its own density (wrong: the tests' negative control);
     `keep`, a dict, receives the first batch's pools as numpy arrays (`pools`)."""
     integ.targets = integ._targets(scene)
     if integ.nulls:
@@ -80,13 +81,13 @@ def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, mixtu
                 S.check_reusable(t.slot, f"a styled BSDF's style '{t.slot.style.name}'")
             t.slot.style.prepare(scene)
         integ.view = camera_forward(scene)
-        return _render(integ, scene, sensor, seed, spp, mixture, keep)
+        return _render(integ, scene, sensor, seed, spp, weights or integ.settings.reuse_mis, keep)
     finally:  # no reference to the scene's objects may outlive the render (integrator.sample says why)
         integ.targets = []
         integ.emitters = None
 
 
-def _render(integ, scene, sensor, seed, spp, mixture, keep):
+def _render(integ, scene, sensor, seed, spp, weights, keep):
     film = sensor.film()
     film.prepare([])
     size = film.crop_size()
@@ -100,7 +101,7 @@ def _render(integ, scene, sensor, seed, spp, mixture, keep):
     while done < spp:
         n = min(per_batch, spp - done)
         value, valid, pos, wavelengths = _batch(integ, scene, sensor, batch_seed(seed, batch), n, width, height,
-                                                spp, mixture, keep if batch == 0 else None)
+                                                spp, weights, keep if batch == 0 else None)
         _splat(block, film, pos, value, valid, wavelengths)
         dr.eval(block.tensor())
         done, batch = done + n, batch + 1
@@ -141,7 +142,7 @@ def _camera(sensor, sampler, width, height, spp, spp_total):
     return ray, weight, pos_f
 
 
-def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, mixture, keep=None):
+def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, keep=None):
     from .integrator import _any_ptr, past_area_emitters
     s = integ.settings
     N = width * height * spp
@@ -189,7 +190,7 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, mixture, k
     if keep is not None:
         keep.update(mask=np.asarray(mask, dtype=np.uint64), start=np.asarray(start, dtype=np.int64), spp=spp,
                     width=width, height=height, K=K, radius=s.reuse_radius, target=np.asarray(target))
-    mean = _pooled(grid, mask, si, bsdf, m, M, kids, mixture)
+    mean = _pooled(grid, mask, si, bsdf, m, M, kids, weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     x = base + mean
     v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(0))
@@ -318,30 +319,35 @@ class Grid:
         return mask
 
 
-def _pooled(grid, mask, si, bsdf, m, M, kids, mixture):
+def _pooled(grid, mask, si, bsdf, m, M, kids, weights):
     """(direct + indirect)(v) of the module docstring for every lane (meaningful where the lane pools)."""
     ctx = mi.BSDFContext()
     K = grid.K
     active = mask != 0
     mf = mi.Float(m)
-    count = mi.Float(0.0)
+    members = mi.Float(dr.popcnt(mask))          # |P|
+    others = dr.maximum(members - 1.0, 1.0)      # n = |P| - 1 (1 where v pools alone: unused then)
 
     def has(q):
         return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
 
-    def density(wb, on):
-        """sum over the pool of m p_k'(wb), or (mixture=False) nothing: the caller uses the own pdf."""
-        def body(q, total):
-            at, _ = grid.neighbour(q)
-            here = on & has(q)
-            sk = dr.gather(mi.SurfaceInteraction3f, si, at, here)
-            total += dr.select(here, bsdf.pdf(ctx, sk, sk.to_local(wb), here), 0.0)
-            return q + 1, total
-        _, total = dr.while_loop((mi.UInt32(0), mi.Float(0.0)), lambda q, t: q <= K, body,
-                                 label="styletrace reuse mixture")
-        return total * mf
+    def density_at(q, wb, on):
+        """p_k(wb) at pool member q's own vertex (v's BSDF object: accepted members share it)."""
+        at, _ = grid.neighbour(q)
+        sk = dr.gather(mi.SurfaceInteraction3f, si, at, on)
+        return bsdf.pdf(ctx, sk, sk.to_local(wb), on)
 
-    def body(i, direct, indirect, count):
+    def over_members(first, wb, term, on):
+        """sum over pool members q >= first of term(p_q(wb)) (a loop over the K + 1 slots)."""
+        def body(q, total):
+            here = on & has(q)
+            total += dr.select(here, term(density_at(q, wb, here)), 0.0)
+            return q + 1, total
+        _, total = dr.while_loop((mi.UInt32(first), mi.Float(0.0)), lambda q, t: on & (q <= K), body,
+                                 label="styletrace reuse densities")
+        return total
+
+    def body(i, direct, indirect):
         q, j = i // M, i % M
         at, _ = grid.neighbour(q)
         on = has(q) & (j < m)
@@ -353,16 +359,19 @@ def _pooled(grid, mask, si, bsdf, m, M, kids, mixture):
         Li = dr.gather(mi.Spectrum, kids.Li, c, on)
         direct += dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
         take = on & (pdf > 0)
-        denom = density(wb, take) if mixture else pdf
-        f = bsdf.eval(ctx, si, si.to_local(wb), take)
-        indirect += dr.select(take & (denom > 0), f * Li / denom, 0.0)
-        count += dr.select(on & (j == 0), 1.0, 0.0)
-        return i + 1, direct, indirect, count
+        f = bsdf.eval(ctx, si, si.to_local(wb), take) * Li
+        if weights == "balance":    # f Li / sum_P m p_k'
+            w = dr.rcp(over_members(0, wb, lambda p: p, take) * mf)
+        elif weights == "own":      # f Li / p_k, averaged over the |P| m samples (wrong: the negative control)
+            w = dr.rcp(pdf * members * mf)
+        else:                       # pairwise: v's samples against each member, members' against v only
+            p_v = dr.select(q == 0, pdf, bsdf.pdf(ctx, si, si.to_local(wb), take & (q != 0)))
+            alone = members < 2
+            canonical = over_members(1, wb, lambda p: dr.rcp(others * p + p_v), take & (q == 0) & ~alone) / others
+            w = dr.select(q == 0, dr.select(alone, dr.rcp(p_v), canonical), dr.rcp(others * pdf + p_v)) / mf
+        indirect += dr.select(take & dr.isfinite(w) & (w > 0), f * w, 0.0)
+        return i + 1, direct, indirect
 
-    _, direct, indirect, count = dr.while_loop(
-        (mi.UInt32(0), mi.Spectrum(0.0), mi.Spectrum(0.0), count), lambda i, d, ind, c: i < (K + 1) * M, body,
-        label="styletrace reuse pool")
-    pooled = dr.maximum(count, 1.0) * mf   # |P| m samples
-    if not mixture:  # each sample weighted by its own density only: f Li / p averaged over the pool
-        indirect = indirect / pooled
-    return direct / pooled + indirect
+    _, direct, indirect = dr.while_loop((mi.UInt32(0), mi.Spectrum(0.0), mi.Spectrum(0.0)),
+                                        lambda i, d, ind: i < (K + 1) * M, body, label="styletrace reuse pool")
+    return direct / (dr.maximum(members, 1.0) * mf) + indirect

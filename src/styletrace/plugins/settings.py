@@ -45,6 +45,7 @@ REUSE_MODES = {
     "off": "every camera sample uses its own children (the tree sampler)",
     "pixels": "first_hit only: pool the children of neighbouring pixels' first hits (docs/reuse.md)",
 }
+REUSE_WEIGHTS = ("balance", "pairwise")
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
 #: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
@@ -72,6 +73,9 @@ PROPERTIES = (
              + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
     Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
              f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})", "--reuse-radius", "R"),
+    Property("reuse_mis", "balance", "string", "reuse=pixels: weights of the pooled BSDF samples: balance (the "
+             "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
+             "the vertex itself, 2K+1; docs/reuse.md)", "--reuse-mis", "NAME"),
     Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
              f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K}); cost grows as (K+1)^2", "--reuse-k", "K"),
 )
@@ -116,6 +120,7 @@ class Settings:
     reuse: str = "off"
     reuse_radius: int = 2
     reuse_k: int = 8
+    reuse_mis: str = "balance"
 
     @property
     def style(self) -> Style:
@@ -128,7 +133,7 @@ class Settings:
     def describe(self) -> str:
         return (f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
                 f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
-                + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k})" if self.reuse != "off" else ""))
+                + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})" if self.reuse != "off" else ""))
 
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
@@ -221,24 +226,29 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if lights not in EMITTER_MODES:
         raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
     hide = boolean("hide_emitters", get_("hide_emitters"))
-    reuse, radius, k = parse_reuse(values, slot, stylize)
+    reuse, radius, k, mis = parse_reuse(values, slot, stylize)
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights, hide_emitters=hide, reuse=reuse, reuse_radius=radius, reuse_k=k)
+                    emitter_sampling=lights, hide_emitters=hide, reuse=reuse, reuse_radius=radius, reuse_k=k,
+                    reuse_mis=mis)
 
 
-def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int]:
-    """`reuse`, `reuse_radius`, `reuse_k`; reuse=pixels only where it is implemented."""
+def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
+    """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is implemented."""
     mode = str(values.get("reuse", DEFAULTS["reuse"])).strip().lower()
     if mode not in REUSE_MODES:
         raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of {', '.join(REUSE_MODES)}")
     radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1, MAX_REUSE_RADIUS)
     k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
+    mis = str(values.get("reuse_mis", DEFAULTS["reuse_mis"])).strip().lower()
+    if mis not in REUSE_WEIGHTS:
+        raise SettingsError(f"bad value {values.get('reuse_mis')!r} for 'reuse_mis': expected one of "
+                            f"{', '.join(REUSE_WEIGHTS)}")
     if mode != "off":
         if stylize != "first_hit":
             raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
                                 f"only; use stylize=first_hit or reuse=off")
         check_reusable(slot)
-    return mode, radius, k
+    return mode, radius, k, mis
 
 
 def check_reusable(slot: StyleSlot, where: str = "the integrator's style") -> None:
