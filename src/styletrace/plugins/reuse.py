@@ -5,31 +5,40 @@ Reference
     here restricted to the first hit, with the image as the neighbour grid (a pixel window, no hash grid).
     Veach and Guibas, "Optimally Combining Sampling Techniques for Monte Carlo Rendering", SIGGRAPH 1995:
     the multi-sample balance heuristic that gives the pooled samples their weights.
+    Bitterli, "Correlations and Reuse for Fast and Accurate Physically Based Light Transport" (PhD thesis,
+    2021), and Lin et al., "Generalized Resampled Importance Sampling", SIGGRAPH 2022: pairwise MIS.
 
 Every camera sample i traces its ray to the first hit v_i and draws m children there (m = its style slot's
-inner_samples), each split into one next-event sample (direction wl, E = L_e vis w_mis / p_light, MIS-weighted
-at v_i) and one BSDF sample (direction wb, density p_i(wb), and the incident radiance Li along it from the
-ordinary path kernel, its first emission MIS-weighted against v_i's next-event estimation). The pool P(v) is
-v and its accepted neighbours among K drawn from the (2r+1)^2 pixel window (same sample index of the pass):
-same style target, same BSDF, shading normals with n.n' > NORMAL_MIN and camera distances within DEPTH_TOL.
-Then, with v's own BSDF f_v (cosine included),
+inner_samples), each split into one next-event sample (direction wl, E = L_e vis / p_light) and one BSDF
+sample (direction wb, density p_i(wb), and the radiance Li arriving along it from the ordinary path kernel,
+less the first emission it meets: next-event estimation has that). The pool P(v) is v and its accepted
+neighbours among K drawn from the (2r+1)^2 pixel window (same sample index of the pass): same style target,
+same BSDF object, shading normals with n.n' > NORMAL_MIN and camera distances within DEPTH_TOL. Then, with
+v's own BSDF f_v (cosine included),
 
-    direct(v)   = 1/(|P| m) sum_{k in P} sum_j f_v(wl_kj) E_kj
-    indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj / sum_{k' in P} m p_k'(wb_kj)      (mixture pdf)
+    direct(v)   = 1/(|P| m) sum_{k in P} sum_j f_v(wl_kj) E_kj                  (neighbours' visibility reused)
+    indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj w_k(wb_kj) / (m p_k(wb_kj))
     L(v) = g( L_e(v) + direct + indirect )
 
-The indirect sum is the multi-sample balance-heuristic estimator over the pool's BSDF-sampling techniques:
-unbiased for the integral at v wherever the neighbours' incident radiance equals v's (a plane under a uniform
-sky: exactly), whatever their normals; dividing by the sampling neighbour's own density alone would not be
-(`mixture=False`, kept as a negative control for the tests). g sees a mean of |P| m samples instead of m, so the
-Jensen bias of direct application shrinks accordingly, at the price of the geometric mismatch between
-neighbours (blurred shadow edges and style thresholds within the window; docs/reuse.md measures it).
+with multi-sample MIS weights w_k over the pool's BSDF-sampling techniques (`reuse_mis`):
+- balance: w_k = p_k / sum_{k' in P} p_k', i.e. each sample divided by the mixture density of the whole pool;
+  (K+1)^2 m density evaluations per camera sample;
+- pairwise: each neighbour's technique weighed against v's only, n = |P| - 1:
+  w_k = p_k / (n p_k + p_v) for a neighbour's sample, w_v = (1/n) sum_k p_v / (n p_k + p_v) for v's own;
+  the weights still sum to one for every direction, at (2K+1) m evaluations.
+Either is unbiased for the integral at v wherever the neighbours' incident radiance equals v's (a plane under
+a uniform sky: exactly), whatever their normals, since v's own technique covers its whole hemisphere.
+Dividing by the sampling neighbour's own density alone (weights='own') misses the directions a neighbour
+cannot sample: the tests' negative control. g sees a mean of |P| m samples instead of m, so the Jensen bias of
+direct application shrinks accordingly, at the price of the geometric mismatch between neighbours (blurred
+shadow edges and style thresholds within the window; docs/reuse.md measures it).
 
-Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their own children
-only (the ordinary estimate); a pool of v alone is the ordinary estimate too. Neighbours are looked up
-within one pass of one crop window (`api.passes` tiles images above a million pixels; a window is clipped at
-a tile's edge). The children of a pass are stored (13 floats each), so a pass is split into batches of
-samples per pixel of at most BATCH_CHILDREN children.
+Light is split by technique, not by MIS, at pooling lanes: MIS weights computed at different vertices would not
+sum to one at v. Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their
+own children only (the ordinary estimate, with MIS); a pool of v alone is the ordinary estimate too.
+Neighbours are looked up within one pass of one crop window (`api.passes` tiles images above a million pixels;
+a window is clipped at a tile's edge). The children of a pass are stored (13 floats each), so a pass is split
+into batches of samples per pixel of at most BATCH_CHILDREN children.
 """
 from __future__ import annotations
 
