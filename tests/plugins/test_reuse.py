@@ -115,6 +115,14 @@ def test_cel_with_reuse_beats_the_tree_with_twice_the_children():
     assert pooled < mse[8], f"MSE with reuse {pooled:.3e}, tree n=8 {mse[8]:.3e}, n=4 {mse[4]:.3e}"
 
 
+def test_same_seed_same_camera_rays_as_the_tree():
+    """A closed-form style (no children, never pooled) is a function of the first hit alone: with reuse it
+    must give the tree's image bit for bit, so both place the same camera rays (the premise of the MSE
+    comparisons above and in docs/reuse.md)."""
+    kw = dict(style="gooch", width=24, height=24, spp=2, seed=4)
+    assert np.array_equal(styletrace.render("cornell-box", **kw), styletrace.render("cornell-box", reuse="pixels", **kw))
+
+
 def two_slots_scene(res=32):
     """Two coplanar rectangles meeting at x = 0 (the film's middle column boundary), each with its own
     `styled` style, seen straight down under a sky."""

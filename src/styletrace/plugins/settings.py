@@ -73,11 +73,11 @@ PROPERTIES = (
              + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
     Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
              f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})", "--reuse-radius", "R"),
+    Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
+             f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K})", "--reuse-k", "K"),
     Property("reuse_mis", "balance", "string", "reuse=pixels: weights of the pooled BSDF samples: balance (the "
              "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
              "the vertex itself, 2K+1; docs/reuse.md)", "--reuse-mis", "NAME"),
-    Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
-             f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K}); cost grows as (K+1)^2", "--reuse-k", "K"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
