@@ -97,7 +97,8 @@ def test_mixture_weights_are_unbiased_where_own_pdf_weights_are_not(room, monkey
         return (means.mean() - refs.mean()) / se
 
     for weights in ("balance", "pairwise"):
-        assert abs(z(weights)) < Z, f"{weights} weights: z = {z(weights)}"
+        z_mixture = z(weights)
+        assert abs(z_mixture) < Z, f"{weights} weights: z = {z_mixture}"
     z_own = z("own")
     assert z_own < -Z, f"own pdf: z = {z_own} (expected darker than path)"
 

@@ -345,3 +345,18 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
     return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid())
+
+
+def past_area_emitters(scene, ray, pi, active):
+    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the ray
+    spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance measured
+    from a ray it does not hand back, so the lights are stepped through here)."""
+    def through(ray, pi, skip):
+        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
+        ray = dr.select(skip, si.spawn_ray(ray.d), ray)
+        pi = dr.select(skip, scene.ray_intersect_preliminary(ray, coherent=True, active=skip), pi)
+        return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+
+    skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
+    return ray, pi

@@ -51,7 +51,8 @@ from ..styles.base import Vertex, camera_forward
 from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .lane_sampler import LaneSampler
-from .path import depth_limit, emission, environment, mis_power, walk
+from .path import depth_limit, emission, environment, mis_power, past_area_emitters, walk
+from .scene_graph import any_ptr
 
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
 NORMAL_MIN = 0.9
@@ -152,7 +153,6 @@ def _camera(sensor, sampler, width, height, spp, spp_total):
 
 
 def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, keep=None):
-    from .integrator import _any_ptr, past_area_emitters
     s = integ.settings
     N = width * height * spp
     sampler = sensor.sampler().clone()
@@ -176,7 +176,7 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     styled = integ._styled(si) if len(targets) > 1 else mi.Bool(False)
     target, m = mi.Int32(-1), mi.UInt32(0)
     for i, t in enumerate(targets):
-        here = hit & (_any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)
+        here = hit & (any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)
         target = dr.select(here, i, target)
         m = dr.select(here, 0 if t.slot.style.closed_form else t.slot.n(0), m)
     flags = bsdf.flags()
