@@ -46,6 +46,9 @@ from .sequence import Recorder, budget  # noqa: E402
 
 
 def check_recordable(settings: S.Settings, slots) -> None:
+    if settings.reuse != "off":
+        raise SettingsError(f"reuse={settings.reuse} cannot be buffered: a buffer keeps each camera sample's own "
+                            f"children, reuse pools its neighbours'; use reuse=off")
     if settings.stylize == "first_n_hits":
         raise SettingsError("stylize=first_n_hits cannot be buffered: its styles nest (each level's children are "
                             "styled again); use first_hit or first_object_hit")

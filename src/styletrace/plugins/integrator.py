@@ -50,8 +50,8 @@ from .estimation import make_estimator
 from .lane_sampler import LaneSampler
 from .lines import Lines
 from ..errors import SceneError
-from .path import bounce, environment, first_scattering, walk
-from .scene_graph import SceneGraph
+from .path import bounce, environment, first_scattering, past_area_emitters, walk
+from .scene_graph import SceneGraph, any_ptr as _any_ptr
 from .volume import volume_walk
 
 
@@ -76,6 +76,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # the values as given, so front ends can refine this integrator (`settings.refine`)
         self.values = S.properties_of(props) if values is None else dict(values)
         self.settings: S.Settings = settings if settings is not None else S.parse(self.values)
+        if self.settings.reuse != "off":  # Mitsuba's own render loop otherwise, untouched
+            self.render = self._render_reuse
 
     @classmethod
     def from_values(cls, values: dict) -> "StylizedIntegrator":
@@ -207,6 +209,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return None
         return self.lines, self.line_states[level]
 
+    def _render_reuse(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
+        """`render` with reuse=pixels: a pass is rendered by `reuse.render`, which needs every camera sample's
+        neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see each other). It is set
+        on the instance only then: a Python `render` on the class, even one calling Mitsuba's, changed how
+        a render in progress takes Ctrl-C (Mitsuba's own handler took the signal and the pass ran on)."""
+        from . import reuse
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
+        return image if develop else mi.TensorXf()
+
     def sample(self, scene, sampler, ray, medium=None, active=True):
         self.targets = self._targets(scene)
         problem = line_problem(self.settings, self.media)
@@ -303,21 +315,6 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return f"StylizedIntegrator[{self.settings.describe()}]"
 
 
-def past_area_emitters(scene, ray, pi, active):
-    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the ray
-    spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance measured
-    from a ray it does not hand back, so the lights are stepped through here)."""
-    def through(ray, pi, skip):
-        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
-        ray = dr.select(skip, si.spawn_ray(ray.d), ray)
-        pi = dr.select(skip, scene.ray_intersect_preliminary(ray, coherent=True, active=skip), pi)
-        return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
-
-    skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
-    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
-    return ray, pi
-
-
 def line_problem(settings: S.Settings, media: bool) -> str | None:
     """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`), or None."""
     lines = settings.lines
@@ -329,11 +326,3 @@ def line_problem(settings: S.Settings, media: bool) -> str | None:
 
 #: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
 AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
-
-
-def _any_ptr(ptr, objects, ptr_type) -> mi.Bool:
-    """Lanes whose pointer (BSDF, emitter, ...) is one of `objects`."""
-    mask = mi.Bool(False)
-    for obj in objects:
-        mask |= ptr == ptr_type(obj)
-    return mask

@@ -192,22 +192,27 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
          active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
          stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
          emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
-         lines=None) -> Walk:
+         came_from: Optional[tuple] = None, lines=None) -> Walk:
     """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
     `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
     vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
-    so scenes without such surfaces trace the plain loop. `lines`: (lines.Lines, lines.LineState at the
-    starting vertex) to detect feature lines on the walk's edges, or None (no line code is traced)."""
+    so scenes without such surfaces trace the plain loop. `came_from` = (interaction, BSDF pdf, delta) of
+    a vertex the caller sampled `ray` from: emission at the starting vertex is then MIS-weighted against
+    that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse.py`).
+    `lines`: (lines.Lines, lines.LineState at the starting vertex) to detect feature lines on the walk's
+    edges, or None (no line code is traced)."""
     ctx = mi.BSDFContext()
     emitters = emitters if emitters is not None else EmitterSampler(scene)
     limit = depth_limit(max_depth)
 
     # A starting vertex counts its emission in full: the previous vertex is treated as a delta
     # scattering event, exactly like a camera ray in Mitsuba's path tracer.
+    si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
+        else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
     state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
                       active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
-                      eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f), pdf_prev=mi.Float(1.0),
-                      delta_prev=mi.Bool(True), halted=mi.Bool(False),
+                      eta=mi.Float(1.0), si_prev=si_prev, pdf_prev=pdf_prev,
+                      delta_prev=delta_prev, halted=mi.Bool(False),
                       first=mi.Bool(True) if nulls and opaque_start else None,
                       lines=None if lines is None else lines[1])
 
@@ -362,3 +367,18 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
     return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state)
+
+
+def past_area_emitters(scene, ray, pi, active):
+    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the ray
+    spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance measured
+    from a ray it does not hand back, so the lights are stepped through here)."""
+    def through(ray, pi, skip):
+        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
+        ray = dr.select(skip, si.spawn_ray(ray.d), ray)
+        pi = dr.select(skip, scene.ray_intersect_preliminary(ray, coherent=True, active=skip), pi)
+        return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+
+    skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
+    return ray, pi

@@ -113,3 +113,11 @@ class SceneGraph:
             if shape.emitter() is not None:
                 emitters.append(shape.emitter())
         self.styled = list(groups.values())
+
+
+def any_ptr(ptr, objects, ptr_type) -> mi.Bool:
+    """Lanes whose pointer (BSDF, emitter, ...) is one of `objects`."""
+    mask = mi.Bool(False)
+    for obj in objects:
+        mask |= ptr == ptr_type(obj)
+    return mask

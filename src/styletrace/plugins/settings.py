@@ -43,6 +43,17 @@ STYLIZE_MODES = {
     "first_object_hit": "the first vertex on a styled object at any depth (through mirrors and glass)",
 }
 
+REUSE_MODES = {
+    "off": "every camera sample uses its own children (the tree sampler)",
+    "pixels": "first_hit only: pool the children of neighbouring pixels' first hits (docs/reuse.md)",
+}
+REUSE_WEIGHTS = ("balance", "pairwise")
+#: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
+MAX_REUSE_RADIUS = 8
+#: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
+#: itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums K+1 terms).
+MAX_REUSE_K = 63
+
 PROPERTIES = (
     Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
     Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
@@ -89,6 +100,15 @@ PROPERTIES = (
     Property("line_mode", "absorb", "string", "absorb (West 2021: N rays against the path's own ray; a line ends "
              "the path) or expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs)"),
     Property("line_k", 12, "int", "expectation mode: k, the opacity control (more: lines darker and wider)"),
+    Property("reuse", "off", "string", "sample reuse at the stylized vertex: " + ", ".join(REUSE_MODES)
+             + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
+    Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
+             f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})", "--reuse-radius", "R"),
+    Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
+             f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K})", "--reuse-k", "K"),
+    Property("reuse_mis", "balance", "string", "reuse=pixels: weights of the pooled BSDF samples: balance (the "
+             "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
+             "the vertex itself, 2K+1; docs/reuse.md)", "--reuse-mis", "NAME"),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -156,6 +176,10 @@ class Settings:
     adaptive_z: float = 2.0
     adaptive_bias: float = 2e-3
     aovs: bool = False
+    reuse: str = "off"
+    reuse_radius: int = 2
+    reuse_k: int = 8
+    reuse_mis: str = "balance"
 
     @property
     def style(self) -> Style:
@@ -168,7 +192,9 @@ class Settings:
     def describe(self) -> str:
         return (f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
                 f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
-                + ("" if self.lines is None else f", {self.lines.describe()}"))
+                + ("" if self.lines is None else f", {self.lines.describe()}")
+                + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})"
+                   if self.reuse != "off" else ""))
 
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
@@ -353,9 +379,48 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if aovs and slot.estimator != "direct":
         raise SettingsError(f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
                             f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct")
+    reuse, radius, k, mis = parse_reuse(values, slot, stylize)
+    lines = parse_lines(values)
+    if reuse != "off" and (lines is not None or aovs):
+        what = "'lines'" if lines is not None else "'aovs'"
+        raise SettingsError(f"bad value True for {what} with reuse={reuse}: a pooled pass traces its own camera "
+                            f"rays and keeps no per-sample statistics; use reuse=off")
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights, hide_emitters=hide, lines=parse_lines(values), adaptive_z=z,
-                    adaptive_bias=target, aovs=aovs)
+                    emitter_sampling=lights, hide_emitters=hide, lines=lines, adaptive_z=z,
+                    adaptive_bias=target, aovs=aovs, reuse=reuse, reuse_radius=radius, reuse_k=k,
+                    reuse_mis=mis)
+
+
+def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
+    """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is implemented."""
+    mode = str(values.get("reuse", DEFAULTS["reuse"])).strip().lower()
+    if mode not in REUSE_MODES:
+        raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of {', '.join(REUSE_MODES)}")
+    radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1, MAX_REUSE_RADIUS)
+    k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
+    mis = str(values.get("reuse_mis", DEFAULTS["reuse_mis"])).strip().lower()
+    if mis not in REUSE_WEIGHTS:
+        raise SettingsError(f"bad value {values.get('reuse_mis')!r} for 'reuse_mis': expected one of "
+                            f"{', '.join(REUSE_WEIGHTS)}")
+    if mode != "off":
+        if stylize != "first_hit":
+            raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
+                                f"only; use stylize=first_hit or reuse=off")
+        check_reusable(slot)
+    return mode, radius, k, mis
+
+
+def check_reusable(slot: StyleSlot, where: str = "the integrator's style") -> None:
+    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation."""
+    if slot.style.per_sample:
+        raise SettingsError(f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
+                            f"every child sample, reuse pools samples before g")
+    if slot.estimator != "direct":
+        raise SettingsError(f"bad value {slot.estimator!r} for 'estimator' ({where}): reuse=pixels supports "
+                            f"'direct' only (g of the pooled mean)")
+    if adaptive(slot.inner):
+        raise SettingsError(f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples' ({where}): "
+                            f"reuse=pixels draws a fixed count of children per camera sample; use a fixed count")
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -375,6 +440,6 @@ def properties_of(props) -> dict[str, Any]:
     return {key: props[key] for key in props.keys()}
 
 
-__all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "StyleSlot", "Settings", "parse", "parse_slot",
-           "parse_inner", "parse_lines", "AdaptiveCount", "adaptive", "integer", "number", "boolean", "refine",
-           "properties_of"]
+__all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "REUSE_MODES", "check_reusable", "StyleSlot",
+           "Settings", "parse", "parse_slot", "parse_inner", "parse_lines", "AdaptiveCount", "adaptive", "integer",
+           "number", "boolean", "refine", "properties_of"]

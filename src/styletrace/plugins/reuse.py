@@ -1,0 +1,386 @@
+"""Sample reuse at the first stylized vertex (`reuse=pixels`): neighbouring camera samples pool their children.
+
+Reference
+    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering,
+    here restricted to the first hit, with the image as the neighbour grid (a pixel window, no hash grid).
+    Veach and Guibas, "Optimally Combining Sampling Techniques for Monte Carlo Rendering", SIGGRAPH 1995:
+    the multi-sample balance heuristic that gives the pooled samples their weights.
+    Bitterli, "Correlations and Reuse for Fast and Accurate Physically Based Light Transport" (PhD thesis,
+    2021), and Lin et al., "Generalized Resampled Importance Sampling", SIGGRAPH 2022: pairwise MIS.
+
+Every camera sample i traces its ray to the first hit v_i and draws m children there (m = its style slot's
+inner_samples), each split into one next-event sample (direction wl, E = L_e vis / p_light) and one BSDF
+sample (direction wb, density p_i(wb), and the radiance Li arriving along it from the ordinary path kernel,
+less the first emission it meets: next-event estimation has that). The pool P(v) is v and its accepted
+neighbours among K drawn from the (2r+1)^2 pixel window (same sample index of the pass): same style target,
+same BSDF object, shading normals with n.n' > NORMAL_MIN and camera distances within DEPTH_TOL. Then, with
+v's own BSDF f_v (cosine included),
+
+    direct(v)   = 1/(|P| m) sum_{k in P} sum_j f_v(wl_kj) E_kj                  (neighbours' visibility reused)
+    indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj w_k(wb_kj) / (m p_k(wb_kj))
+    L(v) = g( L_e(v) + direct + indirect )
+
+with multi-sample MIS weights w_k over the pool's BSDF-sampling techniques (`reuse_mis`):
+- balance: w_k = p_k / sum_{k' in P} p_k', i.e. each sample divided by the mixture density of the whole pool;
+  (K+1)^2 m density evaluations per camera sample;
+- pairwise: each neighbour's technique weighed against v's only, n = |P| - 1:
+  w_k = p_k / (n p_k + p_v) for a neighbour's sample, w_v = (1/n) sum_k p_v / (n p_k + p_v) for v's own;
+  the weights still sum to one for every direction, at (2K+1) m evaluations.
+Either is unbiased for the integral at v wherever the neighbours' incident radiance equals v's (a plane under
+a uniform sky: exactly), whatever their normals, since v's own technique covers its whole hemisphere.
+Dividing by the sampling neighbour's own density alone (weights='own') misses the directions a neighbour
+cannot sample: the tests' negative control. g sees a mean of |P| m samples instead of m, so the Jensen bias of
+direct application shrinks accordingly, at the price of the geometric mismatch between neighbours (blurred
+shadow edges and style thresholds within the window; docs/reuse.md measures it).
+
+Light is split by technique, not by MIS, at pooling lanes: MIS weights computed at different vertices would not
+sum to one at v. Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their
+own children only (the ordinary estimate, with MIS); a pool of v alone is the ordinary estimate too.
+Neighbours are looked up within one pass of one crop window (`api.passes` tiles images above a million pixels;
+a window is clipped at a tile's edge). The children of a pass are stored (13 floats each), so a pass is split
+into batches of samples per pixel of at most BATCH_CHILDREN children.
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..errors import SceneError
+from ..styles.base import Vertex, camera_forward
+from . import settings as S
+from .emitter_sampler import EmitterSampler
+from .lane_sampler import LaneSampler
+from .path import depth_limit, emission, environment, mis_power, past_area_emitters, walk
+from .scene_graph import any_ptr
+
+#: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
+NORMAL_MIN = 0.9
+DEPTH_TOL = 0.05
+#: children stored per batch of a pass (about 60 MB of child data)
+BATCH_CHILDREN = 1 << 20
+
+
+def window(radius: int) -> np.ndarray:
+    """The (2r+1)^2 - 1 pixel offsets around a pixel (itself excluded) in a fixed shuffled order: a lane takes
+    K consecutive ones from a random start, so each offset is pooled with probability K / len."""
+    offsets = [(dx, dy) for dy in range(-radius, radius + 1) for dx in range(-radius, radius + 1) if dx or dy]
+    order = np.random.default_rng(0x5EED).permutation(len(offsets))
+    return np.array([offsets[i] for i in order], dtype=np.int32)
+
+
+def batch_seed(seed: int, batch: int) -> int:
+    return seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
+
+
+def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weights: str | None = None,
+           keep: dict | None = None) -> mi.TensorXf:
+    """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render` returns).
+    `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
+    by its own density (wrong: the tests' negative control);
+    `keep`, a dict, receives the first batch's pools as numpy arrays (`pools`)."""
+    integ.targets = integ._targets(scene)
+    if integ.nulls or integ.media:
+        integ.targets = []
+        what = "participating media" if integ.media else "null-scattering surfaces (masks, null BSDFs)"
+        raise SceneError(f"reuse=pixels does not support scenes with {what} yet: render with reuse=off")
+    integ.emitters = EmitterSampler(scene, integ.settings.emitter_sampling)
+    try:
+        for t in integ.targets:
+            if t.bsdfs:
+                S.check_reusable(t.slot, f"a styled BSDF's style '{t.slot.style.name}'")
+            t.slot.style.prepare(scene)
+        integ.view = camera_forward(scene)
+        return _render(integ, scene, sensor, seed, spp, weights or integ.settings.reuse_mis, keep)
+    finally:  # no reference to the scene's objects may outlive the render (integrator.sample says why)
+        integ.targets = []
+        integ.emitters = None
+
+
+def _render(integ, scene, sensor, seed, spp, weights, keep):
+    film = sensor.film()
+    film.prepare([])
+    size = film.crop_size()
+    if film.sample_border():
+        size += 2 * film.rfilter().border_size()
+    width, height = int(size[0]), int(size[1])
+    m_max = max([t.slot.n(0) for t in integ.targets if not t.slot.style.closed_form] or [1])
+    per_batch = max(1, min(spp, BATCH_CHILDREN // max(width * height * m_max, 1)))
+    block = film.create_block()
+    done, batch = 0, 0
+    while done < spp:
+        n = min(per_batch, spp - done)
+        value, valid, pos, wavelengths = _batch(integ, scene, sensor, batch_seed(seed, batch), n, width, height,
+                                                spp, weights, keep if batch == 0 else None)
+        _splat(block, film, pos, value, valid, wavelengths)
+        dr.eval(block.tensor())
+        done, batch = done + n, batch + 1
+    film.put_block(block)
+    return film.develop()
+
+
+def _splat(block, film, pos, value, valid, wavelengths):
+    alpha = dr.select(valid, mi.Float(1.0), mi.Float(0.0))
+    if dr.all(mi.has_flag(film.flags(), mi.FilmFlags.Special)):
+        block.put(pos, film.prepare_sample(value, wavelengths, block.channel_count(), weight=1.0, alpha=alpha))
+    elif mi.has_flag(film.flags(), mi.FilmFlags.Alpha):
+        block.put(pos, [value.x, value.y, value.z, alpha, mi.Float(1.0)])
+    else:
+        block.put(pos, [value.x, value.y, value.z, mi.Float(1.0)])
+
+
+def _camera(sensor, sampler, width, height, spp, spp_total):
+    """Camera rays as Mitsuba's SamplingIntegrator::render makes them: lane = pixel * spp + sample index."""
+    film = sensor.film()
+    N = width * height * spp
+    idx = dr.arange(mi.UInt32, N) // spp
+    y = idx // width
+    pos = mi.Vector2i(mi.Int32(idx - y * width), mi.Int32(y))
+    if film.sample_border():
+        pos -= mi.Vector2i(film.rfilter().border_size())
+    pos += mi.Vector2i(film.crop_offset())
+    pos_f = mi.Vector2f(pos) + sampler.next_2d()
+    scale = dr.rcp(mi.ScalarVector2f(film.crop_size()))
+    adjusted = dr.fma(pos_f, scale, -mi.ScalarVector2f(film.crop_offset()) * scale)
+    aperture = sampler.next_2d() if sensor.needs_aperture_sample() else mi.Point2f(0.5)
+    time = mi.Float(sensor.shutter_open())
+    if sensor.shutter_open_time() > 0:
+        time += sampler.next_1d() * sensor.shutter_open_time()
+    ray, weight = sensor.sample_ray_differential(time, 0.0, adjusted, aperture)
+    if ray.has_differentials:
+        ray.scale_differential(dr.rsqrt(spp_total))
+    return ray, weight, pos_f
+
+
+def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, keep=None):
+    s = integ.settings
+    N = width * height * spp
+    sampler = sensor.sampler().clone()
+    sampler.set_sample_count(spp)
+    sampler.set_samples_per_wavefront(spp)
+    sampler.seed(seed, N)
+    ray, ray_weight, pos = _camera(sensor, sampler, width, height, spp, spp_total)
+    ray = mi.Ray3f(ray)
+    origin = mi.Point3f(ray.o)
+    lanes = LaneSampler.seeded_from(sampler, N)
+    pi = scene.ray_intersect_preliminary(ray, coherent=True)
+    if s.hide_emitters:
+        ray, pi = past_area_emitters(scene, ray, pi, mi.Bool(True))
+    valid = pi.is_valid() | (scene.environment() is not None and not s.hide_emitters)
+    si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All)
+    hit = si.is_valid()
+    bsdf = si.bsdf(ray)
+
+    # which target (style slot) each lane belongs to, its children count m, and whether it may pool
+    targets = integ.targets
+    styled = integ._styled(si) if len(targets) > 1 else mi.Bool(False)
+    target, m = mi.Int32(-1), mi.UInt32(0)
+    for i, t in enumerate(targets):
+        here = hit & (any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)
+        target = dr.select(here, i, target)
+        m = dr.select(here, 0 if t.slot.style.closed_form else t.slot.n(0), m)
+    flags = bsdf.flags()
+    pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
+    M = max([t.slot.n(0) for t in targets if not t.slot.style.closed_form] or [1])
+
+    # the children, stored per lane: child j of lane i at i * M + j
+    kids = Children(N * M)
+    base = dr.select(hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit))
+    own = _children(integ, scene, lanes, si, bsdf, hit & (m > 0), pool, m, M, kids)
+    W = (2 * s.reuse_radius + 1) ** 2 - 1
+    K = min(s.reuse_k, W)  # settings.parse keeps K <= MAX_REUSE_K
+    start = mi.UInt32(dr.minimum(lanes.next_1d() * W, W - 1)) if K < W else dr.zeros(mi.UInt32, N)
+    depth = dr.norm(si.p - origin)
+    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos)
+
+    grid = Grid(width, height, spp, s.reuse_radius, K, start)
+    mask = grid.accepted(target, bsdf, pool, mi.Vector3f(si.sh_frame.n), depth)
+    dr.eval(mask)
+    if keep is not None:
+        keep.update(mask=np.asarray(mask, dtype=np.uint64), start=np.asarray(start, dtype=np.int64), spp=spp,
+                    width=width, height=height, K=K, radius=s.reuse_radius, target=np.asarray(target))
+    mean = _pooled(grid, mask, si, bsdf, m, M, kids, weights)
+    mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
+    x = base + mean
+    v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(0))
+    value = mi.Spectrum(base)
+    for i, t in enumerate(targets):
+        style = t.slot.style
+        g = style.apply(mi.Color3f(0.0), v) if style.closed_form else style.apply(x, v)
+        value = dr.select(target == i, g, value)
+    return value * ray_weight, valid, pos, ray.wavelengths
+
+
+def pools(keep: dict) -> list[list[tuple[int, int]]]:
+    """From `render(..., keep=d)`: per lane, the (x, y) pixels of its pool, itself first (tests, docs)."""
+    offsets = window(keep["radius"])
+    W, spp, width = len(offsets), keep["spp"], keep["width"]
+    out = []
+    for lane, (mask, start) in enumerate(zip(keep["mask"], keep["start"])):
+        pix = lane // spp
+        x, y = pix % width, pix // width
+        members = []
+        for q in range(keep["K"] + 1):
+            if int(mask) >> q & 1:
+                dx, dy = (0, 0) if q == 0 else offsets[(int(start) + q - 1) % W]
+                members.append((int(x + dx), int(y + dy)))
+        out.append(members)
+    return out
+
+
+class Children:
+    """Flat arrays of the stored children (see the module docstring)."""
+    DRJIT_STRUCT = {"wl": mi.Vector3f, "E": mi.Spectrum, "wb": mi.Vector3f, "pdf": mi.Float, "Li": mi.Spectrum}
+
+    def __init__(self, size: int = 0):
+        self.wl, self.wb = dr.zeros(mi.Vector3f, size), dr.zeros(mi.Vector3f, size)
+        self.E, self.Li = dr.zeros(mi.Spectrum, size), dr.zeros(mi.Spectrum, size)
+        self.pdf = dr.zeros(mi.Float, size)
+
+
+def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids):
+    """Draw each lane's m children at its first hit, store them, and return the sum of their ordinary estimates
+    (next-event plus BSDF-sampled radiance, emission at v left out)."""
+    s = integ.settings
+    ctx = mi.BSDFContext()
+    emitters = integ.emitters
+    lane = dr.arange(mi.UInt32, dr.width(si.p))
+    go_deeper = 1 < depth_limit(s.max_depth)
+
+    def body(j, smp, total):
+        on = active & (j < m)
+        step = on & go_deeper
+        to_light = step & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        ds, em_weight = emitters.sample_direction(si, smp.next_2d(), to_light)
+        to_light &= ds.pdf != 0.0
+        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(ctx, si, si.to_local(ds.d), smp.next_1d(), smp.next_2d(), step)
+        # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all the
+        # emission it can reach (weight 1) and the BSDF sample none of the first emission it meets (pdf 0
+        # below), so the two pooled sums are each unbiased whatever the neighbours' densities; MIS weights
+        # computed at different vertices would not add up to one.
+        w_nee = dr.select(ds.delta | pool, 1.0, mis_power(ds.pdf, pdf_l))
+        E = dr.select(to_light, em_weight * w_nee, 0.0)
+        wb = si.to_world(bs.wo)
+        go = step & (dr.max(w_b) > 0)
+        ray2 = si.spawn_ray(wb)
+        pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+        delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        w = walk(scene, smp, pi2, ray2, go, s.max_depth, s.rr_depth, 1, emitters=emitters,
+                 came_from=(dr.detach(si, True), dr.select(pool, 0.0, bs.pdf), delta & ~pool))
+        Li = dr.select(go, w.L, 0.0)
+        x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
+        finite = dr.all(dr.isfinite(x))
+        at = lane * M + j
+        dr.scatter(kids.wl, ds.d, at, on & finite)
+        dr.scatter(kids.E, E, at, on & finite)
+        dr.scatter(kids.wb, wb, at, on & finite)
+        dr.scatter(kids.pdf, dr.select(go, bs.pdf, 0.0), at, on & finite)
+        dr.scatter(kids.Li, Li, at, on & finite)
+        total += dr.select(on & finite, x, 0.0)
+        return j + 1, smp, total
+
+    _, lanes_out, total = dr.while_loop((mi.UInt32(0), lanes, mi.Spectrum(0.0)), lambda j, smp, t: j < M, body,
+                                        label="styletrace reuse children")
+    lanes.rng = lanes_out.rng
+    return total
+
+
+class Grid:
+    """The neighbour slots of each lane: slot 0 is the lane itself, slot q >= 1 the pixel at window offset
+    order[(start + q - 1) mod W], same sample index."""
+
+    def __init__(self, width, height, spp, radius, K, start):
+        self.width, self.height, self.spp, self.K = width, height, spp, K
+        offsets = window(radius)
+        self.W = len(offsets)
+        self.dx, self.dy = mi.Int32(offsets[:, 0]), mi.Int32(offsets[:, 1])
+        self.start = start
+        self.lane = dr.arange(mi.UInt32, width * height * spp)
+        pix = self.lane // spp
+        self.s = self.lane - pix * spp
+        self.y = mi.Int32(pix // width)
+        self.x = mi.Int32(pix) - self.y * width
+
+    def neighbour(self, q):
+        """(lane index, inside the image) of slot q (a UInt32 array)."""
+        o = (self.start + q - 1) % self.W
+        first = q == 0
+        x = self.x + dr.select(first, 0, dr.gather(mi.Int32, self.dx, o, ~first))
+        y = self.y + dr.select(first, 0, dr.gather(mi.Int32, self.dy, o, ~first))
+        inside = (x >= 0) & (x < self.width) & (y >= 0) & (y < self.height)
+        at = (mi.UInt32(dr.maximum(y, 0)) * self.width + mi.UInt32(dr.maximum(x, 0))) * self.spp + self.s
+        return dr.select(inside, at, self.lane), inside
+
+    def accepted(self, target, bsdf, pool, n, depth) -> mi.UInt64:
+        """Bit q set where slot q's vertex may be pooled with the lane's own."""
+        def body(q, mask):
+            at, inside = self.neighbour(q)
+            ok = inside & pool & dr.gather(mi.Bool, pool, at, inside)
+            ok &= dr.gather(mi.Int32, target, at, ok) == target
+            ok &= dr.gather(mi.BSDFPtr, bsdf, at, ok) == bsdf
+            ok &= dr.dot(dr.gather(mi.Vector3f, n, at, ok), n) > NORMAL_MIN
+            ok &= dr.abs(dr.gather(mi.Float, depth, at, ok) - depth) <= DEPTH_TOL * depth
+            mask |= dr.select(ok, mi.UInt64(1) << mi.UInt64(q), mi.UInt64(0))
+            return q + 1, mask
+
+        _, mask = dr.while_loop((mi.UInt32(0), mi.UInt64(0)), lambda q, mask: q <= self.K, body,
+                                label="styletrace reuse accept")
+        return mask
+
+
+def _pooled(grid, mask, si, bsdf, m, M, kids, weights):
+    """(direct + indirect)(v) of the module docstring for every lane (meaningful where the lane pools)."""
+    ctx = mi.BSDFContext()
+    K = grid.K
+    active = mask != 0
+    mf = mi.Float(m)
+    members = mi.Float(dr.popcnt(mask))          # |P|
+    others = dr.maximum(members - 1.0, 1.0)      # n = |P| - 1 (1 where v pools alone: unused then)
+
+    def has(q):
+        return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+
+    def density_at(q, wb, on):
+        """p_k(wb) at pool member q's own vertex (v's BSDF object: accepted members share it)."""
+        at, _ = grid.neighbour(q)
+        sk = dr.gather(mi.SurfaceInteraction3f, si, at, on)
+        return bsdf.pdf(ctx, sk, sk.to_local(wb), on)
+
+    def over_members(first, wb, term, on):
+        """sum over pool members q >= first of term(p_q(wb)) (a loop over the K + 1 slots)."""
+        def body(q, total):
+            here = on & has(q)
+            total += dr.select(here, term(density_at(q, wb, here)), 0.0)
+            return q + 1, total
+        _, total = dr.while_loop((mi.UInt32(first), mi.Float(0.0)), lambda q, t: on & (q <= K), body,
+                                 label="styletrace reuse densities")
+        return total
+
+    def body(i, direct, indirect):
+        q, j = i // M, i % M
+        at, _ = grid.neighbour(q)
+        on = has(q) & (j < m)
+        c = at * M + j
+        wl = dr.gather(mi.Vector3f, kids.wl, c, on)
+        E = dr.gather(mi.Spectrum, kids.E, c, on)
+        wb = dr.gather(mi.Vector3f, kids.wb, c, on)
+        pdf = dr.gather(mi.Float, kids.pdf, c, on)
+        Li = dr.gather(mi.Spectrum, kids.Li, c, on)
+        direct += dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
+        take = on & (pdf > 0)
+        f = bsdf.eval(ctx, si, si.to_local(wb), take) * Li
+        if weights == "balance":    # f Li / sum_P m p_k'
+            w = dr.rcp(over_members(0, wb, lambda p: p, take) * mf)
+        elif weights == "own":      # f Li / p_k, averaged over the |P| m samples (wrong: the negative control)
+            w = dr.rcp(pdf * members * mf)
+        else:                       # pairwise: v's samples against each member, members' against v only
+            p_v = dr.select(q == 0, pdf, bsdf.pdf(ctx, si, si.to_local(wb), take & (q != 0)))
+            alone = members < 2
+            canonical = over_members(1, wb, lambda p: dr.rcp(others * p + p_v), take & (q == 0) & ~alone) / others
+            w = dr.select(q == 0, dr.select(alone, dr.rcp(p_v), canonical), dr.rcp(others * pdf + p_v)) / mf
+        indirect += dr.select(take & dr.isfinite(w) & (w > 0), f * w, 0.0)
+        return i + 1, direct, indirect
+
+    _, direct, indirect = dr.while_loop((mi.UInt32(0), mi.Spectrum(0.0), mi.Spectrum(0.0)),
+                                        lambda i, d, ind: i < (K + 1) * M, body, label="styletrace reuse pool")
+    return direct / (dr.maximum(members, 1.0) * mf) + indirect
