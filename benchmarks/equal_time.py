@@ -1,0 +1,198 @@
+"""Equal-time quality: fixed inner counts against adaptive counts and sample reuse.
+
+Protocol (Cornell box, first stylized hit unless the setup says otherwise):
+- Every render is 1 camera sample per pixel with seed s, and so is its reference: the same seed places the same
+  camera rays, so the error measured is the stylized estimate's alone, not the pixel-sampling noise that every
+  method shares. Seeds 0 .. SEEDS-1.
+- The reference of seed s is direct application with a large inner count (REF below), the brute force of the
+  gallery's references; its own error is included in every MSE below (it understates the ratios).
+- MSE = bias^2 + variance over the seeds: with e_s = render_s - reference_s per pixel,
+      variance = mean over pixels of var_s(e_s) (ddof 1),  bias^2 = mean over pixels of mean_s(e_s)^2 - variance/S,
+  an unbiased estimate of the squared bias (it can dip below 0). MSE is the median over the seeds.
+- Time: the median wall-clock seconds of the S renders (`styletrace.render`, kernels compiled beforehand).
+- Equal time: fixed counts n = 4 .. 128 trace the MSE(time) curve of the tree sampler; each other method's MSE
+  is compared with that curve interpolated (log-log) at the method's own time. A method faster than the
+  cheapest fixed count is compared with that count (its time or less: a conservative ratio); one slower than
+  the dearest is compared with the dearest (no extrapolation, so its ratio is an upper bound and is marked).
+
+    python benchmarks/equal_time.py [--size 128] [--seeds 3] [--only cel hatching ...]
+
+References are cached in benchmarks/.cache/ (minutes each); delete the folder to recompute them.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
+sys.path.insert(0, os.path.dirname(__file__))
+
+import styletrace  # noqa: E402
+
+styletrace.init()
+import numpy as np  # noqa: E402
+from _report import machine_description, write_section  # noqa: E402
+from styletrace import api  # noqa: E402
+from styletrace.errors import StyletraceError  # noqa: E402
+
+CACHE = os.path.join(os.path.dirname(__file__), ".cache")
+FIXED = (4, 8, 16, 32, 64, 128)
+
+# key, title, style, integrator keywords, reference inner count, goal (MSE ratio at equal time)
+SETUPS = [
+    ("cel", "cel, first hit", "cel", {}, 4096, 4.0),
+    ("hatching", "hatching, first hit", "hatching", {}, 4096, 4.0),
+    ("color_map", "colour map, first hit", "color_map", {}, 1024, 2.0),
+    ("saturation", "saturation, first_n_hits depth 2", "saturation",
+     {"stylize": "first_n_hits", "stylize_depth": 2}, "64,64", 3.0),
+]
+
+
+READING = (
+    "Reading: reuse=pixels pools at the first hit only (it is refused with first_n_hits), so at depth 2 only the "
+    "adaptive counts compete, and saturation's g is close to affine: the Eq. 21 rule finds the predicted bias "
+    "below `adaptive_bias` and stops at n0, the image of the fixed count n0. For cel and hatching the error left "
+    "after reuse is mostly variance: vertices whose mean sits at a band threshold flip between bands from seed "
+    "to seed, and a wider window adds blur bias faster than it removes that variance (docs/reuse.md).")
+
+
+def fixed_counts(depth2: bool) -> list[tuple[str, dict]]:
+    if depth2:  # the second level's count stays 4: the first level carries the style's bias
+        return [(f"fixed n={n},4", {"inner": f"{n},4"}) for n in (2, 4, 8, 16, 32)]
+    return [(f"fixed n={n}", {"inner": n}) for n in FIXED]
+
+
+def others(depth2: bool) -> list[tuple[str, dict]]:
+    """The methods compared with the fixed counts (reuse with pairwise weights: the same images as the balance
+    heuristic on this scene's diffuse walls at a fraction of the cost, docs/reuse.md)."""
+    if depth2:  # reuse=pixels pools at the first hit only (refused with first_n_hits)
+        return [("adaptive 4:32,4", {"inner": "4:32,4"}),
+                ("adaptive 8:64,4", {"inner": "8:64,4"})]
+    pooled = {"reuse": "pixels", "reuse_mis": "pairwise"}
+    return [("adaptive 8:64", {"inner": "8:64"}),
+            ("adaptive 16:64", {"inner": "16:64"}),
+            ("adaptive 16:128", {"inner": "16:128"}),
+            ("reuse m=4 K=24 (5x5)", {"inner": 4, **pooled, "reuse_k": 24}),
+            ("reuse m=4 K=48 (7x7)", {"inner": 4, **pooled, "reuse_radius": 3, "reuse_k": 48}),
+            ("reuse m=8 K=48 (7x7)", {"inner": 8, **pooled, "reuse_radius": 3, "reuse_k": 48}),
+            ("reuse m=16 K=48 (7x7)", {"inner": 16, **pooled, "reuse_radius": 3, "reuse_k": 48})]
+
+
+def render(scene, style, kw, seed):
+    t = time.perf_counter()
+    img = api.render(scene, style=style, spp=1, seed=seed, **kw)
+    return np.asarray(img, dtype=np.float64), time.perf_counter() - t
+
+
+def references(scene, key, style, kw, inner, size, seeds):
+    os.makedirs(CACHE, exist_ok=True)
+    out = []
+    for s in range(seeds):
+        path = os.path.join(CACHE, f"equal_time_{key}_{size}_{str(inner).replace(',', 'x')}_seed{s}.npy")
+        if not os.path.exists(path):
+            img, secs = render(scene, style, {**kw, "inner": inner}, s)
+            print(f"  reference {key} seed {s}: inner {inner}, {secs:.0f} s", flush=True)
+            np.save(path, img)
+        out.append(np.load(path))
+    return out
+
+
+def measure(scene, style, kw, refs):
+    """(median seconds, median MSE, bias^2, variance) over the seeds."""
+    render(scene, style, kw, 999)  # compile the kernels
+    imgs, secs = [], []
+    for s, _ in enumerate(refs):
+        img, t = render(scene, style, kw, s)
+        imgs.append(img)
+        secs.append(t)
+    err = np.stack(imgs) - np.stack(refs)
+    var = float(np.mean(np.var(err, axis=0, ddof=1)))
+    bias2 = float(np.mean(err.mean(axis=0) ** 2)) - var / len(refs)
+    return statistics.median(secs), statistics.median(float(np.mean(e ** 2)) for e in err), bias2, var
+
+
+def fixed_mse_at(curve: list[tuple[float, float]], t: float) -> tuple[float, str]:
+    """The tree sampler's MSE at time t, log-log interpolated along its fixed counts (see the docstring)."""
+    curve = sorted(curve)
+    if t <= curve[0][0]:
+        return curve[0][1], "≥"
+    if t >= curve[-1][0]:
+        return curve[-1][1], "≤"
+    for (t0, m0), (t1, m1) in zip(curve, curve[1:]):
+        if t0 <= t <= t1:
+            a = (np.log(t) - np.log(t0)) / (np.log(t1) - np.log(t0)) if t1 > t0 else 0.0
+            return float(np.exp(np.log(m0) + a * (np.log(m1) - np.log(m0)))), ""
+    raise AssertionError
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=int, default=128)
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--only", nargs="*", default=None)
+    args = ap.parse_args()
+    scene = api.load_scene("cornell-box", args.size, args.size)
+    sections = []
+    for key, title, style, kw, ref_inner, goal in SETUPS:
+        if args.only and key not in args.only:
+            continue
+        depth2 = "stylize_depth" in kw
+        refs = references(scene, key, style, kw, ref_inner, args.size, args.seeds)
+        results = {}
+        for name, mkw in fixed_counts(depth2) + others(depth2):
+            try:
+                results[name] = measure(scene, style, {**kw, **mkw}, refs)
+            except StyletraceError as exc:
+                print(f"  {key} {name}: refused: {exc}", flush=True)
+                continue
+            secs, mse, bias2, var = results[name]
+            print(f"  {key} {name}: {secs:.2f} s, MSE {mse:.3e} (bias^2 {bias2:.2e}, var {var:.2e})", flush=True)
+        curve = [(r[0], r[1]) for n, r in results.items() if n.startswith("fixed")]
+        rows, best = [], (0.0, "")
+        for name, (secs, mse, bias2, var) in results.items():
+            if name.startswith("fixed"):
+                gain = ""
+            else:
+                ref_mse, mark = fixed_mse_at(curve, secs)
+                ratio = ref_mse / mse
+                gain = f"{mark}{ratio:.2f}"
+                if ratio > best[0]:
+                    best = (ratio, name)
+            rows.append(f"| {name} | {secs:.2f} | {mse:.3e} | {bias2:.2e} | {var:.2e} | {gain} |")
+        verdict = "met" if best[0] >= goal else "not met"
+        sections.append("\n".join([
+            f"### {title}",
+            "",
+            f"Reference: direct application, inner {ref_inner}, the same camera rays. Goal: {goal:g}x lower MSE than "
+            f"the fixed counts at equal time. Best: `{best[1]}`, {best[0]:.2f}x: **{verdict}**.",
+            "",
+            "| method | s (median) | MSE (median) | bias^2 | variance | fixed-n MSE at this time / MSE |",
+            "|---|---:|---:|---:|---:|---:|",
+            *rows,
+        ]))
+        print(sections[-1], flush=True)
+    body = "\n".join([
+        "## Equal-time quality: fixed n, adaptive counts, reuse (`benchmarks/equal_time.py`)",
+        "",
+        f"Cornell box at {args.size}x{args.size}, 1 camera sample per pixel, seeds 0..{args.seeds - 1}, each render "
+        "against a reference of the same seed (same camera rays: the error is the stylized estimate's). The "
+        "fixed counts trace MSE against time; the last column compares each other method with that curve at "
+        "the method's own time (≥: the method is faster than every fixed count, compared with the cheapest; "
+        "≤: slower than every fixed count, compared with the dearest). Below 1: a loss at equal time. The "
+        "reference's own error is part of every MSE, so the ratios are understated. Protocol: the script's "
+        "docstring.",
+        "",
+        *sections,
+        "",
+        READING,
+        "",
+        machine_description(),
+    ])
+    write_section("equal_time", body)
+
+
+if __name__ == "__main__":
+    main()
