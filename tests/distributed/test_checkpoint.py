@@ -62,8 +62,10 @@ def test_resume_with_other_settings_is_refused_in_one_line(tmp_path):
 
 
 def cli(*args, **kw):
-    return [sys.executable, "-m", "styletrace", "render", "cornell-box", "--width", "64", "--height", "48",
-            "--spp", "10", "--pass-spp", "1", "--style", "cel", "--inner", "2", "-q", *args]
+    # passes long enough (~0.1 s of paths each) that the tests' 50 ms polls see the render midway: with
+    # millisecond passes a loaded machine finished the render between two polls, and the kill missed it
+    return [sys.executable, "-m", "styletrace", "render", "cornell-box", "--width", "96", "--height", "64",
+            "--spp", "10", "--pass-spp", "1", "--style", "cel", "--inner", "32", "-q", *args]
 
 
 def read(path):
