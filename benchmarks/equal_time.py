@@ -17,6 +17,9 @@ Protocol (Cornell box, first stylized hit unless the setup says otherwise):
 
     python benchmarks/equal_time.py [--size 128] [--seeds 3] [--only cel hatching ...]
 
+It also draws docs/equal_time.png: per setup, seed 0's reference, the fixed count nearest in time to the best
+other method, and that method, side by side (tone-mapped like the gallery's PNGs: clipped to [0, 1], sRGB).
+
 References are cached in benchmarks/.cache/ (minutes each); delete the folder to recompute them.
 """
 from __future__ import annotations
@@ -100,14 +103,16 @@ def references(scene, key, style, kw, inner, size, seeds):
     return out
 
 
-def measure(scene, style, kw, refs):
-    """(median seconds, median MSE, bias^2, variance) over the seeds."""
+def measure(scene, style, kw, refs, keep=None):
+    """(median seconds, median MSE, bias^2, variance) over the seeds; `keep`, a list, receives seed 0's image."""
     render(scene, style, kw, 999)  # compile the kernels
     imgs, secs = [], []
     for s, _ in enumerate(refs):
         img, t = render(scene, style, kw, s)
         imgs.append(img)
         secs.append(t)
+    if keep is not None:
+        keep.append(imgs[0])
     err = np.stack(imgs) - np.stack(refs)
     var = float(np.mean(np.var(err, axis=0, ddof=1)))
     bias2 = float(np.mean(err.mean(axis=0) ** 2)) - var / len(refs)
@@ -135,16 +140,17 @@ def main():
     ap.add_argument("--only", nargs="*", default=None)
     args = ap.parse_args()
     scene = api.load_scene("cornell-box", args.size, args.size)
-    sections = []
+    sections, panels = [], []
     for key, title, style, kw, ref_inner, goal in SETUPS:
         if args.only and key not in args.only:
             continue
         depth2 = "stylize_depth" in kw
         refs = references(scene, key, style, kw, ref_inner, args.size, args.seeds)
-        results = {}
+        results, images = {}, {}
         for name, mkw in fixed_counts(depth2) + others(depth2):
             try:
-                results[name] = measure(scene, style, {**kw, **mkw}, refs)
+                images[name] = []
+                results[name] = measure(scene, style, {**kw, **mkw}, refs, images[name])
             except StyletraceError as exc:
                 print(f"  {key} {name}: refused: {exc}", flush=True)
                 continue
@@ -163,6 +169,12 @@ def main():
                     best = (ratio, name)
             rows.append(f"| {name} | {secs:.2f} | {mse:.3e} | {bias2:.2e} | {var:.2e} | {gain} |")
         verdict = "met" if best[0] >= goal else "not met"
+        if best[1]:
+            near = min((n for n in results if n.startswith("fixed")),
+                       key=lambda n: abs(np.log(results[n][0] / results[best[1]][0])))
+            panels.append((title, [("reference", refs[0]),
+                                   (f"{near}, {results[near][0]:.2f} s", images[near][0]),
+                                   (f"{best[1]}, {results[best[1]][0]:.2f} s", images[best[1]][0])]))
         sections.append("\n".join([
             f"### {title}",
             "",
@@ -192,6 +204,28 @@ def main():
         machine_description(),
     ])
     write_section("equal_time", body)
+    if panels:
+        figure(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "equal_time.png"))
+
+
+def figure(panels, path):
+    """The side-by-side images (module docstring), written atomically as every image of the project."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import io
+    from styletrace.images import srgb8, write_bytes_atomically
+    fig, axes = plt.subplots(len(panels), 3, figsize=(9, 3.1 * len(panels)), squeeze=False)
+    for row, (title, cells) in zip(axes, panels):
+        for ax, (label, img) in zip(row, cells):
+            ax.imshow(srgb8(img))
+            ax.set_title(f"{title}\n{label}" if label == "reference" else label, fontsize=8)
+            ax.axis("off")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    write_bytes_atomically(buf.getvalue(), path)
+    plt.close(fig)
 
 
 if __name__ == "__main__":
