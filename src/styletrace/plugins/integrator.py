@@ -291,9 +291,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         if self.media:
             # the stylized vertex is the first surface that scatters; lanes that scatter in a medium before
             # reaching it go on as ordinary volumetric paths (volume.py), the others carry the transmittance
-            w = volume_walk(scene, sampler, pi, ray, active, medium, True, self.settings.max_depth,
-                            self.settings.rr_depth, 0, stop=lambda si, d: d == 0, emitters=self.emitters,
-                            nulls=self.nulls, hide_first=hide)
+            w = self._walk(scene, sampler, pi, ray, active, 0, medium, True, stop=lambda si, d: d == 0,
+                           hide_first=hide)
             si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
             value = self.stylized(0, scene, sampler, w.pi, si, w.ray, w.halted, mi.UInt32(0), w.medium)
             return self._through(w, value), valid | w.halted | (active & (w.depth > 0)), []

@@ -218,29 +218,11 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
-        here = mi.Bool(s.active)
-        passes, w_pass = mi.Bool(False), mi.Spectrum(1.0)
-        if stop is not None:
-            halt = s.active & si.is_valid() & stop(si, s.depth)
-            if nulls:  # a stylized vertex is a scattering one: pass through the null part first
-                nullish = halt & mi.has_flag(si.bsdf(s.ray).flags(), mi.BSDFFlags.Null)
-                passes, w_pass, w_stay = null_split(si, si.bsdf(s.ray), s.sampler.next_1d(nullish), nullish)
-                halt &= ~passes
-                s.beta *= dr.select(nullish & halt, w_stay, 1.0)
-            s.halted |= halt
-            here &= ~halt
-
-        # Emission at si (environment where the ray escaped), MIS-weighted against the light
-        # sampling done at the previous vertex.
-        emitter = si.emitter(scene)
-        hit_em = here & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
-        ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
-        em_pdf = emitters.pdf_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
-        w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
-        s.L += s.beta * w_em * emitter.eval(si, hit_em)
+        bsdf = si.bsdf(s.ray)
+        here, passes, w_pass = halt_at(s, si, bsdf, s.active, stop, nulls)
+        s.L += mis_emission(scene, emitters, s, si, here)
 
         active_next = here & si.is_valid() & (s.depth + 1 < limit)
-        bsdf = si.bsdf(s.ray)
 
         # Next-event estimation.
         active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
@@ -307,10 +289,47 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     # samples come from measure-zero events (degenerate geometry, 0 * inf), so dropping them costs a
     # bias no larger than their probability times their true value; the causes known are fixed at
     # their source (`mis_power`), this keeps an unknown one from destroying a render.
-    # The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0).
+    return finished(out, lines=out.lines)
+
+
+def finished(out, **extra) -> Walk:
+    """The Walk of a finished loop state `out`, its sample dropped where it is not finite (see `walk`).
+    The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0)."""
     finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
     return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
-                depth=out.depth, halted=out.halted, lines=out.lines)
+                depth=out.depth, halted=out.halted, **extra)
+
+
+def halt_at(s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool):
+    """Where a walk's `stop` halts it at si among the lanes that `reached` it: (lanes that shade si, lanes
+    that pass straight on through a null part, their pass weight). A stylized vertex is a scattering one,
+    so with `nulls` a halting lane first passes through the null part (`null_split`) and the stay weight
+    goes into the throughput; `s.halted` gains the halted lanes. `s`: the loop state (sampler, beta,
+    depth, halted)."""
+    here, passes, w_pass = mi.Bool(reached), mi.Bool(False), mi.Spectrum(1.0)
+    if stop is not None:
+        halt = reached & si.is_valid() & stop(si, s.depth)
+        if nulls:
+            nullish = halt & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
+            passes, w_pass, w_stay = null_split(si, bsdf, s.sampler.next_1d(nullish), nullish)
+            halt &= ~passes
+            s.beta *= dr.select(nullish & halt, w_stay, 1.0)
+        s.halted |= halt
+        here &= ~halt
+    return here, passes, w_pass
+
+
+def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInteraction3f,
+                 hit: mi.Bool) -> mi.Spectrum:
+    """Emission at si (the environment where the ray escaped) on the lanes `hit`, times the throughput and
+    MIS-weighted against the light sampling done at the previous vertex (`s`: the loop state's beta,
+    si_prev, pdf_prev, delta_prev)."""
+    emitter = si.emitter(scene)
+    hit_em = hit & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
+    ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
+    em_pdf = emitters.pdf_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
+    w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
+    return s.beta * w_em * emitter.eval(si, hit_em)
 
 
 @dataclass

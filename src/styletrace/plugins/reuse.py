@@ -104,8 +104,7 @@ def _render(integ, scene, sensor, seed, spp, weights, keep):
     if film.sample_border():
         size += 2 * film.rfilter().border_size()
     width, height = int(size[0]), int(size[1])
-    m_max = max([t.slot.n(0) for t in integ.targets if not t.slot.style.closed_form] or [1])
-    per_batch = max(1, min(spp, BATCH_CHILDREN // max(width * height * m_max, 1)))
+    per_batch = max(1, min(spp, BATCH_CHILDREN // max(width * height * children_per_lane(integ.targets), 1)))
     block = film.create_block()
     done, batch = 0, 0
     while done < spp:
@@ -117,6 +116,11 @@ def _render(integ, scene, sensor, seed, spp, weights, keep):
         done, batch = done + n, batch + 1
     film.put_block(block)
     return film.develop()
+
+
+def children_per_lane(targets) -> int:
+    """M, the children stored per camera sample: the largest count of a style slot that draws children."""
+    return max([t.slot.n(0) for t in targets if not t.slot.style.closed_form] or [1])
 
 
 def _splat(block, film, pos, value, valid, wavelengths):
@@ -181,7 +185,7 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
         m = dr.select(here, 0 if t.slot.style.closed_form else t.slot.n(0), m)
     flags = bsdf.flags()
     pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
-    M = max([t.slot.n(0) for t in targets if not t.slot.style.closed_form] or [1])
+    M = children_per_lane(targets)
 
     # the children, stored per lane: child j of lane i at i * M + j
     kids = Children(N * M)

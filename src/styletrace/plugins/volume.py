@@ -37,7 +37,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .emitter_sampler import EmitterSampler
-from .path import Walk, depth_limit, mis_power, null_split, opaque_part
+from .path import depth_limit, finished, halt_at, mis_emission, mis_power, opaque_part
 
 
 def channel_of(c: mi.Spectrum, channel: mi.UInt32) -> mi.Float:
@@ -159,27 +159,9 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         # ---- the surface, for lanes whose flight reached it (or that travel in no medium)
         at_surf = s.active & ~real
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=at_surf)
-        here = mi.Bool(at_surf)
         bsdf = si.bsdf(s.ray)
-        passes, w_pass = mi.Bool(False), mi.Spectrum(1.0)
-        if stop is not None:
-            halt = at_surf & si.is_valid() & stop(si, s.depth)
-            if nulls:  # a stylized vertex is a scattering one: pass through the null part first
-                nullish = halt & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
-                passes, w_pass, w_stay = null_split(si, bsdf, s.sampler.next_1d(nullish), nullish)
-                halt &= ~passes
-                s.beta *= dr.select(nullish & halt, w_stay, 1.0)
-            s.halted |= halt
-            here &= ~halt
-
-        emitter = si.emitter(scene)
-        hit_em = here & (emitter != None)  # noqa: E711
-        if hide_first:
-            hit_em &= s.depth > 0
-        ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
-        em_pdf = emitters.pdf_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
-        w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
-        s.L += s.beta * w_em * emitter.eval(si, hit_em)
+        here, passes, w_pass = halt_at(s, si, bsdf, at_surf, stop, nulls)
+        s.L += mis_emission(scene, emitters, s, si, here & (s.depth > 0) if hide_first else here)
 
         # the BSDF is sampled at the last depth too: a null component sampled there goes on at the same depth
         sample_s = here & ~passes & si.is_valid()
@@ -258,6 +240,4 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
 
     (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace volumetric path")
     # as at the end of path.walk: a sample that is not finite is dropped
-    finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
-    return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
-                depth=out.depth, halted=out.halted, medium=out.medium)
+    return finished(out, medium=out.medium)
