@@ -61,6 +61,19 @@ def test_resume_with_other_settings_is_refused_in_one_line(tmp_path):
         Checkpoint(str(tmp_path / "b.png"), {"spp": 4}).load()
 
 
+def rounds_checkpointed(proc, manifest, at_least, timeout=240):
+    """Poll the checkpoint manifest every 50 ms until it counts `at_least` finished rounds, the process
+    ends or `timeout` seconds pass; the rounds counted last."""
+    done, deadline = 0, time.monotonic() + timeout
+    while done < at_least and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+        try:
+            done = sum(json.load(open(manifest))["rounds_done"])
+        except (OSError, ValueError):
+            pass
+    return done
+
+
 def cli(*args, **kw):
     # passes long enough (~0.1 s of paths each) that the tests' 50 ms polls see the render midway: with
     # millisecond passes a loaded machine finished the render between two polls, and the kill missed it
@@ -81,14 +94,9 @@ def test_killed_driver_then_resume_equals_the_undisturbed_render(ray_cluster, tm
     args = cli("-o", out, "--checkpoint-every", "0", "--ray", ray_cluster)
     proc = subprocess.Popen(args, env=child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
-    manifest, done, deadline = out + ".checkpoint.json", 0, time.monotonic() + 240
+    manifest = out + ".checkpoint.json"
     try:
-        while done < 3 and time.monotonic() < deadline and proc.poll() is None:
-            time.sleep(0.05)
-            try:
-                done = sum(json.load(open(manifest))["rounds_done"])
-            except (OSError, ValueError):
-                pass
+        done = rounds_checkpointed(proc, manifest, 3)
     finally:
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
@@ -107,13 +115,8 @@ def test_ctrl_c_keeps_the_finished_passes_in_the_image_and_the_checkpoint(ray_cl
     out = str(tmp_path / "out.exr")
     args = cli("-o", out, "--checkpoint-every", "0", "--ray", ray_cluster)
     proc = subprocess.Popen(args, env=child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    manifest, done, deadline = out + ".checkpoint.json", 0, time.monotonic() + 240
-    while done < 2 and time.monotonic() < deadline and proc.poll() is None:
-        time.sleep(0.05)
-        try:
-            done = sum(json.load(open(manifest))["rounds_done"])
-        except (OSError, ValueError):
-            pass
+    manifest = out + ".checkpoint.json"
+    rounds_checkpointed(proc, manifest, 2)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
