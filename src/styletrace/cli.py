@@ -345,18 +345,20 @@ def cmd_gallery(args) -> int:
 
     opts = gallery.QUICK if args.quick else gallery.Options()
     if args.size:
-        opts.size = args.size
+        opts.size = opts.equal_time_size = args.size
     only = [k.strip() for k in args.only.split(",")] if args.only else None
-    unknown = sorted(set(only or ()) - {s.key for s in gallery.SETUPS})
-    if unknown:
-        raise UsageError(f"unknown gallery setup(s) {', '.join(unknown)}: available are "
-                         f"{', '.join(s.key for s in gallery.SETUPS)}")
-    check_gallery_folder(args.output)
+    skip = [k.strip() for k in args.skip.split(",")] if args.skip else None
     try:
-        res = gallery.run(args.output, opts, only, log=say)
+        gallery.select(only, skip)  # unknown keys fail here, before the folder is made
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    say(f"wrote {os.path.join(args.output, 'index.html')} ({len(res['setups'])} setups, {res['seconds']:.0f} s)")
+    check_gallery_folder(args.output)
+    try:
+        res = gallery.run(args.output, opts, only, log=say, skip=skip)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    say(f"wrote {os.path.join(args.output, 'index.html')} ({len(res['setups'])} setups, "
+        f"{len(res['equal_time'])} equal-time comparisons, {res['seconds']:.0f} s)")
     return 0
 
 
@@ -419,7 +421,10 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("-o", "--output", default="gallery", help="output folder (default: gallery)")
     g.add_argument("--quick", action="store_true", help="small and fast (under a minute)")
     g.add_argument("--size", type=int, default=None, help="image size in pixels (square)")
-    g.add_argument("--only", default=None, help="comma-separated setup keys to run")
+    g.add_argument("--only", default=None, help="comma-separated setup keys to run (equal_time: the whole "
+                   "equal-time section, equal_time_cel: one of its comparisons)")
+    g.add_argument("--skip", default=None, help="comma-separated setup keys to leave out (equal_time: the "
+                   "equal-time section)")
     g.set_defaults(func=cmd_gallery)
 
     s = sub.add_parser("styles", help="list the styles and their parameters")

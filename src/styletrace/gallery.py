@@ -6,6 +6,11 @@ supplement) also get the mean squared error of every render against it, plotted 
 results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a contact
 sheet `index.html` / `index.md`.
 
+The equal-time section (`EQUAL_TIME`, rendered by `equal_time.py`) puts one method of each comparison side by
+side with the fixed count n that renders in the same time, both against a brute-force reference on the
+Cornell box, and says "win" or "LOSS": a method that wins at equal inner counts but loses at equal time is a
+loss. `--only equal_time` runs that section alone, `--skip equal_time` leaves it out.
+
 Quick mode (`--quick`) shrinks image size, counts and references so that it finishes in well under a
 minute; CI runs it.
 """
@@ -20,6 +25,10 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
+
+from . import equal_time
+from .equal_time import Comparison
+from .images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
 
 
 @dataclass
@@ -75,6 +84,23 @@ SETUPS = [
           integrator=dict(LINES, line_gradient=LINE_GRADIENT, line_depth=3), scene="lines"),
 ]
 
+#: The equal-time section: each method against the fixed counts at equal time (protocol: equal_time.py). Edit
+#: the `method` configurations here; each is any set of integrator keywords (inner, reuse, reuse_k, ...).
+POOLED = {"reuse": "pixels", "reuse_mis": "pairwise"}
+EQUAL_TIME = [
+    Comparison("equal_time_cel", "GI cel shading, first hit: reuse against fixed n", "cel",
+               method={"inner": 4, **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
+    Comparison("equal_time_hatching", "Cross-hatching, first hit: reuse against fixed n", "hatching",
+               method={"inner": 4, **POOLED, "reuse_k": 24}, reference=4096),
+    Comparison("equal_time_color_map", "Colour mapping, first hit: reuse against fixed n", "color_map",
+               method={"inner": 4, **POOLED, "reuse_k": 24}, reference=1024),
+    Comparison("equal_time_saturation", "Saturation, first 2 hits: adaptive count against fixed n,4",
+               "saturation", method={"inner": "8:64,4"}, reference=(64, 64),
+               integrator={"stylize": "first_n_hits", "stylize_depth": 2}, counts=(2, 4, 8, 16, 32), below=(4,)),
+]
+#: the --only / --skip key of the whole equal-time section
+EQUAL_TIME_SECTION = "equal_time"
+
 
 @dataclass
 class Options:
@@ -82,9 +108,30 @@ class Options:
     spp: int = 8
     reference_spp: int = 4
     quick: bool = False
+    equal_time_size: int = 128   # the equal-time section's image size (1 spp, equal_time.py)
+    equal_time_repeats: int = 3  # timed renders per configuration; the median counts
 
 
-QUICK = Options(size=48, spp=2, reference_spp=2, quick=True)
+QUICK = Options(size=48, spp=2, reference_spp=2, quick=True, equal_time_size=32, equal_time_repeats=1)
+
+
+def keys() -> list[str]:
+    """Everything --only and --skip accept: the setups, the comparisons and the equal-time section."""
+    return [s.key for s in SETUPS] + [c.key for c in EQUAL_TIME] + [EQUAL_TIME_SECTION]
+
+
+def select(only: list[str] | None = None,
+           skip: list[str] | None = None) -> tuple[list[Setup], list[Comparison]]:
+    """The setups and comparisons to run: those `only` names (all when None) less those `skip` names;
+    `equal_time` names every comparison. ValueError names an unknown key."""
+    unknown = sorted(set(only or ()).union(skip or ()) - set(keys()))
+    if unknown:
+        raise ValueError(f"unknown gallery setup(s) {', '.join(unknown)}: available are {', '.join(keys())}")
+
+    def chosen(names: set[str]) -> bool:  # names: the key and the section it belongs to
+        return (only is None or bool(names & set(only))) and not names & set(skip or ())
+    return ([s for s in SETUPS if chosen({s.key})],
+            [c for c in EQUAL_TIME if chosen({c.key, EQUAL_TIME_SECTION})])
 
 
 def _quick(setup: Setup) -> Setup:
@@ -100,18 +147,14 @@ def write_png(image: np.ndarray, path: str) -> None:
 
 
 def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
-        log: Callable[[str], None] = print) -> dict[str, Any]:
+        log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
     from . import api
 
     os.makedirs(out_dir, exist_ok=True)
-    setups = [s for s in SETUPS if only is None or s.key in only]
-    if only:
-        unknown = sorted(set(only) - {s.key for s in SETUPS})
-        if unknown:
-            raise ValueError(f"unknown gallery setup(s) {', '.join(unknown)}: available are "
-                             f"{', '.join(s.key for s in SETUPS)}")
-    results: dict[str, Any] = {"options": options.__dict__, "setups": []}
+    setups, comparisons = select(only, skip)
+    results: dict[str, Any] = {"options": options.__dict__, "setups": [], "equal_time": []}
     t_all = time.perf_counter()
+    comparisons = equal_time.prepare(comparisons, options.quick)  # refused settings stop it before any render
     for setup in setups:
         if options.quick:
             setup = _quick(setup)
@@ -144,18 +187,13 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
             entry["renders"].append(r)
             log(f"{setup.key}: n={n} in {secs:.1f} s" + (f", MSE {r['mse']:.3g}" if "mse" in r else ""))
         results["setups"].append(entry)
+    results["equal_time"] = equal_time.run(comparisons, out_dir, options.equal_time_size,
+                                           options.equal_time_repeats, log)
     results["seconds"] = time.perf_counter() - t_all
     plot_mse(results, os.path.join(out_dir, "mse.png"))
     write_text(os.path.join(out_dir, "gallery.json"), json.dumps(results, indent=1))
     write_sheets(results, out_dir)
     return results
-
-
-def mse(image: np.ndarray, reference: np.ndarray) -> float:
-    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest answer,
-    so numpy's warnings about it are silenced here rather than sent to stderr)."""
-    with np.errstate(over="ignore", invalid="ignore"):
-        return float(np.mean((image.astype(np.float64) - reference) ** 2))
 
 
 def plot_mse(results: dict[str, Any], path: str) -> None:
@@ -211,6 +249,8 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
                " | ".join(f"![{c}]({f})" for f, c in cells), ""]
         h += ["<div>" + "".join(f"<figure><img src='{f}'><figcaption>{html.escape(c)}</figcaption></figure>"
                                 for f, c in cells) + "</div>"]
+    md += equal_time.sheet_md(results.get("equal_time", []))
+    h += equal_time.sheet_html(results.get("equal_time", []))
     write_text(os.path.join(out_dir, "index.md"), "\n".join(md) + "\n")
     write_text(os.path.join(out_dir, "index.html"), "\n".join(h) + "\n")
 

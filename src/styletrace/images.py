@@ -4,6 +4,7 @@
     write_image(y, "out.exr", "luminance")   # H x W x 1: the film's own pixel format (Y, YA, XYZ, RGBA, ...)
     save_safely(img, "out.exr")      # never loses the render: falls back to a temporary EXR
     nonfinite_pixels(img)            # how many pixels hold NaN or +-inf
+    mse(img, reference)              # mean squared error (inf or NaN with non-finite pixels)
 
 Encoding happens in memory (Mitsuba writes the EXR or PNG into a `MemoryStream`); the bytes then go
 through a Python file object into a temporary file in the destination's folder, which is flushed,
@@ -31,6 +32,13 @@ def nonfinite_pixels(image) -> int:
     """Pixels with a NaN or infinite channel."""
     arr = np.asarray(image)
     return int(np.count_nonzero(~np.isfinite(arr).all(axis=-1)))
+
+
+def mse(image, reference) -> float:
+    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest answer,
+    so numpy's warnings about it are silenced here rather than sent to stderr)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return float(np.mean((np.asarray(image, dtype=np.float64) - reference) ** 2))
 
 
 def srgb8(image) -> np.ndarray:
