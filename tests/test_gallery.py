@@ -94,6 +94,27 @@ def test_a_method_worse_than_every_fixed_count_is_a_loss(tmp_path, monkeypatch):
     assert (out / e["file"]).stat().st_size > 0
 
 
+def test_ctrl_c_in_a_comparison_keeps_the_finished_ones(tmp_path, monkeypatch):
+    """The section saves gallery.json and the sheets after each comparison: Ctrl-C during the second loses
+    nothing of the first."""
+    from styletrace import equal_time
+    first, second = (Comparison(f"equal_time_{k}", k, "color_map", method={"inner": 4}, reference=64, counts=(4,))
+                     for k in ("first", "second"))
+    monkeypatch.setattr(gallery, "EQUAL_TIME", [first, second])
+    compare = equal_time.compare
+
+    def interrupted(c, *args, **kw):
+        if c.key == second.key:
+            raise KeyboardInterrupt
+        return compare(c, *args, **kw)
+    monkeypatch.setattr(equal_time, "compare", interrupted)
+    out = tmp_path / "g"
+    assert main(["gallery", "--quick", "--only", "equal_time", "-o", str(out)]) == 130
+    entries = json.loads((out / "gallery.json").read_text())["equal_time"]
+    assert [e["key"] for e in entries] == [first.key] and (out / entries[0]["file"]).stat().st_size > 0
+    assert f"]({entries[0]['file']})" in (out / "index.md").read_text()
+
+
 def test_refused_settings_in_the_table_stop_the_gallery_before_it_renders(tmp_path, monkeypatch, capsys):
     """reuse=pixels is refused with first_n_hits: the gallery says so in one line and renders nothing, not
     even the dragon setups that come before the section."""

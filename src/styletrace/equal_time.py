@@ -1,6 +1,7 @@
 """The gallery's equal-time section: one method against the tree sampler's fixed counts at the same time.
 
-    entries = equal_time.run(equal_time.prepare(gallery.EQUAL_TIME), "gallery", size=128, repeats=3)
+    for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):   # integrators checked, none rendered
+        entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)   # writes gallery/KEY.png
     equal_time.pick([0.10, 0.14, 0.22], 0.18)   # -> 1: the largest fixed count not slower than the method
     equal_time.verdict(0.8)                      # -> "loss": a lower error at equal time is the only win
 
@@ -172,12 +173,6 @@ def prepare(comparisons: list[Comparison], quick_mode: bool = False) -> list[Com
     comparisons = [quick(c) for c in comparisons] if quick_mode else list(comparisons)
     check(comparisons)
     return comparisons
-
-
-def run(comparisons: list[Comparison], out_dir: str, size: int, repeats: int,
-        log: Callable[[str], None] = print) -> list[dict[str, Any]]:
-    """Render prepared comparisons in turn; their gallery.json entries."""
-    return [compare(c, out_dir, size, repeats, log)[0] for c in comparisons]
 
 
 def headline(e: dict[str, Any]) -> str:

@@ -187,13 +187,20 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
             entry["renders"].append(r)
             log(f"{setup.key}: n={n} in {secs:.1f} s" + (f", MSE {r['mse']:.3g}" if "mse" in r else ""))
         results["setups"].append(entry)
-    results["equal_time"] = equal_time.run(comparisons, out_dir, options.equal_time_size,
-                                           options.equal_time_repeats, log)
-    results["seconds"] = time.perf_counter() - t_all
     plot_mse(results, os.path.join(out_dir, "mse.png"))
+    save(results, out_dir, t_all)
+    for c in comparisons:  # saved after each: an error or Ctrl-C in a later one loses none of the finished
+        results["equal_time"].append(equal_time.compare(c, out_dir, options.equal_time_size,
+                                                        options.equal_time_repeats, log)[0])
+        save(results, out_dir, t_all)
+    return results
+
+
+def save(results: dict[str, Any], out_dir: str, started: float) -> None:
+    """gallery.json and the contact sheets of what has rendered so far."""
+    results["seconds"] = time.perf_counter() - started
     write_text(os.path.join(out_dir, "gallery.json"), json.dumps(results, indent=1))
     write_sheets(results, out_dir)
-    return results
 
 
 def plot_mse(results: dict[str, Any], path: str) -> None:
