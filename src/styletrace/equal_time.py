@@ -218,7 +218,7 @@ INTRO = ("Each comparison renders at 1 camera sample per pixel with one seed, ag
          "timed render(s) after one that compiles the kernels. The fixed count at equal time is the largest n "
          "whose render is not slower than the method's (the smallest n when all are slower). Ratio: the fixed "
          "count's MSE over the method's; at 1 or below the method loses at equal time, whatever it gains at "
-         "equal inner counts. Protocol: `styletrace/equal_time.py`.")
+         "equal inner counts. Protocol: the docstring of styletrace/equal_time.py.")
 
 
 def rows(e: dict[str, Any]) -> list[tuple[str, str, str, str]]:
