@@ -2,7 +2,8 @@
 
 Reference
     Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering,
-    here restricted to the first hit, with the image as the neighbour grid (a pixel window, no hash grid).
+    here restricted to the first stylized vertex, with the image as the neighbour grid (a pixel window, no
+    hash grid).
     Veach and Guibas, "Optimally Combining Sampling Techniques for Monte Carlo Rendering", SIGGRAPH 1995:
     the multi-sample balance heuristic that gives the pooled samples their weights.
     Bitterli, "Correlations and Reuse for Fast and Accurate Physically Based Light Transport" (PhD thesis,
@@ -32,6 +33,12 @@ Dividing by the sampling neighbour's own density alone (weights='own') misses th
 cannot sample: the tests' negative control. g sees a mean of |P| m samples instead of m, so the Jensen bias of
 direct application shrinks accordingly, at the price of the geometric mismatch between neighbours (blurred
 shadow edges and style thresholds within the window; docs/reuse.md measures it).
+
+With stylize=first_n_hits (N >= 2 levels) v is the level-0 vertex and a child is `path.bounce`'s: next-event
+samples reach delta lights only, and a BSDF sample's Li is the stylized value of the level-1 vertex it reaches,
+estimated for that child alone by the ordinary tree (`integrator.stylized(1, ...)`, its own n(1) children,
+recursively for N > 2) or the environment where it escapes. The deeper levels are thus done first; level 0 then
+pools exactly as above. Pooling at level 1 as well (Tong and Hachisuka's world-space neighbours) is not done.
 
 Light is split by technique, not by MIS, at pooling lanes: MIS weights computed at different vertices would not
 sum to one at v. Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their
@@ -250,6 +257,7 @@ def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids):
     emitters = integ.emitters
     lane = dr.arange(mi.UInt32, dr.width(si.p))
     go_deeper = 1 < depth_limit(s.max_depth)
+    nested = s.stylize == "first_n_hits" and s.stylize_depth > 1
 
     def body(j, smp, total):
         on = active & (j < m)
@@ -257,21 +265,29 @@ def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids):
         to_light = step & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
         ds, em_weight = emitters.sample_direction(si, smp.next_2d(), to_light)
         to_light &= ds.pdf != 0.0
+        if nested:  # as path.bounce: delta lights only, the BSDF sample reaches every other emitter
+            to_light &= ds.delta
         val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(ctx, si, si.to_local(ds.d), smp.next_1d(), smp.next_2d(), step)
         # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all the
         # emission it can reach (weight 1) and the BSDF sample none of the first emission it meets (pdf 0
         # below), so the two pooled sums are each unbiased whatever the neighbours' densities; MIS weights
-        # computed at different vertices would not add up to one.
+        # computed at different vertices would not add up to one. (first_n_hits splits them so already.)
         w_nee = dr.select(ds.delta | pool, 1.0, mis_power(ds.pdf, pdf_l))
         E = dr.select(to_light, em_weight * w_nee, 0.0)
         wb = si.to_world(bs.wo)
         go = step & (dr.max(w_b) > 0)
         ray2 = si.spawn_ray(wb)
         pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
-        delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        w = walk(scene, smp, pi2, ray2, go, s.max_depth, s.rr_depth, 1, emitters=emitters,
-                 came_from=(dr.detach(si, True), dr.select(pool, 0.0, bs.pdf), delta & ~pool))
-        Li = dr.select(go, w.L, 0.0)
+        if nested:  # the level-1 vertex, stylized by the ordinary tree (deeper levels first), or the sky
+            si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
+            hit2 = go & si2.is_valid()
+            deeper = integ.stylized(1, scene, smp, pi2, si2, ray2, hit2, mi.UInt32(1))
+            Li = dr.select(go, dr.select(hit2, deeper, environment(scene, si2, go)), 0.0)
+        else:
+            delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+            w = walk(scene, smp, pi2, ray2, go, s.max_depth, s.rr_depth, 1, emitters=emitters,
+                     came_from=(dr.detach(si, True), dr.select(pool, 0.0, bs.pdf), delta & ~pool))
+            Li = dr.select(go, w.L, 0.0)
         x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
         finite = dr.all(dr.isfinite(x))
         at = lane * M + j

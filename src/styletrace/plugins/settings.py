@@ -45,7 +45,7 @@ STYLIZE_MODES = {
 
 REUSE_MODES = {
     "off": "every camera sample uses its own children (the tree sampler)",
-    "pixels": "first_hit only: pool the children of neighbouring pixels' first hits (docs/reuse.md)",
+    "pixels": "pool the children of neighbouring pixels' first hits (first_hit, first_n_hits; docs/reuse.md)",
 }
 REUSE_WEIGHTS = ("balance", "pairwise")
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
@@ -403,9 +403,9 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
         raise SettingsError(f"bad value {values.get('reuse_mis')!r} for 'reuse_mis': expected one of "
                             f"{', '.join(REUSE_WEIGHTS)}")
     if mode != "off":
-        if stylize != "first_hit":
+        if stylize not in ("first_hit", "first_n_hits"):
             raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
-                                f"only; use stylize=first_hit or reuse=off")
+                                f"(first_hit, first_n_hits) only; use one of those or reuse=off")
         check_reusable(slot)
     return mode, radius, k, mis
 
