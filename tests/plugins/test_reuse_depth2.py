@@ -133,3 +133,4 @@ def test_bad_settings_one_line(values, message):
     with pytest.raises(SettingsError) as err:
         api.make_integrator(**values)
     assert message in str(err.value) and "\n" not in str(err.value)
+
