@@ -182,7 +182,7 @@ BAD = [
     (dict(reuse="pixels", reuse_radius=1, reuse_k=9), "bad value 9 for 'reuse_k'"),
     (dict(reuse="pixels", reuse_radius=8, reuse_k=64), "bad value 64 for 'reuse_k'"),
     (dict(reuse="pixels", reuse_mis="power"), "bad value 'power' for 'reuse_mis'"),
-    (dict(reuse="pixels", stylize="first_n_hits", stylize_depth=2), "reuse=pixels pools samples at the first hit"),
+    (dict(reuse="pixels", stylize="first_object_hit"), "reuse=pixels pools samples at the first hit"),
     (dict(reuse="pixels", style="gamma", estimator="series"), "supports 'direct' only"),
     (dict(reuse="pixels", style="acp"), "cannot be used with reuse=pixels"),
     (dict(reuse="pixels", style="cel", inner="4:16"), "bad value '4:16' for 'inner_samples'"),
@@ -203,7 +203,8 @@ def test_command_line(tmp_path, capsys):
     assert main(["render", "-q", "--style", "cel", "--width", "16", "--height", "16", "--spp", "2", "--inner", "2",
                  "--set", "reuse=pixels", "--reuse-k", "4", "-o", str(out)]) == 0
     assert out.exists()
-    assert main(["render", "-q", "--reuse", "pixels", "--stylize", "first_n_hits", "-o", str(out)]) == 2
+    assert main(["render", "-q", "--reuse", "pixels", "--style", "identity", "--stylize", "first_object_hit", "-o",
+                 str(out)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("styletrace: error: ") and "first hit" in err and "\n" not in err
 

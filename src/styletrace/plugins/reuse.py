@@ -2,7 +2,8 @@
 
 Reference
     Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering,
-    here restricted to the first hit, with the image as the neighbour grid (a pixel window, no hash grid).
+    here restricted to the first stylized vertex, with the image as the neighbour grid (a pixel window, no
+    hash grid).
     Veach and Guibas, "Optimally Combining Sampling Techniques for Monte Carlo Rendering", SIGGRAPH 1995:
     the multi-sample balance heuristic that gives the pooled samples their weights.
     Bitterli, "Correlations and Reuse for Fast and Accurate Physically Based Light Transport" (PhD thesis,
@@ -33,6 +34,16 @@ cannot sample: the tests' negative control. g sees a mean of |P| m samples inste
 direct application shrinks accordingly, at the price of the geometric mismatch between neighbours (blurred
 shadow edges and style thresholds within the window; docs/reuse.md measures it).
 
+With stylize=first_n_hits (N >= 2 levels) v is the level-0 vertex and a child is `path.bounce`'s: next-event
+samples reach delta lights only, and a BSDF sample's Li is the stylized value of the level-1 vertex it reaches,
+estimated for that child alone by the ordinary tree (`integrator.stylized(1, ...)`, its own n(1) children,
+recursively for N > 2) or the environment where it escapes. The deeper levels are thus done first; level 0 then
+pools exactly as above. With reuse_deep=world (N = 2 only) level 1 pools too, as in Tong and Hachisuka's path
+filtering: all children of a batch are drawn at once (`_pooled_level1`), the level-1 vertices they reach (one
+per child) draw m2 children each (`_children`: ordinary paths beyond the last level), and each pools with the
+accepted ones of K2 candidates from its jittered cell of a world-space grid (world_grid.py: same target, BSDF
+and normal, within distance h), with the same weights as above; g of that pooled value is the child's Li.
+
 Light is split by technique, not by MIS, at pooling lanes: MIS weights computed at different vertices would not
 sum to one at v. Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their
 own children only (the ordinary estimate, with MIS); a pool of v alone is the ordinary estimate too.
@@ -53,6 +64,7 @@ from .emitter_sampler import EmitterSampler
 from .lane_sampler import LaneSampler
 from .path import depth_limit, emission, environment, mis_power, past_area_emitters, walk
 from .scene_graph import any_ptr
+from .world_grid import WorldGrid, density_h
 
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
 NORMAL_MIN = 0.9
@@ -104,7 +116,9 @@ def _render(integ, scene, sensor, seed, spp, weights, keep):
     if film.sample_border():
         size += 2 * film.rfilter().border_size()
     width, height = int(size[0]), int(size[1])
-    per_batch = max(1, min(spp, BATCH_CHILDREN // max(width * height * children_per_lane(integ.targets), 1)))
+    M = children_per_lane(integ.targets)
+    stored = M * (1 + children_per_lane(integ.targets, 1)) if integ.settings.reuse_deep == "world" else M
+    per_batch = max(1, min(spp, BATCH_CHILDREN // max(width * height * stored, 1)))
     block = film.create_block()
     done, batch = 0, 0
     while done < spp:
@@ -118,9 +132,33 @@ def _render(integ, scene, sensor, seed, spp, weights, keep):
     return film.develop()
 
 
-def children_per_lane(targets) -> int:
-    """M, the children stored per camera sample: the largest count of a style slot that draws children."""
-    return max([t.slot.n(0) for t in targets if not t.slot.style.closed_form] or [1])
+def children_per_lane(targets, level: int = 0) -> int:
+    """M, the children stored per vertex of `level`: the largest count of a style slot that draws children."""
+    return max([t.slot.n(level) for t in targets if not t.slot.style.closed_form] or [1])
+
+
+def _slots(integ, si, hit, bsdf, level):
+    """Per lane: its target (style slot index, -1 where none), its children count m at `level`, whether it
+    may pool (it draws children and its BSDF has no delta or null part)."""
+    styled = integ._styled(si) if len(integ.targets) > 1 else mi.Bool(False)
+    target, m = mi.Int32(-1), mi.UInt32(0)
+    for i, t in enumerate(integ.targets):
+        here = hit & (any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)
+        target = dr.select(here, i, target)
+        m = dr.select(here, 0 if t.slot.style.closed_form else t.slot.n(level), m)
+    flags = bsdf.flags()
+    pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
+    return target, m, pool
+
+
+def _styled_value(integ, target, x, v, fallback):
+    """g of each lane's target applied to x (closed-form styles to nothing), `fallback` where no target."""
+    value = mi.Spectrum(fallback)
+    for i, t in enumerate(integ.targets):
+        style = t.slot.style
+        g = style.apply(mi.Color3f(0.0), v) if style.closed_form else style.apply(x, v)
+        value = dr.select(target == i, g, value)
+    return value
 
 
 def _splat(block, film, pos, value, valid, wavelengths):
@@ -176,21 +214,16 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     bsdf = si.bsdf(ray)
 
     # which target (style slot) each lane belongs to, its children count m, and whether it may pool
-    targets = integ.targets
-    styled = integ._styled(si) if len(targets) > 1 else mi.Bool(False)
-    target, m = mi.Int32(-1), mi.UInt32(0)
-    for i, t in enumerate(targets):
-        here = hit & (any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)
-        target = dr.select(here, i, target)
-        m = dr.select(here, 0 if t.slot.style.closed_form else t.slot.n(0), m)
-    flags = bsdf.flags()
-    pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
-    M = children_per_lane(targets)
+    target, m, pool = _slots(integ, si, hit, bsdf, 0)
+    M = children_per_lane(integ.targets)
 
     # the children, stored per lane: child j of lane i at i * M + j
     kids = Children(N * M)
     base = dr.select(hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit))
-    own = _children(integ, scene, lanes, si, bsdf, hit & (m > 0), pool, m, M, kids)
+    if s.reuse_deep == "world":
+        own = _pooled_level1(integ, scene, lanes, si, bsdf, hit & (m > 0), m, M, kids, weights, keep)
+    else:
+        own = _children(integ, scene, lanes, si, bsdf, hit & (m > 0), pool, m, M, kids)
     W = (2 * s.reuse_radius + 1) ** 2 - 1
     K = min(s.reuse_k, W)  # settings.parse keeps K <= MAX_REUSE_K
     start = mi.UInt32(dr.minimum(lanes.next_1d() * W, W - 1)) if K < W else dr.zeros(mi.UInt32, N)
@@ -207,11 +240,7 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     x = base + mean
     v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(0))
-    value = mi.Spectrum(base)
-    for i, t in enumerate(targets):
-        style = t.slot.style
-        g = style.apply(mi.Color3f(0.0), v) if style.closed_form else style.apply(x, v)
-        value = dr.select(target == i, g, value)
+    value = _styled_value(integ, target, x, v, base)
     return value * ray_weight, valid, pos, ray.wavelengths
 
 
@@ -242,14 +271,16 @@ class Children:
         self.pdf = dr.zeros(mi.Float, size)
 
 
-def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids):
-    """Draw each lane's m children at its first hit, store them, and return the sum of their ordinary estimates
-    (next-event plus BSDF-sampled radiance, emission at v left out)."""
+def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids, depth: int = 0):
+    """Draw each lane's m children at its vertex (the first hit, or with `depth` 1 a second-level vertex whose
+    children are ordinary paths), store them, and return the sum of their ordinary estimates (next-event plus
+    BSDF-sampled radiance, emission at v left out)."""
     s = integ.settings
     ctx = mi.BSDFContext()
     emitters = integ.emitters
     lane = dr.arange(mi.UInt32, dr.width(si.p))
-    go_deeper = 1 < depth_limit(s.max_depth)
+    go_deeper = depth + 1 < depth_limit(s.max_depth)
+    nested = s.stylize == "first_n_hits" and s.stylize_depth > depth + 1
 
     def body(j, smp, total):
         on = active & (j < m)
@@ -257,21 +288,29 @@ def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids):
         to_light = step & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
         ds, em_weight = emitters.sample_direction(si, smp.next_2d(), to_light)
         to_light &= ds.pdf != 0.0
+        if nested:  # as path.bounce: delta lights only, the BSDF sample reaches every other emitter
+            to_light &= ds.delta
         val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(ctx, si, si.to_local(ds.d), smp.next_1d(), smp.next_2d(), step)
         # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all the
         # emission it can reach (weight 1) and the BSDF sample none of the first emission it meets (pdf 0
         # below), so the two pooled sums are each unbiased whatever the neighbours' densities; MIS weights
-        # computed at different vertices would not add up to one.
+        # computed at different vertices would not add up to one. (first_n_hits splits them so already.)
         w_nee = dr.select(ds.delta | pool, 1.0, mis_power(ds.pdf, pdf_l))
         E = dr.select(to_light, em_weight * w_nee, 0.0)
         wb = si.to_world(bs.wo)
         go = step & (dr.max(w_b) > 0)
         ray2 = si.spawn_ray(wb)
         pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
-        delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        w = walk(scene, smp, pi2, ray2, go, s.max_depth, s.rr_depth, 1, emitters=emitters,
-                 came_from=(dr.detach(si, True), dr.select(pool, 0.0, bs.pdf), delta & ~pool))
-        Li = dr.select(go, w.L, 0.0)
+        if nested:  # the level-1 vertex, stylized by the ordinary tree (deeper levels first), or the sky
+            si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
+            hit2 = go & si2.is_valid()
+            deeper = integ.stylized(depth + 1, scene, smp, pi2, si2, ray2, hit2, mi.UInt32(depth + 1))
+            Li = dr.select(go, dr.select(hit2, deeper, environment(scene, si2, go)), 0.0)
+        else:
+            delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+            w = walk(scene, smp, pi2, ray2, go, s.max_depth, s.rr_depth, depth + 1, emitters=emitters,
+                     came_from=(dr.detach(si, True), dr.select(pool, 0.0, bs.pdf), delta & ~pool))
+            Li = dr.select(go, w.L, 0.0)
         x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
         finite = dr.all(dr.isfinite(x))
         at = lane * M + j
@@ -287,6 +326,83 @@ def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids):
                                         label="styletrace reuse children")
     lanes.rng = lanes_out.rng
     return total
+
+
+def _pooled_level1(integ, scene, lanes, si, bsdf, active, m, M, kids, weights, keep=None):
+    """reuse_deep=world: `_children` for first_n_hits at depth 2 with the second level pooled too. All children
+    of a batch are drawn at once, one lane each (child j of lane i at i * M + j): a delta-light sample and a BSDF
+    sample from the first hit, as `path.bounce`; the second-level vertices they reach are shaded together by
+    `_level2`, whose value is the child's Li. Stores the children in `kids`; returns each lane's sum of their
+    ordinary estimates."""
+    s = integ.settings
+    ctx = mi.BSDFContext()
+    N = dr.width(si.p)
+    idx = dr.arange(mi.UInt32, N * M)
+    owner, j = idx // M, idx % M
+    on = dr.gather(mi.Bool, active, owner) & (j < dr.gather(mi.UInt32, m, owner))
+    sc = dr.gather(mi.SurfaceInteraction3f, si, owner)
+    bc = dr.gather(mi.BSDFPtr, bsdf, owner)
+    # one PCG32 stream per child, seeded from its camera sample's own stream
+    hi = dr.gather(mi.UInt32, dr.reinterpret_array(mi.UInt32, lanes.next_1d()), owner)
+    lo = dr.gather(mi.UInt32, dr.reinterpret_array(mi.UInt32, lanes.next_1d()), owner)
+    smp = LaneSampler(mi.PCG32(N * M, initstate=(mi.UInt64(hi) << 32) | mi.UInt64(lo),
+                               initseq=dr.arange(mi.UInt64, N * M)))
+    step = on & (1 < depth_limit(s.max_depth))
+    to_light = step & mi.has_flag(bc.flags(), mi.BSDFFlags.Smooth)
+    ds, em_weight = integ.emitters.sample_direction(sc, smp.next_2d(), to_light)
+    to_light &= ds.delta & (ds.pdf != 0.0)  # as path.bounce: the BSDF sample reaches every other emitter
+    val, _, bs, w_b = bc.eval_pdf_sample(ctx, sc, sc.to_local(ds.d), smp.next_1d(), smp.next_2d(), step)
+    E = dr.select(to_light, em_weight, 0.0)
+    wb = sc.to_world(bs.wo)
+    go = step & (dr.max(w_b) > 0)
+    ray2 = sc.spawn_ray(wb)
+    pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+    si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
+    hit2 = go & si2.is_valid()
+    deeper = _level2(integ, scene, smp, si2, ray2, hit2, weights, keep)
+    Li = dr.select(go, dr.select(hit2, deeper, environment(scene, si2, go)), 0.0)
+    x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
+    ok = on & dr.all(dr.isfinite(x))
+    kids.wl, kids.E = dr.select(ok, ds.d, 0.0), dr.select(ok, E, 0.0)
+    kids.wb, kids.Li = dr.select(ok, wb, 0.0), dr.select(ok, Li, 0.0)
+    kids.pdf = dr.select(ok & go, bs.pdf, 0.0)
+    x = dr.select(ok, x, 0.0)
+    lane = dr.arange(mi.UInt32, N)
+    total = mi.Spectrum(0.0)
+    for k in range(M):  # in a fixed order (a scatter-add would not be bit-reproducible)
+        total += dr.gather(mi.Spectrum, x, lane * M + k)
+    return total
+
+
+def _level2(integ, scene, smp, si, ray, hit, weights, keep=None):
+    """The stylized value of second-level vertices `si` (reached along `ray`; `hit`: a surface) that pool the
+    children of their world-space neighbours (world_grid.py): m2 children each by `_children` (ordinary
+    paths beyond the last stylized level), pooled exactly as at the first hit, then g of the vertex's slot."""
+    s = integ.settings
+    bsdf = si.bsdf(ray)
+    target, m, pool = _slots(integ, si, hit, bsdf, 1)
+    M = children_per_lane(integ.targets, 1)
+    kids = Children(dr.width(si.p) * M)
+    base = emission(scene, si, hit)
+    own = _children(integ, scene, smp, si, bsdf, hit & (m > 0), pool, m, M, kids, depth=1)
+    jitter, start = mi.Point3f(smp.next_1d(), smp.next_1d(), smp.next_1d()), smp.next_1d()
+    n = mi.Vector3f(si.sh_frame.n)
+    dr.eval(kids, own, base, si, target, m, pool, jitter, start, bsdf, smp)
+    box = scene.bbox()
+    diag = float(dr.norm(box.extents()))
+    h = s.reuse_h * diag if s.reuse_h > 0 else density_h(si.p, pool, s.reuse_k2, box.min, S.MIN_REUSE_H * diag, diag)
+    grid = WorldGrid(si.p, pool, h, s.reuse_k2, jitter, start, box.min)
+    mask = grid.accepted(target, bsdf, pool, n, NORMAL_MIN)
+    dr.eval(mask)
+    if keep is not None:
+        keep.update(world_mask=np.asarray(mask, dtype=np.uint64), world_p=np.asarray(si.p, dtype=np.float64),
+                    world_pool=np.asarray(pool, dtype=bool), world_h=grid.h, world_k=grid.K,
+                    world_order=np.asarray(grid.order), world_first=np.asarray(grid.first),
+                    world_count=np.asarray(grid.count), world_offset=np.asarray(grid.offset))
+    mean = _pooled(grid, mask, si, bsdf, m, M, kids, weights)
+    mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
+    v = Vertex(p=si.p, n=n, wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(1))
+    return _styled_value(integ, target, base + mean, v, 0.0)
 
 
 class Grid:

@@ -45,9 +45,16 @@ STYLIZE_MODES = {
 
 REUSE_MODES = {
     "off": "every camera sample uses its own children (the tree sampler)",
-    "pixels": "first_hit only: pool the children of neighbouring pixels' first hits (docs/reuse.md)",
+    "pixels": "pool the children of neighbouring pixels' first hits (first_hit, first_n_hits; docs/reuse.md)",
 }
 REUSE_WEIGHTS = ("balance", "pairwise")
+REUSE_DEEP = {
+    "tree": "each child's second-level value from the tree sampler (its own children)",
+    "world": "second-level vertices pool their world-space neighbours' children too (within reuse_h)",
+}
+#: Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world grid
+#: packs 21 bits per axis of a cell index into one key (world_grid.py).
+MIN_REUSE_H = 1e-4
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
 #: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
@@ -109,6 +116,14 @@ PROPERTIES = (
     Property("reuse_mis", "balance", "string", "reuse=pixels: weights of the pooled BSDF samples: balance (the "
              "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
              "the vertex itself, 2K+1; docs/reuse.md)", "--reuse-mis", "NAME"),
+    Property("reuse_deep", "tree", "string", "reuse=pixels with first_n_hits at depth 2: the second level's values: "
+             "tree (estimated per child) or world (pooled over world-space neighbours, Tong and Hachisuka 2025; "
+             "docs/reuse.md)", "", ""),
+    Property("reuse_h", 0.0, "float", f"reuse_deep=world: radius h of a second-level vertex's neighbours and the "
+             f"world grid's cell size, as a fraction of the scene's bounding-box diagonal (at least {MIN_REUSE_H:g}); "
+             f"0: from the vertices' density, a cell holding about reuse_k2 of them", "", ""),
+    Property("reuse_k2", 16, "int", f"reuse_deep=world: candidates a second-level vertex looks at in its cell (at "
+             f"most {MAX_REUSE_K})", "", ""),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
@@ -180,6 +195,9 @@ class Settings:
     reuse_radius: int = 2
     reuse_k: int = 8
     reuse_mis: str = "balance"
+    reuse_deep: str = "tree"
+    reuse_h: float = 0.0
+    reuse_k2: int = 16
 
     @property
     def style(self) -> Style:
@@ -194,7 +212,9 @@ class Settings:
                 f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
                 + ("" if self.lines is None else f", {self.lines.describe()}")
                 + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})"
-                   if self.reuse != "off" else ""))
+                   if self.reuse != "off" else "")
+                + (f", reuse_deep=world(h={self.reuse_h or 'auto'}, k2={self.reuse_k2})"
+                   if self.reuse_deep == "world" else ""))
 
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
@@ -380,6 +400,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
                             f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct")
     reuse, radius, k, mis = parse_reuse(values, slot, stylize)
+    deep, h, k2 = parse_reuse_deep(values, reuse, stylize, depth)
     lines = parse_lines(values)
     if reuse != "off" and (lines is not None or aovs):
         what = "'lines'" if lines is not None else "'aovs'"
@@ -388,7 +409,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
                     emitter_sampling=lights, hide_emitters=hide, lines=lines, adaptive_z=z,
                     adaptive_bias=target, aovs=aovs, reuse=reuse, reuse_radius=radius, reuse_k=k,
-                    reuse_mis=mis)
+                    reuse_mis=mis, reuse_deep=deep, reuse_h=h, reuse_k2=k2)
 
 
 def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
@@ -403,11 +424,29 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
         raise SettingsError(f"bad value {values.get('reuse_mis')!r} for 'reuse_mis': expected one of "
                             f"{', '.join(REUSE_WEIGHTS)}")
     if mode != "off":
-        if stylize != "first_hit":
+        if stylize not in ("first_hit", "first_n_hits"):
             raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
-                                f"only; use stylize=first_hit or reuse=off")
+                                f"(first_hit, first_n_hits) only; use one of those or reuse=off")
         check_reusable(slot)
     return mode, radius, k, mis
+
+
+def parse_reuse_deep(values: Mapping[str, Any], reuse: str, stylize: str, depth: int) -> tuple[str, float, int]:
+    """`reuse_deep`, `reuse_h`, `reuse_k2`; world-space pooling only at first_n_hits depth 2."""
+    deep = str(values.get("reuse_deep", DEFAULTS["reuse_deep"])).strip().lower()
+    if deep not in REUSE_DEEP:
+        raise SettingsError(f"bad value {values.get('reuse_deep')!r} for 'reuse_deep': expected one of "
+                            f"{', '.join(REUSE_DEEP)}")
+    h = number("reuse_h", values.get("reuse_h", DEFAULTS["reuse_h"]), 0.0, 1.0)
+    if 0.0 < h < MIN_REUSE_H:
+        raise SettingsError(f"bad value {values.get('reuse_h')!r} for 'reuse_h': expected 0 (from the vertices' "
+                            f"density) or a number in [{MIN_REUSE_H:g}, 1]")
+    k2 = integer("reuse_k2", values.get("reuse_k2", DEFAULTS["reuse_k2"]), 1, MAX_REUSE_K)
+    if deep == "world" and (reuse == "off" or stylize != "first_n_hits" or depth != 2):
+        raise SettingsError(f"bad value 'world' for 'reuse_deep': world-space pooling needs reuse=pixels with "
+                            f"stylize=first_n_hits and stylize_depth 2 (here reuse={reuse}, stylize={stylize}, "
+                            f"stylize_depth {depth})")
+    return deep, h, k2
 
 
 def check_reusable(slot: StyleSlot, where: str = "the integrator's style") -> None:
