@@ -116,10 +116,10 @@ def test_ctrl_c_in_a_comparison_keeps_the_finished_ones(tmp_path, monkeypatch):
 
 
 def test_refused_settings_in_the_table_stop_the_gallery_before_it_renders(tmp_path, monkeypatch, capsys):
-    """reuse=pixels is refused with first_n_hits: the gallery says so in one line and renders nothing, not
-    even the dragon setups that come before the section."""
-    refused = Comparison("equal_time_refused", "refused", "saturation", method={"inner": 4, "reuse": "pixels"},
-                         reference=(64, 64), integrator={"stylize": "first_n_hits", "stylize_depth": 2})
+    """reuse_deep=world is refused at the first hit (it pools second-level vertices): the gallery says so in one
+    line and renders nothing, not even the dragon setups that come before the section."""
+    refused = Comparison("equal_time_refused", "refused", "cel", reference=64,
+                         method={"inner": 4, "reuse": "pixels", "reuse_deep": "world"})
     monkeypatch.setattr(gallery, "EQUAL_TIME", [refused])
     out = tmp_path / "g"
     assert main(["gallery", "--quick", "--only", "gooch,equal_time", "-o", str(out)]) == 2

@@ -94,9 +94,10 @@ EQUAL_TIME = [
                method={"inner": 4, **POOLED, "reuse_k": 24}, reference=4096),
     Comparison("equal_time_color_map", "Colour mapping, first hit: reuse against fixed n", "color_map",
                method={"inner": 4, **POOLED, "reuse_k": 24}, reference=1024),
-    Comparison("equal_time_saturation", "Saturation, first 2 hits: adaptive count against fixed n,4",
-               "saturation", method={"inner": "8:64,4"}, reference=(64, 64),
-               integrator={"stylize": "first_n_hits", "stylize_depth": 2}, counts=(2, 4, 8, 16, 32), below=(4,)),
+    # the fixed curve n,1: the cheapest split of the two levels' counts at equal time (BENCHMARKS.md equal_time)
+    Comparison("equal_time_saturation", "Saturation, first 2 hits: reuse at the first hits against fixed n,1",
+               "saturation", method={"inner": "2,1", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=(256, 16),
+               integrator={"stylize": "first_n_hits", "stylize_depth": 2}, counts=(2, 4, 8, 16, 32, 64), below=(1,)),
 ]
 #: the --only / --skip key of the whole equal-time section
 EQUAL_TIME_SECTION = "equal_time"
