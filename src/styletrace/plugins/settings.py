@@ -73,10 +73,10 @@ PROPERTIES = (
              "`--aovs`)", "", ""),
     Property("estimator", "direct", "string", "how g(E[L]) is estimated from the children: "
              + ", ".join(estimation.names()), "--estimator", "NAME"),
-    Property("expansion_pass", 0, "int", "estimator series: m > 0 runs a pre-pass of m children at every "
-             "pixel's first stylized vertex, and the first level's series expands about that pixel's b* = "
-             f"mean(x^2)/mean(x) (from m children independent of the estimate's; at most {MAX_EXPANSION_PASS}) "
-             "with geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
+    Property("expansion_pass", 0, "int", "estimator series: m > 0 runs a pre-pass of m children per pixel at the "
+             "first stylized vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of "
+             f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
+             f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
              "--expansion-pass", "M"),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
              "MODE"),
