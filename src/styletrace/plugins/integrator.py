@@ -36,9 +36,10 @@ others reach the surface with the transmittance weight and are stylized there. C
 volumetric paths, so with the identity style the image is Mitsuba's `volpath`.
 
 The expansion pass (`expansion_pass` m > 0, estimator series; expansion.py): before a render's passes the
-front end calls `prepare_expansion`, a render at one camera sample per pixel in which the first stylized
-vertex only collects the moments of m children (less its emission); the render's series estimators at the first stylized level
-then expand about their pixel's b* (`estimation.series_with_pass`). Deeper levels keep their in-lane pilot.
+front end calls `prepare_expansion`, a render of a few camera samples per pixel in which the first stylized
+vertex only collects the moments of m children per pixel (less its emission); the render's series
+estimators at the first stylized level then expand about a b from their pixel's moments
+(`estimation.series_with_pass`). Deeper levels keep their in-lane pilot.
 
 Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
 through area lights and see black where they escape, as in Mitsuba's `path`.
