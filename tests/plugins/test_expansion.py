@@ -153,3 +153,17 @@ def test_cluster_renders_refuse_the_pass():
     with pytest.raises(UsageError) as err:
         Render(job, 4, 0, 16, 16)
     assert "bad value '16' for 'expansion_pass' in a cluster render" in str(err.value)
+
+
+def test_first_n_hits_takes_the_pass_at_the_first_level_only():
+    """With two stylized levels the pass's children are level-0 children (each with its own level-1 estimate);
+    the render's level 0 expands about the pass's b, level 1 keeps its in-lane pilot; same seed, same image."""
+    def render():
+        integ = api.make_integrator("gamma", inner=(4, 2), estimator="series", expansion_pass=8,
+                                    stylize="first_n_hits", stylize_depth=2)
+        img = api.render("cornell-box", integrator=integ, spp=1, width=12, height=12, seed=2)
+        return img, integ
+    (a, integ), (b, _) = render(), render()
+    (moments,) = integ.expansion.maps.values()
+    assert np.all(np.isfinite(a)) and np.array_equal(a, b)
+    assert np.all(moments.b_star() >= 0) and np.count_nonzero(moments.b_star()) > 0.5 * moments.b_star().size
