@@ -89,6 +89,8 @@ BAD = [
     (["--lines", "--set", "line_width=-2"], "bad value '-2' for 'line_width'"),
     (["--lines", "--set", "lines=maybe"], "bad value 'maybe' for 'lines'"),
     (["--lines", "--set", "line_tests=outline"], "bad value 'outline' in 'line_tests'"),
+    (["--style", "gamma", "--estimator", "series", "--expansion-pass", "-1"], "bad value -1 for 'expansion_pass'"),
+    (["--style", "gamma", "--expansion-pass", "8"], "bad value 8 for 'expansion_pass' with estimator 'direct'"),
 ]
 
 
@@ -314,5 +316,20 @@ def test_wild_series_estimates_are_reported_after_the_render(tmp_path, capsys):
     assert main([*common, "--estimator", "series"]) == 0
     lines = [ln for ln in capsys.readouterr().err.splitlines() if "are wild" in ln]
     assert out.exists() and len(lines) == 1 and lines[0].startswith("styletrace: warning: the 'series' estimator")
+    assert "use --expansion-pass 64 or --estimator direct" in lines[0]
     assert main([*common, "--estimator", "direct"]) == 0
     assert "are wild" not in capsys.readouterr().err
+
+
+def test_expansion_pass_flag_and_set(tmp_path):
+    """`--expansion-pass M` and `--set expansion_pass=M` run the pass: the same image, other than without it;
+    its values stay near g's range where the renderer's series alone gives -23.6 (test_wild_estimates)."""
+    common = ["render", "--style", "gamma", "--estimator", "series", "--width", "32", "--height", "32", "--spp",
+              "4", "--inner", "16", "--seed", "0", "-q"]
+    imgs = []
+    for extra in (["--expansion-pass", "64"], ["--set", "expansion_pass=64"], []):
+        out = tmp_path / f"e{len(imgs)}.exr"
+        assert main([*common, *extra, "-o", str(out)]) == 0
+        imgs.append(read(out))
+    assert np.array_equal(imgs[0], imgs[1]) and not np.array_equal(imgs[0], imgs[2])
+    assert imgs[0].min() > -1.0 and imgs[2].min() < -10.0

@@ -208,6 +208,12 @@ def pass_seed(seed: int, index: int) -> int:
     return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
 
 
+def expansion_seed(seed: int, tile: int) -> int:
+    """Seed of the expansion pass of tile `tile` (`StylizedIntegrator.prepare_expansion`): pass_seed's stream at
+    indices from 2^31 on, which no render reaches, so it differs from every pass seed of the same render."""
+    return pass_seed(seed, (1 << 31) + tile)
+
+
 @dataclass(frozen=True)
 class Tile:
     """One crop window of the film (all tiles of a render share one size, so the kernel compiles once per
@@ -340,6 +346,8 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     is then one tile at a time, and every tile gets its passes in turn. The sum of the passes is kept in
     float32, one image's worth of memory. `lock` (a context manager) is held while it is updated, so that
     another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher).
+    A `stylized` integrator with expansion_pass > 0 renders its expansion pass for each tile before the tile's
+    first pass (`expansion_seed`: another stream than the passes', the same for the same seed).
     An integrator with `aovs=True` adds its AOV channels (`aov_names`) to the film; they are summed with the
     image and read as `Progress.aovs` (docs/adaptive.md)."""
     check_passes_args(scene, integrator, spp, seed)
@@ -359,6 +367,10 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     total = np.zeros((height, width, channels + extra), dtype=np.float32)
     counts = np.zeros(len(layout), dtype=np.int64)
     index = 0
+    # the expansion pass (expansion_pass > 0): once per tile and render, before the tile's first pass
+    expand = getattr(integrator, "prepare_expansion", None)
+    if expand is not None:
+        integrator.expansion.clear()
     try:
         while counts[-1] < spp:
             for t, tile in enumerate(layout):
@@ -367,6 +379,8 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     params["film.crop_offset"] = mi.ScalarPoint2u(base[0] + tile.offset[0], base[1] + tile.offset[1])
                     params["film.crop_size"] = mi.ScalarVector2u(*tile.size)
                     params.update()
+                if expand is not None:
+                    expand(scene, expansion_seed(seed, t))
                 img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
                 arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:

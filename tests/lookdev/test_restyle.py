@@ -84,6 +84,7 @@ def test_first_object_hit_restyles_the_styled_objects():
     (dict(lines=True), SettingsError, "feature lines"),
     (dict(inner="2:8"), SettingsError, "a buffer keeps one fixed count of children"),
     (dict(aovs=True), SettingsError, "a buffer keeps the children's means, not the error AOVs"),
+    (dict(style="gamma", estimator="series", expansion_pass=16), SettingsError, "not a pre-pass's expansion point"),
 ])
 def test_what_cannot_be_recorded_is_refused(kwargs, error, message):
     kwargs = {"style": "cel", "inner": 2, **kwargs}

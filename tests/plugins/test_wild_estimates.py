@@ -16,6 +16,7 @@ def test_gamma_series_on_cornell_box_is_reported():
     assert frac >= wild.WILD_FRACTION and lo < -10 * med  # measured: 0.68% of values, min -23.6, median 0.23
     msg = wild.warning(img, settings)
     assert msg is not None and "'series'" in msg and "gamma" in msg and "\n" not in msg
+    assert "--expansion-pass 64" in msg  # the pass is off: the warning names it
 
 
 def test_tame_renders_are_not_reported():

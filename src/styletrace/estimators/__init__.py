@@ -42,10 +42,12 @@ Public API
     Affine(a1, a0=0, n=1, comb=False), Mean(m, comb=False)
     PolynomialNaive(poly, b=None)                  products of k samples per term (S6)
     PolynomialU(poly, n, b=None)                   U-statistic, Kettunen et al. 2021 recurrence (S7-S8)
-    SeriesEstimator(series, b=Pilot(1), selection="iterative", truncation=None, terms=None, max_terms=64)
+    SeriesEstimator(series, b=Pilot(1), selection="iterative", truncation=None, terms=None, max_terms=64,
+                    scaled=False)
     Telescoping(g, n0=1, truncation=PowerLaw(1.5), max_terms=2**16)
     Sum(*parts, shared=True), Product(*factors), Compose(outer, inner), inner_mean(est, m, comb=False)
     Pilot(n=1, lo=None, hi=None)                   expansion point from separate pilot samples
+    PerLane(b, lo=None)                            expansion point per lane, given (a separate pass's)
     truncations: Cumulative, PoissonCMF, Poisson, Geometric, PowerLaw
     series: exp_series, reciprocal_series, power_series, gamma_series, taylor_series, polynomial_series
     fits: chebyshev_fit, legendre_fit, bernstein_fit, taylor_fit, Fit (.to_monomial(b), .series(b))
@@ -66,7 +68,7 @@ from .fits import (Fit, bernstein_fit, chebyshev_basis, chebyshev_fit, chebyshev
                    gauss_legendre, legendre_basis, legendre_fit, taylor_fit, to_unit)
 from .harness import (Distribution, Exponential, NumpyEstimate, TwoPoint, Uniform, channel_means, estimate_drjit,
                       estimate_numpy)
-from .pilot import Pilot
+from .pilot import PerLane, Pilot
 from .polynomial import PolynomialNaive, PolynomialU, u_statistic_means, ustat_update
 from .series import SeriesEstimator
 from .telescoping import Telescoping
@@ -76,7 +78,7 @@ from .truncation import Cumulative, Geometric, Poisson, PoissonCMF, PowerLaw, Tr
 __all__ = [
     "Estimator", "Context", "Direct", "AdaptiveDirect", "channel_mean", "Affine", "Mean", "apply_linear", "PolynomialNaive", "PolynomialU",
     "u_statistic_means", "ustat_update", "SeriesEstimator", "Telescoping", "Sum", "Product", "Compose",
-    "inner_mean", "Pilot", "Truncation", "Cumulative", "PoissonCMF", "Poisson", "Geometric", "PowerLaw",
+    "inner_mean", "Pilot", "PerLane", "Truncation", "Cumulative", "PoissonCMF", "Poisson", "Geometric", "PowerLaw",
     "resolve_truncation", "Series", "PolynomialSeries", "ExpSeries", "ReciprocalSeries", "PowerFunctionSeries",
     "TaylorSeries", "exp_series", "reciprocal_series", "power_series", "gamma_series", "taylor_series",
     "polynomial_series", "taylor_shift", "Fit", "chebyshev_fit", "legendre_fit", "bernstein_fit", "taylor_fit",

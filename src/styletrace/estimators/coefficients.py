@@ -18,6 +18,9 @@ Interface (used by ``series.SeriesEstimator`` and ``polynomial``)
     start_fixed(ctx, b)      the same for a fixed b (host float or per-channel vector)
     coefficient(state)       a_k
     advance(ctx, state, k, b)  state at k + 1 (k: per-lane float)
+    advance_scaled(ctx, state, k, b)  the same for the scaled coefficients a_k b^k (ratio series only): the
+                             terms a_k (I - b)^k = (a_k b^k) ((I - b) / b)^k, whose factors stay within float32
+                             where a_k alone (b^-k for I^p) overflows and (x - b)^k underflows for small b
     coefficients(b, K)       host float64 a_0..a_K for a fixed b (tests, docs)
     function(I)              the exact g(I)
     check_center(b)          ValueError when a fixed b is outside the convergence region
@@ -108,6 +111,9 @@ class Series:
     def advance(self, ctx, state, k, b) -> tuple:
         raise NotImplementedError
 
+    def advance_scaled(self, ctx, state, k, b) -> tuple:
+        raise ValueError(f"{self.name}: scaled terms need a series defined by its coefficient ratio")
+
     def coefficients(self, b, K: int) -> np.ndarray:
         raise NotImplementedError
 
@@ -128,6 +134,9 @@ class _RatioSeries(Series):
 
     def advance(self, ctx, state, k, b):
         return (state[0] * self.ratio(k, b),)
+
+    def advance_scaled(self, ctx, state, k, b):
+        return (state[0] * (self.ratio(k, b) * b),)
 
     def coefficients(self, b, K):
         b = np.asarray(b, dtype=np.float64)

@@ -17,6 +17,8 @@ Parameters
     rho^k, rho = E[(X - b)^2] / b^2; b* = E[X^2] / E[X] minimizes rho, to cv^2 / (1 + cv^2) < 1
     (docs/estimators.md, "Gamma and the series estimators"). spread = 1 aims at b*; it needs a pilot that
     sees the rare bright children (measured on path-traced fireflies: 16 fail, 64 suffice on some scenes only).
+    PerLane(b): b given per lane by the caller, e.g. from a separate pass over other children (the renderer's
+    `expansion_pass`); it is clamped as a pilot's b is, and the estimator draws no pilot children.
 """
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ import numpy as np
 from . import arrays as A
 from .base import check_count
 
-__all__ = ["Pilot", "ExpansionPoint"]
+__all__ = ["Pilot", "PerLane", "ExpansionPoint"]
 
 
 class Pilot:
@@ -51,13 +53,28 @@ class Pilot:
                 + (f", spread={self.spread:g}" if self.spread else "") + ")")
 
 
+class PerLane:
+    """b per lane, computed by the caller from samples independent of the estimate's own (lo: a floor)."""
+
+    def __init__(self, b, lo=None):
+        if lo is not None and not (isinstance(lo, (int, float)) and math.isfinite(lo)):
+            raise ValueError(f"per-lane b floor lo must be a finite number or None, got {lo!r}")
+        self.b, self.lo = b, lo
+
+    def __repr__(self):
+        return "PerLane(...)"
+
+
 class ExpansionPoint:
     """The b of an estimator: fixed (checked against the series) or a pilot (clamped per lane)."""
 
     def __init__(self, b, default=0.0, series=None):
         self.series = series
+        self.lane = None
         if isinstance(b, Pilot):
             self.pilot, self.fixed = b, None
+        elif isinstance(b, PerLane):
+            self.pilot, self.fixed, self.lane = None, None, b
         else:
             self.pilot = None
             b = default if b is None else b
@@ -75,10 +92,14 @@ class ExpansionPoint:
     def describe(self) -> str:
         if self.pilot:
             return f"b=pilot({self.pilot.n})"
+        if self.lane:
+            return "b=per-lane"
         return f"b={np.array2string(self.fixed, precision=3)}" if self.fixed.ndim else f"b={float(self.fixed):g}"
 
     # -- kernel side --------------------------------------------------------------------------
     def start(self, ctx) -> dict:
+        if self.lane:
+            return {"b": self._lane_b(ctx)}
         if not self.pilot:
             return {}
         # b = 1 until the pilot is done keeps the unused (masked) series arithmetic finite
@@ -112,8 +133,17 @@ class ExpansionPoint:
         state["b"] = A.select(done, b, state["b"])
         return state, done
 
+    def _lane_b(self, ctx):
+        b = self.lane.b
+        if not ctx.is_drjit:
+            b = np.asarray(b, dtype=np.float64).reshape(ctx.lanes, -1)
+        b = A.clip(b, self.lane.lo, None)
+        if self.series is not None:
+            b = self.series.clamp_center(b)
+        return ctx.vzero() + b
+
     def value(self, ctx, state):
-        """b as a value array (pilot) or a constant (fixed)."""
-        if self.pilot:
+        """b as a value array (pilot, per lane) or a constant (fixed)."""
+        if self.pilot or self.lane:
             return state["b"]
         return ctx.vconst(self.fixed)

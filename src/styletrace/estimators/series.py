@@ -17,11 +17,15 @@ Reference
 Parameters (defaults)
     series       a coefficients.Series (exp_series, reciprocal_series, gamma_series, taylor_series,
                  a fit's .series(), ...).
-    b            Pilot(1) (default), a fixed float or per-channel vector (checked by the series).
+    b            Pilot(1) (default), a fixed float or per-channel vector (checked by the series), or
+                 PerLane(b) (b from a separate pass, one per lane).
     selection    "iterative" (default), "recursive" or "single".
     truncation   a truncation.Truncation or its name; default per selection: iterative ->
                  PoissonCMF(tau=2), recursive -> Cumulative(), single -> Poisson(tau=2).
     terms        "ustat" (default for iterative) or "naive" (recursive and single are always naive).
+    scaled       False; True (iterative U-statistic terms, ratio series): the terms are evaluated as
+                 (a_k b^k) x U-statistic of ((x - b) / b)^k, the same sum with factors that stay within float32
+                 for small b and many terms (a_k = C(p, k) b^(p - k) overflows past ~22 terms at b = 0.02).
     max_terms    64: no term beyond this (nor beyond a finite series' degree, nor where the truncation
                  probability is below 2^-24) is ever evaluated; the estimate is then unbiased for the
                  series truncated there. "ustat" keeps max_terms running means per lane.
@@ -53,7 +57,7 @@ def _term(coefficient, estimate):
 
 class SeriesEstimator(Estimator):
     def __init__(self, series, b=None, selection: str = "iterative", truncation=None, terms=None,
-                 max_terms: int = 64):
+                 max_terms: int = 64, scaled: bool = False):
         if not isinstance(series, Series):
             if hasattr(series, "series") and callable(series.series):
                 series = series.series()
@@ -74,6 +78,10 @@ class SeriesEstimator(Estimator):
             raise ValueError(f"terms='ustat' needs the number of terms before the samples are drawn: use "
                              f"selection='iterative' (got selection={selection!r})")
         self.terms = terms
+        self.scaled = bool(scaled)
+        if self.scaled and not (selection == "iterative" and terms == "ustat" and hasattr(series, "ratio")):
+            raise ValueError(f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
+                             f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})")
         if self.truncation.adaptive and selection != "recursive":
             raise ValueError(f"{self.truncation.name} truncation adapts to the samples, so only "
                              f"selection='recursive' can use it (got {selection!r})")
@@ -102,6 +110,8 @@ class SeriesEstimator(Estimator):
         return self.point.value(ctx, state)
 
     def _cs_start(self, ctx, state=None):
+        if self.point.lane:
+            return tuple(self.series.start(ctx, state["b"]))
         if self.point.pilot:
             if state is None:
                 return tuple(ctx.vzero() for _ in range(self.series.state_len))
@@ -114,7 +124,7 @@ class SeriesEstimator(Estimator):
     # -- protocol -------------------------------------------------------------------------------
     def start(self, ctx: Context, carry):
         state = self.point.start(ctx)
-        state["cs"] = self._cs_start(ctx)
+        state["cs"] = self._cs_start(ctx, state if self.point.lane else None)
         state["k"] = ctx.lane(0.0)
         state["prod"] = ctx.value_array(1.0)
         sel = self.selection
@@ -160,7 +170,7 @@ class SeriesEstimator(Estimator):
         else:
             state = dict(state)
         b = self._b(ctx, state)
-        y = x - b
+        y = (x - b) / b if self.scaled else x - b
         k = state["k"]
         k1 = k + 1.0
         new = {"k": k1}
@@ -202,8 +212,9 @@ class SeriesEstimator(Estimator):
         b = self._b(ctx, state)
         cs = self._cs_start(ctx, state)
         out = ctx.vzero() + self.series.coefficient(cs)
+        advance = self.series.advance_scaled if self.scaled else self.series.advance
         for k in range(1, self.K + 1):
-            cs = self.series.advance(ctx, cs, ctx.lane(float(k - 1)), b)
+            cs = advance(ctx, cs, ctx.lane(float(k - 1)), b)
             out = out + _term(self.series.coefficient(cs), state["m"][k - 1]) * float(self.invS[k])
         return out
 

@@ -16,7 +16,7 @@ numbers the estimator consumed, in call order (`lookdev.sequence`), and the reco
 exactly the render's: the recording wraps the same `draw` and `uniform` around the same stream.
 
 What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
-stylized level, a per-sample style (acp), a film whose filter is not a box, more camera samples than the
+stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film whose filter is not a box, more camera samples than the
 cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
 """
 from __future__ import annotations
@@ -55,6 +55,9 @@ def check_recordable(settings: S.Settings, slots) -> None:
     if settings.stylize_depth != 1:
         raise SettingsError(f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
                             f"level (1)")
+    if settings.expansion_pass:
+        raise SettingsError(f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each camera "
+                            f"sample's own children, not a pre-pass's expansion point; use expansion_pass=0")
     if settings.lines is not None:
         raise SettingsError("feature lines (lines=true) cannot be buffered: a buffer keeps the radiance before g, "
                             "not where lines replaced it; record without lines")

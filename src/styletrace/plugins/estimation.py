@@ -26,6 +26,18 @@ from ..styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 #: series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| < b/2).
 SERIES_MAX_TERMS = 24
 
+#: The series with the expansion pass (settings.expansion_pass): b* from the pass changes how the terms decay
+#: (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation keeps 8 terms always
+#: and continues with probability 0.9 up to 64 terms, evaluated scaled (SeriesEstimator(scaled=True)), whose
+#: factors stay within float32 (measured: benchmarks/gamma_series.py; docs/estimators.md).
+PASS_TRUNCATION = (0.9, 8)
+PASS_MAX_TERMS = 64
+#: b = PASS_B_SCALE x b*: children up to 2 x PASS_B_SCALE x b* stay inside |x - b| < b, where the series
+#: converges; the pass's b* is low wherever its m children missed a rare bright one, and a child far beyond 2b
+#: enters every term's products. Measured (32x32, equal time, benchmarks/gamma_series.py's scenes): scale 1
+#: gave glossy-sphere images with MSE 1e6 (values to -5e5), 2 gave 0.008-0.016, 4 gave 0.03 and 128.
+PASS_B_SCALE = 2.0
+
 #: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth g)
 ANY_FORM = (AffineForm, SeriesForm, PolynomialForm, CompositeForm)
 FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial",
@@ -143,10 +155,14 @@ def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
                             curvature=lambda I, h: style.curvature(I, vertex, h), z=z, bias=bias)
 
 
-def make_estimator(slot, level: int, vertex, settings=None) -> Transformed:
+def make_estimator(slot, level: int, vertex, settings=None, moments=None) -> Transformed:
     """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time). An adaptive
     count (`settings.AdaptiveCount`), or error AOVs asked for in `settings`, give `AdaptiveDirect` (its
-    `stats` feed the AOVs); a fixed count without AOVs takes the registry's builder as before."""
+    `stats` feed the AOVs); `moments` (the lane's pixel's mean x and x^2 from the expansion pass) at level 0
+    give the series about that pixel's b* (`series_with_pass`); a fixed count without AOVs takes the
+    registry's builder as before."""
+    if moments is not None and level == 0 and slot.estimator == "series":
+        return series_with_pass(slot.style, *moments)
     n = slot.n(level)
     n_max = getattr(n, "n_max", None)
     aovs = settings is not None and settings.aovs and level == 0
@@ -186,6 +202,28 @@ def _series(selection):
         shift = form.shift
         return Transformed(est, (lambda x: x + shift) if shift else None, form.scale, form.offset)
     return build
+
+
+def series_with_pass(style, sets, known=0.0) -> Transformed:
+    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample X' = X + shift =
+    known + shift + R, the largest over `sets`: the expansion pass's (mean r, mean r^2) of the lane's pixel
+    and of its window, and the lane's own `known` part of every child (its vertex's emission). No pilot
+    children; b floored at the form's pilot_lo and clamped into the series' convergence region as a pilot's
+    b is."""
+    form = style.form()
+    shift = form.shift
+    e = known + shift
+    b = None
+    for m1, m2 in sets:
+        m1, m2 = e + m1, e * e + (2.0 * e) * m1 + m2
+        bs = dr.select(m1 > 0.0, m2 / dr.select(m1 > 0.0, m1, 1.0), 0.0)
+        b = bs if b is None else dr.maximum(b, bs)
+    b = b * PASS_B_SCALE
+    # scaled terms for series whose b is kept > 0 (powers, reciprocals); exp's coefficients never overflow
+    scaled = isinstance(form.series, (E.PowerFunctionSeries, E.ReciprocalSeries))
+    est = E.SeriesEstimator(form.series, b=E.PerLane(b, lo=form.pilot_lo), selection="iterative",
+                            truncation=E.Geometric(*PASS_TRUNCATION), max_terms=PASS_MAX_TERMS, scaled=scaled)
+    return Transformed(est, (lambda x: x + shift) if shift else None, form.scale, form.offset)
 
 
 _PILOT = "pilot samples for the expansion point b"
@@ -252,4 +290,4 @@ def _combined(style, n, vertex):
 
 __all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "check_adaptive",
            "adaptive_direct", "make_estimator",
-           "Transformed", "SERIES_MAX_TERMS"]
+           "Transformed", "SERIES_MAX_TERMS", "series_with_pass", "PASS_TRUNCATION", "PASS_MAX_TERMS", "PASS_B_SCALE"]

@@ -35,6 +35,12 @@ flight ends in a real medium collision first goes on as an ordinary volumetric p
 others reach the surface with the transmittance weight and are stylized there. Children are full
 volumetric paths, so with the identity style the image is Mitsuba's `volpath`.
 
+The expansion pass (`expansion_pass` m > 0, estimator series; expansion.py): before a render's passes the
+front end calls `prepare_expansion`, a render of a few camera samples per pixel in which the first stylized
+vertex only collects the moments of m children per pixel (less its emission); the render's series
+estimators at the first stylized level then expand about a b from their pixel's moments
+(`estimation.series_with_pass`). Deeper levels keep their in-lane pilot.
+
 Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
 through area lights and see black where they escape, as in Mitsuba's `path`.
 """
@@ -47,10 +53,11 @@ from ..styles.base import Vertex, camera_forward
 from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
+from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
 from .lines import Lines
 from ..errors import SceneError
-from .path import bounce, environment, first_scattering, past_area_emitters, walk
+from .path import bounce, emission, environment, first_scattering, past_area_emitters, walk
 from .scene_graph import SceneGraph, any_ptr as _any_ptr
 from .volume import volume_walk
 
@@ -78,12 +85,20 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self.settings: S.Settings = settings if settings is not None else S.parse(self.values)
         if self.settings.reuse != "off":  # Mitsuba's own render loop otherwise, untouched
             self.render = self._render_reuse
+        self.expansion = Expansion()  # the expansion pass's per-pixel moments (expansion_pass > 0)
+        self._lane_moments = None
 
     @classmethod
     def from_values(cls, values: dict) -> "StylizedIntegrator":
         """A `stylized` integrator from property values (style, style parameters, inner_samples, ...)."""
         values = {k: v for k, v in values.items() if k != "type"}
         return cls(mi.Properties(), S.parse(values), values)
+
+    def prepare_expansion(self, scene: mi.Scene, seed: int):
+        """Run the expansion pass for the scene's current film crop with `seed` (once per crop and seed; a no-op
+        with expansion_pass 0); returns its `expansion.Moments` or None."""
+        m = self.settings.expansion_pass
+        return self.expansion.prepare(self, scene, m, int(seed)) if m else None
 
     # ---- which styles apply where --------------------------------------------------------------
     def _targets(self, scene: mi.Scene) -> list[Target]:
@@ -195,7 +210,17 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        est = make_estimator(slot, level, v, self.settings)
+        collector = self.expansion.collector
+        if collector is not None and level == 0:  # the expansion pass: the first vertex's moments only
+            if slot.estimator == "series":
+                s1, s2 = pass_moments(lambda smp: draw((smp,))[0], sampler, active, collector.children,
+                                      emission(scene, si, active))
+                collector.add(dr.width(ray.d), active, s1, s2)
+            return mi.Color3f(0.0)
+        moments = None
+        if level == 0 and self._lane_moments is not None:  # the pass's moments of x - e, and this vertex's e
+            moments = (self._lane_moments, emission(scene, si, active))
+        est = make_estimator(slot, level, v, self.settings, moments)
         value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
         stats = getattr(est.inner, "stats", None)  # AdaptiveDirect's; none for a styled object's other estimator
         if level == 0 and self.settings.aovs and stats is not None:
@@ -237,6 +262,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             # is tearing down crashed a later trace (measured: segfault in pdf_emitter_direction).
             self.targets = []
             self.emitters = None
+            self._lane_moments = None
             self.lines, self.line_states = None, {}
 
     def _sample(self, scene, sampler, ray, active, medium=None):
@@ -264,6 +290,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         active = mi.Bool(active)
         # every random decision below the camera ray comes from an independent stream per lane
         sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
+        m = self.settings.expansion_pass
+        # the lane's pixel's moments from the expansion pass (none while that pass itself is rendered)
+        self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
+                              if m and self.expansion.collector is None else None)
         if self.lines is None:
             return self._stylize(scene, sampler, ray, active, medium)
         # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)

@@ -55,6 +55,10 @@ REUSE_DEEP = {
 #: Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world grid
 #: packs 21 bits per axis of a cell index into one key (world_grid.py).
 MIN_REUSE_H = 1e-4
+#: Most children per pixel of the expansion pass (its children are traced in one loop per pixel).
+MAX_EXPANSION_PASS = 4096
+#: Estimators that take their first level's expansion point from the expansion pass.
+EXPANSION_ESTIMATORS = ("series",)
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
 #: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
@@ -76,6 +80,11 @@ PROPERTIES = (
              "`--aovs`)", "", ""),
     Property("estimator", "direct", "string", "how g(E[L]) is estimated from the children: "
              + ", ".join(estimation.names()), "--estimator", "NAME"),
+    Property("expansion_pass", 0, "int", "estimator series: m > 0 runs a pre-pass of m children per pixel at the "
+             "first stylized vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of "
+             f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
+             f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
+             "--expansion-pass", "M"),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
              "MODE"),
     Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 8: tracing time doubles "
@@ -198,6 +207,7 @@ class Settings:
     reuse_deep: str = "tree"
     reuse_h: float = 0.0
     reuse_k2: int = 16
+    expansion_pass: int = 0
 
     @property
     def style(self) -> Style:
@@ -214,7 +224,8 @@ class Settings:
                 + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})"
                    if self.reuse != "off" else "")
                 + (f", reuse_deep=world(h={self.reuse_h or 'auto'}, k2={self.reuse_k2})"
-                   if self.reuse_deep == "world" else ""))
+                   if self.reuse_deep == "world" else "")
+                + (f", expansion_pass={self.expansion_pass}" if self.expansion_pass else ""))
 
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
@@ -406,10 +417,20 @@ def parse(values: Mapping[str, Any]) -> Settings:
         what = "'lines'" if lines is not None else "'aovs'"
         raise SettingsError(f"bad value True for {what} with reuse={reuse}: a pooled pass traces its own camera "
                             f"rays and keeps no per-sample statistics; use reuse=off")
+    expansion = parse_expansion(values, slot)
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
                     emitter_sampling=lights, hide_emitters=hide, lines=lines, adaptive_z=z,
                     adaptive_bias=target, aovs=aovs, reuse=reuse, reuse_radius=radius, reuse_k=k,
-                    reuse_mis=mis, reuse_deep=deep, reuse_h=h, reuse_k2=k2)
+                    reuse_mis=mis, reuse_deep=deep, reuse_h=h, reuse_k2=k2, expansion_pass=expansion)
+
+
+def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
+    """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator only."""
+    m = integer("expansion_pass", values.get("expansion_pass", DEFAULTS["expansion_pass"]), 0, MAX_EXPANSION_PASS)
+    if m and slot.estimator not in EXPANSION_ESTIMATORS:
+        raise SettingsError(f"bad value {m} for 'expansion_pass' with estimator '{slot.estimator}': the pass gives "
+                            f"the expansion point of estimator {', '.join(EXPANSION_ESTIMATORS)} only; use 0")
+    return m  # reuse=pixels takes estimator direct only (check_reusable), so it never meets the pass
 
 
 def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
@@ -479,6 +500,6 @@ def properties_of(props) -> dict[str, Any]:
     return {key: props[key] for key in props.keys()}
 
 
-__all__ = ["Property", "PROPERTIES", "DEFAULTS", "STYLIZE_MODES", "REUSE_MODES", "check_reusable", "StyleSlot",
+__all__ = ["Property", "PROPERTIES", "DEFAULTS", "MAX_EXPANSION_PASS", "EXPANSION_ESTIMATORS", "parse_expansion", "STYLIZE_MODES", "REUSE_MODES", "check_reusable", "StyleSlot",
            "Settings", "parse", "parse_slot", "parse_inner", "parse_lines", "AdaptiveCount", "adaptive", "integer",
            "number", "boolean", "refine", "properties_of"]

@@ -10,7 +10,8 @@ Unbiased estimators use the binomial series of I^(1/gamma) about b = max(1.5 <I>
 the mean of `inner_samples` separate children (a_k = C(1/gamma, k) b^(1/gamma - k)); it converges for
 0 < I < 2b. Radiance with heavy tails (fireflies) makes these estimators' variance unbounded in practice
 (docs/estimators.md, "Gamma and the series estimators": a child far beyond 2b enters every term's products);
-the CLI warns when a render's values leave g's range [0, inf) (`styletrace.wild`).
+the integrator's `expansion_pass` (estimator series) takes b from a separate pre-pass per pixel instead
+(plugins/expansion.py); the CLI warns when a render's values leave g's range [0, inf) (`styletrace.wild`).
 """
 from __future__ import annotations
 
