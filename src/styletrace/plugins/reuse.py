@@ -53,6 +53,8 @@ into batches of samples per pixel of at most BATCH_CHILDREN children.
 """
 from __future__ import annotations
 
+import gc
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -91,6 +93,11 @@ def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weigh
     `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
     by its own density (wrong: the tests' negative control);
     `keep`, a dict, receives the first batch's pools as numpy arrays (`pools`)."""
+    # Dr.Jit traces a BSDF call over every live instance of the class. Instances of scenes that are garbage
+    # but not yet collected (reference cycles) joined the first_n_hits pooling kernel's calls and made LLVM
+    # refuse it ("invalid redefinition of function", an abort) after some sequences of earlier renders in
+    # one process (tests/plugins/test_settings.py, test_reuse.py, then test_reuse_depth2.py): collect first.
+    gc.collect()
     integ.targets = integ._targets(scene)
     if integ.nulls or integ.media:
         integ.targets = []
