@@ -411,16 +411,14 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
 
 
 def check_reusable(slot: StyleSlot, where: str = "the integrator's style") -> None:
-    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation."""
+    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation (an
+    adaptive count n0:n_max adds a refinement round, docs/reuse.md)."""
     if slot.style.per_sample:
         raise SettingsError(f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
                             f"every child sample, reuse pools samples before g")
     if slot.estimator != "direct":
         raise SettingsError(f"bad value {slot.estimator!r} for 'estimator' ({where}): reuse=pixels supports "
                             f"'direct' only (g of the pooled mean)")
-    if adaptive(slot.inner):
-        raise SettingsError(f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples' ({where}): "
-                            f"reuse=pixels draws a fixed count of children per camera sample; use a fixed count")
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
