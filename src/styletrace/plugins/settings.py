@@ -58,7 +58,8 @@ PROPERTIES = (
     Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
     Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
              "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
-             "docs/adaptive.md)", "--inner", "N"),
+             "docs/adaptive.md; with reuse=pixels, a refinement round of the pooled mean, docs/reuse.md)",
+             "--inner", "N"),
     Property("adaptive_z", 2.0, "float", "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
              "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
              "confidence, Student's t standard errors", "", ""),
