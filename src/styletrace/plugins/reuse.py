@@ -230,7 +230,7 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     x = base + mean
     if keep is not None:  # what g sees, the children each lane pooled as its own, and those it stored
-        stored = np.asarray(dr.squared_norm(kids.wl) > 0).reshape(N, M).sum(axis=1)
+        stored = np.asarray(dr.squared_norm(kids.directions()) > 0).reshape(N, M).sum(axis=1)
         keep.update(x=np.asarray(x), children=np.asarray(count), stored=stored)
     value = mi.Spectrum(base)
     for i, t in enumerate(targets):
@@ -267,13 +267,17 @@ def _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids,
                     count=np.asarray(C))
     if dr.width(idx) == 0:
         return mean, count
-    sub = LaneSampler(mi.PCG32())
-    sub.rng.state = dr.gather(mi.UInt64, lanes.rng.state, idx)
-    sub.rng.inc = dr.gather(mi.UInt64, lanes.rng.inc, idx)
-    si_k, bsdf_k = dr.gather(mi.SurfaceInteraction3f, si, idx), dr.gather(mi.BSDFPtr, bsdf, idx)
-    m_k, n_k = dr.gather(mi.UInt32, m, idx), dr.gather(mi.UInt32, n_max, idx)
+    # the extra children, one lane each (flagged lane x extra child: wide and loop-free), each on its own
+    # random stream: the flagged lane's state, a stream index per extra child
     more = max(most(integ.targets[i].slot.n(0)) - int(integ.targets[i].slot.n(0)) for i in refine)
-    _children(integ, scene, sub, si_k, bsdf_k, mi.Bool(True), mi.Bool(True), m_k, n_k, more, M, kids, idx)
+    f = dr.arange(mi.UInt32, dr.width(idx) * more)
+    at = dr.gather(mi.UInt32, idx, f // more)
+    sub = LaneSampler(mi.PCG32(dr.width(f), initstate=dr.gather(mi.UInt64, lanes.rng.state, at),
+                               initseq=mi.UInt64(f)))
+    _children(integ, scene, sub, dr.gather(mi.SurfaceInteraction3f, si, at), dr.gather(mi.BSDFPtr, bsdf, at),
+              mi.Bool(True), mi.Bool(True), dr.gather(mi.UInt32, m, at) + f % more, dr.gather(mi.UInt32, n_max, at),
+              1, M, kids, at)
+    si_k, bsdf_k = dr.gather(mi.SurfaceInteraction3f, si, idx), dr.gather(mi.BSDFPtr, bsdf, idx)
     dr.eval(kids, count)
     sub_grid = Grid(grid.width, grid.height, grid.spp, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx),
                     lane=idx)
@@ -303,22 +307,31 @@ def pools(keep: dict) -> list[list[tuple[int, int]]]:
 
 
 class Children:
-    """Flat arrays of the stored children (see the module docstring)."""
-    DRJIT_STRUCT = {"wl": mi.Vector3f, "E": mi.Spectrum, "wb": mi.Vector3f, "pdf": mi.Float, "Li": mi.Spectrum,
-                    "fLi": mi.Spectrum}
+    """The stored children (see the module docstring), 16 floats each, side by side in one flat array: a child
+    is read with four 4-float loads instead of 16 scattered ones (the pool reads every child K + 1 times).
+    Layout: wl, E, wb, pdf, Li, and fLi = f_i(wb) Li at the child's own vertex (pairwise's own samples)."""
+    DRJIT_STRUCT = {"data": mi.Float}
+    SIZE = 16
 
     def __init__(self, size: int = 0):
-        self.wl, self.wb = dr.zeros(mi.Vector3f, size), dr.zeros(mi.Vector3f, size)
-        self.E, self.Li = dr.zeros(mi.Spectrum, size), dr.zeros(mi.Spectrum, size)
-        self.pdf = dr.zeros(mi.Float, size)
-        self.fLi = dr.zeros(mi.Spectrum, size)  # f_i(wb) Li at the child's own vertex (pairwise's own samples)
+        self.data = dr.zeros(mi.Float, size * self.SIZE)
 
-    @staticmethod
-    def at(kids, c, on):
-        """The children at flat indices c: (wl, E, wb, pdf, Li)."""
-        return (dr.gather(mi.Vector3f, kids.wl, c, on), dr.gather(mi.Spectrum, kids.E, c, on),
-                dr.gather(mi.Vector3f, kids.wb, c, on), dr.gather(mi.Float, kids.pdf, c, on),
-                dr.gather(mi.Spectrum, kids.Li, c, on))
+    def store(self, c, wl, E, wb, pdf, Li, fLi, active):
+        packets = (mi.Vector4f(wl.x, wl.y, wl.z, E[0]), mi.Vector4f(E[1], E[2], wb.x, wb.y),
+                   mi.Vector4f(wb.z, pdf, Li[0], Li[1]), mi.Vector4f(Li[2], fLi[0], fLi[1], fLi[2]))
+        for t, value in enumerate(packets):
+            dr.scatter(self.data, value, c * 4 + t, active)
+
+    def load(self, c, active):
+        """(wl, E, wb, pdf, Li, fLi) of the children at flat indices c."""
+        a, b, d, e = (dr.gather(mi.Vector4f, self.data, c * 4 + t, active) for t in range(4))
+        return (mi.Vector3f(a.x, a.y, a.z), mi.Spectrum(a.w, b.x, b.y), mi.Vector3f(b.z, b.w, d.x), d.y,
+                mi.Spectrum(d.z, d.w, e.x), mi.Spectrum(e.y, e.z, e.w))
+
+    def directions(self):
+        """wl of every stored child (zero where none was stored)."""
+        first = dr.arange(mi.UInt32, dr.width(self.data) // self.SIZE) * self.SIZE
+        return mi.Vector3f(*(dr.gather(mi.Float, self.data, first + k) for k in range(3)))
 
 
 def _children(integ, scene, lanes, si, bsdf, active, pool, first, last, J, M, kids, lane):
@@ -355,12 +368,8 @@ def _children(integ, scene, lanes, si, bsdf, active, pool, first, last, J, M, ki
         x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
         finite = dr.all(dr.isfinite(x))
         at = lane * M + j
-        dr.scatter(kids.wl, ds.d, at, on & finite)
-        dr.scatter(kids.E, E, at, on & finite)
-        dr.scatter(kids.wb, wb, at, on & finite)
-        dr.scatter(kids.pdf, dr.select(go, bs.pdf, 0.0), at, on & finite)
-        dr.scatter(kids.Li, Li, at, on & finite)
-        dr.scatter(kids.fLi, dr.select(go, w_b * bs.pdf * Li, 0.0), at, on & finite)
+        kids.store(at, ds.d, E, wb, dr.select(go, bs.pdf, 0.0), Li, dr.select(go, w_b * bs.pdf * Li, 0.0),
+                   on & finite)
         total += dr.select(on & finite, x, 0.0)
         return i + 1, smp, total
 
@@ -460,7 +469,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
         q, j = i // J, i % J
         at, _ = grid.neighbour(q)
         on = has(q) & (j < dr.gather(mi.UInt32, count, at, has(q)))
-        wl, E, wb, pdf, Li = Children.at(kids, at * M + j, on)
+        wl, E, wb, pdf, Li, _ = kids.load(at * M + j, on)
         d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
         take = on & (pdf > 0)
         f = bsdf.eval(ctx, si, si.to_local(wb), take) * Li
@@ -505,8 +514,7 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all):
 
     def index(j, direct, indirect, s1, s2):
         mine = active & (j < cv)
-        wl, E, wv, pv, _ = Children.at(kids, own + j, mine)
-        fLi = dr.gather(mi.Spectrum, kids.fLi, own + j, mine)
+        wl, E, wv, pv, _, fLi = kids.load(own + j, mine)
         theirs = mine & (pv > 0) & ~alone
 
         def member(q, direct, indirect, s1, s2, canonical):
@@ -514,7 +522,7 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all):
             at, _ = grid.neighbour(q)
             ck = mi.Float(dr.gather(mi.UInt32, count, at, here))
             on = here & (j < ck)
-            wl, E, wb, pdf, Li = Children.at(kids, at * M + j, on)
+            wl, E, wb, pdf, Li, _ = kids.load(at * M + j, on)
             d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
             take = on & (pdf > 0)
             f, p_v = bsdf.eval_pdf(ctx, si, si.to_local(wb), take)
