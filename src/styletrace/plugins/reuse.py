@@ -37,8 +37,14 @@ Light is split by technique, not by MIS, at pooling lanes: MIS weights computed 
 sum to one at v. Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their
 own children only (the ordinary estimate, with MIS); a pool of v alone is the ordinary estimate too.
 Neighbours are looked up within one pass of one crop window (`api.passes` tiles images above a million pixels;
-a window is clipped at a tile's edge). The children of a pass are stored (13 floats each), so a pass is split
-into batches of samples per pixel of at most BATCH_CHILDREN children.
+a window is clipped at a tile's edge). The children of a pass are stored (16 floats each, side by side), so a
+pass is split into batches of samples per pixel of at most BATCH_CHILDREN children.
+
+With an adaptive count n0:n_max (`_refine`), lanes draw n0 children, pool them, and then the lanes whose pooled
+mean AdaptiveDirect's rule finds too close to a style threshold (or too curved), told the pool's C = sum_P c_k
+samples and their second moment, draw n_max - n0 more and recompute their pools with every member's children:
+Veach's multi-sample weights with per-member counts c_k (direct / C; balance 1 / sum_k c_k p_k; pairwise
+1 / (n c_k p_k + c_v p_v) for a member's sample and (1/n) sum_k 1 / (n c_k p_k + c_v p_v) for v's own).
 """
 from __future__ import annotations
 
@@ -59,7 +65,7 @@ from .scene_graph import any_ptr
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
 NORMAL_MIN = 0.9
 DEPTH_TOL = 0.05
-#: children stored per batch of a pass (about 60 MB of child data)
+#: children stored per batch of a pass (64 MB of child data)
 BATCH_CHILDREN = 1 << 20
 
 
@@ -211,7 +217,9 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     K = min(s.reuse_k, W)  # settings.parse keeps K <= MAX_REUSE_K
     start = mi.UInt32(dr.minimum(lanes.next_1d() * W, W - 1)) if K < W else dr.zeros(mi.UInt32, N)
     depth = dr.norm(si.p - origin)
-    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos)
+    # the refinement round seeds its children from the lanes' generators: evaluated with the first round's
+    # children, or reading them would trace the first round again
+    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos, lanes if refine else ())
 
     grid = Grid(width, height, spp, s.reuse_radius, K, start)
     mask = grid.accepted(target, bsdf, pool, mi.Vector3f(si.sh_frame.n), depth)
@@ -248,6 +256,7 @@ def _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids,
     their pools with every member's children. Returns (pooled mean, children per lane)."""
     s = integ.settings
     C = mi.Float(_pool_count(grid, mask, m))
+    dr.eval(mean, s1, s2, C)  # one kernel for the first round's pool (each output traced alone re-runs the loop)
     x = base + mean
     state = {"count": C, "sum": x * C, "mean_u": channel_mean(x),
              "m2_u": dr.maximum(s2 - dr.square(s1) / dr.maximum(C, 1.0), 0.0)}
