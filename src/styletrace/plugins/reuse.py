@@ -230,9 +230,9 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(0))
     count = m
     if refine:
-        mean, s1, s2 = _pooled(grid, mask, si, bsdf, m, first_round(targets), M, kids, weights, moments=True)
+        mean, s1, s2, C = _pooled(grid, mask, si, bsdf, m, first_round(targets), M, kids, weights, moments=True)
         mean, count = _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids, weights, v,
-                              refine, base, mean, s1, s2, keep)
+                              refine, base, mean, s1, s2, C, keep)
     else:
         mean = _pooled(grid, mask, si, bsdf, m, first_round(targets), M, kids, weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
@@ -249,13 +249,13 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
 
 
 def _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids, weights, v, refine, base, mean,
-            s1, s2, keep):
+            s1, s2, C, keep):
     """The refinement round of adaptive counts n0:n_max: the pooling lanes whose pooled mean the style's rule
     (estimators.AdaptiveDirect.needs_more, told the pool's |P| n0 samples and their moments) finds too close
     to a threshold, or too curved, draw n_max - n0 more children (those lanes alone, compacted), and recompute
-    their pools with every member's children. Returns (pooled mean, children per lane)."""
+    their pools with every member's children. mean, s1, s2 and C: the first round's pooled mean, moments and
+    count (`_pooled`). Returns (pooled mean, children per lane)."""
     s = integ.settings
-    C = mi.Float(_pool_count(grid, mask, m))
     dr.eval(mean, s1, s2, C)  # one kernel for the first round's pool (each output traced alone re-runs the loop)
     x = base + mean
     state = {"count": C, "sum": x * C, "mean_u": channel_mean(x),
@@ -291,7 +291,7 @@ def _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids,
     sub_grid = Grid(grid.width, grid.height, grid.spp, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx),
                     lane=idx)
     again = _pooled(sub_grid, dr.gather(mi.UInt64, mask, idx), si_k, bsdf_k, count, M, M, kids, weights,
-                    si_all=si)
+                    si_all=si, equal=False)
     mean = mi.Spectrum(mean)
     dr.eval(mean)
     dr.scatter(mean, again, idx)
@@ -443,19 +443,27 @@ def _pool_count(grid, mask, count):
     return total
 
 
-def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_all=None):
+def _total(grid, mask, count, equal):
+    """C = sum over the pool's members of their children counts: |P| c_v where all members have v's count."""
+    if equal:
+        return mi.Float(dr.popcnt(mask)) * mi.Float(dr.gather(mi.UInt32, count, grid.lane))
+    return mi.Float(_pool_count(grid, mask, count))
+
+
+def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_all=None, equal=True):
     """(direct + indirect)(v) of the module docstring for every lane the grid serves (meaningful where the lane
     pools); si, bsdf and mask are those lanes', si_all (default si) and `count` every lane's of the pass (member
     k contributes its first c_k = count_k children, at most J). With `moments`, also the first two moments of
     the per-child estimates' brightness, sum_i u_i and sum_i u_i^2, u_i = C x_i (x_i child i's terms of the
-    sums, C = sum_P c_k), which give the pooled mean's sample variance."""
+    sums, C = sum_P c_k), which give the pooled mean's sample variance, and C. `equal`: every member has v's
+    count (the first round: members share v's style slot), so C = |P| c_v without a loop over the slots."""
     if weights == "pairwise":
-        return _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all)
+        return _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal)
     ctx = mi.BSDFContext()
     K = grid.K
     si_all = si if si_all is None else si_all
     active = mask != 0
-    C = mi.Float(_pool_count(grid, mask, count))             # sum over P of c_k (|P| m for a fixed count)
+    C = _total(grid, mask, count, equal)                     # sum over P of c_k
 
     def has(q):
         return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
@@ -496,7 +504,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
         (mi.UInt32(0), mi.Spectrum(0.0), mi.Spectrum(0.0), mi.Float(0.0), mi.Float(0.0)),
         lambda i, d, ind, a, b: i < (K + 1) * J, body, label="styletrace reuse pool")
     mean = direct / dr.maximum(C, 1.0) + indirect
-    return (mean, s1, s2) if moments else mean
+    return (mean, s1, s2, C) if moments else mean
 
 
 def _moments(s1, s2, on, y):
@@ -504,7 +512,7 @@ def _moments(s1, s2, on, y):
     return s1 + dr.select(on, u, 0.0), s2 + dr.select(on, dr.square(u), 0.0)
 
 
-def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all):
+def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
     """_pooled with pairwise weights, n = |P| - 1 (counts c_k: Veach's multi-sample form of each pair):
         a member k's sample:  f_v Li / (n c_k p_k + c_v p_v)
         v's own sample:       f_v Li (1/n) sum_{k != v} 1 / (n c_k p_k + c_v p_v)
@@ -516,7 +524,7 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all):
     si_all = si if si_all is None else si_all
     active = mask != 0
     cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
-    C = mi.Float(_pool_count(grid, mask, count))             # sum over P of c_k (|P| m for a fixed count)
+    C = _total(grid, mask, count, equal)                     # sum over P of c_k
     others = mi.Float(dr.popcnt(mask)) - 1.0                  # n = |P| - 1
     alone = others < 0.5
     own = grid.lane * M
@@ -560,4 +568,4 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all):
     _, direct, indirect, s1, s2 = dr.while_loop((mi.UInt32(0), *zero), lambda j, *_: j < J, index,
                                                 label="styletrace reuse pool")
     mean = direct / dr.maximum(C, 1.0) + indirect
-    return (mean, s1, s2) if moments else mean
+    return (mean, s1, s2, C) if moments else mean
