@@ -317,7 +317,7 @@ def pools(keep: dict) -> list[list[tuple[int, int]]]:
 
 class Children:
     """The stored children (see the module docstring), 16 floats each, side by side in one flat array: a child
-    is read with four 4-float loads instead of 16 scattered ones (the pool reads every child K + 1 times).
+    is read with four 4-float loads instead of 16 scattered gathers (the pool reads every child K + 1 times).
     Layout: wl, E, wb, pdf, Li, and fLi = f_i(wb) Li at the child's own vertex (pairwise's own samples)."""
     DRJIT_STRUCT = {"data": mi.Float}
     SIZE = 16
@@ -508,6 +508,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
 
 
 def _moments(s1, s2, on, y):
+    """The running sums of u and u^2, u the brightness (channel mean) of a child's estimate y, where `on`."""
     u = channel_mean(y)
     return s1 + dr.select(on, u, 0.0), s2 + dr.select(on, dr.square(u), 0.0)
 
