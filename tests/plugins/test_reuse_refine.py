@@ -98,6 +98,27 @@ def test_refined_pools_stay_exact_in_a_furnace(weights, monkeypatch):
     assert abs(z) < Z, f"pooled mean {means.mean()} vs exact 1: z = {z}"
 
 
+@pytest.mark.parametrize("weights", ["pairwise", "balance"])
+def test_the_rules_standard_error_matches_the_spread_of_pooled_means(weights):
+    """The standard error the rule uses (from the per-child second moment of the pooled terms) against the
+    spread of the pooled means themselves: in the glowing sphere every lane's pooled mean has one
+    distribution, so its variance over lanes is what se^2 estimates. Pools closer than the window share
+    children, so only about lanes / 25 are independent: the variance's relative standard error is
+    sqrt(2 / (that - 1)), and the ratio must lie within Z of them (measured: 1.06 for both weights)."""
+    scene = mi.load_dict(glowing_shell(res=32))
+    se2, mean_u = [], []
+    for s in range(4):
+        _, keep = refined(scene, inner="2:8", seed=200 + s, spp=1, weights=weights, thresholds=[5.0],
+                          levels=[0.2, 0.9], max_depth=-1)
+        ok, C = keep["mask"] != 0, keep["count"]
+        se2.append((keep["m2_u"] / (C - 1) / C)[ok])
+        mean_u.append(keep["mean_u"][ok])
+    se2, mean_u = np.concatenate(se2), np.concatenate(mean_u)
+    independent = len(mean_u) / 25
+    ratio = se2.mean() / mean_u.var(ddof=1)
+    assert abs(ratio - 1) < Z * math.sqrt(2 / (independent - 1)), f"mean se^2 / variance of the means = {ratio}"
+
+
 def test_same_seed_same_image_and_the_round_changes_it():
     kw = dict(style="cel", width=24, height=24, spp=2, seed=5, reuse="pixels", reuse_k=8)
     a = api.render("cornell-box", inner="2:8", **kw)
