@@ -463,7 +463,12 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
     K = grid.K
     si_all = si if si_all is None else si_all
     active = mask != 0
+    cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
     C = _total(grid, mask, count, equal)                     # sum over P of c_k
+
+    def member_count(at, on):
+        """c_k of the members at lanes `at` (v's own where all members have it)."""
+        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
 
     def has(q):
         return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
@@ -476,7 +481,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
             at, _ = grid.neighbour(q)
             sk = dr.gather(mi.SurfaceInteraction3f, si_all, at, here)
             p = bsdf.pdf(ctx, sk, sk.to_local(wb), here)
-            total += dr.select(here, mi.Float(dr.gather(mi.UInt32, count, at, here)) * p, 0.0)
+            total += dr.select(here, member_count(at, here) * p, 0.0)
             return q + 1, total
         _, total = dr.while_loop((mi.UInt32(0), mi.Float(0.0)), lambda q, t: on & (q <= K), body,
                                  label="styletrace reuse densities")
@@ -485,7 +490,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
     def body(i, direct, indirect, s1, s2):
         q, j = i // J, i % J
         at, _ = grid.neighbour(q)
-        on = has(q) & (j < dr.gather(mi.UInt32, count, at, has(q)))
+        on = has(q) & (j < member_count(at, has(q)))
         wl, E, wb, pdf, Li, _ = kids.load(at * M + j, on)
         d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
         take = on & (pdf > 0)
@@ -526,9 +531,14 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
     active = mask != 0
     cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
     C = _total(grid, mask, count, equal)                     # sum over P of c_k
+
     others = mi.Float(dr.popcnt(mask)) - 1.0                  # n = |P| - 1
     alone = others < 0.5
     own = grid.lane * M
+
+    def member_count(at, on):
+        """c_k of the members at lanes `at` (v's own where all members have it)."""
+        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
 
     def index(j, direct, indirect, s1, s2):
         mine = active & (j < cv)
@@ -538,7 +548,7 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
         def member(q, direct, indirect, s1, s2, canonical):
             here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
             at, _ = grid.neighbour(q)
-            ck = mi.Float(dr.gather(mi.UInt32, count, at, here))
+            ck = member_count(at, here)
             on = here & (j < ck)
             wl, E, wb, pdf, Li, _ = kids.load(at * M + j, on)
             d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
