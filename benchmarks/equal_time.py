@@ -87,6 +87,7 @@ def others(depth2: bool) -> list[tuple[str, dict]]:
             ("reuse m=8 K=48 (7x7)", {"inner": 8, **pooled, "reuse_radius": 3, "reuse_k": 48}),
             ("reuse m=16 K=48 (7x7)", {"inner": 16, **pooled, "reuse_radius": 3, "reuse_k": 48}),
             # reuse with a refinement round: n0 children, n_max at lanes whose pooled mean is near a threshold
+            ("reuse m=2:12 K=48 (7x7)", {"inner": "2:12", **pooled, "reuse_radius": 3, "reuse_k": 48}),
             ("reuse m=2:16 K=48 (7x7)", {"inner": "2:16", **pooled, "reuse_radius": 3, "reuse_k": 48}),
             ("reuse m=4:16 K=24 (5x5)", {"inner": "4:16", **pooled, "reuse_k": 24})]
 
