@@ -185,7 +185,7 @@ BAD = [
     (dict(reuse="pixels", stylize="first_object_hit"), "reuse=pixels pools samples at the first hit"),
     (dict(reuse="pixels", style="gamma", estimator="series"), "supports 'direct' only"),
     (dict(reuse="pixels", style="acp"), "cannot be used with reuse=pixels"),
-    (dict(reuse="pixels", style="cel", inner="4:16"), "bad value '4:16' for 'inner_samples'"),
+    (dict(reuse="pixels", style="gamma", inner="4:16", estimator="series"), "bad value '4:16' for 'inner_samples'"),
     (dict(reuse="pixels", lines=True), "bad value True for 'lines' with reuse=pixels"),
     (dict(reuse="pixels", aovs=True), "bad value True for 'aovs' with reuse=pixels"),
 ]

@@ -122,7 +122,6 @@ def test_same_seed_bit_identical():
 
 BAD = [
     (dict(reuse="pixels", stylize="first_object_hit", stylize_depth=2), "reuse=pixels pools samples at the first hit"),
-    (dict(reuse="pixels", style="cel", inner="4:16,4", **DEPTH2), "bad value '4:16,4' for 'inner_samples'"),
     (dict(reuse="pixels", style="gamma", estimator="series", **DEPTH2), "supports 'direct' only"),
     (dict(reuse="pixels", style="acp", **DEPTH2), "cannot be used with reuse=pixels"),
 ]
@@ -134,3 +133,19 @@ def test_bad_settings_one_line(values, message):
         api.make_integrator(**values)
     assert message in str(err.value) and "\n" not in str(err.value)
 
+
+
+def test_an_adaptive_first_level_count_refines_the_first_hits():
+    """n0:n_max at the first level with reuse_deep=tree: the first hits' refinement round (test_reuse_refine)
+    works as at first_hit, its extra children valued by the tree below: the lanes the rule flags store n_max
+    children, the others n0, and the image is finite and differs from the fixed count n0's."""
+    from .test_reuse_refine import refined
+    scene = api.load_scene("cornell-box", 24, 24)
+    img, keep = refined(scene, inner="2:8,2", spp=1, thresholds=[0.05, 0.2], levels=[0.1, 0.5, 0.9],
+                        stylize="first_n_hits", stylize_depth=2)
+    flag, hit = keep["flag"], keep["target"] >= 0
+    assert 0 < flag.sum() < hit.sum()
+    assert (keep["stored"][flag] == 8).all() and (keep["stored"][~flag & hit] == 2).all()
+    fixed, _ = refined(scene, inner="2,2", spp=1, thresholds=[0.05, 0.2], levels=[0.1, 0.5, 0.9],
+                       stylize="first_n_hits", stylize_depth=2)
+    assert np.isfinite(img).all() and not np.array_equal(img, fixed)

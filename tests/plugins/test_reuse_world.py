@@ -90,6 +90,8 @@ WORLD_BAD = [
     (dict(reuse_h=1e-5, **WORLD), "bad value 1e-05 for 'reuse_h'"),
     (dict(reuse_h=2, **WORLD), "bad value 2 for 'reuse_h'"),
     (dict(reuse_k2=64, **WORLD), "bad value 64 for 'reuse_k2'"),
+    (dict(WORLD, inner_samples="2:8,1"), "bad value '2:8' for 'inner_samples'"),
+    (dict(WORLD, inner_samples="2,1:4"), "bad value '1:4' for 'inner_samples'"),
 ]
 
 

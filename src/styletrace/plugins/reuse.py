@@ -48,8 +48,14 @@ Light is split by technique, not by MIS, at pooling lanes: MIS weights computed 
 sum to one at v. Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their
 own children only (the ordinary estimate, with MIS); a pool of v alone is the ordinary estimate too.
 Neighbours are looked up within one pass of one crop window (`api.passes` tiles images above a million pixels;
-a window is clipped at a tile's edge). The children of a pass are stored (13 floats each), so a pass is split
-into batches of samples per pixel of at most BATCH_CHILDREN children.
+a window is clipped at a tile's edge). The children of a pass are stored (16 floats each, side by side), so a
+pass is split into batches of samples per pixel of at most BATCH_CHILDREN children.
+
+With an adaptive count n0:n_max (`_refine`), lanes draw n0 children, pool them, and then the lanes whose pooled
+mean AdaptiveDirect's rule finds too close to a style threshold (or too curved), told the pool's C = sum_P c_k
+samples and their second moment, draw n_max - n0 more and recompute their pools with every member's children:
+Veach's multi-sample weights with per-member counts c_k (direct / C; balance 1 / sum_k c_k p_k; pairwise
+1 / (n c_k p_k + c_v p_v) for a member's sample and (1/n) sum_k 1 / (n c_k p_k + c_v p_v) for v's own).
 """
 from __future__ import annotations
 
@@ -60,9 +66,11 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import SceneError
+from ..estimators import channel_mean
 from ..styles.base import Vertex, camera_forward
 from . import settings as S
 from .emitter_sampler import EmitterSampler
+from .estimation import adaptive_direct
 from .lane_sampler import LaneSampler
 from .path import depth_limit, emission, environment, mis_power, past_area_emitters, walk
 from .scene_graph import any_ptr
@@ -71,7 +79,7 @@ from .world_grid import WorldGrid, density_h
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
 NORMAL_MIN = 0.9
 DEPTH_TOL = 0.05
-#: children stored per batch of a pass (about 60 MB of child data)
+#: children stored per batch of a pass (64 MB of child data)
 BATCH_CHILDREN = 1 << 20
 
 
@@ -107,7 +115,7 @@ def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weigh
     try:
         for t in integ.targets:
             if t.bsdfs:
-                S.check_reusable(t.slot, f"a styled BSDF's style '{t.slot.style.name}'")
+                S.check_reusable(t.slot, f"a styled BSDF's style '{t.slot.style.name}'", integ.settings.reuse_deep)
             t.slot.style.prepare(scene)
         integ.view = camera_forward(scene)
         return _render(integ, scene, sensor, seed, spp, weights or integ.settings.reuse_mis, keep)
@@ -140,19 +148,30 @@ def _render(integ, scene, sensor, seed, spp, weights, keep):
 
 
 def children_per_lane(targets, level: int = 0) -> int:
-    """M, the children stored per vertex of `level`: the largest count of a style slot that draws children."""
-    return max([t.slot.n(level) for t in targets if not t.slot.style.closed_form] or [1])
+    """M, the children stored per vertex of `level`: the largest count of a style slot that draws children (n_max
+    for an adaptive count n0:n_max)."""
+    return max([most(t.slot.n(level)) for t in targets if not t.slot.style.closed_form] or [1])
+
+
+def most(n) -> int:
+    """The most children a count draws: n_max of an adaptive n0:n_max, else n."""
+    return int(getattr(n, "n_max", n))
+
+
+def first_round(targets, level: int = 0) -> int:
+    """The most children any vertex of `level` draws before the refinement round (n0 of an adaptive count)."""
+    return max([int(t.slot.n(level)) for t in targets if not t.slot.style.closed_form] or [1])
 
 
 def _slots(integ, si, hit, bsdf, level):
-    """Per lane: its target (style slot index, -1 where none), its children count m at `level`, whether it
-    may pool (it draws children and its BSDF has no delta or null part)."""
+    """Per lane: its target (style slot index, -1 where none), its children count m at `level` (n0 of an
+    adaptive count), whether it may pool (it draws children and its BSDF has no delta or null part)."""
     styled = integ._styled(si) if len(integ.targets) > 1 else mi.Bool(False)
     target, m = mi.Int32(-1), mi.UInt32(0)
     for i, t in enumerate(integ.targets):
         here = hit & (any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)
         target = dr.select(here, i, target)
-        m = dr.select(here, 0 if t.slot.style.closed_form else t.slot.n(level), m)
+        m = dr.select(here, 0 if t.slot.style.closed_form else int(t.slot.n(level)), m)
     flags = bsdf.flags()
     pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
     return target, m, pool
@@ -221,21 +240,27 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     bsdf = si.bsdf(ray)
 
     # which target (style slot) each lane belongs to, its children count m, and whether it may pool
+    targets = integ.targets
     target, m, pool = _slots(integ, si, hit, bsdf, 0)
-    M = children_per_lane(integ.targets)
+    M = children_per_lane(targets)
+    refine = [i for i, t in enumerate(targets) if most(t.slot.n(0)) > int(t.slot.n(0))]
 
     # the children, stored per lane: child j of lane i at i * M + j
     kids = Children(N * M)
     base = dr.select(hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit))
+    lane = dr.arange(mi.UInt32, N)
     if s.reuse_deep == "world":
         own = _pooled_level1(integ, scene, lanes, si, bsdf, hit & (m > 0), m, M, kids, weights, keep)
     else:
-        own = _children(integ, scene, lanes, si, bsdf, hit & (m > 0), pool, m, M, kids)
+        own = _children(integ, scene, lanes, si, bsdf, hit & (m > 0), pool, mi.UInt32(0), m, first_round(targets),
+                        M, kids, lane)
     W = (2 * s.reuse_radius + 1) ** 2 - 1
     K = min(s.reuse_k, W)  # settings.parse keeps K <= MAX_REUSE_K
     start = mi.UInt32(dr.minimum(lanes.next_1d() * W, W - 1)) if K < W else dr.zeros(mi.UInt32, N)
     depth = dr.norm(si.p - origin)
-    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos)
+    # the refinement round seeds its children from the lanes' generators: evaluated with the first round's
+    # children, or reading them would trace the first round again
+    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos, lanes if refine else ())
 
     grid = Grid(width, height, spp, s.reuse_radius, K, start)
     mask = grid.accepted(target, bsdf, pool, mi.Vector3f(si.sh_frame.n), depth)
@@ -243,12 +268,71 @@ def _batch(integ, scene, sensor, seed, spp, width, height, spp_total, weights, k
     if keep is not None:
         keep.update(mask=np.asarray(mask, dtype=np.uint64), start=np.asarray(start, dtype=np.int64), spp=spp,
                     width=width, height=height, K=K, radius=s.reuse_radius, target=np.asarray(target))
-    mean = _pooled(grid, mask, si, bsdf, m, M, kids, weights)
+    v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(0))
+    count = m
+    if refine:
+        mean, s1, s2, C = _pooled(grid, mask, si, bsdf, m, first_round(targets), M, kids, weights, moments=True)
+        mean, count = _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids, weights, v,
+                              refine, base, mean, s1, s2, C, keep)
+    else:
+        mean = _pooled(grid, mask, si, bsdf, m, first_round(targets), M, kids, weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     x = base + mean
-    v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(0))
+    if keep is not None:  # what g sees, the children each lane pooled as its own, and those it stored
+        stored = np.asarray(dr.squared_norm(kids.directions()) > 0).reshape(N, M).sum(axis=1)
+        keep.update(x=np.asarray(x), children=np.asarray(count), stored=stored)
     value = _styled_value(integ, target, x, v, base)
     return value * ray_weight, valid, pos, ray.wavelengths
+
+
+def _refine(integ, scene, lanes, grid, mask, si, bsdf, target, pool, m, M, kids, weights, v, refine, base, mean,
+            s1, s2, C, keep):
+    """The refinement round of adaptive counts n0:n_max: the pooling lanes whose pooled mean the style's rule
+    (estimators.AdaptiveDirect.needs_more, told the pool's |P| n0 samples and their moments) finds too close
+    to a threshold, or too curved, draw n_max - n0 more children (those lanes alone, compacted), and recompute
+    their pools with every member's children. mean, s1, s2 and C: the first round's pooled mean, moments and
+    count (`_pooled`). Returns (pooled mean, children per lane)."""
+    s = integ.settings
+    dr.eval(mean, s1, s2, C)  # one kernel for the first round's pool (each output traced alone re-runs the loop)
+    x = base + mean
+    state = {"count": C, "sum": x * C, "mean_u": channel_mean(x),
+             "m2_u": dr.maximum(s2 - dr.square(s1) / dr.maximum(C, 1.0), 0.0)}
+    flag, n_max = mi.Bool(False), mi.UInt32(m)
+    for i in refine:
+        slot = integ.targets[i].slot
+        est = adaptive_direct(slot.style, int(slot.n(0)), most(slot.n(0)), v, s.adaptive_z, s.adaptive_bias)
+        state["tau"] = tuple(dr.zeros(mi.Float, dr.width(C)) + t for t in est.thresholds)
+        here = (target == i) & pool
+        flag |= here & est.needs_more(state)
+        n_max = dr.select(here, most(slot.n(0)), n_max)
+    dr.eval(flag, n_max)
+    idx = dr.compress(flag)
+    count = dr.select(flag, n_max, m)
+    if keep is not None:
+        keep.update(flag=np.asarray(flag), mean_u=np.asarray(state["mean_u"]), m2_u=np.asarray(state["m2_u"]),
+                    count=np.asarray(C))
+    if dr.width(idx) == 0:
+        return mean, count
+    # the extra children, one lane each (flagged lane x extra child: wide and loop-free), each on its own
+    # random stream: the flagged lane's state, a stream index per extra child
+    more = max(most(integ.targets[i].slot.n(0)) - int(integ.targets[i].slot.n(0)) for i in refine)
+    f = dr.arange(mi.UInt32, dr.width(idx) * more)
+    at = dr.gather(mi.UInt32, idx, f // more)
+    sub = LaneSampler(mi.PCG32(dr.width(f), initstate=dr.gather(mi.UInt64, lanes.rng.state, at),
+                               initseq=mi.UInt64(f)))
+    _children(integ, scene, sub, dr.gather(mi.SurfaceInteraction3f, si, at), dr.gather(mi.BSDFPtr, bsdf, at),
+              mi.Bool(True), mi.Bool(True), dr.gather(mi.UInt32, m, at) + f % more, dr.gather(mi.UInt32, n_max, at),
+              1, M, kids, at)
+    si_k, bsdf_k = dr.gather(mi.SurfaceInteraction3f, si, idx), dr.gather(mi.BSDFPtr, bsdf, idx)
+    dr.eval(kids, count)
+    sub_grid = Grid(grid.width, grid.height, grid.spp, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx),
+                    lane=idx)
+    again = _pooled(sub_grid, dr.gather(mi.UInt64, mask, idx), si_k, bsdf_k, count, M, M, kids, weights,
+                    si_all=si, equal=False)
+    mean = mi.Spectrum(mean)
+    dr.eval(mean)
+    dr.scatter(mean, again, idx)
+    return mean, count
 
 
 def pools(keep: dict) -> list[list[tuple[int, int]]]:
@@ -269,28 +353,46 @@ def pools(keep: dict) -> list[list[tuple[int, int]]]:
 
 
 class Children:
-    """Flat arrays of the stored children (see the module docstring)."""
-    DRJIT_STRUCT = {"wl": mi.Vector3f, "E": mi.Spectrum, "wb": mi.Vector3f, "pdf": mi.Float, "Li": mi.Spectrum}
+    """The stored children (see the module docstring), 16 floats each, side by side in one flat array: a child
+    is read with four 4-float loads instead of 16 scattered gathers (the pool reads every child K + 1 times).
+    Layout: wl, E, wb, pdf, Li, and fLi = f_i(wb) Li at the child's own vertex (pairwise's own samples)."""
+    DRJIT_STRUCT = {"data": mi.Float}
+    SIZE = 16
 
     def __init__(self, size: int = 0):
-        self.wl, self.wb = dr.zeros(mi.Vector3f, size), dr.zeros(mi.Vector3f, size)
-        self.E, self.Li = dr.zeros(mi.Spectrum, size), dr.zeros(mi.Spectrum, size)
-        self.pdf = dr.zeros(mi.Float, size)
+        self.data = dr.zeros(mi.Float, size * self.SIZE)
+
+    def store(self, c, wl, E, wb, pdf, Li, fLi, active):
+        packets = (mi.Vector4f(wl.x, wl.y, wl.z, E[0]), mi.Vector4f(E[1], E[2], wb.x, wb.y),
+                   mi.Vector4f(wb.z, pdf, Li[0], Li[1]), mi.Vector4f(Li[2], fLi[0], fLi[1], fLi[2]))
+        for t, value in enumerate(packets):
+            dr.scatter(self.data, value, c * 4 + t, active)
+
+    def load(self, c, active):
+        """(wl, E, wb, pdf, Li, fLi) of the children at flat indices c."""
+        a, b, d, e = (dr.gather(mi.Vector4f, self.data, c * 4 + t, active) for t in range(4))
+        return (mi.Vector3f(a.x, a.y, a.z), mi.Spectrum(a.w, b.x, b.y), mi.Vector3f(b.z, b.w, d.x), d.y,
+                mi.Spectrum(d.z, d.w, e.x), mi.Spectrum(e.y, e.z, e.w))
+
+    def directions(self):
+        """wl of every stored child (zero where none was stored)."""
+        first = dr.arange(mi.UInt32, dr.width(self.data) // self.SIZE) * self.SIZE
+        return mi.Vector3f(*(dr.gather(mi.Float, self.data, first + k) for k in range(3)))
 
 
-def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids, depth: int = 0):
-    """Draw each lane's m children at its vertex (the first hit, or with `depth` 1 a second-level vertex whose
-    children are ordinary paths), store them, and return the sum of their ordinary estimates (next-event plus
-    BSDF-sampled radiance, emission at v left out)."""
+def _children(integ, scene, lanes, si, bsdf, active, pool, first, last, J, M, kids, lane, depth: int = 0):
+    """Draw children first .. last - 1 of each lane (at most J of them) at its vertex (the first hit, or with
+    `depth` 1 a second-level vertex whose children are ordinary paths), store them at lane * M + j, and return
+    the sum of their ordinary estimates (next-event plus BSDF-sampled radiance, emission at v left out)."""
     s = integ.settings
     ctx = mi.BSDFContext()
     emitters = integ.emitters
-    lane = dr.arange(mi.UInt32, dr.width(si.p))
     go_deeper = depth + 1 < depth_limit(s.max_depth)
     nested = s.stylize == "first_n_hits" and s.stylize_depth > depth + 1
 
-    def body(j, smp, total):
-        on = active & (j < m)
+    def body(i, smp, total):
+        j = first + i
+        on = active & (j < last)
         step = on & go_deeper
         to_light = step & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
         ds, em_weight = emitters.sample_direction(si, smp.next_2d(), to_light)
@@ -321,15 +423,12 @@ def _children(integ, scene, lanes, si, bsdf, active, pool, m, M, kids, depth: in
         x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
         finite = dr.all(dr.isfinite(x))
         at = lane * M + j
-        dr.scatter(kids.wl, ds.d, at, on & finite)
-        dr.scatter(kids.E, E, at, on & finite)
-        dr.scatter(kids.wb, wb, at, on & finite)
-        dr.scatter(kids.pdf, dr.select(go, bs.pdf, 0.0), at, on & finite)
-        dr.scatter(kids.Li, Li, at, on & finite)
+        kids.store(at, ds.d, E, wb, dr.select(go, bs.pdf, 0.0), Li, dr.select(go, w_b * bs.pdf * Li, 0.0),
+                   on & finite)
         total += dr.select(on & finite, x, 0.0)
-        return j + 1, smp, total
+        return i + 1, smp, total
 
-    _, lanes_out, total = dr.while_loop((mi.UInt32(0), lanes, mi.Spectrum(0.0)), lambda j, smp, t: j < M, body,
+    _, lanes_out, total = dr.while_loop((mi.UInt32(0), lanes, mi.Spectrum(0.0)), lambda i, smp, t: i < J, body,
                                         label="styletrace reuse children")
     lanes.rng = lanes_out.rng
     return total
@@ -370,9 +469,7 @@ def _pooled_level1(integ, scene, lanes, si, bsdf, active, m, M, kids, weights, k
     Li = dr.select(go, dr.select(hit2, deeper, environment(scene, si2, go)), 0.0)
     x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
     ok = on & dr.all(dr.isfinite(x))
-    kids.wl, kids.E = dr.select(ok, ds.d, 0.0), dr.select(ok, E, 0.0)
-    kids.wb, kids.Li = dr.select(ok, wb, 0.0), dr.select(ok, Li, 0.0)
-    kids.pdf = dr.select(ok & go, bs.pdf, 0.0)
+    kids.store(idx, ds.d, E, wb, dr.select(go, bs.pdf, 0.0), Li, dr.select(go, w_b * bs.pdf * Li, 0.0), ok)
     x = dr.select(ok, x, 0.0)
     lane = dr.arange(mi.UInt32, N)
     total = mi.Spectrum(0.0)
@@ -391,7 +488,9 @@ def _level2(integ, scene, smp, si, ray, hit, weights, keep=None):
     M = children_per_lane(integ.targets, 1)
     kids = Children(dr.width(si.p) * M)
     base = emission(scene, si, hit)
-    own = _children(integ, scene, smp, si, bsdf, hit & (m > 0), pool, m, M, kids, depth=1)
+    J = first_round(integ.targets, 1)
+    own = _children(integ, scene, smp, si, bsdf, hit & (m > 0), pool, mi.UInt32(0), m, J, M, kids,
+                    dr.arange(mi.UInt32, dr.width(si.p)), depth=1)
     jitter, start = mi.Point3f(smp.next_1d(), smp.next_1d(), smp.next_1d()), smp.next_1d()
     n = mi.Vector3f(si.sh_frame.n)
     dr.eval(kids, own, base, si, target, m, pool, jitter, start, bsdf, smp)
@@ -406,7 +505,7 @@ def _level2(integ, scene, smp, si, ray, hit, weights, keep=None):
                     world_pool=np.asarray(pool, dtype=bool), world_h=grid.h, world_k=grid.K,
                     world_order=np.asarray(grid.order), world_first=np.asarray(grid.first),
                     world_count=np.asarray(grid.count), world_offset=np.asarray(grid.offset))
-    mean = _pooled(grid, mask, si, bsdf, m, M, kids, weights)
+    mean = _pooled(grid, mask, si, bsdf, m, J, M, kids, weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     v = Vertex(p=si.p, n=n, wo=-ray.d, view=mi.Vector3f(integ.view), depth=mi.UInt32(1))
     return _styled_value(integ, target, base + mean, v, 0.0)
@@ -414,15 +513,16 @@ def _level2(integ, scene, smp, si, ray, hit, weights, keep=None):
 
 class Grid:
     """The neighbour slots of each lane: slot 0 is the lane itself, slot q >= 1 the pixel at window offset
-    order[(start + q - 1) mod W], same sample index."""
+    order[(start + q - 1) mod W], same sample index. `lane`: the lanes (indices into the pass) this grid
+    serves, all of them by default, with `start` given per served lane."""
 
-    def __init__(self, width, height, spp, radius, K, start):
-        self.width, self.height, self.spp, self.K = width, height, spp, K
+    def __init__(self, width, height, spp, radius, K, start, lane=None):
+        self.width, self.height, self.spp, self.K, self.radius = width, height, spp, K, radius
         offsets = window(radius)
         self.W = len(offsets)
         self.dx, self.dy = mi.Int32(offsets[:, 0]), mi.Int32(offsets[:, 1])
         self.start = start
-        self.lane = dr.arange(mi.UInt32, width * height * spp)
+        self.lane = dr.arange(mi.UInt32, width * height * spp) if lane is None else lane
         pix = self.lane // spp
         self.s = self.lane - pix * spp
         self.y = mi.Int32(pix // width)
@@ -455,59 +555,151 @@ class Grid:
         return mask
 
 
-def _pooled(grid, mask, si, bsdf, m, M, kids, weights):
-    """(direct + indirect)(v) of the module docstring for every lane (meaningful where the lane pools)."""
+def _pool_count(grid, mask, count):
+    """C = sum over the pool's members of their children counts (count: per lane of the pass)."""
+    def body(q, total):
+        here = ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+        at, _ = grid.neighbour(q)
+        return q + 1, total + dr.select(here, dr.gather(mi.UInt32, count, at, here), 0)
+    _, total = dr.while_loop((mi.UInt32(0), mi.UInt32(0)), lambda q, t: q <= grid.K, body,
+                             label="styletrace reuse pool count")
+    return total
+
+
+def _total(grid, mask, count, equal):
+    """C = sum over the pool's members of their children counts: |P| c_v where all members have v's count."""
+    if equal:
+        return mi.Float(dr.popcnt(mask)) * mi.Float(dr.gather(mi.UInt32, count, grid.lane))
+    return mi.Float(_pool_count(grid, mask, count))
+
+
+def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_all=None, equal=True):
+    """(direct + indirect)(v) of the module docstring for every lane the grid serves (meaningful where the lane
+    pools); si, bsdf and mask are those lanes', si_all (default si) and `count` every lane's of the pass (member
+    k contributes its first c_k = count_k children, at most J). With `moments`, also the first two moments of
+    the per-child estimates' brightness, sum_i u_i and sum_i u_i^2, u_i = C x_i (x_i child i's terms of the
+    sums, C = sum_P c_k), which give the pooled mean's sample variance, and C. `equal`: every member has v's
+    count (the first round: members share v's style slot), so C = |P| c_v without a loop over the slots."""
+    if weights == "pairwise":
+        return _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal)
     ctx = mi.BSDFContext()
     K = grid.K
+    si_all = si if si_all is None else si_all
     active = mask != 0
-    mf = mi.Float(m)
-    members = mi.Float(dr.popcnt(mask))          # |P|
-    others = dr.maximum(members - 1.0, 1.0)      # n = |P| - 1 (1 where v pools alone: unused then)
+    cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
+    C = _total(grid, mask, count, equal)                     # sum over P of c_k
+
+    def member_count(at, on):
+        """c_k of the members at lanes `at` (v's own where all members have it)."""
+        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
 
     def has(q):
         return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
 
-    def density_at(q, wb, on):
-        """p_k(wb) at pool member q's own vertex (v's BSDF object: accepted members share it)."""
-        at, _ = grid.neighbour(q)
-        sk = dr.gather(mi.SurfaceInteraction3f, si, at, on)
-        return bsdf.pdf(ctx, sk, sk.to_local(wb), on)
-
-    def over_members(first, wb, term, on):
-        """sum over pool members q >= first of term(p_q(wb)) (a loop over the K + 1 slots)."""
+    def mixture(wb, on):
+        """sum over pool members q of c_q p_q(wb), p_q at member q's own vertex (v's BSDF object: accepted
+        members share it): a loop over the K + 1 slots."""
         def body(q, total):
             here = on & has(q)
-            total += dr.select(here, term(density_at(q, wb, here)), 0.0)
+            at, _ = grid.neighbour(q)
+            sk = dr.gather(mi.SurfaceInteraction3f, si_all, at, here)
+            p = bsdf.pdf(ctx, sk, sk.to_local(wb), here)
+            total += dr.select(here, member_count(at, here) * p, 0.0)
             return q + 1, total
-        _, total = dr.while_loop((mi.UInt32(first), mi.Float(0.0)), lambda q, t: on & (q <= K), body,
+        _, total = dr.while_loop((mi.UInt32(0), mi.Float(0.0)), lambda q, t: on & (q <= K), body,
                                  label="styletrace reuse densities")
         return total
 
-    def body(i, direct, indirect):
-        q, j = i // M, i % M
+    def body(i, direct, indirect, s1, s2):
+        q, j = i // J, i % J
         at, _ = grid.neighbour(q)
-        on = has(q) & (j < m)
-        c = at * M + j
-        wl = dr.gather(mi.Vector3f, kids.wl, c, on)
-        E = dr.gather(mi.Spectrum, kids.E, c, on)
-        wb = dr.gather(mi.Vector3f, kids.wb, c, on)
-        pdf = dr.gather(mi.Float, kids.pdf, c, on)
-        Li = dr.gather(mi.Spectrum, kids.Li, c, on)
-        direct += dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
+        on = has(q) & (j < member_count(at, has(q)))
+        wl, E, wb, pdf, Li, _ = kids.load(at * M + j, on)
+        d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
         take = on & (pdf > 0)
         f = bsdf.eval(ctx, si, si.to_local(wb), take) * Li
-        if weights == "balance":    # f Li / sum_P m p_k'
-            w = dr.rcp(over_members(0, wb, lambda p: p, take) * mf)
-        elif weights == "own":      # f Li / p_k, averaged over the |P| m samples (wrong: the negative control)
-            w = dr.rcp(pdf * members * mf)
-        else:                       # pairwise: v's samples against each member, members' against v only
-            p_v = dr.select(q == 0, pdf, bsdf.pdf(ctx, si, si.to_local(wb), take & (q != 0)))
-            alone = members < 2
-            canonical = over_members(1, wb, lambda p: dr.rcp(others * p + p_v), take & (q == 0) & ~alone) / others
-            w = dr.select(q == 0, dr.select(alone, dr.rcp(p_v), canonical), dr.rcp(others * pdf + p_v)) / mf
-        indirect += dr.select(take & dr.isfinite(w) & (w > 0), f * w, 0.0)
-        return i + 1, direct, indirect
+        if weights == "balance":    # f Li / sum_P c_k p_k
+            w = dr.rcp(mixture(wb, take))
+        else:                       # 'own': f Li / p_k, averaged over the C samples (wrong: the negative control)
+            w = dr.rcp(pdf * C)
+        b = dr.select(take & dr.isfinite(w) & (w > 0), f * w, 0.0)
+        direct, indirect = direct + d, indirect + b
+        if moments:
+            s1, s2 = _moments(s1, s2, on, d + b * C)
+        return i + 1, direct, indirect, s1, s2
 
-    _, direct, indirect = dr.while_loop((mi.UInt32(0), mi.Spectrum(0.0), mi.Spectrum(0.0)),
-                                        lambda i, d, ind: i < (K + 1) * M, body, label="styletrace reuse pool")
-    return direct / (dr.maximum(members, 1.0) * mf) + indirect
+    _, direct, indirect, s1, s2 = dr.while_loop(
+        (mi.UInt32(0), mi.Spectrum(0.0), mi.Spectrum(0.0), mi.Float(0.0), mi.Float(0.0)),
+        lambda i, d, ind, a, b: i < (K + 1) * J, body, label="styletrace reuse pool")
+    mean = direct / dr.maximum(C, 1.0) + indirect
+    return (mean, s1, s2, C) if moments else mean
+
+
+def _moments(s1, s2, on, y):
+    """The running sums of u and u^2, u the brightness (channel mean) of a child's estimate y, where `on`."""
+    u = channel_mean(y)
+    return s1 + dr.select(on, u, 0.0), s2 + dr.select(on, dr.square(u), 0.0)
+
+
+def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
+    """_pooled with pairwise weights, n = |P| - 1 (counts c_k: Veach's multi-sample form of each pair):
+        a member k's sample:  f_v Li / (n c_k p_k + c_v p_v)
+        v's own sample:       f_v Li (1/n) sum_{k != v} 1 / (n c_k p_k + c_v p_v)
+    (for equal counts m: w_k = p_k / (n p_k + p_v) and w_v = (1/n) sum_k p_v / (n p_k + p_v), over m samples).
+    Per child index j, one loop over the members k != v gives both v's terms for k's child j and k's term of
+    the canonical sum of v's own child j; v's own child's f_v Li was stored when it was drawn."""
+    ctx = mi.BSDFContext()
+    K = grid.K
+    si_all = si if si_all is None else si_all
+    active = mask != 0
+    cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
+    C = _total(grid, mask, count, equal)                     # sum over P of c_k
+
+    others = mi.Float(dr.popcnt(mask)) - 1.0                  # n = |P| - 1
+    alone = others < 0.5
+    own = grid.lane * M
+
+    def member_count(at, on):
+        """c_k of the members at lanes `at` (v's own where all members have it)."""
+        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
+
+    def index(j, direct, indirect, s1, s2):
+        mine = active & (j < cv)
+        wl, E, wv, pv, _, fLi = kids.load(own + j, mine)
+        theirs = mine & (pv > 0) & ~alone
+
+        def member(q, direct, indirect, s1, s2, canonical):
+            here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+            at, _ = grid.neighbour(q)
+            ck = member_count(at, here)
+            on = here & (j < ck)
+            wl, E, wb, pdf, Li, _ = kids.load(at * M + j, on)
+            d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
+            take = on & (pdf > 0)
+            f, p_v = bsdf.eval_pdf(ctx, si, si.to_local(wb), take)
+            w = dr.rcp(others * ck * pdf + cv * p_v)
+            b = dr.select(take & dr.isfinite(w) & (w > 0), f * Li * w, 0.0)
+            if moments:
+                s1, s2 = _moments(s1, s2, on, d + b * C)
+            # v's own child j against member k's technique, at k's vertex
+            there = here & theirs
+            sk = dr.gather(mi.SurfaceInteraction3f, si_all, at, there)
+            p_k = bsdf.pdf(ctx, sk, sk.to_local(wv), there)
+            canonical += dr.select(there, dr.rcp(others * ck * p_k + cv * pv), 0.0)
+            return q + 1, direct + d, indirect + b, s1, s2, canonical
+
+        _, direct, indirect, s1, s2, canonical = dr.while_loop(
+            (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda q, *_: q <= K, member,
+            label="styletrace reuse pool members")
+        d = dr.select(mine, bsdf.eval(ctx, si, si.to_local(wl), mine) * E, 0.0)
+        w = dr.select(alone, dr.rcp(cv * pv), canonical / others)
+        b = dr.select(mine & (pv > 0) & dr.isfinite(w) & (w > 0), fLi * w, 0.0)
+        if moments:
+            s1, s2 = _moments(s1, s2, mine, d + b * C)
+        return j + 1, direct + d, indirect + b, s1, s2
+
+    zero = (mi.Spectrum(0.0), mi.Spectrum(0.0), mi.Float(0.0), mi.Float(0.0))
+    _, direct, indirect, s1, s2 = dr.while_loop((mi.UInt32(0), *zero), lambda j, *_: j < J, index,
+                                                label="styletrace reuse pool")
+    mean = direct / dr.maximum(C, 1.0) + indirect
+    return (mean, s1, s2, C) if moments else mean

@@ -69,7 +69,8 @@ PROPERTIES = (
     Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
     Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
              "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
-             "docs/adaptive.md)", "--inner", "N"),
+             "docs/adaptive.md; with reuse=pixels, a refinement round of the pooled mean, docs/reuse.md)",
+             "--inner", "N"),
     Property("adaptive_z", 2.0, "float", "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
              "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
              "confidence, Student's t standard errors", "", ""),
@@ -411,7 +412,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
                             f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct")
     reuse, radius, k, mis = parse_reuse(values, slot, stylize)
-    deep, h, k2 = parse_reuse_deep(values, reuse, stylize, depth)
+    deep, h, k2 = parse_reuse_deep(values, slot, reuse, stylize, depth)
     lines = parse_lines(values)
     if reuse != "off" and (lines is not None or aovs):
         what = "'lines'" if lines is not None else "'aovs'"
@@ -452,7 +453,8 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
     return mode, radius, k, mis
 
 
-def parse_reuse_deep(values: Mapping[str, Any], reuse: str, stylize: str, depth: int) -> tuple[str, float, int]:
+def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, stylize: str,
+                     depth: int) -> tuple[str, float, int]:
     """`reuse_deep`, `reuse_h`, `reuse_k2`; world-space pooling only at first_n_hits depth 2."""
     deep = str(values.get("reuse_deep", DEFAULTS["reuse_deep"])).strip().lower()
     if deep not in REUSE_DEEP:
@@ -467,20 +469,27 @@ def parse_reuse_deep(values: Mapping[str, Any], reuse: str, stylize: str, depth:
         raise SettingsError(f"bad value 'world' for 'reuse_deep': world-space pooling needs reuse=pixels with "
                             f"stylize=first_n_hits and stylize_depth 2 (here reuse={reuse}, stylize={stylize}, "
                             f"stylize_depth {depth})")
+    if deep == "world":
+        check_reusable(slot, deep=deep)
     return deep, h, k2
 
 
-def check_reusable(slot: StyleSlot, where: str = "the integrator's style") -> None:
-    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation."""
+def check_reusable(slot: StyleSlot, where: str = "the integrator's style", deep: str = "tree") -> None:
+    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation (an
+    adaptive count n0:n_max adds a refinement round at the first hit, docs/reuse.md; not with reuse_deep=world,
+    whose first-level children are drawn all at once)."""
+    if deep == "world":
+        for level in (0, 1):
+            n = slot.n(level)
+            if isinstance(n, AdaptiveCount):
+                raise SettingsError(f"bad value '{n!r}' for 'inner_samples' ({where}) with reuse_deep=world: fixed "
+                                    f"counts only there; use reuse_deep=tree for adaptive counts")
     if slot.style.per_sample:
         raise SettingsError(f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
                             f"every child sample, reuse pools samples before g")
     if slot.estimator != "direct":
         raise SettingsError(f"bad value {slot.estimator!r} for 'estimator' ({where}): reuse=pixels supports "
                             f"'direct' only (g of the pooled mean)")
-    if adaptive(slot.inner):
-        raise SettingsError(f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples' ({where}): "
-                            f"reuse=pixels draws a fixed count of children per camera sample; use a fixed count")
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
