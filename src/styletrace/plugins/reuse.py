@@ -69,6 +69,7 @@ from ..errors import SceneError
 from ..estimators import channel_mean
 from ..styles.base import Vertex, camera_forward
 from . import settings as S
+from .acceptance import accepted
 from .emitter_sampler import EmitterSampler
 from .estimation import adaptive_direct
 from .lane_sampler import LaneSampler
@@ -539,20 +540,11 @@ class Grid:
         return dr.select(inside, at, self.lane), inside
 
     def accepted(self, target, bsdf, pool, n, depth) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the lane's own."""
-        def body(q, mask):
-            at, inside = self.neighbour(q)
-            ok = inside & pool & dr.gather(mi.Bool, pool, at, inside)
-            ok &= dr.gather(mi.Int32, target, at, ok) == target
-            ok &= dr.gather(mi.BSDFPtr, bsdf, at, ok) == bsdf
-            ok &= dr.dot(dr.gather(mi.Vector3f, n, at, ok), n) > NORMAL_MIN
-            ok &= dr.abs(dr.gather(mi.Float, depth, at, ok) - depth) <= DEPTH_TOL * depth
-            mask |= dr.select(ok, mi.UInt64(1) << mi.UInt64(q), mi.UInt64(0))
-            return q + 1, mask
-
-        _, mask = dr.while_loop((mi.UInt32(0), mi.UInt64(0)), lambda q, mask: q <= self.K, body,
-                                label="styletrace reuse accept")
-        return mask
+        """Bit q set where slot q's vertex may be pooled with the lane's own (acceptance.py; camera distances
+        within DEPTH_TOL)."""
+        def near(at, ok):
+            return dr.abs(dr.gather(mi.Float, depth, at, ok) - depth) <= DEPTH_TOL * depth
+        return accepted(self.neighbour, self.K, target, bsdf, pool, n, NORMAL_MIN, near, "styletrace reuse accept")
 
 
 def _pool_count(grid, mask, count):
@@ -573,6 +565,16 @@ def _total(grid, mask, count, equal):
     return mi.Float(_pool_count(grid, mask, count))
 
 
+def _counts(grid, mask, count, equal):
+    """(c_v, C, member_count): v's own children count, C = sum over the pool of c_k, and c_k of the members at
+    lanes `at` (v's own where all members have it: `equal`)."""
+    cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))
+
+    def member_count(at, on):
+        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
+    return cv, _total(grid, mask, count, equal), member_count
+
+
 def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_all=None, equal=True):
     """(direct + indirect)(v) of the module docstring for every lane the grid serves (meaningful where the lane
     pools); si, bsdf and mask are those lanes', si_all (default si) and `count` every lane's of the pass (member
@@ -586,12 +588,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
     K = grid.K
     si_all = si if si_all is None else si_all
     active = mask != 0
-    cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
-    C = _total(grid, mask, count, equal)                     # sum over P of c_k
-
-    def member_count(at, on):
-        """c_k of the members at lanes `at` (v's own where all members have it)."""
-        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
+    cv, C, member_count = _counts(grid, mask, count, equal)
 
     def has(q):
         return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
@@ -652,16 +649,11 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
     K = grid.K
     si_all = si if si_all is None else si_all
     active = mask != 0
-    cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))    # c_v, v's own children
-    C = _total(grid, mask, count, equal)                     # sum over P of c_k
+    cv, C, member_count = _counts(grid, mask, count, equal)
 
     others = mi.Float(dr.popcnt(mask)) - 1.0                  # n = |P| - 1
     alone = others < 0.5
     own = grid.lane * M
-
-    def member_count(at, on):
-        """c_k of the members at lanes `at` (v's own where all members have it)."""
-        return cv if equal else mi.Float(dr.gather(mi.UInt32, count, at, on))
 
     def index(j, direct, indirect, s1, s2):
         mine = active & (j < cv)

@@ -22,6 +22,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from .acceptance import accepted
+
 #: bits per axis in a packed cell key (cells per axis are bounded by settings.MIN_REUSE_H)
 AXIS_BITS = 21
 
@@ -95,19 +97,10 @@ class WorldGrid:
         return dr.select(ok, at, self.lane), first | ok
 
     def accepted(self, target, bsdf, pool, n, normal_min) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the vertex's own."""
+        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py; within h)."""
         h2 = dr.opaque(mi.Float, self.h * self.h)  # not a literal: h changes from pass to pass, the kernel not
 
-        def body(q, mask):
-            at, found = self.neighbour(q)
-            ok = found & pool & dr.gather(mi.Bool, pool, at, found)
-            ok &= dr.gather(mi.Int32, target, at, ok) == target
-            ok &= dr.gather(mi.BSDFPtr, bsdf, at, ok) == bsdf
-            ok &= dr.dot(dr.gather(mi.Vector3f, n, at, ok), n) > normal_min
-            ok &= dr.squared_norm(dr.gather(mi.Point3f, self.p, at, ok) - self.p) <= h2
-            mask |= dr.select(ok, mi.UInt64(1) << mi.UInt64(q), mi.UInt64(0))
-            return q + 1, mask
-
-        _, mask = dr.while_loop((mi.UInt32(0), mi.UInt64(0)), lambda q, mask: q <= self.K, body,
-                                label="styletrace reuse world accept")
-        return mask
+        def near(at, ok):
+            return dr.squared_norm(dr.gather(mi.Point3f, self.p, at, ok) - self.p) <= h2
+        return accepted(self.neighbour, self.K, target, bsdf, pool, n, normal_min, near,
+                        "styletrace reuse world accept")
