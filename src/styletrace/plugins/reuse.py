@@ -96,17 +96,27 @@ def batch_seed(seed: int, batch: int) -> int:
     return seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
 
 
+_last_scene = [0]
+
+
+def collect_before(scene: mi.Scene) -> None:
+    """Collect garbage before the first render of a scene. Dr.Jit traces a BSDF call over every live instance
+    of the class: instances of earlier scenes that are garbage but not yet collected (reference cycles) joined
+    the first_n_hits pooling kernel's calls and made LLVM refuse it ("invalid redefinition of function", an
+    abort) after some sequences of renders in one process (tests/plugins/test_settings.py, test_reuse.py, then
+    test_reuse_depth2.py). A collection takes tens of milliseconds, so renders of the same scene skip it."""
+    if _last_scene[0] != id(scene):
+        gc.collect()
+        _last_scene[0] = id(scene)
+
+
 def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weights: str | None = None,
            keep: dict | None = None) -> mi.TensorXf:
     """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render` returns).
     `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
     by its own density (wrong: the tests' negative control);
     `keep`, a dict, receives the first batch's pools as numpy arrays (`pools`)."""
-    # Dr.Jit traces a BSDF call over every live instance of the class. Instances of scenes that are garbage
-    # but not yet collected (reference cycles) joined the first_n_hits pooling kernel's calls and made LLVM
-    # refuse it ("invalid redefinition of function", an abort) after some sequences of earlier renders in
-    # one process (tests/plugins/test_settings.py, test_reuse.py, then test_reuse_depth2.py): collect first.
-    gc.collect()
+    collect_before(scene)
     integ.targets = integ._targets(scene)
     if integ.nulls or integ.media:
         integ.targets = []
