@@ -89,9 +89,9 @@ SETUPS = [
 POOLED = {"reuse": "pixels", "reuse_mis": "pairwise"}
 EQUAL_TIME = [
     Comparison("equal_time_cel", "GI cel shading, first hit: reuse with a refinement round against fixed n", "cel",
-               method={"inner": "2:12", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
-    Comparison("equal_time_hatching", "Cross-hatching, first hit: reuse against fixed n", "hatching",
-               method={"inner": 4, **POOLED, "reuse_k": 24}, reference=4096),
+               method={"inner": "2:16", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
+    Comparison("equal_time_hatching", "Cross-hatching, first hit: reuse with a refinement round against fixed n",
+               "hatching", method={"inner": "2:32", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
     Comparison("equal_time_color_map", "Colour mapping, first hit: reuse against fixed n", "color_map",
                method={"inner": 4, **POOLED, "reuse_k": 24}, reference=1024),
     # the fixed curve n,1: the cheapest split of the two levels' counts at equal time (BENCHMARKS.md equal_time)

@@ -648,13 +648,32 @@ def _moments(s1, s2, on, y):
     return s1 + dr.select(on, u, 0.0), s2 + dr.select(on, dr.square(u), 0.0)
 
 
+def _layer(grid, mask, count, j, active):
+    """The pool members with more than j children (their slot bits; slot 0, v itself, where c_v > j)."""
+    def body(q, bits):
+        here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+        at, _ = grid.neighbour(q)
+        deep = here & (dr.gather(mi.UInt32, count, at, here) > j)
+        return q + 1, bits | dr.select(deep, mi.UInt64(1) << mi.UInt64(q), mi.UInt64(0))
+    _, bits = dr.while_loop((mi.UInt32(0), mi.UInt64(0)), lambda q, b: q <= grid.K, body,
+                            label="styletrace reuse layer")
+    return bits
+
+
 def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
     """_pooled with pairwise weights, n = |P| - 1 (counts c_k: Veach's multi-sample form of each pair):
         a member k's sample:  f_v Li / (n c_k p_k + c_v p_v)
         v's own sample:       f_v Li (1/n) sum_{k != v} 1 / (n c_k p_k + c_v p_v)
     (for equal counts m: w_k = p_k / (n p_k + p_v) and w_v = (1/n) sum_k p_v / (n p_k + p_v), over m samples).
     Per child index j, one loop over the members k != v gives both v's terms for k's child j and k's term of
-    the canonical sum of v's own child j; v's own child's f_v Li was stored when it was drawn."""
+    the canonical sum of v's own child j; v's own child's f_v Li was stored when it was drawn.
+
+    Unequal counts (the refinement round's pools): child index j is a layer, P_j the members with c_k > j, each
+    layer pooled with pairwise weights over its own members (n_j = |P_j| - 1, one sample per technique) and
+    the layers averaged with weights |P_j| / C (each layer is unbiased where the pool's is, and the weights sum
+    to one). With equal counts this is the formula above; with unequal ones a layer beyond the first round's n0
+    holds only the refined members, so its loop visits those alone (the set bits of P_j), where the counts'
+    weights would need every member's density for each of v's n_max children."""
     ctx = mi.BSDFContext()
     K = grid.K
     si_all = si if si_all is None else si_all
@@ -668,10 +687,15 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
     def index(j, direct, indirect, s1, s2):
         mine = active & (j < cv)
         wl, E, wv, pv, _, fLi = kids.load(own + j, mine)
-        theirs = mine & (pv > 0) & ~alone
+        if equal:
+            n_j, alone_j, scale = others, alone, None
+        else:  # layer j: its members, their number less one, and its weight |P_j| / C
+            layer = _layer(grid, mask, count, j, active)
+            n_j = mi.Float(dr.popcnt(layer)) - 1.0
+            alone_j, scale = n_j < 0.5, (n_j + 1.0) / dr.maximum(C, 1.0)
+        theirs = mine & (pv > 0) & ~alone_j
 
-        def member(q, direct, indirect, s1, s2, canonical):
-            here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+        def term(q, here, direct, indirect, s1, s2, canonical):
             at, _ = grid.neighbour(q)
             ck = member_count(at, here)
             on = here & (j < ck)
@@ -679,7 +703,7 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
             d = dr.select(on, bsdf.eval(ctx, si, si.to_local(wl), on) * E, 0.0)
             take = on & (pdf > 0)
             f, p_v = bsdf.eval_pdf(ctx, si, si.to_local(wb), take)
-            w = dr.rcp(others * ck * pdf + cv * p_v)
+            w = dr.rcp(others * ck * pdf + cv * p_v) if equal else scale * dr.rcp(n_j * pdf + p_v)
             b = dr.select(take & dr.isfinite(w) & (w > 0), f * Li * w, 0.0)
             if moments:
                 s1, s2 = _moments(s1, s2, on, d + b * C)
@@ -687,14 +711,29 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
             there = here & theirs
             sk = dr.gather(mi.SurfaceInteraction3f, si_all, at, there)
             p_k = bsdf.pdf(ctx, sk, sk.to_local(wv), there)
-            canonical += dr.select(there, dr.rcp(others * ck * p_k + cv * pv), 0.0)
-            return q + 1, direct + d, indirect + b, s1, s2, canonical
+            canonical += dr.select(there, dr.rcp(others * ck * p_k + cv * pv) if equal else dr.rcp(n_j * p_k + pv),
+                                   0.0)
+            return direct + d, indirect + b, s1, s2, canonical
 
-        _, direct, indirect, s1, s2, canonical = dr.while_loop(
-            (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda q, *_: q <= K, member,
-            label="styletrace reuse pool members")
+        if equal:  # every slot q = 1 .. K
+            def member(q, *acc):
+                here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+                return q + 1, *term(q, here, *acc)
+            _, direct, indirect, s1, s2, canonical = dr.while_loop(
+                (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda q, *_: q <= K, member,
+                label="styletrace reuse pool members")
+        else:      # the layer's members k != v alone: its set bits, lowest first
+            def member(bits, *acc):
+                q = mi.UInt32(dr.tzcnt(bits))
+                return bits & (bits - mi.UInt64(1)), *term(q, bits != 0, *acc)
+            _, direct, indirect, s1, s2, canonical = dr.while_loop(
+                (layer & ~mi.UInt64(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda bits, *_: bits != 0,
+                member, label="styletrace reuse pool layer")
         d = dr.select(mine, bsdf.eval(ctx, si, si.to_local(wl), mine) * E, 0.0)
-        w = dr.select(alone, dr.rcp(cv * pv), canonical / others)
+        if equal:
+            w = dr.select(alone, dr.rcp(cv * pv), canonical / others)
+        else:
+            w = scale * dr.select(alone_j, dr.rcp(pv), canonical / n_j)
         b = dr.select(mine & (pv > 0) & dr.isfinite(w) & (w > 0), fLi * w, 0.0)
         if moments:
             s1, s2 = _moments(s1, s2, mine, d + b * C)
