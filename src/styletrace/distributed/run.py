@@ -45,11 +45,11 @@ class Render:
                  lanes_per_pass: int = api.LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
                  resume: bool = False, checkpoint_every: float = 10.0, cpus_per_task: int = 1,
                  gpus_per_task: float = 0, lock: Any = contextlib.nullcontext()):
-        from ..plugins.settings import MAX_EXPANSION_PASS, integer
-        m = job.values.get("expansion_pass", 0)
-        if integer("expansion_pass", m, 0, MAX_EXPANSION_PASS):  # a unit is a bare mi.render: no pass map travels
-            raise UsageError(f"bad value {m!r} for 'expansion_pass' in a cluster render: its pre-pass runs in a local "
-                             f"render's passes only; render without --ray/cluster=, or use expansion_pass=0")
+        from ..plugins.settings import parse
+        if parse(job.values).expansion_pass:  # a unit is a bare mi.render: no pass map travels
+            raise UsageError(f"bad value {job.values['expansion_pass']!r} for 'expansion_pass' in a cluster render: its "
+                             f"pre-pass runs in a local render's passes only; render without --ray/cluster=, or use "
+                             f"expansion_pass=0")
         self.job, self.spp, self.seed, self.width, self.height = job, spp, seed, width, height
         self.cluster, self.lock = cluster, lock
         self.layout, self.units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)

@@ -54,8 +54,8 @@ pass is split into batches of samples per pixel of at most BATCH_CHILDREN childr
 With an adaptive count n0:n_max (`_refine`), lanes draw n0 children, pool them, and then the lanes whose pooled
 mean AdaptiveDirect's rule finds too close to a style threshold (or too curved), told the pool's C = sum_P c_k
 samples and their second moment, draw n_max - n0 more and recompute their pools with every member's children:
-Veach's multi-sample weights with per-member counts c_k (direct / C; balance 1 / sum_k c_k p_k; pairwise
-1 / (n c_k p_k + c_v p_v) for a member's sample and (1/n) sum_k 1 / (n c_k p_k + c_v p_v) for v's own).
+direct / C; balance with Veach's multi-sample weights with per-member counts c_k, 1 / sum_k c_k p_k; pairwise
+by layers, one per child index j over the members with c_k > j, averaged with weights |P_j| / C (`_pairwise`).
 """
 from __future__ import annotations
 
@@ -391,53 +391,74 @@ class Children:
         return mi.Vector3f(*(dr.gather(mi.Float, self.data, first + k) for k in range(3)))
 
 
-def _children(integ, scene, lanes, si, bsdf, active, pool, first, last, J, M, kids, lane, depth: int = 0):
-    """Draw children first .. last - 1 of each lane (at most J of them) at its vertex (the first hit, or with
-    `depth` 1 a second-level vertex whose children are ordinary paths), store them at lane * M + j, and return
-    the sum of their ordinary estimates (next-event plus BSDF-sampled radiance, emission at v left out)."""
-    s = integ.settings
-    ctx = mi.BSDFContext()
-    emitters = integ.emitters
-    go_deeper = depth + 1 < depth_limit(s.max_depth)
-    nested = s.stylize == "first_n_hits" and s.stylize_depth > depth + 1
+class _Draw:
+    """One child's two samples at the vertex si (its lane `on`): a next-event sample (direction ds.d, E) and a
+    BSDF sample (direction wb, density bs.pdf, weight w_b) with the ray to what it reaches (ray2, pi2). At a
+    non-last level of first_n_hits (`nested`) next-event estimation samples delta lights only, as
+    `path.bounce`: the BSDF sample reaches every other emitter, which the next level stylizes."""
 
-    def body(i, smp, total):
-        j = first + i
-        on = active & (j < last)
-        step = on & go_deeper
+    def __init__(self, integ, scene, smp, si, bsdf, on, pool, depth, nested):
+        step = on & (depth + 1 < depth_limit(integ.settings.max_depth))
         to_light = step & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-        ds, em_weight = emitters.sample_direction(si, smp.next_2d(), to_light)
+        ds, em_weight = integ.emitters.sample_direction(si, smp.next_2d(), to_light)
         to_light &= ds.pdf != 0.0
-        if nested:  # as path.bounce: delta lights only, the BSDF sample reaches every other emitter
+        if nested:
             to_light &= ds.delta
-        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(ctx, si, si.to_local(ds.d), smp.next_1d(), smp.next_2d(), step)
+        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(mi.BSDFContext(), si, si.to_local(ds.d), smp.next_1d(),
+                                                   smp.next_2d(), step)
         # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all the
         # emission it can reach (weight 1) and the BSDF sample none of the first emission it meets (pdf 0
         # below), so the two pooled sums are each unbiased whatever the neighbours' densities; MIS weights
         # computed at different vertices would not add up to one. (first_n_hits splits them so already.)
         w_nee = dr.select(ds.delta | pool, 1.0, mis_power(ds.pdf, pdf_l))
-        E = dr.select(to_light, em_weight * w_nee, 0.0)
-        wb = si.to_world(bs.wo)
-        go = step & (dr.max(w_b) > 0)
-        ray2 = si.spawn_ray(wb)
-        pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+        self.to_light, self.val, self.ds, self.bs, self.w_b = to_light, val, ds, bs, w_b
+        self.E = dr.select(to_light, em_weight * w_nee, 0.0)
+        self.wb = si.to_world(bs.wo)
+        self.go = step & (dr.max(w_b) > 0)
+        self.ray2 = si.spawn_ray(self.wb)
+        self.pi2 = scene.ray_intersect_preliminary(self.ray2, coherent=False, active=self.go)
+
+    def next_vertex(self):
+        """(si2, hit2): the surface the BSDF sample reaches, where it reaches one."""
+        si2 = self.pi2.compute_surface_interaction(self.ray2, ray_flags=mi.RayFlags.All, active=self.go)
+        return si2, self.go & si2.is_valid()
+
+    def seen(self, scene, si2, hit2, value):
+        """The radiance Li along the BSDF sample: `value` where it hit a surface, else the environment."""
+        return dr.select(self.go, dr.select(hit2, value, environment(scene, si2, self.go)), 0.0)
+
+    def store(self, kids, at, Li, on):
+        """Store the child at flat index `at` with its Li; its ordinary estimate x (0 where not `on` or not
+        finite)."""
+        go, bs = self.go, self.bs
+        x = dr.select(self.to_light, self.val * self.E, 0.0) + dr.select(go, self.w_b * Li, 0.0)
+        ok = on & dr.all(dr.isfinite(x))
+        kids.store(at, self.ds.d, self.E, self.wb, dr.select(go, bs.pdf, 0.0), Li,
+                   dr.select(go, self.w_b * bs.pdf * Li, 0.0), ok)
+        return dr.select(ok, x, 0.0)
+
+
+def _children(integ, scene, lanes, si, bsdf, active, pool, first, last, J, M, kids, lane, depth: int = 0):
+    """Draw children first .. last - 1 of each lane (at most J of them) at its vertex (the first hit, or with
+    `depth` 1 a second-level vertex whose children are ordinary paths), store them at lane * M + j, and return
+    the sum of their ordinary estimates (next-event plus BSDF-sampled radiance, emission at v left out)."""
+    s = integ.settings
+    nested = s.stylize == "first_n_hits" and s.stylize_depth > depth + 1
+
+    def body(i, smp, total):
+        j = first + i
+        on = active & (j < last)
+        c = _Draw(integ, scene, smp, si, bsdf, on, pool, depth, nested)
         if nested:  # the level-1 vertex, stylized by the ordinary tree (deeper levels first), or the sky
-            si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
-            hit2 = go & si2.is_valid()
-            deeper = integ.stylized(depth + 1, scene, smp, pi2, si2, ray2, hit2, mi.UInt32(depth + 1))
-            Li = dr.select(go, dr.select(hit2, deeper, environment(scene, si2, go)), 0.0)
+            si2, hit2 = c.next_vertex()
+            Li = c.seen(scene, si2, hit2, integ.stylized(depth + 1, scene, smp, c.pi2, si2, c.ray2, hit2,
+                                                          mi.UInt32(depth + 1)))
         else:
-            delta = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-            w = walk(scene, smp, pi2, ray2, go, s.max_depth, s.rr_depth, depth + 1, emitters=emitters,
-                     came_from=(dr.detach(si, True), dr.select(pool, 0.0, bs.pdf), delta & ~pool))
-            Li = dr.select(go, w.L, 0.0)
-        x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
-        finite = dr.all(dr.isfinite(x))
-        at = lane * M + j
-        kids.store(at, ds.d, E, wb, dr.select(go, bs.pdf, 0.0), Li, dr.select(go, w_b * bs.pdf * Li, 0.0),
-                   on & finite)
-        total += dr.select(on & finite, x, 0.0)
-        return i + 1, smp, total
+            delta = mi.has_flag(c.bs.sampled_type, mi.BSDFFlags.Delta)
+            w = walk(scene, smp, c.pi2, c.ray2, c.go, s.max_depth, s.rr_depth, depth + 1, emitters=integ.emitters,
+                     came_from=(dr.detach(si, True), dr.select(pool, 0.0, c.bs.pdf), delta & ~pool))
+            Li = dr.select(c.go, w.L, 0.0)
+        return i + 1, smp, total + c.store(kids, lane * M + j, Li, on)
 
     _, lanes_out, total = dr.while_loop((mi.UInt32(0), lanes, mi.Spectrum(0.0)), lambda i, smp, t: i < J, body,
                                         label="styletrace reuse children")
@@ -451,37 +472,19 @@ def _pooled_level1(integ, scene, lanes, si, bsdf, active, m, M, kids, weights, k
     sample from the first hit, as `path.bounce`; the second-level vertices they reach are shaded together by
     `_level2`, whose value is the child's Li. Stores the children in `kids`; returns each lane's sum of their
     ordinary estimates."""
-    s = integ.settings
-    ctx = mi.BSDFContext()
     N = dr.width(si.p)
     idx = dr.arange(mi.UInt32, N * M)
     owner, j = idx // M, idx % M
     on = dr.gather(mi.Bool, active, owner) & (j < dr.gather(mi.UInt32, m, owner))
-    sc = dr.gather(mi.SurfaceInteraction3f, si, owner)
-    bc = dr.gather(mi.BSDFPtr, bsdf, owner)
     # one PCG32 stream per child, seeded from its camera sample's own stream
     hi = dr.gather(mi.UInt32, dr.reinterpret_array(mi.UInt32, lanes.next_1d()), owner)
     lo = dr.gather(mi.UInt32, dr.reinterpret_array(mi.UInt32, lanes.next_1d()), owner)
     smp = LaneSampler(mi.PCG32(N * M, initstate=(mi.UInt64(hi) << 32) | mi.UInt64(lo),
                                initseq=dr.arange(mi.UInt64, N * M)))
-    step = on & (1 < depth_limit(s.max_depth))
-    to_light = step & mi.has_flag(bc.flags(), mi.BSDFFlags.Smooth)
-    ds, em_weight = integ.emitters.sample_direction(sc, smp.next_2d(), to_light)
-    to_light &= ds.delta & (ds.pdf != 0.0)  # as path.bounce: the BSDF sample reaches every other emitter
-    val, _, bs, w_b = bc.eval_pdf_sample(ctx, sc, sc.to_local(ds.d), smp.next_1d(), smp.next_2d(), step)
-    E = dr.select(to_light, em_weight, 0.0)
-    wb = sc.to_world(bs.wo)
-    go = step & (dr.max(w_b) > 0)
-    ray2 = sc.spawn_ray(wb)
-    pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
-    si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
-    hit2 = go & si2.is_valid()
-    deeper = _level2(integ, scene, smp, si2, ray2, hit2, weights, keep)
-    Li = dr.select(go, dr.select(hit2, deeper, environment(scene, si2, go)), 0.0)
-    x = dr.select(to_light, val * E, 0.0) + dr.select(go, w_b * Li, 0.0)
-    ok = on & dr.all(dr.isfinite(x))
-    kids.store(idx, ds.d, E, wb, dr.select(go, bs.pdf, 0.0), Li, dr.select(go, w_b * bs.pdf * Li, 0.0), ok)
-    x = dr.select(ok, x, 0.0)
+    c = _Draw(integ, scene, smp, dr.gather(mi.SurfaceInteraction3f, si, owner), dr.gather(mi.BSDFPtr, bsdf, owner),
+              on, mi.Bool(True), 0, nested=True)
+    si2, hit2 = c.next_vertex()
+    x = c.store(kids, idx, c.seen(scene, si2, hit2, _level2(integ, scene, smp, si2, c.ray2, hit2, weights, keep)), on)
     lane = dr.arange(mi.UInt32, N)
     total = mi.Spectrum(0.0)
     for k in range(M):  # in a fixed order (a scatter-add would not be bit-reproducible)
@@ -557,10 +560,15 @@ class Grid:
         return accepted(self.neighbour, self.K, target, bsdf, pool, n, NORMAL_MIN, near, "styletrace reuse accept")
 
 
+def _has(mask, q):
+    """Whether pool slot q (a UInt32 array) is a member: its bit in the pool's mask."""
+    return ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+
+
 def _pool_count(grid, mask, count):
     """C = sum over the pool's members of their children counts (count: per lane of the pass)."""
     def body(q, total):
-        here = ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+        here = _has(mask, q)
         at, _ = grid.neighbour(q)
         return q + 1, total + dr.select(here, dr.gather(mi.UInt32, count, at, here), 0)
     _, total = dr.while_loop((mi.UInt32(0), mi.UInt32(0)), lambda q, t: q <= grid.K, body,
@@ -601,7 +609,7 @@ def _pooled(grid, mask, si, bsdf, count, J, M, kids, weights, moments=False, si_
     cv, C, member_count = _counts(grid, mask, count, equal)
 
     def has(q):
-        return active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+        return active & _has(mask, q)
 
     def mixture(wb, on):
         """sum over pool members q of c_q p_q(wb), p_q at member q's own vertex (v's BSDF object: accepted
@@ -651,7 +659,7 @@ def _moments(s1, s2, on, y):
 def _layer(grid, mask, count, j, active):
     """The pool members with more than j children (their slot bits; slot 0, v itself, where c_v > j)."""
     def body(q, bits):
-        here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+        here = active & _has(mask, q)
         at, _ = grid.neighbour(q)
         deep = here & (dr.gather(mi.UInt32, count, at, here) > j)
         return q + 1, bits | dr.select(deep, mi.UInt64(1) << mi.UInt64(q), mi.UInt64(0))
@@ -717,7 +725,7 @@ def _pairwise(grid, mask, si, bsdf, count, J, M, kids, moments, si_all, equal):
 
         if equal:  # every slot q = 1 .. K
             def member(q, *acc):
-                here = active & ((mask >> mi.UInt64(q)) & mi.UInt64(1)) != 0
+                here = active & _has(mask, q)
                 return q + 1, *term(q, here, *acc)
             _, direct, indirect, s1, s2, canonical = dr.while_loop(
                 (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda q, *_: q <= K, member,
