@@ -33,6 +33,7 @@ from . import scene_file  # noqa: E402
 from .arguments import check_passes_args, check_render_args, check_scene, scene_problem  # noqa: E402
 from .errors import SceneError, UsageError  # noqa: E402
 from .images import PIXEL_FORMATS, save_safely, write_image  # noqa: E402
+from .normals import canonical_normals as _canonical  # noqa: E402
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
 from .plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402
 from .plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
@@ -64,18 +65,12 @@ def scene_dict(name: str, width: int | None = None, height: int | None = None) -
     return BUILTIN[name](**_size(width, height))
 
 
-@contextlib.contextmanager
-def one_thread():
-    """Load scenes on one Dr.Jit thread: a parallel acceleration-structure build (Embree's, Mitsuba's
-    `path` shows it too) changes the last bit of a few pixels from run to run, and the same seed must give
-    the same image. Loading is a small part of a render (about 0.1 s for the built-in scenes either way)."""
-    import drjit as dr
-    threads = dr.thread_count()
-    dr.set_thread_count(1)
-    try:
-        yield
-    finally:
-        dr.set_thread_count(threads)
+def canonical_normals(scene: mi.Scene) -> mi.Scene:
+    """The scene with its computed vertex normals made the same in every process (`normals`): the same seed
+    then gives the same image to the bit. Scenes load on all of Dr.Jit's threads (one thread deadlocks
+    Mitsuba's OpenEXR reader)."""
+    _canonical(scene)
+    return scene
 
 
 def load_scene(scene: Any = None, width: int | None = None, height: int | None = None,
@@ -101,23 +96,21 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         if width or height:
             raise SceneError("width/height apply to built-in scenes and XML files; set the film size in the dict")
         try:
-            with one_thread():
-                loaded = mi.load_dict(scene)
+            loaded = mi.load_dict(scene)
         except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
             raise SceneError(f"cannot load scene dict: {first_line(exc)}") from None
         problem = scene_problem(loaded, "the scene dict")
         if problem is not None:
             del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
             raise SceneError(problem)
-        return loaded
+        return canonical_normals(loaded)
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"bad scene {scene!r}: expected a built-in name ({', '.join(sorted(BUILTIN))}), an XML "
                          f"path, a scene dict or an mi.Scene")
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
-            with one_thread():
-                return mi.load_dict(scene_dict(name, width, height))
+            return canonical_normals(mi.load_dict(scene_dict(name, width, height)))
         except Exception as exc:
             raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
@@ -126,8 +119,7 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     if not os.path.isfile(name):
         raise SceneError(f"scene file '{name}' does not exist")
     try:
-        with one_thread():
-            loaded, notes = scene_file.load(name, width, height, defines)
+        loaded, notes = scene_file.load(name, width, height, defines)
     except SceneError:
         raise
     except Exception as exc:
@@ -142,7 +134,7 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         raise SceneError(problem)
     for note in notes:
         warnings.warn(note, SceneWarning, stacklevel=2)
-    return loaded
+    return canonical_normals(loaded)
 
 
 class SceneWarning(UserWarning):
