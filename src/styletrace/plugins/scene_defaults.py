@@ -39,7 +39,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import StyleError
-from ..styles.base import Camera, Style, Vertex, camera
+from ..styles.base import Camera, Style, Vertex, camera, lanes
 from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .integrator import StylizedIntegrator
@@ -107,7 +107,7 @@ class Pilot:
         n_sh = dr.normalize(si.sh_frame.n)
         return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
                 "depth": np.array(depth, dtype=np.float64), "p": np.array(si.p).T, "n": np.array(n_sh).T,
-                "wo": -np.array(ray.d).T}
+                "wo": -lanes(ray.d, n).T}
 
 
 class Facts:
