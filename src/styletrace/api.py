@@ -153,7 +153,7 @@ def carried_settings(scene: mi.Scene) -> dict[str, Any]:
     text = str(own)
     out: dict[str, Any] = {}
     for key in ("max_depth", "rr_depth"):
-        found = re.search(rf"\b{key}\s*=\s*(\d+)", text)
+        found = re.search(rf"\b{key}\s*=\s*(-?\d+)", text)  # ptracer prints -1, path 2^32 - 1
         if found:
             value = int(found.group(1))
             out[key] = -1 if value >= 2 ** 32 - 1 else value  # Mitsuba stores -1 (unbounded) as UInt32

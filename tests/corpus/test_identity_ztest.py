@@ -70,8 +70,11 @@ RGB_TO_XYZ = np.array([[0.412453, 0.357580, 0.180423],
                        [0.212671, 0.715160, 0.072169],
                        [0.019334, 0.119193, 0.950227]])
 
-# Negative controls: Mitsuba's integrator with a max_depth that drops light the scene has.
-WRONG_DEPTH = {"textured": 2, "envmap": 3, "medium_light": 3}
+# Negative controls: Mitsuba's integrator with a max_depth that drops light the scene has. Two drop one
+# bounce (measured: 98.5% and 99.3% accepted, below ACCEPT), two drop all indirect light of a surface
+# scene and most of the multiple scattering of a medium. (One bounce less went unseen on textured 5 -> 4,
+# envmap 8 -> 7 and medium_light 8 -> 7: too little light to see at this budget.)
+WRONG_DEPTH = {"normal_bump": 3, "instances": 3, "textured": 2, "medium_light": 3}
 
 
 @pytest.fixture(scope="module")
