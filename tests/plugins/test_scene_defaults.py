@@ -134,3 +134,18 @@ def test_a_composition_resolves_under_an_orthographic_camera():
     t = integrator.settings.style.operands[1].thresholds[0]
     assert abs(t - 0.35) < 0.02, t
     assert "cel.thresholds=" in chosen
+
+
+def test_weighted_quantiles_are_the_inverted_cdf_on_any_numpy():
+    """Integer weights are repetitions: the weighted quantile is the plain inverted-CDF quantile of the values
+    repeated (np.quantile's `weights=` is numpy 2 only; pyproject allows numpy 1.24, where it raised)."""
+    from styletrace.plugins.scene_defaults import weighted_quantiles
+    rng = np.random.default_rng(4)
+    qs = [0.0, 0.05, 0.3, 0.5, 0.95, 1.0]
+    for trial in range(200):
+        n = int(rng.integers(1, 30))
+        values = rng.integers(0, 6, n).astype(float) if trial % 2 else rng.random(n)
+        weights = rng.integers(0, 4, n)
+        weights[0] += 1
+        want = np.quantile(np.repeat(values, weights), qs, method="inverted_cdf")
+        assert weighted_quantiles(values, weights, qs) == [float(x) for x in want]
