@@ -43,6 +43,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 import pathlib
 
 import mitsuba as mi
@@ -130,7 +131,7 @@ def reference(name: str, xml: pathlib.Path):
     else:
         mean, var = moment_stats(scene, spec, REF_SPP, REF_SEED)
     CACHE.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp.npz")
+    tmp = path.with_name(f"{path.stem}.{os.getpid()}.tmp.npz")  # one per process: parallel runs may race
     np.savez(tmp, mean=mean, var=var, n=REF_SPP)
     tmp.replace(path)  # atomic: a killed run leaves no half-written reference
     return mean, var, REF_SPP
