@@ -12,18 +12,22 @@ is found by each ray with the same probability q: coverage 1 - (1 - q)^N).
 - Camera edge: o_j = o + a (o_x - o) + b (o_y - o), d_j = normalize(d + a (d_x - d) + b (d_y - d)) from
   the camera ray's own differentials (one-pixel ones: Mitsuba scales them by 1/sqrt(spp)), so depth of
   field is shared.
-- Later edges: the cone's half-angle per pixel (`angle`, |d_x - d| at the camera) and the accumulated
-  path length D from the camera set the stencil: origins on the vertex's tangent plane at lateral offset
-  angle * D * (a, b), directions d + angle * (a, b). After a flat mirror this is exactly the cone of the
-  mirrored camera, so a reflected line keeps its screen width.
+- Later edges: the beam of one pixel, its width at the camera (`spread`, |o_x - o|: 0 for a pinhole or a
+  thin lens, whose differentials share the origin; the pixel's width for an orthographic sensor, whose
+  rays are parallel) and its angle (`angle`, |d_x - d|), with the accumulated path length D from the
+  camera set the stencil: origins on the vertex's tangent plane at lateral offset
+  (spread + angle * D) * (a, b), directions d + angle * (a, b). After a flat mirror this is exactly the
+  beam of the mirrored camera, so a reflected line keeps its screen width.
 Tests between the base hit q and an auxiliary hit s (any one fires; each can be switched off):
 - silhouette: one of the two hits a surface, the other escapes;
 - boundary: both hit, on different shapes (as the loaded scene holds them: Mitsuba merges meshes that
   share a BSDF into one shape when it loads a scene, so their seams draw nothing here);
 - crease: 1 - |n_q . n_s| > `crease` (geometric normals; |.| so flipped normals do not fire);
 - albedo: |lum(albedo_q) - lum(albedo_s)| > `albedo`;
-- depth: the distance of either point from the other's tangent plane exceeds `slope` times the cone's
-  radius at q (slope-aware: any plane, however slanted, gives 0).
+- depth: the distance of either point from the other's tangent plane exceeds `slope` times the beam's
+  radius at q, spread + angle * t per pixel (slope-aware: any plane, however slanted, gives 0). The beam
+  of an orthographic sensor has angle 0 and a constant width: with a radius of angle * t alone, every
+  rounding error of a flat floor fired and an orthographic image was all line.
 The line point is the nearest (along its ray) of the points of the pairs that fire; its world y picks the
 colour of a `gradient`. `objects`: ids of the shapes that draw lines (empty: all); a pair draws where
 either of its hits is on one of them.
@@ -73,13 +77,19 @@ class LineSettings:
 
 class LineState:
     """What a path carries for lines: accumulated length from the camera, whether no diffuse vertex was
-    met yet, and the cone's angle per pixel (from the camera ray's differentials)."""
-    DRJIT_STRUCT = {"D": mi.Float, "alive": mi.Bool, "angle": mi.Float}
+    met yet, and one pixel's beam (from the camera ray's differentials): its angle and its width at the
+    camera."""
+    DRJIT_STRUCT = {"D": mi.Float, "alive": mi.Bool, "angle": mi.Float, "spread": mi.Float}
 
-    def __init__(self, D=None, alive=None, angle=None):
+    def __init__(self, D=None, alive=None, angle=None, spread=None):
         self.D = mi.Float(0.0) if D is None else D
         self.alive = mi.Bool(True) if alive is None else alive
         self.angle = mi.Float(0.0) if angle is None else angle
+        self.spread = mi.Float(0.0) if spread is None else spread
+
+    def width(self, t) -> mi.Float:
+        """The beam's width per pixel at distance t past the state's vertex."""
+        return self.spread + self.angle * (self.D + t)
 
 
 @dataclass
@@ -133,15 +143,16 @@ class Lines:
         o, d = mi.Point3f(ray.o), mi.Vector3f(ray.d)
         ox, oy = (ray.o_x - o) * scale, (ray.o_y - o) * scale
         dx, dy = (ray.d_x - d) * scale, (ray.d_y - d) * scale
-        angle = dr.norm(dx)
+        angle, spread = dr.norm(dx), dr.norm(ox)
         base = mi.Ray3f(o, d)
         q = scene.ray_intersect(base, ray_flags=self.flags, coherent=True, active=active)
 
         def aux(a, b):
             return mi.Ray3f(o + a * ox + b * oy, dr.normalize(d + a * dx + b * dy))
 
-        seen = self._detect(scene, sampler, q, aux, lambda t: angle * t, active)
-        return seen, LineState(D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle)
+        seen = self._detect(scene, sampler, q, aux, lambda t: spread + angle * t, active)
+        return seen, LineState(D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle,
+                               spread=spread)
 
     def edge(self, scene, sampler, state: LineState, si, bs, ray: mi.Ray3f, pi: mi.PreliminaryIntersection3f,
              index, active: mi.Bool):
@@ -158,17 +169,18 @@ class Lines:
         side = dr.sign(cos)
 
         def aux(a, b):
-            offset = state.angle * (a * u + b * v)
-            o = si.p + D0 * offset
+            lateral = a * u + b * v
+            offset = state.angle * lateral
+            o = si.p + state.width(0.0) * lateral
             # onto the vertex's tangent plane along d (where the mirrored camera's rays meet it)
             o = dr.select(flat, o - d * (dr.dot(o - si.p, n) / dr.select(flat, cos, 1.0)), o)
             o = o + n * side * (1.0 + dr.max(dr.abs(o))) * mi.math.RayEpsilon
             return mi.Ray3f(o, dr.normalize(d + offset))
 
-        seen = self._detect(scene, sampler, q, aux, lambda t: state.angle * (D0 + t), go)
+        seen = self._detect(scene, sampler, q, aux, state.width, go)
         # lanes that do not take this edge (halted at a stylized vertex, ended) keep their state
         after = LineState(D=dr.select(active, D0 + dr.select(pi.is_valid(), pi.t, dr.inf), D0),
-                          alive=dr.select(active, alive, state.alive), angle=state.angle)
+                          alive=dr.select(active, alive, state.alive), angle=state.angle, spread=state.spread)
         return seen, after
 
     def _pair(self, a, b, radius_at, active):
@@ -199,7 +211,7 @@ class Lines:
     def _detect(self, scene, sampler, q, aux, radius_at, active) -> Seen:
         """absorb: N auxiliary rays `aux(a, b)` against the base hit q; expectation: k pairs of auxiliary
         rays against each other. (a, b) uniform in the disc of radius width/2 pixels; `radius_at(t)`: the
-        cone's radius per pixel at distance t along the edge (for the depth test)."""
+        beam's width per pixel at distance t along the edge (for the depth test)."""
         s = self.s
         half = 0.5 * s.width
         pairs = s.mode == "expectation"
