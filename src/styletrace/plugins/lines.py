@@ -12,8 +12,8 @@ is found by each ray with the same probability q: coverage 1 - (1 - q)^N).
 - Camera edge: o_j = o + a (o_x - o) + b (o_y - o), d_j = normalize(d + a (d_x - d) + b (d_y - d)) from
   the camera ray's own differentials (one-pixel ones: Mitsuba scales them by 1/sqrt(spp)), so depth of
   field is shared.
-- Later edges: the beam of one pixel, its width at the camera (`spread`, |o_x - o|: 0 for a pinhole or a
-  thin lens, whose differentials share the origin; the pixel's width for an orthographic sensor, whose
+- Later edges: the beam of one pixel, its width at the camera (`spread`, |o_x - o|: 0 for a pinhole, whose
+  differentials share the origin, about 0 for a thin lens (Mitsuba's near-clip offset); the pixel's width for an orthographic sensor, whose
   rays are parallel) and its angle (`angle`, |d_x - d|), with the accumulated path length D from the
   camera set the stencil: origins on the vertex's tangent plane at lateral offset
   (spread + angle * D) * (a, b), directions d + angle * (a, b). After a flat mirror this is exactly the
