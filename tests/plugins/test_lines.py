@@ -125,6 +125,25 @@ def test_orthographic_reflected_silhouette_keeps_its_screen_width():
     assert abs(mirrored / seen - 1.0) <= 0.3, (seen, mirrored)
 
 
+@pytest.mark.parametrize("medium", [False, True])
+def test_a_null_surface_draws_no_line(medium):
+    """A cube with a `null` BSDF around the sphere (a participating medium's boundary, here with or without
+    the medium) is invisible: its outline must not be drawn, and the sphere's outline behind it still is.
+    The stencil's rays once stopped at the null surface and drew the box."""
+    res, width, dist = 64, 2.0, 8.0
+    scene = sphere_scene(res, dist=dist)
+    # the cube's outline lies well inside the image (its front face spans 2 x 10 of the 2 x 20 degrees)
+    scene["box"] = {"type": "cube", "to_world": T().scale(1.2), "bsdf": {"type": "null"}}
+    if medium:  # thin: the sphere behind it stays visible, and the walk is volpath's
+        scene["box"]["interior"] = {"type": "homogeneous", "sigma_t": 0.05, "albedo": 0.5}
+    img = render(scene, line_width=width, line_depth=1)
+    gap = ring_distance(res, (res / 2, res / 2), sphere_outline(res, dist=dist))
+    on = gap == 0.0
+    assert (img[on] > 0).mean() >= 0.9
+    off = gap > 0.5 * width + 0.5
+    assert img[off].max() == 0.0, (img[off] > 0).mean()
+
+
 def test_lines_off_is_the_image_without_the_property(monkeypatch):
     """Off, no line code is traced at all (a Python switch): the kernels are those of a build without lines."""
     from styletrace.plugins import lines

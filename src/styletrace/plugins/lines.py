@@ -28,7 +28,9 @@ Tests between the base hit q and an auxiliary hit s (any one fires; each can be 
   radius at q, spread + angle * t per pixel (slope-aware: any plane, however slanted, gives 0). The beam
   of an orthographic sensor has angle 0 and a constant width: with a radius of angle * t alone, every
   rounding error of a flat floor fired and an orthographic image was all line.
-The line point is the nearest (along its ray) of the points of the pairs that fire; its world y picks the
+Every ray of the stencil (the base ray too) passes surfaces with a pure `null` BSDF, which nothing sees
+(the boundary of a participating medium): outlining them drew the box of a medium. Masks, partly opaque,
+stay surfaces. The line point is the nearest (along its ray) of the points of the pairs that fire; its world y picks the
 colour of a `gradient`. `objects`: ids of the shapes that draw lines (empty: all); a pair draws where
 either of its hits is on one of them.
 
@@ -49,6 +51,9 @@ import drjit as dr
 import mitsuba as mi
 
 from ..errors import SceneError
+
+#: at most this many `null` surfaces passed along one stencil ray (nested medium boundaries)
+MAX_NULL_PASSES = 16
 
 TESTS = ("silhouette", "boundary", "crease", "albedo", "depth")
 DEFAULT_TESTS = ("silhouette", "boundary", "crease", "depth")
@@ -101,7 +106,9 @@ class Seen:
 class Lines:
     """The line settings bound to one scene for one trace (shape pointers, the gradient's y range)."""
 
-    def __init__(self, settings: LineSettings, scene: mi.Scene):
+    def __init__(self, settings: LineSettings, scene: mi.Scene, see_through: bool = False):
+        """`see_through`: the scene has a surface with a pure `null` BSDF (`SceneGraph.has_see_through`), so
+        the stencil's rays must pass such surfaces (a loop per ray that other scenes do without)."""
         self.s = settings
         self.draw_all = not settings.objects
         # positions, geometric normals and shapes are all the tests need; the albedo test evaluates textures
@@ -114,6 +121,7 @@ class Lines:
                 raise SceneError(f"bad value {missing[0]!r} in 'line_objects': the scene's shape ids are "
                                  f"{', '.join(sorted(k for k in by_id if k)) or 'none'}")
             self.shapes = [mi.ShapePtr(by_id[i]) for i in settings.objects]
+        self.see_through = see_through
         if settings.gradient is not None:
             c0, c1, y0, y1 = settings.gradient
             box = scene.bbox()
@@ -136,6 +144,31 @@ class Lines:
             mask |= si.shape == ptr
         return si.is_valid() & mask
 
+    def trace(self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False) -> mi.SurfaceInteraction3f:
+        """The first hit along `ray` that is not a pure `null` surface; its `t` is measured from ray.o."""
+        if not self.see_through:
+            return scene.ray_intersect(ray, ray_flags=self.flags, coherent=coherent, active=active)
+        minimal = mi.RayFlags.Minimal
+        pi = scene.ray_intersect_preliminary(ray, coherent=coherent, active=active)
+        first = pi.compute_surface_interaction(ray, ray_flags=minimal, active=active)
+        state = (pi, mi.Ray3f(ray), mi.Float(0.0), active & first.is_valid() & pure_null(first.bsdf().flags()),
+                 mi.UInt32(0))
+
+        def body(pi, ray, t, passing, n):
+            si = pi.compute_surface_interaction(ray, ray_flags=minimal, active=passing)
+            ahead = si.spawn_ray(ray.d)
+            t = dr.select(passing, t + pi.t, t)
+            ray = dr.select(passing, ahead, ray)
+            pi = dr.select(passing, scene.ray_intersect_preliminary(ahead, coherent=False, active=passing), pi)
+            nxt = pi.compute_surface_interaction(ray, ray_flags=minimal, active=passing)
+            return pi, ray, t, passing & nxt.is_valid() & pure_null(nxt.bsdf().flags()), n + 1
+
+        pi, ray, t, _, _ = dr.while_loop(state, lambda pi, ray, t, passing, n: passing & (n < MAX_NULL_PASSES),
+                                         body, label="styletrace lines through null surfaces")
+        si = pi.compute_surface_interaction(ray, ray_flags=self.flags, active=active)
+        si.t = dr.select(si.is_valid(), si.t + t, si.t)
+        return si
+
     # ---- the edges --------------------------------------------------------------------------------
     def camera(self, scene, sampler, ray: mi.RayDifferential3f, spp: int, active: mi.Bool):
         """Edge 0, from the camera ray's differentials: (Seen, LineState for the edges below)."""
@@ -145,7 +178,7 @@ class Lines:
         dx, dy = (ray.d_x - d) * scale, (ray.d_y - d) * scale
         angle, spread = dr.norm(dx), dr.norm(ox)
         base = mi.Ray3f(o, d)
-        q = scene.ray_intersect(base, ray_flags=self.flags, coherent=True, active=active)
+        q = self.trace(scene, base, active, coherent=True)
 
         def aux(a, b):
             return mi.Ray3f(o + a * ox + b * oy, dr.normalize(d + a * dx + b * dy))
@@ -161,7 +194,9 @@ class Lines:
         alive = state.alive & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Diffuse)
         go = active & alive & (index < self.s.depth)
         D0 = state.D
-        q = pi.compute_surface_interaction(ray, ray_flags=self.flags, active=go)
+        # the path's next vertex, unless it is a null surface, which the path passes after this test
+        q = self.trace(scene, ray, go) if self.see_through else \
+            pi.compute_surface_interaction(ray, ray_flags=self.flags, active=go)
         d, n = mi.Vector3f(ray.d), mi.Vector3f(si.n)
         u, v = mi.coordinate_system(d)
         cos = dr.dot(d, n)
@@ -218,7 +253,7 @@ class Lines:
 
         def hit(smp):
             uv = mi.warp.square_to_uniform_disk(smp.next_2d(active)) * half
-            return scene.ray_intersect(aux(uv.x, uv.y), ray_flags=self.flags, coherent=False, active=active)
+            return self.trace(scene, aux(uv.x, uv.y), active)
 
         def body(j, smp, fired, best_t, best_p):
             fire, p, t = self._pair(hit(smp) if pairs else q, hit(smp), radius_at, active)
@@ -231,6 +266,16 @@ class Lines:
         _, _, fired, _, point = dr.while_loop(state, lambda j, *rest: active & (j < count), body,
                                               label="styletrace lines")
         return Seen(fired=fired, color=self.color(point))
+
+
+def pure_null(flags) -> Any:
+    """BSDF flags of a surface that lets every ray through unchanged (a `null` BSDF): of the lobe flags
+    (`BSDFFlags.All`) only Null, whatever the side flags; a mask or a BSDF with a null lobe besides others
+    is not. Works on a Python int and on a Dr.Jit UInt32."""
+    null, lobes = int(mi.BSDFFlags.Null), int(mi.BSDFFlags.All)
+    if isinstance(flags, int):
+        return flags & lobes == null
+    return (flags & lobes) == null
 
 
 __all__ = ["LineSettings", "LineState", "Lines", "Seen", "TESTS", "DEFAULT_TESTS", "MODES"]
