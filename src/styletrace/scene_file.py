@@ -166,6 +166,9 @@ class _Includes:
             self.problem = f"{self.origin}: included file '{path}' is not readable XML ({exc})"
             return None
         version = _version(root)
+        if root.get("version") is None:
+            self.problem = f"{self.origin}: included file '{path}' has no version attribute, which Mitsuba requires"
+            return None
         if version is None or (version < (2,)) != self.legacy:
             self.problem = (f"{self.origin}: included file '{path}' has version '{root.get('version')}', which "
                             f"Mitsuba reads differently from the scene's")
