@@ -333,3 +333,59 @@ def test_expansion_pass_flag_and_set(tmp_path):
         imgs.append(read(out))
     assert np.array_equal(imgs[0], imgs[1]) and not np.array_equal(imgs[0], imgs[2])
     assert imgs[0].min() > -1.0 and imgs[2].min() < -10.0
+
+
+# ---- no silent waits: a long phase names itself on stderr (status.py) ------------------------------------
+def test_long_phases_name_themselves_on_stderr(tmp_path):
+    """With STYLETRACE_STATUS_DELAY=0 every phase is long enough to show: the load, the auto values' pilot and
+    the first pass (its kernel compilation included); -q shows none of it."""
+    env = dict(ENV, STYLETRACE_STATUS_DELAY="0")
+    args = ["render", "--style", "cel", "--width", "16", "--height", "16", "--spp", "2", "--inner", "1",
+            "-o", str(tmp_path / "s.png")]
+    one = subprocess.run([sys.executable, "-m", "styletrace", *args], capture_output=True, text=True, env=env,
+                         timeout=120)
+    assert one.returncode == 0, one.stderr
+    for words in ("styletrace: loading scene cornell-box (", "compiling and rendering a pilot (",
+                  "styletrace: compiling and rendering ("):
+        assert words in one.stderr, one.stderr
+    two = subprocess.run([sys.executable, "-m", "styletrace", *args, "--pass-spp", "1"], capture_output=True,
+                         text=True, env=env, timeout=120)
+    assert two.returncode == 0, two.stderr
+    assert "compiling and rendering pass 1 of 2" in two.stderr and "rendering: 100%" in two.stderr, two.stderr
+    quiet = subprocess.run([sys.executable, "-m", "styletrace", *args, "--pass-spp", "1", "-q"], capture_output=True,
+                           text=True, env=env, timeout=120)
+    assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
+
+
+def test_a_slow_first_pass_is_named_at_the_default_delay(tmp_path):
+    """At the default delay (2 s) a single pass of 64 x 64 x 1536 paths (several seconds on a CPU) shows its line;
+    the pilot is skipped (thresholds given) and the load is quick, so they stay quiet."""
+    r = run_cli("render", "--style", "cel", "--set", "thresholds=0.3", "--width", "64", "--height", "64",
+                "--spp", "1", "--inner", "1536", "-o", str(tmp_path / "slow.png"))
+    assert r.returncode == 0, r.stderr
+    assert "styletrace: compiling and rendering (" in r.stderr, r.stderr
+    assert "loading scene" not in r.stderr and "pilot" not in r.stderr, r.stderr
+
+
+def test_status_shows_only_phases_longer_than_its_delay():
+    import io
+    from styletrace.errors import UsageError
+    from styletrace.status import Status, delay_from_env
+    out = io.StringIO()
+    status = Status(delay=0.3, stream=out)
+    with status.phase("quick"):
+        pass
+    with status.phase("slow thing"):
+        time.sleep(1.2)
+    assert "quick" not in out.getvalue()
+    assert "styletrace: slow thing (1 s)" in out.getvalue() and out.getvalue().endswith("\n"), repr(out.getvalue())
+    silent = io.StringIO()
+    with Status(enabled=False, delay=0.0, stream=silent).phase("anything"):
+        time.sleep(0.3)
+    assert silent.getvalue() == ""
+    os.environ["STYLETRACE_STATUS_DELAY"] = "soon"
+    try:
+        with pytest.raises(UsageError, match="bad value 'soon' for STYLETRACE_STATUS_DELAY"):
+            delay_from_env()
+    finally:
+        del os.environ["STYLETRACE_STATUS_DELAY"]

@@ -108,6 +108,92 @@ def test_cli_spp_defaults_to_the_scenes_and_the_flag_wins(tmp_path, capsys):
     assert "spp 5)" in capsys.readouterr().err and read(out)[1].shape == (8, 5, 3)
 
 
+# ---- includes: resized as Mitsuba expands them -----------------------------------------------------------
+def sensor_xml(fov=40):
+    return (f'<sensor type="perspective"><float name="fov" value="{fov}"/><transform name="to_world">'
+            f'<lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>'
+            f'<sampler type="independent"><integer name="sample_count" value="2"/></sampler>'
+            f'<film type="hdrfilm"><integer name="width" value="12"/><integer name="height" value="8"/>'
+            f'<rfilter type="box"/></film></sensor>')
+
+
+LIGHTS = ('<shape type="rectangle"><transform name="to_world"><translate value="0,0,-3"/></transform>'
+          '<emitter type="area"><rgb name="radiance" value="1,2,3"/></emitter></shape>'
+          '<emitter type="constant"><rgb name="radiance" value="0.3,0.5,0.7"/></emitter>')
+
+
+def scene_xml(body):
+    return f'<scene version="3.0.0">{body}</scene>'
+
+
+def same_as_unresized(path):
+    """Resized to its own size (the included files expanded, the text loaded from a string) the scene renders
+    bit-identically to Mitsuba's own load of the file."""
+    own = api.render(path, style="identity", inner=1, spp=2, seed=5)
+    resized = api.render(path, style="identity", inner=1, spp=2, seed=5, width=12, height=8)
+    np.testing.assert_array_equal(resized, own)
+    return own
+
+
+def test_resize_reaches_a_sensor_in_an_included_file(tmp_path):
+    write(tmp_path, scene_xml(sensor_xml()), "camera.xml")
+    path = write(tmp_path, scene_xml('<include filename="camera.xml"/>'
+                                     '<shape type="sphere"><bsdf type="diffuse"/></shape>' + LIGHTS))
+    assert list(api.load_scene(path, 20, 6).sensors()[0].film().size()) == [20, 6]
+    same_as_unresized(path)
+
+
+def test_nested_includes_resolve_next_to_the_including_file(tmp_path):
+    """main.xml includes $parts/all.xml (a <default>), which includes camera.xml: Mitsuba takes the one next to
+    all.xml (fov 30), not the one next to main.xml (fov 80); an included non-scene root (a BSDF) takes the
+    include's place under its name."""
+    (tmp_path / "parts").mkdir()
+    write(tmp_path, scene_xml(sensor_xml(80)), "camera.xml")
+    write(tmp_path / "parts", scene_xml(sensor_xml(30)), "camera.xml")
+    write(tmp_path / "parts", '<bsdf version="3.0.0" type="diffuse"><rgb name="reflectance" value="0.8,0.4,0.2"/>'
+                              '</bsdf>', "red.xml")
+    write(tmp_path / "parts", scene_xml('<include filename="camera.xml"/><shape type="sphere">'
+                                        '<include filename="red.xml" name="bsdf"/></shape>'), "all.xml")
+    path = write(tmp_path, scene_xml('<default name="parts" value="parts"/><include filename="$parts/all.xml"/>'
+                                     + LIGHTS))
+    resized = api.load_scene(path, 20, 6)
+    fov = mi.traverse(resized.sensors()[0])["x_fov"]
+    assert abs(float(fov[0] if hasattr(fov, "__len__") else fov) - 30.0) < 1e-3
+    own = same_as_unresized(path)
+    assert own[..., 0].max() > 2 * own[..., 2].min()          # the red BSDF arrived
+    with pytest.raises(SceneError, match=r"cannot resize scene file .*included file 'nowhere/all.xml' not found"):
+        api.load_scene(path, 20, 6, defines={"parts": "nowhere"})
+
+
+def test_an_included_texture_resolves_as_mitsuba_resolves_it(tmp_path):
+    """An included file in a subfolder: its texture path is relative to the scene's folder, where Mitsuba
+    3.9.1 resolves the plugins an included file names (not the included file's folder, nor one its <path>
+    adds: the include's resolver ends with it). Resized, the scene loads and renders the same; a path
+    relative to the subfolder alone fails with one line either way, as in Mitsuba."""
+    sub = tmp_path / "looks"
+    sub.mkdir()
+    check = np.zeros((4, 4, 3), dtype=np.float32)
+    check[::2, ::2] = check[1::2, 1::2] = 1.0
+    mi.Bitmap(check).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, True).write(str(sub / "check.png"))
+
+    def look(texture, extra=""):
+        return scene_xml(f'{extra}<bsdf type="diffuse" id="look"><texture type="bitmap" name="reflectance">'
+                         f'<string name="filename" value="{texture}"/><string name="filter_type" value="nearest"/>'
+                         f'</texture></bsdf>')
+
+    main_text = scene_xml(sensor_xml() + '<include filename="looks/look.xml"/>'
+                          '<shape type="rectangle"><ref id="look"/></shape>' + LIGHTS)
+    write(sub, look("looks/check.png"), "look.xml")
+    path = write(tmp_path, main_text)
+    img = same_as_unresized(path)
+    assert img.mean(axis=2).std() > 0.05                       # the checker shows
+    for extra in ("", '<path value="."/>'):
+        write(sub, look("check.png", extra), "look.xml")
+        for size in ((None, None), (12, 8)):
+            with pytest.raises(SceneError, match="check.png"):
+                api.load_scene(path, *size)
+
+
 # ---- 7: an integrator Mitsuba does not know ------------------------------------------------------------
 def test_unknown_integrator_is_replaced_keeping_its_depths(tmp_path, capsys):
     path = write(tmp_path, xml('<integrator type="sre"><integer name="max_depth" value="3"/>'

@@ -153,13 +153,14 @@ def carried_settings(scene: mi.Scene) -> dict[str, Any]:
     text = str(own)
     out: dict[str, Any] = {}
     for key in ("max_depth", "rr_depth"):
-        found = re.search(rf"\b{key}\s*=\s*(\d+)", text)
+        found = re.search(rf"\b{key}\s*=\s*(-?\d+)", text)  # ptracer prints -1, path 2^32 - 1
         if found:
             value = int(found.group(1))
             out[key] = -1 if value >= 2 ** 32 - 1 else value  # Mitsuba stores -1 (unbounded) as UInt32
     if text.startswith("DirectIntegrator"):
         out["max_depth"] = 2
-    if own.hide_emitters:  # a read-only property of every Mitsuba integrator
+    # a read-only property of Mitsuba's SamplingIntegrators; its AdjointIntegrator binding (ptracer) has none
+    if getattr(own, "hide_emitters", False):
         out["hide_emitters"] = True
     return out
 

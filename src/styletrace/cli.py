@@ -6,7 +6,8 @@ unwritable output, an image too large for memory, malformed arguments) ends with
 integrator only where given. A failure after some passes still writes them. Ctrl-C or SIGTERM during
 a render stops after the pass under way, or within `StopSignals.GRACE` seconds if that pass takes
 longer (a second signal: at once); the average of the finished passes is written, then the exit
-status is 130 (Ctrl-C) or 143 (SIGTERM).
+status is 130 (Ctrl-C) or 143 (SIGTERM). A wait of more than two seconds (loading the scene, the auto values'
+pilot, the first pass with its kernel compilation) names itself on a stderr status line (`status.py`).
 """
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from typing import Sequence
 
 from .errors import StyletraceError, UsageError
 from .images import IMAGE_TYPES, nonfinite_pixels, save_safely
+from .status import Status
 from .wild import warning as wild_warning
 
 
@@ -203,10 +205,11 @@ def cmd_render(args) -> int:
             raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
 
     defines = _parse_defines(args.define)
+    status = Status(enabled=not args.quiet)
     from . import api
     from .images import check_format
 
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, status.phase(f"loading scene {one_line(args.scene)}"):
         warnings.simplefilter("always", api.SceneWarning)
         scene = api.load_scene(args.scene, args.width, args.height, defines)
     for w in caught:
@@ -230,7 +233,8 @@ def cmd_render(args) -> int:
             raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
         if args.spp < 2:
             raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
-    integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
+    with status.phase("measuring the scene for its auto values: compiling and rendering a pilot"):
+        integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
     if chosen and not args.quiet:
         print(f"styletrace: auto values: {chosen}", file=sys.stderr)
     if args.buffer:
@@ -246,7 +250,8 @@ def cmd_render(args) -> int:
     bar = None
     if total > 1 and not args.quiet:
         from tqdm import tqdm
-        bar = tqdm(total=args.spp, unit="spp", desc="rendering", file=sys.stderr)
+        # the first pass includes the kernel's compilation: the bar says so until it is done
+        bar = tqdm(total=args.spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
     latest, failure = None, None
 
     def write(prog) -> str:
@@ -261,6 +266,7 @@ def cmd_render(args) -> int:
     source = None
 
     def abandon(signum):  # from the watcher thread: the pass under way is lost, the finished ones are not
+        status.stop()
         if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass
             source.save()
         if latest is None:
@@ -279,8 +285,14 @@ def cmd_render(args) -> int:
             else:
                 source = api.passes(scene, integrator, args.spp, args.seed, lanes_per_pass=lanes, pass_spp=args.pass_spp,
                                     lock=stop.lock)
+            if bar is not None:
+                status.follow(bar)
+            else:
+                status.start("compiling and rendering")
             for prog in source:
                 if bar is not None:
+                    if latest is None:
+                        bar.set_description_str("rendering", refresh=False)
                     bar.update(prog.spp_done - (latest.spp_done if latest else 0))
                 latest = prog
                 if stop.count:
@@ -290,6 +302,8 @@ def cmd_render(args) -> int:
             if latest is None:
                 raise
             failure = exc
+        finally:
+            status.stop()
         with stop.lock:
             stop.settled = True
         if bar is not None:  # the final write happens under the watcher too: a signal now does not cut it

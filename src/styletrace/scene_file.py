@@ -4,11 +4,20 @@
 
 - `defines` are the values of the file's `<default>` parameters (`$name`), as `mitsuba -D name=value`;
   Mitsuba refuses a name the file does not use.
-- `width`/`height` resize the film of the first top-level `<sensor>`: the XML is parsed (xml.etree), the
-  film's `width`/`height` are set (a film is added where the sensor has none: Mitsuba's default hdrfilm),
-  and the edited text is loaded with the file's folder first on Mitsuba's file resolver, so relative
-  paths resolve as before. A film with a crop window, or a sensor only reachable through `<include>` or
-  `<ref>`, is refused in one line rather than resized wrongly.
+- `width`/`height` resize the film of the first top-level `<sensor>`: the XML is parsed (xml.etree), its
+  `<include>`s are expanded as Mitsuba expands them (`expand_includes`), the film's `width`/`height` are
+  set (a film is added where the sensor has none: Mitsuba's default hdrfilm), and the edited text is
+  loaded with the file's folder first on Mitsuba's file resolver, so relative paths resolve as before. A
+  film with a crop window, or a sensor only reachable through a `<ref>`, is refused in one line rather
+  than resized wrongly.
+- Includes, as Mitsuba 3.9.1's parser treats them: the file name (after `$parameter` substitution) is
+  looked up in the including file's folder first, then on the file resolver (the scene's folder); an
+  included `<scene>`'s children take the include's place, any other root element takes it whole (named
+  by the include's `name`); nesting is limited to 15 levels. Paths Mitsuba resolves while it parses an
+  included file (`<path value>`, `<spectrum filename>`) are resolved as it does and made absolute; paths
+  of plugins it instantiates after parsing (meshes, textures) resolve against the scene's folder in
+  Mitsuba too (not the included file's), so they are left as they are. An included file with a version Mitsuba would upgrade
+  differently from the scene's (before 2.0 against after) is refused for resizing rather than misread.
 - A top-level `<integrator>` whose type Mitsuba does not know (a scene written for another implementation
   of stylized rendering, say `type="sre"`) is replaced by a `path` integrator that keeps its `max_depth`,
   `rr_depth` and `hide_emitters`; the front ends then render it with `stylized`, which carries those over
@@ -59,6 +68,139 @@ def replace_integrator(root: ET.Element, origin: str) -> str | None:
     return None
 
 
+#: Mitsuba's limit of nested includes (ParserConfig.max_include_depth)
+MAX_INCLUDE_DEPTH = 15
+
+
+def _version(node: ET.Element) -> tuple[int, ...] | None:
+    try:
+        return tuple(int(x) for x in node.get("version", "").split("."))
+    except ValueError:
+        return None
+
+
+class _Includes:
+    """One expansion of a scene file's includes, following Mitsuba 3.9.1's parser (parser.cpp).
+
+    - `params` holds the $parameters known so far, in Mitsuba's order: the defines first (they win), then
+      each `<default>` as the parser meets it, in document order through the included files.
+    - File lookups: each file is parsed with a resolver, a list of folders searched in order (then
+      Mitsuba's own file resolver). The scene's is its folder. An `<include>` in a file of folder D and
+      resolver R is looked up on [D] + R, and the included file is parsed with that list as its resolver.
+      A `<path value>` is looked up in its file's folder, else on its resolver, and is put first on that
+      resolver: it serves the rest of that file and the files it includes, and is gone when the include
+      ends (Mitsuba restores the resolver), so an included file's `<path>` is used here and dropped from
+      the spliced text. A `<spectrum filename>` is looked up on its file's resolver and made absolute.
+    - `problem` is set when the expansion could not be faithful; the caller refuses a resize then (the
+      unexpanded file still loads through Mitsuba, which reports its own errors)."""
+
+    def __init__(self, defines: Mapping[str, str], origin: str, legacy: bool):
+        self.params = dict(defines)
+        self.origin = origin
+        self.legacy = legacy          # the scene's own version is before 2.0
+        self.problem: str | None = None
+
+    def subst(self, text: str) -> str:
+        for key in sorted(self.params, key=len, reverse=True):  # longest first, as Mitsuba: $ab before $a
+            text = text.replace("$" + key, self.params[key])
+        return text
+
+    @staticmethod
+    def find(name: str, folders: list[str]) -> str | None:
+        """`name` looked up in `folders`, then on Mitsuba's file resolver; None where it exists nowhere."""
+        if os.path.isabs(name):
+            return name if os.path.exists(name) else None
+        for folder in folders:
+            candidate = os.path.join(folder, name)
+            if os.path.exists(candidate):
+                return os.path.abspath(candidate)
+        found = str(mi.file_resolver().resolve(name))
+        return os.path.abspath(found) if os.path.exists(found) else None
+
+    def expand(self, parent: ET.Element, folder: str, resolver: list[str], depth: int) -> None:
+        """Expand the includes under `parent`, an element of the file in `folder` parsed with `resolver`
+        (mutated by the file's `<path>`s), `depth` includes deep."""
+        i = 0
+        while i < len(parent) and not self.problem:
+            node = parent[i]
+            if node.tag == "default":
+                self.params.setdefault(node.get("name", ""), node.get("value", ""))
+            elif node.tag == "path" and node.get("value"):
+                value = self.subst(node.get("value"))
+                found = value if os.path.isabs(value) else os.path.join(folder, value)
+                if not os.path.exists(found):
+                    found = self.find(value, resolver) or found
+                resolver.insert(0, os.path.abspath(found))
+                if depth > 0:  # its effect ends with the include: nothing of it may reach the scene's text
+                    del parent[i]
+                    continue
+            elif node.tag == "include":
+                spliced = self.included(node, folder, resolver, depth)
+                if spliced is None:
+                    return
+                parent[i:i + 1] = spliced
+                i += len(spliced)
+                continue
+            elif isinstance(node.tag, str):
+                if node.tag == "spectrum" and node.get("filename"):
+                    found = self.find(self.subst(node.get("filename")), resolver)
+                    if found:
+                        node.set("filename", found)
+                self.expand(node, folder, resolver, depth)
+            i += 1
+
+    def included(self, node: ET.Element, folder: str, resolver: list[str], depth: int) -> list[ET.Element] | None:
+        name = self.subst(node.get("filename", ""))
+        if depth + 1 >= MAX_INCLUDE_DEPTH:
+            self.problem = (f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
+                            f"levels at '{name}'")
+            return None
+        lookup = [folder, *resolver]
+        path = self.find(name, lookup)
+        if path is None or not os.path.isfile(path):
+            self.problem = f"{self.origin}: included file '{name}' not found"
+            return None
+        try:
+            root = ET.parse(path).getroot()
+        except (ET.ParseError, OSError, ValueError) as exc:
+            self.problem = f"{self.origin}: included file '{path}' is not readable XML ({exc})"
+            return None
+        version = _version(root)
+        if root.get("version") is None:
+            self.problem = f"{self.origin}: included file '{path}' has no version attribute, which Mitsuba requires"
+            return None
+        if version is None or (version < (2,)) != self.legacy:
+            self.problem = (f"{self.origin}: included file '{path}' has version '{root.get('version')}', which "
+                            f"Mitsuba reads differently from the scene's")
+            return None
+        self.expand(root, os.path.dirname(path), lookup, depth + 1)
+        if self.problem:
+            return None
+        if root.tag == "scene":
+            return list(root)
+        root.attrib.pop("version", None)
+        if node.get("name"):
+            root.set("name", node.get("name"))
+        root.tail = node.tail
+        return [root]
+
+
+def expand_includes(root: ET.Element, path: str, defines: Mapping[str, str] | None = None) -> str | None:
+    """Replace every `<include>` under `root` (the parsed file `path`) by what Mitsuba splices in, in place
+    (see `_Includes`); None, or the reason the expansion cannot be faithful (root is then partly expanded
+    and must not be used)."""
+    version = _version(root)
+    inc = _Includes({str(k): str(v) for k, v in (defines or {}).items()}, f"scene file '{path}'",
+                    legacy=version is not None and version < (2,))
+    folder = os.path.dirname(os.path.abspath(path))
+    inc.expand(root, folder, [folder], 0)
+    return inc.problem
+
+
+def has_include(root: ET.Element) -> bool:
+    return any(True for _ in root.iter("include"))
+
+
 def _set_int(parent: ET.Element, name: str, value: int) -> None:
     for c in parent:
         if c.get("name") == name:
@@ -70,7 +212,7 @@ def resize(root: ET.Element, width: int | None, height: int | None, origin: str)
     sensor = root.find("sensor")
     if sensor is None:
         raise SceneError(f"cannot resize {origin}: it has no top-level <sensor> whose film could be resized "
-                         f"(one in an <include> or <ref> is not); edit the film's width/height in the file")
+                         f"(one only reachable through a <ref> is not); edit the film's width/height in the file")
     film = sensor.find("film")
     if film is None:  # Mitsuba's default film
         film = ET.SubElement(sensor, "film", {"type": "hdrfilm"})
@@ -109,6 +251,16 @@ def load(path: str, width: int | None = None, height: int | None = None,
     edited = False
     if tree is not None and tree.getroot().tag == "scene":
         root = tree.getroot()
+        if has_include(root):
+            # expanded on a copy: a file whose includes cannot be expanded faithfully still loads through
+            # Mitsuba as it is, unless it has to be edited (resized)
+            expanded = ET.fromstring(ET.tostring(root))
+            problem = expand_includes(expanded, path, defines)
+            if problem is None:
+                root = expanded
+                tree = ET.ElementTree(root)
+            elif width or height:
+                raise SceneError(f"cannot resize {problem}")
         note = replace_integrator(root, origin)
         if note:
             notes.append(note)
@@ -124,4 +276,4 @@ def load(path: str, width: int | None = None, height: int | None = None,
     return _load_text(text, os.path.dirname(os.path.abspath(path)), defines), notes
 
 
-__all__ = ["load", "resize", "replace_integrator", "known_integrator", "SHARED"]
+__all__ = ["load", "resize", "replace_integrator", "known_integrator", "expand_includes", "SHARED"]

@@ -91,6 +91,9 @@ def test_hidden_emitters_still_light_the_scene():
      {"max_depth": 3, "rr_depth": 2, "hide_emitters": True}),
     ({"type": "prb", "max_depth": 4}, {"max_depth": 4, "rr_depth": 5}),
     ({"type": "direct", "hide_emitters": True}, {"max_depth": 2, "hide_emitters": True}),
+    # the light tracer: Mitsuba prints its unbounded depth as -1 and its binding has no hide_emitters
+    ({"type": "ptracer", "max_depth": 3}, {"max_depth": 3, "rr_depth": 5}),
+    ({"type": "ptracer"}, {"max_depth": -1, "rr_depth": 5}),
     ({"type": "stylized", "max_depth": 3}, {}),   # its own values are used whole
 ])
 def test_carried_settings_read_mitsubas_integrators(integrator, expected):

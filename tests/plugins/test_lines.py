@@ -77,6 +77,73 @@ def test_sphere_silhouette_is_covered_and_interiors_are_clean():
     assert off.sum() > 0.8 * res * res
 
 
+def ortho_camera(res, half_width):
+    """An orthographic sensor looking down -z that sees [-half_width, half_width]^2 (Mitsuba maps the film to
+    [-1, 1]^2 before `to_world`'s scale)."""
+    cam = camera([0, 0, 4], [0, 0, 0], res)
+    cam["type"] = "orthographic"
+    del cam["fov"], cam["fov_axis"]
+    cam["to_world"] = cam["to_world"] @ T().scale([half_width, half_width, 1.0])
+    return cam
+
+
+@pytest.mark.parametrize("line_depth", [1, 2])
+def test_orthographic_silhouette_is_covered_and_interiors_are_clean(line_depth):
+    """An orthographic camera has parallel rays: its pixel beam has a fixed width (the origin differential)
+    and no angle. The depth test once measured the beam by its angle alone (radius 0), so every rounding
+    error between two points of one flat plane fired and the image was all line. The outline is the
+    sphere's radius over the pixel size, res / 4 pixels; away from it nothing may fire."""
+    res, width = 64, 2.0
+    scene = sphere_scene(res)
+    scene["sensor"] = ortho_camera(res, 2.0)
+    img = render(scene, line_width=width, line_depth=line_depth)
+    gap = ring_distance(res, (res / 2, res / 2), res / 4)
+    on = gap == 0.0
+    assert on.sum() > 100
+    assert (img[on] > 0).mean() >= 0.9
+    off = gap > 0.5 * width + 0.5
+    assert img[off].max() == 0.0, (img[off] > 0).mean()
+
+
+def test_orthographic_reflected_silhouette_keeps_its_screen_width():
+    """Past a flat mirror an orthographic beam stays parallel and as wide: the stencil of the second edge
+    must offset its origins by the beam's width (with the angle alone, 0, every auxiliary ray was the base
+    ray and the mirror showed no line). The mirrored sphere's outline has the direct one's line mass."""
+    res, radius = 64, 1.0
+    mirror = {"type": "rectangle", "to_world": T().translate([0, 0, -5]) @ T().rotate([0, 1, 0], 45.0) @ T().scale(8.0),
+              "bsdf": {"type": "conductor", "material": "none"}}
+    cam = ortho_camera(res, 2.0)
+    cam["to_world"] = T().look_at(origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0]) @ T().scale([2.0, 2.0, 1.0])
+    reflected = {"type": "scene", "sensor": cam, "mirror": mirror,
+                 "sphere": {"type": "sphere", "center": [3, 0, -5], "radius": radius, "bsdf": BLACK}}
+    direct = {"type": "scene", "sensor": cam, "sphere": {"type": "sphere", "center": [0, 0, -8], "radius": radius,
+                                                        "bsdf": BLACK}}
+    perimeter = 2 * math.pi * res / 4
+    seen = render(direct, spp=8, line_depth=2).sum() / perimeter
+    mirrored = render(reflected, spp=8, line_depth=2).sum() / perimeter
+    assert 1.0 < seen < 3.0
+    assert abs(mirrored / seen - 1.0) <= 0.3, (seen, mirrored)
+
+
+@pytest.mark.parametrize("medium", [False, True])
+def test_a_null_surface_draws_no_line(medium):
+    """A cube with a `null` BSDF around the sphere (a participating medium's boundary, here with or without
+    the medium) is invisible: its outline must not be drawn, and the sphere's outline behind it still is.
+    The stencil's rays once stopped at the null surface and drew the box."""
+    res, width, dist = 64, 2.0, 8.0
+    scene = sphere_scene(res, dist=dist)
+    # the cube's outline lies well inside the image (its front face spans 2 x 10 of the 2 x 20 degrees)
+    scene["box"] = {"type": "cube", "to_world": T().scale(1.2), "bsdf": {"type": "null"}}
+    if medium:  # thin: the sphere behind it stays visible, and the walk is volpath's
+        scene["box"]["interior"] = {"type": "homogeneous", "sigma_t": 0.05, "albedo": 0.5}
+    img = render(scene, line_width=width, line_depth=1)
+    gap = ring_distance(res, (res / 2, res / 2), sphere_outline(res, dist=dist))
+    on = gap == 0.0
+    assert (img[on] > 0).mean() >= 0.9
+    off = gap > 0.5 * width + 0.5
+    assert img[off].max() == 0.0, (img[off] > 0).mean()
+
+
 def test_lines_off_is_the_image_without_the_property(monkeypatch):
     """Off, no line code is traced at all (a Python switch): the kernels are those of a build without lines."""
     from styletrace.plugins import lines

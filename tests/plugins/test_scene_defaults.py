@@ -116,3 +116,36 @@ def test_the_pilot_sees_through_participating_media():
     settings = make_integrator("cel").settings
     foggy, clear = (Pilot(scene(f), settings).samples["colour"].mean() for f in (True, False))
     assert np.isfinite(foggy) and 0 < foggy < clear / 3, (foggy, clear)
+
+
+def test_a_composition_resolves_under_an_orthographic_camera():
+    """Under an orthographic sensor every ray has the same direction, which Mitsuba returns as an array of
+    width 1; the pilot's per-sample view directions (read by a composition's later operand) once kept that
+    width and the resolve failed with an IndexError. Here: a grey wall, contrast then cel; cel's threshold is
+    contrast's output of the wall's brightness, 0.5 + 1.5 (0.4 - 0.5) = 0.35."""
+    grey = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.4, 0.4, 0.4]}}
+    scene = mi.load_dict({
+        "type": "scene",
+        "sensor": {"type": "orthographic", "to_world": T().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": 16, "height": 16}},
+        "wall": {"type": "rectangle", "to_world": T().scale([10.0, 10.0, 1.0]), "bsdf": grey},
+        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [1, 1, 1]}}})
+    integrator, chosen = resolve_defaults(scene, make_integrator(style="contrast+cel"))
+    t = integrator.settings.style.operands[1].thresholds[0]
+    assert abs(t - 0.35) < 0.02, t
+    assert "cel.thresholds=" in chosen
+
+
+def test_weighted_quantiles_are_the_inverted_cdf_on_any_numpy():
+    """Integer weights are repetitions: the weighted quantile is the plain inverted-CDF quantile of the values
+    repeated (np.quantile's `weights=` is numpy 2 only; pyproject allows numpy 1.24, where it raised)."""
+    from styletrace.plugins.scene_defaults import weighted_quantiles
+    rng = np.random.default_rng(4)
+    qs = [0.0, 0.05, 0.3, 0.5, 0.95, 1.0]
+    for trial in range(200):
+        n = int(rng.integers(1, 30))
+        values = rng.integers(0, 6, n).astype(float) if trial % 2 else rng.random(n)
+        weights = rng.integers(0, 4, n)
+        weights[0] += 1
+        want = np.quantile(np.repeat(values, weights), qs, method="inverted_cdf")
+        assert weighted_quantiles(values, weights, qs) == [float(x) for x in want]

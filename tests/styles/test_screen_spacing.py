@@ -76,3 +76,61 @@ def test_halftone_dots_on_a_screen_grid_at_every_depth():
     for depth in (0.5, 50.0):
         out = run(h, np.zeros((len(px), 3)), vertex(p=points_at(sc, px, py, depth)))
         np.testing.assert_array_equal(np.all(np.abs(out - np.array(h.dark)) < 1e-6, axis=1), want)
+
+
+# Rendered: orthographic and thin-lens sensors. The sensor's own pixel size sets the spacing (Projection
+# reads it from two of its rays); an orthographic sensor returns its one ray direction as an array of width
+# 1, which the projection once indexed as two and crashed the render (IndexError inside mi.render).
+
+R = 64  # rendered film width and height
+
+
+def camera_scene(kind):
+    sensor = {"type": kind, "film": {"type": "hdrfilm", "width": R, "height": R, "rfilter": {"type": "box"}},
+              "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0])}
+    if kind == "orthographic":   # a view 2 x 3.7 units wide: a pixel is not one unit, nor the default 2/R
+        sensor["to_world"] = sensor["to_world"] @ mi.ScalarTransform4f().scale([3.7, 3.7, 1.0])
+    if kind == "thinlens":       # the wall in focus: its chief rays are the perspective ones
+        sensor.update(fov=50.0, aperture_radius=0.05, focus_distance=5.0)
+    return {"type": "scene", "sensor": sensor,
+            "wall": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale([20.0, 20.0, 1.0]),
+                     "bsdf": {"type": "diffuse"}},
+            "light": {"type": "constant"}}
+
+
+def period(signal):
+    """The dominant period (in samples) of a 1D signal, from the peak of its zero-padded spectrum."""
+    s = np.asarray(signal, dtype=np.float64)
+    pad = 1 << 14
+    spectrum = np.abs(np.fft.rfft(s - s.mean(), pad))
+    k = int(np.argmax(spectrum[8:])) + 8         # leave out the lowest frequencies (periods over 2000 px)
+    return pad / k
+
+
+def dark(img):
+    """1 where a pixel is mostly line/dot colour, 0 where background (both styles draw dark on light)."""
+    return (img[..., :3].mean(axis=2) < 0.5).astype(np.float64)
+
+
+@pytest.mark.parametrize("kind", ["orthographic", "thinlens"])
+@pytest.mark.parametrize("spacing_px", [8.0, 6.0])
+def test_rendered_hatching_period_is_spacing_px(kind, spacing_px):
+    """One set (angle 0: lines across the image's x axis), every set drawn (u_max above any brightness)."""
+    import styletrace
+    img = styletrace.render(camera_scene(kind), style="hatching", spp=4, inner=1, sets=1, angle=0.0,
+                            spacing_px=spacing_px, u_min=100.0, u_max=200.0)
+    lines = dark(img)
+    assert 0.15 < lines.mean() < 0.6, lines.mean()
+    assert period(lines.mean(axis=0)) == pytest.approx(spacing_px, rel=0.03)
+    assert np.ptp(lines.mean(axis=1)) < 0.2       # vertical lines: every row has the same coverage
+
+
+@pytest.mark.parametrize("kind", ["orthographic", "thinlens"])
+def test_rendered_halftone_grid_is_spacing_px(kind):
+    import styletrace
+    img = styletrace.render(camera_scene(kind), style="halftone", spp=4, inner=1, spacing_px=8.0,
+                            max_radius_fraction=0.5, u_min=100.0, u_max=200.0)
+    dots = dark(img)
+    assert 0.1 < dots.mean() < 0.6, dots.mean()
+    assert period(dots.mean(axis=0)) == pytest.approx(8.0, rel=0.03)
+    assert period(dots.mean(axis=1)) == pytest.approx(8.0, rel=0.03)

@@ -106,7 +106,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # shapegroups seen through instances (scene_graph.py); `bsdfs[0]` is the styled BSDF itself
         graph = SceneGraph(scene)
         # plain flags only: a kept reference to a scene's objects breaks later traces (see `sample`)
-        self.nulls, self.media = graph.has_null, graph.has_media
+        self.nulls, self.media, self.see_through = graph.has_null, graph.has_media, graph.has_see_through
         targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
         if self.settings.stylize != "first_object_hit":
             targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
@@ -249,7 +249,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         problem = line_problem(self.settings, self.media)
         if problem is not None:
             raise SceneError(problem)
-        self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene)
+        self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene,
+                                                                    see_through=self.see_through)
         # emitter selection in an order of the scene's own (its emitter list changes order between runs)
         self.emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         try:

@@ -39,7 +39,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import StyleError
-from ..styles.base import Camera, Style, Vertex, camera
+from ..styles.base import Camera, Style, Vertex, camera, lanes
 from . import settings as S
 from .emitter_sampler import EmitterSampler
 from .integrator import StylizedIntegrator
@@ -55,8 +55,19 @@ PILOT_SEED = 0x5EED
 
 
 def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
-    """Quantiles of the distribution putting mass `weights` on `values` (numpy's inverted CDF)."""
-    return [float(x) for x in np.quantile(values, qs, weights=weights, method="inverted_cdf")]
+    """Quantiles of the distribution putting mass `weights` on `values`: the inverted CDF, the smallest value
+    whose cumulative weight reaches q (numpy 2's `np.quantile(..., weights=, method="inverted_cdf")`, which
+    numpy 1.x, still allowed by pyproject, lacks; spelled out so both give the same auto values)."""
+    v = np.asarray(values, dtype=np.float64).ravel()
+    w = np.asarray(weights, dtype=np.float64).ravel()
+    keep = w > 0  # a value of no weight is never a quantile, not even the 0th
+    v, w = v[keep], w[keep]
+    order = np.argsort(v, kind="stable")
+    v, w = v[order], w[order]
+    cdf = np.cumsum(w)
+    cdf /= cdf[-1]
+    index = np.searchsorted(cdf, np.asarray(qs, dtype=np.float64), side="left")
+    return [float(x) for x in v[np.minimum(index, len(v) - 1)]]
 
 
 class Pilot:
@@ -107,7 +118,7 @@ class Pilot:
         n_sh = dr.normalize(si.sh_frame.n)
         return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
                 "depth": np.array(depth, dtype=np.float64), "p": np.array(si.p).T, "n": np.array(n_sh).T,
-                "wo": -np.array(ray.d).T}
+                "wo": -lanes(ray.d, n).T}
 
 
 class Facts:

@@ -4,6 +4,7 @@ wherever they sit, null-scattering surfaces (masks, `null`), participating media
     graph = SceneGraph(scene)
     graph.styled        # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
     graph.has_null      # some surface BSDF has a Null component (a `mask`, a `null` BSDF, ...)
+    graph.has_see_through  # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
     graph.has_media     # some shape bounds a medium, or the sensor sits in one
 
 Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled` BSDF
@@ -21,6 +22,7 @@ from __future__ import annotations
 import mitsuba as mi
 
 from ..errors import SceneError
+from .lines import pure_null
 from .styled_bsdf import StyledBSDF
 
 
@@ -91,11 +93,13 @@ class SceneGraph:
     def __init__(self, scene: mi.Scene):
         groups: dict[int, tuple] = {}
         self.has_null = False
+        self.has_see_through = False   # some surface has a pure `null` BSDF (feature lines pass it)
         self.has_media = scene.sensors()[0].get_medium() is not None if scene.sensors() else False
         for shape in all_shapes(scene):
             bsdf = shape.bsdf()
             if mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null):
                 self.has_null = True
+                self.has_see_through |= pure_null(bsdf.flags())
                 if shape.emitter() is not None:  # see path.first_scattering for why
                     raise SceneError(f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
                                      f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF")

@@ -176,6 +176,15 @@ class Projection:
         return dr.dot(rel, mi.Vector3f(*self.right)) * inv, dr.dot(rel, mi.Vector3f(*self.camera.up)) * inv
 
 
+def lanes(v, n: int):
+    """A Dr.Jit 3-vector as a (3, n) float64 numpy array. A sensor returns a component that is the same for
+    every lane as an array of width 1 (an orthographic sensor's ray direction, a perspective one's origin
+    before the near-clip offset): it is repeated, so that lane k is ray k whatever the sensor type."""
+    import numpy as np
+    a = np.array(v, dtype=np.float64).reshape(3, -1)
+    return np.broadcast_to(a, (3, n))
+
+
 def projection(scene: mi.Scene) -> Projection:
     """Measured on the sensor itself: the rays through the film centre and one pixel to its right."""
     import numpy as np
@@ -187,7 +196,7 @@ def projection(scene: mi.Scene) -> Projection:
     width = max(int(sensor.film().crop_size()[0]), 1)
     ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f([0.5, 0.5 + 1.0 / width], [0.5, 0.5]),
                                mi.Point2f(0.5, 0.5))
-    d, o = np.array(ray.d, dtype=np.float64), np.array(ray.o, dtype=np.float64)
+    d, o = lanes(ray.d, 2), lanes(ray.o, 2)
     f = np.array(cam.forward)
     a = float(np.linalg.norm(d[:, 1] / (d[:, 1] @ f) - d[:, 0] / (d[:, 0] @ f)))
     b = 0.0
@@ -230,4 +239,4 @@ def light_from_camera(cam: Camera) -> tuple[float, float, float]:
 
 
 __all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward",
-           "Projection", "projection", "light_from_camera", "rounded", "increasing"]
+           "Projection", "projection", "lanes", "light_from_camera", "rounded", "increasing"]
