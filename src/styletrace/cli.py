@@ -81,8 +81,13 @@ class StopSignals:
     interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns of
     the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if the pass
     has not finished `GRACE` seconds after the first signal, or a second signal comes, the watcher
-    calls `abandon(signum)`, which writes the finished passes and ends the process. Exit status: 128 + the
-    signal's number (130 for Ctrl-C, 143 for SIGTERM).
+    calls `abandon(signum)`, which writes the finished passes and ends the process (`os._exit`: the
+    kernel is left running). That write must not touch Mitsuba: its EXR writer waits for the kernel
+    (`images.encode_plain`). Exit status: 128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM).
+
+    A Ctrl-C in the few milliseconds in which Mitsuba's C++ `render` traces a pass goes to Mitsuba's own
+    handler (it logs "Received interrupt signal, winding down") instead; the pass then runs on and a
+    further Ctrl-C counts as the first.
     """
 
     GRACE = 1.0
@@ -249,9 +254,9 @@ def cmd_render(args) -> int:
         bar = tqdm(total=args.spp, unit="spp", desc="rendering", file=sys.stderr)
     latest, failure = None, None
 
-    def write(prog) -> str:
+    def write(prog, plain: bool = False) -> str:
         image = prog.image
-        out = save_safely(image, args.output, pixel_format, getattr(prog, "aovs", None))
+        out = save_safely(image, args.output, pixel_format, getattr(prog, "aovs", None), plain)
         bad = nonfinite_pixels(image)
         if bad:
             fix = "NaN as 0 and +inf as 1 in the PNG" if args.output.lower().endswith(".png") else "kept as they are"
@@ -265,8 +270,8 @@ def cmd_render(args) -> int:
             source.save()
         if latest is None:
             say("styletrace: interrupted before the first pass finished; nothing written")
-        else:
-            out = write(latest)
+        else:  # plain: Mitsuba's EXR writer would wait for the kernel under way (images.encode_plain)
+            out = write(latest, plain=True)
             say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
         sys.stderr.flush()
         os._exit(128 + signum)
