@@ -65,12 +65,24 @@ def check_output(path: str, scene: str | None = None) -> None:
     if ext not in IMAGE_TYPES:
         raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
                          f"(.exr is linear, .png is sRGB)")
-    if os.path.isdir(path):
-        raise UsageError(f"cannot write {path!r}: it is a folder")
-    folder = os.path.dirname(os.path.abspath(path))
+    check_target(path)
+
+
+def check_target(path: str) -> None:
+    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a regular
+    file or a new name in an existing, writable folder; a symbolic link counts as its target, which is
+    where the file goes (the link stays). Devices (/dev/null included: the rename would replace the
+    device node, so it is refused rather than written to), fifos, sockets and folders are refused untouched."""
+    from .images import destination, unwritable_kind
+    kind = unwritable_kind(path)
+    if kind is not None:
+        via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
+        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a new name")
+    target = destination(path)
+    folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):
         raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
-    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+    if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
         raise UsageError(f"cannot write {path!r}: permission denied")
 
 

@@ -214,8 +214,40 @@ def creation_mode(path: str) -> int:
         return 0o666 & ~umask
 
 
+def destination(path: str) -> str:
+    """Where a write of `path` lands: `path` itself, or for a symbolic link its final target (a link to a
+    link is followed to the end), so that the rename replaces the target and the link stays a link."""
+    return os.path.realpath(path) if os.path.islink(path) else path
+
+
+def unwritable_kind(path: str) -> str | None:
+    """Why `path` cannot be replaced by a rename of a new file ("a folder", "a character device", ...), or
+    None: a regular file, a name not yet taken, or a link to either. Nothing is opened: a fifo or a device
+    is only looked at (stat)."""
+    try:
+        mode = os.stat(path).st_mode  # follows links
+    except FileNotFoundError:
+        return None  # new, or a link to a name not yet taken (its target is created)
+    except OSError as exc:  # a link loop (ELOOP), a path through a file (ENOTDIR), ...
+        return f"not a usable path ({exc.strerror})"
+    if stat.S_ISREG(mode):
+        return None
+    for test, kind in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a fifo"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
 def write_bytes_atomically(data: bytes, path: str) -> None:
-    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`."""
+    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`. A symbolic
+    link is written through: the temporary file goes beside its target and is renamed over the target
+    (`destination`), so the link keeps pointing there. A `path` that is no regular file (`unwritable_kind`:
+    a device such as /dev/null, a fifo, a folder) raises OSError untouched: a rename would replace it."""
+    kind = unwritable_kind(path)
+    if kind is not None:
+        raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced atomically")
+    path = destination(path)
     folder = os.path.dirname(os.path.abspath(path))
     mode = creation_mode(path)
     fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part", dir=folder)
@@ -282,5 +314,5 @@ def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
 
 
 __all__ = ["IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
-           "encode_plain", "encode_with_aovs", "write_bytes_atomically", "write_image",
+           "encode_plain", "encode_with_aovs", "destination", "unwritable_kind", "write_bytes_atomically", "write_image",
            "save_safely"]

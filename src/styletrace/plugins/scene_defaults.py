@@ -55,8 +55,13 @@ PILOT_SEED = 0x5EED
 
 
 def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
-    """Quantiles of the distribution putting mass `weights` on `values` (numpy's inverted CDF)."""
-    return [float(x) for x in np.quantile(values, qs, weights=weights, method="inverted_cdf")]
+    """Quantiles of the distribution putting mass `weights` on `values` (the inverted CDF: the smallest value
+    whose cumulative weight reaches q of the total; numpy >= 2 has it as `np.quantile(..., weights=,
+    method="inverted_cdf")`, numpy 1.x, which pyproject allows, has no weights)."""
+    order = np.argsort(values, kind="stable")
+    cdf = np.cumsum(np.asarray(weights, dtype=np.float64)[order])
+    at = np.searchsorted(cdf, np.asarray(qs, dtype=np.float64) * cdf[-1], side="left")
+    return [float(x) for x in np.asarray(values)[order][np.minimum(at, len(cdf) - 1)]]
 
 
 class Pilot:
