@@ -247,12 +247,16 @@ def cmd_render(args) -> int:
             raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
         if args.spp < 2:
             raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
-    integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
+    pilot = None
+    if args.buffer:  # the buffer stores the scene-defaults pilot: one trace of it serves both (record)
+        from .plugins.scene_defaults import Pilot
+        pilot = Pilot(scene, integrator.settings) if hasattr(integrator, "settings") else None
+    integrator, chosen = api.resolve_defaults(scene, integrator, pilot)  # scene-relative defaults, printed to pin them
     if chosen and not args.quiet:
         print(f"styletrace: auto values: {chosen}", file=sys.stderr)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
-        return render_with_buffer(args, scene, integrator)
+        return render_with_buffer(args, scene, integrator, pilot)
 
     from .sizing import lanes_per_pass
     from .runtime import init

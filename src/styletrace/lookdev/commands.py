@@ -30,8 +30,9 @@ def check_buffer_path(path: str) -> None:
     check_target(path)  # before the render: the buffer is written after it
 
 
-def render_with_buffer(args, scene, integrator) -> int:
-    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass."""
+def render_with_buffer(args, scene, integrator, pilot=None) -> int:
+    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass. `pilot`: the
+    scene-defaults pilot the auto values were resolved with (record stores it rather than tracing anew)."""
     check_buffer_path(args.buffer)
     from .. import api
     from ..images import save_safely
@@ -40,7 +41,7 @@ def render_with_buffer(args, scene, integrator) -> int:
     latest = buf = None
     failure = None
     try:
-        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene)):
+        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene), pilot=pilot):
             pass
     except (KeyboardInterrupt, RuntimeError) as exc:  # keep the finished passes (see cli.cmd_render)
         if latest is None:
