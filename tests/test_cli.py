@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.cli import main
+from styletrace.cli import StopSignals, main
 from styletrace.styles import get, names
 
 from conftest import child_env
@@ -215,6 +215,56 @@ def test_one_signal_stops_a_long_pass(tmp_path, sig, status):
     rest = proc.communicate(timeout=90)[1]
     assert proc.returncode == status, (seen + rest).decode()
     assert b"nothing written" in rest and not out.exists()
+
+
+#: a pass of 64 x 64 camera samples with 4000 inner samples each: about 4 s on an idle 2-core machine, so a
+#: signal 0.5 s after the first pass finished lands in the second pass's kernel (Mitsuba traces a pass in
+#: 10-30 ms, and a SIGINT in that window is Mitsuba's: `StopSignals`), and the pass is still running 1 s
+#: after a second one 0.2 s later
+LONG_PASSES = ["render", "--width", "64", "--height", "64", "--spp", "1000", "--inner", "4000", "--pass-spp", "1",
+               "--seed", "7"]
+
+
+@pytest.fixture(scope="module")
+def one_long_pass(tmp_path_factory):
+    """The first pass of LONG_PASSES on its own: what an interrupted render must have written."""
+    out = tmp_path_factory.mktemp("reference") / "one.exr"
+    r = run_cli(*LONG_PASSES[:5], "--spp", "1", *LONG_PASSES[7:], "-q", "-o", str(out), timeout=300)
+    assert r.returncode == 0, r.stderr
+    return read(out)
+
+
+@pytest.mark.parametrize("sig,count,status,bound", [
+    (signal.SIGINT, 2, 130, 1.0),  # a second signal: "at once"
+    (signal.SIGTERM, 1, 143, StopSignals.GRACE + 1.0),  # one signal: the grace period, then the same write
+])
+def test_a_signal_in_a_long_pass_writes_the_finished_pass_within_the_promise(tmp_path, one_long_pass, sig, count,
+                                                                              status, bound):
+    """The pass under way is abandoned, not waited for: the exit comes `bound` seconds after the last signal at
+    the latest (measured 0.06 s for the second signal and 1.02 s for one; the write of a 64 x 64 image and
+    the exit take milliseconds, so the bound leaves 1 s for a machine shared by several processes), and the
+    image is the first pass, bit for bit (the same seed gives the same passes). Before the watcher's write
+    went around Mitsuba (images.encode_plain) it waited for the pass's kernel: 6.3-12 s and 15.8 s."""
+    out = tmp_path / "partial.exr"
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", *LONG_PASSES, "-o", str(out)],
+                            stderr=subprocess.PIPE, env=ENV)
+    seen = b""
+    while b"1/1000" not in seen:
+        chunk = os.read(proc.stderr.fileno(), 4096)
+        assert chunk, seen.decode()
+        seen += chunk
+    time.sleep(0.5)
+    for i in range(count):
+        if i:
+            time.sleep(0.2)
+        proc.send_signal(sig)
+    sent = time.monotonic()
+    rest = proc.communicate(timeout=120)[1]
+    took = time.monotonic() - sent
+    assert proc.returncode == status, (seen + rest).decode()
+    assert b"interrupted; wrote" in rest and b"from 1 of 1000 spp" in rest, rest.decode()
+    assert took < bound, f"exited {took:.2f} s after the last signal"
+    np.testing.assert_array_equal(read(out), one_long_pass)
 
 
 def test_non_finite_pixels_are_counted_in_one_line(tmp_path, capsys, monkeypatch):

@@ -212,3 +212,30 @@ def test_a_written_file_gets_ordinary_permissions(tmp_path):
         assert kept.stat().st_mode & 0o777 == 0o640
     finally:
         os.umask(umask)
+
+
+@pytest.mark.parametrize("pixel_format,channels,ext", [
+    ("rgb", 3, ".exr"), ("rgb", 3, ".png"), ("rgba", 4, ".exr"), ("rgba", 4, ".png"), ("luminance", 1, ".exr"),
+    ("luminance", 1, ".png"), ("luminance_alpha", 2, ".exr"), ("luminance_alpha", 2, ".png"), ("xyz", 3, ".exr")])
+def test_the_plain_encoder_writes_what_mitsuba_writes(tmp_path, pixel_format, channels, ext):
+    """`encode_plain` (the interrupted render's writer, which must not wait for a running kernel) gives the
+    file Mitsuba reads back as the same pixels, in the same pixel format, as Mitsuba's own encoding."""
+    img = (np.random.default_rng(3).random((5, 7, channels)) * 3).astype(np.float32)
+    img[0, 0, 0], img[1, 1, -1] = np.nan, np.inf
+    write_image(img, str(tmp_path / f"plain{ext}"), pixel_format, plain=True)
+    write_image(img, str(tmp_path / f"mitsuba{ext}"), pixel_format)
+    a, b = mi.Bitmap(str(tmp_path / f"plain{ext}")), mi.Bitmap(str(tmp_path / f"mitsuba{ext}"))
+    assert a.pixel_format() == b.pixel_format() and a.component_format() == b.component_format()
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_the_plain_encoder_keeps_the_aov_channels(tmp_path):
+    rng = np.random.default_rng(4)
+    img = rng.random((4, 6, 3)).astype(np.float32)
+    aovs = {"variance": rng.random((4, 6, 3)), "bias": rng.random((4, 6)), "children": rng.random((4, 6))}
+    write_image(img, str(tmp_path / "plain.exr"), "rgb", aovs, plain=True)
+    write_image(img, str(tmp_path / "mitsuba.exr"), "rgb", aovs)
+    a, b = mi.Bitmap(str(tmp_path / "plain.exr")), mi.Bitmap(str(tmp_path / "mitsuba.exr"))
+    assert [name for name, _ in a.split()] == [name for name, _ in b.split()]
+    for (_, x), (_, y) in zip(a.split(), b.split()):
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(y))

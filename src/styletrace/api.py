@@ -21,7 +21,7 @@ import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
-from .jit import backend
+from .jit import backend, no_collection
 from .runtime import init
 
 backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
@@ -374,8 +374,9 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     params.update()
                 if expand is not None:
                     expand(scene, expansion_seed(seed, t))
-                img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
-                arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
+                with no_collection():  # recorded and launched with no scene finalised meanwhile (jit.no_collection)
+                    img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
+                    arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
                     counts[t] += n

@@ -8,6 +8,7 @@ instead of a TypeError deep in Mitsuba or a silently different image. Needs Mits
 """
 from __future__ import annotations
 
+import functools
 import numbers
 from typing import Any
 
@@ -58,17 +59,31 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
         Lines(integrator.settings.lines, scene)  # line_objects names shapes of this scene (else refused)
 
 
-def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
-    """Every Mitsuba object reachable from `obj` through traverse(), into `seen` (by id)."""
+@functools.cache
+def _collector() -> type:
+    """The traversal callback of `_objects`, one class for the process (made on first use, when a variant is
+    set). A class made per call was a new type object each time, cyclic garbage holding its closure (the
+    whole `seen` dict while the traversal ran); it was suspected of keeping scenes alive, which it did not
+    (`seen` is emptied after use; the abort it was suspected of came from jit.no_collection's cause), but
+    types that pile up until a collection are no use."""
 
     class Collect(mi.TraversalCallback):
-        def put(self, name, value, *flags):
-            if isinstance(value, mi.Object) and id(value) not in seen:
-                seen[id(value)] = value
-                _objects(value, seen)
+        def __init__(self, seen: dict[int, mi.Object]):
+            super().__init__()
+            self.seen = seen
 
+        def put(self, name, value, *flags):
+            if isinstance(value, mi.Object) and id(value) not in self.seen:
+                self.seen[id(value)] = value
+                _objects(value, self.seen)
+
+    return Collect
+
+
+def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
+    """Every Mitsuba object reachable from `obj` through traverse(), into `seen` (by id)."""
     try:
-        obj.traverse(Collect())
+        obj.traverse(_collector()(seen))
     except Exception:  # a Python plugin without a traversal of its own: nothing below it to find
         pass
 

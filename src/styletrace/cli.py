@@ -67,12 +67,24 @@ def check_output(path: str, scene: str | None = None) -> None:
     if ext not in IMAGE_TYPES:
         raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
                          f"(.exr is linear, .png is sRGB)")
-    if os.path.isdir(path):
-        raise UsageError(f"cannot write {path!r}: it is a folder")
-    folder = os.path.dirname(os.path.abspath(path))
+    check_target(path)
+
+
+def check_target(path: str) -> None:
+    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a regular
+    file or a new name in an existing, writable folder; a symbolic link counts as its target, which is
+    where the file goes (the link stays). Devices (/dev/null included: the rename would replace the
+    device node, so it is refused rather than written to), fifos, sockets and folders are refused untouched."""
+    from .images import destination, unwritable_kind
+    kind = unwritable_kind(path)
+    if kind is not None:
+        via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
+        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a new name")
+    target = destination(path)
+    folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):
         raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
-    if not os.access(folder, os.W_OK) or (os.path.exists(path) and not os.access(path, os.W_OK)):
+    if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
         raise UsageError(f"cannot write {path!r}: permission denied")
 
 
@@ -83,8 +95,13 @@ class StopSignals:
     interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns of
     the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if the pass
     has not finished `GRACE` seconds after the first signal, or a second signal comes, the watcher
-    calls `abandon(signum)`, which writes the finished passes and ends the process. Exit status: 128 + the
-    signal's number (130 for Ctrl-C, 143 for SIGTERM).
+    calls `abandon(signum)`, which writes the finished passes and ends the process (`os._exit`: the
+    kernel is left running). That write must not touch Mitsuba: its EXR writer waits for the kernel
+    (`images.encode_plain`). Exit status: 128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM).
+
+    A Ctrl-C in the few milliseconds in which Mitsuba's C++ `render` traces a pass goes to Mitsuba's own
+    handler (it logs "Received interrupt signal, winding down") instead; the pass then runs on and a
+    further Ctrl-C counts as the first.
     """
 
     GRACE = 1.0
@@ -233,13 +250,17 @@ def cmd_render(args) -> int:
             raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
         if args.spp < 2:
             raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
+    pilot = None
+    if args.buffer:  # the buffer stores the scene-defaults pilot: one trace of it serves both (record)
+        from .plugins.scene_defaults import Pilot
+        pilot = Pilot(scene, integrator.settings) if hasattr(integrator, "settings") else None
     with status.phase("measuring the scene for its auto values: compiling and rendering a pilot"):
-        integrator, chosen = api.resolve_defaults(scene, integrator)  # scene-relative defaults, printed to pin them
+        integrator, chosen = api.resolve_defaults(scene, integrator, pilot)  # scene-relative defaults, printed to pin them
     if chosen and not args.quiet:
         print(f"styletrace: auto values: {chosen}", file=sys.stderr)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
-        return render_with_buffer(args, scene, integrator)
+        return render_with_buffer(args, scene, integrator, pilot)
 
     from .sizing import lanes_per_pass
     from .runtime import init
@@ -254,9 +275,9 @@ def cmd_render(args) -> int:
         bar = tqdm(total=args.spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
     latest, failure = None, None
 
-    def write(prog) -> str:
+    def write(prog, plain: bool = False) -> str:
         image = prog.image
-        out = save_safely(image, args.output, pixel_format, getattr(prog, "aovs", None))
+        out = save_safely(image, args.output, pixel_format, getattr(prog, "aovs", None), plain)
         bad = nonfinite_pixels(image)
         if bad:
             fix = "NaN as 0 and +inf as 1 in the PNG" if args.output.lower().endswith(".png") else "kept as they are"
@@ -271,8 +292,8 @@ def cmd_render(args) -> int:
             source.save()
         if latest is None:
             say("styletrace: interrupted before the first pass finished; nothing written")
-        else:
-            out = write(latest)
+        else:  # plain: Mitsuba's EXR writer would wait for the kernel under way (images.encode_plain)
+            out = write(latest, plain=True)
             say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
         sys.stderr.flush()
         os._exit(128 + signum)

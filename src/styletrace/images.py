@@ -16,12 +16,20 @@ one of their images. (Mitsuba's own `Bitmap.write(path)` ignores ENOSPC and repo
 PNG: the sRGB transfer function, clamping and 8-bit quantization are done here in numpy: linear values
 are clamped to [0, 1] first (NaN -> 0, +inf -> 1, -inf and negatives -> 0), because Mitsuba's own
 conversion wraps values above ~2410 round to black.
+
+`encode_plain` writes the same pixels with numpy and zlib alone (an uncompressed scanline EXR, a PNG),
+for the command line's interrupted render: while a Dr.Jit kernel runs, Mitsuba's OpenEXR writer waits
+for it (measured: an 80 x 80 EXR took until the pass under way ended, 6-15 s), so a write from the
+signal watcher must not go through Mitsuba.
 """
 from __future__ import annotations
 
 import os
+import stat
+import struct
 import sys
 import tempfile
+import zlib
 
 import numpy as np
 
@@ -98,6 +106,76 @@ def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
     return stream.raw_buffer()
 
 
+def _exr_attribute(name: str, kind: str, value: bytes) -> bytes:
+    return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+
+def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
+    """A single-part scanline OpenEXR file, float32 channels, no compression, one line per block.
+    The format stores channels sorted by name, each line channel after channel."""
+    height, width = data.shape[:2]
+    order = sorted(range(len(names)), key=lambda i: names[i])
+    chlist = b"".join(names[i].encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for i in order) + b"\0"
+    box = struct.pack("<iiii", 0, 0, width - 1, height - 1)
+    header = (b"\x76\x2f\x31\x01" + struct.pack("<i", 2)
+              + _exr_attribute("channels", "chlist", chlist)
+              + _exr_attribute("compression", "compression", b"\0")
+              + _exr_attribute("dataWindow", "box2i", box)
+              + _exr_attribute("displayWindow", "box2i", box)
+              + _exr_attribute("lineOrder", "lineOrder", b"\0")
+              + _exr_attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0))
+              + _exr_attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
+              + _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    # every line: y, byte count, then the channels' values (sorted channel order, little-endian float32)
+    lines = np.ascontiguousarray(data[..., order].transpose(0, 2, 1), dtype="<f4").reshape(height, -1)
+    line_bytes = lines.shape[1] * 4
+    start = len(header) + 8 * height
+    offsets = np.arange(height, dtype="<u8") * (8 + line_bytes) + start
+    prefix = np.zeros((height, 2), dtype="<i4")
+    prefix[:, 0], prefix[:, 1] = np.arange(height), line_bytes
+    blocks = np.concatenate([prefix.view(np.uint8), lines.view(np.uint8)], axis=1)
+    return header + offsets.tobytes() + blocks.tobytes()
+
+
+def _png_chunk(kind: bytes, body: bytes) -> bytes:
+    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+
+
+def _plain_png(data: np.ndarray) -> bytes:
+    """An 8-bit PNG (grey, grey+alpha, RGB or RGBA by the channel count) tagged sRGB; filter 0 per line."""
+    height, width, channels = data.shape
+    colour = {1: 0, 2: 4, 3: 2, 4: 6}[channels]
+    rows = np.concatenate([np.zeros((height, 1), np.uint8), data.reshape(height, -1)], axis=1)
+    return (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour, 0, 0, 0))
+            + _png_chunk(b"sRGB", b"\0") + _png_chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
+            + _png_chunk(b"IEND", b""))
+
+
+def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None = None) -> bytes:
+    """What `encode` (`encode_with_aovs` with `aovs`) writes, the same pixel values, without Mitsuba: for a
+    thread that must write while a kernel runs. EXR: float32, uncompressed; PNG: `srgb8`'s bytes."""
+    image = np.asarray(image, dtype=np.float32)
+    if image.ndim == 2:
+        image = image[..., None]
+    name = bitmap_format(pixel_format, image.shape[-1])
+    check_format(pixel_format, ext)
+    if ext == ".png":
+        if aovs is not None:
+            raise ValueError(f"error AOVs are written to .exr files only, not {ext!r}")
+        data = srgb8(image)
+        if name.endswith("A"):  # as `encode`: coverage is quantized linearly
+            data[..., -1] = np.round(np.clip(np.nan_to_num(image[..., -1]), 0.0, 1.0) * 255.0).astype(np.uint8)
+        return _plain_png(data)
+    if ext != ".exr":
+        raise ValueError(f"unknown image type {ext!r}: expected one of {', '.join(IMAGE_TYPES)}")
+    names, layers = list(name), [image]
+    for key, channels in AOV_CHANNELS if aovs is not None else ():
+        arr = np.asarray(aovs[key], dtype=np.float32)
+        layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
+        names.extend(channels)
+    return _plain_exr(np.concatenate(layers, axis=-1), names)
+
+
 #: the EXR channels of the error AOVs, after the image's own (R, G, B[, A]); see `api.Progress.aovs`
 AOV_CHANNELS = (("variance", ("variance.R", "variance.G", "variance.B")), ("bias", ("bias",)),
                 ("children", ("children",)))
@@ -136,8 +214,40 @@ def creation_mode(path: str) -> int:
         return 0o666 & ~umask
 
 
+def destination(path: str) -> str:
+    """Where a write of `path` lands: `path` itself, or for a symbolic link its final target (a link to a
+    link is followed to the end), so that the rename replaces the target and the link stays a link."""
+    return os.path.realpath(path) if os.path.islink(path) else path
+
+
+def unwritable_kind(path: str) -> str | None:
+    """Why `path` cannot be replaced by a rename of a new file ("a folder", "a character device", ...), or
+    None: a regular file, a name not yet taken, or a link to either. Nothing is opened: a fifo or a device
+    is only looked at (stat)."""
+    try:
+        mode = os.stat(path).st_mode  # follows links
+    except FileNotFoundError:
+        return None  # new, or a link to a name not yet taken (its target is created)
+    except OSError as exc:  # a link loop (ELOOP), a path through a file (ENOTDIR), ...
+        return f"not a usable path ({exc.strerror})"
+    if stat.S_ISREG(mode):
+        return None
+    for test, kind in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a fifo"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return kind
+    return "not a regular file"
+
+
 def write_bytes_atomically(data: bytes, path: str) -> None:
-    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`."""
+    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`. A symbolic
+    link is written through: the temporary file goes beside its target and is renamed over the target
+    (`destination`), so the link keeps pointing there. A `path` that is no regular file (`unwritable_kind`:
+    a device such as /dev/null, a fifo, a folder) raises OSError untouched: a rename would replace it."""
+    kind = unwritable_kind(path)
+    if kind is not None:
+        raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced atomically")
+    path = destination(path)
     folder = os.path.dirname(os.path.abspath(path))
     mode = creation_mode(path)
     fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part", dir=folder)
@@ -167,10 +277,14 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
         pass
 
 
-def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None) -> None:
+def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> None:
     """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write.
-    `pixel_format` is the film's (see `encode`). `aovs` (EXR only): the error AOVs as extra channels."""
+    `pixel_format` is the film's (see `encode`). `aovs` (EXR only): the error AOVs as extra channels.
+    `plain`: encoded by `encode_plain` (no Mitsuba: a kernel may be running)."""
     ext = os.path.splitext(path)[1].lower()
+    if plain:
+        write_bytes_atomically(encode_plain(image, ext, pixel_format, aovs), path)
+        return
     if aovs is not None:
         if ext != ".exr":
             raise ValueError(f"error AOVs are written to .exr files only, not {ext!r}")
@@ -179,17 +293,18 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
     write_bytes_atomically(encode(image, ext, pixel_format), path)
 
 
-def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None) -> str:
+def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> str:
     """Write `image`; if that fails, keep it in a temporary EXR instead of losing it. Returns where it went.
-    If even that fails, no empty temporary file is left behind and the error is raised."""
+    If even that fails, no empty temporary file is left behind and the error is raised. `plain`: see
+    `write_image`."""
     try:
-        write_image(image, path, pixel_format, aovs)
+        write_image(image, path, pixel_format, aovs, plain)
         return path
     except Exception as exc:  # the render must survive an I/O failure
         fd, fallback = tempfile.mkstemp(prefix="styletrace-", suffix=".exr")
         os.close(fd)
         try:
-            write_image(image, fallback, pixel_format, aovs)
+            write_image(image, fallback, pixel_format, aovs, plain)
         except BaseException:
             os.remove(fallback)
             raise
@@ -199,5 +314,5 @@ def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
 
 
 __all__ = ["IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
-           "encode_with_aovs", "write_bytes_atomically", "write_image",
+           "encode_plain", "encode_with_aovs", "destination", "unwritable_kind", "write_bytes_atomically", "write_image",
            "save_safely"]

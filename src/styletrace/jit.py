@@ -4,9 +4,14 @@ The LLVM backend `dlopen`s a system libLLVM. Dr.Jit 1.5 aborts the whole process
 (instruction selection fails on `fminimum`) and refuses 14, so we look for a newer library ourselves
 and hand it to Dr.Jit through `DRJIT_LIBLLVM_PATH` before the first `import drjit`.
 Then the variant: `cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`, unless the user chose one.
+
+`no_collection()` keeps Python's cyclic garbage collector from running while a pass is traced and launched
+(see its docstring: a scene freed by it in the middle of a trace made LLVM abort).
 """
 from __future__ import annotations
 
+import contextlib
+import gc
 import glob
 import mmap
 import os
@@ -171,3 +176,24 @@ def backend(variant: str | None = None) -> str:
     if variant is None and mi is not None and mi.variant():
         return check_variant(mi.variant())
     return select_variant(variant)
+
+
+@contextlib.contextmanager
+def no_collection():
+    """No automatic cyclic garbage collection inside the block (the previous state is restored after it).
+
+    Dr.Jit records a virtual call (a BSDF's `eval`, say) over every live instance of the class. Python's
+    cyclic collector runs at arbitrary allocations; when it finalised a scene that had become cyclic garbage
+    (a refused render's traceback held by an exception, say) while a pass was being recorded, that scene's
+    BSDFs left Dr.Jit's registry in the middle of the recording, and the kernel LLVM then compiled had one
+    function defined twice: "invalid redefinition of function", an abort (measured: the collector ran
+    inside reuse's child walk, a while_loop body; tests/test_jit.py reproduces it in a subprocess). Such
+    garbage is collected before or after the pass instead: reference counting still frees everything that
+    is not in a cycle at once, and the collector runs at the next allocation after the block."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import ray
 
+from ..jit import no_collection
 from .describe import SceneSpec, load
 
 
@@ -51,8 +52,9 @@ def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tu
             params["film.crop_offset"] = mi.ScalarPoint2u(base[0] + offset[0], base[1] + offset[1])
             params["film.crop_size"] = mi.ScalarVector2u(*size)
             params.update()
-        img = mi.render(scene, integrator=integrator, spp=spp, seed=seed)
-        arr = np.array(img, dtype=np.float32)[..., :3]
+        with no_collection():  # as api.passes: no scene finalised while the pass is recorded
+            img = mi.render(scene, integrator=integrator, spp=spp, seed=seed)
+            arr = np.array(img, dtype=np.float32)[..., :3]
     finally:
         if params is not None:
             params["film.crop_offset"] = mi.ScalarPoint2u(*base)

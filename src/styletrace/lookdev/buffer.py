@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import UsageError
-from ..images import creation_mode
+from ..images import creation_mode, destination, unwritable_kind
 
 FORMAT = "styletrace-buffer"
 VERSION = 2  # 2: "sequence" buffers; version 1 files (the children's mean) still read
@@ -131,17 +131,21 @@ class Buffer:
         path = os.fspath(path)
         if not path.lower().endswith(".npz"):
             raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
-        folder = os.path.dirname(os.path.abspath(path))
+        kind = unwritable_kind(path)
+        if kind is not None:
+            raise UsageError(f"cannot write {path!r}: it is {kind}; expected a regular file or a new name")
+        target = destination(path)  # a symbolic link is written through, as the images are
+        folder = os.path.dirname(os.path.abspath(target))
         if not os.path.isdir(folder):
             raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
         head = np.frombuffer(json.dumps(self.header).encode("utf-8"), dtype=np.uint8)
-        mode = creation_mode(path)
+        mode = creation_mode(target)
         fd, tmp = tempfile.mkstemp(prefix=".buffer-", suffix=".npz", dir=folder)
         try:
             os.fchmod(fd, mode)
             with os.fdopen(fd, "wb") as f:
                 np.savez(f, header=head, **self.arrays)
-            os.replace(tmp, path)
+            os.replace(tmp, target)
         except OSError as exc:
             if os.path.exists(tmp):
                 os.unlink(tmp)

@@ -26,13 +26,13 @@ BUFFER_HELP = ("also write the expectation buffer (.npz) for `styletrace restyle
 def check_buffer_path(path: str) -> None:
     if not path.lower().endswith(".npz"):
         raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
+    from ..cli import check_target
+    check_target(path)  # before the render: the buffer is written after it
 
 
-def render_with_buffer(args, scene, integrator) -> int:
-    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass."""
+def render_with_buffer(args, scene, integrator, pilot=None) -> int:
+    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass. `pilot`: the
+    scene-defaults pilot the auto values were resolved with (record stores it rather than tracing anew)."""
     check_buffer_path(args.buffer)
     from .. import api
     from ..images import save_safely
@@ -41,7 +41,7 @@ def render_with_buffer(args, scene, integrator) -> int:
     latest = buf = None
     failure = None
     try:
-        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene)):
+        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene), pilot=pilot):
             pass
     except (KeyboardInterrupt, RuntimeError) as exc:  # keep the finished passes (see cli.cmd_render)
         if latest is None:
@@ -74,17 +74,9 @@ def cmd_restyle(args, parse_set, check_output) -> int:
 
 
 def write_atomically(img, path: str, write_image) -> None:
-    """Write an image through a temporary file in the same folder and os.replace."""
-    import tempfile
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".styletrace-", suffix=os.path.splitext(path)[1], dir=folder)
-    os.close(fd)
-    try:
-        write_image(img, tmp)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    """Write an image: `images.write_image` is atomic itself (temporary file beside the target, fsync,
+    rename) and writes through a symbolic link instead of replacing it."""
+    write_image(img, path)
 
 
 def cmd_fit(args, parse_set, check_output) -> int:

@@ -219,13 +219,17 @@ def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) 
 
 
 def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int = 0, label: str = "",
-           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = api.LANES_PER_PASS
+           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = api.LANES_PER_PASS, pilot: Pilot | None = None
            ) -> Iterator[tuple[api.Progress, Buffer]]:
-    """Render like `api.passes`, yielding (progress, buffer so far) after each pass."""
+    """Render like `api.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
+    `Pilot` if the caller resolved the auto values with it already (`render_with_buffer`), so that the pilot
+    is traced once for both (it is stored in the buffer)."""
     film = check_film(scene)
+    if pilot is None or not pilot.serves(scene, integrator.settings):
+        pilot = Pilot(scene, integrator.settings)
     # pin the scene-relative defaults first: `api.passes` would otherwise pin them on a plain copy of the
-    # integrator, losing the recording
-    integrator = api.resolve_defaults(scene, integrator)[0]
+    # integrator, losing the recording; with the pilot stored below (traced here if an auto value needs it)
+    integrator = api.resolve_defaults(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator._targets(scene)]
     check_recordable(integrator.settings, slots)
     sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
@@ -253,7 +257,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
         .tolist(), "sensor": sensor_description(sensor), "passes": [],
     }
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
-    pilot = Pilot(scene, rec.settings).samples
+    pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec._targets(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0

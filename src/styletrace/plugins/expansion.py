@@ -33,6 +33,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import SettingsError
+from ..jit import no_collection
 
 #: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's footprint, not
 #: one point of it (a lane whose children are far brighter than its pixel's b diverges: see the docstring).
@@ -160,8 +161,9 @@ class Expansion:
             return done
         self.collector = Collector(pixel_count(key), m)
         try:
-            mi.render(scene, integrator=integrator, spp=PASS_SPP, seed=seed)
-            sets = self.collector.means(key)
+            with no_collection():  # as api.passes: no scene finalised while the pass is recorded
+                mi.render(scene, integrator=integrator, spp=PASS_SPP, seed=seed)
+                sets = self.collector.means(key)
         finally:
             self.collector = None
         self.maps[key] = Moments(key, seed, sets)

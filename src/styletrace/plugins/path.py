@@ -100,6 +100,17 @@ def opaque_part(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Spectr
     return dr.select(keep > 0, dr.rcp(keep), 0.0)
 
 
+def opaque_share(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Float:
+    """1 - p, p = mean(T) as in `null_split`: the probability with which Mitsuba's BSDFs sample their
+    scattering (non-null) part. They sample it where their first uniform `sample1` is below 1 - p (a `mask`
+    its nested BSDF where sample1 < opacity, a `thindielectric` its reflection where sample1 <= R), and
+    pass sample1 / (1 - p) on to that part. So a stylized vertex scales its sample1 into [0, 1 - p): its
+    children sample the opaque part alone, as the opaque surface itself would, with weight f/pdf of that
+    part, and none is spent on the null part (`walk`, `bounce`)."""
+    T = bsdf.eval_null_transmission(si, active)
+    return 1.0 - dr.clip(dr.mean(T), 0.0, 1.0)
+
+
 @dataclass
 class Front:
     """The first scattering vertex along a ray, past surfaces it went straight through."""
@@ -231,20 +242,28 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
         if skip_emitter is not None:
             active_em &= ~skip_emitter(ds)
         wo = si.to_local(ds.d)
+        u1 = s.sampler.next_1d()
+        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+            keep = dr.select(s.first, opaque_share(si, bsdf, active_next & s.first), 1.0)
+            u1 = dr.select(s.first, u1 * keep, u1)
         # One BSDF call both evaluates the light direction and samples the continuation.
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, s.sampler.next_1d(),
-                                                                   s.sampler.next_2d(), active_next)
-        w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, bsdf_pdf))
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(), active_next)
         scale = mi.Spectrum(1.0)
-        if nulls and opaque_start:  # the stylized starting vertex: its opaque part only
+        if nulls and opaque_start:
+            # the opaque part's f and pdf: the BSDF's own are (1 - T) and (1 - p) times theirs, while the
+            # weight f/pdf of a sample drawn from the opaque part alone is already that part's
             scale = dr.select(s.first, opaque_part(si, bsdf, active_next & s.first), 1.0)
-            bsdf_weight[s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)] = 0.0
+            ok = keep > 0
+            bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
+            bs.pdf = dr.select(ok, bs.pdf / dr.select(ok, keep, 1.0), 0.0)
+            bsdf_weight[~ok | (s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null))] = 0.0
+        w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, bsdf_pdf))
         if nulls and stop is not None:
             active_em &= ~passes
         s.L += dr.select(active_em, s.beta * scale * w_nee * bsdf_val * em_weight, 0.0)
 
         # Continue the path along the sampled direction (halted lanes keep their vertex).
-        beta_next = s.beta * scale * bsdf_weight
+        beta_next = s.beta * bsdf_weight
         s.eta *= dr.select(active_next & ~passes, bs.eta, 1.0)
         ray_next = si.spawn_ray(si.to_world(bs.wo))
         s.si_prev = mi.Interaction3f(dr.detach(si, True))
@@ -368,10 +387,14 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     to_light &= ds.delta & (ds.pdf != 0.0)
     scale = opaque_part(si, bsdf, go) if nulls else 1.0
     L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
-    bs, weight = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), go)
+    u1 = sampler.next_1d()
+    if nulls:  # x samples its opaque part alone (opaque_share): the weight is that part's f/pdf
+        keep = opaque_share(si, bsdf, go)
+        u1 *= keep
+    bs, weight = bsdf.sample(ctx, si, u1, sampler.next_2d(), go)
     ray2 = si.spawn_ray(si.to_world(bs.wo))
     if nulls:
-        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null), 0.0, scale * weight)
+        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight)
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
     line_state = None

@@ -59,14 +59,13 @@ by layers, one per child index j over the members with c_k > j, averaged with we
 """
 from __future__ import annotations
 
-import gc
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
 from ..errors import SceneError
 from ..estimators import channel_mean
+from ..jit import no_collection
 from ..styles.base import Vertex, camera_forward
 from . import settings as S
 from .acceptance import accepted
@@ -96,27 +95,17 @@ def batch_seed(seed: int, batch: int) -> int:
     return seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
 
 
-_last_scene = [0]
-
-
-def collect_before(scene: mi.Scene) -> None:
-    """Collect garbage before the first render of a scene. Dr.Jit traces a BSDF call over every live instance
-    of the class: instances of earlier scenes that are garbage but not yet collected (reference cycles) joined
-    the first_n_hits pooling kernel's calls and made LLVM refuse it ("invalid redefinition of function", an
-    abort) after some sequences of renders in one process (tests/plugins/test_settings.py, test_reuse.py, then
-    test_reuse_depth2.py). A collection takes tens of milliseconds, so renders of the same scene skip it."""
-    if _last_scene[0] != id(scene):
-        gc.collect()
-        _last_scene[0] = id(scene)
-
-
 def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weights: str | None = None,
            keep: dict | None = None) -> mi.TensorXf:
     """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render` returns).
     `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
     by its own density (wrong: the tests' negative control);
     `keep`, a dict, receives the first batch's pools as numpy arrays (`pools`)."""
-    collect_before(scene)
+    with no_collection():  # no scene may be finalised while a pass is recorded (jit.no_collection)
+        return _render_scene(integ, scene, sensor, seed, spp, weights, keep)
+
+
+def _render_scene(integ, scene, sensor, seed, spp, weights, keep):
     integ.targets = integ._targets(scene)
     if integ.nulls or integ.media:
         integ.targets = []

@@ -39,6 +39,7 @@ import mitsuba as mi
 import numpy as np
 
 from ..errors import StyleError
+from ..jit import no_collection
 from ..styles.base import Camera, Style, Vertex, camera, lanes
 from . import settings as S
 from .emitter_sampler import EmitterSampler
@@ -48,6 +49,8 @@ from .scene_graph import SceneGraph
 from .styled_bsdf import StyledBSDF
 from .volume import volume_walk
 
+#: the settings the pilot's trace reads (`Pilot._trace`)
+PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling")
 #: cells of the pilot grid along the film's longer side, and camera samples per cell
 PILOT_CELLS = 32
 PILOT_SPP = 16
@@ -77,8 +80,17 @@ class Pilot:
     def __init__(self, scene: mi.Scene, settings: S.Settings):
         self.scene, self.settings = scene, settings
 
+    def serves(self, scene: mi.Scene, settings: S.Settings) -> bool:
+        """Whether these samples are the pilot of `scene` under `settings`: the same scene, and the settings
+        the trace reads (the style is not among them: a pinned copy of an integrator shares its pilot)."""
+        return self.scene is scene and all(getattr(self.settings, k) == getattr(settings, k) for k in PILOT_SETTINGS)
+
     @cached_property
     def samples(self) -> dict[str, Any]:
+        with no_collection():  # traced and evaluated with no scene finalised meanwhile (jit.no_collection)
+            return self._trace()
+
+    def _trace(self) -> dict[str, Any]:
         scene = self.scene
         sensor = scene.sensors()[0]
         w, h = (int(x) for x in sensor.film().crop_size())
@@ -218,12 +230,15 @@ def describe(style: Style, values: dict[str, Any]) -> str:
     return f"{style.name} " + " ".join(f"{k}={params[k].show(v)}" for k, v in values.items())
 
 
-def resolve(scene: mi.Scene, integrator: mi.Integrator) -> tuple[mi.Integrator, str]:
+def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
     """`integrator` with the auto values of its style and of the scene's `styled` BSDFs pinned (the BSDFs are
-    updated in place: they belong to the scene), and a one-line account of the values chosen ('' if none)."""
+    updated in place: they belong to the scene), and a one-line account of the values chosen ('' if none).
+    `pilot`: a `Pilot` of this scene to use (traced here only if an auto value needs it), so that a caller
+    that keeps the pilot's samples (the look-dev recorder) traces it once."""
     if not isinstance(integrator, StylizedIntegrator):
         return integrator, ""
-    pilot = Pilot(scene, integrator.settings)
+    if pilot is None or not pilot.serves(scene, integrator.settings):
+        pilot = Pilot(scene, integrator.settings)
     notes = []
     if integrator.settings.stylize != "first_object_hit":
         style = integrator.settings.style

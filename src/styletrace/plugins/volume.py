@@ -37,7 +37,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .emitter_sampler import EmitterSampler
-from .path import depth_limit, finished, halt_at, mis_emission, mis_power, opaque_part
+from .path import depth_limit, finished, halt_at, mis_emission, mis_power, opaque_part, opaque_share
 
 
 def channel_of(c: mi.Spectrum, channel: mi.UInt32) -> mi.Float:
@@ -182,12 +182,19 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         phase = mei.medium.phase_function()
         phase_val, phase_pdf = phase.eval_pdf(pctx, mei, ds.d, sample_m)
         wo = si.to_local(ds.d)
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, s.sampler.next_1d(sample_s),
-                                                                   s.sampler.next_2d(sample_s), sample_s)
+        u1 = s.sampler.next_1d(sample_s)
+        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+            keep = dr.select(s.first, opaque_share(si, bsdf, sample_s & s.first), 1.0)
+            u1 = dr.select(s.first, u1 * keep, u1)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(sample_s),
+                                                                   sample_s)
         scale = mi.Spectrum(1.0)
-        if nulls and opaque_start:  # the stylized starting vertex: its opaque part only
+        if nulls and opaque_start:  # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
             scale = dr.select(s.first, opaque_part(si, bsdf, sample_s & s.first), 1.0)
-            bsdf_weight[s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)] = 0.0
+            ok = keep > 0
+            bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
+            bs.pdf = dr.select(ok, bs.pdf / dr.select(ok, keep, 1.0), 0.0)
+            bsdf_weight[~ok | (s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null))] = 0.0
         f_val = dr.select(scat, phase_val, scale * bsdf_val)
         f_pdf = dr.select(scat, phase_pdf, bsdf_pdf)
         w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, f_pdf))
@@ -200,7 +207,7 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         null_s = passes | mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
         go_s = (sample_s & (null_s | active_s)) | (here & passes)
         ray_s = dr.select(passes, si.spawn_ray(s.ray.d), si.spawn_ray(si.to_world(bs.wo)))
-        beta_s = dr.select(passes, s.beta * w_pass, s.beta * scale * bsdf_weight)
+        beta_s = dr.select(passes, s.beta * w_pass, s.beta * bsdf_weight)
         delta_s = dr.select(null_s, s.delta_prev, mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta) |
                             (s.first & delta_start))
 
