@@ -149,7 +149,7 @@ COUNT_MAX = 2 ** 32 - 2
 #: the one above, and Dr.Jit traces a symbolic loop's body twice (JitFlag.OptimizeLoops), so the trace time
 #: doubles per level (measured, 8x8 Cornell box, inner 1: 3.3 s at 8 levels, 10 s at 10, 21 s at 11, 52 s
 #: at 12; 1000 levels overflow Python's recursion). Deeper trees are refused rather than left to hang.
-MAX_STYLIZE_DEPTH = 8
+MAX_STYLIZE_DEPTH = 16
 
 
 class AdaptiveCount(int):
