@@ -221,6 +221,26 @@ def increasing(values) -> tuple[float, ...]:
     return tuple(out)
 
 
+#: The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's median
+#: first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et al. 2002),
+#: so a scene ten times dimmer gets ten times the exposure and looks the same.
+EXPOSURE_KEY = 0.18
+
+
+def exposure_param(what: str = "") -> Param:
+    """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see `auto_exposure`)."""
+    return Param("exposure", "float", None, "scale s of the expected radiance before the tone curve", low=0.0,
+                 low_open=True, auto=what or f"{EXPOSURE_KEY:g} / the median of the scene's first-hit brightness "
+                                             "(unresolved: 1)")
+
+
+def auto_exposure(facts, target: float = EXPOSURE_KEY) -> float:
+    """`target` over the median first-hit brightness of what the style covers, rounded as printed; NaN where the
+    median is not positive (a black scene: the value is refused and the unresolved fallback applies)."""
+    (median,) = facts.brightness([0.5])
+    return rounded(target / median) if median > 0 else float("nan")
+
+
 def light_from_camera(cam: Camera) -> tuple[float, float, float]:
     """The 'auto' light direction of gooch and xtoon: the camera's up vector tilted a little towards the
     camera, normalize(up - 0.3 forward) (the old fixed default 0,1,0.3 for a y-up camera looking along -z)."""
@@ -230,4 +250,5 @@ def light_from_camera(cam: Camera) -> tuple[float, float, float]:
 
 
 __all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward",
-           "Projection", "projection", "light_from_camera", "rounded", "increasing"]
+           "Projection", "projection", "light_from_camera", "rounded", "increasing", "EXPOSURE_KEY", "exposure_param",
+           "auto_exposure"]
