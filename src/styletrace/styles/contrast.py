@@ -3,8 +3,8 @@
 Parameters
 - c (float, default 1.5): contrast factor, >= 0
 - pivot (float, default 0.5): brightness left unchanged
-- exposure (float > 0, default auto): s, the scale of <I> before the contrast; auto: pivot / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`), so the scene's middle tone sits at the pivot
+- exposure (float in (0, 100], default auto): s, the scale of <I> before the contrast; auto: pivot / the median
+  first-hit brightness of the scene (`plugins.scene_defaults`, at most 100), so the scene's middle tone sits at the pivot
   and a dim scene is not pushed below 0; unresolved (mi.render directly, or a pivot <= 0): 1
 
     g(<I>) = c (s <I> - p) + p        per channel; affine, so every unbiased estimator of <I> suffices.
@@ -25,7 +25,8 @@ class Contrast(Style):
     params = (
         Param("c", "float", 1.5, "contrast factor", low=0.0),
         Param("pivot", "float", 0.5, "pivot brightness p"),
-        exposure_param("the pivot / the median of the scene's first-hit brightness (unresolved, or a pivot <= 0: 1)"),
+        exposure_param("the pivot / the median of the scene's first-hit brightness, at most 100 (unresolved, or a "
+                       "pivot <= 0: 1)"),
     )
     default_inner = 1
 

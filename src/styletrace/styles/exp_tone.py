@@ -2,7 +2,7 @@
 
 Parameters
 - exposure (float, default auto): 0 < k <= 87 (e^-k stays a normal float32); auto: 1.5 x 0.18 / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`): the fixed default 1.5 applied to radiance
+  first-hit brightness of the scene (at most 87) (`plugins.scene_defaults`): the fixed default 1.5 applied to radiance
   exposed as the other tone styles expose it (median -> 0.18), so a dim scene is not dark; unresolved
   (mi.render directly): 1.5
 
@@ -36,8 +36,8 @@ class ExpTone(Style):
     # k <= 87 < -ln(FLT_MIN) = 87.3: the series' base a = e^-k, and exp(-k I) at unit radiance, stay normal
     # float32 numbers (above 1.2e-38) instead of flushing to 0, where ln(a) and the series break down
     params = (replace(exposure_param(), doc="exposure k", high=MAX_EXPOSURE,
-                      auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness "
-                           f"(unresolved: {K_AT_KEY:g})"),)
+                      auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
+                           f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})"),)
     default_inner = 16
 
     @property
@@ -45,7 +45,7 @@ class ExpTone(Style):
         return K_AT_KEY if self.exposure is None else self.exposure
 
     def auto_values(self, facts) -> dict:
-        return {} if self.exposure is not None else {"exposure": auto_exposure(facts, K_AT_KEY * EXPOSURE_KEY)}
+        return {} if self.exposure is not None else {"exposure": auto_exposure(facts, K_AT_KEY * EXPOSURE_KEY, MAX_EXPOSURE)}
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return 1.0 - dr.exp(-self.k * I)

@@ -2,8 +2,8 @@
 
 Parameters
 - gamma (float, default 2.2): gamma >= 0.1 (smaller gammas overflow float32 on bright radiance)
-- exposure (float > 0, default auto): s, the scale of <I> before the power; auto: 0.18 / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`); unresolved (mi.render directly): 1
+- exposure (float in (0, 100], default auto): s, the scale of <I> before the power; auto: 0.18 / the median
+  first-hit brightness of the scene (`plugins.scene_defaults`), at most 100; unresolved (mi.render directly): 1
 
     g(<I>) = max(s <I>, 0)^(1/gamma) = s^(1/gamma) max(<I>, 0)^(1/gamma)        per channel.
 
