@@ -63,11 +63,14 @@ def test_styled_objects_and_compositions_resolve_on_what_they_cover():
     styled = [s.bsdf() for s in scene.shapes() if hasattr(s.bsdf(), "slot")][0]
     # the styled dark sphere: the median of its own brightness 0.2 (not of the whole image)
     assert abs(styled.slot.style.thresholds[0] - 0.2) < 0.2 * 0.03 + 0.01, styled.slot.style.thresholds
-    # the integrator's composition covers the bright sphere, and cel sees contrast's output:
-    # 0.5 + 1.5 (0.8 - 0.5) = 0.95 (0.8 if the composition were resolved on the raw brightness)
-    t = integrator.settings.style.operands[1].thresholds[0]
-    assert abs(t - 0.95) < 1.5 * 0.8 * 0.03 + 0.01, t
-    assert "cel.thresholds=" in chosen and "styled BSDF" in chosen
+    # the integrator's composition covers the bright sphere, and cel sees contrast's output: contrast's auto
+    # exposure puts the median 0.8 at the pivot 0.5, which contrast keeps (0.8 if the composition were resolved
+    # on the raw brightness, 0.95 with exposure 1)
+    contrast, cel = integrator.settings.style.operands
+    assert abs(contrast.exposure - 0.5 / 0.8) < 0.5 / 0.8 * 0.03, contrast.exposure
+    t = cel.thresholds[0]
+    assert abs(t - 0.5) < 1.5 * 0.5 * 0.03 + 0.01, t
+    assert "contrast.exposure=" in chosen and "cel.thresholds=" in chosen and "styled BSDF" in chosen
     # pinned: resolving again chooses nothing and runs no pilot
     again, chosen2 = resolve_defaults(scene, integrator)
     assert chosen2 == "" and again is integrator
