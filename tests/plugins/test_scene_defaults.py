@@ -64,7 +64,7 @@ def test_styled_objects_and_compositions_resolve_on_what_they_cover():
     # the styled dark sphere: the median of its own brightness 0.2 (not of the whole image)
     assert abs(styled.slot.style.thresholds[0] - 0.2) < 0.2 * 0.03 + 0.01, styled.slot.style.thresholds
     # the integrator's composition covers the bright sphere, and cel sees contrast's output: contrast's auto
-    # exposure puts the median 0.8 at the pivot 0.5, which contrast keeps (0.8 if the composition were resolved
+    # exposure puts the median 0.8 at 0.5, the pivot, which contrast keeps (0.8 if the composition were resolved
     # on the raw brightness, 0.95 with exposure 1)
     contrast, cel = integrator.settings.style.operands
     assert abs(contrast.exposure - 0.5 / 0.8) < 0.5 / 0.8 * 0.03, contrast.exposure
@@ -173,7 +173,7 @@ def test_auto_exposure_maps_the_median_to_middle_grey():
     chosen = resolve_defaults(scene, integ)[0].settings.slot.style
     assert chosen.exposure == pytest.approx(0.18 / median, rel=1e-3)
     contrast = resolve_defaults(scene, make_integrator(style="contrast", pivot=0.4))[0].settings.slot.style
-    assert contrast.exposure == pytest.approx(0.4 / median, rel=1e-3)  # contrast: the median to its pivot
+    assert contrast.exposure == pytest.approx(0.5 / median, rel=1e-3)  # contrast: the median to the default pivot
     exp_tone = resolve_defaults(scene, make_integrator(style="exp_tone"))[0].settings.slot.style
     assert exp_tone.exposure == pytest.approx(1.5 * 0.18 / median, rel=1e-3)
 

@@ -3,9 +3,11 @@
 Parameters
 - c (float, default 1.5): contrast factor, >= 0
 - pivot (float, default 0.5): brightness left unchanged
-- exposure (float in (0, 100], default auto): s, the scale of <I> before the contrast; auto: pivot / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`, at most 100), so the scene's middle tone sits at the pivot
-  and a dim scene is not pushed below 0; unresolved (mi.render directly, or a pivot <= 0): 1
+- exposure (float in (0, 100], default auto): s, the scale of <I> before the contrast; auto: 0.5 / the median
+  first-hit brightness of the scene (`plugins.scene_defaults`, at most 100), so the scene's middle tone sits at
+  the default pivot and a dim scene is not pushed below 0 (a fixed target, not the pivot you give: the exposure
+  stays the scene's, and restyling a buffer with another pivot equals a fresh render); unresolved
+  (mi.render directly): 1
 
     g(<I>) = c (s <I> - p) + p        per channel; affine, so every unbiased estimator of <I> suffices.
 """
@@ -18,6 +20,10 @@ from .forms import AffineForm
 from .registry import register
 
 
+#: where the auto exposure puts the scene's median brightness: the default pivot
+MID = 0.5
+
+
 @register
 class Contrast(Style):
     name = "contrast"
@@ -25,8 +31,7 @@ class Contrast(Style):
     params = (
         Param("c", "float", 1.5, "contrast factor", low=0.0),
         Param("pivot", "float", 0.5, "pivot brightness p"),
-        exposure_param("the pivot / the median of the scene's first-hit brightness, at most 100 (unresolved, or a "
-                       "pivot <= 0: 1)"),
+        exposure_param(f"{MID:g} / the median of the scene's first-hit brightness, at most 100 (unresolved: 1)"),
     )
     default_inner = 1
 
@@ -35,9 +40,9 @@ class Contrast(Style):
         return 1.0 if self.exposure is None else self.exposure
 
     def auto_values(self, facts) -> dict:
-        # contrast spreads tones about the pivot: the scene's median is put there (a pivot <= 0 gives no
-        # admissible exposure, and the value is left unresolved)
-        return {} if self.exposure is not None else {"exposure": auto_exposure(facts, self.pivot)}
+        # contrast spreads tones about the pivot: the scene's median goes to the default pivot (middle grey,
+        # 0.18, would leave most of the image below 0 after c = 1.5 about 0.5)
+        return {} if self.exposure is not None else {"exposure": auto_exposure(facts, MID)}
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return (I * self.scale - self.pivot) * self.c + self.pivot
