@@ -296,7 +296,7 @@ def test_output_that_is_the_scene_is_refused_before_loading(tmp_path, capsys):
 
 GAMMA_XML = """<scene version="3.0.0">
   <integrator type="stylized"><string name="style" value="gamma"/><float name="gamma" value="4"/>
-    <integer name="inner_samples" value="2"/></integrator>
+    <float name="exposure" value="1"/><integer name="inner_samples" value="2"/></integrator>
   <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
     <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
   <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>"""
@@ -307,7 +307,7 @@ def test_flags_refine_the_scenes_own_integrator(tmp_path, capsys):
     path.write_text(GAMMA_XML)
     out = tmp_path / "o.exr"
     assert main(["render", str(path), "--inner", "4", "--spp", "1", "-o", str(out)]) == 0
-    assert "gamma(gamma=4)" in capsys.readouterr().err  # --inner alone keeps the scene's style
+    assert "gamma(gamma=4, exposure=1)" in capsys.readouterr().err  # --inner alone keeps the scene's style
     # the sphere (albedo 0.5 under a white sky) is 0.5^(1/4) with gamma 4; --max-depth 1 leaves emission only
     np.testing.assert_allclose(read(out)[3:5, 3:5], 0.5 ** 0.25, rtol=0.05)
     assert main(["render", str(path), "--max-depth", "1", "--spp", "1", "-q", "-o", str(out)]) == 0
@@ -316,6 +316,19 @@ def test_flags_refine_the_scenes_own_integrator(tmp_path, capsys):
     err = capsys.readouterr().err
     # a new style drops the old one's parameters: cel at its own defaults (auto thresholds, printed; levels)
     assert "styletrace: auto values: cel thresholds=" in err and "levels=0.4,0.95)" in err and "gamma=" not in err
+
+
+@pytest.mark.parametrize("style", ["contrast", "exp_tone", "reinhard", "gamma", "tie_dye"])
+def test_the_tone_styles_auto_exposure_is_printed_and_a_given_one_wins(style, tmp_path, capsys):
+    out = tmp_path / "o.exr"
+    assert main(["render", "--style", style, "--width", "8", "--height", "8", "--spp", "1", "--inner", "1",
+                 "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"styletrace: auto values: {style} exposure=" in err, err
+    assert main(["render", "--style", style, "--set", "exposure=2", "--width", "8", "--height", "8", "--spp", "1",
+                 "--inner", "1", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "auto values" not in err and "exposure=2" in err, err
 
 
 @pytest.mark.parametrize("args", [["--spp", "abc"], ["--no-such-flag"], []])

@@ -30,5 +30,12 @@ def draws(scene, mask, style, n, seeds, seed0, **kw):
                            for s in range(seeds)]).astype(np.float64)
 
 
+def resolved(scene, style, **kw):
+    """The style as a render of `scene` uses it: its scene-relative 'auto' values (the tone styles' exposure,
+    from the pilot) pinned, as `passes` pins them."""
+    from styletrace.api import resolve_defaults
+    return resolve_defaults(scene, make_integrator(style, **kw))[0].settings.slot.style
+
+
 def z_score(vals, exact):
     return (vals.mean(0) - exact) / (vals.std(0, ddof=1) / np.sqrt(len(vals)))

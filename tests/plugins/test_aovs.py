@@ -48,7 +48,7 @@ def test_the_bias_aov_is_eq21_with_the_childrens_variance(scene, mask, children)
     var = children.var(ddof=1)
     se_var = np.sqrt(np.var((children - children.mean()) ** 2, ddof=1) / len(children))
     predicted = g2.mean() * var / (2 * n)
-    _, aovs = render(scene, "gamma", n, 4, 5, aovs=True, gamma=gamma)
+    _, aovs = render(scene, "gamma", n, 4, 5, aovs=True, gamma=gamma, exposure=1.0)  # g'' above: s = 1
     got = aovs["bias"][mask].astype(np.float64)
     se = np.hypot(got.std(ddof=1) / np.sqrt(got.size), abs(predicted) * se_var / var)
     assert abs(got.mean() - predicted) <= Z * se, (got.mean(), predicted, se)

@@ -22,14 +22,16 @@ RES = 48
 Z = 4.0
 
 
+# g(x, s): s the exposure the render resolved (auto; the pass's moments are of unexposed children, scaled by it)
 @pytest.mark.parametrize("style,g", [
-    ("gamma", lambda x: x ** (1 / 2.2)),                 # power series, scaled terms
-    ("reinhard", lambda x: x / (1 + x)),                 # reciprocal series of the shifted sample 1 + I
-    ("exp_tone", lambda x: 1 - np.exp(-1.5 * x)),        # exp series, unscaled
+    ("gamma", lambda x, s: (s * x) ** (1 / 2.2)),          # power series, scaled terms
+    ("reinhard", lambda x, s: s * x / (1 + s * x)),        # reciprocal series of the shifted sample 1 + s I
+    ("exp_tone", lambda x, s: 1 - np.exp(-s * x)),         # exp series, unscaled
 ])
 def test_series_with_the_pass_is_unbiased_on_the_furnace(scene, mask, style, g):
     vals = furnace.draws(scene, mask, style, 4, 6, 100, estimator="series", expansion_pass=16)
-    z = z_score(vals, g(I))
+    s = furnace.resolved(scene, style, estimator="series", expansion_pass=16).exposure
+    z = z_score(vals, g(I, s))
     assert np.all(np.abs(z) < Z), (style, z, vals.mean(0), g(I))
 
 
@@ -63,12 +65,16 @@ def test_the_first_level_expands_about_the_pass_b_not_a_pilot():
         assert estimation.make_estimator(slot, level, v, None, moments).inner.point.pilot.n == 16
 
 
+# The tests below pin gamma's exposure to 1: they read the pass's maps off the integrator they made, and an
+# integrator with 'auto' values left is replaced by a resolved copy when it renders (scene_defaults.resolve).
+
+
 def test_the_pass_tames_the_cornell_box():
     """The renderer's series on the Cornell box is wild (test_wild_estimates: values -23.6 to 7.1 where g lies in
     [0, 3.8], the light's 18^(1/2.2)); with the pass the same render stays within [-1, 4] (measured: -0.25 to
     3.78; its 0.29% of slightly negative values still trip the warning's threshold of -0.1 x median), and its
     pass map holds one b* per pixel from its own seed."""
-    integ = api.make_integrator("gamma", inner=16, estimator="series", expansion_pass=64)
+    integ = api.make_integrator("gamma", inner=16, estimator="series", expansion_pass=64, exposure=1.0)
     img = api.render("cornell-box", integrator=integ, spp=4, width=32, height=32, seed=0)
     frac, lo, hi, _ = wild.measure(img, 0.0, None)
     assert np.all(np.isfinite(img)) and -1.0 < lo and hi < 4.0 and frac < 0.005, (frac, lo, hi)
@@ -87,7 +93,7 @@ def test_the_pass_children_are_not_the_render_children():
     """Rendered with the render's own seed, the pass would draw the render's first children: its pixel means
     would equal the first-pass means of a 1-spp, same-seed moments render. They do not (other stream)."""
     scene = api.load_scene("cornell-box", 16, 16)
-    integ = api.make_integrator("gamma", inner=16, estimator="series", expansion_pass=16)
+    integ = api.make_integrator("gamma", inner=16, estimator="series", expansion_pass=16, exposure=1.0)
     list(api.passes(scene, integ, 1, seed=3))
     (used,) = integ.expansion.maps.values()
     integ.expansion.clear()
@@ -99,7 +105,7 @@ def test_the_pass_children_are_not_the_render_children():
 
 def test_same_seed_same_image_bit_for_bit():
     def render(seed):
-        integ = api.make_integrator("gamma", inner=8, estimator="series", expansion_pass=16)
+        integ = api.make_integrator("gamma", inner=8, estimator="series", expansion_pass=16, exposure=1.0)
         return api.render("cornell-box", integrator=integ, spp=2, width=16, height=16, seed=seed)
     a, b, c = render(7), render(7), render(8)
     assert np.array_equal(a, b) and not np.array_equal(a, c)
@@ -109,7 +115,7 @@ def test_tiles_get_a_pass_each(monkeypatch):
     """A film above LANES_PER_PASS pixels renders as crop windows; each gets its pass (own seed) and lookup."""
     monkeypatch.setattr(api, "LANES_PER_PASS", 256)  # 32 x 16 -> two 32 x 8 tiles
     scene = api.load_scene("cornell-box", 32, 16)
-    integ = api.make_integrator("gamma", inner=8, estimator="series", expansion_pass=16)
+    integ = api.make_integrator("gamma", inner=8, estimator="series", expansion_pass=16, exposure=1.0)
     img = list(api.passes(scene, integ, 2, seed=1))[-1].image
     keys = sorted(integ.expansion.maps)
     assert [k[0] for k in keys] == [(0, 0), (0, 8)] and all(k[1] == (32, 8) for k in keys)
@@ -134,7 +140,7 @@ def test_bad_values_are_refused_in_one_line(values, needle):
 
 def test_a_bare_render_is_refused_in_one_line(scene):
     """Without the pre-pass (integrator.render, which mi.render wraps in a RuntimeError) there is no b to use."""
-    integ = api.make_integrator("gamma", inner=4, estimator="series", expansion_pass=16)
+    integ = api.make_integrator("gamma", inner=4, estimator="series", expansion_pass=16, exposure=1.0)
     with pytest.raises(SettingsError) as err:
         integ.render(scene, scene.sensors()[0], 0, 1)
     assert "its pre-pass runs in styletrace's passes" in str(err.value) and "\n" not in str(err.value)
@@ -159,7 +165,7 @@ def test_first_n_hits_takes_the_pass_at_the_first_level_only():
     """With two stylized levels the pass's children are level-0 children (each with its own level-1 estimate);
     the render's level 0 expands about the pass's b, level 1 keeps its in-lane pilot; same seed, same image."""
     def render():
-        integ = api.make_integrator("gamma", inner=(4, 2), estimator="series", expansion_pass=8,
+        integ = api.make_integrator("gamma", inner=(4, 2), estimator="series", expansion_pass=8, exposure=1.0,
                                     stylize="first_n_hits", stylize_depth=2)
         img = api.render("cornell-box", integrator=integ, spp=1, width=12, height=12, seed=2)
         return img, integ

@@ -62,7 +62,7 @@ def test_direct_bias_follows_delta_method(scene, mask, single, n):
     includes every order of the bias; the delta method keeps the 1/n term only, which dominates once
     n >= 4 here (the 1/n^2 term is below a tenth of the standard error).
     """
-    vals = draws(scene, mask, "gamma", n, 12 * n, 10_000 * n).astype(np.float64)
+    vals = draws(scene, mask, "gamma", n, 12 * n, 10_000 * n, exposure=1.0).astype(np.float64)
     bias = vals.mean(0) - gamma(I)
     se = vals.std(0, ddof=1) / np.sqrt(len(vals))
 

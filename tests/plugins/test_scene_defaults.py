@@ -63,11 +63,14 @@ def test_styled_objects_and_compositions_resolve_on_what_they_cover():
     styled = [s.bsdf() for s in scene.shapes() if hasattr(s.bsdf(), "slot")][0]
     # the styled dark sphere: the median of its own brightness 0.2 (not of the whole image)
     assert abs(styled.slot.style.thresholds[0] - 0.2) < 0.2 * 0.03 + 0.01, styled.slot.style.thresholds
-    # the integrator's composition covers the bright sphere, and cel sees contrast's output:
-    # 0.5 + 1.5 (0.8 - 0.5) = 0.95 (0.8 if the composition were resolved on the raw brightness)
-    t = integrator.settings.style.operands[1].thresholds[0]
-    assert abs(t - 0.95) < 1.5 * 0.8 * 0.03 + 0.01, t
-    assert "cel.thresholds=" in chosen and "styled BSDF" in chosen
+    # the integrator's composition covers the bright sphere, and cel sees contrast's output: contrast's auto
+    # exposure puts the median 0.8 at 0.5, the pivot, which contrast keeps (0.8 if the composition were resolved
+    # on the raw brightness, 0.95 with exposure 1)
+    contrast, cel = integrator.settings.style.operands
+    assert abs(contrast.exposure - 0.5 / 0.8) < 0.5 / 0.8 * 0.03, contrast.exposure
+    t = cel.thresholds[0]
+    assert abs(t - 0.5) < 1.5 * 0.5 * 0.03 + 0.01, t
+    assert "contrast.exposure=" in chosen and "cel.thresholds=" in chosen and "styled BSDF" in chosen
     # pinned: resolving again chooses nothing and runs no pilot
     again, chosen2 = resolve_defaults(scene, integrator)
     assert chosen2 == "" and again is integrator
@@ -149,3 +152,88 @@ def test_weighted_quantiles_are_the_inverted_cdf_on_any_numpy():
         weights[0] += 1
         want = np.quantile(np.repeat(values, weights), qs, method="inverted_cdf")
         assert weighted_quantiles(values, weights, qs) == [float(x) for x in want]
+
+
+# ---- tone styles: a scene-relative exposure (issue 23, point 5) ------------------------------------------------
+
+TONE_STYLES = ("contrast", "exp_tone", "reinhard", "gamma", "tie_dye")
+#: the largest difference in mean sRGB value the same scene at a tenth of its light may show at defaults
+TONE_MEAN_SRGB = 0.02
+
+
+def mean_srgb(img) -> float:
+    from styletrace.images import srgb8
+    return float(srgb8(img).astype(np.float64).mean() / 255.0)
+
+
+def dimmed_box(light):
+    """The Cornell box with its emitter's radiance times `light` (nothing else changes)."""
+    return load_scene(scaled(cornell_box(32, 32), 1.0, light=light))
+
+
+@pytest.mark.parametrize("style", TONE_STYLES)
+def test_tone_styles_look_the_same_at_a_tenth_of_the_light(style):
+    """The same seed draws the same paths in both boxes (uniform light choice, roulette on the BSDF weight), so
+    the radiance is exactly a tenth; the auto exposure, from the pilot's median, is ten times larger (up to the 4
+    printed digits), and the images agree far inside the bound. With a fixed exposure (the old absolute
+    defaults) the dim box is darker by much more than the bound (checked below)."""
+    means = {}
+    for light in (1.0, 0.1):
+        scene = dimmed_box(light)
+        integ, chosen = resolve_defaults(scene, make_integrator(style=style, inner=4))
+        assert "exposure=" in chosen, chosen
+        means[light] = (mean_srgb(render(scene, integ, spp=2)),
+                        mean_srgb(render(scene, make_integrator(style=style, inner=4, exposure=1.0), spp=2)))
+    (auto, fixed), (auto_dim, fixed_dim) = means[1.0], means[0.1]
+    assert abs(auto - auto_dim) < TONE_MEAN_SRGB, (auto, auto_dim)
+    assert abs(fixed - fixed_dim) > TONE_MEAN_SRGB, (fixed, fixed_dim)
+
+
+def test_a_given_exposure_wins_and_an_unresolvable_one_falls_back():
+    scene = dimmed_box(1.0)
+    integ, chosen = resolve_defaults(scene, make_integrator(style="gamma", exposure=2.0))
+    assert chosen == "" and integ.settings.slot.style.exposure == 2.0
+    # gamma 0.1 with an exposure above 1 would overflow float32: the auto rule pins nothing (unresolved: 1)
+    integ, chosen = resolve_defaults(scene, make_integrator(style="gamma", gamma=0.1))
+    assert chosen == "" and integ.settings.slot.style.scale == 1.0
+
+
+def test_auto_exposure_maps_the_median_to_middle_grey():
+    from styletrace.plugins.scene_defaults import Facts, Pilot
+    scene = dimmed_box(1.0)
+    integ = make_integrator(style="reinhard")
+    (median,) = Facts(scene, Pilot(scene, integ.settings), 0).brightness([0.5])
+    chosen = resolve_defaults(scene, integ)[0].settings.slot.style
+    assert chosen.exposure == pytest.approx(0.18 / median, rel=1e-3)
+    contrast = resolve_defaults(scene, make_integrator(style="contrast", pivot=0.4))[0].settings.slot.style
+    assert contrast.exposure == pytest.approx(0.5 / median, rel=1e-3)  # contrast: the median to the default pivot
+    exp_tone = resolve_defaults(scene, make_integrator(style="exp_tone"))[0].settings.slot.style
+    assert exp_tone.exposure == pytest.approx(1.5 * 0.18 / median, rel=1e-3)
+
+
+# ---- acp: the colour map's range (issue 23, point 5) ----------------------------------------------------------
+
+def test_acp_takes_the_colour_maps_auto_range_and_colours():
+    """At defaults acp resolves the same range as color_map on the same scene, and on a sample whose value is
+    certain (no variance, so per-sample and of-the-mean application agree) it is the colour map's colour times
+    the shading factor max(Y', 0.01), Y' the position in the gradient."""
+    import mitsuba as mi
+    from styletrace.styles.base import Vertex
+    scene = dimmed_box(1.0)
+    acp = resolve_defaults(scene, make_integrator(style="acp"))[0].settings.slot.style
+    cmap = resolve_defaults(scene, make_integrator(style="color_map"))[0].settings.slot.style
+    assert acp.range is not None and acp.range == cmap.range
+    lo, hi = acp.range
+    I = np.linspace(lo - 0.2 * (hi - lo), hi + 0.2 * (hi - lo), 9)
+    colour = mi.Color3f(*(np.float32(I) for _ in range(3)))
+    v = Vertex(p=mi.Point3f(0), n=mi.Vector3f(0, 0, 1), wo=mi.Vector3f(0, 0, 1), view=mi.Vector3f(0, 0, 1),
+               depth=mi.UInt32(0))
+    u0, u1 = acp.gradient.stops[0][0], acp.gradient.stops[-1][0]
+    position = u0 + (I - lo) * (u1 - u0) / (hi - lo)
+    want = np.array(cmap.apply(colour, v)) * np.maximum(position, 0.01)[None, :]
+    np.testing.assert_allclose(np.array(acp.apply(colour, v)), want, rtol=1e-5, atol=1e-7)
+
+
+def test_acp_at_defaults_looks_the_same_at_a_tenth_of_the_light():
+    means = [mean_srgb(render(dimmed_box(light), make_integrator(style="acp", inner=4), spp=2)) for light in (1.0, 0.1)]
+    assert abs(means[0] - means[1]) < TONE_MEAN_SRGB, means

@@ -121,11 +121,11 @@ def test_integer_settings_fit_the_kernels_uint32_depth(key, value, allowed):
 
 
 def test_stylize_depth_is_capped():
-    assert settings.parse({"stylize": "first_n_hits", "stylize_depth": settings.MAX_STYLIZE_DEPTH}).stylize_depth == 8
-    with pytest.raises(SettingsError, match=r"for 'stylize_depth': expected an integer in \[1, 8\]"):
-        settings.parse({"stylize": "first_n_hits", "stylize_depth": 9})
+    assert settings.parse({"stylize": "first_n_hits", "stylize_depth": settings.MAX_STYLIZE_DEPTH}).stylize_depth == 16
+    with pytest.raises(SettingsError, match=r"for 'stylize_depth': expected an integer in \[1, 16\]"):
+        settings.parse({"stylize": "first_n_hits", "stylize_depth": 17})
     row = next(p for p in settings.PROPERTIES if p.name == "stylize_depth")
-    assert "at most 8" in row.doc  # the generated settings table documents the cap
+    assert "at most 16" in row.doc  # the generated settings table documents the cap
 
 
 @pytest.mark.parametrize("value", [0, 1, "4"])

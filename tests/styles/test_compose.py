@@ -22,10 +22,10 @@ def test_applies_its_operands_in_order():
 
 def test_parameters_are_the_operands_under_their_names():
     cls = get("contrast+sepia")
-    assert [p.name for p in cls.params] == ["contrast.c", "contrast.pivot", "sepia.gradient"]
+    assert [p.name for p in cls.params] == ["contrast.c", "contrast.pivot", "contrast.exposure", "sepia.gradient"]
     comp = create("contrast+sepia", **{"contrast.c": "2"})
     assert comp.operands[0].c == 2.0 and comp.operands[0].pivot == get("contrast")().pivot
-    assert comp.describe().startswith("contrast+sepia(contrast.c=2, contrast.pivot=0.5, sepia.gradient=")
+    assert comp.describe().startswith("contrast+sepia(contrast.c=2, contrast.pivot=0.5, contrast.exposure=auto, sepia.gradient=")
     assert get("contrast+sepia") is cls  # one class per spelling
     assert "contrast+sepia" not in names()  # compositions are spelled, not registered
 

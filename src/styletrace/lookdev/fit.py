@@ -51,8 +51,11 @@ from ..styles.hatching import coverage  # noqa: E402
 from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for  # noqa: E402
 
 FITTABLE = ("float", "floats", "color", "gradient")
-#: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in Python)
-NOT_FITTED = {"hatching": ("angle", "spacing", "thickness")}
+#: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in Python; the
+#: tone styles' exposure is the scene's normalisation, resolved from the pilot, and for contrast and reinhard it
+#: is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s + I))
+NOT_FITTED = {"hatching": ("angle", "spacing", "thickness"), "contrast": ("exposure",), "reinhard": ("exposure",),
+              "gamma": ("exposure",), "tie_dye": ("exposure",)}
 #: styles whose steps have no smoothed surrogate
 NOT_SMOOTHED = ("halftone",)
 

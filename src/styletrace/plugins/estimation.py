@@ -194,27 +194,41 @@ def _affine(style, n, vertex):
     return Transformed(E.Affine(form.a1, form.a0, n=n))
 
 
+def _series_sample(form):
+    """The per-sample map gain x + shift of a SeriesForm (None where it is the identity)."""
+    gain, shift = form.gain, form.shift
+    if gain == 1.0:
+        return (lambda x: x + shift) if shift else None
+    return lambda x: x * gain + shift
+
+
+def _clamp_sample(form):
+    """The per-sample map clamp(gain x, lo, hi) of a PolynomialForm."""
+    gain, lo, hi = form.gain, form.lo, form.hi
+    return (lambda x: dr.clip(x, lo, hi)) if gain == 1.0 else (lambda x: dr.clip(x * gain, lo, hi))
+
+
 def _series(selection):
     def build(style, n, vertex):
         form = style.form()
         est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
                                 selection=selection, max_terms=SERIES_MAX_TERMS)
-        shift = form.shift
-        return Transformed(est, (lambda x: x + shift) if shift else None, form.scale, form.offset)
+        return Transformed(est, _series_sample(form), form.scale, form.offset)
     return build
 
 
 def series_with_pass(style, sets, known=0.0) -> Transformed:
-    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample X' = X + shift =
-    known + shift + R, the largest over `sets`: the expansion pass's (mean r, mean r^2) of the lane's pixel
+    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample X' = gain X + shift
+    = gain known + shift + gain R, the largest over `sets`: the expansion pass's (mean r, mean r^2) of the lane's pixel
     and of its window, and the lane's own `known` part of every child (its vertex's emission). No pilot
     children; b floored at the form's pilot_lo and clamped into the series' convergence region as a pilot's
     b is."""
     form = style.form()
-    shift = form.shift
-    e = known + shift
+    gain = form.gain
+    e = known * gain + form.shift
     b = None
     for m1, m2 in sets:
+        m1, m2 = m1 * gain, m2 * (gain * gain)  # the moments of gain R
         m1, m2 = e + m1, e * e + (2.0 * e) * m1 + m2
         bs = dr.select(m1 > 0.0, m2 / dr.select(m1 > 0.0, m1, 1.0), 0.0)
         b = bs if b is None else dr.maximum(b, bs)
@@ -223,7 +237,7 @@ def series_with_pass(style, sets, known=0.0) -> Transformed:
     scaled = isinstance(form.series, (E.PowerFunctionSeries, E.ReciprocalSeries))
     est = E.SeriesEstimator(form.series, b=E.PerLane(b, lo=form.pilot_lo), selection="iterative",
                             truncation=E.Geometric(*PASS_TRUNCATION), max_terms=PASS_MAX_TERMS, scaled=scaled)
-    return Transformed(est, (lambda x: x + shift) if shift else None, form.scale, form.offset)
+    return Transformed(est, _series_sample(form), form.scale, form.offset)
 
 
 _PILOT = "pilot samples for the expansion point b"
@@ -239,16 +253,14 @@ estimator("series_single", (SeriesForm,), "power series, single term, Poisson tr
            "children (at least the fit's degree)", pilot="1 sample")
 def _ustat(style, n, vertex):
     form = style.form()
-    lo, hi = form.lo, form.hi
     est = E.PolynomialU(form.fit, n=max(n, form.fit.degree), b=E.Pilot(1))
-    return Transformed(est, lambda x: dr.clip(x, lo, hi))
+    return Transformed(est, _clamp_sample(form))
 
 
 @estimator("naive", (PolynomialForm,), "products of independent children per polynomial term (S6)", _PILOT)
 def _naive(style, n, vertex):
     form = style.form()
-    lo, hi = form.lo, form.hi
-    return Transformed(E.PolynomialNaive(form.fit, b=E.Pilot(n)), lambda x: dr.clip(x, lo, hi))
+    return Transformed(E.PolynomialNaive(form.fit, b=E.Pilot(n)), _clamp_sample(form))
 
 
 @estimator("telescoping", ANY_FORM, "debiased direct application (Eq. 15)", "n0, the first level",
@@ -260,20 +272,19 @@ def _telescoping(style, n, vertex):
 def _operand(form, n: int):
     """An estimator that consumes samples of an operand's input and returns an unbiased estimate of the
     operand applied to their mean, as the single-style builders above do (sample maps become 1-sample
-    inner estimators: a shift is Affine(1, shift), a clamp is Direct(clip, 1))."""
+    inner estimators: a gain and shift is Affine(gain, shift), a clamp is Direct(clip, 1))."""
     if isinstance(form, AffineForm):
         return E.Affine(form.a1, form.a0, n=1)
     if isinstance(form, SeriesForm):
         est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
                                 selection="iterative", max_terms=SERIES_MAX_TERMS)
-        if form.shift:
-            est = E.Compose(est, E.Affine(1.0, form.shift, n=1))
+        if form.shift or form.gain != 1.0:
+            est = E.Compose(est, E.Affine(form.gain, form.shift, n=1))
         if form.scale != 1.0 or form.offset != 0.0:
             est = E.Compose(E.Affine(form.scale, form.offset, n=1), est)
         return est
     if isinstance(form, PolynomialForm):
-        lo, hi = form.lo, form.hi
-        return E.Compose(E.PolynomialNaive(form.fit, b=E.Pilot(n)), E.Direct(lambda x: dr.clip(x, lo, hi), 1))
+        return E.Compose(E.PolynomialNaive(form.fit, b=E.Pilot(n)), E.Direct(_clamp_sample(form), 1))
     raise AssertionError(f"no operand estimator for {form!r}")
 
 

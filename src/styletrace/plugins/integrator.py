@@ -62,6 +62,22 @@ from .scene_graph import SceneGraph, any_ptr as _any_ptr
 from .volume import volume_walk
 
 
+#: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:
+#: benchmarks/recursion_depth.py, tests/plugins/test_recursion_depth.py)
+OPTIMIZE_LOOPS = False
+
+
+def tracing():
+    """The Dr.Jit flags under which styletrace traces its kernels (scoped: a user's own Dr.Jit code keeps
+    its settings). OptimizeLoops off: with it, Dr.Jit traces every symbolic loop's body twice (a second
+    pass drops the state that the first found loop-invariant), and a stylized level's loop body holds the
+    next level's loop, so the trace time doubled per level (identity, inner 1: 10 s at 12 levels and 107 s at
+    14 with the flag, below 0.06 s at any depth up to 16 without; BENCHMARKS.md, recursion depth). The images
+    are bit-identical either way (tests/plugins/test_recursion_depth.py), and the kernels' run time shows no
+    consistent difference."""
+    return dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS)
+
+
 class Target:
     """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with these BSDFs."""
 
@@ -241,7 +257,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         a render in progress takes Ctrl-C (Mitsuba's own handler took the signal and the pass ran on)."""
         from . import reuse
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
-        image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
+        with tracing():
+            image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
         return image if develop else mi.TensorXf()
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -256,7 +273,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         try:
             if medium is None and scene.sensors():
                 medium = scene.sensors()[0].get_medium()
-            return self._sample(scene, sampler, ray, active, medium)
+            with tracing():
+                return self._sample(scene, sampler, ray, active, medium)
         finally:
             # Keep no reference to this scene's objects once traced: Dr.Jit traces calls on every live
             # instance of a class, and a lingering BSDF or emitter of a scene that the garbage collector

@@ -88,8 +88,8 @@ PROPERTIES = (
              "--expansion-pass", "M"),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
              "MODE"),
-    Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 8: tracing time doubles "
-             "per level)", "--stylize-depth", "N"),
+    Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 16; the trace time grows "
+             "linearly with it)", "--stylize-depth", "N"),
     Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
     Property("emitter_sampling", EMITTER_DEFAULT, "string", "how next-event estimation picks a light: uniform (as "
              "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
@@ -146,10 +146,12 @@ BASE_KEYS = ("samples_per_pass", "timeout")
 #: "unbounded" (`path.depth_limit`), so larger values would wrap around.
 COUNT_MAX = 2 ** 32 - 2
 #: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the draw of
-#: the one above, and Dr.Jit traces a symbolic loop's body twice (JitFlag.OptimizeLoops), so the trace time
-#: doubles per level (measured, 8x8 Cornell box, inner 1: 3.3 s at 8 levels, 10 s at 10, 21 s at 11, 52 s
-#: at 12; 1000 levels overflow Python's recursion). Deeper trees are refused rather than left to hang.
-MAX_STYLIZE_DEPTH = 8
+#: the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice, the trace
+#: time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces with the flag off
+#: (`integrator.tracing`) and the trace time grows linearly (BENCHMARKS.md, recursion depth;
+#: tests/plugins/test_recursion_depth.py). 16 levels of one child each already make a path of 16 stylized
+#: vertices; the cap keeps the kernel and Python's recursion (1000 levels overflow it) bounded.
+MAX_STYLIZE_DEPTH = 16
 
 
 class AdaptiveCount(int):

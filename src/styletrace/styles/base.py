@@ -230,6 +230,34 @@ def increasing(values) -> tuple[float, ...]:
     return tuple(out)
 
 
+#: The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's median
+#: first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et al. 2002),
+#: so a scene ten times dimmer gets ten times the exposure and looks the same.
+EXPOSURE_KEY = 0.18
+#: Largest exposure. The unbiased series estimators take powers of exposed samples in float32: on the Cornell
+#: box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2 (measured), so the auto rule
+#: stops here: a scene whose median brightness is below 0.18 / 100 comes out darker than middle grey.
+MAX_EXPOSURE = 100.0
+
+
+def exposure_param(what: str = "") -> Param:
+    """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see `auto_exposure`)."""
+    return Param("exposure", "float", None, "scale s of the expected radiance before the tone curve", low=0.0,
+                 low_open=True, high=MAX_EXPOSURE,
+                 auto=what or f"{EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at most "
+                              f"{MAX_EXPOSURE:g} (unresolved: 1)")
+
+
+def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSURE) -> float:
+    """`target` over the median first-hit brightness of what the style covers, at most `high`, rounded as
+    printed; NaN where the median or the target is not positive (a black scene, a pivot <= 0: the value is
+    refused and the unresolved fallback applies)."""
+    (median,) = facts.brightness([0.5])
+    if not (median > 0 and target > 0):
+        return float("nan")
+    return rounded(min(target / median, high))
+
+
 def light_from_camera(cam: Camera) -> tuple[float, float, float]:
     """The 'auto' light direction of gooch and xtoon: the camera's up vector tilted a little towards the
     camera, normalize(up - 0.3 forward) (the old fixed default 0,1,0.3 for a y-up camera looking along -z)."""
@@ -239,4 +267,5 @@ def light_from_camera(cam: Camera) -> tuple[float, float, float]:
 
 
 __all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward",
-           "Projection", "projection", "lanes", "light_from_camera", "rounded", "increasing"]
+           "Projection", "projection", "lanes", "light_from_camera", "rounded", "increasing", "EXPOSURE_KEY",
+           "MAX_EXPOSURE", "exposure_param", "auto_exposure"]

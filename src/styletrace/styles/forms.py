@@ -20,8 +20,11 @@ class AffineForm:
 
 @dataclass(frozen=True)
 class SeriesForm:
-    """g(I) = scale * h(I + shift) + offset with h a power series (`estimators.Series`).
+    """g(I) = scale * h(gain I + shift) + offset with h a power series (`estimators.Series`).
 
+    `gain` is a style's exposure: every sample is scaled by it before the series sees it (an exposure is
+    linear in the expectation, gain E[X] = E[gain X], so the estimators stay unbiased, and the expansion point,
+    its floor `pilot_lo` and the series keep their meaning in exposed units on a scene of any brightness).
     `shift` moves the samples into the series' convergence region (e.g. 1/(1+I) is the reciprocal series
     of 1 + I). The expansion point is b = max(pilot_scale * mean of the pilot children, pilot_lo):
     `pilot_lo` keeps b away from 0 (a power series of I^p about b converges only for 0 < I < 2b, so a
@@ -32,6 +35,7 @@ class SeriesForm:
 
     series: Any
     shift: float = 0.0
+    gain: float = 1.0
     scale: Any = 1.0
     offset: Any = 0.0
     pilot_lo: Optional[float] = None
@@ -41,12 +45,14 @@ class SeriesForm:
 
 @dataclass(frozen=True)
 class PolynomialForm:
-    """g(I) ~ fit(clamp(I, lo, hi)): a fitted polynomial (`estimators.Fit`), samples clamped to its domain
-    first (the clamp is part of the style, as in the paper's tie-dye setup)."""
+    """g(I) ~ fit(clamp(gain I, lo, hi)): a fitted polynomial (`estimators.Fit`), samples scaled by `gain` (a
+    style's exposure) and clamped to the fit's domain first (the clamp is part of the style, as in the paper's
+    tie-dye setup)."""
 
     fit: Any
     lo: float
     hi: float
+    gain: float = 1.0
 
 
 @dataclass(frozen=True)

@@ -2,12 +2,14 @@
 
 Parameters
 - gamma (float, default 2.2): gamma >= 0.1 (smaller gammas overflow float32 on bright radiance)
+- exposure (float in (0, 100], default auto): s, the scale of <I> before the power; auto: 0.18 / the median
+  first-hit brightness of the scene (`plugins.scene_defaults`), at most 100; unresolved (mi.render directly): 1
 
-    g(<I>) = max(<I>, 0)^(1/gamma)        per channel.
+    g(<I>) = max(s <I>, 0)^(1/gamma) = s^(1/gamma) max(<I>, 0)^(1/gamma)        per channel.
 
 Negative inputs (possible with unbiased inner estimates) are clamped to 0 before the power.
-Unbiased estimators use the binomial series of I^(1/gamma) about b = max(1.5 <I>_pilot, 0.02), <I>_pilot
-the mean of `inner_samples` separate children (a_k = C(1/gamma, k) b^(1/gamma - k)); it converges for
+Unbiased estimators use the binomial series of x^(1/gamma) of the exposed samples x = s X about
+b = max(1.5 <x>_pilot, 0.02) (the floor in exposed units, so it means the same on a dim scene), <x>_pilot the mean of `inner_samples` separate children (a_k = C(1/gamma, k) b^(1/gamma - k)); it converges for
 0 < I < 2b. Radiance with heavy tails (fireflies) makes these estimators' variance unbounded in practice
 (docs/estimators.md, "Gamma and the series estimators": a child far beyond 2b enters every term's products);
 the integrator's `expansion_pass` (estimator series) takes b from a separate pre-pass per pixel instead
@@ -15,35 +17,56 @@ the integrator's `expansion_pass` (estimator series) takes b from a separate pre
 """
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, Vertex
+from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register
 
 
-#: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR) (radiance units).
+#: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR) (exposed radiance).
 PILOT_FLOOR = 0.02
 PILOT_SCALE = 1.5
 #: Smallest gamma: the exponent 1/gamma <= 10 keeps I^(1/gamma) below float32's 3.4e38 for radiance up to
 #: 7e3, beyond what a scene's lights reach, while as gamma -> 0 it overflows for any I > 1.
 MIN_GAMMA = 0.1
+#: The radiance MIN_GAMMA was chosen for: (s I)^(1/gamma) must stay below float32's largest number for exposed
+#: radiance s I up to this, so an exposure and a small gamma that overflow together are refused.
+MAX_RADIANCE = 7e3
+FLOAT32_MAX = 3.4028234663852886e38
 
 
 @register
 class Gamma(Style):
     name = "gamma"
     summary = "per-channel gamma I^(1/gamma) (Eq. 24)"
-    params = (Param("gamma", "float", 2.2, "gamma exponent", low=MIN_GAMMA),)
+    params = (Param("gamma", "float", 2.2, "gamma exponent", low=MIN_GAMMA), exposure_param())
     default_inner = 16
 
+    @property
+    def scale(self) -> float:
+        return 1.0 if self.exposure is None else self.exposure
+
+    def validate(self) -> None:
+        top = self.scale * MAX_RADIANCE
+        if top > 1.0 and math.log(top) / self.gamma > math.log(FLOAT32_MAX):
+            raise StyleError(f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
+                             f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma")
+
+    def auto_values(self, facts) -> dict:
+        return {} if self.exposure is not None else {"exposure": auto_exposure(facts)}
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        return dr.power(dr.maximum(I, 0.0), 1.0 / self.gamma)
+        return dr.power(dr.maximum(I * self.scale, 0.0), 1.0 / self.gamma)
 
     def form(self):
         from ..estimators import gamma_series
         # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the 1.5x
         # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured in
-        # tests/styles/test_gamma.py and docs/estimators.md)
-        return SeriesForm(gamma_series(self.gamma), pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE, values=(0.0, None))
+        # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its floor in
+        # exposed units: the same on a scene of any brightness)
+        return SeriesForm(gamma_series(self.gamma), gain=self.scale, pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE,
+                          values=(0.0, None))

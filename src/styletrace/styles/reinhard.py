@@ -1,20 +1,22 @@
 """reinhard: the reciprocal tone curve I / (1 + I), per channel (a style with a reciprocal-series form).
 
 Parameters
-- white (float, default 1.0): 0 < w <= 1000, the radiance mapped to 1/2
+- white (float, default 1.0): 0 < w <= 1000, the exposed radiance mapped to 1/2
+- exposure (float in (0, 100], default auto): s, the scale of <I> before the curve; auto: 0.18 / the median
+  first-hit brightness of the scene (`plugins.scene_defaults`), at most 100; unresolved (mi.render directly): 1
 
-    g(<I>) = <I> / (w + <I>) = 1 - w / (w + <I>)            per channel.
+    g(<I>) = s <I> / (w + s <I>) = 1 - w / (w + s <I>)            per channel.
 
-Unbiased estimators use the reciprocal series of the shifted samples w + X (supplement S16-S17):
-w/(w + I) = sum_k w b^(-k-1) (b - (w + I))^k about a pilot estimate b of w + I, which converges for
-0 < w + I < 2b; b = max(1.5 <w + I>_pilot, w) leaves a margin above a pilot that underestimates. Samples of
-w + X are >= w > 0, so the expansion never straddles 0.
+Unbiased estimators use the reciprocal series of the exposed, shifted samples w + s X (supplement S16-S17):
+w/(w + x) = sum_k w b^(-k-1) (b - (w + x))^k about a pilot estimate b of w + x, x = s I, which converges for
+0 < w + x < 2b; b = max(1.5 <w + s X>_pilot, w) leaves a margin above a pilot that underestimates. Samples of
+w + s X are >= w > 0, so the expansion never straddles 0.
 """
 from __future__ import annotations
 
 import mitsuba as mi
 
-from .base import Param, Style, Vertex
+from .base import Param, Style, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register
 
@@ -27,14 +29,23 @@ MAX_WHITE = 1e3
 class Reinhard(Style):
     name = "reinhard"
     summary = "reciprocal tone curve I/(w + I), per channel (reciprocal series, S16-S17)"
-    params = (Param("white", "float", 1.0, "radiance mapped to 1/2", low=0.0, low_open=True, high=MAX_WHITE),)
+    params = (Param("white", "float", 1.0, "exposed radiance mapped to 1/2", low=0.0, low_open=True, high=MAX_WHITE),
+              exposure_param())
     default_inner = 16
 
+    @property
+    def scale(self) -> float:
+        return 1.0 if self.exposure is None else self.exposure
+
+    def auto_values(self, facts) -> dict:
+        return {} if self.exposure is not None else {"exposure": auto_exposure(facts)}
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        return I / (self.white + I)
+        x = I * self.scale
+        return x / (self.white + x)
 
     def form(self):
         from ..estimators import reciprocal_series
-        # samples of w + X are >= w, so a pilot b >= w keeps the expansion on the positive side
-        return SeriesForm(reciprocal_series(self.white), shift=self.white, scale=-1.0, offset=1.0, pilot_lo=self.white,
-                          pilot_scale=1.5, values=(0.0, 1.0))
+        # samples of w + s X are >= w, so a pilot b >= w keeps the expansion on the positive side
+        return SeriesForm(reciprocal_series(self.white), gain=self.scale, shift=self.white, scale=-1.0, offset=1.0,
+                          pilot_lo=self.white, pilot_scale=1.5, values=(0.0, 1.0))

@@ -6,18 +6,21 @@ Parameters
 - domain_min (float, default -1), domain_max (float, default 4): the interval [lo, hi] on which the
   estimator library fits the channel functions (Chebyshev, degree 20 in the paper); lo < hi
 - together: pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14, so float32 resolves the cosine's argument
+- exposure (float in (0, 100], default auto): s, the scale of <I> before the waves; auto: 0.18 / the median first-hit
+  brightness of the scene (`plugins.scene_defaults`, at most 100), so the waves fall on the same tones of a dim scene;
+  unresolved (mi.render directly): 1
 
 Per channel c in {r, g, b}, with x_c the channel of the inner estimate <I>:
-    g_c(x_c) = (1 - cos(pi f_c (clamp(x_c, lo, hi) + phi_c))) / 2
+    g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2
 With the defaults: r' = (1 - cos(2 pi (r + 1)))/2, g' = (1 - cos(2.15 pi (g + 1.13)))/2,
 b' = (1 - cos(2.3 pi (b + 1.29)))/2, as printed in the supplement.
 The supplement clamps samples above the fit interval's maximum 4 (radiance may exceed 1). Direct
-application (`apply`) clamps the inner estimate <I>, so it targets g(clamp(I)). The unbiased estimators
-(`ustat`, `naive`) clamp every child sample before the degree-20 Chebyshev fit h sees it, as the paper
-does, so they target h(E[clamp(X)]): the two differ by the fit error (at most 0.005, 0.023, 0.06 per
+application (`apply`) clamps the exposed inner estimate s <I>, so it targets g(clamp(s I)). The unbiased
+estimators (`ustat`, `naive`) expose and clamp every child sample before the degree-20 Chebyshev fit h sees
+it, as the paper does, so they target h(E[clamp(s X)]): the two differ by the fit error (at most 0.005, 0.023, 0.06 per
 channel) and wherever single samples exceed 4 while their mean does not (near lights).
-`channel_functions()` gives the three channel functions, clamp included, as numpy callables for the fit,
-and `domain()` the interval.
+`channel_functions()` gives the three channel functions of the exposed value y = s x, clamp included, as
+numpy callables for the fit (on [lo, hi] in exposed units, whatever s is), and `domain()` the interval.
 """
 from __future__ import annotations
 
@@ -27,7 +30,7 @@ from typing import Callable
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex
+from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
 from .forms import PolynomialForm
 from .registry import register
 
@@ -50,8 +53,16 @@ class TieDye(Style):
         Param("phases", "floats", (1.0, 1.13, 1.29), "phase offset per channel"),
         Param("domain_min", "float", -1.0, "lower end of the clamp / fit interval"),
         Param("domain_max", "float", 4.0, "upper end of the clamp / fit interval"),
+        exposure_param(),
     )
     default_inner = 16
+
+    @property
+    def scale(self) -> float:
+        return 1.0 if self.exposure is None else self.exposure
+
+    def auto_values(self, facts) -> dict:
+        return {} if self.exposure is not None else {"exposure": auto_exposure(facts)}
 
     def validate(self) -> None:
         for key in ("frequencies", "phases"):
@@ -78,10 +89,12 @@ class TieDye(Style):
         from ..estimators import chebyshev_fit
         lo, hi = self.domain()
         # the paper's Fig. 11 setup: a degree-20 Chebyshev fit per channel on the clamp interval
-        return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi)
+        # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the clamp
+        return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi, gain=self.scale)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:
-        """g_r, g_g, g_b as numpy callables (array in, array out), clamp to the domain included."""
+        """g_r, g_g, g_b of the exposed value y = s x as numpy callables (array in, array out), clamp to the
+        domain included (the fit's functions: the estimators expose the samples themselves)."""
         import numpy as np
         lo, hi = self.domain()
 
@@ -93,7 +106,7 @@ class TieDye(Style):
         return tuple(make(f, phi) for f, phi in zip(self.frequencies, self.phases))
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        x = dr.clip(I, self.domain_min, self.domain_max)
+        x = dr.clip(I * self.scale, self.domain_min, self.domain_max)
         f = mi.Color3f(*(math.pi * f for f in self.frequencies))
         phi = mi.Color3f(*self.phases)
         return (1.0 - dr.cos(f * (x + phi))) * 0.5
