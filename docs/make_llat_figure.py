@@ -1,7 +1,7 @@
 """docs/llat.png: LLaT's canonical lifting of tone (docs/llat.md) beside the position mode, in setups after
 "Lifting Lines and Tone" (West, Mukherjee, Yue 2026) Fig. 13 and Fig. 14.
 
-Rows: (a) direct view, (b) flat perfect mirror, (c) curved glossy reflection (a GGX ball, roughness 0.05),
+Rows: (a) direct view, (b) flat perfect mirror, (c) curved glossy reflection (a GGX ball, roughness 0.01),
 (d) depth of field (thin lens focused on the directly seen plane, the mirror out of focus),
 (e) per-object tone fields (five objects, five hatching/halftone settings, one flipped inside reflections,
 on a glossy floor). Columns: lift=canonical | lift=position.
@@ -26,7 +26,7 @@ def styled(style: dict, lift: str) -> dict:
 
 def sensor(size, thin=False):
     import mitsuba as mi
-    s = {"type": "thinlens", "aperture_radius": 0.12, "focus_distance": 6.0} if thin else {"type": "perspective"}
+    s = {"type": "thinlens", "aperture_radius": 0.3, "focus_distance": 6.0} if thin else {"type": "perspective"}
     return {**s, "fov": 40, "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
             "sampler": {"type": "independent"},
             "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"}}}
@@ -48,7 +48,7 @@ def fig13(kind: str, lift: str, size: int) -> dict:
                  "to_world": T().translate([0, 0, 9]) @ T().rotate([0, 1, 0], 180) @ T().scale(12)}
     if kind == "ball":
         d["reflector"] = {"type": "sphere", "center": [1.6, 0, 0], "radius": 1.2,
-                          "bsdf": {"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": 0.05}}
+                          "bsdf": {"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": 0.01}}
     else:
         d["reflector"] = {"type": "rectangle", "bsdf": {"type": "conductor", "material": "none"},
                           "to_world": T().translate([1.5, 0, 0]) @ T().rotate([0, 1, 0], 45) @ T().scale([1.2, 1.6, 1])}

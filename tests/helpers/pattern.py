@@ -33,6 +33,17 @@ def peak(ink: np.ndarray, region: np.ndarray, pad: int = 1024) -> tuple[float, f
     return 1.0 / f, angle, contrast
 
 
+def amplitude(ink_img, region, spacing):
+    """The pattern's amplitude: the largest |Fourier coefficient| per region pixel on the circle of
+    frequency 1/spacing (the peak), from a zero-padded spectrum."""
+    pad = 1024
+    a = np.where(region, ink_img - ink_img[region].mean(), 0.0)
+    F = np.abs(np.fft.fft2(a, s=(pad, pad)))
+    f = np.hypot(*np.meshgrid(np.fft.fftfreq(pad), np.fft.fftfreq(pad)))
+    ring = np.abs(f - 1.0 / spacing) < 2.0 / pad
+    return float(F[ring].max() / region.sum())
+
+
 def angle_diff(a: float, b: float) -> float:
     """Difference of two line directions (mod 180 degrees), in [0, 90]."""
     d = abs(a - b) % 180.0

@@ -7,7 +7,9 @@ Every stylized vertex x at path depth k gets an image coordinate s (pixels right
 the units of `styles.base.Projection.pixels`), which styles read from `Vertex.s`:
     k = 0                       s = the pinhole projection of x: the pixel x is seen in (method "pixel");
     every vertex before x delta s = s0, the first-edge coordinate: the projection of the camera ray's first
-                                hit (method "all-delta"): a perfect mirror or glass carries the pixel along;
+    (pinhole cameras)           hit (method "all-delta"): a perfect mirror or glass carries the pixel along;
+                                through a lens (depth of field) the MLS inverse below, so that what a mirror
+                                shows out of focus gets a lens-dependent coordinate and its tone blurs;
     otherwise                   s = phi_k^-1(x) by linear MLS over anchor vertices (mls.py), with its fallbacks.
 The anchor map phi_k sends an image coordinate s to the depth-k vertex of the *anchor path* from s: a ray
 from the lens centre through s that reflects perfectly about the **geometric** normal at every vertex,
@@ -62,6 +64,17 @@ class ToneState:
     s0: mi.Point2f      # first-edge coordinate: the pixel of the camera ray's first hit
 
 
+def has_aperture(sensor) -> bool:
+    """Whether rays through one film point leave from different points for different lens samples."""
+    import numpy as np
+    ray, _ = sensor.sample_ray(mi.Float(0.0, 0.0), mi.Float(0.5, 0.5), mi.Point2f([0.5, 0.5], [0.5, 0.5]),
+                               mi.Point2f([0.05, 0.95], [0.05, 0.95]))
+    o = np.array(ray.o, dtype=np.float64).reshape(3, -1)
+    if o.shape[1] < 2:   # the origin did not depend on the lens sample at all
+        return False
+    return bool(np.abs(o[:, 0] - o[:, 1]).max() > 1e-7 * (1.0 + np.abs(o).max()))
+
+
 def shape_id(si) -> mi.UInt32:
     """The shape's registry index (a stable integer per shape within one scene)."""
     return dr.reinterpret_array(mi.UInt32, si.shape)
@@ -81,6 +94,7 @@ class Tone:
         self.sensor = sensor
         size = sensor.film().crop_size()
         self.width, self.height = float(size[0]), float(size[1])
+        self.lens = has_aperture(sensor)
 
     def start(self, ray: mi.Ray3f, pi, active) -> ToneState:
         """The state of a camera ray reaching its first vertex `pi`: empty prefix, s0 = that vertex's pixel."""
@@ -95,7 +109,9 @@ class Tone:
             return direct, mi.UInt32(mls.CLOSED_PIXEL)
         depth = mi.UInt32(depth)
         first = depth == 0
-        closed = first | tone.delta
+        # the all-delta closed form holds for a pinhole (or orthographic) camera only: through a lens the anchor
+        # (from the lens centre) and the sample's ray (from elsewhere on the lens) part after the first vertex
+        closed = first | (tone.delta & (not self.lens))
         s = dr.select(first, direct, tone.s0)
         method = dr.select(first, mi.UInt32(mls.CLOSED_PIXEL), mi.UInt32(mls.CLOSED_DELTA))
         need = active & ~closed
