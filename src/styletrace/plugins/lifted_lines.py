@@ -132,3 +132,139 @@ def compose_sample(fired, colors, L):
     for f, c in reversed(list(zip(fired, colors))):
         out = np.where(f, c, out) if isinstance(f, np.ndarray) else dr.select(f, c, out)
     return out
+
+
+# ---- auxiliary paths and a line renderer over them ---------------------------------------------------------
+
+MEASUREMENTS = ("depth", "normal", "shape_id", "material_id")
+
+
+class Lifted:
+    """Feature lines by conditional lifting in one scene (first sensor), for a dictionary of `LineType`s.
+
+    Per camera sample at image coordinate s (pixels right and up of the centre, as styles.base.Projection) the
+    base path is traced from the lens centre through s, sampling each non-diffuse vertex's BSDF (that choice and
+    its half-vector are the conditioning xi). For each type, `count` pairs of stencil points (u, v) around s
+    give two auxiliary paths each, traced vertex by vertex with xi kept: at a glossy or specular base vertex
+    the auxiliary reflects about the base's half-vector transported to it (`transport_half_vector`), at a
+    diffuse one it turns the base's direction by `minimal_rotation` (only with `through_diffuse`; otherwise the
+    paths stop there, as West 2021's lines do). At every depth up to `depth` the pair fires when exactly one
+    of its paths hits, when the two hit different shapes and the type measures shape or material ids, or when
+    the slope |f(v) - f(u)| / |v - u| reaches the type's threshold. A type fires if any of its pairs fires;
+    the first type in priority order that fires gives the sample's colour (Eq. 34), `background` where none.
+    Refraction is not handled: the paths stop at a transmitting base vertex."""
+
+    def __init__(self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False):
+        from .anchors import Tone
+        self.scene = scene
+        self.tone = Tone(scene)          # film conversion and projection of the first sensor
+        self.types = sorted(types, key=lambda t: t.priority)
+        self.depth = depth
+        self.through_diffuse = through_diffuse
+
+    def _ray(self, s: mi.Point2f, active):
+        ray, _ = self.tone.sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), self.tone.film_uv(s.x, s.y),
+                                             mi.Point2f(0.5, 0.5), active)
+        return mi.Ray3f(ray)
+
+    @staticmethod
+    def _measure(kind: str, si, travelled):
+        if kind == "depth":
+            return travelled
+        if kind == "normal":
+            return mi.Vector3f(si.n)
+        if kind == "shape_id":
+            return mi.Float(dr.reinterpret_array(mi.UInt32, si.shape))
+        return mi.Float(dr.reinterpret_array(mi.UInt32, si.bsdf()))
+
+    def _offsets(self, t: LineType, sampler):
+        """A stencil point in the type's disk or square of radius t.radius pixels."""
+        u = sampler.next_2d()
+        if t.stencil == "square":
+            return mi.Point2f((2.0 * u.x - 1.0) * t.radius, (2.0 * u.y - 1.0) * t.radius)
+        d = mi.warp.square_to_uniform_disk_concentric(u)
+        return mi.Point2f(d.x * t.radius, d.y * t.radius)
+
+    def fired(self, s: mi.Point2f, sampler, active) -> list:
+        """Per type (priority order): whether any of its pairs fired, for camera samples at s."""
+        scene = self.scene
+        ctx = mi.BSDFContext()
+        # the base path: xi (each vertex's sampled direction, half-vector, and the vertex's frame)
+        base = []
+        ray, alive = self._ray(s, active), mi.Bool(active)
+        for j in range(self.depth):
+            si = scene.ray_intersect(ray, active=alive)
+            hit = alive & si.is_valid()
+            bsdf = si.bsdf(ray)
+            bs, _ = bsdf.sample(ctx, si, sampler.next_1d(), sampler.next_2d(), hit)
+            d = si.to_world(bs.wo)
+            diffuse = hit & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Glossy) & \
+                ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+            through = hit & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission)
+            n = mi.Vector3f(si.sh_frame.n)
+            h = dr.normalize(d - ray.d)
+            go = hit & (bs.pdf > 0) & ~through & (~diffuse if not self.through_diffuse else True)
+            base.append(dict(alive=alive, n=n, v=mi.Vector3f(ray.d), h=h, d=d, diffuse=diffuse, go=go))
+            ray = si.spawn_ray(d)
+            alive = go
+        out = []
+        for t in self.types:
+            any_fire = mi.Bool(False)
+            for _ in range(t.count):
+                du, dv = self._offsets(t, sampler), self._offsets(t, sampler)
+                paths = [self._ray(s + du, active), self._ray(s + dv, active)]
+                travelled = [mi.Float(0.0), mi.Float(0.0)]
+                live = mi.Bool(active)
+                for j in range(self.depth):
+                    b = base[j]
+                    live &= b["alive"]
+                    sis = [scene.ray_intersect(r, active=live) for r in paths]
+                    hits = [live & x.is_valid() for x in sis]
+                    fire = hits[0] ^ hits[1]
+                    both = hits[0] & hits[1]
+                    for k in range(2):
+                        travelled[k] = travelled[k] + dr.select(hits[k], sis[k].t, 0.0)
+                    if t.measurement in ("shape_id", "material_id"):
+                        fa, fb = self._measure(t.measurement, sis[0], None), self._measure(t.measurement, sis[1], None)
+                        fire |= both & (fa != fb)
+                    else:
+                        fa = self._measure(t.measurement, sis[0], travelled[0])
+                        fb = self._measure(t.measurement, sis[1], travelled[1])
+                        fire |= both & (slope(fa, fb, du, dv) >= t.threshold)
+                    any_fire |= fire
+                    # carry on past this vertex with xi kept (cut where the pair's objects part: their lines are
+                    # already drawn, or where the base path ends)
+                    same = both & (dr.reinterpret_array(mi.UInt32, sis[0].shape) ==
+                                   dr.reinterpret_array(mi.UInt32, sis[1].shape))
+                    live = same & b["go"] & ~fire
+                    if j + 1 < self.depth:
+                        new = []
+                        for k in range(2):
+                            n2, v2 = mi.Vector3f(sis[k].sh_frame.n), mi.Vector3f(paths[k].d)
+                            h2 = transport_half_vector(b["h"], b["n"], b["v"], n2, v2)
+                            d2 = dr.select(b["diffuse"], minimal_rotation(b["n"], n2, b["d"]), reflect(v2, h2))
+                            new.append(sis[k].spawn_ray(dr.normalize(d2)))
+                        paths = new
+            out.append(any_fire)
+        return out
+
+    def render(self, spp: int, seed: int = 0, background=(1.0, 1.0, 1.0), jitter: bool = True):
+        """(image [h, w, 3] of Eq. 34's estimator over `spp` samples per pixel, per type the fraction of samples
+        it fired [h, w]). jitter=False puts every sample at the pixel centre."""
+        import numpy as np
+        w, h = int(self.tone.width), int(self.tone.height)
+        n = w * h * spp
+        idx = np.arange(n) // spp
+        col, row = (idx % w).astype(np.float32), (idx // w).astype(np.float32)
+        sampler = mi.load_dict({"type": "independent"})
+        sampler.seed(seed, n)
+        jx, jy = np.array(sampler.next_2d()) if jitter else np.full((2, n), 0.5, np.float32)
+        s = mi.Point2f(w / 2 - col - jx, h / 2 - row - jy)   # the Projection convention: x grows to the left
+        fired = self.fired(s, sampler, mi.Bool(True))
+        L = np.array(background, np.float32)
+        colors = [np.array(t.color, np.float32) for t in self.types]
+        f = [np.array(x, bool) for x in fired]
+        self.samples = [x.reshape(h, w, spp) for x in f]          # per sample, for inspection and tests
+        img = compose_sample([x[:, None] for x in f], colors, L[None])
+        img = img.reshape(h, w, spp, 3).mean(axis=2)
+        return img, [x.reshape(h, w, spp).mean(axis=2) for x in f]
