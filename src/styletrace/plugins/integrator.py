@@ -55,6 +55,7 @@ from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
+from .anchors import Tone
 from .lines import Lines
 from ..errors import SceneError
 from .path import bounce, emission, environment, first_scattering, past_area_emitters, walk
@@ -88,6 +89,8 @@ class Target:
 class StylizedIntegrator(mi.SamplingIntegrator):
     lines = None         # feature lines bound to the scene being traced (lines.py), else None
     line_states = {}     # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
+    tone = None          # anchors.Tone where a style reads image coordinates (Vertex.s), else None
+    tone_states = {}     # anchors.ToneState at the vertex of each stylized level (-1: the camera), while tracing
     #: lanes where a line fired on the camera ray trace nothing more (False only to measure the saving:
     #: benchmarks/lines_cost.py)
     line_short_circuit = True
@@ -141,6 +144,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         s = self.settings
         if self.media:  # lines on the camera ray only (`line_problem`): the volume walk tests no edges
             kw.pop("lines", None)
+            kw.pop("tone", None)  # nor carries a tone state: styles there read the position's projection
             return volume_walk(scene, sampler, pi, ray, active, medium, flight, s.max_depth, s.rr_depth, depth,
                                emitters=self.emitters, nulls=self.nulls, **kw)
         return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
@@ -167,9 +171,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
         b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls,
-                   lines=self._lines_from(level))
+                   lines=self._lines_from(level), tone=self.tone_states.get(level))
         if self.lines is not None:
             self.line_states[level + 1] = b.lines
+        self.tone_states[level + 1] = b.tone
         deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
         return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
@@ -185,9 +190,11 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
         extra = dict(medium=medium, flight=flight, hide_first=hide) if self.media else {}
         w = self._walk(scene, sampler, pi, ray, active, depth, stop=stop, skip_emitter=self._skip_emitter,
-                       opaque_start=not halt_at_start, lines=self._lines_from(level - 1), **extra)
+                       opaque_start=not halt_at_start, lines=self._lines_from(level - 1),
+                       tone=self.tone_states.get(level - 1), **extra)
         if self.lines is not None:
             self.line_states[level] = w.lines
+        self.tone_states[level] = w.tone
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth, w.medium)
         return self._through(w, value)
@@ -201,6 +208,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         """g(E[L_o]) at the level-`level` vertex si, each object with its own style."""
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
+        if self.tone is not None:  # LLaT's image coordinate (anchors.py), traced only where a style reads it
+            v.s, v.method = self.tone.coordinate(scene, si, ray, depth, self.tone_states.get(level), active)
         styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
         total = mi.Spectrum(0.0)
         for target in self.targets:
@@ -268,6 +277,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             raise SceneError(problem)
         self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene,
                                                                     see_through=self.see_through)
+        wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in self.targets)
+        self.tone = Tone(scene) if wants and scene.sensors() else None
         # emitter selection in an order of the scene's own (its emitter list changes order between runs)
         self.emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         try:
@@ -283,6 +294,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             self.emitters = None
             self._lane_moments = None
             self.lines, self.line_states = None, {}
+            self.tone, self.tone_states = None, {}
 
     def _sample(self, scene, sampler, ray, active, medium=None):
         self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
@@ -328,6 +340,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         hide = self.settings.hide_emitters
         if hide:
             ray, pi = past_area_emitters(scene, ray, pi, active)
+        if self.tone is not None:
+            start = self.tone.start(ray, pi, active)
+            self.tone_states = {-1: start, 0: start}
         # alpha, as Mitsuba's `path`: the camera ray found a surface, or a visible environment
         valid = active & (pi.is_valid() | (scene.environment() is not None and not hide))
         if self.settings.stylize == "first_object_hit":

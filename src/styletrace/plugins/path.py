@@ -43,6 +43,7 @@ from typing import Any, Callable, Optional
 import drjit as dr
 import mitsuba as mi
 
+from .anchors import MAX_BITS, ToneState, combine, shape_id
 from .emitter_sampler import EmitterSampler
 
 
@@ -178,6 +179,7 @@ class PathState:
     halted: mi.Bool                          # halted at a stylized vertex
     first: Optional[mi.Bool]                 # at the starting vertex (only where `opaque_start` needs it)
     lines: Optional[Any] = None              # lines.LineState where feature lines are on (lines.py)
+    tone: Optional[Any] = None               # anchors.ToneState where a style reads image coordinates
 
 
 @dataclass
@@ -190,6 +192,7 @@ class Walk:
     halted: mi.Bool
     lines: Optional[Any] = None     # lines.LineState at the halting vertex (where lines are on)
     medium: Any = None              # MediumPtr: the medium each lane stands in (volume.py's walk only)
+    tone: Optional[Any] = None      # anchors.ToneState at the halting vertex (where tone is on)
 
 
 def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
@@ -203,7 +206,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
          active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
          stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
          emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
-         came_from: Optional[tuple] = None, lines=None) -> Walk:
+         came_from: Optional[tuple] = None, lines=None, tone=None) -> Walk:
     """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
     `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
     vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
@@ -211,7 +214,8 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     a vertex the caller sampled `ray` from: emission at the starting vertex is then MIS-weighted against
     that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse.py`).
     `lines`: (lines.Lines, lines.LineState at the starting vertex) to detect feature lines on the walk's
-    edges, or None (no line code is traced)."""
+    edges, or None (no line code is traced). `tone`: the anchors.ToneState at the starting vertex, advanced
+    at every scattering (anchors.py), or None."""
     ctx = mi.BSDFContext()
     emitters = emitters if emitters is not None else EmitterSampler(scene)
     limit = depth_limit(max_depth)
@@ -225,7 +229,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
                       eta=mi.Float(1.0), si_prev=si_prev, pdf_prev=pdf_prev,
                       delta_prev=delta_prev, halted=mi.Bool(False),
                       first=mi.Bool(True) if nulls and opaque_start else None,
-                      lines=None if lines is None else lines[1])
+                      lines=None if lines is None else lines[1], tone=tone)
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
@@ -275,6 +279,8 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
             s.delta_prev |= passes
         if nulls and opaque_start:
             s.first = mi.Bool(False)
+        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+            s.tone = advance(s.tone, si, bs, s.depth, active_next & ~passes)
 
         # Russian roulette on the throughput, as in Mitsuba's path tracer (which counts the depth of
         # the vertex about to be reached, hence the increment first).
@@ -308,7 +314,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     # samples come from measure-zero events (degenerate geometry, 0 * inf), so dropping them costs a
     # bias no larger than their probability times their true value; the causes known are fixed at
     # their source (`mis_power`), this keeps an unknown one from destroying a render.
-    return finished(out, lines=out.lines)
+    return finished(out, lines=out.lines, tone=out.tone)
 
 
 def finished(out, **extra) -> Walk:
@@ -361,11 +367,12 @@ class Bounce:
     go: mi.Bool                          # lanes that took the bounce
     hit: mi.Bool                         # ... and reached a surface (the others see the environment)
     lines: Optional[Any] = None          # lines.LineState at the next vertex (where lines are on)
+    tone: Optional[Any] = None           # anchors.ToneState at the next vertex (where tone is on)
 
 
 def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
            max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False,
-           lines=None) -> Bounce:
+           lines=None, tone=None) -> Bounce:
     """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
 
     The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
@@ -408,7 +415,21 @@ def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f,
     si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
-    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state)
+    tone = None if tone is None else advance(tone, si, bs, depth, go)
+    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state,
+                  tone=tone)
+
+
+def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):
+    """The anchors.ToneState past the vertex `si` at `depth`, scattered by `bs` on the `active` lanes: its shape
+    joins the prefix key, a transmission sets the depth's bit, a non-delta event ends the all-delta prefix."""
+    depth = mi.UInt32(depth)
+    through = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission) & (depth < MAX_BITS)
+    bit = mi.UInt32(1) << dr.minimum(depth, MAX_BITS - 1)
+    return ToneState(key=dr.select(active, combine(tone.key, shape_id(si)), tone.key),
+                     bits=dr.select(active & through, tone.bits | bit, tone.bits),
+                     delta=dr.select(active, tone.delta & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), tone.delta),
+                     s0=tone.s0)
 
 
 def past_area_emitters(scene, ray, pi, active):

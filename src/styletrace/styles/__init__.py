@@ -8,7 +8,7 @@ from ..jit import backend as _backend
 
 _backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
 
-from . import (acp, cel, color_map, contrast, exp_tone, gamma, gooch, halftone, hatching,  # noqa: F401
+from . import (acp, cel, color_map, contrast, coordinate, exp_tone, gamma, gooch, halftone, hatching,  # noqa: F401
                identity, reinhard, saturation, sepia, tie_dye, xtoon)  # (registration side effects)
 from .base import Style, Vertex, brightness
 from ..errors import StyleError

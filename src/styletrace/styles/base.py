@@ -37,7 +37,9 @@ class Vertex:
 
     p: world position; n: shading normal (world); wo: unit direction towards the viewer or previous
     vertex; view: the camera's forward direction (the same for all lanes); depth: 0 for the first
-    hit seen from the camera.
+    hit seen from the camera. s: the vertex's image coordinate (mi.Point2f, pixels right and up of the image
+    centre) where the integrator computes one (LLaT's canonical lifting, plugins/anchors.py: only while a
+    style of the render has `wants_coordinate`), else None; method: how s was found (plugins/mls.py codes).
     """
 
     p: mi.Point3f
@@ -45,6 +47,8 @@ class Vertex:
     wo: mi.Vector3f
     view: mi.Vector3f
     depth: mi.UInt32
+    s: Any = None
+    method: Any = None
 
 
 class Style:

@@ -12,6 +12,10 @@ Parameters
 - u_min (float, default auto), u_max (float, default auto, > u_min): brightness of the largest / no dot;
   auto: the 5% and 95% quantiles of the scene's first-hit brightness (as in `hatching`)
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
+- lift (choice, default canonical): where the screen grid is evaluated (spacing_px only): canonical, at the
+  vertex's image coordinate s (LLaT's mirror-anchor map, plugins/anchors.py), so reflections and what lies
+  behind glass show the screen's grid; position, at the projection of the vertex's own position (before
+  LLaT; a point behind the camera seen in a mirror has no meaningful projection there)
 
 With u = (r+g+b)/3 of the inner estimate <I> and the vertex position p:
     g_p = round(p / d) d                                       (nearest grid point, per component)
@@ -25,7 +29,9 @@ be a grid. So by default the dots lie on a square grid of the screen, as in prin
 screen position in pixels (`Projection.pixels`: its camera-space offset over the scene units per pixel
 at its depth, measured on the sensor), g_q = round(q / spacing_px) spacing_px, and the vertex is in a
 dot when |q - g_q| < r(u) with r_max = max_radius_fraction sqrt(2) spacing_px / 2. Dots keep their
-screen size at every depth; they belong to the screen, not to the objects.
+screen size at every depth; they belong to the screen, not to the objects. With lift=canonical q is the
+vertex's image coordinate `Vertex.s` (equal to the projection at depth 0), after "Lifting Lines and Tone:
+Image-space Stylization in Path-space", Rex West, Sayan Mukherjee, Yonghao Yue (2026).
 """
 from __future__ import annotations
 
@@ -58,18 +64,20 @@ def grid_distance(p: mi.Point3f, spacing: float) -> mi.Float:
     return dr.norm(mi.Vector3f(p) - g)
 
 
-def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float) -> mi.Float:
-    """Distance in pixels from p's screen position to its nearest screen grid point."""
-    x, y = proj.pixels(p)
+def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float, s: mi.Point2f | None = None) -> mi.Float:
+    """Distance in pixels from p's screen position (the image coordinate `s` where given) to its nearest
+    screen grid point."""
+    x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
     return dr.sqrt(dr.square(x - gx) + dr.square(y - gy))
 
 
 def screen_halftone_mask(p: mi.Point3f, u: mi.Float, proj: Projection, spacing_px: float, r_max_px: float,
-                         u_min: float = 0.05, u_max: float = 0.9) -> mi.Bool:
-    """True where p's screen position is closer than r(u) pixels to its nearest screen grid point."""
-    x, y = proj.pixels(p)
+                         u_min: float = 0.05, u_max: float = 0.9, s: mi.Point2f | None = None) -> mi.Bool:
+    """True where p's screen position (the image coordinate `s` where given) is closer than r(u) pixels to its
+    nearest screen grid point."""
+    x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
     r = dot_radius(u, r_max_px, u_min, u_max)
@@ -91,6 +99,9 @@ class Halftone(BrightnessRange, Style):
         Param("u_max", "float", None, "brightness at and above which dots vanish", auto=AUTO_U_MAX),
         Param("dark", "color", (0.1, 0.1, 0.15), "colour inside the dots", low=0.0),
         Param("light", "color", (0.97, 0.95, 0.9), "colour outside the dots", low=0.0),
+        Param("lift", "choice", "canonical", "where the screen grid is evaluated: the vertex's image coordinate "
+              "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
+              choices=("canonical", "position")),
     )
     default_inner = 16
 
@@ -111,10 +122,19 @@ class Halftone(BrightnessRange, Style):
     def prepare(self, scene: mi.Scene) -> None:
         self.projection = projection(scene)
 
+    @property
+    def wants_coordinate(self) -> bool:
+        """The integrator computes Vertex.s for this style (canonical lifting of the screen grid)."""
+        return self.spacing is None and self.lift == "canonical"
+
+    def _coordinate(self, v: Vertex):
+        return v.s if self.wants_coordinate else None
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         u_min, u_max = self.u_range()
         if self.spacing is None:
-            dot = screen_halftone_mask(v.p, brightness(I), self.projection, self.spacing_px, self.r_max, u_min, u_max)
+            dot = screen_halftone_mask(v.p, brightness(I), self.projection, self.spacing_px, self.r_max, u_min, u_max,
+                                       s=self._coordinate(v))
         else:
             dot = halftone_mask(v.p, brightness(I), self.spacing, self.r_max, u_min, u_max)
         return dr.select(dot, mi.Color3f(*self.dark), mi.Color3f(*self.light))
@@ -123,7 +143,7 @@ class Halftone(BrightnessRange, Style):
         """The brightness at which the dot's edge passes v: r(u) = d, u = u_max - (d / r_max)(u_max - u_min);
         none (+inf) where v is farther than r_max from its grid point (never inside a dot)."""
         u_min, u_max = self.u_range()
-        d = screen_distance(v.p, self.projection, self.spacing_px) if self.spacing is None \
+        d = screen_distance(v.p, self.projection, self.spacing_px, self._coordinate(v)) if self.spacing is None \
             else grid_distance(v.p, self.spacing)
         t = u_max - d * ((u_max - u_min) / self.r_max)
         return (dr.select(d < self.r_max, t, mi.Float(dr.inf)),)

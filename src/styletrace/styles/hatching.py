@@ -16,6 +16,13 @@ Parameters
   of Mitsuba's `path` integrator), so every scene shows the whole range from fully to not hatched;
   unresolved (mi.render called directly): 0.05 and 0.9
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
+- lift (choice, default canonical): where the screen lines are evaluated (spacing_px only).
+  canonical: at the vertex's image coordinate s (LLaT's mirror-anchor map, plugins/anchors.py): the pixel
+  for a direct view and behind perfect mirrors or glass, the MLS inverse of the anchor map otherwise;
+  position: at the pinhole projection of the vertex's own position (the pattern is anchored to the world
+  point and is scaled and mirrored in reflections; the behaviour before LLaT)
+- angle_reflected (float, default auto = angle): the first set's angle at vertices of path depth > 0
+  (seen in a mirror or through glass), e.g. angle + 90 to flip the hatching in reflections (LLaT Fig. 14)
 
 Set j (j = 0..n-1) is the family of parallel planes {x : x . n_j = k spacing, k integer} whose unit normal
     n_j = cos(theta_j) e1 + sin(theta_j) e2,   theta_j = angle + j pi / n,
@@ -40,6 +47,15 @@ grows with depth exactly as perspective shrinks it, so the lines land evenly, sp
 screen, and a vertex's distance to its nearest plane is measured in pixels at its own depth. The lines
 belong to the screen, not to the objects (moving the camera slides them over the surfaces; `spacing`
 fixes them in the world instead), the usual look of screen-space hatching.
+
+Canonical lifting (lift=canonical, the default with spacing_px). With s = (s_x, s_y) the vertex's image
+coordinate (pixels right and up of the centre, `Vertex.s`), set j's distance is
+    dist_j = |frac((cos(theta_j) s_x + sin(theta_j) s_y) / spacing_px + 1/2) - 1/2| spacing_px,
+which at depth 0 equals the pencil-of-planes distance above (s is then the projection of p, and
+(e1, e2) are the screen's right and up axes). Behind a mirror s is where the point is *seen*, so the
+reflection shows the screen's spacing and angle instead of the world point's projection.
+(Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
+Yonghao Yue, 2026.)
 """
 from __future__ import annotations
 
@@ -126,6 +142,22 @@ def line_masks(p: mi.Point3f, normals: Sequence[Sequence[float]], spacing: float
     return out
 
 
+def coordinate_line_masks(s: mi.Point2f, depth: mi.UInt32, sets: int, angle: float, angle_reflected: float,
+                          spacing: float, thickness: float) -> list[mi.Bool]:
+    """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its lines, the
+    set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc, canonical lifting)."""
+    out = []
+    for j in range(sets):
+        t0 = math.radians(angle) + j * math.pi / sets
+        t1 = math.radians(angle_reflected) + j * math.pi / sets
+        deep = depth > 0
+        c = dr.select(deep, math.cos(t1), math.cos(t0))
+        sn = dr.select(deep, math.sin(t1), math.sin(t0))
+        x = (s.x * c + s.y * sn) * (1.0 / spacing) + 0.5
+        out.append(dr.abs(x - dr.floor(x) - 0.5) * spacing < 0.5 * thickness)
+    return out
+
+
 def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
     """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) > j)."""
     return [u_max - (j + 0.5) * (u_max - u_min) / sets for j in range(sets)]
@@ -182,6 +214,11 @@ class Hatching(BrightnessRange, Style):
         Param("u_max", "float", None, "brightness at and above which no set is drawn", auto=AUTO_U_MAX),
         Param("line_color", "color", (0.05, 0.05, 0.08), "colour of the lines", low=0.0),
         Param("background", "color", (0.97, 0.95, 0.9), "colour between the lines", low=0.0),
+        Param("lift", "choice", "canonical", "where screen lines are evaluated: the vertex's image coordinate "
+              "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
+              choices=("canonical", "position")),
+        Param("angle_reflected", "float", None, "the first set's angle at path depth > 0 (degrees)",
+              auto="the same as angle"),
     )
     default_inner = 16
 
@@ -208,24 +245,49 @@ class Hatching(BrightnessRange, Style):
 
     def set_camera(self, view: Sequence[float], up: Sequence[float]) -> None:
         self.view = tuple(float(x) for x in view)
+        self.up = tuple(float(x) for x in up)
         self.normals = plane_normals(self.view, up, self.sets, self.angle)
 
     def prepare(self, scene: mi.Scene) -> None:
         self.set_camera(camera_forward(scene), camera_up(scene))
         self.projection = projection(scene)
 
+    @property
+    def wants_coordinate(self) -> bool:
+        """The integrator computes Vertex.s for this style (canonical lifting of screen lines)."""
+        return self.spacing is None and self.lift == "canonical"
+
+    def _masks(self, v: Vertex) -> list:
+        """Per set j: v on one of its lines (drawn or not), by the mode in use."""
+        if v.s is not None and self.wants_coordinate:
+            return coordinate_line_masks(v.s, v.depth, self.sets, self.angle, self.reflected_angle, self.pitch,
+                                         self.line_thickness)
+        # position mode; a depth-dependent angle picks the other plane normals at depth > 0
+        masks = line_masks(v.p, self.normals, self.pitch, self.line_thickness,
+                           projection=self.projection if self.spacing is None else None)
+        if self.reflected_angle != self.angle:
+            other = line_masks(v.p, plane_normals(self.view, self.up, self.sets, self.reflected_angle), self.pitch,
+                               self.line_thickness, projection=self.projection if self.spacing is None else None)
+            masks = [dr.select(v.depth > 0, b, a) for a, b in zip(masks, other)]
+        return masks
+
+    @property
+    def reflected_angle(self) -> float:
+        return self.angle if self.angle_reflected is None else self.angle_reflected
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         u_min, u_max = self.u_range()
-        line = hatch_mask(v.p, brightness(I), self.normals, self.pitch, self.line_thickness, u_min, u_max,
-                          projection=self.projection if self.spacing is None else None)
+        m = active_sets(brightness(I), self.sets, u_min, u_max)
+        line = mi.Bool(False)
+        for j, on in enumerate(self._masks(v)):
+            line |= on & (m > j)
         return dr.select(line, mi.Color3f(*self.line_color), mi.Color3f(*self.background))
 
     def step_thresholds(self, v: Vertex) -> tuple:
         """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover v; v turns
         line-coloured there and stays so below it. +inf where v is on no line (g is constant there)."""
         u_min, u_max = self.u_range()
-        masks = line_masks(v.p, self.normals, self.pitch, self.line_thickness,
-                           projection=self.projection if self.spacing is None else None)
+        masks = self._masks(v)
         out = mi.Float(dr.inf)
         for on, t in reversed(list(zip(masks, set_thresholds(len(self.normals), u_min, u_max)))):
             out = dr.select(on, t, out)

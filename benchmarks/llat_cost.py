@@ -1,0 +1,121 @@
+"""Cost of LLaT's canonical lifting of tone (plugins/anchors.py, plugins/mls.py, docs/llat.md): hatching with
+lift=canonical against plain hatching (lift=position, the pattern at the vertex's own projection).
+
+Scene: a hatched plane seen directly and in a reflector turned 45 degrees (the tests' flat-mirror scene,
+tests/tone/scenes.py, rebuilt here), the reflector a perfect mirror (every styled vertex has a closed-form
+coordinate: no anchor is traced) or a GGX conductor of roughness 0.05 (every reflected vertex is an MLS query:
+17 anchor paths traced to its depth). first_object_hit, 128x128, 4 camera samples per pixel, hatching at
+n = 16 and n = 4 inner samples. Each configuration renders once to compile, then the median of RUNS warm
+renders is taken, the configurations timed in turn in each round (one process) so that a change of the
+machine's load falls on all of them alike. The anchor share is the fraction of camera samples that made an
+MLS query (from the `coordinate` style's method channel).
+
+    python benchmarks/llat_cost.py
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(__file__))
+from _report import machine_description, write_section  # noqa: E402
+
+SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
+RES, SPP, RUNS = 128, 32, 3
+CONFIGS = [(refl, inner, lift) for refl in ("mirror", "glossy 0.05") for inner in (16, 4)
+           for lift in ("position", "canonical")]
+
+CHILD = """
+import json, statistics, sys, time
+sys.path.insert(0, {src!r})
+import styletrace
+styletrace.init()
+import mitsuba as mi, numpy as np
+from styletrace.api import make_integrator, render
+T = mi.ScalarTransform4f
+GREY = {{"type": "diffuse", "reflectance": {{"type": "rgb", "value": [0.5, 0.5, 0.5]}}}}
+
+def scene(style, refl):
+    bsdf = {{"type": "styled", **style, "bsdf": GREY}}
+    r = {{"type": "conductor", "material": "none"}} if refl == "mirror" else \\
+        {{"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": 0.05}}
+    return mi.load_dict({{"type": "scene",
+        "sensor": {{"type": "perspective", "fov": 40, "to_world": T().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
+                   "sampler": {{"type": "independent"}}, "film": {{"type": "hdrfilm", "width": {res}, "height": {res}, "rfilter": {{"type": "box"}}}}}},
+        "direct": {{"type": "rectangle", "bsdf": bsdf, "to_world": T().translate([-1.6, 0, 0]) @ T().scale([1.3, 1.6, 1])}},
+        "far": {{"type": "rectangle", "bsdf": bsdf, "to_world": T().translate([4.5, 0, 0]) @ T().rotate([0, 1, 0], -90) @ T().scale([6, 6, 1])}},
+        "reflector": {{"type": "rectangle", "bsdf": r, "to_world": T().translate([1.5, 0, 0]) @ T().rotate([0, 1, 0], 45) @ T().scale([1.2, 1.6, 1])}},
+        "lamp": {{"type": "point", "position": [0, 3, 5], "intensity": {{"type": "rgb", "value": [20, 20, 20]}}}}}})
+
+configs = {configs!r}
+jobs = []
+for refl, inner, lift in configs:
+    st = dict(style="hatching", lift=lift, inner_samples=inner, u_min=0.02, u_max=0.3)
+    sc = scene(st, refl)
+    integ = make_integrator("identity", stylize="first_object_hit")
+    render(sc, integrator=integ, spp={spp}, seed=1)   # compile
+    jobs.append((sc, integ))
+times, cpu = [[] for _ in configs], [[] for _ in configs]
+for r in range({runs}):
+    for i, (sc, integ) in enumerate(jobs):
+        t, c = time.perf_counter(), time.process_time()
+        render(sc, integrator=integ, spp={spp}, seed=1)
+        times[i].append(time.perf_counter() - t)
+        cpu[i].append(time.process_time() - c)
+share = {{}}
+for refl in ("mirror", "glossy 0.05"):
+    img = render(scene(dict(style="coordinate"), refl), integrator=make_integrator("identity", stylize="first_object_hit"),
+                 spp=1, seed=1)
+    m = np.round(np.asarray(img)[..., 2])
+    share[refl] = float((m >= 2).mean())
+out = [dict(refl=refl, inner=inner, lift=lift, seconds=statistics.median(ts), cpu=statistics.median(cs),
+            anchors=share[refl]) for (refl, inner, lift), ts, cs in zip(configs, times, cpu)]
+print(json.dumps(out))
+"""
+
+
+def measure() -> list:
+    code = CHILD.format(src=SRC, configs=CONFIGS, res=RES, spp=SPP, runs=RUNS)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def main():
+    rows = measure()
+    by = {(r["refl"], r["inner"], r["lift"]): r for r in rows}
+    load = os.getloadavg()[0]
+    text = [
+        "## LLaT tone: cost of the canonical lifting (`benchmarks/llat_cost.py`)", "",
+        f"Machine: {machine_description()}. Shared with other jobs (load average {load:.1f} on {os.cpu_count()} "
+        f"cores at the end): ratios use CPU time, medians of renders timed in turn, round after round.", "",
+        f"Hatching on a plane seen directly and in a reflector (first_object_hit), {RES}x{RES}, {SPP} camera "
+        f"samples per pixel, median of {RUNS} warm renders. `position`: plain hatching at the vertex's own "
+        f"projection; `canonical`: LLaT's image coordinate (closed form behind the perfect mirror, 17 streamed "
+        f"anchor paths and the MLS inverse behind the glossy one). MLS share: the fraction of camera samples "
+        f"that queried the anchors.", "",
+        "| reflector | inner n | lift | wall time (s) | CPU time (s) | CPU vs. position | MLS share |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        base = by[(r["refl"], r["inner"], "position")]["cpu"]
+        text.append(f"| {r['refl']} | {r['inner']} | {r['lift']} | {r['seconds']:.2f} | {r['cpu']:.2f} | "
+                    f"{r['cpu'] / base:.2f} | {r['anchors']:.2f} |")
+    ratio = {k: by[k]["cpu"] / by[(k[0], k[1], "position")]["cpu"] for k in by if k[2] == "canonical"}
+    text += ["", f"Behind the perfect mirror no anchor is traced (MLS share 0), yet canonical costs "
+             f"{ratio[('mirror', 16, 'canonical')]:.2f}x (n = 16) and {ratio[('mirror', 4, 'canonical')]:.2f}x (n = 4): "
+             f"the anchor loop is traced into the kernel and the tone state rides along every walk whether or not "
+             f"a lane uses them. Behind the glossy reflector, where {100 * by[('glossy 0.05', 16, 'canonical')]['anchors']:.0f}% "
+             f"of the camera samples query 17 anchor paths each, canonical costs "
+             f"{ratio[('glossy 0.05', 16, 'canonical')]:.2f}x (n = 16) and {ratio[('glossy 0.05', 4, 'canonical')]:.2f}x "
+             f"(n = 4): the anchors weigh like a few child paths, so their share falls as n grows. On this shared "
+             f"2-core machine differences of about 0.2x between runs are noise. A per-image pre-pass would trace "
+             f"one anchor per pixel instead of 17 per query, but must trace both branches at every dielectric and "
+             f"search neighbours per query (docs/llat.md, 'Anchor cache')."]
+    write_section("llat_cost", "\n".join(text))
+    print("\n".join(text))
+
+
+if __name__ == "__main__":
+    main()

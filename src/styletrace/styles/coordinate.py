@@ -1,0 +1,40 @@
+"""coordinate: the vertex's image coordinate and how it was found, as a colour (LLaT's lifting made visible).
+
+Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee and
+Yonghao Yue (ACM TOG 45(4), 2026), Section 5 (canonical lifting) and S2.5 (its fallback chain).
+
+No parameters. Closed form (no children): g = (s_x, s_y, method), with s the image coordinate the integrator
+computed for the vertex (`Vertex.s`, pixels right and up of the image centre; plugins/anchors.py) and method
+its code (plugins/mls.py): 0 the pixel (direct view), 1 the first-edge pixel of an all-delta prefix, 2 MLS,
+3 affine, 4 nearest anchor, 5 first-edge fallback. Rendered on a styled object with one camera sample per
+pixel it is the coordinate and method AOV of the lifting; averaged over samples it is their pixel mean.
+Without a coordinate (a renderer that computes none) s is the projection of the vertex's position, method 0.
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from .base import Projection, Style, Vertex, projection
+from .registry import register
+
+
+@register
+class Coordinate(Style):
+    name = "coordinate"
+    summary = "debug: the vertex's image coordinate (pixels) and how it was found (LLaT) as r, g, b"
+    default_inner = 0
+    wants_coordinate = True
+
+    def __init__(self, **values):
+        super().__init__(**values)
+        self.projection = Projection()
+
+    def prepare(self, scene: mi.Scene) -> None:
+        self.projection = projection(scene)
+
+    def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
+        if v.s is None:
+            x, y = self.projection.pixels(v.p)
+            return mi.Color3f(x, y, dr.zeros(mi.Float, dr.width(x)))
+        return mi.Color3f(v.s.x, v.s.y, mi.Float(v.method))
