@@ -147,6 +147,9 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d["mean"] = vec("mean", mi.Color3f)
     else:
         d.update(device_arrays(a))
+    if "denoised_mean" in a:  # a denoised render (docs/denoise.md): each sample styles its pixel's denoised E[L]
+        per_pixel = [mi.Float(np.ascontiguousarray(a["denoised_mean"][i])) for i in range(3)]
+        d["mean"] = mi.Color3f(*(dr.gather(mi.Float, c, mi.UInt32(a["pixel"])) for c in per_pixel))
     d["slot"] = mi.Int32(a["slot"].astype(np.int32))
     d["pixel"] = mi.UInt32(a["pixel"])
     if "beta" in a:
