@@ -3,7 +3,7 @@ reuse, and fixed counts, on three scenes and three styles.
 
 Protocol: `benchmarks/equal_time.py`'s, on more scenes:
 - Every render is 1 camera sample per pixel at SIZE x SIZE (128) with seed s, and so is its reference: the same
-  seed places the same camera rays, so the error measured is the stylized estimate's. Seeds 0 .. SEEDS-1 (2).
+  seed places the same camera rays, so the error measured is the stylized estimate's. Seeds 0 .. SEEDS-1 (3).
 - The reference of seed s is direct application with REF (4096) children per camera sample. It is recorded once
   per (scene, seed) as an expectation buffer and restyled to each style (a restyle equals a fresh render of the
   same seed and n, tests/lookdev/test_restyle.py). Its own error is part of every MSE (it caps the ratios); the
@@ -21,7 +21,7 @@ Protocol: `benchmarks/equal_time.py`'s, on more scenes:
   held out: their rows for the chosen n are the verdict, the other n's rows are shown for what they are.
 - Reuse: the README's best configuration per style (BENCHMARKS.md, equal_time), re-measured on every scene.
 
-    python benchmarks/denoise.py [--size 128] [--seeds 2] [--scenes cornell-box dragon floor-mirror] [--report]
+    python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror] [--report]
 
 Results are cached in benchmarks/.cache/denoise_*.npz/json per scene (delete to recompute); `--report` only
 writes the BENCHMARKS.md section and docs/denoise.png from the cache.
@@ -238,6 +238,15 @@ def report(size):
                 (f"{near}, {res[f'{style}|{near}']['secs']:.2f} s", imgs[f"{style}|{near}"]),
                 (f"{pick_i}, {res[f'{style}|{pick_i}']['secs']:.2f} s", imgs[f"{style}|{pick_i}"]),
                 (f"{pick_e}, {t:.2f} s", imgs[f"{style}|{pick_e}"])]))
+    timing_lines = []
+    tpath = os.path.join(CACHE, "denoise_timing_512.json")
+    if os.path.exists(tpath):
+        with open(tpath) as f:
+            tm = json.load(f)
+        timing_lines = ["### Cost at 512x512", "",
+                        "Cornell box, 512x512, 1 camera sample per pixel, n = 8, cel; median of 3 runs, same shared "
+                        "2-core machine (`python benchmarks/denoise.py --timing`).", "",
+                        "| step | s |", "|---|---:|"] + [f"| {k} | {v:.2f} |" for k, v in tm.items() if k != "size"]
     body = "\n".join([
         "## Denoising at a budget: the expectation before g, the image after it (`benchmarks/denoise.py`)",
         "",
@@ -258,6 +267,8 @@ def report(size):
         *verdicts,
         "",
         *sections,
+        "",
+        *timing_lines,
         "",
         machine_description(),
     ])
@@ -286,15 +297,58 @@ def figure(panels, path):
     plt.close(fig)
 
 
+def timing(size: int = 512, runs: int = 3) -> dict:
+    """Seconds of the denoising steps at size x size on the Cornell box (1 spp, n = 8), median of `runs`:
+    OIDN alone at each quality, the guides' render, the interpolation at the samples, and the whole
+    `attach` (guides + OIDN high + interpolation), against the render of the noisy buffer itself."""
+    from styletrace.denoise import expectation as X
+    from styletrace.denoise import guides, oidn
+    scene = load("cornell-box", size)
+    integ = api.make_integrator(style="cel", inner=8)
+
+    def med(fn):
+        fn()
+        out = []
+        for _ in range(runs):
+            t = time.perf_counter()
+            fn()
+            out.append(time.perf_counter() - t)
+        return statistics.median(out)
+
+    buf = None
+
+    def record():
+        nonlocal buf
+        buf = render_buffer(scene, spp=1, seed=0, integrator=integ)
+    out = {"size": size, "record (render, n=8, 1 spp)": med(record)}
+    m = X.expectation(buf)
+    al, nn, pos = guides.first_hit(scene, 1, api.pass_seed(0, 0), position=True)
+    out["guides (aov render)"] = med(lambda: guides.first_hit(scene, 1, api.pass_seed(0, 0), position=True))
+    for q in ("high", "balanced", "fast"):
+        out[f"OIDN {q}"] = med(lambda: oidn.run(m, al, nn, q))
+    d = oidn.run(m, al, nn)
+    out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, al, nn, pos))
+    out["attach (guides + OIDN high + interpolation)"] = med(lambda: X.attach(buf, scene, 1, 0))
+    out["restyle of the denoised buffer"] = med(lambda: styletrace.restyle(buf, style="hatching"))
+    with open(os.path.join(CACHE, f"denoise_timing_{size}.json"), "w") as f:
+        json.dump(out, f, indent=1)
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("--seeds", type=int, default=2)
+    ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--scenes", nargs="*", default=list(SCENES))
     ap.add_argument("--report", action="store_true", help="only write the section and figure from the cache")
     ap.add_argument("--ref", type=int, default=REF, help="the reference's children per camera sample")
+    ap.add_argument("--timing", action="store_true", help="only time the denoising steps at 512x512")
     args = ap.parse_args()
     globals()["REF"] = args.ref
+    if args.timing:
+        os.makedirs(CACHE, exist_ok=True)
+        print(json.dumps(timing(), indent=1))
+        return
     if not args.report:
         for name in args.scenes:
             print(f"{name}:", flush=True)

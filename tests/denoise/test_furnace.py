@@ -36,7 +36,7 @@ def test_denoised_furnace_is_the_constant():
     mask = interior(buf)
     assert mask.sum() > 500
     noisy = X.expectation(buf)[mask].astype(np.float64)
-    d = buf.arrays[X.DENOISED].T.reshape(RES, RES, 3)[mask].astype(np.float64)
+    d = X.attach(buf, scene, 1, 3)[mask].astype(np.float64)  # D per pixel
     sigma = noisy.std(0, ddof=1)
     assert np.all(sigma > 0.05 * exact), "the furnace's children carry no noise: nothing is tested"
     se = sigma / np.sqrt(mask.sum())

@@ -188,9 +188,8 @@ def load_buffer(path: str) -> Buffer:
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
     for k, a in denoised.items():
-        if a.shape != (3, int(header["width"]) * int(header["height"])):
-            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected one "
-                             f"RGB value per pixel")
+        if a.shape != (3, n):
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {(3, n)}")
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 
