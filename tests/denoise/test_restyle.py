@@ -50,3 +50,26 @@ def test_aovs_say_denoised(tmp_path):
         styletrace.api.write_image(img, str(out), "rgb", aovs)
         names = [mi.Bitmap(str(out)).struct_()[i].name for i in range(mi.Bitmap(str(out)).channel_count())]
         assert "noisy_variance.R" in names and "denoise_change.G" in names and "variance.R" not in names
+
+
+def test_command_line_buffer_restyles_denoised(tmp_path):
+    """`render --denoise expectation --buffer` then `restyle` = `render --denoise expectation` of the new style."""
+    import subprocess
+    import sys
+
+    import mitsuba as mi
+
+    from conftest import child_env
+    small = ["--width", "24", "--height", "24", "--spp", "2", "--inner", "2", "--seed", "4", "-q"]
+
+    def cli(*args):
+        res = subprocess.run([sys.executable, "-m", "styletrace", *args], capture_output=True, text=True,
+                             env=child_env(), timeout=300)
+        assert res.returncode == 0, res.stderr
+
+    cli("render", "--style", "cel", "--denoise", "expectation", *small, "--buffer", str(tmp_path / "b.npz"),
+        "-o", str(tmp_path / "cel.exr"))
+    cli("restyle", str(tmp_path / "b.npz"), "--style", "hatching", "-o", str(tmp_path / "re.exr"))
+    cli("render", "--style", "hatching", "--denoise", "expectation", *small, "-o", str(tmp_path / "fresh.exr"))
+    re, fresh = (np.array(mi.Bitmap(str(tmp_path / f))) for f in ("re.exr", "fresh.exr"))
+    assert np.abs(re - fresh).max() <= 1e-5
