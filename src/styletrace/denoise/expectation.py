@@ -142,13 +142,33 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, albedo, normal, position) -> n
     return np.ascontiguousarray(out.T.astype(np.float32))
 
 
+#: OIDN's output is trusted down to this fraction of the image's mean brightness (see `below_resolution`)
+RESOLUTION = 1e-3
+
+
+def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """D with the pixels darker than RESOLUTION x the mean brightness of M set to 0.
+
+    Why: where the expectation is about 0 (a mirror reflecting the empty space behind the camera), OIDN leaks
+    a little of the neighbours' light, with a random hue. Chroma-preserving styles (cel: I level / brightness(I))
+    amplify that hue into saturated speckle, where the reference, whose I is 0 or neutral there, shows the
+    style's plain level. Below the denoiser's resolution the value carries no information: 0 it is."""
+    lum = d.mean(-1)
+    scale = float(np.mean(m.mean(-1)))
+    out = d.copy()
+    out[lum < RESOLUTION * scale] = 0.0
+    return np.maximum(out, 0.0)
+
+
 def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high") -> np.ndarray:
     """Denoise the buffer's expectation and keep it, at each camera sample, in the buffer (restyles then
     style it); returns D per pixel (H x W x 3)."""
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
     albedo, normal, position = guides.first_hit(scene, spp, api.pass_seed(seed, 0), position=True)
-    d = oidn.run(expectation(buf), albedo, normal, quality, guides.to_sensor(scene))
+    m = expectation(buf)
+    d = oidn.run(m, albedo, normal, quality, guides.to_sensor(scene))
+    d = below_resolution(d, m)
     buf.arrays[DENOISED] = at_samples(buf, d, scene, albedo, normal, position)
     buf.header["denoise"] = {"method": "expectation", "quality": quality,
                              "guides": "first-hit albedo and shading normal, Mitsuba aov integrator",

@@ -28,6 +28,13 @@ def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, position: bool = Fa
     aov = mi.load_dict({"type": "aov", "aovs": aovs})
     img = np.asarray(mi.render(scene, integrator=aov, spp=int(spp), seed=int(seed)), dtype=np.float32)
     img = np.nan_to_num(img[..., -k:])  # the AOVs come last whatever the film's own channels
+    # A purely specular surface (a mirror, a conductor, glass) has no diffuse albedo: Mitsuba's AOV says 0 there,
+    # which tells OIDN "black, nothing to keep" and leaves the reflection's chroma noise in (cel then turns it
+    # into coloured speckle: I * level / brightness(I) at a dark reflection). OIDN's guidance for perfect
+    # specular surfaces is an albedo of 1: where a surface was hit (a normal) but the albedo is 0, use 1.
+    hit = np.any(img[..., 3:6] != 0.0, axis=-1)
+    black = hit & np.all(img[..., 0:3] <= 0.0, axis=-1)
+    img[black, 0:3] = 1.0
     return tuple(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, k, 3))
 
 
