@@ -40,7 +40,7 @@ setup() {
   local stamp="$VENV/.styletrace-installed"
   if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints.txt -nt "$stamp" ]; then
     "$VENV/bin/python" -m pip install -q --upgrade pip
-    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots,preview,ray]"
+    "$VENV/bin/python" -m pip install -q -c constraints.txt -e ".[test,plots,preview,ray,denoise]"
     touch "$stamp"
   fi
 }

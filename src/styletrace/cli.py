@@ -210,6 +210,8 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
+    if args.denoise and (len(args.scene) > 1 or args.frames is not None or args.orbit is not None):
+        raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
     if len(args.scene) > 1 or args.frames is not None or args.orbit is not None:  # numbered images, on Ray
         from .distributed.command import frames_command
         return frames_command(args, _parse_set, choose_integrator, check_output, say)
@@ -250,6 +252,9 @@ def cmd_render(args) -> int:
             raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
         if args.spp < 2:
             raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
+    if args.denoise:  # its refusals before anything is resolved or rendered (docs/denoise.md)
+        from .denoise.command import precheck
+        precheck(args, scene, integrator, pixel_format)
     pilot = None
     if args.buffer:  # the buffer stores the scene-defaults pilot: one trace of it serves both (record)
         from .plugins.scene_defaults import Pilot
@@ -258,6 +263,9 @@ def cmd_render(args) -> int:
         integrator, chosen = api.resolve_defaults(scene, integrator, pilot)  # scene-relative defaults, printed to pin them
     if chosen and not args.quiet:
         print(f"styletrace: auto values: {chosen}", file=sys.stderr)
+    if args.denoise:  # docs/denoise.md
+        from .denoise.command import render_denoised
+        return render_denoised(args, scene, integrator, pixel_format)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
         return render_with_buffer(args, scene, integrator, pilot)
@@ -445,6 +453,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)")
     r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    r.add_argument("--denoise", choices=("expectation", "image"), default=None,
+                   help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or on "
+                        "the final image; needs the 'denoise' extra (docs/denoise.md)")
+    r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
+                   help="OIDN's filter quality with --denoise (default: high)")
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 

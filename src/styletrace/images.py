@@ -181,6 +181,13 @@ AOV_CHANNELS = (("variance", ("variance.R", "variance.G", "variance.B")), ("bias
                 ("children", ("children",)))
 
 
+#: with denoising on (docs/denoise.md) the AOVs describe the noisy render and say so; `denoise_change` is
+#: what the denoiser changed. Only the keys present are written.
+DENOISED_AOV_CHANNELS = (("noisy_variance", ("noisy_variance.R", "noisy_variance.G", "noisy_variance.B")),
+                         ("noisy_bias", ("noisy_bias",)), ("children", ("children",)),
+                         ("denoise_change", ("denoise_change.R", "denoise_change.G", "denoise_change.B")))
+
+
 def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
     """A multi-channel float32 EXR: the image's channels (R, G, B[, A]) and then the error AOVs under the
     names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a PNG output.)"""
@@ -191,7 +198,8 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
     image = np.asarray(image, dtype=np.float32)
     names = list(bitmap_format(pixel_format, image.shape[-1]))
     layers = [image]
-    for key, channels in AOV_CHANNELS:
+    table = AOV_CHANNELS if "variance" in aovs else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs]
+    for key, channels in table:
         arr = np.asarray(aovs[key], dtype=np.float32)
         layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
         names.extend(channels)

@@ -156,10 +156,17 @@ def job_for(scene: Any, integrator: Any, width: int | None = None, height: int |
 def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
            estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: Any = None, callback: Callable[[api.Progress], None] | None = None,
-           cluster: str | None = None, pass_spp: int | None = None, **params: Any) -> np.ndarray:
+           cluster: str | None = None, pass_spp: int | None = None, denoise: str | None = None,
+           **params: Any) -> np.ndarray:
     """`styletrace.render`: `api.render` with passes sized for the device (`sizing`) and an optional
     `pass_spp`; with `cluster` ("local" or a Ray address) the passes become Ray tasks, and the image is
     bit-identical to the one rendered here with the same seed and split."""
+    if denoise is not None:  # docs/denoise.md; local only
+        if cluster is not None:
+            raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
+        from ..denoise import render as denoised
+        return denoised(scene, style, spp, inner, estimator, seed, width, height, integrator, callback,
+                        denoise=denoise, pass_spp=pass_spp, **params)
     from ..arguments import check_render_args
     from ..sizing import lanes_per_pass
     from ..runtime import init

@@ -176,6 +176,7 @@ def load_buffer(path: str) -> Buffer:
                                  f"styletrace reads version {VERSION} and earlier")
             arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
+            denoised = {k: z[k] for k in z.files if k == "denoised_mean"}  # docs/denoise.md
     except UsageError:
         raise
     except (OSError, ValueError, KeyError, EOFError) as exc:
@@ -190,7 +191,10 @@ def load_buffer(path: str) -> Buffer:
             raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
-    return Buffer(header, {**arrays, **pilot})
+    for k, a in denoised.items():
+        if a.shape != (3, n):
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {(3, n)}")
+    return Buffer(header, {**arrays, **pilot, **denoised})
 
 
 __all__ = ["Buffer", "load_buffer", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",

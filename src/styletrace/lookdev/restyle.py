@@ -147,6 +147,8 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d["mean"] = vec("mean", mi.Color3f)
     else:
         d.update(device_arrays(a))
+    if "denoised_mean" in a:  # a denoised render (docs/denoise.md): each sample styles the denoised E[L]
+        d["mean"] = vec("denoised_mean", mi.Color3f)
     d["slot"] = mi.Int32(a["slot"].astype(np.int32))
     d["pixel"] = mi.UInt32(a["pixel"])
     if "beta" in a:

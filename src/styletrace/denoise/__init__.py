@@ -1,0 +1,65 @@
+"""Denoising at a budget (issue 21): `styletrace.render(..., denoise="expectation" | "image")`.
+
+- `expectation` (`denoise.expectation`): denoise the per-pixel estimate of E[L] at the first stylized vertex,
+  then apply g. Step styles (cel, hatching) stay free of band flips; works through the expectation buffer,
+  which keeps the denoised expectation for millisecond restyles.
+- `image` (`denoise.image`): render as usual and denoise the final image; the baseline.
+
+Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with first-hit albedo and normal guides
+(`denoise.guides`), or Mitsuba's OptiX denoiser on CUDA (`denoise.oidn`, untested). Method, bias and the
+supported combinations: docs/denoise.md.
+
+`render` parameters: as `styletrace.render` (scene, style, spp=16, inner, estimator, seed=0, width, height,
+integrator, callback, **params), plus `denoise` (the method) and `denoise_quality` ("high").
+Returns the image, or (image, aovs) with `aovs=True`.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from ..errors import UsageError
+
+METHODS = ("expectation", "image")
+
+
+def check_method(method: Any) -> str:
+    if method not in METHODS:
+        raise UsageError(f"bad value {method!r} for denoise: expected one of {', '.join(METHODS)}")
+    return method
+
+
+def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+           estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
+           integrator: Any = None, callback: Any = None, denoise: str = "expectation",
+           denoise_quality: str = "high", pass_spp: int | None = None, **params: Any):
+    check_method(denoise)
+    from . import oidn
+    oidn.require()
+    oidn.check_quality(denoise_quality)
+    from .. import api
+    from ..arguments import check_render_args
+    check_render_args(spp, seed, integrator)
+    sc = api.load_scene(scene, width, height)
+    if integrator is None:
+        integrator = api.make_integrator(style=style, inner=inner, estimator=estimator,
+                                         **{**api.carried_settings(sc), **params})
+    want_aovs = bool(integrator.settings.aovs)
+    if want_aovs and spp < 2:
+        raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples per pixel")
+    if api.film_format(sc) != "rgb":
+        raise UsageError(f"--denoise needs an rgb film, not '{api.film_format(sc)}'")
+    if denoise == "expectation":
+        from . import expectation
+        from ..lookdev.record import scene_label
+        image, buf = expectation.render(sc, integrator, spp, seed, denoise_quality, callback,
+                                        label=scene_label(scene))
+        return (image, expectation.aovs(buf, image)) if want_aovs else image
+    from . import image as post
+    from ..sizing import lanes_per_pass
+    from ..runtime import init
+    out, _, errs = post.render(sc, integrator, spp, seed, denoise_quality, callback,
+                               lanes_per_pass=lanes_per_pass(init())[0], pass_spp=pass_spp)
+    return (out, errs) if want_aovs else out
+
+
+__all__ = ["render", "METHODS", "check_method"]

@@ -1,0 +1,33 @@
+"""The preview's draft pass, denoised: the 1-spp, n = 1 draft buffer gets a denoised expectation, so the
+restyles shown while the first full pass renders are clean instead of speckled (docs/preview.md).
+
+    denoised = draft(buf, scene, seed)     # True when the buffer now holds D, False without pyoidn
+
+Parameters: `quality` OIDN's filter quality, default "balanced" for the draft (interaction first: about half of
+"high"'s time, BENCHMARKS.md). Without the `denoise` extra the draft stays as it was (the preview must open on
+any install); the full passes are never denoised (they converge to the render the page's command line makes).
+"""
+from __future__ import annotations
+
+from ..lookdev.buffer import Buffer
+
+QUALITY = "balanced"
+
+
+def available() -> bool:
+    try:
+        import pyoidn  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def draft(buf: Buffer, scene, seed: int, quality: str = QUALITY) -> bool:
+    if not available() or buf.stylize != "first_hit" or buf.stores != "mean":
+        return False
+    from .expectation import attach
+    attach(buf, scene, buf.spp, seed, quality)
+    return True
+
+
+__all__ = ["draft", "available", "QUALITY"]
