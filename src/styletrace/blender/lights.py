@@ -1,0 +1,73 @@
+"""Blender lights -> Mitsuba emitters, with the unit conversions of `units`.
+
+Point and spot lights are points (a radius only softens shadows in Cycles; the intensity far away is the same);
+a spot's cone is Blender's full spot size, its blend the part of the cone over which Cycles' smoothstep rises,
+which Mitsuba's spot approximates with a linear ramp in angle (beam_width). Suns are directional (their angle
+is ignored). Area lights are Mitsuba `rectangle`s or `disk`s turned to emit along the light's -Z, carrying an
+`area` emitter on a black surface (unlike Cycles' lights, it blocks what reaches its back); ellipses become disks of the mean diameter (with a warning).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import units
+
+#: Mitsuba's rectangle and disk face +Z; Blender's area lights emit along -Z
+TURN = np.diag([1.0, -1.0, -1.0, 1.0])
+#: Mitsuba's spot shines along +Z; Blender's along -Z
+SPOT = np.diag([-1.0, 1.0, -1.0, 1.0])
+
+
+def _rgb(light, factor: float) -> dict:
+    return {"type": "rgb", "value": tuple(float(c) * factor for c in light.color)}
+
+
+def _unscaled(m: np.ndarray) -> np.ndarray:
+    m = m.copy()
+    for i in range(3):
+        m[:3, i] /= np.linalg.norm(m[:3, i])
+    return m
+
+
+def convert(light, matrix, warn) -> dict | None:
+    """The emitter (or emitting shape) description of a `bpy.types.Light` placed by `matrix` (4x4)."""
+    m = np.array(matrix, dtype=np.float64)
+    kind = light.type
+    if kind == "POINT":
+        return {"type": "point", "position": m[:3, 3].tolist(),
+                "intensity": _rgb(light, units.point_intensity(light.energy))}
+    if kind == "SPOT":
+        half = light.spot_size / 2.0
+        cos_half = math.cos(half)
+        beam = math.acos(min(1.0, cos_half + (1.0 - cos_half) * light.spot_blend))
+        return {"type": "spot", "to_world": _unscaled(m) @ SPOT, "cutoff_angle": math.degrees(half),
+                "beam_width": math.degrees(min(beam, half)),
+                "intensity": _rgb(light, units.point_intensity(light.energy))}
+    if kind == "SUN":
+        d = -m[:3, 2]
+        return {"type": "directional", "direction": (d / np.linalg.norm(d)).tolist(),
+                "irradiance": _rgb(light, units.sun_irradiance(light.energy))}
+    if kind == "AREA":
+        sx, sy = np.linalg.norm(m[:3, 0]), np.linalg.norm(m[:3, 1])
+        size_x = light.size
+        size_y = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
+        base = _unscaled(m)
+        if light.shape in ("DISK", "ELLIPSE"):
+            if light.shape == "ELLIPSE" and abs(size_x * sx - size_y * sy) > 1e-6:
+                warn(f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of the mean diameter")
+            r = (size_x * sx + size_y * sy) / 4.0
+            area = math.pi * r * r
+            shape = {"type": "disk", "to_world": base @ np.diag([r, r, 1.0, 1.0]) @ TURN}
+        else:
+            hx, hy = size_x * sx / 2.0, size_y * sy / 2.0
+            area = 4.0 * hx * hy
+            shape = {"type": "rectangle", "to_world": base @ np.diag([hx, hy, 1.0, 1.0]) @ TURN}
+        # Cycles' lights block no light; styletrace refuses emitters on see-through (null) surfaces, so the
+        # light is a black, one-sided emitter that absorbs what reaches its back (docs/blender.md)
+        shape["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}
+        shape["emitter"] = {"type": "area", "radiance": _rgb(light, units.area_radiance(light.energy, area))}
+        return shape
+    warn(f"styletrace: light '{light.name}' of type {kind} is not supported: left out")
+    return None
