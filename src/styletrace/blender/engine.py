@@ -9,6 +9,7 @@ Errors the user can cause (a bad style value, an unsupported scene) are one-line
 from __future__ import annotations
 
 import time
+import traceback
 
 import bpy
 import numpy as np
@@ -55,8 +56,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self._render(depsgraph)
         except StyletraceError as exc:
             self.report({"ERROR"}, _message(exc))
-        except (ValueError, RuntimeError) as exc:  # Mitsuba's refusals of the exported scene
-            self.report({"ERROR"}, f"styletrace: {_message(exc)}")
+        except Exception as exc:  # Mitsuba's refusals of the exported scene, or a bug: one line, the trace on stderr
+            traceback.print_exc()
+            self.report({"ERROR"}, f"styletrace: {type(exc).__name__}: {_message(exc)}")
 
     def _render(self, depsgraph):
         st = depsgraph.scene.styletrace

@@ -56,7 +56,16 @@ PILOT_SEED = 0x5EED
 
 def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
     """Quantiles of the distribution putting mass `weights` on `values` (numpy's inverted CDF)."""
-    return [float(x) for x in np.quantile(values, qs, weights=weights, method="inverted_cdf")]
+    if int(np.__version__.split(".")[0]) >= 2:
+        return [float(x) for x in np.quantile(values, qs, weights=weights, method="inverted_cdf")]
+    # numpy 1.x (Blender's bpy pins numpy < 2) has no weighted quantiles: the smallest value whose cumulative
+    # weight fraction reaches q, as numpy 2's inverted_cdf computes it
+    values, weights = np.asarray(values).reshape(-1), np.asarray(weights, dtype=np.float64).reshape(-1)
+    order = np.argsort(values, kind="stable")
+    cdf = np.cumsum(weights[order])
+    cdf /= cdf[-1]
+    idx = np.minimum(np.searchsorted(cdf, np.asarray(qs, dtype=np.float64), side="left"), len(order) - 1)
+    return [float(values[order][i]) for i in np.atleast_1d(idx)]
 
 
 class Pilot:
