@@ -18,6 +18,8 @@ from ..errors import StyletraceError
 from . import pipeline, restyle
 
 COMBINED = "Combined"
+#: what the last render did: samples per pixel finished and asked for, whether it was cancelled, seconds
+LAST: dict = {}
 
 
 def _rows(image: np.ndarray, channels: int) -> np.ndarray:
@@ -41,6 +43,10 @@ class StyletraceEngine(bpy.types.RenderEngine):
     bl_label = "styletrace"
     bl_use_preview = False
     bl_use_postprocess = True
+
+    def stop_requested(self) -> bool:
+        """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can press it."""
+        return self.test_break()
 
     def update_render_passes(self, scene=None, renderlayer=None):
         st = scene.styletrace
@@ -86,13 +92,15 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self.update_stats("", f"styletrace: pass {k}/{total}, {prog.spp_done}/{prog.spp_total} spp, "
                                   f"{time.perf_counter() - start:.1f} s")
             self._show(prog.image, w, h)
-            if self.test_break():
+            if self.stop_requested():
                 break
+        LAST.update(spp_done=prog.spp_done if prog else 0, spp_total=st.spp, cancelled=self.stop_requested(),
+                    seconds=time.perf_counter() - start)
         if prog is None:
             return
         mask = None
-        if st.lines and not self.test_break():
-            mask = pipeline.line_mask(sc, st, self.test_break)
+        if st.lines and not self.stop_requested():
+            mask = pipeline.line_mask(sc, st, self.stop_requested)
         self._write(prog, aovs, mask, w, h)
 
     def _show(self, image, w, h):
