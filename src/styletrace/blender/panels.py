@@ -27,6 +27,21 @@ def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
     return style_rows(settings) + [(settings, name) for name in RENDER_ROWS]
 
 
+def dump(settings, material: bool = False) -> list[str]:
+    """The panel as text, one row each: label, value and Blender property type (docs/blender.md shows it: headless
+    Blender draws no UI to screenshot)."""
+    lines = []
+    for owner, name in layout_rows(settings, material):
+        prop = owner.bl_rna.properties[name]
+        value = getattr(owner, name)
+        if prop.type == "FLOAT" and getattr(prop, "array_length", 0):
+            value = "(" + ", ".join(f"{v:g}" for v in value) + ")"
+        elif isinstance(value, float):
+            value = f"{value:g}"
+        lines.append(f"{prop.name:<24} {str(value)!s:<28} [{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]")
+    return lines
+
+
 def _draw(layout, rows):
     for owner, name in rows:
         layout.prop(owner, name)
