@@ -63,7 +63,7 @@ class Exporter:
         return shapes
 
     def export(self) -> dict:
-        desc: dict = {"type": "scene", "sensor": camera.sensor(self.scene, self.spp)}
+        desc: dict = {"type": "scene", "sensor": camera.sensor(self.scene, self.spp, warn=self.warn)}
         groups: dict[str, list[dict]] = {}
         n = 0
         for inst in self.depsgraph.object_instances:
