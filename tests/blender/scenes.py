@@ -26,14 +26,16 @@ def reset(size: int = 64):
     s.render.image_settings.use_exr_interleave = True  # one part: every pass is a channel of it
     w = bpy.data.worlds.new("world")
     s.world = w
-    w.use_nodes = True
+    if w.node_tree is None:
+        w.use_nodes = True
     w.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     return s
 
 
 def material(name, kind="ShaderNodeBsdfDiffuse", **inputs):
     mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
+    if mat.node_tree is None:  # Blender < 5 (5.0 makes every material a node tree)
+        mat.use_nodes = True
     nt = mat.node_tree
     for n in list(nt.nodes):
         if n.bl_idname != "ShaderNodeOutputMaterial":
@@ -281,8 +283,10 @@ def cycles_reference(name: str, spp: int, builder=None) -> tuple[np.ndarray, np.
         with np.load(cached) as f:
             return f["mean"], f["var"]
     (builder or SCENES[name])()
-    a = cycles(os.path.join(CACHE, f"{name}-a.exr"), spp, seed=1)
-    b = cycles(os.path.join(CACHE, f"{name}-b.exr"), spp, seed=2)
+    files = [os.path.join(CACHE, f"{name}-{k}.exr") for k in "ab"]
+    a, b = (cycles(f, spp, seed=seed) for f, seed in zip(files, (1, 2)))
+    for f in files:
+        os.remove(f)
     mean, var = (a + b) / 2, ((a - b) / 2) ** 2
     np.savez(cached, mean=mean, var=var)
     return mean, var

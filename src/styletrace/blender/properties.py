@@ -62,10 +62,14 @@ def style_items():
     return [(n, n, registry.get(n).summary[:200]) for n in registry.names()]
 
 
+#: called with the context when a style setting changes (`restyle` registers its restyling here)
+ON_CHANGE: list = []
+
+
 def changed(self, context):
-    """A style setting changed: restyle from the recorded buffer, if there is one (`restyle.on_change`)."""
-    from . import restyle
-    restyle.on_change(context)
+    """A style setting changed: tell the listeners (restyling from the recorded buffer, if there is one)."""
+    for listener in ON_CHANGE:
+        listener(context)
 
 
 def _annotations() -> dict:

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import api
 from ..errors import StyletraceError
+from .properties import ON_CHANGE, style_values
 
 IMAGE = "styletrace restyle"
 
@@ -48,7 +49,6 @@ def last_seconds():
 def run(settings) -> np.ndarray:
     """Restyle the recorded buffer with the render settings' style; writes and returns the image (H x W x 3)."""
     from ..lookdev.restyle import restyle as lookdev_restyle
-    from .properties import style_values
     buf = _state["buffer"]
     if buf is None:
         raise StyletraceError("no recorded buffer: turn on Record buffer and render (F12) first")
@@ -107,8 +107,10 @@ class STYLETRACE_OT_restyle(bpy.types.Operator):
 
 def register():
     bpy.utils.register_class(STYLETRACE_OT_restyle)
+    ON_CHANGE.append(on_change)
 
 
 def unregister():
+    ON_CHANGE.remove(on_change)
     bpy.utils.unregister_class(STYLETRACE_OT_restyle)
     forget()
