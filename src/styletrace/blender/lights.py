@@ -1,8 +1,8 @@
 """Blender lights -> Mitsuba emitters, with the unit conversions of `units`.
 
 Point and spot lights are points (a radius only softens shadows in Cycles; the intensity far away is the same);
-a spot's cone is Blender's full spot size, its blend the part of the cone over which Cycles' smoothstep rises,
-which Mitsuba's spot approximates with a linear ramp in angle (beam_width). Suns are directional (their angle
+a spot's cone is Blender's full spot size; Cycles' blend (a smoothstep over the cosine) becomes Mitsuba's linear
+ramp in angle (beam_width) that emits the same power (`spot_beam`; tests/blender/test_units.py). Suns are directional (their angle
 is ignored). Area lights are Mitsuba `rectangle`s or `disk`s turned to emit along the light's -Z, carrying an
 `area` emitter on a black surface (unlike Cycles' lights, it blocks what reaches its back); ellipses become disks of the mean diameter (with a warning).
 """
@@ -31,6 +31,33 @@ def _unscaled(m: np.ndarray) -> np.ndarray:
     return m
 
 
+def _smoothstep(x: float) -> float:
+    x = min(max(x, 0.0), 1.0)
+    return x * x * (3.0 - 2.0 * x)
+
+
+def _power(profile, half: float, steps: int = 400) -> float:
+    """The power a spot of angular profile `profile(theta)` emits into its cone, up to a constant (midpoint rule)."""
+    h = half / steps
+    return sum(profile((i + 0.5) * h) * math.sin((i + 0.5) * h) for i in range(steps)) * h
+
+
+def spot_beam(half: float, blend: float) -> float:
+    """Mitsuba's beam_width (radians) for a Blender spot of half angle `half` and `blend`: Cycles' attenuation is a
+    smoothstep over the cosine, from the cone's edge to cos(half) + (1 - cos(half)) blend; Mitsuba's is linear in
+    angle from beam_width to the edge. The beam width is chosen so that both emit the same power (bisection)."""
+    if blend <= 0:
+        return half
+    c = math.cos(half)
+    target = _power(lambda t: _smoothstep((math.cos(t) - c) / ((1.0 - c) * blend)), half)
+    lo, hi = 0.0, half
+    for _ in range(40):
+        mid = (lo + hi) / 2
+        ramp = lambda t, b=mid: 1.0 if t <= b else (half - t) / (half - b)  # noqa: E731
+        lo, hi = (mid, hi) if _power(ramp, half) < target else (lo, mid)
+    return (lo + hi) / 2
+
+
 def convert(light, matrix, warn) -> dict | None:
     """The emitter (or emitting shape) description of a `bpy.types.Light` placed by `matrix` (4x4)."""
     m = np.array(matrix, dtype=np.float64)
@@ -41,7 +68,7 @@ def convert(light, matrix, warn) -> dict | None:
     if kind == "SPOT":
         half = light.spot_size / 2.0
         cos_half = math.cos(half)
-        beam = math.acos(min(1.0, cos_half + (1.0 - cos_half) * light.spot_blend))
+        beam = spot_beam(half, light.spot_blend)
         return {"type": "spot", "to_world": _unscaled(m) @ SPOT, "cutoff_angle": math.degrees(half),
                 "beam_width": math.degrees(min(beam, half)),
                 "intensity": _rgb(light, units.point_intensity(light.energy))}
