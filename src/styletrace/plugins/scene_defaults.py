@@ -58,9 +58,15 @@ def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[floa
     """Quantiles of the distribution putting mass `weights` on `values` (numpy's inverted CDF)."""
     if int(np.__version__.split(".")[0]) >= 2:
         return [float(x) for x in np.quantile(values, qs, weights=weights, method="inverted_cdf")]
-    # numpy 1.x (Blender's bpy pins numpy < 2) has no weighted quantiles: the smallest value whose cumulative
-    # weight fraction reaches q, as numpy 2's inverted_cdf computes it
+    return weighted_quantiles_np1(values, weights, qs)
+
+
+def weighted_quantiles_np1(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
+    """`weighted_quantiles` for numpy 1.x (Blender's bpy pins numpy < 2), which has no weighted quantiles: the
+    smallest value whose cumulative weight fraction reaches q, as numpy 2's inverted_cdf computes it."""
     values, weights = np.asarray(values).reshape(-1), np.asarray(weights, dtype=np.float64).reshape(-1)
+    keep = weights > 0  # a value without weight is never a quantile (not even q = 0)
+    values, weights = values[keep], weights[keep]
     order = np.argsort(values, kind="stable")
     cdf = np.cumsum(weights[order])
     cdf /= cdf[-1]
