@@ -1,8 +1,6 @@
 """Cameras against Cycles: shift, sensor fit on a non-square image, orthographic, depth of field, the resolution
 percentage. The room (test_cycles) seen through each camera variant; the image mean within 2% and the 8x8 blocks'
 z-test as in test_cycles, with Cycles references cached the same way."""
-import math
-import os
 
 import bpy
 import numpy as np

@@ -1,6 +1,5 @@
 """Cancel (Esc in Blender, `RenderEngine.test_break`) stops the render after the pass under way and leaves the
 finished passes in the render result: the image equals a render of just those passes with the same seed."""
-import os
 import time
 
 import numpy as np

@@ -7,8 +7,6 @@ estimates have well under 0.5% noise at these counts); the docstring of `units` 
 import math
 import os
 
-import bpy
-import numpy as np
 import pytest
 
 import scenes as S
