@@ -1,0 +1,35 @@
+"""styletrace in Blender: a render engine, style panels generated from the registries, an in-process exporter
+from the evaluated depsgraph to a Mitsuba scene, restyling from a recorded buffer, and File -> Export ->
+Mitsuba XML. See docs/blender.md.
+
+    import bpy, styletrace.blender
+    styletrace.blender.register()
+    bpy.context.scene.render.engine = "STYLETRACE"
+
+Modules: `mesh`, `camera`, `lights`, `world`, `materials` convert one kind of datablock each; `exporter` walks the
+depsgraph; `build` makes the Mitsuba objects in process; `xml` writes the same description as a file;
+`properties`/`panels` are the UI; `engine` renders; `restyle` keeps the buffer; `operators` export;
+`extension` builds the Blender extension zip. `units` holds the light-unit conversions.
+"""
+from __future__ import annotations
+
+bl_info = {"name": "styletrace", "author": "styletrace", "version": (0, 1, 0), "blender": (4, 2, 0),
+           "location": "Render Properties > Render Engine > styletrace", "category": "Render",
+           "description": "Stylized global illumination as a function of expectation (Mitsuba 3)"}
+
+_MODULES = ("properties", "engine", "panels", "restyle", "operators")
+
+
+def _modules():
+    from importlib import import_module
+    return [import_module(f".{name}", __name__) for name in _MODULES]
+
+
+def register():
+    for module in _modules():
+        module.register()
+
+
+def unregister():
+    for module in reversed(_modules()):
+        module.unregister()

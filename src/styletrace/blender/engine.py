@@ -1,0 +1,144 @@
+"""The `styletrace` render engine: F12 renders the evaluated depsgraph through styletrace's passes.
+
+Progress is reported after each pass (`update_progress`), the image so far is shown, and `test_break` is asked
+between passes: a cancel keeps the finished passes in the render result. The error AOVs (variance, bias,
+children; `aovs`) and, with lines, a line mask are added as render passes. With "Record buffer" the
+look-development buffer of the render is kept (`restyle`), so style changes restyle it in milliseconds.
+Errors the user can cause (a bad style value, an unsupported scene) are one-line Blender error reports.
+"""
+from __future__ import annotations
+
+import time
+import traceback
+
+import bpy
+import numpy as np
+
+from ..errors import StyletraceError
+from . import pipeline, restyle
+
+COMBINED = "Combined"
+#: what the last render did: samples per pixel finished and asked for, whether it was cancelled, seconds
+LAST: dict = {}
+
+
+def _rows(image: np.ndarray, channels: int) -> np.ndarray:
+    """H x W x C (top row first) -> Blender's pixel rows (bottom row first), `channels` wide."""
+    h, w = image.shape[:2]
+    img = image.reshape(h, w, -1)[::-1]
+    if channels == 4:
+        out = np.ones((h, w, 4), np.float32)
+        out[..., :3] = img[..., :3]
+        return out.reshape(-1, 4)
+    return np.ascontiguousarray(img[..., :channels], dtype=np.float32).reshape(-1, channels)
+
+
+def _message(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return text[-1] if text else type(exc).__name__
+
+
+class StyletraceEngine(bpy.types.RenderEngine):
+    bl_idname = "STYLETRACE"
+    bl_label = "styletrace"
+    bl_use_preview = False
+    bl_use_postprocess = True
+
+    def stop_requested(self) -> bool:
+        """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can press it."""
+        return self.test_break()
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        st = scene.styletrace
+        self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", "COLOR")
+        if st.aovs and not st.record_buffer:
+            for name, channels, ids in pipeline.AOV_PASSES.values():
+                self.register_pass(scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE")
+        if st.lines:
+            self.register_pass(scene, renderlayer, pipeline.LINE_MASK, 1, "X", "VALUE")
+
+    def render(self, depsgraph):
+        try:
+            self._render(depsgraph)
+        except StyletraceError as exc:
+            self.report({"ERROR"}, _message(exc))
+        except Exception as exc:  # Mitsuba's refusals of the exported scene, or a bug: one line, the trace on stderr
+            traceback.print_exc()
+            self.report({"ERROR"}, f"styletrace: {type(exc).__name__}: {_message(exc)}")
+
+    def _render(self, depsgraph):
+        st = depsgraph.scene.styletrace
+        self.update_stats("", "styletrace: exporting the scene")
+        sc = pipeline.scene(depsgraph, st, warn=lambda m: self.report({"WARNING"}, m))
+        size = sc.sensors()[0].film().crop_size()
+        w, h = int(size[0]), int(size[1])
+        aovs = st.aovs and not st.record_buffer  # a recorded render keeps the image only
+        integ = pipeline.integrator(st, aovs=aovs)
+        if aovs:
+            for name, channels, ids in pipeline.AOV_PASSES.values():
+                self.add_pass(name, channels, ids)
+        if st.lines:
+            self.add_pass(pipeline.LINE_MASK, 1, "X")
+        start = time.perf_counter()
+        if st.record_buffer:
+            source = restyle.record(sc, integ, st)
+        else:
+            restyle.forget()
+            source = pipeline.passes(sc, integ, st)
+        prog = None
+        total = -(-st.spp // st.pass_spp)
+        for k, prog in enumerate(source, start=1):
+            self.update_progress(prog.spp_done / prog.spp_total)
+            self.update_stats("", f"styletrace: pass {k}/{total}, {prog.spp_done}/{prog.spp_total} spp, "
+                                  f"{time.perf_counter() - start:.1f} s")
+            self._show(prog.image, w, h)
+            if self.stop_requested():
+                break
+        LAST.update(spp_done=prog.spp_done if prog else 0, spp_total=st.spp, cancelled=self.stop_requested(),
+                    seconds=time.perf_counter() - start)
+        if prog is None:
+            return
+        mask = None
+        if st.lines and not self.stop_requested():
+            mask = pipeline.line_mask(sc, st, self.stop_requested)
+        self._write(prog, aovs, mask, w, h)
+
+    def _show(self, image, w, h):
+        result = self.begin_result(0, 0, w, h)
+        result.layers[0].passes[COMBINED].rect = _rows(image, 4)
+        self.update_result(result)
+        self.end_result(result)
+
+    def _write(self, prog, aovs, mask, w, h):
+        result = self.begin_result(0, 0, w, h)
+        layer = result.layers[0]
+        layer.passes[COMBINED].rect = _rows(prog.image, 4)
+        if aovs:
+            for key, (name, channels, _) in pipeline.AOV_PASSES.items():
+                value = np.nan_to_num(prog.aovs[key])
+                layer.passes[name].rect = _rows(value, channels)
+        if mask is not None:
+            layer.passes[pipeline.LINE_MASK].rect = _rows(mask, 1)
+        self.end_result(result)
+
+
+#: Cycles' panels that also apply to styletrace (resolution, output, colour management, ...)
+def _compatible_panels():
+    skip = {"VIEWLAYER_PT_filter", "VIEWLAYER_PT_layer_passes"}
+    for name in dir(bpy.types):
+        panel = getattr(bpy.types, name)
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if engines is not None and "BLENDER_RENDER" in engines and name not in skip:
+            yield panel
+
+
+def register():
+    bpy.utils.register_class(StyletraceEngine)
+    for panel in _compatible_panels():
+        panel.COMPAT_ENGINES.add(StyletraceEngine.bl_idname)
+
+
+def unregister():
+    for panel in _compatible_panels():
+        panel.COMPAT_ENGINES.discard(StyletraceEngine.bl_idname)
+    bpy.utils.unregister_class(StyletraceEngine)

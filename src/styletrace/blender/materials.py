@@ -1,0 +1,228 @@
+"""Blender materials -> Mitsuba BSDF descriptions (plain dicts, numpy images).
+
+Supported: Principled BSDF (base colour from a value or an Image Texture, roughness, metallic, transmission
+and IOR, emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes behind the active Material
+Output. The mapping (docs/blender.md, "Materials"):
+
+- Principled: a dielectric base (`diffuse` when Specular IOR Level is 0, else `roughplastic` with the IOR),
+  blended with a `roughdielectric` by Transmission Weight and with a `roughconductor` (Fresnel of the base
+  colour taken as 1, as Cycles' F82 at normal incidence) by Metallic. Mitsuba's microfacet alpha is
+  Blender's roughness squared, as in Cycles.
+- Glossy: `roughconductor` without Fresnel (`material = none`), tinted by its colour, as Cycles' Glossy.
+- Glass: `roughdielectric` with the IOR, both lobes tinted by its colour.
+- Emission (and Principled emission): an `area` emitter whose radiance is colour x strength (Cycles' strength
+  on a mesh is radiance).
+
+Every other node behind the output is named in one warning per export and rendered as grey diffuse.
+Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a styletrace style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+GREY = (0.5, 0.5, 0.5)
+#: Cycles' roughness is clamped below at this in its microfacet models; a smaller alpha is a mirror
+SMOOTH = 1e-4
+
+
+class Context:
+    """What the exporter collects while converting materials: warnings (one per unsupported node type) and
+    image textures (converted once per image)."""
+
+    def __init__(self, warn: Callable[[str], None]):
+        self.warn = warn
+        self.unsupported: dict[str, list[str]] = {}
+        self.images: dict[tuple[str, str], np.ndarray] = {}
+
+    def unknown(self, node, material) -> None:
+        self.unsupported.setdefault(node.bl_idname, []).append(material.name)
+
+    def flush(self) -> None:
+        for kind, mats in sorted(self.unsupported.items()):
+            self.warn(f"styletrace: node {kind} is not supported (material {', '.join(sorted(set(mats)))}): "
+                      f"rendered as grey diffuse")
+        self.unsupported.clear()
+
+
+def srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(np.float32)
+
+
+def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
+    """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3) or
+    'alpha' (H x W x 1)."""
+    key = (image.name, channel)
+    if key not in ctx.images:
+        w, h = image.size
+        px = np.empty(w * h * image.channels, dtype=np.float32)
+        image.pixels.foreach_get(px)
+        px = px.reshape(h, w, image.channels)[::-1]  # Blender stores the bottom row first
+        if channel == "alpha":
+            out = px[..., 3:4] if image.channels == 4 else np.ones((h, w, 1), np.float32)
+        else:
+            rgb = px[..., :3] if image.channels >= 3 else np.repeat(px[..., :1], 3, axis=2)
+            if image.colorspace_settings.name == "sRGB" and not image.is_float:
+                rgb = srgb_to_linear(rgb)
+            out = rgb
+        ctx.images[key] = np.ascontiguousarray(out, dtype=np.float32)
+    return ctx.images[key]
+
+
+def texture(data: np.ndarray) -> dict:
+    """A bitmap texture description; `data` stays a numpy array until the scene is built or written."""
+    return {"type": "bitmap", "data": data, "filter_type": "bilinear", "wrap_mode": "repeat", "raw": True}
+
+
+def _source(socket):
+    if not socket.is_linked:
+        return None
+    link = socket.links[0]
+    return link.from_node, link.from_socket
+
+
+def colour(socket, ctx: Context, material) -> Any:
+    """An RGB input: a constant, or an Image Texture node's colour; other nodes are reported."""
+    src = _source(socket)
+    if src is None:
+        return {"type": "rgb", "value": tuple(float(c) for c in socket.default_value[:3])}
+    node, out = src
+    if node.bl_idname == "ShaderNodeTexImage" and node.image is not None:
+        return texture(image_array(node.image, ctx, "alpha" if out.name == "Alpha" else "rgb"))
+    ctx.unknown(node, material)
+    return {"type": "rgb", "value": GREY}
+
+
+def scalar(socket, ctx: Context, material) -> float:
+    src = _source(socket)
+    if src is not None:
+        ctx.unknown(src[0], material)
+    return float(socket.default_value)
+
+
+def alpha(roughness: float) -> float:
+    return max(roughness * roughness, SMOOTH)
+
+
+def _conductor(color, roughness: float) -> dict:
+    return {"type": "roughconductor", "material": "none", "specular_reflectance": color,
+            "alpha": alpha(roughness), "distribution": "ggx"}
+
+
+def _glass(color, roughness: float, ior: float) -> dict:
+    ior = max(ior, 1.0 + 1e-4)
+    return {"type": "roughdielectric", "int_ior": ior, "ext_ior": 1.0, "alpha": alpha(roughness),
+            "distribution": "ggx", "specular_reflectance": color, "specular_transmittance": color}
+
+
+def _blend(weight: float, a: dict, b: dict) -> dict:
+    if weight <= 0:
+        return a
+    if weight >= 1:
+        return b
+    return {"type": "blendbsdf", "weight": weight, "a": a, "b": b}
+
+
+def principled(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
+    inp = node.inputs
+    base = colour(inp["Base Color"], ctx, material)
+    rough = scalar(inp["Roughness"], ctx, material)
+    metal = scalar(inp["Metallic"], ctx, material)
+    trans = scalar(inp["Transmission Weight"], ctx, material)
+    ior = scalar(inp["IOR"], ctx, material)
+    level = scalar(inp["Specular IOR Level"], ctx, material)
+    if level <= 0:
+        bsdf = {"type": "diffuse", "reflectance": base}
+    else:
+        bsdf = {"type": "roughplastic", "diffuse_reflectance": base, "int_ior": max(ior, 1.0 + 1e-4),
+                "alpha": alpha(rough), "distribution": "ggx", "nonlinear": True}
+    bsdf = _blend(trans, bsdf, _glass(base, rough, ior))
+    bsdf = _blend(metal, bsdf, _conductor(base, rough))
+    strength = scalar(inp["Emission Strength"], ctx, material)
+    emitter = None
+    if strength > 0:
+        e = colour(inp["Emission Color"], ctx, material)
+        if e.get("type") == "rgb":
+            e = {"type": "rgb", "value": tuple(c * strength for c in e["value"])}
+            emitter = {"type": "area", "radiance": e} if any(e["value"]) else None
+        else:
+            emitter = {"type": "area", "radiance": texture(e["data"] * np.float32(strength))}
+    a_src = _source(inp["Alpha"])
+    opacity = colour(inp["Alpha"], ctx, material) if a_src else float(inp["Alpha"].default_value)
+    return bsdf, emitter, opacity
+
+
+def convert_node(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
+    """(bsdf, emitter or None, opacity) of the shader node feeding a Material Output."""
+    kind = node.bl_idname
+    inp = node.inputs
+    if kind == "ShaderNodeBsdfPrincipled":
+        return principled(node, ctx, material)
+    if kind == "ShaderNodeBsdfDiffuse":
+        return {"type": "diffuse", "reflectance": colour(inp["Color"], ctx, material)}, None, 1.0
+    if kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
+        return _conductor(colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material)), None, 1.0
+    if kind == "ShaderNodeBsdfGlass":
+        return (_glass(colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material),
+                       scalar(inp["IOR"], ctx, material)), None, 1.0)
+    if kind == "ShaderNodeEmission":
+        c = colour(inp["Color"], ctx, material)
+        s = scalar(inp["Strength"], ctx, material)
+        radiance = ({"type": "rgb", "value": tuple(v * s for v in c["value"])} if c.get("type") == "rgb"
+                    else texture(c["data"] * np.float32(s)))
+        return {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}, \
+            {"type": "area", "radiance": radiance}, 1.0
+    ctx.unknown(node, material)
+    return grey(), None, 1.0
+
+
+def grey() -> dict:
+    return {"type": "diffuse", "reflectance": {"type": "rgb", "value": GREY}}
+
+
+def _transmits(bsdf: dict) -> bool:
+    if bsdf["type"] in ("roughdielectric", "dielectric", "thindielectric"):
+        return True
+    return any(_transmits(v) for v in bsdf.values() if isinstance(v, dict) and "type" in v and v is not bsdf
+               and v["type"] not in ("rgb", "bitmap"))
+
+
+def output_node(material):
+    tree = material.node_tree
+    if tree is None:
+        return None
+    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
+    for n in outputs:
+        if n.is_active_output and n.target in ("ALL", "CYCLES"):
+            return n
+    return outputs[0] if outputs else None
+
+
+def convert(material, ctx: Context, style: dict | None = None) -> tuple[dict, dict | None]:
+    """(bsdf, emitter or None) of a Blender material; `style` (the material's styletrace settings as
+    `styled` properties) wraps the BSDF in a `styled` BSDF."""
+    if material is None:
+        bsdf, emitter, opacity = grey(), None, 1.0
+    else:
+        out = output_node(material)
+        src = _source(out.inputs["Surface"]) if out is not None else None
+        if src is None:
+            # no node tree (or nothing connected): Blender's viewport colour, as Cycles renders an unlinked output black
+            bsdf, emitter, opacity = ({"type": "diffuse", "reflectance": {"type": "rgb", "value":
+                                       tuple(float(c) for c in material.diffuse_color[:3])}}, None, 1.0)
+            if out is not None:
+                bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}
+        else:
+            bsdf, emitter, opacity = convert_node(src[0], ctx, material)
+    if not _transmits(bsdf):
+        # Cycles shades both sides of a surface; Mitsuba's reflective BSDFs are one-sided
+        bsdf = {"type": "twosided", "nested": bsdf}
+    if style:
+        bsdf = {"type": "styled", **style, "nested": bsdf}
+    if isinstance(opacity, dict) or opacity < 1.0:
+        op = opacity if isinstance(opacity, dict) else {"type": "rgb", "value": (opacity,) * 3}
+        if isinstance(op, dict) and op.get("type") == "bitmap" and op["data"].shape[-1] == 3:
+            op = texture(np.ascontiguousarray(op["data"].mean(axis=2, keepdims=True)))
+        bsdf = {"type": "mask", "opacity": op, "nested": bsdf}
+    return bsdf, emitter

@@ -1,0 +1,90 @@
+"""Evaluated Blender meshes -> Mitsuba meshes in memory, one per material slot.
+
+The evaluated object's mesh (modifiers applied) is read with `foreach_get` into numpy: the loop triangles,
+their corners' positions, loop ("corner") normals and the active UV map. Corner normals are what Blender
+shades with, so smooth, flat and auto-smooth edges come out as Blender shows them. Corners that share
+position, normal and UV are merged again (`np.unique`), so a smooth mesh keeps about one vertex per vertex.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import units
+
+
+@dataclass
+class Part:
+    """The triangles of one material slot: float32 positions/normals (N x 3), uvs (N x 2) or None,
+    uint32 faces (F x 3); `slot` is the material index."""
+
+    slot: int
+    positions: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray | None
+    faces: np.ndarray
+
+
+def _get(collection, attr: str, width: int, dtype) -> np.ndarray:
+    out = np.empty(len(collection) * width, dtype=dtype)
+    collection.foreach_get(attr, out)
+    return out.reshape(-1, width) if width > 1 else out
+
+
+def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
+    """The parts of an evaluated `bpy.types.Mesh`; `matrix` (4x4) moves them to world space (None: keep local)."""
+    mesh.calc_loop_triangles()
+    tris = mesh.loop_triangles
+    if len(tris) == 0:
+        return []
+    corners = _get(tris, "loops", 3, np.int32)              # T x 3 corner (loop) indices
+    slots = _get(tris, "material_index", 1, np.int32)
+    corner_vert = _get(mesh.loops, "vertex_index", 1, np.int32)
+    co = _get(mesh.vertices, "co", 3, np.float32)
+    normals = _get(mesh.corner_normals, "vector", 3, np.float32)
+    uv_layer = mesh.uv_layers.active
+    uvs = _get(uv_layer.data, "uv", 2, np.float32) if uv_layer is not None else None
+    if matrix is not None:
+        m = np.asarray(matrix, dtype=np.float64)
+        co = (co @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
+        # normals move with the inverse transpose (non-uniform scale), then are renormalised
+        normals = normals @ np.linalg.inv(m[:3, :3])
+        normals = (normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-20)).astype(np.float32)
+        if np.linalg.det(m[:3, :3]) < 0:  # a mirroring transform turns the winding round
+            corners = corners[:, ::-1]
+    parts = []
+    for slot in np.unique(slots):
+        c = corners[slots == slot].reshape(-1)
+        cols = [co[corner_vert[c]], normals[c]]
+        if uvs is not None:
+            uv = uvs[c].copy()
+            uv[:, 1] = units.flip_v(uv[:, 1])
+            cols.append(uv)
+        table = np.concatenate(cols, axis=1)
+        unique, inverse = np.unique(table, axis=0, return_inverse=True)
+        unique = np.ascontiguousarray(unique, dtype=np.float32)
+        parts.append(Part(int(slot), unique[:, :3].copy(), unique[:, 3:6].copy(),
+                          unique[:, 6:8].copy() if uvs is not None else None,
+                          inverse.reshape(-1, 3).astype(np.uint32)))
+    return parts
+
+
+def to_mitsuba(part: Part, name: str, bsdf=None, emitter=None):
+    """An `mi.Mesh` holding `part`, with its BSDF (and area emitter) objects attached."""
+    import mitsuba as mi
+    props = mi.Properties()
+    if bsdf is not None:
+        props["bsdf"] = bsdf
+    if emitter is not None:
+        props["emitter"] = emitter
+    mesh = mi.Mesh(name, len(part.positions), len(part.faces), props=props, has_vertex_normals=True,
+                   has_vertex_texcoords=part.uvs is not None)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = mi.Float(part.positions.reshape(-1))
+    params["vertex_normals"] = mi.Float(part.normals.reshape(-1))
+    if part.uvs is not None:
+        params["vertex_texcoords"] = mi.Float(part.uvs.reshape(-1))
+    params["faces"] = mi.UInt32(part.faces.reshape(-1))
+    params.update()
+    return mesh

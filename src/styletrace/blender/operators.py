@@ -1,0 +1,51 @@
+"""File -> Export -> Mitsuba XML (styletrace): the evaluated scene as a Mitsuba XML file with PLY meshes, with the
+render settings as its `stylized` integrator. The report names the command line that renders the F12 image."""
+from __future__ import annotations
+
+import bpy
+from bpy_extras.io_utils import ExportHelper
+
+from ..errors import StyletraceError
+from . import exporter, xml
+from .properties import integrator_values
+
+
+def command_line(path: str, settings) -> str:
+    return f"styletrace render {path} --seed {settings.seed} --pass-spp {settings.pass_spp}"
+
+
+class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
+    """Export the scene as a Mitsuba XML file with PLY meshes that `styletrace render` renders"""
+
+    bl_idname = "styletrace.export_xml"
+    bl_label = "Export Mitsuba XML (styletrace)"
+    filename_ext = ".xml"
+    filter_glob: bpy.props.StringProperty(default="*.xml", options={"HIDDEN"})
+
+    def execute(self, context):
+        st = context.scene.styletrace
+        try:
+            desc = exporter.export(context.evaluated_depsgraph_get(), spp=st.spp,
+                                   warn=lambda m: self.report({"WARNING"}, m))
+            values = integrator_values(st)
+            values["aovs"] = False
+            xml.write(desc, self.filepath, values)
+        except (StyletraceError, OSError, ValueError) as exc:
+            self.report({"ERROR"}, str(exc).strip().splitlines()[-1])
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"wrote {self.filepath}; the F12 image: {command_line(self.filepath, st)}")
+        return {"FINISHED"}
+
+
+def menu(self, context):
+    self.layout.operator(STYLETRACE_OT_export_xml.bl_idname, text="Mitsuba XML (styletrace)")
+
+
+def register():
+    bpy.utils.register_class(STYLETRACE_OT_export_xml)
+    bpy.types.TOPBAR_MT_file_export.append(menu)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_export.remove(menu)
+    bpy.utils.unregister_class(STYLETRACE_OT_export_xml)

@@ -1,0 +1,95 @@
+"""The style panels, drawn from the registries: Render Properties -> styletrace, Material Properties -> styletrace
+style. `layout_rows` lists what a panel shows (the same walk as `draw`), so the layout can be checked and
+documented headless, where Blender draws no UI."""
+from __future__ import annotations
+
+import bpy
+
+from .properties import key
+from ..styles import registry
+
+RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "reuse", "spp", "pass_spp",
+               "max_depth", "seed", "aovs", "record_buffer")
+
+
+def style_rows(settings) -> list[tuple[object, str]]:
+    """(owner, property name) of the style selector and the chosen style's parameters."""
+    rows = [(settings, "style")]
+    rows += [(settings.params, key(settings.style, p.name)) for p in registry.get(settings.style).params]
+    return rows
+
+
+def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
+    if material:
+        rows = [(settings, "use_style")]
+        return rows + (style_rows(settings) + [(settings, "inner_samples"), (settings, "estimator")]
+                       if settings.use_style else [])
+    return style_rows(settings) + [(settings, name) for name in RENDER_ROWS]
+
+
+def dump(settings, material: bool = False) -> list[str]:
+    """The panel as text, one row each: label, value and Blender property type (docs/blender.md shows it: headless
+    Blender draws no UI to screenshot)."""
+    lines = []
+    for owner, name in layout_rows(settings, material):
+        prop = owner.bl_rna.properties[name]
+        value = getattr(owner, name)
+        if prop.type == "FLOAT" and getattr(prop, "array_length", 0):
+            value = "(" + ", ".join(f"{v:g}" for v in value) + ")"
+        elif isinstance(value, float):
+            value = f"{value:g}"
+        lines.append(f"{prop.name:<24} {str(value)!s:<28} [{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]")
+    return lines
+
+
+def _draw(layout, rows):
+    for owner, name in rows:
+        layout.prop(owner, name)
+
+
+class STYLETRACE_PT_render(bpy.types.Panel):
+    bl_label = "styletrace"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    COMPAT_ENGINES = {"STYLETRACE"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        st = context.scene.styletrace
+        _draw(self.layout, layout_rows(st))
+        if st.record_buffer:
+            self.layout.operator("styletrace.restyle")
+
+
+class STYLETRACE_PT_material(bpy.types.Panel):
+    bl_label = "styletrace style"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "material"
+    COMPAT_ENGINES = {"STYLETRACE"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES and context.material is not None
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        _draw(self.layout, layout_rows(context.material.styletrace, material=True))
+
+
+CLASSES = (STYLETRACE_PT_render, STYLETRACE_PT_material)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,170 @@
+"""Blender properties generated from styletrace's registries: no hand-written list of styles or parameters.
+
+`StyleParams` holds one Blender property per (style, parameter) of the style registry, named
+`<style>__<parameter>`, typed by the parameter's kind (float, int, bool, colour, choice; lists, gradients and
+'auto' defaults are strings in the spelling `--set` takes). The render settings (`SceneSettings`) and each
+material's settings (`MaterialSettings`) carry a style name and one `StyleParams`; panels draw the parameters of
+the chosen style only. Values go to styletrace as given, so the registry (`Param.parse`) is the one judge of
+what is allowed; its refusals reach the user as one-line Blender error reports (engine, operators).
+"""
+from __future__ import annotations
+
+import math
+
+import bpy
+
+from .. import init
+
+init()  # the registries below import Dr.Jit and Mitsuba
+
+from ..plugins import estimation  # noqa: E402
+from ..plugins import settings as S  # noqa: E402
+from ..styles import registry  # noqa: E402
+
+SEP = "__"
+
+
+def key(style: str, param: str) -> str:
+    return f"{style}{SEP}{param}"
+
+
+def _finite(x):
+    return x is not None and math.isfinite(x)
+
+
+def blender_property(p):
+    """The bpy property declaring style parameter `p` (a `styles.params.Param`)."""
+    text = p.explain()[:400]
+    if p.default is None or p.kind in ("floats", "gradient", "vector"):
+        return bpy.props.StringProperty(name=p.name, description=text + f" ({p.allowed()})",
+                                        default=p.show(p.default), update=changed)
+    lo, hi = p.bounds()
+    if p.kind == "float":
+        kw = {"min": lo} if _finite(lo) else {}
+        kw.update({"max": hi} if _finite(hi) else {})
+        return bpy.props.FloatProperty(name=p.name, description=text, default=p.default, update=changed, **kw)
+    if p.kind == "int":
+        kw = {"min": int(lo)} if _finite(lo) else {}
+        kw.update({"max": int(hi)} if _finite(hi) else {})
+        return bpy.props.IntProperty(name=p.name, description=text, default=p.default, update=changed, **kw)
+    if p.kind == "bool":
+        return bpy.props.BoolProperty(name=p.name, description=text, default=p.default, update=changed)
+    if p.kind == "color":
+        return bpy.props.FloatVectorProperty(name=p.name, description=text, default=p.default, size=3,
+                                             subtype="COLOR", min=0.0, update=changed)
+    if p.kind == "choice":
+        return bpy.props.EnumProperty(name=p.name, description=text, items=[(c, c, "") for c in p.choices],
+                                      default=p.default, update=changed)
+    raise AssertionError(f"no Blender property for parameter kind {p.kind}")
+
+
+def style_items():
+    return [(n, n, registry.get(n).summary[:200]) for n in registry.names()]
+
+
+#: called with the context when a style setting changes (`restyle` registers its restyling here)
+ON_CHANGE: list = []
+
+
+def changed(self, context):
+    """A style setting changed: tell the listeners (restyling from the recorded buffer, if there is one)."""
+    for listener in ON_CHANGE:
+        listener(context)
+
+
+def _annotations() -> dict:
+    return {key(n, p.name): blender_property(p) for n in registry.names() for p in registry.get(n).params}
+
+
+StyleParams = type("StyleParams", (bpy.types.PropertyGroup,), {"__annotations__": _annotations(),
+                                                                "__doc__": "Every registered style's parameters"})
+
+
+def params_of(style: str, params) -> dict:
+    """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba properties take."""
+    out = {}
+    for p in registry.get(style).params:
+        v = getattr(params, key(style, p.name))
+        if p.kind == "color":
+            v = ",".join(f"{c:g}" for c in v)
+        out[p.name] = v
+    return out
+
+
+def _enum(names):
+    return [(n, n, "") for n in names]
+
+
+class SceneSettings(bpy.types.PropertyGroup):
+    """The render settings of the styletrace engine (the `stylized` integrator's properties)."""
+
+    style: bpy.props.EnumProperty(name="Style", items=style_items(), default="identity", update=changed)
+    params: bpy.props.PointerProperty(type=StyleParams)
+    inner_samples: bpy.props.StringProperty(
+        name="Inner samples", default="", update=changed,
+        description="n: child estimates per stylized vertex ('8', '8,4' per level, '4:64' adaptive); "
+                    "empty: the style's default")
+    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimation.names()), default="direct",
+                                      update=changed)
+    stylize: bpy.props.EnumProperty(name="Stylize", items=_enum(S.STYLIZE_MODES), default="first_hit")
+    stylize_depth: bpy.props.IntProperty(name="Stylize depth", default=1, min=1, max=S.MAX_STYLIZE_DEPTH)
+    lines: bpy.props.BoolProperty(name="Lines", default=False,
+                                  description="physically based feature lines; adds a line mask pass")
+    reuse: bpy.props.EnumProperty(name="Reuse", items=_enum(S.REUSE_MODES), default="off")
+    spp: bpy.props.IntProperty(name="Samples", default=16, min=1, description="camera samples per pixel")
+    pass_spp: bpy.props.IntProperty(
+        name="Samples per pass", default=4, min=1,
+        description="camera samples per pixel in one pass: cancel and progress act between passes; the same "
+                    "seed and split give the same image (`styletrace render --pass-spp`)")
+    max_depth: bpy.props.IntProperty(name="Max depth", default=-1, min=-1)
+    seed: bpy.props.IntProperty(name="Seed", default=0, min=0)
+    aovs: bpy.props.BoolProperty(name="Error passes", default=True,
+                                 description="variance, bias and children render passes")
+    record_buffer: bpy.props.BoolProperty(
+        name="Record buffer", default=False,
+        description="keep the look-development buffer of the last render; style changes then restyle it")
+
+
+class MaterialSettings(bpy.types.PropertyGroup):
+    """A material's own style: the material's BSDF becomes a `styled` BSDF."""
+
+    use_style: bpy.props.BoolProperty(name="Style this material", default=False)
+    style: bpy.props.EnumProperty(name="Style", items=style_items(), default="cel", update=changed)
+    params: bpy.props.PointerProperty(type=StyleParams)
+    inner_samples: bpy.props.StringProperty(name="Inner samples", default="", update=changed)
+    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimation.names()), default="direct")
+
+
+def style_values(settings) -> dict:
+    """The `styled` BSDF's (or integrator's style slot's) properties of a settings group."""
+    out = {"style": settings.style, **params_of(settings.style, settings.params)}
+    if settings.inner_samples.strip():
+        out["inner_samples"] = settings.inner_samples.strip()
+    if settings.estimator != "direct":
+        out["estimator"] = settings.estimator
+    return out
+
+
+def integrator_values(settings) -> dict:
+    """The `stylized` integrator's properties from the render settings."""
+    out = style_values(settings)
+    out.update(stylize=settings.stylize, stylize_depth=settings.stylize_depth, lines=settings.lines,
+               reuse=settings.reuse, max_depth=settings.max_depth)
+    return out
+
+
+CLASSES = (StyleParams, SceneSettings, MaterialSettings)
+
+
+def register():
+    for cls in CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.styletrace = bpy.props.PointerProperty(type=SceneSettings)
+    bpy.types.Material.styletrace = bpy.props.PointerProperty(type=MaterialSettings)
+
+
+def unregister():
+    del bpy.types.Material.styletrace
+    del bpy.types.Scene.styletrace
+    for cls in reversed(CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,13 @@
+"""Whether the Blender tests can run here: skipped with the reason when they cannot (conftest.UNAVAILABLE)."""
+import pytest
+
+from conftest import UNAVAILABLE
+
+
+def test_bpy_is_usable():
+    if UNAVAILABLE:
+        pytest.skip(UNAVAILABLE)
+    import bpy
+    assert bpy.app.version >= (4, 2, 0)
+    bpy.context.scene.render.engine = "STYLETRACE"  # a TypeError unless the add-on registered its engine
+    assert bpy.context.scene.render.engine == "STYLETRACE"
