@@ -101,12 +101,14 @@ def load(spec: SceneSpec, values: dict, variant: str):
     if key in CACHE:
         CACHE.move_to_end(key)
         return CACHE[key]
-    from .. import api
+    from ..pipeline.scene import load_scene
+    from ..plugins.integrator import StylizedIntegrator
+    from ..plugins.scene_defaults import resolve
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
-    sc = api.load_scene(scene, spec.width, spec.height, **spec.load_kwargs)
+    sc = load_scene(scene, spec.width, spec.height, **spec.load_kwargs)
     # scene-relative 'auto' values pinned on the whole scene, before any tile's crop: the pilot is
     # deterministic (fixed seed, our path kernel, one-thread load), so every worker pins what the driver would
-    loaded = (sc, api.resolve_defaults(sc, api.make_integrator_from(values))[0])
+    loaded = (sc, resolve(sc, StylizedIntegrator.from_values(values))[0])
     CACHE[key] = loaded
     while len(CACHE) > CACHE_SIZE:
         CACHE.popitem(last=False)
