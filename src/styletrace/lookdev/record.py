@@ -116,12 +116,12 @@ class RecordingIntegrator(StylizedIntegrator):
     def stylized(self, level, scene, sampler, pi, si, ray, active, depth, medium=None):
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
-        styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
+        styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total, slot, mean = mi.Spectrum(0.0), mi.Int32(-1), mi.Color3f(0.0)
         for i, target in enumerate(self.targets):
             here = active & (_any(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
             if self.sequence:
-                value = self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
+                value = self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
             else:
                 m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth, medium)
                 value = finish(target.slot, m, v)
@@ -131,15 +131,15 @@ class RecordingIntegrator(StylizedIntegrator):
         self.kept.update(p=mi.Vector3f(v.p), n=v.n, wo=v.wo, depth=v.depth, slot=slot, mean=mean)
         return total
 
-    def _through(self, w, value):
+    def through(self, w, value):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
-        return super()._through(w, value)
+        return super().through(w, value)
 
-    def _estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
-        """`StylizedIntegrator._estimate` with every draw and uniform also noted in the recorder's pool.
+    def estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
+        """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's pool.
         The same calls on the same stream in the same order: the estimate is the render's."""
         if not self.sequence:
-            return super()._estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
+            return super().estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
         style, rec = slot.style, self.recorder
         if style.closed_form:
             return style.apply(mi.Color3f(0.0), v)
@@ -196,7 +196,7 @@ def sensor_description(sensor) -> dict:
 
 
 def _slots(integrator: StylizedIntegrator, scene: mi.Scene) -> list[dict]:
-    targets = integrator._targets(scene)
+    targets = integrator.targets_for(scene)
     return [slot_record(t.slot, "object" if t.bsdfs else "integrator", t.bsdfs[0].id() if t.bsdfs else "")
             for t in targets]
 
@@ -228,7 +228,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain copy of the
     # integrator, losing the recording
     integrator = resolve_defaults(scene, integrator)[0]
-    slots = [t.slot for t in integrator._targets(scene)]
+    slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
     sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
     per_sample = budget(slots) if sequence else 0
@@ -257,7 +257,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
     pilot = Pilot(scene, rec.settings).samples
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
-    for rec_slot, target in zip(header["slots"], rec._targets(scene)):
+    for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     done = 0

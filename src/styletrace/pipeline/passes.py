@@ -236,4 +236,5 @@ def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, 
     return len(layout) * math.ceil(spp / per_pass)
 
 
-__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "memory_needed", "memory_available", "check_memory", "Progress", "pass_size", "passes", "pass_count"]
+__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "memory_needed",
+           "memory_available", "check_memory", "Progress", "pass_size", "passes", "pass_count"]
