@@ -20,6 +20,7 @@ from .errors import SceneError, UsageError  # noqa: E402,F401
 from .images import PIXEL_FORMATS, save_safely, write_image  # noqa: E402,F401
 from .pipeline.carried import carried_settings  # noqa: E402,F401
 from .pipeline.execute import render  # noqa: E402,F401  (the one-line alias of issue 19: styletrace.render)
+from .pipeline.job import given_values  # noqa: E402
 from .pipeline.passes import (LANE_BYTES, LANES_PER_PASS, TILE_SIDE, Progress, Tile, check_memory,  # noqa: E402,F401
                               expansion_seed, memory_available, memory_needed, pass_count, pass_seed, pass_size,
                               passes, tiles)
@@ -34,8 +35,7 @@ def make_integrator(style: str | None = None, inner: Any = None, estimator: str 
     """A `stylized` integrator. Integrator properties (stylize, stylize_depth, max_depth, rr_depth) and the
     style's parameters go in **params under their names; what is not given takes the default of
     `plugins.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
-    given = {"style": style, "inner_samples": inner, "estimator": estimator, **params}
-    return make_integrator_from({k: v for k, v in given.items() if v is not None})
+    return make_integrator_from(given_values(style, inner, estimator, **params))
 
 
 def make_integrator_from(values: dict[str, Any]) -> StylizedIntegrator:
