@@ -193,25 +193,26 @@ class StyleSlot:
 
 @dataclass(frozen=True)
 class Settings:
+    """The parsed properties (`parse` fills every field; the defaults live in the declarations, PROPERTIES)."""
     slot: StyleSlot                 # the integrator's own style (identity: physically based)
-    stylize: str = "first_hit"
-    stylize_depth: int = 1
-    max_depth: int = -1
-    rr_depth: int = 5
-    emitter_sampling: str = EMITTER_DEFAULT
-    hide_emitters: bool = False
-    lines: LineSettings | None = None   # None: no line code is traced
-    adaptive_z: float = 2.0
-    adaptive_bias: float = 2e-3
-    aovs: bool = False
-    reuse: str = "off"
-    reuse_radius: int = 2
-    reuse_k: int = 8
-    reuse_mis: str = "balance"
-    reuse_deep: str = "tree"
-    reuse_h: float = 0.0
-    reuse_k2: int = 16
-    expansion_pass: int = 0
+    stylize: str
+    stylize_depth: int
+    max_depth: int
+    rr_depth: int
+    emitter_sampling: str
+    hide_emitters: bool
+    lines: LineSettings | None  # None: no line code is traced
+    adaptive_z: float
+    adaptive_bias: float
+    aovs: bool
+    reuse: str
+    reuse_radius: int
+    reuse_k: int
+    reuse_mis: str
+    reuse_deep: str
+    reuse_h: float
+    reuse_k2: int
+    expansion_pass: int
     #: declared properties that no field above holds (`declare`): parsed by their declaration, read as attributes
     extra: Mapping[str, Any] = field(default_factory=dict)
 
