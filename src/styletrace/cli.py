@@ -236,7 +236,7 @@ def cmd_render(args) -> int:
         print(f"styletrace: auto values: {resolved.auto}", file=sys.stderr)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
-        return render_with_buffer(args, scene, integrator)
+        return render_with_buffer(args, scene, integrator, resolved.lanes)
 
     lanes, note = resolved.lanes, resolved.lanes_note
     if note and not args.quiet:

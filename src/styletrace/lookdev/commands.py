@@ -31,8 +31,9 @@ def check_buffer_path(path: str) -> None:
         raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
 
 
-def render_with_buffer(args, scene, integrator) -> int:
-    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass."""
+def render_with_buffer(args, scene, integrator, lanes: int | None = None) -> int:
+    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass (`lanes`: camera
+    samples per pass, the render pipeline's for this device, so the image is the plain render's)."""
     check_buffer_path(args.buffer)
     from .. import api
     from ..images import save_safely
@@ -41,7 +42,8 @@ def render_with_buffer(args, scene, integrator) -> int:
     latest = buf = None
     failure = None
     try:
-        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene)):
+        kw = {} if lanes is None else {"lanes_per_pass": lanes}
+        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene), **kw):
             pass
     except (KeyboardInterrupt, RuntimeError) as exc:  # keep the finished passes (see cli.cmd_render)
         if latest is None:
