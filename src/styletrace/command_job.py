@@ -25,7 +25,9 @@ def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
 def job_of(args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None) -> Job:
     """The job of `styletrace render` (`scene`: one of several scene arguments, else `args.scene`)."""
     from .plugins import settings
-    return Job(scene=args.scene if scene is None else scene, defines=dict(defines or {}), width=args.width,
+    if scene is None:  # `render` takes several scene arguments (frames); a single render the first
+        scene = args.scene[0] if isinstance(args.scene, list) and args.scene else args.scene
+    return Job(scene=scene or None, defines=dict(defines or {}), width=args.width,
                height=args.height, given=given_flags(args, params), default_style=settings.COMMAND_LINE_STYLE,
                spp=args.spp, seed=args.seed, pass_spp=args.pass_spp)
 

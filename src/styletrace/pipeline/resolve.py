@@ -20,9 +20,10 @@ from ..arguments import check_render_args
 from ..plugins import settings as S
 from ..plugins.integrator import StylizedIntegrator
 from ..plugins.scene_defaults import resolve as resolve_defaults
+from ..runtime import init
+from ..sizing import lanes_per_pass
 from .carried import carried_settings
 from .job import Job
-from .passes import LANES_PER_PASS
 from .scene import load_scene, scene_spp
 
 
@@ -67,8 +68,6 @@ def lanes_for(job: Job) -> tuple[int, str | None]:
     """Camera samples per pass: the job's, else the device's (`sizing`)."""
     if job.lanes_per_pass is not None:
         return int(job.lanes_per_pass), None
-    from ..runtime import init
-    from ..sizing import lanes_per_pass
     return lanes_per_pass(init())
 
 
@@ -80,7 +79,7 @@ def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
     integrator, auto = resolve_defaults(scene, choose_integrator(scene, job))
     spp = scene_spp(scene) if job.spp is None else int(job.spp)
     lanes, note = lanes_for(job)
-    return Resolved(job, scene, integrator, spp, lanes or LANES_PER_PASS, auto, note)
+    return Resolved(job, scene, integrator, spp, lanes, auto, note)
 
 
 __all__ = ["Resolved", "resolve", "choose_integrator", "integrator_values", "lanes_for"]
