@@ -15,7 +15,7 @@ The pipeline never renders with this object: it builds its integrator from the v
 """
 from __future__ import annotations
 
-import types
+import weakref
 
 import mitsuba as mi
 
@@ -32,21 +32,29 @@ def scene_key(scene: mi.Scene) -> tuple:
     return id(scene), size, offset
 
 
-def render_resolved(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
-    """`mi.render`'s call: render with this integrator's values, `auto` values pinned on `scene` (cached)."""
-    key = scene_key(scene)
-    cached = getattr(self, "resolved_for", None)
-    if cached is None or cached[0] != key:
-        fresh = StylizedIntegrator.from_values(self.values)
-        self.resolved_for = (key, resolve(scene, fresh)[0])
-    return self.resolved_for[1].render(scene, sensor, seed, spp, develop, evaluate)
+class ResolvingRender:
+    """The `render` a Mitsuba-built integrator gets (see the module doc). It holds its integrator weakly: a
+    bound method would make a reference cycle, and garbage that only the collector frees changes what
+    Dr.Jit traces (reuse.collect_before says how); the resolved integrator it caches holds no scene object."""
+
+    def __init__(self, integrator: StylizedIntegrator):
+        self.owner = weakref.ref(integrator)
+        self.resolved_for: tuple | None = None
+
+    def __call__(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
+        """`mi.render`'s call: render with the owner's values, `auto` values pinned on `scene` (cached)."""
+        key = scene_key(scene)
+        if self.resolved_for is None or self.resolved_for[0] != key:
+            fresh = StylizedIntegrator.from_values(self.owner().values)
+            self.resolved_for = (key, resolve(scene, fresh)[0])
+        return self.resolved_for[1].render(scene, sensor, seed, spp, develop, evaluate)
 
 
 def from_properties(props: mi.Properties) -> StylizedIntegrator:
     """A `stylized` integrator from Mitsuba properties whose `mi.render` resolves `auto` values (module doc)."""
     integrator = StylizedIntegrator(props)
-    integrator.render = types.MethodType(render_resolved, integrator)
+    integrator.render = ResolvingRender(integrator)
     return integrator
 
 
-__all__ = ["from_properties", "render_resolved", "scene_key"]
+__all__ = ["from_properties", "ResolvingRender", "scene_key"]
