@@ -1,5 +1,8 @@
 #!/usr/bin/env bash
 # One entry point for a fresh machine:  bash dev.sh render [ARGS...]  |  bash dev.sh test [PYTEST ARGS...]
+# `bash dev.sh test` without arguments runs the whole suite: tests/ in .venv (numpy 2), then tests/blender in
+# .venv-blender (bpy 5.0 needs numpy < 2: constraints-blender.txt). With arguments it runs pytest in .venv only;
+# `bash dev.sh test-blender [PYTEST ARGS...]` runs the Blender tests alone.
 # The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because
 # Dr.Jit 1.5 aborts on Debian's default LLVM 15), a virtual environment in .venv, and styletrace with
 # versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ray, ...); for `test` also Chromium (apt),
@@ -7,6 +10,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 VENV=${STYLETRACE_VENV:-.venv}
+BLENDER_VENV=${STYLETRACE_BLENDER_VENV:-.venv-blender}
 
 as_root() {
   if [ "$(id -u)" = 0 ]; then "$@"; elif command -v sudo >/dev/null; then sudo "$@"; else
@@ -45,6 +49,17 @@ setup() {
   fi
 }
 
+setup_blender() {  # Blender as a Python module with numpy 1.26, beside the main venv (docs/blender.md)
+  setup test
+  if [ ! -x "$BLENDER_VENV/bin/python" ]; then python3 -m venv "$BLENDER_VENV"; fi
+  local stamp="$BLENDER_VENV/.styletrace-installed"
+  if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints-blender.txt -nt "$stamp" ]; then
+    "$BLENDER_VENV/bin/python" -m pip install -q --upgrade pip
+    "$BLENDER_VENV/bin/python" -m pip install -q -c constraints-blender.txt -e ".[test,blender]"
+    touch "$stamp"
+  fi
+}
+
 cmd=${1:-}
 [ $# -gt 0 ] && shift
 case "$cmd" in
@@ -54,7 +69,11 @@ case "$cmd" in
                    -o render.png
           fi
           exec "$VENV/bin/styletrace" render "$@" ;;
-  test)   setup test; exec "$VENV/bin/python" -m pytest -q "$@" ;;
+  test)   if [ $# -gt 0 ]; then setup test; exec "$VENV/bin/python" -m pytest -q "$@"; fi
+          setup_blender
+          "$VENV/bin/python" -m pytest -q --ignore=tests/blender
+          exec "$BLENDER_VENV/bin/python" -m pytest -q tests/blender ;;
+  test-blender) setup_blender; exec "$BLENDER_VENV/bin/python" -m pytest -q tests/blender "$@" ;;
   setup)  setup ;;
-  *) echo "usage: bash dev.sh render [styletrace render args] | bash dev.sh test [pytest args] | bash dev.sh setup" >&2; exit 2 ;;
+  *) echo "usage: bash dev.sh render [styletrace render args] | bash dev.sh test [pytest args] | bash dev.sh test-blender [pytest args] | bash dev.sh setup" >&2; exit 2 ;;
 esac

@@ -112,8 +112,9 @@ def test_tiles_cover_the_image_once_with_one_size():
 def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
     """Tiles are crop windows: each must equal Mitsuba rendering that window of the film (its own
     crop_offset/crop_width properties) with the tile's seed; shifted edge tiles keep only their new pixels."""
-    monkeypatch.setattr(api, "LANES_PER_PASS", 120)
-    monkeypatch.setattr(api, "TILE_SIDE", 10)
+    from styletrace.pipeline import passes as pass_loop  # the pass loop reads its own constants
+    monkeypatch.setattr(pass_loop, "LANES_PER_PASS", 120)
+    monkeypatch.setattr(pass_loop, "TILE_SIDE", 10)
     scene = api.load_scene("cornell-box", 24, 16)
     integ = api.make_integrator("cel", inner=2, thresholds=(0.5,))  # explicit: no scene-relative pilot
     layout = api.tiles(24, 16)
@@ -132,12 +133,13 @@ def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
 
 
 def test_memory_is_checked_up_front(monkeypatch):
-    monkeypatch.setattr(api, "memory_available", lambda: 1 << 30)
+    from styletrace.pipeline import passes as pass_loop
+    monkeypatch.setattr(pass_loop, "memory_available", lambda: 1 << 30)
     api.check_memory(1024, 1024)
     with pytest.raises(UsageError, match=r"image 8192x8192 is too large: it needs about \d+\.\d GiB"):
         api.check_memory(8192, 8192)
     scene = api.load_scene("furnace", 8, 8)
-    monkeypatch.setattr(api, "memory_available", lambda: 1000)
+    monkeypatch.setattr(pass_loop, "memory_available", lambda: 1000)
     with pytest.raises(UsageError, match="image 8x8 is too large"):
         next(api.passes(scene, api.make_integrator("identity", inner=1), 1))
 

@@ -276,7 +276,8 @@ def test_non_finite_pixels_are_counted_in_one_line(tmp_path, capsys, monkeypatch
         total[0, 0, 1], total[1, 2, :] = np.nan, np.inf
         yield api.Progress(spp, spp, total * spp, np.array([spp]), layout)
 
-    monkeypatch.setattr(api, "passes", nan_passes)
+    from styletrace.pipeline import execute
+    monkeypatch.setattr(execute, "passes", nan_passes)  # the pass loop the CLI's executor runs
     out = tmp_path / "n.png"
     assert main(["render", *SMALL, "-o", str(out)]) == 0
     err = capsys.readouterr().err
@@ -349,7 +350,8 @@ def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypa
         yield next(gen)
         raise RuntimeError("jit_malloc(): out of memory\nsecond line")
 
-    monkeypatch.setattr(api, "passes", failing)
+    from styletrace.pipeline import execute
+    monkeypatch.setattr(execute, "passes", failing)  # the pass loop the CLI's executor runs
     out = tmp_path / "p.exr"
     assert main(["render", *SMALL, "--pass-spp", "1", "-o", str(out)]) == 1
     err = capsys.readouterr().err.strip()

@@ -23,9 +23,9 @@ _LOOKDEV = {"render_buffer": "record", "restyle": "restyle", "load_buffer": "buf
 def __getattr__(name: str):
     if name == "variant":
         return init()
-    if name == "render":  # api.render, or the same on Ray with cluster= (styletrace.distributed.run)
+    if name == "render":  # the render pipeline's, in process or on Ray with cluster= (pipeline.execute)
         init()
-        from .distributed.run import render
+        from .pipeline.execute import render
         return render
     if name in _API:
         init()

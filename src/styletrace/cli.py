@@ -214,7 +214,7 @@ def cmd_render(args) -> int:
         raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
     if len(args.scene) > 1 or args.frames is not None or args.orbit is not None:  # numbered images, on Ray
         from .distributed.command import frames_command
-        return frames_command(args, _parse_set, choose_integrator, check_output, say)
+        return frames_command(args, _parse_set, _parse_defines, check_output, say)
     args.scene = args.scene[0] if args.scene else "cornell-box"
     check_output(args.output, args.scene)
     params = _parse_set(args.set)
@@ -226,16 +226,20 @@ def cmd_render(args) -> int:
     defines = _parse_defines(args.define)
     status = Status(enabled=not args.quiet)
     from . import api
+    from .command_job import job_of
     from .images import check_format
+    from .pipeline.execute import execute
+    from .pipeline.resolve import resolve
 
-    with warnings.catch_warnings(record=True) as caught, status.phase(f"loading scene {one_line(args.scene)}"):
+    with warnings.catch_warnings(record=True) as caught, \
+            status.phase(f"loading scene {one_line(args.scene)} and measuring it for its auto values (a pilot)"):
+        # the render pipeline: load, merge, pin auto values
         warnings.simplefilter("always", api.SceneWarning)
-        scene = api.load_scene(args.scene, args.width, args.height, defines)
+        resolved = resolve(job_of(args, params, defines))
     for w in caught:
         say(f"styletrace: warning: {w.message}")
-    integrator = choose_integrator(scene, args, params)
-    if args.spp is None:  # the scene author's count (its sampler's sample_count)
-        args.spp = api.scene_spp(scene)
+    scene, integrator = resolved.scene, resolved.integrator
+    args.spp = resolved.spp  # the scene author's count (its sampler's sample_count) unless --spp
     size = scene.sensors()[0].film().crop_size()
     ext = os.path.splitext(args.output)[1].lower()
     pixel_format = api.film_format(scene)
@@ -252,27 +256,19 @@ def cmd_render(args) -> int:
             raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
         if args.spp < 2:
             raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
-    if args.denoise:  # its refusals before anything is resolved or rendered (docs/denoise.md)
+    if args.denoise:  # its refusals before anything is rendered (docs/denoise.md)
         from .denoise.command import precheck
         precheck(args, scene, integrator, pixel_format)
-    pilot = None
-    if args.buffer:  # the buffer stores the scene-defaults pilot: one trace of it serves both (record)
-        from .plugins.scene_defaults import Pilot
-        pilot = Pilot(scene, integrator.settings) if hasattr(integrator, "settings") else None
-    with status.phase("measuring the scene for its auto values: compiling and rendering a pilot"):
-        integrator, chosen = api.resolve_defaults(scene, integrator, pilot)  # scene-relative defaults, printed to pin them
-    if chosen and not args.quiet:
-        print(f"styletrace: auto values: {chosen}", file=sys.stderr)
+    if resolved.auto and not args.quiet:  # scene-relative defaults, printed to pin them
+        print(f"styletrace: auto values: {resolved.auto}", file=sys.stderr)
     if args.denoise:  # docs/denoise.md
         from .denoise.command import render_denoised
         return render_denoised(args, scene, integrator, pixel_format)
     if args.buffer:
         from .lookdev.commands import render_with_buffer
-        return render_with_buffer(args, scene, integrator, pilot)
+        return render_with_buffer(args, scene, integrator, resolved.lanes, resolved.pilot)
 
-    from .sizing import lanes_per_pass
-    from .runtime import init
-    lanes, note = lanes_per_pass(init())
+    lanes, note = resolved.lanes, resolved.lanes_note
     if note and not args.quiet:
         say(f"styletrace: {note}")
     total = api.pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp)
@@ -310,10 +306,9 @@ def cmd_render(args) -> int:
         try:
             if args.ray is not None or args.resume:  # the passes as Ray tasks, checkpointed
                 from .distributed.command import passes as ray_passes
-                source = ray_passes(args, args.scene, integrator, int(size[0]), int(size[1]), lanes, stop.lock)
+                source = ray_passes(args, resolved, stop.lock)
             else:
-                source = api.passes(scene, integrator, args.spp, args.seed, lanes_per_pass=lanes, pass_spp=args.pass_spp,
-                                    lock=stop.lock)
+                source = execute(resolved, lock=stop.lock)
             if bar is not None:
                 status.follow(bar)
             else:
@@ -364,23 +359,10 @@ def cmd_render(args) -> int:
 def choose_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
     (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
-    and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise)."""
-    from .plugins import settings
-    from .plugins.integrator import StylizedIntegrator
-
-    from .api import carried_settings
-
-    own = scene.integrator()
-    given = {p.name: getattr(args, p.name, None) for p in settings.PROPERTIES
-             if getattr(args, p.name, None) is not None}  # (properties without a flag come by --set)
-    given.update(params)
-    if isinstance(own, StylizedIntegrator):
-        if not given:
-            return own
-        base = own.values
-    else:  # the scene's path/volpath/direct: its max_depth, rr_depth and hide_emitters still hold
-        base = {"style": settings.COMMAND_LINE_STYLE, **carried_settings(scene)}
-    return StylizedIntegrator.from_values(settings.refine(base, given))
+    and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise): `pipeline.resolve`'s."""
+    from .command_job import job_of
+    from .pipeline.resolve import choose_integrator as choose
+    return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
 
 
 def cmd_gallery(args) -> int:

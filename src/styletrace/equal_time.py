@@ -117,11 +117,11 @@ def check(comparisons: list[Comparison]) -> None:
 
 def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tuple[np.ndarray, list[float]]:
     """The image and the seconds of `repeats` renders, after one untimed render that compiles the kernels."""
-    from . import api
+    from .pipeline.execute import render
 
     def once() -> tuple[np.ndarray, float]:
         t = time.perf_counter()
-        img = api.render(scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config})
+        img = render(scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config})
         return img, time.perf_counter() - t
 
     once()
@@ -132,11 +132,12 @@ def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tu
 def compare(c: Comparison, out_dir: str, size: int, repeats: int,
             log: Callable[[str], None] = print) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Render one comparison (module docstring); its gallery.json entry and its three images."""
-    from . import api
+    from .pipeline.execute import render
+    from .pipeline.scene import load_scene
 
-    scene = api.load_scene(c.scene, size, size)
+    scene = load_scene(c.scene, size, size)
     t = time.perf_counter()
-    reference = api.render(scene, style=c.style, spp=SPP, seed=SEED,
+    reference = render(scene, style=c.style, spp=SPP, seed=SEED,
                            **{**c.integrator, **c.params, "inner": c.reference})
     ref_seconds = time.perf_counter() - t
     log(f"{c.key}: reference inner {show(c.reference)} in {ref_seconds:.1f} s")

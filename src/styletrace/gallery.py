@@ -149,7 +149,8 @@ def write_png(image: np.ndarray, path: str) -> None:
 
 def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
-    from . import api
+    from .pipeline.execute import render  # every image a pipeline Job on the scene loaded once here
+    from .pipeline.scene import load_scene
 
     os.makedirs(out_dir, exist_ok=True)
     setups, comparisons = select(only, skip)
@@ -159,15 +160,15 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
     for setup in setups:
         if options.quick:
             setup = _quick(setup)
-        scene = api.load_scene(setup.scene, options.size, options.size)
+        scene = load_scene(setup.scene, options.size, options.size)
         entry: dict[str, Any] = {"key": setup.key, "title": setup.title, "style": setup.style,
                                  "estimator": setup.estimator,
                                  "params": setup.params, "integrator": setup.integrator, "renders": []}
         reference = None
         if setup.reference:
             t = time.perf_counter()
-            integ = api.make_integrator(setup.style, inner=setup.reference, **setup.integrator, **setup.params)
-            reference = api.render(scene, integrator=integ, spp=options.reference_spp, seed=10_000)
+            reference = render(scene, style=setup.style, inner=setup.reference, spp=options.reference_spp,
+                               seed=10_000, **setup.integrator, **setup.params)
             name = f"{setup.key}_reference.png"
             write_png(reference, os.path.join(out_dir, name))
             entry["reference"] = {"file": name, "inner": setup.reference, "spp": options.reference_spp,
@@ -176,9 +177,8 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
         for n in setup.counts:
             t = time.perf_counter()
             inner = None if n == 0 else n
-            integ = api.make_integrator(setup.style, inner=inner, estimator=setup.estimator if n else "direct",
-                                        **setup.integrator, **setup.params)
-            img = api.render(scene, integrator=integ, spp=options.spp, seed=n)
+            img = render(scene, style=setup.style, inner=inner, estimator=setup.estimator if n else "direct",
+                         spp=options.spp, seed=n, **setup.integrator, **setup.params)
             secs = time.perf_counter() - t
             name = f"{setup.key}_n{n}.png"
             write_png(img, os.path.join(out_dir, name))

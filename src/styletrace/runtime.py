@@ -23,10 +23,11 @@ def init(variant: str | None = None) -> str:
     if active not in _registered:
         import mitsuba as mi
 
-        from .plugins.integrator import StylizedIntegrator
+        from .plugins.standalone import from_properties
         from .plugins.styled_bsdf import StyledBSDF
 
-        mi.register_integrator("stylized", lambda props: StylizedIntegrator(props))
+        # from a scene file or dict: its `mi.render` pins the scene-relative auto values (plugins/standalone.py)
+        mi.register_integrator("stylized", lambda props: from_properties(props))
         mi.register_bsdf("styled", lambda props: StyledBSDF(props))
         _registered.add(active)
     return active

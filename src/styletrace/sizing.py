@@ -3,7 +3,7 @@
     lanes, note = lanes_per_pass("llvm_ad_rgb")     # 2^20: host memory stays flat, as in api.passes
     lanes, note = lanes_per_pass("cuda_ad_rgb")     # from the GPU's memory; note says if free memory cut it
 
-On the CPU (LLVM) a pass keeps `api.LANES_PER_PASS` (2^20) samples: more lanes do not run faster on a few
+On the CPU (LLVM) a pass keeps `pass_loop.LANES_PER_PASS` (2^20) samples: more lanes do not run faster on a few
 cores, and memory stays flat. On a GPU, launches are costly and lanes cheap: measured on an H100 (Cornell
 box 512^2, 256 spp, cel n = 8), 64 passes of 2^20 took 2.31 s and one launch 0.87 s. A CUDA pass gets
 `CUDA_MEMORY_SHARE` of the device's *total* memory at `CUDA_LANE_BYTES` per lane, rounded down to a power
@@ -23,7 +23,7 @@ from __future__ import annotations
 import ctypes
 from typing import Callable, Optional
 
-from . import api
+from .pipeline import passes as pass_loop
 
 CUDA_LANE_BYTES = 1024
 #: The share of the GPU's total memory a pass may use (the scene, the film and Dr.Jit's caches need the rest).
@@ -68,14 +68,14 @@ def _pow2_floor(x: int) -> int:
 def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int, str | None]:
     """Camera samples per pass for `variant`, and a note when the device's free memory lowered it."""
     if not variant.startswith("cuda"):
-        return api.LANES_PER_PASS, None
+        return pass_loop.LANES_PER_PASS, None
     memory = query()
     if memory is None:  # no driver API to ask: the CPU's size is safe everywhere
-        return api.LANES_PER_PASS, None
+        return pass_loop.LANES_PER_PASS, None
     free, total = memory
-    lanes = min(CUDA_LANES_MAX, max(api.LANES_PER_PASS, _pow2_floor(total * CUDA_MEMORY_SHARE // CUDA_LANE_BYTES)))
+    lanes = min(CUDA_LANES_MAX, max(pass_loop.LANES_PER_PASS, _pow2_floor(total * CUDA_MEMORY_SHARE // CUDA_LANE_BYTES)))
     default = lanes
-    while lanes > api.LANES_PER_PASS and lanes * CUDA_LANE_BYTES > free:
+    while lanes > pass_loop.LANES_PER_PASS and lanes * CUDA_LANE_BYTES > free:
         lanes //= 2
     note = None
     if lanes != default:

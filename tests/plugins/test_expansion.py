@@ -113,7 +113,8 @@ def test_same_seed_same_image_bit_for_bit():
 
 def test_tiles_get_a_pass_each(monkeypatch):
     """A film above LANES_PER_PASS pixels renders as crop windows; each gets its pass (own seed) and lookup."""
-    monkeypatch.setattr(api, "LANES_PER_PASS", 256)  # 32 x 16 -> two 32 x 8 tiles
+    from styletrace.pipeline import passes as pass_loop
+    monkeypatch.setattr(pass_loop, "LANES_PER_PASS", 256)  # 32 x 16 -> two 32 x 8 tiles
     scene = api.load_scene("cornell-box", 32, 16)
     integ = api.make_integrator("gamma", inner=8, estimator="series", expansion_pass=16, exposure=1.0)
     img = list(api.passes(scene, integ, 2, seed=1))[-1].image

@@ -15,7 +15,8 @@ import styletrace
 from styletrace.errors import SettingsError
 from styletrace.plugins import settings
 from styletrace.plugins.lane_sampler import LaneSampler
-from styletrace.plugins.lines import LineSettings, Lines
+from styletrace.plugins.lines import Lines
+from styletrace.plugins.settings import parse_lines
 
 T = mi.ScalarTransform4f
 FOV = 40.0
@@ -340,7 +341,7 @@ def straddling_rays(m, delta, pixel=0.002):
 
 
 def fired_share(scene, ray, m, seed, **line):
-    lines = Lines(LineSettings(**line), scene)
+    lines = Lines(parse_lines({"lines": True, **{f"line_{k}": v for k, v in line.items()}}), scene)
     rng = LaneSampler(mi.PCG32(m, initstate=seed, initseq=dr.arange(mi.UInt64, m)))
     seen, _ = lines.camera(scene, rng, ray, 1, mi.Bool(True))
     return float(np.mean(np.asarray(seen.fired)))

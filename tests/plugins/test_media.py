@@ -27,6 +27,7 @@ def test_the_media_switch_is_off_without_media():
     plain = fog_ball()
     del plain["ball"]["interior"]
     for d, media in ((plain, False), (fog_ball(), True), (foggy_room(), True)):
+        from styletrace.plugins.render_context import RenderContext
         integrator = make_integrator("identity")
-        integrator._targets(mi.load_dict(d))
-        assert integrator.media is media
+        with RenderContext(integrator, mi.load_dict(d)):
+            assert integrator.media is media

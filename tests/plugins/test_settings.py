@@ -144,7 +144,7 @@ def test_emitter_sampling_is_a_setting():
 
 def test_the_integrator_samples_emitters_the_way_it_is_told(monkeypatch):
     """The setting reaches the kernel's emitter sampler (power selection renders a different image)."""
-    from styletrace.plugins import integrator as module
+    from styletrace.plugins import render_context as module  # where a render binds its emitter sampler
     modes = []
     real = module.EmitterSampler
     monkeypatch.setattr(module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode))

@@ -28,26 +28,29 @@ def check_method(method: Any) -> str:
     return method
 
 
-def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+def render(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
            estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: Any = None, callback: Any = None, denoise: str = "expectation",
-           denoise_quality: str = "high", pass_spp: int | None = None, **params: Any):
+           denoise_quality: str = "high", pass_spp: int | None = None, defines: dict[str, Any] | None = None,
+           **params: Any):
+    """`styletrace.render(..., denoise=...)`: the render pipeline's job (`pipeline.resolve`: the scene's own
+    settings merged, auto values pinned), rendered and denoised here (docs/denoise.md)."""
     check_method(denoise)
     from . import oidn
     oidn.require()
     oidn.check_quality(denoise_quality)
-    from .. import api
-    from ..arguments import check_render_args
-    check_render_args(spp, seed, integrator)
-    sc = api.load_scene(scene, width, height)
-    if integrator is None:
-        integrator = api.make_integrator(style=style, inner=inner, estimator=estimator,
-                                         **{**api.carried_settings(sc), **params})
+    from ..pipeline.job import Job, given_values
+    from ..pipeline.resolve import resolve
+    from ..pipeline.scene import film_format
+    r = resolve(Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
+                    given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp,
+                    seed=seed, pass_spp=pass_spp))
+    sc, integrator, spp = r.scene, r.integrator, r.spp
     want_aovs = bool(integrator.settings.aovs)
     if want_aovs and spp < 2:
         raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples per pixel")
-    if api.film_format(sc) != "rgb":
-        raise UsageError(f"--denoise needs an rgb film, not '{api.film_format(sc)}'")
+    if film_format(sc) != "rgb":
+        raise UsageError(f"--denoise needs an rgb film, not '{film_format(sc)}'")
     if denoise == "expectation":
         from . import expectation
         from ..lookdev.record import scene_label
@@ -55,10 +58,8 @@ def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: An
                                         label=scene_label(scene))
         return (image, expectation.aovs(buf, image)) if want_aovs else image
     from . import image as post
-    from ..sizing import lanes_per_pass
-    from ..runtime import init
     out, _, errs = post.render(sc, integrator, spp, seed, denoise_quality, callback,
-                               lanes_per_pass=lanes_per_pass(init())[0], pass_spp=pass_spp)
+                               lanes_per_pass=r.lanes, pass_spp=pass_spp)
     return (out, errs) if want_aovs else out
 
 

@@ -27,15 +27,13 @@ def cluster_of(args) -> str:
     return address
 
 
-def passes(args, scene_arg, integrator, width: int, height: int, lanes: int, lock):
-    """A `run.Render` of the command's scene on the cluster, checkpointed next to the output."""
-    from .run import Render, job_for
+def passes(args, resolved, lock):
+    """The command's resolved render (`pipeline.resolve`) on the cluster, checkpointed next to the output."""
+    from ..pipeline.execute import execute
     if args.checkpoint_every is not None and args.checkpoint_every < 0:
         raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected seconds >= 0")
-    job = job_for(scene_arg, integrator, args.width, args.height)
-    return Render(job, args.spp, args.seed, width, height, cluster_of(args), lanes, args.pass_spp,
-                  output=args.output, resume=args.resume,
-                  checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every, lock=lock)
+    return execute(resolved, cluster_of(args), lock, output=args.output, resume=args.resume,
+                   checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every)
 
 
 def frame_paths(output: str, count: int) -> list[str]:
@@ -44,14 +42,16 @@ def frame_paths(output: str, count: int) -> list[str]:
     return [f"{stem}_{i:04d}{ext}" for i in range(count)]
 
 
-def frames_command(args, parse_set, choose_integrator, check_output, say) -> int:
-    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`."""
-    from .. import api
+def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
+    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
+    scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
+    from ..command_job import job_of
+    from ..pipeline.execute import ray_job
+    from ..pipeline.resolve import resolve
     from ..runtime import init
     from ..sizing import lanes_per_pass
     from .frames import Manifest, frame_settings, render_frames
     from .orbit import turntable
-    from .run import job_for
 
     scenes = args.scene or ["cornell-box"]
     if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
@@ -73,27 +73,23 @@ def frames_command(args, parse_set, choose_integrator, check_output, say) -> int
     for path in paths + [args.output + ".frames.json"]:  # every numbered image and the manifest, as the output
         check_target(path)
     params = parse_set(args.set)
+    defines = parse_defines(args.define)
     cluster = cluster_of(args)
     variant = init()
     lanes, note = lanes_per_pass(variant)
     if note and not args.quiet:
         say(f"styletrace: {note}")
     frames, values = [], []
-    if len(scenes) == 1:
-        scene = api.load_scene(scenes[0], args.width, args.height)
-        integrator = choose_integrator(scene, args, params)
-        job = job_for(scenes[0], integrator, args.width, args.height)
-        degrees = 360.0 if args.orbit is None else args.orbit
-        frames = [(job, m) for m in turntable(scene, count, degrees)]
-        values = [job.values]
-        del scene
-    else:
-        for name in scenes:  # each file loaded here once: a broken one fails before any task runs
-            scene = api.load_scene(name, args.width, args.height)
-            job = job_for(name, choose_integrator(scene, args, params), args.width, args.height)
+    for name in scenes:  # each file resolved here once: a broken one fails before any task runs
+        resolved = resolve(job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes))
+        job = ray_job(resolved)
+        if len(scenes) == 1:
+            degrees = 360.0 if args.orbit is None else args.orbit
+            frames = [(job, m) for m in turntable(resolved.scene, count, degrees)]
+        else:
             frames.append((job, None))
-            values.append(job.values)
-            del scene
+        values.append(job.values)
+        del resolved
     settings = frame_settings("orbit" if len(scenes) == 1 else "files", [f[0].spec.describe() for f in frames[:1]]
                               if len(scenes) == 1 else [f[0].spec.describe() for f in frames], values, args.spp,
                               args.seed, count, args.orbit, lanes, args.pass_spp, variant)

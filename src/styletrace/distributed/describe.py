@@ -5,7 +5,7 @@
 
 An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in name,
 an XML path, or a scene dict, plus the width/height and any further keyword arguments of `load_scene`
-(`load_kwargs`, forwarded as they are: defines for XML, once `load_scene` takes them). Scene dicts may
+(`load_kwargs`: the defines of an XML file). Scene dicts may
 hold Mitsuba scalar values (`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either:
 `SceneSpec.of` replaces each by its class name and numbers, and `load` builds it again. A worker keeps the
 last few scenes and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
@@ -93,20 +93,28 @@ class SceneSpec:
 
 
 def load(spec: SceneSpec, values: dict, variant: str):
-    """(scene, integrator) for a worker: `init(variant)`, then `api.load_scene` and `make_integrator_from`
-    with the scene-relative defaults resolved, cached by the scene and the integrator's values."""
+    """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of the scene
+    source with the driver's integrator values, cached by the scene and the integrator's values."""
     from .. import runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
     if key in CACHE:
         CACHE.move_to_end(key)
         return CACHE[key]
-    from .. import api
+    from ..pipeline.job import Job
+    from ..pipeline.resolve import resolve
+    from ..plugins.integrator import StylizedIntegrator
+    unknown = sorted(set(spec.load_kwargs) - {"defines"})
+    if unknown:
+        raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
-    sc = api.load_scene(scene, spec.width, spec.height, **spec.load_kwargs)
-    # scene-relative 'auto' values pinned on the whole scene, before any tile's crop: the pilot is
-    # deterministic (fixed seed, our path kernel, one-thread load), so every worker pins what the driver would
-    loaded = (sc, api.resolve_defaults(sc, api.make_integrator_from(values))[0])
+    # the render pipeline's resolve, with the driver's resolved values as the integrator: the same load, and
+    # scene-relative 'auto' values pinned on the whole scene before any tile's crop (the pilot is
+    # deterministic: fixed seed, our path kernel), so every worker pins what the driver did
+    job = Job(scene=scene, width=spec.width, height=spec.height, defines=dict(spec.load_kwargs.get("defines") or {}),
+              integrator=StylizedIntegrator.from_values(values), lanes_per_pass=1)
+    resolved = resolve(job)
+    loaded = (resolved.scene, resolved.integrator)
     CACHE[key] = loaded
     while len(CACHE) > CACHE_SIZE:
         CACHE.popitem(last=False)

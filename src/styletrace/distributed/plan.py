@@ -2,14 +2,14 @@
 
     layout, units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
     merge = Merge(width, height, spp, layout)
-    merge.add(unit, rendered_tile)     # any order; summed per tile in the order of `api.passes`
-    merge.progress()                   # an api.Progress: spp_done, image
+    merge.add(unit, rendered_tile)     # any order; summed per tile in the order of `pass_loop.passes`
+    merge.progress()                   # a pipeline.passes.Progress: spp_done, image
 
-The units are exactly the kernel launches of `api.passes`: its tiles and pass size (`api.pass_size`) and,
-for launch number `index` (round r of tile t is index r * tiles + t), the seed `api.pass_seed(seed, index)`
+The units are exactly the kernel launches of `pass_loop.passes`: its tiles and pass size (`pass_loop.pass_size`) and,
+for launch number `index` (round r of tile t is index r * tiles + t), the seed `pass_loop.pass_seed(seed, index)`
 and min(per_pass, spp - r * per_pass) samples per pixel. So which worker renders a unit changes nothing.
 Results arrive in any order; `Merge` keeps the early ones aside and adds each tile's passes in round order,
-with the same float32 operations as `api.passes`, so the merged image is bit-identical to the
+with the same float32 operations as `pass_loop.passes`, so the merged image is bit-identical to the
 single-process render of the same seed and split (not merely equal up to the order of summation).
 """
 from __future__ import annotations
@@ -18,25 +18,25 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import api
+from ..pipeline import passes as pass_loop  # the pass loop whose launches these are
 
 
 @dataclass(frozen=True)
 class Unit:
-    index: int   # the launch number in api.passes: round * tiles + tile
+    index: int   # the launch number in pass_loop.passes: round * tiles + tile
     tile: int
     round: int
     spp: int
     seed: int
 
 
-def plan(width: int, height: int, spp: int, seed: int, lanes_per_pass: int = api.LANES_PER_PASS,
-         pass_spp: int | None = None) -> tuple[list[api.Tile], list[Unit]]:
+def plan(width: int, height: int, spp: int, seed: int, lanes_per_pass: int = pass_loop.LANES_PER_PASS,
+         pass_spp: int | None = None) -> tuple[list[pass_loop.Tile], list[Unit]]:
     """The tiles of the film and every unit of the render, in launch order."""
-    layout, per_pass = api.pass_size(width, height, spp, lanes_per_pass, pass_spp)
+    layout, per_pass = pass_loop.pass_size(width, height, spp, lanes_per_pass, pass_spp)
     rounds = -(-spp // per_pass)
     units = [Unit(r * len(layout) + t, t, r, min(per_pass, spp - r * per_pass),
-                  api.pass_seed(seed, r * len(layout) + t))
+                  pass_loop.pass_seed(seed, r * len(layout) + t))
              for r in range(rounds) for t in range(len(layout))]
     return layout, units
 
@@ -44,7 +44,7 @@ def plan(width: int, height: int, spp: int, seed: int, lanes_per_pass: int = api
 class Merge:
     """The running float32 sum of the finished units, added per tile in round order."""
 
-    def __init__(self, width: int, height: int, spp: int, layout: list[api.Tile],
+    def __init__(self, width: int, height: int, spp: int, layout: list[pass_loop.Tile],
                  total: np.ndarray | None = None, rounds_done: list[int] | None = None):
         self.spp, self.layout = spp, layout
         self.total = np.zeros((height, width, 3), dtype=np.float32) if total is None else total
@@ -66,14 +66,14 @@ class Merge:
         while (t, self.rounds_done[t]) in self._pending:
             u, arr = self._pending.pop((t, self.rounds_done[t]))
             tile = self.layout[t]
-            self.total[tile.dest] += arr[tile.keep] * np.float32(u.spp)  # as api.passes does
+            self.total[tile.dest] += arr[tile.keep] * np.float32(u.spp)  # as pass_loop.passes does
             self.counts[t] += u.spp
             self.rounds_done[t] += 1
             added += 1
         return added
 
-    def progress(self) -> api.Progress:
-        return api.Progress(int(self.counts.min()), self.spp, self.total, self.counts, self.layout)
+    def progress(self) -> pass_loop.Progress:
+        return pass_loop.Progress(int(self.counts.min()), self.spp, self.total, self.counts, self.layout)
 
 
 __all__ = ["Unit", "plan", "Merge"]

@@ -1,9 +1,9 @@
 """The driver of a render on Ray: hand out (tile, pass) units, merge them, checkpoint, report progress.
 
     run = Render(job, spp=256, seed=0, width=512, height=512, cluster="local", checkpoint=ck)
-    for prog in run:          # an api.Progress after each finished unit, as api.passes yields
+    for prog in run:          # a pipeline.passes.Progress after each finished unit, as the pass loop yields
         ...
-    image = render("cornell-box", style="cel", spp=64, cluster="local")   # the API's one call
+    image = styletrace.render("cornell-box", style="cel", spp=64, cluster="local")   # via pipeline.execute
 
 Units are submitted in launch order, at most `window` at a time (twice the tasks the cluster can run at
 once), so the driver holds a bounded number of results. A task whose worker dies is run again by Ray
@@ -20,7 +20,8 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from .. import api
+from ..pipeline.passes import LANES_PER_PASS, Progress
+from ..pipeline.scene import first_line
 from ..errors import StyletraceError, UsageError
 from .checkpoint import Checkpoint
 from .cluster import connect, cpus
@@ -42,7 +43,7 @@ class Render:
     """Iterating renders; `progress()` after the loop is the final state, `worker_pids` who rendered."""
 
     def __init__(self, job, spp: int, seed: int, width: int, height: int, cluster: str = "local",
-                 lanes_per_pass: int = api.LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
+                 lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
                  resume: bool = False, checkpoint_every: float = 10.0, cpus_per_task: int = 1,
                  gpus_per_task: float = 0, lock: Any = contextlib.nullcontext()):
         from ..plugins.settings import parse
@@ -77,7 +78,7 @@ class Render:
     def total_units(self) -> int:
         return len(self.units)
 
-    def progress(self) -> api.Progress:
+    def progress(self) -> Progress:
         return self.merge.progress()
 
     def save(self) -> None:
@@ -91,7 +92,7 @@ class Render:
         if self.checkpoint is not None:
             self.checkpoint.remove()
 
-    def __iter__(self) -> Iterator[api.Progress]:
+    def __iter__(self) -> Iterator[Progress]:
         ray = connect(self.cluster)
         from .tasks import render_unit
         todo = [u for u in self.units if u.round >= self.merge.rounds_done[u.tile]]
@@ -137,9 +138,9 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
         cause = getattr(exc, "cause", None)
         if isinstance(cause, StyletraceError):
             raise cause from None
-        raise RuntimeError(f"a Ray task failed: {api.first_line(cause or exc)}") from None
+        raise RuntimeError(f"a Ray task failed: {first_line(cause or exc)}") from None
     except ray.exceptions.RayError as exc:
-        raise RuntimeError(f"a Ray task failed: {api.first_line(exc)}") from None
+        raise RuntimeError(f"a Ray task failed: {first_line(exc)}") from None
 
 
 def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
@@ -153,48 +154,4 @@ def job_for(scene: Any, integrator: Any, width: int | None = None, height: int |
     return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init())
 
 
-def render(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
-           estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
-           integrator: Any = None, callback: Callable[[api.Progress], None] | None = None,
-           cluster: str | None = None, pass_spp: int | None = None, denoise: str | None = None,
-           **params: Any) -> np.ndarray:
-    """`styletrace.render`: `api.render` with passes sized for the device (`sizing`) and an optional
-    `pass_spp`; with `cluster` ("local" or a Ray address) the passes become Ray tasks, and the image is
-    bit-identical to the one rendered here with the same seed and split."""
-    if denoise is not None:  # docs/denoise.md; local only
-        if cluster is not None:
-            raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
-        from ..denoise import render as denoised
-        return denoised(scene, style, spp, inner, estimator, seed, width, height, integrator, callback,
-                        denoise=denoise, pass_spp=pass_spp, **params)
-    from ..arguments import check_render_args
-    from ..sizing import lanes_per_pass
-    from ..runtime import init
-    check_render_args(spp, seed, integrator)
-    sc = api.load_scene(scene, width, height)  # checks the scene here, once, with the driver's one-line errors
-    if integrator is None:
-        integrator = api.make_integrator(style=style, inner=inner, estimator=estimator, **params)
-    lanes, _ = lanes_per_pass(init())
-    aovs = bool(integrator.aov_names())
-    if aovs and spp < 2:
-        raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples per pixel")
-    if cluster is None:  # api.render's loop, with the device's pass size and the given split
-        image = prog = None
-        for prog in api.passes(sc, integrator, spp, seed, lanes_per_pass=lanes, pass_spp=pass_spp):
-            image = prog.image
-            if callback is not None:
-                callback(prog)
-        return (image, prog.aovs) if aovs else image
-    if aovs:
-        raise UsageError("aovs=True renders without cluster=: the Ray passes keep the image only")
-    size = sc.sensors()[0].film().crop_size()
-    job = job_for(scene, integrator, width, height)
-    del sc
-    run = Render(job, spp, seed, int(size[0]), int(size[1]), cluster, lanes, pass_spp)
-    for prog in run:
-        if callback is not None:
-            callback(prog)
-    return run.progress().image
-
-
-__all__ = ["Render", "render", "job_for", "settings_of", "MAX_RETRIES"]
+__all__ = ["Render", "job_for", "settings_of", "MAX_RETRIES"]

@@ -70,7 +70,7 @@ def render_frame(job: Job, to_world, spp: int, seed: int, lanes_per_pass: int, p
     import mitsuba as mi
     import numpy as np
 
-    from .. import api
+    from ..pipeline import passes as pass_loop
     scene, integrator = _prepare(job)
     params = mi.traverse(scene.sensors()[0]) if to_world is not None else None
     old = None
@@ -81,7 +81,7 @@ def render_frame(job: Job, to_world, spp: int, seed: int, lanes_per_pass: int, p
             params["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64))
             params.update()
         image = None
-        for prog in api.passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
+        for prog in pass_loop.passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
             image = prog.image
     finally:
         if old is not None:

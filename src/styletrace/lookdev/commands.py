@@ -30,9 +30,10 @@ def check_buffer_path(path: str) -> None:
     check_target(path)  # before the render: the buffer is written after it
 
 
-def render_with_buffer(args, scene, integrator, pilot=None) -> int:
-    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass. `pilot`: the
-    scene-defaults pilot the auto values were resolved with (record stores it rather than tracing anew)."""
+def render_with_buffer(args, scene, integrator, lanes: int | None = None, pilot=None) -> int:
+    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass (`lanes`: camera
+    samples per pass, the render pipeline's for this device, so the image is the plain render's; `pilot`: the
+    scene-defaults pilot the auto values were resolved with, which record stores rather than tracing anew)."""
     check_buffer_path(args.buffer)
     from .. import api
     from ..images import save_safely
@@ -41,7 +42,8 @@ def render_with_buffer(args, scene, integrator, pilot=None) -> int:
     latest = buf = None
     failure = None
     try:
-        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene), pilot=pilot):
+        kw = {} if lanes is None else {"lanes_per_pass": lanes}
+        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene), pilot=pilot, **kw):
             pass
     except (KeyboardInterrupt, RuntimeError) as exc:  # keep the finished passes (see cli.cmd_render)
         if latest is None:

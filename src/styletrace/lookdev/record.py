@@ -6,7 +6,7 @@
 `RecordingIntegrator` is the `stylized` integrator that also keeps, per camera sample (SIMD lane), the
 θ-free data of `lookdev.buffer`. Mitsuba's render loop calls `sample()` once per pass for the whole
 wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
-and they are collected after each pass of `api.passes` (the same passes and pass seeds as `render`).
+and they are collected after each pass of `pipeline.passes` (the same passes and pass seeds as `render`).
 Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
 SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1.
 
@@ -32,13 +32,15 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .. import api  # noqa: E402
+from ..pipeline import passes as pass_loop  # noqa: E402
+from ..pipeline.scene import film_format  # noqa: E402
 from .. import estimators as E  # noqa: E402
 from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
 from ..plugins import settings as S  # noqa: E402
 from ..plugins.estimation import make_estimator  # noqa: E402
 from ..plugins.integrator import StylizedIntegrator  # noqa: E402
-from ..plugins.scene_defaults import Pilot, unique_styled  # noqa: E402
+from ..plugins.scene_defaults import Pilot, resolve as resolve_defaults, unique_styled  # noqa: E402
+from ..plugins.scenes import DEFAULT  # noqa: E402
 from ..styles.base import Vertex, camera_forward  # noqa: E402
 from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, PILOT, VERSION, Buffer, bytes_per_sample  # noqa: E402
 from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402
@@ -80,8 +82,8 @@ def check_film(scene: mi.Scene) -> mi.Film:
                          f"box filter (<rfilter type=\"box\"/>), where every camera sample lands in one pixel")
     if film.sample_border():
         raise SceneError("the film samples its border (sample_border=true): buffers need it off")
-    if api.film_format(scene) != "rgb":
-        raise SceneError(f"the film's pixel_format is '{api.film_format(scene)}': buffers need an rgb film")
+    if film_format(scene) != "rgb":
+        raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb film")
     return film
 
 
@@ -114,12 +116,12 @@ class RecordingIntegrator(StylizedIntegrator):
     def stylized(self, level, scene, sampler, pi, si, ray, active, depth, medium=None):
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
-        styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
+        styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total, slot, mean = mi.Spectrum(0.0), mi.Int32(-1), mi.Color3f(0.0)
         for i, target in enumerate(self.targets):
             here = active & (_any(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
             if self.sequence:
-                value = self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
+                value = self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
             else:
                 m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth, medium)
                 value = finish(target.slot, m, v)
@@ -129,15 +131,15 @@ class RecordingIntegrator(StylizedIntegrator):
         self.kept.update(p=mi.Vector3f(v.p), n=v.n, wo=v.wo, depth=v.depth, slot=slot, mean=mean)
         return total
 
-    def _through(self, w, value):
+    def through(self, w, value):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
-        return super()._through(w, value)
+        return super().through(w, value)
 
-    def _estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
-        """`StylizedIntegrator._estimate` with every draw and uniform also noted in the recorder's pool.
+    def estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
+        """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's pool.
         The same calls on the same stream in the same order: the estimate is the render's."""
         if not self.sequence:
-            return super()._estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
+            return super().estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
         style, rec = slot.style, self.recorder
         if style.closed_form:
             return style.apply(mi.Color3f(0.0), v)
@@ -194,7 +196,7 @@ def sensor_description(sensor) -> dict:
 
 
 def _slots(integrator: StylizedIntegrator, scene: mi.Scene) -> list[dict]:
-    targets = integrator._targets(scene)
+    targets = integrator.targets_for(scene)
     return [slot_record(t.slot, "object" if t.bsdfs else "integrator", t.bsdfs[0].id() if t.bsdfs else "")
             for t in targets]
 
@@ -219,18 +221,18 @@ def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) 
 
 
 def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int = 0, label: str = "",
-           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = api.LANES_PER_PASS, pilot: Pilot | None = None
-           ) -> Iterator[tuple[api.Progress, Buffer]]:
-    """Render like `api.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
+           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = pass_loop.LANES_PER_PASS, pilot: Pilot | None = None
+           ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
+    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
     `Pilot` if the caller resolved the auto values with it already (`render_with_buffer`), so that the pilot
     is traced once for both (it is stored in the buffer)."""
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
-    # pin the scene-relative defaults first: `api.passes` would otherwise pin them on a plain copy of the
+    # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain copy of the
     # integrator, losing the recording; with the pilot stored below (traced here if an auto value needs it)
-    integrator = api.resolve_defaults(scene, integrator, pilot)[0]
-    slots = [t.slot for t in integrator._targets(scene)]
+    integrator = resolve_defaults(scene, integrator, pilot)[0]
+    slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
     sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
     per_sample = budget(slots) if sequence else 0
@@ -259,14 +261,14 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
     pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
-    for rec_slot, target in zip(header["slots"], rec._targets(scene)):
+    for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     done = 0
-    for index, prog in enumerate(api.passes(scene, rec, spp, seed, lanes_per_pass)):
+    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass)):
         n = prog.spp_done - done
         done = prog.spp_done
-        buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize, rec.recorder), n, api.pass_seed(seed, index))
+        buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize, rec.recorder), n, pass_loop.pass_seed(seed, index))
         rec.kept, rec.recorder = {}, None
         yield prog, buf
 
@@ -274,24 +276,29 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
 def scene_label(scene: Any) -> str:
     """How the buffer names its scene (the equivalent command line uses it)."""
     if scene is None:
-        return api.DEFAULT
+        return DEFAULT
     if isinstance(scene, (str, os.PathLike)):
         return os.fspath(scene)
     return f"<{type(scene).__name__}>"
 
 
-def render_buffer(scene: Any = None, style: str | None = None, spp: int = 16, inner: Any = None,
+def render_buffer(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
                   estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
                   integrator: StylizedIntegrator | None = None, max_samples: int = MAX_SAMPLES,
-                  callback: Callable[[api.Progress], None] | None = None, **params: Any) -> Buffer:
+                  callback: Callable[[pass_loop.Progress], None] | None = None, defines: dict[str, Any] | None = None,
+                  **params: Any) -> Buffer:
     """Render as `styletrace.render` does and return the expectation buffer of every camera sample.
 
-    `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments)."""
-    sc = api.load_scene(scene, width, height)
-    if integrator is None:
-        integrator = api.make_integrator(style=style, inner=inner, estimator=estimator, **params)
+    The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values
+    pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments
+    and pass split)."""
+    from ..pipeline.job import Job, given_values
+    from ..pipeline.resolve import resolve
+    job = Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
+              given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed)
+    r = resolve(job)
     buf = None
-    for prog, buf in record(sc, integrator, spp, seed, scene_label(scene), max_samples):
+    for prog, buf in record(r.scene, r.integrator, r.spp, seed, scene_label(scene), max_samples, r.lanes, pilot=r.pilot):
         buf.image = prog.image
         if callback is not None:
             callback(prog)

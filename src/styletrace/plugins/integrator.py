@@ -49,15 +49,12 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from ..styles.base import Vertex, camera_forward
+from ..styles.base import Vertex
 from . import settings as S
-from .emitter_sampler import EmitterSampler
 from .estimation import make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
-from .anchors import Tone
-from .lines import Lines
-from ..errors import SceneError
+from .render_context import RenderContext
 from .path import bounce, emission, environment, first_scattering, past_area_emitters, walk
 from .scene_graph import SceneGraph, any_ptr as _any_ptr
 from .volume import volume_walk
@@ -87,6 +84,11 @@ class Target:
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
+    # per-render state, set and cleared by `render_context.RenderContext` only (its module doc says why)
+    targets = ()         # the style targets of the scene being traced
+    emitters = None      # its emitter sampler
+    view = None          # its camera's forward vector
+    nulls = media = see_through = False  # null-scattering surfaces / participating media / pure null BSDFs
     lines = None         # feature lines bound to the scene being traced (lines.py), else None
     line_states = {}     # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
     tone = None          # anchors.Tone where a style reads image coordinates (Vertex.s), else None
@@ -120,18 +122,18 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return self.expansion.prepare(self, scene, m, int(seed)) if m else None
 
     # ---- which styles apply where --------------------------------------------------------------
-    def _targets(self, scene: mi.Scene) -> list[Target]:
-        # styled BSDFs wherever they sit: on shapes, inside wrappers (twosided, mask, blendbsdf) and in
-        # shapegroups seen through instances (scene_graph.py); `bsdfs[0]` is the styled BSDF itself
-        graph = SceneGraph(scene)
-        # plain flags only: a kept reference to a scene's objects breaks later traces (see `sample`)
-        self.nulls, self.media, self.see_through = graph.has_null, graph.has_media, graph.has_see_through
+    def targets_for(self, scene: mi.Scene, graph: SceneGraph | None = None) -> list[Target]:
+        """Which style applies where in `scene`: its styled BSDFs wherever they sit (on shapes, inside wrappers
+        such as twosided, mask, blendbsdf, and in shapegroups seen through instances: scene_graph.py;
+        `bsdfs[0]` is the styled BSDF itself), then the integrator's own style for all other objects."""
+        graph = SceneGraph(scene) if graph is None else graph
         targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
         if self.settings.stylize != "first_object_hit":
             targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
         return targets
 
-    def _styled(self, si) -> mi.Bool:
+    def styled_mask(self, si) -> mi.Bool:
+        """Lanes whose surface has a styled BSDF (any target's)."""
         return _any_ptr(si.bsdf(), [b for t in self.targets for b in t.bsdfs], mi.BSDFPtr)
 
     def _skip_emitter(self, ds) -> mi.Bool:
@@ -185,7 +187,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         start = mi.UInt32(depth)
 
         def stop(si, d):
-            styled = self._styled(si)
+            styled = self.styled_mask(si)
             return styled if halt_at_start else styled & (d > start)
 
         extra = dict(medium=medium, flight=flight, hide_first=hide) if self.media else {}
@@ -197,9 +199,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self.tone_states[level] = w.tone
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
         value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth, w.medium)
-        return self._through(w, value)
+        return self.through(w, value)
 
-    def _through(self, w, value) -> mi.Spectrum:
+    def through(self, w, value) -> mi.Spectrum:
         """The walk's radiance: what it gathered before halting plus its throughput times the stylized
         value where it halted (a seam for `lookdev.record`, which keeps both per camera sample)."""
         return w.L + dr.select(w.halted, w.beta * value, 0.0)
@@ -210,15 +212,15 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                    depth=mi.UInt32(depth))
         if self.tone is not None:  # LLaT's image coordinate (anchors.py), traced only where a style reads it
             v.s, v.method = self.tone.coordinate(scene, si, ray, depth, self.tone_states.get(level), active)
-        styled = self._styled(si) if len(self.targets) > 1 else mi.Bool(False)
+        styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total = mi.Spectrum(0.0)
         for target in self.targets:
             here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
-            total = dr.select(here, self._estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v,
+            total = dr.select(here, self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v,
                                                    medium), total)
         return total
 
-    def _estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v,
+    def estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v,
                   medium=None) -> mi.Spectrum:
         style = slot.style
         if style.closed_form:  # no children: the AOVs keep 0 here
@@ -271,30 +273,15 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return image if develop else mi.TensorXf()
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        self.targets = self._targets(scene)
-        problem = line_problem(self.settings, self.media)
-        if problem is not None:
-            raise SceneError(problem)
-        self.lines = None if self.settings.lines is None else Lines(self.settings.lines, scene,
-                                                                    see_through=self.see_through)
-        wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in self.targets)
-        self.tone = Tone(scene) if wants and scene.sensors() else None
-        # emitter selection in an order of the scene's own (its emitter list changes order between runs)
-        self.emitters = EmitterSampler(scene, self.settings.emitter_sampling)
-        try:
+        with RenderContext(self, scene):  # binds the scene's targets, emitters, lines, view; always releases them
             if medium is None and scene.sensors():
                 medium = scene.sensors()[0].get_medium()
             with tracing():
                 return self._sample(scene, sampler, ray, active, medium)
-        finally:
-            # Keep no reference to this scene's objects once traced: Dr.Jit traces calls on every live
-            # instance of a class, and a lingering BSDF or emitter of a scene that the garbage collector
-            # is tearing down crashed a later trace (measured: segfault in pdf_emitter_direction).
-            self.targets = []
-            self.emitters = None
-            self._lane_moments = None
-            self.lines, self.line_states = None, {}
-            self.tone, self.tone_states = None, {}
+
+    def scene_problem(self) -> str | None:
+        """Why this integrator cannot render the scene bound to it (its lines with media), or None."""
+        return line_problem(self.settings, self.media)
 
     def _sample(self, scene, sampler, ray, active, medium=None):
         self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
@@ -315,7 +302,6 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     def _radiance(self, scene, sampler, ray, active, medium=None):
         for t in self.targets:
             t.slot.style.prepare(scene)
-        self.view = camera_forward(scene)
         camera_ray, spp = ray, sampler.sample_count()
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
@@ -359,7 +345,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                            hide_first=hide)
             si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
             value = self.stylized(0, scene, sampler, w.pi, si, w.ray, w.halted, mi.UInt32(0), w.medium)
-            return self._through(w, value), valid | w.halted | (active & (w.depth > 0)), []
+            return self.through(w, value), valid | w.halted | (active & (w.depth > 0)), []
         if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
             front = first_scattering(scene, sampler, pi, ray, active)
             pi, ray = front.pi, front.ray

@@ -62,19 +62,20 @@ MODES = ("absorb", "expectation")
 
 @dataclass(frozen=True)
 class LineSettings:
-    """Parsed in `settings.parse` (the `line_*` integrator properties)."""
-    width: float = 2.0                       # pixels, the line's full width
-    samples: int = 8                         # N auxiliary rays per edge
-    depth: int = 1                           # edges 0 .. depth - 1 (1: the camera ray only)
-    tests: tuple[str, ...] = DEFAULT_TESTS
-    crease: float = 0.3
-    albedo: float = 0.1
-    slope: float = 2.0
-    color: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    gradient: tuple | None = None            # ((r,g,b), (r,g,b), y0 or None, y1 or None)
-    objects: tuple[str, ...] = ()
-    mode: str = "absorb"                     # or "expectation" (LLaT): k stencil pairs
-    k: int = 12
+    """Parsed in `settings.parse` from the `line_*` integrator properties, whose declarations
+    (`settings.PROPERTIES`) hold the defaults, bounds and docs: none are repeated here."""
+    width: float                             # pixels, the line's full width
+    samples: int                             # N auxiliary rays per edge
+    depth: int                               # edges 0 .. depth - 1 (1: the camera ray only)
+    tests: tuple[str, ...]
+    crease: float
+    albedo: float
+    slope: float
+    color: tuple[float, float, float]
+    gradient: tuple | None                   # ((r,g,b), (r,g,b), y0 or None, y1 or None)
+    objects: tuple[str, ...]
+    mode: str                                # "absorb" or "expectation" (LLaT): k stencil pairs
+    k: int
 
     def describe(self) -> str:
         return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, tests={','.join(self.tests)})")

@@ -66,13 +66,13 @@ import numpy as np
 from ..errors import SceneError
 from ..estimators import channel_mean
 from ..jit import no_collection
-from ..styles.base import Vertex, camera_forward
+from ..styles.base import Vertex
 from . import settings as S
 from .acceptance import accepted
-from .emitter_sampler import EmitterSampler
 from .estimation import adaptive_direct
 from .lane_sampler import LaneSampler
 from .path import depth_limit, emission, environment, mis_power, past_area_emitters, walk
+from .render_context import RenderContext
 from .scene_graph import any_ptr
 from .world_grid import WorldGrid, density_h
 
@@ -101,27 +101,16 @@ def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weigh
     `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
     by its own density (wrong: the tests' negative control);
     `keep`, a dict, receives the first batch's pools as numpy arrays (`pools`)."""
-    with no_collection():  # no scene may be finalised while a pass is recorded (jit.no_collection)
-        return _render_scene(integ, scene, sensor, seed, spp, weights, keep)
-
-
-def _render_scene(integ, scene, sensor, seed, spp, weights, keep):
-    integ.targets = integ._targets(scene)
-    if integ.nulls or integ.media:
-        integ.targets = []
-        what = "participating media" if integ.media else "null-scattering surfaces (masks, null BSDFs)"
-        raise SceneError(f"reuse=pixels does not support scenes with {what} yet: render with reuse=off")
-    integ.emitters = EmitterSampler(scene, integ.settings.emitter_sampling)
-    try:
+    # no scene may be finalised while a pass is recorded (jit.no_collection), and none needs collecting first
+    with no_collection(), RenderContext(integ, scene):  # targets, emitters, view bound to this scene, released after
+        if integ.nulls or integ.media:
+            what = "participating media" if integ.media else "null-scattering surfaces (masks, null BSDFs)"
+            raise SceneError(f"reuse=pixels does not support scenes with {what} yet: render with reuse=off")
         for t in integ.targets:
             if t.bsdfs:
                 S.check_reusable(t.slot, f"a styled BSDF's style '{t.slot.style.name}'", integ.settings.reuse_deep)
             t.slot.style.prepare(scene)
-        integ.view = camera_forward(scene)
         return _render(integ, scene, sensor, seed, spp, weights or integ.settings.reuse_mis, keep)
-    finally:  # no reference to the scene's objects may outlive the render (integrator.sample says why)
-        integ.targets = []
-        integ.emitters = None
 
 
 def _render(integ, scene, sensor, seed, spp, weights, keep):
@@ -166,7 +155,7 @@ def first_round(targets, level: int = 0) -> int:
 def _slots(integ, si, hit, bsdf, level):
     """Per lane: its target (style slot index, -1 where none), its children count m at `level` (n0 of an
     adaptive count), whether it may pool (it draws children and its BSDF has no delta or null part)."""
-    styled = integ._styled(si) if len(integ.targets) > 1 else mi.Bool(False)
+    styled = integ.styled_mask(si) if len(integ.targets) > 1 else mi.Bool(False)
     target, m = mi.Int32(-1), mi.UInt32(0)
     for i, t in enumerate(integ.targets):
         here = hit & (any_ptr(si.bsdf(), t.bsdfs, mi.BSDFPtr) if t.bsdfs else ~styled)

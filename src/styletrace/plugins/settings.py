@@ -3,14 +3,15 @@
 Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
 `--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
 bad values raise `SettingsError` (or `StyleError` for the style's own parameters) with one line.
-The integrator's property table in the README and the docs is generated from `PROPERTIES`.
+The integrator's property table in the README and the docs is generated from `PROPERTIES`, whose entries
+(`declare.Property`) declare each property once: type, default, bounds, choices, doc line and flag.
 
     settings = parse({"style": "cel", "inner_samples": "8,4", "stylize": "first_n_hits", "stylize_depth": 2})
     values = refine(scene_integrator.values, {"inner_samples": 16})   # a scene's own integrator, refined
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from typing import Any, Mapping
 
 from ..errors import SettingsError
@@ -19,22 +20,7 @@ from ..styles.base import Style
 from . import estimation
 from .emitter_sampler import DEFAULT_MODE as EMITTER_DEFAULT, MODES as EMITTER_MODES
 from .lines import DEFAULT_TESTS as LINE_TESTS_DEFAULT, MODES as LINE_MODES, TESTS as LINE_TESTS, LineSettings
-
-
-@dataclass(frozen=True)
-class Property:
-    """One integrator property: its default, its type as the docs show it, its flag and its doc line."""
-
-    name: str
-    default: Any
-    kind: str
-    doc: str
-    flag: str = ""            # the `styletrace render` flag, if it has its own
-    metavar: str = ""
-    bare: bool = False        # the flag is a switch without a value (`--lines`)
-
-    def show_default(self) -> str:
-        return "style's" if self.default is None else str(self.default)
+from .declare import COUNT_MAX, Property, boolean, integer, names, number, rgb  # one declaration per property
 
 
 STYLIZE_MODES = {
@@ -73,9 +59,9 @@ PROPERTIES = (
              "--inner", "N"),
     Property("adaptive_z", 2.0, "float", "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
              "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
-             "confidence, Student's t standard errors", "", ""),
+             "confidence, Student's t standard errors", "", "", low=0.0, high=1e6, low_open=True),
     Property("adaptive_bias", 2e-3, "float", "adaptive `n0:n_max`: keep drawing while a smooth style's predicted "
-             "direct-application bias, the magnitude of g'' Var / (2n) (Eq. 21), exceeds this", "", ""),
+             "direct-application bias, the magnitude of g'' Var / (2n) (Eq. 21), exceeds this", "", "", low=0.0, high=1e6, low_open=True),
     Property("aovs", False, "bool", "also output per-pixel error channels: the variance of the pixel's estimate, "
              "the predicted bias (Eq. 21) and the children used at the first stylized vertex (direct only; "
              "`--aovs`)", "", ""),
@@ -85,38 +71,42 @@ PROPERTIES = (
              "first stylized vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of "
              f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
              f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
-             "--expansion-pass", "M"),
+             "--expansion-pass", "M", low=0, high=MAX_EXPANSION_PASS),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
-             "MODE"),
+             "MODE", choices=tuple(STYLIZE_MODES)),
     Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 16; the trace time grows "
              "linearly with it)", "--stylize-depth", "N"),
     Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
     Property("emitter_sampling", EMITTER_DEFAULT, "string", "how next-event estimation picks a light: uniform (as "
              "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
-             "where a sky dominates the estimate; BENCHMARKS.md)", "--emitter-sampling", "MODE"),
-    Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D"),
+             "where a sky dominates the estimate; BENCHMARKS.md)", "--emitter-sampling", "MODE",
+             choices=tuple(EMITTER_MODES)),
+    Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D",
+             low=1),
     Property("hide_emitters", False, "bool", "camera rays do not see emitters, as Mitsuba's `path`: they pass "
              "through area lights and find black (alpha 0) where they escape", "--hide-emitters", "BOOL"),
     # feature lines (plugins/lines.py, docs/lines.md)
     Property("lines", False, "bool", "physically based feature lines on path edges (docs/lines.md)", "--lines",
              "BOOL", bare=True),
-    Property("line_width", 2.0, "float", "a line's width in pixels at the camera (kept in mirrors)"),
-    Property("line_samples", 8, "int", "N, auxiliary rays per tested edge (coverage 1 - (1 - q)^N)"),
+    Property("line_width", 2.0, "float", "a line's width in pixels at the camera (kept in mirrors)", low=0.0, high=64.0, low_open=True),
+    Property("line_samples", 8, "int", "N, auxiliary rays per tested edge (coverage 1 - (1 - q)^N)", low=1, high=256),
     Property("line_depth", 1, "int", "edges tested: 0 .. line_depth - 1 (1: the camera ray only; 2: also what a "
-             "mirror or glass at the first hit shows)"),
+             "mirror or glass at the first hit shows)", low=1, high=64),
     Property("line_tests", ",".join(LINE_TESTS_DEFAULT), "list", "which tests draw lines: "
              + ", ".join(LINE_TESTS)),
-    Property("line_crease", 0.3, "float", "crease test: 1 - abs(n . n') above this draws a line"),
-    Property("line_albedo", 0.1, "float", "albedo test: a luminance difference above this draws a line"),
+    Property("line_crease", 0.3, "float", "crease test: 1 - abs(n . n') above this draws a line", low=0.0, high=1.0),
+    Property("line_albedo", 0.1, "float", "albedo test: a luminance difference above this draws a line", low=0.0),
     Property("line_slope", 2.0, "float", "depth test: a point's distance from the other's tangent plane above this "
-             "times the stencil radius draws a line"),
+             "times the stencil radius draws a line", low=0.0),
     Property("line_color", "0,0,0", "rgb", "the lines' colour"),
     Property("line_gradient", "", "string", "instead of line_color, a gradient over world y: `r,g,b;r,g,b` (over "
              "the scene's bounding box) or `r,g,b;r,g,b;y0;y1`"),
     Property("line_objects", "", "list", "ids of the shapes that draw lines (empty: all)"),
     Property("line_mode", "absorb", "string", "absorb (West 2021: N rays against the path's own ray; a line ends "
-             "the path) or expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs)"),
-    Property("line_k", 12, "int", "expectation mode: k, the opacity control (more: lines darker and wider)"),
+             "the path) or expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs)",
+             choices=tuple(LINE_MODES)),
+    Property("line_k", 12, "int", "expectation mode: k, the opacity control (more: lines darker and wider)", low=1,
+             high=256),
     Property("reuse", "off", "string", "sample reuse at the stylized vertex: " + ", ".join(REUSE_MODES)
              + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
     Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
@@ -133,18 +123,31 @@ PROPERTIES = (
              f"world grid's cell size, as a fraction of the scene's bounding-box diagonal (at least {MIN_REUSE_H:g}); "
              f"0: from the vertices' density, a cell holding about reuse_k2 of them", "", ""),
     Property("reuse_k2", 16, "int", f"reuse_deep=world: candidates a second-level vertex looks at in its cell (at "
-             f"most {MAX_REUSE_K})", "", ""),
+             f"most {MAX_REUSE_K})", "", "", low=1, high=MAX_REUSE_K),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
+
+
+def declare(prop: Property) -> Property:
+    """Add an integrator property: its flag, docs row, parsing and `Settings` attribute follow (declare.py)."""
+    global PROPERTIES
+    if prop.name in DEFAULTS:
+        raise ValueError(f"integrator property {prop.name!r} is declared already")
+    PROPERTIES = PROPERTIES + (prop,)
+    DEFAULTS[prop.name] = prop.default
+    return prop
+
+
+def value(key: str, values: Mapping[str, Any]) -> Any:
+    """The value of property `key` in `values` (else its default), parsed as its declaration says."""
+    prop = next(p for p in PROPERTIES if p.name == key)
+    return prop.parse(values.get(key, prop.default))
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
 COMMAND_LINE_STYLE = "cel"
 #: what a `styled` BSDF accepts besides its style's parameters
 SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
 BASE_KEYS = ("samples_per_pass", "timeout")
-#: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
-#: "unbounded" (`path.depth_limit`), so larger values would wrap around.
-COUNT_MAX = 2 ** 32 - 2
 #: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the draw of
 #: the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice, the trace
 #: time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces with the flag off
@@ -192,25 +195,34 @@ class StyleSlot:
 
 @dataclass(frozen=True)
 class Settings:
+    """The parsed properties (`parse` fills every field; the defaults live in the declarations, PROPERTIES)."""
     slot: StyleSlot                 # the integrator's own style (identity: physically based)
-    stylize: str = "first_hit"
-    stylize_depth: int = 1
-    max_depth: int = -1
-    rr_depth: int = 5
-    emitter_sampling: str = EMITTER_DEFAULT
-    hide_emitters: bool = False
-    lines: LineSettings | None = None   # None: no line code is traced
-    adaptive_z: float = 2.0
-    adaptive_bias: float = 2e-3
-    aovs: bool = False
-    reuse: str = "off"
-    reuse_radius: int = 2
-    reuse_k: int = 8
-    reuse_mis: str = "balance"
-    reuse_deep: str = "tree"
-    reuse_h: float = 0.0
-    reuse_k2: int = 16
-    expansion_pass: int = 0
+    stylize: str
+    stylize_depth: int
+    max_depth: int
+    rr_depth: int
+    emitter_sampling: str
+    hide_emitters: bool
+    lines: LineSettings | None  # None: no line code is traced
+    adaptive_z: float
+    adaptive_bias: float
+    aovs: bool
+    reuse: str
+    reuse_radius: int
+    reuse_k: int
+    reuse_mis: str
+    reuse_deep: str
+    reuse_h: float
+    reuse_k2: int
+    expansion_pass: int
+    #: declared properties that no field above holds (`declare`): parsed by their declaration, read as attributes
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def __getattr__(self, name: str) -> Any:
+        extra = self.__dict__.get("extra", {})
+        if name in extra:
+            return extra[name]
+        raise AttributeError(f"'Settings' object has no attribute {name!r}")
 
     @property
     def style(self) -> Style:
@@ -231,56 +243,11 @@ class Settings:
                 + (f", expansion_pass={self.expansion_pass}" if self.expansion_pass else ""))
 
 
-def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
-    """An integer in [low, high] from a number or a string; exact (1.5 and '2.7' are refused, not truncated)."""
-    expected = f"expected an integer in [{low}, {high}]"
-    try:
-        if isinstance(raw, bool):
-            raise ValueError
-        if isinstance(raw, float) and not raw.is_integer():
-            raise ValueError
-        value = int(raw.strip()) if isinstance(raw, str) else int(raw)
-    except (TypeError, ValueError, OverflowError):
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}") from None
-    if not low <= value <= high:
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
-    return value
 
-
-def number(key: str, raw: Any, low: float, high: float = float("inf"), low_open: bool = False) -> float:
-    """A finite float in [low, high] (or (low, high] with `low_open`) from a number or a string."""
-    expected = f"expected a number in {'(' if low_open else '['}{low:g}, {high:g}]"
-    try:
-        if isinstance(raw, bool):
-            raise ValueError
-        value = float(raw.strip()) if isinstance(raw, str) else float(raw)
-    except (TypeError, ValueError, OverflowError):
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}") from None
-    if value != value or not (low < value if low_open else low <= value) or not value <= high:
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
-    return value
-
-
-def names(key: str, raw: Any) -> tuple[str, ...]:
-    """A list of names from 'a,b' or a list/tuple of strings."""
-    parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else None
-    if parts is None:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected a comma-separated list of names")
-    return tuple(str(p).strip() for p in parts if str(p).strip())
-
-
-def rgb(key: str, raw: Any) -> tuple[float, float, float]:
-    """An RGB colour from 'r,g,b', a list of three numbers, or one grey number."""
-    parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else [raw]
-    if len(parts) == 1:
-        parts = parts * 3
-    if len(parts) != 3:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected a colour r,g,b (three numbers >= 0)")
-    try:
-        return tuple(number(key, p, 0.0) for p in parts)
-    except SettingsError:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected a colour r,g,b (three numbers >= 0)") from None
-
+#: properties parsed into a field of their own or into a group (the style slot, the lines) at import time;
+#: a property declared later (`declare`) is parsed by its declaration alone into `Settings.extra`
+GROUPED = frozenset({f.name for f in fields(Settings)} | set(SLOT_KEYS) | set(BASE_KEYS)
+                    | {p.name for p in PROPERTIES if p.name == "lines" or p.name.startswith("line_")})
 
 def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
     """The `line_*` properties: None where `lines` is off (then the others are still checked)."""
@@ -298,30 +265,16 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
             raise SettingsError(f"bad value {raw!r} for 'line_gradient': expected r,g,b;r,g,b or r,g,b;r,g,b;y0;y1")
         ys = [number("line_gradient", y, -float("inf")) for y in parts[2:]] or [None, None]
         gradient = (rgb("line_gradient", parts[0]), rgb("line_gradient", parts[1]), ys[0], ys[1])
-    lines = LineSettings(width=number("line_width", get_("line_width"), 0.0, 64.0, low_open=True),
-                         samples=integer("line_samples", get_("line_samples"), 1, 256),
-                         depth=integer("line_depth", get_("line_depth"), 1, 64),
-                         tests=tests,
-                         crease=number("line_crease", get_("line_crease"), 0.0, 1.0),
-                         albedo=number("line_albedo", get_("line_albedo"), 0.0),
-                         slope=number("line_slope", get_("line_slope"), 0.0),
-                         color=rgb("line_color", get_("line_color")), gradient=gradient,
-                         objects=names("line_objects", get_("line_objects")),
-                         mode=str(get_("line_mode")), k=integer("line_k", get_("line_k"), 1, 256))
-    if lines.mode not in LINE_MODES:
-        raise SettingsError(f"bad value {lines.mode!r} for 'line_mode': expected one of {', '.join(LINE_MODES)}")
+    lines = LineSettings(width=value("line_width", values), samples=value("line_samples", values),
+                         depth=value("line_depth", values), tests=tests, crease=value("line_crease", values),
+                         albedo=value("line_albedo", values), slope=value("line_slope", values),
+                         color=value("line_color", values), gradient=gradient,
+                         objects=value("line_objects", values), mode=value("line_mode", values),
+                         k=value("line_k", values))
     if on and not tests:
         raise SettingsError(f"bad value {get_('line_tests')!r} for 'line_tests': lines need at least one of "
                             f"{', '.join(LINE_TESTS)}")
     return lines if on else None
-
-
-def boolean(key: str, raw: Any) -> bool:
-    """A bool from True/False, 1/0 or the strings 'true'/'false'/'1'/'0' (any case)."""
-    text = str(raw).strip().lower()
-    if isinstance(raw, bool) or text in ("true", "false", "1", "0") and not isinstance(raw, float):
-        return text in ("true", "1")
-    raise SettingsError(f"bad value {raw!r} for '{key}': expected true or false")
 
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
@@ -386,9 +339,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
     own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)
     slot = parse_slot(values, extra_keys=own + BASE_KEYS)
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
-    stylize = str(get_("stylize"))
-    if stylize not in STYLIZE_MODES:
-        raise SettingsError(f"bad value {stylize!r} for 'stylize': expected one of {', '.join(STYLIZE_MODES)}")
+    stylize = value("stylize", values)
     depth = integer("stylize_depth", get_("stylize_depth"), 1, MAX_STYLIZE_DEPTH)
     if stylize == "first_hit" and depth != 1:
         raise SettingsError(f"bad value {depth!r} for 'stylize_depth': 'first_hit' stylizes one level; "
@@ -402,14 +353,9 @@ def parse(values: Mapping[str, Any]) -> Settings:
     max_depth = integer("max_depth", get_("max_depth"), -1)
     if max_depth == 0:
         raise SettingsError(f"bad value 0 for 'max_depth': expected -1 (unbounded) or an integer in [1, {COUNT_MAX}]")
-    rr_depth = integer("rr_depth", get_("rr_depth"), 1)
-    lights = str(get_("emitter_sampling"))
-    if lights not in EMITTER_MODES:
-        raise SettingsError(f"bad value {lights!r} for 'emitter_sampling': expected one of {', '.join(EMITTER_MODES)}")
-    hide = boolean("hide_emitters", get_("hide_emitters"))
-    z = number("adaptive_z", get_("adaptive_z"), 0.0, 1e6, low_open=True)
-    target = number("adaptive_bias", get_("adaptive_bias"), 0.0, 1e6, low_open=True)
-    aovs = boolean("aovs", get_("aovs"))
+    rr_depth, lights = value("rr_depth", values), value("emitter_sampling", values)
+    hide = value("hide_emitters", values)
+    z, target, aovs = value("adaptive_z", values), value("adaptive_bias", values), value("aovs", values)
     if aovs and slot.estimator != "direct":
         raise SettingsError(f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
                             f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct")
@@ -424,12 +370,13 @@ def parse(values: Mapping[str, Any]) -> Settings:
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
                     emitter_sampling=lights, hide_emitters=hide, lines=lines, adaptive_z=z,
                     adaptive_bias=target, aovs=aovs, reuse=reuse, reuse_radius=radius, reuse_k=k,
-                    reuse_mis=mis, reuse_deep=deep, reuse_h=h, reuse_k2=k2, expansion_pass=expansion)
+                    reuse_mis=mis, reuse_deep=deep, reuse_h=h, reuse_k2=k2, expansion_pass=expansion,
+                    extra={p.name: value(p.name, values) for p in PROPERTIES if p.name not in GROUPED})
 
 
 def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
     """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator only."""
-    m = integer("expansion_pass", values.get("expansion_pass", DEFAULTS["expansion_pass"]), 0, MAX_EXPANSION_PASS)
+    m = value("expansion_pass", values)
     if m and slot.estimator not in EXPANSION_ESTIMATORS:
         raise SettingsError(f"bad value {m} for 'expansion_pass' with estimator '{slot.estimator}': the pass gives "
                             f"the expansion point of estimator {', '.join(EXPANSION_ESTIMATORS)} only; use 0")
@@ -466,7 +413,7 @@ def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, sty
     if 0.0 < h < MIN_REUSE_H:
         raise SettingsError(f"bad value {values.get('reuse_h')!r} for 'reuse_h': expected 0 (from the vertices' "
                             f"density) or a number in [{MIN_REUSE_H:g}, 1]")
-    k2 = integer("reuse_k2", values.get("reuse_k2", DEFAULTS["reuse_k2"]), 1, MAX_REUSE_K)
+    k2 = value("reuse_k2", values)
     if deep == "world" and (reuse == "off" or stylize != "first_n_hits" or depth != 2):
         raise SettingsError(f"bad value 'world' for 'reuse_deep': world-space pooling needs reuse=pixels with "
                             f"stylize=first_n_hits and stylize_depth 2 (here reuse={reuse}, stylize={stylize}, "

@@ -22,7 +22,9 @@ backend()
 
 import numpy as np  # noqa: E402
 
-from .. import api  # noqa: E402
+from ..pipeline.job import Job  # noqa: E402
+from ..pipeline.resolve import resolve  # noqa: E402
+from ..pipeline.scene import first_line  # noqa: E402
 from ..errors import UsageError  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
@@ -45,8 +47,12 @@ class Session:
         w = width or (DEFAULT_SIZE if builtin else None)
         h = height or (DEFAULT_SIZE if builtin else None)
         self.size = (w, h)
-        self.scene = api.load_scene(scene, w, h)
         self.inner = int(inner or DEFAULT_INNER)
+        # the render pipeline's scene and integrator: the scene's own max_depth, rr_depth and hide_emitters kept
+        self.job = Job(scene=scene, width=w, height=h, given={"style": "identity", "inner_samples": self.inner},
+                       spp=int(spp or DEFAULT_SPP), seed=seed)
+        resolved = resolve(self.job)
+        self.scene = resolved.scene
         self.spp = int(spp or DEFAULT_SPP)
         self.seed = seed
         self.max_samples = max_samples
@@ -55,7 +61,9 @@ class Session:
         if self.width * self.height * self.spp > max_samples:
             raise UsageError(f"{self.width}x{self.height} at {self.spp} spp is {self.width * self.height * self.spp} "
                              f"camera samples, over the preview's cap of {max_samples}; lower --spp or the size")
-        self.integrator = api.make_integrator("identity", inner=self.inner)
+        self.integrator = resolved.integrator
+        self._draft_integrator = resolve(self.job.with_(given={**self.job.given, "inner_samples": DRAFT_INNER}),
+                                         self.scene).integrator
         self.jit = threading.Lock()
         self._waiting = 0                      # restyles waiting for `jit`: the render thread lets them first
         self._count = threading.Lock()
@@ -86,7 +94,7 @@ class Session:
                         lanes_per_pass=lanes)
         try:
             if self.inner > DRAFT_INNER and not self._stop.is_set():
-                draft = record(self.scene, api.make_integrator("identity", inner=DRAFT_INNER), 1, self.seed,
+                draft = record(self.scene, self._draft_integrator, 1, self.seed,
                                self.label, self.max_samples, lanes_per_pass=lanes)
                 with self.jit:
                     _, buf = next(draft)
@@ -102,7 +110,7 @@ class Session:
                     prog, self.buffer = step
                     self.spp_done = prog.spp_done
         except Exception as exc:  # shown on the page; the passes done stay usable
-            self.error = api.first_line(exc)
+            self.error = first_line(exc)
 
     def _yield_to_restyles(self) -> None:
         """Wait while restyles are queued for the lock: a pass takes about a second, a restyle a few ms, and

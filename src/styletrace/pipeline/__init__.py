@@ -1,0 +1,12 @@
+"""The one render pipeline: describe a render (`job.Job`), resolve it once (`resolve`), run it (`execute`).
+
+- `job`: the frozen description every front end builds (scene source, defines, size, given settings, seed,
+  spp, pass split).
+- `scene`: loading a scene source (built-in name, XML with defines and a new size, dict, mi.Scene).
+- `carried`: the max_depth, rr_depth and hide_emitters a scene's own Mitsuba integrator shares with `stylized`.
+- `resolve`: load, merge the scene's own integrator settings, pin the `auto` values.
+- `passes`: the pass loop (tiles, seeds, the float32 sum, memory checks).
+- `execute`: the passes in process or as Ray tasks; `render`, which `styletrace.render` is.
+
+Importing this package needs the backend chosen (`styletrace.init()`): its modules import Mitsuba.
+"""

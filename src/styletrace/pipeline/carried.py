@@ -1,0 +1,117 @@
+"""The settings a scene's own Mitsuba integrator shares with `stylized`: max_depth, rr_depth, hide_emitters.
+
+    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})   # {"max_depth": 3, ...}
+
+Two sources, because neither alone sees everything in Mitsuba 3.9:
+- the declaration, read with Mitsuba's own scene parser (`mitsuba.parser`, $parameters resolved with the same
+  defines): it sees through wrappers (`moment`, `aov`) to the integrator that renders, whose `hide_emitters`
+  the loaded wrapper does not report (its own `hide_emitters` is False whatever the nested one says);
+- the loaded object: the values Mitsuba resolved, defaults included (prb's max_depth 6), from the attributes
+  of Python integrators (`prb`, `prbvolpath` expose `max_depth` and `rr_depth`), the `hide_emitters`
+  property, and for C++ integrators, whose depths Mitsuba exposes nowhere else, their description
+  (`PathIntegrator[max_depth = 6, rr_depth = 5]`).
+What is declared wins; the object fills in what was left to Mitsuba's defaults. `direct` is emission plus
+direct light: max_depth 2. A `stylized` integrator carries nothing here: its own values are the base.
+"""
+from __future__ import annotations
+
+import os
+import re
+from typing import Any, Mapping
+
+import mitsuba as mi
+
+#: integrator properties that `stylized` shares with Mitsuba's path tracers
+SHARED = ("max_depth", "rr_depth", "hide_emitters")
+#: integrators that render through the integrators nested in them (Mitsuba's `moment` and `aov`)
+WRAPPERS = ("moment", "aov")
+#: Mitsuba stores max_depth -1 (unbounded) as a UInt32
+UNBOUNDED = 2 ** 32 - 1
+
+
+def _depth(value: Any) -> int:
+    value = int(value)
+    return -1 if value >= UNBOUNDED else value
+
+
+def rendering_node(state, node):
+    """The integrator node that renders: `node`, or through wrappers the first integrator nested in it."""
+    seen = set()
+    while node.props.plugin_name() in WRAPPERS and id(node) not in seen:
+        seen.add(id(node))
+        inner = [state.nodes[node.props[k].index()] for k in node.props.keys()
+                 if type(node.props[k]).__name__ == "ResolvedReference"]
+        inner = [n for n in inner if n.type == mi.ObjectType.Integrator]
+        if not inner:
+            break
+        node = inner[0]
+    return node
+
+
+def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
+    """The shared settings the scene source declares for the integrator that renders, plus its `type`; None
+    where the source cannot be read this way (an mi.Scene) or declares no integrator."""
+    import mitsuba.parser as parser
+    config = parser.ParserConfig(mi.variant())
+    try:
+        if isinstance(source, dict):
+            state = parser.parse_dict(config, source)
+        elif isinstance(source, (str, os.PathLike)) and os.path.isfile(source):
+            state = parser.parse_file(config, os.fspath(source), **{k: str(v) for k, v in (defines or {}).items()})
+        else:
+            return None
+    except Exception:  # the loader reports a broken scene in its own words; here it only means "unknown"
+        return None
+    root = state.nodes[0]
+    tops = [state.nodes[root.props[k].index()] for k in root.props.keys()
+            if type(root.props[k]).__name__ == "ResolvedReference"]
+    tops = [n for n in tops if n.type == mi.ObjectType.Integrator]
+    if not tops:
+        return None
+    node = rendering_node(state, tops[0])
+    props = node.props
+    out: dict[str, Any] = {"type": props.plugin_name()}
+    for key in SHARED:
+        if key in props.keys():
+            out[key] = bool(props[key]) if key == "hide_emitters" else _depth(props[key])
+    return out
+
+
+def loaded(integrator: mi.Integrator) -> dict[str, Any]:
+    """The shared settings as the loaded integrator object reports them (see the module doc)."""
+    out: dict[str, Any] = {}
+    text = str(integrator)
+    for key in ("max_depth", "rr_depth"):
+        value = getattr(integrator, key, None)
+        if isinstance(value, int) and not isinstance(value, bool):
+            out[key] = _depth(value)
+            continue
+        found = re.search(rf"\b{key}\s*=\s*(-?\d+)", text)  # C++ integrators: their description only
+        if found:
+            out[key] = _depth(found.group(1))
+    if text.startswith("DirectIntegrator"):
+        out["max_depth"] = 2
+    if getattr(integrator, "hide_emitters", False):  # absent on adjoint integrators (ptracer)
+        out["hide_emitters"] = True
+    return out
+
+
+def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator; {} for none or a
+    `stylized` one. `source`/`defines`: what the scene was loaded from, to read its declaration."""
+    from ..plugins.integrator import StylizedIntegrator
+    own = scene.integrator()
+    if own is None or isinstance(own, StylizedIntegrator):
+        return {}
+    out = loaded(own)
+    decl = declared(source, defines) if source is not None else None
+    if decl is not None and decl.get("type") != "stylized":
+        if decl["type"] == "direct":
+            decl.pop("max_depth", None)  # direct's own max_depth does not bound its one bounce
+        out.update({k: v for k, v in decl.items() if k in SHARED})
+    if out.get("hide_emitters") is False:
+        del out["hide_emitters"]
+    return out
+
+
+__all__ = ["carried_settings", "declared", "loaded", "SHARED", "WRAPPERS"]

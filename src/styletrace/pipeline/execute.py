@@ -1,0 +1,92 @@
+"""Running a resolved render: its passes in this process (tiled), or as Ray tasks; and `styletrace.render`.
+
+    for prog in execute(resolve(job)):            # a passes.Progress after each pass (or Ray unit)
+        ...
+    image = render("scene.xml", style="cel", defines={"depth": "3"}, cluster="local")
+
+In process the passes are `passes.passes`; with `cluster` ("local" or a Ray address) the same launches, with
+the same seeds and the same float32 merge, are Ray tasks (`distributed.run.Render`), so the image is
+bit-identical for the same seed and split. Ray workers receive the job's scene source and the resolved
+integrator's property values (auto values pinned), never the loaded objects.
+"""
+from __future__ import annotations
+
+import contextlib
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from ..errors import UsageError
+from .job import Job, given_values
+from .passes import Progress, passes
+from .resolve import Resolved, resolve
+
+
+def ray_job(resolved: Resolved):
+    """What every Ray task of this render receives (`distributed.tasks.Job`)."""
+    from ..distributed.run import job_for
+    job = resolved.job
+    load = {"defines": dict(job.defines)} if job.defines else {}
+    return job_for(job.scene, resolved.integrator, job.width, job.height, **load)
+
+
+def execute(resolved: Resolved, cluster: str | None = None, lock: Any = contextlib.nullcontext(),
+            **ray_options: Any) -> Iterator[Progress]:
+    """The render's passes, yielding the running average after each; on Ray with `cluster` (`ray_options`:
+    output, resume, checkpoint_every of `distributed.run.Render`). The returned Ray iterable also has
+    `save()`, `finish()` and `progress()`."""
+    job = resolved.job
+    if resolved.integrator.aov_names() and resolved.spp < 2:
+        raise UsageError(f"bad value {resolved.spp} for 'spp' with aovs=True: the variance needs at least 2 samples "
+                         f"per pixel")
+    if cluster is None and not ray_options.get("resume"):
+        return passes(resolved.scene, resolved.integrator, resolved.spp, job.seed, lanes_per_pass=resolved.lanes,
+                      pass_spp=job.pass_spp, lock=lock)
+    if resolved.integrator.aov_names():
+        raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the image only")
+    from ..distributed.run import Render
+    width, height = resolved.size
+    return Render(ray_job(resolved), resolved.spp, job.seed, width, height, cluster or "local", resolved.lanes,
+                  job.pass_spp, lock=lock, **ray_options)
+
+
+def run(resolved: Resolved, cluster: str | None = None, callback: Callable[[Progress], None] | None = None):
+    """The final image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True."""
+    prog = None
+    for prog in execute(resolved, cluster):
+        if callback is not None:
+            callback(prog)
+    if resolved.integrator.aov_names():
+        return prog.image, prog.aovs
+    return prog.image
+
+
+def render(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
+           estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
+           integrator: Any = None, callback: Callable[[Progress], None] | None = None, cluster: str | None = None,
+           pass_spp: int | None = None, defines: dict[str, Any] | None = None, denoise: str | None = None,
+           **params: Any) -> np.ndarray:
+    """`styletrace.render`: float32 H x W x C, linear radiance in the film's pixel format (C = 3 for the usual
+    rgb film); with `aovs=True` `(image, aovs)` (`Progress.aovs`).
+
+    `scene`: built-in name, XML path, scene dict or mi.Scene; `defines`: the XML file's `<default>` parameters.
+    `spp`: camera samples per pixel (default: the scene sampler's sample_count). The style, `inner`,
+    `estimator`, integrator properties and the style's parameters (**params) refine the scene's own
+    `stylized` integrator, else the max_depth, rr_depth and hide_emitters of its Mitsuba integrator (through
+    `moment`/`aov` wrappers) with the identity style; `auto` values are resolved on the scene. `integrator=`
+    renders with a prebuilt one as it is. `cluster` ("local" or a Ray address) renders the passes on Ray,
+    bit-identical to the same split here; `pass_spp` fixes the split (default: by the device's memory).
+    `denoise` ("expectation" or "image", the `denoise` extra) denoises locally (docs/denoise.md)."""
+    if denoise is not None:
+        if cluster is not None:
+            raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
+        from ..denoise import render as denoised
+        return denoised(scene, style, spp, inner, estimator, seed, width, height, integrator, callback,
+                        denoise=denoise, pass_spp=pass_spp, defines=defines, **params)
+    job = Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
+              given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed,
+              pass_spp=pass_spp)
+    return run(resolve(job), cluster, callback)
+
+
+__all__ = ["execute", "run", "render", "ray_job"]

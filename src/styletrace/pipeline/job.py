@@ -1,0 +1,55 @@
+"""The description of one render: what every front end builds and hands to `resolve`, then to `execute`.
+
+    job = Job(scene="scene.xml", defines={"depth": "3"}, width=64, height=48,
+              given={"style": "cel", "inner_samples": 8}, spp=16, seed=0)
+
+A `Job` holds what the caller said and nothing derived: the scene source (a built-in name, an XML path, a
+scene dict or an mi.Scene), the defines of the file's `<default>` parameters, the film size, the integrator
+values given (they refine the scene's own `stylized` integrator, or the scene's carried settings over
+`default_style`), or a prebuilt integrator used as it is, and the sampling: spp (None: the scene sampler's
+count), seed and the pass split (`pass_spp`, `lanes_per_pass`; None: the device's, `sizing`). It is frozen:
+resolving it twice gives the same scene, integrator and passes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Any, Mapping
+
+from ..errors import UsageError
+
+#: the style of a scene without a `stylized` integrator when the caller names none (Python: physically based)
+PYTHON_STYLE = "identity"
+
+
+@dataclass(frozen=True)
+class Job:
+    scene: Any = None
+    defines: Mapping[str, Any] = field(default_factory=dict)
+    width: int | None = None
+    height: int | None = None
+    given: Mapping[str, Any] = field(default_factory=dict)
+    default_style: str = PYTHON_STYLE
+    integrator: Any = None
+    spp: int | None = None
+    seed: int = 0
+    pass_spp: int | None = None
+    lanes_per_pass: int | None = None
+
+    def __post_init__(self):
+        if self.integrator is not None and self.given:
+            raise UsageError(f"bad arguments: integrator= is used as it is, so {', '.join(sorted(self.given))} "
+                             f"cannot refine it; pass either a prebuilt integrator or style= and parameters")
+
+    def with_(self, **changes: Any) -> "Job":
+        """This job with some fields replaced (a frame of a turntable, another seed)."""
+        return replace(self, **changes)
+
+
+def given_values(style: str | None = None, inner: Any = None, estimator: str | None = None,
+                 **params: Any) -> dict[str, Any]:
+    """The integrator values of the Python API's keywords, leaving out what was not given (None)."""
+    given = {"style": style, "inner_samples": inner, "estimator": estimator, **params}
+    return {k: v for k, v in given.items() if v is not None}
+
+
+__all__ = ["Job", "given_values", "PYTHON_STYLE"]

@@ -1,0 +1,241 @@
+"""The pass loop: a render as kernel launches of bounded size, tiled, summed into one float32 image.
+
+Large renders run as several passes of at most `LANES_PER_PASS` camera samples, so memory stays
+bounded whatever spp and inner sample counts are; each pass has its own seed derived from `seed`,
+so the same seed reproduces the same image exactly. The split into passes depends only on the image
+size and the sample counts (`pass_size`), never on measured time, because a different split draws
+different samples. An image of more than `LANES_PER_PASS` pixels is rendered in tiles (crop windows
+of one fixed size), and the running sum is one float32 image; `check_memory` refuses up front an
+image whose buffers cannot fit.
+"""
+from __future__ import annotations
+
+import contextlib
+import math
+from dataclasses import dataclass
+from typing import Any, Iterator
+
+from ..jit import backend, no_collection
+
+backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..arguments import check_passes_args  # noqa: E402
+from ..errors import UsageError  # noqa: E402
+from ..images import PIXEL_FORMATS  # noqa: E402
+from ..plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402
+from .scene import film_format  # noqa: E402
+
+#: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
+LANES_PER_PASS = 1 << 20
+#: Width of a tile when an image has more than LANES_PER_PASS pixels (a tile is 1024 x 1024 then).
+TILE_SIDE = 1024
+#: Host memory per lane of a pass (the film's block, the output, the sampler), for the up-front estimate;
+#: a 1024 x 1024 pass at 1 spp measured about 50 MB more than a 256 x 256 one (BENCHMARKS.md, memory).
+LANE_BYTES = 256
+
+def pass_seed(seed: int, index: int) -> int:
+    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams."""
+    return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
+
+
+def expansion_seed(seed: int, tile: int) -> int:
+    """Seed of the expansion pass of tile `tile` (`StylizedIntegrator.prepare_expansion`): pass_seed's stream at
+    indices from 2^31 on, which no render reaches, so it differs from every pass seed of the same render."""
+    return pass_seed(seed, (1 << 31) + tile)
+
+
+@dataclass(frozen=True)
+class Tile:
+    """One crop window of the film (all tiles of a render share one size, so the kernel compiles once per
+    offset and not per size) and the part of it that is new: edge tiles are shifted inwards to stay inside
+    the film, and the pixels they share with their neighbour are dropped."""
+    offset: tuple[int, int]   # x, y of the crop window
+    size: tuple[int, int]     # width, height of the crop window
+    keep: tuple[slice, slice]  # rows, columns of the rendered tile that are new
+    dest: tuple[slice, slice]  # where those go in the image
+
+
+def _axis(length: int, tile: int) -> list[tuple[int, slice, slice]]:
+    out, start = [], 0
+    while start < length:
+        offset = min(start, length - tile)
+        out.append((offset, slice(start - offset, tile), slice(start, offset + tile)))
+        start = offset + tile
+    return out
+
+
+def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
+    """The film as one tile if it has at most `max_pixels` pixels, else as tiles of TILE_SIDE columns
+    (or the width, if narrower) and as many rows as fit into `max_pixels` (default LANES_PER_PASS)."""
+    max_pixels = max_pixels or LANES_PER_PASS
+    if width * height <= max_pixels:
+        return [Tile((0, 0), (width, height), (slice(None), slice(None)), (slice(None), slice(None)))]
+    tw = min(width, TILE_SIDE, max_pixels)
+    th = min(height, max(1, max_pixels // tw))
+    return [Tile((x, y), (tw, th), (ky, kx), (dy, dx))
+            for y, ky, dy in _axis(height, th) for x, kx, dx in _axis(width, tw)]
+
+
+def memory_needed(width: int, height: int, ext: str = ".exr") -> int:
+    """Bytes of host memory a render of this size needs at its peak, while the file is written: the
+    float32 accumulator, the averaged image, Mitsuba's bitmap of it, and the encoded file (up to twice in
+    the growing memory stream, once more as bytes), plus the lanes of one pass."""
+    image = width * height * 3 * 4
+    encoded = width * height * 3 * (1 if ext == ".png" else 4)
+    return 3 * image + 3 * encoded + LANE_BYTES * LANES_PER_PASS
+
+
+def memory_available() -> int | None:
+    """MemAvailable of /proc/meminfo, or less if an address-space limit is set; None where unknown."""
+    import resource
+    limits = []
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    limits.append(int(line.split()[1]) * 1024)
+    except (OSError, ValueError):
+        pass
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if soft not in (resource.RLIM_INFINITY, -1):
+        limits.append(soft)
+    return min(limits) if limits else None
+
+
+def check_memory(width: int, height: int, ext: str = ".exr") -> None:
+    """Refuse up front (UsageError) an image whose buffers cannot fit into the memory there is."""
+    need, have = memory_needed(width, height, ext), memory_available()
+    if width >= 1 << 31 or height >= 1 << 31 or (have is not None and need > have):
+        have_txt = f"{have / 2**30:.1f} GiB available" if have is not None else "too large"
+        raise UsageError(f"image {width}x{height} is too large: it needs about {need / 2**30:.1f} GiB of "
+                         f"memory ({have_txt}); render a smaller --width/--height")
+
+
+class Progress:
+    """State after a pass: `spp_done` is what every pixel has at least (tiles of a pass under way may
+    have one more pass); `image` is the average of the finished passes, computed when asked for."""
+
+    def __init__(self, spp_done: int, spp_total: int, total: np.ndarray, counts: np.ndarray, layout: list[Tile],
+                 channels: int | None = None):
+        self.spp_done, self.spp_total = spp_done, spp_total
+        self._total, self._counts, self._tiles = total, counts, layout
+        #: the image's channels in `total`; the error AOVs' sums follow them (`AOV_NAMES`)
+        self._channels = total.shape[-1] if channels is None else channels
+
+    def _mean(self) -> np.ndarray:
+        out = np.empty_like(self._total)
+        for tile, n in zip(self._tiles, self._counts):
+            np.divide(self._total[tile.dest], max(int(n), 1), out=out[tile.dest])
+        return out
+
+    @property
+    def image(self) -> np.ndarray:
+        if self._channels == self._total.shape[-1]:
+            return self._mean()
+        return np.ascontiguousarray(self._mean()[..., :self._channels])
+
+    @property
+    def aovs(self) -> dict[str, np.ndarray] | None:
+        """The error AOVs of an integrator with `aovs=True` (else None), float32 H x W (x 3):
+        `variance`: the variance of each pixel's estimate (its mean over the camera samples), per RGB channel:
+        (mean of the squared samples - squared mean) / (spp - 1), the unbiased sample variance over spp;
+        NaN where a pixel has fewer than 2 samples. `bias`: the predicted direct-application bias of Eq. 21,
+        g''(<I>_n) s^2 / (2n), at the first stylized vertex, averaged over the pixel's samples (0 where no
+        child was drawn). `children`: the children used there, averaged (n for a fixed count)."""
+        if self._channels == self._total.shape[-1]:
+            return None
+        mean = self._mean().astype(np.float64)
+        c = self._channels
+        counts = np.zeros(mean.shape[:2])
+        for tile, n in zip(self._tiles, self._counts):
+            counts[tile.dest] = n
+        rgb, square = mean[..., :3], mean[..., c:c + 3]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            var = np.maximum(square - rgb * rgb, 0.0) / (counts[..., None] - 1.0)
+        var[counts < 2] = np.nan
+        return {"variance": var.astype(np.float32), "bias": mean[..., c + 3].astype(np.float32),
+                "children": mean[..., c + 4].astype(np.float32)}
+
+
+def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER_PASS,
+              pass_spp: int | None = None) -> tuple[list[Tile], int]:
+    """The tiles and the samples per pixel of one pass. A function of the image size and the counts only,
+    never of measured time: the same seed gives the same image on every run."""
+    layout = tiles(width, height)
+    tw, th = layout[0].size
+    per_pass = pass_spp if pass_spp else max(1, lanes_per_pass // (tw * th))
+    return layout, max(1, min(spp, per_pass))
+
+
+def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
+           lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
+           lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
+    """Render `spp` samples per pixel in passes; yield the running average after each pass.
+
+    An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film); a pass
+    is then one tile at a time, and every tile gets its passes in turn. The sum of the passes is kept in
+    float32, one image's worth of memory. `lock` (a context manager) is held while it is updated, so that
+    another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher).
+    A `stylized` integrator with expansion_pass > 0 renders its expansion pass for each tile before the tile's
+    first pass (`expansion_seed`: another stream than the passes', the same for the same seed).
+    An integrator with `aovs=True` adds its AOV channels (`aov_names`) to the film; they are summed with the
+    image and read as `Progress.aovs` (docs/adaptive.md)."""
+    check_passes_args(scene, integrator, spp, seed)
+    integrator = resolve_defaults(scene, integrator)[0]  # scene-relative 'auto' style values (scene_defaults)
+    sensor = scene.sensors()[0]
+    film = sensor.film()
+    width, height = (int(v) for v in film.crop_size())
+    base = tuple(int(v) for v in film.crop_offset())
+    check_memory(width, height)
+    layout, per_pass = pass_size(width, height, spp, lanes_per_pass, pass_spp)
+    params = mi.traverse(sensor) if len(layout) > 1 else None
+    channels = len(PIXEL_FORMATS[film_format(scene)])  # the film's own: RGB, Y, XYZ, with alpha or not
+    extra = len(integrator.aov_names())  # error AOVs (StylizedIntegrator.aov_names), after the film's channels
+    if extra and film_format(scene) not in ("rgb", "rgba"):
+        raise UsageError(f"aovs need an rgb or rgba film (the variance is per RGB channel); the scene's film is "
+                         f"{film_format(scene)!r}")
+    total = np.zeros((height, width, channels + extra), dtype=np.float32)
+    counts = np.zeros(len(layout), dtype=np.int64)
+    index = 0
+    # the expansion pass (expansion_pass > 0): once per tile and render, before the tile's first pass
+    expand = getattr(integrator, "prepare_expansion", None)
+    if expand is not None:
+        integrator.expansion.clear()
+    try:
+        while counts[-1] < spp:
+            for t, tile in enumerate(layout):
+                n = min(per_pass, spp - int(counts[t]))
+                if params is not None:
+                    params["film.crop_offset"] = mi.ScalarPoint2u(base[0] + tile.offset[0], base[1] + tile.offset[1])
+                    params["film.crop_size"] = mi.ScalarVector2u(*tile.size)
+                    params.update()
+                if expand is not None:
+                    expand(scene, expansion_seed(seed, t))
+                with no_collection():  # recorded and launched with no scene finalised meanwhile (jit.no_collection)
+                    img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
+                    arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
+                with lock:
+                    total[tile.dest] += arr[tile.keep] * np.float32(n)
+                    counts[t] += n
+                del img, arr
+                index += 1
+                yield Progress(int(counts.min()), spp, total, counts, layout, channels)
+    finally:
+        if params is not None:  # leave the scene's film as it was
+            params["film.crop_offset"] = mi.ScalarPoint2u(*base)
+            params["film.crop_size"] = mi.ScalarVector2u(width, height)
+            params.update()
+
+
+def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> int:
+    """How many kernel launches `passes` makes (tiles times passes per tile)."""
+    size = scene.sensors()[0].film().crop_size()
+    layout, per_pass = pass_size(int(size[0]), int(size[1]), spp, lanes_per_pass, pass_spp)
+    return len(layout) * math.ceil(spp / per_pass)
+
+
+__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "memory_needed",
+           "memory_available", "check_memory", "Progress", "pass_size", "passes", "pass_count"]

@@ -1,0 +1,89 @@
+"""Resolving a `Job`, once: the scene loaded, its own integrator settings merged, `auto` values pinned.
+
+    r = resolve(Job(scene="scene.xml", given={"style": "cel"}))
+    r.scene, r.integrator, r.spp, r.lanes, r.auto      # what `execute` runs; r.auto names the pinned values
+
+The integrator of a render is, in this order of precedence: a prebuilt one given as it is; else the values
+the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator; else over the shared
+settings of the scene's own Mitsuba integrator (`carried`: max_depth, rr_depth, hide_emitters, seen
+through `moment` and `aov`) with the job's default style. Its scene-relative `auto` values are then pinned
+on this scene (`scene_defaults.resolve`), so every route that renders the result draws the same image.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import mitsuba as mi
+
+from ..arguments import check_render_args
+from ..plugins import settings as S
+from ..plugins.integrator import StylizedIntegrator
+from ..plugins.scene_defaults import Pilot, resolve as resolve_defaults
+from ..runtime import init
+from ..sizing import lanes_per_pass
+from .carried import carried_settings
+from .job import Job
+from .scene import load_scene, scene_spp
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """A job with its scene loaded and its integrator final: everything `execute` needs."""
+    job: Job
+    scene: mi.Scene
+    integrator: mi.Integrator
+    spp: int
+    lanes: int
+    auto: str = ""        # the auto values pinned, one line ('' if none)
+    lanes_note: str | None = None  # why the device's pass size is below its default, if it is
+    pilot: Pilot | None = None     # the scene-defaults pilot the auto values came from (the recorder stores it)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        size = self.scene.sensors()[0].film().crop_size()
+        return int(size[0]), int(size[1])
+
+
+def integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
+    """The property values of the job's integrator on this scene; None: the scene's own `stylized` as it is."""
+    own = scene.integrator()
+    given = dict(job.given)
+    if isinstance(own, StylizedIntegrator):
+        return S.refine(own.values, given) if given else None
+    base = {"style": job.default_style, **carried_settings(scene, job.scene, job.defines)}
+    return S.refine(base, given)
+
+
+def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
+    """The job's integrator before its auto values are pinned (see the module doc)."""
+    if job.integrator is not None:
+        return job.integrator
+    values = integrator_values(scene, job)
+    # from the values, also for the scene's own integrator as it is: Mitsuba's object resolves auto values in
+    # its own `render` (plugins/standalone.py); the pipeline pins them once, here, for every route
+    return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
+
+
+def lanes_for(job: Job) -> tuple[int, str | None]:
+    """Camera samples per pass: the job's, else the device's (`sizing`)."""
+    if job.lanes_per_pass is not None:
+        return int(job.lanes_per_pass), None
+    return lanes_per_pass(init())
+
+
+def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
+    """Load (unless `scene`, already loaded from `job.scene`, is given), merge, pin: see the module doc."""
+    check_render_args(1 if job.spp is None else job.spp, job.seed, job.integrator)
+    if scene is None:
+        scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
+    chosen = choose_integrator(scene, job)
+    # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value needs it)
+    pilot = Pilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
+    integrator, auto = resolve_defaults(scene, chosen, pilot)
+    spp = scene_spp(scene) if job.spp is None else int(job.spp)
+    lanes, note = lanes_for(job)
+    return Resolved(job, scene, integrator, spp, lanes, auto, note, pilot)
+
+
+__all__ = ["Resolved", "resolve", "choose_integrator", "integrator_values", "lanes_for"]

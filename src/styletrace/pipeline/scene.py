@@ -1,0 +1,139 @@
+"""Loading a scene: a built-in name, a Mitsuba XML file (with defines and a new film size), a dict or an mi.Scene.
+
+    scene = load_scene("scene.xml", width=64, height=48, defines={"depth": "3"})
+
+Every loaded scene gets canonical vertex normals (`normals`), so the same seed gives the same image in every
+process; a refused scene raises `SceneError` with one line and does not outlive the call.
+"""
+from __future__ import annotations
+
+import os
+import re
+import warnings
+from typing import Any
+
+from ..jit import backend
+from ..runtime import init
+
+backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+
+import mitsuba as mi  # noqa: E402
+
+from .. import scene_file  # noqa: E402
+from ..arguments import check_scene, scene_problem  # noqa: E402
+from ..errors import SceneError  # noqa: E402
+from ..images import PIXEL_FORMATS  # noqa: E402
+from ..normals import canonical_normals as _canonical  # noqa: E402
+from ..plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
+
+def first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+    # Mitsuba prefixes the real cause with context lines; the last line is the most specific.
+    return lines[-1] if lines else type(exc).__name__
+
+
+def _size(width, height, keys=("width", "height")) -> dict[str, int]:
+    """The given image size as keyword arguments, leaving out what was not given."""
+    return {k: v for k, v in zip(keys, (width, height)) if v}
+
+
+def scene_dict(name: str, width: int | None = None, height: int | None = None) -> dict[str, Any]:
+    if name not in BUILTIN:
+        raise SceneError(f"unknown built-in scene '{name}': available are {', '.join(sorted(BUILTIN))}")
+    return BUILTIN[name](**_size(width, height))
+
+
+def canonical_normals(scene: mi.Scene) -> mi.Scene:
+    """The scene with its computed vertex normals made the same in every process (`normals`): the same seed
+    then gives the same image to the bit. Scenes load on all of Dr.Jit's threads (one thread deadlocks
+    Mitsuba's OpenEXR reader)."""
+    _canonical(scene)
+    return scene
+
+
+def load_scene(scene: Any = None, width: int | None = None, height: int | None = None,
+               defines: dict[str, Any] | None = None) -> mi.Scene:
+    """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene.
+
+    For an XML file, `defines` are the values of its `<default>` parameters (as `mitsuba -D name=value`),
+    and width/height resize its film; an integrator type Mitsuba does not know is replaced, with a
+    `SceneWarning` (see `scene_file`)."""
+    init()
+    if scene is None:
+        scene = DEFAULT
+    if defines and not (isinstance(scene, (str, os.PathLike)) and os.fspath(scene) not in BUILTIN):
+        raise SceneError("defines apply to XML scene files (their <default> parameters) only")
+    if isinstance(scene, mi.Scene):
+        check_scene(scene, "the mi.Scene")
+        if width or height:
+            size = scene.sensors()[0].film().size()
+            if (width and width != size[0]) or (height and height != size[1]):
+                raise SceneError("width/height cannot change an already loaded mi.Scene; pass a dict or file")
+        return scene
+    if isinstance(scene, dict):
+        if width or height:
+            raise SceneError("width/height apply to built-in scenes and XML files; set the film size in the dict")
+        try:
+            loaded = mi.load_dict(scene)
+        except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
+            raise SceneError(f"cannot load scene dict: {first_line(exc)}") from None
+        problem = scene_problem(loaded, "the scene dict")
+        if problem is not None:
+            del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
+            raise SceneError(problem)
+        return canonical_normals(loaded)
+    if not isinstance(scene, (str, os.PathLike)):
+        raise SceneError(f"bad scene {scene!r}: expected a built-in name ({', '.join(sorted(BUILTIN))}), an XML "
+                         f"path, a scene dict or an mi.Scene")
+    name = os.fspath(scene)
+    if name in BUILTIN:
+        try:
+            return canonical_normals(mi.load_dict(scene_dict(name, width, height)))
+        except Exception as exc:
+            raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
+    if not name.lower().endswith(".xml") and not os.path.exists(name):
+        raise SceneError(f"unknown scene '{name}': expected a built-in scene ({', '.join(sorted(BUILTIN))}) "
+                         f"or a Mitsuba XML file")
+    if not os.path.isfile(name):
+        raise SceneError(f"scene file '{name}' does not exist")
+    try:
+        loaded, notes = scene_file.load(name, width, height, defines)
+    except SceneError:
+        raise
+    except Exception as exc:
+        if "unused parameters" in str(exc):  # Mitsuba lists them as "- $name=value"
+            unused = ", ".join(re.findall(r"\$(\w+)=", str(exc)))
+            raise SceneError(f"scene file '{name}' uses no parameter {unused}: -D/defines set only the file's "
+                             f"$parameters (its <default> names)") from None
+        raise SceneError(f"cannot load scene file '{name}': {first_line(exc)}") from None
+    problem = scene_problem(loaded, f"scene file '{name}'")
+    if problem is not None:
+        del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
+        raise SceneError(problem)
+    for note in notes:
+        warnings.warn(note, SceneWarning, stacklevel=2)
+    return canonical_normals(loaded)
+
+
+class SceneWarning(UserWarning):
+    """A scene was changed to render (an unknown integrator replaced); the message names what changed."""
+
+
+def film_format(scene: mi.Scene) -> str:
+    """The pixel format of the scene's film as Mitsuba develops it ('rgb', 'rgba', 'y', 'ya', 'xyz', 'xyza'):
+    the kernel computes RGB radiance and the film converts it (luminance Y, CIE XYZ, alpha coverage)."""
+    found = re.search(r"pixel_format\s*=\s*(\w+)", str(scene.sensors()[0].film()))
+    name = found.group(1).lower() if found else "rgb"
+    if name not in PIXEL_FORMATS:
+        raise SceneError(f"the film's pixel format {name!r} cannot be written: expected one of "
+                         f"{', '.join(sorted(set(PIXEL_FORMATS)))}")
+    return name
+
+
+def scene_spp(scene: mi.Scene) -> int:
+    """The scene's own camera samples per pixel: its sampler's sample_count."""
+    return int(scene.sensors()[0].sampler().sample_count())
+
+
+__all__ = ["load_scene", "scene_dict", "canonical_normals", "first_line", "SceneWarning", "film_format", "scene_spp"]
