@@ -23,9 +23,9 @@ _LOOKDEV = {"render_buffer": "record", "restyle": "restyle", "load_buffer": "buf
 def __getattr__(name: str):
     if name == "variant":
         return init()
-    if name == "render":  # the render pipeline's, in process or on Ray with cluster= (pipeline.execute)
+    if name == "render":  # the render pipeline's, in process or on Ray with cluster= (api.render)
         init()
-        from .pipeline.execute import render
+        from .api import render
         return render
     if name in _API:
         init()

@@ -19,7 +19,7 @@ backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the va
 from .errors import SceneError, UsageError  # noqa: E402,F401
 from .images import PIXEL_FORMATS, save_safely, write_image  # noqa: E402,F401
 from .pipeline.carried import carried_settings  # noqa: E402,F401
-from .pipeline.execute import render  # noqa: E402,F401  (the one-line alias of issue 19: styletrace.render)
+from .pipeline.execute import render as pipeline_render  # noqa: E402
 from .pipeline.job import given_values  # noqa: E402
 from .pipeline.passes import (LANE_BYTES, LANES_PER_PASS, TILE_SIDE, Progress, Tile, check_memory,  # noqa: E402,F401
                               expansion_seed, memory_available, memory_needed, pass_count, pass_seed, pass_size,
@@ -28,6 +28,17 @@ from .pipeline.scene import (SceneWarning, canonical_normals, film_format, first
                              scene_dict, scene_spp)
 from .plugins.integrator import StylizedIntegrator  # noqa: E402
 from .plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402,F401
+
+
+def render(*args: Any, denoise: str | None = None, cluster: str | None = None, **kw: Any):
+    """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the arguments);
+    `denoise="expectation"|"image"` hands the same job to the denoiser, a post-stage (docs/denoise.md)."""
+    if denoise is None:
+        return pipeline_render(*args, cluster=cluster, **kw)
+    if cluster is not None:
+        raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
+    from .denoise import render as denoised
+    return denoised(*args, denoise=denoise, **kw)
 
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,

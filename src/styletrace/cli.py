@@ -22,7 +22,7 @@ import warnings
 from typing import Sequence
 
 from .errors import StyletraceError, UsageError
-from .images import IMAGE_TYPES, nonfinite_pixels, save_safely
+from .images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
 from .status import Status
 from .wild import warning as wild_warning
 
@@ -68,24 +68,6 @@ def check_output(path: str, scene: str | None = None) -> None:
         raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
                          f"(.exr is linear, .png is sRGB)")
     check_target(path)
-
-
-def check_target(path: str) -> None:
-    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a regular
-    file or a new name in an existing, writable folder; a symbolic link counts as its target, which is
-    where the file goes (the link stays). Devices (/dev/null included: the rename would replace the
-    device node, so it is refused rather than written to), fifos, sockets and folders are refused untouched."""
-    from .images import destination, unwritable_kind
-    kind = unwritable_kind(path)
-    if kind is not None:
-        via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
-        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a new name")
-    target = destination(path)
-    folder = os.path.dirname(os.path.abspath(target))
-    if not os.path.isdir(folder):
-        raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
-    if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
-        raise UsageError(f"cannot write {path!r}: permission denied")
 
 
 class StopSignals:
@@ -231,11 +213,14 @@ def cmd_render(args) -> int:
     from .pipeline.execute import execute
     from .pipeline.resolve import resolve
 
-    with warnings.catch_warnings(record=True) as caught, \
-            status.phase(f"loading scene {one_line(args.scene)} and measuring it for its auto values (a pilot)"):
-        # the render pipeline: load, merge, pin auto values
+    job = job_of(args, params, defines)
+    with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
         warnings.simplefilter("always", api.SceneWarning)
-        resolved = resolve(job_of(args, params, defines))
+        with status.phase(f"loading scene {one_line(args.scene)}"):
+            loaded = api.load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
+        with status.phase("measuring the scene for its auto values: compiling and rendering a pilot"):
+            resolved = resolve(job, scene=loaded)
+        del loaded
     for w in caught:
         say(f"styletrace: warning: {w.message}")
     scene, integrator = resolved.scene, resolved.integrator

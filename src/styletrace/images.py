@@ -33,6 +33,8 @@ import zlib
 
 import numpy as np
 
+from .errors import UsageError
+
 IMAGE_TYPES = (".exr", ".png")
 
 
@@ -321,6 +323,23 @@ def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
         return fallback
 
 
-__all__ = ["IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
+
+def check_target(path: str) -> None:
+    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a regular
+    file or a new name in an existing, writable folder; a symbolic link counts as its target, which is
+    where the file goes (the link stays). Devices (/dev/null included: the rename would replace the
+    device node, so it is refused rather than written to), fifos, sockets and folders are refused untouched."""
+    kind = unwritable_kind(path)
+    if kind is not None:
+        via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
+        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a new name")
+    target = destination(path)
+    folder = os.path.dirname(os.path.abspath(target))
+    if not os.path.isdir(folder):
+        raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
+    if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
+        raise UsageError(f"cannot write {path!r}: permission denied")
+
+__all__ = ["check_target", "IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
            "encode_plain", "encode_with_aovs", "destination", "unwritable_kind", "write_bytes_atomically", "write_image",
            "save_safely"]

@@ -36,12 +36,13 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .. import api  # noqa: E402
+from ..pipeline.passes import Progress, pass_seed  # noqa: E402
 from ..errors import UsageError  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, Buffer  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
 from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for  # noqa: E402
 from ..plugins import settings as S  # noqa: E402
+from ..plugins.integrator import StylizedIntegrator  # noqa: E402
 from . import guides, oidn  # noqa: E402
 
 #: the buffer array holding the denoised expectation at each camera sample (3 x samples, as `mean`)
@@ -165,7 +166,7 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high") -> np
     style it); returns D per pixel (H x W x 3)."""
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
-    albedo, normal, position = guides.first_hit(scene, spp, api.pass_seed(seed, 0), position=True)
+    albedo, normal, position = guides.first_hit(scene, spp, pass_seed(seed, 0), position=True)
     m = expectation(buf)
     d = oidn.run(m, albedo, normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
@@ -185,7 +186,7 @@ def image_of(buf: Buffer) -> np.ndarray:
 
 def noisy_variance(buf: Buffer) -> np.ndarray:
     """The variance of each pixel's *undenoised* estimate from its camera samples' values, (mean of squares -
-    squared mean) / (spp - 1), as `api.Progress.aovs` defines `variance`; NaN below 2 samples."""
+    squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines `variance`; NaN below 2 samples."""
     slots = prepare(buf, slots_for(buf))
     held = buf.arrays.pop(DENOISED, None)
     buf.device.clear()
@@ -209,14 +210,14 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
 
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-           callback: Callable[[api.Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
+           callback: Callable[[Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
            label: str = "") -> tuple[np.ndarray, Buffer]:
     """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy render)."""
     oidn.require()
     oidn.check_quality(quality)
     check(integrator)
     if integrator.settings.aovs:  # the buffer records without them; `aovs` below derives them from it
-        integrator = api.make_integrator_from({**integrator.values, "aovs": False})
+        integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
     buf = None
     for prog, buf in record(scene, integrator, spp, seed, label or scene_label(None), max_samples):
         buf.image = prog.image

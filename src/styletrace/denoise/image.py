@@ -2,12 +2,12 @@
 
     image, noisy, aovs = render(scene, integrator, spp=16, seed=0, quality="high")
 
-The stylized image is rendered as usual (`api.passes`) and OIDN denoises it with the same first-hit albedo
+The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same first-hit albedo
 and normal guides as `--denoise expectation`. Every mode of the renderer works (it is a post-process), but
 a step style's band flips are edges to the denoiser, which keeps them (docs/denoise.md, BENCHMARKS.md).
 
 Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `lanes_per_pass`/`pass_spp` as
-`api.passes`. With `aovs=True` on the integrator the error AOVs are those of the noisy render, renamed
+`pipeline.passes`. With `aovs=True` on the integrator the error AOVs are those of the noisy render, renamed
 (`noisy_variance`, `noisy_bias`, `children`) and joined by `denoise_change` (denoised - noisy).
 """
 from __future__ import annotations
@@ -20,22 +20,22 @@ backend()
 
 import numpy as np  # noqa: E402
 
-from .. import api  # noqa: E402
+from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes  # noqa: E402
 from . import guides, oidn  # noqa: E402
 
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-           callback: Callable[[api.Progress], None] | None = None, lanes_per_pass: int = api.LANES_PER_PASS,
+           callback: Callable[[Progress], None] | None = None, lanes_per_pass: int = LANES_PER_PASS,
            pass_spp: int | None = None) -> tuple[np.ndarray, np.ndarray, dict | None]:
     """(denoised image, noisy image, honest AOVs or None), H x W x 3 float32."""
     oidn.require()
     oidn.check_quality(quality)
     prog = None
-    for prog in api.passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
+    for prog in passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
         if callback is not None:
             callback(prog)
     noisy = np.asarray(prog.image, dtype=np.float32)
-    albedo, normal = guides.first_hit(scene, spp, api.pass_seed(seed, 0))
+    albedo, normal = guides.first_hit(scene, spp, pass_seed(seed, 0))
     out = oidn.run(noisy, albedo, normal, quality, guides.to_sensor(scene))
     errs = prog.aovs
     if errs is not None:

@@ -69,7 +69,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         check_output(args.output, scene)
     count = args.frames if len(scenes) == 1 else len(scenes)
     paths = frame_paths(args.output, count)
-    from ..cli import check_target
+    from ..images import check_target
     for path in paths + [args.output + ".frames.json"]:  # every numbered image and the manifest, as the output
         check_target(path)
     params = parse_set(args.set)

@@ -59,8 +59,8 @@ class Render:
         if output is not None:
             self.checkpoint = Checkpoint(output, settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
                                                               len(self.layout)))
-        if self.checkpoint is not None:  # written beside the output, by the output's rules (cli.check_target)
-            from ..cli import check_target
+        if self.checkpoint is not None:  # written beside the output, by the output's rules (images.check_target)
+            from ..images import check_target
             check_target(self.checkpoint.manifest)
         if self.checkpoint is not None and not resume and self.checkpoint.exists():
             raise UsageError(f"{output!r} has the checkpoint of an unfinished render ({self.checkpoint.manifest}): add "

@@ -26,7 +26,7 @@ BUFFER_HELP = ("also write the expectation buffer (.npz) for `styletrace restyle
 def check_buffer_path(path: str) -> None:
     if not path.lower().endswith(".npz"):
         raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
-    from ..cli import check_target
+    from ..images import check_target
     check_target(path)  # before the render: the buffer is written after it
 
 

@@ -64,8 +64,7 @@ def run(resolved: Resolved, cluster: str | None = None, callback: Callable[[Prog
 def render(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
            estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: Any = None, callback: Callable[[Progress], None] | None = None, cluster: str | None = None,
-           pass_spp: int | None = None, defines: dict[str, Any] | None = None, denoise: str | None = None,
-           **params: Any) -> np.ndarray:
+           pass_spp: int | None = None, defines: dict[str, Any] | None = None, **params: Any) -> np.ndarray:
     """`styletrace.render`: float32 H x W x C, linear radiance in the film's pixel format (C = 3 for the usual
     rgb film); with `aovs=True` `(image, aovs)` (`Progress.aovs`).
 
@@ -75,14 +74,7 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     `stylized` integrator, else the max_depth, rr_depth and hide_emitters of its Mitsuba integrator (through
     `moment`/`aov` wrappers) with the identity style; `auto` values are resolved on the scene. `integrator=`
     renders with a prebuilt one as it is. `cluster` ("local" or a Ray address) renders the passes on Ray,
-    bit-identical to the same split here; `pass_spp` fixes the split (default: by the device's memory).
-    `denoise` ("expectation" or "image", the `denoise` extra) denoises locally (docs/denoise.md)."""
-    if denoise is not None:
-        if cluster is not None:
-            raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
-        from ..denoise import render as denoised
-        return denoised(scene, style, spp, inner, estimator, seed, width, height, integrator, callback,
-                        denoise=denoise, pass_spp=pass_spp, defines=defines, **params)
+    bit-identical to the same split here; `pass_spp` fixes the split (default: by the device's memory)."""
     job = Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
               given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed,
               pass_spp=pass_spp)
