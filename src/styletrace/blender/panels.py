@@ -28,8 +28,8 @@ def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
 
 
 def dump(settings, material: bool = False) -> list[str]:
-    """The panel as text, one row each: label, value and Blender property type (docs/blender.md shows it: headless
-    Blender draws no UI to screenshot)."""
+    """The panel as text, one row each: label, value and Blender property type (docs/blender.md shows it next to
+    a screenshot: `bpy` as a module draws no UI)."""
     lines = []
     for owner, name in layout_rows(settings, material):
         prop = owner.bl_rna.properties[name]
