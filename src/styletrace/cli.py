@@ -323,6 +323,8 @@ def cmd_render(args) -> int:
                 f"finished passes to {out}")
             return 1
         if stop.count:
+            if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass, now (not
+                source.save()            # whenever its abandoned iterator is collected)
             if latest is None:
                 say("styletrace: interrupted before the first pass finished; nothing written")
                 return stop.exit_status

@@ -29,7 +29,8 @@ def test_break_then_resume_renders_only_the_rest_and_equals_the_undisturbed_rend
     first = Render(job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1, output=out, checkpoint_every=3600)
     for prog in first:
         if prog.spp_done >= 3:  # units may arrive out of order; those after a gap are summed later
-            break  # as the command line does after Ctrl-C: the loop's end checkpoints the finished units
+            break
+    first.save()  # as the command line does after Ctrl-C: the finished units go to the checkpoint
     saved = json.load(open(out + ".checkpoint.json"))
     done = sum(saved["rounds_done"])
     assert 3 <= done < spp
