@@ -1,4 +1,4 @@
-"""reuse=pixels (plugins/reuse.py): pooled children at the first hit.
+"""reuse=pixels (plugins/reuse/): pooled children at the first hit.
 
 Truth from outside the pooling code: an analytic plane under a uniform sky, Mitsuba's `path`, the tree
 sampler at a large n on the same camera rays, and the pools checked against the scene's geometry.
@@ -87,8 +87,8 @@ def test_mixture_weights_are_unbiased_where_own_pdf_weights_are_not(room, monkey
     each pooled sample by its own density misses the directions a neighbour cannot sample, and the same
     4-sigma test rejects it (measured: 10 % darker)."""
     scene, mask, refs = room
-    monkeypatch.setattr(reuse, "NORMAL_MIN", -1.0)
-    monkeypatch.setattr(reuse, "DEPTH_TOL", 10.0)
+    monkeypatch.setattr(reuse.pool, "NORMAL_MIN", -1.0)
+    monkeypatch.setattr(reuse.pool, "DEPTH_TOL", 10.0)
     integ = api.make_integrator("identity", inner=1, reuse="pixels", reuse_radius=3, reuse_k=48)
 
     def z(weights):
@@ -147,7 +147,7 @@ def test_pools_never_cross_style_slots():
     reuse.render(integ, scene, scene.sensors()[0], 0, 2, keep=keep)
     half = keep["width"] // 2
     sizes, crossing = [], 0
-    for members in reuse.pools(keep):
+    for members in reuse.pool_pixels(keep):
         side = members[0][0] < half
         crossing += sum((x < half) != side for x, _ in members)
         sizes.append(len(members))

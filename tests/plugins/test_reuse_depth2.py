@@ -1,4 +1,4 @@
-"""reuse=pixels with stylize=first_n_hits (plugins/reuse.py): the first hits pool their children, each child's
+"""reuse=pixels with stylize=first_n_hits (plugins/reuse/): the first hits pool their children, each child's
 value being the stylized value of the level-1 vertex it reaches (computed by the ordinary tree, deeper first).
 
 Truth from outside the pooling code: an analytic glowing shell (radiance Le / (1 - albedo) everywhere, also in
@@ -87,8 +87,8 @@ def test_mixture_weights_unbiased_on_a_turning_ball_own_weights_not(monkeypatch)
     path = mi.load_dict({"type": "path"})
     refs = np.array([np.asarray(mi.render(scene, integrator=path, spp=1024, seed=s), dtype=np.float64)[..., :3][mask]
                      .mean() for s in range(4)])
-    monkeypatch.setattr(reuse, "NORMAL_MIN", -1.0)
-    monkeypatch.setattr(reuse, "DEPTH_TOL", 10.0)
+    monkeypatch.setattr(reuse.pool, "NORMAL_MIN", -1.0)
+    monkeypatch.setattr(reuse.pool, "DEPTH_TOL", 10.0)
     integ = api.make_integrator("identity", inner="1,1", reuse="pixels", reuse_radius=3, reuse_k=48, **DEPTH2)
 
     def z(weights):

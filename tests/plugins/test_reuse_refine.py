@@ -1,4 +1,4 @@
-"""reuse=pixels with an adaptive count n0:n_max (plugins/reuse.py, `_refine`): the threshold-aware refinement round.
+"""reuse=pixels with an adaptive count n0:n_max (plugins/reuse/refine.py): the threshold-aware refinement round.
 
 Truth from outside the pooling code: the analytic radiance inside a glowing diffuse sphere, the rule's band
 recomputed here from the recorded statistics with numpy (Student's t bounded by its limits), and the

@@ -1,4 +1,4 @@
-"""reuse=pixels with stylize=first_n_hits and reuse_deep=world (plugins/reuse.py, plugins/world_grid.py): the
+"""reuse=pixels with stylize=first_n_hits and reuse_deep=world (plugins/reuse/world.py, plugins/world_grid.py): the
 second-level vertices pool their world-space neighbours' children too, then the first hits pool theirs.
 
 Truth from outside the pooling code: the analytic glowing shell, Mitsuba's `path` on the Cornell box, and the

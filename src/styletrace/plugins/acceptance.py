@@ -2,7 +2,7 @@
 
 A candidate in slot q (slot 0: the vertex itself) is accepted when it exists, both may pool, and it has the same
 style target, the same BSDF object and a shading normal within `normal_min` (n.n'); the grid adds its own
-geometric test (`near`): camera distances for the pixel window (reuse.Grid), world distance for the world grid
+geometric test (`near`): camera distances for the pixel window (reuse.pool.Grid), world distance for the world grid
 (world_grid.WorldGrid). The result is one bit per slot, K + 1 slots in a UInt64 (K <= 63).
 """
 from __future__ import annotations

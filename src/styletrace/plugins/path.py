@@ -212,7 +212,7 @@ def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f,
     vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
     so scenes without such surfaces trace the plain loop. `came_from` = (interaction, BSDF pdf, delta) of
     a vertex the caller sampled `ray` from: emission at the starting vertex is then MIS-weighted against
-    that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse.py`).
+    that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse/`).
     `lines`: (lines.Lines, lines.LineState at the starting vertex) to detect feature lines on the walk's
     edges, or None (no line code is traced). `tone`: the anchors.ToneState at the starting vertex, advanced
     at every scattering (anchors.py), or None."""

@@ -13,7 +13,7 @@ thread count (a hash table filled with atomics would not: its order depends on t
 A vertex looks up the cell of its position jittered by up to h/2 on each axis (so cell borders do not decide who
 is a neighbour), takes K consecutive candidates of that cell from a random start, itself excluded, and accepts
 those within distance h with the same style target, the same BSDF object and shading normals with
-n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of `reuse.Grid`'s, so `reuse._pooled` pools
+n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of `reuse.pool.Grid`'s, so `reuse.pool.pooled` pools
 over either.
 """
 from __future__ import annotations
