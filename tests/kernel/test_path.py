@@ -2,7 +2,7 @@
 import mitsuba as mi
 import numpy as np
 
-from styletrace.kernel.path import mis_power
+from styletrace.kernel.vertex import mis_power
 
 BIG = [0.0, 1e-30, 1.0, 3.0, 1e19, 2.6e19, 1e30, 3.0e38, float("inf")]
 

@@ -55,7 +55,9 @@ from ..config.estimator_registry import make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
 from .render_context import RenderContext
-from .path import bounce, emission, environment, first_scattering, past_area_emitters, walk
+from .bounce import bounce
+from .path import first_scattering, past_area_emitters, walk
+from .vertex import emission, environment
 from ..scene.graph import SceneGraph, any_ptr as _any_ptr
 from .volume import volume_walk
 

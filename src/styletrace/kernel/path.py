@@ -23,10 +23,9 @@ adds their emission nor reflects there, and next-event estimation skips the emit
 marks (their light reaches the path through g instead). The caller gets the halted lanes back with
 their throughput, intersection and ray.
 
-`bounce(scene, sampler, si, ray, active, depth, max_depth)` is the single step that the recursive
-`first_n_hits` parametrization takes between two stylized vertices: emission at x, next-event
-estimation towards delta lights only (no BSDF sample can reach them), one BSDF sample and the
-intersection of its ray.
+`bounce.bounce(scene, sampler, si, ray, active, depth, max_depth)` is the single step that the recursive
+`first_n_hits` parametrization takes between two stylized vertices (bounce.py); vertex.py holds what
+both share at one vertex (emission, environment, the power heuristic, the depth limit, null parts).
 
 Scenes with participating media use volume.py's walk instead (same interface, a `Walk` with the medium);
 the integrator chooses at trace time, so this kernel has no medium code at all.
@@ -45,71 +44,7 @@ import mitsuba as mi
 
 from .anchors import MAX_BITS, ToneState, combine, shape_id
 from .emitter_sampler import EmitterSampler
-
-
-def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:
-    """Power heuristic weight a^2 / (a^2 + b^2) of strategy a against b, finite for every input.
-
-    Written as 1 / (1 + (b/a)^2): squaring first overflows float32 for densities above ~1.8e19, which
-    a grazing direction towards an area light reaches (pdf = dist^2 / (cos * area) with cos ~ 1e-17
-    from a rotation's rounding), and inf / inf made the weight NaN and the sample with it, even where
-    it multiplied a zero contribution. The ratio form gives the right limits instead (a -> inf: 1,
-    b -> inf: 0); 0 where a vanishes, 1/2 where both are infinite (the two weights still sum to 1).
-    """
-    r = pdf_b / pdf_a
-    w = dr.rcp(dr.fma(r, r, 1.0))
-    w = dr.select(dr.isnan(r), 0.5, w)
-    return dr.detach(dr.select(pdf_a > 0, w, 0.0))
-
-
-def depth_limit(max_depth: int) -> int:
-    return 0xFFFFFFFF if max_depth < 0 else max_depth
-
-
-def environment(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
-    """Radiance the environment sends along an escaped ray (zero where there is none)."""
-    ds = mi.DirectionSample3f(scene, si=si, ref=dr.zeros(mi.Interaction3f))
-    return ds.emitter.eval(si, active & ~si.is_valid())
-
-
-def emission(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> mi.Spectrum:
-    """Radiance emitted at si towards si.wi (or by the environment where si escaped)."""
-    return si.emitter(scene).eval(si, active)
-
-
-def null_split(si: mi.SurfaceInteraction3f, bsdf, u: mi.Float, active: mi.Bool):
-    """Where a surface lets light through unscattered (a `mask`'s transparent part, a `null` BSDF), choose
-    between passing through and scattering: (passes, pass weight, stay weight).
-
-    The null transmission T = `eval_null_transmission` is the part of the BSDF that continues straight
-    on; the ray passes with probability p = mean(T) and weight T/p, else it scatters here with weight
-    (1 - T)/(1 - p) (both 1 where T is grey, as for masks). Mitsuba's BSDFs sample their null component
-    with probability T, so this choice is the one their own `sample` would make.
-    """
-    T = bsdf.eval_null_transmission(si, active)
-    p = dr.clip(dr.mean(T), 0.0, 1.0)
-    passes = active & (u < p)
-    w_pass = dr.select(p > 0, T / p, 0.0)
-    w_stay = dr.select(p < 1, (1.0 - T) / (1.0 - p), 0.0)
-    return passes, w_pass, w_stay
-
-
-def opaque_part(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Spectrum:
-    """1 / (1 - T): the factor that turns a BSDF's scattering into that of its opaque part alone (the part
-    a stylized vertex stands for, see `first_scattering`); 0 where nothing scatters."""
-    keep = 1.0 - bsdf.eval_null_transmission(si, active)
-    return dr.select(keep > 0, dr.rcp(keep), 0.0)
-
-
-def opaque_share(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Float:
-    """1 - p, p = mean(T) as in `null_split`: the probability with which Mitsuba's BSDFs sample their
-    scattering (non-null) part. They sample it where their first uniform `sample1` is below 1 - p (a `mask`
-    its nested BSDF where sample1 < opacity, a `thindielectric` its reflection where sample1 <= R), and
-    pass sample1 / (1 - p) on to that part. So a stylized vertex scales its sample1 into [0, 1 - p): its
-    children sample the opaque part alone, as the opaque surface itself would, with weight f/pdf of that
-    part, and none is spent on the null part (`walk`, `bounce`)."""
-    T = bsdf.eval_null_transmission(si, active)
-    return 1.0 - dr.clip(dr.mean(T), 0.0, 1.0)
+from .vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share
 
 
 @dataclass
@@ -355,69 +290,6 @@ def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInt
     em_pdf = emitters.pdf_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
     w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
     return s.beta * w_em * emitter.eval(si, hit_em)
-
-
-@dataclass
-class Bounce:
-    L: mi.Spectrum                       # emission at x plus next-event estimation towards delta lights
-    weight: mi.Spectrum                  # BSDF sample weight f cos / pdf (valid where `go`)
-    pi: mi.PreliminaryIntersection3f     # the next vertex
-    si: mi.SurfaceInteraction3f
-    ray: mi.Ray3f
-    go: mi.Bool                          # lanes that took the bounce
-    hit: mi.Bool                         # ... and reached a surface (the others see the environment)
-    lines: Optional[Any] = None          # lines.LineState at the next vertex (where lines are on)
-    tone: Optional[Any] = None           # anchors.ToneState at the next vertex (where tone is on)
-
-
-def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
-           max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False,
-           lines=None, tone=None) -> Bounce:
-    """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
-
-    The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
-    surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
-    spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
-    alone get next-event estimation here, with weight 1.
-
-    With `nulls` (the scene has null-scattering surfaces) x scatters by its opaque part only and the
-    next vertex is the first scattering one past null interactions (`first_scattering`).
-    `lines`: as in `walk`; a line on the bounce's edge ends it (weight x line colour joins L).
-    """
-    ctx = mi.BSDFContext()
-    L = emission(scene, si, active)
-    go = active & (depth + 1 < depth_limit(max_depth))
-    bsdf = si.bsdf(ray)
-    to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-    emitters = emitters if emitters is not None else EmitterSampler(scene)
-    ds, em_weight = emitters.sample_direction(si, sampler.next_2d(), to_light)
-    to_light &= ds.delta & (ds.pdf != 0.0)
-    scale = opaque_part(si, bsdf, go) if nulls else 1.0
-    L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
-    u1 = sampler.next_1d()
-    if nulls:  # x samples its opaque part alone (opaque_share): the weight is that part's f/pdf
-        keep = opaque_share(si, bsdf, go)
-        u1 *= keep
-    bs, weight = bsdf.sample(ctx, si, u1, sampler.next_2d(), go)
-    ray2 = si.spawn_ray(si.to_world(bs.wo))
-    if nulls:
-        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight)
-    go &= dr.max(weight) > 0
-    pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
-    line_state = None
-    if lines is not None:  # a feature line on this edge absorbs the path (lines.py)
-        seen, line_state = lines[0].edge(scene, sampler, lines[1], si, bs, ray2, pi2, depth + 1, go)
-        L += dr.select(seen.fired, weight * seen.color, 0.0)
-        go &= ~seen.fired
-    if nulls:
-        front = first_scattering(scene, sampler, pi2, ray2, go)
-        pi2, ray2, weight = front.pi, front.ray, weight * front.beta
-    si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
-    finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
-    L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
-    tone = None if tone is None else advance(tone, si, bs, depth, go)
-    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state,
-                  tone=tone)
 
 
 def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):

@@ -25,7 +25,7 @@ vertex is always a surface one. `flight` says whether the medium along the first
 sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already stands
 at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
 `delta_start`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
-through g at the next stylized vertex; see path.bounce), so emitters found past it get full weight.
+through g at the next stylized vertex; see bounce.bounce), so emitters found past it get full weight.
 `hide_first`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
 """
 from __future__ import annotations
@@ -37,7 +37,8 @@ import drjit as dr
 import mitsuba as mi
 
 from .emitter_sampler import EmitterSampler
-from .path import depth_limit, finished, halt_at, mis_emission, mis_power, opaque_part, opaque_share
+from .path import finished, halt_at, mis_emission
+from .vertex import depth_limit, mis_power, opaque_part, opaque_share
 
 
 def channel_of(c: mi.Spectrum, channel: mi.UInt32) -> mi.Float:

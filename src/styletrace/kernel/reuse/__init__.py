@@ -34,7 +34,7 @@ cannot sample: the tests' negative control. g sees a mean of |P| m samples inste
 direct application shrinks accordingly, at the price of the geometric mismatch between neighbours (blurred
 shadow edges and style thresholds within the window; docs/reuse.md measures it).
 
-With stylize=first_n_hits (N >= 2 levels) v is the level-0 vertex and a child is `path.bounce`'s: next-event
+With stylize=first_n_hits (N >= 2 levels) v is the level-0 vertex and a child is `bounce.bounce`'s: next-event
 samples reach delta lights only, and a BSDF sample's Li is the stylized value of the level-1 vertex it reaches,
 estimated for that child alone by the ordinary tree (`integrator.stylized(1, ...)`, its own n(1) children,
 recursively for N > 2) or the environment where it escapes. The deeper levels are thus done first; level 0 then

@@ -16,7 +16,8 @@ import numpy as np
 
 from ...styles.base import Vertex
 from ..lane_sampler import LaneSampler
-from ..path import emission, environment, past_area_emitters
+from ..path import past_area_emitters
+from ..vertex import emission, environment
 from .children import Children, Parents, Slab, Span, draw
 from .pool import Frame, Grid, Pools, pooled
 from .refine import Round, refine

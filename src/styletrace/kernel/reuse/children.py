@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import drjit as dr
 import mitsuba as mi
 
-from ..path import depth_limit, environment, mis_power, walk
+from ..path import walk
+from ..vertex import depth_limit, environment, mis_power
 
 
 class Children:
@@ -77,7 +78,7 @@ class Draw:
     """One child's two samples at its parent's vertex (its lane `on`): a next-event sample (direction ds.d, E)
     and a BSDF sample (direction wb, density bs.pdf, weight w_b) with the ray to what it reaches (ray2, pi2).
     At a non-last level of first_n_hits (`nested`) next-event estimation samples delta lights only, as
-    `path.bounce`: the BSDF sample reaches every other emitter, which the next level stylizes."""
+    `bounce.bounce`: the BSDF sample reaches every other emitter, which the next level stylizes."""
 
     def __init__(self, scope, smp, parents: Parents, on, depth: int, nested: bool):
         si, bsdf = parents.si, parents.bsdf

@@ -2,7 +2,7 @@
 path filtering; first_n_hits with N = 2 only).
 
 All children of a batch are drawn at once, one lane each (child j of lane i at i * M + j): a delta-light sample
-and a BSDF sample from the first hit, as `path.bounce`. The level-1 vertices they reach (one per child) draw
+and a BSDF sample from the first hit, as `bounce.bounce`. The level-1 vertices they reach (one per child) draw
 m2 children each (children.draw: ordinary paths beyond the last level), and each pools with the accepted ones
 of K2 candidates from its jittered cell of a world-space grid (world_grid.py: same target, BSDF and normal,
 within distance h), with the weights of pool.py; g of that pooled value is the child's Li.
@@ -16,7 +16,7 @@ import numpy as np
 from ...styles.base import Vertex
 from ...config import settings as S
 from ..lane_sampler import LaneSampler
-from ..path import emission
+from ..vertex import emission
 from ..world_grid import WorldGrid, density_h
 from . import pool as P
 from .children import Children, Draw, Parents, Slab, Span, draw
