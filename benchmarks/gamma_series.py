@@ -47,8 +47,8 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 from styletrace import estimators as E  # noqa: E402
-from styletrace.plugins import scenes  # noqa: E402
-from styletrace.plugins.estimation import SERIES_MAX_TERMS  # noqa: E402
+from styletrace.assets import scenes  # noqa: E402
+from styletrace.config.estimator_registry import SERIES_MAX_TERMS  # noqa: E402
 from styletrace.styles import registry  # noqa: E402
 from _report import machine_description, write_section  # noqa: E402
 

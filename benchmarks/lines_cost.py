@@ -1,4 +1,4 @@
-"""Cost of feature lines (plugins/lines.py, docs/lines.md): render time with lines against without.
+"""Cost of feature lines (kernel/lines.py, docs/lines.md): render time with lines against without.
 
 The colour map style at n = 8 samples per style evaluation on the dragon and on the mirror/glass scene
 (`lines`), with lines off, and on at N = 8 and 16 auxiliary rays per tested edge, at line_depth 1 (the

@@ -1,4 +1,4 @@
-"""Cost of LLaT's canonical lifting of tone (plugins/anchors.py, plugins/mls.py, docs/llat.md): hatching with
+"""Cost of LLaT's canonical lifting of tone (kernel/anchors.py, kernel/mls.py, docs/llat.md): hatching with
 lift=canonical against plain hatching (lift=position, the pattern at the vertex's own projection).
 
 Scene: a hatched plane seen directly and in a reflector turned 45 degrees (the tests' flat-mirror scene,

@@ -1,6 +1,6 @@
 """Trace, compile and run time of deep recursive stylization ("first N hits", 1 to 16 levels), with Dr.Jit's
 JitFlag.OptimizeLoops on (Dr.Jit's default) and off (what styletrace traces its kernels with,
-`plugins.integrator.tracing`).
+`kernel.integrator.tracing`).
 
 With the flag on Dr.Jit traces each symbolic loop's body twice; a stylized level's loop body holds the next
 level's loop, so the trace time doubled per level and `stylize_depth` was capped at 8. This script measures
@@ -42,7 +42,7 @@ import styletrace
 styletrace.init()
 import drjit as dr, mitsuba as mi
 from styletrace import api
-from styletrace.plugins import integrator as I
+from styletrace.kernel import integrator as I
 I.OPTIMIZE_LOOPS = {on!r}
 dr.set_flag(dr.JitFlag.KernelHistory, True)
 timer = {{}}
@@ -96,7 +96,7 @@ import styletrace
 styletrace.init()
 import drjit as dr, mitsuba as mi
 from styletrace import api
-from styletrace.plugins import integrator as I
+from styletrace.kernel import integrator as I
 dr.set_flag(dr.JitFlag.KernelHistory, True)
 out = {{}}
 for style in {styles!r}:
@@ -204,7 +204,7 @@ def main():
                   "on this shared 2-core machine more than it differs from 1 (four runs of this table put cel at 8 "
                   "levels at 0.60, 1.03, 0.94 and 1.16). The images are the same bit for bit."]
     lines += ["", "So `stylize_depth` is capped at 16 (it was 8): the trace time no longer doubles per level; the "
-                  "images are bit-identical with the flag on and off (tests/plugins/test_recursion_depth.py)."]
+                  "images are bit-identical with the flag on and off (tests/kernel/test_recursion_depth.py)."]
     write_section("recursion_depth", "\n".join(lines))
     print("\n".join(lines))
 

@@ -2,9 +2,9 @@
 `python docs/make_contact_sheet.py` writes docs/defaults_contact_sheet.png (shown in docs/styles.md).
 
 Scenes: the built-in cornell-box (about 2 units across), the built-in dragon (unit height) and the Cornell
-box scaled x100 with its light x0.1 (`plugins.scenes.scaled`: 200 units across and a tenth as bright), so
+box scaled x100 with its light x0.1 (`assets.scenes.scaled`: 200 units across and a tenth as bright), so
 the scales differ by 200x and the brightness by 10x. Every style is rendered with no parameter given: its
-scene-relative 'auto' values are resolved per scene (`plugins.scene_defaults`) and printed here.
+scene-relative 'auto' values are resolved per scene (`scene.defaults`) and printed here.
 """
 import os
 import sys
@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 
 from styletrace import api  # noqa: E402
 from styletrace.images import write_image  # noqa: E402
-from styletrace.plugins.scenes import cornell_box, dragon, scaled  # noqa: E402
+from styletrace.assets.scenes import cornell_box, dragon, scaled  # noqa: E402
 from styletrace.styles import get, names  # noqa: E402
 
 SIZE, SPP, GAP = 96, 16, 4

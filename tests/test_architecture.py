@@ -12,7 +12,7 @@ MAP = os.path.join(os.path.dirname(SRC), "docs", "architecture.md")
 
 
 def modules() -> list[str]:
-    """Every module file under src/styletrace, relative to it ('plugins/reuse.py'), package __init__s apart."""
+    """Every module file under src/styletrace, relative to it ('kernel/reuse/pool.py'), package __init__s apart."""
     out = []
     for folder, _, files in os.walk(PACKAGE):
         for f in files:
@@ -68,7 +68,7 @@ def test_every_module_has_a_layer():
 
 
 def path_of(module: str) -> str:
-    """'styletrace.plugins.reuse' -> 'plugins/reuse.py'; a package -> its folder's __init__.py."""
+    """'styletrace.kernel.reuse' -> 'kernel/reuse/pool.py'; a package -> its folder's __init__.py."""
     rel = module.split(".", 1)[1].replace(".", "/") if "." in module else ""
     if os.path.isdir(os.path.join(PACKAGE, rel)):
         return (rel + "/__init__.py") if rel else "__init__.py"
@@ -91,8 +91,8 @@ def test_the_checks_see_a_module_left_off_and_an_upward_import():
     """The checks above are not vacuous: a map without one module's name, and a plugin placed under the
     pipeline, are caught."""
     doc = text()
-    assert "plugins/reuse.py" in named(doc)
-    assert "plugins/reuse.py" not in named(doc.replace("plugins/reuse.py", "plugins/xxxxx.py"))
+    assert "kernel/reuse/pool.py" in named(doc)
+    assert "kernel/reuse/pool.py" not in named(doc.replace("kernel/reuse/pool.py", "kernel/reuse/xxxxx.py"))
     table = layer_table(doc)
-    assert layer_of("plugins/reuse.py", table) < layer_of("pipeline/passes.py", table)
+    assert layer_of("kernel/reuse/pool.py", table) < layer_of("pipeline/passes.py", table)
     assert layer_of("distributed/run.py", table) < layer_of("distributed/command.py", table)

@@ -29,8 +29,8 @@ def test_first_use_of_the_api_initialises_the_backend():
 
 
 def test_the_plugin_modules_import_on_their_own():
-    """`styletrace.render` was both a function and a subpackage; the plugins now live in `styletrace.plugins`."""
-    r = run_child("import styletrace.plugins.integrator as m, styletrace; print(m.StylizedIntegrator.__name__)")
+    """`styletrace.render` was both a function and a subpackage; the plugins now live in `styletrace.kernel`."""
+    r = run_child("import styletrace.kernel.integrator as m, styletrace; print(m.StylizedIntegrator.__name__)")
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "StylizedIntegrator"
 
@@ -125,7 +125,7 @@ def test_the_cycle_check_finds_a_cycle():
 
 def test_only_the_engine_layers_import_drjit_or_mitsuba():
     """Dr.Jit picks its libLLVM when first imported: modules that import it at load time sit below a guard
-    (`jit.backend()` in `styles`, `plugins`, `api`), and the estimators and front ends import it nowhere."""
+    (`jit.backend()` in `styles`, `kernel`, `scene`, `api`), and the estimators and front ends import it nowhere."""
     graph_free = ("styletrace", "styletrace.errors", "styletrace.jit", "styletrace.runtime", "styletrace.cli",
                   "styletrace.gallery")
     for name in graph_free:

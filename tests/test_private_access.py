@@ -1,7 +1,7 @@
 """No module outside the integrator's own files reads or writes the `stylized` integrator's private attributes.
 
-Its per-render state belongs to `plugins/render_context.py` (set and released there), its methods to
-`plugins/integrator.py`; the other modules (reuse, the recording integrator, the front ends, the tests' helpers)
+Its per-render state belongs to `kernel/render_context.py` (set and released there), its methods to
+`kernel/integrator.py`; the other modules (reuse, the recording integrator, the front ends, the tests' helpers)
 use the public seams: `targets_for`, `styled_mask`, `estimate`, `through`, `stylized`, `child`, `walk`,
 `RenderContext`. The private names are read from integrator.py itself (its `_methods` and the `self._x` it
 assigns), so a new one is covered as soon as it exists.
@@ -12,7 +12,7 @@ import os
 from conftest import SRC
 
 PACKAGE = os.path.join(SRC, "styletrace")
-OWNERS = ("plugins/integrator.py", "plugins/render_context.py")
+OWNERS = ("kernel/integrator.py", "kernel/render_context.py")
 
 
 def parse(rel: str) -> ast.Module:
@@ -22,7 +22,7 @@ def parse(rel: str) -> ast.Module:
 
 def private_names() -> set[str]:
     """The underscore attributes StylizedIntegrator defines: its methods and what it assigns on `self`."""
-    tree = parse("plugins/integrator.py")
+    tree = parse("kernel/integrator.py")
     cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "StylizedIntegrator")
     names = {n.name for n in cls.body if isinstance(n, ast.FunctionDef) and n.name.startswith("_")
              and not n.name.startswith("__")}

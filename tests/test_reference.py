@@ -7,7 +7,7 @@ import pytest
 
 import styletrace
 from styletrace import reference
-from styletrace.plugins.settings import PROPERTIES
+from styletrace.config.settings import PROPERTIES
 from styletrace.styles import get, names
 
 styletrace.init()

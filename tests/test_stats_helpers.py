@@ -9,7 +9,7 @@ K = 16
 def rare_light_renders(rng, n, p=1 / 256, big=16.0, base=0.4):
     """K renders of 24 x 24 pixels of an exactly unbiased estimator whose samples are `base` except, with
     probability p, `base + big`: a pixel's value is the mean of n such samples. The numbers are those of
-    first_n_hits at stylize_depth 2 on tests/plugins/test_null_surfaces.py's diffuse card (sky: 0.8 x 0.5;
+    first_n_hits at stylize_depth 2 on tests/kernel/test_null_surfaces.py's diffuse card (sky: 0.8 x 0.5;
     the lamp, 20 x 0.8, found by a cosine-sampled bounce about once in 256), and the reference is path's
     render: normal, of the same mean."""
     ours = base + big * rng.binomial(n, p, size=(K, 24, 24, 1)) / n

@@ -26,8 +26,8 @@ from .pipeline.passes import (LANE_BYTES, LANES_PER_PASS, TILE_SIDE, Progress, T
                               passes, tiles)
 from .pipeline.scene import (SceneWarning, canonical_normals, film_format, first_line, load_scene,  # noqa: E402,F401
                              scene_dict, scene_spp)
-from .plugins.integrator import StylizedIntegrator  # noqa: E402
-from .plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402,F401
+from .kernel.integrator import StylizedIntegrator  # noqa: E402
+from .scene.defaults import resolve as resolve_defaults  # noqa: E402,F401
 
 
 def render(*args: Any, denoise: str | None = None, cluster: str | None = None, **kw: Any):
@@ -45,7 +45,7 @@ def make_integrator(style: str | None = None, inner: Any = None, estimator: str 
                     **params: Any) -> StylizedIntegrator:
     """A `stylized` integrator. Integrator properties (stylize, stylize_depth, max_depth, rr_depth) and the
     style's parameters go in **params under their names; what is not given takes the default of
-    `plugins.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
+    `config.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
     return make_integrator_from(given_values(style, inner, estimator, **params))
 
 

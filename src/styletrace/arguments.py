@@ -49,10 +49,10 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     """The arguments of `passes`: a renderable scene as well."""
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
-    from .plugins.integrator import StylizedIntegrator, line_problem  # needs a variant set, as the plugins do
+    from .kernel.integrator import StylizedIntegrator, line_problem  # needs a variant set, as the plugins do
     if isinstance(integrator, StylizedIntegrator) and integrator.settings.lines is not None:
-        from .plugins.lines import Lines
-        from .plugins.scene_graph import SceneGraph
+        from .kernel.lines import Lines
+        from .scene.graph import SceneGraph
         problem = line_problem(integrator.settings, SceneGraph(scene).has_media)
         if problem is not None:
             raise SceneError(problem)
@@ -107,7 +107,7 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     seen.clear()
     for name in sorted(names & set(UNRENDERABLE)):
         return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
-    from .plugins.scene_graph import SceneGraph  # needs a variant set, as the plugins do
+    from .scene.graph import SceneGraph  # needs a variant set, as the plugins do
     try:
         SceneGraph(scene)  # styled BSDFs where no style can apply
     except SceneError as exc:

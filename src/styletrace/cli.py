@@ -148,7 +148,7 @@ class StopSignals:
 def cmd_styles(args) -> int:
     from .runtime import init
     init()
-    from .plugins.estimation import applicable
+    from .config.estimator_registry import applicable
     from .styles import get, names
 
     for name in names():
@@ -168,7 +168,7 @@ def cmd_styles(args) -> int:
 def cmd_lines(args) -> int:
     from .runtime import init
     init()
-    from .plugins import settings
+    from .config import settings
 
     print("feature lines (West 2021) on path edges, with any style and stylize mode: `render --lines` and "
           "`--set NAME=VALUE` (Python: styletrace.render(..., lines=True, line_width=2)); docs/lines.md")
@@ -181,7 +181,7 @@ def cmd_lines(args) -> int:
 def cmd_estimators(args) -> int:
     from .runtime import init
     init()
-    from .plugins.estimation import kinds
+    from .config.estimator_registry import kinds
 
     for k in kinds():
         print(f"{k.name}: {k.doc}")
@@ -470,7 +470,7 @@ def add_ray_flags(parser) -> None:
 
 def add_setting_flags(parser) -> None:
     """One flag per integrator property that has one; help and defaults come from the settings table."""
-    from .plugins import settings
+    from .config import settings
     for p in settings.PROPERTIES:
         if not p.flag:
             continue

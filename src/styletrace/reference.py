@@ -5,8 +5,8 @@ rewrites each block from the code:
 
 | block | source |
 |---|---|
-| `integrator` | the integrator's properties (`plugins.settings.PROPERTIES`) |
-| `estimators` | the estimator registry (`plugins.estimation`) |
+| `integrator` | the integrator's properties (`config.settings.PROPERTIES`) |
+| `estimators` | the estimator registry (`config.estimator_registry`) |
 | `style:NAME` | a style's parameters (`styles` registry) |
 
     python -m styletrace.reference            # rewrite README.md and docs/*.md in place
@@ -27,7 +27,7 @@ def _row(*cells) -> str:
 
 
 def integrator_table() -> str:
-    from .plugins.settings import PROPERTIES
+    from .config.settings import PROPERTIES
     rows = [_row("property", "type", "default", "flag", "meaning"), "|---|---|---|---|---|"]
     for p in PROPERTIES:
         default = "the style's" if p.default is None else f"`{p.default}`"
@@ -39,7 +39,7 @@ def integrator_table() -> str:
 
 
 def estimator_table() -> str:
-    from .plugins.estimation import kinds
+    from .config.estimator_registry import kinds
     from .styles import get, names
     styles = [get(n)() for n in names()]
     rows = [_row("estimator", "forms of g", "styles", "inner_samples n means", "what it is"), "|---|---|---|---|---|"]

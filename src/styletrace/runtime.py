@@ -5,7 +5,7 @@
 
 `jit.backend()` picks a working libLLVM and the Mitsuba variant; a variant the user set before is
 kept. Every styletrace module that imports Dr.Jit or Mitsuba when it loads calls it first (the
-`styles` and `plugins` packages, `api`, `images`), because Dr.Jit chooses its libLLVM at import time.
+`styles`, `kernel` and `scene` packages, `assets.scenes`, `api`, `images`), because Dr.Jit chooses its libLLVM at import time.
 `init()` does that and registers the plugins for the active variant. The command line, the API
 entry points and the tests call `init()`; a script that loads Mitsuba XML naming `stylized` calls it
 before `mi.load_file`. `import styletrace` alone does neither: it loads no Dr.Jit, no Mitsuba.
@@ -23,10 +23,10 @@ def init(variant: str | None = None) -> str:
     if active not in _registered:
         import mitsuba as mi
 
-        from .plugins.standalone import from_properties
-        from .plugins.styled_bsdf import StyledBSDF
+        from .kernel.standalone import from_properties
+        from .kernel.styled_bsdf import StyledBSDF
 
-        # from a scene file or dict: its `mi.render` pins the scene-relative auto values (plugins/standalone.py)
+        # from a scene file or dict: its `mi.render` pins the scene-relative auto values (kernel/standalone.py)
         mi.register_integrator("stylized", lambda props: from_properties(props))
         mi.register_bsdf("styled", lambda props: StyledBSDF(props))
         _registered.add(active)

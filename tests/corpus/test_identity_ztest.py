@@ -20,7 +20,7 @@ its pixel channels are accepted), with two changes that make it a valid comparis
    and the per-channel RGB variances cannot be recovered from them (they need the covariances). So the test
    runs in XYZ: styletrace's RGB mean is converted exactly (a linear map). Its variance comes from its
    per-RGB-channel variance AOV (`aovs=True`, the unbiased sample variance over the camera samples, checked
-   against independent renders in tests/plugins/test_aovs.py) through the bound
+   against independent renders in tests/kernel/test_aovs.py) through the bound
    Var(sum_c a_c R_c) <= (sum_c |a_c| sd(R_c))^2 (Cauchy-Schwarz), exact for fully correlated channels and
    an upper bound otherwise: the test can only become more conservative, never invalid.
 

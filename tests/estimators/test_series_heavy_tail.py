@@ -32,7 +32,7 @@ def var_and_se(v):
 
 
 def renderer_rule():
-    """What `--style gamma --estimator series --inner 16` builds (plugins/estimation.py, styles/gamma.py)."""
+    """What `--style gamma --estimator series --inner 16` builds (config/estimator_registry.py, styles/gamma.py)."""
     return SeriesEstimator(gamma_series(2.2), b=Pilot(16, lo=0.02, scale=1.5), max_terms=24)
 
 

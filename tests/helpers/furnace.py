@@ -6,7 +6,7 @@ the pixels inside the silhouette are independent draws of one estimator (spp = 1
 import numpy as np
 
 from styletrace.api import load_scene, make_integrator, passes
-from styletrace.plugins.scenes import FURNACE_ALBEDO, FURNACE_RADIANCE
+from styletrace.assets.scenes import FURNACE_ALBEDO, FURNACE_RADIANCE
 
 I = np.array(FURNACE_ALBEDO) * FURNACE_RADIANCE
 

@@ -1,4 +1,4 @@
-"""Small scenes with participating media and the comparison with Mitsuba's `volpath` that tests/plugins/test_media*.py
+"""Small scenes with participating media and the comparison with Mitsuba's `volpath` that tests/kernel/test_media*.py
 share: K independent renders per side at the same number of light paths, the difference of the image means
 tested against its standard error (`mean_z`) and each 4 x 4 pixel block (`pixel_t_test`)."""
 import mitsuba as mi

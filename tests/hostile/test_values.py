@@ -14,7 +14,7 @@ import styletrace
 from styletrace import api
 from styletrace.cli import main
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
-from styletrace.plugins import estimation
+from styletrace.config import estimator_registry as estimation
 from styletrace.styles import get, names
 
 BLACKBODY_XML = """<scene version="3.0.0">

@@ -7,7 +7,7 @@ from styletrace import api
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
-from styletrace.plugins.scenes import cornell_box
+from styletrace.assets.scenes import cornell_box
 from styletrace.styles import get, names
 
 W, H, SPP, INNER, SEED = 20, 14, 3, 2, 7
@@ -39,7 +39,7 @@ def test_restyle_equals_a_fresh_render(buf, name):
 
 
 @pytest.mark.parametrize("name", [n for n in names() if "affine" in
-                                  __import__("styletrace.plugins.estimation", fromlist=["x"]).applicable(get(n)())])
+                                  __import__("styletrace.config.estimator_registry", fromlist=["x"]).applicable(get(n)())])
 def test_restyle_with_the_affine_estimator(buf, name):
     np.testing.assert_allclose(restyle(buf, style=name, estimator="affine"), fresh(name, estimator="affine"),
                                rtol=RTOL, atol=ATOL)

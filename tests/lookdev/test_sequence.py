@@ -10,7 +10,7 @@ from styletrace.lookdev.buffer import MAX_SEQUENCE_SAMPLES, bytes_per_sample, lo
 from styletrace.lookdev.fit import fit
 from styletrace.lookdev.record import render_buffer
 from styletrace.lookdev.restyle import replay_lanes, restyle
-from styletrace.plugins.scenes import cornell_box
+from styletrace.assets.scenes import cornell_box
 
 W, H, SPP, INNER, SEED = 16, 12, 2, 4, 7
 #: "up to float rounding": both images are float32 means of the same per-sample float32 values
@@ -154,7 +154,7 @@ def test_replay_reads_each_sample_s_own_events_and_nothing_past_them(monkeypatch
     import mitsuba as mi
 
     from styletrace.lookdev import sequence
-    from styletrace.plugins.settings import parse_slot
+    from styletrace.config.settings import parse_slot
     arrays = {"seq_count": np.array([0, 1, 1, 2], np.uint32), "seq_kind": np.array([0, 1, 1, 1], np.uint8),
               "child": np.array([[1.0, 2.0, 3.0]] * 3, np.float32), "uniform": np.array([0.25], np.float32)}
     monkeypatch.setattr(sequence, "make_estimator", lambda slot, level, v: estimator)

@@ -31,7 +31,7 @@ def test_zero_brightness_is_grey_at_first_level():
 
 
 def test_unresolved_auto_thresholds_are_evenly_spaced():
-    # thresholds default to auto (scene quantiles, tests/plugins/test_scene_defaults.py); a style never
+    # thresholds default to auto (scene quantiles, tests/scene/test_defaults.py); a style never
     # resolved on a scene splits [0, 1] evenly: 0.5 for two levels, 1/3 and 2/3 for three
     assert create("cel").thresholds is None
     out = run(create("cel"), [(0.49,) * 3, (0.5,) * 3])

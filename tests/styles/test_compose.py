@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from styletrace.errors import StyleError
-from styletrace.plugins import estimation, settings
+from styletrace.config import estimator_registry as estimation, settings
 from styletrace.styles import create, get, names
 from styletrace.styles.forms import AffineForm, CompositeForm
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from helpers.pattern import peak
-from styletrace.plugins import mls
-from styletrace.plugins.anchors import Tone, ToneState, combine, shape_id
+from styletrace.kernel import mls
+from styletrace.kernel.anchors import Tone, ToneState, combine, shape_id
 from tone.scenes import T, mirror_scene, render, sensor, styled
 
 RNG = np.random.default_rng(7)

@@ -1,4 +1,4 @@
-"""LLaT's canonical lifting of tone (plugins/anchors.py, plugins/mls.py): hatching seen in a flat mirror,
+"""LLaT's canonical lifting of tone (kernel/anchors.py, kernel/mls.py): hatching seen in a flat mirror,
 behind glass, in a convex mirror ball and in glossy reflections keeps the direct view's screen spacing and
 angle; the position mode (lift=position, the pattern at the projection of the vertex's own position) does
 not. Spacing and angle come from the peak of the 2D spectrum of the hatched region (helpers/pattern.py);

@@ -17,8 +17,8 @@ from .. import init
 
 init()  # the registries below import Dr.Jit and Mitsuba
 
-from ..plugins import estimation  # noqa: E402
-from ..plugins import settings as S  # noqa: E402
+from ..config import estimator_registry  # noqa: E402
+from ..config import settings as S  # noqa: E402
 from ..styles import registry  # noqa: E402
 
 SEP = "__"
@@ -104,7 +104,7 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Inner samples", default="", update=changed,
         description="n: child estimates per stylized vertex ('8', '8,4' per level, '4:64' adaptive); "
                     "empty: the style's default")
-    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimation.names()), default="direct",
+    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimator_registry.names()), default="direct",
                                       update=changed)
     stylize: bpy.props.EnumProperty(name="Stylize", items=_enum(S.STYLIZE_MODES), default="first_hit")
     stylize_depth: bpy.props.IntProperty(name="Stylize depth", default=1, min=1, max=S.MAX_STYLIZE_DEPTH)
@@ -132,7 +132,7 @@ class MaterialSettings(bpy.types.PropertyGroup):
     style: bpy.props.EnumProperty(name="Style", items=style_items(), default="cel", update=changed)
     params: bpy.props.PointerProperty(type=StyleParams)
     inner_samples: bpy.props.StringProperty(name="Inner samples", default="", update=changed)
-    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimation.names()), default="direct")
+    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimator_registry.names()), default="direct")
 
 
 def style_values(settings) -> dict:

@@ -41,8 +41,8 @@ from ..errors import UsageError  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, Buffer  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
 from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for  # noqa: E402
-from ..plugins import settings as S  # noqa: E402
-from ..plugins.integrator import StylizedIntegrator  # noqa: E402
+from ..config import settings as S  # noqa: E402
+from ..kernel.integrator import StylizedIntegrator  # noqa: E402
 from . import guides, oidn  # noqa: E402
 
 #: the buffer array holding the denoised expectation at each camera sample (3 x samples, as `mean`)

@@ -103,7 +103,7 @@ def load(spec: SceneSpec, values: dict, variant: str):
         return CACHE[key]
     from ..pipeline.job import Job
     from ..pipeline.resolve import resolve
-    from ..plugins.integrator import StylizedIntegrator
+    from ..kernel.integrator import StylizedIntegrator
     unknown = sorted(set(spec.load_kwargs) - {"defines"})
     if unknown:
         raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")

@@ -46,7 +46,7 @@ class Render:
                  lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
                  resume: bool = False, checkpoint_every: float = 10.0, cpus_per_task: int = 1,
                  gpus_per_task: float = 0, lock: Any = contextlib.nullcontext()):
-        from ..plugins.settings import parse
+        from ..config.settings import parse
         if parse(job.values).expansion_pass:  # a unit is a bare mi.render: no pass map travels
             raise UsageError(f"bad value {job.values['expansion_pass']!r} for 'expansion_pass' in a cluster render: its "
                              f"pre-pass runs in a local render's passes only; render without --ray/cluster=, or use "

@@ -72,7 +72,7 @@ from .pilot import PerLane, Pilot
 from .polynomial import PolynomialNaive, PolynomialU, u_statistic_means, ustat_update
 from .series import SeriesEstimator
 from .telescoping import Telescoping
-from .tiedye import TIE_DYE, tie_dye, tie_dye_b, tie_dye_fit, tie_dye_g, tie_dye_r
+from .tie_dye_chebyshev import TIE_DYE, tie_dye, tie_dye_b, tie_dye_fit, tie_dye_g, tie_dye_r
 from .truncation import Cumulative, Geometric, Poisson, PoissonCMF, PowerLaw, Truncation, resolve_truncation
 
 __all__ = [

@@ -21,7 +21,7 @@ What it does
     Stopping depends on the data, so the estimate's bias differs from that of a fixed n: still O(1/n0)
     and vanishing as n0 grows (consistent), but not g''Var/(2n) for any one n. Unbiased estimators lose
     their unbiasedness under such a rule (the number of terms depends on the samples they average), so
-    nothing but direct application uses it (plugins/estimation.py refuses the others).
+    nothing but direct application uses it (config/estimator_registry.py refuses the others).
 
 Parameters
     g           callable g(x) -> y, array-generic as for ``Direct``.

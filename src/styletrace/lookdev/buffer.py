@@ -76,7 +76,7 @@ def bytes_per_sample(stylize: str, stores: str = "mean") -> int:
                for k in fields_for(stylize, stores) if k not in SEQUENCE[1:])
 
 
-#: prefix of the arrays that keep the scene-defaults pilot (`plugins.scene_defaults.Pilot.samples`), so that
+#: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.Pilot.samples`), so that
 #: a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
 PILOT = "pilot_"
 

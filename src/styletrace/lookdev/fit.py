@@ -43,7 +43,7 @@ import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..errors import BackendError, UsageError  # noqa: E402
-from ..plugins import settings as S  # noqa: E402
+from ..config import settings as S  # noqa: E402
 from ..styles import create  # noqa: E402
 from ..styles.base import Style, brightness  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402

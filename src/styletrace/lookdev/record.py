@@ -36,11 +36,11 @@ from ..pipeline import passes as pass_loop  # noqa: E402
 from ..pipeline.scene import film_format  # noqa: E402
 from .. import estimators as E  # noqa: E402
 from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
-from ..plugins import settings as S  # noqa: E402
-from ..plugins.estimation import make_estimator  # noqa: E402
-from ..plugins.integrator import StylizedIntegrator  # noqa: E402
-from ..plugins.scene_defaults import Pilot, resolve as resolve_defaults, unique_styled  # noqa: E402
-from ..plugins.scenes import DEFAULT  # noqa: E402
+from ..config import settings as S  # noqa: E402
+from ..config.estimator_registry import make_estimator  # noqa: E402
+from ..kernel.integrator import StylizedIntegrator  # noqa: E402
+from ..scene.defaults import Pilot, resolve as resolve_defaults, unique_styled  # noqa: E402
+from ..assets.scenes import DEFAULT  # noqa: E402
 from ..styles.base import Vertex, camera_forward  # noqa: E402
 from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, PILOT, VERSION, Buffer, bytes_per_sample  # noqa: E402
 from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402

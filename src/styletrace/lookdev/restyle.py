@@ -42,9 +42,9 @@ import numpy as np  # noqa: E402
 from ..errors import UsageError  # noqa: E402
 from ..estimators import apply_linear  # noqa: E402
 from ..estimators.arrays import const_like  # noqa: E402
-from ..plugins import settings as S  # noqa: E402
-from ..plugins.estimation import applicable  # noqa: E402
-from ..plugins.scene_defaults import Facts, auto_values  # noqa: E402
+from ..config import settings as S  # noqa: E402
+from ..config.estimator_registry import applicable  # noqa: E402
+from ..scene.defaults import Facts, auto_values  # noqa: E402
 from ..styles import get  # noqa: E402
 from ..styles.base import Vertex  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402
@@ -180,7 +180,7 @@ def camera_scene(buffer: Buffer) -> mi.Scene:
 
 def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> list[S.StyleSlot]:
     """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render of the
-    scene pins them (`plugins.scene_defaults`); unchanged for a buffer without a pilot."""
+    scene pins them (`scene.defaults`); unchanged for a buffer without a pilot."""
     pilot = {k[len(PILOT):]: v for k, v in buffer.arrays.items() if k.startswith(PILOT)}
     if not pilot:
         return slots

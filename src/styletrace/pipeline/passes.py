@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 from ..arguments import check_passes_args  # noqa: E402
 from ..errors import UsageError  # noqa: E402
 from ..images import PIXEL_FORMATS  # noqa: E402
-from ..plugins.scene_defaults import resolve as resolve_defaults  # noqa: E402
+from ..scene.defaults import resolve as resolve_defaults  # noqa: E402
 from .scene import film_format  # noqa: E402
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).

@@ -17,9 +17,9 @@ from typing import Any
 import mitsuba as mi
 
 from ..arguments import check_render_args
-from ..plugins import settings as S
-from ..plugins.integrator import StylizedIntegrator
-from ..plugins.scene_defaults import Pilot, resolve as resolve_defaults
+from ..config import settings as S
+from ..kernel.integrator import StylizedIntegrator
+from ..scene.defaults import Pilot, resolve as resolve_defaults
 from ..runtime import init
 from ..sizing import lanes_per_pass
 from .carried import carried_settings
@@ -61,7 +61,7 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
         return job.integrator
     values = integrator_values(scene, job)
     # from the values, also for the scene's own integrator as it is: Mitsuba's object resolves auto values in
-    # its own `render` (plugins/standalone.py); the pipeline pins them once, here, for every route
+    # its own `render` (kernel/standalone.py); the pipeline pins them once, here, for every route
     return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
 
 

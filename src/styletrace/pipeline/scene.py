@@ -24,7 +24,7 @@ from ..arguments import check_scene, scene_problem  # noqa: E402
 from ..errors import SceneError  # noqa: E402
 from ..images import PIXEL_FORMATS  # noqa: E402
 from ..normals import canonical_normals as _canonical  # noqa: E402
-from ..plugins.scenes import BUILTIN, DEFAULT  # noqa: E402
+from ..assets.scenes import BUILTIN, DEFAULT  # noqa: E402
 
 def first_line(exc: BaseException) -> str:
     text = str(exc).strip()

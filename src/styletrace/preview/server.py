@@ -25,7 +25,7 @@ PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 def styles_table() -> list[dict[str, Any]]:
     from ..lookdev.restyle import RESTYLABLE_ESTIMATORS  # the preview's buffer keeps the children's mean
-    from ..plugins.estimation import applicable
+    from ..config.estimator_registry import applicable
     from ..styles import get, names
     out = []
     for name in names():
@@ -142,7 +142,7 @@ def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: 
     import uvicorn
 
     from .session import Session
-    from ..plugins.settings import parse_slot
+    from ..config.settings import parse_slot
     slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
     if slot.style.per_sample:
         raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "

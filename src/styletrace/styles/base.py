@@ -38,8 +38,8 @@ class Vertex:
     p: world position; n: shading normal (world); wo: unit direction towards the viewer or previous
     vertex; view: the camera's forward direction (the same for all lanes); depth: 0 for the first
     hit seen from the camera. s: the vertex's image coordinate (mi.Point2f, pixels right and up of the image
-    centre) where the integrator computes one (LLaT's canonical lifting, plugins/anchors.py: only while a
-    style of the render has `wants_coordinate`), else None; method: how s was found (plugins/mls.py codes).
+    centre) where the integrator computes one (LLaT's canonical lifting, kernel/anchors.py: only while a
+    style of the render has `wants_coordinate`), else None; method: how s was found (kernel/mls.py codes).
     """
 
     p: mi.Point3f
@@ -89,7 +89,7 @@ class Style:
         """Called once per render before the kernel is traced (e.g. to read the camera)."""
 
     def auto_values(self, facts) -> dict[str, Any]:
-        """Values for the parameters left at 'auto' whose rule needs the scene (`plugins.scene_defaults`
+        """Values for the parameters left at 'auto' whose rule needs the scene (`scene.defaults`
         computes them before rendering). `facts` offers `camera` (a `Camera`), `brightness(qs)` and
         `depth(qs)`: quantiles of the first-hit brightness and camera depth of what this style covers."""
         return {}

@@ -4,7 +4,7 @@ Parameters
 - thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K
 - levels (floats, default 0.4,0.95): K+1 target brightnesses m_0..m_K
 
-Auto thresholds (scene-relative, `plugins.scene_defaults`): the brightness quantiles 1/(K+1), ...,
+Auto thresholds (scene-relative, `scene.defaults`): the brightness quantiles 1/(K+1), ...,
 K/(K+1) of what the camera sees of the objects this style covers, from a pilot of Mitsuba's `path`
 integrator (32 cells along the film, 16 samples each, brightness averaged per cell), so the K+1 bands
 hold about equal shares of the image whatever the scene's light level. A fixed brightness cannot: on

@@ -4,7 +4,7 @@ Parameters
 - c (float, default 1.5): contrast factor, >= 0
 - pivot (float, default 0.5): brightness left unchanged
 - exposure (float in (0, 100], default auto): s, the scale of <I> before the contrast; auto: 0.5 / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`, at most 100), so the scene's middle tone sits at
+  first-hit brightness of the scene (`scene.defaults`, at most 100), so the scene's middle tone sits at
   the default pivot and a dim scene is not pushed below 0 (a fixed target, not the pivot you give: the exposure
   stays the scene's, and restyling a buffer with another pivot equals a fresh render); unresolved
   (mi.render directly): 1

@@ -4,8 +4,8 @@ Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex 
 Yonghao Yue (ACM TOG 45(4), 2026), Section 5 (canonical lifting) and S2.5 (its fallback chain).
 
 No parameters. Closed form (no children): g = (s_x, s_y, method), with s the image coordinate the integrator
-computed for the vertex (`Vertex.s`, pixels right and up of the image centre; plugins/anchors.py) and method
-its code (plugins/mls.py): 0 the pixel (direct view), 1 the first-edge pixel of an all-delta prefix, 2 MLS,
+computed for the vertex (`Vertex.s`, pixels right and up of the image centre; kernel/anchors.py) and method
+its code (kernel/mls.py): 0 the pixel (direct view), 1 the first-edge pixel of an all-delta prefix, 2 MLS,
 3 affine, 4 nearest anchor, 5 first-edge fallback. Rendered on a styled object with one camera sample per
 pixel it is the coordinate and method AOV of the lifting; averaged over samples it is their pixel mean.
 Without a coordinate (a renderer that computes none) s is the projection of the vertex's position, method 0.

@@ -2,7 +2,7 @@
 
 Parameters
 - exposure (float, default auto): 0 < k <= 87 (e^-k stays a normal float32); auto: 1.5 x 0.18 / the median
-  first-hit brightness of the scene (at most 87) (`plugins.scene_defaults`): the fixed default 1.5 applied to radiance
+  first-hit brightness of the scene (at most 87) (`scene.defaults`): the fixed default 1.5 applied to radiance
   exposed as the other tone styles expose it (median -> 0.18), so a dim scene is not dark; unresolved
   (mi.render directly): 1.5
 

@@ -1,7 +1,7 @@
 """Forms of a style function that the unbiased estimators can take (main paper Sec. 4, Theorem 4.1).
 
 A style whose g is affine, a power series or a polynomial fit returns one of these from `form()`;
-`styletrace.plugins.estimation` turns it into the estimator the user picked. Styles with
+`styletrace.config.estimator_registry` turns it into the estimator the user picked. Styles with
 discontinuities (cel, colour maps, hatching, ...) have no form: only direct application applies.
 """
 from __future__ import annotations

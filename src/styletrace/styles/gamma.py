@@ -3,7 +3,7 @@
 Parameters
 - gamma (float, default 2.2): gamma >= 0.1 (smaller gammas overflow float32 on bright radiance)
 - exposure (float in (0, 100], default auto): s, the scale of <I> before the power; auto: 0.18 / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`), at most 100; unresolved (mi.render directly): 1
+  first-hit brightness of the scene (`scene.defaults`), at most 100; unresolved (mi.render directly): 1
 
     g(<I>) = max(s <I>, 0)^(1/gamma) = s^(1/gamma) max(<I>, 0)^(1/gamma)        per channel.
 
@@ -13,7 +13,7 @@ b = max(1.5 <x>_pilot, 0.02) (the floor in exposed units, so it means the same o
 0 < I < 2b. Radiance with heavy tails (fireflies) makes these estimators' variance unbounded in practice
 (docs/estimators.md, "Gamma and the series estimators": a child far beyond 2b enters every term's products);
 the integrator's `expansion_pass` (estimator series) takes b from a separate pre-pass per pixel instead
-(plugins/expansion.py); the CLI warns when a render's values leave g's range [0, inf) (`styletrace.wild`).
+(kernel/expansion.py); the CLI warns when a render's values leave g's range [0, inf) (`styletrace.wild`).
 """
 from __future__ import annotations
 

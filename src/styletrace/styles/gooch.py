@@ -7,7 +7,7 @@ Parameters
 - light_dir (vector, default auto): direction TOWARDS the light, normalised here; a global
   illumination scene has no single light, so it is a user parameter (the paper points it at the area
   lights above the model). Auto: the camera's up vector tilted towards the camera,
-  normalize(up - 0.3 forward), read in `prepare` (and pinned and printed by `plugins.scene_defaults`):
+  normalize(up - 0.3 forward), read in `prepare` (and pinned and printed by `scene.defaults`):
   light from above the picture whichever world axis is up (a fixed 0,1,0.3 lit z-up scenes from the
   side). For a y-up camera looking along -z it is the old default 0,1,0.3 (normalised).
 - k_d (colour, default 0.8,0.8,0.8): the object's diffuse colour

@@ -13,7 +13,7 @@ Parameters
   auto: the 5% and 95% quantiles of the scene's first-hit brightness (as in `hatching`)
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
 - lift (choice, default canonical): where the screen grid is evaluated (spacing_px only): canonical, at the
-  vertex's image coordinate s (LLaT's mirror-anchor map, plugins/anchors.py), so reflections and what lies
+  vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py), so reflections and what lies
   behind glass show the screen's grid; position, at the projection of the vertex's own position (before
   LLaT; a point behind the camera seen in a mirror has no meaningful projection there)
 

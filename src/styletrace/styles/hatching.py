@@ -12,12 +12,12 @@ Parameters
   units of the spacing in use (pixels with spacing_px, scene units with spacing)
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
 - u_min (float, default auto), u_max (float, default auto, > u_min): brightness of full / no hatching;
-  auto: the 5% and 95% quantiles of the scene's first-hit brightness (`plugins.scene_defaults`: a pilot
+  auto: the 5% and 95% quantiles of the scene's first-hit brightness (`scene.defaults`: a pilot
   of Mitsuba's `path` integrator), so every scene shows the whole range from fully to not hatched;
   unresolved (mi.render called directly): 0.05 and 0.9
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
 - lift (choice, default canonical): where the screen lines are evaluated (spacing_px only).
-  canonical: at the vertex's image coordinate s (LLaT's mirror-anchor map, plugins/anchors.py): the pixel
+  canonical: at the vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py): the pixel
   for a direct view and behind perfect mirrors or glass, the MLS inverse of the anchor map otherwise;
   position: at the pinhole projection of the vertex's own position (the pattern is anchored to the world
   point and is scaled and mirrored in reflections; the behaviour before LLaT)

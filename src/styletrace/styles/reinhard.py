@@ -3,7 +3,7 @@
 Parameters
 - white (float, default 1.0): 0 < w <= 1000, the exposed radiance mapped to 1/2
 - exposure (float in (0, 100], default auto): s, the scale of <I> before the curve; auto: 0.18 / the median
-  first-hit brightness of the scene (`plugins.scene_defaults`), at most 100; unresolved (mi.render directly): 1
+  first-hit brightness of the scene (`scene.defaults`), at most 100; unresolved (mi.render directly): 1
 
     g(<I>) = s <I> / (w + s <I>) = 1 - w / (w + s <I>)            per channel.
 

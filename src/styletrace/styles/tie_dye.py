@@ -7,7 +7,7 @@ Parameters
   estimator library fits the channel functions (Chebyshev, degree 20 in the paper); lo < hi
 - together: pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14, so float32 resolves the cosine's argument
 - exposure (float in (0, 100], default auto): s, the scale of <I> before the waves; auto: 0.18 / the median first-hit
-  brightness of the scene (`plugins.scene_defaults`, at most 100), so the waves fall on the same tones of a dim scene;
+  brightness of the scene (`scene.defaults`, at most 100), so the waves fall on the same tones of a dim scene;
   unresolved (mi.render directly): 1
 
 Per channel c in {r, g, b}, with x_c the channel of the inner estimate <I>:

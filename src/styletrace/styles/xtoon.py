@@ -22,7 +22,7 @@ Parameters
 - mode (choice orientation|depth, default orientation): the detail attribute
 - r (float, default 2, >= 0): exponent of the orientation mode (larger: thinner rim)
 - z_min (float, default auto, > 0), z_max (float, default auto, > z_min): depth range of the depth mode.
-  Auto (depth mode, `plugins.scene_defaults`): the 5% and 95% quantiles of the camera depth of the first
+  Auto (depth mode, `scene.defaults`): the 5% and 95% quantiles of the camera depth of the first
   hits on the objects this style covers (pilot rays through a 32-cell grid of the film), so the fade
   spans the visible depth at any scene scale; unresolved (mi.render called directly): 1 and 10
 - gradient (gradient, default a 3-band warm ramp over tone in [0, 1]): G; tone = n.l in [-1, 1] is

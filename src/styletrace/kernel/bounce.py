@@ -1,0 +1,77 @@
+"""One step of the recursive `first_n_hits` parametrization between two stylized vertices: emission at x,
+next-event estimation towards delta lights only (no BSDF sample can reach them), one BSDF sample and the
+intersection of its ray (`bounce`; path.py walks below the last stylized vertex)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import drjit as dr
+import mitsuba as mi
+
+from .emitter_sampler import EmitterSampler
+from .path import advance, first_scattering
+from .vertex import depth_limit, emission, opaque_part, opaque_share
+
+
+@dataclass
+class Bounce:
+    L: mi.Spectrum                       # emission at x plus next-event estimation towards delta lights
+    weight: mi.Spectrum                  # BSDF sample weight f cos / pdf (valid where `go`)
+    pi: mi.PreliminaryIntersection3f     # the next vertex
+    si: mi.SurfaceInteraction3f
+    ray: mi.Ray3f
+    go: mi.Bool                          # lanes that took the bounce
+    hit: mi.Bool                         # ... and reached a surface (the others see the environment)
+    lines: Optional[Any] = None          # lines.LineState at the next vertex (where lines are on)
+    tone: Optional[Any] = None           # anchors.ToneState at the next vertex (where tone is on)
+
+
+def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
+           max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False,
+           lines=None, tone=None) -> Bounce:
+    """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
+
+    The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
+    surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
+    spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
+    alone get next-event estimation here, with weight 1.
+
+    With `nulls` (the scene has null-scattering surfaces) x scatters by its opaque part only and the
+    next vertex is the first scattering one past null interactions (`first_scattering`).
+    `lines`: as in `walk`; a line on the bounce's edge ends it (weight x line colour joins L).
+    """
+    ctx = mi.BSDFContext()
+    L = emission(scene, si, active)
+    go = active & (depth + 1 < depth_limit(max_depth))
+    bsdf = si.bsdf(ray)
+    to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+    emitters = emitters if emitters is not None else EmitterSampler(scene)
+    ds, em_weight = emitters.sample_direction(si, sampler.next_2d(), to_light)
+    to_light &= ds.delta & (ds.pdf != 0.0)
+    scale = opaque_part(si, bsdf, go) if nulls else 1.0
+    L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
+    u1 = sampler.next_1d()
+    if nulls:  # x samples its opaque part alone (opaque_share): the weight is that part's f/pdf
+        keep = opaque_share(si, bsdf, go)
+        u1 *= keep
+    bs, weight = bsdf.sample(ctx, si, u1, sampler.next_2d(), go)
+    ray2 = si.spawn_ray(si.to_world(bs.wo))
+    if nulls:
+        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight)
+    go &= dr.max(weight) > 0
+    pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
+    line_state = None
+    if lines is not None:  # a feature line on this edge absorbs the path (lines.py)
+        seen, line_state = lines[0].edge(scene, sampler, lines[1], si, bs, ray2, pi2, depth + 1, go)
+        L += dr.select(seen.fired, weight * seen.color, 0.0)
+        go &= ~seen.fired
+    if nulls:
+        front = first_scattering(scene, sampler, pi2, ray2, go)
+        pi2, ray2, weight = front.pi, front.ray, weight * front.beta
+    si2 = pi2.compute_surface_interaction(ray2, ray_flags=mi.RayFlags.All, active=go)
+    finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
+    L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
+    tone = None if tone is None else advance(tone, si, bs, depth, go)
+    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state,
+                  tone=tone)

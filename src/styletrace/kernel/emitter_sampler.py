@@ -1,0 +1,120 @@
+"""Emitter selection for next-event estimation, independent of the order Mitsuba lists the emitters in.
+
+Mitsuba 3.9.1 loads a scene's objects in parallel, so `scene.emitters()` comes back in a different order
+from one process to the next (measured on the built-in `mixed` scene: the two area lights swap in about
+one load in six). `scene.sample_emitter_direction` picks an emitter by its index in that list, so the
+same seed gave different images (Mitsuba's own `path` too). `EmitterSampler` orders the emitters by a
+key built from what they are, not from when they were loaded: the emitter's description (`str`: type,
+radiance, position, ...) and, for area lights, its shape's description and bounding box. Emitters with
+equal keys are interchangeable, so their relative order cannot change an image.
+
+Selection (`mode`):
+- `uniform`: probability proportional to each emitter's `sampling_weight` (1 by default), as Mitsuba.
+- `power`: proportional to `sampling_weight` times an estimate of the emitted power Phi, the mean weight
+  of `Emitter.sample_ray` over a fixed set of samples (its expectation is Phi for every emitter type;
+  for environment and directional lights it is the power through the scene's bounding disk).
+  An emitter with no estimated power is never chosen by next-event estimation; BSDF sampling still
+  reaches it and the MIS densities below stay consistent, so the estimate stays unbiased.
+
+`sample_direction` matches `Scene.sample_emitter_direction` (one 2D sample: its x picks the emitter and is
+reused for the direction; the weight is divided and the density multiplied by the selection probability;
+occluded samples get weight 0). `pdf_direction` is the matching solid-angle density of a direction
+that reached an emitter: the emitter's own density times its selection probability, looked up by the
+emitter's registry id (one gather, whatever the number of emitters).
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from ..config.choices import EMITTER_DEFAULT as DEFAULT_MODE, EMITTER_MODES as MODES  # noqa: F401
+from ..errors import SettingsError
+
+#: samples of `sample_ray` per emitter for the power estimate (fixed, so the estimate is deterministic)
+POWER_SAMPLES = 1 << 12
+
+
+def emitter_id(ptr) -> mi.UInt32:
+    """The registry id of each lane's emitter (0 for none): a dense small integer per live emitter."""
+    return dr.reinterpret_array(mi.UInt32, ptr)
+
+
+def stable_key(emitter: mi.Emitter) -> tuple:
+    """What an emitter is, independent of the order it was loaded in (see the module docstring)."""
+    shape = emitter.get_shape()
+    if shape is None:
+        return (str(emitter), "", "")
+    return (str(emitter), str(shape), str(shape.bbox()))
+
+
+def estimated_power(emitter: mi.Emitter) -> float:
+    """Phi estimated as the mean weight of `sample_ray` (averaged over the channels) over fixed samples."""
+    n = POWER_SAMPLES
+    rng = mi.PCG32(n, initseq=dr.arange(mi.UInt64, n))
+    u = [rng.next_float32() for _ in range(5)]
+    _, weight = emitter.sample_ray(0.0, u[0], mi.Point2f(u[1], u[2]), mi.Point2f(u[3], u[4]))
+    w = mi.Color3f(weight)
+    total = dr.sum(dr.select(dr.isfinite(w.x + w.y + w.z), (w.x + w.y + w.z) / 3.0, 0.0))
+    return max(float(total[0] if dr.is_array_v(total) else total) / n, 0.0)
+
+
+def selection_order(emitters) -> list:
+    """The emitters in the order selection uses: by `stable_key`, whatever order they came in."""
+    return sorted(emitters, key=stable_key)
+
+
+class EmitterSampler:
+    def __init__(self, scene: mi.Scene, mode: str | None = None):
+        mode = DEFAULT_MODE if mode is None else mode
+        if mode not in MODES:
+            raise SettingsError(f"emitter sampling '{mode}': expected one of {', '.join(MODES)}")
+        emitters = selection_order(scene.emitters())
+        self.scene = scene
+        self.keys = [stable_key(e) for e in emitters]  # the selection order, for tests and reports
+        self.count = len(emitters)
+        if not emitters:
+            return
+        ids = [emitter_id(mi.EmitterPtr(e))[0] for e in emitters]
+        weights = [e.sampling_weight() for e in emitters]
+        if mode == "power":
+            powered = [w * estimated_power(e) for w, e in zip(weights, emitters)]
+            if sum(powered) > 0:
+                weights = powered
+        if not sum(weights) > 0:
+            weights = [1.0] * len(emitters)
+        total = sum(weights)
+        self.table = dr.reinterpret_array(mi.EmitterPtr, mi.UInt32(ids))
+        self.distr = mi.DiscreteDistribution(mi.Float(weights))
+        prob = [0.0] * (max(ids) + 1)
+        for i, w in zip(ids, weights):
+            prob[i] = w / total
+        self.prob_by_id = mi.Float(prob)
+        self.probabilities = [w / total for w in weights]  # in key order, for tests and reports
+
+    def sample_direction(self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True):
+        """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded (with `visible`; without,
+        the caller estimates the transmittance: volume.py) or none."""
+        if self.count == 0:
+            return dr.zeros(mi.DirectionSample3f), mi.Spectrum(0.0)
+        index, x, pmf = self.distr.sample_reuse_pmf(sample.x, active)
+        emitter = dr.gather(mi.EmitterPtr, self.table, index, active)
+        ds, weight = emitter.sample_direction(si, mi.Point2f(x, sample.y), active)
+        ds.pdf *= pmf
+        weight *= dr.rcp(pmf)
+        active &= ds.pdf != 0.0
+        weight = dr.select(active, weight, 0.0)
+        if not visible:
+            return ds, weight
+        occluded = self.scene.ray_test(si.spawn_ray_to(ds.p), active & (dr.max(weight) > 0.0))
+        return ds, dr.select(occluded, 0.0, weight)
+
+    def selection_probability(self, emitter, active: mi.Bool) -> mi.Float:
+        if self.count == 0:
+            return mi.Float(0.0)
+        return dr.gather(mi.Float, self.prob_by_id, emitter_id(emitter), active & (emitter != None))  # noqa: E711
+
+    def pdf_direction(self, ref: mi.Interaction3f, ds: mi.DirectionSample3f, active: mi.Bool) -> mi.Float:
+        """Solid-angle density with which `sample_direction` from `ref` produces the direction of `ds`."""
+        if self.count == 0:
+            return mi.Float(0.0)
+        return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(ds.emitter, active)

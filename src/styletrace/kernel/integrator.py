@@ -1,0 +1,379 @@
+"""`stylized`: Mitsuba integrator for the stylized rendering equation (depth-first tree sampling).
+
+Properties (XML, Python dict, or the CLI's --set): `style`, the style's own parameters under their
+registry names, `inner_samples`, `estimator`, `stylize`, `stylize_depth`, `max_depth`, `rr_depth`,
+`hide_emitters`, `lines` and the `line_*` settings.
+Their defaults, parsing and docs live in `settings` (the table in the README is generated from it).
+
+The radiance leaving a stylized vertex x towards the viewer is
+    L(x, wo) = g_theta( L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi )
+(the stylized rendering equation, emission inside g). At a stylized vertex the integrator draws n
+child estimates of the argument of g in a nested symbolic loop in the same SIMD lane (no lane
+replication, so memory does not grow with n) and hands them to the estimator.
+
+Where styles apply (`stylize`):
+- first_hit: the camera ray's first hit. Objects whose BSDF is a `styled` wrapper use their own style
+  there; all other objects use the integrator's style.
+- first_n_hits: the first N = stylize_depth vertices of every path, recursively (a child of a level-l
+  vertex takes one BSDF-sampled bounce to the level-(l+1) vertex; children of the last level are
+  ordinary path-traced samples). Cost per camera sample is the product of the per-level counts.
+- first_object_hit: the first vertex *on a styled object* along each path, at any depth: a stylized
+  object seen through a mirror or a glass is still stylized. Paths are ordinary path-traced walks that
+  halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
+  The integrator's own style must be identity here.
+
+Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ray replaces the camera
+sample (nothing else is traced for it); walks and bounces carry the line state of the vertex they leave
+(`line_states`, one per stylized level) and end where a line absorbs them, so lines on later edges enter
+the expectation before g. With `lines` off no line code is traced. In scenes with participating media lines
+are detected on the camera ray only (`line_depth` above 1 is refused there).
+
+Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
+trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
+to one (the camera ray, the bounce between first_n_hits levels, a first_object_hit walk) a lane whose free
+flight ends in a real medium collision first goes on as an ordinary volumetric path, unstylized; the
+others reach the surface with the transmittance weight and are stylized there. Children are full
+volumetric paths, so with the identity style the image is Mitsuba's `volpath`.
+
+The expansion pass (`expansion_pass` m > 0, estimator series; expansion.py): before a render's passes the
+front end calls `prepare_expansion`, a render of a few camera samples per pixel in which the first stylized
+vertex only collects the moments of m children per pixel (less its emission); the render's series
+estimators at the first stylized level then expand about a b from their pixel's moments
+(`estimator_registry.series_with_pass`). Deeper levels keep their in-lane pilot.
+
+Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
+through area lights and see black where they escape, as in Mitsuba's `path`.
+"""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+
+from ..styles.base import Vertex
+from ..config import settings as S
+from ..config.estimator_registry import make_estimator
+from .expansion import Expansion, moments as pass_moments
+from .lane_sampler import LaneSampler
+from .render_context import RenderContext
+from .bounce import bounce
+from .path import first_scattering, past_area_emitters, walk
+from .vertex import emission, environment
+from ..scene.graph import SceneGraph, any_ptr as _any_ptr
+from .volume import volume_walk
+
+
+#: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:
+#: benchmarks/recursion_depth.py, tests/kernel/test_recursion_depth.py)
+OPTIMIZE_LOOPS = False
+
+
+def tracing():
+    """The Dr.Jit flags under which styletrace traces its kernels (scoped: a user's own Dr.Jit code keeps
+    its settings). OptimizeLoops off: with it, Dr.Jit traces every symbolic loop's body twice (a second
+    pass drops the state that the first found loop-invariant), and a stylized level's loop body holds the
+    next level's loop, so the trace time doubled per level (identity, inner 1: 10 s at 12 levels and 107 s at
+    14 with the flag, below 0.06 s at any depth up to 16 without; BENCHMARKS.md, recursion depth). The images
+    are bit-identical either way (tests/kernel/test_recursion_depth.py), and the kernels' run time shows no
+    consistent difference."""
+    return dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS)
+
+
+class Target:
+    """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with these BSDFs."""
+
+    def __init__(self, slot: S.StyleSlot, bsdfs=(), emitters=()):
+        self.slot, self.bsdfs, self.emitters = slot, list(bsdfs), list(emitters)
+
+
+class StylizedIntegrator(mi.SamplingIntegrator):
+    # per-render state, set and cleared by `render_context.RenderContext` only (its module doc says why)
+    targets = ()         # the style targets of the scene being traced
+    emitters = None      # its emitter sampler
+    view = None          # its camera's forward vector
+    nulls = media = see_through = False  # null-scattering surfaces / participating media / pure null BSDFs
+    lines = None         # feature lines bound to the scene being traced (lines.py), else None
+    line_states = {}     # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
+    tone = None          # anchors.Tone where a style reads image coordinates (Vertex.s), else None
+    tone_states = {}     # anchors.ToneState at the vertex of each stylized level (-1: the camera), while tracing
+    #: lanes where a line fired on the camera ray trace nothing more (False only to measure the saving:
+    #: benchmarks/lines_cost.py)
+    line_short_circuit = True
+
+    def __init__(self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None):
+        """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
+        (`S.parse(values)`; the Python API and the CLI build it this way, parsing once)."""
+        super().__init__(props)
+        # the values as given, so front ends can refine this integrator (`settings.refine`)
+        self.values = S.properties_of(props) if values is None else dict(values)
+        self.settings: S.Settings = settings if settings is not None else S.parse(self.values)
+        if self.settings.reuse != "off":  # Mitsuba's own render loop otherwise, untouched
+            self.render = self._render_reuse
+        self.expansion = Expansion()  # the expansion pass's per-pixel moments (expansion_pass > 0)
+        self._lane_moments = None
+
+    @classmethod
+    def from_values(cls, values: dict) -> "StylizedIntegrator":
+        """A `stylized` integrator from property values (style, style parameters, inner_samples, ...)."""
+        values = {k: v for k, v in values.items() if k != "type"}
+        return cls(mi.Properties(), S.parse(values), values)
+
+    def prepare_expansion(self, scene: mi.Scene, seed: int):
+        """Run the expansion pass for the scene's current film crop with `seed` (once per crop and seed; a no-op
+        with expansion_pass 0); returns its `expansion.Moments` or None."""
+        m = self.settings.expansion_pass
+        return self.expansion.prepare(self, scene, m, int(seed)) if m else None
+
+    # ---- which styles apply where --------------------------------------------------------------
+    def targets_for(self, scene: mi.Scene, graph: SceneGraph | None = None) -> list[Target]:
+        """Which style applies where in `scene`: its styled BSDFs wherever they sit (on shapes, inside wrappers
+        such as twosided, mask, blendbsdf, and in shapegroups seen through instances: scene_graph.py;
+        `bsdfs[0]` is the styled BSDF itself), then the integrator's own style for all other objects."""
+        graph = SceneGraph(scene) if graph is None else graph
+        targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
+        if self.settings.stylize != "first_object_hit":
+            targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
+        return targets
+
+    def styled_mask(self, si) -> mi.Bool:
+        """Lanes whose surface has a styled BSDF (any target's)."""
+        return _any_ptr(si.bsdf(), [b for t in self.targets for b in t.bsdfs], mi.BSDFPtr)
+
+    def _skip_emitter(self, ds) -> mi.Bool:
+        return _any_ptr(ds.emitter, [e for t in self.targets for e in t.emitters], mi.EmitterPtr)
+
+    # ---- the tree ------------------------------------------------------------------------------
+    def _walk(self, scene, sampler, pi, ray, active, depth, medium=None, flight=False, **kw):
+        """path.walk, or volume.py's walk where the scene has media (a trace-time switch: scenes without
+        media trace exactly the plain kernel)."""
+        s = self.settings
+        if self.media:  # lines on the camera ray only (`line_problem`): the volume walk tests no edges
+            kw.pop("lines", None)
+            kw.pop("tone", None)  # nor carries a tone state: styles there read the position's projection
+            return volume_walk(scene, sampler, pi, ray, active, medium, flight, s.max_depth, s.rr_depth, depth,
+                               emitters=self.emitters, nulls=self.nulls, **kw)
+        return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
+                    nulls=self.nulls, **kw)
+
+    def child(self, level: int, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Spectrum:
+        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`; `medium`:
+        the medium on the side `ray` came from, in scenes with media)."""
+        s = self.settings
+        if level + 1 >= s.stylize_depth:
+            return self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True,
+                              lines=self._lines_from(level)).L
+        if s.stylize == "first_object_hit":
+            return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False, medium=medium)
+        if self.media:
+            # first_n_hits through media: x samples delta lights only, its BSDF sample flies through the media
+            # to the next surface vertex, stylized at the next level; a lane that scatters in a medium on
+            # the way goes on as an ordinary volumetric path (volume.py)
+            start = mi.UInt32(depth)
+            w = self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True, delta_start=True,
+                           stop=lambda si2, d: d == start + 1)
+            si2 = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
+            deeper = self.stylized(level + 1, scene, sampler, w.pi, si2, w.ray, w.halted, w.depth, w.medium)
+            return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
+        # first_n_hits: one bounce to the next vertex, which is stylized as well
+        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls,
+                   lines=self._lines_from(level), tone=self.tone_states.get(level))
+        if self.lines is not None:
+            self.line_states[level + 1] = b.lines
+        self.tone_states[level + 1] = b.tone
+        deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
+        return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
+
+    def walk(self, level: int, scene, sampler, pi, ray, active, depth, halt_at_start: bool, medium=None,
+             flight: bool = False, hide: bool = False) -> mi.Spectrum:
+        """A path-traced walk that halts on styled objects and stylizes them at `level` (with media: from
+        `medium`, flying along `ray` first where `flight`; `hide`: no emission before the first scattering)."""
+        start = mi.UInt32(depth)
+
+        def stop(si, d):
+            styled = self.styled_mask(si)
+            return styled if halt_at_start else styled & (d > start)
+
+        extra = dict(medium=medium, flight=flight, hide_first=hide) if self.media else {}
+        w = self._walk(scene, sampler, pi, ray, active, depth, stop=stop, skip_emitter=self._skip_emitter,
+                       opaque_start=not halt_at_start, lines=self._lines_from(level - 1),
+                       tone=self.tone_states.get(level - 1), **extra)
+        if self.lines is not None:
+            self.line_states[level] = w.lines
+        self.tone_states[level] = w.tone
+        si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
+        value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth, w.medium)
+        return self.through(w, value)
+
+    def through(self, w, value) -> mi.Spectrum:
+        """The walk's radiance: what it gathered before halting plus its throughput times the stylized
+        value where it halted (a seam for `lookdev.record`, which keeps both per camera sample)."""
+        return w.L + dr.select(w.halted, w.beta * value, 0.0)
+
+    def stylized(self, level: int, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Spectrum:
+        """g(E[L_o]) at the level-`level` vertex si, each object with its own style."""
+        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
+                   depth=mi.UInt32(depth))
+        if self.tone is not None:  # LLaT's image coordinate (anchors.py), traced only where a style reads it
+            v.s, v.method = self.tone.coordinate(scene, si, ray, depth, self.tone_states.get(level), active)
+        styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
+        total = mi.Spectrum(0.0)
+        for target in self.targets:
+            here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
+            total = dr.select(here, self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v,
+                                                   medium), total)
+        return total
+
+    def estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v,
+                  medium=None) -> mi.Spectrum:
+        style = slot.style
+        if style.closed_form:  # no children: the AOVs keep 0 here
+            return style.apply(mi.Color3f(0.0), v)
+
+        def draw(carry):
+            (smp,) = carry
+            x = self.child(level, scene, smp, pi, si, ray, active, depth, medium)
+            if style.per_sample:
+                x = style.apply(x, v)
+            return x, (smp,)
+
+        def uniform(carry):
+            (smp,) = carry
+            return smp.next_1d(), (smp,)
+
+        collector = self.expansion.collector
+        if collector is not None and level == 0:  # the expansion pass: the first vertex's moments only
+            if slot.estimator == "series":
+                s1, s2 = pass_moments(lambda smp: draw((smp,))[0], sampler, active, collector.children,
+                                      emission(scene, si, active))
+                collector.add(dr.width(ray.d), active, s1, s2)
+            return mi.Color3f(0.0)
+        moments = None
+        if level == 0 and self._lane_moments is not None:  # the pass's moments of x - e, and this vertex's e
+            moments = (self._lane_moments, emission(scene, si, active))
+        est = make_estimator(slot, level, v, self.settings, moments)
+        value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        stats = getattr(est.inner, "stats", None)  # AdaptiveDirect's; none for a styled object's other estimator
+        if level == 0 and self.settings.aovs and stats is not None:
+            self._stats.append((active, stats))
+        return value
+
+    def _lines_from(self, level: int):
+        """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's first
+        vertex, where first_object_hit's camera walk starts): the line settings and that vertex's state."""
+        if self.lines is None or self.media:  # with media, lines on the camera ray only (`line_problem`)
+            return None
+        return self.lines, self.line_states[level]
+
+    def _render_reuse(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
+        """`render` with reuse=pixels: a pass is rendered by `reuse.render`, which needs every camera sample's
+        neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see each other). It is set
+        on the instance only then: a Python `render` on the class, even one calling Mitsuba's, changed how
+        a render in progress takes Ctrl-C (Mitsuba's own handler took the signal and the pass ran on)."""
+        from . import reuse
+        sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
+        with tracing():
+            image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
+        return image if develop else mi.TensorXf()
+
+    def sample(self, scene, sampler, ray, medium=None, active=True):
+        with RenderContext(self, scene):  # binds the scene's targets, emitters, lines, view; always releases them
+            if medium is None and scene.sensors():
+                medium = scene.sensors()[0].get_medium()
+            with tracing():
+                return self._sample(scene, sampler, ray, active, medium)
+
+    def scene_problem(self) -> str | None:
+        """Why this integrator cannot render the scene bound to it (its lines with media), or None."""
+        return line_problem(self.settings, self.media)
+
+    def _sample(self, scene, sampler, ray, active, medium=None):
+        self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
+        value, valid, _ = self._radiance(scene, sampler, ray, active, medium)
+        return value, valid, self._aovs(value) if self.settings.aovs else []
+
+    def _aovs(self, value) -> list:
+        """The error AOVs of one camera sample (see `aov_names`): its value squared per channel (the film's
+        average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias
+        prediction and the number of children."""
+        bias, children = mi.Float(0.0), mi.Float(0.0)
+        for lanes, stats in self._stats:
+            bias = dr.select(lanes, stats["bias"], bias)
+            children = dr.select(lanes, stats["children"], children)
+        self._stats = []
+        return [value.x * value.x, value.y * value.y, value.z * value.z, bias, children]
+
+    def _radiance(self, scene, sampler, ray, active, medium=None):
+        for t in self.targets:
+            t.slot.style.prepare(scene)
+        camera_ray, spp = ray, sampler.sample_count()
+        ray = mi.Ray3f(ray)
+        active = mi.Bool(active)
+        # every random decision below the camera ray comes from an independent stream per lane
+        sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
+        m = self.settings.expansion_pass
+        # the lane's pixel's moments from the expansion pass (none while that pass itself is rendered)
+        self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
+                              if m and self.expansion.collector is None else None)
+        if self.lines is None:
+            return self._stylize(scene, sampler, ray, active, medium)
+        # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
+        seen, camera = self.lines.camera(scene, sampler, camera_ray, spp, active)
+        # the camera ray's first hit: where first_object_hit's walk starts and the first_hit/first_n_hits vertex
+        self.line_states = {-1: camera, 0: camera}
+        live = active & ~seen.fired if self.line_short_circuit else active
+        value, valid, aovs = self._stylize(scene, sampler, ray, live, medium)
+        return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
+
+    def _stylize(self, scene, sampler, ray, active, medium=None):
+        pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
+        hide = self.settings.hide_emitters
+        if hide:
+            ray, pi = past_area_emitters(scene, ray, pi, active)
+        if self.tone is not None:
+            start = self.tone.start(ray, pi, active)
+            self.tone_states = {-1: start, 0: start}
+        # alpha, as Mitsuba's `path`: the camera ray found a surface, or a visible environment
+        valid = active & (pi.is_valid() | (scene.environment() is not None and not hide))
+        if self.settings.stylize == "first_object_hit":
+            if self.media:  # the walk hides what it meets before its first scattering (a medium scatters too)
+                value = self.walk(0, scene, sampler, pi, ray, active, mi.UInt32(0), halt_at_start=True, medium=medium,
+                                  flight=True, hide=hide)
+                return value, valid, []
+            start = active & pi.is_valid() if hide else active  # a hidden environment is black
+            return self.walk(0, scene, sampler, pi, ray, start, mi.UInt32(0), halt_at_start=True), valid, []
+        if self.media:
+            # the stylized vertex is the first surface that scatters; lanes that scatter in a medium before
+            # reaching it go on as ordinary volumetric paths (volume.py), the others carry the transmittance
+            w = self._walk(scene, sampler, pi, ray, active, 0, medium, True, stop=lambda si, d: d == 0,
+                           hide_first=hide)
+            si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
+            value = self.stylized(0, scene, sampler, w.pi, si, w.ray, w.halted, mi.UInt32(0), w.medium)
+            return self.through(w, value), valid | w.halted | (active & (w.depth > 0)), []
+        if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
+            front = first_scattering(scene, sampler, pi, ray, active)
+            pi, ray = front.pi, front.ray
+        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
+        hit = active & si.is_valid()
+        value = self.stylized(0, scene, sampler, pi, si, ray, hit, mi.UInt32(0))
+        value = dr.select(hit, value, 0.0 if hide else environment(scene, si, active))
+        if self.nulls:
+            value = front.beta * value
+        return value, valid, []
+
+    def aov_names(self):
+        return list(AOV_NAMES) if self.settings.aovs else []
+
+    def to_string(self):
+        return f"StylizedIntegrator[{self.settings.describe()}]"
+
+
+def line_problem(settings: S.Settings, media: bool) -> str | None:
+    """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`), or None."""
+    lines = settings.lines
+    if media and lines is not None and lines.depth > 1:
+        return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: lines are detected "
+                "on the camera ray only there (line_depth 1)")
+    return None
+
+
+#: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
+AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")

@@ -1,0 +1,319 @@
+"""The inner path tracer every stylized vertex reuses: one sample of exitant radiance.
+
+`exitant(scene, sampler, pi, ray, active, ...)` returns one unbiased sample of
+    L_o(x, wo) = L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi
+at the vertex x that `ray` reaches (`pi`, its preliminary intersection; wo = -ray.d). Emission at x is
+counted in full: in the stylized rendering equation it sits inside g. Below x the estimator is an
+ordinary unidirectional path tracer with next-event estimation, multiple importance sampling (power
+heuristic on solid-angle densities, as Mitsuba's `path`) and Russian roulette from `rr_depth` on. An
+invalid `pi` means the ray escaped: the sample is then the environment's radiance.
+
+Next-event estimation picks its emitter with an `EmitterSampler` (emitter_sampler.py) rather than
+`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does not,
+so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples uses the
+same selection probabilities. Samples that are not finite are dropped at the end of a walk (see there).
+
+Depth follows Mitsuba's convention: x is at depth `depth0` (0 for a camera ray's first hit), so
+`max_depth` = 1 returns emission only, and the tree camera ray -> x -> this path has the same
+longest path as Mitsuba's `path` with the same `max_depth` (-1 = unbounded).
+
+`stop(si, depth)`, if given, marks vertices where the walk must halt because a style applies there
+(per-object stylization): their radiance is g(...), not emission plus reflection, so the walk neither
+adds their emission nor reflects there, and next-event estimation skips the emitters `skip_emitter(ds)`
+marks (their light reaches the path through g instead). The caller gets the halted lanes back with
+their throughput, intersection and ray.
+
+`bounce.bounce(scene, sampler, si, ray, active, depth, max_depth)` is the single step that the recursive
+`first_n_hits` parametrization takes between two stylized vertices (bounce.py); vertex.py holds what
+both share at one vertex (emission, environment, the power heuristic, the depth limit, null parts).
+
+Scenes with participating media use volume.py's walk instead (same interface, a `Walk` with the medium);
+the integrator chooses at trace time, so this kernel has no medium code at all.
+
+The loop carries the small preliminary intersection and rebuilds the full surface interaction at the
+top of each iteration, as Mitsuba's own path tracer does; the sampler is part of the loop state (a
+loop drawing random numbers without it would replay the same numbers in every iteration).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Optional
+
+import drjit as dr
+import mitsuba as mi
+
+from .anchors import MAX_BITS, ToneState, combine, shape_id
+from .emitter_sampler import EmitterSampler
+from .vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share
+
+
+@dataclass
+class Front:
+    """The first scattering vertex along a ray, past surfaces it went straight through."""
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    beta: mi.Spectrum       # weight of the passes (1 where none)
+
+
+@dataclass
+class FrontState:
+    sampler: Any
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    beta: mi.Spectrum
+    active: mi.Bool
+
+
+def first_scattering(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
+                     active: mi.Bool) -> Front:
+    """Follow `ray` through null interactions (masks, `null` BSDFs) to the first vertex that scatters.
+
+    A stylized vertex is a scattering vertex: a ray that meets a mask passes it with probability T (its
+    null transmission) and goes on; otherwise the mask is an opaque surface there, and the lane's weight
+    is (1 - T)/(1 - p) (1 for grey T). The stylized value at that vertex is the radiance of the opaque part
+    (`opaque_part`), so for the identity style the mixture is exactly the physically based one. Null
+    interactions add no depth. Emitters on see-through surfaces are refused with the scene
+    (scene_graph.py): evaluating emission in this loop as well made Dr.Jit 1.5's LLVM backend emit one
+    emitter callable twice into a kernel ("invalid redefinition of function"), a crash.
+    """
+    state = FrontState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
+                       beta=mi.Spectrum(1.0), active=mi.Bool(active))
+
+    def body(s: FrontState):
+        si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
+        bsdf = si.bsdf(s.ray)
+        nullish = s.active & si.is_valid() & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
+        passes, w_pass, w_stay = null_split(si, bsdf, s.sampler.next_1d(nullish), nullish)
+        s.beta *= dr.select(passes, w_pass, dr.select(nullish, w_stay, 1.0))
+        ray_next = si.spawn_ray(s.ray.d)
+        pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=passes)
+        s.pi = dr.select(passes, pi_next, s.pi)
+        s.ray = dr.select(passes, ray_next, s.ray)
+        s.active = passes & (dr.max(s.beta) > 0)
+        return (s,)
+
+    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace null passes")
+    return Front(pi=out.pi, ray=out.ray, beta=out.beta)
+
+
+@dataclass
+class PathState:
+    """What the path loop carries from one vertex to the next (a Dr.Jit PyTree: the loop state)."""
+
+    sampler: Any                             # LaneSampler (or a Mitsuba sampler): must travel in the state
+    pi: mi.PreliminaryIntersection3f         # the vertex about to be shaded
+    ray: mi.Ray3f                            # the ray that reached it
+    active: mi.Bool
+    depth: mi.UInt32
+    L: mi.Spectrum                           # radiance gathered so far
+    beta: mi.Spectrum                        # throughput
+    eta: mi.Float                            # relative IOR along the path, for roulette
+    si_prev: mi.Interaction3f                # previous vertex, for the emitter density
+    pdf_prev: mi.Float                       # BSDF density of the direction that reached the vertex
+    delta_prev: mi.Bool                      # was that direction a delta (specular) sample?
+    halted: mi.Bool                          # halted at a stylized vertex
+    first: Optional[mi.Bool]                 # at the starting vertex (only where `opaque_start` needs it)
+    lines: Optional[Any] = None              # lines.LineState where feature lines are on (lines.py)
+    tone: Optional[Any] = None               # anchors.ToneState where a style reads image coordinates
+
+
+@dataclass
+class Walk:
+    L: mi.Spectrum          # radiance gathered before any halt
+    beta: mi.Spectrum       # throughput at the halting vertex
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    depth: mi.UInt32
+    halted: mi.Bool
+    lines: Optional[Any] = None     # lines.LineState at the halting vertex (where lines are on)
+    medium: Any = None              # MediumPtr: the medium each lane stands in (volume.py's walk only)
+    tone: Optional[Any] = None      # anchors.ToneState at the halting vertex (where tone is on)
+
+
+def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
+            active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
+            emitters: Optional[EmitterSampler] = None) -> mi.Spectrum:
+    """One sample of L_o at the vertex `ray` reaches (see the module docstring)."""
+    return walk(scene, sampler, pi, ray, active, max_depth, rr_depth, depth0, emitters=emitters).L
+
+
+def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
+         active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
+         stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
+         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
+         came_from: Optional[tuple] = None, lines=None, tone=None) -> Walk:
+    """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
+    `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
+    vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
+    so scenes without such surfaces trace the plain loop. `came_from` = (interaction, BSDF pdf, delta) of
+    a vertex the caller sampled `ray` from: emission at the starting vertex is then MIS-weighted against
+    that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse/`).
+    `lines`: (lines.Lines, lines.LineState at the starting vertex) to detect feature lines on the walk's
+    edges, or None (no line code is traced). `tone`: the anchors.ToneState at the starting vertex, advanced
+    at every scattering (anchors.py), or None."""
+    ctx = mi.BSDFContext()
+    emitters = emitters if emitters is not None else EmitterSampler(scene)
+    limit = depth_limit(max_depth)
+
+    # A starting vertex counts its emission in full: the previous vertex is treated as a delta
+    # scattering event, exactly like a camera ray in Mitsuba's path tracer.
+    si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
+        else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
+    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
+                      active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
+                      eta=mi.Float(1.0), si_prev=si_prev, pdf_prev=pdf_prev,
+                      delta_prev=delta_prev, halted=mi.Bool(False),
+                      first=mi.Bool(True) if nulls and opaque_start else None,
+                      lines=None if lines is None else lines[1], tone=tone)
+
+    def body(s: PathState):
+        si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
+        bsdf = si.bsdf(s.ray)
+        here, passes, w_pass = halt_at(s, si, bsdf, s.active, stop, nulls)
+        s.L += mis_emission(scene, emitters, s, si, here)
+
+        active_next = here & si.is_valid() & (s.depth + 1 < limit)
+
+        # Next-event estimation.
+        active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
+        ds, em_weight = emitters.sample_direction(si, s.sampler.next_2d(), active_em)
+        active_em &= ds.pdf != 0.0
+        if skip_emitter is not None:
+            active_em &= ~skip_emitter(ds)
+        wo = si.to_local(ds.d)
+        u1 = s.sampler.next_1d()
+        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+            keep = dr.select(s.first, opaque_share(si, bsdf, active_next & s.first), 1.0)
+            u1 = dr.select(s.first, u1 * keep, u1)
+        # One BSDF call both evaluates the light direction and samples the continuation.
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(), active_next)
+        scale = mi.Spectrum(1.0)
+        if nulls and opaque_start:
+            # the opaque part's f and pdf: the BSDF's own are (1 - T) and (1 - p) times theirs, while the
+            # weight f/pdf of a sample drawn from the opaque part alone is already that part's
+            scale = dr.select(s.first, opaque_part(si, bsdf, active_next & s.first), 1.0)
+            ok = keep > 0
+            bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
+            bs.pdf = dr.select(ok, bs.pdf / dr.select(ok, keep, 1.0), 0.0)
+            bsdf_weight[~ok | (s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null))] = 0.0
+        w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, bsdf_pdf))
+        if nulls and stop is not None:
+            active_em &= ~passes
+        s.L += dr.select(active_em, s.beta * scale * w_nee * bsdf_val * em_weight, 0.0)
+
+        # Continue the path along the sampled direction (halted lanes keep their vertex).
+        beta_next = s.beta * bsdf_weight
+        s.eta *= dr.select(active_next & ~passes, bs.eta, 1.0)
+        ray_next = si.spawn_ray(si.to_world(bs.wo))
+        s.si_prev = mi.Interaction3f(dr.detach(si, True))
+        s.pdf_prev = bs.pdf
+        s.delta_prev = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
+        if nulls and stop is not None:  # straight on through the null part, like a sampled null component
+            beta_next = dr.select(passes, s.beta * w_pass, beta_next)
+            ray_next = dr.select(passes, si.spawn_ray(s.ray.d), ray_next)
+            s.delta_prev |= passes
+        if nulls and opaque_start:
+            s.first = mi.Bool(False)
+        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+            s.tone = advance(s.tone, si, bs, s.depth, active_next & ~passes)
+
+        # Russian roulette on the throughput, as in Mitsuba's path tracer (which counts the depth of
+        # the vertex about to be reached, hence the increment first).
+        depth_next = s.depth + 1
+        beta_max = dr.max(beta_next)
+        active_next &= beta_max != 0.0
+        q = dr.minimum(beta_max * dr.square(s.eta), 0.95)
+        roulette = depth_next >= rr_depth
+        beta_next[roulette] *= dr.rcp(q)
+        active_next &= ~roulette | (s.sampler.next_1d() < q)
+
+        pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=active_next)
+        if lines is not None:  # a feature line on the new edge absorbs the path (lines.py)
+            seen, s.lines = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
+                                          active_next)
+            s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
+            active_next &= ~seen.fired
+        if stop is not None:  # halted lanes keep their vertex
+            keep = ~here
+            pi_next = dr.select(keep, s.pi, pi_next)
+            ray_next = dr.select(keep, s.ray, ray_next)
+            beta_next = dr.select(keep, s.beta, beta_next)
+            depth_next = dr.select(keep, s.depth, depth_next)
+        s.pi, s.ray, s.beta, s.depth = pi_next, ray_next, beta_next, depth_next
+        s.active = active_next
+        return (s,)
+
+    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace path")
+    # A sample that is not finite is dropped here, before it reaches a style's estimator or the film:
+    # one NaN poisons its pixel for good (every pass is averaged in) and g of a mean containing it. Such
+    # samples come from measure-zero events (degenerate geometry, 0 * inf), so dropping them costs a
+    # bias no larger than their probability times their true value; the causes known are fixed at
+    # their source (`mis_power`), this keeps an unknown one from destroying a render.
+    return finished(out, lines=out.lines, tone=out.tone)
+
+
+def finished(out, **extra) -> Walk:
+    """The Walk of a finished loop state `out`, its sample dropped where it is not finite (see `walk`).
+    The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0)."""
+    finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
+    return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
+                depth=out.depth, halted=out.halted, **extra)
+
+
+def halt_at(s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool):
+    """Where a walk's `stop` halts it at si among the lanes that `reached` it: (lanes that shade si, lanes
+    that pass straight on through a null part, their pass weight). A stylized vertex is a scattering one,
+    so with `nulls` a halting lane first passes through the null part (`null_split`) and the stay weight
+    goes into the throughput; `s.halted` gains the halted lanes. `s`: the loop state (sampler, beta,
+    depth, halted)."""
+    here, passes, w_pass = mi.Bool(reached), mi.Bool(False), mi.Spectrum(1.0)
+    if stop is not None:
+        halt = reached & si.is_valid() & stop(si, s.depth)
+        if nulls:
+            nullish = halt & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null)
+            passes, w_pass, w_stay = null_split(si, bsdf, s.sampler.next_1d(nullish), nullish)
+            halt &= ~passes
+            s.beta *= dr.select(nullish & halt, w_stay, 1.0)
+        s.halted |= halt
+        here &= ~halt
+    return here, passes, w_pass
+
+
+def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInteraction3f,
+                 hit: mi.Bool) -> mi.Spectrum:
+    """Emission at si (the environment where the ray escaped) on the lanes `hit`, times the throughput and
+    MIS-weighted against the light sampling done at the previous vertex (`s`: the loop state's beta,
+    si_prev, pdf_prev, delta_prev)."""
+    emitter = si.emitter(scene)
+    hit_em = hit & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
+    ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
+    em_pdf = emitters.pdf_direction(s.si_prev, ds, hit_em & ~s.delta_prev)
+    w_em = dr.select(s.delta_prev, 1.0, mis_power(s.pdf_prev, em_pdf))
+    return s.beta * w_em * emitter.eval(si, hit_em)
+
+
+def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):
+    """The anchors.ToneState past the vertex `si` at `depth`, scattered by `bs` on the `active` lanes: its shape
+    joins the prefix key, a transmission sets the depth's bit, a non-delta event ends the all-delta prefix."""
+    depth = mi.UInt32(depth)
+    through = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission) & (depth < MAX_BITS)
+    bit = mi.UInt32(1) << dr.minimum(depth, MAX_BITS - 1)
+    return ToneState(key=dr.select(active, combine(tone.key, shape_id(si)), tone.key),
+                     bits=dr.select(active & through, tone.bits | bit, tone.bits),
+                     delta=dr.select(active, tone.delta & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), tone.delta),
+                     s0=tone.s0)
+
+
+def past_area_emitters(scene, ray, pi, active):
+    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the ray
+    spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance measured
+    from a ray it does not hand back, so the lights are stepped through here)."""
+    def through(ray, pi, skip):
+        si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
+        ray = dr.select(skip, si.spawn_ray(ray.d), ray)
+        pi = dr.select(skip, scene.ray_intersect_preliminary(ray, coherent=True, active=skip), pi)
+        return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+
+    skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
+    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
+    return ray, pi

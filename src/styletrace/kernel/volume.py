@@ -1,0 +1,251 @@
+"""The path kernel in scenes with participating media: `walk` of path.py, but along rays through media.
+
+    w = volume_walk(scene, sampler, pi, ray, active, medium, flight=True, ...)   # a path.Walk
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active)         # towards a sampled light
+
+The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray in a
+medium a free-flight distance is drawn from the medium's majorant (`Medium.sample_interaction`); a
+collision before the next surface is real (scattering, probability sigma_t / majorant) or null (the ray
+goes on from there, nothing added). A real collision scatters by the medium's phase function: next-event
+estimation (power heuristic against phase sampling), then a phase-sampled direction. Surfaces scatter as
+in path.py (next-event estimation, MIS against BSDF sampling, roulette). A transmission through a
+surface that bounds a medium (`si.is_medium_transition()`) moves the path into `si.target_medium(d)`.
+Null-scattering surfaces (`null`, masks) add no depth and keep the last real vertex for MIS, as in
+`volpath`. Light reaches a vertex through media and null surfaces: the shadow ray's transmittance is
+estimated by ratio tracking (`transmittance`), so a `null` shape bounding a medium does not block it.
+
+In RGB the free-flight distance is drawn in one colour channel per path (chosen uniformly), and the
+throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel); media
+with grey extinction get weight 1 from the same formulas. Depth counts real scattering events at
+surfaces and in media (x at `depth0`), and roulette acts on the throughput after every scattering from
+depth `rr_depth` + 1 on, as `volpath`'s.
+
+Stylization (integrator.py) uses the walk's `stop` to halt at surface scattering vertices: a stylized
+vertex is always a surface one. `flight` says whether the medium along the first ray is still to be
+sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already stands
+at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
+`delta_start`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
+through g at the next stylized vertex; see bounce.bounce), so emitters found past it get full weight.
+`hide_first`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Optional
+
+import drjit as dr
+import mitsuba as mi
+
+from .emitter_sampler import EmitterSampler
+from .path import finished, halt_at, mis_emission
+from .vertex import depth_limit, mis_power, opaque_part, opaque_share
+
+
+def channel_of(c: mi.Spectrum, channel: mi.UInt32) -> mi.Float:
+    """The value of colour c in the path's free-flight channel."""
+    return dr.select(channel == 0, c[0], dr.select(channel == 1, c[1], c[2]))
+
+
+def free_flight_weight(medium, mei, t_surface, channel, active) -> mi.Spectrum:
+    """Transmittance over the channel's free-flight density up to the collision or the surface."""
+    st = dr.zeros(mi.SurfaceInteraction3f)
+    st.t = t_surface
+    tr, pdf = medium.transmittance_eval_pdf(mei, st, active)
+    p = channel_of(pdf, channel)
+    return dr.select(active, dr.select(p > 0, tr / p, 0.0), 1.0)
+
+
+def medium_vertex(mei: mi.MediumInteraction3f) -> mi.Interaction3f:
+    """A medium collision as a plain interaction (no normal), for emitter sampling and densities."""
+    return mi.Interaction3f(t=mei.t, time=mei.time, wavelengths=mei.wavelengths, p=mei.p)
+
+
+@dataclass
+class ShadowState:
+    sampler: Any
+    ray: mi.Ray3f
+    medium: Any
+    tr: mi.Spectrum
+    active: mi.Bool
+
+
+def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.DirectionSample3f, medium,
+                  channel: mi.UInt32, active: mi.Bool) -> mi.Spectrum:
+    """Ratio-tracking estimate of the transmittance from `it` to the light point ds.p: through media
+    (null collisions weigh sigma_n over the channel's density) and through surfaces by their null
+    transmission (0 at opaque ones: an occlusion test). `medium`: the medium the shadow ray starts in."""
+    state = ShadowState(sampler=sampler, ray=it.spawn_ray_to(ds.p), medium=mi.MediumPtr(medium),
+                        tr=mi.Spectrum(1.0), active=mi.Bool(active))
+
+    def body(s: ShadowState):
+        pi = scene.ray_intersect_preliminary(s.ray, coherent=False, active=s.active)
+        t_surf = dr.select(pi.is_valid(), pi.t, dr.inf)
+        in_med = s.active & (s.medium != None)  # noqa: E711  (a Dr.Jit pointer comparison)
+        mei = s.medium.sample_interaction(s.ray, s.sampler.next_1d(in_med), channel, in_med)
+        mei.t = dr.select(mei.t > t_surf, dr.inf, mei.t)
+        s.tr *= free_flight_weight(s.medium, mei, dr.minimum(t_surf, s.ray.maxt), channel, in_med)
+        coll = in_med & mei.is_valid()
+        s.tr = dr.select(coll, s.tr * mei.sigma_n, s.tr)
+        ray_coll = mi.Ray3f(s.ray)
+        ray_coll.o, ray_coll.maxt = mei.p, s.ray.maxt - mei.t
+
+        surf = s.active & ~coll & pi.is_valid()
+        si = pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=surf)
+        s.tr = dr.select(surf, s.tr * si.bsdf(s.ray).eval_null_transmission(si, surf), s.tr)
+        s.medium = dr.select(surf & si.is_medium_transition(), si.target_medium(s.ray.d), s.medium)
+        s.ray = dr.select(coll, ray_coll, dr.select(surf, si.spawn_ray_to(ds.p), s.ray))
+        s.active = (coll | surf) & dr.any(s.tr != 0.0)
+        return (s,)
+
+    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace shadow transmittance")
+    return dr.select(active, out.tr, 0.0)
+
+
+@dataclass
+class VolumeState:
+    """The loop state of `volume_walk` (path.PathState plus the medium and the free-flight switch)."""
+    sampler: Any
+    pi: mi.PreliminaryIntersection3f     # the next surface along `ray` (its t measured from ray.o)
+    ray: mi.Ray3f
+    medium: Any                          # MediumPtr: where `ray` travels (None: vacuum)
+    flight: mi.Bool                      # sample the medium along `ray` before reaching `pi`
+    active: mi.Bool
+    depth: mi.UInt32
+    L: mi.Spectrum
+    beta: mi.Spectrum
+    eta: mi.Float
+    si_prev: mi.Interaction3f            # last real scattering vertex, for the emitter density
+    pdf_prev: mi.Float
+    delta_prev: mi.Bool                  # its direction had no competing light sample: full weight
+    halted: mi.Bool
+    first: mi.Bool                       # at the starting vertex
+
+
+def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f, active: mi.Bool,
+                medium, flight: bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
+                stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
+                emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
+                delta_start: bool = False, hide_first: bool = False):
+    """path.walk through participating media (module docstring); returns a path.Walk with the medium
+    each lane stands in."""
+    ctx, pctx = mi.BSDFContext(), mi.PhaseFunctionContext(None)
+    emitters = emitters if emitters is not None else EmitterSampler(scene)
+    limit = depth_limit(max_depth)
+    channel = mi.UInt32(dr.minimum(sampler.next_1d(active) * 3.0, 2.0))
+
+    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
+                        medium=dr.select(active, mi.MediumPtr(medium), mi.MediumPtr(None)),
+                        flight=mi.Bool(flight), active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0),
+                        beta=mi.Spectrum(1.0), eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f),
+                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True))
+
+    def body(s: VolumeState):
+        # ---- the medium between the ray's origin and the surface `pi` (volpath's delta tracking)
+        in_med = s.active & s.flight & (s.medium != None)  # noqa: E711
+        mei = s.medium.sample_interaction(s.ray, s.sampler.next_1d(in_med), channel, in_med)
+        t_surf = dr.select(s.pi.is_valid(), s.pi.t, dr.inf)
+        mei.t = dr.select(mei.t > t_surf, dr.inf, mei.t)
+        s.beta *= free_flight_weight(s.medium, mei, t_surf, channel, in_med)
+        real = in_med & mei.is_valid()
+        majorant_c, sigma_t_c = channel_of(mei.combined_extinction, channel), channel_of(mei.sigma_t, channel)
+        null_coll = real & (s.sampler.next_1d(real) >= sigma_t_c / majorant_c)
+        sigma_n_c = channel_of(mei.sigma_n, channel)
+        s.beta *= dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0)
+        scat = real & ~null_coll
+        depth_m = s.depth + 1
+        scat &= depth_m < limit                  # a collision past the last depth ends the path
+        beta_m = s.beta * dr.select(sigma_t_c > 0, mei.sigma_s * majorant_c / sigma_t_c, 0.0)
+        it_m = medium_vertex(mei)
+
+        # ---- the surface, for lanes whose flight reached it (or that travel in no medium)
+        at_surf = s.active & ~real
+        si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=at_surf)
+        bsdf = si.bsdf(s.ray)
+        here, passes, w_pass = halt_at(s, si, bsdf, at_surf, stop, nulls)
+        s.L += mis_emission(scene, emitters, s, si, here & (s.depth > 0) if hide_first else here)
+
+        # the BSDF is sampled at the last depth too: a null component sampled there goes on at the same depth
+        sample_s = here & ~passes & si.is_valid()
+        active_s = sample_s & (s.depth + 1 < limit)
+
+        # ---- next-event estimation from the medium collision or the surface vertex, one light sample
+        sample_m = scat & mei.medium.use_emitter_sampling()
+        em_on = sample_m | (active_s & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth))
+        it = dr.select(scat, it_m, mi.Interaction3f(si))
+        ds, em_weight = emitters.sample_direction(it, s.sampler.next_2d(em_on), em_on, visible=False)
+        em_on &= ds.pdf != 0.0
+        if skip_emitter is not None:
+            em_on &= ~skip_emitter(ds)
+        if delta_start:
+            em_on &= ~s.first | ds.delta | scat
+        to_light = dr.select(at_surf & si.is_medium_transition(), si.target_medium(ds.d), s.medium)
+        tr = transmittance(scene, s.sampler, it, ds, to_light, channel, em_on)
+        phase = mei.medium.phase_function()
+        phase_val, phase_pdf = phase.eval_pdf(pctx, mei, ds.d, sample_m)
+        wo = si.to_local(ds.d)
+        u1 = s.sampler.next_1d(sample_s)
+        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+            keep = dr.select(s.first, opaque_share(si, bsdf, sample_s & s.first), 1.0)
+            u1 = dr.select(s.first, u1 * keep, u1)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(sample_s),
+                                                                   sample_s)
+        scale = mi.Spectrum(1.0)
+        if nulls and opaque_start:  # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
+            scale = dr.select(s.first, opaque_part(si, bsdf, sample_s & s.first), 1.0)
+            ok = keep > 0
+            bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
+            bs.pdf = dr.select(ok, bs.pdf / dr.select(ok, keep, 1.0), 0.0)
+            bsdf_weight[~ok | (s.first & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null))] = 0.0
+        f_val = dr.select(scat, phase_val, scale * bsdf_val)
+        f_pdf = dr.select(scat, phase_pdf, bsdf_pdf)
+        w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, f_pdf))
+        s.L += dr.select(em_on, dr.select(scat, beta_m, s.beta) * f_val * em_weight * tr * w_nee, 0.0)
+
+        # ---- the next ray: phase sample in the medium, BSDF sample (or straight on) at the surface
+        wo_m, phase_weight, phase_pdf_m = phase.sample(pctx, mei, s.sampler.next_1d(scat), s.sampler.next_2d(scat),
+                                                       scat)
+        scat &= phase_pdf_m > 0.0
+        null_s = passes | mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
+        go_s = (sample_s & (null_s | active_s)) | (here & passes)
+        ray_s = dr.select(passes, si.spawn_ray(s.ray.d), si.spawn_ray(si.to_world(bs.wo)))
+        beta_s = dr.select(passes, s.beta * w_pass, s.beta * bsdf_weight)
+        delta_s = dr.select(null_s, s.delta_prev, mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta) |
+                            (s.first & delta_start))
+
+        ray_next = dr.select(scat, mei.spawn_ray(wo_m), ray_s)
+        beta_next = dr.select(scat, beta_m * phase_weight, beta_s)
+        depth_next = dr.select(scat, depth_m, s.depth + dr.select(null_s, 0, 1))
+        go = scat | go_s
+        s.eta *= dr.select(go_s & ~null_s, bs.eta, 1.0)
+        real_s = go_s & ~null_s
+        s.si_prev = dr.select(scat, it_m, dr.select(real_s, mi.Interaction3f(dr.detach(si, True)), s.si_prev))
+        s.pdf_prev = dr.select(scat, phase_pdf_m, dr.select(real_s, bs.pdf, s.pdf_prev))
+        s.delta_prev = dr.select(scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev))
+        s.medium = dr.select(go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium)
+
+        # roulette after each scattering, from depth rr_depth + 1 on (volpath's)
+        beta_max = dr.max(beta_next)
+        go &= beta_max != 0.0
+        q = dr.minimum(beta_max * dr.square(s.eta), 0.95)
+        roulette = go & (depth_next > rr_depth)
+        beta_next[roulette] *= dr.rcp(q)
+        go &= ~roulette | (s.sampler.next_1d(roulette) < q)
+
+        pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=go)
+        # null collisions move the origin along the same ray; halted lanes keep their vertex
+        moved = mi.Ray3f(s.ray)
+        moved.o = mei.p
+        pi_moved = mi.PreliminaryIntersection3f(s.pi)
+        pi_moved.t = s.pi.t - mei.t
+        s.pi = dr.select(go, pi_next, dr.select(null_coll, pi_moved, s.pi))
+        s.ray = dr.select(go, ray_next, dr.select(null_coll, moved, s.ray))
+        s.beta = dr.select(go, beta_next, s.beta)
+        s.depth = dr.select(go, depth_next, s.depth)
+        s.flight = mi.Bool(True)
+        s.first = mi.Bool(False)
+        s.active = go | null_coll
+        return (s,)
+
+    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace volumetric path")
+    # as at the end of path.walk: a sample that is not finite is dropped
+    return finished(out, medium=out.medium)

@@ -1,0 +1,261 @@
+"""Scene-relative defaults: the styles' 'auto' parameters, resolved on the scene about to be rendered.
+
+    integrator, chosen = resolve(scene, integrator)   # before rendering (api.passes, the CLI's render)
+
+A fixed default in scene units or in absolute brightness suits one scene: hatching spacing 0.04 is pixel
+noise in a 550-unit box, a cel threshold of 0.75 leaves a dim scene in one band. A style declares such
+parameters with a default of None ('auto') and a rule (`Param.auto`, listed by `styletrace styles`);
+`Style.auto_values(facts)` applies the rule to the `Facts` of the scene computed here, and `resolve`
+returns the integrator with the values pinned (explicit values always win: only None is filled in) and
+one line naming them, which the CLI prints so that a user can pin them.
+
+What the rules may read (`Facts`, per style slot):
+- `camera`: the first sensor's frame (gooch, xtoon: the light follows the camera's up vector);
+- `brightness(qs)`: quantiles of the first-hit brightness (r+g+b)/3 the camera sees on the objects the
+  style covers: the integrator's style covers the objects without a `styled` BSDF, a `styled` BSDF its own.
+  A pilot of the path kernel (`path.exitant`, the scene's max_depth and rr_depth) traces PILOT_SPP
+  jittered camera rays in each cell of a grid of PILOT_CELLS cells along the film's longer side, and the
+  brightness is averaged per cell and slot (a cell estimate, like a stylized vertex's inner estimate
+  rather than one noisy path), the cells weighted by their number of samples on the slot's objects; in a
+  scene with participating media the pilot is volume.py's walk from the camera (through the sensor's
+  medium), so a sample's brightness is what reaches the camera along its ray;
+- `depth(qs)`: quantiles of the camera depth (p - c) . forward of those first hits (xtoon's depth mode).
+A composition's later operand sees the brightness of the earlier operands' output (`Facts.mapped`).
+
+Where the pilot runs: here, before Mitsuba's render call, never inside the integrator's `sample`; the pilot
+costs one small path-traced render (32 x 32 x 16 paths) and runs only if some style has a brightness rule left.
+Stylized levels below the first (first_n_hits, first_object_hit through glass) are resolved with the
+first hits' statistics. Rendering through mi.render directly skips this module: camera rules still apply
+(in `Style.prepare`), brightness and depth rules fall back to the fixed values each style documents.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from functools import cached_property
+from typing import Any
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from ..errors import StyleError
+from ..jit import no_collection
+from ..styles.base import Camera, Style, Vertex, camera, lanes
+from ..config import settings as S
+from ..kernel.emitter_sampler import EmitterSampler
+from ..kernel.integrator import StylizedIntegrator
+from ..kernel.path import exitant
+from .graph import SceneGraph
+from ..kernel.styled_bsdf import StyledBSDF
+from ..kernel.volume import volume_walk
+
+#: the settings the pilot's trace reads (`Pilot._trace`)
+PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling")
+#: cells of the pilot grid along the film's longer side, and camera samples per cell
+PILOT_CELLS = 32
+PILOT_SPP = 16
+PILOT_SEED = 0x5EED
+
+
+def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
+    """Quantiles of the distribution putting mass `weights` on `values`: the inverted CDF, the smallest value
+    whose cumulative weight reaches q (numpy 2's `np.quantile(..., weights=, method="inverted_cdf")`, which
+    numpy 1.x, still allowed by pyproject, lacks; spelled out so both give the same auto values)."""
+    v = np.asarray(values, dtype=np.float64).ravel()
+    w = np.asarray(weights, dtype=np.float64).ravel()
+    keep = w > 0  # a value of no weight is never a quantile, not even the 0th
+    v, w = v[keep], w[keep]
+    order = np.argsort(v, kind="stable")
+    v, w = v[order], w[order]
+    cdf = np.cumsum(w)
+    cdf /= cdf[-1]
+    index = np.searchsorted(cdf, np.asarray(qs, dtype=np.float64), side="left")
+    return [float(x) for x in v[np.minimum(index, len(v) - 1)]]
+
+
+class Pilot:
+    """The pilot's camera samples: per sample its cell, first hit (BSDF, position, normal, direction, depth)
+    and one `path` estimate of the radiance there. Traced on first use, once per `resolve`."""
+
+    def __init__(self, scene: mi.Scene, settings: S.Settings):
+        self.scene, self.settings = scene, settings
+
+    def serves(self, scene: mi.Scene, settings: S.Settings) -> bool:
+        """Whether these samples are the pilot of `scene` under `settings`: the same scene, and the settings
+        the trace reads (the style is not among them: a pinned copy of an integrator shares its pilot)."""
+        return self.scene is scene and all(getattr(self.settings, k) == getattr(settings, k) for k in PILOT_SETTINGS)
+
+    @cached_property
+    def samples(self) -> dict[str, Any]:
+        with no_collection():  # traced and evaluated with no scene finalised meanwhile (jit.no_collection)
+            return self._trace()
+
+    def _trace(self) -> dict[str, Any]:
+        scene = self.scene
+        sensor = scene.sensors()[0]
+        w, h = (int(x) for x in sensor.film().crop_size())
+        cx = PILOT_CELLS if w >= h else max(1, round(PILOT_CELLS * w / h))
+        cy = PILOT_CELLS if h >= w else max(1, round(PILOT_CELLS * h / w))
+        n = cx * cy * PILOT_SPP
+        rng = np.random.default_rng(PILOT_SEED)
+        cell = np.repeat(np.arange(cx * cy), PILOT_SPP)
+        ux = ((cell % cx) + rng.random(n)) / cx
+        uy = ((cell // cx) + rng.random(n)) / cy
+        ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
+                                   mi.Point2f(0.5, 0.5))
+        si = scene.ray_intersect(ray)
+        sampler = mi.load_dict({"type": "independent"})
+        sampler.seed(PILOT_SEED, n)
+        # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order Mitsuba
+        # lists the emitters in, so the auto values (and the image) are the same for the same seed
+        pi = scene.ray_intersect_preliminary(ray, coherent=True)
+        graph = SceneGraph(scene)
+        emitters = EmitterSampler(scene, self.settings.emitter_sampling)
+        if graph.has_media:
+            L = volume_walk(scene, sampler, pi, ray, mi.Bool(True), sensor.get_medium(), True, self.settings.max_depth,
+                            self.settings.rr_depth, emitters=emitters, nulls=graph.has_null).L
+        else:
+            L = exitant(scene, sampler, pi, ray, mi.Bool(True), self.settings.max_depth, self.settings.rr_depth,
+                        emitters=emitters)
+        cam = camera(scene)
+        depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
+        owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
+        hit = np.array(si.is_valid(), dtype=bool)
+        owner[hit] = 0
+        # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for it (itself
+        # and the wrappers that hold it): one traversal of the scene
+        for k, (_, pointers, _) in enumerate(graph.styled, start=1):
+            for ptr in pointers:
+                owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
+        n_sh = dr.normalize(si.sh_frame.n)
+        return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
+                "depth": np.array(depth, dtype=np.float64), "p": np.array(si.p).T, "n": np.array(n_sh).T,
+                "wo": -lanes(ray.d, n).T}
+
+
+class Facts:
+    """What a style's auto rule may read about the part of the scene it covers (see the module doc)."""
+
+    def __init__(self, scene: mi.Scene, pilot: Pilot, owner: int, styles: tuple[Style, ...] = ()):
+        self.scene, self.pilot, self.owner, self.styles = scene, pilot, owner, styles
+
+    @cached_property
+    def camera(self) -> Camera:
+        return camera(self.scene)
+
+    def mapped(self, style: Style) -> "Facts":
+        """The facts of `style`'s output (for the next operand of a composition)."""
+        return Facts(self.scene, self.pilot, self.owner, self.styles + (style,))
+
+    @cached_property
+    def _mine(self) -> np.ndarray:
+        mask = self.pilot.samples["owner"] == self.owner
+        if not mask.any():  # the style covers nothing the camera sees directly: use every first hit
+            mask = self.pilot.samples["owner"] >= 0
+        if not mask.any():
+            raise NothingSeen
+        return mask
+
+    @cached_property
+    def _cells(self) -> tuple[np.ndarray, np.ndarray]:
+        """(brightness per cell, number of samples) over the cells with samples on the covered objects."""
+        s, mask = self.pilot.samples, self._mine
+        cells, inverse, counts = np.unique(s["cell"][mask], return_inverse=True, return_counts=True)
+        colour = np.zeros((len(cells), 3))
+        np.add.at(colour, inverse, s["colour"][mask])
+        colour /= counts[:, None]
+        if self.styles:
+            # a representative first hit per cell (the last sample of the cell) for styles that read the vertex
+            last = np.zeros(len(cells), dtype=np.int64)
+            last[inverse] = np.arange(mask.sum())
+            pick = lambda key: s[key][mask][last]  # noqa: E731
+            colour = self._apply(colour, pick("p"), pick("n"), pick("wo"))
+        return colour.mean(axis=1), counts
+
+    def _apply(self, colour, p, n, wo) -> np.ndarray:
+        arr = lambda a, t: t(np.ascontiguousarray(a.T, dtype=np.float32))  # noqa: E731
+        cam = self.camera
+        v = Vertex(p=arr(p, mi.Point3f), n=arr(n, mi.Vector3f), wo=arr(wo, mi.Vector3f),
+                   view=mi.Vector3f(*cam.forward), depth=dr.zeros(mi.UInt32, len(p)))
+        I = arr(colour, mi.Color3f)
+        for style in self.styles:
+            style.prepare(self.scene)
+            I = style.apply(I, v)
+        return np.array(I, dtype=np.float64).T
+
+    def brightness(self, qs) -> list[float]:
+        u, counts = self._cells
+        return weighted_quantiles(u, counts, qs)
+
+    def depth(self, qs) -> list[float]:
+        d = self.pilot.samples["depth"][self._mine]
+        return weighted_quantiles(d, np.ones_like(d), qs)
+
+
+class NothingSeen(Exception):
+    """The camera sees no surface: a style's brightness or depth rule has nothing to measure, so its auto
+    values stay unresolved (the style's documented fallbacks; it shows on no pixel anyway)."""
+
+
+def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
+    """The style's auto values that its parameters accept. A rule pushed past a parameter's range by an
+    extreme given value (u_min = 1e6 leaves no u_max above it) pins nothing: the style's unresolved
+    fallback applies, as it does when the camera sees nothing."""
+    try:
+        chosen = style.auto_values(facts)
+    except NothingSeen:
+        return {}
+    params = {p.name: p for p in type(style).params}
+    out = {}
+    for key, value in chosen.items():
+        try:
+            params[key].parse(value)
+        except StyleError:
+            continue
+        out[key] = value
+    try:
+        style.pinned(out)
+    except StyleError:  # together they break a check across parameters: leave them all unresolved
+        return {}
+    return out
+
+
+def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
+    """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups), in a fixed order."""
+    return [styled for styled, _, _ in SceneGraph(scene).styled]
+
+
+def describe(style: Style, values: dict[str, Any]) -> str:
+    params = {p.name: p for p in type(style).params}
+    return f"{style.name} " + " ".join(f"{k}={params[k].show(v)}" for k, v in values.items())
+
+
+def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
+    """`integrator` with the auto values of its style and of the scene's `styled` BSDFs pinned (the BSDFs are
+    updated in place: they belong to the scene), and a one-line account of the values chosen ('' if none).
+    `pilot`: a `Pilot` of this scene to use (traced here only if an auto value needs it), so that a caller
+    that keeps the pilot's samples (the look-dev recorder) traces it once."""
+    if not isinstance(integrator, StylizedIntegrator):
+        return integrator, ""
+    if pilot is None or not pilot.serves(scene, integrator.settings):
+        pilot = Pilot(scene, integrator.settings)
+    notes = []
+    if integrator.settings.stylize != "first_object_hit":
+        style = integrator.settings.style
+        chosen = auto_values(style, Facts(scene, pilot, 0))
+        if chosen:
+            # the parsed settings with only the style replaced (settings are parsed once, `settings` module)
+            s = integrator.settings
+            pinned = replace(s, slot=replace(s.slot, style=style.pinned(chosen)))
+            integrator = StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen})
+            notes.append(describe(style, chosen))
+    for k, bsdf in enumerate(unique_styled(scene), start=1):
+        style = bsdf.slot.style
+        chosen = auto_values(style, Facts(scene, pilot, k))
+        if chosen:
+            bsdf.slot = replace(bsdf.slot, style=style.pinned(chosen))
+            notes.append(f"{describe(style, chosen)} (styled BSDF {bsdf.id() or k})")
+    return integrator, "; ".join(notes)
+
+
+__all__ = ["resolve", "Facts", "Pilot", "weighted_quantiles", "PILOT_CELLS", "PILOT_SPP"]

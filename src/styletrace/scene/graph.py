@@ -1,0 +1,127 @@
+"""What a loaded scene holds that the `stylized` integrator must know before it traces: styled BSDFs
+wherever they sit, null-scattering surfaces (masks, `null`), participating media.
+
+    graph = SceneGraph(scene)
+    graph.styled        # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
+    graph.has_null      # some surface BSDF has a Null component (a `mask`, a `null` BSDF, ...)
+    graph.has_see_through  # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
+    graph.has_media     # some shape bounds a medium, or the sensor sits in one
+
+Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled` BSDF
+wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is registered with
+the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in `scene.shapes()`, but an
+intersection with an `instance` of the group reports the group shape's own BSDF; the graph reaches
+those shapes through the scene's traversal (`Object.traverse` with a `TraversalCallback`, which hands
+every child object to `put`). A surface whose BSDF holds two different styled BSDFs (a `blendbsdf` of
+two styles, a `twosided` with a different style on each side) cannot take both styles: it is refused
+with a `SceneError`, as is a styled BSDF inside another one (the inner style would never apply), and an
+emitter on a see-through surface (path.first_scattering says why).
+"""
+from __future__ import annotations
+
+import mitsuba as mi
+
+from ..errors import SceneError
+from ..kernel.lines import pure_null
+from ..kernel.styled_bsdf import StyledBSDF
+
+
+class _Collect(mi.TraversalCallback):
+    """Gathers the child objects a traversal hands over. One class for the module: a class made per call
+    (a closure over the list) sits in a reference cycle, so the objects it reached lived on until the
+    cyclic garbage collector ran, possibly in the middle of a later scene's trace, where Dr.Jit traces
+    calls on every live instance (measured: a segfault in the next test's render)."""
+
+    def __init__(self):
+        super().__init__()
+        self.found: list[mi.Object] = []
+
+    def put(self, name, value, *flags):
+        if isinstance(value, mi.Object):
+            self.found.append(value)
+
+
+def children(obj: mi.Object) -> list[mi.Object]:
+    """The Mitsuba objects `obj` hands to its traversal callback (one level down)."""
+    collect = _Collect()
+    try:
+        obj.traverse(collect)
+    except Exception:  # a Python plugin without a traversal of its own: nothing below it to find
+        pass
+    found, collect.found = collect.found, []
+    return found
+
+
+def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
+    """The distinct styled BSDFs in `bsdf` itself or nested at any depth inside its wrappers."""
+    found: dict[int, StyledBSDF] = {}
+    stack, seen = [bsdf], set()
+    while stack:
+        obj = stack.pop()
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        if isinstance(obj, StyledBSDF):
+            found[id(obj)] = obj
+            if styled_inside(obj.nested):
+                raise SceneError(f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, whose "
+                                 f"style would never apply: keep one 'styled' BSDF per surface")
+            continue  # its traversal forwards to the nested BSDF's parameters, checked above
+        stack.extend(children(obj))
+    return list(found.values())
+
+
+def all_shapes(scene: mi.Scene) -> list[mi.Shape]:
+    """Every shape of the scene with a surface, those inside shapegroups (seen through instances) too."""
+    shapes: dict[int, mi.Shape] = {id(s): s for s in scene.shapes()}
+    stack, seen = list(children(scene)), set()
+    while stack:
+        obj = stack.pop()
+        if id(obj) in seen or not isinstance(obj, mi.Shape):
+            continue
+        seen.add(id(obj))
+        shapes.setdefault(id(obj), obj)
+        stack.extend(children(obj))  # a shapegroup hands over its shapes
+    return [s for s in shapes.values() if s.bsdf() is not None]
+
+
+def _name(shape: mi.Shape) -> str:
+    return shape.id() or shape.class_name()
+
+
+class SceneGraph:
+    def __init__(self, scene: mi.Scene):
+        groups: dict[int, tuple] = {}
+        self.has_null = False
+        self.has_see_through = False   # some surface has a pure `null` BSDF (feature lines pass it)
+        self.has_media = scene.sensors()[0].get_medium() is not None if scene.sensors() else False
+        for shape in all_shapes(scene):
+            bsdf = shape.bsdf()
+            if mi.has_flag(bsdf.flags(), mi.BSDFFlags.Null):
+                self.has_null = True
+                self.has_see_through |= pure_null(bsdf.flags())
+                if shape.emitter() is not None:  # see path.first_scattering for why
+                    raise SceneError(f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
+                                     f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF")
+            self.has_media |= shape.interior_medium() is not None or shape.exterior_medium() is not None
+            styled = styled_inside(bsdf)
+            if len(styled) > 1:
+                raise SceneError(f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} 'styled' "
+                                 f"BSDFs, but a surface takes one style: wrap the whole BSDF in one 'styled' instead")
+            if not styled:
+                continue
+            s = styled[0]
+            _, pointers, emitters = groups.setdefault(id(s), (s, [s], []))
+            if all(p is not bsdf for p in pointers):
+                pointers.append(bsdf)
+            if shape.emitter() is not None:
+                emitters.append(shape.emitter())
+        self.styled = list(groups.values())
+
+
+def any_ptr(ptr, objects, ptr_type) -> mi.Bool:
+    """Lanes whose pointer (BSDF, emitter, ...) is one of `objects`."""
+    mask = mi.Bool(False)
+    for obj in objects:
+        mask |= ptr == ptr_type(obj)
+    return mask

@@ -1,0 +1,3 @@
+import styletrace
+
+styletrace.init()  # the scene-analysis tests render: pick the backend and register the plugins first
