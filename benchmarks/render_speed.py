@@ -133,7 +133,7 @@ def previous_memory_line() -> str | None:
     commit = re.search(r"commit (\w+)\.", text)
     for line in text.splitlines():
         if line.startswith("Peak memory"):
-            if "(not re-measured" in line:
+            if "not re-measured" in line:  # already marked by an earlier run
                 return line
             at = f"measured at commit {commit.group(1)}; " if commit else ""
             return line + f" ({at}not re-measured in this run: `--memory` does)"
