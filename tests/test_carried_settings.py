@@ -112,3 +112,17 @@ def test_a_stylized_integrator_in_the_file_is_the_base(tmp_path):
     assert (s.style.name, s.max_depth, s.hide_emitters) == ("cel", 2, True)
     s = resolve(Job(scene=path, given={"inner_samples": 3}, lanes_per_pass=1 << 20)).integrator.settings
     assert (s.style.name, s.max_depth, s.inner) == ("cel", 7, (3,))
+
+
+@pytest.mark.parametrize("wrapper", ["moment", "aov"])
+def test_a_stylized_integrator_nested_in_a_wrapper_is_the_base(tmp_path, wrapper):
+    """Its own values (style, parameters, depths) are the base, as for a `stylized` integrator at the top."""
+    extra = '<string name="aovs" value="dd:depth"/>' if wrapper == "aov" else ""
+    nested = ('<integrator type="stylized"><string name="style" value="cel"/><string name="levels" value="0.2,0.9"/>'
+              '<integer name="max_depth" value="$depth"/></integrator>')
+    path = write(tmp_path, f'<integrator type="{wrapper}">{extra}{nested}</integrator>')
+    s = resolve(Job(scene=path, defines={"depth": "4"}, lanes_per_pass=1 << 20)).integrator.settings
+    assert (s.style.name, s.max_depth) == ("cel", 4)
+    assert s.style.levels == (0.2, 0.9)
+    given = resolve(Job(scene=path, given={"max_depth": 2}, lanes_per_pass=1 << 20)).integrator.settings
+    assert (given.style.name, given.max_depth) == ("cel", 2)  # what the caller gives is laid over it

@@ -5,16 +5,20 @@
 A `Property` is everything the project knows about one setting of the `stylized` integrator: the command
 line makes its flag from it (`cli.add_setting_flags`), the docs their table row (`reference.integrator_table`),
 and `settings.parse` its value (`Property.parse`: the kind, the bounds and the choices declared here), so
-adding a property is one declaration in `settings.PROPERTIES` (or `settings.declare(...)`). Properties whose
+adding a property is one declaration in `settings.PROPERTIES` (or `settings.declare(...)`). `Property` is the
+integrator's side of the shared `styletrace.declaration.Declaration` (style parameters are the other side):
+the common kinds are parsed there, once. Properties whose
 value depends on others (inner_samples and stylize_depth, the reuse family, lines) keep their cross-checks
 in `settings.parse`; their single values are still parsed here. Also here: the value parsers every front end
-shares (integer, number, boolean, names, rgb), each failing with one line naming the value and what is allowed.
+shares (integer, number, boolean, names, rgb), each a throwaway `Property` parsing one value, failing with one
+line naming the value and what is allowed.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
+from ..declaration import Declaration
 from ..errors import SettingsError
 
 #: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
@@ -23,103 +27,87 @@ COUNT_MAX = 2 ** 32 - 2
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
     """An integer in [low, high] from a number or a string; exact (1.5 and '2.7' are refused, not truncated)."""
-    expected = f"expected an integer in [{low}, {high}]"
-    try:
-        if isinstance(raw, bool):
-            raise ValueError
-        if isinstance(raw, float) and not raw.is_integer():
-            raise ValueError
-        value = int(raw.strip()) if isinstance(raw, str) else int(raw)
-    except (TypeError, ValueError, OverflowError):
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}") from None
-    if not low <= value <= high:
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
-    return value
+    return Property(key, None, "int", "", low=low, high=high).parse(raw)
 
 
 def number(key: str, raw: Any, low: float, high: float = float("inf"), low_open: bool = False) -> float:
     """A finite float in [low, high] (or (low, high] with `low_open`) from a number or a string."""
-    expected = f"expected a number in {'(' if low_open else '['}{low:g}, {high:g}]"
-    try:
-        if isinstance(raw, bool):
-            raise ValueError
-        value = float(raw.strip()) if isinstance(raw, str) else float(raw)
-    except (TypeError, ValueError, OverflowError):
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}") from None
-    if value != value or not (low < value if low_open else low <= value) or not value <= high:
-        raise SettingsError(f"bad value {raw!r} for '{key}': {expected}")
-    return value
+    return Property(key, None, "float", "", low=low, high=high, low_open=low_open).parse(raw)
 
 
 def names(key: str, raw: Any) -> tuple[str, ...]:
     """A list of names from 'a,b' or a list/tuple of strings."""
-    parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else None
-    if parts is None:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected a comma-separated list of names")
-    return tuple(str(p).strip() for p in parts if str(p).strip())
+    return Property(key, None, "list", "").parse(raw)
 
 
 def rgb(key: str, raw: Any) -> tuple[float, float, float]:
     """An RGB colour from 'r,g,b', a list of three numbers, or one grey number."""
-    parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else [raw]
-    if len(parts) == 1:
-        parts = parts * 3
-    if len(parts) != 3:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected a colour r,g,b (three numbers >= 0)")
-    try:
-        return tuple(number(key, p, 0.0) for p in parts)
-    except SettingsError:
-        raise SettingsError(f"bad value {raw!r} for '{key}': expected a colour r,g,b (three numbers >= 0)") from None
+    return Property(key, None, "rgb", "").parse(raw)
 
 
 def boolean(key: str, raw: Any) -> bool:
     """A bool from True/False, 1/0 or the strings 'true'/'false'/'1'/'0' (any case)."""
-    text = str(raw).strip().lower()
-    if isinstance(raw, bool) or text in ("true", "false", "1", "0") and not isinstance(raw, float):
-        return text in ("true", "1")
-    raise SettingsError(f"bad value {raw!r} for '{key}': expected true or false")
+    return Property(key, None, "bool", "").parse(raw)
 
 
-@dataclass(frozen=True)
-class Property:
-    """One integrator property (see the module doc). `kind`: int | float | bool | string | list | rgb | the
-    docs' wording for the few parsed in `settings.parse` (int or list); `low`/`high` bound a number (`low_open`:
-    the low end excluded); `choices`: the strings a `string` accepts."""
+@dataclass(frozen=True, init=False)
+class Property(Declaration):
+    """One integrator property (see the module doc): a `Declaration` with its command-line flag. `kind`:
+    int | float | bool | string | list | rgb | the docs' wording for the few parsed in `settings.parse` (int
+    or list); `low`/`high` bound a number (`low_open`: the low end excluded); `choices`: the strings a
+    `string` accepts. Spellings: bool is true/false/1/0; an int or float is never True/False; an rgb is
+    'r,g,b' with each value >= 0."""
 
-    name: str
-    default: Any
-    kind: str
-    doc: str
     flag: str = ""            # the `styletrace render` flag, if it has its own
     metavar: str = ""
     bare: bool = False        # the flag is a switch without a value (`--lines`)
-    low: float | None = None
-    high: float | None = None
-    low_open: bool = False
-    choices: tuple[str, ...] = ()
+
+    OTHER_KIND: ClassVar[str] = "choice"   # the docs' wordings ('int or list') parse as a string here
+
+    def __init__(self, name: str, default: Any, kind: str, doc: str, flag: str = "", metavar: str = "",
+                 bare: bool = False, low: float | None = None, high: float | None = None, low_open: bool = False,
+                 choices: tuple[str, ...] = ()):
+        Declaration.__init__(self, name, kind, default, doc, low, high, low_open, tuple(choices))
+        object.__setattr__(self, "flag", flag)
+        object.__setattr__(self, "metavar", metavar)
+        object.__setattr__(self, "bare", bare)
 
     def show_default(self) -> str:
         return "style's" if self.default is None else str(self.default)
 
-    def parse(self, raw: Any) -> Any:
-        """The value `raw` (a CLI string, a Mitsuba property, a Python value) as this property declares it."""
-        kind, name = self.kind, self.name
-        if kind == "int":
-            return integer(name, raw, int(self.low if self.low is not None else -COUNT_MAX),
-                           int(self.high if self.high is not None else COUNT_MAX))
-        if kind == "float":
-            return number(name, raw, self.low if self.low is not None else -float("inf"),
-                          self.high if self.high is not None else float("inf"), self.low_open)
-        if kind == "bool":
-            return boolean(name, raw)
-        if kind == "list":
-            return names(name, raw)
-        if kind == "rgb":
-            return rgb(name, raw)
-        value = str(raw)
-        if self.choices and value not in self.choices:
-            raise SettingsError(f"bad value {value!r} for '{name}': expected one of {', '.join(self.choices)}")
-        return value
+    def bounds(self) -> tuple[float, float]:
+        if self.kind == "int":
+            return (-COUNT_MAX if self.low is None else int(self.low), COUNT_MAX if self.high is None else int(self.high))
+        if self.kind == "rgb":
+            return (0.0, float("inf"))
+        return super().bounds()
+
+    def allowed(self) -> str:
+        """What the property accepts, as its errors say it."""
+        lo, hi = self.bounds()
+        if self.kind == "int":
+            return f"an integer in [{lo}, {hi}]"
+        if self.kind == "float":
+            return f"a number in {'(' if self.low_open else '['}{lo:g}, {hi:g}]"
+        if self.kind == "bool":
+            return "true or false"
+        if self.kind == "list":
+            return "a comma-separated list of names"
+        if self.kind == "rgb":
+            return "a colour r,g,b (three numbers >= 0)"
+        return "one of " + ", ".join(self.choices) if self.choices else "a string"
+
+    def fail(self, raw: Any) -> SettingsError:
+        shown = raw if self.kind in ("int", "float", "bool", "list", "rgb") else str(raw)
+        return SettingsError(f"bad value {shown!r} for '{self.name}': expected {self.allowed()}")
+
+    def convert(self, raw: Any) -> Any:
+        if self.kind == "list":
+            parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else None
+            if parts is None:
+                raise self.fail(raw)
+            return tuple(str(p).strip() for p in parts if str(p).strip())
+        return super().convert(raw)
 
 
 __all__ = ["Property", "COUNT_MAX", "integer", "number", "boolean", "names", "rgb"]

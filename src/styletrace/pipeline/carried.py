@@ -11,7 +11,8 @@ Two sources, because neither alone sees everything in Mitsuba 3.9:
   property, and for C++ integrators, whose depths Mitsuba exposes nowhere else, their description
   (`PathIntegrator[max_depth = 6, rr_depth = 5]`).
 What is declared wins; the object fills in what was left to Mitsuba's defaults. `direct` is emission plus
-direct light: max_depth 2. A `stylized` integrator carries nothing here: its own values are the base.
+direct light: max_depth 2. A `stylized` integrator carries nothing here: its own values are the base, also
+when it is nested in a wrapper (`nested_stylized` reads them from the declaration).
 """
 from __future__ import annotations
 
@@ -48,8 +49,8 @@ def rendering_node(state, node):
     return node
 
 
-def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
-    """The shared settings the scene source declares for the integrator that renders, plus its `type`; None
+def _rendering_node(source: Any, defines: Mapping[str, Any] | None):
+    """(the scene's top integrator node, the node that renders) as Mitsuba's parser reads the source; None
     where the source cannot be read this way (an mi.Scene) or declares no integrator."""
     import mitsuba.parser as parser
     config = parser.ParserConfig(mi.variant())
@@ -68,13 +69,31 @@ def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str,
     tops = [n for n in tops if n.type == mi.ObjectType.Integrator]
     if not tops:
         return None
-    node = rendering_node(state, tops[0])
-    props = node.props
+    return tops[0], rendering_node(state, tops[0])
+
+
+def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
+    """The shared settings the scene source declares for the integrator that renders, plus its `type`; None
+    where the source cannot be read this way (an mi.Scene) or declares no integrator."""
+    nodes = _rendering_node(source, defines)
+    if nodes is None:
+        return None
+    props = nodes[1].props
     out: dict[str, Any] = {"type": props.plugin_name()}
     for key in SHARED:
         if key in props.keys():
             out[key] = bool(props[key]) if key == "hide_emitters" else _depth(props[key])
     return out
+
+
+def nested_stylized(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
+    """The property values of a `stylized` integrator nested in a wrapper (`moment`, `aov`) of the scene
+    source, as the declaration gives them; None for none (no wrapper, another integrator, an mi.Scene)."""
+    nodes = _rendering_node(source, defines)
+    if nodes is None or nodes[0] is nodes[1] or nodes[1].props.plugin_name() != "stylized":
+        return None
+    props = nodes[1].props
+    return {key: props[key] for key in props.keys()}
 
 
 def loaded(integrator: mi.Integrator) -> dict[str, Any]:
@@ -114,4 +133,4 @@ def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, 
     return out
 
 
-__all__ = ["carried_settings", "declared", "loaded", "SHARED", "WRAPPERS"]
+__all__ = ["carried_settings", "declared", "nested_stylized", "loaded", "SHARED", "WRAPPERS"]

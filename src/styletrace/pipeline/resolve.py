@@ -4,7 +4,8 @@
     r.scene, r.integrator, r.spp, r.lanes, r.auto      # what `execute` runs; r.auto names the pinned values
 
 The integrator of a render is, in this order of precedence: a prebuilt one given as it is; else the values
-the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator; else over the shared
+the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator (also one nested in a
+`moment` or `aov` wrapper, read from the declaration); else over the shared
 settings of the scene's own Mitsuba integrator (`carried`: max_depth, rr_depth, hide_emitters, seen
 through `moment` and `aov`) with the job's default style. Its scene-relative `auto` values are then pinned
 on this scene (`scene_defaults.resolve`), so every route that renders the result draws the same image.
@@ -22,7 +23,7 @@ from ..kernel.integrator import StylizedIntegrator
 from ..scene.defaults import Pilot, resolve as resolve_defaults
 from ..runtime import init
 from ..sizing import lanes_per_pass
-from .carried import carried_settings
+from .carried import carried_settings, nested_stylized
 from .job import Job
 from .scene import load_scene, scene_spp
 
@@ -51,6 +52,9 @@ def integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
     given = dict(job.given)
     if isinstance(own, StylizedIntegrator):
         return S.refine(own.values, given) if given else None
+    nested = nested_stylized(job.scene, job.defines)   # `stylized` inside `moment` or `aov`: its values
+    if nested is not None:
+        return S.refine(nested, given)
     base = {"style": job.default_style, **carried_settings(scene, job.scene, job.defines)}
     return S.refine(base, given)
 

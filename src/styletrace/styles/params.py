@@ -13,9 +13,10 @@ own bounds, derived where they are declared.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar, Sequence
 
+from ..declaration import COMMON_KINDS, Declaration
 from ..errors import StyleError
 from .gradient import Gradient
 
@@ -33,20 +34,26 @@ def _floats(text: str) -> list[float]:
     return [float(t) for t in text.replace(",", " ").split()]
 
 
-@dataclass(frozen=True)
-class Param:
-    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice."""
+@dataclass(frozen=True, init=False)
+class Param(Declaration):
+    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice. The styles'
+    side of the shared `styletrace.declaration.Declaration`: the common kinds (float, int, bool, color, choice)
+    are parsed there; here the `auto` rule, the vector, floats and gradient kinds, the ±LIMIT bound on reals
+    and the styles' spellings (bool also yes/no/on/off, True/False as numbers, a colour also '#rrggbb' or
+    'r g b', a choice stripped)."""
 
-    name: str
-    kind: str
-    default: Any
-    doc: str
-    low: float | None = None
-    high: float | None = None
-    low_open: bool = False  # True: the bound itself is not allowed (e.g. gamma > 0)
-    choices: Sequence[str] = field(default_factory=tuple)
     #: for a default of None ('auto'): the rule that derives the value (from the scene or other parameters)
     auto: str = ""
+
+    TRUE: ClassVar[tuple[str, ...]] = ("1", "true", "yes", "on")
+    FALSE: ClassVar[tuple[str, ...]] = ("0", "false", "no", "off")
+    BOOL_IS_NUMBER: ClassVar[bool] = True
+    STRIP_CHOICE: ClassVar[bool] = True
+
+    def __init__(self, name: str, kind: str, default: Any, doc: str, low: float | None = None,
+                 high: float | None = None, low_open: bool = False, choices: Sequence[str] = (), auto: str = ""):
+        Declaration.__init__(self, name, kind, default, doc, low, high, low_open, tuple(choices))
+        object.__setattr__(self, "auto", auto)
 
     def allowed(self) -> str:
         """Human description of the admissible values, used in errors and in `styletrace styles`."""
@@ -71,7 +78,7 @@ class Param:
     def bounds(self) -> tuple[float, float]:
         """The closed range of admissible values; reals default to [-LIMIT, LIMIT]."""
         if self.kind == "int":
-            return (-math.inf if self.low is None else self.low, math.inf if self.high is None else self.high)
+            return super().bounds()
         return (-LIMIT if self.low is None else self.low, LIMIT if self.high is None else self.high)
 
     def _range(self) -> str:
@@ -85,67 +92,32 @@ class Param:
     def fail(self, value: Any) -> StyleError:
         return StyleError(f"bad value {value!r} for parameter '{self.name}': expected {self.allowed()}")
 
-    def _check_range(self, x: float, raw: Any) -> None:
-        lo, hi = self.bounds()
-        if not (lo <= x <= hi) or (self.low_open and x == lo):  # NaN fails every comparison
-            raise self.fail(raw)
+    def colour_text(self, text: str) -> list[Any]:
+        s = text.strip()
+        return Gradient.parse_color(s) if s.startswith("#") else _floats(s)
+
+    def is_sequence(self, raw: Any) -> bool:
+        return _is_seq(raw)
 
     def parse(self, raw: Any) -> Any:
         """Turn a string, number, sequence or Mitsuba colour into the validated Python value ('auto': None, for
         a parameter whose default is derived)."""
         if self.default is None and isinstance(raw, str) and raw.strip().lower() == "auto":
             return None
-        try:
-            value = self._convert(raw)
-        except StyleError:
-            raise
-        except (TypeError, ValueError, IndexError, OverflowError) as exc:
-            raise self.fail(raw) from exc
-        return value
+        return super().parse(raw)
 
-    def _convert(self, raw: Any) -> Any:
+    def convert(self, raw: Any) -> Any:
         k = self.kind
-        if k == "float":
-            x = float(raw)
-            self._check_range(x, raw)
-            return x
-        if k == "int":
-            if isinstance(raw, float) and not raw.is_integer():
+        if k == "vector":
+            vals = self.triple(raw)
+            if sum(v * v for v in vals) == 0:
                 raise self.fail(raw)
-            x = int(str(raw).strip()) if isinstance(raw, str) else int(raw)
-            self._check_range(x, raw)
-            return x
-        if k == "bool":
-            if isinstance(raw, bool):
-                return raw
-            s = str(raw).strip().lower()
-            if s in ("1", "true", "yes", "on"):
-                return True
-            if s in ("0", "false", "no", "off"):
-                return False
-            raise self.fail(raw)
-        if k in ("color", "vector"):
-            if isinstance(raw, str):
-                s = raw.strip()
-                vals = Gradient.parse_color(s) if s.startswith("#") else _floats(s)
-            else:
-                vals = [float(raw[i]) for i in range(len(raw))] if _is_seq(raw) else [float(raw)] * 3
-            if len(vals) == 1:
-                vals = vals * 3
-            if len(vals) != 3:
-                raise self.fail(raw)
-            for v in vals:
-                self._check_range(v, raw)
-            if k == "vector" and sum(v * v for v in vals) == 0:
-                raise self.fail(raw)
-            return tuple(vals)
+            return vals
         if k == "floats":
             vals = _floats(raw) if isinstance(raw, str) else ([float(v) for v in raw] if _is_seq(raw) else [float(raw)])
             if not vals:
                 raise self.fail(raw)
-            for v in vals:
-                self._check_range(v, raw)
-            return tuple(vals)
+            return tuple(self.check(v, raw) for v in vals)
         if k == "gradient":
             gradient = raw if isinstance(raw, Gradient) else Gradient.parse(raw)
             for pos, colour in gradient.stops:
@@ -155,11 +127,8 @@ class Param:
                                          f"positions and colour values must be finite numbers in "
                                          f"[{-LIMIT:g}, {LIMIT:g}]")
             return gradient
-        if k == "choice":
-            s = str(raw).strip()
-            if s not in self.choices:
-                raise self.fail(raw)
-            return s
+        if k in COMMON_KINDS:
+            return super().convert(raw)
         raise AssertionError(f"unknown parameter kind {k}")
 
     def explain(self) -> str:
