@@ -79,3 +79,27 @@ def median_time(fn, runs: int) -> float:
         fn()
         out.append(time.perf_counter() - t)
     return statistics.median(out)
+
+
+def image_grid(panels, path: str, row_height: float = 3.1, fontsize: int = 8, width: float | None = None) -> None:
+    """A figure of images side by side, one row per (title, [(label, linear image), ...]) in `panels`, shown in
+    sRGB, the row's title above its first ("reference") image; written atomically as every image of the project."""
+    import io
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from styletrace.images import srgb8, write_bytes_atomically
+    columns = max(len(cells) for _, cells in panels)
+    fig, axes = plt.subplots(len(panels), columns, figsize=(width or 3 * columns, row_height * len(panels)),
+                             squeeze=False)
+    for row, (title, cells) in zip(axes, panels):
+        for ax, (label, img) in zip(row, cells):
+            ax.imshow(srgb8(img))
+            ax.set_title(f"{title}\n{label}" if label == "reference" else label, fontsize=fontsize)
+            ax.axis("off")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    write_bytes_atomically(buf.getvalue(), path)
+    plt.close(fig)

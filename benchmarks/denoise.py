@@ -43,7 +43,7 @@ import styletrace  # noqa: E402
 styletrace.init()
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
+from _report import image_grid, machine_description, median_time, write_section  # noqa: E402
 from equal_time import envelope, fixed_mse_at  # noqa: E402
 from styletrace import api  # noqa: E402
 from styletrace.denoise import render as denoised_render  # noqa: E402
@@ -306,28 +306,8 @@ def report(size):
         machine_description(),
     ])
     write_section("denoise", body)
-    figure(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "denoise.png"))
-
-
-def figure(panels, path):
-    """reference | fixed n at equal time | image denoising | expectation denoising, per (scene, style)."""
-    import io
-
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from styletrace.images import srgb8, write_bytes_atomically
-    fig, axes = plt.subplots(len(panels), 4, figsize=(10, 2.75 * len(panels)), squeeze=False)
-    for row, (title, cells) in zip(axes, panels):
-        for ax, (label, img) in zip(row, cells):
-            ax.imshow(srgb8(img))
-            ax.set_title(f"{title}\n{label}" if label == "reference" else label, fontsize=7)
-            ax.axis("off")
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    write_bytes_atomically(buf.getvalue(), path)
-    plt.close(fig)
+    image_grid(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "denoise.png"), row_height=2.75,
+               fontsize=7, width=10)
 
 
 def timing(size: int = 512, runs: int = 3) -> dict:
@@ -340,13 +320,7 @@ def timing(size: int = 512, runs: int = 3) -> dict:
     integ = api.make_integrator(style="cel", inner=8)
 
     def med(fn):
-        fn()
-        out = []
-        for _ in range(runs):
-            t = time.perf_counter()
-            fn()
-            out.append(time.perf_counter() - t)
-        return statistics.median(out)
+        return median_time(fn, runs)
 
     buf = None
 

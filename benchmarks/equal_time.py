@@ -39,7 +39,7 @@ import styletrace  # noqa: E402
 
 styletrace.init()
 import numpy as np  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
+from _report import image_grid, machine_description, write_section  # noqa: E402
 from styletrace import api  # noqa: E402
 from styletrace.errors import StyletraceError  # noqa: E402
 
@@ -262,27 +262,7 @@ def main():
     ])
     write_section("equal_time", body)
     if panels:
-        figure(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "equal_time.png"))
-
-
-def figure(panels, path):
-    """The side-by-side images (module docstring), written atomically as every image of the project."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import io
-    from styletrace.images import srgb8, write_bytes_atomically
-    fig, axes = plt.subplots(len(panels), 3, figsize=(9, 3.1 * len(panels)), squeeze=False)
-    for row, (title, cells) in zip(axes, panels):
-        for ax, (label, img) in zip(row, cells):
-            ax.imshow(srgb8(img))
-            ax.set_title(f"{title}\n{label}" if label == "reference" else label, fontsize=8)
-            ax.axis("off")
-    fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    write_bytes_atomically(buf.getvalue(), path)
-    plt.close(fig)
+        image_grid(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "equal_time.png"))
 
 
 if __name__ == "__main__":
