@@ -1,18 +1,5 @@
-import pytest
 import styletrace
 
-styletrace.init()  # the plugin tests render: pick the backend and register the plugins first
+styletrace.init()  # the kernel tests render: pick the backend and register the plugins first
 
-from helpers import furnace  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def scene(request):
-    """The furnace scene at the test module's RES."""
-    return furnace.scene(request.module.RES)
-
-
-@pytest.fixture(scope="module")
-def mask(request):
-    """Pixels inside the furnace sphere's silhouette at the test module's RES."""
-    return furnace.sphere_mask(request.module.RES)
+from helpers.furnace_fixtures import mask, scene  # noqa: E402,F401  (pytest finds fixtures by name here)
