@@ -170,12 +170,8 @@ def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None =
         return _plain_png(data)
     if ext != ".exr":
         raise ValueError(f"unknown image type {ext!r}: expected one of {', '.join(IMAGE_TYPES)}")
-    names, layers = list(name), [image]
-    for key, channels in AOV_CHANNELS if aovs is not None else ():
-        arr = np.asarray(aovs[key], dtype=np.float32)
-        layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
-        names.extend(channels)
-    return _plain_exr(np.concatenate(layers, axis=-1), names)
+    data, names = with_aovs(image, list(name), aovs or {})
+    return _plain_exr(data, names)
 
 
 #: the EXR channels of the error AOVs, after the image's own (R, G, B[, A]); see `api.Progress.aovs`
@@ -190,6 +186,19 @@ DENOISED_AOV_CHANNELS = (("noisy_variance", ("noisy_variance.R", "noisy_variance
                          ("denoise_change", ("denoise_change.R", "denoise_change.G", "denoise_change.B")))
 
 
+def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
+    """The image's channels (`names`) followed by the AOVs present in `aovs` (`AOV_CHANNELS`, or with
+    denoising `DENOISED_AOV_CHANNELS`), as one float32 H x W x C array and its channel names: what both EXR
+    writers lay out."""
+    layers = [image]
+    table = AOV_CHANNELS if "variance" in aovs else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs]
+    for key, channels in table if aovs else ():
+        arr = np.asarray(aovs[key], dtype=np.float32)
+        layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
+        names = names + list(channels)
+    return np.ascontiguousarray(np.concatenate(layers, axis=-1)), names
+
+
 def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
     """A multi-channel float32 EXR: the image's channels (R, G, B[, A]) and then the error AOVs under the
     names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a PNG output.)"""
@@ -198,14 +207,7 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
     from .jit import backend
     backend()
     image = np.asarray(image, dtype=np.float32)
-    names = list(bitmap_format(pixel_format, image.shape[-1]))
-    layers = [image]
-    table = AOV_CHANNELS if "variance" in aovs else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs]
-    for key, channels in table:
-        arr = np.asarray(aovs[key], dtype=np.float32)
-        layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
-        names.extend(channels)
-    data = np.ascontiguousarray(np.concatenate(layers, axis=-1))
+    data, names = with_aovs(image, list(bitmap_format(pixel_format, image.shape[-1])), aovs)
     bmp = mi.Bitmap(data, pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
     stream = mi.MemoryStream()
     bmp.write(stream, mi.Bitmap.FileFormat.OpenEXR)
