@@ -39,12 +39,11 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     from . import oidn
     oidn.require()
     oidn.check_quality(denoise_quality)
-    from ..pipeline.job import Job, given_values
+    from ..pipeline.job import python_job
     from ..pipeline.resolve import resolve
     from ..pipeline.scene import film_format
-    r = resolve(Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
-                    given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp,
-                    seed=seed, pass_spp=pass_spp))
+    r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, pass_spp,
+                           **params))
     sc, integrator, spp = r.scene, r.integrator, r.spp
     want_aovs = bool(integrator.settings.aovs)
     if want_aovs and spp < 2:

@@ -292,11 +292,9 @@ def render_buffer(scene: Any = None, style: str | None = None, spp: int | None =
     The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values
     pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments
     and pass split)."""
-    from ..pipeline.job import Job, given_values
+    from ..pipeline.job import python_job
     from ..pipeline.resolve import resolve
-    job = Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
-              given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed)
-    r = resolve(job)
+    r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, **params))
     buf = None
     for prog, buf in record(r.scene, r.integrator, r.spp, seed, scene_label(scene), max_samples, r.lanes, pilot=r.pilot):
         buf.image = prog.image

@@ -17,7 +17,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from ..errors import UsageError
-from .job import Job, given_values
+from .job import python_job
 from .passes import Progress, passes
 from .resolve import Resolved, resolve
 
@@ -75,9 +75,7 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     `moment`/`aov` wrappers) with the identity style; `auto` values are resolved on the scene. `integrator=`
     renders with a prebuilt one as it is. `cluster` ("local" or a Ray address) renders the passes on Ray,
     bit-identical to the same split here; `pass_spp` fixes the split (default: by the device's memory)."""
-    job = Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
-              given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed,
-              pass_spp=pass_spp)
+    job = python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, pass_spp, **params)
     return run(resolve(job), cluster, callback)
 
 

@@ -52,4 +52,15 @@ def given_values(style: str | None = None, inner: Any = None, estimator: str | N
     return {k: v for k, v in given.items() if v is not None}
 
 
-__all__ = ["Job", "given_values", "PYTHON_STYLE"]
+def python_job(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
+               estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
+               integrator: Any = None, defines: dict[str, Any] | None = None, pass_spp: int | None = None,
+               **params: Any) -> "Job":
+    """The Job of a Python API call (`styletrace.render`, `render_buffer`, `render(denoise=...)`): its keywords
+    as the pipeline's description, integrator values given only where not None."""
+    return Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
+               given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed,
+               pass_spp=pass_spp)
+
+
+__all__ = ["Job", "given_values", "python_job", "PYTHON_STYLE"]
