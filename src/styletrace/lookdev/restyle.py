@@ -155,7 +155,12 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d["beta"], d["depth"] = vec("beta", mi.Color3f), mi.UInt32(a["depth"])
     else:
         d["depth"] = dr.zeros(mi.UInt32, buffer.samples)
-    counts = np.bincount(a["pixel"], minlength=buffer.width * buffer.height).astype(np.float32)
+    counts = np.bincount(a["pixel"], minlength=buffer.width * buffer.height)
+    if counts.size and counts.min() == counts.max() > 0:
+        # every pixel holds k samples: `accumulate` sums them in a fixed order (see there)
+        d["by_pixel"] = mi.UInt32(np.argsort(a["pixel"], kind="stable").astype(np.uint32))
+        d["per_pixel"] = int(counts[0])
+    counts = counts.astype(np.float32)
     d["inv_weight"] = mi.Float(np.repeat(1.0 / np.maximum(counts, 1.0), 3).astype(np.float32))
     dr.eval(*[x for x in d.values()])
     return d
@@ -257,8 +262,21 @@ def replay_lanes(buffer: Any, style: str | None = None, estimator: str | None = 
 
 
 def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
-    """Per-pixel mean of the samples (box filter), flat H*W*3, row-major RGB; differentiable."""
+    """Per-pixel mean of the samples (box filter), flat H*W*3, row-major RGB; differentiable.
+
+    Where every pixel holds the same number k of samples, they are gathered pixel by pixel and summed in
+    blocks of k: one order on every run. An atomic scatter-add (the fallback, and what Mitsuba's film does)
+    adds a pixel's samples in whatever order the threads reach them, so two restyles of one buffer could
+    differ in the last bit."""
     d = device(buffer)
+    if "by_pixel" in d:
+        k = d["per_pixel"]
+        out = [dr.block_sum(dr.gather(mi.Float, values[c], d["by_pixel"]), k) for c in range(3)]
+        rgb = dr.zeros(mi.Float, buffer.width * buffer.height * 3)
+        idx = dr.arange(mi.UInt32, buffer.width * buffer.height) * 3
+        for c in range(3):
+            dr.scatter(rgb, out[c], idx + c)
+        return rgb * d["inv_weight"]
     out = dr.zeros(mi.Float, buffer.width * buffer.height * 3)
     base = d["pixel"] * 3
     for c in range(3):
