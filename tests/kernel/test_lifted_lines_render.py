@@ -14,28 +14,11 @@ styletrace.init()
 
 from styletrace.kernel.lifted_lines import Lifted, LineType  # noqa: E402
 
-T = mi.ScalarTransform4f
-RES = 64
+from helpers.line_scenes import RES, line_scene  # noqa: E402
 
 
 def scene(alpha=0.0, flat=False):
-    """A box seen directly (left) and, with a plane behind the camera, in a mirror ball (right; `flat`: a flat
-    mirror facing the camera, turned 8 degrees, instead)."""
-    ball = {"type": "conductor", "material": "none"} if alpha == 0 else \
-        {"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": alpha}
-    grey = {"type": "diffuse"}
-    return mi.load_dict({
-        "type": "scene",
-        "sensor": {"type": "perspective", "fov": 40,
-                   "to_world": T().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": RES, "height": RES}},
-        "box": {"type": "cube", "bsdf": grey, "to_world": T().translate([-1.4, 0, 0]) @ T().rotate([1, 1, 0], 30) @ T().scale(0.7)},
-        "ball": {"type": "rectangle", "bsdf": ball,
-                 "to_world": T().translate([1.4, 0, 0]) @ T().rotate([0, 1, 0], -8) @ T().scale(1.0)} if flat else
-                {"type": "sphere", "center": [1.4, 0, 0], "radius": 1.1, "bsdf": ball},
-        "back": {"type": "rectangle", "bsdf": grey, "to_world": T().translate([1.0, 0.5, 8]) @ T().rotate([0, 1, 0], 180)
-                 @ T().scale([1.5, 1.0, 1])},
-    })
+    return mi.load_dict(line_scene(alpha, flat))
 
 
 SHAPE = LineType("shape_id", 1e-3, "disk", 1.5, 8, (1.0, 0.0, 0.0), 0)

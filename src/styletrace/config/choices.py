@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 TESTS = ("silhouette", "boundary", "crease", "albedo", "depth")
 DEFAULT_TESTS = ("silhouette", "boundary", "crease", "depth")
-MODES = ("absorb", "expectation")
+MODES = ("absorb", "expectation", "lifted")
 
 
 @dataclass(frozen=True)
@@ -24,10 +24,15 @@ class LineSettings:
     color: tuple[float, float, float]
     gradient: tuple | None                   # ((r,g,b), (r,g,b), y0 or None, y1 or None)
     objects: tuple[str, ...]
-    mode: str                                # "absorb" or "expectation" (LLaT): k stencil pairs
+    mode: str                                # "absorb", "expectation" (LLaT): k stencil pairs, or "lifted"
     k: int
+    types: tuple = ()                        # lifted: the line dictionary (config/line_types.LineType)
+    diffuse: bool = False                    # lifted: auxiliary paths go on through diffuse vertices
 
     def describe(self) -> str:
+        if self.mode == "lifted":
+            kinds = ",".join(t.measurement for t in self.types)
+            return f"lines(lifted, depth={self.depth}, types={kinds})"
         return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, tests={','.join(self.tests)})")
 
 

@@ -11,7 +11,7 @@ The integrator's property table in the README and the docs is generated from `PR
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
 from ..errors import SettingsError
@@ -21,6 +21,7 @@ from . import estimator_registry
 from .choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT, EMITTER_DEFAULT, EMITTER_MODES, LineSettings, \
     MODES as LINE_MODES, TESTS as LINE_TESTS
 from .declare import COUNT_MAX, Property, boolean, integer, names, number, rgb  # one declaration per property
+from .line_types import parse_line_types
 
 
 STYLIZE_MODES = {
@@ -103,10 +104,17 @@ PROPERTIES = (
              "the scene's bounding box) or `r,g,b;r,g,b;y0;y1`"),
     Property("line_objects", "", "list", "ids of the shapes that draw lines (empty: all)"),
     Property("line_mode", "absorb", "string", "absorb (West 2021: N rays against the path's own ray; a line ends "
-             "the path) or expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs)",
+             "the path), expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs) or lifted "
+             "(LLaT's conditional lifting: auxiliary paths per `line_types` entry; the first type that fires "
+             "colours the camera sample, L is traced only where none does)",
              choices=tuple(LINE_MODES)),
     Property("line_k", 12, "int", "expectation mode: k, the opacity control (more: lines darker and wider)", low=1,
              high=256),
+    Property("line_types", "", "string", "lifted mode: the line dictionary, in priority order: `measurement "
+             "key=value ...; ...` (measurements shape_id, material_id, depth, normal; fields threshold, stencil, "
+             "radius, count, color; docs/lines.md). Empty: one shape_id type"),
+    Property("line_diffuse", False, "bool", "lifted mode: auxiliary paths go on through diffuse vertices by the "
+             "minimal rotation of the base path's direction (off: they stop there, as in the other modes)"),
     Property("reuse", "off", "string", "sample reuse at the stylized vertex: " + ", ".join(REUSE_MODES)
              + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
     Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
@@ -274,6 +282,17 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
     if on and not tests:
         raise SettingsError(f"bad value {get_('line_tests')!r} for 'line_tests': lines need at least one of "
                             f"{', '.join(LINE_TESTS)}")
+    raw_types = get_("line_types")
+    if lines.mode == "lifted":
+        for key in ("line_gradient", "line_objects"):
+            if get_(key) not in ("", None, ()):
+                raise SettingsError(f"'{key}' is not drawn by line_mode lifted: its lines take each line type's "
+                                    "colour and test every shape (use line_mode absorb or expectation)")
+        lines = replace(lines, types=parse_line_types(raw_types, lines.width, lines.samples, lines.color),
+                        diffuse=value("line_diffuse", values))
+    elif raw_types not in ("", None):
+        raise SettingsError(f"bad value {raw_types!r} for 'line_types': line types are read by line_mode lifted "
+                            f"only (line_mode is {lines.mode!r})")
     return lines if on else None
 
 

@@ -26,7 +26,9 @@ Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ra
 sample (nothing else is traced for it); walks and bounces carry the line state of the vertex they leave
 (`line_states`, one per stylized level) and end where a line absorbs them, so lines on later edges enter
 the expectation before g. With `lines` off no line code is traced. In scenes with participating media lines
-are detected on the camera ray only (`line_depth` above 1 is refused there).
+are detected on the camera ray only (`line_depth` above 1 is refused there). `line_mode lifted` (LLaT's
+conditional lifting, lifted_lines.py) instead tests its line types once per camera sample, along auxiliary
+paths that follow the camera sample's own base path to `line_depth` vertices, before anything else is traced.
 
 Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
 trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
@@ -92,6 +94,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     view = None          # its camera's forward vector
     nulls = media = see_through = False  # null-scattering surfaces / participating media / pure null BSDFs
     lines = None         # feature lines bound to the scene being traced (lines.py), else None
+    lifted = None        # line_mode lifted: LLaT's line types bound to the scene (lifted_lines.py), else None
     line_states = {}     # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
     tone = None          # anchors.Tone where a style reads image coordinates (Vertex.s), else None
     tone_states = {}     # anchors.ToneState at the vertex of each stylized level (-1: the camera), while tracing
@@ -313,6 +316,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # the lane's pixel's moments from the expansion pass (none while that pass itself is rendered)
         self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
                               if m and self.expansion.collector is None else None)
+        if self.lifted is not None:
+            return self._lifted_lines(scene, sampler, camera_ray, ray, active, medium)
         if self.lines is None:
             return self._stylize(scene, sampler, ray, active, medium)
         # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
@@ -322,6 +327,21 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         live = active & ~seen.fired if self.line_short_circuit else active
         value, valid, aovs = self._stylize(scene, sampler, ray, live, medium)
         return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
+
+    def _lifted_lines(self, scene, sampler, camera_ray, ray, active, medium):
+        """line_mode lifted (LLaT Eq. 34): each line type's auxiliary pairs are tested for the camera sample
+        (its film point and lens sample kept); the first type in priority order that fires gives the sample
+        its colour, and L is traced only where none fired."""
+        lifted = self.lifted
+        s, aperture = lifted.conditioning(camera_ray)
+        fired = lifted.fired(s, sampler, active, aperture)
+        any_fired = mi.Bool(False)
+        for f in fired:
+            any_fired |= f
+        value, valid, aovs = self._stylize(scene, sampler, ray, active & ~any_fired, medium)
+        for f, t in reversed(list(zip(fired, lifted.types))):
+            value = dr.select(f, mi.Color3f(*t.color), value)
+        return value, valid | any_fired, aovs
 
     def _stylize(self, scene, sampler, ray, active, medium=None):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)

@@ -21,17 +21,19 @@ probability that type i draws no line, the expected result is
     sum_i prod_{j<i} w_j (1 - w_i) c_i + prod_i w_i L                      (Eq. 32)
 and its binary-metric estimator returns the colour of the first type that fires, L where none does (Eq. 34).
 
-What is here: the transport, the two scattering rules, minimal rotation, the slope metric and the
-composition (functions on Dr.Jit arrays, and `compose_expected` / `compose_sample` on numpy or Dr.Jit).
-What is not: tracing auxiliary paths vertex by vertex inside the render kernel and a line dictionary setting;
-feature lines in renders are still West 2021's cone (kernel/lines.py).
+What is here: the transport, the two scattering rules, minimal rotation, the slope metric, the
+composition (functions on Dr.Jit arrays, and `compose_expected` / `compose_sample` on numpy or Dr.Jit), and
+`Lifted`, which traces the auxiliary paths of a line dictionary for camera samples. The integrator uses it
+with `line_mode lifted` (`line_types`, config/line_types.py): per camera sample the types are tested first
+and L is traced only where none fired (Eq. 34). West 2021's cone (kernel/lines.py) stays the `absorb` mode.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import drjit as dr
 import mitsuba as mi
+
+from ..config.line_types import LineType
+from ..errors import SceneError
 
 
 def chart(n: mi.Vector3f, v: mi.Vector3f):
@@ -100,20 +102,6 @@ def fires(f_u, f_v, s_u: mi.Point2f, s_v: mi.Point2f, threshold: float) -> mi.Bo
     return slope(f_u, f_v, s_u, s_v) >= threshold
 
 
-@dataclass(frozen=True)
-class LineType:
-    """One entry of a line dictionary: measurement f (depth, normal, material_id, shape_id), slope threshold
-    t (units of f per pixel), stencil (disk or square) of radius `radius` pixels, n metric samples, colour,
-    priority (lower first)."""
-    measurement: str = "depth"
-    threshold: float = 1.0
-    stencil: str = "disk"
-    radius: float = 1.0
-    count: int = 16
-    color: tuple = (0.0, 0.0, 0.0)
-    priority: int = 0
-
-
 def compose_expected(w, colors, L):
     """Eq. 32: sum_i prod_{j<i} w_j (1 - w_i) c_i + prod_i w_i L; `w` and `colors` in priority order."""
     out = 0.0
@@ -152,7 +140,13 @@ class Lifted:
     of its paths hits, when the two hit different shapes and the type measures shape or material ids, or when
     the slope |f(v) - f(u)| / |v - u| reaches the type's threshold. A type fires if any of its pairs fires;
     the first type in priority order that fires gives the sample's colour (Eq. 34), `background` where none.
-    Refraction is not handled: the paths stop at a transmitting base vertex."""
+    At a transmitting base vertex the auxiliary refracts (Eq. 20) about the transported generalised
+    half-vector h = normalize(v - eta d) (eta: the base's sampled relative index), keeping the base's
+    reflect-or-refract choice; where it cannot (total internal reflection) its pair stops.
+
+    A camera ray is turned into its film coordinate and lens sample by `conditioning` (pinhole: the pixel it
+    passes through; thin lens: the lens point it leaves from and the film point of its focus), so the base and
+    auxiliary paths of a depth-of-field render leave from the sample's own lens point."""
 
     def __init__(self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False):
         from .anchors import Tone
@@ -162,9 +156,41 @@ class Lifted:
         self.depth = depth
         self.through_diffuse = through_diffuse
 
-    def _ray(self, s: mi.Point2f, active):
+        sensor = self.tone.sensor
+        self.lens = None   # (camera to world, world to camera, aperture radius, focus distance) of a thin lens
+        if self.tone.lens:
+            params = mi.traverse(sensor)
+            if "aperture_radius" not in params:
+                raise SceneError(f"lifted lines: sensor {sensor.class_name()} has an aperture whose lens model "
+                                 "is not known here (supported: perspective, orthographic, thinlens)")
+            m = sensor.world_transform()
+            self.lens = (m, m.inverse(), float(dr.ravel(params["aperture_radius"])[0]),
+                         float(dr.ravel(sensor.focus_distance())[0]))
+
+    def conditioning(self, ray: mi.Ray3f) -> tuple[mi.Point2f, mi.Point2f]:
+        """(s, aperture sample) of a camera ray: its film point (pixels right and up of the centre) and the
+        lens sample it left the lens with ((0.5, 0.5) without an aperture), so that `_ray(s, aperture)`
+        gives the ray back."""
+        o, d = mi.Point3f(ray.o), mi.Vector3f(ray.d)
+        if self.lens is None:
+            x, y = self.tone.projection.pixels(o + d)
+            return mi.Point2f(x, y), mi.Point2f(0.5, 0.5)
+        to_world, to_local, radius, focus = self.lens
+        ol, dl = to_local @ o, to_local @ d
+        # Mitsuba's thin lens: the ray leaves the lens point (radius * disk(aperture), 0) towards the point
+        # of the focal plane z = focus that the lens centre sees at the sample's film position; its origin is
+        # then moved along it to the near clip plane, which is undone here
+        inv_z = dr.rcp(dr.maximum(dl.z, 1e-12))
+        f = ol + dl * ((focus - ol.z) * inv_z)
+        ol = ol - dl * (ol.z * inv_z)
+        x, y = self.tone.projection.pixels(to_world @ mi.Point3f(f))
+        disk = mi.Point2f(ol.x, ol.y) / max(radius, 1e-30)
+        return mi.Point2f(x, y), mi.warp.uniform_disk_to_square_concentric(disk)
+
+    def _ray(self, s: mi.Point2f, active, aperture=None):
+        aperture = mi.Point2f(0.5, 0.5) if aperture is None else aperture
         ray, _ = self.tone.sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), self.tone.film_uv(s.x, s.y),
-                                             mi.Point2f(0.5, 0.5), active)
+                                             aperture, active)
         return mi.Ray3f(ray)
 
     @staticmethod
@@ -185,13 +211,14 @@ class Lifted:
         d = mi.warp.square_to_uniform_disk_concentric(u)
         return mi.Point2f(d.x * t.radius, d.y * t.radius)
 
-    def fired(self, s: mi.Point2f, sampler, active) -> list:
-        """Per type (priority order): whether any of its pairs fired, for camera samples at s."""
+    def fired(self, s: mi.Point2f, sampler, active, aperture=None) -> list:
+        """Per type (priority order): whether any of its pairs fired, for camera samples at s (leaving the
+        lens at `aperture`, a lens sample; None: the lens centre)."""
         scene = self.scene
         ctx = mi.BSDFContext()
         # the base path: xi (each vertex's sampled direction, half-vector, and the vertex's frame)
         base = []
-        ray, alive = self._ray(s, active), mi.Bool(active)
+        ray, alive = self._ray(s, active, aperture), mi.Bool(active)
         for j in range(self.depth):
             si = scene.ray_intersect(ray, active=alive)
             hit = alive & si.is_valid()
@@ -202,9 +229,12 @@ class Lifted:
                 ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
             through = hit & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission)
             n = mi.Vector3f(si.sh_frame.n)
-            h = dr.normalize(d - ray.d)
-            go = hit & (bs.pdf > 0) & ~through & (~diffuse if not self.through_diffuse else True)
-            base.append(dict(alive=alive, n=n, v=mi.Vector3f(ray.d), h=h, d=d, diffuse=diffuse, go=go))
+            # the (generalised) half-vector: reflection d - v; refraction v - eta d (eta = eta_t / eta_i)
+            eta = dr.select(through, bs.eta, 1.0)
+            h = dr.normalize(dr.select(through, ray.d - eta * d, d - ray.d))
+            go = hit & (bs.pdf > 0) & (~diffuse if not self.through_diffuse else True)
+            base.append(dict(alive=alive, n=n, v=mi.Vector3f(ray.d), h=h, d=d, diffuse=diffuse, through=through,
+                             eta=eta, go=go))
             ray = si.spawn_ray(d)
             alive = go
         out = []
@@ -212,7 +242,7 @@ class Lifted:
             any_fire = mi.Bool(False)
             for _ in range(t.count):
                 du, dv = self._offsets(t, sampler), self._offsets(t, sampler)
-                paths = [self._ray(s + du, active), self._ray(s + dv, active)]
+                paths = [self._ray(s + du, active, aperture), self._ray(s + dv, active, aperture)]
                 travelled = [mi.Float(0.0), mi.Float(0.0)]
                 live = mi.Bool(active)
                 for j in range(self.depth):
@@ -242,7 +272,10 @@ class Lifted:
                         for k in range(2):
                             n2, v2 = mi.Vector3f(sis[k].sh_frame.n), mi.Vector3f(paths[k].d)
                             h2 = transport_half_vector(b["h"], b["n"], b["v"], n2, v2)
-                            d2 = dr.select(b["diffuse"], minimal_rotation(b["n"], n2, b["d"]), reflect(v2, h2))
+                            refracted, ok = refract(v2, h2, dr.rcp(b["eta"]))
+                            live &= ~b["through"] | ok
+                            d2 = dr.select(b["diffuse"], minimal_rotation(b["n"], n2, b["d"]),
+                                           dr.select(b["through"], refracted, reflect(v2, h2)))
                             new.append(sis[k].spawn_ray(dr.normalize(d2)))
                         paths = new
             out.append(any_fire)

@@ -5,7 +5,7 @@
 
 While a kernel is traced the integrator's methods read what the scene decides: the style targets (which
 BSDFs are styled, `targets_for`), whether the scene has media or null surfaces, the emitter sampler, the
-feature-line detector and the line state per stylized level, LLaT's image-coordinate tracer and its state per
+feature-line detector (West 2021's cone, or LLaT's lifted line types) and the line state per stylized level, LLaT's image-coordinate tracer and its state per
 level (only where a style reads the coordinate: anchors.py), the camera's forward vector, the expansion
 pass's lane moments and the adaptive statistics. This is the one place that sets them and the one place
 that clears them: Dr.Jit traces calls on every live instance of a class, and a BSDF or emitter of a scene
@@ -20,6 +20,7 @@ from ..errors import SceneError
 from ..styles.base import camera_forward
 from .anchors import Tone
 from .emitter_sampler import EmitterSampler
+from .lifted_lines import Lifted
 from .lines import Lines
 from ..scene.graph import SceneGraph
 
@@ -43,8 +44,13 @@ class RenderContext:
             if problem is not None:
                 raise SceneError(problem)
             settings = integ.settings
-            integ.lines = None if settings.lines is None else Lines(settings.lines, scene,
-                                                                    see_through=integ.see_through)
+            lifted = settings.lines is not None and settings.lines.mode == "lifted"
+            integ.lines = None if settings.lines is None or lifted else Lines(settings.lines, scene,
+                                                                              see_through=integ.see_through)
+            # LLaT's conditional lifting tests its line types per camera sample before L (lifted_lines.py)
+            integ.lifted = (Lifted(scene, settings.lines.types, depth=settings.lines.depth,
+                                   through_diffuse=settings.lines.diffuse)
+                            if lifted and scene.sensors() else None)
             wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in integ.targets)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
             integ.tone_states = {}
@@ -64,6 +70,7 @@ class RenderContext:
         integ.targets = []
         integ.emitters = None
         integ.lines, integ.line_states = None, {}
+        integ.lifted = None
         integ.tone, integ.tone_states = None, {}
         integ._lane_moments = None
         integ._stats = []
