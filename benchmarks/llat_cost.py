@@ -1,5 +1,7 @@
-"""Cost of LLaT's canonical lifting of tone (kernel/anchors.py, kernel/mls.py, docs/llat.md): hatching with
-lift=canonical against plain hatching (lift=position, the pattern at the vertex's own projection).
+"""Cost of LLaT (docs/llat.md): the canonical lifting of tone (kernel/anchors.py, kernel/mls.py), hatching with
+lift=canonical against plain hatching (lift=position, the pattern at the vertex's own projection), and its
+lifted lines (line_mode lifted, kernel/lifted_lines.py) against West 2021's cone (line_mode absorb), both at
+line_depth 2 with shape-id and crease lines, against plain hatching without lines.
 
 Scene: a hatched plane seen directly and in a reflector turned 45 degrees (the tests' flat-mirror scene,
 tests/tone/scenes.py, rebuilt here), the reflector a perfect mirror (every styled vertex has a closed-form
@@ -24,8 +26,14 @@ from _report import machine_description, write_section  # noqa: E402
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 RES, SPP, RUNS = 128, 32, 3
-CONFIGS = [(refl, inner, lift) for refl in ("mirror", "glossy 0.05") for inner in (16, 4)
-           for lift in ("position", "canonical")]
+CONFIGS = [(refl, inner, lift, "none") for refl in ("mirror", "glossy 0.05") for inner in (16, 4)
+           for lift in ("position", "canonical")] + \
+    [(refl, 16, lift, lines) for refl in ("mirror", "glossy 0.05")
+     for lift, lines in (("position", "absorb"), ("canonical", "lifted"))]
+#: the lines of each configuration: the cone with West's tests, or the lifted dictionary's two types
+LINES = {"none": {},
+         "absorb": dict(lines=True, line_mode="absorb", line_depth=2, line_tests="silhouette,boundary,crease"),
+         "lifted": dict(lines=True, line_mode="lifted", line_depth=2, line_types="shape_id; normal threshold=0.35")}
 
 CHILD = """
 import json, statistics, sys, time
@@ -50,11 +58,12 @@ def scene(style, refl):
         "lamp": {{"type": "point", "position": [0, 3, 5], "intensity": {{"type": "rgb", "value": [20, 20, 20]}}}}}})
 
 configs = {configs!r}
+LINES = {lines!r}
 jobs = []
-for refl, inner, lift in configs:
+for refl, inner, lift, lines in configs:
     st = dict(style="hatching", lift=lift, inner_samples=inner, u_min=0.02, u_max=0.3)
     sc = scene(st, refl)
-    integ = make_integrator("identity", stylize="first_object_hit")
+    integ = make_integrator("identity", stylize="first_object_hit", **LINES[lines])
     render(sc, integrator=integ, spp={spp}, seed=1)   # compile
     jobs.append((sc, integ))
 times, cpu = [[] for _ in configs], [[] for _ in configs]
@@ -70,49 +79,60 @@ for refl in ("mirror", "glossy 0.05"):
                  spp=1, seed=1)
     m = np.round(np.asarray(img)[..., 2])
     share[refl] = float((m >= 2).mean())
-out = [dict(refl=refl, inner=inner, lift=lift, seconds=statistics.median(ts), cpu=statistics.median(cs),
-            anchors=share[refl]) for (refl, inner, lift), ts, cs in zip(configs, times, cpu)]
+out = [dict(refl=refl, inner=inner, lift=lift, lines=lines, seconds=statistics.median(ts), cpu=statistics.median(cs),
+            anchors=share[refl]) for (refl, inner, lift, lines), ts, cs in zip(configs, times, cpu)]
 print(json.dumps(out))
 """
 
 
 def measure() -> list:
-    code = CHILD.format(src=SRC, configs=CONFIGS, res=RES, spp=SPP, runs=RUNS)
+    code = CHILD.format(src=SRC, configs=CONFIGS, lines=LINES, res=RES, spp=SPP, runs=RUNS)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
 def main():
     rows = measure()
-    by = {(r["refl"], r["inner"], r["lift"]): r for r in rows}
+    by = {(r["refl"], r["inner"], r["lift"], r["lines"]): r for r in rows}
     load = os.getloadavg()[0]
     text = [
-        "## LLaT tone: cost of the canonical lifting (`benchmarks/llat_cost.py`)", "",
+        "## LLaT: cost of the canonical lifting of tone and of lifted lines (`benchmarks/llat_cost.py`)", "",
         f"Machine: {machine_description()}. Shared with other jobs (load average {load:.1f} on {os.cpu_count()} "
         f"cores at the end): ratios use CPU time, medians of renders timed in turn, round after round.", "",
         f"Hatching on a plane seen directly and in a reflector (first_object_hit), {RES}x{RES}, {SPP} camera "
         f"samples per pixel, median of {RUNS} warm renders. `position`: plain hatching at the vertex's own "
         f"projection; `canonical`: LLaT's image coordinate (closed form behind the perfect mirror, 17 streamed "
         f"anchor paths and the MLS inverse behind the glossy one). MLS share: the fraction of camera samples "
-        f"that queried the anchors.", "",
-        "| reflector | inner n | lift | wall time (s) | CPU time (s) | CPU vs. position | MLS share |",
-        "|---|---|---|---|---|---|---|",
+        f"that queried the anchors. Lines: none, West 2021's cone (`absorb`: silhouette, boundary and crease "
+        f"tests, 8 rays per tested edge) or LLaT's lifted lines (`lifted`: a shape-id and a normal type, 8 "
+        f"pairs each), line_depth 2. The ratio is against plain hatching (position, no lines) at the same n.", "",
+        "| reflector | inner n | lift | lines | wall time (s) | CPU time (s) | CPU vs. plain hatching | MLS share |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
-        base = by[(r["refl"], r["inner"], "position")]["cpu"]
-        text.append(f"| {r['refl']} | {r['inner']} | {r['lift']} | {r['seconds']:.2f} | {r['cpu']:.2f} | "
-                    f"{r['cpu'] / base:.2f} | {r['anchors']:.2f} |")
-    ratio = {k: by[k]["cpu"] / by[(k[0], k[1], "position")]["cpu"] for k in by if k[2] == "canonical"}
+        base = by[(r["refl"], r["inner"], "position", "none")]["cpu"]
+        text.append(f"| {r['refl']} | {r['inner']} | {r['lift']} | {r['lines']} | {r['seconds']:.2f} | "
+                    f"{r['cpu']:.2f} | {r['cpu'] / base:.2f} | {r['anchors']:.2f} |")
+    ratio = {k[:3]: by[k]["cpu"] / by[(k[0], k[1], "position", "none")]["cpu"] for k in by
+             if k[2] == "canonical" and k[3] == "none"}
+    full = {k[0]: by[k]["cpu"] / by[(k[0], 16, "position", "none")]["cpu"] for k in by if k[3] == "lifted"}
+    cone = {k[0]: by[k]["cpu"] / by[(k[0], 16, "position", "none")]["cpu"] for k in by if k[3] == "absorb"}
     text += ["", f"Behind the perfect mirror no anchor is traced (MLS share 0), yet canonical costs "
              f"{ratio[('mirror', 16, 'canonical')]:.2f}x (n = 16) and {ratio[('mirror', 4, 'canonical')]:.2f}x (n = 4): "
              f"the anchor loop is traced into the kernel and the tone state rides along every walk whether or not "
-             f"a lane uses them. Behind the glossy reflector, where {100 * by[('glossy 0.05', 16, 'canonical')]['anchors']:.0f}% "
+             f"a lane uses them. Behind the glossy reflector, where {100 * by[('glossy 0.05', 16, 'canonical', 'none')]['anchors']:.0f}% "
              f"of the camera samples query 17 anchor paths each, canonical costs "
              f"{ratio[('glossy 0.05', 16, 'canonical')]:.2f}x (n = 16) and {ratio[('glossy 0.05', 4, 'canonical')]:.2f}x "
              f"(n = 4): the anchors weigh like a few child paths, so their share falls as n grows. On this shared "
              f"2-core machine differences of about 0.2x between runs are noise. A per-image pre-pass would trace "
              f"one anchor per pixel instead of 17 per query, but must trace both branches at every dielectric and "
-             f"search neighbours per query (docs/llat.md, 'Anchor cache')."]
+             f"search neighbours per query (docs/llat.md, 'Anchor cache').",
+             "", f"Lines (n = 16): the full LLaT setup (canonical tone and lifted lines) costs "
+             f"{full['mirror']:.2f}x plain hatching with the perfect mirror and {full['glossy 0.05']:.2f}x with the "
+             f"glossy one; the world-anchored setup (position tone and the cone) {cone['mirror']:.2f}x and "
+             f"{cone['glossy 0.05']:.2f}x. The lifted types trace 2 x 8 pairs x 2 auxiliary paths of up to "
+             f"line_depth vertices per camera sample before L, the cone 8 rays per tested edge; where a type "
+             f"fires, L is not traced at all."]
     write_section("llat_cost", "\n".join(text))
     print("\n".join(text))
 

@@ -1,10 +1,11 @@
-"""docs/llat.png: LLaT's canonical lifting of tone (docs/llat.md) beside the position mode, in setups after
-"Lifting Lines and Tone" (West, Mukherjee, Yue 2026) Fig. 13 and Fig. 14.
+"""docs/llat.png: LLaT's canonical lifting of tone and its lifted lines (docs/llat.md) beside the
+world-anchored modes, in setups after "Lifting Lines and Tone" (West, Mukherjee, Yue 2026) Fig. 13 and 14.
 
 Rows: (a) direct view, (b) flat perfect mirror, (c) curved glossy reflection (a GGX ball, roughness 0.01),
 (d) depth of field (thin lens focused on the directly seen plane, the mirror out of focus),
 (e) per-object tone fields (five objects, five hatching/halftone settings, one flipped inside reflections,
-on a glossy floor). Columns: lift=canonical | lift=position.
+on a glossy floor). Columns: lift=canonical with line_mode lifted (shape-id and crease types, blue) |
+lift=position with West 2021's cone (line_mode absorb, the same colour), both with line_depth 3.
 
     PYTHONPATH=src python docs/make_llat_figure.py [SIZE] [SPP]
 """
@@ -79,6 +80,14 @@ def fig14(lift: str, size: int) -> dict:
     return d
 
 
+#: the lines of each column: lifted (LLaT) beside the canonical tone, West's cone beside the position mode
+INK = "0.1,0.15,0.6"
+LINES = {"canonical": dict(lines=True, line_mode="lifted", line_depth=3,
+                           line_types=f"shape_id color={INK}; normal threshold=0.35 color={INK}"),
+         "position": dict(lines=True, line_mode="absorb", line_depth=3, line_color=INK,
+                          line_tests="silhouette,boundary,crease")}
+
+
 def main(size: int = 160, spp: int = 32) -> None:
     styletrace.init()
     import mitsuba as mi
@@ -88,7 +97,7 @@ def main(size: int = 160, spp: int = 32) -> None:
         row = []
         for lift in ("canonical", "position"):
             scene = mi.load_dict(fig14(lift, size) if kind == "fig14" else fig13(kind, lift, size))
-            integ = api.make_integrator("identity", stylize="first_object_hit")
+            integ = api.make_integrator("identity", stylize="first_object_hit", **LINES[lift])
             row.append(api.render(scene, integrator=integ, spp=spp, seed=1)[..., :3])
         gap = np.ones((size, 4, 3), np.float32)
         rows.append(np.concatenate([row[0], gap, row[1]], axis=1))
