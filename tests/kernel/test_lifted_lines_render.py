@@ -14,7 +14,7 @@ styletrace.init()
 
 from styletrace.kernel.lifted_lines import Lifted, LineType  # noqa: E402
 
-from helpers.line_scenes import RES, line_scene  # noqa: E402
+from helpers.line_scenes import RES, ball_mask, line_scene, reference  # noqa: E402
 
 
 def scene(alpha=0.0, flat=False):
@@ -22,51 +22,6 @@ def scene(alpha=0.0, flat=False):
 
 
 SHAPE = LineType("shape_id", 1e-3, "disk", 1.5, 8, (1.0, 0.0, 0.0), 0)
-
-
-def reference(sc, t: LineType, spp=16, seed=3):
-    """Image-space lines: the pair test on id(s), the shape seen along the perfectly specular path from s
-    (reflection about the shading normal at the ball), with the type's stencil and count."""
-    w = h = RES
-    n = w * h * spp
-    idx = np.arange(n) // spp
-    col, row = (idx % w).astype(np.float32), (idx // w).astype(np.float32)
-    sampler = mi.load_dict({"type": "independent"})
-    sampler.seed(seed, n)
-    jx, jy = np.array(sampler.next_2d())
-    lifted = Lifted(sc, [t], depth=2)
-    s = mi.Point2f(w / 2 - col - jx, h / 2 - row - jy)
-    ball = [x for x in sc.shapes() if x.id() == "ball"][0]
-    ball_id = dr.reinterpret_array(mi.UInt32, mi.ShapePtr(ball))
-
-    def ident(p):
-        ray = lifted._ray(p, mi.Bool(True))
-        si = sc.ray_intersect(ray)
-        sid = dr.select(si.is_valid(), dr.reinterpret_array(mi.UInt32, si.shape), 0xFFFFFFFF)
-        on_ball = si.is_valid() & (sid == ball_id)
-        n_ = mi.Vector3f(si.sh_frame.n)
-        r2 = si.spawn_ray(dr.normalize(ray.d - 2 * dr.dot(ray.d, n_) * n_))
-        si2 = sc.ray_intersect(r2, active=on_ball)
-        sid2 = dr.select(si2.is_valid(), dr.reinterpret_array(mi.UInt32, si2.shape), 0xFFFFFFFE)
-        return np.array(dr.select(on_ball, sid2, sid))
-
-    fired = np.zeros(n, bool)
-    for _ in range(t.count):
-        du, dv = lifted._offsets(t, sampler), lifted._offsets(t, sampler)
-        fired |= ident(s + du) != ident(s + dv)
-    return fired.reshape(h, w, spp).mean(axis=2)
-
-
-def ball_mask(sc):
-    lifted = Lifted(sc, [SHAPE], depth=1)
-    col, row = np.meshgrid(np.arange(RES), np.arange(RES))
-    s = mi.Point2f((RES / 2 - col - 0.5).ravel().astype(np.float32), (RES / 2 - row - 0.5).ravel().astype(np.float32))
-    si = sc.ray_intersect(lifted._ray(s, mi.Bool(True)))
-    ball = [x for x in sc.shapes() if x.id() == "ball"][0]
-    m = np.array(si.is_valid()) & (np.array(dr.reinterpret_array(mi.UInt32, si.shape)) ==
-                                   np.array(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(ball)))[0])
-    m = m.reshape(RES, RES)
-    return m & np.roll(m, 2, 0) & np.roll(m, -2, 0) & np.roll(m, 2, 1) & np.roll(m, -2, 1)   # inside, not its rim
 
 
 @pytest.fixture(scope="module", params=["ball", "flat"])
