@@ -129,3 +129,17 @@ def test_lines_behind_a_glass_slab_keep_their_coverage():
     seen, _ = shares(np.asarray(styletrace.render(slab_scene(True), line_depth=3, **kw), np.float64))
     assert plain.mean() > 0.02
     assert abs(seen.mean() / plain.mean() - 1) < 0.10, (seen.mean(), plain.mean())
+
+
+def test_line_diffuse_carries_the_pairs_on_through_diffuse_vertices():
+    """line_diffuse: at a diffuse base vertex the auxiliary paths turn the base's direction by the minimal
+    rotation and go on, so edges in what the grey surfaces see (the box, the ball, the sky beyond them) draw
+    lines in their indirect view; without it the pairs stop there. Same seed, so the same random numbers:
+    every pair that fired without the switch fires with it (the first vertex is tested alike), and more fire
+    with it, sample by sample."""
+    kw = dict(style="identity", inner=1, spp=8, seed=9, lines=True, line_mode="lifted", line_depth=2,
+              line_types="shape_id radius=1.5 count=4 color=1,0,0")
+    off, _ = shares(np.asarray(styletrace.render(line_scene(light=0.5), **kw), np.float64))
+    on, _ = shares(np.asarray(styletrace.render(line_scene(light=0.5), line_diffuse=True, **kw), np.float64))
+    assert np.all(on >= off - 1e-6)
+    assert (on > off + 1e-6).sum() >= 50, (on > off + 1e-6).sum()
