@@ -21,7 +21,30 @@ Protocol: `benchmarks/equal_time.py`'s, on more scenes:
   held out: their rows for the chosen n are the verdict, the other n's rows are shown for what they are.
 - Reuse: the README's best configuration per style (BENCHMARKS.md, equal_time), re-measured on every scene.
 
-    python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror] [--report]
+Second protocol, `--protocol pixel` (added after the same-ray results above were seen; the one the issue's goal is
+judged on, BENCHMARKS.md says why): against the pixel-integrated reference.
+- What a renderer converges to is the pixel's integral over its footprint (box filter) of g(E[L | x]). The
+  same-ray protocol compares a spatial filter with g at one sub-pixel point; here every render is compared with
+  that integral.
+- Reference: the mean R of four independent parts (seeds 1000 .. 1003, not the renders' 0 .. SEEDS-1), each
+  PIXEL_REF = (32 camera samples per pixel, direct application with n = 1024), recorded once per scene as an
+  expectation buffer and restyled to each style: 128 camera samples per pixel in all. Its own floor is measured
+  and reported: the variance of R's error from the parts' spread, and the bias that direct application's finite
+  n leaves, bounded by its change from n = 256 (check buffers on the camera rays of parts 0 and 1; their product
+  of differences removes the children's noise), pixel_reference says how.
+- Methods, each with its own split of the budget into camera samples per pixel (spp) and children (n):
+  fixed counts over the (spp, n) grid PIXEL_FIXED (the equal-time curve is the lower envelope over all of them,
+  the tree sampler's best split at every time); expectation denoising over PIXEL_EXPECTATION (D formed from all
+  of a pixel's samples, g applied per sample at its own film position); image denoising over PIXEL_IMAGE; reuse
+  (the README's configuration) at spp 1, 4 and 8. Styles cel and hatching (the goal's; the colour map is left out to
+  fit the time).
+- MSE, bias^2 and variance as above with e_s = render_s - R; R's own error is common to all seeds, so it lands
+  in bias^2. Timing interleaved as above. The (spp, n) of each denoiser and of reuse is chosen on the Cornell
+  box only (the best ratio averaged over cel and hatching); the held-out scenes are reported at that choice.
+
+    python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror]
+                                 [--protocol same-ray|pixel|both] [--report]
+    python benchmarks/denoise.py --bias-check --scenes cornell-box   # R's bias from its n, estimated (bias_check)
 
 Results are cached in benchmarks/.cache/denoise_*.npz/json per scene (delete to recompute); `--report` only
 writes the BENCHMARKS.md section and docs/denoise.png from the cache.
@@ -31,6 +54,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import statistics
 import sys
 import time
@@ -66,6 +90,22 @@ REUSE = {"cel": ("reuse m=2:16 K=48 (7x7)", {"inner": "2:16", **POOLED}),
          "hatching": ("reuse m=2:32 K=48 (7x7)", {"inner": "2:32", **POOLED}),
          "color_map": ("reuse m=4 K=48 (7x7)", {"inner": 4, **POOLED})}
 
+# the pixel-integrated protocol (docstring): (spp, n) per reference half, the renders' grids
+PIXEL_REF = (32, 1024)  # per part; R is the mean of one part per seed below (128 camera samples per pixel)
+# four parts, not two: with two (64 spp) the variance of R's error was 8% of the best hatching MSE on the Cornell box
+PIXEL_REF_SEEDS = (1000, 1001, 1002, 1003)
+PIXEL_CHECK_N = 256
+PIXEL_HIGH = (16, 4096)  # bias_check's parts (`--bias-check`): 4n, half the camera samples to halve their cost
+PIXEL_STYLES = ("cel", "hatching")
+# products spp * n from 2 to 512, small n at many camera samples and large n at few; the envelope takes the best
+PIXEL_FIXED = ((1, 2), (1, 4), (1, 16), (1, 64), (2, 8), (4, 2), (4, 4), (4, 16), (4, 64), (8, 8), (16, 2),
+               (16, 4), (16, 16), (32, 16), (64, 2), (64, 4), (128, 4))
+# a first run with spp up to 8 found expectation and image denoising still improving at spp = 8 (and reuse at 4,
+# the most it had): every method's grid goes on from there
+PIXEL_EXPECTATION = tuple((spp, n) for spp in (1, 2, 4, 8) for n in (4, 8, 16)) + ((16, 4), (16, 8))
+PIXEL_IMAGE = tuple((spp, n) for spp in (1, 2, 4, 8, 16) for n in (4, 16))
+PIXEL_REUSE_SPP = (1, 4, 8)
+
 
 READING = (
     "Reading. **The 10x goal is not met on any scene** (best: 3.6x, cel on the Cornell box, where the settings were "
@@ -94,8 +134,71 @@ READING = (
     "Disclosure: two rules of the method (albedo 1 for specular first hits, D below the denoiser's resolution set "
     "to 0) were added after seeing the floor-and-mirror images (coloured speckle in the mirror); they change no "
     "MSE on the Cornell box or the dragon (identical to 4 digits before and after), but that scene is not "
-    "strictly held out for them. The colour map is not part of the goal; there the three filters reach 1.2x to 3.1x over "
+    "strictly held out for them. The colour map is not part of the goal; there the three filters reach 1.2x to "
+    "3.1x over "
     "the fixed counts, reuse the highest on two of three scenes.")
+
+PIXEL_READING = (
+    "Reading (pixel protocol). **The 10x goal is not met on any scene**: expectation denoising reaches 3.57x (cel) "
+    "and 2.80x (hatching) on the Cornell box, where its setting (16 camera samples per pixel, n = 4) was chosen; "
+    "on the held-out scenes 1.80x and 3.15x (dragon) and **0.48x and 1.00x on the floor-and-mirror scene, where it "
+    "is worse than the fixed counts on cel and no better on hatching**: losses. It beats image denoising on "
+    "hatching on all three scenes and on cel on the Cornell box, but **loses to it on cel on the dragon (1.80x "
+    "against 2.24x) and on the floor-and-mirror scene (0.48x against 1.30x)**: losses. Reuse at 8 camera samples "
+    "per pixel (its best split on the Cornell box) beats expectation denoising on cel on all three scenes "
+    "(5.55x, 2.33x, 2.63x) and on hatching on the floor-and-mirror scene (1.39x). "
+    "**The pixel protocol did not reveal a hidden 10x**: on the Cornell box the ratios are about what the same-ray "
+    "protocol gave (3.57x/2.80x against 3.59x/2.12x), because the fixed sampler gains from it as much as the "
+    "denoisers: around the denoiser's time (about 0.5 s) its envelope runs through 4 to 16 camera samples per "
+    "pixel with 8 to 16 children, not 1 sample, and camera samples anti-alias its bands too. What limits the "
+    "denoiser, Cornell box, "
+    "cel (MSE 4.25e-3 = bias^2 2.05e-3 + variance 2.20e-3): of the variance (over the seeds, untouched by R's "
+    "bias) about 0.6e-3 is the sampling of g at 16 points per pixel (the spread of the reference's 32-sample parts, "
+    "scaled to 16) and the rest, about 1.6e-3, is what is left of D's noise; the fixed counts' MSE at its time is "
+    "about 1.5e-2 against R (2.0e-2 against the truth, estimated below), so 10x would allow 1.5e-3 to 2.0e-3 in all: "
+    "the variance alone is above that, before any bias. On the floor-and-mirror scene the denoised cel render's "
+    "error sits on the checkerboard's edges (in seed 0, 86% of its squared error in 5% of the pixels; lower half "
+    "of the image 1.09e-2, upper half 1.76e-3, against 2.74e-3 and 3.92e-3 for fixed spp=16 n=16). The likely "
+    "mechanism (read from the error maps, not isolated by a separate run): a pixel straddling an edge has one M "
+    "for two albedos, and a sample whose neighbours all show the other albedo takes its "
+    "own pixel's mixed D (the 'within a pixel' bias of docs/denoise.md), so both sides can land in the wrong band. "
+    "Denoising E[L] / albedo and multiplying back by each sample's own albedo is the change this points to; it is "
+    "not made here (the buffer has no per-sample albedo). **R's floor**: its variance is 0.9% to 6.6% of the "
+    "chosen denoiser's MSE, but the bias of its direct application at n = 1024 is not negligible for cel. Two more "
+    "parts at n = 4096 per scene (`--bias-check`, run after the first version of this section, which had only the "
+    "change from n = 256 and assumed the bias falls at least as 1/sqrt(n)) found cel's bias falling more slowly than "
+    "that: 4^a (its fall per 4x of n, from a power law fitted to n = 256, 1024, 4096) 1.65 on the Cornell box, "
+    "1.87 on the dragon, 1.30 on the floor-and-mirror scene, so the squared bias left in R is estimated at 1.5e-3, "
+    "3.2e-4 and 3.0e-3: 35%, 8% and 47% of the chosen denoiser's MSE (the last from a fit so flat that it is "
+    "unstable). Hatching's falls nearly as 1/n on the Cornell box and the dragon (4^a 3.53, 2.94; 4.6e-5, 8.4e-5 "
+    "left) but slowly "
+    "on the floor-and-mirror scene (4^a 1.42, 1.5e-3 left, 19%). So **R is not converged to the 10% the protocol "
+    "asked for on cel, nor on hatching on the floor-and-mirror scene**: a weakness of this reference, a loss of "
+    "the protocol. "
+    "Corrected for it (last column of the verdict table: each method's MSE against the truth, estimated from R's "
+    "bias and seed 0's "
+    "error maps, corrected_mse; an estimate resting on a power law fitted to three n) expectation denoising's "
+    "ratios become 3.96x/2.88x (Cornell box, cel/hatching), 2.13x/3.10x (dragon), 0.70x/1.29x (floor and mirror); "
+    "image denoising's on cel 1.95x, 2.08x, 1.06x, so against that estimate expectation denoising ties image "
+    "denoising on cel on the dragon (2.13x against 2.08x; the measured loss above is the reported verdict) and "
+    "still loses to it on the floor-and-mirror scene; reuse's on cel 4.00x, 2.20x, 1.76x. The verdict does "
+    "not rest on R's bias: the denoiser's error is partly aligned with it (both apply g directly), and the fixed "
+    "counts' is more so. Disclosure: after a first run on the Cornell box only (two reference parts, spp up to 8 for "
+    "the denoisers and 4 for reuse; its rows are not reported) showed the denoisers and reuse still improving at "
+    "their largest spp and the hatching reference's variance at 8% of the best MSE, the grids were extended and the "
+    "reference doubled; that run's ratios for the chosen kind of setting were similar (expectation about 3.8x cel, "
+    "1.9x hatching). The held-out scenes were first measured in the final run. Load average 1.8 to 3.3 at the end "
+    "of each scene (the shared machine); the full test suite ran during the Cornell box's references, which are "
+    "not timed. The colour map is left out of this protocol (not part of the goal; time).")
+PROTOCOLS = (
+    "**Which protocol the goal is judged on: the pixel-integrated one.** What a renderer converges to, and what the "
+    "picture shows, is each pixel's integral over its footprint (box filter) of g(E[L | x]). The same-ray protocol "
+    "compares every render with g at one sub-pixel point, the reference's own camera ray: it counts as error a "
+    "denoiser's smooth D where D is closer to the pixel's value than that one point is, and it gives no method the "
+    "choice of spending its budget on camera samples rather than children. **The pixel protocol was added after the "
+    "same-ray results had been seen** (their reading named sub-pixel placement as one reason for the shortfall), so "
+    "the choice of protocol was not made blind; both are reported, the same-ray tables as they were measured (not "
+    "re-run; their machine line names their commit), and the verdict is given under both.")
 
 
 def floor_mirror(size: int) -> dict:
@@ -141,11 +244,12 @@ def methods(style: str) -> list[tuple[str, str, dict]]:
 def one(scene, style, kw, seed):
     kw = dict(kw)
     method = kw.pop("denoise", None)
+    spp = kw.pop("spp", 1)
     t = time.perf_counter()
     if method is None:
-        img = api.render(scene, style=style, spp=1, seed=seed, **kw)
+        img = api.render(scene, style=style, spp=spp, seed=seed, **kw)
     else:
-        img = denoised_render(scene, style=style, spp=1, seed=seed, denoise=method, **kw)
+        img = denoised_render(scene, style=style, spp=spp, seed=seed, denoise=method, **kw)
     return np.asarray(img, dtype=np.float64)[..., :3], time.perf_counter() - t
 
 
@@ -204,6 +308,125 @@ def measure_scene(name, size, seeds):
     np.savez(os.path.join(CACHE, f"denoise_images_{name}_{size}.npz"), **keep)
 
 
+def pixel_methods(style: str) -> list[tuple[str, str, dict]]:
+    """The pixel protocol's (label, kind, keywords), every kind over its (spp, n) grid."""
+    out = [(f"fixed spp={spp} n={n}", "fixed", {"spp": spp, "inner": n}) for spp, n in PIXEL_FIXED]
+    out += [(f"denoise expectation spp={spp} n={n}", "expectation", {"spp": spp, "inner": n, "denoise": "expectation"})
+            for spp, n in PIXEL_EXPECTATION]
+    out += [(f"denoise image spp={spp} n={n}", "image", {"spp": spp, "inner": n, "denoise": "image"})
+            for spp, n in PIXEL_IMAGE]
+    label, kw = REUSE[style]
+    return out + [(f"{label} spp={spp}", "reuse", {"spp": spp, **kw}) for spp in PIXEL_REUSE_SPP]
+
+
+def pixel_reference(name, scene, size):
+    """R = the mean of the PIXEL_REF parts per style, and its floor per style: "var", the variance of R's error
+    (the parts' variance over K, ddof 1, averaged over pixels: camera samples and children together), and "n2",
+    the squared bias that direct application's finite n adds, bounded from its change between PIXEL_CHECK_N and
+    n: with C_k the check buffer on part k's camera rays, mean((C_0 - A_0) (C_1 - A_1)) estimates the squared
+    change without the children's noise (the two pairs are independent), and the bias at n is below that change
+    (it shrinks as n grows); "n_raw" is MSE(C_0 - A_0), noise included, the figure the same-ray protocol printed."""
+    os.makedirs(CACHE, exist_ok=True)
+    spp, n = PIXEL_REF
+
+    def part(seed, rn):
+        path = os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{spp}x{rn}_seed{seed}.npz")
+        if not os.path.exists(path):
+            t = time.perf_counter()
+            buf = render_buffer(scene, style="cel", spp=spp, inner=rn, seed=seed)
+            got = {st: styletrace.restyle(buf, style=st) for st in STYLES}
+            del buf
+            print(f"  pixel reference {name} seed {seed}: spp={spp} n={rn}, {time.perf_counter() - t:.0f} s", flush=True)
+            np.savez(path, **got)
+        with np.load(path) as z:
+            return {st: z[st].astype(np.float64) for st in STYLES}
+    parts = [part(seed, n) for seed in PIXEL_REF_SEEDS]
+    checks = [part(seed, PIXEL_CHECK_N) for seed in PIXEL_REF_SEEDS[:2]]
+    k = len(parts)
+    ref = {st: np.mean([p[st] for p in parts], axis=0) for st in STYLES}
+    floor = {}
+    for st in STYLES:
+        d0, d1 = (checks[i][st] - parts[i][st] for i in range(2))
+        floor[st] = {"var": float(np.mean(np.var([p[st] for p in parts], axis=0, ddof=1))) / k,
+                     "n2": float(np.mean(d0 * d1)), "n_raw": float(np.mean(d0 ** 2))}
+    return ref, floor
+
+
+def bias_check(name, size) -> dict:
+    """R's bias from direct application at n = PIXEL_REF[1], estimated rather than bounded (pixel_reference bounds
+    it): with the squared bias changes d1 (PIXEL_CHECK_N to n) and d2 (n to PIXEL_HIGH[1] = 4n), each from two
+    independent pairs as in pixel_reference, a bias falling as n^-a gives d1 / d2 = (4^a)^2, and the squared
+    bias left at n is d2 / (1 - 4^-a)^2. PIXEL_HIGH has fewer camera samples: the pairs' expected difference does not
+    depend on them, only their noise does. Cached in denoise_pixel_bias_<scene>_<size>.json; minutes per part."""
+    scene = load(name, size)
+    spp, n = PIXEL_REF
+    hs, hn = PIXEL_HIGH
+
+    def part(seed, rs, rn):
+        path = os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{rs}x{rn}_seed{seed}.npz")
+        if not os.path.exists(path):
+            t = time.perf_counter()
+            buf = render_buffer(scene, style="cel", spp=rs, inner=rn, seed=seed)
+            got = {st: styletrace.restyle(buf, style=st) for st in STYLES}
+            del buf
+            print(f"  bias check {name} seed {seed}: spp={rs} n={rn}, {time.perf_counter() - t:.0f} s", flush=True)
+            np.savez(path, **got)
+        with np.load(path) as z:
+            return {st: z[st].astype(np.float64) for st in STYLES}
+    seeds = PIXEL_REF_SEEDS[:2]
+    low = [part(s_, spp, PIXEL_CHECK_N) for s_ in seeds]
+    mid = [part(s_, spp, n) for s_ in seeds]
+    high = [part(s_, hs, hn) for s_ in seeds]
+    out = {}
+    for st in STYLES:
+        d1 = float(np.mean((low[0][st] - mid[0][st]) * (low[1][st] - mid[1][st])))
+        d2 = float(np.mean((mid[0][st] - high[0][st]) * (mid[1][st] - high[1][st])))
+        four_a = np.sqrt(d1 / d2) if d1 > 0 and d2 > 0 else float("nan")
+        left = d2 / (1 - 1 / four_a) ** 2 if four_a > 1 else float("nan")
+        out[st] = {"d1": d1, "d2": d2, "four_a": float(four_a), "bias2_at_n": float(left)}
+        print(f"  bias check {name} {st}: d1 {d1:.2e}, d2 {d2:.2e}, 4^a {four_a:.2f}, squared bias at n={n} "
+              f"{left:.2e}", flush=True)
+    with open(os.path.join(CACHE, f"denoise_pixel_bias_{name}_{size}.json"), "w") as f:
+        json.dump(out, f, indent=1)
+    return out
+
+
+def measure_scene_pixel(name, size, seeds):
+    scene = load(name, size)
+    ref, floor = pixel_reference(name, scene, size)
+    for st in PIXEL_STYLES:  # the floor every MSE of this scene includes, before anything is timed
+        print(f"  R's floor {name} {st}: variance {floor[st]['var']:.2e}, n's squared bias change {floor[st]['n2']:.2e} "
+              f"(with noise {floor[st]['n_raw']:.2e})", flush=True)
+    results, keep = {}, {}
+    for style in PIXEL_STYLES:
+        ms = pixel_methods(style)
+        for label, _, kw in ms:  # warm-up: kernels compiled, caches filled
+            one(scene, style, kw, 999)
+        imgs = {label: [] for label, _, _ in ms}
+        secs = {label: [] for label, _, _ in ms}
+        for s in range(seeds):  # interleaved: every method of this comparison under the same load
+            for label, _, kw in ms:
+                img, t = one(scene, style, kw, s)
+                imgs[label].append(img)
+                secs[label].append(t)
+        for label, kind, kw in ms:
+            err = np.stack(imgs[label]) - ref[style][None]
+            var = float(np.mean(np.var(err, axis=0, ddof=1)))
+            bias2 = float(np.mean(err.mean(axis=0) ** 2)) - var / seeds
+            mse = float(np.mean(err ** 2))
+            results[f"{style}|{label}"] = {"style": style, "method": label, "kind": kind, "spp": kw.get("spp", 1),
+                                           "secs": statistics.median(secs[label]), "mse": mse, "bias2": bias2,
+                                           "var": var}
+            keep[f"{style}|{label}"] = imgs[label][0].astype(np.float32)
+            print(f"  {name} {style} {label}: {statistics.median(secs[label]):.2f} s, MSE {mse:.3e} "
+                  f"(bias^2 {bias2:.2e}, var {var:.2e})", flush=True)
+        keep[f"{style}|reference"] = ref[style].astype(np.float32)
+    with open(os.path.join(CACHE, f"denoise_pixel_results_{name}_{size}.json"), "w") as f:
+        json.dump({"results": results, "ref_floor": floor, "seeds": seeds, "load_at_end": os.getloadavg()}, f,
+                  indent=1)
+    np.savez(os.path.join(CACHE, f"denoise_pixel_images_{name}_{size}.npz"), **keep)
+
+
 def ratios(results: dict, style: str) -> dict[str, tuple[float, str]]:
     rows = [r for r in results.values() if r["style"] == style]
     curve = envelope([(r["secs"], r["mse"]) for r in rows if r["kind"] == "fixed"])
@@ -215,29 +438,42 @@ def ratios(results: dict, style: str) -> dict[str, tuple[float, str]]:
     return out
 
 
-def chosen(cornell: dict, kind: str, ns) -> str:
-    """The n of `kind` with the best mean ratio over cel and hatching on the Cornell box."""
-    prefix = "denoise expectation" if kind == "expectation" else "denoise image"
-    score = {n: np.mean([ratios(cornell, st)[f"{prefix} n={n}"][0] for st in ("cel", "hatching")]) for n in ns}
-    return f"{prefix} n={max(score, key=score.get)}"
+def setting(label: str) -> str:
+    """A method's settings without the style's own part (reuse's m differs per style, REUSE)."""
+    return "reuse " + label.rsplit(" ", 1)[1] if label.startswith("reuse") and "spp=" in label else label
 
 
-def report(size):
+def best_of(cornell: dict, kind: str) -> dict[str, str]:
+    """The settings of `kind` with the best mean ratio over cel and hatching on the Cornell box (they are chosen
+    there only), as {style: that setting's label}."""
+    by = {}
+    for r in cornell.values():
+        if r["kind"] == kind and r["style"] in ("cel", "hatching"):
+            by.setdefault(setting(r["method"]), {})[r["style"]] = r["method"]
+    score = {k: np.mean([ratios(cornell, st)[lb][0] for st, lb in v.items()]) for k, v in by.items()}
+    return by[max(score, key=score.get)]
+
+
+def load_cached(prefix: str, size: int) -> dict:
     data = {}
     for name in SCENES:
-        path = os.path.join(CACHE, f"denoise_results_{name}_{size}.json")
+        path = os.path.join(CACHE, f"{prefix}_{name}_{size}.json")
         if os.path.exists(path):
             with open(path) as f:
                 data[name] = json.load(f)
-    if "cornell-box" not in data:
-        raise SystemExit("no Cornell box results cached: run the measurement first")
-    pick_e = chosen(data["cornell-box"]["results"], "expectation", EXPECTATION_N)
-    pick_i = chosen(data["cornell-box"]["results"], "image", IMAGE_N)
+    return data
+
+
+def same_ray_body(data: dict, size: int) -> tuple[str, list]:
+    """The same-ray protocol's subsection (headings one level below the section's) and its figure panels."""
+    cornell = data["cornell-box"]["results"]
+    pick_e = best_of(cornell, "expectation")["cel"]
+    pick_i = best_of(cornell, "image")["cel"]
     sections, verdicts, panels = [], [], []
     for name, d in data.items():
         res = d["results"]
         held = " (held out)" if name in HELD_OUT else " (settings chosen here)"
-        lines = [f"### {name}{held}", "",
+        lines = [f"#### {name}{held}", "",
                  f"Reference: direct application, n={REF}, seed by seed. A reference of n={REF // 4} differs from it "
                  f"(seed 0) by MSE " + ", ".join(f"{st} {v:.2e}" for st, v in d["ref_check"].items())
                  + ": the order of the floor every MSE below includes.", "",
@@ -255,9 +491,8 @@ def report(size):
             if style in ("cel", "hatching"):
                 e, i = rat[pick_e][0], rat[pick_i][0]
                 reuse = rat[REUSE[style][0]][0]
-                ok = e >= GOAL
-                verdicts.append(f"| {name} | {style} | {e:.2f}x | {'met' if ok else '**LOSS: not met**'} | {i:.2f}x | "
-                                f"{'yes' if e > i else '**no: LOSS**'} | {reuse:.2f}x |")
+                verdicts.append(f"| {name} | {style} | {e:.2f}x | {'met' if e >= GOAL else '**LOSS: not met**'} | "
+                                f"{i:.2f}x | {'yes' if e > i else '**no: LOSS**'} | {reuse:.2f}x |")
         sections.append("\n".join(lines))
         imgs = np.load(os.path.join(CACHE, f"denoise_images_{name}_{size}.npz"))
         for style in ("cel", "hatching"):
@@ -274,24 +509,20 @@ def report(size):
     if os.path.exists(tpath):
         with open(tpath) as f:
             tm = json.load(f)
-        timing_lines = ["### Cost at 512x512", "",
+        timing_lines = ["#### Cost at 512x512", "",
                         "Cornell box, 512x512, 1 camera sample per pixel, n = 8, cel; median of 3 runs, same shared "
                         "2-core machine (`python benchmarks/denoise.py --timing`).", "",
                         "| step | s |", "|---|---:|"] + [f"| {k} | {v:.2f} |" for k, v in tm.items() if k != "size"]
     body = "\n".join([
-        "## Denoising at a budget: the expectation before g, the image after it (`benchmarks/denoise.py`)",
+        "### Same-ray protocol (the first measurement)",
         "",
         f"{size}x{size}, 1 camera sample per pixel, seeds 0..{next(iter(data.values()))['seeds'] - 1}, each render "
-        "against a reference of the same seed (the same camera rays). Protocol: the script's docstring. The "
-        "machine was shared with other jobs while this ran (2 cores, load average above 4): times are noisy, "
-        "which is why every method of one (scene, style) was timed interleaved in one loop. Settings of the "
+        "against a reference of the same seed (the same camera rays). Protocol: the script's docstring. Every "
+        "method of one (scene, style) was timed interleaved in one loop. Settings of the "
         f"denoisers chosen on the Cornell box alone (expectation: `{pick_e}`, image: `{pick_i}`, in bold); the "
         "dragon and the floor-and-mirror scene are held out. Last column: the fixed counts' MSE at the method's "
         "time over the method's MSE (above 1: better than the tree sampler at equal time; ≥: the method is "
         "faster than every fixed count, so compared with the cheapest; ≤: slower than every fixed count).",
-        "",
-        f"Goal: expectation denoising ≥ {GOAL:g}x lower MSE than the fixed counts at equal time, cel and hatching, "
-        "every scene, and better than image denoising:",
         "",
         "| scene | style | expectation ratio | goal | image-denoising ratio | expectation beats image | reuse ratio |",
         "|---|---|---:|---|---:|---|---:|",
@@ -302,12 +533,221 @@ def report(size):
         *sections,
         "",
         *timing_lines,
-        "",
-        machine_description(),
     ])
-    write_section("denoise", body)
-    image_grid(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "denoise.png"), row_height=2.75,
-               fontsize=7, width=10)
+    return body, panels
+
+
+SAME_RAY_START, SAME_RAY_END = "<!-- same-ray -->", "<!-- /same-ray -->"
+
+
+def kept_same_ray() -> str | None:
+    """The same-ray subsection as BENCHMARKS.md holds it, for a report written without its cache (the measurement
+    stays on record; it is not re-run by a pixel-protocol run). A section written before the pixel protocol
+    existed is the same-ray one as a whole: its headings are moved one level down."""
+    from _report import REPORT
+    if not REPORT.exists():
+        return None
+    text = REPORT.read_text()
+    m = re.search(r"<!-- section:denoise -->\n(.*?)\n<!-- /section:denoise -->", text, re.S)
+    if m is None:
+        return None
+    sec = m.group(1)
+    if SAME_RAY_START in sec:
+        return sec.split(SAME_RAY_START, 1)[1].split(SAME_RAY_END, 1)[0].strip("\n")
+    lines = []
+    for line in sec.splitlines():  # the machine line (and its commit) stays: it says where this was measured
+        if line.startswith("## "):
+            line = "### Same-ray protocol (the first measurement)"
+        elif line.startswith("### "):
+            line = "#" + line
+        lines.append(line)
+    return "\n".join(lines).strip("\n")
+
+
+def n_bias(name: str, size: int, style: str, fl: dict) -> tuple[float, str]:
+    """R's squared bias from its n: bias_check's estimate where it was run, else the change from PIXEL_CHECK_N
+    (a bound only if the bias falls at least as 1/sqrt(n), which bias_check found false for cel)."""
+    path = os.path.join(CACHE, f"denoise_pixel_bias_{name}_{size}.json")
+    if os.path.exists(path):
+        with open(path) as f:
+            b = json.load(f)[style]
+        if np.isfinite(b["bias2_at_n"]):
+            return b["bias2_at_n"], "estimated"
+    return max(fl[style]["n2"], 0.0), "change from n=256"
+
+
+def corrected_mse(name: str, size: int, res: dict, style: str) -> dict[str, float] | None:
+    """Each method's MSE against the truth T rather than R, estimated where bias_check ran: with b = R - T (R's bias
+    from its n), MSE_T = MSE_R + 2 <e, b> + |b|^2, e = render - R. <e, b> is estimated from seed 0's image with
+    e_k = render - (R without part k) dotted with part k's difference to its n = 4n part (independent of e_k's
+    noise; its mean is b (1 - 4^-a)), averaged over the two parts; |b|^2 is bias_check's. An estimate resting on
+    bias_check's power law, one seed, and R's variance left in; None where it cannot be formed."""
+    path = os.path.join(CACHE, f"denoise_pixel_bias_{name}_{size}.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        b = json.load(f)[style]
+    if not (np.isfinite(b["four_a"]) and b["four_a"] > 1):
+        return None
+
+    def part(seed, rs, rn):
+        with np.load(os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{rs}x{rn}_seed{seed}.npz")) as z:
+            return z[style].astype(np.float64)
+    parts = [part(sd, *PIXEL_REF) for sd in PIXEL_REF_SEEDS]
+    highs = [part(sd, *PIXEL_HIGH) for sd in PIXEL_REF_SEEDS[:2]]
+    scale = 1 / (1 - 1 / b["four_a"])
+    with np.load(os.path.join(CACHE, f"denoise_pixel_images_{name}_{size}.npz")) as z:
+        out = {}
+        for r in res.values():
+            if r["style"] != style:
+                continue
+            img = z[f"{style}|{r['method']}"].astype(np.float64)
+            cross = np.mean([np.mean((img - np.mean(parts[:k] + parts[k + 1:], axis=0)) * (parts[k] - highs[k]))
+                             for k in range(2)]) * scale
+            out[r["method"]] = r["mse"] + 2 * cross + b["bias2_at_n"]
+    return out
+
+
+def corrected_ratio(name: str, size: int, res: dict, style: str, label: str) -> float | None:
+    """The ratio of `label` to the fixed counts' envelope, both with corrected_mse."""
+    mse = corrected_mse(name, size, res, style)
+    if mse is None:
+        return None
+    rows = [r for r in res.values() if r["style"] == style]
+    curve = envelope([(r["secs"], mse[r["method"]]) for r in rows if r["kind"] == "fixed"])
+    return fixed_mse_at(curve, res[f"{style}|{label}"]["secs"])[0] / mse[label]
+
+
+def bias_sentence(name: str, size: int) -> str:
+    """bias_check's estimate for the scene, where it was run (`--bias-check`)."""
+    path = os.path.join(CACHE, f"denoise_pixel_bias_{name}_{size}.json")
+    if not os.path.exists(path):
+        return ""
+    with open(path) as f:
+        b = json.load(f)
+    return (f" Estimated (`--bias-check`, two more parts of {PIXEL_HIGH[0]} camera samples at n={PIXEL_HIGH[1]}): "
+            "squared bias change from 1024 to 4096 " + ", ".join(f"{st} {b[st]['d2']:.1e}" for st in PIXEL_STYLES)
+            + "; fitted 4^a (the bias's fall per 4x of n) " + ", ".join(f"{st} {b[st]['four_a']:.2f}" for st in PIXEL_STYLES)
+            + "; squared bias left in R " + ", ".join(f"{st} {b[st]['bias2_at_n']:.1e}" for st in PIXEL_STYLES) + ".")
+
+
+def fixed_near(res: dict, style: str, t: float) -> str:
+    """The fixed (spp, n) on the lower envelope nearest in time to t: the tree sampler's best split there."""
+    rows = [r for r in res.values() if r["style"] == style and r["kind"] == "fixed"]
+    curve = envelope([(r["secs"], r["mse"]) for r in rows])
+    on = [r for r in rows if (r["secs"], r["mse"]) in curve]
+    return min(on, key=lambda r: abs(np.log(r["secs"] / t)))["method"]
+
+
+def pixel_body(data: dict, size: int) -> tuple[str, list, list]:
+    """The pixel protocol's subsection, its figure panels and its verdict rows."""
+    cornell = data["cornell-box"]["results"]
+    picks = {kind: best_of(cornell, kind) for kind in ("expectation", "image", "reuse")}
+    sections, verdicts, panels = [], [], []
+    for name, d in data.items():
+        res = d["results"]
+        held = " (held out)" if name in HELD_OUT else " (settings chosen here)"
+        best = {st: min(r["mse"] for r in res.values() if r["style"] == st) for st in PIXEL_STYLES}
+        fl = d["ref_floor"]
+        lines = [f"#### {name}{held}", "",
+                 f"Reference R: the mean of {len(PIXEL_REF_SEEDS)} independent parts of {PIXEL_REF[0]} camera samples "
+                 f"per pixel, each with direct application at n={PIXEL_REF[1]} (seeds "
+                 f"{', '.join(map(str, PIXEL_REF_SEEDS))}). Its floor, the variance of R's error: "
+                 + ", ".join(f"{st} {fl[st]['var']:.1e} ({100 * fl[st]['var'] / best[st]:.1f}% of the best "
+                             f"method's MSE, {best[st]:.2e})" for st in PIXEL_STYLES)
+                 + f". Direct application's bias at n={PIXEL_REF[1]}: its squared change from n={PIXEL_CHECK_N} is "
+                 + ", ".join(f"{st} {fl[st]['n2']:.1e}" for st in PIXEL_STYLES)
+                 + " (noise-free cross estimate, can dip below 0; with the children's noise: "
+                 + ", ".join(f"{st} {fl[st]['n_raw']:.1e}" for st in PIXEL_STYLES)
+                 + "); the squared bias left at n=1024 is below that only if the bias falls at least as 1/sqrt(n)."
+                 + bias_sentence(name, size), "",
+                 "| style | method | s (median) | MSE | bias^2 | variance | fixed MSE at this time / MSE |",
+                 "|---|---|---:|---:|---:|---:|---:|"]
+        for style in PIXEL_STYLES:
+            pick = {kind: v[style] for kind, v in picks.items()}
+            rat = ratios(res, style)
+            rows = [r for r in res.values() if r["style"] == style]
+            curve = envelope([(r["secs"], r["mse"]) for r in rows if r["kind"] == "fixed"])
+            for r in rows:
+                if r["kind"] == "fixed":
+                    g = "envelope" if (r["secs"], r["mse"]) in curve else ""
+                else:
+                    g = f"{rat[r['method']][1]}{rat[r['method']][0]:.2f}"
+                label = f"**{r['method']}**" if r["method"] in pick.values() else r["method"]
+                lines.append(f"| {style} | {label} | {r['secs']:.2f} | {r['mse']:.3e} | {r['bias2']:.2e} | "
+                             f"{r['var']:.2e} | {g} |")
+            e, i, u = (rat[pick[k]][0] for k in ("expectation", "image", "reuse"))
+            em = res[f"{style}|{pick['expectation']}"]["mse"]
+            # R's floor: its variance and the squared bias of its n; then the ratios against the truth where
+            # bias_check ran (corrected_mse; taking the floor off both MSEs would assume R's error independent of
+            # the methods', which it is not: they apply g directly too)
+            nb, how = n_bias(name, size, style, fl)
+            cr = {k: corrected_ratio(name, size, res, style, pick[k]) for k in ("expectation", "image")}
+            cor = "" if cr["expectation"] is None else f"{cr['expectation']:.2f}x / {cr['image']:.2f}x"
+            verdicts.append(f"| {name} | {style} | {e:.2f}x | {'met' if e >= GOAL else '**LOSS: not met**'} | "
+                            f"{i:.2f}x | {'yes' if e > i else '**no: LOSS**'} | {u:.2f}x | "
+                            f"{100 * fl[style]['var'] / em:.1f}% + {100 * nb / em:.1f}% ({how}) | {cor} |")
+        sections.append("\n".join(lines))
+        imgs = np.load(os.path.join(CACHE, f"denoise_pixel_images_{name}_{size}.npz"))
+        for style in PIXEL_STYLES:
+            pe, pi = picks["expectation"][style], picks["image"][style]
+            t = res[f"{style}|{pe}"]["secs"]
+            near = fixed_near(res, style, t)
+            panels.append((f"{name}, {style}", [
+                (f"{name}, {style}: reference (pixel-integrated)", imgs[f"{style}|reference"]),
+                (f"{near}, {res[f'{style}|{near}']['secs']:.2f} s", imgs[f"{style}|{near}"]),
+                (f"{pi}, {res[f'{style}|{pi}']['secs']:.2f} s", imgs[f"{style}|{pi}"]),
+                (f"{pe}, {t:.2f} s", imgs[f"{style}|{pe}"])]))
+    body = "\n".join([
+        "### Pixel-integrated protocol (the goal is judged on this one)",
+        "",
+        f"{size}x{size}, seeds 0..{next(iter(data.values()))['seeds'] - 1}, styles cel and hatching, every render "
+        "against the brute-force pixel-integrated reference (the box-filtered integral over the pixel of g(E[L | x]), "
+        "independent of the renders' seeds). Each method chooses its camera samples per pixel (spp) and children (n); "
+        "the fixed counts' curve is the lower envelope over their whole (spp, n) grid ('envelope' marks its points). "
+        f"Chosen on the Cornell box alone (best ratio averaged over cel and hatching, in bold): expectation "
+        f"`{picks['expectation']['cel']}`, image `{picks['image']['cel']}`, reuse "
+        f"`{setting(picks['reuse']['cel'])}` (m as REUSE per style). Protocol: the script's "
+        "docstring (`python benchmarks/denoise.py --protocol pixel`).",
+        "",
+        "| scene | style | expectation ratio | goal | image-denoising ratio | expectation beats image | reuse ratio | "
+        "R's floor / expectation's MSE (variance + bias^2 of R's n) | expectation / image ratio against the truth, "
+        "R's bias corrected (estimate, corrected_mse) |",
+        "|---|---|---:|---|---:|---|---:|---:|---:|",
+        *verdicts,
+        "",
+        PIXEL_READING,
+        "",
+        *sections,
+    ])
+    return body, panels, verdicts
+
+
+def report(size):
+    same = load_cached("denoise_results", size)
+    pixel = load_cached("denoise_pixel_results", size)
+    if "cornell-box" not in same and "cornell-box" not in pixel:
+        raise SystemExit("no Cornell box results cached: run the measurement first")
+    if "cornell-box" in same:
+        same_body, same_panels = same_ray_body(same, size)
+    else:
+        same_body, same_panels = kept_same_ray(), []
+    parts = ["## Denoising at a budget: the expectation before g, the image after it (`benchmarks/denoise.py`)", "",
+             f"Goal (issue 21): expectation denoising ≥ {GOAL:g}x lower MSE than the fixed-count tree sampler at equal "
+             "time, cel and hatching, on every scene (Cornell box, dragon, floor and mirror at 128x128; settings "
+             "chosen on the Cornell box only), and better than image denoising. Two protocols were measured; the "
+             "paragraph below says which one the goal is judged on and why.", "", PROTOCOLS, ""]
+    panels = same_panels
+    if "cornell-box" in pixel:
+        body, panels, _ = pixel_body(pixel, size)
+        parts += [body, ""]
+    if same_body:
+        parts += [SAME_RAY_START, same_body, SAME_RAY_END, ""]
+    parts.append(machine_description())
+    write_section("denoise", "\n".join(parts))
+    if panels:
+        image_grid(panels, os.path.join(os.path.dirname(__file__), "..", "docs", "denoise.png"), row_height=2.75,
+                   fontsize=7, width=10)
 
 
 def timing(size: int = 512, runs: int = 3) -> dict:
@@ -350,8 +790,16 @@ def main():
     ap.add_argument("--report", action="store_true", help="only write the section and figure from the cache")
     ap.add_argument("--ref", type=int, default=REF, help="the reference's children per camera sample")
     ap.add_argument("--timing", action="store_true", help="only time the denoising steps at 512x512")
+    ap.add_argument("--bias-check", action="store_true",
+                    help="estimate the pixel reference's bias from its n on the given scenes (bias_check), then report")
+    ap.add_argument("--protocol", choices=("same-ray", "pixel", "both"), default="both",
+                    help="which protocol to measure (the report writes every one that is cached)")
     args = ap.parse_args()
     globals()["REF"] = args.ref
+    if args.bias_check:
+        for name in args.scenes:
+            bias_check(name, args.size)
+        args.report = True
     if args.timing:
         os.makedirs(CACHE, exist_ok=True)
         print(json.dumps(timing(), indent=1))
@@ -359,7 +807,10 @@ def main():
     if not args.report:
         for name in args.scenes:
             print(f"{name}:", flush=True)
-            measure_scene(name, args.size, args.seeds)
+            if args.protocol in ("same-ray", "both"):
+                measure_scene(name, args.size, args.seeds)
+            if args.protocol in ("pixel", "both"):
+                measure_scene_pixel(name, args.size, args.seeds)
     report(args.size)
 
 
