@@ -127,7 +127,7 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, albedo, normal, position) -> n
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
     fx, fy = uv[:, 0] - 0.5, uv[:, 1] - 0.5
     x0, y0 = np.floor(np.where(good, fx, 0)).astype(np.int64), np.floor(np.where(good, fy, 0)).astype(np.int64)
-    acc, wsum = np.zeros_like(own), np.zeros(len(pix))
+    acc, acc_a, wsum = np.zeros_like(own), np.zeros_like(own), np.zeros(len(pix))
     for dy in (0, 1):
         for dx in (0, 1):
             qx, qy = np.clip(x0 + dx, 0, w - 1), np.clip(y0 + dy, 0, h - 1)
@@ -138,9 +138,51 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, albedo, normal, position) -> n
             same &= np.abs(albedo[qy, qx] - a_s).max(-1) <= 0.05
             wt = np.where(good & same, wt, 0.0)
             acc += wt[:, None] * d[qy, qx]
+            acc_a += wt[:, None] * albedo[qy, qx]
             wsum += wt
     out = np.where((wsum > 1e-6)[:, None], acc / np.maximum(wsum, 1e-12)[:, None], own)
+    if REMODULATE:
+        # the guide albedo with the same weights: what albedo the interpolated D was formed under
+        mixed = np.where((wsum > 1e-6)[:, None], acc_a / np.maximum(wsum, 1e-12)[:, None], a_s)
+        out = remodulate(out, mixed, sample_albedo(scene, a), found)
     return np.ascontiguousarray(out.T.astype(np.float32))
+
+
+#: rescale D at each camera sample by its own albedo over the pixel's (`remodulate`)
+REMODULATE = True
+
+
+def sample_albedo(scene, a: dict) -> np.ndarray:
+    """The albedo guide at each camera sample's own vertex (N x 3): the BSDF's diffuse reflectance at p, found
+    by a ray from just in front of the vertex (along wo) back onto it; 1 where a surface has none (the
+    guides' rule for specular surfaces), 0 where no vertex was recorded."""
+    p = np.asarray(a["p"], np.float64)
+    wo = np.asarray(a["wo"], np.float64)
+    diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
+    eps = 1e-4 * max(diag, 1e-6)
+    o = p + wo * eps
+    ray = mi.Ray3f(mi.Point3f(*(mi.Float(np.ascontiguousarray(o[i], np.float32)) for i in range(3))),
+                   mi.Vector3f(*(mi.Float(np.ascontiguousarray(-wo[i], np.float32)) for i in range(3))))
+    ray.maxt = mi.Float(3.0 * eps)
+    si = scene.ray_intersect(ray)
+    alb = si.bsdf().eval_diffuse_reflectance(si, si.is_valid())
+    out = np.stack([np.asarray(alb[i], np.float64) for i in range(3)], -1)
+    hit = np.asarray(si.is_valid(), bool)
+    out[hit & np.all(out <= 0.0, -1)] = 1.0
+    out[~hit] = np.nan  # not found again: no correction for this sample
+    return out
+
+
+def remodulate(d: np.ndarray, mixed: np.ndarray, own: np.ndarray, found: np.ndarray) -> np.ndarray:
+    """D x own albedo / the albedo D was formed under, per channel, for samples with a vertex.
+
+    Why: a pixel on a texture edge averages two albedos into its M, and so into D (E[L] of a diffuse surface
+    is albedo x irradiance); its camera samples on the dark side would take the bright side's share and the
+    other way round. The irradiance D / albedo varies slowly across the edge, so each sample takes its
+    own albedo times it. Where the albedos agree (no texture edge in the pixel) the factor is 1."""
+    ok = found[:, None] & np.isfinite(own) & (mixed > 1e-4) & (own > 0)
+    factor = np.where(ok, own / np.where(ok, mixed, 1.0), 1.0)
+    return d * factor
 
 
 #: OIDN's output is trusted down to this fraction of the image's mean brightness (see `below_resolution`)
