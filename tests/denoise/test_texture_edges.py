@@ -1,0 +1,57 @@
+"""A texture edge inside a pixel: each camera sample takes D times its own albedo (denoise/expectation.py,
+`remodulate`).
+
+A diffuse checkerboard plane facing the camera under a constant environment L and nothing else has exitant
+radiance albedo(x) * L everywhere: E[L] jumps with the texture and nothing else. In a pixel that a texture
+edge crosses, M mixes the two albedos, and so does OIDN's D; with the remodulation each sample's D is its own
+albedo times L again, without it the samples on either side share the pixel's mixture, off by the albedo
+contrast (dark 0.15 against bright 0.8)."""
+import numpy as np
+import pytest
+
+import mitsuba as mi
+
+from styletrace import api
+from styletrace.denoise import expectation as X
+
+RES, SKY = 48, 0.7
+DARK, BRIGHT = 0.15, 0.8
+
+
+def scene():
+    T = mi.ScalarTransform4f
+    return api.load_scene({
+        "type": "scene",
+        "sensor": {"type": "perspective", "fov": 30, "to_world": T().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}}},
+        "plane": {"type": "rectangle", "to_world": T().scale(2.0),
+                  "bsdf": {"type": "diffuse", "reflectance": {
+                      "type": "checkerboard", "color0": {"type": "rgb", "value": [DARK] * 3},
+                      "color1": {"type": "rgb", "value": [BRIGHT] * 3},
+                      "to_uv": T().rotate([0, 0, 1], 17).scale([5.3, 5.3, 1])}}},
+        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [SKY] * 3}},
+    })
+
+
+def edge_samples_error(remodulate, monkeypatch):
+    """Relative error of D at the camera samples of pixels whose samples see both albedos, per sample."""
+    monkeypatch.setattr(X, "REMODULATE", remodulate)
+    sc = scene()
+    _, buf = X.render(sc, api.make_integrator(style="identity", inner=4), spp=8, seed=2)
+    a = buf.arrays
+    own = X.sample_albedo(sc, a)[:, 0]
+    pix = a["pixel"].astype(np.int64)
+    lo = np.bincount(pix, weights=(own < 0.5), minlength=RES * RES)
+    hi = np.bincount(pix, weights=(own > 0.5), minlength=RES * RES)
+    edge = (lo > 0) & (hi > 0)
+    pick = edge[pix] & (a["slot"] >= 0)
+    assert edge.sum() > 100, "the texture crosses too few pixels: nothing is tested"
+    want = own[pick] * SKY
+    return np.abs(a[X.DENOISED][0][pick] - want) / want
+
+
+def test_samples_on_a_texture_edge_take_their_own_albedo(monkeypatch):
+    """With the remodulation the median relative error of D at edge-pixel samples is below 0.1; without
+    it above 0.3 (measured 0.03 and 0.55; the mixture of 0.15 and 0.8 is off by far more on either side): the test can fail."""
+    assert np.median(edge_samples_error(True, monkeypatch)) < 0.1
+    assert np.median(edge_samples_error(False, monkeypatch)) > 0.3
