@@ -45,6 +45,5 @@ def test_line_types_belong_to_the_lifted_mode():
         parse({"lines": True, "line_types": "depth"})
     with pytest.raises(SettingsError, match="'line_gradient' is not drawn by line_mode lifted"):
         lifted(line_gradient="0,0,0;1,1,1")
-    with pytest.raises(SettingsError, match="'line_objects' is not drawn by line_mode lifted"):
-        lifted(line_objects="box")
+    assert lifted(line_objects="box").objects == ("box",)
     assert parse({"lines": False, "line_mode": "lifted", "line_types": "depth"}).lines is None

@@ -15,6 +15,7 @@ styletrace.init()
 from helpers.line_scenes import ball_mask, line_scene, reference  # noqa: E402
 from styletrace import api  # noqa: E402
 from styletrace.config.line_types import LineType  # noqa: E402
+from styletrace.errors import SceneError  # noqa: E402
 from styletrace.kernel.lifted_lines import Lifted  # noqa: E402
 
 T = mi.ScalarTransform4f
@@ -143,3 +144,22 @@ def test_line_diffuse_carries_the_pairs_on_through_diffuse_vertices():
     on, _ = shares(np.asarray(styletrace.render(line_scene(light=0.5), line_diffuse=True, **kw), np.float64))
     assert np.all(on >= off - 1e-6)
     assert (on > off + 1e-6).sum() >= 50, (on > off + 1e-6).sum()
+
+
+def test_line_objects_keep_the_lines_of_the_named_shapes():
+    """line_objects=ball: a pair draws only where one of its hits is on the ball. Same seed, so the lines are a
+    subset of those without the list, sample by sample: the ball's rim keeps them, the box on the left and the
+    box's reflection inside the ball (hits on the box, not the ball) draw none. (The box and
+    the back plane share one BSDF, so Mitsuba merges them into one mesh without an id: only the ball can be
+    named here.) An unknown id is refused in one line naming the scene's ids."""
+    kw = dict(style="identity", inner=1, spp=8, seed=4, lines=True, line_mode="lifted", line_depth=2,
+              line_types="shape_id radius=1.5 count=8 color=1,0,0")
+    every, _ = shares(np.asarray(styletrace.render(line_scene(light=0.5), **kw), np.float64))
+    named, _ = shares(np.asarray(styletrace.render(line_scene(light=0.5), line_objects="ball", **kw), np.float64))
+    right = np.arange(every.shape[1]) >= every.shape[1] // 2 + 4            # the ball, away from the box
+    left = np.arange(every.shape[1]) < every.shape[1] // 2 - 4               # the box
+    assert np.all(named <= every + 1e-6)
+    assert named[:, right].mean() > 0.01 and named[:, right].mean() < every[:, right].mean()
+    assert every[:, left].mean() > 0.02 and named[:, left].max() == 0.0
+    with pytest.raises(SceneError, match="bad value 'teapot' in 'line_objects': the scene's shape ids are ball"):
+        styletrace.render(line_scene(light=0.5), line_objects="teapot", **kw)

@@ -284,10 +284,9 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
                             f"{', '.join(LINE_TESTS)}")
     raw_types = get_("line_types")
     if lines.mode == "lifted":
-        for key in ("line_gradient", "line_objects"):
-            if get_(key) not in ("", None, ()):
-                raise SettingsError(f"'{key}' is not drawn by line_mode lifted: its lines take each line type's "
-                                    "colour and test every shape (use line_mode absorb or expectation)")
+        if get_("line_gradient") not in ("", None, ()):
+            raise SettingsError("'line_gradient' is not drawn by line_mode lifted: its lines take each line type's "
+                                "colour (use line_mode absorb or expectation)")
         lines = replace(lines, types=parse_line_types(raw_types, lines.width, lines.samples, lines.color),
                         diffuse=value("line_diffuse", values))
     elif raw_types not in ("", None):

@@ -34,6 +34,7 @@ import mitsuba as mi
 
 from ..config.line_types import LineType
 from ..errors import SceneError
+from .lines import object_shapes, on_shapes
 
 
 def chart(n: mi.Vector3f, v: mi.Vector3f):
@@ -138,7 +139,8 @@ class Lifted:
     diffuse one it turns the base's direction by `minimal_rotation` (only with `through_diffuse`; otherwise the
     paths stop there, as West 2021's lines do). At every depth up to `depth` the pair fires when exactly one
     of its paths hits, when the two hit different shapes and the type measures shape or material ids, or when
-    the slope |f(v) - f(u)| / |v - u| reaches the type's threshold. A type fires if any of its pairs fires;
+    the slope |f(v) - f(u)| / |v - u| reaches the type's threshold; with `objects` (shape ids, `line_objects`)
+    only where one of the pair's hits there is on one of those shapes. A type fires if any of its pairs fires;
     the first type in priority order that fires gives the sample's colour (Eq. 34), `background` where none.
     At a transmitting base vertex the auxiliary refracts (Eq. 20) about the transported generalised
     half-vector h = normalize(v - eta d) (eta: the base's sampled relative index), keeping the base's
@@ -148,13 +150,14 @@ class Lifted:
     passes through; thin lens: the lens point it leaves from and the film point of its focus), so the base and
     auxiliary paths of a depth-of-field render leave from the sample's own lens point."""
 
-    def __init__(self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False):
+    def __init__(self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False, objects=()):
         from .anchors import Tone
         self.scene = scene
         self.tone = Tone(scene)          # film conversion and projection of the first sensor
         self.types = sorted(types, key=lambda t: t.priority)
         self.depth = depth
         self.through_diffuse = through_diffuse
+        self.shapes = object_shapes(scene, objects)   # line_objects: a pair draws where a hit is on one of them
 
         sensor = self.tone.sensor
         self.lens = None   # (camera to world, world to camera, aperture radius, focus distance) of a thin lens
@@ -261,6 +264,8 @@ class Lifted:
                         fa = self._measure(t.measurement, sis[0], travelled[0])
                         fb = self._measure(t.measurement, sis[1], travelled[1])
                         fire |= both & (slope(fa, fb, du, dv) >= t.threshold)
+                    if self.shapes:
+                        fire &= on_shapes(sis[0], self.shapes) | on_shapes(sis[1], self.shapes)
                     any_fire |= fire
                     # carry on past this vertex with xi kept (cut where the pair's objects part: their lines are
                     # already drawn, or where the base path ends)

@@ -79,6 +79,28 @@ class Seen:
     color: mi.Color3f
 
 
+def object_shapes(scene: mi.Scene, objects) -> list:
+    """The shapes named by `line_objects` (empty: all draw lines); an unknown id is refused in one line."""
+    if not objects:
+        return []
+    by_id = {shape.id(): shape for shape in scene.shapes()}
+    missing = [i for i in objects if i not in by_id]
+    if missing:
+        raise SceneError(f"bad value {missing[0]!r} in 'line_objects': the scene's shape ids are "
+                         f"{', '.join(sorted(k for k in by_id if k)) or 'none'}")
+    return [mi.ShapePtr(by_id[i]) for i in objects]
+
+
+def on_shapes(si, shapes: list) -> mi.Bool:
+    """Whether a hit is on one of `shapes` (every hit where `shapes` is empty)."""
+    if not shapes:
+        return si.is_valid()
+    mask = mi.Bool(False)
+    for ptr in shapes:
+        mask |= si.shape == ptr
+    return si.is_valid() & mask
+
+
 class Lines:
     """The line settings bound to one scene for one trace (shape pointers, the gradient's y range)."""
 
@@ -86,17 +108,10 @@ class Lines:
         """`see_through`: the scene has a surface with a pure `null` BSDF (`SceneGraph.has_see_through`), so
         the stencil's rays must pass such surfaces (a loop per ray that other scenes do without)."""
         self.s = settings
-        self.draw_all = not settings.objects
         # positions, geometric normals and shapes are all the tests need; the albedo test evaluates textures
         self.flags = mi.RayFlags.All if "albedo" in settings.tests else mi.RayFlags.Minimal
         self.shapes = []
-        if settings.objects:
-            by_id = {shape.id(): shape for shape in scene.shapes()}
-            missing = [i for i in settings.objects if i not in by_id]
-            if missing:
-                raise SceneError(f"bad value {missing[0]!r} in 'line_objects': the scene's shape ids are "
-                                 f"{', '.join(sorted(k for k in by_id if k)) or 'none'}")
-            self.shapes = [mi.ShapePtr(by_id[i]) for i in settings.objects]
+        self.shapes = object_shapes(scene, settings.objects)
         self.see_through = see_through
         if settings.gradient is not None:
             c0, c1, y0, y1 = settings.gradient
@@ -113,12 +128,7 @@ class Lines:
         return dr.lerp(c0, c1, t)
 
     def _draws(self, si) -> mi.Bool:
-        if self.draw_all:
-            return si.is_valid()
-        mask = mi.Bool(False)
-        for ptr in self.shapes:
-            mask |= si.shape == ptr
-        return si.is_valid() & mask
+        return on_shapes(si, self.shapes)
 
     def trace(self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False) -> mi.SurfaceInteraction3f:
         """The first hit along `ray` that is not a pure `null` surface; its `t` is measured from ray.o."""

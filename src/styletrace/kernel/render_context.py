@@ -49,7 +49,7 @@ class RenderContext:
                                                                               see_through=integ.see_through)
             # LLaT's conditional lifting tests its line types per camera sample before L (lifted_lines.py)
             integ.lifted = (Lifted(scene, settings.lines.types, depth=settings.lines.depth,
-                                   through_diffuse=settings.lines.diffuse)
+                                   through_diffuse=settings.lines.diffuse, objects=settings.lines.objects)
                             if lifted and scene.sensors() else None)
             wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in integ.targets)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
