@@ -266,32 +266,41 @@ def references(name, scene, size, seeds):
     return out, check
 
 
+def measure_methods(name, scene, style, ms, seeds, reference_of):
+    """Every method of `ms` (label, kind, keywords) rendered for seeds 0 .. seeds-1, interleaved, and scored
+    against `reference_of(seed)`: (result rows by "style|label", seed 0's image by "style|label")."""
+    for label, _, kw in ms:  # warm-up: kernels compiled, caches filled
+        one(scene, style, kw, 999)
+    imgs = {label: [] for label, _, _ in ms}
+    secs = {label: [] for label, _, _ in ms}
+    for s in range(seeds):  # interleaved: every method of this comparison under the same load
+        for label, _, kw in ms:
+            img, t = one(scene, style, kw, s)
+            imgs[label].append(img)
+            secs[label].append(t)
+    results, keep = {}, {}
+    for label, kind, kw in ms:
+        err = np.stack(imgs[label]) - np.stack([reference_of(s) for s in range(seeds)])
+        var = float(np.mean(np.var(err, axis=0, ddof=1)))
+        bias2 = float(np.mean(err.mean(axis=0) ** 2)) - var / seeds
+        mse = float(np.mean(err ** 2))
+        results[f"{style}|{label}"] = {"style": style, "method": label, "kind": kind, "spp": kw.get("spp", 1),
+                                       "secs": statistics.median(secs[label]), "mse": mse, "bias2": bias2,
+                                       "var": var}
+        keep[f"{style}|{label}"] = imgs[label][0].astype(np.float32)
+        print(f"  {name} {style} {label}: {statistics.median(secs[label]):.2f} s, MSE {mse:.3e} "
+              f"(bias^2 {bias2:.2e}, var {var:.2e})", flush=True)
+    return results, keep
+
+
 def measure_scene(name, size, seeds):
     scene = load(name, size)
     refs, check = references(name, scene, size, seeds)
     results, keep = {}, {}
     for style in STYLES:
-        ms = methods(style)
-        for label, _, kw in ms:  # warm-up: kernels compiled, caches filled
-            one(scene, style, kw, 999)
-        imgs = {label: [] for label, _, _ in ms}
-        secs = {label: [] for label, _, _ in ms}
-        for s in range(seeds):  # interleaved: every method of this comparison under the same load
-            for label, _, kw in ms:
-                img, t = one(scene, style, kw, s)
-                imgs[label].append(img)
-                secs[label].append(t)
-        for label, kind, _ in ms:
-            err = np.stack(imgs[label]) - np.stack([r[style] for r in refs])
-            var = float(np.mean(np.var(err, axis=0, ddof=1)))
-            bias2 = float(np.mean(err.mean(axis=0) ** 2)) - var / seeds
-            mse = float(np.mean(err ** 2))
-            results[f"{style}|{label}"] = {"style": style, "method": label, "kind": kind,
-                                           "secs": statistics.median(secs[label]), "mse": mse, "bias2": bias2,
-                                           "var": var}
-            keep[f"{style}|{label}"] = imgs[label][0].astype(np.float32)
-            print(f"  {name} {style} {label}: {statistics.median(secs[label]):.2f} s, MSE {mse:.3e} "
-                  f"(bias^2 {bias2:.2e}, var {var:.2e})", flush=True)
+        got, imgs = measure_methods(name, scene, style, methods(style), seeds, lambda s: refs[s][style])
+        results.update(got)
+        keep.update(imgs)
         keep[f"{style}|reference"] = refs[0][style].astype(np.float32)
     with open(os.path.join(CACHE, f"denoise_results_{name}_{size}.json"), "w") as f:
         json.dump({"results": results, "ref_check": check, "seeds": seeds}, f, indent=1)
@@ -309,6 +318,22 @@ def pixel_methods(style: str) -> list[tuple[str, str, dict]]:
     return out + [(f"{label} spp={spp}", "reuse", {"spp": spp, **kw}) for spp in PIXEL_REUSE_SPP]
 
 
+def ref_part(name, scene, size, seed, spp, n, what="pixel reference"):
+    """One part of the pixel reference: `spp` camera samples per pixel, direct application at `n`, seed `seed`,
+    restyled to every style; rendered once (`what` names it in the log) and cached, float64 per style. `scene`
+    None: read from the cache only."""
+    path = os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{spp}x{n}_seed{seed}.npz")
+    if scene is not None and not os.path.exists(path):
+        t = time.perf_counter()
+        buf = render_buffer(scene, style="cel", spp=spp, inner=n, seed=seed)
+        got = {st: styletrace.restyle(buf, style=st) for st in STYLES}
+        del buf
+        print(f"  {what} {name} seed {seed}: spp={spp} n={n}, {time.perf_counter() - t:.0f} s", flush=True)
+        np.savez(path, **got)
+    with np.load(path) as z:
+        return {st: z[st].astype(np.float64) for st in STYLES}
+
+
 def pixel_reference(name, scene, size):
     """R = the mean of the PIXEL_REF parts per style, and its floor per style: "var", the variance of R's error
     (the parts' variance over K, ddof 1, averaged over pixels: camera samples and children together), and "n2",
@@ -318,20 +343,8 @@ def pixel_reference(name, scene, size):
     (it shrinks as n grows); "n_raw" is MSE(C_0 - A_0), noise included, the figure the same-ray protocol printed."""
     os.makedirs(CACHE, exist_ok=True)
     spp, n = PIXEL_REF
-
-    def part(seed, rn):
-        path = os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{spp}x{rn}_seed{seed}.npz")
-        if not os.path.exists(path):
-            t = time.perf_counter()
-            buf = render_buffer(scene, style="cel", spp=spp, inner=rn, seed=seed)
-            got = {st: styletrace.restyle(buf, style=st) for st in STYLES}
-            del buf
-            print(f"  pixel reference {name} seed {seed}: spp={spp} n={rn}, {time.perf_counter() - t:.0f} s", flush=True)
-            np.savez(path, **got)
-        with np.load(path) as z:
-            return {st: z[st].astype(np.float64) for st in STYLES}
-    parts = [part(seed, n) for seed in PIXEL_REF_SEEDS]
-    checks = [part(seed, PIXEL_CHECK_N) for seed in PIXEL_REF_SEEDS[:2]]
+    parts = [ref_part(name, scene, size, seed, spp, n) for seed in PIXEL_REF_SEEDS]
+    checks = [ref_part(name, scene, size, seed, spp, PIXEL_CHECK_N) for seed in PIXEL_REF_SEEDS[:2]]
     k = len(parts)
     ref = {st: np.mean([p[st] for p in parts], axis=0) for st in STYLES}
     floor = {}
@@ -353,16 +366,7 @@ def bias_check(name, size) -> dict:
     hs, hn = PIXEL_HIGH
 
     def part(seed, rs, rn):
-        path = os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{rs}x{rn}_seed{seed}.npz")
-        if not os.path.exists(path):
-            t = time.perf_counter()
-            buf = render_buffer(scene, style="cel", spp=rs, inner=rn, seed=seed)
-            got = {st: styletrace.restyle(buf, style=st) for st in STYLES}
-            del buf
-            print(f"  bias check {name} seed {seed}: spp={rs} n={rn}, {time.perf_counter() - t:.0f} s", flush=True)
-            np.savez(path, **got)
-        with np.load(path) as z:
-            return {st: z[st].astype(np.float64) for st in STYLES}
+        return ref_part(name, scene, size, seed, rs, rn, "bias check")
     seeds = PIXEL_REF_SEEDS[:2]
     low = [part(s_, spp, PIXEL_CHECK_N) for s_ in seeds]
     mid = [part(s_, spp, n) for s_ in seeds]
@@ -389,27 +393,9 @@ def measure_scene_pixel(name, size, seeds):
               f"(with noise {floor[st]['n_raw']:.2e})", flush=True)
     results, keep = {}, {}
     for style in PIXEL_STYLES:
-        ms = pixel_methods(style)
-        for label, _, kw in ms:  # warm-up: kernels compiled, caches filled
-            one(scene, style, kw, 999)
-        imgs = {label: [] for label, _, _ in ms}
-        secs = {label: [] for label, _, _ in ms}
-        for s in range(seeds):  # interleaved: every method of this comparison under the same load
-            for label, _, kw in ms:
-                img, t = one(scene, style, kw, s)
-                imgs[label].append(img)
-                secs[label].append(t)
-        for label, kind, kw in ms:
-            err = np.stack(imgs[label]) - ref[style][None]
-            var = float(np.mean(np.var(err, axis=0, ddof=1)))
-            bias2 = float(np.mean(err.mean(axis=0) ** 2)) - var / seeds
-            mse = float(np.mean(err ** 2))
-            results[f"{style}|{label}"] = {"style": style, "method": label, "kind": kind, "spp": kw.get("spp", 1),
-                                           "secs": statistics.median(secs[label]), "mse": mse, "bias2": bias2,
-                                           "var": var}
-            keep[f"{style}|{label}"] = imgs[label][0].astype(np.float32)
-            print(f"  {name} {style} {label}: {statistics.median(secs[label]):.2f} s, MSE {mse:.3e} "
-                  f"(bias^2 {bias2:.2e}, var {var:.2e})", flush=True)
+        got, imgs = measure_methods(name, scene, style, pixel_methods(style), seeds, lambda s: ref[style])
+        results.update(got)
+        keep.update(imgs)
         keep[f"{style}|reference"] = ref[style].astype(np.float32)
     with open(os.path.join(CACHE, f"denoise_pixel_results_{name}_{size}.json"), "w") as f:
         json.dump({"results": results, "ref_floor": floor, "seeds": seeds, "load_at_end": os.getloadavg()}, f,
@@ -570,11 +556,8 @@ def corrected_mse(name: str, size: int, res: dict, style: str) -> dict[str, floa
     if not (np.isfinite(b["four_a"]) and b["four_a"] > 1):
         return None
 
-    def part(seed, rs, rn):
-        with np.load(os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{rs}x{rn}_seed{seed}.npz")) as z:
-            return z[style].astype(np.float64)
-    parts = [part(sd, *PIXEL_REF) for sd in PIXEL_REF_SEEDS]
-    highs = [part(sd, *PIXEL_HIGH) for sd in PIXEL_REF_SEEDS[:2]]
+    parts = [ref_part(name, None, size, sd, *PIXEL_REF)[style] for sd in PIXEL_REF_SEEDS]
+    highs = [ref_part(name, None, size, sd, *PIXEL_HIGH)[style] for sd in PIXEL_REF_SEEDS[:2]]
     scale = 1 / (1 - 1 / b["four_a"])
     with np.load(os.path.join(CACHE, f"denoise_pixel_images_{name}_{size}.npz")) as z:
         out = {}
