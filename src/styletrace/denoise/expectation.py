@@ -155,7 +155,8 @@ REMODULATE = True
 def sample_albedo(scene, a: dict) -> np.ndarray:
     """The albedo guide at each camera sample's own vertex (N x 3): the BSDF's diffuse reflectance at p, found
     by a ray from just in front of the vertex (along wo) back onto it; 1 where a surface has none (the
-    guides' rule for specular surfaces), 0 where no vertex was recorded."""
+    guides' rule for specular surfaces), NaN where the ray does not find it again (`remodulate` then leaves
+    the sample as it is)."""
     p = np.asarray(a["p"], np.float64)
     wo = np.asarray(a["wo"], np.float64)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))

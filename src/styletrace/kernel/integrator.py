@@ -57,6 +57,7 @@ from ..config.estimator_registry import make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
 from .render_context import RenderContext
+from .lifted_lines import compose_sample
 from .bounce import bounce
 from .path import first_scattering, past_area_emitters, walk
 from .vertex import emission, environment
@@ -339,8 +340,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         for f in fired:
             any_fired |= f
         value, valid, aovs = self._stylize(scene, sampler, ray, active & ~any_fired, medium)
-        for f, t in reversed(list(zip(fired, lifted.types))):
-            value = dr.select(f, mi.Color3f(*t.color), value)
+        value = compose_sample(fired, [mi.Color3f(*t.color) for t in lifted.types], value)
         return value, valid | any_fired, aovs
 
     def _stylize(self, scene, sampler, ray, active, medium=None):

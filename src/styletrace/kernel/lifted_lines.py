@@ -125,15 +125,12 @@ def compose_sample(fired, colors, L):
 
 # ---- auxiliary paths and a line renderer over them ---------------------------------------------------------
 
-MEASUREMENTS = ("depth", "normal", "shape_id", "material_id")
-
-
 class Lifted:
     """Feature lines by conditional lifting in one scene (first sensor), for a dictionary of `LineType`s.
 
     Per camera sample at image coordinate s (pixels right and up of the centre, as styles.base.Projection) the
-    base path is traced from the lens centre through s, sampling each non-diffuse vertex's BSDF (that choice and
-    its half-vector are the conditioning xi). For each type, `count` pairs of stencil points (u, v) around s
+    base path is traced from the lens point `aperture` (the lens centre where none is given) through s, sampling
+    each non-diffuse vertex's BSDF (that choice and its half-vector are the conditioning xi). For each type, `count` pairs of stencil points (u, v) around s
     give two auxiliary paths each, traced vertex by vertex with xi kept: at a glossy or specular base vertex
     the auxiliary reflects about the base's half-vector transported to it (`transport_half_vector`), at a
     diffuse one it turns the base's direction by `minimal_rotation` (only with `through_diffuse`; otherwise the

@@ -110,7 +110,6 @@ class Lines:
         self.s = settings
         # positions, geometric normals and shapes are all the tests need; the albedo test evaluates textures
         self.flags = mi.RayFlags.All if "albedo" in settings.tests else mi.RayFlags.Minimal
-        self.shapes = []
         self.shapes = object_shapes(scene, settings.objects)
         self.see_through = see_through
         if settings.gradient is not None:
