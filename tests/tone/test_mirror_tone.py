@@ -17,11 +17,17 @@ def ink(img):
     return np.clip((0.95 - img.mean(axis=2)) / 0.9, 0.0, 1.0)
 
 
+def regions(scene, img, region="reflector", erode=2):
+    """(the directly seen plane on the left, the `region` shape's pixels), both where the image is styled,
+    each shrunk by `erode` pixels."""
+    styled = img.mean(axis=2) > 0.01
+    return (styled & LEFT & first_hit_mask(scene, "", erode=erode),
+            styled & first_hit_mask(scene, region, erode=erode))
+
+
 def measure(scene, style, spp=1, region="reflector", **kw):
     img = render(scene, spp=spp, **kw)
-    styled = img.mean(axis=2) > 0.01
-    direct = styled & LEFT & first_hit_mask(scene, "", erode=2)
-    seen = styled & first_hit_mask(scene, region, erode=2)
+    direct, seen = regions(scene, img, region)
     assert direct.sum() > 1500 and seen.sum() > 300
     return peak(ink(img), direct), peak(ink(img), seen)
 
@@ -70,9 +76,7 @@ def test_convex_ball_mls_spacing():
     scene = mirror_scene(HATCH, alpha=0.001, shape="ball")
     coord = render(mirror_scene(dict(style="coordinate"), alpha=0.001, shape="ball"), spp=1)
     img = render(scene, spp=4)
-    styled = img.mean(axis=2) > 0.01
-    direct = styled & LEFT & first_hit_mask(scene, "", erode=2)
-    ball = styled & first_hit_mask(scene, "reflector", erode=2)
+    direct, ball = regions(scene, img)
     mls = ball & (np.round(coord[..., 2]) == 2)
     assert mls.sum() > 0.7 * ball.sum() and mls.sum() > 200
     sd, ad, _ = peak(ink(img), direct)
@@ -91,9 +95,7 @@ def test_glossy_reflection_blurs_tone_but_keeps_frequency():
     for a in (0.001, 0.01, 0.05, 0.1):
         scene = mirror_scene(st, alpha=a, far_x=2.3, width=0.7)
         img = render(scene, spp=64, seed=3)
-        styled = img.mean(axis=2) > 0.01
-        direct = styled & LEFT & first_hit_mask(scene, "", erode=2)
-        seen = styled & first_hit_mask(scene, "reflector", erode=2)
+        direct, seen = regions(scene, img)
         sd, _, _ = peak(ink(img), direct)
         sg, _, _ = peak(ink(img), seen)
         amp = amplitude(ink(img), seen, sg)
@@ -116,9 +118,7 @@ def test_depth_of_field_blurs_the_reflection_and_not_the_focused_plane():
     for name, extra in (("pinhole", None), ("lens", lens)):
         scene = mirror_scene(HATCH, sensor_extra=extra)
         img = render(scene, spp=32, seed=4)
-        styled = img.mean(axis=2) > 0.01
-        direct = styled & LEFT & first_hit_mask(scene, "", erode=3)
-        seen = styled & first_hit_mask(scene, "reflector", erode=3)
+        direct, seen = regions(scene, img, erode=3)
         sd, _, _ = peak(ink(img), direct)
         sm, _, _ = peak(ink(img), seen)
         assert abs(sm / sd - 1) < 0.10
