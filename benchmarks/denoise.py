@@ -760,12 +760,12 @@ def timing(size: int = 512, runs: int = 3) -> dict:
         buf = render_buffer(scene, spp=1, seed=0, integrator=integ)
     out = {"size": size, "record (render, n=8, 1 spp)": med(record)}
     m = X.expectation(buf)
-    al, nn, pos = guides.first_hit(scene, 1, api.pass_seed(0, 0), position=True)
-    out["guides (aov render)"] = med(lambda: guides.first_hit(scene, 1, api.pass_seed(0, 0), position=True))
+    g = guides.first_hit(scene, 1, api.pass_seed(0, 0))
+    out["guides (guide pass)"] = med(lambda: guides.first_hit(scene, 1, api.pass_seed(0, 0)))
     for q in ("high", "balanced", "fast"):
-        out[f"OIDN {q}"] = med(lambda: oidn.run(m, al, nn, q))
-    d = oidn.run(m, al, nn)
-    out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, al, nn, pos))
+        out[f"OIDN {q}"] = med(lambda: oidn.run(m, g.albedo, g.normal, q))
+    d = oidn.run(m, g.albedo, g.normal)
+    out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, g))
     out["attach (guides + OIDN high + interpolation)"] = med(lambda: X.attach(buf, scene, 1, 0))
     out["restyle of the denoised buffer"] = med(lambda: styletrace.restyle(buf, style="hatching"))
     with open(os.path.join(CACHE, f"denoise_timing_{size}.json"), "w") as f:

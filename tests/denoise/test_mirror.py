@@ -1,7 +1,7 @@
 """A mirror that reflects empty space: its expectation is 0, and a denoised cel image must show cel's plain
 level there (neutral grey), not the hue of light the denoiser leaked in from the neighbours, which cel's
 I * level / brightness(I) blows up into saturated speckle (`expectation.below_resolution`; the mirror's albedo
-guide is 1, `guides.first_hit`). The rule removes the leak where it is below the denoiser's resolution;
+guide is its specular weight where it sees nothing, `guides.first_hit`). The rule removes the leak where it is below the denoiser's resolution;
 next to the mirror's reflection of the light the hue is the denoiser's blur, which it does not touch."""
 import mitsuba as mi
 import numpy as np
@@ -33,7 +33,7 @@ def scene():
 
 def mirror_pixels(sc):
     from styletrace.denoise import guides
-    albedo, normal = guides.first_hit(sc, 1, api.pass_seed(0, 0))
+    normal = guides.first_hit(sc, 1, api.pass_seed(0, 0)).surface_normal
     return (normal[..., 2] > 0.85) & (np.abs(normal[..., 0]) < 0.05)  # the mirror's normal, (0, sin 25, cos 25)
 
 

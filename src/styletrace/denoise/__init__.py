@@ -5,7 +5,7 @@
   which keeps the denoised expectation for millisecond restyles.
 - `image` (`denoise.image`): render as usual and denoise the final image; the baseline.
 
-Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with first-hit albedo and normal guides
+Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with albedo and normal guides (through mirrors and glass)
 (`denoise.guides`), or Mitsuba's OptiX denoiser on CUDA (`denoise.oidn`, untested). Method, bias and the
 supported combinations: docs/denoise.md.
 

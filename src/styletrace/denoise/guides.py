@@ -1,17 +1,28 @@
-"""The denoiser's guides: first-hit albedo and shading normal per pixel, from Mitsuba's `aov` integrator.
+"""The denoiser's guides: albedo and shading normal per pixel, seen through mirrors and glass.
 
-    albedo, normal = first_hit(scene, spp=16, seed=0)      # H x W x 3 float32 each
-    albedo, normal, position = first_hit(scene, spp, seed, position=True)
+    g = first_hit(scene, spp=16, seed=0)   # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
 
 Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the callers,
 so the guides cover the pixel as its camera samples do), `seed` (default 0: the render's first pass seed).
-The albedo is the BSDF's `albedo` AOV (its directional albedo, textures included); the normal is the world-space
-shading normal. Both are free of the children's noise: one ray per camera sample, no path continues.
-Pixels where the camera ray escapes get 0 in both (OIDN's convention for "nothing there"). With
-`position=True` the pixel's mean first-hit position comes too (the sub-pixel interpolation of
-`denoise.expectation` compares it with a camera sample's own vertex).
+The guide pass is a sampling integrator of its own (`GuidePass`), so `mi.render` gives it the render's camera
+rays; one ray per camera sample, no path continues, so the guides carry none of the children's noise.
+
+- `albedo`: the BSDF's diffuse reflectance (Mitsuba's `albedo` AOV: textures included) at the first surface
+  that is not purely specular, times the specular weights of the mirror and glass bounces before it
+  (`through_delta`). Why through: E[L] at a mirror's vertex is the reflected surface's radiance, whose texture
+  and shadow edges OIDN can only keep if the guide shows them; a constant guide there let it blur the
+  reflected checkerboard (the floor-and-mirror scene of `benchmarks/denoise.py`). OIDN's documentation
+  recommends this for perfect specular surfaces. A surface with no diffuse reflectance (a rough conductor)
+  gets 1 there: 0 would tell OIDN "black, nothing to keep".
+- `normal`: the world-space shading normal of that same surface (OIDN's guide).
+- `position`, `surface_normal`: the first hit's mean position and shading normal, the camera sample's own
+  vertex (`denoise.expectation.at_samples` compares them with a sample's vertex).
+Pixels where the camera ray escapes get 0 everywhere (OIDN's convention for "nothing there"); a chain that
+escapes after a specular bounce keeps its specular weight as albedo and the last surface's normal.
 """
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -19,23 +30,85 @@ from ..jit import backend
 
 backend()
 
+import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 
+#: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever); a chain
+#: still specular after them keeps its specular weight as albedo
+DELTA_BOUNCES = 4
 
-def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, position: bool = False) -> tuple[np.ndarray, ...]:
-    aovs = "albedo:albedo,nn:sh_normal" + (",pos:position" if position else "")
-    k = 9 if position else 6
-    aov = mi.load_dict({"type": "aov", "aovs": aovs})
-    img = np.asarray(mi.render(scene, integrator=aov, spp=int(spp), seed=int(seed)), dtype=np.float32)
-    img = np.nan_to_num(img[..., -k:])  # the AOVs come last whatever the film's own channels
-    # A purely specular surface (a mirror, a conductor, glass) has no diffuse albedo: Mitsuba's AOV says 0 there,
-    # which tells OIDN "black, nothing to keep" and leaves the reflection's chroma noise in (cel then turns it
-    # into coloured speckle: I * level / brightness(I) at a dark reflection). OIDN's guidance for perfect
-    # specular surfaces is an albedo of 1: where a surface was hit (a normal) but the albedo is 0, use 1.
-    hit = np.any(img[..., 3:6] != 0.0, axis=-1)
-    black = hit & np.all(img[..., 0:3] <= 0.0, axis=-1)
-    img[black, 0:3] = 1.0
-    return tuple(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, k, 3))
+
+class Guides(NamedTuple):
+    albedo: np.ndarray
+    normal: np.ndarray
+    position: np.ndarray
+    surface_normal: np.ndarray
+
+
+def through_delta(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> tuple[mi.Color3f, mi.Vector3f]:
+    """(albedo, shading normal) of the first surface along si's specular chain that is not purely specular.
+
+    At a purely specular surface (only delta lobes: a smooth conductor, smooth glass) the chain goes on along
+    its transmission lobe where it has one (what one sees through glass), else its reflection, and the albedo is
+    weighted by that lobe's weight (Fresnel, tint). One lobe is enabled at a time, so the sampled direction is
+    the lobe's own and no random number decides it: the guide stays noise-free."""
+    throughput = mi.Color3f(1.0)
+    albedo = mi.Color3f(0.0)
+    normal = mi.Vector3f(si.sh_frame.n)
+    done = ~(active & si.is_valid())
+    ctx_t = mi.BSDFContext(mi.TransportMode.Radiance, int(mi.BSDFFlags.DeltaTransmission), None)
+    ctx_r = mi.BSDFContext(mi.TransportMode.Radiance, int(mi.BSDFFlags.DeltaReflection), None)
+    for _ in range(DELTA_BOUNCES):
+        bsdf = si.bsdf()
+        flags = bsdf.flags()
+        specular = mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Smooth)
+        stop = ~done & ~specular
+        diffuse = mi.Color3f(bsdf.eval_diffuse_reflectance(si, stop))
+        diffuse = dr.select(dr.all(diffuse <= 0.0), mi.Color3f(1.0), diffuse)
+        albedo[stop] = throughput * diffuse
+        normal[stop] = si.sh_frame.n
+        done |= stop
+        go = ~done
+        glass = mi.has_flag(flags, mi.BSDFFlags.DeltaTransmission)
+        bs_t, w_t = bsdf.sample(ctx_t, si, 0.5, mi.Point2f(0.5), go & glass)
+        bs_r, w_r = bsdf.sample(ctx_r, si, 0.5, mi.Point2f(0.5), go & ~glass)
+        wo = dr.select(glass, bs_t.wo, bs_r.wo)
+        throughput *= mi.Color3f(dr.select(glass, w_t, w_r))
+        last_normal = mi.Vector3f(si.sh_frame.n)
+        si = scene.ray_intersect(si.spawn_ray(si.to_world(wo)), go)
+        escaped = go & ~si.is_valid()
+        albedo[escaped] = throughput
+        normal[escaped] = last_normal
+        done |= escaped
+    albedo[~done] = throughput  # still specular after DELTA_BOUNCES
+    return albedo, normal
+
+
+class GuidePass(mi.SamplingIntegrator):
+    """Per camera ray: the guides of the module docstring as AOVs (the image itself is 0)."""
+
+    NAMES = ("albedo", "normal", "position", "surface_normal")
+
+    def __init__(self, props=None):
+        super().__init__(props if props is not None else mi.Properties())
+
+    def aov_names(self):
+        return [f"{name}.{c}" for name in self.NAMES for c in "XYZ"]
+
+    def sample(self, scene, sampler, ray, medium=None, active=True):
+        si = scene.ray_intersect(ray, active)
+        hit = mi.Bool(active) & si.is_valid()
+        albedo, normal = through_delta(scene, si, hit)
+        zero = mi.Vector3f(0.0)
+        parts = (albedo, normal, dr.select(hit, si.p, zero), dr.select(hit, si.sh_frame.n, zero))
+        aovs = [dr.select(hit, part[i], 0.0) for part in parts for i in range(3)]
+        return mi.Spectrum(0.0), mi.Bool(True), aovs
+
+
+def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0) -> Guides:
+    img = np.asarray(mi.render(scene, integrator=GuidePass(), spp=int(spp), seed=int(seed)), dtype=np.float32)
+    img = np.nan_to_num(img[..., -12:])  # the AOVs come last whatever the film's own channels
+    return Guides(*(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, 12, 3)))
 
 
 def to_sensor(scene: mi.Scene):
@@ -43,4 +116,4 @@ def to_sensor(scene: mi.Scene):
     return scene.sensors()[0].world_transform().inverse()
 
 
-__all__ = ["first_hit", "to_sensor"]
+__all__ = ["first_hit", "through_delta", "Guides", "GuidePass", "to_sensor"]

@@ -2,8 +2,8 @@
 
     image, noisy, aovs = render(scene, integrator, spp=16, seed=0, quality="high")
 
-The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same first-hit albedo
-and normal guides as `--denoise expectation`. Every mode of the renderer works (it is a post-process), but
+The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same albedo and normal
+guides as `--denoise expectation`. Every mode of the renderer works (it is a post-process), but
 a step style's band flips are edges to the denoiser, which keeps them (docs/denoise.md, BENCHMARKS.md).
 
 Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `lanes_per_pass`/`pass_spp` as
@@ -35,8 +35,8 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
         if callback is not None:
             callback(prog)
     noisy = np.asarray(prog.image, dtype=np.float32)
-    albedo, normal = guides.first_hit(scene, spp, pass_seed(seed, 0))
-    out = oidn.run(noisy, albedo, normal, quality, guides.to_sensor(scene))
+    g = guides.first_hit(scene, spp, pass_seed(seed, 0))
+    out = oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
     errs = prog.aovs
     if errs is not None:
         errs = {"noisy_variance": errs["variance"], "noisy_bias": errs["bias"], "children": errs["children"],

@@ -40,7 +40,7 @@ def _as_rgb(a) -> np.ndarray:
 
 
 def run(color, albedo, normal, quality: str = "high", to_sensor=None) -> np.ndarray:
-    """Denoise `color` (H x W x 3 linear radiance) guided by first-hit `albedo` and `normal` (H x W x 3)."""
+    """Denoise `color` (H x W x 3 linear radiance) guided by `albedo` and `normal` (H x W x 3)."""
     check_quality(quality)
     color, albedo, normal = _as_rgb(color), _as_rgb(albedo), _as_rgb(normal)
     import mitsuba as mi
