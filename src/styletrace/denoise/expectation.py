@@ -55,7 +55,7 @@ def check(integrator) -> None:
     why = None
     if s.stylize == "first_object_hit":
         why = ("stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where the "
-               "first-hit guides describe another surface; use first_hit or --denoise image")
+               "pixel's guides describe another surface; use first_hit or --denoise image")
     elif s.stylize == "first_n_hits" or s.stylize_depth != 1:
         why = ("stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the inner levels' "
                "vertices are not the pixel's); use first_hit or --denoise image")
