@@ -102,8 +102,12 @@ PIXEL_FIXED = ((1, 2), (1, 4), (1, 16), (1, 64), (2, 8), (4, 2), (4, 4), (4, 16)
                (16, 4), (16, 16), (32, 16), (64, 2), (64, 4), (128, 4))
 # a first run with spp up to 8 found expectation and image denoising still improving at spp = 8 (and reuse at 4,
 # the most it had): every method's grid goes on from there
-PIXEL_EXPECTATION = tuple((spp, n) for spp in (1, 2, 4, 8) for n in (4, 8, 16)) + ((16, 4), (16, 8))
-PIXEL_IMAGE = tuple((spp, n) for spp in (1, 2, 4, 8, 16) for n in (4, 16))
+# a third run (the interpolation in one Dr.Jit kernel, guides through mirrors) found the denoiser's cost per camera
+# sample a third lower and hatching still improving with spp at a fixed number of children per pixel: both
+# denoisers' grids go on to 32 and 64 camera samples per pixel
+PIXEL_EXPECTATION = (tuple((spp, n) for spp in (1, 2, 4, 8) for n in (4, 8, 16)) + ((16, 4), (16, 8))
+                     + ((32, 2), (32, 4), (64, 2)))
+PIXEL_IMAGE = tuple((spp, n) for spp in (1, 2, 4, 8, 16) for n in (4, 16)) + ((32, 4), (64, 2))
 PIXEL_REUSE_SPP = (1, 4, 8)
 
 
@@ -698,8 +702,9 @@ def timing_section() -> list[str]:
         tm = json.load(f)
     return ["### Cost at 512x512", "",
             "Cornell box, 512x512, 1 camera sample per pixel, n = 8, cel; median of 3 runs, same shared 2-core "
-            "machine (`python benchmarks/denoise.py --timing`; the current method, with the per-sample "
-            "remodulation inside the interpolation step).", "",
+            "machine (`python benchmarks/denoise.py --timing`; the current method: guides through mirrors "
+            "and glass, each sample's own albedo and emission found by one ray, the interpolation in one Dr.Jit "
+            "kernel).", "",
             "| step | s |", "|---|---:|"] + [f"| {k} | {v:.2f} |" for k, v in tm.items() if k != "size"] + [""]
 
 
@@ -759,13 +764,15 @@ def timing(size: int = 512, runs: int = 3) -> dict:
         nonlocal buf
         buf = render_buffer(scene, spp=1, seed=0, integrator=integ)
     out = {"size": size, "record (render, n=8, 1 spp)": med(record)}
-    m = X.expectation(buf)
+    own = X.own_surface(scene, buf.arrays)
+    m = X.expectation(buf, own[1])
     g = guides.first_hit(scene, 1, api.pass_seed(0, 0))
     out["guides (guide pass)"] = med(lambda: guides.first_hit(scene, 1, api.pass_seed(0, 0)))
     for q in ("high", "balanced", "fast"):
         out[f"OIDN {q}"] = med(lambda: oidn.run(m, g.albedo, g.normal, q))
     d = oidn.run(m, g.albedo, g.normal)
-    out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, g))
+    out["own albedo and emission (one ray per sample)"] = med(lambda: X.own_surface(scene, buf.arrays))
+    out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, g, own))
     out["attach (guides + OIDN high + interpolation)"] = med(lambda: X.attach(buf, scene, 1, 0))
     out["restyle of the denoised buffer"] = med(lambda: styletrace.restyle(buf, style="hatching"))
     with open(os.path.join(CACHE, f"denoise_timing_{size}.json"), "w") as f:

@@ -4,10 +4,11 @@
 
 Per camera sample the renderer records (as `lookdev.record` does for an expectation buffer) the stylized
 vertex, the radiance before it and the mean of its n children, the estimate of E[L] there. Per pixel the
-means of the camera samples that found a stylized vertex are averaged: the pixel's estimate of the
-expectation M. M is denoised by OIDN with albedo and normal guides (`guides`, `oidn`), giving D,
-and every such camera sample then takes its own style slot's g of D interpolated at its own film position
-(`at_samples`: guided bilinear, so a threshold crossing is placed within the pixel) at its own vertex
+means of the camera samples that found a stylized vertex, less each one's own emission (`own_surface`), are
+averaged: the pixel's estimate of the reflected part of the expectation, M. M is denoised by OIDN with albedo
+and normal guides (`guides`, `oidn`), giving D, and every such camera sample then takes its own style slot's g
+of D interpolated at its own film position (`at_samples`: guided bilinear, so a threshold crossing is placed
+within the pixel; remodulated by its own albedo; its own emission added back) at its own vertex
 (hatching's lines and per-object styles stay per sample): value = g(D(sample), vertex); pixel = mean of its
 samples. D at the samples is kept in the buffer (`denoised_mean`, 3 x samples, in place of the children's
 means when restyling), so a restyle of the buffer (`lookdev.restyle`) styles D too, at the usual milliseconds.
@@ -76,15 +77,19 @@ def check(integrator) -> None:
         raise UsageError(f"--denoise expectation cannot render {why}")
 
 
-def expectation(buf: Buffer) -> np.ndarray:
+def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
     """M: per pixel, the mean of its camera samples' children means where a stylized vertex was found
-    (0 where none was), H x W x 3 float32."""
+    (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each sample's own emitted
+    radiance is taken off first (M is then the reflected part alone)."""
     a = buf.arrays
     found = a["slot"] >= 0
     pix = a["pixel"][found].astype(np.int64)
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
-    out = np.stack([np.bincount(pix, weights=a["mean"][c][found].astype(np.float64), minlength=size)
+    mean = a["mean"].astype(np.float64)
+    if emission is not None:
+        mean = mean - emission.T
+    out = np.stack([np.bincount(pix, weights=mean[c][found], minlength=size)
                     for c in range(3)], axis=-1) / np.maximum(count, 1.0)[:, None]
     return out.reshape(buf.height, buf.width, 3).astype(np.float32)
 
@@ -100,7 +105,7 @@ def raster(scene, p: np.ndarray) -> np.ndarray:
     return np.stack([np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1) - off
 
 
-def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides) -> np.ndarray:
+def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) -> np.ndarray:
     """D at each camera sample's own film position (3 x N): bilinear between the four nearest pixel centres,
     keeping only the pixels that show the sample's own surface (normal within ~18 degrees, the pixel's
     first hit within ~6 degrees of the sample's tangent plane, albedo within 0.05), renormalised; the
@@ -110,8 +115,13 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides) -> np.ndarra
     on either side of it; D constant per pixel puts the whole pixel on one side. Interpolating D at the
     sample's position places the boundary to a fraction of a pixel (BENCHMARKS.md: ~18% lower MSE on the
     Cornell box at n = 32; the choice was made there). The guide tests keep the interpolation from mixing
-    surfaces across geometric edges and texture edges."""
+    surfaces across geometric edges and texture edges.
+
+    `own`: (albedo, emission) at each sample's vertex (`own_surface`). D is the reflected part, M formed
+    without the emission (`attach`): each sample's own emission is added back after the interpolation and the
+    remodulation."""
     a = buf.arrays
+    own_albedo, emission = own
     albedo = g.albedo
     w, h = buf.width, buf.height
     pix = a["pixel"].astype(np.int64)
@@ -130,7 +140,8 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides) -> np.ndarra
     if REMODULATE:
         # the guide albedo with the same weights: what albedo the interpolated D was formed under
         mixed = np.where((wsum > 1e-6)[:, None], acc_a / np.maximum(wsum, 1e-12)[:, None], a_s)
-        out = remodulate(out, mixed, sample_albedo(scene, a), found)
+        out = remodulate(out, mixed, own_albedo, found)
+    out = out + np.where(found[:, None], emission, 0.0)
     return np.ascontiguousarray(out.T.astype(np.float32))
 
 
@@ -176,13 +187,20 @@ def _guided_bilinear(d, g: guides.Guides, uv, good, p, n, pix, w: int, h: int, d
 
 #: rescale D at each camera sample by its own albedo over the pixel's (`remodulate`)
 REMODULATE = True
+#: denoise the reflected part of E[L] and add each sample's own emission back (`own_surface`)
+EMISSION_APART = True
 
 
-def sample_albedo(scene, a: dict) -> np.ndarray:
-    """The albedo guide at each camera sample's own vertex (N x 3), as `guides.first_hit` forms it (through
-    mirrors and glass, `guides.through_delta`), at the surface found by a ray from just in front of the vertex
-    (along wo) back onto it; NaN where that ray does not find it again (`remodulate` then leaves the sample as
-    it is)."""
+def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(albedo, emission) at each camera sample's own vertex, N x 3 each, at the surface found by a ray from
+    just in front of the vertex (along wo) back onto it.
+
+    albedo: the albedo guide as `guides.first_hit` forms it (through mirrors and glass, `guides.through_delta`);
+    NaN where the ray does not find the vertex again (`remodulate` then leaves the sample as it is).
+    emission: the radiance the vertex emits towards wo (an area light's, 0 elsewhere and where not found).
+    E[L] at a vertex on a light includes its emission, which no guide tells apart from a coplanar surface of
+    the same albedo (the Cornell box's light in its ceiling): `attach` denoises the reflected part alone and
+    adds each sample's own emission back, so a ceiling sample next to the light does not take the light's."""
     p = np.asarray(a["p"], np.float64)
     wo = np.asarray(a["wo"], np.float64)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
@@ -193,12 +211,21 @@ def sample_albedo(scene, a: dict) -> np.ndarray:
     ray.maxt = mi.Float(3.0 * eps)
     si = scene.ray_intersect(ray)
     dr.eval(si)  # measured: the chain after an evaluated hit costs half of one kernel doing both
-    alb, _ = guides.through_delta(scene, si, si.is_valid())
     found = si.is_valid()
-    dr.eval(alb, found)  # one kernel: reading the channels one by one would trace the chain three times
-    out = np.stack([np.asarray(alb[i], np.float64) for i in range(3)], -1)
-    out[~np.asarray(found, bool)] = np.nan  # not found again: no correction for this sample
-    return out
+    alb, _ = guides.through_delta(scene, si, found)
+    le = mi.Color3f(si.emitter(scene, found).eval(si, found))
+    dr.eval(alb, le, found)  # one kernel: reading the channels one by one would trace the chain three times
+    hit = np.asarray(found, bool)
+    albedo = np.stack([np.asarray(alb[i], np.float64) for i in range(3)], -1)
+    albedo[~hit] = np.nan  # not found again: no correction for this sample
+    emission = np.stack([np.asarray(le[i], np.float64) for i in range(3)], -1)
+    emission[~hit] = 0.0
+    return albedo, np.nan_to_num(emission)
+
+
+def sample_albedo(scene, a: dict) -> np.ndarray:
+    """The albedo at each camera sample's own vertex (`own_surface`), N x 3."""
+    return own_surface(scene, a)[0]
 
 
 def remodulate(d: np.ndarray, mixed: np.ndarray, own: np.ndarray, found: np.ndarray) -> np.ndarray:
@@ -237,10 +264,12 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high") -> np
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
     g = guides.first_hit(scene, spp, pass_seed(seed, 0))
-    m = expectation(buf)
+    own = own_surface(scene, buf.arrays) if EMISSION_APART else (sample_albedo(scene, buf.arrays),
+                                                                 np.zeros((buf.samples, 3)))
+    m = expectation(buf, own[1])  # the reflected part: each sample's own emission goes back in at_samples
     d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
-    buf.arrays[DENOISED] = at_samples(buf, d, scene, g)
+    buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
     buf.header["denoise"] = {"method": "expectation", "quality": quality,
                              "guides": "albedo and shading normal through specular chains (guides.first_hit)",
                              "at_samples": "guided bilinear interpolation of D at each camera sample's film position"}
