@@ -6,7 +6,7 @@ line_depth 2 with shape-id and crease lines, against plain hatching without line
 Scene: a hatched plane seen directly and in a reflector turned 45 degrees (the tests' flat-mirror scene,
 tests/tone/scenes.py, rebuilt here), the reflector a perfect mirror (every styled vertex has a closed-form
 coordinate: no anchor is traced) or a GGX conductor of roughness 0.05 (every reflected vertex is an MLS query:
-17 anchor paths traced to its depth). first_object_hit, 128x128, 4 camera samples per pixel, hatching at
+17 anchor paths traced to its depth). first_object_hit, 128x128, 32 camera samples per pixel (SPP), hatching at
 n = 16 and n = 4 inner samples. Each configuration renders once to compile, then the median of RUNS warm
 renders is taken, the configurations timed in turn in each round (one process) so that a change of the
 machine's load falls on all of them alike. The anchor share is the fraction of camera samples that made an
