@@ -39,3 +39,20 @@ def test_exported_xml_renders_the_f12_image(name, tmp_path):
     assert f12.shape == cli.shape
     assert np.abs(f12).max() > 0
     np.testing.assert_allclose(cli, f12, rtol=1e-5, atol=1e-6)
+    if name == "instanced":  # and `--ray` (a local Ray instance) renders the same file to the same image
+        ray_out = str(tmp_path / "ray.exr")
+        run = subprocess.run([main_python(), "-m", "styletrace", "render", xml, "--seed", "11", "--pass-spp", "4",
+                              "--ray", "-o", ray_out], capture_output=True, text=True, env=child_env(), timeout=600)
+        assert run.returncode == 0, run.stderr
+        np.testing.assert_allclose(np.array(mi.Bitmap(ray_out), dtype=np.float32)[..., :3], f12, rtol=1e-5,
+                                   atol=1e-6)
+
+
+def main_python():
+    """The project's main environment (dev.sh's STYLETRACE_VENV, .venv): Ray is an extra of that one; the
+    Blender environment (numpy < 2 for bpy) does not carry it."""
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+    venv = os.environ.get("STYLETRACE_VENV", ".venv")
+    python = os.path.join(venv if os.path.isabs(venv) else os.path.join(root, venv), "bin", "python")
+    assert os.path.exists(python), f"no main environment at {python}: run `bash dev.sh test` (it builds both)"
+    return python

@@ -48,6 +48,12 @@ class StyletraceEngine(bpy.types.RenderEngine):
         """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can press it."""
         return self.test_break()
 
+    def progress(self, fraction: float, status: str) -> None:
+        """Blender's progress bar and status line; a method of our own, so that a test can read them (Blender's
+        own `update_progress` cannot be replaced on a registered engine)."""
+        self.update_progress(fraction)
+        self.update_stats("", status)
+
     def update_render_passes(self, scene=None, renderlayer=None):
         st = scene.styletrace
         self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", "COLOR")
@@ -88,9 +94,8 @@ class StyletraceEngine(bpy.types.RenderEngine):
         prog = None
         total = -(-st.spp // st.pass_spp)
         for k, prog in enumerate(source, start=1):
-            self.update_progress(prog.spp_done / prog.spp_total)
-            self.update_stats("", f"styletrace: pass {k}/{total}, {prog.spp_done}/{prog.spp_total} spp, "
-                                  f"{time.perf_counter() - start:.1f} s")
+            self.progress(prog.spp_done / prog.spp_total, f"styletrace: pass {k}/{total}, {prog.spp_done}/"
+                                                           f"{prog.spp_total} spp, {time.perf_counter() - start:.1f} s")
             self._show(prog.image, w, h)
             if self.stop_requested():
                 break
