@@ -10,7 +10,8 @@ import sys
 import numpy as np
 
 import styletrace
-from styletrace import api, gallery
+from styletrace import api
+from styletrace.frontends import gallery
 
 
 def main(size: int = 192, spp: int = 16) -> None:

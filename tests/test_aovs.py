@@ -5,7 +5,7 @@ import pytest
 
 import styletrace
 from styletrace import api
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 from styletrace.errors import UsageError
 from styletrace.images import AOV_CHANNELS
 

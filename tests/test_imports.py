@@ -14,7 +14,7 @@ def run_child(code):
 
 
 def test_import_styletrace_loads_neither_drjit_nor_mitsuba():
-    r = run_child("import sys, styletrace, styletrace.estimators, styletrace.errors, styletrace.cli; "
+    r = run_child("import sys, styletrace, styletrace.estimators, styletrace.errors, styletrace.frontends.cli; "
                   "print(sorted(m for m in ('drjit', 'mitsuba') if m in sys.modules))")
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "[]"
@@ -126,8 +126,8 @@ def test_the_cycle_check_finds_a_cycle():
 def test_only_the_engine_layers_import_drjit_or_mitsuba():
     """Dr.Jit picks its libLLVM when first imported: modules that import it at load time sit below a guard
     (`jit.backend()` in `styles`, `kernel`, `scene`, `api`), and the estimators and front ends import it nowhere."""
-    graph_free = ("styletrace", "styletrace.errors", "styletrace.jit", "styletrace.runtime", "styletrace.cli",
-                  "styletrace.gallery")
+    graph_free = ("styletrace", "styletrace.errors", "styletrace.jit", "styletrace.runtime",
+                  "styletrace.frontends.cli", "styletrace.frontends.gallery")
     for name in graph_free:
         path = os.path.join(PACKAGE, *name.split(".")[1:]) + ".py" if name != "styletrace" else \
             os.path.join(PACKAGE, "__init__.py")

@@ -89,7 +89,7 @@ def test_command_without_llvm_is_one_line_and_exit_2(tmp_path):
     fake = tmp_path / "libLLVM-15.so"
     fake.write_bytes(b"")
     r = _import_in_child({"DRJIT_LIBLLVM_PATH": str(fake), "STYLETRACE_NO_CUDA": "1"},
-                         "import sys; from styletrace.cli import main; sys.exit(main(['render']))")
+                         "import sys; from styletrace.frontends.cli import main; sys.exit(main(['render']))")
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("styletrace: error: ") and "apt-get install libllvm19" in lines[0]

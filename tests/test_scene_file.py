@@ -8,7 +8,7 @@ import pytest
 
 import styletrace
 from styletrace import api
-from styletrace.cli import build_parser, choose_integrator, main
+from styletrace.frontends.cli import build_parser, choose_integrator, main
 from styletrace.errors import SceneError
 from styletrace.images import save_safely
 

@@ -49,7 +49,8 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     """The arguments of `passes`: a renderable scene as well."""
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
-    from .kernel.integrator import StylizedIntegrator, line_problem  # needs a variant set, as the plugins do
+    from .kernel.integrator import StylizedIntegrator  # needs a variant set, as the plugins do
+    from .kernel.line_hooks import line_problem
     if isinstance(integrator, StylizedIntegrator) and integrator.settings.lines is not None:
         from .kernel.lines import Lines
         from .scene.graph import SceneGraph

@@ -2,7 +2,7 @@
 import pytest
 
 import styletrace
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 from styletrace.errors import SettingsError
 from styletrace.config import estimator_registry, settings
 from styletrace.config.settings import AdaptiveCount

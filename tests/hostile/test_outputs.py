@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 
 styletrace.init()
 

@@ -12,7 +12,7 @@ import pytest
 
 import styletrace
 from styletrace import api
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.config import estimator_registry as estimation
 from styletrace.styles import get, names

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from styletrace import api
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 from styletrace.lookdev.record import record
 from styletrace.kernel import reuse
 from styletrace.scene import defaults as scene_defaults

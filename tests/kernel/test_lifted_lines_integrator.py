@@ -1,4 +1,4 @@
-"""`line_mode lifted` in the `stylized` integrator (kernel/integrator.py `_lifted_lines`): the camera sample's
+"""`line_mode lifted` in the `stylized` integrator (kernel/line_hooks.py `lifted`): the camera sample's
 film point and lens sample are recovered exactly; the integrator draws the lines of the standalone renderer
 (kernel/lifted_lines.Lifted, tested against image-space references in test_lifted_lines_render.py) with the
 priority of Eq. 34 and traces no children where a type fired; through a glass slab the auxiliary paths refract

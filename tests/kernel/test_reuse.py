@@ -10,7 +10,7 @@ import pytest
 
 import styletrace
 from styletrace import api
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 from styletrace.errors import SceneError, SettingsError
 from styletrace.kernel import reuse
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.cli import main
+from styletrace.frontends.cli import main
 
 
 def sphere_scene(bsdf):

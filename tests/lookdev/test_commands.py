@@ -2,7 +2,7 @@
 import mitsuba as mi
 import numpy as np
 
-from styletrace import cli
+from styletrace.frontends import cli
 from styletrace.lookdev.buffer import load_buffer
 from styletrace.lookdev.restyle import restyle
 

@@ -45,7 +45,7 @@ def frame_paths(output: str, count: int) -> list[str]:
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
     scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
-    from ..command_job import job_of
+    from ..frontends.command_job import job_of
     from ..pipeline.execute import ray_job
     from ..pipeline.resolve import resolve
     from ..runtime import init

@@ -22,13 +22,9 @@ Where styles apply (`stylize`):
   halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
   The integrator's own style must be identity here.
 
-Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ray replaces the camera
-sample (nothing else is traced for it); walks and bounces carry the line state of the vertex they leave
-(`line_states`, one per stylized level) and end where a line absorbs them, so lines on later edges enter
-the expectation before g. With `lines` off no line code is traced. In scenes with participating media lines
-are detected on the camera ray only (`line_depth` above 1 is refused there). `line_mode lifted` (LLaT's
-conditional lifting, lifted_lines.py) instead tests its line types once per camera sample, along auxiliary
-paths that follow the camera sample's own base path to `line_depth` vertices, before anything else is traced.
+Feature lines (`lines`, `line_mode lifted`; line_hooks.py, docs/lines.md): walks and bounces carry the
+line state of the vertex they leave (`line_states`, one per stylized level); line_hooks.py decides the
+camera sample's own lines before anything else is traced.
 
 Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
 trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
@@ -57,7 +53,7 @@ from ..config.estimator_registry import make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
 from .render_context import RenderContext
-from .lifted_lines import compose_sample
+from .line_hooks import camera_edge, lifted as lifted_lines, line_problem, walk_lines
 from .bounce import bounce
 from .path import first_scattering, past_area_emitters, walk
 from .vertex import emission, environment
@@ -164,7 +160,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         s = self.settings
         if level + 1 >= s.stylize_depth:
             return self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True,
-                              lines=self._lines_from(level)).L
+                              lines=walk_lines(self, level)).L
         if s.stylize == "first_object_hit":
             return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False, medium=medium)
         if self.media:
@@ -179,7 +175,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
         b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls,
-                   lines=self._lines_from(level), tone=self.tone_states.get(level))
+                   lines=walk_lines(self, level), tone=self.tone_states.get(level))
         if self.lines is not None:
             self.line_states[level + 1] = b.lines
         self.tone_states[level + 1] = b.tone
@@ -198,7 +194,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
         extra = dict(medium=medium, flight=flight, hide_first=hide) if self.media else {}
         w = self._walk(scene, sampler, pi, ray, active, depth, stop=stop, skip_emitter=self._skip_emitter,
-                       opaque_start=not halt_at_start, lines=self._lines_from(level - 1),
+                       opaque_start=not halt_at_start, lines=walk_lines(self, level - 1),
                        tone=self.tone_states.get(level - 1), **extra)
         if self.lines is not None:
             self.line_states[level] = w.lines
@@ -260,13 +256,6 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             self._stats.append((active, stats))
         return value
 
-    def _lines_from(self, level: int):
-        """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's first
-        vertex, where first_object_hit's camera walk starts): the line settings and that vertex's state."""
-        if self.lines is None or self.media:  # with media, lines on the camera ray only (`line_problem`)
-            return None
-        return self.lines, self.line_states[level]
-
     def _render_reuse(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
         """`render` with reuse=pixels: a pass is rendered by `reuse.render`, which needs every camera sample's
         neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see each other). It is set
@@ -318,30 +307,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
                               if m and self.expansion.collector is None else None)
         if self.lifted is not None:
-            return self._lifted_lines(scene, sampler, camera_ray, ray, active, medium)
+            return lifted_lines(self, self._stylize, scene, sampler, camera_ray, ray, active, medium)
         if self.lines is None:
             return self._stylize(scene, sampler, ray, active, medium)
-        # edge 0: a feature line on the camera ray replaces the pixel sample (lines.py)
-        seen, camera = self.lines.camera(scene, sampler, camera_ray, spp, active)
-        # the camera ray's first hit: where first_object_hit's walk starts and the first_hit/first_n_hits vertex
-        self.line_states = {-1: camera, 0: camera}
-        live = active & ~seen.fired if self.line_short_circuit else active
-        value, valid, aovs = self._stylize(scene, sampler, ray, live, medium)
-        return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
-
-    def _lifted_lines(self, scene, sampler, camera_ray, ray, active, medium):
-        """line_mode lifted (LLaT Eq. 34): each line type's auxiliary pairs are tested for the camera sample
-        (its film point and lens sample kept); the first type in priority order that fires gives the sample
-        its colour, and L is traced only where none fired."""
-        lifted = self.lifted
-        s, aperture = lifted.conditioning(camera_ray)
-        fired = lifted.fired(s, sampler, active, aperture)
-        any_fired = mi.Bool(False)
-        for f in fired:
-            any_fired |= f
-        value, valid, aovs = self._stylize(scene, sampler, ray, active & ~any_fired, medium)
-        value = compose_sample(fired, [mi.Color3f(*t.color) for t in lifted.types], value)
-        return value, valid | any_fired, aovs
+        return camera_edge(self, self._stylize, scene, sampler, camera_ray, ray, active, medium, spp)
 
     def _stylize(self, scene, sampler, ray, active, medium=None):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
@@ -384,15 +353,6 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"
-
-
-def line_problem(settings: S.Settings, media: bool) -> str | None:
-    """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`), or None."""
-    lines = settings.lines
-    if media and lines is not None and lines.depth > 1:
-        return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: lines are detected "
-                "on the camera ray only there (line_depth 1)")
-    return None
 
 
 #: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children

@@ -21,10 +21,10 @@ import time
 import warnings
 from typing import Sequence
 
-from .errors import StyletraceError, UsageError
-from .images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
+from ..errors import StyletraceError, UsageError
+from ..images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
 from .status import Status
-from .wild import warning as wild_warning
+from ..wild import warning as wild_warning
 
 
 def _parse_defines(items: Sequence[str]) -> dict[str, str]:
@@ -146,10 +146,10 @@ class StopSignals:
 
 
 def cmd_styles(args) -> int:
-    from .runtime import init
+    from ..runtime import init
     init()
-    from .config.estimator_registry import applicable
-    from .styles import get, names
+    from ..config.estimator_registry import applicable
+    from ..styles import get, names
 
     for name in names():
         cls = get(name)
@@ -166,9 +166,9 @@ def cmd_styles(args) -> int:
 
 
 def cmd_lines(args) -> int:
-    from .runtime import init
+    from ..runtime import init
     init()
-    from .config import settings
+    from ..config import settings
 
     print("feature lines (West 2021) on path edges, with any style and stylize mode: `render --lines` and "
           "`--set NAME=VALUE` (Python: styletrace.render(..., lines=True, line_width=2)); docs/lines.md")
@@ -179,9 +179,9 @@ def cmd_lines(args) -> int:
 
 
 def cmd_estimators(args) -> int:
-    from .runtime import init
+    from ..runtime import init
     init()
-    from .config.estimator_registry import kinds
+    from ..config.estimator_registry import kinds
 
     for k in kinds():
         print(f"{k.name}: {k.doc}")
@@ -195,7 +195,7 @@ def cmd_render(args) -> int:
     if args.denoise and (len(args.scene) > 1 or args.frames is not None or args.orbit is not None):
         raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
     if len(args.scene) > 1 or args.frames is not None or args.orbit is not None:  # numbered images, on Ray
-        from .distributed.command import frames_command
+        from ..distributed.command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     args.scene = args.scene[0] if args.scene else "cornell-box"
     check_output(args.output, args.scene)
@@ -207,11 +207,11 @@ def cmd_render(args) -> int:
 
     defines = _parse_defines(args.define)
     status = Status(enabled=not args.quiet)
-    from . import api
+    from .. import api
     from .command_job import job_of
-    from .images import check_format
-    from .pipeline.execute import execute
-    from .pipeline.resolve import resolve
+    from ..images import check_format
+    from ..pipeline.execute import execute
+    from ..pipeline.resolve import resolve
 
     job = job_of(args, params, defines)
     with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
@@ -242,15 +242,15 @@ def cmd_render(args) -> int:
         if args.spp < 2:
             raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
     if args.denoise:  # its refusals before anything is rendered (docs/denoise.md)
-        from .denoise.command import precheck
+        from ..denoise.command import precheck
         precheck(args, scene, integrator, pixel_format)
     if resolved.auto and not args.quiet:  # scene-relative defaults, printed to pin them
         print(f"styletrace: auto values: {resolved.auto}", file=sys.stderr)
     if args.denoise:  # docs/denoise.md
-        from .denoise.command import render_denoised
+        from ..denoise.command import render_denoised
         return render_denoised(args, scene, integrator, pixel_format)
     if args.buffer:
-        from .lookdev.commands import render_with_buffer
+        from ..lookdev.commands import render_with_buffer
         return render_with_buffer(args, scene, integrator, resolved.lanes, resolved.pilot)
 
     lanes, note = resolved.lanes, resolved.lanes_note
@@ -290,7 +290,7 @@ def cmd_render(args) -> int:
     with StopSignals(abandon) as stop:
         try:
             if args.ray is not None or args.resume:  # the passes as Ray tasks, checkpointed
-                from .distributed.command import passes as ray_passes
+                from ..distributed.command import passes as ray_passes
                 source = ray_passes(args, resolved, stop.lock)
             else:
                 source = execute(resolved, lock=stop.lock)
@@ -348,7 +348,7 @@ def choose_integrator(scene, args, params):
     (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
     and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise): `pipeline.resolve`'s."""
     from .command_job import job_of
-    from .pipeline.resolve import choose_integrator as choose
+    from ..pipeline.resolve import choose_integrator as choose
     return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
 
 
@@ -430,7 +430,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 
-    from .lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
+    from ..lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
     r.add_argument("--buffer", default=None, metavar="FILE", help=lookdev.BUFFER_HELP)
     lookdev.add_parsers(sub, parse_set=_parse_set, check_output=check_output)
 
@@ -470,7 +470,7 @@ def add_ray_flags(parser) -> None:
 
 def add_setting_flags(parser) -> None:
     """One flag per integrator property that has one; help and defaults come from the settings table."""
-    from .config import settings
+    from ..config import settings
     for p in settings.PROPERTIES:
         if not p.flag:
             continue

@@ -6,18 +6,18 @@ import sys
 import pytest
 
 import styletrace
-from styletrace import reference
+from styletrace.frontends import reference
 from styletrace.config.settings import PROPERTIES
 from styletrace.styles import get, names
 
 styletrace.init()
-ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
 @pytest.mark.parametrize("path", reference.files(ROOT), ids=os.path.basename)
 def test_generated_blocks_are_up_to_date(path):
     text = open(path, encoding="utf-8").read()
-    assert reference.render_file(text) == text, f"run: python -m styletrace.reference ({path} is stale)"
+    assert reference.render_file(text) == text, f"run: python -m styletrace.frontends.reference ({path} is stale)"
 
 
 def test_every_table_has_its_block():

@@ -28,7 +28,7 @@ import numpy as np
 
 from . import equal_time
 from .equal_time import Comparison
-from .images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
+from ..images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
 
 
 @dataclass
@@ -143,14 +143,14 @@ def _quick(setup: Setup) -> Setup:
 
 
 def write_png(image: np.ndarray, path: str) -> None:
-    from .images import write_image
+    from ..images import write_image
     write_image(image, path)
 
 
 def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
-    from .pipeline.execute import render  # every image a pipeline Job on the scene loaded once here
-    from .pipeline.scene import load_scene
+    from ..pipeline.execute import render  # every image a pipeline Job on the scene loaded once here
+    from ..pipeline.scene import load_scene
 
     os.makedirs(out_dir, exist_ok=True)
     setups, comparisons = select(only, skip)
@@ -224,7 +224,7 @@ def plot_mse(results: dict[str, Any], path: str) -> None:
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
-    from .images import write_bytes_atomically
+    from ..images import write_bytes_atomically
     write_bytes_atomically(buf.getvalue(), path)
     plt.close(fig)
 
@@ -264,5 +264,5 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
 
 
 def write_text(path: str, text: str) -> None:
-    from .images import write_bytes_atomically
+    from ..images import write_bytes_atomically
     write_bytes_atomically(text.encode(), path)

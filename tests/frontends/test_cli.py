@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.cli import StopSignals, main
+from styletrace.frontends.cli import StopSignals, main
 from styletrace.styles import get, names
 
 from conftest import child_env
@@ -435,7 +435,7 @@ def test_a_slow_first_pass_is_named_at_the_default_delay(tmp_path):
 def test_status_shows_only_phases_longer_than_its_delay():
     import io
     from styletrace.errors import UsageError
-    from styletrace.status import Status, delay_from_env
+    from styletrace.frontends.status import Status, delay_from_env
     out = io.StringIO()
     status = Status(delay=0.3, stream=out)
     with status.phase("quick"):

@@ -6,9 +6,9 @@ import os
 import numpy as np
 import pytest
 
-from styletrace import gallery
-from styletrace.cli import main
-from styletrace.equal_time import Comparison
+from styletrace.frontends import gallery
+from styletrace.frontends.cli import main
+from styletrace.frontends.equal_time import Comparison
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +97,7 @@ def test_a_method_worse_than_every_fixed_count_is_a_loss(tmp_path, monkeypatch):
 def test_ctrl_c_in_a_comparison_keeps_the_finished_ones(tmp_path, monkeypatch):
     """The section saves gallery.json and the sheets after each comparison: Ctrl-C during the second loses
     nothing of the first."""
-    from styletrace import equal_time
+    from styletrace.frontends import equal_time
     first, second = (Comparison(f"equal_time_{k}", k, "color_map", method={"inner": 4}, reference=64, counts=(4,))
                      for k in ("first", "second"))
     monkeypatch.setattr(gallery, "EQUAL_TIME", [first, second])
@@ -157,7 +157,7 @@ def test_mse_of_non_finite_renders_is_honest_and_quiet():
 
     import numpy as np
 
-    from styletrace.gallery import mse
+    from styletrace.frontends.gallery import mse
     img = np.zeros((2, 2, 3), np.float32)
     img[0, 0, 0] = np.inf
     ref = np.zeros((2, 2, 3), np.float64)

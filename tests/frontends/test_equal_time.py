@@ -2,8 +2,8 @@
 quick comparisons and the sheets' labels. (tests/test_gallery.py renders the section.)"""
 import pytest
 
-from styletrace import equal_time as et
-from styletrace.equal_time import Comparison
+from styletrace.frontends import equal_time as et
+from styletrace.frontends.equal_time import Comparison
 
 
 def test_pick_is_the_largest_count_not_slower_than_the_method():
