@@ -53,6 +53,7 @@ from ..config.estimator_registry import make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
 from .render_context import RenderContext
+from .error_aovs import AOV_NAMES, error_aovs
 from .line_hooks import camera_edge, lifted as lifted_lines, line_problem, walk_lines
 from .bounce import bounce
 from .path import first_scattering, past_area_emitters, walk
@@ -281,18 +282,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     def _sample(self, scene, sampler, ray, active, medium=None):
         self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
         value, valid, _ = self._radiance(scene, sampler, ray, active, medium)
-        return value, valid, self._aovs(value) if self.settings.aovs else []
-
-    def _aovs(self, value) -> list:
-        """The error AOVs of one camera sample (see `aov_names`): its value squared per channel (the film's
-        average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias
-        prediction and the number of children."""
-        bias, children = mi.Float(0.0), mi.Float(0.0)
-        for lanes, stats in self._stats:
-            bias = dr.select(lanes, stats["bias"], bias)
-            children = dr.select(lanes, stats["children"], children)
+        aovs = error_aovs(value, self._stats) if self.settings.aovs else []
         self._stats = []
-        return [value.x * value.x, value.y * value.y, value.z * value.z, bias, children]
+        return value, valid, aovs
 
     def _radiance(self, scene, sampler, ray, active, medium=None):
         for t in self.targets:
@@ -353,7 +345,3 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"
-
-
-#: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
-AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
