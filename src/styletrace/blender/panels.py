@@ -8,7 +8,8 @@ import bpy
 from .properties import key
 from ..styles import registry
 
-RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "reuse", "spp", "pass_spp",
+RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "line_mode", "line_types",
+               "reuse", "spp", "pass_spp",
                "max_depth", "seed", "aovs", "record_buffer")
 
 

@@ -110,6 +110,14 @@ class SceneSettings(bpy.types.PropertyGroup):
     stylize_depth: bpy.props.IntProperty(name="Stylize depth", default=1, min=1, max=S.MAX_STYLIZE_DEPTH)
     lines: bpy.props.BoolProperty(name="Lines", default=False,
                                   description="physically based feature lines; adds a line mask pass")
+    line_mode: bpy.props.EnumProperty(
+        name="Line mode", items=_enum(S.LINE_MODES), default="absorb",
+        description="absorb: West 2021's cone along the path; lifted: LLaT's conditional lifting, one auxiliary "
+                    "path pair per line type, lines that keep their screen width in mirrors and glass")
+    line_types: bpy.props.StringProperty(
+        name="Line types", default="",
+        description="lifted mode: the line dictionary in priority order, e.g. 'shape_id color=1,0,0; depth "
+                    "threshold=0.05; normal threshold=0.5'; empty: styletrace's default")
     reuse: bpy.props.EnumProperty(name="Reuse", items=_enum(S.REUSE_MODES), default="off")
     spp: bpy.props.IntProperty(name="Samples", default=16, min=1, description="camera samples per pixel")
     pass_spp: bpy.props.IntProperty(
@@ -150,6 +158,10 @@ def integrator_values(settings) -> dict:
     out = style_values(settings)
     out.update(stylize=settings.stylize, stylize_depth=settings.stylize_depth, lines=settings.lines,
                reuse=settings.reuse, max_depth=settings.max_depth)
+    if settings.lines:
+        out["line_mode"] = settings.line_mode
+        if settings.line_types.strip():
+            out["line_types"] = settings.line_types.strip()
     return out
 
 
