@@ -2,7 +2,7 @@
 refused in one line where it is wrong or where another mode would ignore it."""
 import pytest
 
-from styletrace.config.line_types import LineType, parse_line_types
+from styletrace.config.line_types import LineType, parse_line_types, without_colours
 from styletrace.config.settings import parse
 from styletrace.errors import SettingsError
 
@@ -47,3 +47,12 @@ def test_line_types_belong_to_the_lifted_mode():
         lifted(line_gradient="0,0,0;1,1,1")
     assert lifted(line_objects="box").objects == ("box",)
     assert parse({"lines": False, "line_mode": "lifted", "line_types": "depth"}).lines is None
+
+
+def test_without_colours_keeps_everything_but_each_entrys_colour():
+    raw = "shape_id color=1,0,0; depth threshold=0.05 color=0,1,0 stencil=square ;normal"
+    assert without_colours(raw) == "shape_id; depth threshold=0.05 stencil=square; normal"
+    types = parse_line_types(without_colours(raw), 2.0, 16, (1.0, 1.0, 1.0))
+    assert [t.color for t in types] == [(1.0, 1.0, 1.0)] * 3
+    assert [(t.measurement, t.threshold, t.stencil) for t in types] == [
+        ("shape_id", 0.5, "disk"), ("depth", 0.05, "square"), ("normal", 0.3, "disk")]

@@ -6,8 +6,6 @@ renders with seed K and N samples per pass.
 """
 from __future__ import annotations
 
-import re
-
 from typing import Callable, Iterator
 
 import numpy as np
@@ -15,6 +13,7 @@ import numpy as np
 from .. import api
 from . import build, exporter
 from .properties import integrator_values
+from ..config.line_types import without_colours
 
 LINE_MASK = "LineMask"
 AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"), "children": ("Children", 1, "X")}
@@ -40,17 +39,13 @@ def passes(sc, integ, settings) -> Iterator[api.Progress]:
     return api.passes(sc, integ, settings.spp, settings.seed, pass_spp=settings.pass_spp)
 
 
-#: a line type's colour field in `line_types` (config/line_types.py: `color=r,g,b`)
-OWN_COLOUR = re.compile(r"\bcolor=[^\s;]*")
-
-
 def line_mask(sc, settings, should_stop: Callable[[], bool] = lambda: False) -> np.ndarray | None:
     """Where lines are drawn, in [0, 1]: the image with white lines minus the image with black lines, with the same
     seed. Line decisions do not depend on the line colour, so everything but the lines cancels exactly; this
     costs a second render of the lines' settings (documented in docs/blender.md)."""
     images = []
     # a line type's own colour= would not follow the override: every type takes line_color for the mask
-    types = {"line_types": OWN_COLOUR.sub("", settings.line_types).strip()} if settings.line_types.strip() else {}
+    types = {"line_types": without_colours(settings.line_types)} if settings.line_types.strip() else {}
     for colour in ("0,0,0", "1,1,1"):
         prog = None
         for prog in passes(sc, integrator(settings, aovs=False, line_color=colour, line_gradient="", **types),

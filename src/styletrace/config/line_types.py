@@ -90,4 +90,11 @@ def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tupl
     return tuple(out)
 
 
-__all__ = ["LineType", "MEASUREMENTS", "STENCILS", "parse_line_types"]
+def without_colours(raw: str) -> str:
+    """`line_types` with every entry's own `color=` field dropped, the rest as given: each type then takes the
+    line group's colour (the Blender add-on's line mask renders the lines once black and once white)."""
+    return "; ".join(" ".join(w for w in entry.split() if w.partition("=")[0] != "color")
+                     for entry in raw.split(";") if entry.strip())
+
+
+__all__ = ["LineType", "MEASUREMENTS", "STENCILS", "parse_line_types", "without_colours"]
