@@ -223,11 +223,6 @@ def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
     return albedo, np.nan_to_num(emission)
 
 
-def sample_albedo(scene, a: dict) -> np.ndarray:
-    """The albedo at each camera sample's own vertex (`own_surface`), N x 3."""
-    return own_surface(scene, a)[0]
-
-
 def remodulate(d: np.ndarray, mixed: np.ndarray, own: np.ndarray, found: np.ndarray) -> np.ndarray:
     """D x own albedo / the albedo D was formed under, per channel, for samples with a vertex.
 
@@ -264,9 +259,11 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high") -> np
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
     g = guides.first_hit(scene, spp, pass_seed(seed, 0))
-    own = own_surface(scene, buf.arrays) if EMISSION_APART else (sample_albedo(scene, buf.arrays),
-                                                                 np.zeros((buf.samples, 3)))
-    m = expectation(buf, own[1])  # the reflected part: each sample's own emission goes back in at_samples
+    own_albedo, emission = own_surface(scene, buf.arrays)
+    if not EMISSION_APART:
+        emission = np.zeros_like(emission)
+    own = (own_albedo, emission)
+    m = expectation(buf, emission)  # the reflected part: each sample's own emission goes back in at_samples
     d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
     buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
