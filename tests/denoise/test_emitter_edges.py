@@ -11,6 +11,7 @@ import numpy as np
 import mitsuba as mi
 
 from styletrace import api
+from helpers.denoise_edges import denoised_identity
 from styletrace.denoise import expectation as X
 
 RES, SKY, ALBEDO, LE = 48, 0.7, 0.5, 6.0
@@ -34,21 +35,14 @@ def scene():
 def plane_samples_error(apart, monkeypatch):
     """Relative error of D at the plane's (not the light's) camera samples in pixels the light's edge crosses."""
     monkeypatch.setattr(X, "EMISSION_APART", apart)
-    sc = scene()
-    _, buf = X.render(sc, api.make_integrator(style="identity", inner=4), spp=8, seed=2)
-    a = buf.arrays
-    _, emission = X.own_surface(sc, a)
-    lit = emission[:, 0] > 0
-    found = a["slot"] >= 0
-    pix = a["pixel"].astype(np.int64)
-    on = np.bincount(pix, weights=lit & found, minlength=RES * RES)
-    off = np.bincount(pix, weights=~lit & found, minlength=RES * RES)
-    edge = (on > 0) & (off > 0)
-    assert edge.sum() > 40, "the light's edge crosses too few pixels: nothing is tested"
-    np.testing.assert_allclose(emission[lit, 0], LE)  # the emission found is the light's own
-    pick = edge[pix] & found & ~lit
+    got = denoised_identity(scene())
+    lit = got.emission[:, 0] > 0
+    edges, mixed = got.in_pixels_with_both(lit & got.found, ~lit & got.found, RES * RES)
+    assert edges > 40, "the light's edge crosses too few pixels: nothing is tested"
+    np.testing.assert_allclose(got.emission[lit, 0], LE)  # the emission found is the light's own
+    pick = mixed & got.found & ~lit
     want = ALBEDO * SKY
-    return np.abs(a[X.DENOISED][0][pick] - want) / want
+    return np.abs(got.denoised()[pick] - want) / want
 
 
 def test_plane_samples_beside_a_light_do_not_take_its_emission(monkeypatch):

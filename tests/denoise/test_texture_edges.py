@@ -12,6 +12,7 @@ import pytest
 import mitsuba as mi
 
 from styletrace import api
+from helpers.denoise_edges import denoised_identity
 from styletrace.denoise import expectation as X
 
 RES, SKY = 48, 0.7
@@ -36,18 +37,13 @@ def scene():
 def edge_samples_error(remodulate, monkeypatch):
     """Relative error of D at the camera samples of pixels whose samples see both albedos, per sample."""
     monkeypatch.setattr(X, "REMODULATE", remodulate)
-    sc = scene()
-    _, buf = X.render(sc, api.make_integrator(style="identity", inner=4), spp=8, seed=2)
-    a = buf.arrays
-    own = X.sample_albedo(sc, a)[:, 0]
-    pix = a["pixel"].astype(np.int64)
-    lo = np.bincount(pix, weights=(own < 0.5), minlength=RES * RES)
-    hi = np.bincount(pix, weights=(own > 0.5), minlength=RES * RES)
-    edge = (lo > 0) & (hi > 0)
-    pick = edge[pix] & (a["slot"] >= 0)
-    assert edge.sum() > 100, "the texture crosses too few pixels: nothing is tested"
+    got = denoised_identity(scene())
+    own = got.albedo[:, 0]
+    edges, mixed = got.in_pixels_with_both(own < 0.5, own > 0.5, RES * RES)
+    pick = mixed & got.found
+    assert edges > 100, "the texture crosses too few pixels: nothing is tested"
     want = own[pick] * SKY
-    return np.abs(a[X.DENOISED][0][pick] - want) / want
+    return np.abs(got.denoised()[pick] - want) / want
 
 
 def test_samples_on_a_texture_edge_take_their_own_albedo(monkeypatch):
