@@ -197,19 +197,25 @@ def test_sigterm_is_like_ctrl_c_with_status_143(tmp_path):
     assert img.shape == (64, 64, 3) and np.isfinite(img).all() and img.mean() > 0
 
 
+def started(args: list, marker: bytes):
+    """`styletrace ARGS` started with its stderr read until `marker` shows (the render's progress line);
+    (the process, what it printed so far). A process that ends first fails the test with what it printed."""
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", *args], stderr=subprocess.PIPE, env=ENV)
+    seen = b""
+    while marker not in seen:
+        chunk = os.read(proc.stderr.fileno(), 4096)
+        assert chunk, seen.decode()
+        seen += chunk
+    return proc, seen
+
+
 @pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_one_signal_stops_a_long_pass(tmp_path, sig, status):
     """A pass of 2^20 camera samples with 64 inner samples each runs for minutes on a CPU; one signal ends
     the render after the grace period, not after the pass (the first pass: nothing to write)."""
     out = tmp_path / "never.exr"
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
-                             "--spp", "512", "--inner", "64", "--pass-spp", "256", "-o", str(out)],
-                            stderr=subprocess.PIPE, env=ENV)
-    seen = b""
-    while b"0/512" not in seen:
-        chunk = os.read(proc.stderr.fileno(), 4096)
-        assert chunk, seen.decode()
-        seen += chunk
+    proc, seen = started(["render", "--width", "64", "--height", "64", "--spp", "512", "--inner", "64",
+                          "--pass-spp", "256", "-o", str(out)], b"0/512")
     time.sleep(0.5)
     proc.send_signal(sig)
     rest = proc.communicate(timeout=90)[1]
@@ -246,13 +252,7 @@ def test_a_signal_in_a_long_pass_writes_the_finished_pass_within_the_promise(tmp
     image is the first pass, bit for bit (the same seed gives the same passes). Before the watcher's write
     went around Mitsuba (images.encode_plain) it waited for the pass's kernel: 6.3-12 s and 15.8 s."""
     out = tmp_path / "partial.exr"
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", *LONG_PASSES, "-o", str(out)],
-                            stderr=subprocess.PIPE, env=ENV)
-    seen = b""
-    while b"1/1000" not in seen:
-        chunk = os.read(proc.stderr.fileno(), 4096)
-        assert chunk, seen.decode()
-        seen += chunk
+    proc, seen = started([*LONG_PASSES, "-o", str(out)], b"1/1000")
     time.sleep(0.5)
     for i in range(count):
         if i:
