@@ -122,21 +122,20 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     remodulation."""
     a = buf.arrays
     own_albedo, emission = own
-    albedo = g.albedo
     w, h = buf.width, buf.height
     pix = a["pixel"].astype(np.int64)
     px, py = pix % w, pix // w
-    own = d[py, px].astype(np.float64)
+    at_pixel = d[py, px].astype(np.float64)  # the fallback: the sample's own pixel's D
     found = a["slot"] >= 0
     if not found.any():
-        return np.ascontiguousarray(own.T.astype(np.float32))
+        return np.ascontiguousarray(at_pixel.T.astype(np.float32))
     uv = raster(scene, a["p"])
     good = found & np.all(np.isfinite(uv), -1)
     good &= (np.floor(uv[:, 0]) == px) & (np.floor(uv[:, 1]) == py)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
     acc, acc_a, wsum = _guided_bilinear(d, g, uv, good, a["p"], a["n"], pix, w, h, diag)
-    a_s = albedo[py, px].astype(np.float64)
-    out = np.where((wsum > 1e-6)[:, None], acc / np.maximum(wsum, 1e-12)[:, None], own)
+    a_s = g.albedo[py, px].astype(np.float64)
+    out = np.where((wsum > 1e-6)[:, None], acc / np.maximum(wsum, 1e-12)[:, None], at_pixel)
     if REMODULATE:
         # the guide albedo with the same weights: what albedo the interpolated D was formed under
         mixed = np.where((wsum > 1e-6)[:, None], acc_a / np.maximum(wsum, 1e-12)[:, None], a_s)
