@@ -104,9 +104,12 @@ PIXEL_FIXED = ((1, 2), (1, 4), (1, 16), (1, 64), (2, 8), (4, 2), (4, 4), (4, 16)
 # the most it had): every method's grid goes on from there
 # a third run (the interpolation in one Dr.Jit kernel, guides through mirrors) found the denoiser's cost per camera
 # sample a third lower and hatching still improving with spp at a fixed number of children per pixel: both
-# denoisers' grids go on to 32 and 64 camera samples per pixel
-PIXEL_EXPECTATION = (tuple((spp, n) for spp in (1, 2, 4, 8) for n in (4, 8, 16)) + ((16, 4), (16, 8))
-                     + ((32, 2), (32, 4), (64, 2)))
+# denoisers' grids went on to 32 and 64 camera samples per pixel
+# the fourth run has coverage points (g at k = 64 stratified first hits per pixel, docs/denoise.md step 6): the
+# camera samples then only form M, so the grid trades camera samples against children at 64 to 512 children
+# per pixel; (spp, n, k) with k = 0 the previous method (g at the camera samples), kept at its previous choice
+PIXEL_EXPECTATION = (((2, 16, 64), (2, 32, 64), (4, 8, 64), (4, 16, 64), (4, 32, 64), (8, 8, 64), (8, 16, 64),
+                      (8, 32, 64), (16, 4, 64), (16, 8, 64), (32, 4, 64), (32, 4, 0)))
 PIXEL_IMAGE = tuple((spp, n) for spp in (1, 2, 4, 8, 16) for n in (4, 16)) + ((32, 4), (64, 2))
 PIXEL_REUSE_SPP = (1, 4, 8)
 
@@ -226,7 +229,7 @@ def load(name: str, size: int) -> mi.Scene:
 def methods(style: str) -> list[tuple[str, str, dict]]:
     """(label, kind, keywords): kind "fixed", "expectation", "image" or "reuse"."""
     out = [(f"fixed n={n}", "fixed", {"inner": n}) for n in FIXED]
-    out += [(f"denoise expectation n={n}", "expectation", {"inner": n, "denoise": "expectation"})
+    out += [(f"denoise expectation n={n}", "expectation", {"inner": n, "denoise": "expectation", "coverage": 0})
             for n in EXPECTATION_N]
     out += [(f"denoise image n={n}", "image", {"inner": n, "denoise": "image"}) for n in IMAGE_N]
     label, kw = REUSE[style]
@@ -312,8 +315,8 @@ def measure_scene(name, size, seeds):
 def pixel_methods(style: str) -> list[tuple[str, str, dict]]:
     """The pixel protocol's (label, kind, keywords), every kind over its (spp, n) grid."""
     out = [(f"fixed spp={spp} n={n}", "fixed", {"spp": spp, "inner": n}) for spp, n in PIXEL_FIXED]
-    out += [(f"denoise expectation spp={spp} n={n}", "expectation", {"spp": spp, "inner": n, "denoise": "expectation"})
-            for spp, n in PIXEL_EXPECTATION]
+    out += [(f"denoise expectation spp={spp} n={n} k={k}", "expectation",
+             {"spp": spp, "inner": n, "denoise": "expectation", "coverage": k}) for spp, n, k in PIXEL_EXPECTATION]
     out += [(f"denoise image spp={spp} n={n}", "image", {"spp": spp, "inner": n, "denoise": "image"})
             for spp, n in PIXEL_IMAGE]
     label, kw = REUSE[style]

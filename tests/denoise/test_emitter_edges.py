@@ -5,8 +5,9 @@ A diffuse plane of albedo A facing the camera under a constant environment L, wi
 same albedo lying on it (a hair in front): E[L] is A L everywhere plus the light's radiance Le on the square.
 Albedo and normal are the same on both sides of the light's edge, so no guide separates them; in a pixel the
 edge crosses, M mixes Le into the plane's samples. With the emission apart the plane's samples there get A L
-again; without it they take a share of Le."""
+again; without it they take a share of Le. Both at the camera samples (coverage 0) and at coverage points."""
 import numpy as np
+import pytest
 
 import mitsuba as mi
 
@@ -32,10 +33,10 @@ def scene():
     })
 
 
-def plane_samples_error(apart, monkeypatch):
-    """Relative error of D at the plane's (not the light's) camera samples in pixels the light's edge crosses."""
+def plane_samples_error(apart, monkeypatch, coverage):
+    """Relative error of D at the plane's (not the light's) samples in pixels the light's edge crosses."""
     monkeypatch.setattr(X, "EMISSION_APART", apart)
-    got = denoised_identity(scene())
+    got = denoised_identity(scene(), coverage=coverage)
     lit = got.emission[:, 0] > 0
     edges, mixed = got.in_pixels_with_both(lit & got.found, ~lit & got.found, RES * RES)
     assert edges > 40, "the light's edge crosses too few pixels: nothing is tested"
@@ -45,11 +46,12 @@ def plane_samples_error(apart, monkeypatch):
     return np.abs(got.denoised()[pick] - want) / want
 
 
-def test_plane_samples_beside_a_light_do_not_take_its_emission(monkeypatch):
+@pytest.mark.parametrize("coverage", [0, 16])
+def test_plane_samples_beside_a_light_do_not_take_its_emission(monkeypatch, coverage):
     """Median relative error below 0.1 with the emission apart, above 0.5 without (measured: see the assert
     messages; a share of Le = 6 against A L = 0.35 is far off)."""
-    with_ = np.median(plane_samples_error(True, monkeypatch))
-    without = np.median(plane_samples_error(False, monkeypatch))
+    with_ = np.median(plane_samples_error(True, monkeypatch, coverage))
+    without = np.median(plane_samples_error(False, monkeypatch, coverage))
     assert with_ < 0.1, with_
     assert without > 0.5, without
     print(f"median relative error: {with_:.3f} with the emission apart, {without:.3f} without")

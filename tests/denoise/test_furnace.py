@@ -8,6 +8,8 @@ standard deviation over the N interior pixels, per channel):
   a constant and averages noise keeps the noisy mean, whose standard error that is; 4: a two-sided 6e-5 test);
 - the RMS of D - rho*E over the interior is below sigma/4: the denoiser removed at least three quarters of the
   noise's standard deviation (a no-op, or a denoiser fed the wrong image, leaves sigma).
+The same holds for D where the style meets it at coverage points (`denoise.coverage`: D looked up in the
+kernel at 16 stratified points per pixel), with the same tolerances, over the points of the interior pixels.
 """
 import numpy as np
 
@@ -31,15 +33,33 @@ def interior(buf):
 
 def test_denoised_furnace_is_the_constant():
     scene = api.load_scene("furnace", RES, RES)
-    _, buf = X.render(scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3)
+    _, buf = X.render(scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3, coverage=0)
     exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
     mask = interior(buf)
     assert mask.sum() > 500
     noisy = X.expectation(buf)[mask].astype(np.float64)
-    d = X.attach(buf, scene, 1, 3)[mask].astype(np.float64)  # D per pixel
+    d = X.attach(buf, scene, 1, 3)[0][mask].astype(np.float64)  # D per pixel
     sigma = noisy.std(0, ddof=1)
     assert np.all(sigma > 0.05 * exact), "the furnace's children carry no noise: nothing is tested"
     se = sigma / np.sqrt(mask.sum())
+    assert np.all(np.abs(d.mean(0) - exact) < Z * se), f"mean {d.mean(0)} vs {exact}, se {se}"
+    rms = np.sqrt(((d - exact) ** 2).mean(0))
+    assert np.all(rms < sigma / 4), f"RMS {rms} vs noise sigma {sigma}"
+
+
+def test_denoised_furnace_is_the_constant_at_coverage_points():
+    scene = api.load_scene("furnace", RES, RES)
+    integ = api.make_integrator(style="identity", inner=1)
+    _, cam = X.render(scene, integ, spp=1, seed=3, coverage=0)
+    _, cover = X.render(scene, integ, spp=1, seed=3, coverage=16)
+    assert cover.spp == 16 and cover.source.spp == 1
+    exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
+    mask = interior(cam).ravel()
+    sigma = X.expectation(cam)[mask.reshape(RES, RES)].astype(np.float64).std(0, ddof=1)
+    a = cover.arrays
+    pick = mask[a["pixel"]] & (a["slot"] >= 0)
+    d = a["mean"][:, pick].T.astype(np.float64)  # D at each point
+    se = sigma / np.sqrt(mask.sum())  # the points of a pixel share its D: the pixels are the independent units
     assert np.all(np.abs(d.mean(0) - exact) < Z * se), f"mean {d.mean(0)} vs {exact}, se {se}"
     rms = np.sqrt(((d - exact) ** 2).mean(0))
     assert np.all(rms < sigma / 4), f"RMS {rms} vs noise sigma {sigma}"

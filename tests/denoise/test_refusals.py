@@ -33,6 +33,10 @@ REFUSED = [
     (["--denoise", "expectation", "--frames", "2", "--orbit", "10"], "renders one image"),
     (["--denoise", "sharpen"], "invalid choice"),
     (["--denoise", "image", "--denoise-quality", "best"], "invalid choice"),
+    (["--denoise", "expectation", "--coverage", "5"], "bad value '5' for coverage"),
+    (["--denoise", "expectation", "--coverage", "lots"], "bad value 'lots' for coverage"),
+    (["--denoise", "image", "--coverage", "16"], "applies to --denoise expectation only"),
+    (["--coverage", "16"], "applies to --denoise expectation only"),
 ]
 
 

@@ -5,7 +5,8 @@ A diffuse checkerboard plane facing the camera under a constant environment L an
 radiance albedo(x) * L everywhere: E[L] jumps with the texture and nothing else. In a pixel that a texture
 edge crosses, M mixes the two albedos, and so does OIDN's D; with the remodulation each sample's D is its own
 albedo times L again, without it the samples on either side share the pixel's mixture, off by the albedo
-contrast (dark 0.15 against bright 0.8)."""
+contrast (dark 0.15 against bright 0.8). Both where the style is applied: at the camera samples (coverage 0,
+`at_samples`) and at coverage points (`coverage.CoverageIntegrator`, the lookup in the kernel)."""
 import numpy as np
 import pytest
 
@@ -34,10 +35,10 @@ def scene():
     })
 
 
-def edge_samples_error(remodulate, monkeypatch):
-    """Relative error of D at the camera samples of pixels whose samples see both albedos, per sample."""
+def edge_samples_error(remodulate, monkeypatch, coverage):
+    """Relative error of D at the samples of pixels whose samples see both albedos, per sample."""
     monkeypatch.setattr(X, "REMODULATE", remodulate)
-    got = denoised_identity(scene())
+    got = denoised_identity(scene(), coverage=coverage)
     own = got.albedo[:, 0]
     edges, mixed = got.in_pixels_with_both(own < 0.5, own > 0.5, RES * RES)
     pick = mixed & got.found
@@ -46,8 +47,12 @@ def edge_samples_error(remodulate, monkeypatch):
     return np.abs(got.denoised()[pick] - want) / want
 
 
-def test_samples_on_a_texture_edge_take_their_own_albedo(monkeypatch):
+@pytest.mark.parametrize("coverage", [0, 16])
+def test_samples_on_a_texture_edge_take_their_own_albedo(monkeypatch, coverage):
     """With the remodulation the median relative error of D at edge-pixel samples is below 0.1; without
-    it above 0.3 (measured 0.03 and 0.55; the mixture of 0.15 and 0.8 is off by far more on either side): the test can fail."""
-    assert np.median(edge_samples_error(True, monkeypatch)) < 0.1
-    assert np.median(edge_samples_error(False, monkeypatch)) > 0.3
+    it above 0.3 (measured 0.03 and 0.55 at the camera samples; the mixture of 0.15 and 0.8 is off by far more on
+    either side): the test can fail."""
+    with_, without = (np.median(edge_samples_error(r, monkeypatch, coverage)) for r in (True, False))
+    print(f"coverage {coverage}: median relative error {with_:.3f} remodulated, {without:.3f} not")
+    assert with_ < 0.1
+    assert without > 0.3

@@ -32,11 +32,12 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
            estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: Any = None, callback: Any = None, denoise: str = "expectation",
            denoise_quality: str = "high", pass_spp: int | None = None, defines: dict[str, Any] | None = None,
-           **params: Any):
+           coverage: int | str = "auto", **params: Any):
     """`styletrace.render(..., denoise=...)`: the render pipeline's job (`pipeline.resolve`: the scene's own
     settings merged, auto values pinned), rendered and denoised here (docs/denoise.md)."""
     check_method(denoise)
-    from . import oidn
+    from . import coverage as points, oidn
+    points.check_k(coverage)
     oidn.require()
     oidn.check_quality(denoise_quality)
     from ..pipeline.job import python_job
@@ -54,7 +55,7 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
         from . import expectation
         from ..lookdev.record import scene_label
         image, buf = expectation.render(sc, integrator, spp, seed, denoise_quality, callback,
-                                        label=scene_label(scene))
+                                        label=scene_label(scene), coverage=coverage)
         return (image, expectation.aovs(buf, image)) if want_aovs else image
     from . import image as post
     out, _, errs = post.render(sc, integrator, spp, seed, denoise_quality, callback,

@@ -1,4 +1,4 @@
-"""`styletrace render --denoise expectation|image [--denoise-quality high] [--buffer FILE]`: the command line.
+"""`styletrace render --denoise expectation|image [--denoise-quality high] [--coverage K] [--buffer FILE]`.
 
 `cli.cmd_render` hands over here after it has loaded the scene, built the integrator and pinned its `auto`
 values (so `--denoise` refuses, in one line and with exit status 2, before anything renders). The output is
@@ -28,6 +28,8 @@ def precheck(args, scene, integrator, pixel_format: str) -> None:
         raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, which image denoising "
                          "leaves noisy; use --denoise expectation")
     if method == "expectation":
+        from .coverage import check_k
+        check_k(coverage_of(args))
         from ..lookdev.commands import check_buffer_path
         from ..lookdev.record import check_film
         from . import expectation
@@ -35,6 +37,12 @@ def precheck(args, scene, integrator, pixel_format: str) -> None:
         check_film(scene)  # the buffer's conditions: box filter, no border sampling
         if args.buffer:
             check_buffer_path(args.buffer)
+
+
+def coverage_of(args):
+    """--coverage, "auto" when not given (`denoise.coverage`)."""
+    value = getattr(args, "coverage", None)
+    return "auto" if value is None else value
 
 
 def render_denoised(args, scene, integrator, pixel_format: str) -> int:
@@ -45,7 +53,7 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
         from ..lookdev.record import scene_label
         from . import expectation
         image, buf = expectation.render(scene, integrator, args.spp, args.seed, args.denoise_quality,
-                                        label=scene_label(args.scene))
+                                        label=scene_label(args.scene), coverage=coverage_of(args))
         errs = expectation.aovs(buf, image) if integrator.settings.aovs else None
         out = save_safely(image, args.output, pixel_format, errs)
         if args.buffer:

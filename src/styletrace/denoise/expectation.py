@@ -44,7 +44,7 @@ from ..lookdev.record import record, scene_label  # noqa: E402
 from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for  # noqa: E402
 from ..config import settings as S  # noqa: E402
 from ..kernel.integrator import StylizedIntegrator  # noqa: E402
-from . import guides, oidn  # noqa: E402
+from . import coverage as coverage_module, guides, oidn  # noqa: E402
 
 #: the buffer array holding the denoised expectation at each camera sample (3 x samples, as `mean`)
 DENOISED = "denoised_mean"
@@ -148,40 +148,76 @@ def _guided_bilinear(d, g: guides.Guides, uv, good, p, n, pix, w: int, h: int, d
     """`at_samples`' weighted sums over the four pixel centres around each sample, in one Dr.Jit kernel (the
     numpy version of the same loop took 0.3 s at 128 x 128 x 16 samples, a third of a denoised render):
     (sum of w D, sum of w albedo, sum of w), float64 N x 3, N x 3, N."""
-    def image(a):
-        return mi.Float(np.ascontiguousarray(a, np.float32).ravel())
-
-    def at(img, idx, mask):
-        return mi.Vector3f(dr.gather(mi.Vector3f, img, idx, mask))
-
-    D, A, NRM, POS = image(d), image(g.albedo), image(g.surface_normal), image(g.position)
     good_j = mi.Bool(np.ascontiguousarray(good))
-    fx = dr.select(good_j, mi.Float(np.ascontiguousarray(uv[:, 0], np.float32)) - 0.5, 0.0)
-    fy = dr.select(good_j, mi.Float(np.ascontiguousarray(uv[:, 1], np.float32)) - 0.5, 0.0)
+    fx = dr.select(good_j, mi.Float(np.ascontiguousarray(uv[:, 0], np.float32)), 0.5)
+    fy = dr.select(good_j, mi.Float(np.ascontiguousarray(uv[:, 1], np.float32)), 0.5)
     ps = mi.Vector3f(*(mi.Float(np.ascontiguousarray(p[i], np.float32)) for i in range(3)))
     ns = mi.Vector3f(*(mi.Float(np.ascontiguousarray(n[i], np.float32)) for i in range(3)))
-    a_s = at(A, mi.UInt32(np.ascontiguousarray(pix, np.uint32)), good_j)
-    x0, y0 = mi.Int32(dr.floor(fx)), mi.Int32(dr.floor(fy))
-    acc, acc_a, wsum = mi.Vector3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
-    for dy in (0, 1):
-        for dx in (0, 1):
-            qx, qy = dr.clip(x0 + dx, 0, w - 1), dr.clip(y0 + dy, 0, h - 1)
-            q = mi.UInt32(qy * w + qx)
-            wt = dr.clip(1 - dr.abs(fx - mi.Float(x0 + dx)), 0, 1) * dr.clip(1 - dr.abs(fy - mi.Float(y0 + dy)), 0, 1)
-            gap = at(POS, q, good_j) - ps
-            aq = at(A, q, good_j)
-            same = dr.dot(at(NRM, q, good_j), ns) > 0.95
-            same &= dr.abs(dr.dot(gap, ns)) <= 0.1 * dr.norm(gap) + 1e-5 * diag
-            same &= dr.max(dr.abs(aq - a_s)) <= 0.05
-            wt = dr.select(good_j & same, wt, 0.0)
-            acc += wt * at(D, q, good_j)
-            acc_a += wt * aq
-            wsum += wt
+    acc, acc_a, wsum = Field(d, g, diag).lookup(fx, fy, ps, ns, mi.UInt32(np.ascontiguousarray(pix, np.uint32)),
+                                               good_j)
     dr.eval(acc, acc_a, wsum)
 
     def host(v):
         return np.stack([np.asarray(v[i], np.float64) for i in range(3)], -1)
     return host(acc), host(acc_a), np.asarray(wsum, np.float64)
+
+
+class Field:
+    """D and its guides as Dr.Jit arrays, for lookups inside a kernel (`lookup`, `at`): `at_samples` for the
+    camera samples, `coverage.CoverageIntegrator` for its points."""
+
+    def __init__(self, d: np.ndarray, g: guides.Guides, diag: float):
+        #: whether D is the reflected part alone (`EMISSION_APART`): a lookup adds the vertex's own emission back
+        self.emission_apart = EMISSION_APART
+
+        def image(a):
+            return mi.Float(np.ascontiguousarray(a, np.float32).ravel())
+        self.h, self.w = d.shape[:2]
+        self.diag = float(diag)
+        self.D, self.A, self.NRM, self.POS = image(d), image(g.albedo), image(g.surface_normal), image(g.position)
+
+    @staticmethod
+    def _get(img, idx, mask):
+        return mi.Vector3f(dr.gather(mi.Vector3f, img, idx, mask))
+
+    def lookup(self, fx, fy, ps, ns, pix, valid):
+        """Sums over the four pixel centres around film position (fx, fy) (pixels of the crop window) of a vertex
+        at ps with normal ns in pixel pix: (sum of w D, sum of w albedo, sum of w), w the bilinear weight where
+        the pixel shows the vertex's own surface (normal within ~18 degrees, the pixel's first hit within ~6
+        degrees of the vertex's tangent plane, albedo within 0.05 of pix's), 0 elsewhere."""
+        w, h, get = self.w, self.h, self._get
+        fx, fy = fx - 0.5, fy - 0.5
+        a_s = get(self.A, pix, valid)
+        x0, y0 = mi.Int32(dr.floor(fx)), mi.Int32(dr.floor(fy))
+        acc, acc_a, wsum = mi.Vector3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
+        for dy in (0, 1):
+            for dx in (0, 1):
+                qx, qy = dr.clip(x0 + dx, 0, w - 1), dr.clip(y0 + dy, 0, h - 1)
+                q = mi.UInt32(qy * w + qx)
+                wt = dr.clip(1 - dr.abs(fx - mi.Float(x0 + dx)), 0, 1) * dr.clip(1 - dr.abs(fy - mi.Float(y0 + dy)), 0, 1)
+                gap = get(self.POS, q, valid) - ps
+                aq = get(self.A, q, valid)
+                same = dr.dot(get(self.NRM, q, valid), ns) > 0.95
+                same &= dr.abs(dr.dot(gap, ns)) <= 0.1 * dr.norm(gap) + 1e-5 * self.diag
+                same &= dr.max(dr.abs(aq - a_s)) <= 0.05
+                wt = dr.select(valid & same, wt, 0.0)
+                acc += wt * get(self.D, q, valid)
+                acc_a += wt * aq
+                wsum += wt
+        return acc, acc_a, wsum
+
+    def at(self, fx, fy, ps, ns, pix, own_albedo, emission, valid) -> mi.Color3f:
+        """`at_samples` for one vertex inside a kernel: D interpolated (the own pixel's where no neighbour
+        qualifies), remodulated by the vertex's own albedo (`remodulate`), its own emission added."""
+        acc, acc_a, wsum = self.lookup(fx, fy, ps, ns, pix, valid)
+        some = wsum > 1e-6
+        inv = dr.rcp(dr.maximum(wsum, 1e-12))
+        out = dr.select(some, acc * inv, self._get(self.D, pix, valid))
+        if REMODULATE:
+            mixed = dr.select(some, acc_a * inv, self._get(self.A, pix, valid))
+            ok = (mixed > 1e-4) & (own_albedo > 0)
+            out = out * dr.select(ok, own_albedo / dr.select(ok, mixed, 1.0), 1.0)
+        return mi.Color3f(out + emission)
 
 
 #: rescale D at each camera sample by its own albedo over the pixel's (`remodulate`)
@@ -252,25 +288,36 @@ def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.maximum(out, 0.0)
 
 
-def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high") -> np.ndarray:
-    """Denoise the buffer's expectation and keep it, at each camera sample, in the buffer (restyles then
-    style it); returns D per pixel (H x W x 3)."""
+def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integrator=None, k: int = 0):
+    """Denoise the buffer's expectation. k = 0: keep D at each camera sample in the buffer (restyles then style
+    it); returns (D per pixel H x W x 3, None). k > 0: g is evaluated at k stratified points per pixel instead
+    (`coverage.points`, which needs the `integrator`); returns (D, the points' buffer)."""
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
     g = guides.first_hit(scene, spp, pass_seed(seed, 0))
+    own = _own(scene, buf)
+    m = expectation(buf, own[1])  # the reflected part: each sample's own emission goes back in at_samples
+    d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
+    d = below_resolution(d, m)
+    header = {"method": "expectation", "quality": quality,
+              "guides": "albedo and shading normal through specular chains (guides.first_hit)",
+              "at_samples": "guided bilinear interpolation of D at each sample's film position"}
+    if k:
+        diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
+        cover = coverage_module.points(scene, integrator, Field(d, g, diag), k, seed)
+        cover.header["denoise"] = {**header, "coverage": k}
+        return d, cover
+    buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
+    buf.header["denoise"] = header
+    buf.device.clear()  # the Dr.Jit copy must pick up the denoised means
+    return d, None
+
+
+def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:
     own_albedo, emission = own_surface(scene, buf.arrays)
     if not EMISSION_APART:
         emission = np.zeros_like(emission)
-    own = (own_albedo, emission)
-    m = expectation(buf, emission)  # the reflected part: each sample's own emission goes back in at_samples
-    d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
-    d = below_resolution(d, m)
-    buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
-    buf.header["denoise"] = {"method": "expectation", "quality": quality,
-                             "guides": "albedo and shading normal through specular chains (guides.first_hit)",
-                             "at_samples": "guided bilinear interpolation of D at each camera sample's film position"}
-    buf.device.clear()  # the Dr.Jit copy must pick up the denoised means
-    return d
+    return own_albedo, emission
 
 
 def image_of(buf: Buffer) -> np.ndarray:
@@ -306,11 +353,15 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
            callback: Callable[[Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
-           label: str = "") -> tuple[np.ndarray, Buffer]:
-    """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy render)."""
+           label: str = "", coverage: int | str = "auto") -> tuple[np.ndarray, Buffer]:
+    """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy render).
+    `coverage` k > 0: g is evaluated at k stratified first hits per pixel (`coverage.points`), not at the camera
+    samples; the buffer returned is then the coverage points' (`buf.source`: the camera samples')."""
     oidn.require()
     oidn.check_quality(quality)
     check(integrator)
+    w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
+    k = coverage_module.resolve_k(coverage, w, h, max_samples)
     if integrator.settings.aovs:  # the buffer records without them; `aovs` below derives them from it
         integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
     buf = None
@@ -318,18 +369,23 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
         buf.image = prog.image
         if callback is not None:
             callback(prog)
-    attach(buf, scene, spp, seed, quality)
-    return image_of(buf), buf
+    _, cover = attach(buf, scene, spp, seed, quality, integrator, k)
+    if cover is None:
+        return image_of(buf), buf
+    image = np.asarray(cover.image, dtype=np.float32)[..., :3]
+    cover.image, cover.source = buf.image, buf
+    return image, cover
 
 
 def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
     """Honest error AOVs of a denoised-expectation render (docs/denoise.md): the variance of the pixel
     *before* denoising (not the denoised pixel's error, which no per-pixel statistic here measures), the
     children per camera sample, and what denoising changed (denoised - noisy image)."""
-    n = max(int(s["inner"]) for s in buf.header["slots"])
-    return {"noisy_variance": noisy_variance(buf),
-            "children": np.full((buf.height, buf.width), float(n), dtype=np.float32),
-            "denoise_change": (np.asarray(image, np.float32) - np.asarray(buf.image, np.float32)[..., :3])}
+    src = getattr(buf, "source", None) or buf  # coverage points: the camera samples with children
+    n = max(int(s["inner"]) for s in src.header["slots"])
+    return {"noisy_variance": noisy_variance(src),
+            "children": np.full((src.height, src.width), float(n), dtype=np.float32),
+            "denoise_change": (np.asarray(image, np.float32) - np.asarray(src.image, np.float32)[..., :3])}
 
 
-__all__ = ["render", "attach", "check", "expectation", "image_of", "noisy_variance", "aovs", "DENOISED"]
+__all__ = ["render", "attach", "Field", "check", "expectation", "image_of", "noisy_variance", "aovs", "DENOISED"]

@@ -192,6 +192,9 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
+    if args.coverage is not None and args.denoise != "expectation":
+        raise UsageError(f"--coverage {args.coverage} applies to --denoise expectation only (the points where the "
+                         f"style meets the denoised expectation)")
     if args.denoise and (len(args.scene) > 1 or args.frames is not None or args.orbit is not None):
         raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
     if len(args.scene) > 1 or args.frames is not None or args.orbit is not None:  # numbered images, on Ray
@@ -427,6 +430,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "the final image; needs the 'denoise' extra (docs/denoise.md)")
     r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
                    help="OIDN's filter quality with --denoise (default: high)")
+    r.add_argument("--coverage", default=None, metavar="K",
+                   help="with --denoise expectation: points per pixel where the style is applied to the denoised "
+                        "expectation, a square (16, 64, ...), 0 for the camera samples, or auto (default: 64, fewer "
+                        "where the image would not fit the buffer's cap)")
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 

@@ -221,11 +221,14 @@ def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) 
 
 
 def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int = 0, label: str = "",
-           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = pass_loop.LANES_PER_PASS, pilot: Pilot | None = None
+           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = pass_loop.LANES_PER_PASS, pilot: Pilot | None = None,
+           pass_spp: int | None = None, recorder: Callable[..., RecordingIntegrator] | None = None
            ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
     """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
     `Pilot` if the caller resolved the auto values with it already (`render_with_buffer`), so that the pilot
-    is traced once for both (it is stored in the buffer)."""
+    is traced once for both (it is stored in the buffer). `pass_spp`: camera samples per pixel in one pass
+    (`pipeline.passes`); `recorder`: makes the recording integrator from (integrator, sequence, per_sample)
+    (default `RecordingIntegrator`; `denoise.coverage` places its own camera rays)."""
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
@@ -236,7 +239,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     check_recordable(integrator.settings, slots)
     sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
     per_sample = budget(slots) if sequence else 0
-    rec = RecordingIntegrator(integrator, sequence, per_sample)
+    rec = (recorder or RecordingIntegrator)(integrator, sequence, per_sample)
     size = film.crop_size()
     w, h = int(size[0]), int(size[1])
     total = w * h * spp
@@ -265,7 +268,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     done = 0
-    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass)):
+    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
         n = prog.spp_done - done
         done = prog.spp_done
         buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize, rec.recorder), n, pass_loop.pass_seed(seed, index))

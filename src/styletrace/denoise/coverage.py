@@ -1,0 +1,133 @@
+"""Coverage points: where g is evaluated once E[L] is denoised, apart from where E[L] was estimated.
+
+    cov = points(scene, integrator, k=16, seed=0)   # a Buffer of k first hits per pixel, no children traced
+
+With the expectation denoised, the value of a pixel is the integral over its footprint of g(D(x)), and the
+camera samples with children are only one way of placing the points x. They are an expensive one: each
+carries n child paths. A coverage point is a camera ray to its first hit and nothing more (the stylized
+vertex, its style slot, the radiance before it: the same kernel as a render, `record`), so many can be
+spent per pixel for the cost of a few children, and they are stratified: k = m x m points, one jittered point
+in each cell of an m x m grid over the pixel.
+
+Why: a step style's pixel near a band boundary, and hatching's screen-space line pattern in every pixel, is
+a fraction of the footprint. At s independent points per pixel that fraction has variance p (1 - p) / s; on an
+m x m jittered grid it falls as s^-3/2 for a boundary that is a smooth curve. Measured on the Cornell box
+(BENCHMARKS.md, denoise): with D nearly noise-free, hatching's error at 32 camera samples per pixel was
+mostly this sampling of the pattern.
+
+Parameters: `k` points per pixel, a square (1, 4, 9, 16, ...), or "auto" (the default of `render`: `DEFAULT_K`,
+64, fewer where the image would not fit the buffer's cap); 0 evaluates g at the camera samples instead; `seed`
+the render's seed (the points' stream is `COVERAGE_PASS` passes away from the render's own).
+"""
+from __future__ import annotations
+
+import math
+
+from ..jit import backend
+
+backend()
+
+import drjit as dr  # noqa: E402
+import mitsuba as mi  # noqa: E402
+
+from ..errors import UsageError  # noqa: E402
+from ..kernel.integrator import StylizedIntegrator  # noqa: E402
+from ..lookdev.buffer import MAX_SAMPLES, Buffer  # noqa: E402
+from ..lookdev.record import RecordingIntegrator, record  # noqa: E402
+from ..pipeline.passes import pass_seed  # noqa: E402
+from . import guides  # noqa: E402
+
+#: points per pixel of coverage="auto" (chosen on the Cornell box, BENCHMARKS.md denoise), less where the
+#: image is so large that they would not fit the buffer's cap
+DEFAULT_K = 64
+AUTO = "auto"
+#: the pass index whose seed the coverage points use: far from any render's own passes
+COVERAGE_PASS = 1 << 30
+
+
+def check_k(k) -> int | str:
+    """k as an int, "auto", or a one-line UsageError: "auto", 0 (g at the camera samples) or a square >= 1."""
+    if k == AUTO:
+        return AUTO
+    value = k if isinstance(k, int) and not isinstance(k, bool) else None
+    if isinstance(k, str) and k.strip().isdigit():
+        value = int(k)
+    if value is None or value < 0 or (value and math.isqrt(value) ** 2 != value):
+        raise UsageError(f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a square "
+                         f"number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)")
+    return value
+
+
+def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int:
+    """The points per pixel of a render: "auto" is DEFAULT_K, or the largest square whose points fit the
+    buffer's cap (0 where not even one does); a number given must fit the cap (one-line UsageError)."""
+    k = check_k(k)
+    pixels = max(1, width * height)
+    if k == AUTO:
+        return min(DEFAULT_K, math.isqrt(max_samples // pixels) ** 2)
+    if k * pixels > max_samples:
+        raise UsageError(f"bad value {k} for coverage: {width}x{height} at {k} points per pixel is {k * pixels} "
+                         f"points, over the buffer's cap of {max_samples}; use at most "
+                         f"{math.isqrt(max_samples // pixels) ** 2} or 'auto'")
+    return k
+
+
+class CoverageIntegrator(RecordingIntegrator):
+    """The recording integrator with no children and camera rays placed on an m x m jittered grid in each pixel
+    (lane i of a pass of k spp is pixel i // k's point i % k). The stylized vertex's mean is D there, looked up
+    in the kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
+    emission added), so the pass's image is the denoised render and its buffer holds D at every point."""
+
+    def __init__(self, base: StylizedIntegrator, k: int, field):
+        super().__init__(base)
+        self.k, self.m, self.field = k, math.isqrt(k), field
+        self._at = None
+
+    def sample(self, scene, sampler, ray, medium=None, active=True):
+        sensor = scene.sensors()[0]
+        film = sensor.film()
+        cw, ch = (int(v) for v in film.crop_size())
+        off = mi.ScalarVector2f(film.crop_offset())
+        size = mi.ScalarVector2f(film.size())
+        lane = dr.arange(mi.UInt32, dr.width(ray.d))
+        pixel, cell = lane // self.k, lane % self.k
+        px = mi.Float(pixel % cw)
+        py = mi.Float(pixel // cw)
+        cx, cy = mi.Float(cell % self.m), mi.Float(cell // self.m)
+        jitter = sampler.next_2d()
+        pos = mi.Point2f(px + (cx + jitter.x) / self.m, py + (cy + jitter.y) / self.m)
+        wavelength = sampler.next_1d()
+        aperture = sampler.next_2d()
+        placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, (pos + off) / size, aperture)
+        self._at = (pos, mi.UInt32(pixel), None)
+        try:
+            return super().sample(scene, sampler, placed, medium, active)
+        finally:
+            self._at = None
+
+    def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
+        """D at the vertex in place of the children's mean (one lookup per camera ray, whatever the slot)."""
+        pos, pixel, value = self._at
+        if value is None:
+            valid = si.is_valid()
+            albedo, _ = guides.through_delta(scene, si, valid)
+            emission = (mi.Color3f(si.emitter(scene, valid).eval(si, valid)) if self.field.emission_apart
+                        else mi.Color3f(0.0))
+            value = self.field.at(pos.x, pos.y, si.p, mi.Vector3f(si.sh_frame.n), pixel, albedo, emission, valid)
+            self._at = (pos, pixel, value)
+        return value
+
+
+def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0) -> Buffer:
+    """The denoised render at k stratified points per pixel: a Buffer whose means are D at each point (pixel,
+    slot, vertex, L_before as a render's), `buf.image` its image."""
+    if not isinstance(k, int) or k < 1:
+        raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
+    buf = None
+    for prog, buf in record(scene, integrator, k, pass_seed(seed, COVERAGE_PASS), pass_spp=k,
+                            recorder=lambda base, *_: CoverageIntegrator(base, k, field)):
+        buf.image = prog.image
+    return buf
+
+
+__all__ = ["points", "check_k", "resolve_k", "CoverageIntegrator", "DEFAULT_K", "AUTO"]

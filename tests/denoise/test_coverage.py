@@ -1,0 +1,74 @@
+"""Coverage points (denoise/coverage.py): k stratified first hits per pixel where the style meets D.
+
+- The points are stratified: the j-th point of a pixel lies in cell (j mod m, j div m) of an m x m grid over
+  the pixel. Checked by projecting every point's vertex back onto the film (`expectation.raster`, the
+  sensor's own projection), on a plane that fills the view; an independent placement puts 15 of 16 points
+  outside their cell.
+- `coverage` values: "auto" is 64 where it fits the buffer's cap and the largest square that fits elsewhere;
+  anything else than "auto", 0 or a square is refused in one line naming the value, and so is a count over the cap.
+"""
+import math
+
+import numpy as np
+import pytest
+
+import mitsuba as mi
+
+from styletrace import api
+from styletrace.denoise import coverage as C
+from styletrace.denoise import expectation as X
+from styletrace.errors import UsageError
+
+RES = 12
+
+
+def plane():
+    T = mi.ScalarTransform4f
+    grey = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5] * 3}}
+    return api.load_scene({
+        "type": "scene",
+        "sensor": {"type": "perspective", "fov": 30, "to_world": T().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
+                   "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}}},
+        "plane": {"type": "rectangle", "to_world": T().scale(3.0), "bsdf": grey},
+        "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [1.0] * 3}},
+    })
+
+
+@pytest.mark.parametrize("k", [4, 16])
+def test_each_point_lies_in_its_own_cell(k):
+    scene = plane()
+    _, buf = X.render(scene, api.make_integrator(style="cel", inner=1), spp=1, seed=5, coverage=k)
+    a = buf.arrays
+    assert buf.samples == RES * RES * k and np.all(a["slot"] >= 0)
+    uv = X.raster(scene, a["p"])
+    pixel = a["pixel"].astype(np.int64)
+    assert np.all(np.floor(uv[:, 0]) == pixel % RES) and np.all(np.floor(uv[:, 1]) == pixel // RES)
+    m = math.isqrt(k)
+    j = np.arange(buf.samples) % k  # the lane's point within its pixel
+    cell = np.floor((uv - np.floor(uv)) * m).astype(np.int64)
+    assert np.array_equal(cell[:, 0], j % m) and np.array_equal(cell[:, 1], j // m)
+
+
+def test_points_differ_by_seed_and_stay_by_seed():
+    scene = plane()
+    integ = api.make_integrator(style="cel", inner=1)
+    p = [X.render(scene, integ, spp=1, seed=s, coverage=4)[1].arrays["p"] for s in (1, 1, 2)]
+    assert np.array_equal(p[0], p[1]) and not np.allclose(p[0], p[2])
+
+
+def test_auto_fits_the_buffer():
+    assert C.resolve_k("auto", 128, 128) == C.DEFAULT_K == 64
+    assert C.resolve_k("auto", 1024, 1024) == 4  # 4 Mi points at most
+    assert C.resolve_k("auto", 4096, 4096) == 0  # not one point per pixel fits: g at the camera samples
+    assert C.resolve_k("16", 64, 64) == 16 and C.resolve_k(0, 64, 64) == 0
+
+
+@pytest.mark.parametrize("bad", [3, -4, "x", 2.5, True, "16.0"])
+def test_bad_values_are_refused(bad):
+    with pytest.raises(UsageError, match=r"bad value .* for coverage: expected 'auto', 0"):
+        C.check_k(bad)
+
+
+def test_a_count_over_the_cap_is_refused():
+    with pytest.raises(UsageError, match=r"bad value 64 for coverage: 512x512 .* over the buffer's cap .* at most 16"):
+        C.resolve_k(64, 512, 512)
