@@ -34,12 +34,13 @@ judged on, BENCHMARKS.md says why): against the pixel-integrated reference.
   of differences removes the children's noise), pixel_reference says how.
 - Methods, each with its own split of the budget into camera samples per pixel (spp) and children (n):
   fixed counts over the (spp, n) grid PIXEL_FIXED (the equal-time curve is the lower envelope over all of them,
-  the tree sampler's best split at every time); expectation denoising over PIXEL_EXPECTATION (D formed from all
-  of a pixel's samples, g applied per sample at its own film position); image denoising over PIXEL_IMAGE; reuse
+  the tree sampler's best split at every time); expectation denoising over PIXEL_EXPECTATION (spp, n, and where g
+  meets D: k coverage points per pixel, or the camera samples with k = 0; u the uncertainty g is averaged over,
+  docs/denoise.md); image denoising over PIXEL_IMAGE; reuse
   (the README's configuration) at spp 1, 4 and 8. Styles cel and hatching (the goal's; the colour map is left out to
   fit the time).
 - MSE, bias^2 and variance as above with e_s = render_s - R; R's own error is common to all seeds, so it lands
-  in bias^2. Timing interleaved as above. The (spp, n) of each denoiser and of reuse is chosen on the Cornell
+  in bias^2. Timing interleaved as above. The setting of each denoiser and of reuse is chosen on the Cornell
   box only (the best ratio averaged over cel and hatching); the held-out scenes are reported at that choice.
 
     python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror]
@@ -106,10 +107,13 @@ PIXEL_FIXED = ((1, 2), (1, 4), (1, 16), (1, 64), (2, 8), (4, 2), (4, 4), (4, 16)
 # sample a third lower and hatching still improving with spp at a fixed number of children per pixel: both
 # denoisers' grids went on to 32 and 64 camera samples per pixel
 # the fourth run has coverage points (g at k = 64 stratified first hits per pixel, docs/denoise.md step 6): the
-# camera samples then only form M, so the grid trades camera samples against children at 64 to 512 children
-# per pixel; (spp, n, k) with k = 0 the previous method (g at the camera samples), kept at its previous choice
-PIXEL_EXPECTATION = (((2, 16, 64), (2, 32, 64), (4, 8, 64), (4, 16, 64), (4, 32, 64), (8, 8, 64), (8, 16, 64),
-                      (8, 32, 64), (16, 4, 64), (16, 8, 64), (32, 4, 64), (32, 4, 0)))
+# camera samples then only form M, so the grid trades camera samples against children at 32 to 512 children
+# per pixel; (spp, n, k, u) with k = 0 the previous method (g at the camera samples), kept at its previous choice
+# the fifth adds g averaged over D's uncertainty (u, `--denoise-uncertainty`, step 7; its default 0.3 was chosen
+# on the Cornell box at spp 4, n 8, k 64 among 0.15, 0.2, 0.3, 0.45 and 1): u = 0 rows show it off
+PIXEL_EXPECTATION = (tuple((spp, n, 64, 0.3) for spp, n in ((2, 16), (2, 32), (4, 8), (4, 16), (4, 32), (8, 8),
+                                                             (8, 16), (8, 32), (16, 4), (16, 8), (32, 4)))
+                     + ((4, 8, 64, 0.0), (8, 16, 64, 0.0), (32, 4, 0, 0.0)))
 PIXEL_IMAGE = tuple((spp, n) for spp in (1, 2, 4, 8, 16) for n in (4, 16)) + ((32, 4), (64, 2))
 PIXEL_REUSE_SPP = (1, 4, 8)
 
@@ -315,8 +319,9 @@ def measure_scene(name, size, seeds):
 def pixel_methods(style: str) -> list[tuple[str, str, dict]]:
     """The pixel protocol's (label, kind, keywords), every kind over its (spp, n) grid."""
     out = [(f"fixed spp={spp} n={n}", "fixed", {"spp": spp, "inner": n}) for spp, n in PIXEL_FIXED]
-    out += [(f"denoise expectation spp={spp} n={n} k={k}", "expectation",
-             {"spp": spp, "inner": n, "denoise": "expectation", "coverage": k}) for spp, n, k in PIXEL_EXPECTATION]
+    out += [(f"denoise expectation spp={spp} n={n} k={k} u={u:g}", "expectation",
+             {"spp": spp, "inner": n, "denoise": "expectation", "coverage": k, "denoise_uncertainty": u})
+            for spp, n, k, u in PIXEL_EXPECTATION]
     out += [(f"denoise image spp={spp} n={n}", "image", {"spp": spp, "inner": n, "denoise": "image"})
             for spp, n in PIXEL_IMAGE]
     label, kw = REUSE[style]
@@ -705,7 +710,7 @@ def timing_section() -> list[str]:
             "Cornell box, 512x512, 1 camera sample per pixel, n = 8, cel; median of 3 runs, same shared 2-core "
             "machine (`python benchmarks/denoise.py --timing`; the current method: guides through mirrors "
             "and glass, each sample's own albedo and emission found by one ray, the interpolation in one Dr.Jit "
-            "kernel).", "",
+            "kernel, coverage points with D looked up in their kernel).", "",
             "| step | s |", "|---|---:|"] + [f"| {k} | {v:.2f} |" for k, v in tm.items() if k != "size"] + [""]
 
 
@@ -774,7 +779,17 @@ def timing(size: int = 512, runs: int = 3) -> dict:
     d = oidn.run(m, g.albedo, g.normal)
     out["own albedo and emission (one ray per sample)"] = med(lambda: X.own_surface(scene, buf.arrays))
     out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, g, own))
-    out["attach (guides + OIDN high + interpolation)"] = med(lambda: X.attach(buf, scene, 1, 0))
+    out["attach (guides + OIDN high + interpolation at the camera samples, coverage 0)"] = med(
+        lambda: X.attach(buf, scene, 1, 0))
+    from styletrace.denoise import coverage
+    k = coverage.resolve_k("auto", size, size)
+    field = X.Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
+    out[f"coverage points ({k} per pixel, the 'auto' count at this size; D looked up in the kernel)"] = med(
+        lambda: coverage.points(scene, integ, field, k, 0))
+    out[f"attach with coverage points (guides + OIDN high + {k} points per pixel)"] = med(
+        lambda: X.attach(buf, scene, 1, 0, "high", integ, k))
+    out["the whole denoised render (render_buffer + attach with coverage 'auto')"] = med(
+        lambda: denoised_render(scene, style="cel", spp=1, inner=8, seed=0, denoise="expectation"))
     out["restyle of the denoised buffer"] = med(lambda: styletrace.restyle(buf, style="hatching"))
     with open(os.path.join(CACHE, f"denoise_timing_{size}.json"), "w") as f:
         json.dump(out, f, indent=1)

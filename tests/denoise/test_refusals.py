@@ -37,6 +37,9 @@ REFUSED = [
     (["--denoise", "expectation", "--coverage", "lots"], "bad value 'lots' for coverage"),
     (["--denoise", "image", "--coverage", "16"], "applies to --denoise expectation only"),
     (["--coverage", "16"], "applies to --denoise expectation only"),
+    (["--denoise", "expectation", "--denoise-uncertainty", "-1"], "bad value '-1' for denoise uncertainty"),
+    (["--denoise", "expectation", "--denoise-uncertainty", "nan"], "bad value 'nan' for denoise uncertainty"),
+    (["--denoise", "image", "--denoise-uncertainty", "0.3"], "applies to --denoise expectation only"),
 ]
 
 

@@ -10,7 +10,9 @@ Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with albedo and normal
 supported combinations: docs/denoise.md.
 
 `render` parameters: as `styletrace.render` (scene, style, spp=16, inner, estimator, seed=0, width, height,
-integrator, callback, **params), plus `denoise` (the method) and `denoise_quality` ("high").
+integrator, callback, **params), plus `denoise` (the method), `denoise_quality` ("high"), and for
+`expectation` `coverage` ("auto": 64 points per pixel where the style meets D, `denoise.coverage`) and
+`denoise_uncertainty` (0.3: the style averaged over D's residual error, `expectation.spread`; 0 for g of D).
 Returns the image, or (image, aovs) with `aovs=True`.
 """
 from __future__ import annotations
@@ -32,12 +34,14 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
            estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
            integrator: Any = None, callback: Any = None, denoise: str = "expectation",
            denoise_quality: str = "high", pass_spp: int | None = None, defines: dict[str, Any] | None = None,
-           coverage: int | str = "auto", **params: Any):
+           coverage: int | str = "auto", denoise_uncertainty: float | None = None, **params: Any):
     """`styletrace.render(..., denoise=...)`: the render pipeline's job (`pipeline.resolve`: the scene's own
     settings merged, auto values pinned), rendered and denoised here (docs/denoise.md)."""
     check_method(denoise)
     from . import coverage as points, oidn
     points.check_k(coverage)
+    from .expectation import UNCERTAINTY, check_uncertainty
+    uncertainty = check_uncertainty(UNCERTAINTY if denoise_uncertainty is None else denoise_uncertainty)
     oidn.require()
     oidn.check_quality(denoise_quality)
     from ..pipeline.job import python_job
@@ -55,7 +59,7 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
         from . import expectation
         from ..lookdev.record import scene_label
         image, buf = expectation.render(sc, integrator, spp, seed, denoise_quality, callback,
-                                        label=scene_label(scene), coverage=coverage)
+                                        label=scene_label(scene), coverage=coverage, uncertainty=uncertainty)
         return (image, expectation.aovs(buf, image)) if want_aovs else image
     from . import image as post
     out, _, errs = post.render(sc, integrator, spp, seed, denoise_quality, callback,

@@ -29,7 +29,9 @@ def precheck(args, scene, integrator, pixel_format: str) -> None:
                          "leaves noisy; use --denoise expectation")
     if method == "expectation":
         from .coverage import check_k
+        from .expectation import check_uncertainty
         check_k(coverage_of(args))
+        check_uncertainty(uncertainty_of(args))
         from ..lookdev.commands import check_buffer_path
         from ..lookdev.record import check_film
         from . import expectation
@@ -45,6 +47,13 @@ def coverage_of(args):
     return "auto" if value is None else value
 
 
+def uncertainty_of(args):
+    """--denoise-uncertainty, the default when not given (`denoise.expectation.UNCERTAINTY`)."""
+    from .expectation import UNCERTAINTY
+    value = getattr(args, "denoise_uncertainty", None)
+    return UNCERTAINTY if value is None else value
+
+
 def render_denoised(args, scene, integrator, pixel_format: str) -> int:
     precheck(args, scene, integrator, pixel_format)
     method = args.denoise
@@ -53,7 +62,8 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
         from ..lookdev.record import scene_label
         from . import expectation
         image, buf = expectation.render(scene, integrator, args.spp, args.seed, args.denoise_quality,
-                                        label=scene_label(args.scene), coverage=coverage_of(args))
+                                        label=scene_label(args.scene), coverage=coverage_of(args),
+                                        uncertainty=uncertainty_of(args))
         errs = expectation.aovs(buf, image) if integrator.settings.aovs else None
         out = save_safely(image, args.output, pixel_format, errs)
         if args.buffer:

@@ -34,6 +34,7 @@ from ..errors import UsageError  # noqa: E402
 from ..kernel.integrator import StylizedIntegrator  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, Buffer  # noqa: E402
 from ..lookdev.record import RecordingIntegrator, record  # noqa: E402
+from ..lookdev.restyle import finish_spread  # noqa: E402
 from ..pipeline.passes import pass_seed  # noqa: E402
 from . import guides  # noqa: E402
 
@@ -104,6 +105,13 @@ class CoverageIntegrator(RecordingIntegrator):
             return super().sample(scene, sampler, placed, medium, active)
         finally:
             self._at = None
+
+    def finish_mean(self, slot, m, v):
+        """g averaged over D's uncertainty at the point's pixel where the field has one (`restyle.finish_spread`)."""
+        if self.field.spread is None:
+            return super().finish_mean(slot, m, v)
+        _, pixel, _ = self._at
+        return finish_spread(slot, m, v, dr.gather(mi.Float, self.field.spread, pixel))
 
     def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
         """D at the vertex in place of the children's mean (one lookup per camera ray, whatever the slot)."""

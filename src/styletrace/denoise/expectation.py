@@ -39,7 +39,7 @@ import numpy as np  # noqa: E402
 
 from ..pipeline.passes import Progress, pass_seed  # noqa: E402
 from ..errors import UsageError  # noqa: E402
-from ..lookdev.buffer import MAX_SAMPLES, Buffer  # noqa: E402
+from ..lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
 from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for  # noqa: E402
 from ..config import settings as S  # noqa: E402
@@ -169,6 +169,8 @@ class Field:
     def __init__(self, d: np.ndarray, g: guides.Guides, diag: float):
         #: whether D is the reflected part alone (`EMISSION_APART`): a lookup adds the vertex's own emission back
         self.emission_apart = EMISSION_APART
+        #: D's relative uncertainty per pixel (Dr.Jit Float, H x W) where the style is averaged over it, else None
+        self.spread = None
 
         def image(a):
             return mi.Float(np.ascontiguousarray(a, np.float32).ravel())
@@ -288,10 +290,12 @@ def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.maximum(out, 0.0)
 
 
-def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integrator=None, k: int = 0):
+def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integrator=None, k: int = 0,
+           uncertainty: float = 0.0):
     """Denoise the buffer's expectation. k = 0: keep D at each camera sample in the buffer (restyles then style
     it); returns (D per pixel H x W x 3, None). k > 0: g is evaluated at k stratified points per pixel instead
-    (`coverage.points`, which needs the `integrator`); returns (D, the points' buffer)."""
+    (`coverage.points`, which needs the `integrator`), averaged over D's uncertainty where `uncertainty` > 0
+    (`spread`); returns (D, the points' buffer)."""
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
     g = guides.first_hit(scene, spp, pass_seed(seed, 0))
@@ -303,14 +307,60 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integ
               "guides": "albedo and shading normal through specular chains (guides.first_hit)",
               "at_samples": "guided bilinear interpolation of D at each sample's film position"}
     if k:
-        diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
-        cover = coverage_module.points(scene, integrator, Field(d, g, diag), k, seed)
-        cover.header["denoise"] = {**header, "coverage": k}
+        field = Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
+        rel = spread(buf, own[1], uncertainty) if uncertainty > 0 else None
+        if rel is not None:
+            field.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
+        cover = coverage_module.points(scene, integrator, field, k, seed)
+        if rel is not None:  # per point, its pixel's: restyles average g over it too
+            cover.arrays[SPREAD] = np.ascontiguousarray(rel.ravel()[cover.arrays["pixel"]], dtype=np.float32)
+        cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
         return d, cover
     buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
     buf.header["denoise"] = header
     buf.device.clear()  # the Dr.Jit copy must pick up the denoised means
     return d, None
+
+
+#: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error, chosen on the
+#: Cornell box (BENCHMARKS.md denoise: 0.15, 0.2, 0.3, 0.45 and 1 tried)
+UNCERTAINTY = 0.3
+
+
+def check_uncertainty(value) -> float:
+    """`uncertainty` as a float >= 0, or a one-line UsageError naming the value."""
+    try:
+        u = float(value)
+    except (TypeError, ValueError):
+        u = float("nan")
+    if isinstance(value, bool) or not np.isfinite(u) or u < 0 or u > 10:
+        raise UsageError(f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D itself) "
+                         f"to 10, the residual error of D as a fraction of the noisy estimate's standard error")
+    return u
+
+
+def spread(buf: Buffer, emission: np.ndarray, uncertainty: float) -> np.ndarray:
+    """D's relative uncertainty per pixel (H x W float64): `uncertainty` x the relative standard error of M, from
+    the spread of its camera samples' children means (brightness, the emission taken off), capped at 1; 0 where
+    a pixel has fewer than 2 samples with a stylized vertex.
+
+    Why: OIDN leaves part of M's noise, in proportion to it; where D lies within that of a step style's
+    threshold, g(D) is a coin toss between two bands, and the mean of g over the spread (`finish_spread`) is
+    the estimate with the least squared error (docs/denoise.md, step 7). It goes to 0 as the samples grow."""
+    a = buf.arrays
+    found = a["slot"] >= 0
+    pix = a["pixel"].astype(np.int64)[found]
+    size = buf.width * buf.height
+    lum = (a["mean"].astype(np.float64) - emission.T).mean(0)[found]
+    count = np.bincount(pix, minlength=size).astype(np.float64)
+    s1 = np.bincount(pix, weights=lum, minlength=size)
+    s2 = np.bincount(pix, weights=lum * lum, minlength=size)
+    mean = s1 / np.maximum(count, 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        var_of_mean = np.where(count > 1, np.maximum(s2 / np.maximum(count, 1.0) - mean * mean, 0.0) / (count - 1.0), 0.0)
+    floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
+    rel = np.sqrt(var_of_mean) / np.maximum(np.abs(mean), floor)
+    return np.minimum(uncertainty * rel, 1.0).reshape(buf.height, buf.width)
 
 
 def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:
@@ -353,7 +403,8 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
            callback: Callable[[Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
-           label: str = "", coverage: int | str = "auto") -> tuple[np.ndarray, Buffer]:
+           label: str = "", coverage: int | str = "auto", uncertainty: float = UNCERTAINTY
+           ) -> tuple[np.ndarray, Buffer]:
     """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy render).
     `coverage` k > 0: g is evaluated at k stratified first hits per pixel (`coverage.points`), not at the camera
     samples; the buffer returned is then the coverage points' (`buf.source`: the camera samples')."""
@@ -362,6 +413,7 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     check(integrator)
     w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
     k = coverage_module.resolve_k(coverage, w, h, max_samples)
+    uncertainty = check_uncertainty(uncertainty)
     if integrator.settings.aovs:  # the buffer records without them; `aovs` below derives them from it
         integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
     buf = None
@@ -369,7 +421,7 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
         buf.image = prog.image
         if callback is not None:
             callback(prog)
-    _, cover = attach(buf, scene, spp, seed, quality, integrator, k)
+    _, cover = attach(buf, scene, spp, seed, quality, integrator, k, uncertainty)
     if cover is None:
         return image_of(buf), buf
     image = np.asarray(cover.image, dtype=np.float32)[..., :3]

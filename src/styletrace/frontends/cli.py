@@ -192,6 +192,8 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
+    if args.denoise_uncertainty is not None and args.denoise != "expectation":
+        raise UsageError(f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation only")
     if args.coverage is not None and args.denoise != "expectation":
         raise UsageError(f"--coverage {args.coverage} applies to --denoise expectation only (the points where the "
                          f"style meets the denoised expectation)")
@@ -434,6 +436,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --denoise expectation: points per pixel where the style is applied to the denoised "
                         "expectation, a square (16, 64, ...), 0 for the camera samples, or auto (default: 64, fewer "
                         "where the image would not fit the buffer's cap)")
+    r.add_argument("--denoise-uncertainty", default=None, metavar="U",
+                   help="with --denoise expectation and coverage points: the style is averaged over the denoised "
+                        "expectation's residual error, taken as U times the noisy estimate's standard error "
+                        "(default 0.3; 0: the style of the denoised expectation itself)")
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 

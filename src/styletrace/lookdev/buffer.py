@@ -76,6 +76,10 @@ def bytes_per_sample(stylize: str, stores: str = "mean") -> int:
                for k in fields_for(stylize, stores) if k not in SEQUENCE[1:])
 
 
+#: a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over it
+#: (`lookdev.restyle.finish_spread`, docs/denoise.md)
+SPREAD = "denoise_spread"
+
 #: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.Pilot.samples`), so that
 #: a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
 PILOT = "pilot_"
@@ -176,7 +180,7 @@ def load_buffer(path: str) -> Buffer:
                                  f"styletrace reads version {VERSION} and earlier")
             arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
-            denoised = {k: z[k] for k in z.files if k == "denoised_mean"}  # docs/denoise.md
+            denoised = {k: z[k] for k in z.files if k in ("denoised_mean", SPREAD)}  # docs/denoise.md
     except UsageError:
         raise
     except (OSError, ValueError, KeyError, EOFError) as exc:
@@ -192,10 +196,11 @@ def load_buffer(path: str) -> Buffer:
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
     for k, a in denoised.items():
-        if a.shape != (3, n):
-            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {(3, n)}")
+        want = (n,) if k == SPREAD else (3, n)
+        if a.shape != want:
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 
-__all__ = ["Buffer", "load_buffer", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
+__all__ = ["Buffer", "load_buffer", "SPREAD", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
            "bytes_per_sample"]

@@ -124,12 +124,16 @@ class RecordingIntegrator(StylizedIntegrator):
                 value = self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
             else:
                 m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth, medium)
-                value = finish(target.slot, m, v)
+                value = self.finish_mean(target.slot, m, v)
                 mean = dr.select(here, m, mean)
             total = dr.select(here, value, total)
             slot = dr.select(here, i, slot)
         self.kept.update(p=mi.Vector3f(v.p), n=v.n, wo=v.wo, depth=v.depth, slot=slot, mean=mean)
         return total
+
+    def finish_mean(self, slot, m, v):
+        """The slot's estimate from the children's mean m (`restyle.finish`; `denoise.coverage` overrides it)."""
+        return finish(slot, m, v)
 
     def through(self, w, value):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))

@@ -48,7 +48,7 @@ from ..scene.defaults import Facts, auto_values  # noqa: E402
 from ..styles import get  # noqa: E402
 from ..styles.base import Vertex  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402
-from .buffer import PILOT, Buffer, load_buffer  # noqa: E402
+from .buffer import PILOT, SPREAD, Buffer, load_buffer  # noqa: E402
 from .sequence import device_arrays, replay  # noqa: E402
 
 #: estimators whose value is a function of the children's mean alone
@@ -67,6 +67,24 @@ def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
         a0 = np.asarray(form.a0, dtype=np.float64)
         return apply_linear(np.asarray(form.a1, dtype=np.float64), mean) + const_like(a0, mean)
     return style.apply(mean, v)
+
+
+#: (z, weight): 5-point Gauss-Hermite quadrature for z ~ N(0, 1) (numpy.polynomial.hermite_e.hermegauss(5),
+#: weights over sqrt(2 pi)); exact for polynomials in z up to degree 9
+SPREAD_NODES = ((0.0, 0.53333333), (1.35562618, 0.22207592), (-1.35562618, 0.22207592),
+                (2.85697001, 0.01125741), (-2.85697001, 0.01125741))
+
+
+def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.Color3f:
+    """The slot's estimate averaged over a relative uncertainty of the mean: E over z ~ N(0, 1) of
+    finish(slot, mean (1 + spread z)) (SPREAD_NODES; the scaled mean is clamped at 0). With spread 0 it is
+    `finish`. Why: a denoised expectation D carries a residual error, and g of it flips a step style's band
+    wherever that error crosses a threshold; the mean of g over the error's spread is the estimate of g(E[L])
+    with the least squared error when the error is Gaussian (docs/denoise.md, step 7)."""
+    out = mi.Color3f(0.0)
+    for z, weight in SPREAD_NODES:
+        out += weight * finish(slot, dr.maximum(mean * (1.0 + spread * z), 0.0), v)
+    return out
 
 
 # ---- slots: what the header records, and what a restyle makes of it ---------------------------------
@@ -149,6 +167,8 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d.update(device_arrays(a))
     if "denoised_mean" in a:  # a denoised render (docs/denoise.md): each sample styles the denoised E[L]
         d["mean"] = vec("denoised_mean", mi.Color3f)
+    if SPREAD in a:  # and averages the style over D's uncertainty (`finish_spread`)
+        d["spread"] = mi.Float(np.ascontiguousarray(a[SPREAD], dtype=np.float32))
     d["slot"] = mi.Int32(a["slot"].astype(np.int32))
     d["pixel"] = mi.UInt32(a["pixel"])
     if "beta" in a:
@@ -216,7 +236,8 @@ def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
     else:
         total = mi.Color3f(0.0)
         for i, slot in enumerate(slots):
-            total = dr.select(d["slot"] == i, finish(slot, d["mean"], v), total)
+            value = finish(slot, d["mean"], v) if "spread" not in d else finish_spread(slot, d["mean"], v, d["spread"])
+            total = dr.select(d["slot"] == i, value, total)
     found = d["slot"] >= 0
     if "beta" in d:
         return d["L_before"] + dr.select(found, d["beta"] * total, 0.0)
@@ -301,5 +322,5 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
-__all__ = ["restyle", "finish", "slot_record", "slots_for", "sample_values", "accumulate", "device", "prepare",
+__all__ = ["restyle", "finish", "finish_spread", "SPREAD_NODES", "slot_record", "slots_for", "sample_values", "accumulate", "device", "prepare",
            "RESTYLABLE_ESTIMATORS", "as_buffer", "replay_lanes"]
