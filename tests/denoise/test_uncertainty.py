@@ -4,7 +4,7 @@
 - `finish_spread` of a linear style is the style of the mean (the quadrature is exact for it), and with spread 0
   it is `finish`.
 - `spread` is uncertainty x the relative standard error of each pixel's mean of its samples' children means,
-  computed here by numpy from a hand-made buffer.
+  its square averaged over the 3 x 3 neighbourhood, computed here by numpy from a hand-made buffer.
 - With uncertainty 0 a render keeps no spread and styles D itself; with the default it keeps one per point.
 """
 import numpy as np
@@ -54,21 +54,25 @@ def test_a_linear_style_is_unchanged_and_spread_zero_is_finish():
 
 def test_spread_is_the_relative_standard_error():
     rng = np.random.default_rng(3)
-    w, h, per = 3, 2, 5
+    w, h, per = 4, 3, 5
     pixel = np.repeat(np.arange(w * h), per).astype(np.uint32)
     mean = rng.uniform(0.2, 1.0, (3, pixel.size)).astype(np.float32)
     slot = np.zeros(pixel.size, np.int8)
-    slot[:per - 1] = -1  # pixel 0 keeps one sample with a vertex: no standard error, no spread
+    slot[:per - 1] = -1  # pixel 0 keeps one sample with a vertex: no standard error (0 in the average)
     buf = Buffer({"width": w, "height": h}, {"pixel": pixel, "slot": slot, "mean": mean})
     emission = np.zeros((pixel.size, 3))
     emission[per:2 * per] = 0.05  # pixel 1's samples emit: the reflected part is what counts
     got = X.spread(buf, emission, 0.3)
     lum = mean.astype(np.float64).mean(0) - emission.mean(1)
+    rel2 = np.zeros(w * h)
     for p in range(1, w * h):
         x = lum[p * per:(p + 1) * per]
-        want = 0.3 * x.std(ddof=1) / np.sqrt(per) / abs(x.mean())
-        assert got.ravel()[p] == pytest.approx(min(want, 1.0), rel=1e-6)
-    assert got.ravel()[0] == 0.0
+        rel2[p] = (x.std(ddof=1) / np.sqrt(per) / abs(x.mean())) ** 2
+    rel2 = rel2.reshape(h, w)
+    for y in range(h):
+        for x in range(w):
+            near = [rel2[min(max(y + dy, 0), h - 1), min(max(x + dx, 0), w - 1)] for dy in (-1, 0, 1) for dx in (-1, 0, 1)]
+            assert got[y, x] == pytest.approx(min(0.3 * np.sqrt(np.mean(near)), 1.0), rel=1e-6)
 
 
 @pytest.mark.parametrize("bad", [-0.1, float("inf"), "x", True, 11])
