@@ -111,8 +111,9 @@ PIXEL_FIXED = ((1, 2), (1, 4), (1, 16), (1, 64), (2, 8), (4, 2), (4, 4), (4, 16)
 # per pixel; (spp, n, k, u) with k = 0 the previous method (g at the camera samples), kept at its previous choice
 # the fifth adds g averaged over D's uncertainty (u, `--denoise-uncertainty`, step 7; its default 0.3 was chosen
 # on the Cornell box at spp 4, n 8, k 64 among 0.15, 0.2, 0.3, 0.45 and 1): u = 0 rows show it off
-PIXEL_EXPECTATION = (tuple((spp, n, 64, 0.3) for spp, n in ((2, 8), (2, 16), (2, 32), (4, 4), (4, 8), (4, 16), (4, 32), (8, 8),
-                                                             (8, 16), (8, 32), (16, 4), (16, 8), (32, 4)))
+PIXEL_EXPECTATION = (tuple((spp, n, 64, 0.3) for spp, n in ((2, 8), (2, 16), (2, 32), (4, 4), (4, 8), (4, 16),
+                                                             (4, 32), (8, 8), (8, 16), (8, 32), (16, 4), (16, 8),
+                                                             (32, 4)))
                      + ((4, 8, 64, 0.0), (8, 16, 64, 0.0), (32, 4, 0, 0.0)))
 PIXEL_IMAGE = tuple((spp, n) for spp in (1, 2, 4, 8, 16) for n in (4, 16)) + ((32, 4), (64, 2))
 PIXEL_REUSE_SPP = (1, 4, 8)
