@@ -18,7 +18,8 @@ def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkey
     img, spp, inner = s.restyle("cel", None, {})
     assert (spp, inner) == (1, module.DRAFT_INNER)
     from styletrace.denoise.draft import QUALITY, available  # with the denoise extra the draft is denoised
-    extra = {"denoise": "expectation", "denoise_quality": QUALITY} if available() else {}
+    # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page restyles)
+    extra = {"denoise": "expectation", "denoise_quality": QUALITY, "coverage": 0} if available() else {}
     want = styletrace.render("cornell-box", style="cel", spp=1, inner=module.DRAFT_INNER, seed=0, width=24, height=20,
                              **extra)
     np.testing.assert_allclose(img, want, rtol=0, atol=1e-5)
