@@ -57,6 +57,7 @@ def uncertainty_of(args):
 def render_denoised(args, scene, integrator, pixel_format: str) -> int:
     precheck(args, scene, integrator, pixel_format)
     method = args.denoise
+    how = method
     from ..images import save_safely
     if method == "expectation":
         from ..lookdev.record import scene_label
@@ -68,6 +69,8 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
         out = save_safely(image, args.output, pixel_format, errs)
         if args.buffer:
             buf.save(args.buffer)
+        points = buf.header.get("denoise", {}).get("coverage")
+        how += f", the style at {points} points per pixel" if points else ", the style at the camera samples"
     else:
         from ..runtime import init
         from ..sizing import lanes_per_pass
@@ -76,7 +79,7 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
                                      lanes_per_pass=lanes_per_pass(init())[0], pass_spp=args.pass_spp)
         out = save_safely(image, args.output, pixel_format, errs)
     if not args.quiet:
-        print(f"wrote {out} ({integrator.settings.style.describe()}, spp {args.spp}, denoised: {method})",
+        print(f"wrote {out} ({integrator.settings.style.describe()}, spp {args.spp}, denoised: {how})",
               file=sys.stderr)
     return 0 if out == args.output else 1
 
