@@ -125,41 +125,28 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     w, h = buf.width, buf.height
     pix = a["pixel"].astype(np.int64)
     px, py = pix % w, pix // w
-    at_pixel = d[py, px].astype(np.float64)  # the fallback: the sample's own pixel's D
     found = a["slot"] >= 0
-    if not found.any():
-        return np.ascontiguousarray(at_pixel.T.astype(np.float32))
+    if not found.any():  # the fallback everywhere: the sample's own pixel's D
+        return np.ascontiguousarray(d[py, px].T.astype(np.float32))
     uv = raster(scene, a["p"])
     good = found & np.all(np.isfinite(uv), -1)
     good &= (np.floor(uv[:, 0]) == px) & (np.floor(uv[:, 1]) == py)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
-    acc, acc_a, wsum = _guided_bilinear(d, g, uv, good, a["p"], a["n"], pix, w, h, diag)
-    a_s = g.albedo[py, px].astype(np.float64)
-    out = np.where((wsum > 1e-6)[:, None], acc / np.maximum(wsum, 1e-12)[:, None], at_pixel)
-    if REMODULATE:
-        # the guide albedo with the same weights: what albedo the interpolated D was formed under
-        mixed = np.where((wsum > 1e-6)[:, None], acc_a / np.maximum(wsum, 1e-12)[:, None], a_s)
-        out = remodulate(out, mixed, own_albedo, found)
-    out = out + np.where(found[:, None], emission, 0.0)
-    return np.ascontiguousarray(out.T.astype(np.float32))
 
-
-def _guided_bilinear(d, g: guides.Guides, uv, good, p, n, pix, w: int, h: int, diag: float):
-    """`at_samples`' weighted sums over the four pixel centres around each sample, in one Dr.Jit kernel (the
-    numpy version of the same loop took 0.3 s at 128 x 128 x 16 samples, a third of a denoised render):
-    (sum of w D, sum of w albedo, sum of w), float64 N x 3, N x 3, N."""
-    good_j = mi.Bool(np.ascontiguousarray(good))
-    fx = dr.select(good_j, mi.Float(np.ascontiguousarray(uv[:, 0], np.float32)), 0.5)
-    fy = dr.select(good_j, mi.Float(np.ascontiguousarray(uv[:, 1], np.float32)), 0.5)
-    ps = mi.Vector3f(*(mi.Float(np.ascontiguousarray(p[i], np.float32)) for i in range(3)))
-    ns = mi.Vector3f(*(mi.Float(np.ascontiguousarray(n[i], np.float32)) for i in range(3)))
-    acc, acc_a, wsum = Field(d, g, diag).lookup(fx, fy, ps, ns, mi.UInt32(np.ascontiguousarray(pix, np.uint32)),
-                                               good_j)
-    dr.eval(acc, acc_a, wsum)
-
-    def host(v):
-        return np.stack([np.asarray(v[i], np.float64) for i in range(3)], -1)
-    return host(acc), host(acc_a), np.asarray(wsum, np.float64)
+    def vec(x, T):  # N x 3 or 3 x N host array -> Dr.Jit
+        x = x if x.shape[0] == 3 else x.T
+        return T(*(mi.Float(np.ascontiguousarray(x[i], np.float32)) for i in range(3)))
+    near = mi.Bool(np.ascontiguousarray(good))
+    fx = dr.select(near, mi.Float(np.ascontiguousarray(uv[:, 0], np.float32)), 0.5)
+    fy = dr.select(near, mi.Float(np.ascontiguousarray(uv[:, 1], np.float32)), 0.5)
+    # samples without a vertex keep their pixel's D as it is: no albedo (no remodulation), no emission
+    albedo = np.where(found[:, None], own_albedo, np.nan)
+    emitted = np.where(found[:, None], emission, 0.0)
+    out = Field(d, g, diag).at(fx, fy, vec(a["p"], mi.Point3f), vec(a["n"], mi.Vector3f),
+                               mi.UInt32(np.ascontiguousarray(pix, np.uint32)), vec(albedo, mi.Color3f),
+                               vec(emitted, mi.Color3f), mi.Bool(True), near)
+    dr.eval(out)  # one kernel for the three channels
+    return np.ascontiguousarray(np.stack([np.asarray(out[i], np.float32) for i in range(3)]))
 
 
 class Field:
@@ -182,11 +169,13 @@ class Field:
     def _get(img, idx, mask):
         return mi.Vector3f(dr.gather(mi.Vector3f, img, idx, mask))
 
-    def lookup(self, fx, fy, ps, ns, pix, valid):
+    def lookup(self, fx, fy, ps, ns, pix, valid, near=None):
         """Sums over the four pixel centres around film position (fx, fy) (pixels of the crop window) of a vertex
         at ps with normal ns in pixel pix: (sum of w D, sum of w albedo, sum of w), w the bilinear weight where
         the pixel shows the vertex's own surface (normal within ~18 degrees, the pixel's first hit within ~6
-        degrees of the vertex's tangent plane, albedo within 0.05 of pix's), 0 elsewhere."""
+        degrees of the vertex's tangent plane, albedo within 0.05 of pix's), 0 elsewhere. `valid` masks the
+        lanes; `near` (default `valid`) those whose film position can be trusted (w = 0 elsewhere)."""
+        near = valid if near is None else near
         w, h, get = self.w, self.h, self._get
         fx, fy = fx - 0.5, fy - 0.5
         a_s = get(self.A, pix, valid)
@@ -202,16 +191,23 @@ class Field:
                 same = dr.dot(get(self.NRM, q, valid), ns) > 0.95
                 same &= dr.abs(dr.dot(gap, ns)) <= 0.1 * dr.norm(gap) + 1e-5 * self.diag
                 same &= dr.max(dr.abs(aq - a_s)) <= 0.05
-                wt = dr.select(valid & same, wt, 0.0)
+                wt = dr.select(valid & near & same, wt, 0.0)
                 acc += wt * get(self.D, q, valid)
                 acc_a += wt * aq
                 wsum += wt
         return acc, acc_a, wsum
 
-    def at(self, fx, fy, ps, ns, pix, own_albedo, emission, valid) -> mi.Color3f:
-        """`at_samples` for one vertex inside a kernel: D interpolated (the own pixel's where no neighbour
-        qualifies), remodulated by the vertex's own albedo (`remodulate`), its own emission added."""
-        acc, acc_a, wsum = self.lookup(fx, fy, ps, ns, pix, valid)
+    def at(self, fx, fy, ps, ns, pix, own_albedo, emission, valid, near=None) -> mi.Color3f:
+        """D for one vertex inside a kernel (`at_samples`, `coverage.CoverageIntegrator`): interpolated (`lookup`;
+        the own pixel's D where no neighbour qualifies), remodulated, its own emission added.
+
+        Remodulated (`REMODULATE`): D x the vertex's own albedo / the albedo D was formed under (the guide albedo
+        with the same weights), per channel, where both are positive (a NaN albedo: left as it is). Why: a pixel
+        on a texture edge averages two albedos into its M, and so into D (E[L] of a diffuse surface is albedo x
+        irradiance); its samples on the dark side would take the bright side's share and the other way round.
+        The irradiance D / albedo varies slowly across the edge, so each sample takes its own albedo times it.
+        Where the albedos agree (no texture edge in the pixel) the factor is 1."""
+        acc, acc_a, wsum = self.lookup(fx, fy, ps, ns, pix, valid, near)
         some = wsum > 1e-6
         inv = dr.rcp(dr.maximum(wsum, 1e-12))
         out = dr.select(some, acc * inv, self._get(self.D, pix, valid))
@@ -222,7 +218,7 @@ class Field:
         return mi.Color3f(out + emission)
 
 
-#: rescale D at each camera sample by its own albedo over the pixel's (`remodulate`)
+#: rescale D at each camera sample by its own albedo over the pixel's (`Field.at`)
 REMODULATE = True
 #: denoise the reflected part of E[L] and add each sample's own emission back (`own_surface`)
 EMISSION_APART = True
@@ -233,7 +229,7 @@ def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
     just in front of the vertex (along wo) back onto it.
 
     albedo: the albedo guide as `guides.first_hit` forms it (through mirrors and glass, `guides.through_delta`);
-    NaN where the ray does not find the vertex again (`remodulate` then leaves the sample as it is).
+    NaN where the ray does not find the vertex again (`Field.at` then leaves the sample as it is).
     emission: the radiance the vertex emits towards wo (an area light's, 0 elsewhere and where not found).
     E[L] at a vertex on a light includes its emission, which no guide tells apart from a coplanar surface of
     the same albedo (the Cornell box's light in its ceiling): `attach` denoises the reflected part alone and
@@ -258,18 +254,6 @@ def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
     emission = np.stack([np.asarray(le[i], np.float64) for i in range(3)], -1)
     emission[~hit] = 0.0
     return albedo, np.nan_to_num(emission)
-
-
-def remodulate(d: np.ndarray, mixed: np.ndarray, own: np.ndarray, found: np.ndarray) -> np.ndarray:
-    """D x own albedo / the albedo D was formed under, per channel, for samples with a vertex.
-
-    Why: a pixel on a texture edge averages two albedos into its M, and so into D (E[L] of a diffuse surface
-    is albedo x irradiance); its camera samples on the dark side would take the bright side's share and the
-    other way round. The irradiance D / albedo varies slowly across the edge, so each sample takes its
-    own albedo times it. Where the albedos agree (no texture edge in the pixel) the factor is 1."""
-    ok = found[:, None] & np.isfinite(own) & (mixed > 1e-4) & (own > 0)
-    factor = np.where(ok, own / np.where(ok, mixed, 1.0), 1.0)
-    return d * factor
 
 
 #: OIDN's output is trusted down to this fraction of the image's mean brightness (see `below_resolution`)
