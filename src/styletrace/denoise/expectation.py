@@ -81,17 +81,33 @@ def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
     """M: per pixel, the mean of its camera samples' children means where a stylized vertex was found
     (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each sample's own emitted
     radiance is taken off first (M is then the reflected part alone)."""
+    return _moments(buf, reflected(buf, emission))[1].reshape(buf.height, buf.width, 3).astype(np.float32)
+
+
+def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
+    """Each camera sample's children mean, less its own emission where given (N x 3, float64)."""
+    mean = buf.arrays["mean"].astype(np.float64).T
+    return mean if emission is None else mean - emission
+
+
+def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
+    """Per pixel, over its samples with a stylized vertex (or those of `found`) of `values` (N x C): (count,
+    mean, variance of the mean = (mean of squares - squared mean) / (count - 1)); mean 0 where a pixel has no
+    such sample, variance NaN below 2. Float64, flat over the pixels (H*W, and H*W x C)."""
     a = buf.arrays
-    found = a["slot"] >= 0
-    pix = a["pixel"][found].astype(np.int64)
+    found = a["slot"] >= 0 if found is None else found
+    pix = a["pixel"].astype(np.int64)[found]
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
-    mean = a["mean"].astype(np.float64)
-    if emission is not None:
-        mean = mean - emission.T
-    out = np.stack([np.bincount(pix, weights=mean[c][found], minlength=size)
-                    for c in range(3)], axis=-1) / np.maximum(count, 1.0)[:, None]
-    return out.reshape(buf.height, buf.width, 3).astype(np.float32)
+    v = values[found]
+    s1 = np.stack([np.bincount(pix, weights=v[:, c], minlength=size) for c in range(v.shape[1])], -1)
+    s2 = np.stack([np.bincount(pix, weights=v[:, c] * v[:, c], minlength=size) for c in range(v.shape[1])], -1)
+    n = np.maximum(count, 1.0)[:, None]
+    mean = s1 / n
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var = np.maximum(s2 / n - mean * mean, 0.0) / (count[:, None] - 1.0)
+    var[count < 2] = np.nan
+    return count, mean, var
 
 
 def raster(scene, p: np.ndarray) -> np.ndarray:
@@ -335,17 +351,8 @@ def spread(buf: Buffer, emission: np.ndarray, uncertainty: float) -> np.ndarray:
     samples give a noisy estimate of its error level, and D at a pixel is formed from its neighbours too (the
     Cornell box: MSE 2.60e-3 to 2.50e-3 for cel, 1.83e-3 to 1.75e-3 for hatching; 5 x 5 gave the same). It goes
     to 0 as the samples grow."""
-    a = buf.arrays
-    found = a["slot"] >= 0
-    pix = a["pixel"].astype(np.int64)[found]
-    size = buf.width * buf.height
-    lum = (a["mean"].astype(np.float64) - emission.T).mean(0)[found]
-    count = np.bincount(pix, minlength=size).astype(np.float64)
-    s1 = np.bincount(pix, weights=lum, minlength=size)
-    s2 = np.bincount(pix, weights=lum * lum, minlength=size)
-    mean = s1 / np.maximum(count, 1.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        var_of_mean = np.where(count > 1, np.maximum(s2 / np.maximum(count, 1.0) - mean * mean, 0.0) / (count - 1.0), 0.0)
+    _, mean, var = _moments(buf, reflected(buf, emission).mean(1, keepdims=True))
+    mean, var_of_mean = mean[:, 0], np.nan_to_num(var[:, 0])  # below 2 samples: 0
     floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
     rel2 = (var_of_mean / np.maximum(np.abs(mean), floor) ** 2).reshape(buf.height, buf.width)
     padded = np.pad(rel2, 1, mode="edge")
@@ -380,15 +387,7 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
         if held is not None:
             buf.arrays[DENOISED] = held
         buf.device.clear()
-    pix = buf.arrays["pixel"].astype(np.int64)
-    size = buf.width * buf.height
-    n = np.bincount(pix, minlength=size).astype(np.float64)[:, None]
-    s1 = np.stack([np.bincount(pix, weights=vals[:, c], minlength=size) for c in range(3)], -1)
-    s2 = np.stack([np.bincount(pix, weights=vals[:, c] ** 2, minlength=size) for c in range(3)], -1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mean = s1 / n
-        var = np.maximum(s2 / n - mean * mean, 0.0) / (n - 1.0)
-    var[n[:, 0] < 2] = np.nan
+    var = _moments(buf, vals, np.ones(buf.samples, bool))[2]  # every sample, vertex or not
     return var.reshape(buf.height, buf.width, 3).astype(np.float32)
 
 
