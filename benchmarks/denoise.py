@@ -333,11 +333,16 @@ def pixel_methods(style: str) -> list[tuple[str, str, dict]]:
     return out + [(f"{label} spp={spp}", "reuse", {"spp": spp, **kw}) for spp in PIXEL_REUSE_SPP]
 
 
+def ref_path(name, size, seed, spp, n) -> str:
+    """Where `ref_part` caches a part."""
+    return os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{spp}x{n}_seed{seed}.npz")
+
+
 def ref_part(name, scene, size, seed, spp, n, what="pixel reference"):
     """One part of the pixel reference: `spp` camera samples per pixel, direct application at `n`, seed `seed`,
     restyled to every style; rendered once (`what` names it in the log) and cached, float64 per style. `scene`
     None: read from the cache only."""
-    path = os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{spp}x{n}_seed{seed}.npz")
+    path = ref_path(name, size, seed, spp, n)
     if scene is not None and not os.path.exists(path):
         t = time.perf_counter()
         buf = render_buffer(scene, style="cel", spp=spp, inner=n, seed=seed)
@@ -440,8 +445,7 @@ def high_reference(name, size):
     camera-sample variance 4x R's (32 camera samples per pixel, not 128): a measured check of what R's bias does
     to the ratios, where corrected_mse is an extrapolation."""
     hs, hn = PIXEL_HIGH
-    paths = [os.path.join(CACHE, f"denoise_pixref_{name}_{size}_{hs}x{hn}_seed{s}.npz") for s in PIXEL_REF_SEEDS[:2]]
-    if not all(os.path.exists(p) for p in paths):
+    if not all(os.path.exists(ref_path(name, size, s, hs, hn)) for s in PIXEL_REF_SEEDS[:2]):
         return None
     parts = [ref_part(name, None, size, s, hs, hn) for s in PIXEL_REF_SEEDS[:2]]
     return {st: np.mean([p[st] for p in parts], axis=0) for st in PIXEL_STYLES}
