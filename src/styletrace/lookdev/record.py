@@ -87,6 +87,17 @@ def check_film(scene: mi.Scene) -> mi.Film:
     return film
 
 
+def check_untiled(film: mi.Film) -> None:
+    """A buffer maps lane i of a pass to pixel i // spp of the whole crop window, which holds only where
+    `pipeline.passes` renders the film in one piece: a film of more than LANES_PER_PASS pixels is rendered in
+    tiles, whose samples would land on the wrong pixels. Refused in one line until the buffer maps tiles."""
+    w, h = (int(v) for v in film.crop_size())
+    if w * h > pass_loop.LANES_PER_PASS:
+        raise UsageError(f"a buffer of {w}x{h} ({w * h} pixels) is over the {pass_loop.LANES_PER_PASS} pixels one "
+                         f"pass renders whole (larger films are rendered in tiles, which buffers do not map); "
+                         f"lower the size or render without a buffer")
+
+
 class RecordingIntegrator(StylizedIntegrator):
     """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each `sample()`."""
 
@@ -234,6 +245,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     (`pipeline.passes`); `recorder`: makes the recording integrator from (integrator, sequence, per_sample)
     (default `RecordingIntegrator`; `denoise.coverage` places its own camera rays)."""
     film = check_film(scene)
+    check_untiled(film)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
     # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain copy of the
@@ -310,4 +322,4 @@ def render_buffer(scene: Any = None, style: str | None = None, spp: int | None =
     return buf
 
 
-__all__ = ["RecordingIntegrator", "record", "render_buffer", "check_recordable", "check_film"]
+__all__ = ["RecordingIntegrator", "record", "render_buffer", "check_recordable", "check_film", "check_untiled"]
