@@ -3,7 +3,7 @@
 A buffer maps lane i of a pass to pixel i // spp of the whole film; a film of more than LANES_PER_PASS pixels is
 rendered tile by tile, and its samples would land on the first tile's pixels (measured before the refusal: the
 restyle of a 1100 x 1000 buffer differed from its own render by up to 2.85). Refused in one line, before
-anything renders, in Python and on the command line (`--denoise expectation` records a buffer)."""
+the first pass renders (after the buffer's cap on camera samples), in Python and on the command line (`--denoise expectation` records a buffer)."""
 import subprocess
 import sys
 
@@ -17,7 +17,7 @@ from styletrace.pipeline.passes import LANES_PER_PASS
 from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
 
 
-def test_a_tiled_film_is_refused_before_rendering():
+def test_a_tiled_film_is_refused_before_the_first_pass():
     scene = api.load_scene("cornell-box", 1025, 1024)
     assert 1025 * 1024 > LANES_PER_PASS
     with pytest.raises(UsageError, match=r"a buffer of 1025x1024 \(1049600 pixels\) is over the 1048576 pixels"):

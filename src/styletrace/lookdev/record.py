@@ -245,7 +245,6 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     (`pipeline.passes`); `recorder`: makes the recording integrator from (integrator, sequence, per_sample)
     (default `RecordingIntegrator`; `denoise.coverage` places its own camera rays)."""
     film = check_film(scene)
-    check_untiled(film)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
     # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain copy of the
@@ -267,6 +266,7 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
                 f"up to {4 + per_sample * 18} bytes each")
         raise UsageError(f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
                          f"{max_samples} ({what}); lower spp or the image size")
+    check_untiled(film)  # after the cap: a film over both is told about its samples first
     sensor = scene.sensors()[0]
     header = {
         "format": FORMAT, "version": VERSION, "scene": label, "width": w, "height": h,
