@@ -10,6 +10,13 @@ from .conftest import wait_until
 def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkeypatch):
     from styletrace.preview import session as module
     monkeypatch.setattr(module, "DRAFT_GRACE_S", 120.0)  # the render thread waits for the draft to be shown
+    from styletrace.denoise.draft import QUALITY, available  # with the denoise extra the draft is denoised
+    # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page restyles); rendered
+    # before the session starts: the page's Dr.Jit work runs under the session's lock, a render of the test's own
+    # beside the session's render thread would not (a CI run once failed there with an empty-array gather)
+    extra = {"denoise": "expectation", "denoise_quality": QUALITY, "coverage": 0} if available() else {}
+    want = styletrace.render("cornell-box", style="cel", spp=1, inner=module.DRAFT_INNER, seed=0, width=24, height=20,
+                             **extra)
     s = module.Session("cornell-box", inner=2, spp=2, width=24, height=20)
     assert s.restyle("cel", None, {}) == (None, 0, 0)  # nothing rendered yet
     s.start()
@@ -17,11 +24,6 @@ def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkey
     assert s.buffer is None and s.state()["draft"]
     img, spp, inner = s.restyle("cel", None, {})
     assert (spp, inner) == (1, module.DRAFT_INNER)
-    from styletrace.denoise.draft import QUALITY, available  # with the denoise extra the draft is denoised
-    # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page restyles)
-    extra = {"denoise": "expectation", "denoise_quality": QUALITY, "coverage": 0} if available() else {}
-    want = styletrace.render("cornell-box", style="cel", spp=1, inner=module.DRAFT_INNER, seed=0, width=24, height=20,
-                             **extra)
     np.testing.assert_allclose(img, want, rtol=0, atol=1e-5)
     assert "--inner 1 --spp 1" in s.command("cel", None, {}, spp, inner)
     wait_until(lambda: s.done or s.error, 120, "the background render")
