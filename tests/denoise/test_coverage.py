@@ -4,6 +4,9 @@
   the pixel. Checked by projecting every point's vertex back onto the film (`expectation.raster`, the
   sensor's own projection), on a plane that fills the view; an independent placement puts 15 of 16 points
   outside their cell.
+  The same holds where the film is rendered in tiles (each tile's points are mapped to the film's pixels and
+  D's), and in a crop window of the film (the sensor's position sample spans the crop window: the points were
+  placed as if it spanned the whole film until this test), and the points' buffer restyles to the denoised image.
 - `coverage` values: "auto" is 64 where it fits the buffer's cap and the largest square that fits elsewhere;
   anything else than "auto", 0 or a square is refused in one line naming the value, and so is a count over the cap.
 """
@@ -14,6 +17,7 @@ import pytest
 
 import mitsuba as mi
 
+import styletrace
 from styletrace import api
 from styletrace.denoise import coverage as C
 from styletrace.denoise import expectation as X
@@ -22,27 +26,39 @@ from styletrace.errors import UsageError
 RES = 12
 
 
-def plane():
+def plane(crop=None):
     T = mi.ScalarTransform4f
+    film = {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}}
+    if crop:  # a crop window: x, y, width, height
+        film.update(zip(("crop_offset_x", "crop_offset_y", "crop_width", "crop_height"), crop))
     grey = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.5] * 3}}
     return api.load_scene({
         "type": "scene",
         "sensor": {"type": "perspective", "fov": 30, "to_world": T().look_at(origin=[0, 0, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}}},
+                   "film": film},
         "plane": {"type": "rectangle", "to_world": T().scale(3.0), "bsdf": grey},
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [1.0] * 3}},
     })
 
 
-@pytest.mark.parametrize("k", [4, 16])
-def test_each_point_lies_in_its_own_cell(k):
-    scene = plane()
-    _, buf = X.render(scene, api.make_integrator(style="cel", inner=1), spp=1, seed=5, coverage=k)
+@pytest.mark.parametrize("k,tiled,crop", [(4, False, None), (16, False, None), (4, True, None),
+                                          (4, False, (3, 2, 7, 9)), (4, True, (1, 0, 11, 10))])
+def test_each_point_lies_in_its_own_cell(k, tiled, crop, monkeypatch):
+    if tiled:  # 2 x 2 crop windows of 8 x 8, the second row and column shifted inwards (pipeline.passes)
+        from styletrace.pipeline import passes as pass_loop
+        monkeypatch.setattr(pass_loop, "LANES_PER_PASS", 64)
+        monkeypatch.setattr(pass_loop, "TILE_SIDE", 8)
+        assert len(pass_loop.tiles(*(crop[2:] if crop else (RES, RES)))) == 4
+    scene = plane(crop)
+    w = crop[2] if crop else RES
+    image, buf = X.render(scene, api.make_integrator(style="cel", inner=1), spp=1, seed=5, coverage=k)
+    assert buf.header.get("tiles", 1) == (4 if tiled else 1)
+    np.testing.assert_allclose(styletrace.restyle(buf, style="cel"), image, atol=2e-6)
     a = buf.arrays
-    assert buf.samples == RES * RES * k and np.all(a["slot"] >= 0)
+    assert buf.samples == buf.width * buf.height * k and buf.width == w and np.all(a["slot"] >= 0)
     uv = X.raster(scene, a["p"])
     pixel = a["pixel"].astype(np.int64)
-    assert np.all(np.floor(uv[:, 0]) == pixel % RES) and np.all(np.floor(uv[:, 1]) == pixel // RES)
+    assert np.all(np.floor(uv[:, 0]) == pixel % w) and np.all(np.floor(uv[:, 1]) == pixel // w)
     m = math.isqrt(k)
     j = np.arange(buf.samples) % k  # the lane's point within its pixel
     cell = np.floor((uv - np.floor(uv)) * m).astype(np.int64)

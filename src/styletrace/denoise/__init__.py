@@ -59,7 +59,8 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
         from . import expectation
         from ..lookdev.record import scene_label
         image, buf = expectation.render(sc, integrator, spp, seed, denoise_quality, callback,
-                                        label=scene_label(scene), coverage=coverage, uncertainty=uncertainty)
+                                        label=scene_label(scene), coverage=coverage, uncertainty=uncertainty,
+                                        lanes_per_pass=r.lanes, pass_spp=pass_spp)
         return (image, expectation.aovs(buf, image)) if want_aovs else image
     from . import image as post
     out, _, errs = post.render(sc, integrator, spp, seed, denoise_quality, callback,

@@ -8,9 +8,11 @@ denoised expectation, so `styletrace restyle` styles it.
 """
 from __future__ import annotations
 
+import os
 import sys
 
 from ..errors import UsageError
+from ..pipeline.scene import first_line
 from . import check_method
 
 
@@ -60,15 +62,9 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
     how = method
     from ..images import save_safely
     if method == "expectation":
-        from ..lookdev.record import scene_label
-        from . import expectation
-        image, buf = expectation.render(scene, integrator, args.spp, args.seed, args.denoise_quality,
-                                        label=scene_label(args.scene), coverage=coverage_of(args),
-                                        uncertainty=uncertainty_of(args))
-        errs = expectation.aovs(buf, image) if integrator.settings.aovs else None
-        out = save_safely(image, args.output, pixel_format, errs)
-        if args.buffer:
-            buf.save(args.buffer)
+        failed, out, buf = _expectation(args, scene, integrator, pixel_format)
+        if failed is not None:
+            return failed
         points = buf.header.get("denoise", {}).get("coverage")
         how += f", the style at {points} points per pixel" if points else ", the style at the camera samples"
     else:
@@ -82,6 +78,73 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
         print(f"wrote {out} ({integrator.settings.style.describe()}, spp {args.spp}, denoised: {how})",
               file=sys.stderr)
     return 0 if out == args.output else 1
+
+
+def _expectation(args, scene, integrator, pixel_format: str):
+    """The passes with a progress bar and the command line's Ctrl-C handling (`frontends.signals.StopSignals`), then the
+    denoising. A stop (Ctrl-C, SIGTERM, an error in a later pass) denoises and writes the finished passes
+    (and --buffer); where the pass under way does not end within the grace period, the noisy finished passes
+    are written instead (denoising needs the kernel under way to finish). Returns (exit status if stopped
+    else None, the written path, the buffer)."""
+    from ..frontends.signals import StopSignals, say
+    from ..images import save_safely
+    from ..lookdev.record import scene_label
+    from ..pipeline.passes import pass_count
+    from ..runtime import init
+    from ..sizing import lanes_per_pass
+    from . import expectation
+    job = expectation.Job(scene, integrator, args.spp, args.seed, args.denoise_quality,
+                          label=scene_label(args.scene), coverage=coverage_of(args), uncertainty=uncertainty_of(args),
+                          lanes_per_pass=lanes_per_pass(init())[0], pass_spp=args.pass_spp)
+    latest = buf = failure = None
+    bar = None
+    total = pass_count(scene, args.spp, job.lanes, pass_spp=args.pass_spp)
+    if total > 1 and not args.quiet:
+        from tqdm import tqdm
+        bar = tqdm(total=args.spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
+
+    def abandon(signum):  # from the watcher thread, the kernel still running: the noisy finished passes
+        if latest is None or buf.spp < 1:
+            say("styletrace: interrupted before the first pass finished; nothing written")
+        else:
+            out = save_safely(latest.image, args.output, pixel_format, None, plain=True)
+            say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp, NOT denoised "
+                f"(the pass under way did not end)")
+        sys.stderr.flush()
+        os._exit(128 + signum)
+
+    with StopSignals(abandon) as stop:
+        try:
+            for prog, buf in job.passes():
+                if bar is not None:
+                    bar.set_description_str("rendering", refresh=False)
+                    bar.update(prog.spp_done - (latest.spp_done if latest else 0))
+                latest = prog
+                if stop.count:
+                    break
+        except (KeyboardInterrupt, RuntimeError) as exc:  # a later pass's failure keeps the finished ones
+            if latest is None or buf.spp < 1:
+                raise
+            failure = exc
+        finally:
+            if bar is not None:
+                bar.close()
+        with stop.lock:
+            stop.settled = True
+        if (stop.count or failure is not None) and (latest is None or buf.spp < 1):
+            say("styletrace: interrupted before every pixel had a pass; nothing written")
+            return stop.exit_status, None, None
+        image, buf = job.finish(buf)
+        errs = expectation.aovs(buf, image) if integrator.settings.aovs else None
+        out = save_safely(image, args.output, pixel_format, errs)
+        if args.buffer:
+            buf.save(args.buffer)
+    if failure is not None or stop.count:
+        what = f"error ({first_line(failure)})" if failure is not None else "interrupted"
+        say(f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished passes, denoised, "
+            f"to {out}" + (f" and {args.buffer}" if args.buffer else ""))
+        return (1 if failure is not None else stop.exit_status), out, buf
+    return None, out, buf
 
 
 __all__ = ["render_denoised"]

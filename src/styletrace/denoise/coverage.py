@@ -79,9 +79,11 @@ class CoverageIntegrator(RecordingIntegrator):
     in the kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
     emission added), so the pass's image is the denoised render and its buffer holds D at every point."""
 
-    def __init__(self, base: StylizedIntegrator, k: int, field):
+    def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0)):
         super().__init__(base)
         self.k, self.m, self.field = k, math.isqrt(k), field
+        #: the film's crop offset: a tile's (`pipeline.passes`) lies at its crop offset minus this in D
+        self.origin = mi.ScalarVector2f(origin)
         self._at = None
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -89,7 +91,6 @@ class CoverageIntegrator(RecordingIntegrator):
         film = sensor.film()
         cw, ch = (int(v) for v in film.crop_size())
         off = mi.ScalarVector2f(film.crop_offset())
-        size = mi.ScalarVector2f(film.size())
         lane = dr.arange(mi.UInt32, dr.width(ray.d))
         pixel, cell = lane // self.k, lane % self.k
         px = mi.Float(pixel % cw)
@@ -99,8 +100,12 @@ class CoverageIntegrator(RecordingIntegrator):
         pos = mi.Point2f(px + (cx + jitter.x) / self.m, py + (cy + jitter.y) / self.m)
         wavelength = sampler.next_1d()
         aperture = sampler.next_2d()
-        placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, (pos + off) / size, aperture)
-        self._at = (pos, mi.UInt32(pixel), None)
+        # the sensor's position sample spans the crop window (as SamplingIntegrator::render_sample makes it)
+        placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture)
+        shift = off - self.origin  # (0, 0) but in a tile: D, its guides and spread are the whole film's
+        pos = pos + shift
+        pixel = mi.UInt32(py + shift.y) * self.field.w + mi.UInt32(px + shift.x)
+        self._at = (pos, pixel, None)
         try:
             return super().sample(scene, sampler, placed, medium, active)
         finally:
@@ -132,8 +137,9 @@ def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFA
     if not isinstance(k, int) or k < 1:
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None
+    origin = tuple(int(v) for v in scene.sensors()[0].film().crop_offset())
     for prog, buf in record(scene, integrator, k, pass_seed(seed, COVERAGE_PASS), pass_spp=k,
-                            recorder=lambda base, *_: CoverageIntegrator(base, k, field)):
+                            recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin)):
         buf.image = prog.image
     return buf
 

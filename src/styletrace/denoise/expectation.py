@@ -27,7 +27,7 @@ styles (acp), Ray (cluster=), films other than rgb with a box filter (the buffer
 """
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, Iterator
 
 from ..jit import backend
 
@@ -37,7 +37,7 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..pipeline.passes import Progress, pass_seed  # noqa: E402
+from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed  # noqa: E402
 from ..errors import UsageError  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
@@ -117,8 +117,8 @@ def raster(scene, p: np.ndarray) -> np.ndarray:
     it = dr.zeros(mi.Interaction3f, p.shape[1])
     it.p = mi.Point3f(*(mi.Float(np.ascontiguousarray(p[i])) for i in range(3)))
     ds, _ = sensor.sample_direction(it, mi.Point2f(0.5, 0.5))
-    off = np.asarray([int(v) for v in sensor.film().crop_offset()], dtype=np.float64)
-    return np.stack([np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1) - off
+    # uv is in pixels of the crop window already (tests/denoise/test_expectation.py measures it on a crop)
+    return np.stack([np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1)
 
 
 def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) -> np.ndarray:
@@ -393,30 +393,59 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
            callback: Callable[[Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
-           label: str = "", coverage: int | str = "auto", uncertainty: float = UNCERTAINTY
-           ) -> tuple[np.ndarray, Buffer]:
+           label: str = "", coverage: int | str = "auto", uncertainty: float = UNCERTAINTY,
+           lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> tuple[np.ndarray, Buffer]:
     """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy render).
     `coverage` k > 0: g is evaluated at k stratified first hits per pixel (`coverage.points`), not at the camera
-    samples; the buffer returned is then the coverage points' (`buf.source`: the camera samples')."""
-    oidn.require()
-    oidn.check_quality(quality)
-    check(integrator)
-    w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
-    k = coverage_module.resolve_k(coverage, w, h, max_samples)
-    uncertainty = check_uncertainty(uncertainty)
-    if integrator.settings.aovs:  # the buffer records without them; `aovs` below derives them from it
-        integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
+    samples; the buffer returned is then the coverage points' (`buf.source`: the camera samples').
+    `lanes_per_pass`, `pass_spp`: the pass split, as `pipeline.passes`."""
+    job = Job(scene, integrator, spp, seed, quality, max_samples, label, coverage, uncertainty, lanes_per_pass,
+              pass_spp)
     buf = None
-    for prog, buf in record(scene, integrator, spp, seed, label or scene_label(None), max_samples):
-        buf.image = prog.image
+    for prog, buf in job.passes():
         if callback is not None:
             callback(prog)
-    _, cover = attach(buf, scene, spp, seed, quality, integrator, k, uncertainty)
-    if cover is None:
-        return image_of(buf), buf
-    image = np.asarray(cover.image, dtype=np.float32)[..., :3]
-    cover.image, cover.source = buf.image, buf
-    return image, cover
+    return job.finish(buf)
+
+
+class Job:
+    """A denoised-expectation render in two steps, for callers that show and cancel passes (the Blender engine):
+    `passes()` records the noisy buffer pass by pass (`buf.image`: the noisy render so far), `finish(buf)`
+    denoises it and applies g, also to the finished passes of a cancelled render. Bad values are refused in
+    one line when the job is made, before anything renders."""
+
+    def __init__(self, scene, integrator, spp: int, seed: int = 0, quality: str = "high",
+                 max_samples: int = MAX_SAMPLES, label: str = "", coverage: int | str = "auto",
+                 uncertainty: float = UNCERTAINTY, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None):
+        oidn.require()
+        oidn.check_quality(quality)
+        check(integrator)
+        w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
+        self.k = coverage_module.resolve_k(coverage, w, h, max_samples)
+        self.uncertainty = check_uncertainty(uncertainty)
+        if integrator.settings.aovs:  # the buffer records without them; `aovs` below derives them from it
+            integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
+        self.scene, self.integrator, self.spp, self.seed, self.quality = scene, integrator, spp, seed, quality
+        self.max_samples, self.label, self.lanes, self.pass_spp = max_samples, label, lanes_per_pass, pass_spp
+
+    def passes(self) -> Iterator[tuple[Progress, Buffer]]:
+        for prog, buf in record(self.scene, self.integrator, self.spp, self.seed, self.label or scene_label(None),
+                                self.max_samples, self.lanes, pass_spp=self.pass_spp):
+            buf.image = prog.image
+            yield prog, buf
+
+    def finish(self, buf: Buffer) -> tuple[np.ndarray, Buffer]:
+        """(the denoised image, the buffer that restyles to it) from the recorded buffer; one-line UsageError
+        if not every pixel has a camera sample yet (a render cancelled in its first round of tiles)."""
+        if buf is None or buf.spp < 1:
+            raise UsageError("nothing to denoise: no pass of the render finished")
+        _, cover = attach(buf, self.scene, buf.spp, self.seed, self.quality, self.integrator, self.k,
+                          self.uncertainty)
+        if cover is None:
+            return image_of(buf), buf
+        image = np.asarray(cover.image, dtype=np.float32)[..., :3]
+        cover.image, cover.source = buf.image, buf
+        return image, cover
 
 
 def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
@@ -430,4 +459,4 @@ def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
             "denoise_change": (np.asarray(image, np.float32) - np.asarray(src.image, np.float32)[..., :3])}
 
 
-__all__ = ["render", "attach", "Field", "check", "expectation", "image_of", "noisy_variance", "aovs", "DENOISED"]
+__all__ = ["render", "Job", "attach", "Field", "check", "expectation", "image_of", "noisy_variance", "aovs", "DENOISED"]

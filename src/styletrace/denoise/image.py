@@ -35,8 +35,7 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
         if callback is not None:
             callback(prog)
     noisy = np.asarray(prog.image, dtype=np.float32)
-    g = guides.first_hit(scene, spp, pass_seed(seed, 0))
-    out = oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
+    out = denoise(scene, noisy, spp, seed, quality)
     errs = prog.aovs
     if errs is not None:
         errs = {"noisy_variance": errs["variance"], "noisy_bias": errs["bias"], "children": errs["children"],
@@ -44,4 +43,10 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     return out, noisy, errs
 
 
-__all__ = ["render"]
+def denoise(scene, noisy: np.ndarray, spp: int, seed: int = 0, quality: str = "high") -> np.ndarray:
+    """OIDN on a rendered image (H x W x >= 3) with the guides of `spp` first hits per pixel: H x W x 3."""
+    g = guides.first_hit(scene, spp, pass_seed(seed, 0))
+    return oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
+
+
+__all__ = ["render", "denoise"]

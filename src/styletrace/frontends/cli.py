@@ -13,16 +13,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import select
-import signal
 import sys
-import threading
-import time
 import warnings
 from typing import Sequence
 
 from ..errors import StyletraceError, UsageError
 from ..images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
+from .signals import StopSignals, one_line, say  # noqa: F401  (StopSignals: tests and callers import it here)
 from .status import Status
 from ..wild import warning as wild_warning
 
@@ -49,15 +46,6 @@ def _parse_set(items: Sequence[str]) -> dict[str, str]:
     return out
 
 
-def one_line(text: str) -> str:
-    """A message as one line: newlines and carriage returns (say, in a file name) escaped."""
-    return str(text).replace("\r", "\\r").replace("\n", "\\n")
-
-
-def say(message: str) -> None:
-    print(one_line(message), file=sys.stderr, flush=True)
-
-
 def check_output(path: str, scene: str | None = None) -> None:
     """Fail before rendering, not after, if the image could not be written or would overwrite the scene."""
     if scene is not None and os.path.exists(scene) and os.path.exists(path) and os.path.samefile(scene, path) \
@@ -68,81 +56,6 @@ def check_output(path: str, scene: str | None = None) -> None:
         raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
                          f"(.exr is linear, .png is sRGB)")
     check_target(path)
-
-
-class StopSignals:
-    """Ctrl-C (SIGINT) and SIGTERM during a render.
-
-    The first signal asks the pass loop to stop after the pass under way. A kernel launch cannot be
-    interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns of
-    the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if the pass
-    has not finished `GRACE` seconds after the first signal, or a second signal comes, the watcher
-    calls `abandon(signum)`, which writes the finished passes and ends the process (`os._exit`: the
-    kernel is left running). That write must not touch Mitsuba: its EXR writer waits for the kernel
-    (`images.encode_plain`). Exit status: 128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM).
-
-    A Ctrl-C in the few milliseconds in which Mitsuba's C++ `render` traces a pass goes to Mitsuba's own
-    handler (it logs "Received interrupt signal, winding down") instead; the pass then runs on and a
-    further Ctrl-C counts as the first.
-    """
-
-    GRACE = 1.0
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-    def __init__(self, abandon):
-        self._abandon = abandon
-        self.signum = 0  # the first signal received, 0 if none
-        self.count = 0
-        self.lock = threading.Lock()  # held by the loop while it settles, by the watcher while it abandons
-        self.settled = False
-
-    def __enter__(self):
-        self._r, self._w = os.pipe()
-        os.set_blocking(self._w, False)
-        self._old = {s: signal.signal(s, lambda *_: None) for s in self.SIGNALS}
-        self._old_fd = signal.set_wakeup_fd(self._w)
-        threading.Thread(target=self._watch, daemon=True, name="styletrace-signals").start()
-        return self
-
-    @property
-    def exit_status(self) -> int:
-        return 128 + self.signum
-
-    def _watch(self):
-        deadline = None
-        while True:
-            timeout = None if deadline is None else max(0.0, deadline - time.monotonic())
-            ready, _, _ = select.select([self._r], [], [], timeout)
-            if not ready:  # the grace period is over and the pass still runs
-                return self._give_up()
-            data = os.read(self._r, 64)
-            if not data:  # closed by __exit__
-                os.close(self._r)
-                return None
-            for signum in (b for b in data if b in self.SIGNALS):
-                self.count += 1
-                if self.count == 1:
-                    self.signum = signum
-                    deadline = time.monotonic() + self.GRACE
-                    say(f"styletrace: {signal.Signals(signum).name}: stopping after this pass "
-                        f"(at most {self.GRACE:g} s; again to stop now)")
-                else:
-                    return self._give_up()
-
-    def _give_up(self):
-        with self.lock:
-            if self.settled:  # the loop got there first and is writing
-                return
-            self._abandon(self.signum)
-
-    def __exit__(self, *exc):
-        signal.set_wakeup_fd(self._old_fd)
-        for s, handler in self._old.items():
-            # after a stop the render is saved and the exit status decided: a second Ctrl-C during the
-            # interpreter's shutdown (which restores the default handlers) must not turn it into a kill
-            signal.signal(s, signal.SIG_IGN if self.count else handler)
-        os.close(self._w)
-        return False
 
 
 def cmd_styles(args) -> int:

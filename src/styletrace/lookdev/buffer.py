@@ -35,7 +35,9 @@ Size per camera sample: 53 bytes (69 with first_object_hit) + 4 + 13 per child +
 ~200 bytes for `series` on gamma with n = 8 (BENCHMARKS.md); capped at MAX_SEQUENCE_SAMPLES camera samples
 and MAX_EVENTS_PER_SAMPLE (64) events per camera sample on average.
 The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each pass's
-spp and seed. The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see
+spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles (`pipeline.passes`): each pass
+then covers one tile (its index in the entry, and `header["tiles"]` their number), its samples' `pixel` is
+the film's, and the pixels it shares with a neighbouring tile are left to that tile, as in the render. The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see
 the same camera when restyling.
 """
 from __future__ import annotations
@@ -110,7 +112,11 @@ class Buffer:
 
     @property
     def spp(self) -> int:
-        return sum(int(p["spp"]) for p in self.header["passes"])
+        """Camera samples per pixel: of every pixel, where a tiled film has a round of tiles under way."""
+        per_tile = [0] * int(self.header.get("tiles", 1))
+        for p in self.header["passes"]:
+            per_tile[int(p.get("tile", 0))] += int(p["spp"])
+        return min(per_tile)
 
     @property
     def stylize(self) -> str:
@@ -156,12 +162,14 @@ class Buffer:
             raise UsageError(f"cannot write {path!r}: {exc.strerror or exc}") from None
         return path
 
-    def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int) -> None:
-        """Add one pass's camera samples (in the order the render loop made them)."""
+    def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int, tile: int | None = None) -> None:
+        """Add one pass's camera samples (in the order the render loop made them); `tile`: the index of the crop
+        window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
         for k in fields_for(self.stylize, self.stores):
             a = arrays[k]
             self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
-        self.header["passes"].append({"spp": int(spp), "seed": int(seed)})
+        self.header["passes"].append({"spp": int(spp), "seed": int(seed)} if tile is None else
+                                     {"spp": int(spp), "seed": int(seed), "tile": int(tile)})
         self.device.clear()
 
 
@@ -195,6 +203,10 @@ def load_buffer(path: str) -> Buffer:
             raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
+    tiles = header.get("tiles", 1)
+    if (not isinstance(tiles, int) or tiles < 1
+            or any(not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles for p in header["passes"])):
+        raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
     for k, a in denoised.items():
         want = (n,) if k == SPREAD else (3, n)
         if a.shape != want:

@@ -8,7 +8,9 @@
 wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
 and they are collected after each pass of `pipeline.passes` (the same passes and pass seeds as `render`).
 Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
-SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1.
+SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. A film of
+more than LANES_PER_PASS pixels is rendered one tile (crop window) per pass: `to_film` maps that pass's pixels
+to the film's and drops those the tile shares with a neighbour, as the render does.
 
 With `direct` or `affine` the buffer keeps the mean of each camera sample's n children. With any other
 estimator (series*, ustat, naive, telescoping, combined) it keeps the sequence of children and uniform
@@ -87,15 +89,28 @@ def check_film(scene: mi.Scene) -> mi.Film:
     return film
 
 
-def check_untiled(film: mi.Film) -> None:
-    """A buffer maps lane i of a pass to pixel i // spp of the whole crop window, which holds only where
-    `pipeline.passes` renders the film in one piece: a film of more than LANES_PER_PASS pixels is rendered in
-    tiles, whose samples would land on the wrong pixels. Refused in one line until the buffer maps tiles."""
-    w, h = (int(v) for v in film.crop_size())
-    if w * h > pass_loop.LANES_PER_PASS:
-        raise UsageError(f"a buffer of {w}x{h} ({w * h} pixels) is over the {pass_loop.LANES_PER_PASS} pixels one "
-                         f"pass renders whole (larger films are rendered in tiles, which buffers do not map); "
-                         f"lower the size or render without a buffer")
+def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int) -> dict[str, np.ndarray]:
+    """One pass's arrays of a tiled film (`pipeline.passes`: a film of more than LANES_PER_PASS pixels is rendered
+    as crop windows) with `pixel` made the film's and the samples of the pixels the tile shares with its
+    neighbour dropped, as the render drops them (`Tile.keep`): lane pixels are the crop window's until here."""
+    tw, th = tile.size
+    local = arrays["pixel"]
+    lx, ly = local % np.uint32(tw), local // np.uint32(tw)
+    rows, cols = tile.keep
+    keep = ((ly >= (rows.start or 0)) & (ly < (th if rows.stop is None else rows.stop))
+            & (lx >= (cols.start or 0)) & (lx < (tw if cols.stop is None else cols.stop)))
+    out = {}
+    if "seq_count" in arrays:  # a sequence's events, children and uniform numbers follow their camera sample
+        events = np.repeat(keep, arrays["seq_count"].astype(np.int64))
+        kinds = arrays["seq_kind"]
+        out.update(seq_count=arrays["seq_count"][keep], seq_kind=kinds[events],
+                   child=arrays["child"][:, events[kinds == 1]], uniform=arrays["uniform"][events[kinds == 0]])
+    for k, a in arrays.items():
+        if k not in out:
+            out[k] = a[..., keep]
+    out["pixel"] = ((ly[keep] + np.uint32(tile.offset[1])) * np.uint32(width)
+                    + lx[keep] + np.uint32(tile.offset[0])).astype(np.uint32)
+    return out
 
 
 class RecordingIntegrator(StylizedIntegrator):
@@ -266,7 +281,6 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
                 f"up to {4 + per_sample * 18} bytes each")
         raise UsageError(f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
                          f"{max_samples} ({what}); lower spp or the image size")
-    check_untiled(film)  # after the cap: a film over both is told about its samples first
     sensor = scene.sensors()[0]
     header = {
         "format": FORMAT, "version": VERSION, "scene": label, "width": w, "height": h,
@@ -277,17 +291,21 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
         "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
         .tolist(), "sensor": sensor_description(sensor), "passes": [],
     }
+    layout = pass_loop.tiles(w, h)  # the crop windows `pipeline.passes` renders, one per pass (`to_film`)
+    if len(layout) > 1:
+        header["tiles"] = len(layout)
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
     pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
-    done = 0
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
-        n = prog.spp_done - done
-        done = prog.spp_done
-        buf.append(_pass_arrays(rec.kept, n, rec.settings.stylize, rec.recorder), n, pass_loop.pass_seed(seed, index))
+        arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
+        tiled = len(prog.layout) > 1
+        if tiled:
+            arrays = to_film(arrays, prog.layout[prog.tile], w)
+        buf.append(arrays, prog.samples, pass_loop.pass_seed(seed, index), prog.tile if tiled else None)
         rec.kept, rec.recorder = {}, None
         yield prog, buf
 
@@ -322,4 +340,4 @@ def render_buffer(scene: Any = None, style: str | None = None, spp: int | None =
     return buf
 
 
-__all__ = ["RecordingIntegrator", "record", "render_buffer", "check_recordable", "check_film", "check_untiled"]
+__all__ = ["RecordingIntegrator", "record", "render_buffer", "check_recordable", "check_film", "to_film"]

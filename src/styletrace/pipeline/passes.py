@@ -119,11 +119,18 @@ class Progress:
     have one more pass); `image` is the average of the finished passes, computed when asked for."""
 
     def __init__(self, spp_done: int, spp_total: int, total: np.ndarray, counts: np.ndarray, layout: list[Tile],
-                 channels: int | None = None):
+                 channels: int | None = None, tile: int = 0, samples: int = 0):
         self.spp_done, self.spp_total = spp_done, spp_total
+        #: the pass just done: the index in `layout` of the tile it rendered, and its samples per pixel (a
+        #: recording maps that pass's lanes to the film's pixels with them: `lookdev.record`)
+        self.tile, self.samples = tile, samples
         self._total, self._counts, self._tiles = total, counts, layout
         #: the image's channels in `total`; the error AOVs' sums follow them (`AOV_NAMES`)
         self._channels = total.shape[-1] if channels is None else channels
+
+    @property
+    def layout(self) -> list[Tile]:
+        return self._tiles
 
     def _mean(self) -> np.ndarray:
         out = np.empty_like(self._total)
@@ -222,7 +229,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     counts[t] += n
                 del img, arr
                 index += 1
-                yield Progress(int(counts.min()), spp, total, counts, layout, channels)
+                yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n)
     finally:
         if params is not None:  # leave the scene's film as it was
             params["film.crop_offset"] = mi.ScalarPoint2u(*base)

@@ -1,0 +1,66 @@
+"""`styletrace render --denoise expectation` on the command line: the pass split, and a stop that keeps the work.
+
+- `--pass-spp` splits the recorded passes as it does a plain render (it was ignored: one pass of all samples).
+- Ctrl-C (SIGINT) after some passes ends the render after the pass under way; the finished passes are denoised
+  and written, with the buffer, and the exit status is 130. The written image is the buffer's restyle, so what
+  was written is the denoised render of exactly those passes.
+"""
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+import styletrace
+from styletrace.lookdev.buffer import load_buffer
+
+from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
+
+ENV = child_env()
+
+
+def _exr(path):
+    import mitsuba as mi
+    return np.asarray(mi.Bitmap(str(path)), dtype=np.float32)[..., :3]
+
+
+def test_pass_spp_splits_the_recorded_passes(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "styletrace", "render", "--denoise", "expectation", "--width", "16",
+                          "--height", "16", "--spp", "4", "--inner", "2", "--pass-spp", "2", "--coverage", "4", "-q",
+                          "-o", str(tmp_path / "o.exr"), "--buffer", str(tmp_path / "b.npz")],
+                         capture_output=True, text=True, env=ENV, timeout=300)
+    assert res.returncode == 0, res.stderr
+    source = load_buffer(str(tmp_path / "b.npz"))
+    assert source.header["denoise"]["coverage"] == 4
+    # the points' buffer is one pass of 4 points; the camera samples' passes are those of the render
+    py = styletrace.render("cornell-box", style="cel", spp=4, inner=2, width=16, height=16, pass_spp=2,
+                                denoise="expectation", coverage=4)
+    np.testing.assert_allclose(_exr(tmp_path / "o.exr"), py, atol=1e-5)
+    whole = styletrace.render("cornell-box", style="cel", spp=4, inner=2, width=16, height=16, pass_spp=4,
+                              denoise="expectation", coverage=4)
+    assert not np.allclose(whole, py, atol=1e-5)  # another split draws other samples
+
+
+def test_ctrl_c_denoises_and_writes_the_finished_passes(tmp_path):
+    out, bufp = tmp_path / "partial.exr", tmp_path / "partial.npz"
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--denoise", "expectation", "--width", "32",
+                             "--height", "32", "--spp", "4000", "--inner", "4", "--pass-spp", "1", "-o", str(out),
+                             "--buffer", str(bufp)], stderr=subprocess.PIPE, env=ENV)
+    seen, deadline = b"", time.time() + 120
+    while b"3/4000" not in seen and time.time() < deadline:
+        chunk = os.read(proc.stderr.fileno(), 4096)
+        assert chunk, seen.decode()
+        seen += chunk
+    proc.send_signal(signal.SIGINT)
+    rest = proc.communicate(timeout=120)[1]
+    assert proc.returncode == 130, (seen + rest).decode()
+    assert b"wrote the finished passes, denoised" in rest, rest.decode()
+    image = _exr(out)
+    assert image.shape == (32, 32, 3) and np.isfinite(image).all() and image.mean() > 0
+    done = int(re.search(rb"after (\d+) of 4000 spp", rest).group(1))
+    assert 3 <= done < 4000
+    buf = load_buffer(str(bufp))
+    np.testing.assert_allclose(styletrace.restyle(buf), image, atol=1e-4)
