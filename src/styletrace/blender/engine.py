@@ -4,6 +4,8 @@ Progress is reported after each pass (`update_progress`), the image so far is sh
 between passes: a cancel keeps the finished passes in the render result. The error AOVs (variance, bias,
 children; `aovs`) and, with lines, a line mask are added as render passes. With "Record buffer" the
 look-development buffer of the render is kept (`restyle`), so style changes restyle it in milliseconds.
+With Denoise on (`denoising`), the finished passes are denoised after the last one (or after a cancel), a Noisy
+pass keeps the image before denoising, and the error passes are off (they would not be the denoised pixel's).
 Errors the user can cause (a bad style value, an unsupported scene) are one-line Blender error reports.
 """
 from __future__ import annotations
@@ -15,7 +17,7 @@ import bpy
 import numpy as np
 
 from ..errors import StyletraceError
-from . import pipeline, restyle
+from . import denoising, pipeline, restyle
 
 COMBINED = "Combined"
 #: what the last render did: samples per pixel finished and asked for, whether it was cancelled, seconds
@@ -57,9 +59,11 @@ class StyletraceEngine(bpy.types.RenderEngine):
     def update_render_passes(self, scene=None, renderlayer=None):
         st = scene.styletrace
         self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", "COLOR")
-        if st.aovs and not st.record_buffer:
+        if pipeline.error_passes(st):
             for name, channels, ids in pipeline.AOV_PASSES.values():
                 self.register_pass(scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE")
+        if st.denoise != "off":
+            self.register_pass(scene, renderlayer, pipeline.NOISY, 3, "RGB", "COLOR")
         if st.lines:
             self.register_pass(scene, renderlayer, pipeline.LINE_MASK, 1, "X", "VALUE")
 
@@ -78,15 +82,21 @@ class StyletraceEngine(bpy.types.RenderEngine):
         sc = pipeline.scene(depsgraph, st, warn=lambda m: self.report({"WARNING"}, m))
         size = sc.sensors()[0].film().crop_size()
         w, h = int(size[0]), int(size[1])
-        aovs = st.aovs and not st.record_buffer  # a recorded render keeps the image only
+        aovs = pipeline.error_passes(st)
         integ = pipeline.integrator(st, aovs=aovs)
+        job = denoising.prepare(sc, integ, st)  # its refusals come before anything renders
         if aovs:
             for name, channels, ids in pipeline.AOV_PASSES.values():
                 self.add_pass(name, channels, ids)
+        if st.denoise != "off":
+            self.add_pass(pipeline.NOISY, 3, "RGB")
         if st.lines:
             self.add_pass(pipeline.LINE_MASK, 1, "X")
         start = time.perf_counter()
-        if st.record_buffer:
+        if job is not None:
+            restyle.forget()
+            source = denoising.passes(job, sc, integ, st)
+        elif st.record_buffer:
             source = restyle.record(sc, integ, st)
         else:
             restyle.forget()
@@ -106,7 +116,12 @@ class StyletraceEngine(bpy.types.RenderEngine):
         mask = None
         if st.lines and not self.stop_requested():
             mask = pipeline.line_mask(sc, st, self.stop_requested)
-        self._write(prog, aovs, mask, w, h)
+        image, noisy = None, (prog.image if st.denoise != "off" else None)
+        if noisy is not None and prog.spp_done >= 1:  # (cancelled before every tile had a pass: kept noisy)
+            self.progress(prog.spp_done / prog.spp_total, "styletrace: denoising")
+            image = denoising.finish(sc, st, job, prog)
+            LAST["seconds"] = time.perf_counter() - start
+        self._write(prog, aovs, mask, w, h, image, noisy)
 
     def _show(self, image, w, h):
         result = self.begin_result(0, 0, w, h)
@@ -114,10 +129,12 @@ class StyletraceEngine(bpy.types.RenderEngine):
         self.update_result(result)
         self.end_result(result)
 
-    def _write(self, prog, aovs, mask, w, h):
+    def _write(self, prog, aovs, mask, w, h, image=None, noisy=None):
         result = self.begin_result(0, 0, w, h)
         layer = result.layers[0]
-        layer.passes[COMBINED].rect = _rows(prog.image, 4)
+        layer.passes[COMBINED].rect = _rows(prog.image if image is None else image, 4)
+        if noisy is not None:
+            layer.passes[pipeline.NOISY].rect = _rows(noisy, 3)
         if aovs:
             for key, (name, channels, _) in pipeline.AOV_PASSES.items():
                 value = np.nan_to_num(prog.aovs[key])

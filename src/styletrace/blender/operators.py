@@ -11,7 +11,9 @@ from .properties import integrator_values
 
 
 def command_line(path: str, settings) -> str:
-    return f"styletrace render {path} --seed {settings.seed} --pass-spp {settings.pass_spp}"
+    denoise = "" if settings.denoise == "off" else f" --denoise {settings.denoise}" + (
+        "" if settings.denoise_quality == "high" else f" --denoise-quality {settings.denoise_quality}")
+    return f"styletrace render {path} --seed {settings.seed} --pass-spp {settings.pass_spp}{denoise}"
 
 
 class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):

@@ -16,7 +16,15 @@ from .properties import integrator_values
 from ..config.line_types import without_colours
 
 LINE_MASK = "LineMask"
+#: the image before denoising, beside the denoised Combined (as Cycles' "Noisy Image")
+NOISY = "Noisy"
 AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"), "children": ("Children", 1, "X")}
+
+
+def error_passes(settings) -> bool:
+    """Whether F12 adds the error AOVs: not for a recorded render (it keeps the image only), nor a denoised one
+    (the variance of the noisy pixel is not the error of the denoised one: docs/denoise.md)."""
+    return bool(settings.aovs and not settings.record_buffer and settings.denoise == "off")
 
 
 def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dict:

@@ -18,6 +18,7 @@ from .. import init
 init()  # the registries below import Dr.Jit and Mitsuba
 
 from ..config import estimator_registry  # noqa: E402
+from ..denoise.oidn import QUALITIES  # noqa: E402
 from ..config import settings as S  # noqa: E402
 from ..styles import registry  # noqa: E402
 
@@ -131,6 +132,16 @@ class SceneSettings(bpy.types.PropertyGroup):
     record_buffer: bpy.props.BoolProperty(
         name="Record buffer", default=False,
         description="keep the look-development buffer of the last render; style changes then restyle it")
+    denoise: bpy.props.EnumProperty(
+        name="Denoise", default="off",
+        items=[("off", "Off", "no denoising"),
+               ("expectation", "Expectation", "denoise the expectation at the stylized vertex, then apply the "
+                                              "style: step styles stay free of band flips (docs/denoise.md)"),
+               ("image", "Image", "denoise the final image, as an ordinary renderer does")],
+        description="OIDN with albedo and normal guides (the 'denoise' extra); error passes are off while it is on, "
+                    "and a Noisy pass keeps the image before denoising")
+    denoise_quality: bpy.props.EnumProperty(name="Denoise quality", items=_enum(QUALITIES),
+                                            default="high")
 
 
 class MaterialSettings(bpy.types.PropertyGroup):

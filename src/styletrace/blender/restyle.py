@@ -38,6 +38,11 @@ def forget():
     _state["buffer"] = None
 
 
+def keep(buf):
+    """Keep `buf` for restyles (F12 with Denoise 'expectation' keeps its denoised buffer: `denoising`)."""
+    _state["buffer"] = buf
+
+
 def buffer():
     return _state["buffer"]
 
