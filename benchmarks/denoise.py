@@ -42,10 +42,14 @@ judged on, BENCHMARKS.md says why): against the pixel-integrated reference.
 - MSE, bias^2 and variance as above with e_s = render_s - R; R's own error is common to all seeds, so it lands
   in bias^2. Timing interleaved as above. The setting of each denoiser and of reuse is chosen on the Cornell
   box only (the best ratio averaged over cel and hatching); the held-out scenes are reported at that choice.
+- The chosen expectation setting's floor (`--floor`, method_floor): the same setting with 8x its camera samples and
+  8x n, against R. The ratio it would have at its own time if its MSE were that floor bounds what a less noisy D
+  alone could bring; below the goal, the goal needs a change to what D is, not more samples or a better OIDN.
 
     python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror]
                                  [--protocol same-ray|pixel|both] [--report]
     python benchmarks/denoise.py --bias-check --scenes cornell-box   # R's bias from its n, estimated (bias_check)
+    python benchmarks/denoise.py --floor                              # the chosen setting's floor (method_floor)
 
 Results are cached in benchmarks/.cache/denoise_*.npz/json per scene (delete to recompute); `--report` only
 writes the BENCHMARKS.md section and docs/denoise.png from the cache.
@@ -451,6 +455,39 @@ def high_reference(name, size):
     return {st: np.mean([p[st] for p in parts], axis=0) for st in PIXEL_STYLES}
 
 
+#: the method's own floor (`method_floor`): its chosen setting with FLOOR_SCALE x the camera samples and x n
+FLOOR_SCALE = 8
+FLOOR_SEEDS = (0, 1)
+
+
+def floor_path(name, size) -> str:
+    return os.path.join(CACHE, f"denoise_pixel_floor_{name}_{size}.json")
+
+
+def method_floor(name, size, label: str) -> dict:
+    """Where expectation denoising's setting `label` goes as its samples grow: the same k and u with
+    FLOOR_SCALE x the camera samples and FLOOR_SCALE x n (64x the children), MSE against R per style, mean over
+    FLOOR_SEEDS. What remains there is no noise of M to speak of: the bias of D (OIDN's, the interpolation's
+    at the points), the points' own error and R's error. Compared with the fixed counts' MSE at the setting's own
+    time it bounds what any lower-noise D could gain at that time (`pixel_body`)."""
+    spp, n, k, u = (float(v) for v in re.search(r"spp=(\d+) n=(\d+) k=(\d+) u=([\d.]+)", label).groups())
+    scene = load(name, size)
+    imgs = np.load(os.path.join(CACHE, f"denoise_pixel_images_{name}_{size}.npz"))
+    out = {"setting": label, "scale": FLOOR_SCALE, "seeds": list(FLOOR_SEEDS)}
+    for st in PIXEL_STYLES:
+        ref = imgs[f"{st}|reference"].astype(np.float64)
+        mses = []
+        for seed in FLOOR_SEEDS:
+            img = denoised_render(scene, style=st, spp=int(spp) * FLOOR_SCALE, inner=int(n) * FLOOR_SCALE, seed=seed,
+                                  denoise="expectation", coverage=int(k), denoise_uncertainty=u)
+            mses.append(float(np.mean((np.asarray(img, dtype=np.float64)[..., :3] - ref) ** 2)))
+        out[st] = float(np.mean(mses))
+        print(f"  floor {name} {st}: {out[st]:.3e} ({label}, x{FLOOR_SCALE} spp and n)", flush=True)
+    with open(floor_path(name, size), "w") as f:
+        json.dump(out, f, indent=1)
+    return out
+
+
 def setting(label: str) -> str:
     """A method's settings without the style's own part (reuse's m differs per style, REUSE)."""
     return "reuse " + label.rsplit(" ", 1)[1] if label.startswith("reuse") and "spp=" in label else label
@@ -688,9 +725,17 @@ def pixel_body(data: dict, size: int) -> tuple[str, list, list]:
             if all("mse_hi" in r for r in rows):
                 rh = ratios(res, style, "mse_hi")
                 hi = f"{rh[pick['expectation']][0]:.2f}x / {rh[pick['image']][0]:.2f}x"
+            mf, bound = "", ""
+            if os.path.exists(floor_path(name, size)):
+                with open(floor_path(name, size)) as f:
+                    fj = json.load(f)
+                if fj["setting"] == pick["expectation"]:
+                    mf = f"{fj[style]:.2e} ({100 * fj[style] / em:.0f}%)"
+                    bound = f"{e * em / fj[style]:.1f}x"
             verdicts.append(f"| {name} | {style} | {e:.2f}x | {'met' if e >= GOAL else '**LOSS: not met**'} | "
                             f"{i:.2f}x | {'yes' if e > i else '**no: LOSS**'} | {u:.2f}x | "
-                            f"{100 * fl[style]['var'] / em:.1f}% + {100 * nb / em:.1f}% ({how}) | {cor} | {hi} |")
+                            f"{100 * fl[style]['var'] / em:.1f}% + {100 * nb / em:.1f}% ({how}) | {cor} | {hi} | "
+                            f"{mf} | {bound} |")
         sections.append("\n".join(lines))
         imgs = np.load(os.path.join(CACHE, f"denoise_pixel_images_{name}_{size}.npz"))
         for style in PIXEL_STYLES:
@@ -717,8 +762,9 @@ def pixel_body(data: dict, size: int) -> tuple[str, list, list]:
         "| scene | style | expectation ratio | goal | image-denoising ratio | expectation beats image | reuse ratio | "
         "R's floor / expectation's MSE (variance + bias^2 of R's n) | expectation / image ratio against the truth, "
         "R's bias corrected (estimate, corrected_mse) | expectation / image ratio against R at 4x its n "
-        "(measured, high_reference) |",
-        "|---|---|---:|---|---:|---|---:|---:|---:|---:|",
+        "(measured, high_reference) | the setting's floor: its MSE at 8x its camera samples and 8x n (and as % of "
+        "its MSE; method_floor) | the ratio at the setting's time if its MSE were that floor |",
+        "|---|---|---:|---|---:|---|---:|---:|---:|---:|---:|---:|",
         *verdicts,
         "",
         PIXEL_READING,
@@ -838,6 +884,8 @@ def main():
     ap.add_argument("--timing", action="store_true", help="only time the denoising steps at 512x512")
     ap.add_argument("--bias-check", action="store_true",
                     help="estimate the pixel reference's bias from its n on the given scenes (bias_check), then report")
+    ap.add_argument("--floor", action="store_true",
+                    help="measure the chosen expectation setting's floor (method_floor) on the given scenes, then report")
     ap.add_argument("--protocol", choices=("same-ray", "pixel", "both"), default="both",
                     help="which protocol to measure (the report writes every one that is cached)")
     args = ap.parse_args()
@@ -845,6 +893,12 @@ def main():
     if args.bias_check:
         for name in args.scenes:
             bias_check(name, args.size)
+        args.report = True
+    if args.floor:
+        cornell = load_cached("denoise_pixel_results", args.size)["cornell-box"]["results"]
+        label = best_of(cornell, "expectation")["cel"]
+        for name in args.scenes:
+            method_floor(name, args.size, label)
         args.report = True
     if args.timing:
         os.makedirs(CACHE, exist_ok=True)

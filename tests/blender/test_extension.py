@@ -24,8 +24,8 @@ def test_extension_zip(tmp_path):
     assert manifest["id"] == "styletrace" and manifest["type"] == "add-on"
     assert tuple(int(v) for v in manifest["blender_version_min"].split(".")) <= (4, 2, 0)
     wheels = [w.removeprefix("./") for w in manifest["wheels"]]
-    assert set(wheels) <= names and len(wheels) == 4
-    for dist in ("styletrace-", "mitsuba-3.9.1-", "drjit-1.5.0-", "tqdm-"):
+    assert set(wheels) <= names and len(wheels) == 7
+    for dist in ("styletrace-", "mitsuba-3.9.1-", "drjit-1.5.0-", "tqdm-", "pyoidn-2.5.1.0-", "cffi-", "pycparser-"):
         assert any(os.path.basename(w).startswith(dist) for w in wheels), dist
     assert "from styletrace.blender import register" in entry
     validator = os.path.join(bpy.utils.system_resource("SCRIPTS"), "addons_core", "bl_pkg", "cli", "blender_ext.py")

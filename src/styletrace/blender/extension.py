@@ -1,5 +1,6 @@
 """Build the Blender extension (Blender 4.2+): a zip with `blender_manifest.toml`, the add-on's entry module and
-the wheels it needs (styletrace itself, Mitsuba, Dr.Jit, tqdm; numpy comes with Blender).
+the wheels it needs (styletrace itself, Mitsuba, Dr.Jit, tqdm, and pyoidn with cffi for Denoise; numpy comes with
+Blender).
 
     python -m styletrace.blender.extension -o DIR [--platform linux-x64] [--python 3.11]
 
@@ -26,7 +27,9 @@ PLATFORMS = {
     "macos-arm64": ["macosx_11_0_arm64", "macosx_12_0_arm64", "macosx_13_0_arm64", "macosx_14_0_arm64"],
 }
 #: what the add-on needs beyond Blender's own Python and numpy (pinned as in constraints.txt)
-REQUIREMENTS = ["mitsuba==3.9.1", "drjit==1.5.0", "tqdm==4.70.1"]
+REQUIREMENTS = ["mitsuba==3.9.1", "drjit==1.5.0", "tqdm==4.70.1",
+                # Denoise (Intel Open Image Denoise, blender/denoising.py): ~50-90 MB per platform
+                "pyoidn==2.5.1.0", "cffi==2.1.1", "pycparser==3.12"]
 ADDON_ID = "styletrace"
 
 ENTRY = '''"""styletrace as a Blender extension: the add-on lives in the bundled styletrace wheel (styletrace.blender)."""
