@@ -1,9 +1,9 @@
-"""`styletrace render --denoise expectation` on the command line: the pass split, and a stop that keeps the work.
+"""`styletrace render --denoise expectation|image` on the command line: the pass split, and a stop that keeps the work.
 
 - `--pass-spp` splits the recorded passes as it does a plain render (it was ignored: one pass of all samples).
 - Ctrl-C (SIGINT) after some passes ends the render after the pass under way; the finished passes are denoised
-  and written, with the buffer, and the exit status is 130. The written image is the buffer's restyle, so what
-  was written is the denoised render of exactly those passes.
+  and written, with the buffer, and the exit status is 130. With `expectation` the written image is the buffer's
+  restyle; with `image` it is the denoised render of exactly that many passes.
 """
 import os
 import re
@@ -44,11 +44,12 @@ def test_pass_spp_splits_the_recorded_passes(tmp_path):
     assert not np.allclose(whole, py, atol=1e-5)  # another split draws other samples
 
 
-def test_ctrl_c_denoises_and_writes_the_finished_passes(tmp_path):
-    out, bufp = tmp_path / "partial.exr", tmp_path / "partial.npz"
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--denoise", "expectation", "--width", "32",
+def interrupted(method, out, *extra):
+    """`render --denoise METHOD` of 4000 passes, Ctrl-C once 3 are done: (exit status, stderr after the signal,
+    the spp the render says it wrote)."""
+    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--denoise", method, "--width", "32",
                              "--height", "32", "--spp", "4000", "--inner", "4", "--pass-spp", "1", "-o", str(out),
-                             "--buffer", str(bufp)], stderr=subprocess.PIPE, env=ENV)
+                             *extra], stderr=subprocess.PIPE, env=ENV)
     seen, deadline = b"", time.time() + 120
     while b"3/4000" not in seen and time.time() < deadline:
         chunk = os.read(proc.stderr.fileno(), 4096)
@@ -56,11 +57,27 @@ def test_ctrl_c_denoises_and_writes_the_finished_passes(tmp_path):
         seen += chunk
     proc.send_signal(signal.SIGINT)
     rest = proc.communicate(timeout=120)[1]
-    assert proc.returncode == 130, (seen + rest).decode()
-    assert b"wrote the finished passes, denoised" in rest, rest.decode()
+    assert b"wrote the finished passes, denoised" in rest, (seen + rest).decode()
+    return proc.returncode, rest, int(re.search(rb"after (\d+) of 4000 spp", rest).group(1))
+
+
+def test_ctrl_c_denoises_and_writes_the_finished_passes(tmp_path):
+    out, bufp = tmp_path / "partial.exr", tmp_path / "partial.npz"
+    code, rest, done = interrupted("expectation", out, "--buffer", str(bufp))
+    assert code == 130, rest.decode()
     image = _exr(out)
     assert image.shape == (32, 32, 3) and np.isfinite(image).all() and image.mean() > 0
-    done = int(re.search(rb"after (\d+) of 4000 spp", rest).group(1))
     assert 3 <= done < 4000
     buf = load_buffer(str(bufp))
     np.testing.assert_allclose(styletrace.restyle(buf), image, atol=1e-4)
+
+
+def test_ctrl_c_with_image_denoising_denoises_the_finished_passes(tmp_path):
+    """The image written is OIDN's output on the finished passes: the same as denoising a render of that many
+    passes with the same seed and split."""
+    out = tmp_path / "partial.exr"
+    code, rest, done = interrupted("image", out)
+    assert code == 130 and 3 <= done < 4000, rest.decode()
+    again = styletrace.render("cornell-box", style="cel", spp=done, inner=4, width=32, height=32, pass_spp=1,
+                              denoise="image")
+    np.testing.assert_allclose(_exr(out), again, rtol=1e-4, atol=1e-5)

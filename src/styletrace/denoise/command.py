@@ -57,57 +57,80 @@ def uncertainty_of(args):
 
 
 def render_denoised(args, scene, integrator, pixel_format: str) -> int:
+    """Both methods: the passes with a progress bar and the command line's Ctrl-C handling (`_passes`), then the
+    denoising of the finished passes, also after a stop."""
     precheck(args, scene, integrator, pixel_format)
-    method = args.denoise
-    how = method
     from ..images import save_safely
-    if method == "expectation":
-        failed, out, buf = _expectation(args, scene, integrator, pixel_format)
-        if failed is not None:
-            return failed
-        points = buf.header.get("denoise", {}).get("coverage")
-        how += f", the style at {points} points per pixel" if points else ", the style at the camera samples"
+    from ..runtime import init
+    from ..sizing import lanes_per_pass
+    lanes = lanes_per_pass(init())[0]
+    if args.denoise == "expectation":
+        from ..lookdev.record import scene_label
+        from . import expectation
+        job = expectation.Job(scene, integrator, args.spp, args.seed, args.denoise_quality,
+                              label=scene_label(args.scene), coverage=coverage_of(args),
+                              uncertainty=uncertainty_of(args), lanes_per_pass=lanes, pass_spp=args.pass_spp)
+        state = {}
+
+        def source():
+            for prog, buf in job.passes():
+                state["buf"] = buf
+                yield prog
+
+        def finish(prog):
+            if state["buf"].spp < 1:
+                return None
+            image, buf = job.finish(state["buf"])
+            out = save_safely(image, args.output, pixel_format,
+                              expectation.aovs(buf, image) if integrator.settings.aovs else None)
+            if args.buffer:
+                buf.save(args.buffer)
+            points = buf.header.get("denoise", {}).get("coverage")
+            return out, (f"expectation, the style at {points} points per pixel" if points else
+                         "expectation, the style at the camera samples")
     else:
-        from ..runtime import init
-        from ..sizing import lanes_per_pass
+        from ..pipeline.passes import passes
         from . import image as post
-        image, _, errs = post.render(scene, integrator, args.spp, args.seed, args.denoise_quality,
-                                     lanes_per_pass=lanes_per_pass(init())[0], pass_spp=args.pass_spp)
-        out = save_safely(image, args.output, pixel_format, errs)
+
+        def source():
+            return passes(scene, integrator, args.spp, args.seed, lanes_per_pass=lanes, pass_spp=args.pass_spp)
+
+        def finish(prog):
+            if prog.spp_done < 1:
+                return None
+            image, _, errs = post.finish(scene, prog, prog.spp_done, args.seed, args.denoise_quality)
+            return save_safely(image, args.output, pixel_format, errs), "image"
+    status, out, how = _passes(args, scene, lanes, source(), finish, pixel_format)
+    if status is not None:
+        return status
     if not args.quiet:
         print(f"wrote {out} ({integrator.settings.style.describe()}, spp {args.spp}, denoised: {how})",
               file=sys.stderr)
     return 0 if out == args.output else 1
 
 
-def _expectation(args, scene, integrator, pixel_format: str):
-    """The passes with a progress bar and the command line's Ctrl-C handling (`frontends.signals.StopSignals`), then the
-    denoising. A stop (Ctrl-C, SIGTERM, an error in a later pass) denoises and writes the finished passes
-    (and --buffer); where the pass under way does not end within the grace period, the noisy finished passes
-    are written instead (denoising needs the kernel under way to finish). Returns (exit status if stopped
-    else None, the written path, the buffer)."""
+def _passes(args, scene, lanes: int, source, finish, pixel_format: str):
+    """Run the passes of `source` with a progress bar under `frontends.signals.StopSignals`, then
+    `finish(last progress)` -> (written path, how) or None where not every pixel has a pass yet. A stop (Ctrl-C,
+    SIGTERM, an error in a later pass) finishes, that is denoises and writes, the finished passes (and --buffer);
+    where the pass under way does not end within the grace period, the noisy finished passes are written
+    instead (denoising needs the kernel under way to finish). Returns (exit status if stopped else None, the
+    written path, how it was denoised)."""
     from ..frontends.signals import StopSignals, say
     from ..images import save_safely
-    from ..lookdev.record import scene_label
     from ..pipeline.passes import pass_count
-    from ..runtime import init
-    from ..sizing import lanes_per_pass
-    from . import expectation
-    job = expectation.Job(scene, integrator, args.spp, args.seed, args.denoise_quality,
-                          label=scene_label(args.scene), coverage=coverage_of(args), uncertainty=uncertainty_of(args),
-                          lanes_per_pass=lanes_per_pass(init())[0], pass_spp=args.pass_spp)
-    latest = buf = failure = None
+    latest = failure = None
     bar = None
-    total = pass_count(scene, args.spp, job.lanes, pass_spp=args.pass_spp)
+    total = pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp)
     if total > 1 and not args.quiet:
         from tqdm import tqdm
         bar = tqdm(total=args.spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
 
     def abandon(signum):  # from the watcher thread, the kernel still running: the noisy finished passes
-        if latest is None or buf.spp < 1:
+        if latest is None or latest.spp_done < 1:
             say("styletrace: interrupted before the first pass finished; nothing written")
         else:
-            out = save_safely(latest.image, args.output, pixel_format, None, plain=True)
+            out = save_safely(latest.image[..., :3], args.output, pixel_format, None, plain=True)
             say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp, NOT denoised "
                 f"(the pass under way did not end)")
         sys.stderr.flush()
@@ -115,7 +138,7 @@ def _expectation(args, scene, integrator, pixel_format: str):
 
     with StopSignals(abandon) as stop:
         try:
-            for prog, buf in job.passes():
+            for prog in source:
                 if bar is not None:
                     bar.set_description_str("rendering", refresh=False)
                     bar.update(prog.spp_done - (latest.spp_done if latest else 0))
@@ -123,7 +146,7 @@ def _expectation(args, scene, integrator, pixel_format: str):
                 if stop.count:
                     break
         except (KeyboardInterrupt, RuntimeError) as exc:  # a later pass's failure keeps the finished ones
-            if latest is None or buf.spp < 1:
+            if latest is None:
                 raise
             failure = exc
         finally:
@@ -131,20 +154,19 @@ def _expectation(args, scene, integrator, pixel_format: str):
                 bar.close()
         with stop.lock:
             stop.settled = True
-        if (stop.count or failure is not None) and (latest is None or buf.spp < 1):
+        done = finish(latest) if latest is not None else None
+        if done is None:
+            if failure is not None:
+                raise failure
             say("styletrace: interrupted before every pixel had a pass; nothing written")
             return stop.exit_status, None, None
-        image, buf = job.finish(buf)
-        errs = expectation.aovs(buf, image) if integrator.settings.aovs else None
-        out = save_safely(image, args.output, pixel_format, errs)
-        if args.buffer:
-            buf.save(args.buffer)
+        out, how = done
     if failure is not None or stop.count:
         what = f"error ({first_line(failure)})" if failure is not None else "interrupted"
         say(f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished passes, denoised, "
             f"to {out}" + (f" and {args.buffer}" if args.buffer else ""))
-        return (1 if failure is not None else stop.exit_status), out, buf
-    return None, out, buf
+        return (1 if failure is not None else stop.exit_status), out, how
+    return None, out, how
 
 
 __all__ = ["render_denoised"]

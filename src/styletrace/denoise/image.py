@@ -34,6 +34,12 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     for prog in passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
         if callback is not None:
             callback(prog)
+    return finish(scene, prog, spp, seed, quality)
+
+
+def finish(scene, prog: Progress, spp: int, seed: int = 0, quality: str = "high"
+           ) -> tuple[np.ndarray, np.ndarray, dict | None]:
+    """`render`'s result from the passes' last progress (the finished passes of a stopped render too)."""
     noisy = np.asarray(prog.image, dtype=np.float32)
     out = denoise(scene, noisy, spp, seed, quality)
     errs = prog.aovs
@@ -49,4 +55,4 @@ def denoise(scene, noisy: np.ndarray, spp: int, seed: int = 0, quality: str = "h
     return oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
 
 
-__all__ = ["render", "denoise"]
+__all__ = ["render", "finish", "denoise"]
