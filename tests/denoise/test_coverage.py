@@ -88,3 +88,25 @@ def test_bad_values_are_refused(bad):
 def test_a_count_over_the_cap_is_refused():
     with pytest.raises(UsageError, match=r"bad value 64 for coverage: 512x512 .* over the buffer's cap .* at most 16"):
         C.resolve_k(64, 512, 512)
+
+
+@pytest.mark.parametrize("scale", [1, 2])
+def test_points_read_d_at_their_own_film_position(scale):
+    """D given on a grid of `scale` x the film's pixels per axis, linear in the film position: each point's D is that
+    linear function at the point's own film position (bilinear interpolation reproduces it), found by projecting
+    the point back through the sensor; for scale 2 the lookup lands in the right sub-pixel
+    (`benchmarks/denoise_subpixel.py` uses it)."""
+    from styletrace.denoise.guides import Guides
+    scene = plane()
+    n = RES * scale
+    y, x = np.mgrid[0:n, 0:n].astype(np.float32)
+    d = np.stack([(x + 0.5) / scale, (y + 0.5) / scale, np.ones_like(x)], -1)
+    same = np.full((n, n, 3), 0.5, np.float32)
+    normal = np.zeros((n, n, 3), np.float32)
+    normal[..., 2] = 1.0
+    field = X.Field(d, Guides(same, normal, np.zeros_like(normal), normal), 10.0)
+    buf = C.points(scene, api.make_integrator(style="identity", inner=1), field, 4, seed=3, scale=scale)
+    uv = X.raster(scene, buf.arrays["p"])
+    inside = np.all((uv > 0.5) & (uv < RES - 0.5), axis=1)  # away from the clamped border
+    assert inside.sum() > 300
+    np.testing.assert_allclose(buf.arrays["mean"][:2, inside].T, uv[inside], atol=2e-3)

@@ -79,11 +79,15 @@ class CoverageIntegrator(RecordingIntegrator):
     in the kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
     emission added), so the pass's image is the denoised render and its buffer holds D at every point."""
 
-    def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0)):
+    def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0), scale: int = 1):
         super().__init__(base)
         self.k, self.m, self.field = k, math.isqrt(k), field
         #: the film's crop offset: a tile's (`pipeline.passes`) lies at its crop offset minus this in D
         self.origin = mi.ScalarVector2f(origin)
+        #: D's pixels per film pixel along each axis (1; more for a D below the pixel, benchmarks/denoise_subpixel.py);
+        #: the spread stays per film pixel
+        self.scale = int(scale)
+        self.width = field.w // self.scale
         self._at = None
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -104,7 +108,7 @@ class CoverageIntegrator(RecordingIntegrator):
         placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture)
         shift = off - self.origin  # (0, 0) but in a tile: D, its guides and spread are the whole film's
         pos = pos + shift
-        pixel = mi.UInt32(py + shift.y) * self.field.w + mi.UInt32(px + shift.x)
+        pixel = mi.UInt32(py + shift.y) * self.width + mi.UInt32(px + shift.x)
         self._at = (pos, pixel, None)
         try:
             return super().sample(scene, sampler, placed, medium, active)
@@ -126,20 +130,25 @@ class CoverageIntegrator(RecordingIntegrator):
             albedo, _ = guides.through_delta(scene, si, valid)
             emission = (mi.Color3f(si.emitter(scene, valid).eval(si, valid)) if self.field.emission_apart
                         else mi.Color3f(0.0))
-            value = self.field.at(pos.x, pos.y, si.p, mi.Vector3f(si.sh_frame.n), pixel, albedo, emission, valid)
+            at, own = pos, pixel
+            if self.scale != 1:  # D's own pixel of the point
+                at = pos * self.scale
+                own = mi.UInt32(dr.floor(at.y)) * self.field.w + mi.UInt32(dr.floor(at.x))
+            value = self.field.at(at.x, at.y, si.p, mi.Vector3f(si.sh_frame.n), own, albedo, emission, valid)
             self._at = (pos, pixel, value)
         return value
 
 
-def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0) -> Buffer:
+def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0,
+           scale: int = 1) -> Buffer:
     """The denoised render at k stratified points per pixel: a Buffer whose means are D at each point (pixel,
-    slot, vertex, L_before as a render's), `buf.image` its image."""
+    slot, vertex, L_before as a render's), `buf.image` its image. `scale`: D's pixels per film pixel (1)."""
     if not isinstance(k, int) or k < 1:
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None
     origin = tuple(int(v) for v in scene.sensors()[0].film().crop_offset())
     for prog, buf in record(scene, integrator, k, pass_seed(seed, COVERAGE_PASS), pass_spp=k,
-                            recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin)):
+                            recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin, scale)):
         buf.image = prog.image
     return buf
 
