@@ -3,7 +3,7 @@
 - expectation (`denoise.expectation.Job`): the passes record the expectation buffer; after the last pass (or a
   cancel) the expectation is denoised and the style applied. With Record buffer on, the buffer kept for restyling
   is the denoised one, so a style change restyles to what a denoised F12 with the new value gives.
-- image (`denoise.image.denoise`): the passes as usual, then OIDN on the image. Record buffer is refused with it:
+- image (`denoise.image.finish`): the passes as usual, then OIDN on the image. Record buffer is refused with it:
   restyles of a noisy buffer would not be the denoised image F12 showed.
 Both are the command line's (`styletrace render FILE.xml --denoise ... --pass-spp N`: the same image for the same
 seed and pass split). Without the `denoise` extra (pyoidn), F12 refuses in one line naming it.
@@ -15,15 +15,9 @@ from typing import Iterator
 import numpy as np
 
 from .. import api
+from ..denoise.expectation import Job
 from ..errors import UsageError
 from . import pipeline
-
-
-class _Expectation:
-    """The job and the buffer recorded so far."""
-
-    def __init__(self, job):
-        self.job, self.buffer = job, None
 
 
 def prepare(sc, integ, settings):
@@ -38,32 +32,27 @@ def prepare(sc, integ, settings):
             raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would not be the "
                              "denoised image; use Denoise 'expectation' (its buffer keeps the denoised expectation)")
         return settings.denoise
-    from ..denoise import expectation
-    return _Expectation(expectation.Job(sc, integ, settings.spp, settings.seed, settings.denoise_quality,
-                                        label="<blender>", pass_spp=settings.pass_spp))
+    return Job(sc, integ, settings.spp, settings.seed, settings.denoise_quality, label="<blender>",
+               pass_spp=settings.pass_spp)
 
 
 def passes(job, sc, integ, settings) -> Iterator[api.Progress]:
     """F12's passes: the expectation job's (recording its buffer), or the ordinary ones for image denoising."""
-    if not isinstance(job, _Expectation):
-        yield from pipeline.passes(sc, integ, settings)
-        return
-    for prog, buf in job.job.passes():
-        job.buffer = buf
-        yield prog
+    if not isinstance(job, Job):
+        return pipeline.passes(sc, integ, settings)
+    return (prog for prog, _ in job.passes())
 
 
 def finish(sc, settings, job, prog) -> np.ndarray:
     """The denoised image (H x W x 3) of the finished passes; keeps the denoised buffer for restyles."""
-    if isinstance(job, _Expectation):
-        image, buf = job.job.finish(job.buffer)
+    if isinstance(job, Job):
+        image, buf = job.finish()
         if settings.record_buffer:
             from . import restyle
             restyle.keep(buf)
         return image
-    from ..denoise.image import denoise
-    return denoise(sc, np.asarray(prog.image, dtype=np.float32), prog.spp_done, settings.seed,
-                   settings.denoise_quality)
+    from ..denoise.image import finish as denoised
+    return denoised(sc, prog, settings.seed, settings.denoise_quality)[0]
 
 
 __all__ = ["prepare", "passes", "finish"]

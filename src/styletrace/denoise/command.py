@@ -70,17 +70,13 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
         job = expectation.Job(scene, integrator, args.spp, args.seed, args.denoise_quality,
                               label=scene_label(args.scene), coverage=coverage_of(args),
                               uncertainty=uncertainty_of(args), lanes_per_pass=lanes, pass_spp=args.pass_spp)
-        state = {}
-
         def source():
-            for prog, buf in job.passes():
-                state["buf"] = buf
-                yield prog
+            return (prog for prog, _ in job.passes())
 
         def finish(prog):
-            if state["buf"].spp < 1:
+            if job.buffer.spp < 1:
                 return None
-            image, buf = job.finish(state["buf"])
+            image, buf = job.finish()
             out = save_safely(image, args.output, pixel_format,
                               expectation.aovs(buf, image) if integrator.settings.aovs else None)
             if args.buffer:
@@ -98,7 +94,7 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
         def finish(prog):
             if prog.spp_done < 1:
                 return None
-            image, _, errs = post.finish(scene, prog, prog.spp_done, args.seed, args.denoise_quality)
+            image, _, errs = post.finish(scene, prog, args.seed, args.denoise_quality)
             return save_safely(image, args.output, pixel_format, errs), "image"
     status, out, how = _passes(args, scene, lanes, source(), finish, pixel_format)
     if status is not None:
@@ -110,23 +106,19 @@ def render_denoised(args, scene, integrator, pixel_format: str) -> int:
 
 
 def _passes(args, scene, lanes: int, source, finish, pixel_format: str):
-    """Run the passes of `source` with a progress bar under `frontends.signals.StopSignals`, then
-    `finish(last progress)` -> (written path, how) or None where not every pixel has a pass yet. A stop (Ctrl-C,
-    SIGTERM, an error in a later pass) finishes, that is denoises and writes, the finished passes (and --buffer);
-    where the pass under way does not end within the grace period, the noisy finished passes are written
-    instead (denoising needs the kernel under way to finish). Returns (exit status if stopped else None, the
-    written path, how it was denoised)."""
-    from ..frontends.signals import StopSignals, say
+    """Run the passes of `source` as `styletrace render` does (`frontends.signals`: its progress bar and stops),
+    then `finish(last progress)` -> (written path, how) or None where not every pixel has a pass yet. A stop
+    (Ctrl-C, SIGTERM, an error in a later pass) finishes, that is denoises and writes, the finished passes (and
+    --buffer); where the pass under way does not end within the grace period, the noisy finished passes are
+    written instead (denoising needs the kernel under way to finish). Returns (exit status if stopped else None,
+    the written path, how it was denoised)."""
+    from ..frontends.signals import Passes, StopSignals, say
     from ..images import save_safely
     from ..pipeline.passes import pass_count
-    latest = failure = None
-    bar = None
-    total = pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp)
-    if total > 1 and not args.quiet:
-        from tqdm import tqdm
-        bar = tqdm(total=args.spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
+    run = Passes(args.spp, pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp), args.quiet)
 
     def abandon(signum):  # from the watcher thread, the kernel still running: the noisy finished passes
+        latest = run.latest
         if latest is None or latest.spp_done < 1:
             say("styletrace: interrupted before the first pass finished; nothing written")
         else:
@@ -138,22 +130,12 @@ def _passes(args, scene, lanes: int, source, finish, pixel_format: str):
 
     with StopSignals(abandon) as stop:
         try:
-            for prog in source:
-                if bar is not None:
-                    bar.set_description_str("rendering", refresh=False)
-                    bar.update(prog.spp_done - (latest.spp_done if latest else 0))
-                latest = prog
-                if stop.count:
-                    break
-        except (KeyboardInterrupt, RuntimeError) as exc:  # a later pass's failure keeps the finished ones
-            if latest is None:
-                raise
-            failure = exc
+            run.follow(source, stop)
         finally:
-            if bar is not None:
-                bar.close()
+            run.close()
         with stop.lock:
             stop.settled = True
+        latest, failure = run.latest, run.failure
         done = finish(latest) if latest is not None else None
         if done is None:
             if failure is not None:

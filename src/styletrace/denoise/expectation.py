@@ -412,18 +412,17 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     `lanes_per_pass`, `pass_spp`: the pass split, as `pipeline.passes`."""
     job = Job(scene, integrator, spp, seed, quality, max_samples, label, coverage, uncertainty, lanes_per_pass,
               pass_spp)
-    buf = None
-    for prog, buf in job.passes():
+    for prog, _ in job.passes():
         if callback is not None:
             callback(prog)
-    return job.finish(buf)
+    return job.finish()
 
 
 class Job:
     """A denoised-expectation render in two steps, for callers that show and cancel passes (the Blender engine):
-    `passes()` records the noisy buffer pass by pass (`buf.image`: the noisy render so far), `finish(buf)`
-    denoises it and applies g, also to the finished passes of a cancelled render. Bad values are refused in
-    one line when the job is made, before anything renders."""
+    `passes()` records the noisy buffer pass by pass (`buffer`, whose `image` is the noisy render so far),
+    `finish()` denoises it and applies g, also to the finished passes of a cancelled render. Bad values are
+    refused in one line when the job is made, before anything renders."""
 
     def __init__(self, scene, integrator, spp: int, seed: int = 0, quality: str = "high",
                  max_samples: int = MAX_SAMPLES, label: str = "", coverage: int | str = "auto",
@@ -438,16 +437,20 @@ class Job:
             integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
         self.scene, self.integrator, self.spp, self.seed, self.quality = scene, integrator, spp, seed, quality
         self.max_samples, self.label, self.lanes, self.pass_spp = max_samples, label, lanes_per_pass, pass_spp
+        #: the noisy buffer of the passes recorded so far (None before the first)
+        self.buffer: Buffer | None = None
 
     def passes(self) -> Iterator[tuple[Progress, Buffer]]:
         for prog, buf in record(self.scene, self.integrator, self.spp, self.seed, self.label or scene_label(None),
                                 self.max_samples, self.lanes, pass_spp=self.pass_spp):
             buf.image = prog.image
+            self.buffer = buf
             yield prog, buf
 
-    def finish(self, buf: Buffer) -> tuple[np.ndarray, Buffer]:
+    def finish(self) -> tuple[np.ndarray, Buffer]:
         """(the denoised image, the buffer that restyles to it) from the recorded buffer; one-line UsageError
         if not every pixel has a camera sample yet (a render cancelled in its first round of tiles)."""
+        buf = self.buffer
         if buf is None or buf.spp < 1:
             raise UsageError("nothing to denoise: no pass of the render finished")
         _, cover = attach(buf, self.scene, buf.spp, self.seed, self.quality, self.integrator, self.k,

@@ -34,14 +34,15 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     for prog in passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
         if callback is not None:
             callback(prog)
-    return finish(scene, prog, spp, seed, quality)
+    return finish(scene, prog, seed, quality)
 
 
-def finish(scene, prog: Progress, spp: int, seed: int = 0, quality: str = "high"
-           ) -> tuple[np.ndarray, np.ndarray, dict | None]:
-    """`render`'s result from the passes' last progress (the finished passes of a stopped render too)."""
+def finish(scene, prog: Progress, seed: int = 0, quality: str = "high") -> tuple[np.ndarray, np.ndarray, dict | None]:
+    """`render`'s result from the passes' last progress (the finished passes of a stopped render too; the guides
+    take as many camera samples per pixel as they did)."""
     noisy = np.asarray(prog.image, dtype=np.float32)
-    out = denoise(scene, noisy, spp, seed, quality)
+    g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0))
+    out = oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
     errs = prog.aovs
     if errs is not None:
         errs = {"noisy_variance": errs["variance"], "noisy_bias": errs["bias"], "children": errs["children"],
@@ -49,10 +50,4 @@ def finish(scene, prog: Progress, spp: int, seed: int = 0, quality: str = "high"
     return out, noisy, errs
 
 
-def denoise(scene, noisy: np.ndarray, spp: int, seed: int = 0, quality: str = "high") -> np.ndarray:
-    """OIDN on a rendered image (H x W x >= 3) with the guides of `spp` first hits per pixel: H x W x 3."""
-    g = guides.first_hit(scene, spp, pass_seed(seed, 0))
-    return oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
-
-
-__all__ = ["render", "finish", "denoise"]
+__all__ = ["render", "finish"]

@@ -19,7 +19,7 @@ from typing import Sequence
 
 from ..errors import StyletraceError, UsageError
 from ..images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
-from .signals import StopSignals, one_line, say  # noqa: F401  (StopSignals: tests and callers import it here)
+from .signals import Passes, StopSignals, one_line, say  # noqa: F401  (StopSignals: tests import it here)
 from .status import Status
 from ..wild import warning as wild_warning
 
@@ -174,13 +174,7 @@ def cmd_render(args) -> int:
     lanes, note = resolved.lanes, resolved.lanes_note
     if note and not args.quiet:
         say(f"styletrace: {note}")
-    total = api.pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp)
-    bar = None
-    if total > 1 and not args.quiet:
-        from tqdm import tqdm
-        # the first pass includes the kernel's compilation: the bar says so until it is done
-        bar = tqdm(total=args.spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
-    latest, failure = None, None
+    run = Passes(args.spp, api.pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp), args.quiet)
 
     def write(prog, plain: bool = False) -> str:
         image = prog.image
@@ -197,11 +191,11 @@ def cmd_render(args) -> int:
         status.stop()
         if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass
             source.save()
-        if latest is None:
+        if run.latest is None:
             say("styletrace: interrupted before the first pass finished; nothing written")
         else:  # plain: Mitsuba's EXR writer would wait for the kernel under way (images.encode_plain)
-            out = write(latest, plain=True)
-            say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
+            out = write(run.latest, plain=True)
+            say(f"styletrace: interrupted; wrote {out} from {run.latest.spp_done} of {args.spp} spp")
         sys.stderr.flush()
         os._exit(128 + signum)
 
@@ -212,29 +206,17 @@ def cmd_render(args) -> int:
                 source = ray_passes(args, resolved, stop.lock)
             else:
                 source = execute(resolved, lock=stop.lock)
-            if bar is not None:
-                status.follow(bar)
+            if run.bar is not None:
+                status.follow(run.bar)
             else:
                 status.start("compiling and rendering")
-            for prog in source:
-                if bar is not None:
-                    if latest is None:
-                        bar.set_description_str("rendering", refresh=False)
-                    bar.update(prog.spp_done - (latest.spp_done if latest else 0))
-                latest = prog
-                if stop.count:
-                    break
-        except (KeyboardInterrupt, RuntimeError) as exc:
-            # any failure of a later pass must not cost the passes already finished
-            if latest is None:
-                raise
-            failure = exc
+            run.follow(source, stop)
         finally:
             status.stop()
         with stop.lock:
             stop.settled = True
-        if bar is not None:  # the final write happens under the watcher too: a signal now does not cut it
-            bar.close()
+        run.close()  # the final write happens under the watcher too: a signal now does not cut it
+        latest, failure = run.latest, run.failure
         if failure is not None:
             out = write(latest)
             say(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "

@@ -96,4 +96,39 @@ class StopSignals:
         return False
 
 
-__all__ = ["StopSignals", "say", "one_line"]
+class Passes:
+    """The passes of a command-line render as they finish: a tqdm bar over the samples per pixel (where there is more
+    than one pass and the command is not quiet), `latest` (the last finished pass's progress, which an `abandon`
+    of `StopSignals` writes) and `failure` (the error of a later pass, which must not cost the finished ones)."""
+
+    def __init__(self, spp: int, total: int, quiet: bool):
+        self.latest = self.failure = None
+        self.bar = None
+        if total > 1 and not quiet:
+            from tqdm import tqdm
+            # the first pass includes the kernel's compilation: the bar says so until it is done
+            self.bar = tqdm(total=spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
+
+    def follow(self, source, stop: StopSignals) -> None:
+        """Take the passes of `source` until it ends or `stop` has a signal; a KeyboardInterrupt or RuntimeError
+        after a finished pass is kept in `failure` (before one, it is raised)."""
+        try:
+            for prog in source:
+                if self.bar is not None:
+                    if self.latest is None:
+                        self.bar.set_description_str("rendering", refresh=False)
+                    self.bar.update(prog.spp_done - (self.latest.spp_done if self.latest else 0))
+                self.latest = prog
+                if stop.count:
+                    break
+        except (KeyboardInterrupt, RuntimeError) as exc:
+            if self.latest is None:
+                raise
+            self.failure = exc
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+__all__ = ["StopSignals", "Passes", "say", "one_line"]

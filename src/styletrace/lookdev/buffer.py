@@ -37,8 +37,9 @@ and MAX_EVENTS_PER_SAMPLE (64) events per camera sample on average.
 The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each pass's
 spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles (`pipeline.passes`): each pass
 then covers one tile (its index in the entry, and `header["tiles"]` their number), its samples' `pixel` is
-the film's, and the pixels it shares with a neighbouring tile are left to that tile, as in the render. The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see
-the same camera when restyling.
+the film's, and the pixels it shares with a neighbouring tile are left to that tile, as in the render.
+The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see the same camera
+when restyling.
 """
 from __future__ import annotations
 

@@ -291,9 +291,6 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
         "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
         .tolist(), "sensor": sensor_description(sensor), "passes": [],
     }
-    layout = pass_loop.tiles(w, h)  # the crop windows `pipeline.passes` renders, one per pass (`to_film`)
-    if len(layout) > 1:
-        header["tiles"] = len(layout)
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
     pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
@@ -302,8 +299,9 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
-        tiled = len(prog.layout) > 1
+        tiled = len(prog.layout) > 1  # the crop windows `pipeline.passes` renders, one per pass
         if tiled:
+            buf.header["tiles"] = len(prog.layout)
             arrays = to_film(arrays, prog.layout[prog.tile], w)
         buf.append(arrays, prog.samples, pass_loop.pass_seed(seed, index), prog.tile if tiled else None)
         rec.kept, rec.recorder = {}, None
