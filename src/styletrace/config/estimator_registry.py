@@ -155,12 +155,13 @@ def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
                             curvature=lambda I, h: style.curvature(I, vertex, h), z=z, bias=bias)
 
 
-def make_estimator(slot, level: int, vertex, settings=None, moments=None) -> Transformed:
+def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitted=None) -> Transformed:
     """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time). An adaptive
     count (`settings.AdaptiveCount`), or error AOVs asked for in `settings`, give `AdaptiveDirect` (its
     `stats` feed the AOVs); `moments` (the lane's pixel's mean x and x^2 from the expansion pass) at level 0
     give the series about that pixel's b* (`series_with_pass`); a fixed count without AOVs takes the
-    registry's builder as before."""
+    registry's builder as before. `emitted`: the vertex's own emission, which the firefly control of
+    direct application leaves out of its cap (`child_mean`)."""
     if moments is not None and level == 0 and slot.estimator == "series":
         return series_with_pass(slot.style, *moments)
     n = slot.n(level)
@@ -169,7 +170,37 @@ def make_estimator(slot, level: int, vertex, settings=None, moments=None) -> Tra
     if (n_max is not None or aovs) and slot.estimator == "direct" and not slot.style.per_sample:
         z, bias = (settings.adaptive_z, settings.adaptive_bias) if settings is not None else (2.0, 2e-3)
         return Transformed(adaptive_direct(slot.style, int(n), n_max or int(n), vertex, z, bias))
+    cap = firefly_cap(settings)
+    if cap is not None and slot.estimator == "direct" and not slot.style.per_sample:
+        return _capped(lambda I: slot.style.apply(I, vertex), int(n), cap, emitted)
     return get(slot.estimator).build(slot.style, int(n), vertex)
+
+
+def _capped(g, n: int, cap: tuple[float, float], emitted) -> Transformed:
+    """Direct application of g with the firefly cap on the children's reflected part (each child less
+    the vertex's own emission `emitted`, added back before g; None: the children as they are)."""
+    if emitted is None:
+        return Transformed(E.Direct(g, n, cap=cap))
+    return Transformed(E.Direct(lambda I: g(I + emitted), n, cap=cap), sample=lambda x: x - emitted)
+
+
+def firefly_cap(settings) -> tuple[float, float] | None:
+    """(k, floor) of the firefly control for direct application (`estimators.affine.MeanOfN`), or None where
+    it is off (firefly 0, no settings, or error AOVs, which describe the paper's estimator). An unresolved floor
+    (no pilot ran) is 0."""
+    k = getattr(settings, "firefly", 0.0) if settings is not None else 0.0
+    if not k or settings.aovs:
+        return None
+    return float(k), float(settings.firefly_floor or 0.0)
+
+
+def child_mean(slot, level: int, settings=None, emitted=None) -> Transformed:
+    """The mean of a slot's n children as direct application computes it (the firefly control included):
+    what an expectation buffer keeps and restyles from (`lookdev.record`)."""
+    cap = firefly_cap(settings) if slot.estimator == "direct" and not slot.style.per_sample else None
+    if cap is None:
+        return Transformed(E.Direct(lambda x: x, slot.n(level)))
+    return _capped(lambda x: x, slot.n(level), cap, emitted)
 
 
 # ---- the registry ------------------------------------------------------------------------------
@@ -300,5 +331,5 @@ def _combined(style, n, vertex):
 
 
 __all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "check_adaptive",
-           "adaptive_direct", "make_estimator",
+           "adaptive_direct", "make_estimator", "firefly_cap", "child_mean",
            "Transformed", "SERIES_MAX_TERMS", "series_with_pass", "PASS_TRUNCATION", "PASS_MAX_TERMS", "PASS_B_SCALE"]

@@ -51,14 +51,27 @@ def apply_linear(a1: np.ndarray, x):
 
 
 class MeanOfN(Estimator):
-    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish from."""
+    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish from.
 
-    def __init__(self, n: int, comb: bool = False):
+    `cap` = (k, floor), or None: the firefly control. The brightest draw (by channel mean) is scaled
+    down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1) to at
+    most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how much."""
+
+    #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp of 10
+    #: at the exposure that maps the median to middle grey (10 / 0.18)
+    LONE_CAP = 10.0 / 0.18
+
+    def __init__(self, n: int, comb: bool = False, cap: tuple[float, float] | None = None):
         self.n = check_count("n", n)
         self.comb = bool(comb)
+        if cap is not None and not (cap[0] >= 1.0 and cap[1] >= 0.0):
+            raise ValueError(f"cap must be (k >= 1, floor >= 0), got {cap!r}")
+        self.cap = None if cap is None or (self.n == 1 and cap[1] <= 0.0) else (float(cap[0]), float(cap[1]))
 
     def start(self, ctx: Context, carry):
         state = {"sum": ctx.vzero(), "count": ctx.lane(0.0)}
+        if self.cap is not None:
+            state["top"], state["top_b"] = ctx.vzero(), ctx.lane(-1.0)
         if self.comb:
             state["offset"], carry = ctx.uniform(carry)
         return state, carry
@@ -75,10 +88,27 @@ class MeanOfN(Estimator):
         state = dict(state)
         state["sum"] = A.select(mask, state["sum"] + x, state["sum"])
         state["count"] = A.select(mask, state["count"] + 1.0, state["count"])
+        if self.cap is not None:
+            b = A.channel_mean(x)
+            brighter = mask & (b > state["top_b"])
+            state["top"] = A.select(brighter, x, state["top"])
+            state["top_b"] = A.select(brighter, b, state["top_b"])
         return state, carry
 
     def mean(self, state):
-        return state["sum"] * (1.0 / self.n)
+        total = state["sum"]
+        if self.cap is not None:
+            k, floor = self.cap
+            top, top_b = state["top"], state["top_b"]
+            if self.n == 1:
+                limit = self.LONE_CAP * floor + 0.0 * top_b
+            else:
+                others = A.channel_mean(total - top) * (1.0 / (self.n - 1))
+                limit = k * A.maximum(others, floor)
+            over = top_b > limit
+            scale = A.select(over, limit / A.select(over, top_b, 1.0), 1.0)
+            total = total - top + top * scale
+        return total * (1.0 / self.n)
 
     @property
     def mean_samples(self):

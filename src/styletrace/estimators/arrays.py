@@ -31,7 +31,7 @@ import numpy as np
 
 __all__ = [
     "is_drjit", "drjit", "backend_module", "select", "abs", "exp", "log", "sqrt", "cos", "sin", "minimum", "maximum",
-    "clip", "hmax", "tree_map", "tree_select", "numpy_while_loop", "const_like",
+    "clip", "hmax", "channel_mean", "tree_map", "tree_select", "numpy_while_loop", "const_like",
 ]
 
 _pyabs = abs
@@ -152,6 +152,21 @@ def hmax(v):
         return v
     if isinstance(v, np.ndarray) and v.ndim >= 2:
         return v.max(axis=-1, keepdims=True)
+    return v
+
+
+def channel_mean(v):
+    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value."""
+    if is_drjit(v):
+        dr = drjit()
+        if dr.depth_v(v) > 1:
+            out = v[0]
+            for i in range(1, len(v)):
+                out = out + v[i]
+            return out * (1.0 / len(v))
+        return v
+    if isinstance(v, np.ndarray) and v.ndim >= 2:
+        return v.mean(axis=-1, keepdims=True)
     return v
 
 

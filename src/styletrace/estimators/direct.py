@@ -11,6 +11,7 @@ Parameters
     n      samples per estimate (>= 1).
     comb   False (default): n independent draws. True: a stratified discrete comb, the i-th draw gets
            first primary dimension (xi + i)/n with one uniform xi per estimate (see ``affine.Mean``).
+    cap    None (default), or (k, floor): the firefly control of ``affine.MeanOfN`` on the mean (biased).
 """
 from __future__ import annotations
 
@@ -20,12 +21,12 @@ __all__ = ["Direct"]
 
 
 class Direct(MeanOfN):
-    def __init__(self, g, n: int, comb: bool = False):
+    def __init__(self, g, n: int, comb: bool = False, cap: tuple[float, float] | None = None):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")
-        super().__init__(n, comb)
+        super().__init__(n, comb, cap)
         self.g = g
-        self.name = f"direct(n={self.n}{', comb' if comb else ''})"
+        self.name = f"direct(n={self.n}{', comb' if comb else ''}{', capped' if self.cap else ''})"
 
     def value(self, ctx, state):
         return self.g(self.mean(state))

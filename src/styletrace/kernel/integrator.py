@@ -49,7 +49,7 @@ import mitsuba as mi
 
 from ..styles.base import Vertex
 from ..config import settings as S
-from ..config.estimator_registry import make_estimator
+from ..config.estimator_registry import firefly_cap, make_estimator
 from .expansion import Expansion, moments as pass_moments
 from .lane_sampler import LaneSampler
 from .render_context import RenderContext
@@ -250,7 +250,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         moments = None
         if level == 0 and self._lane_moments is not None:  # the pass's moments of x - e, and this vertex's e
             moments = (self._lane_moments, emission(scene, si, active))
-        est = make_estimator(slot, level, v, self.settings, moments)
+        emitted = emission(scene, si, active) if firefly_cap(self.settings) else None
+        est = make_estimator(slot, level, v, self.settings, moments, emitted)
         value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
         stats = getattr(est.inner, "stats", None)  # AdaptiveDirect's; none for a styled object's other estimator
         if level == 0 and self.settings.aovs and stats is not None:
