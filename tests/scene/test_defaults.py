@@ -33,10 +33,12 @@ SCENES = {"cornell-box": lambda: cornell_box(RES, RES),
 @pytest.mark.parametrize("name", SCENES)
 def test_cel_at_defaults_shows_its_bands(name):
     scene = load_scene(SCENES[name]())
-    fractions = band_fractions(render(scene, make_integrator(style="cel", inner=16)))
+    integrator, _ = resolve_defaults(scene, make_integrator(style="cel", inner=16))
+    levels = integrator.settings.style.band_values()
+    fractions = band_fractions(render(scene, integrator), levels)
     assert fractions.max() <= MAX_BAND, fractions
     # the fixed threshold the default used to be: one band takes almost everything (measured 0.99)
-    old = band_fractions(render(scene, make_integrator(style="cel", inner=16, thresholds=0.75)))
+    old = band_fractions(render(scene, make_integrator(style="cel", inner=16, thresholds=0.75, levels="0.4,0.95")))
     assert old.max() > MAX_BAND, old
 
 
@@ -78,10 +80,10 @@ def test_styled_objects_and_compositions_resolve_on_what_they_cover():
 
 def test_explicit_values_win():
     scene = load_scene(cornell_box(16, 16))
-    integrator = make_integrator(style="cel", thresholds="0.3", levels="0.1,0.9")
+    integrator = make_integrator(style="cel", thresholds="0.3", levels="0.1,0.9", firefly_floor=0.05)
     out, chosen = resolve_defaults(scene, integrator)
     assert out is integrator and chosen == "" and out.settings.style.thresholds == (0.3,)
-    out, chosen = resolve_defaults(scene, make_integrator(style="gooch", light_dir="1,0,0"))
+    out, chosen = resolve_defaults(scene, make_integrator(style="gooch", light_dir="1,0,0", firefly=0))
     assert chosen == "" and out.settings.style.light_dir == (1.0, 0.0, 0.0)
     out, chosen = resolve_defaults(scene, make_integrator(style="hatching", u_min=0.01))
     assert out.settings.style.u_min == 0.01 and "u_max=" in chosen and "u_min" not in chosen
@@ -192,10 +194,10 @@ def test_tone_styles_look_the_same_at_a_tenth_of_the_light(style):
 
 def test_a_given_exposure_wins_and_an_unresolvable_one_falls_back():
     scene = dimmed_box(1.0)
-    integ, chosen = resolve_defaults(scene, make_integrator(style="gamma", exposure=2.0))
+    integ, chosen = resolve_defaults(scene, make_integrator(style="gamma", exposure=2.0, firefly=0))
     assert chosen == "" and integ.settings.slot.style.exposure == 2.0
     # gamma 0.1 with an exposure above 1 would overflow float32: the auto rule pins nothing (unresolved: 1)
-    integ, chosen = resolve_defaults(scene, make_integrator(style="gamma", gamma=0.1))
+    integ, chosen = resolve_defaults(scene, make_integrator(style="gamma", gamma=0.1, firefly=0))
     assert chosen == "" and integ.settings.slot.style.scale == 1.0
 
 

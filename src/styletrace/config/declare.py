@@ -73,7 +73,10 @@ class Property(Declaration):
         object.__setattr__(self, "bare", bare)
 
     def show_default(self) -> str:
-        return "style's" if self.default is None else str(self.default)
+        """The default as the docs show it: None is the style's own count (inner_samples) or auto."""
+        if self.default is None:
+            return "style's" if self.name == "inner_samples" else "auto"
+        return str(self.default)
 
     def bounds(self) -> tuple[float, float]:
         if self.kind == "int":

@@ -73,6 +73,12 @@ PROPERTIES = (
              f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
              f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
              "--expansion-pass", "M", low=0, high=MAX_EXPANSION_PASS),
+    Property("firefly", None, "float", "firefly control of direct application: the brightest of a stylized "
+             "vertex's n children is capped at k times the larger of the others' mean brightness and "
+             "firefly_floor (a lone child: 10 / 0.18 times firefly_floor); 0: off, the paper's estimator; "
+             "auto: 4 where the render is denoised, else 0 (docs/look.md)", "--firefly", "K", low=0.0),
+    Property("firefly_floor", None, "float", "firefly control: the brightness below which a child is never an "
+             "outlier; auto: the scene's median first-hit brightness (the pilot)", low=0.0),
     Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
              "MODE", choices=tuple(STYLIZE_MODES)),
     Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 16; the trace time grows "
@@ -149,7 +155,8 @@ def declare(prop: Property) -> Property:
 def value(key: str, values: Mapping[str, Any]) -> Any:
     """The value of property `key` in `values` (else its default), parsed as its declaration says."""
     prop = next(p for p in PROPERTIES if p.name == key)
-    return prop.parse(values.get(key, prop.default))
+    raw = values.get(key, prop.default)
+    return None if raw is None and prop.default is None else prop.parse(raw)
 #: the style `styletrace render` uses on a scene without a `stylized` integrator of its own
 COMMAND_LINE_STYLE = "cel"
 #: what a `styled` BSDF accepts besides its style's parameters
@@ -385,6 +392,9 @@ def parse(values: Mapping[str, Any]) -> Settings:
         raise SettingsError(f"bad value True for {what} with reuse={reuse}: a pooled pass traces its own camera "
                             f"rays and keeps no per-sample statistics; use reuse=off")
     expansion = parse_expansion(values, slot)
+    firefly = value("firefly", values)
+    if firefly is not None and 0.0 < firefly < 1.0:
+        raise SettingsError(f"bad value {firefly!r} for 'firefly': expected 0 (off) or a number >= 1")
     return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
                     emitter_sampling=lights, hide_emitters=hide, lines=lines, adaptive_z=z,
                     adaptive_bias=target, aovs=aovs, reuse=reuse, reuse_radius=radius, reuse_k=k,

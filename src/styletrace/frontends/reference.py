@@ -30,7 +30,7 @@ def integrator_table() -> str:
     from ..config.settings import PROPERTIES
     rows = [_row("property", "type", "default", "flag", "meaning"), "|---|---|---|---|---|"]
     for p in PROPERTIES:
-        default = "the style's" if p.default is None else f"`{p.default}`"
+        default = ("the style's" if p.name == "inner_samples" else "auto") if p.default is None else f"`{p.default}`"
         rows.append(_row(f"`{p.name}`", p.kind, default, f"`{p.flag}`" if p.flag else "", p.doc))
         if p.name == "style":
             rows.append(_row("*style parameters*", "", "the style's", "`--set KEY=VALUE`",

@@ -36,11 +36,11 @@ import numpy as np  # noqa: E402
 
 from ..pipeline import passes as pass_loop  # noqa: E402
 from ..pipeline.scene import film_format  # noqa: E402
-from .. import estimators as E  # noqa: E402
 from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
 from ..config import settings as S  # noqa: E402
-from ..config.estimator_registry import make_estimator  # noqa: E402
+from ..config.estimator_registry import child_mean, firefly_cap, make_estimator  # noqa: E402
 from ..kernel.integrator import StylizedIntegrator  # noqa: E402
+from ..kernel.vertex import emission  # noqa: E402
 from ..scene.defaults import Pilot, resolve as resolve_defaults, unique_styled  # noqa: E402
 from ..assets.scenes import DEFAULT  # noqa: E402
 from ..styles.base import Vertex, camera_forward  # noqa: E402
@@ -192,7 +192,8 @@ class RecordingIntegrator(StylizedIntegrator):
         return value
 
     def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
-        """The mean of the slot's n children: the same draws, in the same order, as the `direct` estimator."""
+        """The mean of the slot's n children: the same draws, in the same order, and the same firefly control
+        as the `direct` estimator."""
         if slot.style.closed_form:
             return mi.Color3f(0.0)
 
@@ -204,7 +205,9 @@ class RecordingIntegrator(StylizedIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        value, _ = E.Direct(lambda x: x, slot.n(level)).run(draw, (sampler,), uniform, active, like=mi.Color3f)
+        emitted = emission(scene, si, active) if firefly_cap(self.settings) else None
+        value, _ = child_mean(slot, level, self.settings, emitted).run(draw, (sampler,), uniform, active,
+                                                                         like=mi.Color3f)
         return value
 
 

@@ -133,6 +133,26 @@ class Pilot:
                 "wo": -lanes(ray.d, n).T}
 
 
+def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pilot's mean colour per cell over the samples in `mask`: (colour (cells, 3), samples per cell,
+    each masked sample's cell index)."""
+    cells, inverse, counts = np.unique(samples["cell"][mask], return_inverse=True, return_counts=True)
+    colour = np.zeros((len(cells), 3))
+    np.add.at(colour, inverse, samples["colour"][mask])
+    colour /= counts[:, None]
+    return colour, counts, inverse
+
+
+def median_brightness(pilot: Pilot) -> float | None:
+    """The median first-hit brightness (r+g+b)/3 the camera sees, over every object (cells weighted by
+    their samples), or None where it sees none: the firefly control's floor (`firefly_floor`)."""
+    mask = pilot.samples["owner"] >= 0
+    if not mask.any():
+        return None
+    colour, counts, _ = cell_colours(pilot.samples, mask)
+    return weighted_quantiles(colour.mean(axis=1), counts, [0.5])[0]
+
+
 class Facts:
     """What a style's auto rule may read about the part of the scene it covers (see the module doc)."""
 
@@ -160,13 +180,10 @@ class Facts:
     def _cells(self) -> tuple[np.ndarray, np.ndarray]:
         """(brightness per cell, number of samples) over the cells with samples on the covered objects."""
         s, mask = self.pilot.samples, self._mine
-        cells, inverse, counts = np.unique(s["cell"][mask], return_inverse=True, return_counts=True)
-        colour = np.zeros((len(cells), 3))
-        np.add.at(colour, inverse, s["colour"][mask])
-        colour /= counts[:, None]
+        colour, counts, inverse = cell_colours(s, mask)
         if self.styles:
             # a representative first hit per cell (the last sample of the cell) for styles that read the vertex
-            last = np.zeros(len(cells), dtype=np.int64)
+            last = np.zeros(len(counts), dtype=np.int64)
             last[inverse] = np.arange(mask.sum())
             pick = lambda key: s[key][mask][last]  # noqa: E731
             colour = self._apply(colour, pick("p"), pick("n"), pick("wo"))
@@ -240,6 +257,9 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = No
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
     notes = []
+    if integrator.settings.firefly:
+        integrator, note = pin_firefly(scene, integrator, pilot, integrator.settings.firefly)
+        notes.append(note)
     if integrator.settings.stylize != "first_object_hit":
         style = integrator.settings.style
         chosen = auto_values(style, Facts(scene, pilot, 0))
@@ -255,7 +275,25 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = No
         if chosen:
             bsdf.slot = replace(bsdf.slot, style=style.pinned(chosen))
             notes.append(f"{describe(style, chosen)} (styled BSDF {bsdf.id() or k})")
-    return integrator, "; ".join(notes)
+    return integrator, "; ".join(n for n in notes if n)
 
 
-__all__ = ["resolve", "Facts", "Pilot", "weighted_quantiles", "PILOT_CELLS", "PILOT_SPP"]
+def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: Pilot | None, k: float
+                ) -> tuple[StylizedIntegrator, str]:
+    """`integrator` with the firefly control's k and, unless given, its floor (the scene's median brightness,
+    `median_brightness`) pinned, and the note naming what was chosen ('' if nothing)."""
+    s = integrator.settings
+    chosen = {} if s.firefly == k else {"firefly": float(k)}
+    if s.firefly_floor is None:
+        pilot = pilot if pilot is not None and pilot.serves(scene, s) else Pilot(scene, s)
+        floor = median_brightness(pilot)
+        if floor is not None:
+            chosen["firefly_floor"] = float(f"{max(floor, 0.0):.4g}")
+    if not chosen:
+        return integrator, ""
+    pinned = replace(s, extra={**s.extra, **chosen})
+    note = " ".join(f"{key}={value:g}" for key, value in chosen.items())
+    return StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen}), note
+
+
+__all__ = ["resolve", "pin_firefly", "Facts", "Pilot", "weighted_quantiles", "PILOT_CELLS", "PILOT_SPP"]
