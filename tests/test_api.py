@@ -116,7 +116,7 @@ def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
     monkeypatch.setattr(pass_loop, "LANES_PER_PASS", 120)
     monkeypatch.setattr(pass_loop, "TILE_SIDE", 10)
     scene = api.load_scene("cornell-box", 24, 16)
-    integ = api.make_integrator("cel", inner=2, thresholds=(0.5,))  # explicit: no scene-relative pilot
+    integ = api.make_integrator("cel", inner=2, thresholds=(0.5,), levels=(0.4, 0.95))  # explicit: no pilot
     layout = api.tiles(24, 16)
     assert len(layout) == 6 and layout[0].size == (10, 12)
     progress = list(api.passes(scene, integ, 2, seed=3, lanes_per_pass=1 << 20))

@@ -98,7 +98,8 @@ def test_half_opaque_mask_is_the_mixture_of_the_stylized_surface_and_what_lies_b
     # shines through the card onto it: half, none, all of it), so this mixture is a reference only where
     # cel puts those lightings in one band; test_half_opaque_mask_stylizes_each_branch_of_the_path has an
     # exact one at thresholds 0.5 and 0.75
-    integ = make_integrator(style, inner=4, **({"thresholds": (0.75,)} if style == "cel" else {}))
+    fixed = {"thresholds": (0.75,), "levels": (0.4, 0.95)}
+    integ = make_integrator(style, inner=4, **(fixed if style == "cel" else {}))
     half = renders(scene(mask(0.5)), integ, 8, 100)
     opaque = renders(scene(mask(1.0)), integ, 8, 300)
     d_none = scene(mask(1.0))
@@ -133,7 +134,7 @@ def test_half_opaque_mask_stylizes_each_branch_of_the_path(threshold):
     Tolerances: Student's t from the spread of K independent renders per side (mean_z). Before the
     stylized vertex sampled its opaque part alone, half its children went through the card and were
     dropped (weight 2 on the rest): the image means were 0.921 at 0.5 and 0.731 at 0.75."""
-    integ = make_integrator("cel", inner=16, thresholds=(threshold,))
+    integ = make_integrator("cel", inner=16, thresholds=(threshold,), levels=(0.4, 0.95))
     half = renders(card_over_white_sky(0.5), integ, 16, 100)
     opaque = renders(card_over_white_sky(1.0), integ, 16, 300)
     z = mean_z(half, 0.5 * opaque + 0.5)

@@ -22,7 +22,8 @@ def test_styles_come_from_the_registry(client):
     table = {s["name"]: s for s in client.get("/api/styles").json()["styles"]}
     assert set(table) == {n for n in names() if not get(n).per_sample}
     cel = {p["name"]: p for p in table["cel"]["params"]}
-    assert cel["levels"]["kind"] == "floats" and cel["levels"]["low"] == 0.0 and cel["levels"]["default"] == "0.4,0.95"
+    assert cel["levels"]["kind"] == "floats" and cel["levels"]["low"] == 0.0 and cel["levels"]["default"] == "auto"
+    assert cel["bands"]["default"] == "3"
     assert table["contrast"]["estimators"] == ["direct", "affine"]
     assert "gradient" in {p["kind"] for p in table["color_map"]["params"]}
 

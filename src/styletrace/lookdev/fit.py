@@ -47,7 +47,6 @@ from ..config import settings as S  # noqa: E402
 from ..styles import create  # noqa: E402
 from ..styles.base import Style, brightness  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402
-from ..styles.hatching import coverage  # noqa: E402
 from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for  # noqa: E402
 
 FITTABLE = ("float", "floats", "color", "gradient")
@@ -129,16 +128,17 @@ class Smoothed:
 
 def _smooth_cel(style, I, v, tau):
     u = brightness(I)
-    m = style.levels
+    m = style.band_values()
     target = mi.Float(m[0])
-    for j, t in enumerate(style.thresholds):
+    for j, t in enumerate(style.steps()):
         target = target + (m[j + 1] - m[j]) * _sigmoid((u - t) / tau)
     return dr.select(u > 0, I * (target / dr.maximum(u, 1e-30)), mi.Color3f(target))
 
 
 def _smooth_hatching(style, I, v, tau):
     sets = len(style.normals)
-    m = coverage(brightness(I), style.u_min, style.u_max) * sets + 0.5
+    toned = style.toned(brightness(I))
+    m = toned * (sets + 1) if style.uses_tones else toned * sets + 0.5
     clear = mi.Float(1.0)
     for j, nj in enumerate(style.normals):
         s = dr.dot(mi.Vector3f(v.p), mi.Vector3f(*nj)) / style.spacing + 0.5

@@ -1,16 +1,18 @@
 """cel: global-illumination cel shading (supplement S5.2).
 
 Parameters
+- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither thresholds nor levels is given
 - thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K
-- levels (floats, default 0.4,0.95): K+1 target brightnesses m_0..m_K
+- levels (floats, default auto): K+1 target brightnesses m_0..m_K
 
 Auto thresholds (scene-relative, `scene.defaults`): the brightness quantiles 1/(K+1), ...,
-K/(K+1) of what the camera sees of the objects this style covers, from a pilot of Mitsuba's `path`
-integrator (32 cells along the film, 16 samples each, brightness averaged per cell), so the K+1 bands
-hold about equal shares of the image whatever the scene's light level. A fixed brightness cannot: on
-Mitsuba's test scenes the old default 0.75 put 87-92% of the pixels in one band. The chosen values are
-printed (`styletrace render` logs them unless -q) and can be pinned with `thresholds=...`. A style that
-was never resolved (rendered by calling mi.render directly) uses evenly spaced k/(K+1), i.e. 0.5.
+K/(K+1) of what the camera sees of the objects this style covers, from a pilot of the path kernel, so the
+K+1 bands hold about equal shares of the image whatever the scene's light level. Auto levels
+(`tone.band_levels`): each band's median brightness, exposed so that the scene's median is middle grey
+and spread at least 18 L* apart, so the bands are flat and distinct on any scene. The chosen values
+are printed (`styletrace render` logs them unless -q) and can be pinned. A style that was never
+resolved (rendered by calling mi.render directly) uses evenly spaced thresholds k/(K+1) and levels
+evenly spaced in lightness (`FALLBACK_LSTAR`).
 
 With u = (r+g+b)/3 of the inner estimate <I>, the target brightness is
     u' = m(u) = m_j  where j = number of thresholds t_i <= u,
@@ -22,8 +24,12 @@ from __future__ import annotations
 import drjit as dr
 import mitsuba as mi
 
-from .base import Param, Style, StyleError, Vertex, brightness, increasing
+from .base import Param, Style, StyleError, Vertex, brightness, increasing, rounded
 from .registry import register
+from .tone import band_levels, luminance_of
+
+#: the lightness range of the levels of an unresolved cel (evenly spaced over the bands)
+FALLBACK_LSTAR = (30.0, 85.0)
 
 
 @register
@@ -31,38 +37,61 @@ class Cel(Style):
     name = "cel"
     summary = "GI cel shading: brightness quantized to levels, colour kept (S5.2)"
     params = (
+        Param("bands", "int", 3, "number of bands where neither thresholds nor levels is given", low=2, high=8),
         Param("thresholds", "floats", None, "brightness steps between levels, increasing",
-              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; unresolved: evenly spaced k/(K+1))"),
-        Param("levels", "floats", (0.4, 0.95), "target brightness of each band (one more than thresholds)", low=0.0),
+              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
+                   "unresolved: evenly spaced k/(K+1))"),
+        Param("levels", "floats", None, "target brightness of each band (one more than thresholds)", low=0.0,
+              auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
+                   "(unresolved: evenly spaced in lightness)"),
     )
     default_inner = 16
 
     def validate(self) -> None:
         t, m = self.thresholds, self.levels
-        if t is None:
-            return
-        if any(b <= a for a, b in zip(t, t[1:])):
+        if t is not None and any(b <= a for a, b in zip(t, t[1:])):
             raise StyleError(f"bad value {','.join(map(str, t))!r} for parameter 'thresholds': must increase")
-        if len(m) != len(t) + 1:
+        if t is not None and m is not None and len(m) != len(t) + 1:
             raise StyleError(f"bad value {','.join(map(str, m))!r} for parameter 'levels': "
                              f"expected {len(t) + 1} levels for {len(t)} thresholds")
+
+    @property
+    def band_count(self) -> int:
+        """K+1: from the levels or thresholds given, else `bands`."""
+        if self.levels is not None:
+            return len(self.levels)
+        if self.thresholds is not None:
+            return len(self.thresholds) + 1
+        return self.bands
 
     def steps(self) -> tuple[float, ...]:
         """The thresholds in use: the given or resolved ones, else evenly spaced k/(K+1)."""
         if self.thresholds is not None:
             return self.thresholds
-        k = len(self.levels)
+        k = self.band_count
         return tuple(i / k for i in range(1, k))
 
+    def band_values(self) -> tuple[float, ...]:
+        """The levels in use: the given or resolved ones, else evenly spaced in lightness."""
+        if self.levels is not None:
+            return self.levels
+        k = self.band_count
+        lo, hi = FALLBACK_LSTAR
+        return tuple(rounded(float(luminance_of(lo + (hi - lo) * j / (k - 1)))) for j in range(k))
+
     def auto_values(self, facts) -> dict:
-        if self.thresholds is not None:
-            return {}
-        k = len(self.levels)
-        return {"thresholds": increasing(facts.brightness([i / k for i in range(1, k)]))}
+        k = self.band_count
+        out = {}
+        if self.thresholds is None:
+            out["thresholds"] = increasing(facts.brightness([i / k for i in range(1, k)]))
+        if self.levels is None:
+            out["levels"] = increasing(band_levels(facts.brightness, k))
+        return out
 
     def target(self, u: mi.Float) -> mi.Float:
-        out = mi.Float(self.levels[0])
-        for t, m in zip(self.steps(), self.levels[1:]):
+        levels = self.band_values()
+        out = mi.Float(levels[0])
+        for t, m in zip(self.steps(), levels[1:]):
             out = dr.select(u >= t, m, out)
         return out
 

@@ -9,8 +9,9 @@ Parameters
 - max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot radius as a fraction of half
   the cell diagonal, the radius at which the dots cover everything: r_max = max_radius_fraction sqrt(3) d / 2
   on the 3D grid, max_radius_fraction sqrt(2) d / 2 on the screen grid
-- u_min (float, default auto), u_max (float, default auto, > u_min): brightness of the largest / no dot;
-  auto: the 5% and 95% quantiles of the scene's first-hit brightness (as in `hatching`)
+- tones (floats, default auto): the tone curve, as in `hatching`; the radius is r = (1 - F(u)) r_max
+- u_min (float), u_max (float, > u_min): brightness of the largest / no dot, a linear ramp between them
+  instead of the tone curve (the behaviour before `tones`), as in `hatching`
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
 - lift (choice, default canonical): where the screen grid is evaluated (spacing_px only): canonical, at the
   vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py), so reflections and what lies
@@ -19,7 +20,7 @@ Parameters
 
 With u = (r+g+b)/3 of the inner estimate <I> and the vertex position p:
     g_p = round(p / d) d                                       (nearest grid point, per component)
-    r   = (1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) r_max
+    r   = (1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) r_max     (or (1 - F(u)) r_max with tones)
     g(<I>) = dark if |p - g_p| < r else light
 `halftone_mask` is that predicate on Dr.Jit arrays.
 
@@ -41,8 +42,9 @@ import drjit as dr
 import mitsuba as mi
 
 from .base import Param, Projection, Style, Vertex, brightness, projection
-from .hatching import AUTO_U_MAX, AUTO_U_MIN, BrightnessRange, coverage
+from .hatching import AUTO_TONES, AUTO_U_MAX, AUTO_U_MIN, BrightnessRange, coverage
 from .registry import register
+from .tone import tone_inverse
 
 
 def dot_radius(u: mi.Float, r_max: float, u_min: float = 0.05, u_max: float = 0.9) -> mi.Float:
@@ -95,8 +97,12 @@ class Halftone(BrightnessRange, Style):
               low=0.0, low_open=True, auto="not used: a screen grid spacing_px apart"),
         Param("max_radius_fraction", "float", 0.75, "largest radius as a fraction of half the cell diagonal "
               "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)", low=0.0, high=1.0, low_open=True),
-        Param("u_min", "float", None, "brightness at and below which dots are largest", auto=AUTO_U_MIN),
-        Param("u_max", "float", None, "brightness at and above which dots vanish", auto=AUTO_U_MAX),
+        Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
+              auto=AUTO_TONES),
+        Param("u_min", "float", None, "brightness at and below which dots are largest (a linear ramp)",
+              auto=AUTO_U_MIN),
+        Param("u_max", "float", None, "brightness at and above which dots vanish (a linear ramp)",
+              auto=AUTO_U_MAX),
         Param("dark", "color", (0.1, 0.1, 0.15), "colour inside the dots", low=0.0),
         Param("light", "color", (0.97, 0.95, 0.9), "colour outside the dots", low=0.0),
         Param("lift", "choice", "canonical", "where the screen grid is evaluated: the vertex's image coordinate "
@@ -130,22 +136,25 @@ class Halftone(BrightnessRange, Style):
     def _coordinate(self, v: Vertex):
         return v.s if self.wants_coordinate else None
 
-    def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        u_min, u_max = self.u_range()
+    def _distance(self, v: Vertex) -> mi.Float:
+        """v's distance to its nearest grid point: pixels on the screen grid, scene units on the 3D grid."""
         if self.spacing is None:
-            dot = screen_halftone_mask(v.p, brightness(I), self.projection, self.spacing_px, self.r_max, u_min, u_max,
-                                       s=self._coordinate(v))
-        else:
-            dot = halftone_mask(v.p, brightness(I), self.spacing, self.r_max, u_min, u_max)
+            return screen_distance(v.p, self.projection, self.spacing_px, self._coordinate(v))
+        return grid_distance(v.p, self.spacing)
+
+    def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
+        dot = self._distance(v) < self.toned(brightness(I)) * self.r_max
         return dr.select(dot, mi.Color3f(*self.dark), mi.Color3f(*self.light))
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """The brightness at which the dot's edge passes v: r(u) = d, u = u_max - (d / r_max)(u_max - u_min);
-        none (+inf) where v is farther than r_max from its grid point (never inside a dot)."""
-        u_min, u_max = self.u_range()
-        d = screen_distance(v.p, self.projection, self.spacing_px, self._coordinate(v)) if self.spacing is None \
-            else grid_distance(v.p, self.spacing)
-        t = u_max - d * ((u_max - u_min) / self.r_max)
+        """The brightness at which the dot's edge passes v, where r(u) = d; none (+inf) where v is farther
+        than r_max from its grid point (never inside a dot)."""
+        d = self._distance(v)
+        if self.uses_tones:
+            t = tone_inverse(1.0 - d * (1.0 / self.r_max), self.tones)
+        else:
+            u_min, u_max = self.u_range()
+            t = u_max - d * ((u_max - u_min) / self.r_max)
         return (dr.select(d < self.r_max, t, mi.Float(dr.inf)),)
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:

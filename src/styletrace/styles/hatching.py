@@ -11,10 +11,12 @@ Parameters
 - thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d, in the
   units of the spacing in use (pixels with spacing_px, scene units with spacing)
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
-- u_min (float, default auto), u_max (float, default auto, > u_min): brightness of full / no hatching;
-  auto: the 5% and 95% quantiles of the scene's first-hit brightness (`scene.defaults`: a pilot
-  of Mitsuba's `path` integrator), so every scene shows the whole range from fully to not hatched;
-  unresolved (mi.render called directly): 0.05 and 0.9
+- tones (floats, default auto): the tone curve, brightnesses u_0 < ... < u_K at tone 0, 1/K, ..., 1
+  (`tone.tone_knots`: the scene's brightness distribution mixed with its lightness, so every level
+  covers a fair share of the image, a window or a lamp included); used unless u_min or u_max is given
+- u_min (float), u_max (float, > u_min): brightness of full / no hatching, a linear ramp between them
+  (the behaviour before `tones`); given one, the other is the 5% / 95% brightness quantile; unresolved
+  (mi.render called directly, no tones): 0.05 and 0.9
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
 - lift (choice, default canonical): where the screen lines are evaluated (spacing_px only).
   canonical: at the vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py): the pixel
@@ -30,7 +32,8 @@ with (e1, e2) an orthonormal basis perpendicular to the camera's view direction 
 vector made perpendicular): every plane contains the view direction, so n_i x n_j is parallel to it.
 The planes pass through the world origin (o = 0). With u = (r+g+b)/3 of the inner estimate <I>,
     m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)      (m = 0 at u_max, n at u_min)
-sets 0..m-1 are active, and the vertex p is on a line when, for some active j,
+or, with tones, m = min(n, floor((1 - F(u)) (n + 1))) with F the tone curve (each of the n + 1 levels
+an equal share of tone); sets 0..m-1 are active, and the vertex p is on a line when, for some active j,
     dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2
 (the distance to the nearest plane of set j). g = line_color on a line, background elsewhere.
 `hatch_mask` is that predicate on Dr.Jit arrays; the camera is read in `prepare` (until then the
@@ -68,6 +71,7 @@ import mitsuba as mi
 from .base import (Param, Projection, Style, StyleError, Vertex, brightness, camera, camera_forward, increasing,
                    projection)
 from .registry import register
+from .tone import tone_inverse, tone_knots, tone_of
 
 Vec = tuple[float, float, float]
 
@@ -163,14 +167,23 @@ def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
     return [u_max - (j + 0.5) * (u_max - u_min) / sets for j in range(sets)]
 
 
-AUTO_U_MIN = "the 5% quantile of the scene's first-hit brightness (unresolved: 0.05)"
-AUTO_U_MAX = "the 95% quantile of the scene's first-hit brightness (unresolved: 0.9)"
+AUTO_U_MIN = "unused while tones applies; given u_max only: the 5% brightness quantile (unresolved: 0.05)"
+AUTO_U_MAX = "unused while tones applies; given u_min only: the 95% brightness quantile (unresolved: 0.9)"
+AUTO_TONES = ("the scene's first-hit brightness distribution mixed with its lightness at 9 knots, unless "
+              "u_min or u_max is given (unresolved: the linear ramp)")
 
 
 class BrightnessRange:
-    """Mixin of hatching and halftone: u_min/u_max 'auto' are the 5% / 95% brightness quantiles."""
+    """Mixin of hatching and halftone: the tone of a brightness, by the tone curve `tones` (auto: the scene's
+    distribution, `tone.tone_knots`) or by a linear ramp between u_min and u_max where either is given."""
+
+    @property
+    def uses_tones(self) -> bool:
+        return self.tones is not None and self.u_min is None and self.u_max is None
 
     def u_range(self) -> tuple[float, float]:
+        if self.uses_tones:
+            return self.tones[0], self.tones[-1]
         lo = 0.05 if self.u_min is None else self.u_min
         hi = 0.9 if self.u_max is None else self.u_max
         if self.u_min is None and self.u_max is not None and not hi > lo:
@@ -179,12 +192,28 @@ class BrightnessRange:
             hi = lo + 0.85
         return lo, hi
 
+    def toned(self, u: mi.Float) -> mi.Float:
+        """1 where fully toned (dark) to 0 where untoned, by the tone curve or the linear ramp."""
+        if self.uses_tones:
+            return 1.0 - tone_of(u, self.tones)
+        return coverage(u, *self.u_range())
+
     def check_u_range(self) -> None:
+        if self.tones is not None and (self.u_min is not None or self.u_max is not None):
+            raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are alternatives; give one")
+        if self.tones is not None and any(b < a for a, b in zip(self.tones, self.tones[1:])):
+            raise StyleError(f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "
+                             f"decrease")
+        if self.tones is not None and (len(self.tones) < 2 or not self.tones[-1] > self.tones[0]):
+            raise StyleError(f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': at least two "
+                             f"brightnesses, the last above the first")
         lo, hi = self.u_range()
         if not hi > lo:
             raise StyleError(f"bad value {hi:g} for parameter 'u_max': must exceed u_min = {lo:g}")
 
     def auto_values(self, facts) -> dict:
+        if self.u_min is None and self.u_max is None:
+            return {} if self.tones is not None else {"tones": increasing(tone_knots(facts.brightness))}
         if self.u_min is not None and self.u_max is not None:
             return {}
         lo, hi = increasing(facts.brightness([0.05, 0.95]))
@@ -210,8 +239,12 @@ class Hatching(BrightnessRange, Style):
         Param("thickness", "float", None, "line thickness d, in the units of the spacing in use, < spacing",
               low=0.0, low_open=True, auto="0.3 * the spacing in use"),
         Param("angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"),
-        Param("u_min", "float", None, "brightness at and below which all sets are drawn", auto=AUTO_U_MIN),
-        Param("u_max", "float", None, "brightness at and above which no set is drawn", auto=AUTO_U_MAX),
+        Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
+              auto=AUTO_TONES),
+        Param("u_min", "float", None, "brightness at and below which all sets are drawn (a linear ramp)",
+              auto=AUTO_U_MIN),
+        Param("u_max", "float", None, "brightness at and above which no set is drawn (a linear ramp)",
+              auto=AUTO_U_MAX),
         Param("line_color", "color", (0.05, 0.05, 0.08), "colour of the lines", low=0.0),
         Param("background", "color", (0.97, 0.95, 0.9), "colour between the lines", low=0.0),
         Param("lift", "choice", "canonical", "where screen lines are evaluated: the vertex's image coordinate "
@@ -275,9 +308,20 @@ class Hatching(BrightnessRange, Style):
     def reflected_angle(self) -> float:
         return self.angle if self.angle_reflected is None else self.angle_reflected
 
+    def active(self, u: mi.Float) -> mi.Float:
+        """m(u), the number of sets drawn at brightness u (module doc)."""
+        if self.uses_tones:
+            return dr.minimum(dr.floor(self.toned(u) * (self.sets + 1)), self.sets)
+        return active_sets(u, self.sets, *self.u_range())
+
+    def thresholds_of_sets(self) -> list[float]:
+        """Set j is drawn iff u <= its threshold (where m(u) > j)."""
+        if self.uses_tones:
+            return [float(tone_inverse(1.0 - (j + 1) / (self.sets + 1), self.tones)) for j in range(self.sets)]
+        return set_thresholds(self.sets, *self.u_range())
+
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
-        u_min, u_max = self.u_range()
-        m = active_sets(brightness(I), self.sets, u_min, u_max)
+        m = self.active(brightness(I))
         line = mi.Bool(False)
         for j, on in enumerate(self._masks(v)):
             line |= on & (m > j)
@@ -286,10 +330,9 @@ class Hatching(BrightnessRange, Style):
     def step_thresholds(self, v: Vertex) -> tuple:
         """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover v; v turns
         line-coloured there and stays so below it. +inf where v is on no line (g is constant there)."""
-        u_min, u_max = self.u_range()
         masks = self._masks(v)
         out = mi.Float(dr.inf)
-        for on, t in reversed(list(zip(masks, set_thresholds(len(self.normals), u_min, u_max)))):
+        for on, t in reversed(list(zip(masks, self.thresholds_of_sets()))):
             out = dr.select(on, t, out)
         return (out,)
 
