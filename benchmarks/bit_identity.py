@@ -25,9 +25,11 @@ import numpy as np  # noqa: E402
 from styletrace import api  # noqa: E402
 
 RES = 12
+#: cel's levels when the digests were recorded (its default then; now the levels follow the scene)
+CEL = dict(levels="0.4,0.95")
 #: name -> (scene, spp, integrator property values)
 CONFIGS = {
-    "first_hit_cel": ("cornell-box", 2, dict(style="cel", inner_samples=4)),
+    "first_hit_cel": ("cornell-box", 2, dict(style="cel", inner_samples=4, **CEL)),
     "affine_contrast": ("cornell-box", 2, dict(style="contrast", estimator="affine", inner_samples=2)),
     "series_gamma": ("cornell-box", 2, dict(style="gamma", estimator="series", inner_samples=4)),
     "ustat_tie_dye": ("cornell-box", 2, dict(style="tie_dye", estimator="ustat", inner_samples=4)),
@@ -35,12 +37,13 @@ CONFIGS = {
     "telescoping_reinhard": ("cornell-box", 2, dict(style="reinhard", estimator="telescoping", inner_samples=4)),
     "combined_gamma_sepia": ("cornell-box", 2, dict(style="gamma+sepia", estimator="combined", inner_samples=4)),
     "first_n_hits": ("cornell-box", 2, dict(style="cel", stylize="first_n_hits", stylize_depth=2,
-                                            inner_samples="3,2")),
+                                            inner_samples="3,2", **CEL)),
     "first_object_hit_mixed": ("mixed", 2, dict(style="identity", stylize="first_object_hit", inner_samples=2)),
-    "lines": ("lines", 2, dict(style="cel", inner_samples=2, lines=True)),
-    "reuse_pixels_refine": ("cornell-box", 2, dict(style="cel", reuse="pixels", inner_samples="2:8")),
+    "lines": ("lines", 2, dict(style="cel", inner_samples=2, lines=True, **CEL)),
+    "reuse_pixels_refine": ("cornell-box", 2, dict(style="cel", reuse="pixels", inner_samples="2:8", **CEL)),
     "reuse_deep_world": ("cornell-box", 2, dict(style="cel", reuse="pixels", reuse_deep="world",
-                                                stylize="first_n_hits", stylize_depth=2, inner_samples="2,2")),
+                                                stylize="first_n_hits", stylize_depth=2, inner_samples="2,2",
+                                                **CEL)),
     "hide_emitters_depth3": ("cornell-box", 2, dict(style="identity", max_depth=3, hide_emitters=True,
                                                     inner_samples=2)),
 }
@@ -65,7 +68,7 @@ def run() -> dict[str, str]:
         out[name] = digest(list(api.passes(sc, integrator, spp, seed=7))[-1].image)
         del sc
     sc = api.load_scene(media_scene())
-    integrator = api.make_integrator_from(dict(style="cel", inner_samples=2))
+    integrator = api.make_integrator_from(dict(style="cel", inner_samples=2, **CEL))
     out["media_cel"] = digest(list(api.passes(sc, integrator, 2, seed=7))[-1].image)
     return out
 

@@ -143,3 +143,27 @@ def test_mi_render_against_another_pass_split(files, reference):
     scene = mi.load_file(files[1], depth="3")
     whole = np.array(mi.render(scene, spp=SPP, seed=SEED))[..., :3]
     within_4_se(split, whole, reference[1])
+
+
+def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
+    """The default of `denoise` is one (`denoise.default_method`: auto, unless $STYLETRACE_DENOISE, which the
+    suite sets to off and this test clears): `styletrace.render`, the command line, the preview and Blender's
+    Denoise property (tests/blender/test_denoise.py) all take it, and the Python call and the command line draw
+    the same denoised image."""
+    monkeypatch.delenv("STYLETRACE_DENOISE", raising=False)
+    from styletrace.denoise import default_method
+    assert default_method() == "auto"
+    args = dict(style="cel", inner=INNER, seed=SEED, defines={"depth": "3"})
+    image = styletrace.render(files[0], **args)
+    assert np.array_equal(image, styletrace.render(files[0], denoise="auto", **args))
+    assert not np.array_equal(image, styletrace.render(files[0], denoise="off", **args))
+    env = {k: v for k, v in child_env().items() if k != "STYLETRACE_DENOISE"}
+    out = tmp_path / "default.exr"
+    r = subprocess.run([sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3", "--style", "cel",
+                        "--inner", str(INNER), "--seed", str(SEED), "-o", str(out)],
+                       capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "denoised: expectation" in r.stderr, r.stderr
+    assert np.array_equal(np.array(mi.Bitmap(str(out)))[..., :3], image)
+    from styletrace.preview.session import Session
+    assert Session(files[0], inner=INNER, spp=2).denoised

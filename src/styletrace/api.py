@@ -31,14 +31,22 @@ from .scene.defaults import resolve as resolve_defaults  # noqa: E402,F401
 
 
 def render(*args: Any, denoise: str | None = None, cluster: str | None = None, **kw: Any):
-    """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the arguments);
-    `denoise="expectation"|"image"` hands the same job to the denoiser, a post-stage (docs/denoise.md)."""
-    if denoise is None:
+    """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the arguments).
+    `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off; all but off hand the job
+    to the denoiser, a post-stage (docs/denoise.md); off is the paper's estimators exactly."""
+    from .denoise import NotDenoised, check_method, default_method
+    method = check_method(denoise if denoise is not None else default_method())
+    if method == "off":
         return pipeline_render(*args, cluster=cluster, **kw)
     if cluster is not None:
-        raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
+        if method != "auto":
+            raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
+        import warnings
+        warnings.warn("not denoised: the render runs on Ray; the denoiser needs the whole image in one process",
+                      NotDenoised, stacklevel=2)
+        return pipeline_render(*args, cluster=cluster, **kw)
     from .denoise import render as denoised
-    return denoised(*args, denoise=denoise, **kw)
+    return denoised(*args, denoise=method, **kw)
 
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,

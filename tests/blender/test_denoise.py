@@ -43,14 +43,23 @@ def test_f12_denoises_as_the_command_line(method, tmp_path):
     bpy.context.scene.styletrace.denoise = method
     assert bpy.ops.styletrace.export_xml(filepath=xml) == {"FINISHED"}
     line = operators.command_line(xml, bpy.context.scene.styletrace)  # what the export reports
-    assert line.endswith(f"--seed 11 --pass-spp 4 --denoise {method}"), line
+    assert line.endswith(f"--spp 8 --seed 11 --pass-spp 4 --denoise {method}"), line
     cli = str(tmp_path / "cli.exr")
-    run = subprocess.run([sys.executable, "-m", "styletrace", "render", xml, "--seed", "11", "--pass-spp", "4",
-                          "--denoise", method, "-q", "-o", cli], capture_output=True, text=True, env=child_env(),
-                         timeout=300)
+    run = subprocess.run([sys.executable, "-m", "styletrace", "render", xml, "--spp", "8", "--seed", "11",
+                          "--pass-spp", "4", "--denoise", method, "-q", "-o", cli], capture_output=True, text=True,
+                         env=child_env(), timeout=300)
     assert run.returncode == 0, run.stderr
     import mitsuba as mi
     np.testing.assert_allclose(np.array(mi.Bitmap(cli), dtype=np.float32)[..., :3], f12, rtol=1e-5, atol=1e-5)
+
+
+def test_the_denoise_default_is_every_front_ends():
+    """Blender's Denoise starts at `denoise.default_method()`, the default of the command line, the Python API
+    and the preview (auto; the suite sets $STYLETRACE_DENOISE=off for its own renders: tests/conftest.py)."""
+    from styletrace.denoise import default_method
+    prop = type(bpy.context.scene.styletrace).bl_rna.properties["denoise"]
+    assert prop.default == default_method()
+    assert {item.identifier for item in prop.enum_items} == {"auto", "off", "expectation", "image"}
 
 
 def test_a_recorded_denoised_render_restyles_to_a_fresh_one(tmp_path):

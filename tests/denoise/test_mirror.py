@@ -38,7 +38,8 @@ def mirror_pixels(sc):
 
 
 def hued(sc, dark, seed):
-    img = styletrace.render(sc, style="cel", spp=1, inner=8, seed=seed, denoise="expectation")
+    img = styletrace.render(sc, style="cel", spp=1, inner=8, seed=seed, denoise="expectation", levels="0.4,0.95",
+                            firefly=0)
     return int((np.abs(img[dark] - img[dark].mean(-1, keepdims=True)).max(-1) > 0.05).sum())
 
 

@@ -20,18 +20,34 @@ from ..errors import UsageError
 from . import pipeline
 
 
-def prepare(sc, integ, settings):
-    """None without denoising; else what `passes` and `finish` need, after every refusal (one line each)."""
-    if settings.denoise == "off":
+def method(sc, integ, settings) -> tuple[str, str]:
+    """(the method F12 uses: expectation, image or off; the one-line note where auto could not denoise)."""
+    from ..denoise.default import method_for
+    return method_for(sc, integ, settings.denoise)
+
+
+def firefly(sc, integ, used: str):
+    """`integ` with the firefly control a denoised render gets at defaults (`denoise.default`)."""
+    if used == "off" or integ.settings.firefly is not None:
+        return integ
+    from ..denoise.default import FIREFLY_K
+    from ..scene.defaults import pin_firefly
+    return pin_firefly(sc, integ, None, FIREFLY_K)[0]
+
+
+def prepare(sc, integ, settings, used: str):
+    """None without denoising (`used`: `method`'s choice); else what `passes` and `finish` need, after every
+    refusal (one line each)."""
+    if used == "off":
         return None
     from ..denoise import oidn
     oidn.require()
     oidn.check_quality(settings.denoise_quality)
-    if settings.denoise == "image":
+    if used == "image":
         if settings.record_buffer:
             raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would not be the "
                              "denoised image; use Denoise 'expectation' (its buffer keeps the denoised expectation)")
-        return settings.denoise
+        return used
     return Job(sc, integ, settings.spp, settings.seed, settings.denoise_quality, label="<blender>",
                pass_spp=settings.pass_spp)
 
@@ -55,4 +71,4 @@ def finish(sc, settings, job, prog) -> np.ndarray:
     return denoised(sc, prog, settings.seed, settings.denoise_quality)[0]
 
 
-__all__ = ["prepare", "passes", "finish"]
+__all__ = ["method", "firefly", "prepare", "passes", "finish"]

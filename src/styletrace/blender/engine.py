@@ -84,11 +84,15 @@ class StyletraceEngine(bpy.types.RenderEngine):
         w, h = int(size[0]), int(size[1])
         aovs = pipeline.error_passes(st)
         integ = pipeline.integrator(st, aovs=aovs)
-        job = denoising.prepare(sc, integ, st)  # its refusals come before anything renders
+        used, note = denoising.method(sc, integ, st)
+        if note:
+            self.report({"WARNING"}, f"styletrace: {note}")
+        integ = denoising.firefly(sc, integ, used)
+        job = denoising.prepare(sc, integ, st, used)  # its refusals come before anything renders
         if aovs:
             for name, channels, ids in pipeline.AOV_PASSES.values():
                 self.add_pass(name, channels, ids)
-        if st.denoise != "off":
+        if used != "off":
             self.add_pass(pipeline.NOISY, 3, "RGB")
         if st.lines:
             self.add_pass(pipeline.LINE_MASK, 1, "X")
@@ -116,7 +120,7 @@ class StyletraceEngine(bpy.types.RenderEngine):
         mask = None
         if st.lines and not self.stop_requested():
             mask = pipeline.line_mask(sc, st, self.stop_requested)
-        image, noisy = None, (prog.image if st.denoise != "off" else None)
+        image, noisy = None, (prog.image if used != "off" else None)
         if noisy is not None and prog.spp_done >= 1:  # (cancelled before every tile had a pass: kept noisy)
             self.progress(prog.spp_done / prog.spp_total, "styletrace: denoising")
             image = denoising.finish(sc, st, job, prog)

@@ -11,9 +11,12 @@ from .properties import integrator_values
 
 
 def command_line(path: str, settings) -> str:
-    denoise = "" if settings.denoise == "off" else f" --denoise {settings.denoise}" + (
-        "" if settings.denoise_quality == "high" else f" --denoise-quality {settings.denoise_quality}")
-    return f"styletrace render {path} --seed {settings.seed} --pass-spp {settings.pass_spp}{denoise}"
+    denoise = f" --denoise {settings.denoise}" + (
+        "" if settings.denoise == "off" or settings.denoise_quality == "high"
+        else f" --denoise-quality {settings.denoise_quality}")
+    # --spp: F12 renders the Samples as camera samples, which the command line's default would spend on children
+    return (f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp {settings.pass_spp}"
+            f"{denoise}")
 
 
 class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):

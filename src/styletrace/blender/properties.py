@@ -18,6 +18,7 @@ from .. import init
 init()  # the registries below import Dr.Jit and Mitsuba
 
 from ..config import estimator_registry  # noqa: E402
+from ..denoise import default_method  # noqa: E402
 from ..denoise.oidn import QUALITIES  # noqa: E402
 from ..config import settings as S  # noqa: E402
 from ..styles import registry  # noqa: E402
@@ -133,8 +134,10 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Record buffer", default=False,
         description="keep the look-development buffer of the last render; style changes then restyle it")
     denoise: bpy.props.EnumProperty(
-        name="Denoise", default="off",
-        items=[("off", "Off", "no denoising"),
+        name="Denoise", default=default_method(),
+        items=[("auto", "Auto", "expectation where it applies (with the firefly control), else off with a "
+                                "warning: every front end's default (docs/look.md)"),
+               ("off", "Off", "no denoising: the paper's estimators exactly"),
                ("expectation", "Expectation", "denoise the expectation at the stylized vertex, then apply the "
                                               "style: step styles stay free of band flips (docs/denoise.md)"),
                ("image", "Image", "denoise the final image, as an ordinary renderer does")],

@@ -105,14 +105,21 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
-    if args.denoise_uncertainty is not None and args.denoise != "expectation":
+    from ..denoise import check_method, default_method
+    method = check_method(args.denoise or default_method())
+    if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
         raise UsageError(f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation only")
-    if args.coverage is not None and args.denoise != "expectation":
+    if args.coverage is not None and method not in ("expectation", "auto"):
         raise UsageError(f"--coverage {args.coverage} applies to --denoise expectation only (the points where the "
                          f"style meets the denoised expectation)")
-    if args.denoise and (len(args.scene) > 1 or args.frames is not None or args.orbit is not None):
+    several = len(args.scene) > 1 or args.frames is not None or args.orbit is not None
+    if several and method in ("expectation", "image"):
         raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
-    if len(args.scene) > 1 or args.frames is not None or args.orbit is not None:  # numbered images, on Ray
+    if several:  # numbered images, on Ray
+        if method == "auto" and not args.quiet:
+            say("styletrace: not denoised: several images render on Ray; the denoiser needs one image in one "
+                "process")
+        args.denoise = None
         from ..distributed.command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     args.scene = args.scene[0] if args.scene else "cornell-box"
@@ -141,6 +148,11 @@ def cmd_render(args) -> int:
         del loaded
     for w in caught:
         say(f"styletrace: warning: {w.message}")
+    from ..denoise.default import choose
+    plan = choose(resolved, method, local=args.ray is None and not args.resume)
+    if plan.note and not args.quiet:
+        say(f"styletrace: {plan.note}")
+    resolved, args.denoise = plan.resolved, (None if plan.method == "off" else plan.method)
     scene, integrator = resolved.scene, resolved.integrator
     args.spp = resolved.spp  # the scene author's count (its sampler's sample_count) unless --spp
     size = scene.sensors()[0].film().crop_size()
@@ -322,9 +334,11 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)")
     r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
-    r.add_argument("--denoise", choices=("expectation", "image"), default=None,
+    r.add_argument("--denoise", choices=("auto", "expectation", "image", "off"), default=None,
                    help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or on "
-                        "the final image; needs the 'denoise' extra (docs/denoise.md)")
+                        "the final image; auto (the default, or $STYLETRACE_DENOISE): expectation where it applies, "
+                        "with the firefly control and the scene's samples spent on children; off: the paper's "
+                        "estimators exactly (docs/denoise.md, docs/look.md)")
     r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
                    help="OIDN's filter quality with --denoise (default: high)")
     r.add_argument("--coverage", default=None, metavar="K",

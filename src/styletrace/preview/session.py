@@ -4,7 +4,8 @@ The background thread first records a **draft**: 1 spp with one child per camera
 fifth of a full pass's work (measured: 0.2 s against 1.1 s for the Cornell box at 256² with n = 8), so
 the first image arrives early; restyles use it until the first full pass is done. With the `denoise`
 extra the draft's expectation is denoised before the style (`denoise.draft`), so the draft looks clean. Then it records the
-buffer pass by pass (1 spp per pass, `lookdev.record`) with the `identity` style and n children per
+buffer pass by pass, denoising its expectation after each pass where every front end's default does (`denoise`:
+auto, expectation or off; `denoise.default`), (1 spp per pass, `lookdev.record`) with the `identity` style and n children per
 camera sample, so every style that needs children can restyle it; after each pass the page's next
 restyle shows the refined image. Dr.Jit work of both threads (a render
 pass, a restyle) runs under one lock, `jit`: requests from several browsers are served one at a time and
@@ -29,7 +30,11 @@ from ..errors import UsageError  # noqa: E402
 from ..lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample  # noqa: E402
 from ..lookdev.record import record, scene_label  # noqa: E402
 from ..lookdev.restyle import restyle  # noqa: E402
-from ..denoise.draft import QUALITY as DRAFT_QUALITY, draft as denoise_draft  # noqa: E402
+from ..denoise.draft import QUALITY as DRAFT_QUALITY, available as denoise_available, draft as denoise_draft  # noqa: E402,E501
+from ..denoise.expectation import attach  # noqa: E402
+
+#: OIDN's quality on the full passes (the draft's is `denoise.draft.QUALITY`)
+FULL_QUALITY = "high"
 
 DEFAULT_SIZE, DEFAULT_SPP, DEFAULT_INNER = 256, 16, 8
 DRAFT_INNER = 1  # children per camera sample of the draft pass
@@ -41,7 +46,7 @@ DRAFT_GRACE_S = 1.0
 
 class Session:
     def __init__(self, scene: Any = None, inner: int | None = None, spp: int | None = None, width: int | None = None,
-                 height: int | None = None, seed: int = 0, max_samples: int = MAX_SAMPLES):
+                 height: int | None = None, seed: int = 0, max_samples: int = MAX_SAMPLES, denoise: str | None = None):
         self.label = scene_label(scene)
         builtin = isinstance(scene, str) and not scene.lower().endswith(".xml") or scene is None
         w = width or (DEFAULT_SIZE if builtin else None)
@@ -62,6 +67,13 @@ class Session:
             raise UsageError(f"{self.width}x{self.height} at {self.spp} spp is {self.width * self.height * self.spp} "
                              f"camera samples, over the preview's cap of {max_samples}; lower --spp or the size")
         self.integrator = resolved.integrator
+        # every front end's default (`denoise.default`): the full passes' expectation denoised where it applies
+        from ..denoise.default import method_for
+        method, self.note = method_for(self.scene, self.integrator, denoise)
+        self.denoised = method == "expectation" and denoise_available()
+        if method == "image":
+            raise UsageError("the preview restyles the expectation: denoise 'image' would hide what the styles see; "
+                             "use expectation, auto or off")
         self._draft_integrator = resolve(self.job.with_(given={**self.job.given, "inner_samples": DRAFT_INNER}),
                                          self.scene).integrator
         self.jit = threading.Lock()
@@ -107,7 +119,10 @@ class Session:
                     step = next(passes, None)
                     if step is None:
                         return
-                    prog, self.buffer = step
+                    prog, buf = step
+                    if self.denoised:  # D of the passes so far, at every camera sample (`denoise.expectation`)
+                        attach(buf, self.scene, buf.spp, self.seed, FULL_QUALITY)
+                    self.buffer = buf
                     self.spp_done = prog.spp_done
         except Exception as exc:  # shown on the page; the passes done stay usable
             self.error = first_line(exc)
@@ -153,6 +168,7 @@ class Session:
                 "bytes": self.width * self.height * self.spp_done * per, "error": self.error,
                 "draft": self.buffer is None and self.draft is not None,
                 "draft_denoised": self.buffer is None and self.draft_denoised,
+                "denoised": self.denoised, "note": self.note,
                 "initial": self.initial}
 
     def command(self, style: str, estimator: str | None, params: dict[str, Any], spp: int | None = None,
@@ -165,7 +181,11 @@ class Session:
         if estimator:
             words += ["--estimator", estimator]
         if self.draft_denoised and (spp, inner) == (1, DRAFT_INNER):  # the denoised draft's image
-            words += ["--denoise", "expectation", "--denoise-quality", DRAFT_QUALITY]
+            words += ["--denoise", "expectation", "--coverage", "0", "--denoise-quality", DRAFT_QUALITY]
+        elif self.denoised:  # the full passes' denoised expectation, styled at the camera samples
+            words += ["--denoise", "expectation", "--coverage", "0", "--denoise-quality", FULL_QUALITY]
+        else:
+            words += ["--denoise", "off"]
         if self.size[0]:
             words += ["--width", str(self.width), "--height", str(self.height)]
         for k, v in params.items():

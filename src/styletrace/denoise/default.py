@@ -1,0 +1,115 @@
+"""What a render does at defaults: denoise where it can, with the firefly control and the sample budget.
+
+    plan = choose(resolved, method="auto", local=True)
+    plan.method, plan.resolved, plan.note          # "expectation" | "image" | "off", the pinned job, why not
+
+`auto` (the default of every front end, `denoise.default_method`) is `expectation` where the expectation
+denoiser applies (`expectation.check`; the `denoise` extra installed; an rgb film; one process) and `off`
+elsewhere, with a one-line note saying why. A render that denoises also gets, unless the caller set them:
+- the firefly control of direct application (`firefly` = FIREFLY_K, its floor the scene's median
+  brightness: `estimators.affine.MeanOfN`);
+- with `expectation` and no spp given, the scene's sample count S spent as camera samples times children:
+  spp = max(MIN_SPP, round(SPEND * S / n)) for n children per stylized vertex, about SPEND times the paths
+  of the physically based render at S spp (docs/look.md).
+`off` is the paper's estimators exactly: no denoiser, no firefly control.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, replace
+
+from ..errors import UsageError
+
+#: the denoising methods; `auto` is `expectation` where it applies and `off` (with a one-line note) elsewhere
+METHODS = ("auto", "expectation", "image", "off")
+#: the environment variable that sets the default method of every front end (unset: auto)
+ENV = "STYLETRACE_DENOISE"
+
+#: the firefly control's k where a render denoises
+FIREFLY_K = 4.0
+#: paths per pixel of a denoised style at defaults, in units of the scene's sample count
+SPEND = 2.0
+#: the fewest camera samples per pixel a denoised style gets at defaults
+MIN_SPP = 2
+
+
+def check_method(method) -> str:
+    """`method` if it is one of METHODS, else a one-line UsageError."""
+    if method not in METHODS:
+        raise UsageError(f"bad value {method!r} for denoise: expected one of {', '.join(METHODS)}")
+    return method
+
+
+def default_method() -> str:
+    """The default of `--denoise` / `denoise=` in every front end: $STYLETRACE_DENOISE, else auto."""
+    value = os.environ.get(ENV, "").strip().lower() or "auto"
+    if value not in METHODS:
+        raise UsageError(f"bad value {value!r} for ${ENV}: expected one of {', '.join(METHODS)}")
+    return value
+
+
+@dataclass(frozen=True)
+class Plan:
+    method: str          # expectation | image | off
+    resolved: object     # pipeline.resolve.Resolved, with the values chosen here pinned
+    note: str = ""       # why auto did not denoise ('' where it did or was not asked to)
+
+
+def why_not(scene, integrator, local: bool = True) -> str:
+    """Why `expectation` cannot denoise `integrator` on `scene` ('' where it can); `local`: one process."""
+    from ..kernel.integrator import StylizedIntegrator
+    from ..pipeline.scene import film_format
+    if not local:
+        return "the render runs on Ray or as several images; the denoiser needs the whole image in one process"
+    if not isinstance(integrator, StylizedIntegrator):
+        return f"the integrator is Mitsuba's {type(integrator).__name__}, not stylized"
+    try:
+        import pyoidn  # noqa: F401
+    except ImportError:
+        return "Intel Open Image Denoise is not installed (pip install 'styletrace[denoise]')"
+    if film_format(scene) != "rgb":
+        return f"the film's pixel_format is '{film_format(scene)}', not rgb"
+    from . import expectation
+    try:
+        expectation.check(integrator)
+    except UsageError as exc:
+        return str(exc).replace("--denoise expectation cannot render ", "")
+    return ""
+
+
+def method_for(scene, integrator, method: str | None = None, local: bool = True) -> tuple[str, str]:
+    """(expectation | image | off, the one-line note where auto could not denoise, else '')."""
+    method = check_method(method or default_method())
+    if method != "auto":
+        return method, ""
+    reason = why_not(scene, integrator, local)
+    return ("off", f"not denoised: {reason}") if reason else ("expectation", "")
+
+
+def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
+    """The plan of a resolved job (`pipeline.resolve.Resolved`) for `method` (None: the default)."""
+    method, note = method_for(resolved.scene, resolved.integrator, method, local)
+    if method == "off":
+        return Plan("off", resolved, note)
+    return Plan(method, pin(resolved, method), note)
+
+
+def pin(resolved, method: str):
+    """`resolved` with the firefly control on and, for `expectation` without a given spp, the budget spent."""
+    from ..kernel.integrator import StylizedIntegrator
+    from ..scene.defaults import pin_firefly
+    integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
+    if not isinstance(integrator, StylizedIntegrator):
+        return resolved
+    if integrator.settings.firefly is None and not integrator.settings.aovs:  # AOVs: the paper's estimator
+        integrator, note = pin_firefly(resolved.scene, integrator, resolved.pilot, FIREFLY_K)
+        auto.append(note)
+    spp = resolved.spp
+    n = integrator.settings.slot.n(0)
+    if method == "expectation" and resolved.job.spp is None and n > 1:
+        spp = max(MIN_SPP, round(SPEND * resolved.spp / n))
+        auto.append(f"spp={spp} (the scene's {resolved.spp} samples as {spp} x {n} children)")
+    return replace(resolved, integrator=integrator, spp=spp, auto="; ".join(a for a in auto if a))
+
+
+__all__ = ["METHODS", "ENV", "check_method", "default_method", "Plan", "choose", "method_for", "why_not", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]
