@@ -64,9 +64,8 @@ cmd=${1:-}
 [ $# -gt 0 ] && shift
 case "$cmd" in
   render) setup
-          if [ $# -eq 0 ]; then  # the demo: the default scene (Cornell box) with four cel bands tuned to it
-            set -- --style cel --set thresholds=0.05,0.12,0.3 --set levels=0.03,0.09,0.2,0.6 --inner 32 --spp 32 \
-                   -o render.png
+          if [ $# -eq 0 ]; then  # the demo: GI cel shading at every default, seen in a mirror and through glass
+            set -- lines --style cel --width 512 --height 512 -o render.png
           fi
           exec "$VENV/bin/styletrace" render "$@" ;;
   test)   if [ $# -gt 0 ]; then setup test; exec "$VENV/bin/python" -m pytest -q "$@"; fi

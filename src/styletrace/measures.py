@@ -1,0 +1,93 @@
+"""Reference-free measures of a rendered image, as a user judges a default (docs/look.md).
+
+    noise_psnr(a, b)          PSNR (dB) between two renders that differ only in seed, in display space
+    firefly_share(img)        share of pixels brighter than 5x the median of their 5 x 5 neighbourhood
+    clipped_share(img), crushed_share(img)   pixels with every channel >= 0.99 / <= 0.01 in display space
+    tone_correlation(img, ref, period)       rank correlation of local luminance with a converged render
+
+Images are H x W x 3 float arrays of linear radiance; display space is sRGB of the values clamped to [0, 1].
+numpy only.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: a pixel is a firefly above this multiple of its neighbourhood's median luminance
+FIREFLY_RATIO = 5.0
+FIREFLY_WINDOW = 5
+
+
+def srgb(img: np.ndarray) -> np.ndarray:
+    """sRGB encoding of linear values clamped to [0, 1]."""
+    x = np.clip(np.nan_to_num(np.asarray(img, dtype=np.float64), nan=0.0), 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def luminance(img: np.ndarray) -> np.ndarray:
+    """Rec. 709 luminance of linear RGB, H x W."""
+    img = np.asarray(img, dtype=np.float64)
+    return img[..., 0] * 0.2126 + img[..., 1] * 0.7152 + img[..., 2] * 0.0722
+
+
+def noise_psnr(a: np.ndarray, b: np.ndarray) -> float:
+    """PSNR in dB of one render's noise, from two renders differing only in seed: the per-render variance is
+    mean((a - b)^2) / 2 in display space (peak 1). inf for identical images."""
+    var = float(np.mean((srgb(a) - srgb(b)) ** 2)) / 2.0
+    return float("inf") if var == 0.0 else float(10.0 * np.log10(1.0 / var))
+
+
+def _windows(x: np.ndarray, size: int) -> np.ndarray:
+    r = size // 2
+    padded = np.pad(x, r, mode="edge")
+    return np.lib.stride_tricks.sliding_window_view(padded, (size, size))
+
+
+def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO, size: int = FIREFLY_WINDOW) -> float:
+    """Share of pixels whose luminance exceeds `ratio` times the median of their `size` x `size` neighbourhood
+    (edges repeated), of the linear image."""
+    lum = luminance(img)
+    median = np.median(_windows(lum, size), axis=(-2, -1))
+    return float(np.mean(lum > ratio * np.maximum(median, 1e-8)))
+
+
+def clipped_share(img: np.ndarray) -> float:
+    """Share of pixels with every channel at or above 0.99 in display space."""
+    return float(np.mean(np.all(srgb(img) >= 0.99, axis=-1)))
+
+
+def crushed_share(img: np.ndarray) -> float:
+    """Share of pixels with every channel at or below 0.01 in display space."""
+    return float(np.mean(np.all(srgb(img) <= 0.01, axis=-1)))
+
+
+def _box_blur(x: np.ndarray, size: int) -> np.ndarray:
+    if size <= 1:
+        return x
+    return np.mean(_windows(x, size | 1), axis=(-2, -1))
+
+
+def _ranks(x: np.ndarray) -> np.ndarray:
+    order = np.argsort(x, kind="stable")
+    ranks = np.empty(len(x), dtype=np.float64)
+    ranks[order] = np.arange(len(x), dtype=np.float64)
+    # ties share their mean rank
+    values, inverse, counts = np.unique(x, return_inverse=True, return_counts=True)
+    sums = np.bincount(inverse, weights=ranks)
+    return (sums / counts)[inverse]
+
+
+def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8) -> float:
+    """Spearman's rank correlation between the display luminance of `img` and of a converged `reference`,
+    both blurred by a box of about `period` pixels (the pattern's period, so a screen of lines or dots reads
+    as its tone)."""
+    a = _box_blur(luminance(srgb(img)), period).ravel()
+    b = _box_blur(luminance(srgb(reference)), period).ravel()
+    ra, rb = _ranks(a), _ranks(b)
+    ra -= ra.mean()
+    rb -= rb.mean()
+    denom = np.sqrt((ra * ra).sum() * (rb * rb).sum())
+    return float((ra * rb).sum() / denom) if denom > 0 else 0.0
+
+
+__all__ = ["srgb", "luminance", "noise_psnr", "firefly_share", "clipped_share", "crushed_share",
+           "tone_correlation", "FIREFLY_RATIO", "FIREFLY_WINDOW"]
