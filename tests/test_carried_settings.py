@@ -15,7 +15,8 @@ import mitsuba as mi  # noqa: E402
 from styletrace.pipeline.carried import carried_settings, declared, loaded  # noqa: E402
 from styletrace.pipeline.job import Job  # noqa: E402
 from styletrace.pipeline.resolve import resolve  # noqa: E402
-from styletrace.pipeline.scene import load_scene  # noqa: E402
+from styletrace.errors import SceneError  # noqa: E402
+from styletrace.pipeline.scene import SceneWarning, load_scene  # noqa: E402
 
 SCENE = """<scene version="3.0.0">
   <default name="depth" value="7"/>
@@ -126,3 +127,71 @@ def test_a_stylized_integrator_nested_in_a_wrapper_is_the_base(tmp_path, wrapper
     assert s.style.levels == (0.2, 0.9)
     given = resolve(Job(scene=path, given={"max_depth": 2}, lanes_per_pass=1 << 20)).integrator.settings
     assert (given.style.name, given.max_depth) == ("cel", 2)  # what the caller gives is laid over it
+
+
+# ---- an integrator chosen through a <default> (Mitsuba's convention: type="$integrator") ----------------
+def by_default(kind: str, props: str = "", wrapper: str = "") -> str:
+    """The integrator element in Mitsuba's convention, its type a $parameter whose default is `kind`."""
+    inner = f'<default name="integrator" value="{kind}"/><integrator type="$integrator">{props}</integrator>'
+    if wrapper:
+        inner = inner.replace("<integrator type=", f'<integrator type="{wrapper}"><integrator type=', 1)
+        inner += "</integrator>"
+    return inner
+
+
+def settings(path, **defines):
+    s = resolve(Job(scene=path, defines=defines, lanes_per_pass=1 << 20)).integrator.settings
+    return s.max_depth, s.rr_depth, s.hide_emitters
+
+
+def test_direct_through_a_default_carries_exactly_what_direct_written_out_does(tmp_path):
+    hide = '<boolean name="hide_emitters" value="true"/>'
+    written = write(tmp_path, f'<integrator type="direct">{hide}</integrator>')
+    expected = settings(written)
+    assert expected[0] == 2 and expected[2] is True
+    (tmp_path / "d").mkdir()
+    path = write(tmp_path / "d", by_default("direct", hide))
+    assert settings(path) == expected
+    assert "DirectIntegrator" in str(load_scene(path).integrator())  # not replaced as an unknown '$integrator'
+
+
+def test_a_define_picks_the_integrator_and_its_settings(tmp_path):
+    """`-D integrator=path` over a file whose default is `direct`: path's own settings (unbounded, rr 5)."""
+    path = write(tmp_path, by_default("direct", '<boolean name="hide_emitters" value="true"/>'))
+    assert settings(path, integrator="path") == (-1, 5, True)
+    assert "PathIntegrator" in str(load_scene(path, defines={"integrator": "path"}).integrator())
+
+
+@pytest.mark.parametrize("wrapper", ["", "moment", "aov"])
+def test_every_property_through_a_parameter_is_carried(tmp_path, wrapper):
+    props = ('<string name="aovs" value="dd:depth"/>' if wrapper == "aov" else "")
+    text = by_default("path", OWN, wrapper).replace('<integrator type="aov">',
+                                                   f'<integrator type="aov">{props}')
+    path = write(tmp_path, text)
+    assert settings(path) == (7, 2, True)
+    assert settings(path, depth="3", integrator="volpath") == (3, 2, True)
+
+
+@pytest.mark.parametrize("wrapper", ["moment", "aov"])
+def test_direct_nested_in_a_wrapper_is_one_bounce(tmp_path, wrapper):
+    """A wrapper's loaded object reports no depth of its nested `direct`: the declaration says 2."""
+    extra = '<string name="aovs" value="dd:depth"/>' if wrapper == "aov" else ""
+    path = write(tmp_path, f'<integrator type="{wrapper}">{extra}<integrator type="direct"/></integrator>')
+    assert settings(path)[0] == 2
+    (tmp_path / "d").mkdir()
+    path = write(tmp_path / "d", by_default("direct", wrapper=wrapper).replace(
+        f'<integrator type="{wrapper}">', f'<integrator type="{wrapper}">{extra}'))
+    assert settings(path)[0] == 2
+
+
+def test_an_unknown_type_through_a_default_is_replaced_and_its_define_accepted(tmp_path):
+    path = write(tmp_path, '<default name="kind" value="sre"/><integrator type="$kind">'
+                           '<integer name="max_depth" value="$depth"/><float name="sharpness" value="2"/></integrator>')
+    with pytest.warns(SceneWarning, match="integrator 'sre' is not a Mitsuba plugin: rendering with "
+                                                        "stylized, keeping max_depth=7; dropped sharpness"):
+        assert settings(path)[0] == 7
+    # the define was used by the type only, which the replacement drops: Mitsuba must not refuse it as unused
+    with pytest.warns(SceneWarning, match="integrator 'toon' .* keeping max_depth=3;"):
+        assert settings(path, kind="toon", depth="3")[0] == 3
+    with pytest.raises(SceneError, match="uses no parameter nope"):
+        settings(path, nope="1")

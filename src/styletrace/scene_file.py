@@ -21,7 +21,12 @@
 - A top-level `<integrator>` whose type Mitsuba does not know (a scene written for another implementation
   of stylized rendering, say `type="sre"`) is replaced by a `path` integrator that keeps its `max_depth`,
   `rr_depth` and `hide_emitters`; the front ends then render it with `stylized`, which carries those over
-  (`api.carried_settings`). One note names what was dropped.
+  (`api.carried_settings`). One note names what was dropped. The type is judged as Mitsuba reads it, its
+  `$parameters` substituted (`type="$integrator"` with `<default name="integrator" value="direct"/>`, the
+  convention of Mitsuba's own test scenes, is `direct`, and `-D integrator=path` makes it `path`); a type
+  with a parameter no `<default>` before it defines is left to Mitsuba's parser to report.
+- A define that the file used only in what was edited away (a replaced integrator's type, a resized film's
+  width) is not handed to Mitsuba, which would refuse it as unused; one the file never used still is.
 
 A file that needs none of this is handed to `mi.load_file` unchanged.
 """
@@ -51,21 +56,52 @@ def known_integrator(kind: str) -> bool:
     return True
 
 
-def replace_integrator(root: ET.Element, origin: str) -> str | None:
-    """Swap an unknown top-level integrator for `path` with the shared depths; the note to show, or None."""
-    for i, node in enumerate(list(root)):
-        if node.tag != "integrator" or known_integrator(node.get("type", "")):
+def substitute(text: str, params: Mapping[str, str]) -> str:
+    """`text` with its `$parameters` replaced as Mitsuba 3.9.1's parser does: longest name first ($ab before
+    $a), plain text replacement."""
+    for key in sorted(params, key=len, reverse=True):
+        text = text.replace("$" + key, params[key])
+    return text
+
+
+def add_default(params: dict[str, str], node: ET.Element) -> None:
+    """Record a `<default>` as Mitsuba's parser meets it: a name already known (a define, an earlier default)
+    keeps its value; the default's own value has the parameters known so far substituted."""
+    params.setdefault(node.get("name", ""), substitute(node.get("value", ""), params))
+
+
+def replace_integrator(root: ET.Element, origin: str, defines: Mapping[str, str] | None = None) -> str | None:
+    """Swap an unknown top-level integrator for `path` with the shared depths; the note to show, or None.
+
+    The type is read as Mitsuba reads it: `defines`, then the `<default>`s before the integrator in document
+    order, substituted for its `$parameters`."""
+    params = {str(k): str(v) for k, v in (defines or {}).items()}
+    tops = [node for node in root if node.tag == "integrator"]
+    for node in root.iter():
+        if node.tag == "default":
+            add_default(params, node)
+            continue
+        if not any(node is top for top in tops):
+            continue
+        kind = substitute(node.get("type", ""), params)
+        if "$" in kind or known_integrator(kind):  # "$": undefined here, Mitsuba's parser reports it
             continue
         kept = [c for c in node if c.get("name") in SHARED]
         dropped = [c.get("name") or c.tag for c in node if c.get("name") not in SHARED]
         new = ET.Element("integrator", {"type": "path"})
-        new.extend(kept)
+        new.extend(kept)  # their $parameters stay: Mitsuba substitutes them in the edited text
         new.tail = node.tail
-        root[i] = new
-        keep = ", ".join(f"{c.get('name')}={c.get('value')}" for c in kept) or "nothing"
-        return (f"{origin}: integrator '{node.get('type')}' is not a Mitsuba plugin: rendering with stylized, "
+        root[list(root).index(node)] = new
+        keep = ", ".join(f"{c.get('name')}={substitute(c.get('value', ''), params)}" for c in kept) or "nothing"
+        return (f"{origin}: integrator '{kind}' is not a Mitsuba plugin: rendering with stylized, "
                 f"keeping {keep}; dropped {', '.join(dropped) or 'nothing'}")
     return None
+
+
+def used_defines(defines: Mapping[str, str], before: str, after: str) -> dict[str, str]:
+    """The defines to hand Mitsuba for the edited text `after` of the file text `before`: all but those the
+    edit removed every use of (Mitsuba refuses an unused define; it was used in the file as written)."""
+    return {k: v for k, v in defines.items() if "$" + k in after or "$" + k not in before}
 
 
 #: Mitsuba's limit of nested includes (ParserConfig.max_include_depth)
@@ -101,9 +137,7 @@ class _Includes:
         self.problem: str | None = None
 
     def subst(self, text: str) -> str:
-        for key in sorted(self.params, key=len, reverse=True):  # longest first, as Mitsuba: $ab before $a
-            text = text.replace("$" + key, self.params[key])
-        return text
+        return substitute(text, self.params)
 
     @staticmethod
     def find(name: str, folders: list[str]) -> str | None:
@@ -124,7 +158,7 @@ class _Includes:
         while i < len(parent) and not self.problem:
             node = parent[i]
             if node.tag == "default":
-                self.params.setdefault(node.get("name", ""), node.get("value", ""))
+                add_default(self.params, node)
             elif node.tag == "path" and node.get("value"):
                 value = self.subst(node.get("value"))
                 found = value if os.path.isabs(value) else os.path.join(folder, value)
@@ -261,7 +295,8 @@ def load(path: str, width: int | None = None, height: int | None = None,
                 tree = ET.ElementTree(root)
             elif width or height:
                 raise SceneError(f"cannot resize {problem}")
-        note = replace_integrator(root, origin)
+        before = ET.tostring(root, encoding="unicode") if defines else ""
+        note = replace_integrator(root, origin, defines)
         if note:
             notes.append(note)
             edited = True
@@ -273,7 +308,7 @@ def load(path: str, width: int | None = None, height: int | None = None,
     if not edited:
         return mi.load_file(path, **defines), notes
     text = ET.tostring(tree.getroot(), encoding="unicode")
-    return _load_text(text, os.path.dirname(os.path.abspath(path)), defines), notes
+    return _load_text(text, os.path.dirname(os.path.abspath(path)), used_defines(defines, before, text)), notes
 
 
-__all__ = ["load", "resize", "replace_integrator", "known_integrator", "expand_includes", "SHARED"]
+__all__ = ["load", "resize", "replace_integrator", "known_integrator", "expand_includes", "substitute", "SHARED"]

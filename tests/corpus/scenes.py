@@ -12,6 +12,8 @@ Interface:
   (the scene file may wrap it in `moment` or `aov`; the plain integrator is what its image means).
   `max_depth` is given explicitly wherever the integrator has one, so a negative control can change it.
 - `FEATURES[name]`: the features the scene covers (for reports and the corpus figure).
+- `BY_DEFAULT`: the scenes that pick their integrator's type through a `<default>` parameter, Mitsuba's own
+  convention (`<default name="integrator" value="direct"/>` and `<integrator type="$integrator">`).
 
 Which scene covers what:
 - textured: diffuse bitmap (PNG) texture, textured roughness on a textured `roughconductor`, a textured
@@ -23,6 +25,8 @@ Which scene covers what:
   orthographic sensor, the integrator wrapped in `moment`.
 - colours: per-vertex and per-face colours (`mesh_attribute`), a thin-lens sensor, `aov`-wrapped `path`.
 - direct: the `direct` integrator with hidden emitters (`hide_emitters`).
+- direct_default: a sphere floating over a plane under a directional light, the `direct` integrator picked
+  as Mitsuba's test scenes pick it (`type="$integrator"`): the sphere's underside and the shadow are black.
 - ptracer: the `ptracer` light tracer on a diffuse scene.
 - medium_light: a homogeneous medium with an area light and an object inside it (`volpath`).
 - smoke_env: a heterogeneous `gridvolume` medium with an albedo volume inside a `null` boundary, under an
@@ -45,11 +49,13 @@ REFERENCE_INTEGRATOR: dict[str, dict] = {
     "instances": {"type": "path", "max_depth": 4},
     "colours": {"type": "path", "max_depth": 3},
     "direct": {"type": "direct", "hide_emitters": True},  # no max_depth: direct is depth 2 by definition
+    "direct_default": {"type": "direct"},
     "ptracer": {"type": "ptracer", "max_depth": 4},
     "medium_light": {"type": "volpath", "max_depth": 8},
     "smoke_env": {"type": "volpath", "max_depth": 6},
 }
 WRAPPER: dict[str, str] = {"instances": "moment", "colours": "aov"}
+BY_DEFAULT: set[str] = {"direct_default"}
 SCENES: list[str] = list(REFERENCE_INTEGRATOR)
 
 FEATURES: dict[str, str] = {
@@ -60,6 +66,7 @@ FEATURES: dict[str, str] = {
     "instances": "shapegroup + instance, styled BSDF in a group, projector light, orthographic sensor, moment",
     "colours": "per-vertex and per-face colours (mesh_attribute), thin-lens sensor, aov",
     "direct": "direct integrator, hide_emitters",
+    "direct_default": "integrator type from a default ($integrator = direct), directional light, floating sphere",
     "ptracer": "ptracer (light tracer)",
     "medium_light": "homogeneous medium with an area light and an object inside (volpath)",
     "smoke_env": "heterogeneous gridvolume + albedo volume, null boundary, EXR envmap (volpath)",
@@ -149,7 +156,11 @@ def _integrator(name: str) -> str:
     props = "".join(
         f'<boolean name="{k}" value="{str(v).lower()}"/>' if isinstance(v, bool) else f'<integer name="{k}" value="{v}"/>'
         for k, v in spec.items() if k != "type")
-    inner = f'<integrator type="{spec["type"]}">{props}</integrator>'
+    if name in BY_DEFAULT:
+        inner = (f'<default name="integrator" value="{spec["type"]}"/>'
+                 f'<integrator type="$integrator">{props}</integrator>')
+    else:
+        inner = f'<integrator type="{spec["type"]}">{props}</integrator>'
     wrap = WRAPPER.get(name)
     if wrap == "moment":
         return f'<integrator type="moment">{inner}</integrator>'
@@ -380,6 +391,19 @@ def _direct(folder):
     <emitter type="constant"><rgb name="radiance" value="0.4, 0.45, 0.5"/></emitter>"""
 
 
+def _direct_default(folder):
+    # seen from below the sphere's centre: its underside has no direct light (black in `direct`, lit by the
+    # plane in any deeper integrator), and neither has its shadow on the plane
+    return _sensor(origin="0, 0.8, 4.2", target="0, 0.9, 0") + _floor() + """
+    <shape type="sphere">
+        <point name="center" x="0" y="1.2" z="0"/><float name="radius" value="0.55"/>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.6, 0.5"/></bsdf>
+    </shape>
+    <emitter type="directional">
+        <vector name="direction" x="0.35" y="-1" z="-0.25"/><rgb name="irradiance" value="2, 2, 2"/>
+    </emitter>"""
+
+
 def _ptracer(folder):
     # all diffuse: a light tracer cannot connect specular vertices to the camera
     return _sensor() + _floor() + """
@@ -450,8 +474,8 @@ def _smoke_env(folder):
 
 
 _BUILDERS = {"textured": _textured, "envmap": _envmap, "normal_bump": _normal_bump, "instances": _instances,
-             "colours": _colours, "direct": _direct, "ptracer": _ptracer, "medium_light": _medium_light,
-             "smoke_env": _smoke_env}
+             "colours": _colours, "direct": _direct, "direct_default": _direct_default, "ptracer": _ptracer,
+             "medium_light": _medium_light, "smoke_env": _smoke_env}
 assert list(_BUILDERS) == SCENES
 
 

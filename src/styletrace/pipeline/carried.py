@@ -11,8 +11,11 @@ Two sources, because neither alone sees everything in Mitsuba 3.9:
   property, and for C++ integrators, whose depths Mitsuba exposes nowhere else, their description
   (`PathIntegrator[max_depth = 6, rr_depth = 5]`).
 What is declared wins; the object fills in what was left to Mitsuba's defaults. `direct` is emission plus
-direct light: max_depth 2. A `stylized` integrator carries nothing here: its own values are the base, also
-when it is nested in a wrapper (`nested_stylized` reads them from the declaration).
+direct light: max_depth 2 (also nested in a wrapper, and whatever max_depth it declares). The declaration's
+$parameters are Mitsuba's own: `<integrator type="$integrator">` with `<default name="integrator"
+value="direct"/>` is `direct`, and a define `integrator=path` makes it `path`, exactly as if written out.
+A `stylized` integrator carries nothing here: its own values are the base, also when it is nested in a
+wrapper (`nested_stylized` reads them from the declaration).
 """
 from __future__ import annotations
 
@@ -126,7 +129,9 @@ def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, 
     decl = declared(source, defines) if source is not None else None
     if decl is not None and decl.get("type") != "stylized":
         if decl["type"] == "direct":
-            decl.pop("max_depth", None)  # direct's own max_depth does not bound its one bounce
+            # emission plus direct light, whatever max_depth it declares; also nested in `moment` or `aov`,
+            # whose loaded object reports no depth of it
+            decl["max_depth"] = 2
         out.update({k: v for k, v in decl.items() if k in SHARED})
     if out.get("hide_emitters") is False:
         del out["hide_emitters"]
