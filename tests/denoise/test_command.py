@@ -86,10 +86,11 @@ def test_ctrl_c_with_image_denoising_denoises_the_finished_passes(tmp_path):
 
 
 def test_a_gaussian_film_denoises_with_both_methods(tmp_path):
-    """Both methods run on a film with Mitsuba's default filter (gaussian), and the denoised image is nearer to
-    a 1024-spp render of the same film than the noisy render of the same spp is (the yardstick: the noise that
-    denoising is there to remove; measured 2.1e-4 and 2.3e-4 against 3.5e-4, as with a box filter 2.8e-4 and 3.7e-4
-    against 11e-4). With `expectation` the written image is the saved buffer's restyle."""
+    """Both methods run on a film with Mitsuba's default filter (gaussian), and the denoised image
+    is nearer to a 1024-spp render of the same film than the noisy render of the same spp is (the
+    yardstick: the noise that denoising is there to remove; measured 2.1e-4 and 2.3e-4 against
+    3.5e-4, as with a box filter 2.8e-4 and 3.7e-4 against 11e-4). With `expectation` the written
+    image is the saved buffer's restyle."""
     scene = tmp_path / "g.xml"
     scene.write_text(GAUSSIAN_SCENE)
     import mitsuba as mi
@@ -102,9 +103,9 @@ def test_a_gaussian_film_denoises_with_both_methods(tmp_path):
     for method in ("expectation", "image"):
         out = tmp_path / f"{method}.exr"
         extra = ["--buffer", str(tmp_path / "b.npz")] if method == "expectation" else []
-        res = subprocess.run([sys.executable, "-m", "styletrace", "render", str(scene), "--denoise", method,
-                              "--style", "identity", "--spp", "4", "--inner", "4", "--width", "48", "--height", "48", "-q",
-                              "-o", str(out), *extra],
+        res = subprocess.run([sys.executable, "-m", "styletrace", "render", str(scene),
+                              "--denoise", method, "--style", "identity", "--spp", "4", "--inner",
+                              "4", "--width", "48", "--height", "48", "-q", "-o", str(out), *extra],
                              capture_output=True, text=True, env=ENV, timeout=300)
         assert res.returncode == 0, res.stderr
         image = _exr(out)
@@ -113,4 +114,5 @@ def test_a_gaussian_film_denoises_with_both_methods(tmp_path):
         assert err < err_noisy, (method, err, err_noisy)
     buf = load_buffer(str(tmp_path / "b.npz"))
     assert buf.header["filter"] == {"type": "gaussian", "stddev": 0.5}
-    np.testing.assert_allclose(styletrace.restyle(buf), _exr(tmp_path / "expectation.exr"), atol=1e-5)
+    written = _exr(tmp_path / "expectation.exr")
+    np.testing.assert_allclose(styletrace.restyle(buf), written, atol=1e-5)

@@ -1,11 +1,12 @@
 """Buffers of films with a reconstruction filter other than a box (`lookdev.film_filter`).
 
-- `positions` draws each camera sample's film position as Mitsuba's render loop does: the rays a render
-  traced are the rays of those positions, bit for bit, for the independent, stratified and multijitter
-  samplers, with and without border sampling;
-- a restyle equals a fresh render with the new style (the same seed, spp, n) to float rounding for gaussian
-  (Mitsuba's default: a film with no rfilter), tent, mitchell and box filters, with sample_border, over
-  several passes, and on a film rendered in tiles (each pass developed in its crop window, as the render);
+- `positions` draws each camera sample's film position as Mitsuba's render loop does: the rays a
+render traced are the rays of those positions, bit for bit, for the independent, stratified and
+multijitter samplers, with and without border sampling;
+- a restyle equals a fresh render with the new style (the same seed, spp, n) to float rounding for
+gaussian (Mitsuba's default: a film with no rfilter), tent, mitchell and box filters, with
+sample_border, over several passes, and on a film rendered in tiles (each pass developed in its crop
+window, as the render);
 - the filter survives the file, and buffers of a box filter keep their format (no positions).
 """
 import mitsuba as mi
@@ -24,7 +25,8 @@ from styletrace.lookdev.restyle import restyle
 from styletrace.pipeline import passes as pass_loop
 
 W, H, SPP, INNER, SEED = 20, 14, 5, 2, 7
-#: both images are float32 sums of the same float32 sample values and filter weights, in another order
+#: both images are float32 sums of the same float32 sample values and filter weights, in another
+#: order
 RTOL, ATOL = 1e-5, 1e-6
 
 
@@ -62,13 +64,14 @@ def test_positions_are_the_render_loops(sampler, border):
     pos = film_filter.positions(sensor, 4, 1234)
     assert pos.shape == (2, (9 + 4 * border) * (7 + 4 * border) * 4)
     cs = mi.ScalarVector2f(sensor.film().crop_size())
-    ray, _ = sensor.sample_ray_differential(0.0, 0.0, mi.Point2f(pos[0], pos[1]) / cs, mi.Point2f(0.5))
+    at = mi.Point2f(pos[0], pos[1]) / cs
+    ray, _ = sensor.sample_ray_differential(0.0, 0.0, at, mi.Point2f(0.5))
     for i in range(3):
         np.testing.assert_array_equal(np.asarray(ray.d[i]), np.asarray(rays.d[i]))
 
 
-FILTERS = [None, {"type": "gaussian", "stddev": 0.3}, {"type": "tent", "radius": 1.5}, {"type": "mitchell"},
-           {"type": "box"}]
+FILTERS = [None, {"type": "gaussian", "stddev": 0.3}, {"type": "tent", "radius": 1.5},
+           {"type": "mitchell"}, {"type": "box"}]
 
 
 @pytest.mark.parametrize("rfilter", FILTERS, ids=lambda f: "default" if f is None else f["type"])
@@ -86,7 +89,8 @@ def test_sample_border():
     buf = render_buffer(scene_dict({"type": "gaussian"}, border=True), style="cel", **kw)
     assert buf.header["sample_border"] and buf.samples == (W + 4) * (H + 4) * SPP
     own = buf.arrays["own"].astype(bool)
-    assert np.array_equal(np.bincount(buf.arrays["pixel"][own], minlength=W * H), np.full(W * H, SPP))
+    counts = np.bincount(buf.arrays["pixel"][own], minlength=W * H)
+    assert np.array_equal(counts, np.full(W * H, SPP))
     want = styletrace.render(scene_dict({"type": "gaussian"}, border=True), style="sepia", **kw)
     np.testing.assert_allclose(restyle(buf, style="sepia"), want, rtol=RTOL, atol=ATOL)
 
@@ -103,7 +107,8 @@ def tiled(monkeypatch):
 def test_a_tiled_film_of_several_passes(tiled, rfilter, tmp_path):
     def scene():
         return mi.load_dict(scene_dict(rfilter, w=40, h=30))
-    for prog, buf in record(scene(), api.make_integrator(style="cel", inner=2), 3, seed=1, pass_spp=2):
+    integ = api.make_integrator(style="cel", inner=2)
+    for prog, buf in record(scene(), integ, 3, seed=1, pass_spp=2):
         buf.image = prog.image
     assert len(buf.header["passes"]) == 18 and buf.spp == 3
     back = load_buffer(buf.save(str(tmp_path / "b.npz")))
@@ -111,17 +116,19 @@ def test_a_tiled_film_of_several_passes(tiled, rfilter, tmp_path):
     np.testing.assert_allclose(restyle(back, style="cel"), buf.image, rtol=RTOL, atol=ATOL)
     *_, want = api.passes(scene(), api.make_integrator("gamma", inner=2), 3, 1, pass_spp=2)
     np.testing.assert_allclose(restyle(back, style="gamma"), want.image, rtol=RTOL, atol=ATOL)
-    if buf.filtered:  # every pixel has its own spp samples; the others weigh on it through the filter
+    if buf.filtered:  # each pixel has its own spp samples; others weigh on it through the filter
         own = buf.arrays["own"].astype(bool)
         assert 0 < own.mean() < 1
-        assert np.array_equal(np.bincount(buf.arrays["pixel"][own], minlength=40 * 30), np.full(40 * 30, 3))
+        counts = np.bincount(buf.arrays["pixel"][own], minlength=40 * 30)
+        assert np.array_equal(counts, np.full(40 * 30, 3))
 
 
 def test_the_filters_format():
     buf = render_buffer(scene_dict(None, w=8, h=6), style="cel", spp=1, inner=1, seed=0)
     assert buf.header["filter"] == {"type": "gaussian", "stddev": 0.5}
     assert buf.header["layout"] == [{"offset": [0, 0], "size": [8, 6], "keep": [0, 6, 0, 8]}]
-    assert buf.nbytes == buf.samples * bytes_per_sample("first_hit", filtered=True) == buf.samples * 74
+    per = bytes_per_sample("first_hit", filtered=True)
+    assert buf.nbytes == buf.samples * per == buf.samples * 74
     box = render_buffer(scene_dict({"type": "box"}, w=8, h=6), style="cel", spp=1, inner=1)
     assert box.header["filter"] == "box" and "pos" not in box.arrays and "layout" not in box.header
 
@@ -130,3 +137,15 @@ def test_fit_differentiates_through_the_filter():
     buf = render_buffer(scene_dict({"type": "gaussian"}), style="contrast", spp=2, inner=2, seed=3)
     r = fit(buf, style="contrast", target=restyle(buf, style="contrast", c=2.2, pivot=0.3))
     assert abs(r.params["c"] - 2.2) < 1e-3 and abs(r.params["pivot"] - 0.3) < 1e-3
+
+
+def test_a_version_2_file_of_a_box_filter_still_restyles(tmp_path):
+    """Files written before filters were recorded (version 2: no positions, "filter": "box") read as before."""
+    import json
+    box = render_buffer(scene_dict({"type": "box"}, w=8, h=6), style="cel", spp=2, inner=1)
+    old = dict(box.header, version=2)
+    path = str(tmp_path / "old.npz")
+    np.savez(path, header=np.frombuffer(json.dumps(old).encode(), dtype=np.uint8), **box.arrays)
+    back = load_buffer(path)
+    assert not back.filtered
+    np.testing.assert_array_equal(restyle(back, style="sepia"), restyle(box, style="sepia"))

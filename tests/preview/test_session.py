@@ -35,8 +35,8 @@ def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkey
 
 
 def test_a_film_with_a_gaussian_filter(tmp_path):
-    """The session records and restyles a film with Mitsuba's default filter (no rfilter: a gaussian): the restyle
-    is the render of the page's command line (1 spp per pass)."""
+    """The session records and restyles a film with Mitsuba's default filter (no rfilter: a
+    gaussian): the restyle is the render of the page's command line (1 spp per pass)."""
     from helpers.filtered_scene import GAUSSIAN_SCENE
     from styletrace.preview import session as module
     scene = tmp_path / "g.xml"

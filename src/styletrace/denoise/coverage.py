@@ -74,11 +74,13 @@ def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int
 
 
 class CoverageIntegrator(RecordingIntegrator):
-    """The recording integrator with no children and camera rays placed on an m x m jittered grid in each pixel
-    (lane i of a pass of k spp is pixel i // k's point i % k; the crop widened by the filter's border where the
-    film samples it), each point's film position kept (`pos`: a restyle splats it with the film's filter). The stylized vertex's mean is D there, looked up
-    in the kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
-    emission added), so the pass's image is the denoised render and its buffer holds D at every point."""
+    """The recording integrator with no children and camera rays placed on an m x m jittered grid in
+    each pixel (lane i of a pass of k spp is pixel i // k's point i % k; the crop widened by the
+    filter's border where the film samples it), each point's film position kept (`pos`: a restyle
+    splats it with the film's filter). The stylized vertex's mean is D there, looked up in the
+    kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
+    emission added), so the pass's image is the denoised render (box filter) and its buffer holds D
+    at every point."""
 
     def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0), scale: int = 1):
         super().__init__(base)
@@ -96,7 +98,7 @@ class CoverageIntegrator(RecordingIntegrator):
         film = sensor.film()
         cw, ch = (int(v) for v in film.crop_size())
         off = mi.ScalarVector2f(film.crop_offset())
-        # border sampling (a filter other than a box): the lanes cover the crop widened by the border
+        # border sampling (a filter other than a box): the lanes cover the crop and its border
         b = int(film.rfilter().border_size()) if film.sample_border() else 0
         lane = dr.arange(mi.UInt32, dr.width(ray.d))
         pixel, cell = lane // self.k, lane % self.k
@@ -151,7 +153,9 @@ class CoverageIntegrator(RecordingIntegrator):
 def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0,
            scale: int = 1) -> Buffer:
     """The denoised render at k stratified points per pixel: a Buffer whose means are D at each point (pixel,
-    slot, vertex, L_before as a render's), `buf.image` its image. `scale`: D's pixels per film pixel (1)."""
+    slot, vertex, L_before as a render's), `buf.image` its image (the render loop's: with a filter other
+    than a box `expectation.attach` replaces it by the buffer's restyle, which splats each point at its
+    own position). `scale`: D's pixels per film pixel (1)."""
     if not isinstance(k, int) or k < 1:
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None

@@ -1,7 +1,7 @@
 """The denoiser's guides: albedo and shading normal per pixel, seen through mirrors and glass.
 
     g = first_hit(scene, spp=16, seed=0)   # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
-    g = first_hit(scene, 16, 0, footprint="pixel")   # each pixel the mean inside it, whatever the film's filter
+    g = first_hit(scene, 16, 0, footprint="pixel")   # each pixel the mean inside it, any filter
 
 Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the callers,
 so the guides cover the pixel as its camera samples do), `seed` (default 0: the render's first pass seed).
@@ -107,21 +107,22 @@ class GuidePass(mi.SamplingIntegrator):
 
 
 def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "film") -> Guides:
-    """The guides of the film's crop window. `footprint`: "film" forms each pixel as the film does (its
-    reconstruction filter: the guides of a rendered image, `--denoise image`); "pixel" as the mean of camera
-    samples inside the pixel (a box: the guides of a per-pixel mean of samples, `--denoise expectation`'s M).
-    The two are the same for a film with a box filter."""
+    """The guides of the film's crop window. `footprint`: "film" forms each pixel as the film does
+    (its reconstruction filter: the guides of a rendered image, `--denoise image`); "pixel" as the
+    mean of camera samples inside the pixel (a box: the guides of a per-pixel mean of samples,
+    `--denoise expectation`'s M). The two are the same for a film with a box filter."""
     if footprint == "pixel" and not scene.sensors()[0].film().rfilter().is_box_filter():
         img = _in_pixels(scene, int(spp), int(seed))
     else:
-        img = np.asarray(mi.render(scene, integrator=GuidePass(), spp=int(spp), seed=int(seed)), dtype=np.float32)
+        img = np.asarray(mi.render(scene, integrator=GuidePass(), spp=int(spp), seed=int(seed)),
+                         dtype=np.float32)
     img = np.nan_to_num(img[..., -12:])  # the AOVs come last whatever the film's own channels
     return Guides(*(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, 12, 3)))
 
 
 def _in_pixels(scene: mi.Scene, spp: int, seed: int) -> np.ndarray:
-    """`GuidePass`'s AOVs averaged over `spp` camera rays per pixel placed inside the pixel, as a render with a
-    box filter places them (the sensor's sampler, seeded alike): H x W x 12."""
+    """`GuidePass`'s AOVs averaged over `spp` camera rays per pixel placed inside the pixel, as a
+    render with a box filter places them (the sensor's sampler, seeded alike): H x W x 12."""
     sensor = scene.sensors()[0]
     film = sensor.film()
     w, h = (int(v) for v in film.crop_size())

@@ -28,13 +28,14 @@ Size per camera sample: 65 bytes for first_hit, 81 bytes for first_object_hit (`
 A film whose reconstruction filter is not a box (`header["filter"]`: the filter's plugin dict,
 `lookdev.film_filter.describe`; "box" otherwise) adds, per camera sample (9 bytes):
 
-    pos      float32 (2, N)  its film position, Mitsuba's sample_pos (pixels of the full film, crop offset in)
-    own      uint8  (N,)     1: one of its pixel's own samples; 0: a border sample (sample_border; `pixel` is
-                             then the nearest pixel of the crop) or one its tile leaves to a neighbour
+    pos      float32 (2, N)  its film position, Mitsuba's sample_pos (the full film's pixels)
+    own      uint8  (N,)     1: one of its pixel's own samples; 0: a border sample (sample_border;
+                             `pixel` the crop's nearest) or one its tile leaves to a neighbour
 
-and keeps every camera sample of every pass (a sample outside its pixel still weighs on the pixels its
-filter covers): each pass's entry in `header["passes"]` names its `samples`, and `header["layout"]` the
-crop windows of the tiles (offset, size and the rows and columns kept, `r0, r1, c0, c1`).
+and keeps every camera sample of every pass (a sample outside its pixel still weighs on the pixels
+its filter covers): each pass's entry in `header["passes"]` names its `samples`, and
+`header["layout"]` the crop windows of the tiles (offset, size and the rows and columns kept, `r0,
+r1, c0, c1`).
 
 A "sequence" buffer keeps, instead of `mean`, what the estimator consumed in call order (`lookdev.sequence`):
 
@@ -45,11 +46,11 @@ A "sequence" buffer keeps, instead of `mean`, what the estimator consumed in cal
 Size per camera sample: 53 bytes (69 with first_object_hit) + 4 + 13 per child + 5 per uniform, e.g.
 ~200 bytes for `series` on gamma with n = 8 (BENCHMARKS.md); capped at MAX_SEQUENCE_SAMPLES camera samples
 and MAX_EVENTS_PER_SAMPLE (64) events per camera sample on average.
-The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each pass's
-spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles (`pipeline.passes`): each pass
-then covers one tile (its index in the entry, and `header["tiles"]` their number), its samples' `pixel` is
-the film's, and (box filter) the pixels it shares with a neighbouring tile are left to that tile, as in
-the render.
+The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each
+pass's spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles
+(`pipeline.passes`): each pass then covers one tile (its index in the entry, and `header["tiles"]`
+their number), its samples' `pixel` is the film's, and (box filter) the pixels it shares with a
+neighbouring tile are left to that tile, as in the render.
 The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see the same camera
 when restyling.
 """
@@ -91,11 +92,13 @@ def fields_for(stylize: str, stores: str = "mean", filtered: bool = False) -> tu
 
 def bytes_per_sample(stylize: str, stores: str = "mean", filtered: bool = False) -> int:
     """Bytes per camera sample of the fixed fields (a sequence buffer adds its events)."""
-    return sum(_BYTES.get(k, 12) for k in fields_for(stylize, stores, filtered) if k not in SEQUENCE[1:])
+    fields = fields_for(stylize, stores, filtered)
+    return sum(_BYTES.get(k, 12) for k in fields if k not in SEQUENCE[1:])
 
 
 def filtered(header: dict) -> bool:
-    """Whether a buffer's header names a filter other than a box (it then has `FILTERED`'s arrays)."""
+    """Whether a buffer's header names a filter other than a box (it then has `FILTERED`'s
+    arrays)."""
     spec = header.get("filter")
     return not (spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box"))
 
@@ -146,7 +149,8 @@ class Buffer:
 
     @property
     def filtered(self) -> bool:
-        """Recorded with a filter other than a box: samples are splatted with it (`lookdev.film_filter`)."""
+        """Recorded with a filter other than a box: samples are splatted with it
+        (`lookdev.film_filter`)."""
         return filtered(self.header)
 
     @property
@@ -230,7 +234,8 @@ def load_buffer(path: str) -> Buffer:
         events, children = int(arrays["seq_count"].sum()), int(arrays["seq_kind"].sum())
         seq = {"seq_count": (n,), "seq_kind": (events,), "child": (3, children), "uniform": (events - children,)}
     for k, a in arrays.items():
-        want = seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (2, n) if k == "pos" else (3, n)
+        want = (seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (2, n) if k == "pos"
+                else (3, n))
         if a.shape != want:
             raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
     if len({a.shape[0] for a in pilot.values()}) > 1:
@@ -240,7 +245,8 @@ def load_buffer(path: str) -> Buffer:
             or any(not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles for p in header["passes"])):
         raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
     if filtered(header) and sum(int(p.get("samples", -1)) for p in header["passes"]) != n:
-        raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} camera samples")
+        raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} "
+                         f"camera samples")
     for k, a in denoised.items():
         want = (n,) if k == SPREAD else (3, n)
         if a.shape != want:

@@ -1,24 +1,26 @@
-"""The film's reconstruction filter for buffers: where Mitsuba put each camera sample, and its splat.
+"""The film's reconstruction filter for buffers: where Mitsuba put each sample, and its splat.
 
-    spec = describe(film.rfilter())            # {"type": "gaussian", "stddev": 0.5}: JSON for the header
+    spec = describe(film.rfilter())            # {"type": "gaussian", "stddev": 0.5}: the header's
     pos = positions(sensor, spp, seed)         # 2 x N float32: each camera sample's film position
     img = develop(buf, values)                 # the restyled image, as Mitsuba's film develops it
 
 How Mitsuba 3 places and weights a camera sample (SamplingIntegrator::render and render_sample, JIT
-variants): lane i of a pass of s spp is pixel i // s of the crop window (widened by the filter's border
-on each side where the film samples its border), its film position is that pixel's corner (crop offset
-included) plus the sensor sampler's first `next_2d()` of the pass, the sampler seeded with
-`seed(pass seed, lanes)` after `set_sample_count(s)` and `set_samples_per_wavefront(s)`. `positions`
-draws that same `next_2d()` from a clone of the sampler: bit for bit the render's (checked for the
-independent, stratified and multijitter samplers, tests/lookdev/test_film_filter.py).
+variants): lane i of a pass of s spp is pixel i // s of the crop window (widened by the filter's
+border on each side where the film samples its border), its film position is that pixel's corner
+(crop offset included) plus the sensor sampler's first `next_2d()` of the pass, the sampler seeded
+with `seed(pass seed, lanes)` after `set_sample_count(s)` and `set_samples_per_wavefront(s)`.
+`positions` draws that same `next_2d()` from a clone of the sampler: bit for bit the render's
+(checked for the independent, stratified and multijitter samplers,
+tests/lookdev/test_film_filter.py).
 
-The pass's ImageBlock has the crop window's size and offset, no border (samples outside the crop only
-contribute to the pixels inside it), no normalisation, and is coalesced in LLVM variants at >= 4 spp per
-pass; `ImageBlock.put` weighs a sample by `rfilter.eval` (not `eval_discretized`) of its offset from each
-pixel centre along x times along y (a box filter: weight 1 in the pixel of the lane, at its integer
-position), adding the weight to channel W; `HDRFilm.develop` divides the weighted sum by W (W = 0: 0).
-`develop` builds that ImageBlock per pass, with the rebuilt filter, develops it, keeps the pixels the pass's
-tile keeps and averages the passes weighted by their spp, as `pipeline.passes` does.
+The pass's ImageBlock has the crop window's size and offset, no border (samples outside the crop
+only contribute to the pixels inside it), no normalisation, and is coalesced in LLVM variants at >=
+4 spp per pass; `ImageBlock.put` weighs a sample by `rfilter.eval` (not `eval_discretized`) of its
+offset from each pixel centre along x times along y (a box filter: weight 1 in the pixel of the
+lane, at its integer position), adding the weight to channel W; `HDRFilm.develop` divides the
+weighted sum by W (W = 0: 0). `develop` builds that ImageBlock per pass, with the rebuilt filter,
+develops it, keeps the pixels the pass's tile keeps and averages the passes weighted by their spp,
+as `pipeline.passes` does.
 """
 from __future__ import annotations
 
@@ -45,7 +47,8 @@ _KINDS = {"BoxFilter": "box", "TentFilter": "tent", "GaussianFilter": "gaussian"
 
 
 def is_box(spec: Any) -> bool:
-    """Whether a header's filter entry ("box", or a spec dict; None: a buffer older than filters) is a box."""
+    """Whether a header's filter entry ("box", or a spec dict; None: a buffer older than filters) is
+    a box."""
     return spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box")
 
 
@@ -62,15 +65,16 @@ def _candidates(rfilter) -> list[dict]:
         return [{"type": kind, "stddev": r / 4.0}]  # Mitsuba: radius = 4 stddev (exact in binary)
     if kind == "lanczos":
         return [{"type": kind, "lobes": int(round(r))}]
-    text = dict(re.findall(r"(\w+)=([-+0-9.eE]+)", str(rfilter)))  # mitchell: B and C, printed to 6 digits
+    # mitchell: B and C, printed to 6 digits
+    text = dict(re.findall(r"(\w+)=([-+0-9.eE]+)", str(rfilter)))
     b, c = float(text.get("B", 1 / 3)), float(text.get("C", 1 / 3))
     near = [(float(Fraction(v).limit_denominator(12)), v) for v in (b, c)]
     return [{"type": kind, "B": x, "C": y} for x in near[0] for y in near[1]]
 
 
 def describe(rfilter) -> dict:
-    """The film's filter as a plugin dict that `build` turns back into the same filter (its `eval` equal at
-    every tested offset); SceneError (one line) for a filter that cannot be rebuilt so."""
+    """The film's filter as a plugin dict that `build` turns back into the same filter (its `eval`
+    equal at every tested offset); SceneError (one line) for a filter that cannot be rebuilt so."""
     xs = mi.Float(np.linspace(-4.0, 4.0, 257, dtype=np.float32))
     want = np.asarray(rfilter.eval(xs))
     for spec in _candidates(rfilter):
@@ -78,10 +82,12 @@ def describe(rfilter) -> dict:
             got = np.asarray(build(_key(spec)).eval(xs))
         except Exception:  # noqa: BLE001 - a parameter Mitsuba refuses: try the next candidate
             continue
-        if np.array_equal(got, want) and float(build(_key(spec)).radius()) == float(rfilter.radius()):
+        same_radius = float(build(_key(spec)).radius()) == float(rfilter.radius())
+        if np.array_equal(got, want) and same_radius:
             return spec
-    raise SceneError(f"the film's reconstruction filter '{rfilter.class_name()}' cannot be recorded in a buffer: "
-                     f"use box, tent, gaussian, mitchell, catmullrom or lanczos")
+    raise SceneError(f"the film's reconstruction filter '{rfilter.class_name()}' cannot be "
+                     f"recorded in a buffer: use box, tent, gaussian, mitchell, catmullrom or "
+                     f"lanczos")
 
 
 def _key(spec: dict) -> tuple:
@@ -100,8 +106,9 @@ def rebuild(spec: Any):
 
 
 def positions(sensor, spp: int, seed: int) -> np.ndarray:
-    """Each camera sample's film position of a pass of `spp` spp and seed `seed` on the sensor's film as it
-    is set now (crop window, border): 2 x lanes float32, pixels of the full film (crop offset included)."""
+    """Each camera sample's film position of a pass of `spp` spp and seed `seed` on the sensor's
+    film as it is set now (crop window, border): 2 x lanes float32, pixels of the full film (crop
+    offset included)."""
     film = sensor.film()
     b = int(film.rfilter().border_size()) if film.sample_border() else 0
     w, h = (int(v) + 2 * b for v in film.crop_size())
@@ -130,8 +137,8 @@ def _keep_index(tile: dict, width: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def develop(buffer, values) -> mi.Float:
-    """The image of per-sample `values` (Color3f, one lane per camera sample) of a buffer recorded with a
-    filter other than a box: flat H*W*3 row-major RGB, differentiable in the values."""
+    """The image of per-sample `values` (Color3f, one lane per camera sample) of a buffer recorded
+    with a filter other than a box: flat H*W*3 row-major RGB, differentiable in the values."""
     d = buffer.device
     rf = rebuild(buffer.header["filter"])
     w, h = buffer.width, buffer.height
@@ -148,9 +155,9 @@ def develop(buffer, values) -> mi.Float:
         tile = layout[t]
         idx = dr.arange(mi.UInt32, start, start + count)
         start += count
-        block = mi.ImageBlock(mi.ScalarVector2u(*tile["size"]),
-                              mi.ScalarPoint2i(base[0] + tile["offset"][0], base[1] + tile["offset"][1]),
-                              4, rf, False, False, llvm and n >= 4)
+        corner = mi.ScalarPoint2i(base[0] + tile["offset"][0], base[1] + tile["offset"][1])
+        block = mi.ImageBlock(mi.ScalarVector2u(*tile["size"]), corner, 4, rf, False, False,
+                              llvm and n >= 4)
         block.put(dr.gather(mi.Point2f, d["pos"], idx),
                   [dr.gather(mi.Float, values[c], idx) for c in range(3)] + [mi.Float(1.0)])
         data = block.tensor().array
@@ -158,8 +165,8 @@ def develop(buffer, values) -> mi.Float:
         weight = dr.gather(mi.Float, data, src * 4 + 3)
         weight = dr.select(weight == 0.0, 1.0, weight)
         for c in range(3):
-            dr.scatter_reduce(dr.ReduceOp.Add, total, dr.gather(mi.Float, data, src * 4 + c) / weight * n,
-                              dst * 3 + c)
+            value = dr.gather(mi.Float, data, src * 4 + c) / weight * n
+            dr.scatter_reduce(dr.ReduceOp.Add, total, value, dst * 3 + c)
         spp[_keep_index(tile, w)[1]] += n
     return total / mi.Float(np.repeat(np.maximum(spp, 1.0), 3))
 

@@ -8,11 +8,11 @@
 wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
 and they are collected after each pass of `pipeline.passes` (the same passes and pass seeds as `render`).
 Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
-SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. With another
-filter the buffer also keeps each sample's film position (`film_filter.positions`), and restyles splat it
-with the filter (`lookdev.film_filter`). A film of more than LANES_PER_PASS pixels is rendered one tile (crop
-window) per pass: `to_film` maps that pass's pixels to the film's and, with a box filter, drops those the tile
-shares with a neighbour, as the render does.
+SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. With
+another filter the buffer also keeps each sample's film position (`film_filter.positions`), and
+restyles splat it with the filter (`lookdev.film_filter`). A film of more than LANES_PER_PASS pixels
+is rendered one tile (crop window) per pass: `to_film` maps that pass's pixels to the film's and,
+with a box filter, drops those the tile shares with a neighbour, as the render does.
 
 With `direct` or `affine` the buffer keeps the mean of each camera sample's n children. With any other
 estimator (series*, ustat, naive, telescoping, combined) it keeps the sequence of children and uniform
@@ -20,8 +20,8 @@ numbers the estimator consumed, in call order (`lookdev.sequence`), and the reco
 exactly the render's: the recording wraps the same `draw` and `uniform` around the same stream.
 
 What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
-stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film other than rgb, more
-camera samples than the cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
+stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film other than
+rgb, more camera samples than the cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
 """
 from __future__ import annotations
 
@@ -81,8 +81,8 @@ def check_recordable(settings: S.Settings, slots) -> None:
 
 
 def check_film(scene: mi.Scene) -> mi.Film:
-    """The scene's film if a buffer can record it (any filter `film_filter.describe` rebuilds, any border);
-    SceneError (one line) otherwise."""
+    """The scene's film if a buffer can record it (any filter `film_filter.describe` rebuilds, any
+    border); SceneError (one line) otherwise."""
     film = scene.sensors()[0].film()
     if film_format(scene) != "rgb":
         raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb film")
@@ -90,15 +90,16 @@ def check_film(scene: mi.Scene) -> mi.Film:
     return film
 
 
-def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int, height: int | None = None,
-            border: int = 0, filtered: bool = False) -> dict[str, np.ndarray]:
-    """One pass's arrays with `pixel` made the film's crop window's (until here: the lane's pixel in the pass's
-    crop window, widened by `border` on each side where the film samples its border).
+def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int,
+            height: int | None = None, border: int = 0, filtered: bool = False
+            ) -> dict[str, np.ndarray]:
+    """One pass's arrays with `pixel` made the film's crop window's (until here: the lane's pixel in
+    the pass's crop window, widened by `border` on each side where the film samples its border).
 
-    Box filter (`filtered` False): the samples of the pixels the tile shares with its neighbour are dropped, as
-    the render drops those pixels (`Tile.keep`). Other filters: every sample stays (it weighs on the pixels
-    its filter covers), `own` marks those of the kept pixels, and a border sample's `pixel` is the nearest
-    pixel of the film."""
+    Box filter (`filtered` False): the samples of the pixels the tile shares with its neighbour are
+    dropped, as the render drops those pixels (`Tile.keep`). Other filters: every sample stays (it
+    weighs on the pixels its filter covers), `own` marks those of the kept pixels, and a border
+    sample's `pixel` is the nearest pixel of the film."""
     tw, th = tile.size
     height = height if height is not None else tile.offset[1] + th
     ew = np.int64(tw + 2 * border)
@@ -123,12 +124,14 @@ def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int, hei
     for k, a in arrays.items():
         if k not in out:
             out[k] = a[..., keep]
-    out["pixel"] = ((ly[keep] + tile.offset[1]) * width + lx[keep] + tile.offset[0]).astype(np.uint32)
+    fx, fy = lx[keep] + tile.offset[0], ly[keep] + tile.offset[1]
+    out["pixel"] = (fy * width + fx).astype(np.uint32)
     return out
 
 
 def _window(tile: pass_loop.Tile) -> dict:
-    """A tile as the header's `layout` keeps it: crop window offset and size, rows and columns kept."""
+    """A tile as the header's `layout` keeps it: crop window offset and size, rows and columns
+    kept."""
     (tw, th), (rows, cols) = tile.size, tile.keep
     return {"offset": list(tile.offset), "size": list(tile.size),
             "keep": [rows.start or 0, th if rows.stop is None else rows.stop,
@@ -258,7 +261,8 @@ def _vec(x) -> np.ndarray:
 
 
 def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) -> dict[str, np.ndarray]:
-    """One pass's kept arrays on the host; `pixel` is the lane's pixel in the pass's (widened) crop window."""
+    """One pass's kept arrays on the host; `pixel` is the lane's pixel in the pass's (widened) crop
+    window."""
     dr.eval(*kept.values())
     width = dr.width(kept["slot"])
     out = {"pixel": (np.arange(width, dtype=np.uint32) // np.uint32(spp)).astype(np.uint32),
@@ -333,8 +337,9 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
-        if filtered and "pos" not in arrays:  # where Mitsuba put each sample: the pass's film is still set
-            arrays["pos"] = film_filter.positions(sensor, prog.samples, pass_loop.pass_seed(seed, index))
+        if filtered and "pos" not in arrays:  # where Mitsuba put each sample
+            seed_i = pass_loop.pass_seed(seed, index)
+            arrays["pos"] = film_filter.positions(sensor, prog.samples, seed_i)
         tiled = len(prog.layout) > 1  # the crop windows `pipeline.passes` renders, one per pass
         if tiled:
             buf.header["tiles"] = len(prog.layout)
