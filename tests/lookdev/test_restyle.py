@@ -94,10 +94,10 @@ def test_what_cannot_be_recorded_is_refused(kwargs, error, message):
         render_buffer("cornell-box", spp=1, width=8, height=8, **kwargs)
 
 
-def test_a_gaussian_filter_is_refused():
+def test_a_film_other_than_rgb_is_refused():
     scene = cornell_box(8, 8)
-    scene["sensor"]["film"]["rfilter"] = {"type": "gaussian"}
-    with pytest.raises(SceneError, match="filter is 'GaussianFilter': buffers need a box filter"):
+    scene["sensor"]["film"]["pixel_format"] = "luminance"
+    with pytest.raises(SceneError, match="pixel_format is 'y': buffers need an rgb film"):
         render_buffer(scene, style="cel", spp=1, inner=1)
 
 

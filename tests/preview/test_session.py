@@ -32,3 +32,20 @@ def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkey
     assert (spp, inner) == (2, 2) and not s.state()["draft"]
     np.testing.assert_array_equal(img, restyle(s.buffer, style="cel"))
     s.stop()
+
+
+def test_a_film_with_a_gaussian_filter(tmp_path):
+    """The session records and restyles a film with Mitsuba's default filter (no rfilter: a
+    gaussian): the restyle is the render of the page's command line (1 spp per pass)."""
+    from helpers.filtered_scene import GAUSSIAN_SCENE
+    from styletrace.preview import session as module
+    scene = tmp_path / "g.xml"
+    scene.write_text(GAUSSIAN_SCENE)
+    want = styletrace.render(str(scene), style="sepia", spp=2, inner=2, seed=0, pass_spp=1)
+    s = module.Session(str(scene), inner=2, spp=2).start()
+    wait_until(lambda: s.done or s.error, 120, "the background render")
+    assert s.error is None and s.buffer.filtered
+    img, spp, inner = s.restyle("sepia", None, {})
+    s.stop()
+    assert (spp, inner) == (2, 2) and s.state()["bytes_per_sample"] == 74
+    np.testing.assert_allclose(img, want, rtol=1e-5, atol=1e-6)

@@ -38,7 +38,7 @@ def precheck(args, scene, integrator, pixel_format: str) -> None:
         from ..lookdev.record import check_film
         from . import expectation
         expectation.check(integrator)
-        check_film(scene)  # the buffer's conditions: box filter, no border sampling
+        check_film(scene)  # the buffer's conditions: an rgb film, a filter it can record
         if args.buffer:
             check_buffer_path(args.buffer)
 

@@ -74,10 +74,13 @@ def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int
 
 
 class CoverageIntegrator(RecordingIntegrator):
-    """The recording integrator with no children and camera rays placed on an m x m jittered grid in each pixel
-    (lane i of a pass of k spp is pixel i // k's point i % k). The stylized vertex's mean is D there, looked up
-    in the kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
-    emission added), so the pass's image is the denoised render and its buffer holds D at every point."""
+    """The recording integrator with no children and camera rays placed on an m x m jittered grid in
+    each pixel (lane i of a pass of k spp is pixel i // k's point i % k; the crop widened by the
+    filter's border where the film samples it), each point's film position kept (`pos`: a restyle
+    splats it with the film's filter). The stylized vertex's mean is D there, looked up in the
+    kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
+    emission added), so the pass's image is the denoised render (box filter) and its buffer holds D
+    at every point."""
 
     def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0), scale: int = 1):
         super().__init__(base)
@@ -95,10 +98,12 @@ class CoverageIntegrator(RecordingIntegrator):
         film = sensor.film()
         cw, ch = (int(v) for v in film.crop_size())
         off = mi.ScalarVector2f(film.crop_offset())
+        # border sampling (a filter other than a box): the lanes cover the crop and its border
+        b = int(film.rfilter().border_size()) if film.sample_border() else 0
         lane = dr.arange(mi.UInt32, dr.width(ray.d))
         pixel, cell = lane // self.k, lane % self.k
-        px = mi.Float(pixel % cw)
-        py = mi.Float(pixel // cw)
+        px = mi.Float(pixel % (cw + 2 * b)) - b
+        py = mi.Float(pixel // (cw + 2 * b)) - b
         cx, cy = mi.Float(cell % self.m), mi.Float(cell // self.m)
         jitter = sampler.next_2d()
         pos = mi.Point2f(px + (cx + jitter.x) / self.m, py + (cy + jitter.y) / self.m)
@@ -106,14 +111,20 @@ class CoverageIntegrator(RecordingIntegrator):
         aperture = sampler.next_2d()
         # the sensor's position sample spans the crop window (as SamplingIntegrator::render_sample makes it)
         placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture)
+        on_film = mi.Point2f(pos + off)  # the point's film position: the restyle splats it there
         shift = off - self.origin  # (0, 0) but in a tile: D, its guides and spread are the whole film's
         pos = pos + shift
+        # a border point looks D up from the nearest pixel of the crop
+        px, py = dr.clip(px, 0, cw - 1), dr.clip(py, 0, ch - 1)
         pixel = mi.UInt32(py + shift.y) * self.width + mi.UInt32(px + shift.x)
         self._at = (pos, pixel, None)
         try:
-            return super().sample(scene, sampler, placed, medium, active)
+            out = super().sample(scene, sampler, placed, medium, active)
         finally:
             self._at = None
+        self.kept["pos"] = on_film
+        dr.schedule(on_film)
+        return out
 
     def finish_mean(self, slot, m, v):
         """g averaged over D's uncertainty at the point's pixel where the field has one (`restyle.finish_spread`)."""
@@ -142,7 +153,9 @@ class CoverageIntegrator(RecordingIntegrator):
 def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0,
            scale: int = 1) -> Buffer:
     """The denoised render at k stratified points per pixel: a Buffer whose means are D at each point (pixel,
-    slot, vertex, L_before as a render's), `buf.image` its image. `scale`: D's pixels per film pixel (1)."""
+    slot, vertex, L_before as a render's), `buf.image` its image (the render loop's: with a filter other
+    than a box `expectation.attach` replaces it by the buffer's restyle, which splats each point at its
+    own position). `scale`: D's pixels per film pixel (1)."""
     if not isinstance(k, int) or k < 1:
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None

@@ -23,7 +23,13 @@ Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `max_sample
 Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the `direct` and
 `affine` estimators, fixed counts n. Refused, one line each (`check`): first_object_hit, first_n_hits /
 stylize_depth > 1, lines, reuse, adaptive counts, the unbiased estimators, the expansion pass, per-sample
-styles (acp), Ray (cluster=), films other than rgb with a box filter (the buffer's own conditions).
+styles (acp), Ray (cluster=), films other than rgb (the buffer's own conditions).
+
+Films with a reconstruction filter other than a box (`lookdev.film_filter`): M stays the mean of
+each pixel's own camera samples (its guides too: `guides.first_hit(footprint="pixel")`), D is
+looked up at each sample's own film position, and the image is the samples' (or the coverage
+points') values splatted with the film's filter and developed as the film does
+(`lookdev.restyle.accumulate`).
 """
 from __future__ import annotations
 
@@ -96,6 +102,8 @@ def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
     such sample, variance NaN below 2. Float64, flat over the pixels (H*W, and H*W x C)."""
     a = buf.arrays
     found = a["slot"] >= 0 if found is None else found
+    if "own" in a:  # a filtered buffer: each pixel's own samples (not the border's, a neighbour's)
+        found = found & (a["own"] > 0)
     pix = a["pixel"].astype(np.int64)[found]
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
@@ -144,7 +152,10 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     found = a["slot"] >= 0
     if not found.any():  # the fallback everywhere: the sample's own pixel's D
         return np.ascontiguousarray(d[py, px].T.astype(np.float32))
-    uv = raster(scene, a["p"])
+    if "pos" in a:  # where the render loop put the sample (filtered buffers), in crop pixels
+        uv = a["pos"].T.astype(np.float64) - np.asarray(buf.header["crop_offset"], np.float64)
+    else:
+        uv = raster(scene, a["p"])
     good = found & np.all(np.isfinite(uv), -1)
     good &= (np.floor(uv[:, 0]) == px) & (np.floor(uv[:, 1]) == py)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
@@ -309,7 +320,7 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integ
     (`spread`); returns (D, the points' buffer)."""
     if buf.stores != "mean":
         raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
-    g = guides.first_hit(scene, spp, pass_seed(seed, 0))
+    g = guides.first_hit(scene, spp, pass_seed(seed, 0), footprint="pixel")  # M's footprint
     own = _own(scene, buf)
     m = expectation(buf, own[1])  # the reflected part: each sample's own emission goes back in at_samples
     d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
@@ -326,6 +337,8 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integ
         if rel is not None:  # per point, its pixel's: restyles average g over it too
             cover.arrays[SPREAD] = np.ascontiguousarray(rel.ravel()[cover.arrays["pixel"]], dtype=np.float32)
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
+        if cover.filtered:  # the render loop splatted each point at its sample_pos, not the point's
+            cover.image = image_of(cover)
         return d, cover
     buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
     buf.header["denoise"] = header

@@ -1,6 +1,7 @@
 """The denoiser's guides: albedo and shading normal per pixel, seen through mirrors and glass.
 
     g = first_hit(scene, spp=16, seed=0)   # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
+    g = first_hit(scene, 16, 0, footprint="pixel")   # each pixel the mean inside it, any filter
 
 Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the callers,
 so the guides cover the pixel as its camera samples do), `seed` (default 0: the render's first pass seed).
@@ -105,10 +106,41 @@ class GuidePass(mi.SamplingIntegrator):
         return mi.Spectrum(0.0), mi.Bool(True), aovs
 
 
-def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0) -> Guides:
-    img = np.asarray(mi.render(scene, integrator=GuidePass(), spp=int(spp), seed=int(seed)), dtype=np.float32)
+def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "film") -> Guides:
+    """The guides of the film's crop window. `footprint`: "film" forms each pixel as the film does
+    (its reconstruction filter: the guides of a rendered image, `--denoise image`); "pixel" as the
+    mean of camera samples inside the pixel (a box: the guides of a per-pixel mean of samples,
+    `--denoise expectation`'s M). The two are the same for a film with a box filter."""
+    if footprint == "pixel" and not scene.sensors()[0].film().rfilter().is_box_filter():
+        img = _in_pixels(scene, int(spp), int(seed))
+    else:
+        img = np.asarray(mi.render(scene, integrator=GuidePass(), spp=int(spp), seed=int(seed)),
+                         dtype=np.float32)
     img = np.nan_to_num(img[..., -12:])  # the AOVs come last whatever the film's own channels
     return Guides(*(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, 12, 3)))
+
+
+def _in_pixels(scene: mi.Scene, spp: int, seed: int) -> np.ndarray:
+    """`GuidePass`'s AOVs averaged over `spp` camera rays per pixel placed inside the pixel, as a
+    render with a box filter places them (the sensor's sampler, seeded alike): H x W x 12."""
+    sensor = scene.sensors()[0]
+    film = sensor.film()
+    w, h = (int(v) for v in film.crop_size())
+    lanes = w * h * spp
+    sampler = sensor.sampler().clone()
+    sampler.set_sample_count(spp)
+    sampler.set_samples_per_wavefront(spp)
+    sampler.seed(seed, lanes)
+    idx = dr.arange(mi.UInt32, lanes) // spp
+    py = idx // w
+    pos = mi.Point2f(mi.Float(idx - py * w), mi.Float(py)) + sampler.next_2d()
+    aperture = sampler.next_2d() if sensor.needs_aperture_sample() else mi.Point2f(0.5)
+    ray, _ = sensor.sample_ray_differential(mi.Float(sensor.shutter_open()), mi.Float(0.0),
+                                            pos / mi.ScalarVector2f(w, h), aperture)
+    _, _, aovs = GuidePass().sample(scene, sampler, ray)
+    means = [dr.block_sum(a, spp) / spp for a in aovs]  # a pixel's lanes are next to each other
+    dr.eval(means)
+    return np.stack([np.asarray(m, dtype=np.float32) for m in means], -1).reshape(h, w, len(means))
 
 
 def to_sensor(scene: mi.Scene):

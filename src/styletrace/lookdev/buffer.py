@@ -15,7 +15,7 @@ again without tracing a ray (`lookdev.restyle`). None of it depends on θ.
 File format (`.npz`, written atomically: a temporary file in the target folder, then `os.replace`):
 
     header   uint8 array: UTF-8 JSON, {"format": "styletrace-buffer", "version": 1, ...} (`Buffer.header`)
-    pixel    uint32 (N,)     row-major pixel index in the film's crop window (box filter: weight 1)
+    pixel    uint32 (N,)     row-major index in the film's crop window of the pixel of its lane
     slot     int8   (N,)     index into header["slots"]; -1: the camera sample has no stylized vertex
     p, n, wo float32 (3, N)  vertex position, shading normal, direction towards the viewer
     mean     float32 (3, N)  mean of the n child estimates (0 for closed-form styles, n = 0)
@@ -24,6 +24,18 @@ File format (`.npz`, written atomically: a temporary file in the target folder, 
     depth    uint32 (N,)     path depth of the vertex (first_object_hit only; first_hit: 0)
 
 Size per camera sample: 65 bytes for first_hit, 81 bytes for first_object_hit (`bytes_per_sample`).
+
+A film whose reconstruction filter is not a box (`header["filter"]`: the filter's plugin dict,
+`lookdev.film_filter.describe`; "box" otherwise) adds, per camera sample (9 bytes):
+
+    pos      float32 (2, N)  its film position, Mitsuba's sample_pos (the full film's pixels)
+    own      uint8  (N,)     1: one of its pixel's own samples; 0: a border sample (sample_border;
+                             `pixel` the crop's nearest) or one its tile leaves to a neighbour
+
+and keeps every camera sample of every pass (a sample outside its pixel still weighs on the pixels
+its filter covers): each pass's entry in `header["passes"]` names its `samples`, and
+`header["layout"]` the crop windows of the tiles (offset, size and the rows and columns kept, `r0,
+r1, c0, c1`).
 
 A "sequence" buffer keeps, instead of `mean`, what the estimator consumed in call order (`lookdev.sequence`):
 
@@ -34,10 +46,11 @@ A "sequence" buffer keeps, instead of `mean`, what the estimator consumed in cal
 Size per camera sample: 53 bytes (69 with first_object_hit) + 4 + 13 per child + 5 per uniform, e.g.
 ~200 bytes for `series` on gamma with n = 8 (BENCHMARKS.md); capped at MAX_SEQUENCE_SAMPLES camera samples
 and MAX_EVENTS_PER_SAMPLE (64) events per camera sample on average.
-The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each pass's
-spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles (`pipeline.passes`): each pass
-then covers one tile (its index in the entry, and `header["tiles"]` their number), its samples' `pixel` is
-the film's, and the pixels it shares with a neighbouring tile are left to that tile, as in the render.
+The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each
+pass's spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles
+(`pipeline.passes`): each pass then covers one tile (its index in the entry, and `header["tiles"]`
+their number), its samples' `pixel` is the film's, and (box filter) the pixels it shares with a
+neighbouring tile are left to that tile, as in the render.
 The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see the same camera
 when restyling.
 """
@@ -55,7 +68,7 @@ from ..errors import UsageError
 from ..images import creation_mode, destination, unwritable_kind
 
 FORMAT = "styletrace-buffer"
-VERSION = 2  # 2: "sequence" buffers; version 1 files (the children's mean) still read
+VERSION = 3  # 3: filters other than a box; 2: "sequence" buffers; versions 1 and 2 still read
 #: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
 #: bytes_per_sample times this (~270 MB for first_hit)
 MAX_SAMPLES = 1 << 22
@@ -63,20 +76,31 @@ MAX_SAMPLES = 1 << 22
 MAX_SEQUENCE_SAMPLES = 1 << 20
 SEQUENCE = ("seq_count", "seq_kind", "child", "uniform")
 
-SCALAR = {"pixel": np.uint32, "slot": np.int8, "depth": np.uint32}
+SCALAR = {"pixel": np.uint32, "slot": np.int8, "depth": np.uint32, "own": np.uint8}
 VECTOR = ("p", "n", "wo", "mean", "L_before", "beta")
+#: the fields of a buffer recorded with a filter other than a box
+FILTERED = ("pos", "own")
+_BYTES = {"pixel": 4, "depth": 4, "seq_count": 4, "slot": 1, "own": 1, "pos": 8}
 
 
-def fields_for(stylize: str, stores: str = "mean") -> tuple[str, ...]:
+def fields_for(stylize: str, stores: str = "mean", filtered: bool = False) -> tuple[str, ...]:
+    """The arrays of a buffer (`filtered`: recorded with a filter other than a box)."""
     base = ("pixel", "slot", "p", "n", "wo") + (("mean",) if stores == "mean" else ()) + ("L_before",)
     return base + (("beta", "depth") if stylize == "first_object_hit" else ()) + (
-        SEQUENCE if stores == "sequence" else ())
+        SEQUENCE if stores == "sequence" else ()) + (FILTERED if filtered else ())
 
 
-def bytes_per_sample(stylize: str, stores: str = "mean") -> int:
+def bytes_per_sample(stylize: str, stores: str = "mean", filtered: bool = False) -> int:
     """Bytes per camera sample of the fixed fields (a sequence buffer adds its events)."""
-    return sum(4 if k in ("pixel", "depth", "seq_count") else 1 if k == "slot" else 12
-               for k in fields_for(stylize, stores) if k not in SEQUENCE[1:])
+    fields = fields_for(stylize, stores, filtered)
+    return sum(_BYTES.get(k, 12) for k in fields if k not in SEQUENCE[1:])
+
+
+def filtered(header: dict) -> bool:
+    """Whether a buffer's header names a filter other than a box (it then has `FILTERED`'s
+    arrays)."""
+    spec = header.get("filter")
+    return not (spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box"))
 
 
 #: a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over it
@@ -124,6 +148,12 @@ class Buffer:
         return self.header["stylize"]
 
     @property
+    def filtered(self) -> bool:
+        """Recorded with a filter other than a box: samples are splatted with it
+        (`lookdev.film_filter`)."""
+        return filtered(self.header)
+
+    @property
     def stores(self) -> str:
         """"mean" (direct / affine) or "sequence" (the children and uniforms in call order)."""
         return self.header.get("stores", "mean")
@@ -166,11 +196,15 @@ class Buffer:
     def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int, tile: int | None = None) -> None:
         """Add one pass's camera samples (in the order the render loop made them); `tile`: the index of the crop
         window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
-        for k in fields_for(self.stylize, self.stores):
+        for k in fields_for(self.stylize, self.stores, self.filtered):
             a = arrays[k]
             self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
-        self.header["passes"].append({"spp": int(spp), "seed": int(seed)} if tile is None else
-                                     {"spp": int(spp), "seed": int(seed), "tile": int(tile)})
+        entry = {"spp": int(spp), "seed": int(seed)}
+        if tile is not None:
+            entry["tile"] = int(tile)
+        if self.filtered:
+            entry["samples"] = int(arrays["pixel"].shape[0])
+        self.header["passes"].append(entry)
         self.device.clear()
 
 
@@ -187,7 +221,8 @@ def load_buffer(path: str) -> Buffer:
             if header.get("version") not in range(1, VERSION + 1):
                 raise UsageError(f"buffer file {path!r} has format version {header.get('version')!r}; this "
                                  f"styletrace reads version {VERSION} and earlier")
-            arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"))}
+            arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"),
+                                                  filtered(header))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
             denoised = {k: z[k] for k in z.files if k in ("denoised_mean", SPREAD)}  # docs/denoise.md
     except UsageError:
@@ -199,7 +234,8 @@ def load_buffer(path: str) -> Buffer:
         events, children = int(arrays["seq_count"].sum()), int(arrays["seq_kind"].sum())
         seq = {"seq_count": (n,), "seq_kind": (events,), "child": (3, children), "uniform": (events - children,)}
     for k, a in arrays.items():
-        want = seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (3, n)
+        want = (seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (2, n) if k == "pos"
+                else (3, n))
         if a.shape != want:
             raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
     if len({a.shape[0] for a in pilot.values()}) > 1:
@@ -208,6 +244,9 @@ def load_buffer(path: str) -> Buffer:
     if (not isinstance(tiles, int) or tiles < 1
             or any(not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles for p in header["passes"])):
         raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
+    if filtered(header) and sum(int(p.get("samples", -1)) for p in header["passes"]) != n:
+        raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} "
+                         f"camera samples")
     for k, a in denoised.items():
         want = (n,) if k == SPREAD else (3, n)
         if a.shape != want:
@@ -216,4 +255,4 @@ def load_buffer(path: str) -> Buffer:
 
 
 __all__ = ["Buffer", "load_buffer", "SPREAD", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
-           "bytes_per_sample"]
+           "bytes_per_sample", "filtered", "FILTERED"]

@@ -8,9 +8,11 @@
 wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
 and they are collected after each pass of `pipeline.passes` (the same passes and pass seeds as `render`).
 Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
-SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. A film of
-more than LANES_PER_PASS pixels is rendered one tile (crop window) per pass: `to_film` maps that pass's pixels
-to the film's and drops those the tile shares with a neighbour, as the render does.
+SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. With
+another filter the buffer also keeps each sample's film position (`film_filter.positions`), and
+restyles splat it with the filter (`lookdev.film_filter`). A film of more than LANES_PER_PASS pixels
+is rendered one tile (crop window) per pass: `to_film` maps that pass's pixels to the film's and,
+with a box filter, drops those the tile shares with a neighbour, as the render does.
 
 With `direct` or `affine` the buffer keeps the mean of each camera sample's n children. With any other
 estimator (series*, ustat, naive, telescoping, combined) it keeps the sequence of children and uniform
@@ -18,8 +20,8 @@ numbers the estimator consumed, in call order (`lookdev.sequence`), and the reco
 exactly the render's: the recording wraps the same `draw` and `uniform` around the same stream.
 
 What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
-stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film whose filter is not a box, more camera samples than the
-cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
+stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film other than
+rgb, more camera samples than the cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
 """
 from __future__ import annotations
 
@@ -44,6 +46,7 @@ from ..kernel.vertex import emission  # noqa: E402
 from ..scene.defaults import Pilot, resolve as resolve_defaults, unique_styled  # noqa: E402
 from ..assets.scenes import DEFAULT  # noqa: E402
 from ..styles.base import Vertex, camera_forward  # noqa: E402
+from . import film_filter  # noqa: E402
 from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, PILOT, VERSION, Buffer, bytes_per_sample  # noqa: E402
 from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402
 from .sequence import Recorder, budget  # noqa: E402
@@ -78,27 +81,40 @@ def check_recordable(settings: S.Settings, slots) -> None:
 
 
 def check_film(scene: mi.Scene) -> mi.Film:
+    """The scene's film if a buffer can record it (any filter `film_filter.describe` rebuilds, any
+    border); SceneError (one line) otherwise."""
     film = scene.sensors()[0].film()
-    if not film.rfilter().is_box_filter():
-        raise SceneError(f"the film's reconstruction filter is '{film.rfilter().class_name()}': buffers need a "
-                         f"box filter (<rfilter type=\"box\"/>), where every camera sample lands in one pixel")
-    if film.sample_border():
-        raise SceneError("the film samples its border (sample_border=true): buffers need it off")
     if film_format(scene) != "rgb":
         raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb film")
+    film_filter.describe(film.rfilter())
     return film
 
 
-def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int) -> dict[str, np.ndarray]:
-    """One pass's arrays of a tiled film (`pipeline.passes`: a film of more than LANES_PER_PASS pixels is rendered
-    as crop windows) with `pixel` made the film's and the samples of the pixels the tile shares with its
-    neighbour dropped, as the render drops them (`Tile.keep`): lane pixels are the crop window's until here."""
+def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int,
+            height: int | None = None, border: int = 0, filtered: bool = False
+            ) -> dict[str, np.ndarray]:
+    """One pass's arrays with `pixel` made the film's crop window's (until here: the lane's pixel in
+    the pass's crop window, widened by `border` on each side where the film samples its border).
+
+    Box filter (`filtered` False): the samples of the pixels the tile shares with its neighbour are
+    dropped, as the render drops those pixels (`Tile.keep`). Other filters: every sample stays (it
+    weighs on the pixels its filter covers), `own` marks those of the kept pixels, and a border
+    sample's `pixel` is the nearest pixel of the film."""
     tw, th = tile.size
-    local = arrays["pixel"]
-    lx, ly = local % np.uint32(tw), local // np.uint32(tw)
+    height = height if height is not None else tile.offset[1] + th
+    ew = np.int64(tw + 2 * border)
+    local = arrays["pixel"].astype(np.int64)
+    lx, ly = local % ew - border, local // ew - border
     rows, cols = tile.keep
     keep = ((ly >= (rows.start or 0)) & (ly < (th if rows.stop is None else rows.stop))
             & (lx >= (cols.start or 0)) & (lx < (tw if cols.stop is None else cols.stop)))
+    if filtered:
+        out = dict(arrays)
+        out["own"] = keep.astype(np.uint8)
+        fx = np.clip(lx + tile.offset[0], 0, width - 1)
+        fy = np.clip(ly + tile.offset[1], 0, height - 1)
+        out["pixel"] = (fy * width + fx).astype(np.uint32)
+        return out
     out = {}
     if "seq_count" in arrays:  # a sequence's events, children and uniform numbers follow their camera sample
         events = np.repeat(keep, arrays["seq_count"].astype(np.int64))
@@ -108,9 +124,18 @@ def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int) -> 
     for k, a in arrays.items():
         if k not in out:
             out[k] = a[..., keep]
-    out["pixel"] = ((ly[keep] + np.uint32(tile.offset[1])) * np.uint32(width)
-                    + lx[keep] + np.uint32(tile.offset[0])).astype(np.uint32)
+    fx, fy = lx[keep] + tile.offset[0], ly[keep] + tile.offset[1]
+    out["pixel"] = (fy * width + fx).astype(np.uint32)
     return out
+
+
+def _window(tile: pass_loop.Tile) -> dict:
+    """A tile as the header's `layout` keeps it: crop window offset and size, rows and columns
+    kept."""
+    (tw, th), (rows, cols) = tile.size, tile.keep
+    return {"offset": list(tile.offset), "size": list(tile.size),
+            "keep": [rows.start or 0, th if rows.stop is None else rows.stop,
+                     cols.start or 0, tw if cols.stop is None else cols.stop]}
 
 
 class RecordingIntegrator(StylizedIntegrator):
@@ -239,10 +264,14 @@ def _vec(x) -> np.ndarray:
 
 
 def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) -> dict[str, np.ndarray]:
+    """One pass's kept arrays on the host; `pixel` is the lane's pixel in the pass's (widened) crop
+    window."""
     dr.eval(*kept.values())
     width = dr.width(kept["slot"])
     out = {"pixel": (np.arange(width, dtype=np.uint32) // np.uint32(spp)).astype(np.uint32),
            "slot": np.asarray(kept["slot"], dtype=np.int32).astype(np.int8)}
+    if "pos" in kept:  # placed by the recording integrator itself (`denoise.coverage`)
+        out["pos"] = np.stack([np.asarray(kept["pos"][i], dtype=np.float32) for i in range(2)])
     for k in ("p", "n", "wo", "L_before") + (() if recorder else ("mean",)):
         out[k] = _vec(kept[k])
     if recorder is not None:
@@ -275,11 +304,17 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     rec = (recorder or RecordingIntegrator)(integrator, sequence, per_sample)
     size = film.crop_size()
     w, h = int(size[0]), int(size[1])
-    total = w * h * spp
+    spec = film_filter.describe(film.rfilter())
+    filtered = not film_filter.is_box(spec)
+    border = int(film.rfilter().border_size()) if film.sample_border() and filtered else 0
+    layout = pass_loop.tiles(w, h)
+    tw, th = layout[0].size
+    total = len(layout) * (tw + 2 * border) * (th + 2 * border) * spp if filtered else w * h * spp
     if sequence and max_samples == MAX_SAMPLES:
         max_samples = MAX_SEQUENCE_SAMPLES
     if total > max_samples:
-        what = (f"~{max_samples * bytes_per_sample(rec.settings.stylize) / 2**20:.0f} MiB" if not sequence else
+        per = bytes_per_sample(rec.settings.stylize, filtered=filtered)
+        what = (f"~{max_samples * per / 2**20:.0f} MiB" if not sequence else
                 f"the children and uniforms of the '{slots[0].estimator}' estimator take up to "
                 f"up to {4 + per_sample * 18} bytes each")
         raise UsageError(f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
@@ -287,13 +322,16 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     sensor = scene.sensors()[0]
     header = {
         "format": FORMAT, "version": VERSION, "scene": label, "width": w, "height": h,
-        "crop_offset": [int(c) for c in film.crop_offset()], "filter": "box", "seed": int(seed),
+        "crop_offset": [int(c) for c in film.crop_offset()], "filter": spec if filtered else "box",
+        "seed": int(seed),
         "stylize": rec.settings.stylize, "max_depth": rec.settings.max_depth, "rr_depth": rec.settings.rr_depth,
         "slots": _slots(rec, scene), "stores": "sequence" if sequence else "mean",
         "events_per_sample": per_sample, "view": list(camera_forward(scene)),
         "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
         .tolist(), "sensor": sensor_description(sensor), "passes": [],
     }
+    if filtered:
+        header.update(sample_border=bool(border), layout=[_window(t) for t in layout])
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
     pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
@@ -302,10 +340,13 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
+        if filtered and "pos" not in arrays:  # where Mitsuba put each sample
+            seed_i = pass_loop.pass_seed(seed, index)
+            arrays["pos"] = film_filter.positions(sensor, prog.samples, seed_i)
         tiled = len(prog.layout) > 1  # the crop windows `pipeline.passes` renders, one per pass
         if tiled:
             buf.header["tiles"] = len(prog.layout)
-            arrays = to_film(arrays, prog.layout[prog.tile], w)
+        arrays = to_film(arrays, prog.layout[prog.tile], w, h, border, filtered)
         buf.append(arrays, prog.samples, pass_loop.pass_seed(seed, index), prog.tile if tiled else None)
         rec.kept, rec.recorder = {}, None
         yield prog, buf

@@ -4,9 +4,10 @@
 
 Per camera sample the value is L_before + beta g_θ(mean, vertex) (see `lookdev.buffer`), computed by
 `style.apply` on Dr.Jit arrays with a `Vertex` built from the stored data on the active backend, and
-accumulated into its pixel with the film's (box) filter: the pixel is the mean of its samples. With the
-same seed and the buffer's inner sample count this equals `styletrace.render` with the new style up to
-float rounding (tests/lookdev/test_restyle.py checks every style of the registry).
+accumulated as the film accumulates it (`accumulate`): with a box filter the pixel is the mean of
+its samples; with another filter each sample weighs on the pixels it covers (`lookdev.film_filter`).
+With the same seed and the buffer's inner sample count this equals `styletrace.render` with the new
+style up to float rounding (tests/lookdev/test_restyle.py checks every style of the registry).
 
 Which slot changes: the integrator's own style for `first_hit` buffers, every styled object's style for
 `first_object_hit` buffers; other slots keep their recorded style. Parameters not given keep the
@@ -48,6 +49,7 @@ from ..scene.defaults import Facts, auto_values  # noqa: E402
 from ..styles import get  # noqa: E402
 from ..styles.base import Vertex  # noqa: E402
 from ..styles.gradient import Gradient  # noqa: E402
+from . import film_filter  # noqa: E402
 from .buffer import PILOT, SPREAD, Buffer, load_buffer  # noqa: E402
 from .sequence import device_arrays, replay  # noqa: E402
 
@@ -175,6 +177,10 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d["beta"], d["depth"] = vec("beta", mi.Color3f), mi.UInt32(a["depth"])
     else:
         d["depth"] = dr.zeros(mi.UInt32, buffer.samples)
+    if buffer.filtered:  # splatted with the film's filter (`film_filter.develop`)
+        d["pos"] = mi.Point2f(*(mi.Float(np.ascontiguousarray(a["pos"][i])) for i in range(2)))
+        dr.eval(*[x for x in d.values()])
+        return d
     counts = np.bincount(a["pixel"], minlength=buffer.width * buffer.height)
     if counts.size and counts.min() == counts.max() > 0:
         # every pixel holds k samples: `accumulate` sums them in a fixed order (see there)
@@ -283,13 +289,19 @@ def replay_lanes(buffer: Any, style: str | None = None, estimator: str | None = 
 
 
 def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
-    """Per-pixel mean of the samples (box filter), flat H*W*3, row-major RGB; differentiable.
+    """The image of per-sample values as the film makes it, flat H*W*3, row-major RGB;
+    differentiable.
 
-    Where every pixel holds the same number k of samples, they are gathered pixel by pixel and summed in
-    blocks of k: one order on every run. An atomic scatter-add (the fallback, and what Mitsuba's film does)
-    adds a pixel's samples in whatever order the threads reach them, so two restyles of one buffer could
-    differ in the last bit."""
+    Box filter: the per-pixel mean of the samples. Where every pixel holds the same number k of
+    samples, they are gathered pixel by pixel and summed in blocks of k: one order on every run. An
+    atomic scatter-add (the fallback, and what Mitsuba's film does) adds a pixel's samples in
+    whatever order the threads reach them, so two restyles of one buffer could differ in the last
+    bit. Other filters: each pass splatted with the filter's weights and developed as Mitsuba's film
+    does, then the passes averaged (`film_filter.develop`; atomic adds, so the last bit may
+    vary)."""
     d = device(buffer)
+    if buffer.filtered:
+        return film_filter.develop(buffer, values)
     if "by_pixel" in d:
         k = d["per_pixel"]
         out = [dr.block_sum(dr.gather(mi.Float, values[c], d["by_pixel"]), k) for c in range(3)]

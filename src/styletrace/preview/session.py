@@ -161,7 +161,8 @@ class Session:
             return img, buf.spp, int(buf.header["slots"][0]["inner"])
 
     def state(self) -> dict[str, Any]:
-        per = bytes_per_sample("first_hit")
+        filtered = self.buffer is not None and self.buffer.filtered
+        per = bytes_per_sample("first_hit", filtered=filtered)
         return {"scene": self.label, "width": self.width, "height": self.height, "spp_done": self.spp_done,
                 "spp": self.spp, "inner": self.inner, "samples": self.width * self.height * self.spp_done,
                 "cap_samples": self.max_samples, "bytes_per_sample": per,

@@ -1,0 +1,174 @@
+"""The film's reconstruction filter for buffers: where Mitsuba put each sample, and its splat.
+
+    spec = describe(film.rfilter())            # {"type": "gaussian", "stddev": 0.5}: the header's
+    pos = positions(sensor, spp, seed)         # 2 x N float32: each camera sample's film position
+    img = develop(buf, values)                 # the restyled image, as Mitsuba's film develops it
+
+How Mitsuba 3 places and weights a camera sample (SamplingIntegrator::render and render_sample, JIT
+variants): lane i of a pass of s spp is pixel i // s of the crop window (widened by the filter's
+border on each side where the film samples its border), its film position is that pixel's corner
+(crop offset included) plus the sensor sampler's first `next_2d()` of the pass, the sampler seeded
+with `seed(pass seed, lanes)` after `set_sample_count(s)` and `set_samples_per_wavefront(s)`.
+`positions` draws that same `next_2d()` from a clone of the sampler: bit for bit the render's
+(checked for the independent, stratified and multijitter samplers,
+tests/lookdev/test_film_filter.py).
+
+The pass's ImageBlock has the crop window's size and offset, no border (samples outside the crop
+only contribute to the pixels inside it), no normalisation, and is coalesced in LLVM variants at >=
+4 spp per pass; `ImageBlock.put` weighs a sample by `rfilter.eval` (not `eval_discretized`) of its
+offset from each pixel centre along x times along y (a box filter: weight 1 in the pixel of the
+lane, at its integer position), adding the weight to channel W; `HDRFilm.develop` divides the
+weighted sum by W (W = 0: 0). `develop` builds that ImageBlock per pass, with the rebuilt filter,
+develops it, keeps the pixels the pass's tile keeps and averages the passes weighted by their spp,
+as `pipeline.passes` does.
+"""
+from __future__ import annotations
+
+import re
+from fractions import Fraction
+from functools import lru_cache
+from typing import Any
+
+from ..jit import backend
+
+backend()
+
+import drjit as dr  # noqa: E402
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..errors import SceneError  # noqa: E402
+
+BOX = {"type": "box"}
+#: Mitsuba class -> (plugin name, parameters read from its radius or description)
+_KINDS = {"BoxFilter": "box", "TentFilter": "tent", "GaussianFilter": "gaussian",
+          "MitchellNetravaliFilter": "mitchell", "CatmullRomFilter": "catmullrom",
+          "LanczosSincFilter": "lanczos"}
+
+
+def is_box(spec: Any) -> bool:
+    """Whether a header's filter entry ("box", or a spec dict; None: a buffer older than filters) is
+    a box."""
+    return spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box")
+
+
+def _candidates(rfilter) -> list[dict]:
+    kind = _KINDS.get(rfilter.class_name())
+    if kind is None:
+        return []
+    r = float(rfilter.radius())
+    if kind in ("box", "catmullrom"):
+        return [{"type": kind}]
+    if kind == "tent":
+        return [{"type": kind, "radius": r}]
+    if kind == "gaussian":
+        return [{"type": kind, "stddev": r / 4.0}]  # Mitsuba: radius = 4 stddev (exact in binary)
+    if kind == "lanczos":
+        return [{"type": kind, "lobes": int(round(r))}]
+    # mitchell: B and C, printed to 6 digits
+    text = dict(re.findall(r"(\w+)=([-+0-9.eE]+)", str(rfilter)))
+    b, c = float(text.get("B", 1 / 3)), float(text.get("C", 1 / 3))
+    near = [(float(Fraction(v).limit_denominator(12)), v) for v in (b, c)]
+    return [{"type": kind, "B": x, "C": y} for x in near[0] for y in near[1]]
+
+
+def describe(rfilter) -> dict:
+    """The film's filter as a plugin dict that `build` turns back into the same filter (its `eval`
+    equal at every tested offset); SceneError (one line) for a filter that cannot be rebuilt so."""
+    xs = mi.Float(np.linspace(-4.0, 4.0, 257, dtype=np.float32))
+    want = np.asarray(rfilter.eval(xs))
+    for spec in _candidates(rfilter):
+        try:
+            got = np.asarray(build(_key(spec)).eval(xs))
+        except Exception:  # noqa: BLE001 - a parameter Mitsuba refuses: try the next candidate
+            continue
+        same_radius = float(build(_key(spec)).radius()) == float(rfilter.radius())
+        if np.array_equal(got, want) and same_radius:
+            return spec
+    raise SceneError(f"the film's reconstruction filter '{rfilter.class_name()}' cannot be "
+                     f"recorded in a buffer: use box, tent, gaussian, mitchell, catmullrom or "
+                     f"lanczos")
+
+
+def _key(spec: dict) -> tuple:
+    return tuple(sorted(spec.items()))
+
+
+@lru_cache(maxsize=16)
+def build(key: tuple):
+    """The Mitsuba filter of a spec (as `_key` orders it), made once per variant and spec."""
+    return mi.load_dict(dict(key))
+
+
+def rebuild(spec: Any):
+    """The filter of a header's entry (`is_box` entries: a box)."""
+    return build(_key(BOX if is_box(spec) else dict(spec)))
+
+
+def positions(sensor, spp: int, seed: int) -> np.ndarray:
+    """Each camera sample's film position of a pass of `spp` spp and seed `seed` on the sensor's
+    film as it is set now (crop window, border): 2 x lanes float32, pixels of the full film (crop
+    offset included)."""
+    film = sensor.film()
+    b = int(film.rfilter().border_size()) if film.sample_border() else 0
+    w, h = (int(v) + 2 * b for v in film.crop_size())
+    lanes = w * h * spp
+    sampler = sensor.sampler().clone()
+    sampler.set_sample_count(spp)
+    sampler.set_samples_per_wavefront(spp)
+    sampler.seed(seed, lanes)
+    idx = dr.arange(mi.UInt32, lanes) // spp
+    py = idx // w
+    px = idx - py * w
+    off = [int(v) for v in film.crop_offset()]
+    corner = mi.Vector2i(mi.Int32(px) + (off[0] - b), mi.Int32(py) + (off[1] - b))
+    pos = mi.Vector2f(corner) + sampler.next_2d()
+    dr.eval(pos)
+    return np.stack([np.asarray(pos.x, dtype=np.float32), np.asarray(pos.y, dtype=np.float32)])
+
+
+def _keep_index(tile: dict, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """(pixels of the tile's block, pixels of the film) that a tile keeps, row-major indices."""
+    (tw, th), (ox, oy) = tile["size"], tile["offset"]
+    r0, r1, c0, c1 = tile["keep"]
+    ys, xs = np.mgrid[r0:r1, c0:c1]
+    return ((ys * tw + xs).ravel().astype(np.uint32),
+            ((ys + oy) * width + xs + ox).ravel().astype(np.uint32))
+
+
+def develop(buffer, values) -> mi.Float:
+    """The image of per-sample `values` (Color3f, one lane per camera sample) of a buffer recorded
+    with a filter other than a box: flat H*W*3 row-major RGB, differentiable in the values."""
+    d = buffer.device
+    rf = rebuild(buffer.header["filter"])
+    w, h = buffer.width, buffer.height
+    base = buffer.header.get("crop_offset", [0, 0])
+    layout = buffer.header["layout"]
+    if "keep_index" not in d:
+        d["keep_index"] = [tuple(mi.UInt32(a) for a in _keep_index(t, w)) for t in layout]
+    llvm = mi.variant().startswith("llvm")
+    total = dr.zeros(mi.Float, w * h * 3)
+    spp = np.zeros(w * h, dtype=np.float32)
+    start = 0
+    for p in buffer.header["passes"]:
+        count, n, t = int(p["samples"]), int(p["spp"]), int(p.get("tile", 0))
+        tile = layout[t]
+        idx = dr.arange(mi.UInt32, start, start + count)
+        start += count
+        corner = mi.ScalarPoint2i(base[0] + tile["offset"][0], base[1] + tile["offset"][1])
+        block = mi.ImageBlock(mi.ScalarVector2u(*tile["size"]), corner, 4, rf, False, False,
+                              llvm and n >= 4)
+        block.put(dr.gather(mi.Point2f, d["pos"], idx),
+                  [dr.gather(mi.Float, values[c], idx) for c in range(3)] + [mi.Float(1.0)])
+        data = block.tensor().array
+        src, dst = d["keep_index"][t]
+        weight = dr.gather(mi.Float, data, src * 4 + 3)
+        weight = dr.select(weight == 0.0, 1.0, weight)
+        for c in range(3):
+            value = dr.gather(mi.Float, data, src * 4 + c) / weight * n
+            dr.scatter_reduce(dr.ReduceOp.Add, total, value, dst * 3 + c)
+        spp[_keep_index(tile, w)[1]] += n
+    return total / mi.Float(np.repeat(np.maximum(spp, 1.0), 3))
+
+
+__all__ = ["describe", "build", "rebuild", "is_box", "positions", "develop", "BOX"]
