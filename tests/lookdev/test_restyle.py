@@ -138,3 +138,15 @@ def test_restyle_sums_each_pixel_in_one_order(buf):
     first = restyle(buf, style="gamma", gamma=1.7)
     for _ in range(30):
         np.testing.assert_array_equal(restyle(buf, style="gamma", gamma=1.7), first)
+
+
+def test_a_restyle_with_new_parameters_chooses_the_auto_values_again():
+    """The header names the values the pilot chose (`auto`); a restyle that changes the style's parameters
+    chooses them again from the stored pilot, as a fresh render of the new values does (two levels need one
+    threshold, not the three bands' two)."""
+    kw = dict(spp=2, inner=4, seed=3, width=24, height=24)
+    buf = styletrace.render_buffer("cornell-box", style="cel", **kw)
+    assert set(buf.header["slots"][0]["auto"]) >= {"thresholds", "levels"}
+    for params in ({"levels": "0.2,0.8"}, {"levels": "0.1,0.3,0.6,0.9"}, {"bands": 5}):
+        fresh = styletrace.render("cornell-box", style="cel", denoise="off", **kw, **params)
+        np.testing.assert_allclose(styletrace.restyle(buf, **params), fresh, rtol=1e-5, atol=1e-6)

@@ -337,6 +337,8 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
+        # the values the pilot chose: a restyle that changes the slot's parameters chooses them again
+        rec_slot["auto"] = list(getattr(target.slot.style, "chosen", ()))
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)

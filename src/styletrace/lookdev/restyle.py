@@ -120,6 +120,9 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
         est = rec["estimator"]
         n = int(rec["inner"])
         if rec["owner"] == changed_owner(buffer):
+            given = {k: v for k, v in params.items() if v is not None}
+            if given and style in (None, rec["style"]):  # new values: the pilot's choices are made again
+                values = {k: v for k, v in values.items() if k not in rec.get("auto", ())}
             values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
             new = get(str(values["style"]))()
             if inner is not None and S.adaptive(S.parse_inner(inner, 1)):

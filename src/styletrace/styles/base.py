@@ -68,6 +68,8 @@ class Style:
         self.values: dict[str, Any] = {}
         #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in auto values
         self.given: dict[str, Any] = {k: v for k, v in values.items() if v is not None}
+        #: the parameters `pinned` filled in from the scene (auto values), as opposed to given ones
+        self.chosen: tuple[str, ...] = ()
         for p in self.params:
             self.values[p.name] = p.parse(values[p.name]) if key_in(values, p.name) else p.default
         self.validate()
@@ -95,8 +97,11 @@ class Style:
         return {}
 
     def pinned(self, values: Mapping[str, Any]) -> "Style":
-        """A new style of the same kind: the given parameters kept, `values` filling in auto ones."""
-        return type(self)(**{**self.given, **values})
+        """A new style of the same kind: the given parameters kept, `values` filling in auto ones (named in the
+        new style's `chosen`)."""
+        out = type(self)(**{**self.given, **values})
+        out.chosen = tuple(sorted(set(self.chosen) | set(values)))
+        return out
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         raise NotImplementedError
