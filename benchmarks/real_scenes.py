@@ -64,7 +64,23 @@ def render(path: Path, style: str, size, seed: int, **kw) -> tuple[np.ndarray, f
     return np.asarray(img, dtype=np.float32)[..., :3], time.perf_counter() - t
 
 
-def measure(path: Path, styles: list[str], longest: int) -> dict:
+def measure(path: Path, styles: list[str], longest: int, fresh: bool = False) -> dict:
+    """The scene's rows and thumbnails, kept in benchmarks/.cache/real_scenes so that a stopped run resumes."""
+    cache = HERE / ".cache" / "real_scenes" / f"{path.parent.name}-{longest}.pkl"
+    import pickle
+    if cache.exists() and not fresh:
+        kept = pickle.loads(cache.read_bytes())
+        if all(s in kept["rows"] for s in styles):
+            kept["rows"] = {s: kept["rows"][s] for s in styles}
+            kept["thumbs"] = {s: kept["thumbs"][s] for s in styles}
+            return kept
+    out = _measure(path, styles, longest)
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    cache.write_bytes(pickle.dumps(out))
+    return out
+
+
+def _measure(path: Path, styles: list[str], longest: int) -> dict:
     size = film_size(path, longest)
     spp = scene_spp(load_scene(str(path)))
     render(path, "identity", (32, 32), 0)  # compile what every style shares
@@ -140,6 +156,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--scenes", default="")
     ap.add_argument("--styles", default="")
     ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--fresh", action="store_true", help="measure again what the cache holds")
     args = ap.parse_args(argv)
     panel = json.loads(MANIFEST.read_text())["scenes"]
     chosen = [e for e in panel if not args.scenes or e["name"] in args.scenes.split(",")]
@@ -152,7 +169,8 @@ def main(argv: list[str]) -> int:
     results = {}
     for entry in chosen:
         print(f"{entry['name']} ({'held out' if entry['held_out'] else 'tuning'})", flush=True)
-        results[entry["name"]] = measure(Path(args.panel) / entry["name"] / "scene.xml", styles, args.size)
+        results[entry["name"]] = measure(Path(args.panel) / entry["name"] / "scene.xml", styles, args.size,
+                                         args.fresh)
     if args.no_write:
         return 0
     contact_sheet(results, chosen, HERE.parent / "docs" / "real_scenes.png")

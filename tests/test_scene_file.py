@@ -310,3 +310,16 @@ def test_an_integrator_chosen_by_a_default_renders_as_that_integrator(tmp_path, 
     bounced = read(out)[1]
     mitsuba_path = np.asarray(mi.render(mi.load_file(path, integrator="path"), spp=64, seed=1))
     assert mitsuba_path.mean() > 0.03 and abs(bounced.mean() - mitsuba_path.mean()) < 0.25 * mitsuba_path.mean()
+
+
+def test_a_comment_with_a_double_hyphen_is_read_as_mitsuba_reads_it(tmp_path):
+    """XML forbids "--" inside a comment; Mitsuba's parser accepts it (a licence header written that way), so
+    the file is resized and rendered all the same."""
+    import numpy as np
+    path = tmp_path / "dashes.xml"
+    path.write_text('<!--\n-- SPDX-License-Identifier: Apache-2.0\n  -->\n<scene version="3.0.0">'
+                    '<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>'
+                    '<integer name="height" value="8"/></film></sensor><shape type="sphere"/>'
+                    '<emitter type="constant"/></scene>')
+    img = styletrace.render(str(path), style="identity", width=6, height=4, spp=1)
+    assert img.shape == (4, 6, 3) and np.isfinite(img).all()

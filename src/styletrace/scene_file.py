@@ -33,6 +33,7 @@ A file that needs none of this is handed to `mi.load_file` unchanged.
 from __future__ import annotations
 
 import os
+import re
 import xml.etree.ElementTree as ET
 from typing import Any, Mapping
 
@@ -40,6 +41,8 @@ import mitsuba as mi
 
 from .errors import SceneError
 
+#: an XML comment, for `parse_xml`
+COMMENT = re.compile(r"<!--.*?-->", re.S)
 #: integrator properties that `stylized` shares with Mitsuba's path tracers
 SHARED = ("max_depth", "rr_depth", "hide_emitters")
 #: integrator types registered from Python (Mitsuba's plugin manager does not list them)
@@ -195,7 +198,7 @@ class _Includes:
             self.problem = f"{self.origin}: included file '{name}' not found"
             return None
         try:
-            root = ET.parse(path).getroot()
+            root = parse_xml(path).getroot()
         except (ET.ParseError, OSError, ValueError) as exc:
             self.problem = f"{self.origin}: included file '{path}' is not readable XML ({exc})"
             return None
@@ -271,6 +274,18 @@ def _load_text(text: str, folder: str, defines: Mapping[str, str]) -> mi.Scene:
             resolver.append(p)
 
 
+def parse_xml(path: str) -> ET.ElementTree:
+    """The file's element tree. Mitsuba's parser accepts a comment holding "--", which XML forbids (a licence
+    header `<!-- -- SPDX ... -->`); comments are dropped and the file read again where that is what fails.
+    Raises ET.ParseError, OSError or ValueError where it is not XML all the same."""
+    try:
+        return ET.parse(path)
+    except ET.ParseError:
+        with open(path, encoding="utf-8") as f:
+            text = COMMENT.sub("", f.read())
+        return ET.ElementTree(ET.fromstring(text))
+
+
 def load(path: str, width: int | None = None, height: int | None = None,
          defines: Mapping[str, Any] | None = None) -> tuple[Any, list[str]]:
     """The loaded file (whatever Mitsuba made of it) and the notes to show the user. Mitsuba's own
@@ -278,7 +293,7 @@ def load(path: str, width: int | None = None, height: int | None = None,
     origin = f"scene file '{path}'"
     defines = {str(k): str(v) for k, v in (defines or {}).items()}
     try:
-        tree = ET.parse(path)
+        tree = parse_xml(path)
     except (ET.ParseError, OSError, ValueError):
         tree = None  # leave the report to Mitsuba's parser
     notes: list[str] = []

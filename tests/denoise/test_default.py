@@ -102,3 +102,22 @@ def test_off_is_the_pass_loop_of_the_papers_estimators_bit_for_bit(name):
                            api.make_integrator_from(values), spp, seed=7))[-1].image
     assert bit_identity.digest(image) == bit_identity.digest(seam)
     assert api.make_integrator_from(values).settings.firefly is None
+
+
+@pytest.mark.parametrize("style,inner", [("identity", None), ("gooch", None), ("acp", 4)])
+def test_auto_denoises_the_image_where_the_expectation_adds_nothing_or_is_refused(auto, style, inner):
+    """One child or none (identity, gooch: g of the denoised mean is the denoised image), or g applied to every
+    child (acp, which the expectation's denoiser refuses): auto denoises the image."""
+    plan = choose(resolve(python_job("cornell-box", style=style, inner=inner, **SMALL)))
+    assert plan.method == "image" and plan.note == ""
+    image = styletrace.render("cornell-box", style=style, inner=inner, **SMALL)
+    assert np.array_equal(image, styletrace.render("cornell-box", style=style, inner=inner, denoise="image", **SMALL))
+
+
+def test_a_given_spp_over_the_buffers_cap_denoises_the_image(auto, monkeypatch):
+    from styletrace.lookdev import buffer
+    monkeypatch.setattr(buffer, "MAX_SAMPLES", 24 * 24 * 3)
+    assert choose(resolve(python_job("cornell-box", style="cel", spp=4, **SMALL))).method == "image"
+    # without a given spp the budget is spent within the cap instead
+    plan = choose(resolve(python_job("cornell-box", style="cel", **SMALL)))
+    assert plan.method == "expectation" and plan.resolved.spp == 2

@@ -23,7 +23,8 @@ from . import pipeline
 def method(sc, integ, settings) -> tuple[str, str]:
     """(the method F12 uses: expectation, image or off; the one-line note where auto could not denoise)."""
     from ..denoise.default import method_for
-    return method_for(sc, integ, settings.denoise)
+    size = sc.sensors()[0].film().crop_size()
+    return method_for(sc, integ, settings.denoise, samples=int(size[0]) * int(size[1]) * int(settings.spp))
 
 
 def firefly(sc, integ, used: str):

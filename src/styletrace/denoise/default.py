@@ -3,14 +3,16 @@
     plan = choose(resolved, method="auto", local=True)
     plan.method, plan.resolved, plan.note          # "expectation" | "image" | "off", the pinned job, why not
 
-`auto` (the default of every front end, `denoise.default_method`) is `expectation` where the expectation
-denoiser applies (`expectation.check`; the `denoise` extra installed; an rgb film; one process) and `off`
-elsewhere, with a one-line note saying why. A render that denoises also gets, unless the caller set them:
+`auto` (the default of every front end, `denoise.default_method`) is `expectation` for a style of more than
+one child where the expectation denoiser applies (`expectation.check`; the `denoise` extra installed; an rgb
+film; one process); `image` for the rest that the image denoiser takes (an affine or closed-form style, where
+both are the same, a per-sample style, first_n_hits, first_object_hit); and `off` elsewhere (feature lines,
+which an image denoiser blurs; Ray), with a one-line note saying why. A render that denoises also gets, unless the caller set them:
 - the firefly control of direct application (`firefly` = FIREFLY_K, its floor the scene's median
   brightness: `estimators.affine.MeanOfN`);
 - with `expectation` and no spp given, the scene's sample count S spent as camera samples times children:
   spp = max(MIN_SPP, round(SPEND * S / n)) for n children per stylized vertex, about SPEND times the paths
-  of the physically based render at S spp (docs/look.md).
+  of the physically based render at S spp, and at most what the buffer holds (docs/look.md).
 `off` is the paper's estimators exactly: no denoiser, no firefly control.
 """
 from __future__ import annotations
@@ -55,20 +57,23 @@ class Plan:
     note: str = ""       # why auto did not denoise ('' where it did or was not asked to)
 
 
-def why_not(scene, integrator, local: bool = True) -> str:
-    """Why `expectation` cannot denoise `integrator` on `scene` ('' where it can); `local`: one process."""
+def why_not(scene, integrator, local: bool = True, method: str = "expectation") -> str:
+    """Why `method` (expectation or image) cannot denoise `integrator` on `scene` ('' where it can); `local`:
+    the render runs in one process."""
     from ..kernel.integrator import StylizedIntegrator
     from ..pipeline.scene import film_format
     if not local:
         return "the render runs on Ray or as several images; the denoiser needs the whole image in one process"
-    if not isinstance(integrator, StylizedIntegrator):
-        return f"the integrator is Mitsuba's {type(integrator).__name__}, not stylized"
     try:
         import pyoidn  # noqa: F401
     except ImportError:
         return "Intel Open Image Denoise is not installed (pip install 'styletrace[denoise]')"
     if film_format(scene) != "rgb":
         return f"the film's pixel_format is '{film_format(scene)}', not rgb"
+    if method == "image":
+        return ""
+    if not isinstance(integrator, StylizedIntegrator):
+        return f"the integrator is Mitsuba's {type(integrator).__name__}, not stylized"
     from . import expectation
     try:
         expectation.check(integrator)
@@ -77,18 +82,45 @@ def why_not(scene, integrator, local: bool = True) -> str:
     return ""
 
 
-def method_for(scene, integrator, method: str | None = None, local: bool = True) -> tuple[str, str]:
-    """(expectation | image | off, the one-line note where auto could not denoise, else '')."""
+def nonlinear(integrator) -> bool:
+    """Whether the first stylized level applies g to a mean of more than one child, so that denoising the
+    expectation before g differs from denoising the image after it."""
+    from ..kernel.integrator import StylizedIntegrator
+    if not isinstance(integrator, StylizedIntegrator):
+        return False
+    slot = integrator.settings.slot
+    n = slot.n(0)
+    return not slot.style.per_sample and int(n) > 1
+
+
+def method_for(scene, integrator, method: str | None = None, local: bool = True, samples: int = 0
+               ) -> tuple[str, str]:
+    """(expectation | image | off, the one-line note where auto could not denoise, else ''). auto: expectation
+    for a style of more than one child where it applies; else image (an affine or closed-form style, a
+    per-sample style, where the expectation's denoiser refuses); else off. `samples`: the camera samples of a
+    given spp (width x height x spp), which the expectation's buffer must hold; 0 where spp is not given."""
     method = check_method(method or default_method())
     if method != "auto":
         return method, ""
-    reason = why_not(scene, integrator, local)
-    return ("off", f"not denoised: {reason}") if reason else ("expectation", "")
+    from ..lookdev.buffer import MAX_SAMPLES
+    why = why_not(scene, integrator, local, "expectation")
+    if not why and samples > MAX_SAMPLES:
+        why = f"{samples} camera samples, over the expectation buffer's cap of {MAX_SAMPLES}"
+    if not why and nonlinear(integrator):
+        return "expectation", ""
+    image_why = why_not(scene, integrator, local, "image")
+    if image_why:
+        return "off", f"not denoised: {image_why}"
+    if why and why.startswith("feature lines"):  # the image denoiser would blur the lines away
+        return "off", f"not denoised: {why}"
+    return "image", ""
 
 
 def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
     """The plan of a resolved job (`pipeline.resolve.Resolved`) for `method` (None: the default)."""
-    method, note = method_for(resolved.scene, resolved.integrator, method, local)
+    w, h = resolved.size
+    given = 0 if resolved.job.spp is None else w * h * int(resolved.spp)
+    method, note = method_for(resolved.scene, resolved.integrator, method, local, given)
     if method == "off":
         return Plan("off", resolved, note)
     return Plan(method, pin(resolved, method), note)
@@ -105,11 +137,14 @@ def pin(resolved, method: str):
         integrator, note = pin_firefly(resolved.scene, integrator, resolved.pilot, FIREFLY_K)
         auto.append(note)
     spp = resolved.spp
-    n = integrator.settings.slot.n(0)
+    n = int(integrator.settings.slot.n(0))
     if method == "expectation" and resolved.job.spp is None and n > 1:
-        spp = max(MIN_SPP, round(SPEND * resolved.spp / n))
+        from ..lookdev.buffer import MAX_SAMPLES
+        w, h = resolved.size
+        spp = max(1, min(max(MIN_SPP, round(SPEND * resolved.spp / n)), MAX_SAMPLES // (w * h)))
         auto.append(f"spp={spp} (the scene's {resolved.spp} samples as {spp} x {n} children)")
     return replace(resolved, integrator=integrator, spp=spp, auto="; ".join(a for a in auto if a))
 
 
-__all__ = ["METHODS", "ENV", "check_method", "default_method", "Plan", "choose", "method_for", "why_not", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]
+__all__ = ["METHODS", "ENV", "check_method", "default_method", "Plan", "choose", "method_for", "why_not",
+           "nonlinear", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]

@@ -70,10 +70,10 @@ class Session:
         # every front end's default (`denoise.default`): the full passes' expectation denoised where it applies
         from ..denoise.default import method_for
         method, self.note = method_for(self.scene, self.integrator, denoise)
-        self.denoised = method == "expectation" and denoise_available()
-        if method == "image":
+        if denoise == "image":
             raise UsageError("the preview restyles the expectation: denoise 'image' would hide what the styles see; "
                              "use expectation, auto or off")
+        self.denoised = method == "expectation" and denoise_available()
         self._draft_integrator = resolve(self.job.with_(given={**self.job.given, "inner_samples": DRAFT_INNER}),
                                          self.scene).integrator
         self.jit = threading.Lock()
