@@ -10,30 +10,7 @@ from styletrace.measures import firefly_share
 
 styletrace.init()
 
-T = mi.ScalarTransform4f
-RES = 48
-
-
-def grey(a):
-    return {"type": "diffuse", "reflectance": {"type": "rgb", "value": [a, a, a]}}
-
-
-def caustic_scene(res=RES):
-    """A floor under a dim sky; a lamp of radius 0.04 under an opaque shade, seen by the floor only in a mirror
-    above it: next-event estimation never reaches it, BSDF samples rarely do, and then carry 2000 x albedo."""
-    return {"type": "scene",
-            "sensor": {"type": "perspective", "fov": 45,
-                       "to_world": T().look_at(origin=[0, 3, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "gaussian"}},
-                       "sampler": {"type": "independent", "sample_count": 4}},
-            "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": grey(0.5)},
-            "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.3, 0.3]}},
-            "lamp": {"type": "sphere", "center": [0, 1.0, 0], "radius": 0.04,
-                     "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2000, 2000, 2000]}}},
-            "shade": {"type": "disk", "to_world": T().translate([0, 0.9, 0]).rotate([1, 0, 0], -90).scale(0.25),
-                      "bsdf": grey(0.2)},
-            "mirror": {"type": "rectangle", "to_world": T().translate([0, 2.0, 0]).rotate([1, 0, 0], 90),
-                       "bsdf": {"type": "conductor"}}}
+from helpers.look_scenes import caustic_scene
 
 
 @pytest.mark.parametrize("style", ["contrast", "identity"])
@@ -58,7 +35,8 @@ def test_a_buffer_keeps_the_controlled_mean_so_restyles_equal_renders():
     kw = dict(style="contrast", inner=8, spp=2, seed=4, firefly=4)
     buf = styletrace.render_buffer(caustic_scene(24), **kw)
     image = styletrace.render(caustic_scene(24), denoise="off", **kw)
-    assert np.array_equal(buf.image, image)
+    # the recording kernel has more outputs (the filtered buffer's positions): equal up to float rounding
+    np.testing.assert_allclose(buf.image, image, rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(styletrace.restyle(buf, style="contrast"), image, rtol=1e-5, atol=1e-5)
 
 

@@ -10,33 +10,7 @@ from styletrace.api import load_scene, make_integrator, resolve_defaults
 
 styletrace.init()
 
-T = mi.ScalarTransform4f
-RES = 48
-
-
-def grey(a):
-    return {"type": "diffuse", "reflectance": {"type": "rgb", "value": [a, a, a]}}
-
-
-def window_room(res=RES):
-    """A closed grey room lit by a window in its back wall (radiance 40, ~2% of the image) seen by the camera."""
-    return {"type": "scene", "integrator": {"type": "path", "max_depth": 6},
-            "sensor": {"type": "perspective", "fov": 70,
-                       "to_world": T().look_at(origin=[0, 0, 3.5], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "gaussian"}},
-                       "sampler": {"type": "independent", "sample_count": 16}},
-            "floor": {"type": "rectangle", "to_world": T().translate([0, -1, 0]).rotate([1, 0, 0], -90).scale(2),
-                      "bsdf": grey(0.6)},
-            "ceiling": {"type": "rectangle", "to_world": T().translate([0, 1, 0]).rotate([1, 0, 0], 90).scale(2),
-                        "bsdf": grey(0.7)},
-            "back": {"type": "rectangle", "to_world": T().translate([0, 0, -1]).scale(2), "bsdf": grey(0.5)},
-            "left": {"type": "rectangle", "to_world": T().translate([-1, 0, 0]).rotate([0, 1, 0], 90).scale(2),
-                     "bsdf": grey(0.5)},
-            "right": {"type": "rectangle", "to_world": T().translate([1, 0, 0]).rotate([0, 1, 0], -90).scale(2),
-                      "bsdf": grey(0.5)},
-            "window": {"type": "rectangle", "to_world": T().translate([-0.3, 0.35, -0.99]).scale([0.45, 0.4, 1]),
-                       "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [40, 40, 38]}}},
-            "box": {"type": "cube", "to_world": T().translate([0.35, -0.65, -0.2]).scale(0.35), "bsdf": grey(0.4)}}
+from helpers.look_scenes import window_room
 
 
 @pytest.fixture(scope="module")

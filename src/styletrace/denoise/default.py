@@ -10,7 +10,7 @@ both are the same, a per-sample style, first_n_hits, first_object_hit); and `off
 which an image denoiser blurs; Ray), with a one-line note saying why. A render that denoises also gets, unless the caller set them:
 - the firefly control of direct application (`firefly` = FIREFLY_K, its floor the scene's median
   brightness: `estimators.affine.MeanOfN`);
-- with `expectation` and no spp given, the scene's sample count S spent as camera samples times children:
+- without a given spp, the scene's sample count S spent as camera samples times children:
   spp = max(MIN_SPP, round(SPEND * S / n)) for n children per stylized vertex, about SPEND times the paths
   of the physically based render at S spp, and at most what the buffer holds (docs/look.md).
 `off` is the paper's estimators exactly: no denoiser, no firefly control.
@@ -127,7 +127,7 @@ def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
 
 
 def pin(resolved, method: str):
-    """`resolved` with the firefly control on and, for `expectation` without a given spp, the budget spent."""
+    """`resolved` with the firefly control on and, without a given spp, the budget spent on children."""
     from ..kernel.integrator import StylizedIntegrator
     from ..scene.defaults import pin_firefly
     integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
@@ -138,10 +138,12 @@ def pin(resolved, method: str):
         auto.append(note)
     spp = resolved.spp
     n = int(integrator.settings.slot.n(0))
-    if method == "expectation" and resolved.job.spp is None and n > 1:
+    if resolved.job.spp is None and n > 1:
         from ..lookdev.buffer import MAX_SAMPLES
         w, h = resolved.size
-        spp = max(1, min(max(MIN_SPP, round(SPEND * resolved.spp / n)), MAX_SAMPLES // (w * h)))
+        spp = max(MIN_SPP, round(SPEND * resolved.spp / n))
+        if method == "expectation":  # within what the buffer holds
+            spp = max(1, min(spp, MAX_SAMPLES // (w * h)))
         auto.append(f"spp={spp} (the scene's {resolved.spp} samples as {spp} x {n} children)")
     return replace(resolved, integrator=integrator, spp=spp, auto="; ".join(a for a in auto if a))
 

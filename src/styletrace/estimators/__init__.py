@@ -56,7 +56,8 @@ Public API
 """
 from __future__ import annotations
 
-from .adaptive import AdaptiveDirect, channel_mean
+from .adaptive import AdaptiveDirect
+from .arrays import channel_mean
 from .affine import Affine, Mean, apply_linear
 from .algebra import Compose, Product, Sum, inner_mean
 from .base import Context, Estimator

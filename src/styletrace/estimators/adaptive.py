@@ -46,21 +46,7 @@ import numpy as np
 from . import arrays as A
 from .base import Context, Estimator, check_count
 
-__all__ = ["AdaptiveDirect", "channel_mean"]
-
-
-def channel_mean(x):
-    """The mean of a value's channels per lane: Dr.Jit Float from Color3f/Array3f, numpy (lanes, 1)."""
-    if A.is_drjit(x):
-        dr = A.drjit()
-        if dr.depth_v(x) > 1:
-            total = x[0]
-            for i in range(1, len(x)):
-                total = total + x[i]
-            return total * (1.0 / len(x))
-        return x
-    x = np.asarray(x)
-    return x.mean(axis=-1, keepdims=True) if x.ndim >= 2 else x
+__all__ = ["AdaptiveDirect"]
 
 
 class AdaptiveDirect(Estimator):
@@ -90,7 +76,7 @@ class AdaptiveDirect(Estimator):
     def feed(self, ctx, state, x, mask, carry):
         state = dict(state)
         n = state["count"] + 1.0
-        u = channel_mean(x)
+        u = A.channel_mean(x)
         delta = u - state["mean_u"]
         mean_u = state["mean_u"] + delta / n
         m2_u = state["m2_u"] + delta * (u - mean_u)
@@ -117,7 +103,7 @@ class AdaptiveDirect(Estimator):
         if self.curvature is None:
             return 0.0 * var
         curv = self.curvature(self.mean(state), A.sqrt(var / n))
-        per = channel_mean(curv) if signed else A.hmax(A.abs(curv))
+        per = A.channel_mean(curv) if signed else A.hmax(A.abs(curv))
         return per * var / (2.0 * n)
 
     def band_width(self, n):

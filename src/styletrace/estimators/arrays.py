@@ -156,7 +156,8 @@ def hmax(v):
 
 
 def channel_mean(v):
-    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value."""
+    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value (Dr.Jit Float from
+    Color3f/Array3f, numpy (lanes, 1) from (lanes, C))."""
     if is_drjit(v):
         dr = drjit()
         if dr.depth_v(v) > 1:
