@@ -10,7 +10,8 @@ from ..styles import registry
 
 RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "line_mode", "line_types",
                "reuse", "spp", "pass_spp",
-               "max_depth", "seed", "aovs", "record_buffer", "denoise", "denoise_quality")
+               "max_depth", "seed", "aovs", "record_buffer", "denoise", "denoise_quality",
+               "firefly", "firefly_k")
 
 
 def style_rows(settings) -> list[tuple[object, str]]:

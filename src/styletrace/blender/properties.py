@@ -145,6 +145,14 @@ class SceneSettings(bpy.types.PropertyGroup):
                     "and a Noisy pass keeps the image before denoising")
     denoise_quality: bpy.props.EnumProperty(name="Denoise quality", items=_enum(QUALITIES),
                                             default="high")
+    firefly: bpy.props.EnumProperty(
+        name="Firefly control", default="auto",
+        items=[("auto", "Auto", "on where the render is denoised, else off (docs/look.md)"),
+               ("off", "Off", "the paper's estimator: every child as it is"),
+               ("on", "On", "cap the brightest child at k times the others' mean brightness")],
+        description="the firefly control at the stylized vertex (`firefly`)")
+    firefly_k: bpy.props.FloatProperty(name="Firefly k", default=4.0, min=1.0,
+                                       description="the cap, in units of the other children's mean brightness")
 
 
 class MaterialSettings(bpy.types.PropertyGroup):
@@ -172,6 +180,8 @@ def integrator_values(settings) -> dict:
     out = style_values(settings)
     out.update(stylize=settings.stylize, stylize_depth=settings.stylize_depth, lines=settings.lines,
                reuse=settings.reuse, max_depth=settings.max_depth)
+    if settings.firefly != "auto":
+        out["firefly"] = 0.0 if settings.firefly == "off" else float(settings.firefly_k)
     if settings.lines:
         out["line_mode"] = settings.line_mode
         if settings.line_types.strip():
