@@ -33,6 +33,7 @@ backend()
 
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
+from ..lookdev.film_filter import seeded_positions  # noqa: E402
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever); a chain
 #: still specular after them keeps its specular weight as albedo
@@ -124,19 +125,11 @@ def _in_pixels(scene: mi.Scene, spp: int, seed: int) -> np.ndarray:
     """`GuidePass`'s AOVs averaged over `spp` camera rays per pixel placed inside the pixel, as a
     render with a box filter places them (the sensor's sampler, seeded alike): H x W x 12."""
     sensor = scene.sensors()[0]
-    film = sensor.film()
-    w, h = (int(v) for v in film.crop_size())
-    lanes = w * h * spp
-    sampler = sensor.sampler().clone()
-    sampler.set_sample_count(spp)
-    sampler.set_samples_per_wavefront(spp)
-    sampler.seed(seed, lanes)
-    idx = dr.arange(mi.UInt32, lanes) // spp
-    py = idx // w
-    pos = mi.Point2f(mi.Float(idx - py * w), mi.Float(py)) + sampler.next_2d()
+    w, h = (int(v) for v in sensor.film().crop_size())
+    sampler, pos = seeded_positions(sensor, spp, seed)
     aperture = sampler.next_2d() if sensor.needs_aperture_sample() else mi.Point2f(0.5)
     ray, _ = sensor.sample_ray_differential(mi.Float(sensor.shutter_open()), mi.Float(0.0),
-                                            pos / mi.ScalarVector2f(w, h), aperture)
+                                            mi.Point2f(pos) / mi.ScalarVector2f(w, h), aperture)
     _, _, aovs = GuidePass().sample(scene, sampler, ray)
     means = [dr.block_sum(a, spp) / spp for a in aovs]  # a pixel's lanes are next to each other
     dr.eval(means)

@@ -105,13 +105,12 @@ def rebuild(spec: Any):
     return build(_key(BOX if is_box(spec) else dict(spec)))
 
 
-def positions(sensor, spp: int, seed: int) -> np.ndarray:
-    """Each camera sample's film position of a pass of `spp` spp and seed `seed` on the sensor's
-    film as it is set now (crop window, border): 2 x lanes float32, pixels of the full film (crop
-    offset included)."""
-    film = sensor.film()
-    b = int(film.rfilter().border_size()) if film.sample_border() else 0
-    w, h = (int(v) + 2 * b for v in film.crop_size())
+def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)):
+    """(the sensor's sampler seeded as Mitsuba's render loop seeds it for a pass of `spp` spp and seed `seed`,
+    each lane's film position): lane i is pixel i // spp of the crop window widened by `border` on each side,
+    its corner moved by `offset` (integers, as Mitsuba adds them) plus the sampler's first `next_2d()`. The
+    sampler's next draws are the aperture's and the integrator's."""
+    w, h = (int(v) + 2 * border for v in sensor.film().crop_size())
     lanes = w * h * spp
     sampler = sensor.sampler().clone()
     sampler.set_sample_count(spp)
@@ -120,9 +119,17 @@ def positions(sensor, spp: int, seed: int) -> np.ndarray:
     idx = dr.arange(mi.UInt32, lanes) // spp
     py = idx // w
     px = idx - py * w
-    off = [int(v) for v in film.crop_offset()]
-    corner = mi.Vector2i(mi.Int32(px) + (off[0] - b), mi.Int32(py) + (off[1] - b))
-    pos = mi.Vector2f(corner) + sampler.next_2d()
+    corner = mi.Vector2i(mi.Int32(px) + (int(offset[0]) - border), mi.Int32(py) + (int(offset[1]) - border))
+    return sampler, mi.Vector2f(corner) + sampler.next_2d()
+
+
+def positions(sensor, spp: int, seed: int) -> np.ndarray:
+    """Each camera sample's film position of a pass of `spp` spp and seed `seed` on the sensor's
+    film as it is set now (crop window, border): 2 x lanes float32, pixels of the full film (crop
+    offset included)."""
+    film = sensor.film()
+    b = int(film.rfilter().border_size()) if film.sample_border() else 0
+    _, pos = seeded_positions(sensor, spp, seed, b, [int(v) for v in film.crop_offset()])
     dr.eval(pos)
     return np.stack([np.asarray(pos.x, dtype=np.float32), np.asarray(pos.y, dtype=np.float32)])
 

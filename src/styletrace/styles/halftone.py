@@ -42,7 +42,7 @@ import drjit as dr
 import mitsuba as mi
 
 from .base import Param, Projection, Style, Vertex, brightness, projection
-from .hatching import AUTO_TONES, AUTO_U_MAX, AUTO_U_MIN, BrightnessRange, coverage
+from .hatching import BrightnessRange, coverage, tone_params
 from .registry import register
 from .tone import tone_inverse
 
@@ -97,12 +97,7 @@ class Halftone(BrightnessRange, Style):
               low=0.0, low_open=True, auto="not used: a screen grid spacing_px apart"),
         Param("max_radius_fraction", "float", 0.75, "largest radius as a fraction of half the cell diagonal "
               "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)", low=0.0, high=1.0, low_open=True),
-        Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
-              auto=AUTO_TONES),
-        Param("u_min", "float", None, "brightness at and below which dots are largest (a linear ramp)",
-              auto=AUTO_U_MIN),
-        Param("u_max", "float", None, "brightness at and above which dots vanish (a linear ramp)",
-              auto=AUTO_U_MAX),
+        *tone_params("dots are largest", "dots vanish"),
         Param("dark", "color", (0.1, 0.1, 0.15), "colour inside the dots", low=0.0),
         Param("light", "color", (0.97, 0.95, 0.9), "colour outside the dots", low=0.0),
         Param("lift", "choice", "canonical", "where the screen grid is evaluated: the vertex's image coordinate "

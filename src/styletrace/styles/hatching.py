@@ -173,6 +173,15 @@ AUTO_TONES = ("the scene's first-hit brightness distribution mixed with its ligh
               "u_min or u_max is given (unresolved: the linear ramp)")
 
 
+def tone_params(full: str, none: str) -> tuple[Param, ...]:
+    """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear ramp, whose
+    docs end with what happens at full tone (`full`) and at none (`none`)."""
+    return (Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
+                  auto=AUTO_TONES),
+            Param("u_min", "float", None, f"brightness at and below which {full} (a linear ramp)", auto=AUTO_U_MIN),
+            Param("u_max", "float", None, f"brightness at and above which {none} (a linear ramp)", auto=AUTO_U_MAX))
+
+
 class BrightnessRange:
     """Mixin of hatching and halftone: the tone of a brightness, by the tone curve `tones` (auto: the scene's
     distribution, `tone.tone_knots`) or by a linear ramp between u_min and u_max where either is given."""
@@ -239,12 +248,7 @@ class Hatching(BrightnessRange, Style):
         Param("thickness", "float", None, "line thickness d, in the units of the spacing in use, < spacing",
               low=0.0, low_open=True, auto="0.3 * the spacing in use"),
         Param("angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"),
-        Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
-              auto=AUTO_TONES),
-        Param("u_min", "float", None, "brightness at and below which all sets are drawn (a linear ramp)",
-              auto=AUTO_U_MIN),
-        Param("u_max", "float", None, "brightness at and above which no set is drawn (a linear ramp)",
-              auto=AUTO_U_MAX),
+        *tone_params("all sets are drawn", "no set is drawn"),
         Param("line_color", "color", (0.05, 0.05, 0.08), "colour of the lines", low=0.0),
         Param("background", "color", (0.97, 0.95, 0.9), "colour between the lines", low=0.0),
         Param("lift", "choice", "canonical", "where screen lines are evaluated: the vertex's image coordinate "
