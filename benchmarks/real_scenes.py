@@ -104,6 +104,16 @@ def _measure(path: Path, styles: list[str], longest: int) -> dict:
     return {"size": size, "spp": spp, "rows": rows, "thumbs": thumbs}
 
 
+def single_image_measures(results: dict) -> None:
+    """Clipping, crushing and fireflies from each row's seed-0 image (kept), so that a change of those measures
+    needs no new render."""
+    for res in results.values():
+        for style, row in res["rows"].items():
+            img = res["thumbs"][style]
+            row.update(clipped=measures.clipped_share(img), crushed=measures.crushed_share(img),
+                       fireflies=None if style in SCREEN else measures.firefly_share(img))
+
+
 def misses(row: dict, style: str) -> list[str]:
     """The goals a row misses."""
     out = []
@@ -145,8 +155,11 @@ def contact_sheet(results: dict, panel: list[dict], path: Path) -> None:
         if res is None:
             continue
         cells = [(f"{style} {res['rows'][style]['time']:.0f} s", img) for style, img in res["thumbs"].items()]
-        rows.append((f"{entry['name']} ({'held out' if entry['held_out'] else 'tuning'})", cells))
-    image_grid(rows, str(path), row_height=2.2, fontsize=6)
+        split = "held out" if entry["held_out"] else "tuning"
+        cells[0] = (f"{entry['name']} ({split})\n{cells[0][0]}", cells[0][1])  # the row's name over its first
+        rows.append((entry["name"], cells))
+    columns = max(len(cells) for _, cells in rows)
+    image_grid(rows, str(path), row_height=1.9, fontsize=6, width=1.45 * columns)
 
 
 def main(argv: list[str]) -> int:
@@ -171,6 +184,7 @@ def main(argv: list[str]) -> int:
         print(f"{entry['name']} ({'held out' if entry['held_out'] else 'tuning'})", flush=True)
         results[entry["name"]] = measure(Path(args.panel) / entry["name"] / "scene.xml", styles, args.size,
                                          args.fresh)
+    single_image_measures(results)
     if args.no_write:
         return 0
     contact_sheet(results, chosen, HERE.parent / "docs" / "real_scenes.png")

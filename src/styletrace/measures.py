@@ -1,7 +1,7 @@
 """Reference-free measures of a rendered image, as a user judges a default (docs/look.md).
 
     noise_psnr(a, b)          PSNR (dB) between two renders that differ only in seed, in display space
-    firefly_share(img)        share of pixels brighter than 5x the median of their 5 x 5 neighbourhood
+    firefly_share(img)        share of pixels brighter than 5x the median of their 5 x 5 neighbourhood (>= 0.01)
     clipped_share(img), crushed_share(img)   pixels with every channel >= 0.99 / <= 0.01 in display space
     tone_correlation(img, ref, period)       rank correlation of local luminance with a converged render
 
@@ -15,6 +15,9 @@ import numpy as np
 #: a pixel is a firefly above this multiple of its neighbourhood's median luminance
 FIREFLY_RATIO = 5.0
 FIREFLY_WINDOW = 5
+#: the least median a firefly is measured against (1% of display white): a dark pixel among black ones is
+#: noise nobody sees, not a firefly
+FIREFLY_FLOOR = 0.01
 
 
 def srgb(img: np.ndarray) -> np.ndarray:
@@ -44,10 +47,10 @@ def _windows(x: np.ndarray, size: int) -> np.ndarray:
 
 def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO, size: int = FIREFLY_WINDOW) -> float:
     """Share of pixels whose luminance exceeds `ratio` times the median of their `size` x `size` neighbourhood
-    (edges repeated), of the linear image."""
-    lum = luminance(img)
+    (edges repeated), that median taken as at least FIREFLY_FLOOR, of the linear image (negative values as 0)."""
+    lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
     median = np.median(_windows(lum, size), axis=(-2, -1))
-    return float(np.mean(lum > ratio * np.maximum(median, 1e-8)))
+    return float(np.mean(lum > ratio * np.maximum(median, FIREFLY_FLOOR)))
 
 
 def clipped_share(img: np.ndarray) -> float:
@@ -90,4 +93,4 @@ def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8) ->
 
 
 __all__ = ["srgb", "luminance", "noise_psnr", "firefly_share", "clipped_share", "crushed_share",
-           "tone_correlation", "FIREFLY_RATIO", "FIREFLY_WINDOW"]
+           "tone_correlation", "FIREFLY_RATIO", "FIREFLY_WINDOW", "FIREFLY_FLOOR"]

@@ -1,0 +1,44 @@
+"""The reference-free measures of benchmarks/real_scenes.py (`styletrace.measures`), on images with known answers."""
+import numpy as np
+import pytest
+
+from styletrace import measures
+
+
+def test_psnr_of_two_seeds_is_the_noise_of_one():
+    rng = np.random.default_rng(0)
+    base = np.full((64, 64, 3), 0.5)
+    sigma = 0.01  # in display space: 0.5 linear is 0.735 sRGB, the slope there 0.84 per linear unit
+    a = base + rng.normal(0, sigma, base.shape)
+    b = base + rng.normal(0, sigma, base.shape)
+    slope = (measures.srgb(np.array(0.5 + 1e-4)) - measures.srgb(np.array(0.5))) / 1e-4
+    expected = 10 * np.log10(1 / (slope * sigma) ** 2)
+    assert measures.noise_psnr(a, b) == pytest.approx(expected, abs=0.2)
+    assert measures.noise_psnr(a, a) == float("inf")
+
+
+def test_fireflies_are_counted_against_their_neighbourhood_not_in_the_dark():
+    img = np.full((20, 20, 3), 0.2)
+    img[5, 5] = 50.0                    # a firefly
+    img[10, 10] = 0.9                   # bright, but under 5x its neighbours' 0.2
+    dark = np.zeros((20, 20, 3))
+    dark[3, 3] = 0.02                   # 0.02 among black pixels: below 5 x the 1% floor
+    dark[15, 15] = 1.0                  # a firefly in the dark
+    assert measures.firefly_share(img) == pytest.approx(1 / 400)
+    assert measures.firefly_share(dark) == pytest.approx(1 / 400)
+
+
+def test_clipped_and_crushed_count_pixels_with_every_channel_at_the_end():
+    img = np.full((10, 10, 3), 0.3)
+    img[0, :] = 2.0                     # clipped
+    img[1, :] = (2.0, 2.0, 0.5)         # one channel below: not clipped
+    img[2, :] = -0.5                    # crushed
+    img[3, :] = 0.00001                 # crushed (sRGB 0.00013)
+    assert measures.clipped_share(img) == pytest.approx(0.1)
+    assert measures.crushed_share(img) == pytest.approx(0.2)
+
+
+def test_tone_correlation_is_rank_based_and_sees_a_reversal():
+    ramp = np.linspace(0, 1, 32)[None, :, None] * np.ones((32, 32, 3))
+    assert measures.tone_correlation(ramp ** 3, ramp, period=1) == pytest.approx(1.0)  # monotone: 1
+    assert measures.tone_correlation(1 - ramp, ramp, period=1) == pytest.approx(-1.0)
