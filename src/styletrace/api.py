@@ -42,8 +42,8 @@ def render(*args: Any, denoise: str | None = None, cluster: str | None = None, *
         if method != "auto":
             raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
         import warnings
-        warnings.warn("not denoised: the render runs on Ray; the denoiser needs the whole image in one process",
-                      NotDenoised, stacklevel=2)
+        from .denoise.default import why_not
+        warnings.warn(f"not denoised: {why_not(None, None, local=False)}", NotDenoised, stacklevel=2)
         return pipeline_render(*args, cluster=cluster, **kw)
     from .denoise import render as denoised
     return denoised(*args, denoise=method, **kw)

@@ -27,15 +27,6 @@ def method(sc, integ, settings) -> tuple[str, str]:
     return method_for(sc, integ, settings.denoise, samples=int(size[0]) * int(size[1]) * int(settings.spp))
 
 
-def firefly(sc, integ, used: str):
-    """`integ` with the firefly control a denoised render gets at defaults (`denoise.default`)."""
-    if used == "off" or integ.settings.firefly is not None:
-        return integ
-    from ..denoise.default import FIREFLY_K
-    from ..scene.defaults import pin_firefly
-    return pin_firefly(sc, integ, None, FIREFLY_K)[0]
-
-
 def prepare(sc, integ, settings, used: str):
     """None without denoising (`used`: `method`'s choice); else what `passes` and `finish` need, after every
     refusal (one line each)."""
@@ -72,4 +63,4 @@ def finish(sc, settings, job, prog) -> np.ndarray:
     return denoised(sc, prog, settings.seed, settings.denoise_quality)[0]
 
 
-__all__ = ["method", "firefly", "prepare", "passes", "finish"]
+__all__ = ["method", "prepare", "passes", "finish"]

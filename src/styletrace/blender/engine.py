@@ -17,6 +17,7 @@ import bpy
 import numpy as np
 
 from ..errors import StyletraceError
+from ..denoise.default import with_firefly
 from . import denoising, pipeline, restyle
 
 COMBINED = "Combined"
@@ -87,7 +88,7 @@ class StyletraceEngine(bpy.types.RenderEngine):
         used, note = denoising.method(sc, integ, st)
         if note:
             self.report({"WARNING"}, f"styletrace: {note}")
-        integ = denoising.firefly(sc, integ, used)
+        integ = with_firefly(sc, integ, used)[0]  # the command line's default (`denoise.default`)
         job = denoising.prepare(sc, integ, st, used)  # its refusals come before anything renders
         if aovs:
             for name, channels, ids in pipeline.AOV_PASSES.values():

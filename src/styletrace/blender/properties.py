@@ -135,8 +135,9 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="keep the look-development buffer of the last render; style changes then restyle it")
     denoise: bpy.props.EnumProperty(
         name="Denoise", default=default_method(),
-        items=[("auto", "Auto", "expectation where it applies (with the firefly control), else off with a "
-                                "warning: every front end's default (docs/look.md)"),
+        items=[("auto", "Auto", "expectation for a style of several children where it applies, else image, else "
+                                "off with a warning; with the firefly control: every front end's default "
+                                "(docs/look.md)"),
                ("off", "Off", "no denoising: the paper's estimators exactly"),
                ("expectation", "Expectation", "denoise the expectation at the stylized vertex, then apply the "
                                               "style: step styles stay free of band flips (docs/denoise.md)"),

@@ -7,7 +7,8 @@
 one child where the expectation denoiser applies (`expectation.check`; the `denoise` extra installed; an rgb
 film; one process); `image` for the rest that the image denoiser takes (an affine or closed-form style, where
 both are the same, a per-sample style, first_n_hits, first_object_hit); and `off` elsewhere (feature lines,
-which an image denoiser blurs; Ray), with a one-line note saying why. A render that denoises also gets, unless the caller set them:
+which an image denoiser blurs; Ray), with a one-line note saying why. A render that denoises also gets,
+unless the caller set them:
 - the firefly control of direct application (`firefly` = FIREFLY_K, its floor the scene's median
   brightness: `estimators.affine.MeanOfN`);
 - without a given spp, the scene's sample count S spent as camera samples times children:
@@ -22,7 +23,7 @@ from dataclasses import dataclass, replace
 
 from ..errors import UsageError
 
-#: the denoising methods; `auto` is `expectation` where it applies and `off` (with a one-line note) elsewhere
+#: the denoising methods; `auto` chooses among the other three (`method_for`)
 METHODS = ("auto", "expectation", "image", "off")
 #: the environment variable that sets the default method of every front end (unset: auto)
 ENV = "STYLETRACE_DENOISE"
@@ -126,16 +127,25 @@ def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
     return Plan(method, pin(resolved, method), note)
 
 
+def with_firefly(scene, integrator, method: str, pilot=None):
+    """(`integrator` with the firefly control a render of `method` gets at its default, the note naming the
+    values chosen): on where the render denoises, unless `firefly` was given or error AOVs (which describe the
+    paper's estimator) are on."""
+    from ..scene.defaults import pin_firefly
+    s = integrator.settings
+    if method == "off" or s.firefly is not None or s.aovs:
+        return integrator, ""
+    return pin_firefly(scene, integrator, pilot, FIREFLY_K)
+
+
 def pin(resolved, method: str):
     """`resolved` with the firefly control on and, without a given spp, the budget spent on children."""
     from ..kernel.integrator import StylizedIntegrator
-    from ..scene.defaults import pin_firefly
     integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
     if not isinstance(integrator, StylizedIntegrator):
         return resolved
-    if integrator.settings.firefly is None and not integrator.settings.aovs:  # AOVs: the paper's estimator
-        integrator, note = pin_firefly(resolved.scene, integrator, resolved.pilot, FIREFLY_K)
-        auto.append(note)
+    integrator, note = with_firefly(resolved.scene, integrator, method, resolved.pilot)
+    auto.append(note)
     spp = resolved.spp
     n = int(integrator.settings.slot.n(0))
     if resolved.job.spp is None and n > 1:
@@ -149,4 +159,4 @@ def pin(resolved, method: str):
 
 
 __all__ = ["METHODS", "ENV", "check_method", "default_method", "Plan", "choose", "method_for", "why_not",
-           "nonlinear", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]
+           "nonlinear", "with_firefly", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]

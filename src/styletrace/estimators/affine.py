@@ -101,7 +101,7 @@ class MeanOfN(Estimator):
             k, floor = self.cap
             top, top_b = state["top"], state["top_b"]
             if self.n == 1:
-                limit = self.LONE_CAP * floor + 0.0 * top_b
+                limit = self.LONE_CAP * floor
             else:
                 others = A.channel_mean(total - top) * (1.0 / (self.n - 1))
                 limit = k * A.maximum(others, floor)

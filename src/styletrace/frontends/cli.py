@@ -117,8 +117,8 @@ def cmd_render(args) -> int:
         raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
     if several:  # numbered images, on Ray
         if method == "auto" and not args.quiet:
-            say("styletrace: not denoised: several images render on Ray; the denoiser needs one image in one "
-                "process")
+            from ..denoise.default import why_not
+            say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
         args.denoise = None
         from ..distributed.command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
