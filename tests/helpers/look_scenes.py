@@ -9,14 +9,14 @@ def grey(a):
     return {"type": "diffuse", "reflectance": {"type": "rgb", "value": [a, a, a]}}
 
 
-def caustic_scene(res=RES):
+def caustic_scene(res=RES, rfilter="gaussian"):
     """A floor under a dim sky; a lamp of radius 0.04 under an opaque shade, seen by the floor only in a mirror
     above it: next-event estimation never reaches it, BSDF samples rarely do, and then carry 2000 x albedo."""
     T = mi.ScalarTransform4f
     return {"type": "scene",
             "sensor": {"type": "perspective", "fov": 45,
                        "to_world": T().look_at(origin=[0, 3, 4], target=[0, 0, 0], up=[0, 1, 0]),
-                       "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "gaussian"}},
+                       "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": rfilter}},
                        "sampler": {"type": "independent", "sample_count": 4}},
             "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90).scale(3), "bsdf": grey(0.5)},
             "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.3, 0.3, 0.3]}},

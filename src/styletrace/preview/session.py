@@ -4,8 +4,8 @@ The background thread first records a **draft**: 1 spp with one child per camera
 fifth of a full pass's work (measured: 0.2 s against 1.1 s for the Cornell box at 256² with n = 8), so
 the first image arrives early; restyles use it until the first full pass is done. With the `denoise`
 extra the draft's expectation is denoised before the style (`denoise.draft`), so the draft looks clean. Then it records the
-buffer pass by pass, denoising its expectation after each pass where every front end's default does (`denoise`:
-auto, expectation or off; `denoise.default`), (1 spp per pass, `lookdev.record`) with the `identity` style and n children per
+buffer pass by pass (1 spp per pass, `lookdev.record`), its expectation denoised after each pass where
+every front end's default does (`denoise`: auto, expectation or off; `denoise.default`), with the `identity` style and n children per
 camera sample, so every style that needs children can restyle it; after each pass the page's next
 restyle shows the refined image. Dr.Jit work of both threads (a render
 pass, a restyle) runs under one lock, `jit`: requests from several browsers are served one at a time and
