@@ -11,23 +11,39 @@ from __future__ import annotations
 
 from typing import Any
 
-from .jit import backend
+from .errors import SceneError, UsageError
+from .images import PIXEL_FORMATS, save_safely, write_image
+from .kernel.integrator import StylizedIntegrator
+from .pipeline.carried import carried_settings
+from .pipeline.execute import render as pipeline_render
+from .pipeline.job import given_values
+from .pipeline.passes import (
+    LANE_BYTES,
+    LANES_PER_PASS,
+    TILE_SIDE,
+    Progress,
+    Tile,
+    check_memory,
+    expansion_seed,
+    memory_available,
+    memory_needed,
+    pass_count,
+    pass_seed,
+    pass_size,
+    passes,
+    tiles,
+)
+from .pipeline.scene import (
+    SceneWarning,
+    canonical_normals,
+    film_format,
+    first_line,
+    load_scene,
+    scene_dict,
+    scene_spp,
+)
 from .runtime import init
-
-backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
-
-from .errors import SceneError, UsageError  # noqa: E402,F401
-from .images import PIXEL_FORMATS, save_safely, write_image  # noqa: E402,F401
-from .pipeline.carried import carried_settings  # noqa: E402,F401
-from .pipeline.execute import render as pipeline_render  # noqa: E402
-from .pipeline.job import given_values  # noqa: E402
-from .pipeline.passes import (LANE_BYTES, LANES_PER_PASS, TILE_SIDE, Progress, Tile, check_memory,  # noqa: E402,F401
-                              expansion_seed, memory_available, memory_needed, pass_count, pass_seed, pass_size,
-                              passes, tiles)
-from .pipeline.scene import (SceneWarning, canonical_normals, film_format, first_line, load_scene,  # noqa: E402,F401
-                             scene_dict, scene_spp)
-from .kernel.integrator import StylizedIntegrator  # noqa: E402
-from .scene.defaults import resolve as resolve_defaults  # noqa: E402,F401
+from .scene.defaults import resolve as resolve_defaults
 
 
 def render(*args: Any, denoise: str | None = None, cluster: str | None = None, **kw: Any):
@@ -42,6 +58,7 @@ def render(*args: Any, denoise: str | None = None, cluster: str | None = None, *
         if method != "auto":
             raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
         import warnings
+
         from .denoise.default import why_not
         warnings.warn(f"not denoised: {why_not(None, None, local=False)}", NotDenoised, stacklevel=2)
         return pipeline_render(*args, cluster=cluster, **kw)

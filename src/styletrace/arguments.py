@@ -12,9 +12,8 @@ import functools
 import numbers
 from typing import Any
 
-import mitsuba as mi
-
 from .errors import SceneError, UsageError
+from .gate import mi
 
 #: Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one image.
 SEED_MAX = 2 ** 32 - 1

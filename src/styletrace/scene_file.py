@@ -37,9 +37,8 @@ import re
 import xml.etree.ElementTree as ET
 from typing import Any, Mapping
 
-import mitsuba as mi
-
 from .errors import SceneError
+from .gate import mi
 
 #: an XML comment, for `parse_xml`
 COMMENT = re.compile(r"<!--.*?-->", re.S)

@@ -18,11 +18,7 @@ from __future__ import annotations
 from importlib import resources
 from typing import Any, Callable
 
-from ..jit import backend
-
-backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
-
-import mitsuba as mi  # noqa: E402
+from ..gate import mi
 
 FURNACE_ALBEDO = (0.8, 0.5, 0.3)
 FURNACE_RADIANCE = 1.0

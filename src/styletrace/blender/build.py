@@ -19,6 +19,7 @@ def _value(value: Any) -> Any:
 def node(d: dict) -> Any:
     """One description node -> what `mi.load_dict` accepts (a dict, or an object made here)."""
     import mitsuba as mi
+
     from .mesh import to_mitsuba
     kind = d.get("type")
     if kind == "blender_mesh":

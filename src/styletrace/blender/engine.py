@@ -16,8 +16,8 @@ import traceback
 import bpy
 import numpy as np
 
-from ..errors import StyletraceError
 from ..denoise.default import with_firefly
+from ..errors import StyletraceError
 from . import denoising, pipeline, restyle
 
 COMBINED = "Combined"

@@ -11,9 +11,9 @@ from typing import Callable, Iterator
 import numpy as np
 
 from .. import api
+from ..config.line_types import without_colours
 from . import build, exporter
 from .properties import integrator_values
-from ..config.line_types import without_colours
 
 LINE_MASK = "LineMask"
 #: the image before denoising, beside the denoised Combined (as Cycles' "Noisy Image")

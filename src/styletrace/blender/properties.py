@@ -18,9 +18,9 @@ from .. import init
 init()  # the registries below import Dr.Jit and Mitsuba
 
 from ..config import estimator_registry  # noqa: E402
+from ..config import settings as S  # noqa: E402
 from ..denoise import default_method  # noqa: E402
 from ..denoise.oidn import QUALITIES  # noqa: E402
-from ..config import settings as S  # noqa: E402
 from ..styles import registry  # noqa: E402
 
 SEP = "__"

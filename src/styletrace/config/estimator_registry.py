@@ -14,10 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
-import drjit as dr
-
 from .. import estimators as E
 from ..errors import SettingsError
+from ..gate import dr
 from ..styles.base import Style
 from ..styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 

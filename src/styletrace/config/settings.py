@@ -18,11 +18,20 @@ from ..errors import SettingsError
 from ..styles import create, get
 from ..styles.base import Style
 from . import estimator_registry
-from .choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT, EMITTER_DEFAULT, EMITTER_MODES, LineSettings, \
-    MODES as LINE_MODES, TESTS as LINE_TESTS
-from .declare import COUNT_MAX, Property, boolean, integer, names, number, rgb  # one declaration per property
+from .choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT
+from .choices import EMITTER_DEFAULT, EMITTER_MODES, LineSettings
+from .choices import MODES as LINE_MODES
+from .choices import TESTS as LINE_TESTS
+from .declare import (  # one declaration per property
+    COUNT_MAX,
+    Property,
+    boolean,
+    integer,
+    names,
+    number,
+    rgb,
+)
 from .line_types import parse_line_types
-
 
 STYLIZE_MODES = {
     "first_hit": "the camera ray's first hit; objects with a `styled` BSDF use their own style",

@@ -38,7 +38,8 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     applies, else renders as the pipeline does and warns `NotDenoised`), rendered and denoised here
     (docs/denoise.md)."""
     check_method(denoise)
-    from . import coverage as points, oidn
+    from . import coverage as points
+    from . import oidn
     points.check_k(coverage)
     from .expectation import UNCERTAINTY, check_uncertainty
     uncertainty = check_uncertainty(UNCERTAINTY if denoise_uncertainty is None else denoise_uncertainty)
@@ -52,6 +53,7 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     plan = choose(r, denoise)
     if plan.method == "off":
         import warnings
+
         from ..pipeline.execute import run
         if plan.note:
             warnings.warn(plan.note, NotDenoised, stacklevel=3)
@@ -65,8 +67,8 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     if film_format(sc) != "rgb":
         raise UsageError(f"--denoise needs an rgb film, not '{film_format(sc)}'")
     if plan.method == "expectation":
-        from . import expectation
         from ..lookdev.record import scene_label
+        from . import expectation
         image, buf = expectation.render(sc, integrator, spp, seed, denoise_quality, callback,
                                         label=scene_label(scene), coverage=coverage, uncertainty=uncertainty,
                                         lanes_per_pass=r.lanes, pass_spp=pass_spp)

@@ -23,20 +23,14 @@ from __future__ import annotations
 
 import math
 
-from ..jit import backend
-
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-
-from ..errors import UsageError  # noqa: E402
-from ..kernel.integrator import StylizedIntegrator  # noqa: E402
-from ..lookdev.buffer import MAX_SAMPLES, Buffer  # noqa: E402
-from ..lookdev.record import RecordingIntegrator, record  # noqa: E402
-from ..lookdev.restyle import finish_spread  # noqa: E402
-from ..pipeline.passes import pass_seed  # noqa: E402
-from . import guides  # noqa: E402
+from ..errors import UsageError
+from ..gate import dr, mi
+from ..kernel.integrator import StylizedIntegrator
+from ..lookdev.buffer import MAX_SAMPLES, Buffer
+from ..lookdev.record import RecordingIntegrator, record
+from ..lookdev.restyle import finish_spread
+from ..pipeline.passes import pass_seed
+from . import guides
 
 #: points per pixel of coverage="auto" (chosen on the Cornell box, BENCHMARKS.md denoise), less where the
 #: image is so large that they would not fit the buffer's cap

@@ -35,22 +35,18 @@ from __future__ import annotations
 
 from typing import Callable, Iterator
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed  # noqa: E402
-from ..errors import UsageError  # noqa: E402
-from ..lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer  # noqa: E402
-from ..lookdev.record import record, scene_label  # noqa: E402
-from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for  # noqa: E402
-from ..config import settings as S  # noqa: E402
-from ..kernel.integrator import StylizedIntegrator  # noqa: E402
-from . import coverage as coverage_module, guides, oidn  # noqa: E402
+from ..config import settings as S
+from ..errors import UsageError
+from ..gate import dr, mi
+from ..kernel.integrator import StylizedIntegrator
+from ..lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer
+from ..lookdev.record import record, scene_label
+from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for
+from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed
+from . import coverage as coverage_module
+from . import guides, oidn
 
 #: the buffer array holding the denoised expectation at each camera sample (3 x samples, as `mean`)
 DENOISED = "denoised_mean"

@@ -27,13 +27,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..jit import backend
-
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-from ..lookdev.film_filter import seeded_positions  # noqa: E402
+from ..gate import dr, mi
+from ..lookdev.film_filter import seeded_positions
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever); a chain
 #: still specular after them keeps its specular weight as albedo

@@ -14,14 +14,10 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import numpy as np  # noqa: E402
-
-from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes  # noqa: E402
-from . import guides, oidn  # noqa: E402
+from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes
+from . import guides, oidn
 
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",

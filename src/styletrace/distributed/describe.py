@@ -101,9 +101,9 @@ def load(spec: SceneSpec, values: dict, variant: str):
     if key in CACHE:
         CACHE.move_to_end(key)
         return CACHE[key]
+    from ..kernel.integrator import StylizedIntegrator
     from ..pipeline.job import Job
     from ..pipeline.resolve import resolve
-    from ..kernel.integrator import StylizedIntegrator
     unknown = sorted(set(spec.load_kwargs) - {"defines"})
     if unknown:
         raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")

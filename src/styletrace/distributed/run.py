@@ -20,9 +20,9 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
+from ..errors import StyletraceError, UsageError
 from ..pipeline.passes import LANES_PER_PASS, Progress
 from ..pipeline.scene import first_line
-from ..errors import StyletraceError, UsageError
 from .checkpoint import Checkpoint
 from .cluster import connect, cpus
 from .describe import SceneSpec

@@ -81,7 +81,9 @@ def backend_module(like=None):
     if variant and (variant.startswith("cuda") or variant.startswith("llvm")):
         backend = dr.JitBackend.CUDA if variant.startswith("cuda") else dr.JitBackend.LLVM
         return _module_for(dr, backend, "_ad_" in variant)
-    from ..jit import prepare_drjit  # the package's one answer: CUDA where it works (STYLETRACE_NO_CUDA honoured)
+    from ..jit import (
+        prepare_drjit,  # the package's one answer: CUDA where it works (STYLETRACE_NO_CUDA honoured)
+    )
     cuda = prepare_drjit() == "cuda"
     return _module_for(dr, dr.JitBackend.CUDA if cuda else dr.JitBackend.LLVM, False)
 

@@ -19,9 +19,9 @@ from typing import Sequence
 
 from ..errors import StyletraceError, UsageError
 from ..images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
+from ..wild import warning as wild_warning
 from .signals import Passes, StopSignals, one_line, say  # noqa: F401  (StopSignals: tests import it here)
 from .status import Status
-from ..wild import warning as wild_warning
 
 
 def _parse_defines(items: Sequence[str]) -> dict[str, str]:
@@ -133,10 +133,10 @@ def cmd_render(args) -> int:
     defines = _parse_defines(args.define)
     status = Status(enabled=not args.quiet)
     from .. import api
-    from .command_job import job_of
     from ..images import check_format
     from ..pipeline.execute import execute
     from ..pipeline.resolve import resolve
+    from .command_job import job_of
 
     job = job_of(args, params, defines)
     with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
@@ -259,8 +259,8 @@ def choose_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
     (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
     and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise): `pipeline.resolve`'s."""
-    from .command_job import job_of
     from ..pipeline.resolve import choose_integrator as choose
+    from .command_job import job_of
     return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
 
 

@@ -26,9 +26,9 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
 from . import equal_time
 from .equal_time import Comparison
-from ..images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
 
 
 @dataclass
@@ -149,7 +149,9 @@ def write_png(image: np.ndarray, path: str) -> None:
 
 def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
-    from ..pipeline.execute import render  # every image a pipeline Job on the scene loaded once here
+    from ..pipeline.execute import (
+        render,  # every image a pipeline Job on the scene loaded once here
+    )
     from ..pipeline.scene import load_scene
 
     os.makedirs(out_dir, exist_ok=True)

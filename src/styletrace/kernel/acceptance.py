@@ -7,8 +7,7 @@ geometric test (`near`): camera distances for the pixel window (reuse.pool.Grid)
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
+from ..gate import dr, mi
 
 
 def accepted(neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str) -> mi.UInt64:

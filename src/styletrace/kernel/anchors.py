@@ -38,9 +38,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from ..styles.base import projection
 from . import mls
 

@@ -6,9 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Optional
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .emitter_sampler import EmitterSampler
 from .path import advance, first_scattering
 from .vertex import depth_limit, emission, opaque_part, opaque_share

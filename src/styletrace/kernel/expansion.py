@@ -28,11 +28,10 @@ How
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
 from ..errors import SettingsError
+from ..gate import dr, mi
 from ..jit import no_collection
 
 #: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's footprint, not

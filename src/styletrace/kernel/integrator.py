@@ -44,23 +44,23 @@ through area lights and see black where they escape, as in Mitsuba's `path`.
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
-from ..styles.base import Vertex
 from ..config import settings as S
 from ..config.estimator_registry import firefly_cap, make_estimator
-from .expansion import Expansion, moments as pass_moments
-from .lane_sampler import LaneSampler
-from .render_context import RenderContext
-from .error_aovs import AOV_NAMES, error_aovs
-from .line_hooks import camera_edge, lifted as lifted_lines, line_problem, walk_lines
+from ..gate import dr, mi
+from ..scene.graph import SceneGraph
+from ..scene.graph import any_ptr as _any_ptr
+from ..styles.base import Vertex
 from .bounce import bounce
+from .error_aovs import AOV_NAMES, error_aovs
+from .expansion import Expansion
+from .expansion import moments as pass_moments
+from .lane_sampler import LaneSampler
+from .line_hooks import camera_edge, line_problem, walk_lines
+from .line_hooks import lifted as lifted_lines
 from .path import first_scattering, past_area_emitters, walk
+from .render_context import RenderContext
 from .vertex import emission, environment
-from ..scene.graph import SceneGraph, any_ptr as _any_ptr
 from .volume import volume_walk
-
 
 #: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:
 #: benchmarks/recursion_depth.py, tests/kernel/test_recursion_depth.py)

@@ -14,8 +14,7 @@ struct, so it travels in loop state like Mitsuba's own samplers.
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
+from ..gate import dr, mi
 
 
 class LaneSampler:

@@ -29,11 +29,9 @@ and L is traced only where none fired (Eq. 34). West 2021's cone (kernel/lines.p
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
 from ..config.line_types import LineType
 from ..errors import SceneError
+from ..gate import dr, mi
 from .lines import object_shapes, on_shapes
 
 

@@ -15,10 +15,8 @@ camera ray, which it calls for the lanes where no line fired.
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
 from ..config import settings as S
+from ..gate import dr, mi
 from .lifted_lines import compose_sample
 
 

@@ -47,11 +47,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import drjit as dr
-import mitsuba as mi
-
 from ..config.choices import DEFAULT_TESTS, MODES, TESTS, LineSettings  # noqa: F401 (the kernel's names for them)
 from ..errors import SceneError
+from ..gate import dr, mi
 
 #: at most this many `null` surfaces passed along one stencil ray (nested medium boundaries)
 MAX_NULL_PASSES = 16

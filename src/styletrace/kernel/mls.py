@@ -24,8 +24,7 @@ small and fixed), so no gather and no loop is traced.
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
+from ..gate import dr, mi
 
 #: method codes, as the `coordinate` style and the docs report them
 CLOSED_PIXEL, CLOSED_DELTA, MLS, AFFINE, NEAREST, FIRST = 0, 1, 2, 3, 4, 5

@@ -39,9 +39,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .anchors import MAX_BITS, ToneState, combine, shape_id
 from .emitter_sampler import EmitterSampler
 from .vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share

@@ -14,15 +14,14 @@ the garbage collector is tearing down, still held by an integrator after its ren
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
 from ..errors import SceneError
+from ..gate import mi
+from ..scene.graph import SceneGraph
 from ..styles.base import camera_forward
 from .anchors import Tone
 from .emitter_sampler import EmitterSampler
 from .lifted_lines import Lifted
 from .lines import Lines
-from ..scene.graph import SceneGraph
 
 
 class RenderContext:

@@ -17,10 +17,9 @@ from __future__ import annotations
 
 import weakref
 
-import mitsuba as mi
-
-from .integrator import StylizedIntegrator
+from ..gate import mi
 from ..scene.defaults import resolve
+from .integrator import StylizedIntegrator
 
 
 def scene_key(scene: mi.Scene) -> tuple:

@@ -17,10 +17,9 @@ the objects physically based.
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
-from ..errors import SettingsError
 from ..config.settings import parse_slot
+from ..errors import SettingsError
+from ..gate import mi
 
 
 class StyledBSDF(mi.BSDF):

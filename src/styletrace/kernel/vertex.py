@@ -3,8 +3,7 @@ heuristic, Mitsuba's depth limit, and the split of a BSDF with a null-scattering
 stylized vertex stands for, and the probability of sampling it)."""
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
+from ..gate import dr, mi
 
 
 def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:

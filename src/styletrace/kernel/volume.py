@@ -33,9 +33,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .emitter_sampler import EmitterSampler
 from .path import finished, halt_at, mis_emission
 from .vertex import depth_limit, mis_power, opaque_part, opaque_share

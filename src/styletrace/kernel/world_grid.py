@@ -18,10 +18,9 @@ over either.
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
+from ..gate import dr, mi
 from .acceptance import accepted
 
 #: bits per axis in a packed cell key (cells per axis are bounded by settings.MIN_REUSE_H)

@@ -29,15 +29,10 @@ from fractions import Fraction
 from functools import lru_cache
 from typing import Any
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..errors import SceneError  # noqa: E402
+from ..errors import SceneError
+from ..gate import dr, mi
 
 BOX = {"type": "box"}
 #: Mitsuba class -> (plugin name, parameters read from its radius or description)

@@ -34,20 +34,15 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..errors import BackendError, UsageError  # noqa: E402
-from ..config import settings as S  # noqa: E402
-from ..styles import create  # noqa: E402
-from ..styles.base import Style, brightness  # noqa: E402
-from ..styles.gradient import Gradient  # noqa: E402
-from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for  # noqa: E402
+from ..config import settings as S
+from ..errors import BackendError, UsageError
+from ..gate import dr, mi
+from ..styles import create
+from ..styles.base import Style, brightness
+from ..styles.gradient import Gradient
+from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for
 
 FITTABLE = ("float", "floats", "color", "gradient")
 #: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in Python; the

@@ -28,28 +28,32 @@ from __future__ import annotations
 import os
 from typing import Any, Callable, Iterator
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..pipeline import passes as pass_loop  # noqa: E402
-from ..pipeline.scene import film_format  # noqa: E402
-from ..errors import SceneError, SettingsError, UsageError  # noqa: E402
-from ..config import settings as S  # noqa: E402
-from ..config.estimator_registry import child_mean, firefly_cap, make_estimator  # noqa: E402
-from ..kernel.integrator import StylizedIntegrator  # noqa: E402
-from ..kernel.vertex import emission  # noqa: E402
-from ..scene.defaults import Pilot, resolve as resolve_defaults, unique_styled  # noqa: E402
-from ..assets.scenes import DEFAULT  # noqa: E402
-from ..styles.base import Vertex, camera_forward  # noqa: E402
-from . import film_filter  # noqa: E402
-from .buffer import FORMAT, MAX_SAMPLES, MAX_SEQUENCE_SAMPLES, PILOT, VERSION, Buffer, bytes_per_sample  # noqa: E402
-from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record  # noqa: E402
-from .sequence import Recorder, budget  # noqa: E402
+from ..assets.scenes import DEFAULT
+from ..config import settings as S
+from ..config.estimator_registry import child_mean, firefly_cap, make_estimator
+from ..errors import SceneError, SettingsError, UsageError
+from ..gate import dr, mi
+from ..kernel.integrator import StylizedIntegrator
+from ..kernel.vertex import emission
+from ..pipeline import passes as pass_loop
+from ..pipeline.scene import film_format
+from ..scene.defaults import Pilot, unique_styled
+from ..scene.defaults import resolve as resolve_defaults
+from ..styles.base import Vertex, camera_forward
+from . import film_filter
+from .buffer import (
+    FORMAT,
+    MAX_SAMPLES,
+    MAX_SEQUENCE_SAMPLES,
+    PILOT,
+    VERSION,
+    Buffer,
+    bytes_per_sample,
+)
+from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record
+from .sequence import Recorder, budget
 
 
 def check_recordable(settings: S.Settings, slots) -> None:

@@ -32,26 +32,21 @@ from dataclasses import replace
 from types import SimpleNamespace
 from typing import Any
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..errors import UsageError  # noqa: E402
-from ..estimators import apply_linear  # noqa: E402
-from ..estimators.arrays import const_like  # noqa: E402
-from ..config import settings as S  # noqa: E402
-from ..config.estimator_registry import applicable  # noqa: E402
-from ..scene.defaults import Facts, auto_values  # noqa: E402
-from ..styles import get  # noqa: E402
-from ..styles.base import Vertex  # noqa: E402
-from ..styles.gradient import Gradient  # noqa: E402
-from . import film_filter  # noqa: E402
-from .buffer import PILOT, SPREAD, Buffer, load_buffer  # noqa: E402
-from .sequence import device_arrays, replay  # noqa: E402
+from ..config import settings as S
+from ..config.estimator_registry import applicable
+from ..errors import UsageError
+from ..estimators import apply_linear
+from ..estimators.arrays import const_like
+from ..gate import dr, mi
+from ..scene.defaults import Facts, auto_values
+from ..styles import get
+from ..styles.base import Vertex
+from ..styles.gradient import Gradient
+from . import film_filter
+from .buffer import PILOT, SPREAD, Buffer, load_buffer
+from .sequence import device_arrays, replay
 
 #: estimators whose value is a function of the children's mean alone
 RESTYLABLE_ESTIMATORS = ("direct", "affine")

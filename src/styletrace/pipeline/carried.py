@@ -23,7 +23,7 @@ import os
 import re
 from typing import Any, Mapping
 
-import mitsuba as mi
+from ..gate import mi
 
 #: integrator properties that `stylized` shares with Mitsuba's path tracers
 SHARED = ("max_depth", "rr_depth", "hide_emitters")

@@ -15,18 +15,15 @@ import math
 from dataclasses import dataclass
 from typing import Any, Iterator
 
-from ..jit import backend, no_collection
+import numpy as np
 
-backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
-
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..arguments import check_passes_args  # noqa: E402
-from ..errors import UsageError  # noqa: E402
-from ..images import PIXEL_FORMATS  # noqa: E402
-from ..scene.defaults import resolve as resolve_defaults  # noqa: E402
-from .scene import film_format  # noqa: E402
+from ..arguments import check_passes_args
+from ..errors import UsageError
+from ..gate import mi
+from ..images import PIXEL_FORMATS
+from ..jit import no_collection
+from ..scene.defaults import resolve as resolve_defaults
+from .scene import film_format
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
 LANES_PER_PASS = 1 << 20

@@ -15,13 +15,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import mitsuba as mi
-
 from ..arguments import check_render_args
 from ..config import settings as S
+from ..gate import mi
 from ..kernel.integrator import StylizedIntegrator
-from ..scene.defaults import Pilot, resolve as resolve_defaults
 from ..runtime import init
+from ..scene.defaults import Pilot
+from ..scene.defaults import resolve as resolve_defaults
 from ..sizing import lanes_per_pass
 from .carried import carried_settings, nested_stylized
 from .job import Job

@@ -12,19 +12,15 @@ import re
 import warnings
 from typing import Any
 
-from ..jit import backend
+from .. import scene_file
+from ..arguments import check_scene, scene_problem
+from ..assets.scenes import BUILTIN, DEFAULT
+from ..errors import SceneError
+from ..gate import mi
+from ..images import PIXEL_FORMATS
+from ..normals import canonical_normals as _canonical
 from ..runtime import init
 
-backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
-
-import mitsuba as mi  # noqa: E402
-
-from .. import scene_file  # noqa: E402
-from ..arguments import check_scene, scene_problem  # noqa: E402
-from ..errors import SceneError  # noqa: E402
-from ..images import PIXEL_FORMATS  # noqa: E402
-from ..normals import canonical_normals as _canonical  # noqa: E402
-from ..assets.scenes import BUILTIN, DEFAULT  # noqa: E402
 
 def first_line(exc: BaseException) -> str:
     text = str(exc).strip()

@@ -24,8 +24,10 @@ PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 
 def styles_table() -> list[dict[str, Any]]:
-    from ..lookdev.restyle import RESTYLABLE_ESTIMATORS  # the preview's buffer keeps the children's mean
     from ..config.estimator_registry import applicable
+    from ..lookdev.restyle import (
+        RESTYLABLE_ESTIMATORS,  # the preview's buffer keeps the children's mean
+    )
     from ..styles import get, names
     out = []
     for name in names():
@@ -58,10 +60,10 @@ def encode(image, fmt: str) -> bytes:
 
 def make_app(session):
     from starlette.applications import Starlette
+    from starlette.concurrency import run_in_threadpool
     from starlette.requests import Request
     from starlette.responses import FileResponse, JSONResponse, Response
     from starlette.routing import Route
-    from starlette.concurrency import run_in_threadpool
 
     table = styles_table()
     known = {s["name"] for s in table}
@@ -141,8 +143,8 @@ def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: 
     """Run the preview server until Ctrl-C; prints the page's URL once it listens."""
     import uvicorn
 
-    from .session import Session
     from ..config.settings import parse_slot
+    from .session import Session
     slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
     if slot.style.per_sample:
         raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "

@@ -17,21 +17,19 @@ import threading
 import time
 from typing import Any
 
-from ..jit import backend
+import numpy as np
 
-backend()
-
-import numpy as np  # noqa: E402
-
-from ..pipeline.job import Job  # noqa: E402
-from ..pipeline.resolve import resolve  # noqa: E402
-from ..pipeline.scene import first_line  # noqa: E402
-from ..errors import UsageError  # noqa: E402
-from ..lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample  # noqa: E402
-from ..lookdev.record import record, scene_label  # noqa: E402
-from ..lookdev.restyle import restyle  # noqa: E402
-from ..denoise.draft import QUALITY as DRAFT_QUALITY, available as denoise_available, draft as denoise_draft  # noqa: E402,E501
-from ..denoise.expectation import attach  # noqa: E402
+from ..denoise.draft import QUALITY as DRAFT_QUALITY
+from ..denoise.draft import available as denoise_available
+from ..denoise.draft import draft as denoise_draft
+from ..denoise.expectation import attach
+from ..errors import UsageError
+from ..lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample
+from ..lookdev.record import record, scene_label
+from ..lookdev.restyle import restyle
+from ..pipeline.job import Job
+from ..pipeline.resolve import resolve
+from ..pipeline.scene import first_line
 
 #: OIDN's quality on the full passes (the draft's is `denoise.draft.QUALITY`)
 FULL_QUALITY = "high"

@@ -1,5 +1,3 @@
 """Scene analysis: what a loaded scene holds for the kernel (graph.py: styled BSDFs wherever they sit, media,
 null surfaces) and its scene-relative `auto` style values (defaults.py: a pilot of the path kernel)."""
-from ..jit import backend as _backend
 
-_backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that

@@ -34,20 +34,19 @@ from dataclasses import replace
 from functools import cached_property
 from typing import Any
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
-from ..errors import StyleError
-from ..jit import no_collection
-from ..styles.base import Camera, Style, Vertex, camera, lanes
 from ..config import settings as S
+from ..errors import StyleError
+from ..gate import dr, mi
+from ..jit import no_collection
 from ..kernel.emitter_sampler import EmitterSampler
 from ..kernel.integrator import StylizedIntegrator
 from ..kernel.path import exitant
-from .graph import SceneGraph
 from ..kernel.styled_bsdf import StyledBSDF
 from ..kernel.volume import volume_walk
+from ..styles.base import Camera, Style, Vertex, camera, lanes
+from .graph import SceneGraph
 
 #: the settings the pilot's trace reads (`Pilot._trace`)
 PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling")

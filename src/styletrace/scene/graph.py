@@ -19,9 +19,8 @@ emitter on a see-through surface (path.first_scattering says why).
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
 from ..errors import SceneError
+from ..gate import mi
 from ..kernel.lines import pure_null
 from ..kernel.styled_bsdf import StyledBSDF
 

@@ -4,14 +4,28 @@ Each style lives in a module of its own and registers itself on import; this pac
 all, so `registry.names()` lists every style. Styles evaluate inside the render kernel on Dr.Jit
 arrays (see `base.Style`).
 """
-from ..jit import backend as _backend
 
-_backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
 
-from . import (acp, cel, color_map, contrast, coordinate, exp_tone, gamma, gooch, halftone, hatching,  # noqa: F401
-               identity, reinhard, saturation, sepia, tie_dye, xtoon)  # (registration side effects)
-from .base import Style, Vertex, brightness
 from ..errors import StyleError
+from . import (  # noqa: F401
+               acp,
+               cel,
+               color_map,
+               contrast,
+               coordinate,
+               exp_tone,
+               gamma,
+               gooch,
+               halftone,
+               hatching,
+               identity,  # (registration side effects)
+               reinhard,
+               saturation,
+               sepia,
+               tie_dye,
+               xtoon,
+)
+from .base import Style, Vertex, brightness
 from .params import Param
 from .registry import create, get, names
 

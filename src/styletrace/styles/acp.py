@@ -25,9 +25,7 @@ extra settings.
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Vertex, brightness
 from .color_map import ColorMap
 from .registry import register

@@ -20,9 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .params import Param, StyleError
 
 

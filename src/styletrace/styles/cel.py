@@ -21,9 +21,7 @@ and the output keeps the colour of global illumination:
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Style, StyleError, Vertex, brightness, increasing, rounded
 from .registry import register
 from .tone import band_levels, luminance_of

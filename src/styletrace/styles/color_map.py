@@ -16,8 +16,7 @@ what an unresolved style, rendered by calling mi.render directly, does).
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
+from ..gate import mi
 from .base import Param, Style, StyleError, Vertex, brightness, increasing
 from .gradient import Gradient
 from .registry import register

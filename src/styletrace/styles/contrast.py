@@ -13,12 +13,10 @@ Parameters
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
+from ..gate import mi
 from .base import Param, Style, Vertex, auto_exposure, exposure_param
 from .forms import AffineForm
 from .registry import register
-
 
 #: where the auto exposure puts the scene's median brightness: the default pivot
 MID = 0.5

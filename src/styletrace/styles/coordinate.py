@@ -12,9 +12,7 @@ Without a coordinate (a renderer that computes none) s is the projection of the 
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Projection, Style, Vertex, projection
 from .registry import register
 

@@ -16,9 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import EXPOSURE_KEY, Param, Style, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register

@@ -19,13 +19,10 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register
-
 
 #: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR) (exposed radiance).
 PILOT_FLOOR = 0.02

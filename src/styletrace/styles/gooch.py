@@ -28,9 +28,7 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Style, Vertex, camera, light_from_camera
 from .registry import register
 

@@ -10,11 +10,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
 from ..errors import StyleError
+from ..gate import dr, mi
 
 PRESETS = {
     # dark blue -> terracotta -> warm sand: reads well on the built-in scenes' brightness range

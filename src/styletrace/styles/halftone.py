@@ -38,9 +38,7 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Projection, Style, Vertex, brightness, projection
 from .hatching import BrightnessRange, coverage, tone_params
 from .registry import register

@@ -65,11 +65,19 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-import drjit as dr
-import mitsuba as mi
-
-from .base import (Param, Projection, Style, StyleError, Vertex, brightness, camera, camera_forward, increasing,
-                   projection)
+from ..gate import dr, mi
+from .base import (
+    Param,
+    Projection,
+    Style,
+    StyleError,
+    Vertex,
+    brightness,
+    camera,
+    camera_forward,
+    increasing,
+    projection,
+)
 from .registry import register
 from .tone import tone_inverse, tone_knots, tone_of
 

@@ -5,8 +5,7 @@ With it, the `stylized` integrator converges to Mitsuba's `path` integrator (a t
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
+from ..gate import mi
 from .base import Style, Vertex
 from .forms import AffineForm
 from .registry import register

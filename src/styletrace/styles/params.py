@@ -20,7 +20,6 @@ from ..declaration import COMMON_KINDS, Declaration
 from ..errors import StyleError
 from .gradient import Gradient
 
-
 #: Default bound on the magnitude of every real parameter value (see the module's reference block).
 LIMIT = 1e6
 

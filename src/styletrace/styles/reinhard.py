@@ -14,8 +14,7 @@ w + s X are >= w > 0, so the expansion never straddles 0.
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
+from ..gate import mi
 from .base import Param, Style, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register

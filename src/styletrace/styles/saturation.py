@@ -20,9 +20,7 @@ The style is meant for the "first N hits only" parametrization (recursive satura
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Style, Vertex, brightness
 from .registry import register
 

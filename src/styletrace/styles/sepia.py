@@ -13,8 +13,7 @@ with contrast). A gradient with more stops would be piecewise linear, no longer 
 """
 from __future__ import annotations
 
-import mitsuba as mi
-
+from ..gate import mi
 from .base import Param, Style, StyleError, Vertex, brightness
 from .forms import AffineForm
 from .gradient import Gradient

@@ -27,13 +27,10 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
 from .forms import PolynomialForm
 from .registry import register
-
 
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20

@@ -36,9 +36,7 @@ from __future__ import annotations
 
 import math
 
-import drjit as dr
-import mitsuba as mi
-
+from ..gate import dr, mi
 from .base import Param, Style, StyleError, Vertex, camera, increasing
 from .gooch import AUTO_LIGHT, CameraLight, facing
 from .gradient import Gradient

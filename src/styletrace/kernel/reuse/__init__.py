@@ -64,7 +64,7 @@ refine.py (the refinement round of n0:n_max), batch.py (one batch: camera, first
 loop.py (the pass loop).
 """
 from . import pool
-from .pool import pool_pixels, window
 from .loop import render
+from .pool import pool_pixels, window
 
 __all__ = ["pool", "pool_pixels", "render", "window"]

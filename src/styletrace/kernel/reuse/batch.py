@@ -10,10 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
+from ...gate import dr, mi
 from ...styles.base import Vertex
 from ..lane_sampler import LaneSampler
 from ..path import past_area_emitters

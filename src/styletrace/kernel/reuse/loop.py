@@ -8,12 +8,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import drjit as dr
-import mitsuba as mi
-
-from ...errors import SceneError
-from ...jit import no_collection
 from ...config import settings as S
+from ...errors import SceneError
+from ...gate import dr, mi
+from ...jit import no_collection
 from ..render_context import RenderContext
 from .batch import Samples, batch
 from .pool import Frame

@@ -17,11 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
 from ...estimators import channel_mean
+from ...gate import dr, mi
 from ..acceptance import accepted
 
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent

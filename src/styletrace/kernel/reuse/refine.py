@@ -10,12 +10,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
-from ...estimators import channel_mean
 from ...config.estimator_registry import adaptive_direct
+from ...estimators import channel_mean
+from ...gate import dr, mi
 from ..lane_sampler import LaneSampler
 from .children import Parents, Slab, Span, draw
 from .pool import Grid, Pools, pooled

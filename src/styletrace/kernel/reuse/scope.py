@@ -9,9 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import drjit as dr
-import mitsuba as mi
-
+from ...gate import dr, mi
 from ...scene.graph import any_ptr
 
 

@@ -9,12 +9,11 @@ within distance h), with the weights of pool.py; g of that pooled value is the c
 """
 from __future__ import annotations
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
-from ...styles.base import Vertex
 from ...config import settings as S
+from ...gate import dr, mi
+from ...styles.base import Vertex
 from ..lane_sampler import LaneSampler
 from ..vertex import emission
 from ..world_grid import WorldGrid, density_h
