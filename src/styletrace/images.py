@@ -1,26 +1,13 @@
 """Writing rendered images: EXR as linear float32, PNG as sRGB 8-bit; atomic and checked.
 
-    write_image(img, "out.png")      # H x W x 3 linear radiance -> file; raises OSError if it cannot
-    write_image(y, "out.exr", "luminance")   # H x W x 1: the film's own pixel format (Y, YA, XYZ, RGBA, ...)
-    save_safely(img, "out.exr")      # never loses the render: falls back to a temporary EXR
-    nonfinite_pixels(img)            # how many pixels hold NaN or +-inf
-    mse(img, reference)              # mean squared error (inf or NaN with non-finite pixels)
+    write_image(img, "out.png")              # H x W x 3 linear -> file; OSError if it cannot
+    write_image(y, "out.exr", "luminance")   # the film's own pixel format
+    save_safely(img, "out.exr")              # never loses the render: falls back to a temporary EXR
+    nonfinite_pixels(img), mse(img, reference)
 
-Encoding happens in memory (Mitsuba writes the EXR or PNG into a `MemoryStream`); the bytes then go
-through a Python file object into a temporary file in the destination's folder, which is flushed,
-checked for its full size, fsynced and only then renamed over the destination (`os.replace`, atomic on
-POSIX). So a full disk (ENOSPC), a short write or a kill during the write raises or leaves the old
-file intact; it never leaves a truncated file where a valid one was, and two writers of one path leave
-one of their images. (Mitsuba's own `Bitmap.write(path)` ignores ENOSPC and reports success.)
-
-PNG: the sRGB transfer function, clamping and 8-bit quantization are done here in numpy: linear values
-are clamped to [0, 1] first (NaN -> 0, +inf -> 1, -inf and negatives -> 0), because Mitsuba's own
-conversion wraps values above ~2410 round to black.
-
-`encode_plain` writes the same pixels with numpy and zlib alone (an uncompressed scanline EXR, a PNG),
-for the command line's interrupted render: while a Dr.Jit kernel runs, Mitsuba's OpenEXR writer waits
-for it (measured: an 80 x 80 EXR took until the pass under way ended, 6-15 s), so a write from the
-signal watcher must not go through Mitsuba.
+A write never leaves a truncated file where a valid one was (temporary file, size check, fsync,
+rename). PNG values are clamped to [0, 1] first (NaN -> 0, +inf -> 1). `encode_plain` encodes with
+numpy and zlib alone, for the interrupted render. Rationale: docs/design/atomic_image_writes.md.
 """
 from __future__ import annotations
 

@@ -1,26 +1,11 @@
 """The estimator protocol and the kernel driver that every estimator shares.
 
-What it is
-    ``Estimator`` is a per-lane state machine fed one input sample at a time:
-
-        start(ctx, carry)                 -> (state, carry)   initial state; may draw uniforms
-        wants(ctx, state)                 -> mask             lanes that need another input sample
-        feed(ctx, state, x, mask, carry)  -> (state, carry)   consume x on the lanes in mask
-        value(ctx, state)                 -> estimate of g(I)
-        next_u(ctx, state)                -> None, or the stratified first dimension of the next draw
-
-    ``Estimator.run`` is the kernel contract used by the integrator (see the package docstring):
-    one loop, one ``draw`` per iteration and lane, only on lanes that want a sample. Composite
-    estimators (``algebra.py``) are state machines made of state machines, so the whole tree still
-    runs in one loop and calls ``draw`` at exactly one place in the traced code.
-
-Parameters of ``run``
-    draw(carry[, u]) -> (x, carry), uniform(carry) -> (u, carry), carry (opaque pytree),
-    active=None (lanes that take part; others return 0 and draw nothing),
-    like=None (the type or an instance of x: required for Dr.Jit, optional for numpy).
-
-The ``Context`` hides the backend: per-lane constants, tables looked up by a per-lane index,
-uniforms, and the while loop (``drjit.while_loop`` or the numpy emulation in ``arrays.py``).
+`Estimator` is a per-lane state machine fed one input sample at a time: `start(ctx, carry)`,
+`wants(ctx, state)` (lanes that need another sample), `feed(ctx, state, x, mask, carry)`,
+`value(ctx, state)` and `next_u(ctx, state)` (the stratified first dimension of the next draw, or
+None). `Estimator.run` is the kernel contract of the package docstring: one loop, one `draw` per
+iteration and lane. The `Context` hides the backend: per-lane constants, tables, uniforms and the
+while loop. See docs/design/estimator_kernel_contract.md.
 """
 from __future__ import annotations
 

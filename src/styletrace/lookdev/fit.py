@@ -1,31 +1,12 @@
 """Inverse stylization: θ that make a buffer's restyled image match a target image.
 
-    result = styletrace.fit(buf, style="cel", target=img)       # img: H x W x 3 linear, or an image file
-    result.params        # {'thresholds': (0.3,), 'levels': (0.1, 0.9)}, validated by the style
-    result.image         # restyle(buf, style="cel", **result.params)
+    result = styletrace.fit(buf, style="cel", target=img)   # .params (validated), .image
 
-Gradient descent through the restyle kernel (`lookdev.restyle.sample_values` + `accumulate`) with Dr.Jit's
-automatic differentiation (an `_ad_` variant): the parameters are Dr.Jit arrays with gradients enabled,
-the loss is the mean squared error over the pixels' RGB values, `dr.backward` gives its gradient and
-Adam (`drjit.opt.Adam`, Kingma and Ba, "Adam: A Method for Stochastic Optimization", 2015) steps,
-with a learning rate falling geometrically from `lr` to `lr / 100` over the iterations.
-
-What is fitted: every parameter of kind float, floats and colour, and the colours of a gradient's stops
-(its positions stay where the initial gradient puts them). Integer, boolean, choice and vector
-parameters stay at their initial values, and so do hatching's angle, spacing and thickness (the line
-pattern is periodic in them: the loss has a minimum per period); `fixed=` holds any other parameter too. After each step each
-parameter is clamped to its declared range. Fitting uses the `direct` estimator (g of the children's mean).
-
-Step styles have no useful gradient (a step's derivative is zero almost everywhere), so during fitting
-they are replaced by a smoothed surrogate with temperature τ:
-- cel: the band target m(u) = m_0 + sum_j (m_j - m_{j-1}) H(u - t_j) with the Heaviside step H replaced
-  by the logistic sigmoid s((u - t_j) / τ); thresholds are kept sorted;
-- hatching: the line test dist_j < d/2 becomes s((d/2 - dist_j) / (τ spacing)) and the active-set test
-  m > j becomes s((m' - j - 1/2) / τ) with m' = coverage sets + 1/2 unrounded, lines combined as
-  1 - prod_j (1 - line_j active_j).
-τ falls geometrically from `tau` (default 0.1) to `tau_end` (default 1e-4) over the iterations, so late
-iterations fit nearly the true style. The loss reported (and the convergence test) uses the true style.
-Halftone's steps are not smoothed: fitting it is refused with one line.
+Gradient descent (Adam) through the restyle kernel with Dr.Jit's AD on the mean squared error.
+Fitted: float, floats and colour parameters and a gradient's stop colours, clamped to their ranges
+after each step; `fixed=` holds others. Step styles (cel, hatching) are smoothed with a temperature
+τ falling from `tau` to `tau_end`; halftone is refused with one line. The `direct` estimator is
+used. Rationale and the surrogates: docs/design/fitting_surrogates.md.
 """
 from __future__ import annotations
 

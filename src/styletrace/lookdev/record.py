@@ -1,27 +1,12 @@
 """Recording an expectation buffer while rendering: `render_buffer` and the recording integrator.
 
     buf = styletrace.render_buffer("cornell-box", style="cel", spp=16, inner=16, seed=0)
-    buf.save("box.npz")
 
-`RecordingIntegrator` is the `stylized` integrator that also keeps, per camera sample (SIMD lane), the
-θ-free data of `lookdev.buffer`. Mitsuba's render loop calls `sample()` once per pass for the whole
-wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
-and they are collected after each pass of `pipeline.passes` (the same passes and pass seeds as `render`).
-Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
-SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. With
-another filter the buffer also keeps each sample's film position (`film_filter.positions`), and
-restyles splat it with the filter (`lookdev.film_filter`). A film of more than LANES_PER_PASS pixels
-is rendered one tile (crop window) per pass: `to_film` maps that pass's pixels to the film's and,
-with a box filter, drops those the tile shares with a neighbour, as the render does.
-
-With `direct` or `affine` the buffer keeps the mean of each camera sample's n children. With any other
-estimator (series*, ustat, naive, telescoping, combined) it keeps the sequence of children and uniform
-numbers the estimator consumed, in call order (`lookdev.sequence`), and the recorded image is still
-exactly the render's: the recording wraps the same `draw` and `uniform` around the same stream.
-
-What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
-stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film other than
-rgb, more camera samples than the cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
+`RecordingIntegrator` is the `stylized` integrator that also keeps, per camera sample, the θ-free
+data of `lookdev.buffer`, written by the same kernel and collected after each pass of
+`pipeline.passes`; the recorded image is the render's. Refused with one line: `first_n_hits`, more
+than one stylized level, `expansion_pass`, a per-sample style (acp), a film other than rgb, more
+samples than the cap. See docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 

@@ -1,29 +1,13 @@
-"""Restyling an expectation buffer: g_θ evaluated again over the stored camera samples, no ray traced.
+"""Restyling an expectation buffer: g_θ evaluated again over the stored camera samples.
 
-    img = styletrace.restyle(buf, style="cel", thresholds=(0.2, 0.6), levels=(0.1, 0.5, 0.9))  # H x W x 3
+    img = styletrace.restyle(buf, style="cel", thresholds=(0.2, 0.6))   # H x W x 3, linear
 
-Per camera sample the value is L_before + beta g_θ(mean, vertex) (see `lookdev.buffer`), computed by
-`style.apply` on Dr.Jit arrays with a `Vertex` built from the stored data on the active backend, and
-accumulated as the film accumulates it (`accumulate`): with a box filter the pixel is the mean of
-its samples; with another filter each sample weighs on the pixels it covers (`lookdev.film_filter`).
-With the same seed and the buffer's inner sample count this equals `styletrace.render` with the new
-style up to float rounding (tests/lookdev/test_restyle.py checks every style of the registry).
-
-Which slot changes: the integrator's own style for `first_hit` buffers, every styled object's style for
-`first_object_hit` buffers; other slots keep their recorded style. Parameters not given keep the
-recorded values while the style stays the same (a new style starts from its defaults). The estimator is
-the one given, else the recorded one where it applies to the style, else `direct`.
-
-A "sequence" buffer (recorded with an unbiased estimator) is restyled by replaying the estimator over
-each camera sample's stored children and uniform numbers (`lookdev.sequence.replay`). Where the new
-estimator asks for what is not stored, or in another order (another estimator, a larger n, a truncation
-that goes further), the result would not be a render's: refused in one line, naming how many camera
-samples it concerns.
-
-Refused with one line: estimators other than direct and affine on a "mean" buffer (they need the children
-themselves), another inner sample count than a mean buffer's, a per-sample style (acp), a style that needs
-children on a buffer recorded with a closed-form style (0 children), and a replay that needs more than
-the sequence buffer stores.
+Per camera sample L_before + beta g_θ(mean, vertex), accumulated as the film does (`accumulate`;
+`lookdev.film_filter` for other filters); equal to a fresh render with the same seed and n up to
+float rounding. Sequence buffers are replayed (`lookdev.sequence.replay`). Refused with one line:
+estimators other than direct and affine on a mean buffer, another n, a per-sample style (acp),
+children needed from a closed-form recording, a replay beyond what is stored. See
+docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 

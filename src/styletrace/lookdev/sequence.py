@@ -1,33 +1,12 @@
-"""The per-camera-sample sequence of children and uniforms an estimator consumed: record it, replay it.
+"""The per-camera-sample sequence of children and uniforms an estimator consumed: record, replay.
 
-The unbiased estimators (series*, ustat, naive, telescoping, combined) are not functions of the children's
-mean: they use the children themselves and uniform numbers (truncation, Russian roulette) in an order of
-their own. The kernel contract (`estimators/__init__.py`) gives every estimator two sources,
-`draw(carry)` (one child) and `uniform(carry)` (one uniform number), both fed by the lane's one random
-stream. So a camera sample's estimate is determined by the sequence of calls it made and what each
-returned, and a restyle that asks for the same sequence in the same order sees exactly what a fresh render
-with the same seed would see.
-
-Recording (`Recorder`, used by `record.RecordingIntegrator`): every `draw` and `uniform` call of every
-style slot's estimator, with its position in the lane's call order (including the uniforms an
-estimator's start draws on lanes of other slots: they advance the same stream), is noted: children in
-one pool shared by the lanes of a pass (`dr.scatter_inc` hands out the places, so a lane with a long
-random truncation uses the room others left), uniforms in a fixed number of places per lane. After the
-pass both are sorted per lane (numpy) into the buffer's compact form:
-
-    seq_count uint32 (N,)    events stored per camera sample (offsets: their exclusive cumsum)
-    seq_kind  uint8  (E,)    1 = a child, 0 = a uniform number, per event in call order
-    child     float32 (3, C) the children in call order (C = number of kind-1 events)
-    uniform   float32 (U,)   the uniform numbers in call order (U = number of kind-0 events)
-
-The pool holds `budget(slots)` children per camera sample on average, the slab as many uniforms per
-camera sample (at most `MAX_EVENTS_PER_SAMPLE`); a lane whose events no longer fit keeps the prefix that
-did (its later events are not stored, and a replay that needs them is refused).
-
-Replay (`replay`): each slot's (new) estimator runs over all lanes with `active` = its lanes, as the
-integrator runs it; `draw` returns the lane's next stored child and `uniform` its next stored uniform. A
-lane whose estimator asks for an event that is not stored, or for a child where a uniform was recorded
-(or the reverse), is marked: its result would not be a fresh render's, so `restyle` refuses.
+Every estimator draws from two sources, `draw(carry)` and `uniform(carry)`, fed by the lane's one
+stream, so a camera sample's estimate is fixed by its sequence of calls and their results.
+`Recorder` notes every call of every slot's estimator in call order (children in a shared pool,
+uniforms in a slab) and sorts them per lane into seq_count, seq_kind, child and uniform; a lane that
+overflows keeps its prefix. `replay` runs a slot's estimator over the stored events and marks lanes
+that ask for an event not stored, or of the other kind; `restyle` refuses those. See
+docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 

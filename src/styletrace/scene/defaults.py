@@ -1,32 +1,13 @@
 """Scene-relative defaults: the styles' 'auto' parameters, resolved on the scene about to be rendered.
 
-    integrator, chosen = resolve(scene, integrator)   # before rendering (api.passes, the CLI's render)
+    integrator, chosen = resolve(scene, integrator)   # before rendering
 
-A fixed default in scene units or in absolute brightness suits one scene: hatching spacing 0.04 is pixel
-noise in a 550-unit box, a cel threshold of 0.75 leaves a dim scene in one band. A style declares such
-parameters with a default of None ('auto') and a rule (`Param.auto`, listed by `styletrace styles`);
-`Style.auto_values(facts)` applies the rule to the `Facts` of the scene computed here, and `resolve`
-returns the integrator with the values pinned (explicit values always win: only None is filled in) and
-one line naming them, which the CLI prints so that a user can pin them.
-
-What the rules may read (`Facts`, per style slot):
-- `camera`: the first sensor's frame (gooch, xtoon: the light follows the camera's up vector);
-- `brightness(qs)`: quantiles of the first-hit brightness (r+g+b)/3 the camera sees on the objects the
-  style covers: the integrator's style covers the objects without a `styled` BSDF, a `styled` BSDF its own.
-  A pilot of the path kernel (`path.exitant`, the scene's max_depth and rr_depth) traces PILOT_SPP
-  jittered camera rays in each cell of a grid of PILOT_CELLS cells along the film's longer side, and the
-  brightness is averaged per cell and slot (a cell estimate, like a stylized vertex's inner estimate
-  rather than one noisy path), the cells weighted by their number of samples on the slot's objects; in a
-  scene with participating media the pilot is volume.py's walk from the camera (through the sensor's
-  medium), so a sample's brightness is what reaches the camera along its ray;
-- `depth(qs)`: quantiles of the camera depth (p - c) . forward of those first hits (xtoon's depth mode).
-A composition's later operand sees the brightness of the earlier operands' output (`Facts.mapped`).
-
-Where the pilot runs: here, before Mitsuba's render call, never inside the integrator's `sample`; the pilot
-costs one small path-traced render (32 x 32 x 16 paths) and runs only if some style has a brightness rule left.
-Stylized levels below the first (first_n_hits, first_object_hit through glass) are resolved with the
-first hits' statistics. Rendering through mi.render directly skips this module: camera rules still apply
-(in `Style.prepare`), brightness and depth rules fall back to the fixed values each style documents.
+A style declares a parameter 'auto' (default None) with a rule (`Param.auto`);
+`Style.auto_values(facts)` applies it to the `Facts` computed here per style slot: `camera`,
+`brightness(qs)` (quantiles of a pilot's first-hit brightness on the slot's objects) and
+`depth(qs)`. `resolve` returns the integrator with the values pinned (given values win) and one line
+naming them. The pilot runs here, before Mitsuba's render call, and only if a brightness rule is
+left. Rationale and the pilot's design: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 

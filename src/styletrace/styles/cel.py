@@ -1,23 +1,16 @@
 """cel: global-illumination cel shading (supplement S5.2).
 
 Parameters
-- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither thresholds nor levels is given
-- thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K
-- levels (floats, default auto): K+1 target brightnesses m_0..m_K
+- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither thresholds nor levels is
+  given
+- thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K; auto: the
+  brightness quantiles 1/(K+1), ..., K/(K+1) of the first hits (unresolved: k/(K+1))
+- levels (floats, default auto): K+1 target brightnesses m_0..m_K; auto: `tone.band_levels`
+  (unresolved: evenly spaced in lightness, `FALLBACK_LSTAR`)
 
-Auto thresholds (scene-relative, `scene.defaults`): the brightness quantiles 1/(K+1), ...,
-K/(K+1) of what the camera sees of the objects this style covers, from a pilot of the path kernel, so the
-K+1 bands hold about equal shares of the image whatever the scene's light level. Auto levels
-(`tone.band_levels`): each band's median brightness, exposed so that the scene's median is middle grey
-and spread at least 18 L* apart, so the bands are flat and distinct on any scene. The chosen values
-are printed (`styletrace render` logs them unless -q) and can be pinned. A style that was never
-resolved (rendered by calling mi.render directly) uses evenly spaced thresholds k/(K+1) and levels
-evenly spaced in lightness (`FALLBACK_LSTAR`).
-
-With u = (r+g+b)/3 of the inner estimate <I>, the target brightness is
-    u' = m(u) = m_j  where j = number of thresholds t_i <= u,
-and the output keeps the colour of global illumination:
-    g(<I>) = <I> u' / u          (grey (u',u',u') where u <= 0, since <I> has no colour there).
+With u = (r+g+b)/3 of the inner estimate <I>:
+    u' = m_j, j = number of thresholds t_i <= u;   g(<I>) = <I> u' / u   (grey (u',u',u') if u <= 0)
+Rationale of the auto rules: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 

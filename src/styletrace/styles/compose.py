@@ -1,23 +1,15 @@
-"""compose: styles applied one after another as one style (supplement S5.4, Fig. 10; main paper Theorem 4.1).
+"""compose: styles applied one after another as one style (supplement S5.4, Fig. 10; Theorem 4.1).
 
-Spelling: `--style contrast+sepia` (or `"style": "contrast+sepia"`) applies contrast, then sepia:
-    g(<I>) = g_k( ... g_2(g_1(<I>)) ... )      for  `g_1+g_2+...+g_k`
+`--style contrast+sepia` applies contrast, then sepia:  g(<I>) = g_k( ... g_2(g_1(<I>)) ... ).
 
 Parameters
 - OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name, e.g.
-  `contrast.c`, `contrast.pivot`, `sepia.gradient`. A style may appear once.
+  `contrast.c`, `sepia.gradient`. A style may appear once.
 
-Estimators
-- every operand affine (identity, contrast, sepia): the composite is affine, A = A_k ... A_1 and
-  b = A_k (... (A_2 b_1 + b_2) ...) + b_k, so `affine` is unbiased with n children, like a single affine
-  style (and `combined` applies as well).
-- every operand with a form (affine, power series, polynomial fit): `combined` nests the operands' own
-  unbiased estimators (Theorem 4.1, composition): each sample an outer operand's estimator consumes is an
-  independent unbiased estimate of the operands inside it. Affine operands take 1 sample, series and
-  polynomial operands a pilot of n (`inner_samples`) for their expansion point, as they do on their own.
-  This is the paper's combined gu-estimator of Fig. 10 (sepia after contrast, 1 sample per operand).
-- otherwise only `direct` (and `telescoping` where every operand has a form) apply.
-Per-sample baselines (acp) cannot be composed: they are not functions of an expectation.
+Estimators: all operands affine -> the composite is affine (`affine`, `combined`); all operands with
+a form (affine, power series, polynomial fit) -> `combined` nests the operands' unbiased estimators
+(Theorem 4.1, composition; Fig. 10's gu-estimator); otherwise `direct` (and `telescoping` where
+every operand has a form). Per-sample baselines (acp) cannot be composed.
 """
 from __future__ import annotations
 

@@ -1,64 +1,31 @@
 """hatching: cross-hatching by slabs around planes through the view direction (supplement S5.6).
 
-Reference: "An Illustration Technique Using Hardware-Based Intersections and Skeletons",
-Oliver Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte (1999).
+Reference: "An Illustration Technique Using Hardware-Based Intersections and Skeletons", Oliver
+Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte (1999); canonical lifting
+after "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
+Yonghao Yue (2026).
 
 Parameters
 - sets (int, default 3, in [1, 8]): number of hatching directions n
-- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in pixels
-- spacing (float, default auto, > 0): distance between neighbouring planes of a set, in scene units;
-  given, it replaces spacing_px (the fixed world-space planes below); auto: spacing_px is used
-- thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d, in the
-  units of the spacing in use (pixels with spacing_px, scene units with spacing)
+- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in
+  pixels
+- spacing (float, default auto, > 0): world-space plane distance; given, it replaces spacing_px
+- thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
-- tones (floats, default auto): the tone curve, brightnesses u_0 < ... < u_K at tone 0, 1/K, ..., 1
-  (`tone.tone_knots`: the scene's brightness distribution mixed with its lightness, so every level
-  covers a fair share of the image, a window or a lamp included); used unless u_min or u_max is given
-- u_min (float), u_max (float, > u_min): brightness of full / no hatching, a linear ramp between them
-  (the behaviour before `tones`); given one, the other is the 5% / 95% brightness quantile; unresolved
-  (mi.render called directly, no tones): 0.05 and 0.9
+- tones (floats, default auto): the tone curve u_0 < ... < u_K (`tone.tone_knots`)
+- u_min (float), u_max (float, > u_min): a linear ramp instead of tones (unresolved: 0.05 and 0.9)
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): where the screen lines are evaluated (spacing_px only).
-  canonical: at the vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py): the pixel
-  for a direct view and behind perfect mirrors or glass, the MLS inverse of the anchor map otherwise;
-  position: at the pinhole projection of the vertex's own position (the pattern is anchored to the world
-  point and is scaled and mirrored in reflections; the behaviour before LLaT)
-- angle_reflected (float, default auto = angle): the first set's angle at vertices of path depth > 0
-  (seen in a mirror or through glass), e.g. angle + 90 to flip the hatching in reflections (LLaT Fig. 14)
+- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
+  projection)
+- angle_reflected (float, default auto = angle): the first set's angle at path depth > 0
 
-Set j (j = 0..n-1) is the family of parallel planes {x : x . n_j = k spacing, k integer} whose unit normal
-    n_j = cos(theta_j) e1 + sin(theta_j) e2,   theta_j = angle + j pi / n,
-with (e1, e2) an orthonormal basis perpendicular to the camera's view direction (e2 the camera's up
-vector made perpendicular): every plane contains the view direction, so n_i x n_j is parallel to it.
-The planes pass through the world origin (o = 0). With u = (r+g+b)/3 of the inner estimate <I>,
-    m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)      (m = 0 at u_max, n at u_min)
-or, with tones, m = min(n, floor((1 - F(u)) (n + 1))) with F the tone curve (each of the n + 1 levels
-an equal share of tone); sets 0..m-1 are active, and the vertex p is on a line when, for some active j,
-    dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2
-(the distance to the nearest plane of set j). g = line_color on a line, background elsewhere.
-`hatch_mask` is that predicate on Dr.Jit arrays; the camera is read in `prepare` (until then the
-camera of Mitsuba's default sensor is assumed: looking along +z, up +y).
-
-Screen spacing (spacing_px, the default). A fixed world spacing is pixel noise on a large scene and a
-few strokes on a small one (0.04 against a 550-unit box), so by default the planes of set j are
-    {x : (x - c) . n_j = k spacing_px s (x - c) . f,  k integer}
-with c the camera position, f its forward direction and s the scene units per pixel per unit depth
-(`Projection`, measured on the sensor: one pixel's ray angle; an orthographic sensor has a fixed
-width per pixel instead). Each is still a plane, but the family is now a pencil of planes through the
-camera (all containing the line through c along f x n_j) rather than parallel planes: the slab spacing
-grows with depth exactly as perspective shrinks it, so the lines land evenly, spacing_px apart, on the
-screen, and a vertex's distance to its nearest plane is measured in pixels at its own depth. The lines
-belong to the screen, not to the objects (moving the camera slides them over the surfaces; `spacing`
-fixes them in the world instead), the usual look of screen-space hatching.
-
-Canonical lifting (lift=canonical, the default with spacing_px). With s = (s_x, s_y) the vertex's image
-coordinate (pixels right and up of the centre, `Vertex.s`), set j's distance is
-    dist_j = |frac((cos(theta_j) s_x + sin(theta_j) s_y) / spacing_px + 1/2) - 1/2| spacing_px,
-which at depth 0 equals the pencil-of-planes distance above (s is then the projection of p, and
-(e1, e2) are the screen's right and up axes). Behind a mirror s is where the point is *seen*, so the
-reflection shows the screen's spacing and angle instead of the world point's projection.
-(Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
-Yonghao Yue, 2026.)
+Set j has normal n_j = cos(theta_j) e1 + sin(theta_j) e2, theta_j = angle + j pi / n, (e1, e2) the
+screen's axes. With u = (r+g+b)/3 of <I>, m = min(n, floor((1 - F(u)) (n + 1))) sets are active (the
+ramp: m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)), and p is on a line when
+    dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2      for some active j
+(with spacing_px: planes through the camera, or s . (cos, sin) / spacing_px with lift=canonical). g
+= line_color on a line, background elsewhere; `hatch_mask` is that predicate. Rationale:
+docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
 

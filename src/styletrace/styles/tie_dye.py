@@ -1,26 +1,17 @@
 """tie_dye: per-channel cosine waves (supplement S5.5, the polynomial-approximation example).
 
 Parameters
-- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all channels)
+- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all
+  channels)
 - phases (floats, default 1,1.13,1.29): phi_r, phi_g, phi_b (one value: all channels)
-- domain_min (float, default -1), domain_max (float, default 4): the interval [lo, hi] on which the
-  estimator library fits the channel functions (Chebyshev, degree 20 in the paper); lo < hi
-- together: pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14, so float32 resolves the cosine's argument
-- exposure (float in (0, 100], default auto): s, the scale of <I> before the waves; auto: 0.18 / the median first-hit
-  brightness of the scene (`scene.defaults`, at most 100), so the waves fall on the same tones of a dim scene;
-  unresolved (mi.render directly): 1
+- domain_min (float, default -1), domain_max (float, default 4): the fit interval [lo, hi], lo < hi;
+  together pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median first-hit
+  brightness (at most 100; unresolved: 1)
 
-Per channel c in {r, g, b}, with x_c the channel of the inner estimate <I>:
-    g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2
-With the defaults: r' = (1 - cos(2 pi (r + 1)))/2, g' = (1 - cos(2.15 pi (g + 1.13)))/2,
-b' = (1 - cos(2.3 pi (b + 1.29)))/2, as printed in the supplement.
-The supplement clamps samples above the fit interval's maximum 4 (radiance may exceed 1). Direct
-application (`apply`) clamps the exposed inner estimate s <I>, so it targets g(clamp(s I)). The unbiased
-estimators (`ustat`, `naive`) expose and clamp every child sample before the degree-20 Chebyshev fit h sees
-it, as the paper does, so they target h(E[clamp(s X)]): the two differ by the fit error (at most 0.005, 0.023, 0.06 per
-channel) and wherever single samples exceed 4 while their mean does not (near lights).
-`channel_functions()` gives the three channel functions of the exposed value y = s x, clamp included, as
-numpy callables for the fit (on [lo, hi] in exposed units, whatever s is), and `domain()` the interval.
+Per channel c:  g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2.
+`channel_functions()` gives the channel functions of the exposed value (for the fit), `domain()` the
+interval. Where the clamp applies per estimator: docs/design/tie_dye_clamp.md.
 """
 from __future__ import annotations
 
