@@ -277,9 +277,18 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
 
 
 def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> None:
-    """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write.
-    `pixel_format` is the film's (see `encode`). `aovs` (EXR only): the error AOVs as extra channels.
-    `plain`: encoded by `encode_plain` (no Mitsuba: a kernel may be running)."""
+    """Write `image` atomically: EXR as linear float32, PNG as sRGB 8 bit, clamped.
+
+    Args:
+        image: H x W x C linear pixels.
+        path: the destination; its extension chooses the format.
+        pixel_format: the film's pixel format (see `encode`).
+        aovs: the error AOVs as extra channels (EXR only), or None.
+        plain: encode with `encode_plain` (no Mitsuba: a kernel may be running).
+
+    Raises:
+        OSError: the file cannot be written. ValueError: AOVs for a format other than EXR.
+    """
     ext = os.path.splitext(path)[1].lower()
     if plain:
         write_bytes_atomically(encode_plain(image, ext, pixel_format, aovs), path)
@@ -293,9 +302,17 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
 
 
 def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> str:
-    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it. Returns where it went.
-    If even that fails, no empty temporary file is left behind and the error is raised. `plain`: see
-    `write_image`."""
+    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it.
+
+    Args:
+        image, path, pixel_format, aovs, plain: as for `write_image`.
+
+    Returns:
+        The path written: `path`, or the temporary EXR's.
+
+    Raises:
+        Exception: the fallback failed too (no empty temporary file is left behind).
+    """
     try:
         write_image(image, path, pixel_format, aovs, plain)
         return path

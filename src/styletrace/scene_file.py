@@ -269,8 +269,19 @@ def parse_xml(path: str) -> ET.ElementTree:
 
 def load(path: str, width: int | None = None, height: int | None = None,
          defines: Mapping[str, Any] | None = None) -> tuple[Any, list[str]]:
-    """The loaded file (whatever Mitsuba made of it) and the notes to show the user. Mitsuba's own
-    errors propagate; the caller turns them into one line."""
+    """Load a Mitsuba XML scene file with the command line's changes applied.
+
+    Args:
+        path: the XML file.
+        width, height: a new film size for the first top-level sensor, or None to keep it.
+        defines: values of the file's `<default>` parameters, as `mitsuba -D`.
+
+    Returns:
+        (scene, notes): whatever Mitsuba made of the file, and the notes to show the user.
+
+    Raises:
+        SceneError: a resize that cannot be done correctly. Mitsuba's own errors propagate.
+    """
     origin = f"scene file '{path}'"
     defines = {str(k): str(v) for k, v in (defines or {}).items()}
     try:

@@ -56,7 +56,15 @@ def _pow2_floor(x: int) -> int:
 
 
 def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int, str | None]:
-    """Camera samples per pass for `variant`, and a note when the device's free memory lowered it."""
+    """Camera samples per pass for a backend.
+
+    Args:
+        variant: the Mitsuba variant, e.g. "llvm_ad_rgb" or "cuda_ad_rgb".
+        query: returns the CUDA device's (free, total) bytes, or None where it cannot tell.
+
+    Returns:
+        (lanes, note): the pass size, and a note for the user when free memory lowered it, else None.
+    """
     if not variant.startswith("cuda"):
         return pass_loop.LANES_PER_PASS, None
     memory = query()

@@ -3,7 +3,7 @@
 Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
 `--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
 bad values raise `SettingsError` (or `StyleError` for the style's own parameters) with one line.
-The integrator's property table in the README and the docs is generated from `PROPERTIES`, whose entries
+The integrator's property table in docs/python.md is generated from `PROPERTIES`, whose entries
 (`declare.Property`) declare each property once: type, default, bounds, choices, doc line and flag.
 
     settings = parse({"style": "cel", "inner_samples": "8,4", "stylize": "first_n_hits", "stylize_depth": 2})

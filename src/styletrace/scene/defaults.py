@@ -229,10 +229,17 @@ def describe(style: Style, values: dict[str, Any]) -> str:
 
 
 def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
-    """`integrator` with the auto values of its style and of the scene's `styled` BSDFs pinned (the BSDFs are
-    updated in place: they belong to the scene), and a one-line account of the values chosen ('' if none).
-    `pilot`: a `Pilot` of this scene to use (traced here only if an auto value needs it), so that a caller
-    that keeps the pilot's samples (the look-dev recorder) traces it once."""
+    """Pin the auto values of an integrator's style and of the scene's `styled` BSDFs.
+
+    Args:
+        scene: the scene about to be rendered; its `styled` BSDFs are updated in place.
+        integrator: the integrator to resolve (any other integrator is returned as it is).
+        pilot: a `Pilot` of this scene to reuse (traced only if an auto value needs it), so that a
+            caller that keeps the pilot's samples (the look-dev recorder) traces it once.
+
+    Returns:
+        (integrator, chosen): the integrator with values pinned, and a one-line account ('' if none).
+    """
     if not isinstance(integrator, StylizedIntegrator):
         return integrator, ""
     if pilot is None or not pilot.serves(scene, integrator.settings):
