@@ -16,11 +16,13 @@ import mitsuba as mi
 
 from .errors import SceneError, UsageError
 
-#: Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one image.
+# : Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one
+# image.
 SEED_MAX = 2 ** 32 - 1
 #: spp is a UInt32 sample count in Mitsuba's samplers.
 SPP_MAX = 2 ** 32 - 1
-#: Plugin classes whose spectra an RGB variant cannot evaluate: the first pass fails inside the kernel.
+# : Plugin classes whose spectra an RGB variant cannot evaluate: the first pass fails inside the
+# kernel.
 UNRENDERABLE = {"BlackBodySpectrum": "a 'blackbody' spectrum needs a spectral variant; give the emitter an RGB "
                                      "radiance (<rgb name=\"radiance\" value=\"...\"/>) instead"}
 

@@ -46,7 +46,8 @@ def srgb8(image) -> np.ndarray:
     return np.round(enc * 255.0).astype(np.uint8)
 
 
-#: a film's pixel format (as `hdrfilm` names it, or as its description shows it) -> Bitmap pixel format
+# : a film's pixel format (as `hdrfilm` names it, or as its description shows it) -> Bitmap pixel
+# format
 PIXEL_FORMATS = {"rgb": "RGB", "rgba": "RGBA", "luminance": "Y", "y": "Y", "luminance_alpha": "YA", "ya": "YA",
                  "xyz": "XYZ", "xyza": "XYZA"}
 
@@ -115,7 +116,8 @@ def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
               + _exr_attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0))
               + _exr_attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
               + _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
-    # every line: y, byte count, then the channels' values (sorted channel order, little-endian float32)
+    # every line: y, byte count, then the channels' values (sorted channel order, little-endian
+    # float32)
     lines = np.ascontiguousarray(data[..., order].transpose(0, 2, 1), dtype="<f4").reshape(height, -1)
     line_bytes = lines.shape[1] * 4
     start = len(header) + 8 * height
@@ -166,7 +168,8 @@ AOV_CHANNELS = (("variance", ("variance.R", "variance.G", "variance.B")), ("bias
                 ("children", ("children",)))
 
 
-#: with denoising on (docs/denoise.md) the AOVs describe the noisy render and say so; `denoise_change` is
+# : with denoising on (docs/denoise.md) the AOVs describe the noisy render and say so;
+# `denoise_change` is
 #: what the denoiser changed. Only the keys present are written.
 DENOISED_AOV_CHANNELS = (("noisy_variance", ("noisy_variance.R", "noisy_variance.G", "noisy_variance.B")),
                          ("noisy_bias", ("noisy_bias",)), ("children", ("children",)),

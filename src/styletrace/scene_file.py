@@ -293,7 +293,8 @@ def load(path: str, width: int | None = None, height: int | None = None,
     if tree is not None and tree.getroot().tag == "scene":
         root = tree.getroot()
         if has_include(root):
-            # expanded on a copy: a file whose includes cannot be expanded faithfully still loads through
+            # expanded on a copy: a file whose includes cannot be expanded faithfully still loads
+            # through
             # Mitsuba as it is, unless it has to be edited (resized)
             expanded = ET.fromstring(ET.tostring(root))
             problem = expand_includes(expanded, path, defines)

@@ -16,7 +16,8 @@ from typing import Callable, Optional
 from .pipeline import passes as pass_loop
 
 CUDA_LANE_BYTES = 1024
-#: The share of the GPU's total memory a pass may use (the scene, the film and Dr.Jit's caches need the rest).
+# : The share of the GPU's total memory a pass may use (the scene, the film and Dr.Jit's caches need
+# the rest).
 CUDA_MEMORY_SHARE = 0.5
 #: Dr.Jit indexes lanes with 32-bit integers; stay well below.
 CUDA_LANES_MAX = 1 << 30

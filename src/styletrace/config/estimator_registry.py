@@ -21,24 +21,33 @@ from ..errors import SettingsError
 from ..styles.base import Style
 from ..styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 
-#: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with fireflies
-#: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased for the
+# : Highest series term the renderer evaluates. Products of (x - b) over radiance samples with
+# fireflies
+# : (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased
+# for the
 #: series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| < b/2).
 SERIES_MAX_TERMS = 24
 
-#: The series with the expansion pass (settings.expansion_pass): b* from the pass changes how the terms decay
-#: (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation keeps 8 terms always
-#: and continues with probability 0.9 up to 64 terms, evaluated scaled (SeriesEstimator(scaled=True)), whose
+# : The series with the expansion pass (settings.expansion_pass): b* from the pass changes how the
+# terms decay
+# : (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation keeps 8
+# terms always
+# : and continues with probability 0.9 up to 64 terms, evaluated scaled
+# (SeriesEstimator(scaled=True)), whose
 #: factors stay within float32 (measured: benchmarks/gamma_series.py; docs/estimators.md).
 PASS_TRUNCATION = (0.9, 8)
 PASS_MAX_TERMS = 64
-#: b = PASS_B_SCALE x b*: children up to 2 x PASS_B_SCALE x b* stay inside |x - b| < b, where the series
-#: converges; the pass's b* is low wherever its m children missed a rare bright one, and a child far beyond 2b
-#: enters every term's products. Measured (32x32, equal time, benchmarks/gamma_series.py's scenes): scale 1
+# : b = PASS_B_SCALE x b*: children up to 2 x PASS_B_SCALE x b* stay inside |x - b| < b, where the
+# series
+# : converges; the pass's b* is low wherever its m children missed a rare bright one, and a child
+# far beyond 2b
+# : enters every term's products. Measured (32x32, equal time, benchmarks/gamma_series.py's scenes):
+# scale 1
 #: gave glossy-sphere images with MSE 1e6 (values to -5e5), 2 gave 0.008-0.016, 4 gave 0.03 and 128.
 PASS_B_SCALE = 2.0
 
-#: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth g)
+# : forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a
+# smooth g)
 ANY_FORM = (AffineForm, SeriesForm, PolynomialForm, CompositeForm)
 FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial",
               CompositeForm: "composite"}
@@ -264,7 +273,8 @@ def series_with_pass(style, sets, known=0.0) -> Transformed:
         bs = dr.select(m1 > 0.0, m2 / dr.select(m1 > 0.0, m1, 1.0), 0.0)
         b = bs if b is None else dr.maximum(b, bs)
     b = b * PASS_B_SCALE
-    # scaled terms for series whose b is kept > 0 (powers, reciprocals); exp's coefficients never overflow
+    # scaled terms for series whose b is kept > 0 (powers, reciprocals); exp's coefficients never
+    # overflow
     scaled = isinstance(form.series, (E.PowerFunctionSeries, E.ReciprocalSeries))
     est = E.SeriesEstimator(form.series, b=E.PerLane(b, lo=form.pilot_lo), selection="iterative",
                             truncation=E.Geometric(*PASS_TRUNCATION), max_terms=PASS_MAX_TERMS, scaled=scaled)

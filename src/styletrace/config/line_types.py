@@ -21,7 +21,8 @@ from .declare import integer, number, rgb
 
 MEASUREMENTS = ("shape_id", "material_id", "depth", "normal")
 STENCILS = ("disk", "square")
-#: slope thresholds per pixel where the entry names none (ids fire on any difference: the value is unused)
+# : slope thresholds per pixel where the entry names none (ids fire on any difference: the value is
+# unused)
 DEFAULT_THRESHOLD = {"shape_id": 0.5, "material_id": 0.5, "depth": 0.1, "normal": 0.3}
 FIELDS = ("threshold", "stencil", "radius", "count", "color")
 

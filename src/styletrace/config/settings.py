@@ -39,7 +39,8 @@ REUSE_DEEP = {
     "tree": "each child's second-level value from the tree sampler (its own children)",
     "world": "second-level vertices pool their world-space neighbours' children too (within reuse_h)",
 }
-#: Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world grid
+# : Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world
+# grid
 #: packs 21 bits per axis of a cell index into one key (world_grid.py).
 MIN_REUSE_H = 1e-4
 #: Most children per pixel of the expansion pass (its children are traced in one loop per pixel).
@@ -48,8 +49,10 @@ MAX_EXPANSION_PASS = 4096
 EXPANSION_ESTIMATORS = ("series",)
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
-#: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
-#: itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums K+1 terms).
+# : Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the
+# vertex
+# : itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums
+# K+1 terms).
 MAX_REUSE_K = 63
 
 PROPERTIES = (
@@ -163,11 +166,14 @@ COMMAND_LINE_STYLE = "cel"
 SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
 BASE_KEYS = ("samples_per_pass", "timeout")
-#: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the draw of
-#: the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice, the trace
+# : Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the
+# draw of
+# : the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice,
+# the trace
 #: time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces with the flag off
 #: (`integrator.tracing`) and the trace time grows linearly (BENCHMARKS.md, recursion depth;
-#: tests/kernel/test_recursion_depth.py). 16 levels of one child each already make a path of 16 stylized
+# : tests/kernel/test_recursion_depth.py). 16 levels of one child each already make a path of 16
+# stylized
 #: vertices; the cap keeps the kernel and Python's recursion (1000 levels overflow it) bounded.
 MAX_STYLIZE_DEPTH = 16
 
@@ -230,7 +236,8 @@ class Settings:
     reuse_h: float
     reuse_k2: int
     expansion_pass: int
-    #: declared properties that no field above holds (`declare`): parsed by their declaration, read as attributes
+    # : declared properties that no field above holds (`declare`): parsed by their declaration, read
+    # as attributes
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def __getattr__(self, name: str) -> Any:
@@ -259,7 +266,8 @@ class Settings:
 
 
 
-#: properties parsed into a field of their own or into a group (the style slot, the lines) at import time;
+# : properties parsed into a field of their own or into a group (the style slot, the lines) at
+# import time;
 #: a property declared later (`declare`) is parsed by its declaration alone into `Settings.extra`
 GROUPED = frozenset({f.name for f in fields(Settings)} | set(SLOT_KEYS) | set(BASE_KEYS)
                     | {p.name for p in PROPERTIES if p.name == "lines" or p.name.startswith("line_")})

@@ -40,7 +40,8 @@ class AdaptiveDirect(Estimator):
     def start(self, ctx: Context, carry):
         zero = ctx.lane(0.0)
         state = {"sum": ctx.vzero(), "count": zero, "mean_u": zero, "m2_u": zero,
-                 # per-lane copies, so that numpy's lane compaction carries them along with the lanes
+                 # per-lane copies, so that numpy's lane compaction carries them along with the
+                 # lanes
                  "tau": tuple(zero + (t if not isinstance(t, np.ndarray) else np.reshape(t, (-1, 1)))
                               for t in self.thresholds)}
         return state, carry

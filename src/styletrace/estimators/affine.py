@@ -42,7 +42,8 @@ class MeanOfN(Estimator):
     down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1) to at
     most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how much."""
 
-    #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp of 10
+    # : a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect
+    # clamp of 10
     #: at the exposure that maps the median to middle grey (10 / 0.18)
     LONE_CAP = 10.0 / 0.18
 

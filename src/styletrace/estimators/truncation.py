@@ -113,7 +113,8 @@ class Poisson(Truncation):
         pk[0] = math.exp(-self.tau)
         for k in range(1, M + 1):
             pk[k] = pk[k - 1] * self.tau / k
-        # S(k) = 1 - CMF(k-1); in the tail, summing the pmf is more accurate than 1 minus a CMF near 1
+        # S(k) = 1 - CMF(k-1); in the tail, summing the pmf is more accurate than 1 minus a CMF near
+        # 1
         tail = np.cumsum(pk[::-1])[::-1]
         head = 1.0 - np.concatenate([[0.0], np.cumsum(pk)[:-1]])
         return np.where(head > 0.5, head, tail)[:kmax + 1]

@@ -27,7 +27,8 @@ VERSION = 3  # 3: filters other than a box; 2: "sequence" buffers; versions 1 an
 #: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
 #: bytes_per_sample times this (~270 MB for first_hit)
 MAX_SAMPLES = 1 << 22
-#: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 17 x 64 bytes per camera sample more
+# : the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 17 x 64 bytes per camera sample
+# more
 MAX_SEQUENCE_SAMPLES = 1 << 20
 SEQUENCE = ("seq_count", "seq_kind", "child", "uniform")
 
@@ -58,7 +59,8 @@ def filtered(header: dict) -> bool:
     return not (spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box"))
 
 
-#: a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over it
+# : a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over
+# it
 #: (`lookdev.restyle.finish_spread`, docs/denoise.md)
 SPREAD = "denoise_spread"
 
@@ -73,9 +75,11 @@ class Buffer:
 
     header: dict[str, Any]
     arrays: dict[str, np.ndarray]
-    #: Dr.Jit copies of the arrays, made by `lookdev.restyle` on first use and kept for later restyles
+    # : Dr.Jit copies of the arrays, made by `lookdev.restyle` on first use and kept for later
+    # restyles
     device: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
-    #: the image rendered while recording (not saved; `restyle` with the recorded style reproduces it)
+    # : the image rendered while recording (not saved; `restyle` with the recorded style reproduces
+    # it)
     image: Any = field(default=None, repr=False, compare=False)
 
     @property

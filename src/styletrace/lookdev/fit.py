@@ -31,9 +31,12 @@ from ..styles.gradient import Gradient  # noqa: E402
 from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for  # noqa: E402
 
 FITTABLE = ("float", "floats", "color", "gradient")
-#: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in Python; the
-#: tone styles' exposure is the scene's normalisation, resolved from the pilot, and for contrast and reinhard it
-#: is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s + I))
+# : parameters that stay fixed although of a fittable kind (hatching's plane normals are built in
+# Python; the
+# : tone styles' exposure is the scene's normalisation, resolved from the pilot, and for contrast
+# and reinhard it
+# : is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s +
+# I))
 NOT_FITTED = {"hatching": ("angle", "spacing", "thickness"), "contrast": ("exposure",), "reinhard": ("exposure",),
               "gamma": ("exposure",), "tie_dye": ("exposure",)}
 #: styles whose steps have no smoothed surrogate
@@ -50,7 +53,8 @@ class FitResult:
     image: np.ndarray | None = None
 
 
-# ---- θ as Dr.Jit arrays ------------------------------------------------------------------------------
+# ---- θ as Dr.Jit arrays
+# ------------------------------------------------------------------------------
 
 def _flatten(kind: str, value: Any) -> list[float]:
     if kind == "float":
@@ -88,7 +92,8 @@ def _clamp(p, x: mi.Float) -> mi.Float:
     return x
 
 
-# ---- smoothed surrogates -------------------------------------------------------------------------------
+# ---- smoothed surrogates
+# -------------------------------------------------------------------------------
 
 def _sigmoid(x):
     return dr.rcp(1.0 + dr.exp(-x))
@@ -133,7 +138,8 @@ def _smooth_hatching(style, I, v, tau):
 SURROGATES: dict[str, Callable] = {"cel": _smooth_cel, "hatching": _smooth_hatching}
 
 
-# ---- the loop ----------------------------------------------------------------------------------------
+# ---- the loop
+# ----------------------------------------------------------------------------------------
 
 def read_target(target: Any, width: int, height: int) -> np.ndarray:
     if isinstance(target, np.ndarray):
@@ -168,7 +174,8 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
         raise UsageError("fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
                          "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
                          "through")
-    # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a render would)
+    # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a
+    # render would)
     slots = prepare(buf, slots_for(buf, style, "direct", None, **initial))
     owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
     if not owned:

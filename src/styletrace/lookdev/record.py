@@ -279,8 +279,10 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
-    # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain copy of the
-    # integrator, losing the recording; with the pilot stored below (traced here if an auto value needs it)
+    # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain
+    # copy of the
+    # integrator, losing the recording; with the pilot stored below (traced here if an auto value
+    # needs it)
     integrator = resolve_defaults(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
@@ -317,12 +319,14 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     }
     if filtered:
         header.update(sample_border=bool(border), layout=[_window(t) for t in layout])
-    # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
+    # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of
+    # the scene would
     pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
-        # the values the pilot chose: a restyle that changes the slot's parameters chooses them again
+        # the values the pilot chose: a restyle that changes the slot's parameters chooses them
+        # again
         rec_slot["auto"] = list(getattr(target.slot.style, "chosen", ()))
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):

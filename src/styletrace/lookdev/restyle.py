@@ -41,7 +41,8 @@ from .sequence import device_arrays, replay  # noqa: E402
 RESTYLABLE_ESTIMATORS = ("direct", "affine")
 
 
-# ---- the value of one camera sample ----------------------------------------------------------------
+# ---- the value of one camera sample
+# ----------------------------------------------------------------
 
 def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
     """The slot's estimate from the mean of its n children, as its estimator computes it in the kernel."""
@@ -55,7 +56,8 @@ def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
     return style.apply(mean, v)
 
 
-#: (z, weight): 5-point Gauss-Hermite quadrature for z ~ N(0, 1) (numpy.polynomial.hermite_e.hermegauss(5),
+# : (z, weight): 5-point Gauss-Hermite quadrature for z ~ N(0, 1)
+# (numpy.polynomial.hermite_e.hermegauss(5),
 #: weights over sqrt(2 pi)); exact for polynomials in z up to degree 9
 SPREAD_NODES = ((0.0, 0.53333333), (1.35562618, 0.22207592), (-1.35562618, 0.22207592),
                 (2.85697001, 0.01125741), (-2.85697001, 0.01125741))
@@ -73,7 +75,8 @@ def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.
     return out
 
 
-# ---- slots: what the header records, and what a restyle makes of it ---------------------------------
+# ---- slots: what the header records, and what a restyle makes of it
+# ---------------------------------
 
 def _jsonable(value: Any) -> Any:
     if isinstance(value, Gradient):
@@ -136,7 +139,8 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
     return slots
 
 
-# ---- the kernel --------------------------------------------------------------------------------------
+# ---- the kernel
+# --------------------------------------------------------------------------------------
 
 def device(buffer: Buffer) -> dict[str, Any]:
     """The buffer's arrays as Dr.Jit arrays (made once per buffer and kept)."""

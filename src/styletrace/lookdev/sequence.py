@@ -46,14 +46,16 @@ class Recorder:
 
     def __init__(self, width: int, per_sample: int):
         self.width, self.per_sample = width, per_sample
-        # children: one pool for the pass, places handed out by dr.scatter_inc (a loop body draws at one
+        # children: one pool for the pass, places handed out by dr.scatter_inc (a loop body draws at
+        # one
         # place, and Dr.Jit allows one scatter_inc on a counter per symbolic region)
         self.capacity = max(1, width * per_sample)
         self.counter = dr.zeros(mi.UInt32, 1)
         self.lane_of = dr.zeros(mi.UInt32, self.capacity)
         self.pos = dr.zeros(mi.UInt32, self.capacity)
         self.value = dr.zeros(mi.Color3f, self.capacity)
-        # uniforms: `per_sample` places per lane (an estimator may ask for them at several places per body)
+        # uniforms: `per_sample` places per lane (an estimator may ask for them at several places
+        # per body)
         self.u_pos = dr.zeros(mi.UInt32, self.capacity)
         self.u_value = dr.zeros(mi.Float, self.capacity)
         self.lanes = dr.arange(mi.UInt32, width)

@@ -87,7 +87,8 @@ class Pilot:
         si = scene.ray_intersect(ray)
         sampler = mi.load_dict({"type": "independent"})
         sampler.seed(PILOT_SEED, n)
-        # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order Mitsuba
+        # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order
+        # Mitsuba
         # lists the emitters in, so the auto values (and the image) are the same for the same seed
         pi = scene.ray_intersect_preliminary(ray, coherent=True)
         graph = SceneGraph(scene)
@@ -103,7 +104,8 @@ class Pilot:
         owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
         hit = np.array(si.is_valid(), dtype=bool)
         owner[hit] = 0
-        # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for it (itself
+        # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for
+        # it (itself
         # and the wrappers that hold it): one traversal of the scene
         for k, (_, pointers, _) in enumerate(graph.styled, start=1):
             for ptr in pointers:
@@ -163,7 +165,8 @@ class Facts:
         s, mask = self.pilot.samples, self._mine
         colour, counts, inverse = cell_colours(s, mask)
         if self.styles:
-            # a representative first hit per cell (the last sample of the cell) for styles that read the vertex
+            # a representative first hit per cell (the last sample of the cell) for styles that read
+            # the vertex
             last = np.zeros(len(counts), dtype=np.int64)
             last[inverse] = np.arange(mask.sum())
             pick = lambda key: s[key][mask][last]  # noqa: E731
@@ -252,7 +255,8 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = No
         style = integrator.settings.style
         chosen = auto_values(style, Facts(scene, pilot, 0))
         if chosen:
-            # the parsed settings with only the style replaced (settings are parsed once, `settings` module)
+            # the parsed settings with only the style replaced (settings are parsed once, `settings`
+            # module)
             s = integrator.settings
             pinned = replace(s, slot=replace(s.slot, style=style.pinned(chosen)))
             integrator = StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen})

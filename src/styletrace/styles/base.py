@@ -56,7 +56,8 @@ class Style:
     summary: ClassVar[str] = ""
     params: ClassVar[tuple[Param, ...]] = ()
     default_inner: ClassVar[int] = 8
-    #: True for baselines that apply g to every child sample and average (not a function of expectation).
+    # : True for baselines that apply g to every child sample and average (not a function of
+    # expectation).
     per_sample: ClassVar[bool] = False
 
     def __init__(self, **values: Any):
@@ -66,7 +67,8 @@ class Style:
                 allowed = ", ".join(known) if known else "none"
                 raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are {allowed}")
         self.values: dict[str, Any] = {}
-        #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in auto values
+        # : the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in
+        # auto values
         self.given: dict[str, Any] = {k: v for k, v in values.items() if v is not None}
         #: the parameters `pinned` filled in from the scene (auto values), as opposed to given ones
         self.chosen: tuple[str, ...] = ()
@@ -239,13 +241,18 @@ def increasing(values) -> tuple[float, ...]:
     return tuple(out)
 
 
-#: The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's median
-#: first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et al. 2002),
+# : The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's
+# median
+# : first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et
+# al. 2002),
 #: so a scene ten times dimmer gets ten times the exposure and looks the same.
 EXPOSURE_KEY = 0.18
-#: Largest exposure. The unbiased series estimators take powers of exposed samples in float32: on the Cornell
-#: box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2 (measured), so the auto rule
-#: stops here: a scene whose median brightness is below 0.18 / 100 comes out darker than middle grey.
+# : Largest exposure. The unbiased series estimators take powers of exposed samples in float32: on
+# the Cornell
+# : box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2 (measured), so
+# the auto rule
+# : stops here: a scene whose median brightness is below 0.18 / 100 comes out darker than middle
+# grey.
 MAX_EXPOSURE = 100.0
 
 

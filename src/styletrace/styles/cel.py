@@ -92,7 +92,8 @@ class Cel(Style):
         return self.steps()
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
-        # constant along grey inside a band (I * level / u of a grey shift keeps the band's level); its
+        # constant along grey inside a band (I * level / u of a grey shift keeps the band's level);
+        # its
         # jumps are the thresholds
         return mi.Color3f(0.0)
 

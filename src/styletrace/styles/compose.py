@@ -52,7 +52,8 @@ def composite_class(name: str, lookup) -> type[Style]:
                              f"an expectation)" if cls.per_sample else f"bad style {name!r}: nested composition")
     params = tuple(replace(p, name=f"{cls.name}.{p.name}", doc=f"{cls.name}: {p.doc}")
                    for cls in classes for p in cls.params)
-    # the first operand sees the radiance: if it ignores it (closed form), so does the whole composition
+    # the first operand sees the radiance: if it ignores it (closed form), so does the whole
+    # composition
     inner = 0 if classes[0].default_inner == 0 else max(c.default_inner for c in classes)
     summary = " then ".join(ops) + ", as one style g = " + " o ".join(reversed(ops))
     return type(f"Composite[{name}]", (Composite,), {"name": name, "summary": summary, "params": params,

@@ -40,7 +40,8 @@ class Contrast(Style):
         return 1.0 if self.exposure is None else self.exposure
 
     def auto_values(self, facts) -> dict:
-        # contrast spreads tones about the pivot: the scene's median goes to the default pivot (middle grey,
+        # contrast spreads tones about the pivot: the scene's median goes to the default pivot
+        # (middle grey,
         # 0.18, would leave most of the image below 0 after c = 1.5 about 0.5)
         return {} if self.exposure is not None else {"exposure": auto_exposure(facts, MID)}
 

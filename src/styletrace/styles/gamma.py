@@ -27,13 +27,16 @@ from .forms import SeriesForm
 from .registry import register
 
 
-#: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR) (exposed radiance).
+# : Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR)
+# (exposed radiance).
 PILOT_FLOOR = 0.02
 PILOT_SCALE = 1.5
-#: Smallest gamma: the exponent 1/gamma <= 10 keeps I^(1/gamma) below float32's 3.4e38 for radiance up to
+# : Smallest gamma: the exponent 1/gamma <= 10 keeps I^(1/gamma) below float32's 3.4e38 for radiance
+# up to
 #: 7e3, beyond what a scene's lights reach, while as gamma -> 0 it overflows for any I > 1.
 MIN_GAMMA = 0.1
-#: The radiance MIN_GAMMA was chosen for: (s I)^(1/gamma) must stay below float32's largest number for exposed
+# : The radiance MIN_GAMMA was chosen for: (s I)^(1/gamma) must stay below float32's largest number
+# for exposed
 #: radiance s I up to this, so an exposure and a small gamma that overflow together are refused.
 MAX_RADIANCE = 7e3
 FLOAT32_MAX = 3.4028234663852886e38
@@ -64,9 +67,12 @@ class Gamma(Style):
 
     def form(self):
         from ..estimators import gamma_series
-        # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the 1.5x
-        # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured in
-        # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its floor in
+        # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the
+        # 1.5x
+        # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured
+        # in
+        # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its
+        # floor in
         # exposed units: the same on a scene of any brightness)
         return SeriesForm(gamma_series(self.gamma), gain=self.scale, pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE,
                           values=(0.0, None))

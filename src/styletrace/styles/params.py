@@ -42,7 +42,8 @@ class Param(Declaration):
     and the styles' spellings (bool also yes/no/on/off, True/False as numbers, a colour also '#rrggbb' or
     'r g b', a choice stripped)."""
 
-    #: for a default of None ('auto'): the rule that derives the value (from the scene or other parameters)
+    # : for a default of None ('auto'): the rule that derives the value (from the scene or other
+    # parameters)
     auto: str = ""
 
     TRUE: ClassVar[tuple[str, ...]] = ("1", "true", "yes", "on")

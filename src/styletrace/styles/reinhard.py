@@ -20,7 +20,8 @@ from .base import Param, Style, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register
 
-#: Largest w: the unbiased estimators expand in float32 samples w + X, which resolve X only to w 2^-24
+# : Largest w: the unbiased estimators expand in float32 samples w + X, which resolve X only to w
+# 2^-24
 #: (6e-5 at w = 1e3); at w = 3e5 the series estimator returned NaN (measured on the Cornell box).
 MAX_WHITE = 1e3
 

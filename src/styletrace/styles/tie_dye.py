@@ -28,8 +28,10 @@ from .registry import register
 
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20
-#: Largest cosine argument pi f (x + phi) the kernel is handed: float32 (24-bit mantissa) resolves an
-#: argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger arguments
+# : Largest cosine argument pi f (x + phi) the kernel is handed: float32 (24-bit mantissa) resolves
+# an
+# : argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger
+# arguments
 #: lose the radiance x in rounding, and huge ones make cos return NaN.
 MAX_ARGUMENT = float(2 ** 14)
 
@@ -80,7 +82,8 @@ class TieDye(Style):
         from ..estimators import chebyshev_fit
         lo, hi = self.domain()
         # the paper's Fig. 11 setup: a degree-20 Chebyshev fit per channel on the clamp interval
-        # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the clamp
+        # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the
+        # clamp
         return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi, gain=self.scale)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:
