@@ -23,8 +23,10 @@ SEED_MAX = 2 ** 32 - 1
 SPP_MAX = 2 ** 32 - 1
 # : Plugin classes whose spectra an RGB variant cannot evaluate: the first pass fails inside the
 # kernel.
-UNRENDERABLE = {"BlackBodySpectrum": "a 'blackbody' spectrum needs a spectral variant; give the emitter an RGB "
-                                     "radiance (<rgb name=\"radiance\" value=\"...\"/>) instead"}
+UNRENDERABLE = {
+    "BlackBodySpectrum": "a 'blackbody' spectrum needs a spectral variant; give the emitter an RGB "
+    'radiance (<rgb name="radiance" value="..."/>) instead'
+}
 
 
 def whole(name: str, value: Any, low: int, high: int) -> int:
@@ -36,8 +38,10 @@ def whole(name: str, value: Any, low: int, high: int) -> int:
 
 def check_integrator(integrator: Any) -> None:
     if integrator is not None and not isinstance(integrator, mi.Integrator):
-        raise UsageError(f"bad value {integrator!r} for integrator: expected None or an mi.Integrator such as "
-                         f"styletrace.make_integrator(...); choose a style with style=...")
+        raise UsageError(
+            f"bad value {integrator!r} for integrator: expected None or an mi.Integrator such as "
+            f"styletrace.make_integrator(...); choose a style with style=..."
+        )
 
 
 def check_render_args(spp: Any, seed: Any, integrator: Any = None) -> None:
@@ -99,8 +103,10 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     traces virtual calls on all live instances), and its blackbody spectrum fails there."""
     if not isinstance(scene, mi.Scene):
         kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
-        return (f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
-                f"holding a sensor, shapes and emitters")
+        return (
+            f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
+            f"holding a sensor, shapes and emitters"
+        )
     if not scene.sensors():
         return (f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "
                 f"<sensor type=\"perspective\"/>)")

@@ -48,8 +48,16 @@ def srgb8(image) -> np.ndarray:
 
 # : a film's pixel format (as `hdrfilm` names it, or as its description shows it) -> Bitmap pixel
 # format
-PIXEL_FORMATS = {"rgb": "RGB", "rgba": "RGBA", "luminance": "Y", "y": "Y", "luminance_alpha": "YA", "ya": "YA",
-                 "xyz": "XYZ", "xyza": "XYZA"}
+PIXEL_FORMATS = {
+    "rgb": "RGB",
+    "rgba": "RGBA",
+    "luminance": "Y",
+    "y": "Y",
+    "luminance_alpha": "YA",
+    "ya": "YA",
+    "xyz": "XYZ",
+    "xyza": "XYZA",
+}
 
 
 def bitmap_format(pixel_format: str, channels: int) -> str:
@@ -65,8 +73,10 @@ def bitmap_format(pixel_format: str, channels: int) -> str:
 def check_format(pixel_format: str, ext: str) -> None:
     """XYZ has no sRGB encoding: such a film is written as EXR only (ValueError otherwise)."""
     if PIXEL_FORMATS.get(pixel_format.lower(), "").startswith("XYZ") and ext == ".png":
-        raise ValueError(f"the film's pixel_format is {pixel_format!r}: XYZ images are written as .exr only "
-                         f"(or set pixel_format=\"rgb\" for a .png)")
+        raise ValueError(
+            f"the film's pixel_format is {pixel_format!r}: XYZ images are written as .exr only "
+            f'(or set pixel_format="rgb" for a .png)'
+        )
 
 
 def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
@@ -137,9 +147,13 @@ def _plain_png(data: np.ndarray) -> bytes:
     height, width, channels = data.shape
     colour = {1: 0, 2: 4, 3: 2, 4: 6}[channels]
     rows = np.concatenate([np.zeros((height, 1), np.uint8), data.reshape(height, -1)], axis=1)
-    return (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour, 0, 0, 0))
-            + _png_chunk(b"sRGB", b"\0") + _png_chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
-            + _png_chunk(b"IEND", b""))
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour, 0, 0, 0))
+        + _png_chunk(b"sRGB", b"\0")
+        + _png_chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
+        + _png_chunk(b"IEND", b"")
+    )
 
 
 def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None = None) -> bytes:
@@ -171,9 +185,12 @@ AOV_CHANNELS = (("variance", ("variance.R", "variance.G", "variance.B")), ("bias
 # : with denoising on (docs/denoise.md) the AOVs describe the noisy render and say so;
 # `denoise_change` is
 #: what the denoiser changed. Only the keys present are written.
-DENOISED_AOV_CHANNELS = (("noisy_variance", ("noisy_variance.R", "noisy_variance.G", "noisy_variance.B")),
-                         ("noisy_bias", ("noisy_bias",)), ("children", ("children",)),
-                         ("denoise_change", ("denoise_change.R", "denoise_change.G", "denoise_change.B")))
+DENOISED_AOV_CHANNELS = (
+    ("noisy_variance", ("noisy_variance.R", "noisy_variance.G", "noisy_variance.B")),
+    ("noisy_bias", ("noisy_bias",)),
+    ("children", ("children",)),
+    ("denoise_change", ("denoise_change.R", "denoise_change.G", "denoise_change.B")),
+)
 
 
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
@@ -234,8 +251,13 @@ def unwritable_kind(path: str) -> str | None:
         return f"not a usable path ({exc.strerror})"
     if stat.S_ISREG(mode):
         return None
-    for test, kind in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a fifo"), (stat.S_ISSOCK, "a socket")):
+    for test, kind in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a fifo"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return kind
     return "not a regular file"
@@ -349,6 +371,21 @@ def check_target(path: str) -> None:
     if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
         raise UsageError(f"cannot write {path!r}: permission denied")
 
-__all__ = ["check_target", "IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
-           "encode_plain", "encode_with_aovs", "destination", "unwritable_kind", "write_bytes_atomically", "write_image",
-           "save_safely"]
+__all__ = [
+    "check_target",
+    "IMAGE_TYPES",
+    "PIXEL_FORMATS",
+    "AOV_CHANNELS",
+    "bitmap_format",
+    "check_format",
+    "nonfinite_pixels",
+    "srgb8",
+    "encode",
+    "encode_plain",
+    "encode_with_aovs",
+    "destination",
+    "unwritable_kind",
+    "write_bytes_atomically",
+    "write_image",
+    "save_safely",
+]

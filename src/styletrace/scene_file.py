@@ -170,8 +170,10 @@ class _Includes:
     def included(self, node: ET.Element, folder: str, resolver: list[str], depth: int) -> list[ET.Element] | None:
         name = self.subst(node.get("filename", ""))
         if depth + 1 >= MAX_INCLUDE_DEPTH:
-            self.problem = (f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
-                            f"levels at '{name}'")
+            self.problem = (
+                f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
+                f"levels at '{name}'"
+            )
             return None
         lookup = [folder, *resolver]
         path = self.find(name, lookup)
@@ -188,8 +190,10 @@ class _Includes:
             self.problem = f"{self.origin}: included file '{path}' has no version attribute, which Mitsuba requires"
             return None
         if version is None or (version < (2,)) != self.legacy:
-            self.problem = (f"{self.origin}: included file '{path}' has version '{root.get('version')}', which "
-                            f"Mitsuba reads differently from the scene's")
+            self.problem = (
+                f"{self.origin}: included file '{path}' has version '{root.get('version')}', which "
+                f"Mitsuba reads differently from the scene's"
+            )
             return None
         self.expand(root, os.path.dirname(path), lookup, depth + 1)
         if self.problem:
@@ -229,8 +233,10 @@ def _set_int(parent: ET.Element, name: str, value: int) -> None:
 def resize(root: ET.Element, width: int | None, height: int | None, origin: str) -> None:
     sensor = root.find("sensor")
     if sensor is None:
-        raise SceneError(f"cannot resize {origin}: it has no top-level <sensor> whose film could be resized "
-                         f"(one only reachable through a <ref> is not); edit the film's width/height in the file")
+        raise SceneError(
+            f"cannot resize {origin}: it has no top-level <sensor> whose film could be resized "
+            f"(one only reachable through a <ref> is not); edit the film's width/height in the file"
+        )
     film = sensor.find("film")
     if film is None:  # Mitsuba's default film
         film = ET.SubElement(sensor, "film", {"type": "hdrfilm"})

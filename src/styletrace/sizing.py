@@ -78,8 +78,10 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
         lanes //= 2
     note = None
     if lanes != default:
-        note = (f"only {free / 2**30:.1f} GiB of GPU memory free: passes of {lanes} samples instead of "
-                f"{default}, so the image differs from this device's default split (--pass-spp fixes it)")
+        note = (
+            f"only {free / 2**30:.1f} GiB of GPU memory free: passes of {lanes} samples instead of "
+            f"{default}, so the image differs from this device's default split (--pass-spp fixes it)"
+        )
     return lanes, note
 
 

@@ -119,8 +119,10 @@ def check(name: str, style: Style) -> str:
         what = FORM_NAMES.get(type(form), "no unbiased") + " form"
         if isinstance(form, CompositeForm) and form.affine is not None:
             what = "an affine composite form"
-        raise SettingsError(f"estimator '{name}' does not apply to style '{style.name}' (it has {what}): "
-                            f"use one of {', '.join(applicable(style))}")
+        raise SettingsError(
+            f"estimator '{name}' does not apply to style '{style.name}' (it has {what}): "
+            f"use one of {', '.join(applicable(style))}"
+        )
     return name
 
 
@@ -148,20 +150,31 @@ def check_adaptive(name: str, style: Style, raw) -> None:
     """Adaptive inner counts (`n0:n_max`) only with direct application of a function of expectation: the
     unbiased estimators' guarantee does not survive a data-dependent number of children (docs/adaptive.md)."""
     if name != "direct":
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
-                            f"n0:n_max stop on the data, which makes the unbiased estimators biased; use estimator "
-                            f"direct or a fixed count")
+        raise SettingsError(
+            f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
+            f"n0:n_max stop on the data, which makes the unbiased estimators biased; use estimator "
+            f"direct or a fixed count"
+        )
     if style.per_sample:
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples' with style '{style.name}': it averages "
-                            f"g over its children (not g of their mean), which adaptive stopping would bias; use a "
-                            f"fixed count")
+        raise SettingsError(
+            f"bad value {raw!r} for 'inner_samples' with style '{style.name}': it averages "
+            f"g over its children (not g of their mean), which adaptive stopping would bias; use a "
+            f"fixed count"
+        )
 
 
 def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
     """Direct application with adaptive stopping (`estimators.AdaptiveDirect`), told by the style where its
     steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`)."""
-    return E.AdaptiveDirect(lambda I: style.apply(I, vertex), n0, n_max, thresholds=style.step_thresholds(vertex),
-                            curvature=lambda I, h: style.curvature(I, vertex, h), z=z, bias=bias)
+    return E.AdaptiveDirect(
+        lambda I: style.apply(I, vertex),
+        n0,
+        n_max,
+        thresholds=style.step_thresholds(vertex),
+        curvature=lambda I, h: style.curvature(I, vertex, h),
+        z=z,
+        bias=bias,
+    )
 
 
 def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitted=None) -> Transformed:
@@ -276,18 +289,40 @@ def series_with_pass(style, sets, known=0.0) -> Transformed:
     # scaled terms for series whose b is kept > 0 (powers, reciprocals); exp's coefficients never
     # overflow
     scaled = isinstance(form.series, (E.PowerFunctionSeries, E.ReciprocalSeries))
-    est = E.SeriesEstimator(form.series, b=E.PerLane(b, lo=form.pilot_lo), selection="iterative",
-                            truncation=E.Geometric(*PASS_TRUNCATION), max_terms=PASS_MAX_TERMS, scaled=scaled)
+    est = E.SeriesEstimator(
+        form.series,
+        b=E.PerLane(b, lo=form.pilot_lo),
+        selection="iterative",
+        truncation=E.Geometric(*PASS_TRUNCATION),
+        max_terms=PASS_MAX_TERMS,
+        scaled=scaled,
+    )
     return Transformed(est, _series_sample(form), form.scale, form.offset)
 
 
 _PILOT = "pilot samples for the expansion point b"
-estimator("series", (SeriesForm,), "power series, iterative prefix sum, Poisson-CMF truncation, U-statistic "
-          "terms (S12)", _PILOT, max_terms=str(SERIES_MAX_TERMS))(_series("iterative"))
-estimator("series_recursive", (SeriesForm,), "power series, recursive prefix sum (Russian roulette), "
-          "cumulative truncation, naive terms (S13)", _PILOT, max_terms=str(SERIES_MAX_TERMS))(_series("recursive"))
-estimator("series_single", (SeriesForm,), "power series, single term, Poisson truncation (S11)", _PILOT,
-          max_terms=str(SERIES_MAX_TERMS))(_series("single"))
+estimator(
+    "series",
+    (SeriesForm,),
+    "power series, iterative prefix sum, Poisson-CMF truncation, U-statistic terms (S12)",
+    _PILOT,
+    max_terms=str(SERIES_MAX_TERMS),
+)(_series("iterative"))
+estimator(
+    "series_recursive",
+    (SeriesForm,),
+    "power series, recursive prefix sum (Russian roulette), "
+    "cumulative truncation, naive terms (S13)",
+    _PILOT,
+    max_terms=str(SERIES_MAX_TERMS),
+)(_series("recursive"))
+estimator(
+    "series_single",
+    (SeriesForm,),
+    "power series, single term, Poisson truncation (S11)",
+    _PILOT,
+    max_terms=str(SERIES_MAX_TERMS),
+)(_series("single"))
 
 
 @estimator("ustat", (PolynomialForm,), "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
@@ -340,6 +375,23 @@ def _combined(style, n, vertex):
     return Transformed(est)
 
 
-__all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "check_adaptive",
-           "adaptive_direct", "make_estimator", "firefly_cap", "child_mean",
-           "Transformed", "SERIES_MAX_TERMS", "series_with_pass", "PASS_TRUNCATION", "PASS_MAX_TERMS", "PASS_B_SCALE"]
+__all__ = [
+    "EstimatorKind",
+    "estimator",
+    "names",
+    "get",
+    "kinds",
+    "applicable",
+    "check",
+    "check_adaptive",
+    "adaptive_direct",
+    "make_estimator",
+    "firefly_cap",
+    "child_mean",
+    "Transformed",
+    "SERIES_MAX_TERMS",
+    "series_with_pass",
+    "PASS_TRUNCATION",
+    "PASS_MAX_TERMS",
+    "PASS_B_SCALE",
+]

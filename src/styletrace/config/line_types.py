@@ -52,30 +52,46 @@ def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tupl
         words = entry.split()
         kind = words[0]
         if kind not in MEASUREMENTS:
-            raise SettingsError(f"bad measurement {kind!r} in 'line_types' entry {entry!r}: expected one of "
-                                f"{', '.join(MEASUREMENTS)}")
+            raise SettingsError(
+                f"bad measurement {kind!r} in 'line_types' entry {entry!r}: expected one of "
+                f"{', '.join(MEASUREMENTS)}"
+            )
         fields: dict[str, Any] = {}
         for w in words[1:]:
             key, eq, val = w.partition("=")
             if not eq or key not in FIELDS:
-                raise SettingsError(f"bad field {w!r} in 'line_types' entry {entry!r}: expected key=value with "
-                                    f"key one of {', '.join(FIELDS)}")
+                raise SettingsError(
+                    f"bad field {w!r} in 'line_types' entry {entry!r}: expected key=value with "
+                    f"key one of {', '.join(FIELDS)}"
+                )
             if key in fields:
                 raise SettingsError(f"field {key!r} given twice in 'line_types' entry {entry!r}")
             fields[key] = val
         stencil = fields.get("stencil", "disk")
         if stencil not in STENCILS:
-            raise SettingsError(f"bad stencil {stencil!r} in 'line_types' entry {entry!r}: expected "
-                                f"{' or '.join(STENCILS)}")
+            raise SettingsError(
+                f"bad stencil {stencil!r} in 'line_types' entry {entry!r}: expected "
+                f"{' or '.join(STENCILS)}"
+            )
         where = f"line_types {kind}"
-        out.append(LineType(
-            measurement=kind,
-            threshold=number(f"{where} threshold", fields.get("threshold", DEFAULT_THRESHOLD[kind]), 0.0, low_open=True),
-            stencil=stencil,
-            radius=number(f"{where} radius", fields.get("radius", width / 2.0), 0.0, 64.0, low_open=True),
-            count=integer(f"{where} count", fields.get("count", samples), 1, 256),
-            color=rgb(f"{where} color", fields["color"]) if "color" in fields else tuple(color),
-            priority=priority))
+        out.append(
+            LineType(
+                measurement=kind,
+                threshold=number(
+                    f"{where} threshold",
+                    fields.get("threshold", DEFAULT_THRESHOLD[kind]),
+                    0.0,
+                    low_open=True,
+                ),
+                stencil=stencil,
+                radius=number(
+                    f"{where} radius", fields.get("radius", width / 2.0), 0.0, 64.0, low_open=True
+                ),
+                count=integer(f"{where} count", fields.get("count", samples), 1, 256),
+                color=rgb(f"{where} color", fields["color"]) if "color" in fields else tuple(color),
+                priority=priority,
+            )
+        )
     return tuple(out)
 
 

@@ -39,11 +39,18 @@ class AdaptiveDirect(Estimator):
     # -- running statistics ---------------------------------------------------------------------
     def start(self, ctx: Context, carry):
         zero = ctx.lane(0.0)
-        state = {"sum": ctx.vzero(), "count": zero, "mean_u": zero, "m2_u": zero,
-                 # per-lane copies, so that numpy's lane compaction carries them along with the
-                 # lanes
-                 "tau": tuple(zero + (t if not isinstance(t, np.ndarray) else np.reshape(t, (-1, 1)))
-                              for t in self.thresholds)}
+        state = {
+            "sum": ctx.vzero(),
+            "count": zero,
+            "mean_u": zero,
+            "m2_u": zero,
+            # per-lane copies, so that numpy's lane compaction carries them along with the
+            # lanes
+            "tau": tuple(
+                zero + (t if not isinstance(t, np.ndarray) else np.reshape(t, (-1, 1)))
+                for t in self.thresholds
+            ),
+        }
         return state, carry
 
     def feed(self, ctx, state, x, mask, carry):

@@ -149,8 +149,10 @@ class Compose(Estimator):
     def __init__(self, outer: Estimator, inner: Estimator):
         _check_parts((outer, inner), "Compose")
         if outer.uses_comb:
-            raise ValueError("the outer estimator of a composition receives inner estimates, not draws: "
-                             "it cannot use a comb (put the comb on the inner estimator)")
+            raise ValueError(
+                "the outer estimator of a composition receives inner estimates, not draws: "
+                "it cannot use a comb (put the comb on the inner estimator)"
+            )
         self.outer, self.inner = outer, inner
         self.name = f"{outer.name} o {inner.name}"
 

@@ -14,8 +14,25 @@ import sys
 import numpy as np
 
 __all__ = [
-    "is_drjit", "drjit", "backend_module", "select", "abs", "exp", "log", "sqrt", "cos", "sin", "minimum", "maximum",
-    "clip", "hmax", "channel_mean", "tree_map", "tree_select", "numpy_while_loop", "const_like",
+    "is_drjit",
+    "drjit",
+    "backend_module",
+    "select",
+    "abs",
+    "exp",
+    "log",
+    "sqrt",
+    "cos",
+    "sin",
+    "minimum",
+    "maximum",
+    "clip",
+    "hmax",
+    "channel_mean",
+    "tree_map",
+    "tree_select",
+    "numpy_while_loop",
+    "const_like",
 ]
 
 _pyabs = abs

@@ -45,8 +45,17 @@ def check_count(name: str, value, minimum: int = 1) -> int:
 class Context:
     """Backend-specific helpers for one ``run`` (numpy lanes or a Dr.Jit value type)."""
 
-    def __init__(self, backend: str, *, lanes=None, like_t=None, dtype=None, channels=None, ndim=None,
-                 uniform=None):
+    def __init__(
+        self,
+        backend: str,
+        *,
+        lanes=None,
+        like_t=None,
+        dtype=None,
+        channels=None,
+        ndim=None,
+        uniform=None,
+    ):
         self.backend = backend
         self.lanes = lanes
         self.like_t = like_t
@@ -70,9 +79,11 @@ class Context:
         if like_t is not None and dr is not None and issubclass(like_t, dr.ArrayBase):
             return cls("drjit", like_t=like_t, uniform=uniform), carry
         if like is not None and not isinstance(like, np.ndarray):
-            raise ValueError(f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
-                             f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
-                             f"got {like!r}")
+            raise ValueError(
+                f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
+                f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
+                f"got {like!r}"
+            )
         if A.is_drjit(active):
             raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>, "
                              "e.g. like=mitsuba.Color3f or like=drjit.llvm.Float")
@@ -153,8 +164,10 @@ class Context:
         if self.channels is None:
             self.channels = channels
         elif self.channels != channels:
-            raise ValueError(f"draw() returned {channels} channel(s) where {self.channels} were expected "
-                             f"(per-channel coefficients or like= say so)")
+            raise ValueError(
+                f"draw() returned {channels} channel(s) where {self.channels} were expected "
+                f"(per-channel coefficients or like= say so)"
+            )
         return x.reshape(x.shape[0], -1)
 
     def user_u(self, u):

@@ -18,8 +18,18 @@ import numpy as np
 from . import arrays as A
 
 __all__ = [
-    "Series", "PolynomialSeries", "ExpSeries", "ReciprocalSeries", "PowerFunctionSeries", "TaylorSeries",
-    "exp_series", "reciprocal_series", "power_series", "gamma_series", "taylor_series", "polynomial_series",
+    "Series",
+    "PolynomialSeries",
+    "ExpSeries",
+    "ReciprocalSeries",
+    "PowerFunctionSeries",
+    "TaylorSeries",
+    "exp_series",
+    "reciprocal_series",
+    "power_series",
+    "gamma_series",
+    "taylor_series",
+    "polynomial_series",
     "taylor_shift",
 ]
 
@@ -144,8 +154,10 @@ class ReciprocalSeries(_RatioSeries):
         self.a = _finite_real("a", a)
         self.lo, self.hi = _check_range(lo, hi)
         if self.lo is not None and self.lo <= 0.0 <= self.hi:
-            raise ValueError(f"reciprocal a/I: the range [{self.lo}, {self.hi}] contains 0, where a/I has a pole; "
-                             f"no expansion point converges on it")
+            raise ValueError(
+                f"reciprocal a/I: the range [{self.lo}, {self.hi}] contains 0, where a/I has a pole; "
+                f"no expansion point converges on it"
+            )
         self.name = f"reciprocal(a={self.a:g})"
 
     def function(self, I):
@@ -166,7 +178,8 @@ class ReciprocalSeries(_RatioSeries):
                     f"reciprocal a/I: expansion point b={bc} is outside the convergence region for I in "
                     f"[{self.lo}, {self.hi}]: the series needs |b - I| < |b| for every such I, i.e. lo, hi and b of "
                     f"one sign and max|I| < 2|b| (here b must be "
-                    f"{'> ' + str(self.hi / 2) if self.hi > 0 else '< ' + str(self.lo / 2)})")
+                    f"{'> ' + str(self.hi / 2) if self.hi > 0 else '< ' + str(self.lo / 2)})"
+                )
 
     def clamp_center(self, b):
         if self.lo is None:
@@ -191,8 +204,10 @@ class PowerFunctionSeries(_RatioSeries):
             raise ValueError("power series I^p needs p != 0 (I^0 = 1 needs no estimator)")
         self.lo, self.hi = _check_range(lo, hi)
         if self.lo is not None and (self.lo < 0.0 or (self.p < 0 and self.lo <= 0.0)):
-            raise ValueError(f"power I^{self.p:g}: the range [{self.lo}, {self.hi}] reaches "
-                             f"{'below 0' if self.lo < 0 else '0'}, where the real power is not analytic")
+            raise ValueError(
+                f"power I^{self.p:g}: the range [{self.lo}, {self.hi}] reaches "
+                f"{'below 0' if self.lo < 0 else '0'}, where the real power is not analytic"
+            )
         if self.p > 0 and float(self.p).is_integer():
             self.degree = int(self.p)  # the binomial series terminates
         self.name = f"power(p={self.p:g})"
@@ -213,7 +228,8 @@ class PowerFunctionSeries(_RatioSeries):
                 raise ValueError(
                     f"power I^{self.p:g}: expansion point b={bc} is outside the convergence region for I in "
                     f"[{self.lo}, {self.hi}]: the binomial series needs |b - I| <= |b| (strict for p < 0), i.e. "
-                    f"b >= hi/2 = {self.hi / 2}")
+                    f"b >= hi/2 = {self.hi / 2}"
+                )
 
     def clamp_center(self, b):
         lower = TINY if self.lo is None else max(PILOT_FRACTION * self.hi, TINY)

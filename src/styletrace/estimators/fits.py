@@ -20,8 +20,18 @@ from . import arrays as A
 from .coefficients import PolynomialSeries, taylor_shift
 
 __all__ = [
-    "Fit", "to_unit", "from_unit", "chebyshev_nodes", "even_nodes", "gauss_legendre", "chebyshev_basis",
-    "legendre_basis", "chebyshev_fit", "legendre_fit", "bernstein_fit", "taylor_fit",
+    "Fit",
+    "to_unit",
+    "from_unit",
+    "chebyshev_nodes",
+    "even_nodes",
+    "gauss_legendre",
+    "chebyshev_basis",
+    "legendre_basis",
+    "chebyshev_fit",
+    "legendre_fit",
+    "bernstein_fit",
+    "taylor_fit",
 ]
 
 BASES = ("chebyshev", "legendre", "bernstein", "monomial")

@@ -131,8 +131,9 @@ def estimate_numpy(estimator, dist, lanes: int, rng, channels=None, dtype=np.flo
     return NumpyEstimate(values, carry["draws"])
 
 
-def estimate_drjit(estimator, dist: Distribution, lanes: int, seed: int = 0, channels=None, like=None,
-                   active=None) -> NumpyEstimate:
+def estimate_drjit(
+    estimator, dist: Distribution, lanes: int, seed: int = 0, channels=None, like=None, active=None
+) -> NumpyEstimate:
     """One estimate per lane inside a Dr.Jit loop whose carry holds a PCG32 and a draw counter."""
     if channels not in (None, 3):
         raise ValueError(f"estimate_drjit supports channels=None (Float) or 3 (Array3f), got {channels!r}")

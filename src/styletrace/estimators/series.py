@@ -54,13 +54,17 @@ class SeriesEstimator(Estimator):
         if terms not in ("naive", "ustat"):
             raise ValueError(f"unknown term estimator {terms!r}; allowed: 'naive', 'ustat'")
         if terms == "ustat" and selection != "iterative":
-            raise ValueError(f"terms='ustat' needs the number of terms before the samples are drawn: use "
-                             f"selection='iterative' (got selection={selection!r})")
+            raise ValueError(
+                f"terms='ustat' needs the number of terms before the samples are drawn: use "
+                f"selection='iterative' (got selection={selection!r})"
+            )
         self.terms = terms
         self.scaled = bool(scaled)
         if self.scaled and not (selection == "iterative" and terms == "ustat" and hasattr(series, "ratio")):
-            raise ValueError(f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
-                             f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})")
+            raise ValueError(
+                f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
+                f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
+            )
         if self.truncation.adaptive and selection != "recursive":
             raise ValueError(f"{self.truncation.name} truncation adapts to the samples, so only "
                              f"selection='recursive' can use it (got {selection!r})")
@@ -75,13 +79,17 @@ class SeriesEstimator(Estimator):
             if selection == "single":
                 bad = np.flatnonzero(self.pmf <= 0.0)
                 if bad.size:
-                    raise ValueError(f"single-term selection needs P(k) > 0 for every term k <= {self.K}, but "
-                                     f"{self.truncation.name} gives P(k) = 0 for k in {bad.tolist()}; use "
-                                     f"Poisson(tau) or Geometric(p)")
+                    raise ValueError(
+                        f"single-term selection needs P(k) > 0 for every term k <= {self.K}, but "
+                        f"{self.truncation.name} gives P(k) = 0 for k in {bad.tolist()}; use "
+                        f"Poisson(tau) or Geometric(p)"
+                    )
                 self.inv_pmf = 1.0 / self.pmf
         if terms == "ustat" and self.K > MAX_USTAT_TERMS:
-            raise ValueError(f"terms='ustat' keeps one running mean per term; K={self.K} > {MAX_USTAT_TERMS}: "
-                             f"lower max_terms")
+            raise ValueError(
+                f"terms='ustat' keeps one running mean per term; K={self.K} > {MAX_USTAT_TERMS}: "
+                f"lower max_terms"
+            )
         self.name = f"series[{series.name}; {selection}/{self.truncation.name}/{terms}; {self.point.describe()}]"
 
     # -- helpers ----------------------------------------------------------------------------------

@@ -74,8 +74,10 @@ class Cumulative(Truncation):
         self.name = "cumulative" + (f"(min={self.min_continue:g})" if self.min_continue else "")
 
     def survival(self, kmax):
-        raise ValueError("cumulative truncation adapts to the samples: it has no fixed distribution "
-                         "(use selection='recursive')")
+        raise ValueError(
+            "cumulative truncation adapts to the samples: it has no fixed distribution "
+            "(use selection='recursive')"
+        )
 
     def cap(self, max_terms):
         return max_terms

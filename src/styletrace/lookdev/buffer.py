@@ -178,8 +178,10 @@ def load_buffer(path: str) -> Buffer:
             if not isinstance(header, dict) or header.get("format") != FORMAT:
                 raise ValueError("not a styletrace buffer")
             if header.get("version") not in range(1, VERSION + 1):
-                raise UsageError(f"buffer file {path!r} has format version {header.get('version')!r}; this "
-                                 f"styletrace reads version {VERSION} and earlier")
+                raise UsageError(
+                    f"buffer file {path!r} has format version {header.get('version')!r}; this "
+                    f"styletrace reads version {VERSION} and earlier"
+                )
             arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"),
                                                   filtered(header))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
@@ -200,8 +202,14 @@ def load_buffer(path: str) -> Buffer:
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
     tiles = header.get("tiles", 1)
-    if (not isinstance(tiles, int) or tiles < 1
-            or any(not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles for p in header["passes"])):
+    if (
+        not isinstance(tiles, int)
+        or tiles < 1
+        or any(
+            not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles
+            for p in header["passes"]
+        )
+    ):
         raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
     if filtered(header) and sum(int(p.get("samples", -1)) for p in header["passes"]) != n:
         raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} "
@@ -213,5 +221,16 @@ def load_buffer(path: str) -> Buffer:
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 
-__all__ = ["Buffer", "load_buffer", "SPREAD", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
-           "bytes_per_sample", "filtered", "FILTERED"]
+__all__ = [
+    "Buffer",
+    "load_buffer",
+    "SPREAD",
+    "FORMAT",
+    "VERSION",
+    "MAX_SAMPLES",
+    "MAX_SEQUENCE_SAMPLES",
+    "fields_for",
+    "bytes_per_sample",
+    "filtered",
+    "FILTERED",
+]

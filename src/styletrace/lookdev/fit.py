@@ -37,8 +37,13 @@ FITTABLE = ("float", "floats", "color", "gradient")
 # and reinhard it
 # : is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s +
 # I))
-NOT_FITTED = {"hatching": ("angle", "spacing", "thickness"), "contrast": ("exposure",), "reinhard": ("exposure",),
-              "gamma": ("exposure",), "tie_dye": ("exposure",)}
+NOT_FITTED = {
+    "hatching": ("angle", "spacing", "thickness"),
+    "contrast": ("exposure",),
+    "reinhard": ("exposure",),
+    "gamma": ("exposure",),
+    "tie_dye": ("exposure",),
+}
 #: styles whose steps have no smoothed surrogate
 NOT_SMOOTHED = ("halftone",)
 
@@ -146,20 +151,35 @@ def read_target(target: Any, width: int, height: int) -> np.ndarray:
         img = np.asarray(target, dtype=np.float32)
     else:
         try:
-            bmp = mi.Bitmap(str(target)).convert(pixel_format=mi.Bitmap.PixelFormat.RGB,
-                                                 component_format=mi.Struct.Type.Float32, srgb_gamma=False)
+            bmp = mi.Bitmap(str(target)).convert(
+                pixel_format=mi.Bitmap.PixelFormat.RGB,
+                component_format=mi.Struct.Type.Float32,
+                srgb_gamma=False,
+            )
         except Exception as exc:
-            raise UsageError(f"cannot read target image {str(target)!r}: {str(exc).strip().splitlines()[-1]}") \
-                from None
+            raise UsageError(
+                f"cannot read target image {str(target)!r}: {str(exc).strip().splitlines()[-1]}"
+            ) from None
         img = np.array(bmp, dtype=np.float32)
     if img.shape != (height, width, 3):
         raise UsageError(f"bad target image of shape {img.shape}: expected {height}x{width}x3 like the buffer")
     return img
 
 
-def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: int = 300, lr: float = 0.1,
-        tau: float = 0.1, tau_end: float = 1e-4, tol: float = 1e-9, fixed: tuple[str, ...] = (), check_every: int = 10,
-        callback: Callable[[int, float], None] | None = None, **initial: Any) -> FitResult:
+def fit(
+    buffer: Any,
+    style: str | None = None,
+    target: Any = None,
+    iterations: int = 300,
+    lr: float = 0.1,
+    tau: float = 0.1,
+    tau_end: float = 1e-4,
+    tol: float = 1e-9,
+    fixed: tuple[str, ...] = (),
+    check_every: int = 10,
+    callback: Callable[[int, float], None] | None = None,
+    **initial: Any,
+) -> FitResult:
     """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled buffer matches
     `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB). `initial` gives starting
     values (the style's defaults otherwise); `fixed` names parameters to keep."""
@@ -171,9 +191,11 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
         raise UsageError(f"bad value {iterations!r} for iterations: expected an integer >= 1")
     buf = as_buffer(buffer)
     if buf.stores != "mean":
-        raise UsageError("fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
-                         "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
-                         "through")
+        raise UsageError(
+            "fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
+            "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
+            "through"
+        )
     # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a
     # render would)
     slots = prepare(buf, slots_for(buf, style, "direct", None, **initial))
@@ -182,8 +204,10 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
         raise UsageError("this buffer has no styled object to fit (first_object_hit without styled objects)")
     base = slots[owned[0]].style
     if base.name in NOT_SMOOTHED:
-        raise UsageError(f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one of "
-                         f"the other styles")
+        raise UsageError(
+            f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one of "
+            f"the other styles"
+        )
     for k in fixed:
         if k not in base.values:
             raise UsageError(f"bad fixed parameter {k!r}: style '{base.name}' has {', '.join(base.values) or 'none'}")

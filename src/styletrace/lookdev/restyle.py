@@ -98,8 +98,13 @@ def changed_owner(buffer: Buffer) -> str:
     return "object" if buffer.stylize == "first_object_hit" else "integrator"
 
 
-def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = None, inner: Any = None,
-              **params: Any) -> list[S.StyleSlot]:
+def slots_for(
+    buffer: Buffer,
+    style: str | None = None,
+    estimator: str | None = None,
+    inner: Any = None,
+    **params: Any,
+) -> list[S.StyleSlot]:
     """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they name."""
     slots = []
     for rec in buffer.header["slots"]:
@@ -113,27 +118,37 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
             values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
             new = get(str(values["style"]))()
             if inner is not None and S.adaptive(S.parse_inner(inner, 1)):
-                raise UsageError(f"bad value {inner!r} for inner: a buffer replays a fixed count of children; "
-                                 f"adaptive counts n0:n_max need a new render")
+                raise UsageError(
+                    f"bad value {inner!r} for inner: a buffer replays a fixed count of children; "
+                    f"adaptive counts n0:n_max need a new render"
+                )
             if inner is not None and buffer.stores == "sequence":
                 n = S.parse_inner(inner, 1)[0]  # the replay finds out whether the stored sequence suffices
             elif inner is not None and S.parse_inner(inner, 1) != (n,):
-                raise UsageError(f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
-                                 f"per camera sample; another n needs a new render")
+                raise UsageError(
+                    f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
+                    f"per camera sample; another n needs a new render"
+                )
             if new.per_sample:
-                raise UsageError(f"style '{new.name}' cannot restyle: it applies g to every child sample, and a "
-                                 f"buffer keeps only their mean")
+                raise UsageError(
+                    f"style '{new.name}' cannot restyle: it applies g to every child sample, and a "
+                    f"buffer keeps only their mean"
+                )
             if n == 0 and not new.closed_form:
-                raise UsageError(f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
-                                 f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
-                                 f"record the buffer with a style that traces children")
+                raise UsageError(
+                    f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
+                    f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
+                    f"record the buffer with a style that traces children"
+                )
             if estimator is not None:
                 est = estimator
             elif est not in applicable(new):
                 est = "direct"
         if est not in RESTYLABLE_ESTIMATORS and buffer.stores == "mean":
-            raise UsageError(f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
-                             f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}")
+            raise UsageError(
+                f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
+                f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}"
+            )
         slots.append(S.parse_slot({**values, "inner_samples": max(n, 1), "estimator": est},
                                   context="restyle"))
     return slots
@@ -257,12 +272,18 @@ def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi
             f"{buffer.samples} camera samples it asks for a child or uniform number beyond the stored ones or in "
             f"another order than the recorded {', '.join(repr(n) for n in recorded)} (the buffer stores "
             f"{children / buffer.samples:.1f} children and {(events - children) / buffer.samples:.1f} uniform "
-            f"numbers per camera sample on average); this estimator needs more: record a buffer with it")
+            f"numbers per camera sample on average); this estimator needs more: record a buffer with it"
+        )
     return total
 
 
-def replay_lanes(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
-                 **params: Any) -> tuple[np.ndarray, np.ndarray]:
+def replay_lanes(
+    buffer: Any,
+    style: str | None = None,
+    estimator: str | None = None,
+    inner: Any = None,
+    **params: Any,
+) -> tuple[np.ndarray, np.ndarray]:
     """A sequence buffer's per-camera-sample contributions with a new style, and the samples whose
     replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and tests)."""
     buf = as_buffer(buffer)
@@ -325,5 +346,18 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
-__all__ = ["restyle", "finish", "finish_spread", "SPREAD_NODES", "slot_record", "slots_for", "sample_values", "accumulate", "device", "prepare",
-           "RESTYLABLE_ESTIMATORS", "as_buffer", "replay_lanes"]
+__all__ = [
+    "restyle",
+    "finish",
+    "finish_spread",
+    "SPREAD_NODES",
+    "slot_record",
+    "slots_for",
+    "sample_values",
+    "accumulate",
+    "device",
+    "prepare",
+    "RESTYLABLE_ESTIMATORS",
+    "as_buffer",
+    "replay_lanes",
+]

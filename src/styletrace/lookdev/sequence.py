@@ -100,9 +100,12 @@ class Recorder:
         first = np.searchsorted(lane, np.arange(self.width, dtype=np.int64))
         keep = pos == np.arange(lane.size, dtype=np.int64) - first[lane]  # each lane's prefix that was stored
         lane, kind, value = lane[keep], kind[keep], value[:, keep]
-        return {"seq_count": np.bincount(lane, minlength=self.width).astype(np.uint32), "seq_kind": kind,
-                "child": np.ascontiguousarray(value[:, kind == CHILD]),
-                "uniform": np.ascontiguousarray(value[0, kind == UNIFORM])}
+        return {
+            "seq_count": np.bincount(lane, minlength=self.width).astype(np.uint32),
+            "seq_kind": kind,
+            "child": np.ascontiguousarray(value[:, kind == CHILD]),
+            "uniform": np.ascontiguousarray(value[0, kind == UNIFORM]),
+        }
 
 
 def offsets(arrays: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -118,11 +121,15 @@ def device_arrays(arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     ev, ch, un = offsets(arrays)
     pad = lambda a: np.concatenate([a, np.zeros(a.shape[:-1] + (1,), a.dtype)], axis=-1)  # noqa: E731
     child = pad(arrays["child"])
-    return {"ev_start": mi.UInt32(ev[:-1].astype(np.uint32)), "ev_end": mi.UInt32(ev[1:].astype(np.uint32)),
-            "ch_start": mi.UInt32(ch[:-1].astype(np.uint32)), "un_start": mi.UInt32(un[:-1].astype(np.uint32)),
-            "kind": mi.UInt32(pad(arrays["seq_kind"]).astype(np.uint32)),
-            "child": mi.Color3f(*(mi.Float(np.ascontiguousarray(child[i])) for i in range(3))),
-            "uniform": mi.Float(pad(arrays["uniform"]))}
+    return {
+        "ev_start": mi.UInt32(ev[:-1].astype(np.uint32)),
+        "ev_end": mi.UInt32(ev[1:].astype(np.uint32)),
+        "ch_start": mi.UInt32(ch[:-1].astype(np.uint32)),
+        "un_start": mi.UInt32(un[:-1].astype(np.uint32)),
+        "kind": mi.UInt32(pad(arrays["seq_kind"]).astype(np.uint32)),
+        "child": mi.Color3f(*(mi.Float(np.ascontiguousarray(child[i])) for i in range(3))),
+        "uniform": mi.Float(pad(arrays["uniform"])),
+    }
 
 
 def replay(d: dict[str, Any], slot_of: mi.Int32, slots, v) -> tuple[mi.Color3f, mi.Bool]:

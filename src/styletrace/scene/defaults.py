@@ -82,8 +82,12 @@ class Pilot:
         cell = np.repeat(np.arange(cx * cy), PILOT_SPP)
         ux = ((cell % cx) + rng.random(n)) / cx
         uy = ((cell // cx) + rng.random(n)) / cy
-        ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
-                                   mi.Point2f(0.5, 0.5))
+        ray, _ = sensor.sample_ray(
+            mi.Float(0.0),
+            mi.Float(0.5),
+            mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
+            mi.Point2f(0.5, 0.5),
+        )
         si = scene.ray_intersect(ray)
         sampler = mi.load_dict({"type": "independent"})
         sampler.seed(PILOT_SEED, n)
@@ -94,11 +98,30 @@ class Pilot:
         graph = SceneGraph(scene)
         emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         if graph.has_media:
-            L = volume_walk(scene, sampler, pi, ray, mi.Bool(True), sensor.get_medium(), True, self.settings.max_depth,
-                            self.settings.rr_depth, emitters=emitters, nulls=graph.has_null).L
+            L = volume_walk(
+                scene,
+                sampler,
+                pi,
+                ray,
+                mi.Bool(True),
+                sensor.get_medium(),
+                True,
+                self.settings.max_depth,
+                self.settings.rr_depth,
+                emitters=emitters,
+                nulls=graph.has_null,
+            ).L
         else:
-            L = exitant(scene, sampler, pi, ray, mi.Bool(True), self.settings.max_depth, self.settings.rr_depth,
-                        emitters=emitters)
+            L = exitant(
+                scene,
+                sampler,
+                pi,
+                ray,
+                mi.Bool(True),
+                self.settings.max_depth,
+                self.settings.rr_depth,
+                emitters=emitters,
+            )
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
         owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
@@ -111,9 +134,15 @@ class Pilot:
             for ptr in pointers:
                 owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
         n_sh = dr.normalize(si.sh_frame.n)
-        return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
-                "depth": np.array(depth, dtype=np.float64), "p": np.array(si.p).T, "n": np.array(n_sh).T,
-                "wo": -lanes(ray.d, n).T}
+        return {
+            "cell": cell,
+            "owner": owner,
+            "colour": np.array(L, dtype=np.float64).T,
+            "depth": np.array(depth, dtype=np.float64),
+            "p": np.array(si.p).T,
+            "n": np.array(n_sh).T,
+            "wo": -lanes(ray.d, n).T,
+        }
 
 
 def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

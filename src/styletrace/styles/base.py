@@ -205,8 +205,12 @@ def projection(scene: mi.Scene) -> Projection:
     cam = camera(scene)
     sensor = sensors[0]
     width = max(int(sensor.film().crop_size()[0]), 1)
-    ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f([0.5, 0.5 + 1.0 / width], [0.5, 0.5]),
-                               mi.Point2f(0.5, 0.5))
+    ray, _ = sensor.sample_ray(
+        mi.Float(0.0),
+        mi.Float(0.5),
+        mi.Point2f([0.5, 0.5 + 1.0 / width], [0.5, 0.5]),
+        mi.Point2f(0.5, 0.5),
+    )
     d, o = lanes(ray.d, 2), lanes(ray.o, 2)
     f = np.array(cam.forward)
     a = float(np.linalg.norm(d[:, 1] / (d[:, 1] @ f) - d[:, 0] / (d[:, 0] @ f)))
@@ -258,10 +262,18 @@ MAX_EXPOSURE = 100.0
 
 def exposure_param(what: str = "") -> Param:
     """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see `auto_exposure`)."""
-    return Param("exposure", "float", None, "scale s of the expected radiance before the tone curve", low=0.0,
-                 low_open=True, high=MAX_EXPOSURE,
-                 auto=what or f"{EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at most "
-                              f"{MAX_EXPOSURE:g} (unresolved: 1)")
+    return Param(
+        "exposure",
+        "float",
+        None,
+        "scale s of the expected radiance before the tone curve",
+        low=0.0,
+        low_open=True,
+        high=MAX_EXPOSURE,
+        auto=what
+        or f"{EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at most "
+        f"{MAX_EXPOSURE:g} (unresolved: 1)",
+    )
 
 
 def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSURE) -> float:
@@ -282,6 +294,23 @@ def light_from_camera(cam: Camera) -> tuple[float, float, float]:
     return tuple(round(x / n, 4) for x in v)
 
 
-__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward",
-           "Projection", "projection", "lanes", "light_from_camera", "rounded", "increasing", "EXPOSURE_KEY",
-           "MAX_EXPOSURE", "exposure_param", "auto_exposure"]
+__all__ = [
+    "Style",
+    "Vertex",
+    "Param",
+    "StyleError",
+    "brightness",
+    "Camera",
+    "camera",
+    "camera_forward",
+    "Projection",
+    "projection",
+    "lanes",
+    "light_from_camera",
+    "rounded",
+    "increasing",
+    "EXPOSURE_KEY",
+    "MAX_EXPOSURE",
+    "exposure_param",
+    "auto_exposure",
+]

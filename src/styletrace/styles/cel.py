@@ -30,13 +30,31 @@ class Cel(Style):
     name = "cel"
     summary = "GI cel shading: brightness quantized to levels, colour kept (S5.2)"
     params = (
-        Param("bands", "int", 3, "number of bands where neither thresholds nor levels is given", low=2, high=8),
-        Param("thresholds", "floats", None, "brightness steps between levels, increasing",
-              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
-                   "unresolved: evenly spaced k/(K+1))"),
-        Param("levels", "floats", None, "target brightness of each band (one more than thresholds)", low=0.0,
-              auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
-                   "(unresolved: evenly spaced in lightness)"),
+        Param(
+            "bands",
+            "int",
+            3,
+            "number of bands where neither thresholds nor levels is given",
+            low=2,
+            high=8,
+        ),
+        Param(
+            "thresholds",
+            "floats",
+            None,
+            "brightness steps between levels, increasing",
+            auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
+            "unresolved: evenly spaced k/(K+1))",
+        ),
+        Param(
+            "levels",
+            "floats",
+            None,
+            "target brightness of each band (one more than thresholds)",
+            low=0.0,
+            auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
+            "(unresolved: evenly spaced in lightness)",
+        ),
     )
     default_inner = 16
 

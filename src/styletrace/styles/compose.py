@@ -43,21 +43,36 @@ def composite_class(name: str, lookup) -> type[Style]:
     if len(ops) < 2 or any(not o for o in ops):
         raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. contrast+sepia")
     if len(set(ops)) != len(ops):
-        raise StyleError(f"bad style {name!r}: each style may appear once in a composition (its parameters are "
-                         f"named after it)")
+        raise StyleError(
+            f"bad style {name!r}: each style may appear once in a composition (its parameters are "
+            f"named after it)"
+        )
     classes = [lookup(o) for o in ops]
     for cls in classes:
         if cls.per_sample or is_composite(cls.name):
-            raise StyleError(f"bad style {name!r}: '{cls.name}' cannot be composed (it is not a function of "
-                             f"an expectation)" if cls.per_sample else f"bad style {name!r}: nested composition")
+            raise StyleError(
+                f"bad style {name!r}: '{cls.name}' cannot be composed (it is not a function of "
+                f"an expectation)"
+                if cls.per_sample
+                else f"bad style {name!r}: nested composition"
+            )
     params = tuple(replace(p, name=f"{cls.name}.{p.name}", doc=f"{cls.name}: {p.doc}")
                    for cls in classes for p in cls.params)
     # the first operand sees the radiance: if it ignores it (closed form), so does the whole
     # composition
     inner = 0 if classes[0].default_inner == 0 else max(c.default_inner for c in classes)
     summary = " then ".join(ops) + ", as one style g = " + " o ".join(reversed(ops))
-    return type(f"Composite[{name}]", (Composite,), {"name": name, "summary": summary, "params": params,
-                                                     "default_inner": inner, "operand_classes": tuple(classes)})
+    return type(
+        f"Composite[{name}]",
+        (Composite,),
+        {
+            "name": name,
+            "summary": summary,
+            "params": params,
+            "default_inner": inner,
+            "operand_classes": tuple(classes),
+        },
+    )
 
 
 class Composite(Style):

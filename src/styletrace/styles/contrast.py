@@ -31,7 +31,9 @@ class Contrast(Style):
     params = (
         Param("c", "float", 1.5, "contrast factor", low=0.0),
         Param("pivot", "float", 0.5, "pivot brightness p"),
-        exposure_param(f"{MID:g} / the median of the scene's first-hit brightness, at most 100 (unresolved: 1)"),
+        exposure_param(
+            f"{MID:g} / the median of the scene's first-hit brightness, at most 100 (unresolved: 1)"
+        ),
     )
     default_inner = 1
 

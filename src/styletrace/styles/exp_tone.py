@@ -37,9 +37,15 @@ class ExpTone(Style):
     # normal
     # float32 numbers (above 1.2e-38) instead of flushing to 0, where ln(a) and the series break
     # down
-    params = (replace(exposure_param(), doc="exposure k", high=MAX_EXPOSURE,
-                      auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
-                           f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})"),)
+    params = (
+        replace(
+            exposure_param(),
+            doc="exposure k",
+            high=MAX_EXPOSURE,
+            auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
+            f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})",
+        ),
+    )
     default_inner = 16
 
     @property

@@ -56,8 +56,10 @@ class Gamma(Style):
     def validate(self) -> None:
         top = self.scale * MAX_RADIANCE
         if top > 1.0 and math.log(top) / self.gamma > math.log(FLOAT32_MAX):
-            raise StyleError(f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
-                             f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma")
+            raise StyleError(
+                f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
+                f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma"
+            )
 
     def auto_values(self, facts) -> dict:
         return {} if self.exposure is not None else {"exposure": auto_exposure(facts)}
@@ -74,5 +76,10 @@ class Gamma(Style):
         # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its
         # floor in
         # exposed units: the same on a scene of any brightness)
-        return SeriesForm(gamma_series(self.gamma), gain=self.scale, pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE,
-                          values=(0.0, None))
+        return SeriesForm(
+            gamma_series(self.gamma),
+            gain=self.scale,
+            pilot_lo=PILOT_FLOOR,
+            pilot_scale=PILOT_SCALE,
+            values=(0.0, None),
+        )

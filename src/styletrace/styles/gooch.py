@@ -63,7 +63,9 @@ class Gooch(CameraLight, Style):
     name = "gooch"
     summary = "Gooch cool-to-warm shading from a user light direction, closed form (Gooch et al. 1998)"
     params = (
-        Param("light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT),
+        Param(
+            "light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT
+        ),
         Param("k_d", "color", (0.8, 0.8, 0.8), "diffuse colour of the object", low=0.0),
         Param("blue", "color", (0.0, 0.0, 0.55), "cool tone k_blue", low=0.0),
         Param("yellow", "color", (0.3, 0.3, 0.0), "warm tone k_yellow", low=0.0),

@@ -59,8 +59,16 @@ def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float, s: mi.Po
     return dr.sqrt(dr.square(x - gx) + dr.square(y - gy))
 
 
-def screen_halftone_mask(p: mi.Point3f, u: mi.Float, proj: Projection, spacing_px: float, r_max_px: float,
-                         u_min: float = 0.05, u_max: float = 0.9, s: mi.Point2f | None = None) -> mi.Bool:
+def screen_halftone_mask(
+    p: mi.Point3f,
+    u: mi.Float,
+    proj: Projection,
+    spacing_px: float,
+    r_max_px: float,
+    u_min: float = 0.05,
+    u_max: float = 0.9,
+    s: mi.Point2f | None = None,
+) -> mi.Bool:
     """True where p's screen position (the image coordinate `s` where given) is closer than r(u) pixels to its
     nearest screen grid point."""
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
@@ -75,18 +83,45 @@ class Halftone(BrightnessRange, Style):
     name = "halftone"
     summary = "half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness falls"
     params = (
-        Param("spacing_px", "float", 8.0, "grid interval on screen (pixels, a square grid of the image); used "
-              "unless spacing is given", low=0.0, low_open=True),
-        Param("spacing", "float", None, "grid interval d of a 3D grid (scene units), replacing spacing_px",
-              low=0.0, low_open=True, auto="not used: a screen grid spacing_px apart"),
-        Param("max_radius_fraction", "float", 0.75, "largest radius as a fraction of half the cell diagonal "
-              "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)", low=0.0, high=1.0, low_open=True),
+        Param(
+            "spacing_px",
+            "float",
+            8.0,
+            "grid interval on screen (pixels, a square grid of the image); used "
+            "unless spacing is given",
+            low=0.0,
+            low_open=True,
+        ),
+        Param(
+            "spacing",
+            "float",
+            None,
+            "grid interval d of a 3D grid (scene units), replacing spacing_px",
+            low=0.0,
+            low_open=True,
+            auto="not used: a screen grid spacing_px apart",
+        ),
+        Param(
+            "max_radius_fraction",
+            "float",
+            0.75,
+            "largest radius as a fraction of half the cell diagonal "
+            "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)",
+            low=0.0,
+            high=1.0,
+            low_open=True,
+        ),
         *tone_params("dots are largest", "dots vanish"),
         Param("dark", "color", (0.1, 0.1, 0.15), "colour inside the dots", low=0.0),
         Param("light", "color", (0.97, 0.95, 0.9), "colour outside the dots", low=0.0),
-        Param("lift", "choice", "canonical", "where the screen grid is evaluated: the vertex's image coordinate "
-              "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
-              choices=("canonical", "position")),
+        Param(
+            "lift",
+            "choice",
+            "canonical",
+            "where the screen grid is evaluated: the vertex's image coordinate "
+            "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
+            choices=("canonical", "position"),
+        ),
     )
     default_inner = 16
 

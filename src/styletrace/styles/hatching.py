@@ -113,8 +113,15 @@ def line_masks(p: mi.Point3f, normals: Sequence[Sequence[float]], spacing: float
     return out
 
 
-def coordinate_line_masks(s: mi.Point2f, depth: mi.UInt32, sets: int, angle: float, angle_reflected: float,
-                          spacing: float, thickness: float) -> list[mi.Bool]:
+def coordinate_line_masks(
+    s: mi.Point2f,
+    depth: mi.UInt32,
+    sets: int,
+    angle: float,
+    angle_reflected: float,
+    spacing: float,
+    thickness: float,
+) -> list[mi.Bool]:
     """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its lines, the
     set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc, canonical lifting)."""
     out = []
@@ -136,17 +143,38 @@ def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
 
 AUTO_U_MIN = "unused while tones applies; given u_max only: the 5% brightness quantile (unresolved: 0.05)"
 AUTO_U_MAX = "unused while tones applies; given u_min only: the 95% brightness quantile (unresolved: 0.9)"
-AUTO_TONES = ("the scene's first-hit brightness distribution mixed with its lightness at 9 knots, unless "
-              "u_min or u_max is given (unresolved: the linear ramp)")
+AUTO_TONES = (
+    "the scene's first-hit brightness distribution mixed with its lightness at 9 knots, unless "
+    "u_min or u_max is given (unresolved: the linear ramp)"
+)
 
 
 def tone_params(full: str, none: str) -> tuple[Param, ...]:
     """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear ramp, whose
     docs end with what happens at full tone (`full`) and at none (`none`)."""
-    return (Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
-                  auto=AUTO_TONES),
-            Param("u_min", "float", None, f"brightness at and below which {full} (a linear ramp)", auto=AUTO_U_MIN),
-            Param("u_max", "float", None, f"brightness at and above which {none} (a linear ramp)", auto=AUTO_U_MAX))
+    return (
+        Param(
+            "tones",
+            "floats",
+            None,
+            "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
+            auto=AUTO_TONES,
+        ),
+        Param(
+            "u_min",
+            "float",
+            None,
+            f"brightness at and below which {full} (a linear ramp)",
+            auto=AUTO_U_MIN,
+        ),
+        Param(
+            "u_max",
+            "float",
+            None,
+            f"brightness at and above which {none} (a linear ramp)",
+            auto=AUTO_U_MAX,
+        ),
+    )
 
 
 class BrightnessRange:
@@ -178,11 +206,15 @@ class BrightnessRange:
         if self.tones is not None and (self.u_min is not None or self.u_max is not None):
             raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are alternatives; give one")
         if self.tones is not None and any(b < a for a, b in zip(self.tones, self.tones[1:])):
-            raise StyleError(f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "
-                             f"decrease")
+            raise StyleError(
+                f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "
+                f"decrease"
+            )
         if self.tones is not None and (len(self.tones) < 2 or not self.tones[-1] > self.tones[0]):
-            raise StyleError(f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': at least two "
-                             f"brightnesses, the last above the first")
+            raise StyleError(
+                f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': at least two "
+                f"brightnesses, the last above the first"
+            )
         lo, hi = self.u_range()
         if not hi > lo:
             raise StyleError(f"bad value {hi:g} for parameter 'u_max': must exceed u_min = {lo:g}")
@@ -208,21 +240,54 @@ class Hatching(BrightnessRange, Style):
     summary = "cross-hatching: brightness picks how many plane sets around the view direction draw lines"
     params = (
         Param("sets", "int", 3, "number of hatching directions", low=1, high=8),
-        Param("spacing_px", "float", 8.0, "distance between lines on screen (pixels, projected at each "
-              "vertex's depth); used unless spacing is given", low=0.0, low_open=True),
-        Param("spacing", "float", None, "distance between planes (scene units), replacing spacing_px",
-              low=0.0, low_open=True, auto="not used: lines spacing_px apart on screen"),
-        Param("thickness", "float", None, "line thickness d, in the units of the spacing in use, < spacing",
-              low=0.0, low_open=True, auto="0.3 * the spacing in use"),
-        Param("angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"),
+        Param(
+            "spacing_px",
+            "float",
+            8.0,
+            "distance between lines on screen (pixels, projected at each "
+            "vertex's depth); used unless spacing is given",
+            low=0.0,
+            low_open=True,
+        ),
+        Param(
+            "spacing",
+            "float",
+            None,
+            "distance between planes (scene units), replacing spacing_px",
+            low=0.0,
+            low_open=True,
+            auto="not used: lines spacing_px apart on screen",
+        ),
+        Param(
+            "thickness",
+            "float",
+            None,
+            "line thickness d, in the units of the spacing in use, < spacing",
+            low=0.0,
+            low_open=True,
+            auto="0.3 * the spacing in use",
+        ),
+        Param(
+            "angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"
+        ),
         *tone_params("all sets are drawn", "no set is drawn"),
         Param("line_color", "color", (0.05, 0.05, 0.08), "colour of the lines", low=0.0),
         Param("background", "color", (0.97, 0.95, 0.9), "colour between the lines", low=0.0),
-        Param("lift", "choice", "canonical", "where screen lines are evaluated: the vertex's image coordinate "
-              "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
-              choices=("canonical", "position")),
-        Param("angle_reflected", "float", None, "the first set's angle at path depth > 0 (degrees)",
-              auto="the same as angle"),
+        Param(
+            "lift",
+            "choice",
+            "canonical",
+            "where screen lines are evaluated: the vertex's image coordinate "
+            "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
+            choices=("canonical", "position"),
+        ),
+        Param(
+            "angle_reflected",
+            "float",
+            None,
+            "the first set's angle at path depth > 0 (degrees)",
+            auto="the same as angle",
+        ),
     )
     default_inner = 16
 
@@ -243,8 +308,10 @@ class Hatching(BrightnessRange, Style):
     def validate(self) -> None:
         if not self.line_thickness < self.pitch:
             which = "spacing_px" if self.spacing is None else "spacing"
-            raise StyleError(f"bad value {self.line_thickness:g} for parameter 'thickness': must be less than "
-                             f"{which} = {self.pitch:g}")
+            raise StyleError(
+                f"bad value {self.line_thickness:g} for parameter 'thickness': must be less than "
+                f"{which} = {self.pitch:g}"
+            )
         self.check_u_range()
 
     def set_camera(self, view: Sequence[float], up: Sequence[float]) -> None:
@@ -264,14 +331,26 @@ class Hatching(BrightnessRange, Style):
     def _masks(self, v: Vertex) -> list:
         """Per set j: v on one of its lines (drawn or not), by the mode in use."""
         if v.s is not None and self.wants_coordinate:
-            return coordinate_line_masks(v.s, v.depth, self.sets, self.angle, self.reflected_angle, self.pitch,
-                                         self.line_thickness)
+            return coordinate_line_masks(
+                v.s,
+                v.depth,
+                self.sets,
+                self.angle,
+                self.reflected_angle,
+                self.pitch,
+                self.line_thickness,
+            )
         # position mode; a depth-dependent angle picks the other plane normals at depth > 0
         masks = line_masks(v.p, self.normals, self.pitch, self.line_thickness,
                            projection=self.projection if self.spacing is None else None)
         if self.reflected_angle != self.angle:
-            other = line_masks(v.p, plane_normals(self.view, self.up, self.sets, self.reflected_angle), self.pitch,
-                               self.line_thickness, projection=self.projection if self.spacing is None else None)
+            other = line_masks(
+                v.p,
+                plane_normals(self.view, self.up, self.sets, self.reflected_angle),
+                self.pitch,
+                self.line_thickness,
+                projection=self.projection if self.spacing is None else None,
+            )
             masks = [dr.select(v.depth > 0, b, a) for a, b in zip(masks, other)]
         return masks
 

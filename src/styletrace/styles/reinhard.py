@@ -30,8 +30,18 @@ MAX_WHITE = 1e3
 class Reinhard(Style):
     name = "reinhard"
     summary = "reciprocal tone curve I/(w + I), per channel (reciprocal series, S16-S17)"
-    params = (Param("white", "float", 1.0, "exposed radiance mapped to 1/2", low=0.0, low_open=True, high=MAX_WHITE),
-              exposure_param())
+    params = (
+        Param(
+            "white",
+            "float",
+            1.0,
+            "exposed radiance mapped to 1/2",
+            low=0.0,
+            low_open=True,
+            high=MAX_WHITE,
+        ),
+        exposure_param(),
+    )
     default_inner = 16
 
     @property
@@ -48,5 +58,13 @@ class Reinhard(Style):
     def form(self):
         from ..estimators import reciprocal_series
         # samples of w + s X are >= w, so a pilot b >= w keeps the expansion on the positive side
-        return SeriesForm(reciprocal_series(self.white), gain=self.scale, shift=self.white, scale=-1.0, offset=1.0,
-                          pilot_lo=self.white, pilot_scale=1.5, values=(0.0, 1.0))
+        return SeriesForm(
+            reciprocal_series(self.white),
+            gain=self.scale,
+            shift=self.white,
+            scale=-1.0,
+            offset=1.0,
+            pilot_lo=self.white,
+            pilot_scale=1.5,
+            values=(0.0, 1.0),
+        )

@@ -41,8 +41,14 @@ class TieDye(Style):
     name = "tie_dye"
     summary = "per-channel cosine waves (1 - cos(pi f (x + phi)))/2 (S5.5)"
     params = (
-        Param("frequencies", "floats", (2.0, 2.15, 2.3), "angular frequency per channel, in units of pi",
-              low=0.0, low_open=True),
+        Param(
+            "frequencies",
+            "floats",
+            (2.0, 2.15, 2.3),
+            "angular frequency per channel, in units of pi",
+            low=0.0,
+            low_open=True,
+        ),
         Param("phases", "floats", (1.0, 1.13, 1.29), "phase offset per channel"),
         Param("domain_min", "float", -1.0, "lower end of the clamp / fit interval"),
         Param("domain_max", "float", 4.0, "upper end of the clamp / fit interval"),
@@ -63,17 +69,23 @@ class TieDye(Style):
             if len(vals) == 1:
                 self.values[key] = vals * 3
             elif len(vals) != 3:
-                raise StyleError(f"bad value {','.join(f'{x:g}' for x in vals)!r} for parameter '{key}': "
-                                 f"expected 1 or 3 numbers (r,g,b)")
+                raise StyleError(
+                    f"bad value {','.join(f'{x:g}' for x in vals)!r} for parameter '{key}': "
+                    f"expected 1 or 3 numbers (r,g,b)"
+                )
         if not self.domain_min < self.domain_max:
-            raise StyleError(f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
-                             f"domain_min = {self.domain_min:g}")
+            raise StyleError(
+                f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
+                f"domain_min = {self.domain_min:g}"
+            )
         largest = math.pi * max(self.frequencies) * (max(-self.domain_min, self.domain_max) + max(map(abs, self.phases)))
         if largest > MAX_ARGUMENT:
-            raise StyleError(f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
-                             f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
-                             f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
-                             f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it")
+            raise StyleError(
+                f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
+                f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
+                f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
+                f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it"
+            )
 
     def domain(self) -> tuple[float, float]:
         return (self.domain_min, self.domain_max)

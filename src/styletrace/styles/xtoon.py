@@ -41,13 +41,31 @@ class XToon(CameraLight, Style):
     name = "xtoon"
     summary = "X-Toon: toon ramp over n.l faded by an orientation or depth detail, closed form (Barla et al. 2006)"
     params = (
-        Param("light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT),
-        Param("mode", "choice", "orientation", "detail attribute", choices=("orientation", "depth")),
+        Param(
+            "light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT
+        ),
+        Param(
+            "mode", "choice", "orientation", "detail attribute", choices=("orientation", "depth")
+        ),
         Param("r", "float", 2.0, "orientation exponent: D = |n.wo|^r", low=0.0),
-        Param("z_min", "float", None, "depth of full detail (depth mode)", low=0.0, low_open=True,
-              auto="depth mode: the 5% quantile of the first hits' camera depth (unresolved: 1)"),
-        Param("z_max", "float", None, "depth of zero detail (depth mode)", low=0.0, low_open=True,
-              auto="depth mode: the 95% quantile of the first hits' camera depth (unresolved: 10)"),
+        Param(
+            "z_min",
+            "float",
+            None,
+            "depth of full detail (depth mode)",
+            low=0.0,
+            low_open=True,
+            auto="depth mode: the 5% quantile of the first hits' camera depth (unresolved: 1)",
+        ),
+        Param(
+            "z_max",
+            "float",
+            None,
+            "depth of zero detail (depth mode)",
+            low=0.0,
+            low_open=True,
+            auto="depth mode: the 95% quantile of the first hits' camera depth (unresolved: 10)",
+        ),
         Param("gradient", "gradient", Gradient.parse(BANDS), "toon colours over tone n.l"),
         Param("detail_color", "color", (0.95, 0.92, 0.85), "colour at zero detail", low=0.0),
     )
