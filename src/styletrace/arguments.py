@@ -15,13 +15,17 @@ from typing import Any
 from .errors import SceneError, UsageError
 from .gate import mi
 
-#: Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one image.
+#: Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one
+#: image.
 SEED_MAX = 2 ** 32 - 1
 #: spp is a UInt32 sample count in Mitsuba's samplers.
 SPP_MAX = 2 ** 32 - 1
-#: Plugin classes whose spectra an RGB variant cannot evaluate: the first pass fails inside the kernel.
-UNRENDERABLE = {"BlackBodySpectrum": "a 'blackbody' spectrum needs a spectral variant; give the emitter an RGB "
-                                     "radiance (<rgb name=\"radiance\" value=\"...\"/>) instead"}
+#: Plugin classes whose spectra an RGB variant cannot evaluate: the first pass fails inside the
+#: kernel.
+UNRENDERABLE = {
+    "BlackBodySpectrum": "a 'blackbody' spectrum needs a spectral variant; give the emitter an RGB "
+    'radiance (<rgb name="radiance" value="..."/>) instead'
+}
 
 
 def whole(name: str, value: Any, low: int, high: int) -> int:
@@ -33,8 +37,10 @@ def whole(name: str, value: Any, low: int, high: int) -> int:
 
 def check_integrator(integrator: Any) -> None:
     if integrator is not None and not isinstance(integrator, mi.Integrator):
-        raise UsageError(f"bad value {integrator!r} for integrator: expected None or an mi.Integrator such as "
-                         f"styletrace.make_integrator(...); choose a style with style=...")
+        raise UsageError(
+            f"bad value {integrator!r} for integrator: expected None or an mi.Integrator such as "
+            f"styletrace.make_integrator(...); choose a style with style=..."
+        )
 
 
 def check_render_args(spp: Any, seed: Any, integrator: Any = None) -> None:
@@ -96,8 +102,10 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     traces virtual calls on all live instances), and its blackbody spectrum fails there."""
     if not isinstance(scene, mi.Scene):
         kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
-        return (f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
-                f"holding a sensor, shapes and emitters")
+        return (
+            f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
+            f"holding a sensor, shapes and emitters"
+        )
     if not scene.sensors():
         return (f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "
                 f"<sensor type=\"perspective\"/>)")

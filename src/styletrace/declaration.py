@@ -24,8 +24,15 @@ from typing import Any, ClassVar
 from .errors import StyletraceError
 
 #: the kind names of both sides, mapped to the common kinds parsed here
-COMMON_KINDS = {"int": "int", "float": "float", "bool": "bool", "choice": "choice", "string": "choice",
-                "rgb": "rgb", "color": "rgb"}
+COMMON_KINDS = {
+    "int": "int",
+    "float": "float",
+    "bool": "bool",
+    "choice": "choice",
+    "string": "choice",
+    "rgb": "rgb",
+    "color": "rgb",
+}
 
 
 @dataclass(frozen=True)

@@ -1,26 +1,13 @@
 """Writing rendered images: EXR as linear float32, PNG as sRGB 8-bit; atomic and checked.
 
-    write_image(img, "out.png")      # H x W x 3 linear radiance -> file; raises OSError if it cannot
-    write_image(y, "out.exr", "luminance")   # H x W x 1: the film's own pixel format (Y, YA, XYZ, RGBA, ...)
-    save_safely(img, "out.exr")      # never loses the render: falls back to a temporary EXR
-    nonfinite_pixels(img)            # how many pixels hold NaN or +-inf
-    mse(img, reference)              # mean squared error (inf or NaN with non-finite pixels)
+    write_image(img, "out.png")              # H x W x 3 linear -> file; OSError if it cannot
+    write_image(y, "out.exr", "luminance")   # the film's own pixel format
+    save_safely(img, "out.exr")              # never loses the render: falls back to a temporary EXR
+    nonfinite_pixels(img), mse(img, reference)
 
-Encoding happens in memory (Mitsuba writes the EXR or PNG into a `MemoryStream`); the bytes then go
-through a Python file object into a temporary file in the destination's folder, which is flushed,
-checked for its full size, fsynced and only then renamed over the destination (`os.replace`, atomic on
-POSIX). So a full disk (ENOSPC), a short write or a kill during the write raises or leaves the old
-file intact; it never leaves a truncated file where a valid one was, and two writers of one path leave
-one of their images. (Mitsuba's own `Bitmap.write(path)` ignores ENOSPC and reports success.)
-
-PNG: the sRGB transfer function, clamping and 8-bit quantization are done here in numpy: linear values
-are clamped to [0, 1] first (NaN -> 0, +inf -> 1, -inf and negatives -> 0), because Mitsuba's own
-conversion wraps values above ~2410 round to black.
-
-`encode_plain` writes the same pixels with numpy and zlib alone (an uncompressed scanline EXR, a PNG),
-for the command line's interrupted render: while a Dr.Jit kernel runs, Mitsuba's OpenEXR writer waits
-for it (measured: an 80 x 80 EXR took until the pass under way ended, 6-15 s), so a write from the
-signal watcher must not go through Mitsuba.
+A write never leaves a truncated file where a valid one was (temporary file, size check, fsync,
+rename). PNG values are clamped to [0, 1] first (NaN -> 0, +inf -> 1). `encode_plain` encodes with
+numpy and zlib alone, for the interrupted render. Rationale: docs/design/atomic_image_writes.md.
 """
 from __future__ import annotations
 
@@ -59,9 +46,18 @@ def srgb8(image) -> np.ndarray:
     return np.round(enc * 255.0).astype(np.uint8)
 
 
-#: a film's pixel format (as `hdrfilm` names it, or as its description shows it) -> Bitmap pixel format
-PIXEL_FORMATS = {"rgb": "RGB", "rgba": "RGBA", "luminance": "Y", "y": "Y", "luminance_alpha": "YA", "ya": "YA",
-                 "xyz": "XYZ", "xyza": "XYZA"}
+#: a film's pixel format (as `hdrfilm` names it, or as its description shows it) -> Bitmap pixel
+#: format
+PIXEL_FORMATS = {
+    "rgb": "RGB",
+    "rgba": "RGBA",
+    "luminance": "Y",
+    "y": "Y",
+    "luminance_alpha": "YA",
+    "ya": "YA",
+    "xyz": "XYZ",
+    "xyza": "XYZA",
+}
 
 
 def bitmap_format(pixel_format: str, channels: int) -> str:
@@ -77,8 +73,10 @@ def bitmap_format(pixel_format: str, channels: int) -> str:
 def check_format(pixel_format: str, ext: str) -> None:
     """XYZ has no sRGB encoding: such a film is written as EXR only (ValueError otherwise)."""
     if PIXEL_FORMATS.get(pixel_format.lower(), "").startswith("XYZ") and ext == ".png":
-        raise ValueError(f"the film's pixel_format is {pixel_format!r}: XYZ images are written as .exr only "
-                         f"(or set pixel_format=\"rgb\" for a .png)")
+        raise ValueError(
+            f"the film's pixel_format is {pixel_format!r}: XYZ images are written as .exr only "
+            f'(or set pixel_format="rgb" for a .png)'
+        )
 
 
 def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
@@ -128,7 +126,8 @@ def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
               + _exr_attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0))
               + _exr_attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
               + _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
-    # every line: y, byte count, then the channels' values (sorted channel order, little-endian float32)
+    # every line: y, byte count, then the channels' values (sorted channel order, little-endian
+    # float32)
     lines = np.ascontiguousarray(data[..., order].transpose(0, 2, 1), dtype="<f4").reshape(height, -1)
     line_bytes = lines.shape[1] * 4
     start = len(header) + 8 * height
@@ -148,9 +147,13 @@ def _plain_png(data: np.ndarray) -> bytes:
     height, width, channels = data.shape
     colour = {1: 0, 2: 4, 3: 2, 4: 6}[channels]
     rows = np.concatenate([np.zeros((height, 1), np.uint8), data.reshape(height, -1)], axis=1)
-    return (b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour, 0, 0, 0))
-            + _png_chunk(b"sRGB", b"\0") + _png_chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
-            + _png_chunk(b"IEND", b""))
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + _png_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, colour, 0, 0, 0))
+        + _png_chunk(b"sRGB", b"\0")
+        + _png_chunk(b"IDAT", zlib.compress(rows.tobytes(), 6))
+        + _png_chunk(b"IEND", b"")
+    )
 
 
 def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None = None) -> bytes:
@@ -179,11 +182,14 @@ AOV_CHANNELS = (("variance", ("variance.R", "variance.G", "variance.B")), ("bias
                 ("children", ("children",)))
 
 
-#: with denoising on (docs/denoise.md) the AOVs describe the noisy render and say so; `denoise_change` is
-#: what the denoiser changed. Only the keys present are written.
-DENOISED_AOV_CHANNELS = (("noisy_variance", ("noisy_variance.R", "noisy_variance.G", "noisy_variance.B")),
-                         ("noisy_bias", ("noisy_bias",)), ("children", ("children",)),
-                         ("denoise_change", ("denoise_change.R", "denoise_change.G", "denoise_change.B")))
+#: with denoising on (docs/denoise.md) the AOVs describe the noisy render and say so;
+#: `denoise_change` is what the denoiser changed. Only the keys present are written.
+DENOISED_AOV_CHANNELS = (
+    ("noisy_variance", ("noisy_variance.R", "noisy_variance.G", "noisy_variance.B")),
+    ("noisy_bias", ("noisy_bias",)),
+    ("children", ("children",)),
+    ("denoise_change", ("denoise_change.R", "denoise_change.G", "denoise_change.B")),
+)
 
 
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
@@ -244,8 +250,13 @@ def unwritable_kind(path: str) -> str | None:
         return f"not a usable path ({exc.strerror})"
     if stat.S_ISREG(mode):
         return None
-    for test, kind in ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISFIFO, "a fifo"), (stat.S_ISSOCK, "a socket")):
+    for test, kind in (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISFIFO, "a fifo"),
+        (stat.S_ISSOCK, "a socket"),
+    ):
         if test(mode):
             return kind
     return "not a regular file"
@@ -290,9 +301,18 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
 
 
 def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> None:
-    """EXR: linear float32. PNG: sRGB-encoded 8 bit, clamped. Atomic; raises OSError if it cannot write.
-    `pixel_format` is the film's (see `encode`). `aovs` (EXR only): the error AOVs as extra channels.
-    `plain`: encoded by `encode_plain` (no Mitsuba: a kernel may be running)."""
+    """Write `image` atomically: EXR as linear float32, PNG as sRGB 8 bit, clamped.
+
+    Args:
+        image: H x W x C linear pixels.
+        path: the destination; its extension chooses the format.
+        pixel_format: the film's pixel format (see `encode`).
+        aovs: the error AOVs as extra channels (EXR only), or None.
+        plain: encode with `encode_plain` (no Mitsuba: a kernel may be running).
+
+    Raises:
+        OSError: the file cannot be written. ValueError: AOVs for a format other than EXR.
+    """
     ext = os.path.splitext(path)[1].lower()
     if plain:
         write_bytes_atomically(encode_plain(image, ext, pixel_format, aovs), path)
@@ -306,9 +326,17 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
 
 
 def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> str:
-    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it. Returns where it went.
-    If even that fails, no empty temporary file is left behind and the error is raised. `plain`: see
-    `write_image`."""
+    """Write `image`; if that fails, keep it in a temporary EXR instead of losing it.
+
+    Args:
+        image, path, pixel_format, aovs, plain: as for `write_image`.
+
+    Returns:
+        The path written: `path`, or the temporary EXR's.
+
+    Raises:
+        Exception: the fallback failed too (no empty temporary file is left behind).
+    """
     try:
         write_image(image, path, pixel_format, aovs, plain)
         return path
@@ -342,6 +370,21 @@ def check_target(path: str) -> None:
     if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
         raise UsageError(f"cannot write {path!r}: permission denied")
 
-__all__ = ["check_target", "IMAGE_TYPES", "PIXEL_FORMATS", "AOV_CHANNELS", "bitmap_format", "check_format", "nonfinite_pixels", "srgb8", "encode",
-           "encode_plain", "encode_with_aovs", "destination", "unwritable_kind", "write_bytes_atomically", "write_image",
-           "save_safely"]
+__all__ = [
+    "check_target",
+    "IMAGE_TYPES",
+    "PIXEL_FORMATS",
+    "AOV_CHANNELS",
+    "bitmap_format",
+    "check_format",
+    "nonfinite_pixels",
+    "srgb8",
+    "encode",
+    "encode_plain",
+    "encode_with_aovs",
+    "destination",
+    "unwritable_kind",
+    "write_bytes_atomically",
+    "write_image",
+    "save_safely",
+]

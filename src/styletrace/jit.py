@@ -133,16 +133,20 @@ def prepare_drjit() -> str:
     loaded = loaded_libllvm()
     major = llvm_major_of_file(loaded) if loaded else None
     if major is not None and major < MIN_LLVM_MAJOR:
-        raise BackendError(f"Dr.Jit loaded {loaded} (LLVM {major}), which crashes it; import styletrace before "
-                           f"drjit/mitsuba, or {FIX}")
+        raise BackendError(
+            f"Dr.Jit loaded {loaded} (LLVM {major}), which crashes it; import styletrace before "
+            f"drjit/mitsuba, or {FIX}"
+        )
     return "llvm"
 
 
 def check_variant(variant: str) -> str:
     """Refuse variants styles cannot run on: they act on RGB radiance inside JIT-compiled loops."""
     if variant.startswith("scalar") or not variant.endswith("_rgb"):
-        raise BackendError(f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active "
-                           f"variant is {variant}")
+        raise BackendError(
+            f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active "
+            f"variant is {variant}"
+        )
     return variant
 
 

@@ -15,8 +15,8 @@ import numpy as np
 #: a pixel is a firefly above this multiple of its neighbourhood's median luminance
 FIREFLY_RATIO = 5.0
 FIREFLY_WINDOW = 5
-#: the least median a firefly is measured against (1% of display white): a dark pixel among black ones is
-#: noise nobody sees, not a firefly
+#: the least median a firefly is measured against (1% of display white): a dark pixel among black
+#: ones is noise nobody sees, not a firefly
 FIREFLY_FLOOR = 0.01
 
 

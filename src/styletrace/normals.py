@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-#: largest difference per component between Mitsuba's computed normals and the host's (measured: 1.7e-6 on
-#: the dragon); a file's own normals that differ by more are the author's and stay
+#: largest difference per component between Mitsuba's computed normals and the host's (measured:
+#: 1.7e-6 on the dragon); a file's own normals that differ by more are the author's and stay
 TOLERANCE = 1e-4
 
 

@@ -26,7 +26,8 @@ def init(variant: str | None = None) -> str:
         from .kernel.standalone import from_properties
         from .kernel.styled_bsdf import StyledBSDF
 
-        # from a scene file or dict: its `mi.render` pins the scene-relative auto values (kernel/standalone.py)
+        # from a scene file or dict: its `mi.render` pins the scene-relative auto values
+        # (kernel/standalone.py)
         mi.register_integrator("stylized", lambda props: from_properties(props))
         mi.register_bsdf("styled", lambda props: StyledBSDF(props))
         _registered.add(active)

@@ -2,33 +2,14 @@
 
     scene, notes = load("cbox.xml", width=64, height=48, defines={"spp": "4"})
 
-- `defines` are the values of the file's `<default>` parameters (`$name`), as `mitsuba -D name=value`;
-  Mitsuba refuses a name the file does not use.
-- `width`/`height` resize the film of the first top-level `<sensor>`: the XML is parsed (xml.etree), its
-  `<include>`s are expanded as Mitsuba expands them (`expand_includes`), the film's `width`/`height` are
-  set (a film is added where the sensor has none: Mitsuba's default hdrfilm), and the edited text is
-  loaded with the file's folder first on Mitsuba's file resolver, so relative paths resolve as before. A
-  film with a crop window, or a sensor only reachable through a `<ref>`, is refused in one line rather
-  than resized wrongly.
-- Includes, as Mitsuba 3.9.1's parser treats them: the file name (after `$parameter` substitution) is
-  looked up in the including file's folder first, then on the file resolver (the scene's folder); an
-  included `<scene>`'s children take the include's place, any other root element takes it whole (named
-  by the include's `name`); nesting is limited to 15 levels. Paths Mitsuba resolves while it parses an
-  included file (`<path value>`, `<spectrum filename>`) are resolved as it does and made absolute; paths
-  of plugins it instantiates after parsing (meshes, textures) resolve against the scene's folder in
-  Mitsuba too (not the included file's), so they are left as they are. An included file with a version Mitsuba would upgrade
-  differently from the scene's (before 2.0 against after) is refused for resizing rather than misread.
-- A top-level `<integrator>` whose type Mitsuba does not know (a scene written for another implementation
-  of stylized rendering, say `type="sre"`) is replaced by a `path` integrator that keeps its `max_depth`,
-  `rr_depth` and `hide_emitters`; the front ends then render it with `stylized`, which carries those over
-  (`api.carried_settings`). One note names what was dropped. The type is judged as Mitsuba reads it, its
-  `$parameters` substituted (`type="$integrator"` with `<default name="integrator" value="direct"/>`, the
-  convention of Mitsuba's own test scenes, is `direct`, and `-D integrator=path` makes it `path`); a type
-  with a parameter no `<default>` before it defines is left to Mitsuba's parser to report.
-- A define that the file used only in what was edited away (a replaced integrator's type, a resized film's
-  width) is not handed to Mitsuba, which would refuse it as unused; one the file never used still is.
-
-A file that needs none of this is handed to `mi.load_file` unchanged.
+- `defines`: the file's `<default>` parameters, as `mitsuba -D name=value`.
+- `width`/`height` resize the film of the first top-level sensor, its `<include>`s expanded as
+  Mitsuba expands them (`expand_includes`); a crop window or a sensor behind a `<ref>` is refused in
+  one line.
+- An unknown top-level integrator type is replaced by `path` keeping `max_depth`, `rr_depth` and
+  `hide_emitters`, with one note.
+A file that needs none of this goes to `mi.load_file` unchanged. Details:
+docs/design/scene_files.md.
 """
 from __future__ import annotations
 
@@ -188,8 +169,10 @@ class _Includes:
     def included(self, node: ET.Element, folder: str, resolver: list[str], depth: int) -> list[ET.Element] | None:
         name = self.subst(node.get("filename", ""))
         if depth + 1 >= MAX_INCLUDE_DEPTH:
-            self.problem = (f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
-                            f"levels at '{name}'")
+            self.problem = (
+                f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
+                f"levels at '{name}'"
+            )
             return None
         lookup = [folder, *resolver]
         path = self.find(name, lookup)
@@ -206,8 +189,10 @@ class _Includes:
             self.problem = f"{self.origin}: included file '{path}' has no version attribute, which Mitsuba requires"
             return None
         if version is None or (version < (2,)) != self.legacy:
-            self.problem = (f"{self.origin}: included file '{path}' has version '{root.get('version')}', which "
-                            f"Mitsuba reads differently from the scene's")
+            self.problem = (
+                f"{self.origin}: included file '{path}' has version '{root.get('version')}', which "
+                f"Mitsuba reads differently from the scene's"
+            )
             return None
         self.expand(root, os.path.dirname(path), lookup, depth + 1)
         if self.problem:
@@ -247,8 +232,10 @@ def _set_int(parent: ET.Element, name: str, value: int) -> None:
 def resize(root: ET.Element, width: int | None, height: int | None, origin: str) -> None:
     sensor = root.find("sensor")
     if sensor is None:
-        raise SceneError(f"cannot resize {origin}: it has no top-level <sensor> whose film could be resized "
-                         f"(one only reachable through a <ref> is not); edit the film's width/height in the file")
+        raise SceneError(
+            f"cannot resize {origin}: it has no top-level <sensor> whose film could be resized "
+            f"(one only reachable through a <ref> is not); edit the film's width/height in the file"
+        )
     film = sensor.find("film")
     if film is None:  # Mitsuba's default film
         film = ET.SubElement(sensor, "film", {"type": "hdrfilm"})
@@ -287,8 +274,19 @@ def parse_xml(path: str) -> ET.ElementTree:
 
 def load(path: str, width: int | None = None, height: int | None = None,
          defines: Mapping[str, Any] | None = None) -> tuple[Any, list[str]]:
-    """The loaded file (whatever Mitsuba made of it) and the notes to show the user. Mitsuba's own
-    errors propagate; the caller turns them into one line."""
+    """Load a Mitsuba XML scene file with the command line's changes applied.
+
+    Args:
+        path: the XML file.
+        width, height: a new film size for the first top-level sensor, or None to keep it.
+        defines: values of the file's `<default>` parameters, as `mitsuba -D`.
+
+    Returns:
+        (scene, notes): whatever Mitsuba made of the file, and the notes to show the user.
+
+    Raises:
+        SceneError: a resize that cannot be done correctly. Mitsuba's own errors propagate.
+    """
     origin = f"scene file '{path}'"
     defines = {str(k): str(v) for k, v in (defines or {}).items()}
     try:
@@ -300,7 +298,8 @@ def load(path: str, width: int | None = None, height: int | None = None,
     if tree is not None and tree.getroot().tag == "scene":
         root = tree.getroot()
         if has_include(root):
-            # expanded on a copy: a file whose includes cannot be expanded faithfully still loads through
+            # expanded on a copy: a file whose includes cannot be expanded faithfully still loads
+            # through
             # Mitsuba as it is, unless it has to be edited (resized)
             expanded = ET.fromstring(ET.tostring(root))
             problem = expand_includes(expanded, path, defines)

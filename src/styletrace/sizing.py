@@ -1,22 +1,12 @@
 """Camera samples per pass for the backend and the device the render runs on.
 
-    lanes, note = lanes_per_pass("llvm_ad_rgb")     # 2^20: host memory stays flat, as in api.passes
-    lanes, note = lanes_per_pass("cuda_ad_rgb")     # from the GPU's memory; note says if free memory cut it
+    lanes, note = lanes_per_pass("llvm_ad_rgb")   # 2^20 (pass_loop.LANES_PER_PASS)
+    lanes, note = lanes_per_pass("cuda_ad_rgb")   # from the GPU's memory; note: cut by free memory
 
-On the CPU (LLVM) a pass keeps `pass_loop.LANES_PER_PASS` (2^20) samples: more lanes do not run faster on a few
-cores, and memory stays flat. On a GPU, launches are costly and lanes cheap: measured on an H100 (Cornell
-box 512^2, 256 spp, cel n = 8), 64 passes of 2^20 took 2.31 s and one launch 0.87 s. A CUDA pass gets
-`CUDA_MEMORY_SHARE` of the device's *total* memory at `CUDA_LANE_BYTES` per lane, rounded down to a power
-of two. The total, not the free memory, because the split into passes decides which samples are drawn:
-a split that followed the free memory of the moment would give a different image for the same seed
-whenever another process held memory. The free memory only lowers it (halving, with a `note` for the
-user) when the default split would not fit now. So the split depends on the backend and the device
-model, never on timing; `--pass-spp` fixes it by hand (say, to match images across machines).
-
-`CUDA_LANE_BYTES` is an estimate, not a measurement (no GPU was at hand): a lane of the megakernel keeps
-its loop state in registers; what lives in device memory per lane is the camera ray and sample
-(~100 B), the sampler's PCG32 state (16 B), the radiance, weight and alpha written to the film (~32 B),
-and Dr.Jit's temporaries around the loop; 1 KiB leaves a 2-4x margin over that.
+CUDA: `CUDA_MEMORY_SHARE` of the device's total memory at `CUDA_LANE_BYTES` per lane, a power of
+two, halved (with a note) while it does not fit into the free memory. The split depends on the
+backend and the device model, never on timing; `--pass-spp` fixes it. Rationale:
+docs/design/pass_sizes.md.
 """
 from __future__ import annotations
 
@@ -26,7 +16,8 @@ from typing import Callable, Optional
 from .pipeline import passes as pass_loop
 
 CUDA_LANE_BYTES = 1024
-#: The share of the GPU's total memory a pass may use (the scene, the film and Dr.Jit's caches need the rest).
+#: The share of the GPU's total memory a pass may use (the scene, the film and Dr.Jit's caches need
+#: the rest).
 CUDA_MEMORY_SHARE = 0.5
 #: Dr.Jit indexes lanes with 32-bit integers; stay well below.
 CUDA_LANES_MAX = 1 << 30
@@ -66,7 +57,15 @@ def _pow2_floor(x: int) -> int:
 
 
 def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int, str | None]:
-    """Camera samples per pass for `variant`, and a note when the device's free memory lowered it."""
+    """Camera samples per pass for a backend.
+
+    Args:
+        variant: the Mitsuba variant, e.g. "llvm_ad_rgb" or "cuda_ad_rgb".
+        query: returns the CUDA device's (free, total) bytes, or None where it cannot tell.
+
+    Returns:
+        (lanes, note): the pass size, and a note for the user when free memory lowered it, else None.
+    """
     if not variant.startswith("cuda"):
         return pass_loop.LANES_PER_PASS, None
     memory = query()
@@ -79,8 +78,10 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
         lanes //= 2
     note = None
     if lanes != default:
-        note = (f"only {free / 2**30:.1f} GiB of GPU memory free: passes of {lanes} samples instead of "
-                f"{default}, so the image differs from this device's default split (--pass-spp fixes it)")
+        note = (
+            f"only {free / 2**30:.1f} GiB of GPU memory free: passes of {lanes} samples instead of "
+            f"{default}, so the image differs from this device's default split (--pass-spp fixes it)"
+        )
     return lanes, note
 
 

@@ -52,10 +52,13 @@ def warning(image, settings) -> str | None:
     if fraction < WILD_FRACTION:
         return None
     span = f"[{lo:g}, inf)" if hi is None else f"[{lo:g}, {hi:g}]"
-    # the series estimator without its expansion pass: the pass is the first thing to try (docs/estimators.md)
+    # the series estimator without its expansion pass: the pass is the first thing to try
+    # (docs/estimators.md)
     advice = ("use --expansion-pass 64 or --estimator direct" if slot.estimator == "series"
               and not getattr(settings, "expansion_pass", 0) else "use --estimator direct")
-    return (f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: {100 * fraction:.2g}% of "
-            f"pixel values lie outside {slot.style.name}'s range {span} (observed {vmin:.3g} to {vmax:.3g}, median "
-            f"|value| {med:.3g}); its variance is unbounded on radiance with fireflies (small bright lights, glossy "
-            f"highlights): {advice}, or see docs/estimators.md (Gamma and the series estimators)")
+    return (
+        f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: {100 * fraction:.2g}% of "
+        f"pixel values lie outside {slot.style.name}'s range {span} (observed {vmin:.3g} to {vmax:.3g}, median "
+        f"|value| {med:.3g}); its variance is unbounded on radiance with fireflies (small bright lights, glossy "
+        f"highlights): {advice}, or see docs/estimators.md (Gamma and the series estimators)"
+    )

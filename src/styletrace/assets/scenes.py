@@ -63,15 +63,37 @@ def dragon(width: int = 256, height: int = 256) -> dict[str, Any]:
     light = {"type": "area", "radiance": {"type": "rgb", "value": [7.0, 6.6, 6.0]}}
     return {
         "type": "scene",
-        "sensor": _sensor(origin=[2.6, 1.25, 1.1], target=[0.0, 0.45, 0.0], fov=32.0, width=width, height=height),
-        "dragon": {"type": "ply", "filename": dragon_mesh_path(), "to_world": dragon_to_world(),
-                   "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.62, 0.45]}}},
-        "ground": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90.0) @ T().scale(6.0),
-                   "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.55, 0.55, 0.58]}}},
-        "key_light": {"type": "rectangle", "to_world": T().translate([0.6, 2.4, 0.6]) @ T().rotate([1, 0, 0], 90.0)
-                      @ T().scale(0.6), "emitter": light},
-        "fill_light": {"type": "rectangle", "to_world": T().translate([-0.8, 2.6, -0.6]) @ T().rotate([1, 0, 0], 90.0)
-                       @ T().scale(0.5), "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [3.0, 3.2, 3.6]}}},
+        "sensor": _sensor(
+            origin=[2.6, 1.25, 1.1], target=[0.0, 0.45, 0.0], fov=32.0, width=width, height=height
+        ),
+        "dragon": {
+            "type": "ply",
+            "filename": dragon_mesh_path(),
+            "to_world": dragon_to_world(),
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.8, 0.62, 0.45]}},
+        },
+        "ground": {
+            "type": "rectangle",
+            "to_world": T().rotate([1, 0, 0], -90.0) @ T().scale(6.0),
+            "bsdf": {
+                "type": "diffuse",
+                "reflectance": {"type": "rgb", "value": [0.55, 0.55, 0.58]},
+            },
+        },
+        "key_light": {
+            "type": "rectangle",
+            "to_world": T().translate([0.6, 2.4, 0.6])
+            @ T().rotate([1, 0, 0], 90.0)
+            @ T().scale(0.6),
+            "emitter": light,
+        },
+        "fill_light": {
+            "type": "rectangle",
+            "to_world": T().translate([-0.8, 2.6, -0.6])
+            @ T().rotate([1, 0, 0], 90.0)
+            @ T().scale(0.5),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [3.0, 3.2, 3.6]}},
+        },
         "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.12, 0.14, 0.18]}},
     }
 
@@ -81,10 +103,21 @@ def mixed(width: int = 256, height: int = 256) -> dict[str, Any]:
     physically based glass sphere in front of the dragon (render with stylize=first_object_hit to see
     the dragon stylized through the glass too)."""
     scene = dragon(width, height)
-    scene["dragon"]["bsdf"] = {"type": "styled", "style": "cel", "thresholds": "0.3,0.6", "levels": "0.15,0.45,0.9",
-                               "inner_samples": 16, "bsdf": scene["dragon"]["bsdf"]}
-    scene["ground"]["bsdf"] = {"type": "styled", "style": "hatching", "spacing": 0.03, "inner_samples": 8,
-                               "bsdf": scene["ground"]["bsdf"]}
+    scene["dragon"]["bsdf"] = {
+        "type": "styled",
+        "style": "cel",
+        "thresholds": "0.3,0.6",
+        "levels": "0.15,0.45,0.9",
+        "inner_samples": 16,
+        "bsdf": scene["dragon"]["bsdf"],
+    }
+    scene["ground"]["bsdf"] = {
+        "type": "styled",
+        "style": "hatching",
+        "spacing": 0.03,
+        "inner_samples": 8,
+        "bsdf": scene["ground"]["bsdf"],
+    }
     scene["glass"] = {"type": "sphere", "center": [0.8, 0.22, -0.1], "radius": 0.2,
                       "bsdf": {"type": "dielectric", "int_ior": 1.5}}
     return scene
@@ -95,9 +128,12 @@ def lines(width: int = 256, height: int = 256) -> dict[str, Any]:
     lines (`--lines --set line_depth=3`) show in the reflection and through the glass (docs/lines.md)."""
     T = mi.ScalarTransform4f
     scene = dragon(width, height)
-    scene["mirror"] = {"type": "rectangle", "to_world": T().look_at(origin=[-0.75, 0.62, -0.75], target=[1.4, 0.55, 1.2],
-                                                                     up=[0, 1, 0]) @ T().scale([0.75, 0.6, 1.0]),
-                       "bsdf": {"type": "conductor", "material": "Ag"}}
+    scene["mirror"] = {
+        "type": "rectangle",
+        "to_world": T().look_at(origin=[-0.75, 0.62, -0.75], target=[1.4, 0.55, 1.2], up=[0, 1, 0])
+        @ T().scale([0.75, 0.6, 1.0]),
+        "bsdf": {"type": "conductor", "material": "Ag"},
+    }
     scene["glass"] = {"type": "sphere", "center": [0.75, 0.22, 0.15], "radius": 0.2,
                       "bsdf": {"type": "dielectric", "int_ior": 1.5}}
     return scene
@@ -106,9 +142,14 @@ def lines(width: int = 256, height: int = 256) -> dict[str, Any]:
 def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO, radiance: float = FURNACE_RADIANCE) -> dict[str, Any]:
     return {
         "type": "scene",
-        "sensor": _sensor(origin=[0, 0, 4.0], target=[0, 0, 0], fov=35.0, width=width, height=height),
-        "sphere": {"type": "sphere", "radius": 1.0,
-                   "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(albedo)}}},
+        "sensor": _sensor(
+            origin=[0, 0, 4.0], target=[0, 0, 0], fov=35.0, width=width, height=height
+        ),
+        "sphere": {
+            "type": "sphere",
+            "radius": 1.0,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(albedo)}},
+        },
         "env": {"type": "constant", "radiance": {"type": "rgb", "value": [radiance] * 3}},
     }
 

@@ -62,11 +62,22 @@ class Property(Declaration):
     metavar: str = ""
     bare: bool = False        # the flag is a switch without a value (`--lines`)
 
-    OTHER_KIND: ClassVar[str] = "choice"   # the docs' wordings ('int or list') parse as a string here
+    OTHER_KIND: ClassVar[str] = "choice"
 
-    def __init__(self, name: str, default: Any, kind: str, doc: str, flag: str = "", metavar: str = "",
-                 bare: bool = False, low: float | None = None, high: float | None = None, low_open: bool = False,
-                 choices: tuple[str, ...] = ()):
+    def __init__(
+        self,
+        name: str,
+        default: Any,
+        kind: str,
+        doc: str,
+        flag: str = "",
+        metavar: str = "",
+        bare: bool = False,
+        low: float | None = None,
+        high: float | None = None,
+        low_open: bool = False,
+        choices: tuple[str, ...] = (),
+    ):
         Declaration.__init__(self, name, kind, default, doc, low, high, low_open, tuple(choices))
         object.__setattr__(self, "flag", flag)
         object.__setattr__(self, "metavar", metavar)

@@ -20,24 +20,33 @@ from ..gate import dr
 from ..styles.base import Style
 from ..styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 
-#: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with fireflies
-#: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased for the
-#: series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| < b/2).
+#: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with
+#: fireflies
+#: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased
+#: for the series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| <
+#: b/2).
 SERIES_MAX_TERMS = 24
 
-#: The series with the expansion pass (settings.expansion_pass): b* from the pass changes how the terms decay
-#: (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation keeps 8 terms always
-#: and continues with probability 0.9 up to 64 terms, evaluated scaled (SeriesEstimator(scaled=True)), whose
-#: factors stay within float32 (measured: benchmarks/gamma_series.py; docs/estimators.md).
+#: The series with the expansion pass (settings.expansion_pass): b* from the pass changes how the
+#: terms decay
+#: (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation keeps 8
+#: terms always
+#: and continues with probability 0.9 up to 64 terms, evaluated scaled
+#: (SeriesEstimator(scaled=True)), whose factors stay within float32 (measured:
+#: benchmarks/gamma_series.py; docs/estimators.md).
 PASS_TRUNCATION = (0.9, 8)
 PASS_MAX_TERMS = 64
-#: b = PASS_B_SCALE x b*: children up to 2 x PASS_B_SCALE x b* stay inside |x - b| < b, where the series
-#: converges; the pass's b* is low wherever its m children missed a rare bright one, and a child far beyond 2b
-#: enters every term's products. Measured (32x32, equal time, benchmarks/gamma_series.py's scenes): scale 1
-#: gave glossy-sphere images with MSE 1e6 (values to -5e5), 2 gave 0.008-0.016, 4 gave 0.03 and 128.
+#: b = PASS_B_SCALE x b*: children up to 2 x PASS_B_SCALE x b* stay inside |x - b| < b, where the
+#: series
+#: converges; the pass's b* is low wherever its m children missed a rare bright one, and a child far
+#: beyond 2b
+#: enters every term's products. Measured (32x32, equal time, benchmarks/gamma_series.py's scenes):
+#: scale 1 gave glossy-sphere images with MSE 1e6 (values to -5e5), 2 gave 0.008-0.016, 4 gave 0.03
+#: and 128.
 PASS_B_SCALE = 2.0
 
-#: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth g)
+#: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth
+#: g)
 ANY_FORM = (AffineForm, SeriesForm, PolynomialForm, CompositeForm)
 FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial",
               CompositeForm: "composite"}
@@ -109,8 +118,10 @@ def check(name: str, style: Style) -> str:
         what = FORM_NAMES.get(type(form), "no unbiased") + " form"
         if isinstance(form, CompositeForm) and form.affine is not None:
             what = "an affine composite form"
-        raise SettingsError(f"estimator '{name}' does not apply to style '{style.name}' (it has {what}): "
-                            f"use one of {', '.join(applicable(style))}")
+        raise SettingsError(
+            f"estimator '{name}' does not apply to style '{style.name}' (it has {what}): "
+            f"use one of {', '.join(applicable(style))}"
+        )
     return name
 
 
@@ -138,20 +149,31 @@ def check_adaptive(name: str, style: Style, raw) -> None:
     """Adaptive inner counts (`n0:n_max`) only with direct application of a function of expectation: the
     unbiased estimators' guarantee does not survive a data-dependent number of children (docs/adaptive.md)."""
     if name != "direct":
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
-                            f"n0:n_max stop on the data, which makes the unbiased estimators biased; use estimator "
-                            f"direct or a fixed count")
+        raise SettingsError(
+            f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
+            f"n0:n_max stop on the data, which makes the unbiased estimators biased; use estimator "
+            f"direct or a fixed count"
+        )
     if style.per_sample:
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples' with style '{style.name}': it averages "
-                            f"g over its children (not g of their mean), which adaptive stopping would bias; use a "
-                            f"fixed count")
+        raise SettingsError(
+            f"bad value {raw!r} for 'inner_samples' with style '{style.name}': it averages "
+            f"g over its children (not g of their mean), which adaptive stopping would bias; use a "
+            f"fixed count"
+        )
 
 
 def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
     """Direct application with adaptive stopping (`estimators.AdaptiveDirect`), told by the style where its
     steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`)."""
-    return E.AdaptiveDirect(lambda I: style.apply(I, vertex), n0, n_max, thresholds=style.step_thresholds(vertex),
-                            curvature=lambda I, h: style.curvature(I, vertex, h), z=z, bias=bias)
+    return E.AdaptiveDirect(
+        lambda I: style.apply(I, vertex),
+        n0,
+        n_max,
+        thresholds=style.step_thresholds(vertex),
+        curvature=lambda I, h: style.curvature(I, vertex, h),
+        z=z,
+        bias=bias,
+    )
 
 
 def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitted=None) -> Transformed:
@@ -263,20 +285,43 @@ def series_with_pass(style, sets, known=0.0) -> Transformed:
         bs = dr.select(m1 > 0.0, m2 / dr.select(m1 > 0.0, m1, 1.0), 0.0)
         b = bs if b is None else dr.maximum(b, bs)
     b = b * PASS_B_SCALE
-    # scaled terms for series whose b is kept > 0 (powers, reciprocals); exp's coefficients never overflow
+    # scaled terms for series whose b is kept > 0 (powers, reciprocals); exp's coefficients never
+    # overflow
     scaled = isinstance(form.series, (E.PowerFunctionSeries, E.ReciprocalSeries))
-    est = E.SeriesEstimator(form.series, b=E.PerLane(b, lo=form.pilot_lo), selection="iterative",
-                            truncation=E.Geometric(*PASS_TRUNCATION), max_terms=PASS_MAX_TERMS, scaled=scaled)
+    est = E.SeriesEstimator(
+        form.series,
+        b=E.PerLane(b, lo=form.pilot_lo),
+        selection="iterative",
+        truncation=E.Geometric(*PASS_TRUNCATION),
+        max_terms=PASS_MAX_TERMS,
+        scaled=scaled,
+    )
     return Transformed(est, _series_sample(form), form.scale, form.offset)
 
 
 _PILOT = "pilot samples for the expansion point b"
-estimator("series", (SeriesForm,), "power series, iterative prefix sum, Poisson-CMF truncation, U-statistic "
-          "terms (S12)", _PILOT, max_terms=str(SERIES_MAX_TERMS))(_series("iterative"))
-estimator("series_recursive", (SeriesForm,), "power series, recursive prefix sum (Russian roulette), "
-          "cumulative truncation, naive terms (S13)", _PILOT, max_terms=str(SERIES_MAX_TERMS))(_series("recursive"))
-estimator("series_single", (SeriesForm,), "power series, single term, Poisson truncation (S11)", _PILOT,
-          max_terms=str(SERIES_MAX_TERMS))(_series("single"))
+estimator(
+    "series",
+    (SeriesForm,),
+    "power series, iterative prefix sum, Poisson-CMF truncation, U-statistic terms (S12)",
+    _PILOT,
+    max_terms=str(SERIES_MAX_TERMS),
+)(_series("iterative"))
+estimator(
+    "series_recursive",
+    (SeriesForm,),
+    "power series, recursive prefix sum (Russian roulette), "
+    "cumulative truncation, naive terms (S13)",
+    _PILOT,
+    max_terms=str(SERIES_MAX_TERMS),
+)(_series("recursive"))
+estimator(
+    "series_single",
+    (SeriesForm,),
+    "power series, single term, Poisson truncation (S11)",
+    _PILOT,
+    max_terms=str(SERIES_MAX_TERMS),
+)(_series("single"))
 
 
 @estimator("ustat", (PolynomialForm,), "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
@@ -329,6 +374,23 @@ def _combined(style, n, vertex):
     return Transformed(est)
 
 
-__all__ = ["EstimatorKind", "estimator", "names", "get", "kinds", "applicable", "check", "check_adaptive",
-           "adaptive_direct", "make_estimator", "firefly_cap", "child_mean",
-           "Transformed", "SERIES_MAX_TERMS", "series_with_pass", "PASS_TRUNCATION", "PASS_MAX_TERMS", "PASS_B_SCALE"]
+__all__ = [
+    "EstimatorKind",
+    "estimator",
+    "names",
+    "get",
+    "kinds",
+    "applicable",
+    "check",
+    "check_adaptive",
+    "adaptive_direct",
+    "make_estimator",
+    "firefly_cap",
+    "child_mean",
+    "Transformed",
+    "SERIES_MAX_TERMS",
+    "series_with_pass",
+    "PASS_TRUNCATION",
+    "PASS_MAX_TERMS",
+    "PASS_B_SCALE",
+]

@@ -1,27 +1,15 @@
 """The line dictionary of `line_mode lifted`: `line_types`, parsed into `LineType`s.
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee and
-Yonghao Yue (ACM TOG 45(4), 2026), Section 4.3 (line types, Eqs. 31-34).
+Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
+Mukherjee, Yonghao Yue (2026), Section 4.3 (Eqs. 23, 31-34). A type measures f at the vertex an
+auxiliary path reaches and fires where |f(v) - f(u)| / |v - u| >= threshold for a pair drawn from a
+stencil; types are in priority order, the first that fires colours the camera sample.
 
-A line type is a measurement f of the vertex an auxiliary path reaches, a slope threshold t (units of f per
-pixel: the pair (u, v) fires where |f(v) - f(u)| / |v - u| >= t, Eq. 23), a stencil (disk or square) of a
-radius in pixels that the pair's two points are drawn from, a count n of pairs per camera sample (the type
-fires if any does), and a colour. Types are listed in priority order: the first that fires gives the camera
-sample its colour, and L is traced only where none fires (Eq. 34).
+    line_types = "shape_id color=0.8,0,0; depth threshold=0.05 radius=1.5 count=16; normal"
 
-Spelling (XML, the command line's `-D line_types=...`, Python): entries separated by `;`, each a measurement
-followed by `key=value` fields separated by spaces, e.g.
-
-    line_types = "shape_id color=0.8,0,0; depth threshold=0.05 radius=1.5 count=16; normal threshold=0.5"
-
-measurement   what f is                                     default threshold
-  shape_id      which shape the path reaches (ids differ)      (any difference fires)
-  material_id   which BSDF it reaches                          (any difference fires)
-  depth         distance travelled from the lens (world units) 0.1 per pixel
-  normal        the shading normal (a unit vector)             0.3 per pixel
-fields: threshold (> 0), stencil (disk | square), radius (pixels, > 0; default: half the `line_width`),
-count (1 .. 256; default `line_samples`), color (r,g,b; default `line_color`). A pair also fires where only
-one of its two paths finds a surface (a silhouette against the background). Empty: one `shape_id` type.
+Measurements: shape_id, material_id (any difference fires), depth (0.1 per pixel), normal (0.3).
+Fields: threshold (> 0), stencil (disk | square), radius (pixels), count (1 .. 256), color. Empty:
+one shape_id type. Spelled out in docs/lines.md, "Conditional lifting".
 """
 from __future__ import annotations
 
@@ -33,7 +21,8 @@ from .declare import integer, number, rgb
 
 MEASUREMENTS = ("shape_id", "material_id", "depth", "normal")
 STENCILS = ("disk", "square")
-#: slope thresholds per pixel where the entry names none (ids fire on any difference: the value is unused)
+#: slope thresholds per pixel where the entry names none (ids fire on any difference: the value is
+#: unused)
 DEFAULT_THRESHOLD = {"shape_id": 0.5, "material_id": 0.5, "depth": 0.1, "normal": 0.3}
 FIELDS = ("threshold", "stencil", "radius", "count", "color")
 
@@ -63,30 +52,46 @@ def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tupl
         words = entry.split()
         kind = words[0]
         if kind not in MEASUREMENTS:
-            raise SettingsError(f"bad measurement {kind!r} in 'line_types' entry {entry!r}: expected one of "
-                                f"{', '.join(MEASUREMENTS)}")
+            raise SettingsError(
+                f"bad measurement {kind!r} in 'line_types' entry {entry!r}: expected one of "
+                f"{', '.join(MEASUREMENTS)}"
+            )
         fields: dict[str, Any] = {}
         for w in words[1:]:
             key, eq, val = w.partition("=")
             if not eq or key not in FIELDS:
-                raise SettingsError(f"bad field {w!r} in 'line_types' entry {entry!r}: expected key=value with "
-                                    f"key one of {', '.join(FIELDS)}")
+                raise SettingsError(
+                    f"bad field {w!r} in 'line_types' entry {entry!r}: expected key=value with "
+                    f"key one of {', '.join(FIELDS)}"
+                )
             if key in fields:
                 raise SettingsError(f"field {key!r} given twice in 'line_types' entry {entry!r}")
             fields[key] = val
         stencil = fields.get("stencil", "disk")
         if stencil not in STENCILS:
-            raise SettingsError(f"bad stencil {stencil!r} in 'line_types' entry {entry!r}: expected "
-                                f"{' or '.join(STENCILS)}")
+            raise SettingsError(
+                f"bad stencil {stencil!r} in 'line_types' entry {entry!r}: expected "
+                f"{' or '.join(STENCILS)}"
+            )
         where = f"line_types {kind}"
-        out.append(LineType(
-            measurement=kind,
-            threshold=number(f"{where} threshold", fields.get("threshold", DEFAULT_THRESHOLD[kind]), 0.0, low_open=True),
-            stencil=stencil,
-            radius=number(f"{where} radius", fields.get("radius", width / 2.0), 0.0, 64.0, low_open=True),
-            count=integer(f"{where} count", fields.get("count", samples), 1, 256),
-            color=rgb(f"{where} color", fields["color"]) if "color" in fields else tuple(color),
-            priority=priority))
+        out.append(
+            LineType(
+                measurement=kind,
+                threshold=number(
+                    f"{where} threshold",
+                    fields.get("threshold", DEFAULT_THRESHOLD[kind]),
+                    0.0,
+                    low_open=True,
+                ),
+                stencil=stencil,
+                radius=number(
+                    f"{where} radius", fields.get("radius", width / 2.0), 0.0, 64.0, low_open=True
+                ),
+                count=integer(f"{where} count", fields.get("count", samples), 1, 256),
+                color=rgb(f"{where} color", fields["color"]) if "color" in fields else tuple(color),
+                priority=priority,
+            )
+        )
     return tuple(out)
 
 

@@ -3,7 +3,7 @@
 Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
 `--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
 bad values raise `SettingsError` (or `StyleError` for the style's own parameters) with one line.
-The integrator's property table in the README and the docs is generated from `PROPERTIES`, whose entries
+The integrator's property table in docs/python.md is generated from `PROPERTIES`, whose entries
 (`declare.Property`) declare each property once: type, default, bounds, choices, doc line and flag.
 
     settings = parse({"style": "cel", "inner_samples": "8,4", "stylize": "first_n_hits", "stylize_depth": 2})
@@ -48,8 +48,8 @@ REUSE_DEEP = {
     "tree": "each child's second-level value from the tree sampler (its own children)",
     "world": "second-level vertices pool their world-space neighbours' children too (within reuse_h)",
 }
-#: Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world grid
-#: packs 21 bits per axis of a cell index into one key (world_grid.py).
+#: Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world
+#: grid packs 21 bits per axis of a cell index into one key (world_grid.py).
 MIN_REUSE_H = 1e-4
 #: Most children per pixel of the expansion pass (its children are traced in one loop per pixel).
 MAX_EXPANSION_PASS = 4096
@@ -57,96 +57,337 @@ MAX_EXPANSION_PASS = 4096
 EXPANSION_ESTIMATORS = ("series",)
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
-#: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the vertex
-#: itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums K+1 terms).
+#: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the
+#: vertex
+#: itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums
+#: K+1 terms).
 MAX_REUSE_K = 63
 
 PROPERTIES = (
-    Property("style", "identity", "string", "registry name of the style (`styletrace styles`)", "--style", "NAME"),
-    Property("inner_samples", None, "int or list", "n: child estimates per stylized vertex; `8,4` sets one per "
-             "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
-             "docs/adaptive.md; with reuse=pixels, a refinement round of the pooled mean, docs/reuse.md)",
-             "--inner", "N"),
-    Property("adaptive_z", 2.0, "float", "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
-             "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
-             "confidence, Student's t standard errors", "", "", low=0.0, high=1e6, low_open=True),
-    Property("adaptive_bias", 2e-3, "float", "adaptive `n0:n_max`: keep drawing while a smooth style's predicted "
-             "direct-application bias, the magnitude of g'' Var / (2n) (Eq. 21), exceeds this", "", "", low=0.0, high=1e6, low_open=True),
-    Property("aovs", False, "bool", "also output per-pixel error channels: the variance of the pixel's estimate, "
-             "the predicted bias (Eq. 21) and the children used at the first stylized vertex (direct only; "
-             "`--aovs`)", "", ""),
-    Property("estimator", "direct", "string", "how g(E[L]) is estimated from the children: "
-             + ", ".join(estimator_registry.names()), "--estimator", "NAME"),
-    Property("expansion_pass", 0, "int", "estimator series: m > 0 runs a pre-pass of m children per pixel at the "
-             "first stylized vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of "
-             f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
-             f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
-             "--expansion-pass", "M", low=0, high=MAX_EXPANSION_PASS),
-    Property("firefly", None, "float", "firefly control of direct application: the brightest of a stylized "
-             "vertex's n children is capped at k times the larger of the others' mean brightness and "
-             "firefly_floor (a lone child: 10 / 0.18 times firefly_floor); 0: off, the paper's estimator; "
-             "auto: 4 where the render is denoised, else 0 (docs/look.md)", "--firefly", "K", low=0.0),
-    Property("firefly_floor", None, "float", "firefly control: the brightness below which a child is never an "
-             "outlier; auto: the scene's median first-hit brightness (the pilot)", low=0.0),
-    Property("stylize", "first_hit", "string", "where styles apply: " + ", ".join(STYLIZE_MODES), "--stylize",
-             "MODE", choices=tuple(STYLIZE_MODES)),
-    Property("stylize_depth", 1, "int", "N, the number of stylized levels (at most 16; the trace time grows "
-             "linearly with it)", "--stylize-depth", "N"),
-    Property("max_depth", -1, "int", "longest path, as Mitsuba's `path` (-1: unbounded)", "--max-depth", "D"),
-    Property("emitter_sampling", EMITTER_DEFAULT, "string", "how next-event estimation picks a light: uniform (as "
-             "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
-             "where a sky dominates the estimate; BENCHMARKS.md)", "--emitter-sampling", "MODE",
-             choices=tuple(EMITTER_MODES)),
-    Property("rr_depth", 5, "int", "depth at which Russian roulette starts, as Mitsuba's `path`", "--rr-depth", "D",
-             low=1),
-    Property("hide_emitters", False, "bool", "camera rays do not see emitters, as Mitsuba's `path`: they pass "
-             "through area lights and find black (alpha 0) where they escape", "--hide-emitters", "BOOL"),
+    Property(
+        "style",
+        "identity",
+        "string",
+        "registry name of the style (`styletrace styles`)",
+        "--style",
+        "NAME",
+    ),
+    Property(
+        "inner_samples",
+        None,
+        "int or list",
+        "n: child estimates per stylized vertex; `8,4` sets one per "
+        "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
+        "docs/adaptive.md; with reuse=pixels, a refinement round of the pooled mean, docs/reuse.md)",
+        "--inner",
+        "N",
+    ),
+    Property(
+        "adaptive_z",
+        2.0,
+        "float",
+        "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
+        "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
+        "confidence, Student's t standard errors",
+        "",
+        "",
+        low=0.0,
+        high=1e6,
+        low_open=True,
+    ),
+    Property(
+        "adaptive_bias",
+        2e-3,
+        "float",
+        "adaptive `n0:n_max`: keep drawing while a smooth style's predicted "
+        "direct-application bias, the magnitude of g'' Var / (2n) (Eq. 21), exceeds this",
+        "",
+        "",
+        low=0.0,
+        high=1e6,
+        low_open=True,
+    ),
+    Property(
+        "aovs",
+        False,
+        "bool",
+        "also output per-pixel error channels: the variance of the pixel's estimate, "
+        "the predicted bias (Eq. 21) and the children used at the first stylized vertex (direct only; "
+        "`--aovs`)",
+        "",
+        "",
+    ),
+    Property(
+        "estimator",
+        "direct",
+        "string",
+        "how g(E[L]) is estimated from the children: " + ", ".join(estimator_registry.names()),
+        "--estimator",
+        "NAME",
+    ),
+    Property(
+        "expansion_pass",
+        0,
+        "int",
+        "estimator series: m > 0 runs a pre-pass of m children per pixel at the "
+        "first stylized vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of "
+        f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
+        f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
+        "--expansion-pass",
+        "M",
+        low=0,
+        high=MAX_EXPANSION_PASS,
+    ),
+    Property(
+        "firefly",
+        None,
+        "float",
+        "firefly control of direct application: the brightest of a stylized "
+        "vertex's n children is capped at k times the larger of the others' mean brightness and "
+        "firefly_floor (a lone child: 10 / 0.18 times firefly_floor); 0: off, the paper's estimator; "
+        "auto: 4 where the render is denoised, else 0 (docs/look.md)",
+        "--firefly",
+        "K",
+        low=0.0,
+    ),
+    Property(
+        "firefly_floor",
+        None,
+        "float",
+        "firefly control: the brightness below which a child is never an "
+        "outlier; auto: the scene's median first-hit brightness (the pilot)",
+        low=0.0,
+    ),
+    Property(
+        "stylize",
+        "first_hit",
+        "string",
+        "where styles apply: " + ", ".join(STYLIZE_MODES),
+        "--stylize",
+        "MODE",
+        choices=tuple(STYLIZE_MODES),
+    ),
+    Property(
+        "stylize_depth",
+        1,
+        "int",
+        "N, the number of stylized levels (at most 16; the trace time grows linearly with it)",
+        "--stylize-depth",
+        "N",
+    ),
+    Property(
+        "max_depth",
+        -1,
+        "int",
+        "longest path, as Mitsuba's `path` (-1: unbounded)",
+        "--max-depth",
+        "D",
+    ),
+    Property(
+        "emitter_sampling",
+        EMITTER_DEFAULT,
+        "string",
+        "how next-event estimation picks a light: uniform (as "
+        "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
+        "where a sky dominates the estimate; BENCHMARKS.md)",
+        "--emitter-sampling",
+        "MODE",
+        choices=tuple(EMITTER_MODES),
+    ),
+    Property(
+        "rr_depth",
+        5,
+        "int",
+        "depth at which Russian roulette starts, as Mitsuba's `path`",
+        "--rr-depth",
+        "D",
+        low=1,
+    ),
+    Property(
+        "hide_emitters",
+        False,
+        "bool",
+        "camera rays do not see emitters, as Mitsuba's `path`: they pass "
+        "through area lights and find black (alpha 0) where they escape",
+        "--hide-emitters",
+        "BOOL",
+    ),
     # feature lines (kernel/lines.py, docs/lines.md)
-    Property("lines", False, "bool", "physically based feature lines on path edges (docs/lines.md)", "--lines",
-             "BOOL", bare=True),
-    Property("line_width", 2.0, "float", "a line's width in pixels at the camera (kept in mirrors)", low=0.0, high=64.0, low_open=True),
-    Property("line_samples", 8, "int", "N, auxiliary rays per tested edge (coverage 1 - (1 - q)^N)", low=1, high=256),
-    Property("line_depth", 1, "int", "edges tested: 0 .. line_depth - 1 (1: the camera ray only; 2: also what a "
-             "mirror or glass at the first hit shows)", low=1, high=64),
-    Property("line_tests", ",".join(LINE_TESTS_DEFAULT), "list", "which tests draw lines: "
-             + ", ".join(LINE_TESTS)),
-    Property("line_crease", 0.3, "float", "crease test: 1 - abs(n . n') above this draws a line", low=0.0, high=1.0),
-    Property("line_albedo", 0.1, "float", "albedo test: a luminance difference above this draws a line", low=0.0),
-    Property("line_slope", 2.0, "float", "depth test: a point's distance from the other's tangent plane above this "
-             "times the stencil radius draws a line", low=0.0),
+    Property(
+        "lines",
+        False,
+        "bool",
+        "physically based feature lines on path edges (docs/lines.md)",
+        "--lines",
+        "BOOL",
+        bare=True,
+    ),
+    Property(
+        "line_width",
+        2.0,
+        "float",
+        "a line's width in pixels at the camera (kept in mirrors)",
+        low=0.0,
+        high=64.0,
+        low_open=True,
+    ),
+    Property(
+        "line_samples",
+        8,
+        "int",
+        "N, auxiliary rays per tested edge (coverage 1 - (1 - q)^N)",
+        low=1,
+        high=256,
+    ),
+    Property(
+        "line_depth",
+        1,
+        "int",
+        "edges tested: 0 .. line_depth - 1 (1: the camera ray only; 2: also what a "
+        "mirror or glass at the first hit shows)",
+        low=1,
+        high=64,
+    ),
+    Property(
+        "line_tests",
+        ",".join(LINE_TESTS_DEFAULT),
+        "list",
+        "which tests draw lines: " + ", ".join(LINE_TESTS),
+    ),
+    Property(
+        "line_crease",
+        0.3,
+        "float",
+        "crease test: 1 - abs(n . n') above this draws a line",
+        low=0.0,
+        high=1.0,
+    ),
+    Property(
+        "line_albedo",
+        0.1,
+        "float",
+        "albedo test: a luminance difference above this draws a line",
+        low=0.0,
+    ),
+    Property(
+        "line_slope",
+        2.0,
+        "float",
+        "depth test: a point's distance from the other's tangent plane above this "
+        "times the stencil radius draws a line",
+        low=0.0,
+    ),
     Property("line_color", "0,0,0", "rgb", "the lines' colour"),
-    Property("line_gradient", "", "string", "instead of line_color, a gradient over world y: `r,g,b;r,g,b` (over "
-             "the scene's bounding box) or `r,g,b;r,g,b;y0;y1`"),
+    Property(
+        "line_gradient",
+        "",
+        "string",
+        "instead of line_color, a gradient over world y: `r,g,b;r,g,b` (over "
+        "the scene's bounding box) or `r,g,b;r,g,b;y0;y1`",
+    ),
     Property("line_objects", "", "list", "ids of the shapes that draw lines (empty: all)"),
-    Property("line_mode", "absorb", "string", "absorb (West 2021: N rays against the path's own ray; a line ends "
-             "the path), expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs) or lifted "
-             "(LLaT's conditional lifting: auxiliary paths per `line_types` entry; the first type that fires "
-             "colours the camera sample, L is traced only where none does)",
-             choices=tuple(LINE_MODES)),
-    Property("line_k", 12, "int", "expectation mode: k, the opacity control (more: lines darker and wider)", low=1,
-             high=256),
-    Property("line_types", "", "string", "lifted mode: the line dictionary, in priority order: `measurement "
-             "key=value ...; ...` (measurements shape_id, material_id, depth, normal; fields threshold, stencil, "
-             "radius, count, color; docs/lines.md). Empty: one shape_id type"),
-    Property("line_diffuse", False, "bool", "lifted mode: auxiliary paths go on through diffuse vertices by the "
-             "minimal rotation of the base path's direction (off: they stop there, as in the other modes)"),
-    Property("reuse", "off", "string", "sample reuse at the stylized vertex: " + ", ".join(REUSE_MODES)
-             + " (Tong and Hachisuka 2025; docs/reuse.md)", "--reuse", "MODE"),
-    Property("reuse_radius", 2, "int", f"reuse=pixels: half-size r of the pixel window the neighbours come from "
-             f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})", "--reuse-radius", "R"),
-    Property("reuse_k", 8, "int", "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
-             f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K})", "--reuse-k", "K"),
-    Property("reuse_mis", "balance", "string", "reuse=pixels: weights of the pooled BSDF samples: balance (the "
-             "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
-             "the vertex itself, 2K+1; docs/reuse.md)", "--reuse-mis", "NAME"),
-    Property("reuse_deep", "tree", "string", "reuse=pixels with first_n_hits at depth 2: the second level's values: "
-             "tree (estimated per child) or world (pooled over world-space neighbours, Tong and Hachisuka 2025; "
-             "docs/reuse.md)", "", ""),
-    Property("reuse_h", 0.0, "float", f"reuse_deep=world: radius h of a second-level vertex's neighbours and the "
-             f"world grid's cell size, as a fraction of the scene's bounding-box diagonal (at least {MIN_REUSE_H:g}); "
-             f"0: from the vertices' density, a cell holding about reuse_k2 of them", "", ""),
-    Property("reuse_k2", 16, "int", f"reuse_deep=world: candidates a second-level vertex looks at in its cell (at "
-             f"most {MAX_REUSE_K})", "", "", low=1, high=MAX_REUSE_K),
+    Property(
+        "line_mode",
+        "absorb",
+        "string",
+        "absorb (West 2021: N rays against the path's own ray; a line ends "
+        "the path), expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs) or lifted "
+        "(LLaT's conditional lifting: auxiliary paths per `line_types` entry; the first type that fires "
+        "colours the camera sample, L is traced only where none does)",
+        choices=tuple(LINE_MODES),
+    ),
+    Property(
+        "line_k",
+        12,
+        "int",
+        "expectation mode: k, the opacity control (more: lines darker and wider)",
+        low=1,
+        high=256,
+    ),
+    Property(
+        "line_types",
+        "",
+        "string",
+        "lifted mode: the line dictionary, in priority order: `measurement "
+        "key=value ...; ...` (measurements shape_id, material_id, depth, normal; fields threshold, stencil, "
+        "radius, count, color; docs/lines.md). Empty: one shape_id type",
+    ),
+    Property(
+        "line_diffuse",
+        False,
+        "bool",
+        "lifted mode: auxiliary paths go on through diffuse vertices by the "
+        "minimal rotation of the base path's direction (off: they stop there, as in the other modes)",
+    ),
+    Property(
+        "reuse",
+        "off",
+        "string",
+        "sample reuse at the stylized vertex: "
+        + ", ".join(REUSE_MODES)
+        + " (Tong and Hachisuka 2025; docs/reuse.md)",
+        "--reuse",
+        "MODE",
+    ),
+    Property(
+        "reuse_radius",
+        2,
+        "int",
+        f"reuse=pixels: half-size r of the pixel window the neighbours come from "
+        f"((2r+1) x (2r+1), r at most {MAX_REUSE_RADIUS})",
+        "--reuse-radius",
+        "R",
+    ),
+    Property(
+        "reuse_k",
+        8,
+        "int",
+        "reuse=pixels: neighbours pooled per camera sample, drawn from the window "
+        f"(at most (2r+1)^2 - 1 and {MAX_REUSE_K})",
+        "--reuse-k",
+        "K",
+    ),
+    Property(
+        "reuse_mis",
+        "balance",
+        "string",
+        "reuse=pixels: weights of the pooled BSDF samples: balance (the "
+        "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
+        "the vertex itself, 2K+1; docs/reuse.md)",
+        "--reuse-mis",
+        "NAME",
+    ),
+    Property(
+        "reuse_deep",
+        "tree",
+        "string",
+        "reuse=pixels with first_n_hits at depth 2: the second level's values: "
+        "tree (estimated per child) or world (pooled over world-space neighbours, Tong and Hachisuka 2025; "
+        "docs/reuse.md)",
+        "",
+        "",
+    ),
+    Property(
+        "reuse_h",
+        0.0,
+        "float",
+        f"reuse_deep=world: radius h of a second-level vertex's neighbours and the "
+        f"world grid's cell size, as a fraction of the scene's bounding-box diagonal (at least {MIN_REUSE_H:g}); "
+        f"0: from the vertices' density, a cell holding about reuse_k2 of them",
+        "",
+        "",
+    ),
+    Property(
+        "reuse_k2",
+        16,
+        "int",
+        f"reuse_deep=world: candidates a second-level vertex looks at in its cell (at "
+        f"most {MAX_REUSE_K})",
+        "",
+        "",
+        low=1,
+        high=MAX_REUSE_K,
+    ),
 )
 DEFAULTS = {p.name: p.default for p in PROPERTIES}
 
@@ -172,12 +413,15 @@ COMMAND_LINE_STYLE = "cel"
 SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
 BASE_KEYS = ("samples_per_pass", "timeout")
-#: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the draw of
-#: the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice, the trace
-#: time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces with the flag off
-#: (`integrator.tracing`) and the trace time grows linearly (BENCHMARKS.md, recursion depth;
-#: tests/kernel/test_recursion_depth.py). 16 levels of one child each already make a path of 16 stylized
-#: vertices; the cap keeps the kernel and Python's recursion (1000 levels overflow it) bounded.
+#: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the
+#: draw of
+#: the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice,
+#: the trace time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces with
+#: the flag off (`integrator.tracing`) and the trace time grows linearly (BENCHMARKS.md, recursion
+#: depth;
+#: tests/kernel/test_recursion_depth.py). 16 levels of one child each already make a path of 16
+#: stylized vertices; the cap keeps the kernel and Python's recursion (1000 levels overflow it)
+#: bounded.
 MAX_STYLIZE_DEPTH = 16
 
 
@@ -239,7 +483,8 @@ class Settings:
     reuse_h: float
     reuse_k2: int
     expansion_pass: int
-    #: declared properties that no field above holds (`declare`): parsed by their declaration, read as attributes
+    #: declared properties that no field above holds (`declare`): parsed by their declaration, read
+    #: as attributes
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def __getattr__(self, name: str) -> Any:
@@ -257,21 +502,34 @@ class Settings:
         return self.slot.inner
 
     def describe(self) -> str:
-        return (f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
-                f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
-                + ("" if self.lines is None else f", {self.lines.describe()}")
-                + (f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})"
-                   if self.reuse != "off" else "")
-                + (f", reuse_deep=world(h={self.reuse_h or 'auto'}, k2={self.reuse_k2})"
-                   if self.reuse_deep == "world" else "")
-                + (f", expansion_pass={self.expansion_pass}" if self.expansion_pass else ""))
+        return (
+            f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
+            f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
+            + ("" if self.lines is None else f", {self.lines.describe()}")
+            + (
+                f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})"
+                if self.reuse != "off"
+                else ""
+            )
+            + (
+                f", reuse_deep=world(h={self.reuse_h or 'auto'}, k2={self.reuse_k2})"
+                if self.reuse_deep == "world"
+                else ""
+            )
+            + (f", expansion_pass={self.expansion_pass}" if self.expansion_pass else "")
+        )
 
 
 
-#: properties parsed into a field of their own or into a group (the style slot, the lines) at import time;
-#: a property declared later (`declare`) is parsed by its declaration alone into `Settings.extra`
-GROUPED = frozenset({f.name for f in fields(Settings)} | set(SLOT_KEYS) | set(BASE_KEYS)
-                    | {p.name for p in PROPERTIES if p.name == "lines" or p.name.startswith("line_")})
+#: properties parsed into a field of their own or into a group (the style slot, the lines) at import
+#: time; a property declared later (`declare`) is parsed by its declaration alone into
+#: `Settings.extra`
+GROUPED = frozenset(
+    {f.name for f in fields(Settings)}
+    | set(SLOT_KEYS)
+    | set(BASE_KEYS)
+    | {p.name for p in PROPERTIES if p.name == "lines" or p.name.startswith("line_")}
+)
 
 def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
     """The `line_*` properties: None where `lines` is off (then the others are still checked)."""
@@ -289,25 +547,42 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
             raise SettingsError(f"bad value {raw!r} for 'line_gradient': expected r,g,b;r,g,b or r,g,b;r,g,b;y0;y1")
         ys = [number("line_gradient", y, -float("inf")) for y in parts[2:]] or [None, None]
         gradient = (rgb("line_gradient", parts[0]), rgb("line_gradient", parts[1]), ys[0], ys[1])
-    lines = LineSettings(width=value("line_width", values), samples=value("line_samples", values),
-                         depth=value("line_depth", values), tests=tests, crease=value("line_crease", values),
-                         albedo=value("line_albedo", values), slope=value("line_slope", values),
-                         color=value("line_color", values), gradient=gradient,
-                         objects=value("line_objects", values), mode=value("line_mode", values),
-                         k=value("line_k", values))
+    lines = LineSettings(
+        width=value("line_width", values),
+        samples=value("line_samples", values),
+        depth=value("line_depth", values),
+        tests=tests,
+        crease=value("line_crease", values),
+        albedo=value("line_albedo", values),
+        slope=value("line_slope", values),
+        color=value("line_color", values),
+        gradient=gradient,
+        objects=value("line_objects", values),
+        mode=value("line_mode", values),
+        k=value("line_k", values),
+    )
     if on and not tests:
-        raise SettingsError(f"bad value {get_('line_tests')!r} for 'line_tests': lines need at least one of "
-                            f"{', '.join(LINE_TESTS)}")
+        raise SettingsError(
+            f"bad value {get_('line_tests')!r} for 'line_tests': lines need at least one of "
+            f"{', '.join(LINE_TESTS)}"
+        )
     raw_types = get_("line_types")
     if lines.mode == "lifted":
         if get_("line_gradient") not in ("", None, ()):
-            raise SettingsError("'line_gradient' is not drawn by line_mode lifted: its lines take each line type's "
-                                "colour (use line_mode absorb or expectation)")
-        lines = replace(lines, types=parse_line_types(raw_types, lines.width, lines.samples, lines.color),
-                        diffuse=value("line_diffuse", values))
+            raise SettingsError(
+                "'line_gradient' is not drawn by line_mode lifted: its lines take each line type's "
+                "colour (use line_mode absorb or expectation)"
+            )
+        lines = replace(
+            lines,
+            types=parse_line_types(raw_types, lines.width, lines.samples, lines.color),
+            diffuse=value("line_diffuse", values),
+        )
     elif raw_types not in ("", None):
-        raise SettingsError(f"bad value {raw_types!r} for 'line_types': line types are read by line_mode lifted "
-                            f"only (line_mode is {lines.mode!r})")
+        raise SettingsError(
+            f"bad value {raw_types!r} for 'line_types': line types are read by line_mode lifted "
+            f"only (line_mode is {lines.mode!r})"
+        )
     return lines if on else None
 
 
@@ -334,8 +609,10 @@ def _count(part: Any) -> int:
         lo, _, hi = part.partition(":")
         n0, n_max = integer("inner_samples", lo, 1), integer("inner_samples", hi, 1)
         if n_max < n0:
-            raise SettingsError(f"bad value {part.strip()!r} for 'inner_samples': an adaptive count n0:n_max "
-                                f"needs n0 <= n_max")
+            raise SettingsError(
+                f"bad value {part.strip()!r} for 'inner_samples': an adaptive count n0:n_max "
+                f"needs n0 <= n_max"
+            )
         return AdaptiveCount(n0, n_max)
     return integer("inner_samples", part, 1)
 
@@ -367,20 +644,26 @@ def parse(values: Mapping[str, Any]) -> Settings:
     """Validated integrator settings from a flat name -> value mapping (property values, CLI strings or
     Python values); missing names take DEFAULTS."""
     if "samples_per_pass" in values:
-        raise SettingsError(f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
-                            f"integrator renders in styletrace's own passes; set the samples per pass with "
-                            f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead")
+        raise SettingsError(
+            f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
+            f"integrator renders in styletrace's own passes; set the samples per pass with "
+            f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead"
+        )
     own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)
     slot = parse_slot(values, extra_keys=own + BASE_KEYS)
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
     stylize = value("stylize", values)
     depth = integer("stylize_depth", get_("stylize_depth"), 1, MAX_STYLIZE_DEPTH)
     if stylize == "first_hit" and depth != 1:
-        raise SettingsError(f"bad value {depth!r} for 'stylize_depth': 'first_hit' stylizes one level; "
-                            f"use stylize=first_n_hits or first_object_hit for more")
+        raise SettingsError(
+            f"bad value {depth!r} for 'stylize_depth': 'first_hit' stylizes one level; "
+            f"use stylize=first_n_hits or first_object_hit for more"
+        )
     if stylize == "first_object_hit" and slot.style.name != "identity":
-        raise SettingsError(f"bad value {slot.style.name!r} for 'style': with stylize=first_object_hit the "
-                            f"styles come from 'styled' BSDFs, so the integrator's own style must be identity")
+        raise SettingsError(
+            f"bad value {slot.style.name!r} for 'style': with stylize=first_object_hit the "
+            f"styles come from 'styled' BSDFs, so the integrator's own style must be identity"
+        )
     if len(slot.inner) not in (1, depth):
         expected = "1 count (one stylized level)" if depth == 1 else f"1 or {depth} counts (one per stylized level)"
         raise SettingsError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': expected {expected}")
@@ -391,32 +674,55 @@ def parse(values: Mapping[str, Any]) -> Settings:
     hide = value("hide_emitters", values)
     z, target, aovs = value("adaptive_z", values), value("adaptive_bias", values), value("aovs", values)
     if aovs and slot.estimator != "direct":
-        raise SettingsError(f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
-                            f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct")
+        raise SettingsError(
+            f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
+            f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct"
+        )
     reuse, radius, k, mis = parse_reuse(values, slot, stylize)
     deep, h, k2 = parse_reuse_deep(values, slot, reuse, stylize, depth)
     lines = parse_lines(values)
     if reuse != "off" and (lines is not None or aovs):
         what = "'lines'" if lines is not None else "'aovs'"
-        raise SettingsError(f"bad value True for {what} with reuse={reuse}: a pooled pass traces its own camera "
-                            f"rays and keeps no per-sample statistics; use reuse=off")
+        raise SettingsError(
+            f"bad value True for {what} with reuse={reuse}: a pooled pass traces its own camera "
+            f"rays and keeps no per-sample statistics; use reuse=off"
+        )
     expansion = parse_expansion(values, slot)
     firefly = value("firefly", values)
     if firefly is not None and 0.0 < firefly < 1.0:
         raise SettingsError(f"bad value {firefly!r} for 'firefly': expected 0 (off) or a number >= 1")
-    return Settings(slot=slot, stylize=stylize, stylize_depth=depth, max_depth=max_depth, rr_depth=rr_depth,
-                    emitter_sampling=lights, hide_emitters=hide, lines=lines, adaptive_z=z,
-                    adaptive_bias=target, aovs=aovs, reuse=reuse, reuse_radius=radius, reuse_k=k,
-                    reuse_mis=mis, reuse_deep=deep, reuse_h=h, reuse_k2=k2, expansion_pass=expansion,
-                    extra={p.name: value(p.name, values) for p in PROPERTIES if p.name not in GROUPED})
+    return Settings(
+        slot=slot,
+        stylize=stylize,
+        stylize_depth=depth,
+        max_depth=max_depth,
+        rr_depth=rr_depth,
+        emitter_sampling=lights,
+        hide_emitters=hide,
+        lines=lines,
+        adaptive_z=z,
+        adaptive_bias=target,
+        aovs=aovs,
+        reuse=reuse,
+        reuse_radius=radius,
+        reuse_k=k,
+        reuse_mis=mis,
+        reuse_deep=deep,
+        reuse_h=h,
+        reuse_k2=k2,
+        expansion_pass=expansion,
+        extra={p.name: value(p.name, values) for p in PROPERTIES if p.name not in GROUPED},
+    )
 
 
 def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
     """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator only."""
     m = value("expansion_pass", values)
     if m and slot.estimator not in EXPANSION_ESTIMATORS:
-        raise SettingsError(f"bad value {m} for 'expansion_pass' with estimator '{slot.estimator}': the pass gives "
-                            f"the expansion point of estimator {', '.join(EXPANSION_ESTIMATORS)} only; use 0")
+        raise SettingsError(
+            f"bad value {m} for 'expansion_pass' with estimator '{slot.estimator}': the pass gives "
+            f"the expansion point of estimator {', '.join(EXPANSION_ESTIMATORS)} only; use 0"
+        )
     return m  # reuse=pixels takes estimator direct only (check_reusable), so it never meets the pass
 
 
@@ -429,12 +735,16 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
     k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
     mis = str(values.get("reuse_mis", DEFAULTS["reuse_mis"])).strip().lower()
     if mis not in REUSE_WEIGHTS:
-        raise SettingsError(f"bad value {values.get('reuse_mis')!r} for 'reuse_mis': expected one of "
-                            f"{', '.join(REUSE_WEIGHTS)}")
+        raise SettingsError(
+            f"bad value {values.get('reuse_mis')!r} for 'reuse_mis': expected one of "
+            f"{', '.join(REUSE_WEIGHTS)}"
+        )
     if mode != "off":
         if stylize not in ("first_hit", "first_n_hits"):
-            raise SettingsError(f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
-                                f"(first_hit, first_n_hits) only; use one of those or reuse=off")
+            raise SettingsError(
+                f"bad value {stylize!r} for 'stylize': reuse={mode} pools samples at the first hit "
+                f"(first_hit, first_n_hits) only; use one of those or reuse=off"
+            )
         check_reusable(slot)
     return mode, radius, k, mis
 
@@ -444,17 +754,23 @@ def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, sty
     """`reuse_deep`, `reuse_h`, `reuse_k2`; world-space pooling only at first_n_hits depth 2."""
     deep = str(values.get("reuse_deep", DEFAULTS["reuse_deep"])).strip().lower()
     if deep not in REUSE_DEEP:
-        raise SettingsError(f"bad value {values.get('reuse_deep')!r} for 'reuse_deep': expected one of "
-                            f"{', '.join(REUSE_DEEP)}")
+        raise SettingsError(
+            f"bad value {values.get('reuse_deep')!r} for 'reuse_deep': expected one of "
+            f"{', '.join(REUSE_DEEP)}"
+        )
     h = number("reuse_h", values.get("reuse_h", DEFAULTS["reuse_h"]), 0.0, 1.0)
     if 0.0 < h < MIN_REUSE_H:
-        raise SettingsError(f"bad value {values.get('reuse_h')!r} for 'reuse_h': expected 0 (from the vertices' "
-                            f"density) or a number in [{MIN_REUSE_H:g}, 1]")
+        raise SettingsError(
+            f"bad value {values.get('reuse_h')!r} for 'reuse_h': expected 0 (from the vertices' "
+            f"density) or a number in [{MIN_REUSE_H:g}, 1]"
+        )
     k2 = value("reuse_k2", values)
     if deep == "world" and (reuse == "off" or stylize != "first_n_hits" or depth != 2):
-        raise SettingsError(f"bad value 'world' for 'reuse_deep': world-space pooling needs reuse=pixels with "
-                            f"stylize=first_n_hits and stylize_depth 2 (here reuse={reuse}, stylize={stylize}, "
-                            f"stylize_depth {depth})")
+        raise SettingsError(
+            f"bad value 'world' for 'reuse_deep': world-space pooling needs reuse=pixels with "
+            f"stylize=first_n_hits and stylize_depth 2 (here reuse={reuse}, stylize={stylize}, "
+            f"stylize_depth {depth})"
+        )
     if deep == "world":
         check_reusable(slot, deep=deep)
     return deep, h, k2
@@ -471,11 +787,15 @@ def check_reusable(slot: StyleSlot, where: str = "the integrator's style", deep:
                 raise SettingsError(f"bad value '{n!r}' for 'inner_samples' ({where}) with reuse_deep=world: fixed "
                                     f"counts only there; use reuse_deep=tree for adaptive counts")
     if slot.style.per_sample:
-        raise SettingsError(f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
-                            f"every child sample, reuse pools samples before g")
+        raise SettingsError(
+            f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
+            f"every child sample, reuse pools samples before g"
+        )
     if slot.estimator != "direct":
-        raise SettingsError(f"bad value {slot.estimator!r} for 'estimator' ({where}): reuse=pixels supports "
-                            f"'direct' only (g of the pooled mean)")
+        raise SettingsError(
+            f"bad value {slot.estimator!r} for 'estimator' ({where}): reuse=pixels supports "
+            f"'direct' only (g of the pooled mean)"
+        )
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
@@ -495,6 +815,27 @@ def properties_of(props) -> dict[str, Any]:
     return {key: props[key] for key in props.keys()}
 
 
-__all__ = ["Property", "PROPERTIES", "DEFAULTS", "MAX_EXPANSION_PASS", "EXPANSION_ESTIMATORS", "parse_expansion", "STYLIZE_MODES", "REUSE_MODES", "check_reusable", "StyleSlot",
-           "Settings", "parse", "parse_slot", "parse_inner", "parse_lines", "AdaptiveCount", "adaptive", "integer",
-           "number", "boolean", "refine", "properties_of"]
+__all__ = [
+    "Property",
+    "PROPERTIES",
+    "DEFAULTS",
+    "MAX_EXPANSION_PASS",
+    "EXPANSION_ESTIMATORS",
+    "parse_expansion",
+    "STYLIZE_MODES",
+    "REUSE_MODES",
+    "check_reusable",
+    "StyleSlot",
+    "Settings",
+    "parse",
+    "parse_slot",
+    "parse_inner",
+    "parse_lines",
+    "AdaptiveCount",
+    "adaptive",
+    "integer",
+    "number",
+    "boolean",
+    "refine",
+    "properties_of",
+]

@@ -1,43 +1,15 @@
-"""Direct application with adaptive stopping: n0 children, then more only where the predicted error is large.
+"""Direct application with adaptive stopping: n0 children, more only where the error is large.
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eq. 19 (direct application
-    g(<I>_n)) and Eq. 21 (its bias, g''(I) Var[x] / (2n) to first order).
-    The stopping rule for a piecewise-constant g is the sequential rule of nested simulation (Broadie, Du
-    and Moallemi, "Efficient risk estimation via nested sequential simulation", Management Science 2011):
-    keep sampling while the mean lies within a confidence band of a threshold.
+Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eqs. 19 and 21; the
+step rule is the sequential rule of Broadie, Du and Moallemi, "Efficient risk estimation via nested
+sequential simulation" (2011). Each lane draws n0 samples, then one more per iteration while n <
+n_max and
+    step:    |m - tau_k| < t_(n-1)(z) s / sqrt(n) for some threshold tau_k, or
+    smooth:  max_c |g_c''(<I>_n)| s^2 / (2n) > bias,
+m and s^2 the running mean and variance of the samples' brightness. The estimate is g(<I>_n).
 
-What it does
-    Every lane draws n0 samples, then keeps drawing, one per loop iteration, while n < n_max and
-        step rule:   |m - tau_k| < t_(n-1)(z) * s / sqrt(n)                 for some threshold tau_k, or
-        smooth rule: max_c |g_c''(<I>_n)| * s^2 / (2n) > bias
-    where m and s^2 are the running mean and sample variance (Welford) of the samples' brightness, the
-    mean of their channels (styletrace's styles threshold brightness, and one scalar per lane keeps the
-    rule cheap), g'' is what ``curvature`` returns, and t_(n-1)(z) is Student's t quantile with n - 1
-    degrees of freedom at the confidence of z standard normal deviations (``band_width``): with few children
-    s is often far too small (radiance is heavy-tailed: four children that all miss a light), and a plain
-    z band then stops lanes near a threshold. The estimate is g(<I>_n) with the lane's own n.
-
-    Stopping depends on the data, so the estimate's bias differs from that of a fixed n: still O(1/n0)
-    and vanishing as n0 grows (consistent), but not g''Var/(2n) for any one n. Unbiased estimators lose
-    their unbiasedness under such a rule (the number of terms depends on the samples they average), so
-    nothing but direct application uses it (config/estimator_registry.py refuses the others).
-
-Parameters
-    g           callable g(x) -> y, array-generic as for ``Direct``.
-    n0, n_max   1 <= n0 <= n_max; n0 == n_max is a fixed count that still reports statistics.
-    thresholds  brightness values where g jumps: numbers, or per-lane arrays (Dr.Jit Float; numpy
-                (lanes,) / (lanes, 1)); +inf for "none at this lane". Default ().
-    curvature   None (no smooth rule), or a callable (mean, h) -> g''(mean) per channel (or per lane) with
-                h = s / sqrt(n) per lane, the standard error: a finite difference over +-h measures the
-                curvature a Jensen gap of that spread sees (for a kink, |jump of g'|/h). On numpy the loop
-                compacts lanes, so a curvature callable there must not depend on per-lane data it closes over.
-    z           confidence of the band, in standard normal deviations (default 2; t_(n-1)(z) standard errors).
-    bias        target of the smooth rule, in g's units (default 1e-3).
-
-After ``run``, ``stats`` holds per-lane arrays of that run (the estimators' layout: numpy (lanes, 1)):
-``children`` (n used), ``variance`` (sample variance s^2 of the children's brightness, 0 for n < 2) and
-``bias`` (the Eq. 21 prediction g''(<I>_n) s^2 / (2n), the channels' mean; 0 without ``curvature``).
+`AdaptiveDirect(g, n0, n_max, thresholds=(), curvature=None, z=2, bias=1e-3)`; after `run`, `stats`
+holds per-lane `children`, `variance` and `bias`. Rationale: docs/design/adaptive_stopping.md.
 """
 from __future__ import annotations
 
@@ -67,10 +39,18 @@ class AdaptiveDirect(Estimator):
     # -- running statistics ---------------------------------------------------------------------
     def start(self, ctx: Context, carry):
         zero = ctx.lane(0.0)
-        state = {"sum": ctx.vzero(), "count": zero, "mean_u": zero, "m2_u": zero,
-                 # per-lane copies, so that numpy's lane compaction carries them along with the lanes
-                 "tau": tuple(zero + (t if not isinstance(t, np.ndarray) else np.reshape(t, (-1, 1)))
-                              for t in self.thresholds)}
+        state = {
+            "sum": ctx.vzero(),
+            "count": zero,
+            "mean_u": zero,
+            "m2_u": zero,
+            # per-lane copies, so that numpy's lane compaction carries them along with the
+            # lanes
+            "tau": tuple(
+                zero + (t if not isinstance(t, np.ndarray) else np.reshape(t, (-1, 1)))
+                for t in self.thresholds
+            ),
+        }
         return state, carry
 
     def feed(self, ctx, state, x, mask, carry):

@@ -1,28 +1,13 @@
 """Affine style functions and the (optionally comb-stratified) sample mean.
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement Eqs. S1-S3:
-        g(I) = a1 I + a0,   <g(I)> = a1 <I> + a0,
-    unbiased for any unbiased <I>; here <I> is the mean of n draws. ``Mean(m)`` (a1 = 1, a0 = 0) is the
-    building block for multi-sample inner estimates (Kettunen, d'Eon, Pantaleoni, Novak, "An Unbiased
-    Ray-Marching Transmittance Estimator", 2021): compose a polynomial or series estimator with
-    ``Mean(m)`` and each of its samples becomes the mean of m draws (``algebra.inner_mean``).
+Reference: West & Mukherjee, supplement Eqs. S1-S3: g(I) = a1 I + a0, <g(I)> = a1 <I> + a0, unbiased
+for any unbiased <I>, here the mean of n draws. `Mean(m)` is the building block of multi-sample
+inner estimates (Kettunen, d'Eon, Pantaleoni, Novak 2021; `algebra.inner_mean`).
 
-Stratified comb (what exactly is implemented)
-    With ``comb=True`` one uniform xi is drawn per estimate (per lane) and the i-th of the n draws is
-    requested as draw(carry, u_i) with u_i = (xi + i) / n, i = 0..n-1: a discrete comb of n equally
-    spaced points with one random offset. Each u_i alone is uniform on [0, 1), so every draw is an
-    unbiased sample of I and so is their mean; the n draws of one estimate are negatively
-    correlated (stratified in the first primary dimension that draw() maps u to), while different
-    estimates use independent offsets, so estimates stay independent of each other, which is what
-    the polynomial and series estimators require of their samples. What "first primary dimension"
-    means is up to draw(): in the renderer, e.g., the first uniform of the BSDF/light sample.
-
-Parameters
-    a1     scalar, one value per channel (C,), or a (C, C) matrix (y = A x, mixing channels).
-    a0     scalar or one value per channel. Default 0.
-    n      draws averaged per estimate (>= 1). Default 1.
-    comb   stratify the n draws with the comb above. Default False.
+`Affine(a1, a0=0, n=1, comb=False)`: a1 a scalar, one value per channel or a (C, C) matrix; a0 a
+scalar or one value per channel; n >= 1 draws per estimate; comb stratifies them with one random
+offset per estimate (docs/design/comb_stratification.md). `Mean(m, comb=False)` is Affine(1, 0, m,
+comb).
 """
 from __future__ import annotations
 
@@ -57,8 +42,8 @@ class MeanOfN(Estimator):
     down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1) to at
     most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how much."""
 
-    #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp of 10
-    #: at the exposure that maps the median to middle grey (10 / 0.18)
+    #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp
+    #: of 10 at the exposure that maps the median to middle grey (10 / 0.18)
     LONE_CAP = 10.0 / 0.18
 
     def __init__(self, n: int, comb: bool = False, cap: tuple[float, float] | None = None):

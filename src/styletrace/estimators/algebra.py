@@ -1,27 +1,14 @@
 """Build-your-own group-unbiased estimators: sum, product and composition (Theorem 4.1).
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", Theorem 4.1: for gu
-    estimators <A> of gA(I) and <B> of gB(I),
-      Sum          <A> + <B> is gu for gA + gB; the two may share samples (linearity of expectation).
-      Product      <A> <B> is gu for gA gB when their sample groups are independent.
-      Composition  gA(gB(I)): independent gu estimates of gB(I) become the samples of a gu estimator
-                   of gA, e.g. a polynomial of an affine map of I (sepia, contrast).
+Reference: West & Mukherjee, Theorem 4.1: <A> + <B> is gu for gA + gB (samples may be shared); <A>
+<B> for gA gB with independent sample groups; independent gu estimates of gB(I) fed to a gu
+estimator of gA give gA(gB(I)).
 
-Parameters
-    Sum(*parts, shared=True)  shared: every draw goes to every part that still wants samples, so the
-                              cost is the largest part's; shared=False: parts draw in turn.
-                              A shared sum cannot contain comb-stratified parts (two combs cannot
-                              share one draw).
-    Product(*factors)         factors draw in turn (independent groups); values multiply elementwise.
-    Compose(outer, inner)     each sample the outer estimator wants is a fresh, complete estimate of
-                              the inner one; inner estimators that need no draws are evaluated inside
-                              a nested loop, so the outer one never waits for a draw that is not needed.
-    inner_mean(estimator, m, comb=False)  = Compose(estimator, Mean(m, comb)): multi-sample inner
-                              estimates (Kettunen et al. 2021), optionally comb-stratified.
-
-mean_samples: Sum(shared) -> max of the parts when all are fixed, else None; Sum(unshared) and
-Product -> the sum; Compose -> outer mean x inner mean (Wald's identity).
+`Sum(*parts, shared=True)`: shared, every draw goes to every part that still wants one (cost: the
+largest part's; no comb-stratified parts); unshared, parts draw in turn. `Product(*factors)`:
+factors draw in turn. `Compose(outer, inner)`: each outer sample is a fresh inner estimate.
+`inner_mean(estimator, m, comb=False)` = Compose(estimator, Mean(m, comb)). mean_samples: shared Sum
+-> max of fixed parts, else None; unshared Sum and Product -> the sum; Compose -> the product.
 """
 from __future__ import annotations
 
@@ -162,8 +149,10 @@ class Compose(Estimator):
     def __init__(self, outer: Estimator, inner: Estimator):
         _check_parts((outer, inner), "Compose")
         if outer.uses_comb:
-            raise ValueError("the outer estimator of a composition receives inner estimates, not draws: "
-                             "it cannot use a comb (put the comb on the inner estimator)")
+            raise ValueError(
+                "the outer estimator of a composition receives inner estimates, not draws: "
+                "it cannot use a comb (put the comb on the inner estimator)"
+            )
         self.outer, self.inner = outer, inner
         self.name = f"{outer.name} o {inner.name}"
 

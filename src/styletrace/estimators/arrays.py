@@ -1,27 +1,11 @@
 """Array backend: one small vocabulary over numpy and Dr.Jit.
 
-What it is
-    The estimators are written once against these helpers and then run unchanged on numpy arrays
-    (float32/float64) and on Dr.Jit arrays inside a symbolic kernel (drjit.llvm.Float, Array3f,
-    mitsuba.Color3f, ... anything with elementwise arithmetic).
-
-Conventions
-    * numpy: the estimators see per-lane scalars as (lanes, 1) arrays and values as (lanes, C)
-      arrays, so that numpy broadcasting behaves like Dr.Jit's ``Float * Array3f``. The driver in
-      ``base.py`` reshapes user arrays on the way in and out.
-    * Dr.Jit: per-lane scalars are the value type's leaf Float (``dr.leaf_t``); masks are its Bool.
-    * Dr.Jit is imported lazily and only if the caller already imported it, so the numpy path needs
-      neither Dr.Jit nor Mitsuba (and never triggers Dr.Jit's libLLVM loading).
-    * Backend: ``backend_module(like)`` is the Dr.Jit array module (``drjit.llvm``, ``drjit.cuda`` or
-      their ``.ad`` submodules) that code creating fresh Dr.Jit arrays should use: the one ``like``
-      belongs to, else the one of the active Mitsuba variant, else CUDA where it works and LLVM
-      otherwise. It never imports Mitsuba.
-
-Loops
-    ``numpy_while_loop`` emulates ``drjit.while_loop``: the body runs on the lanes whose condition
-    holds, the others keep their state. It compacts the active lanes first, so a loop where a few
-    lanes need many iterations (random truncation) stays cheap. Leaves of the state whose first
-    axis has the lane count are per-lane; other leaves (a numpy Generator, constants) are shared.
+The estimators are written once against these helpers and run unchanged on numpy arrays and on
+Dr.Jit arrays inside a symbolic kernel. numpy sees per-lane scalars as (lanes, 1) and values as
+(lanes, C), so broadcasting behaves like Dr.Jit's `Float * Array3f`; Dr.Jit per-lane scalars are the
+value type's leaf Float. Dr.Jit is imported lazily and only if the caller already did.
+`backend_module(like)` is the Dr.Jit array module to create arrays with; `numpy_while_loop` emulates
+`drjit.while_loop`, compacting the active lanes. See docs/design/estimator_kernel_contract.md.
 """
 from __future__ import annotations
 
@@ -30,8 +14,25 @@ import sys
 import numpy as np
 
 __all__ = [
-    "is_drjit", "drjit", "backend_module", "select", "abs", "exp", "log", "sqrt", "cos", "sin", "minimum", "maximum",
-    "clip", "hmax", "channel_mean", "tree_map", "tree_select", "numpy_while_loop", "const_like",
+    "is_drjit",
+    "drjit",
+    "backend_module",
+    "select",
+    "abs",
+    "exp",
+    "log",
+    "sqrt",
+    "cos",
+    "sin",
+    "minimum",
+    "maximum",
+    "clip",
+    "hmax",
+    "channel_mean",
+    "tree_map",
+    "tree_select",
+    "numpy_while_loop",
+    "const_like",
 ]
 
 _pyabs = abs

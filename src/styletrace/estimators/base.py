@@ -1,26 +1,11 @@
 """The estimator protocol and the kernel driver that every estimator shares.
 
-What it is
-    ``Estimator`` is a per-lane state machine fed one input sample at a time:
-
-        start(ctx, carry)                 -> (state, carry)   initial state; may draw uniforms
-        wants(ctx, state)                 -> mask             lanes that need another input sample
-        feed(ctx, state, x, mask, carry)  -> (state, carry)   consume x on the lanes in mask
-        value(ctx, state)                 -> estimate of g(I)
-        next_u(ctx, state)                -> None, or the stratified first dimension of the next draw
-
-    ``Estimator.run`` is the kernel contract used by the integrator (see the package docstring):
-    one loop, one ``draw`` per iteration and lane, only on lanes that want a sample. Composite
-    estimators (``algebra.py``) are state machines made of state machines, so the whole tree still
-    runs in one loop and calls ``draw`` at exactly one place in the traced code.
-
-Parameters of ``run``
-    draw(carry[, u]) -> (x, carry), uniform(carry) -> (u, carry), carry (opaque pytree),
-    active=None (lanes that take part; others return 0 and draw nothing),
-    like=None (the type or an instance of x: required for Dr.Jit, optional for numpy).
-
-The ``Context`` hides the backend: per-lane constants, tables looked up by a per-lane index,
-uniforms, and the while loop (``drjit.while_loop`` or the numpy emulation in ``arrays.py``).
+`Estimator` is a per-lane state machine fed one input sample at a time: `start(ctx, carry)`,
+`wants(ctx, state)` (lanes that need another sample), `feed(ctx, state, x, mask, carry)`,
+`value(ctx, state)` and `next_u(ctx, state)` (the stratified first dimension of the next draw, or
+None). `Estimator.run` is the kernel contract of the package docstring: one loop, one `draw` per
+iteration and lane. The `Context` hides the backend: per-lane constants, tables, uniforms and the
+while loop. See docs/design/estimator_kernel_contract.md.
 """
 from __future__ import annotations
 
@@ -60,8 +45,17 @@ def check_count(name: str, value, minimum: int = 1) -> int:
 class Context:
     """Backend-specific helpers for one ``run`` (numpy lanes or a Dr.Jit value type)."""
 
-    def __init__(self, backend: str, *, lanes=None, like_t=None, dtype=None, channels=None, ndim=None,
-                 uniform=None):
+    def __init__(
+        self,
+        backend: str,
+        *,
+        lanes=None,
+        like_t=None,
+        dtype=None,
+        channels=None,
+        ndim=None,
+        uniform=None,
+    ):
         self.backend = backend
         self.lanes = lanes
         self.like_t = like_t
@@ -85,9 +79,11 @@ class Context:
         if like_t is not None and dr is not None and issubclass(like_t, dr.ArrayBase):
             return cls("drjit", like_t=like_t, uniform=uniform), carry
         if like is not None and not isinstance(like, np.ndarray):
-            raise ValueError(f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
-                             f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
-                             f"got {like!r}")
+            raise ValueError(
+                f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
+                f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
+                f"got {like!r}"
+            )
         if A.is_drjit(active):
             raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>, "
                              "e.g. like=mitsuba.Color3f or like=drjit.llvm.Float")
@@ -168,8 +164,10 @@ class Context:
         if self.channels is None:
             self.channels = channels
         elif self.channels != channels:
-            raise ValueError(f"draw() returned {channels} channel(s) where {self.channels} were expected "
-                             f"(per-channel coefficients or like= say so)")
+            raise ValueError(
+                f"draw() returned {channels} channel(s) where {self.channels} were expected "
+                f"(per-channel coefficients or like= say so)"
+            )
         return x.reshape(x.shape[0], -1)
 
     def user_u(self, u):

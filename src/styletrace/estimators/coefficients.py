@@ -1,42 +1,13 @@
 """Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k for a (possibly per-lane) expansion point b.
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3-S2.6 and Eq. 24:
-      exp         a^I = sum_k ln(a)^k a^b / k! (I - b)^k                  (S15)  entire: any b
-      reciprocal  a/I = sum_k a b^(-k-1) (b - I)^k,  a_k = a (-1)^k b^(-k-1)  (S17)  needs |b - I| < |b|
-      power       I^p = sum_k C(p, k) b^(p-k) (I - b)^k, p = 1/gamma (Eq. 24)     needs |b - I| < |b|, b > 0
-      Taylor      a_k = g^(k)(b) / k! from a derivative callable, up to a given order (S10, S25)
-      polynomial  a finite sum_k c_k (x - c)^k re-expanded about b (Taylor shift), e.g. a fit (S18)
+Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3-S2.6
+and Eq. 24: exp (S15, any b), reciprocal a/I (S17, |b - I| < |b|), power I^p (Eq. 24, b > 0), Taylor
+from a derivative (S10, S25), and a finite polynomial re-expanded about b (S18).
 
-Why a generator and not a table
-    The expansion point may be a per-lane pilot estimate, so coefficients are per-lane arrays made
-    inside the kernel. Infinite series advance by their coefficient ratio a_(k+1) = a_k r(k, b);
-    finite ones keep their remaining coefficients in a shift register (register renames, no work).
-
-Interface (used by ``series.SeriesEstimator`` and ``polynomial``)
-    start(ctx, b)            coefficient state at k = 0 for a per-lane b (value array)
-    start_fixed(ctx, b)      the same for a fixed b (host float or per-channel vector)
-    coefficient(state)       a_k
-    advance(ctx, state, k, b)  state at k + 1 (k: per-lane float)
-    advance_scaled(ctx, state, k, b)  the same for the scaled coefficients a_k b^k (ratio series only): the
-                             terms a_k (I - b)^k = (a_k b^k) ((I - b) / b)^k, whose factors stay within float32
-                             where a_k alone (b^-k for I^p) overflows and (x - b)^k underflows for small b
-    coefficients(b, K)       host float64 a_0..a_K for a fixed b (tests, docs)
-    function(I)              the exact g(I)
-    check_center(b)          ValueError when a fixed b is outside the convergence region
-    clamp_center(b)          a pilot b moved into the convergence region (array-generic)
-
-Convergence checks (what exactly is checked)
-    reciprocal(a, lo, hi): with a known range lo <= I <= hi, a fixed b is refused unless every I in
-        [lo, hi] has |b - I| < |b|, i.e. lo, hi, b share a sign and max|I| < 2|b| (0 < lo and hi < 2b,
-        or 2b < lo and hi < 0); a range containing 0 is refused outright (1/I is not analytic there).
-        b = 0 is always refused. A pilot b is clamped to b >= 0.55 hi (or b <= 0.55 lo for a negative
-        range), which keeps the worst-case ratio |b - I| / |b| <= 0.82.
-    power(p, lo, hi): b > 0 always; with a range, lo >= 0 (lo > 0 when p < 0) and hi <= 2b (hi < 2b
-        when p < 0). For p > 0 the endpoints |b - I| = |b| are allowed: sum_k |C(p, k)| converges there.
-        A pilot b is clamped to b >= max(0.55 hi, 1e-6).
-    Without a range nothing about I is known, so only b itself is checked (and a pilot b is kept away
-    from 0); the caller then owns convergence.
+A `Series` offers `start`, `start_fixed`, `coefficient`, `advance`, `advance_scaled` (a_k b^k),
+`coefficients(b, K)` (host float64), `function(I)`, `check_center(b)` (ValueError when a fixed b is
+outside the convergence region, given the known range of I) and `clamp_center(b)` (a pilot b moved
+into it). Convergence checks in full and rationale: docs/design/power_series.md.
 """
 from __future__ import annotations
 
@@ -47,8 +18,18 @@ import numpy as np
 from . import arrays as A
 
 __all__ = [
-    "Series", "PolynomialSeries", "ExpSeries", "ReciprocalSeries", "PowerFunctionSeries", "TaylorSeries",
-    "exp_series", "reciprocal_series", "power_series", "gamma_series", "taylor_series", "polynomial_series",
+    "Series",
+    "PolynomialSeries",
+    "ExpSeries",
+    "ReciprocalSeries",
+    "PowerFunctionSeries",
+    "TaylorSeries",
+    "exp_series",
+    "reciprocal_series",
+    "power_series",
+    "gamma_series",
+    "taylor_series",
+    "polynomial_series",
     "taylor_shift",
 ]
 
@@ -173,8 +154,10 @@ class ReciprocalSeries(_RatioSeries):
         self.a = _finite_real("a", a)
         self.lo, self.hi = _check_range(lo, hi)
         if self.lo is not None and self.lo <= 0.0 <= self.hi:
-            raise ValueError(f"reciprocal a/I: the range [{self.lo}, {self.hi}] contains 0, where a/I has a pole; "
-                             f"no expansion point converges on it")
+            raise ValueError(
+                f"reciprocal a/I: the range [{self.lo}, {self.hi}] contains 0, where a/I has a pole; "
+                f"no expansion point converges on it"
+            )
         self.name = f"reciprocal(a={self.a:g})"
 
     def function(self, I):
@@ -195,7 +178,8 @@ class ReciprocalSeries(_RatioSeries):
                     f"reciprocal a/I: expansion point b={bc} is outside the convergence region for I in "
                     f"[{self.lo}, {self.hi}]: the series needs |b - I| < |b| for every such I, i.e. lo, hi and b of "
                     f"one sign and max|I| < 2|b| (here b must be "
-                    f"{'> ' + str(self.hi / 2) if self.hi > 0 else '< ' + str(self.lo / 2)})")
+                    f"{'> ' + str(self.hi / 2) if self.hi > 0 else '< ' + str(self.lo / 2)})"
+                )
 
     def clamp_center(self, b):
         if self.lo is None:
@@ -220,8 +204,10 @@ class PowerFunctionSeries(_RatioSeries):
             raise ValueError("power series I^p needs p != 0 (I^0 = 1 needs no estimator)")
         self.lo, self.hi = _check_range(lo, hi)
         if self.lo is not None and (self.lo < 0.0 or (self.p < 0 and self.lo <= 0.0)):
-            raise ValueError(f"power I^{self.p:g}: the range [{self.lo}, {self.hi}] reaches "
-                             f"{'below 0' if self.lo < 0 else '0'}, where the real power is not analytic")
+            raise ValueError(
+                f"power I^{self.p:g}: the range [{self.lo}, {self.hi}] reaches "
+                f"{'below 0' if self.lo < 0 else '0'}, where the real power is not analytic"
+            )
         if self.p > 0 and float(self.p).is_integer():
             self.degree = int(self.p)  # the binomial series terminates
         self.name = f"power(p={self.p:g})"
@@ -242,7 +228,8 @@ class PowerFunctionSeries(_RatioSeries):
                 raise ValueError(
                     f"power I^{self.p:g}: expansion point b={bc} is outside the convergence region for I in "
                     f"[{self.lo}, {self.hi}]: the binomial series needs |b - I| <= |b| (strict for p < 0), i.e. "
-                    f"b >= hi/2 = {self.hi / 2}")
+                    f"b >= hi/2 = {self.hi / 2}"
+                )
 
     def clamp_center(self, b):
         lower = TINY if self.lo is None else max(PILOT_FRACTION * self.hi, TINY)

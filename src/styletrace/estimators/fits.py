@@ -1,41 +1,14 @@
 """Polynomial fits of a style function, and their change of basis to monomials about b.
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S3, Eqs. S25-S28
-    (with the supplement's typos corrected: T_(n+1) = 2x T_n - T_(n-1), and the Legendre factor
-    (2i+1)/2). A fit h ~ g turns any g into a polynomial whose value h(I) the U-statistic or a
-    power-series estimator can estimate without bias (main paper Eq. 17); the error is the fit error.
+Reference: West & Mukherjee, supplement S3, Eqs. S25-S28 (typos corrected). A fit h ~ g turns any g
+into a polynomial whose h(I) the U-statistic or a power-series estimator estimates without bias (Eq.
+17). [lo, hi] maps onto t in [-1, 1] (Bernstein: s in [0, 1]).
 
-Domain mapping
-    [lo, hi] -> [-1, 1]: t = (2x - lo - hi) / (hi - lo) (Bernstein uses s = (x - lo) / (hi - lo) in [0, 1]).
-
-Fits (parameters, defaults)
-    chebyshev_fit(g, degree, lo=-1, hi=1, nodes="chebyshev", points=None)
-        a_i = sum_j g(x_j) T_i(t_j) w_j / C(i), C(0) = pi, C(i>0) = pi/2                     (S27)
-        nodes="chebyshev": t_j = cos((2j-1) pi / (2n)), n = points (default degree+1). The Riemann sum
-            is taken in the angle theta = arccos t, in which these nodes are evenly spaced and
-            dt / sqrt(1 - t^2) = d theta, so w_j = pi / n. This is discrete Chebyshev interpolation:
-            exact for polynomials of degree < n and equal to numpy's chebinterpolate for n = degree+1.
-        nodes="even": t_j = -1 + 2j/(n+1), j = 1..n (interior, since the weight is infinite at +-1),
-            n = points (default 4096), and the literal S27 weights w_j = (t_j - t_(j-1)) / sqrt(1 - t_j^2)
-            with t_0 = -1. Converges slowly (O(n^-1/2), from the endpoint singularities).
-    legendre_fit(g, degree, lo=-1, hi=1, nodes="gauss", points=None)
-        a_i = (2i+1)/2 sum_j g(x_j) P_i(t_j) w_j                                             (S28)
-        nodes="gauss": Gauss-Legendre nodes and weights (n = points, default degree+1; Golub-Welsch),
-            which makes the sum exact for polynomials of degree <= 2n-1: the discrete projection equals
-            least squares at those nodes. nodes="even": the same interior grid as above with the literal
-            S28 weights w_j = t_j - t_(j-1), t_0 = -1 (O(1/n) accurate).
-    bernstein_fit(g, degree, lo=0, hi=1)  h(x) = sum_i g(x_i) C(k,i) s^i (1-s)^(k-i), x_i at s = i/k (S26)
-    taylor_fit(derivative, degree, b)     h(x) = sum_i g^(i)(b)/i! (x-b)^i from derivative(i, b)   (S25)
-    g may be one callable or a sequence of per-channel callables (coefficients then have shape (D+1, C)).
-
-Change of basis
-    Fit.to_monomial(b) returns c_k with h(x) = sum_k c_k (x - b)^k in the ORIGINAL variable x:
-    basis -> monomials in t (or s) by the three-term recurrences (or binomial expansion), then the
-    Taylor shift to t_b = t(b) and the scaling (t - t_b)^k = (dt/dx)^k (x - b)^k. Fit.series(center)
-    wraps that as a PolynomialSeries for the polynomial and power-series estimators. Monomial
-    coefficients of high-degree fits are large and cancel (conditioning grows roughly like 2.4^degree
-    for Chebyshev on the unit interval), so keep them float64 on the host; see docs/estimators.md.
+Fits: `chebyshev_fit(g, degree, lo=-1, hi=1, nodes="chebyshev", points=None)` (S27),
+`legendre_fit(g, degree, lo=-1, hi=1, nodes="gauss", points=None)` (S28), `bernstein_fit(g, degree,
+lo=0, hi=1)` (S26), `taylor_fit(derivative, degree, b)` (S25); g may be per-channel callables.
+`Fit.to_monomial(b)` gives c_k with h(x) = sum_k c_k (x - b)^k; `Fit.series(center)` wraps it for
+the estimators. Nodes, weights and conditioning: docs/design/polynomial_fits.md.
 """
 from __future__ import annotations
 
@@ -47,8 +20,18 @@ from . import arrays as A
 from .coefficients import PolynomialSeries, taylor_shift
 
 __all__ = [
-    "Fit", "to_unit", "from_unit", "chebyshev_nodes", "even_nodes", "gauss_legendre", "chebyshev_basis",
-    "legendre_basis", "chebyshev_fit", "legendre_fit", "bernstein_fit", "taylor_fit",
+    "Fit",
+    "to_unit",
+    "from_unit",
+    "chebyshev_nodes",
+    "even_nodes",
+    "gauss_legendre",
+    "chebyshev_basis",
+    "legendre_basis",
+    "chebyshev_fit",
+    "legendre_fit",
+    "bernstein_fit",
+    "taylor_fit",
 ]
 
 BASES = ("chebyshev", "legendre", "bernstein", "monomial")

@@ -1,22 +1,12 @@
 """Running estimators on numpy with known test distributions (for tests, benchmarks and docs).
 
-What it is
-    ``estimate_numpy`` wraps ``Estimator.run`` with a numpy draw/uniform pair whose carry counts the
-    draws per lane, so tests can check both the values and the sample counts. The distributions have
-    closed-form mean, variance and quantile function (the quantile serves the stratified comb:
-    draw(carry, u) returns quantile(u)).
-
-Parameters
-    estimate_numpy(estimator, dist, lanes, rng, channels=None, dtype=np.float64, active=None)
-        dist      a Distribution below, or a callable sample(rng, size) -> (size,) / (size, C)
-        channels  None: values of shape (lanes,); C: (lanes, C) with channel c = (1 + c) x, one
-                  draw x per lane (like RGB from one path: correlated channels, means (1 + c) E[x])
-    returns NumpyEstimate(values, draws)
-    estimate_drjit(estimator, dist, lanes, seed=0, channels=None, like=None, active=None)
-        the same inside a Dr.Jit kernel: the carry is (PCG32, per-lane draw counter), x uses the
-        distribution's quantile of a PCG32 uniform (channels=3: Array3f, or like=, with channel c = (1 + c) x);
-        returns NumpyEstimate with numpy copies. The Dr.Jit types come from like's backend, else from
-        the backend in use (``arrays.backend_module``); Dr.Jit is imported (libLLVM configured) if needed.
+`estimate_numpy(estimator, dist, lanes, rng, channels=None, dtype=np.float64, active=None)` runs
+`Estimator.run` with a draw/uniform pair that counts draws per lane; dist is a Distribution here or
+a callable sample(rng, size); channels=C gives (lanes, C) values with channel c = (1 + c) x. Returns
+NumpyEstimate(values, draws). `estimate_drjit(estimator, dist, lanes, seed=0, channels=None,
+like=None, active=None)` does the same inside a Dr.Jit kernel (PCG32 uniforms through the quantile
+function). The distributions (`Uniform`, `Exponential`, `TwoPoint`) have closed-form mean, variance
+and quantile.
 """
 from __future__ import annotations
 
@@ -141,8 +131,9 @@ def estimate_numpy(estimator, dist, lanes: int, rng, channels=None, dtype=np.flo
     return NumpyEstimate(values, carry["draws"])
 
 
-def estimate_drjit(estimator, dist: Distribution, lanes: int, seed: int = 0, channels=None, like=None,
-                   active=None) -> NumpyEstimate:
+def estimate_drjit(
+    estimator, dist: Distribution, lanes: int, seed: int = 0, channels=None, like=None, active=None
+) -> NumpyEstimate:
     """One estimate per lane inside a Dr.Jit loop whose carry holds a PCG32 and a draw counter."""
     if channels not in (None, 3):
         raise ValueError(f"estimate_drjit supports channels=None (Float) or 3 (Array3f), got {channels!r}")

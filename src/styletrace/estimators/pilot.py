@@ -1,24 +1,13 @@
 """Expansion points: a fixed b, or b estimated from separate pilot samples.
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3: "one
-    reasonable choice for the expansion point b is an estimate <I> of the integral I". The series
-    estimators stay unbiased only if b is independent of the samples used for the terms, so the
-    pilot consumes its own first n samples and the terms use later, independent ones.
+Reference: West & Mukherjee, supplement S2.3 ("one reasonable choice for the expansion point b is an
+estimate <I>"). Series estimators stay unbiased only if b is independent of the term samples, so the
+pilot consumes its own first n samples.
 
-Parameters
-    Pilot(n=1, lo=None, hi=None, scale=1, spread=0): b = clamp(max(scale * mean, spread * mean(x^2) / mean(x))
-    over n pilot draws, lo, hi) (the second term only where spread > 0 and mean(x) > 0), then moved
-    into the series' convergence region by ``Series.clamp_center`` (see coefficients.py). Clamping or
-    scaling a pilot estimate keeps unbiasedness: b is still independent of the term samples. A scale
-    above 1 widens the convergence region (0, 2b) of series such as I^p beyond the pilot's own estimate,
-    which guards against pilots that underestimate I (few or sparse samples) at some cost in variance.
-    spread: a term estimate is a product of (x_i - b) / b over children, whose second moment grows like
-    rho^k, rho = E[(X - b)^2] / b^2; b* = E[X^2] / E[X] minimizes rho, to cv^2 / (1 + cv^2) < 1
-    (docs/estimators.md, "Gamma and the series estimators"). spread = 1 aims at b*; it needs a pilot that
-    sees the rare bright children (measured on path-traced fireflies: 16 fail, 64 suffice on some scenes only).
-    PerLane(b): b given per lane by the caller, e.g. from a separate pass over other children (the renderer's
-    `expansion_pass`); it is clamped as a pilot's b is, and the estimator draws no pilot children.
+`Pilot(n=1, lo=None, hi=None, scale=1, spread=0)`: b = clamp(max(scale mean, spread mean(x^2) /
+mean(x)), lo, hi) over n pilot draws, then `Series.clamp_center`. `PerLane(b)`: b given per lane
+(the renderer's `expansion_pass`), clamped as a pilot's. Why scale and spread:
+docs/design/power_series.md.
 """
 from __future__ import annotations
 

@@ -1,27 +1,14 @@
 """Unbiased estimators of polynomials of I: naive products (S6) and the U-statistic (S7-S8).
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.2:
-      naive        <I^k> = x_1 x_2 ... x_k, the product of k independent samples        (S6)
-      U-statistic  <I^k> = mean over all k-subsets of n samples of their product
-                         = e_k(x_1..x_n) / C(n, k)                                   (S7-S8)
-    (Lee, Tiberi, Zanella, "Unbiased approximations of products of expectations", 2019; the
-    U-statistic is the minimum-variance unbiased estimator, Halmos 1946.)
-    The running-mean recurrence is Algorithm 1 of Kettunen, d'Eon, Pantaleoni, Novak, "An Unbiased
-    Ray-Marching Transmittance Estimator", 2021: keep m_k = e_k / C(n, k), m_0 = 1; for each new
-    sample x_n and k = min(n, K) down to 1:  m_k += (k / n) (x_n m_(k-1) - m_k).
-    Every update is a weighted average of O(1) quantities: no binomials, no overflow, and all
-    terms k = 1..K come out of the same pass.
+Reference: West & Mukherjee, supplement S2.2 (Lee, Tiberi, Zanella 2019; Halmos 1946):
+    naive        <I^k> = x_1 ... x_k                      (S6)
+    U-statistic  <I^k> = e_k(x_1..x_n) / C(n, k)          (S7-S8)
+computed with Kettunen, d'Eon, Pantaleoni, Novak's running-mean recurrence (2021, Algorithm 1), m_k
++= (k / n) (x_n m_(k-1) - m_k): no binomials, no overflow, all terms in one pass.
 
-Parameters
-    PolynomialNaive(poly, b=None)
-        poly   PolynomialSeries, a fit (anything with .series()), or coefficients of I^k.
-        b      expansion point: None (the polynomial's own center), a fixed float / per-channel vector,
-               or Pilot(n). The samples fed to the terms are y = x - b.
-        Cost: degree K samples. Term k is the product of the first k samples: each term's k factors
-        are independent, and the terms share their prefix (Theorem 4.1 allows sums to share samples).
-    PolynomialU(poly, n, b=None)
-        n      samples (>= degree K). Cost: n samples (plus the pilot).
+`PolynomialNaive(poly, b=None)`: poly a PolynomialSeries, a fit or coefficients of I^k; b None (the
+polynomial's centre), a fixed value or Pilot(n); cost: degree K samples (terms share their prefix).
+`PolynomialU(poly, n, b=None)`: n >= K samples (plus the pilot).
 """
 from __future__ import annotations
 

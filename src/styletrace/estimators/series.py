@@ -1,36 +1,15 @@
 """Power-series estimators: sum_k a_k (I - b)^k with randomly selected, reweighted terms.
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3 (S9-S13),
-    after Georgiev, Misso, Hachisuka, Nowrouzezahrai, Krivanek, Jarosz, "Integral Formulations of
-    Volumetric Transmittance", 2019:
-      single      <h> = a_k <(I-b)^k> / P(k),           one term k ~ P            (S11)
-      iterative   <h> = sum_{k<=N} a_k <(I-b)^k> / P(N >= k), N drawn first      (S12)
-      recursive   <h> = sum_{k<=N} a_k <(I-b)^k> / prod_{j<=k} q_j, Russian roulette with
-                  continuation probability q_j decided after each term            (S13)
-    Term estimates <(I-b)^k>: "naive" = product of k samples of (x - b) (S6), the terms sharing their
-    prefix, so N terms cost N samples; "ustat" (iterative only: N must be known before the samples) =
-    the U-statistic of order k over all N samples via the running-mean recurrence of Kettunen,
-    d'Eon, Pantaleoni, Novak, "An Unbiased Ray-Marching Transmittance Estimator", 2021 (S7-S8).
-    Unbiased when b is independent of the term samples: a fixed b, or Pilot(n) (its own samples).
+Reference: West & Mukherjee, supplement S2.3 (S9-S13), after Georgiev, Misso, Hachisuka,
+Nowrouzezahrai, Krivanek, Jarosz, "Integral Formulations of Volumetric Transmittance" (2019): single
+term (S11), iterative prefix sum (S12), recursive Russian roulette (S13); term estimates "naive"
+(products, S6) or "ustat" (U-statistics, S7-S8, Kettunen, d'Eon, Pantaleoni, Novak 2021). Unbiased
+when b is independent of the term samples.
 
-Parameters (defaults)
-    series       a coefficients.Series (exp_series, reciprocal_series, gamma_series, taylor_series,
-                 a fit's .series(), ...).
-    b            Pilot(1) (default), a fixed float or per-channel vector (checked by the series), or
-                 PerLane(b) (b from a separate pass, one per lane).
-    selection    "iterative" (default), "recursive" or "single".
-    truncation   a truncation.Truncation or its name; default per selection: iterative ->
-                 PoissonCMF(tau=2), recursive -> Cumulative(), single -> Poisson(tau=2).
-    terms        "ustat" (default for iterative) or "naive" (recursive and single are always naive).
-    scaled       False; True (iterative U-statistic terms, ratio series): the terms are evaluated as
-                 (a_k b^k) x U-statistic of ((x - b) / b)^k, the same sum with factors that stay within float32
-                 for small b and many terms (a_k = C(p, k) b^(p - k) overflows past ~22 terms at b = 0.02).
-    max_terms    64: no term beyond this (nor beyond a finite series' degree, nor where the truncation
-                 probability is below 2^-24) is ever evaluated; the estimate is then unbiased for the
-                 series truncated there. "ustat" keeps max_terms running means per lane.
-
-Cost: pilot + (number of terms after the zeroth) samples for prefix sums, pilot + k for single-term.
+`SeriesEstimator(series, b=Pilot(1), selection="iterative", truncation=None, terms=None,
+max_terms=64, scaled=False)`: truncation defaults per selection (iterative: PoissonCMF(2),
+recursive: Cumulative(), single: Poisson(2)). Cost: pilot + number of terms after the zeroth
+(single: pilot + k). Details: docs/design/power_series.md.
 """
 from __future__ import annotations
 
@@ -75,13 +54,17 @@ class SeriesEstimator(Estimator):
         if terms not in ("naive", "ustat"):
             raise ValueError(f"unknown term estimator {terms!r}; allowed: 'naive', 'ustat'")
         if terms == "ustat" and selection != "iterative":
-            raise ValueError(f"terms='ustat' needs the number of terms before the samples are drawn: use "
-                             f"selection='iterative' (got selection={selection!r})")
+            raise ValueError(
+                f"terms='ustat' needs the number of terms before the samples are drawn: use "
+                f"selection='iterative' (got selection={selection!r})"
+            )
         self.terms = terms
         self.scaled = bool(scaled)
         if self.scaled and not (selection == "iterative" and terms == "ustat" and hasattr(series, "ratio")):
-            raise ValueError(f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
-                             f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})")
+            raise ValueError(
+                f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
+                f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
+            )
         if self.truncation.adaptive and selection != "recursive":
             raise ValueError(f"{self.truncation.name} truncation adapts to the samples, so only "
                              f"selection='recursive' can use it (got {selection!r})")
@@ -96,13 +79,17 @@ class SeriesEstimator(Estimator):
             if selection == "single":
                 bad = np.flatnonzero(self.pmf <= 0.0)
                 if bad.size:
-                    raise ValueError(f"single-term selection needs P(k) > 0 for every term k <= {self.K}, but "
-                                     f"{self.truncation.name} gives P(k) = 0 for k in {bad.tolist()}; use "
-                                     f"Poisson(tau) or Geometric(p)")
+                    raise ValueError(
+                        f"single-term selection needs P(k) > 0 for every term k <= {self.K}, but "
+                        f"{self.truncation.name} gives P(k) = 0 for k in {bad.tolist()}; use "
+                        f"Poisson(tau) or Geometric(p)"
+                    )
                 self.inv_pmf = 1.0 / self.pmf
         if terms == "ustat" and self.K > MAX_USTAT_TERMS:
-            raise ValueError(f"terms='ustat' keeps one running mean per term; K={self.K} > {MAX_USTAT_TERMS}: "
-                             f"lower max_terms")
+            raise ValueError(
+                f"terms='ustat' keeps one running mean per term; K={self.K} > {MAX_USTAT_TERMS}: "
+                f"lower max_terms"
+            )
         self.name = f"series[{series.name}; {selection}/{self.truncation.name}/{terms}; {self.point.describe()}]"
 
     # -- helpers ----------------------------------------------------------------------------------

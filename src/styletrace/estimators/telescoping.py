@@ -1,23 +1,14 @@
 """Telescoping debiasing of the direct estimator (randomized telescoping sum).
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eq. 15 (form inferred), after
-    Misso, Li, Burley, Teece, Jarosz, "Unbiased and Consistent Rendering using Biased Estimators", 2022:
-        <g(I)> = g(<I>_n0) + sum_{j=1..N} [g(<I>_(n0+j)) - g(<I>_(n0+j-1))] / P(N >= j),
-    N drawn from a truncation distribution before the samples; the nested means share samples
-    (<I>_(n0+j) extends <I>_(n0+j-1) by one draw), so N differences cost N draws.
-    Its expectation is E[g(<I>_(n0+K))] for the largest reachable K (see truncation.py: terms with
-    P(N >= j) < 2^-24 or j > max_terms are never reached), i.e. the direct estimator's bias at
-    n0 + K samples, approximately g''(I) Var / (2 (n0 + K)); it is unbiased only as K -> infinity.
-    The differences shrink like 1/(n0 + j), so the variance contributed by term j is about
-    g'(I)^2 Var / ((n0 + j)^2 P(N >= j)): heavy-tailed N (PowerLaw) keeps this finite up to the cap at
-    a small mean cost; light tails (Geometric) make the weights 1/P explode. Measure before use.
+Reference: West & Mukherjee, Eq. 15 (form inferred), after Misso, Li, Burley, Teece, Jarosz,
+"Unbiased and Consistent Rendering using Biased Estimators" (2022):
+    <g(I)> = g(<I>_n0) + sum_{j=1..N} [g(<I>_(n0+j)) - g(<I>_(n0+j-1))] / P(N >= j),
+N drawn before the samples; the nested means share samples, so N differences cost N draws. Its
+expectation is the direct estimator's at n0 + K samples, K the largest reachable term: unbiased only
+as K -> infinity. Heavy tails (PowerLaw) keep the variance finite; light tails make 1/P explode.
 
-Parameters (defaults)
-    g            callable, array-generic, g(x) -> y.
-    n0           samples of the base term (>= 1). Default 1.
-    truncation   a sample-independent Truncation. Default PowerLaw(alpha=1.5).
-    max_terms    2**16 (largest number of differences).
+`Telescoping(g, n0=1, truncation=PowerLaw(1.5), max_terms=2**16)`. Details:
+docs/design/power_series.md.
 """
 from __future__ import annotations
 

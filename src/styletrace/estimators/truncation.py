@@ -1,35 +1,13 @@
 """Truncation distributions: which terms of an infinite sum get evaluated, and with what weight.
 
-Reference
-    Georgiev, Misso, Hachisuka, Nowrouzezahrai, Krivanek, Jarosz, "Integral Formulations of
-    Volumetric Transmittance", 2019 (single-term, prefix-sum, Russian roulette; "cumulative" and
-    "CMF" power-series estimators), and Kettunen, d'Eon, Pantaleoni, Novak, "An Unbiased
-    Ray-Marching Transmittance Estimator", 2021 (deterministic terms up to a Poisson CMF threshold).
-
-Notation
-    N is the last term index evaluated (terms 0..N). S(k) = P(N >= k), S(0) = 1; a prefix-sum
-    estimator weights term k by 1 / S(k); Russian roulette continues from term k-1 to term k with
-    probability q_k = S(k) / S(k-1). Any rule with S(k) > 0 for every needed term is unbiased.
-
-Distributions (parameters, defaults)
-    Cumulative(min_continue=0.0)  adaptive: after term k (k >= 0) continue to k+1 with probability
-        q = clamp(W_k, min_continue, 1), W_k = max over channels of |a_k <(I-b)^k>| / (Q_k |a_0|)
-        (|a_0| replaced by 1 where a_0 = 0), Q_k = product of the continuation probabilities so far:
-        the running term weight relative to the zeroth term. W_0 = 1, so term 1 is always reached.
-        Depends on the samples, so only recursive (Russian roulette) selection can use it. A series
-        with an interior zero coefficient (a_k = 0 but a_j != 0 for some j > k) stops there unless
-        min_continue > 0: use a positive floor for such series.
-    PoissonCMF(tau=2.0, threshold=0.99)  terms 0..K0 always, K0 = the first k where the Poisson(tau)
-        CMF reaches `threshold`; beyond, continue to term k with probability min(1, tau / k).
-    Poisson(tau=2.0)      N ~ Poisson(tau): S(k) = P(Poisson(tau) >= k). Full support: usable by
-        single-term selection (term k chosen with probability e^-tau tau^k / k!).
-    Geometric(p=0.5, min_terms=0)   S(k) = 1 for k <= min_terms, p^(k - min_terms) beyond.
-    PowerLaw(alpha=1.5, min_terms=0) S(k) = 1 for k <= min_terms, (k - min_terms + 1)^(-alpha) beyond:
-        heavy tails for the telescoping estimator, whose differences shrink only like 1/k.
-
-Effective cap
-    Terms with S(k) < 2^-24 are never evaluated (a float32 uniform cannot resolve them), nor terms
-    beyond `max_terms`; the estimate is then exactly unbiased for the series truncated there.
+Reference: Georgiev et al., "Integral Formulations of Volumetric Transmittance" (2019); Kettunen,
+d'Eon, Pantaleoni, Novak, "An Unbiased Ray-Marching Transmittance Estimator" (2021). N is the last
+term evaluated, S(k) = P(N >= k); a prefix sum weights term k by 1 / S(k), Russian roulette
+continues with q_k = S(k) / S(k-1). Distributions: `Cumulative(min_continue=0)` (adaptive, recursive
+selection only), `PoissonCMF(tau=2, threshold=0.99)`, `Poisson(tau=2)`, `Geometric(p=0.5,
+min_terms=0)`, `PowerLaw(alpha=1.5, min_terms=0)`. Terms with S(k) < 2^-24 or beyond `max_terms` are
+never evaluated: the estimate is unbiased for the series truncated there. Details:
+docs/design/power_series.md.
 """
 from __future__ import annotations
 
@@ -96,8 +74,10 @@ class Cumulative(Truncation):
         self.name = "cumulative" + (f"(min={self.min_continue:g})" if self.min_continue else "")
 
     def survival(self, kmax):
-        raise ValueError("cumulative truncation adapts to the samples: it has no fixed distribution "
-                         "(use selection='recursive')")
+        raise ValueError(
+            "cumulative truncation adapts to the samples: it has no fixed distribution "
+            "(use selection='recursive')"
+        )
 
     def cap(self, max_terms):
         return max_terms
@@ -135,7 +115,8 @@ class Poisson(Truncation):
         pk[0] = math.exp(-self.tau)
         for k in range(1, M + 1):
             pk[k] = pk[k - 1] * self.tau / k
-        # S(k) = 1 - CMF(k-1); in the tail, summing the pmf is more accurate than 1 minus a CMF near 1
+        # S(k) = 1 - CMF(k-1); in the tail, summing the pmf is more accurate than 1 minus a CMF near
+        # 1
         tail = np.cumsum(pk[::-1])[::-1]
         head = 1.0 - np.concatenate([[0.0], np.cumsum(pk)[:-1]])
         return np.where(head > 0.5, head, tail)[:kmax + 1]

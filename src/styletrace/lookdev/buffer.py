@@ -1,58 +1,13 @@
 """The expectation buffer: per camera sample, everything a stylized image depends on except θ.
 
-Two kinds (`header["stores"]`): "mean" for the `direct` and `affine` estimators, "sequence" for the
-unbiased ones (series, series_recursive, series_single, ustat, naive, telescoping, combined).
-
-For `first_hit` and `first_object_hit` (one stylized level) with the `direct` or `affine` estimator, a
-camera sample's contribution to its pixel is
-
-    value = L_before + beta * g_θ(mean, vertex)          (L_before + 0 where no stylized vertex was found)
-
-so storing, per camera sample, its pixel, its stylized vertex, its style slot, the radiance gathered
-before the vertex, the throughput to it and the mean of its n child estimates lets any θ be evaluated
-again without tracing a ray (`lookdev.restyle`). None of it depends on θ.
-
-File format (`.npz`, written atomically: a temporary file in the target folder, then `os.replace`):
-
-    header   uint8 array: UTF-8 JSON, {"format": "styletrace-buffer", "version": 1, ...} (`Buffer.header`)
-    pixel    uint32 (N,)     row-major index in the film's crop window of the pixel of its lane
-    slot     int8   (N,)     index into header["slots"]; -1: the camera sample has no stylized vertex
-    p, n, wo float32 (3, N)  vertex position, shading normal, direction towards the viewer
-    mean     float32 (3, N)  mean of the n child estimates (0 for closed-form styles, n = 0)
-    L_before float32 (3, N)  radiance gathered before the vertex (first_hit: the environment on a miss)
-    beta     float32 (3, N)  throughput to the vertex (first_object_hit only; first_hit: 1 where slot >= 0)
-    depth    uint32 (N,)     path depth of the vertex (first_object_hit only; first_hit: 0)
-
-Size per camera sample: 65 bytes for first_hit, 81 bytes for first_object_hit (`bytes_per_sample`).
-
-A film whose reconstruction filter is not a box (`header["filter"]`: the filter's plugin dict,
-`lookdev.film_filter.describe`; "box" otherwise) adds, per camera sample (9 bytes):
-
-    pos      float32 (2, N)  its film position, Mitsuba's sample_pos (the full film's pixels)
-    own      uint8  (N,)     1: one of its pixel's own samples; 0: a border sample (sample_border;
-                             `pixel` the crop's nearest) or one its tile leaves to a neighbour
-
-and keeps every camera sample of every pass (a sample outside its pixel still weighs on the pixels
-its filter covers): each pass's entry in `header["passes"]` names its `samples`, and
-`header["layout"]` the crop windows of the tiles (offset, size and the rows and columns kept, `r0,
-r1, c0, c1`).
-
-A "sequence" buffer keeps, instead of `mean`, what the estimator consumed in call order (`lookdev.sequence`):
-
-    seq_count uint32 (N,)    events per camera sample
-    seq_kind  uint8  (E,)    1: a child, 0: a uniform number
-    child     float32 (3, C) the children, uniform float32 (U,) the uniform numbers
-
-Size per camera sample: 53 bytes (69 with first_object_hit) + 4 + 13 per child + 5 per uniform, e.g.
-~200 bytes for `series` on gamma with n = 8 (BENCHMARKS.md); capped at MAX_SEQUENCE_SAMPLES camera samples
-and MAX_EVENTS_PER_SAMPLE (64) events per camera sample on average.
-The camera samples of all passes are concatenated in pass order; `header["passes"]` lists each
-pass's spp and seed. A film of more than LANES_PER_PASS pixels is rendered in tiles
-(`pipeline.passes`): each pass then covers one tile (its index in the entry, and `header["tiles"]`
-their number), its samples' `pixel` is the film's, and (box filter) the pixels it shares with a
-neighbouring tile are left to that tile, as in the render.
-The sensor's to-world matrix is kept so that styles that read the camera (`prepare`) see the same camera
-when restyling.
+Two kinds (`header["stores"]`): "mean" (`direct`, `affine`: value = L_before + beta g_θ(mean,
+vertex)) and "sequence" (the unbiased estimators: the children and uniforms in call order,
+`lookdev.sequence`). Arrays per camera sample: pixel, slot, p, n, wo, mean, L_before, beta, depth,
+plus pos and own for a non-box filter, or seq_count, seq_kind, child and uniform for a sequence
+buffer; the header keeps the passes, tiles, filter and the sensor's to-world matrix. Files are
+`.npz`, written atomically. Sizes: `bytes_per_sample` (65 bytes for first_hit); caps `MAX_SAMPLES`,
+`MAX_SEQUENCE_SAMPLES`, `MAX_EVENTS_PER_SAMPLE`. Layout in full: docs/lookdev.md and
+docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 
@@ -72,7 +27,8 @@ VERSION = 3  # 3: filters other than a box; 2: "sequence" buffers; versions 1 an
 #: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
 #: bytes_per_sample times this (~270 MB for first_hit)
 MAX_SAMPLES = 1 << 22
-#: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 17 x 64 bytes per camera sample more
+#: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 17 x 64 bytes per camera sample
+#: more
 MAX_SEQUENCE_SAMPLES = 1 << 20
 SEQUENCE = ("seq_count", "seq_kind", "child", "uniform")
 
@@ -103,8 +59,8 @@ def filtered(header: dict) -> bool:
     return not (spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box"))
 
 
-#: a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over it
-#: (`lookdev.restyle.finish_spread`, docs/denoise.md)
+#: a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over
+#: it (`lookdev.restyle.finish_spread`, docs/denoise.md)
 SPREAD = "denoise_spread"
 
 #: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.Pilot.samples`), so that
@@ -118,9 +74,11 @@ class Buffer:
 
     header: dict[str, Any]
     arrays: dict[str, np.ndarray]
-    #: Dr.Jit copies of the arrays, made by `lookdev.restyle` on first use and kept for later restyles
+    #: Dr.Jit copies of the arrays, made by `lookdev.restyle` on first use and kept for later
+    #: restyles
     device: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
-    #: the image rendered while recording (not saved; `restyle` with the recorded style reproduces it)
+    #: the image rendered while recording (not saved; `restyle` with the recorded style reproduces
+    #: it)
     image: Any = field(default=None, repr=False, compare=False)
 
     @property
@@ -219,8 +177,10 @@ def load_buffer(path: str) -> Buffer:
             if not isinstance(header, dict) or header.get("format") != FORMAT:
                 raise ValueError("not a styletrace buffer")
             if header.get("version") not in range(1, VERSION + 1):
-                raise UsageError(f"buffer file {path!r} has format version {header.get('version')!r}; this "
-                                 f"styletrace reads version {VERSION} and earlier")
+                raise UsageError(
+                    f"buffer file {path!r} has format version {header.get('version')!r}; this "
+                    f"styletrace reads version {VERSION} and earlier"
+                )
             arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"),
                                                   filtered(header))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
@@ -241,8 +201,14 @@ def load_buffer(path: str) -> Buffer:
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
     tiles = header.get("tiles", 1)
-    if (not isinstance(tiles, int) or tiles < 1
-            or any(not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles for p in header["passes"])):
+    if (
+        not isinstance(tiles, int)
+        or tiles < 1
+        or any(
+            not isinstance(p.get("tile", 0), int) or not 0 <= p.get("tile", 0) < tiles
+            for p in header["passes"]
+        )
+    ):
         raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
     if filtered(header) and sum(int(p.get("samples", -1)) for p in header["passes"]) != n:
         raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} "
@@ -254,5 +220,16 @@ def load_buffer(path: str) -> Buffer:
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 
-__all__ = ["Buffer", "load_buffer", "SPREAD", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
-           "bytes_per_sample", "filtered", "FILTERED"]
+__all__ = [
+    "Buffer",
+    "load_buffer",
+    "SPREAD",
+    "FORMAT",
+    "VERSION",
+    "MAX_SAMPLES",
+    "MAX_SEQUENCE_SAMPLES",
+    "fields_for",
+    "bytes_per_sample",
+    "filtered",
+    "FILTERED",
+]

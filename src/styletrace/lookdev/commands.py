@@ -16,11 +16,13 @@ from functools import partial
 
 from ..errors import UsageError
 
-BUFFER_HELP = ("also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
-               "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
-               "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's children "
-               "and uniforms: at most 1048576 camera samples and 64 children per sample on average, 57 bytes + 13 "
-               "per child + 5 per uniform each")
+BUFFER_HELP = (
+    "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
+    "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
+    "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's children "
+    "and uniforms: at most 1048576 camera samples and 64 children per sample on average, 57 bytes + 13 "
+    "per child + 5 per uniform each"
+)
 
 
 def check_buffer_path(path: str) -> None:
@@ -53,12 +55,17 @@ def render_with_buffer(args, scene, integrator, lanes: int | None = None, pilot=
     buf.save(args.buffer)
     if failure is not None:
         what = "interrupted" if isinstance(failure, KeyboardInterrupt) else f"error ({api.first_line(failure)})"
-        print(f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished passes to {out} "
-              f"and {args.buffer}", file=sys.stderr)
+        print(
+            f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished passes to {out} "
+            f"and {args.buffer}",
+            file=sys.stderr,
+        )
         return 130 if isinstance(failure, KeyboardInterrupt) else 1
     if not args.quiet:
-        print(f"wrote {out} and {args.buffer} ({buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB)",
-              file=sys.stderr)
+        print(
+            f"wrote {out} and {args.buffer} ({buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB)",
+            file=sys.stderr,
+        )
     return 0 if out == args.output else 1
 
 
@@ -93,8 +100,15 @@ def cmd_fit(args, parse_set, check_output) -> int:
 
     buf = load_buffer(args.buffer)
     style = args.style or buf.header["slots"][0]["style"]
-    result = fit(buf, style=style, target=args.target, iterations=args.iterations, lr=args.lr, fixed=fixed,
-                 **initial)
+    result = fit(
+        buf,
+        style=style,
+        target=args.target,
+        iterations=args.iterations,
+        lr=args.lr,
+        fixed=fixed,
+        **initial,
+    )
     import shlex
     params = {p.name: p for p in get(style).params}
     shown = {k: v for k, v in initial.items() if k not in result.params}
@@ -124,9 +138,13 @@ def add_parsers(sub, parse_set, check_output) -> None:
     r = sub.add_parser("restyle", help="restyle an expectation buffer (from render --buffer) without tracing")
     r.add_argument("buffer", help="buffer file (.npz) written by `styletrace render --buffer`")
     r.add_argument("--style", default=None, help="new style (default: the recorded one)")
-    r.add_argument("--estimator", default=None, help="direct or affine on a buffer of means; on a buffer recorded with an unbiased "
-                   "estimator, any estimator whose requests the stored children and uniforms cover (refused "
-                   "otherwise) (default: the recorded one where it applies)")
+    r.add_argument(
+        "--estimator",
+        default=None,
+        help="direct or affine on a buffer of means; on a buffer recorded with an unbiased "
+        "estimator, any estimator whose requests the stored children and uniforms cover (refused "
+        "otherwise) (default: the recorded one where it applies)",
+    )
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style parameter")
     r.add_argument("-o", "--output", default="restyle.png", help="output image: .exr (linear) or .png (sRGB)")
     r.set_defaults(func=partial(cmd_restyle, parse_set=parse_set, check_output=check_output))

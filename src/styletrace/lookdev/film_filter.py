@@ -1,26 +1,13 @@
 """The film's reconstruction filter for buffers: where Mitsuba put each sample, and its splat.
 
-    spec = describe(film.rfilter())            # {"type": "gaussian", "stddev": 0.5}: the header's
-    pos = positions(sensor, spp, seed)         # 2 x N float32: each camera sample's film position
-    img = develop(buf, values)                 # the restyled image, as Mitsuba's film develops it
+    spec = describe(film.rfilter())        # the header's filter: {"type": "gaussian", ...}
+    pos = positions(sensor, spp, seed)     # 2 x N float32: each camera sample's film position
+    img = develop(buf, values)             # the restyled image, as Mitsuba's film develops it
 
-How Mitsuba 3 places and weights a camera sample (SamplingIntegrator::render and render_sample, JIT
-variants): lane i of a pass of s spp is pixel i // s of the crop window (widened by the filter's
-border on each side where the film samples its border), its film position is that pixel's corner
-(crop offset included) plus the sensor sampler's first `next_2d()` of the pass, the sampler seeded
-with `seed(pass seed, lanes)` after `set_sample_count(s)` and `set_samples_per_wavefront(s)`.
-`positions` draws that same `next_2d()` from a clone of the sampler: bit for bit the render's
-(checked for the independent, stratified and multijitter samplers,
-tests/lookdev/test_film_filter.py).
-
-The pass's ImageBlock has the crop window's size and offset, no border (samples outside the crop
-only contribute to the pixels inside it), no normalisation, and is coalesced in LLVM variants at >=
-4 spp per pass; `ImageBlock.put` weighs a sample by `rfilter.eval` (not `eval_discretized`) of its
-offset from each pixel centre along x times along y (a box filter: weight 1 in the pixel of the
-lane, at its integer position), adding the weight to channel W; `HDRFilm.develop` divides the
-weighted sum by W (W = 0: 0). `develop` builds that ImageBlock per pass, with the rebuilt filter,
-develops it, keeps the pixels the pass's tile keeps and averages the passes weighted by their spp,
-as `pipeline.passes` does.
+`positions` draws the sensor sampler's first `next_2d()` from a clone of it, bit for bit the
+render's; `develop` splats with `rfilter.eval` per pass into an ImageBlock, develops, keeps the
+tile's pixels and averages the passes by spp. How Mitsuba places and weighs samples:
+docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 

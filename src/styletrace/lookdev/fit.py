@@ -1,31 +1,12 @@
 """Inverse stylization: θ that make a buffer's restyled image match a target image.
 
-    result = styletrace.fit(buf, style="cel", target=img)       # img: H x W x 3 linear, or an image file
-    result.params        # {'thresholds': (0.3,), 'levels': (0.1, 0.9)}, validated by the style
-    result.image         # restyle(buf, style="cel", **result.params)
+    result = styletrace.fit(buf, style="cel", target=img)   # .params (validated), .image
 
-Gradient descent through the restyle kernel (`lookdev.restyle.sample_values` + `accumulate`) with Dr.Jit's
-automatic differentiation (an `_ad_` variant): the parameters are Dr.Jit arrays with gradients enabled,
-the loss is the mean squared error over the pixels' RGB values, `dr.backward` gives its gradient and
-Adam (`drjit.opt.Adam`, Kingma and Ba, "Adam: A Method for Stochastic Optimization", 2015) steps,
-with a learning rate falling geometrically from `lr` to `lr / 100` over the iterations.
-
-What is fitted: every parameter of kind float, floats and colour, and the colours of a gradient's stops
-(its positions stay where the initial gradient puts them). Integer, boolean, choice and vector
-parameters stay at their initial values, and so do hatching's angle, spacing and thickness (the line
-pattern is periodic in them: the loss has a minimum per period); `fixed=` holds any other parameter too. After each step each
-parameter is clamped to its declared range. Fitting uses the `direct` estimator (g of the children's mean).
-
-Step styles have no useful gradient (a step's derivative is zero almost everywhere), so during fitting
-they are replaced by a smoothed surrogate with temperature τ:
-- cel: the band target m(u) = m_0 + sum_j (m_j - m_{j-1}) H(u - t_j) with the Heaviside step H replaced
-  by the logistic sigmoid s((u - t_j) / τ); thresholds are kept sorted;
-- hatching: the line test dist_j < d/2 becomes s((d/2 - dist_j) / (τ spacing)) and the active-set test
-  m > j becomes s((m' - j - 1/2) / τ) with m' = coverage sets + 1/2 unrounded, lines combined as
-  1 - prod_j (1 - line_j active_j).
-τ falls geometrically from `tau` (default 0.1) to `tau_end` (default 1e-4) over the iterations, so late
-iterations fit nearly the true style. The loss reported (and the convergence test) uses the true style.
-Halftone's steps are not smoothed: fitting it is refused with one line.
+Gradient descent (Adam) through the restyle kernel with Dr.Jit's AD on the mean squared error.
+Fitted: float, floats and colour parameters and a gradient's stop colours, clamped to their ranges
+after each step; `fixed=` holds others. Step styles (cel, hatching) are smoothed with a temperature
+τ falling from `tau` to `tau_end`; halftone is refused with one line. The `direct` estimator is
+used. Rationale and the surrogates: docs/design/fitting_surrogates.md.
 """
 from __future__ import annotations
 
@@ -45,11 +26,19 @@ from ..styles.gradient import Gradient
 from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for
 
 FITTABLE = ("float", "floats", "color", "gradient")
-#: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in Python; the
-#: tone styles' exposure is the scene's normalisation, resolved from the pilot, and for contrast and reinhard it
-#: is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s + I))
-NOT_FITTED = {"hatching": ("angle", "spacing", "thickness"), "contrast": ("exposure",), "reinhard": ("exposure",),
-              "gamma": ("exposure",), "tie_dye": ("exposure",)}
+#: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in
+#: Python; the
+#: tone styles' exposure is the scene's normalisation, resolved from the pilot, and for contrast and
+#: reinhard it
+#: is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s +
+#: I))
+NOT_FITTED = {
+    "hatching": ("angle", "spacing", "thickness"),
+    "contrast": ("exposure",),
+    "reinhard": ("exposure",),
+    "gamma": ("exposure",),
+    "tie_dye": ("exposure",),
+}
 #: styles whose steps have no smoothed surrogate
 NOT_SMOOTHED = ("halftone",)
 
@@ -64,7 +53,8 @@ class FitResult:
     image: np.ndarray | None = None
 
 
-# ---- θ as Dr.Jit arrays ------------------------------------------------------------------------------
+# ---- θ as Dr.Jit arrays
+# ------------------------------------------------------------------------------
 
 def _flatten(kind: str, value: Any) -> list[float]:
     if kind == "float":
@@ -102,7 +92,8 @@ def _clamp(p, x: mi.Float) -> mi.Float:
     return x
 
 
-# ---- smoothed surrogates -------------------------------------------------------------------------------
+# ---- smoothed surrogates
+# -------------------------------------------------------------------------------
 
 def _sigmoid(x):
     return dr.rcp(1.0 + dr.exp(-x))
@@ -147,27 +138,43 @@ def _smooth_hatching(style, I, v, tau):
 SURROGATES: dict[str, Callable] = {"cel": _smooth_cel, "hatching": _smooth_hatching}
 
 
-# ---- the loop ----------------------------------------------------------------------------------------
+# ---- the loop
+# ----------------------------------------------------------------------------------------
 
 def read_target(target: Any, width: int, height: int) -> np.ndarray:
     if isinstance(target, np.ndarray):
         img = np.asarray(target, dtype=np.float32)
     else:
         try:
-            bmp = mi.Bitmap(str(target)).convert(pixel_format=mi.Bitmap.PixelFormat.RGB,
-                                                 component_format=mi.Struct.Type.Float32, srgb_gamma=False)
+            bmp = mi.Bitmap(str(target)).convert(
+                pixel_format=mi.Bitmap.PixelFormat.RGB,
+                component_format=mi.Struct.Type.Float32,
+                srgb_gamma=False,
+            )
         except Exception as exc:
-            raise UsageError(f"cannot read target image {str(target)!r}: {str(exc).strip().splitlines()[-1]}") \
-                from None
+            raise UsageError(
+                f"cannot read target image {str(target)!r}: {str(exc).strip().splitlines()[-1]}"
+            ) from None
         img = np.array(bmp, dtype=np.float32)
     if img.shape != (height, width, 3):
         raise UsageError(f"bad target image of shape {img.shape}: expected {height}x{width}x3 like the buffer")
     return img
 
 
-def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: int = 300, lr: float = 0.1,
-        tau: float = 0.1, tau_end: float = 1e-4, tol: float = 1e-9, fixed: tuple[str, ...] = (), check_every: int = 10,
-        callback: Callable[[int, float], None] | None = None, **initial: Any) -> FitResult:
+def fit(
+    buffer: Any,
+    style: str | None = None,
+    target: Any = None,
+    iterations: int = 300,
+    lr: float = 0.1,
+    tau: float = 0.1,
+    tau_end: float = 1e-4,
+    tol: float = 1e-9,
+    fixed: tuple[str, ...] = (),
+    check_every: int = 10,
+    callback: Callable[[int, float], None] | None = None,
+    **initial: Any,
+) -> FitResult:
     """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled buffer matches
     `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB). `initial` gives starting
     values (the style's defaults otherwise); `fixed` names parameters to keep."""
@@ -179,18 +186,23 @@ def fit(buffer: Any, style: str | None = None, target: Any = None, iterations: i
         raise UsageError(f"bad value {iterations!r} for iterations: expected an integer >= 1")
     buf = as_buffer(buffer)
     if buf.stores != "mean":
-        raise UsageError("fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
-                         "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
-                         "through")
-    # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a render would)
+        raise UsageError(
+            "fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
+            "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
+            "through"
+        )
+    # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a
+    # render would)
     slots = prepare(buf, slots_for(buf, style, "direct", None, **initial))
     owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
     if not owned:
         raise UsageError("this buffer has no styled object to fit (first_object_hit without styled objects)")
     base = slots[owned[0]].style
     if base.name in NOT_SMOOTHED:
-        raise UsageError(f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one of "
-                         f"the other styles")
+        raise UsageError(
+            f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one of "
+            f"the other styles"
+        )
     for k in fixed:
         if k not in base.values:
             raise UsageError(f"bad fixed parameter {k!r}: style '{base.name}' has {', '.join(base.values) or 'none'}")

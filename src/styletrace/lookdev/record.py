@@ -1,27 +1,12 @@
 """Recording an expectation buffer while rendering: `render_buffer` and the recording integrator.
 
     buf = styletrace.render_buffer("cornell-box", style="cel", spp=16, inner=16, seed=0)
-    buf.save("box.npz")
 
-`RecordingIntegrator` is the `stylized` integrator that also keeps, per camera sample (SIMD lane), the
-θ-free data of `lookdev.buffer`. Mitsuba's render loop calls `sample()` once per pass for the whole
-wavefront; the kept arrays are scheduled there, so the kernel that evaluates the image writes them too,
-and they are collected after each pass of `pipeline.passes` (the same passes and pass seeds as `render`).
-Lane i of a pass of s spp belongs to pixel i // s of the crop window, row-major (Mitsuba's
-SamplingIntegrator::render); with a box filter every sample lands in that pixel with weight 1. With
-another filter the buffer also keeps each sample's film position (`film_filter.positions`), and
-restyles splat it with the filter (`lookdev.film_filter`). A film of more than LANES_PER_PASS pixels
-is rendered one tile (crop window) per pass: `to_film` maps that pass's pixels to the film's and,
-with a box filter, drops those the tile shares with a neighbour, as the render does.
-
-With `direct` or `affine` the buffer keeps the mean of each camera sample's n children. With any other
-estimator (series*, ustat, naive, telescoping, combined) it keeps the sequence of children and uniform
-numbers the estimator consumed, in call order (`lookdev.sequence`), and the recorded image is still
-exactly the render's: the recording wraps the same `draw` and `uniform` around the same stream.
-
-What cannot be recorded raises one line: `first_n_hits` (styles nested in styles), more than one
-stylized level, the expansion pass (`expansion_pass`), a per-sample style (acp), a film other than
-rgb, more camera samples than the cap (`MAX_SAMPLES`; `MAX_SEQUENCE_SAMPLES` for sequence buffers).
+`RecordingIntegrator` is the `stylized` integrator that also keeps, per camera sample, the θ-free
+data of `lookdev.buffer`, written by the same kernel and collected after each pass of
+`pipeline.passes`; the recorded image is the render's. Refused with one line: `first_n_hits`, more
+than one stylized level, `expansion_pass`, a per-sample style (acp), a film other than rgb, more
+samples than the cap. See docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 
@@ -58,30 +43,46 @@ from .sequence import Recorder, budget
 
 def check_recordable(settings: S.Settings, slots) -> None:
     if settings.reuse != "off":
-        raise SettingsError(f"reuse={settings.reuse} cannot be buffered: a buffer keeps each camera sample's own "
-                            f"children, reuse pools its neighbours'; use reuse=off")
+        raise SettingsError(
+            f"reuse={settings.reuse} cannot be buffered: a buffer keeps each camera sample's own "
+            f"children, reuse pools its neighbours'; use reuse=off"
+        )
     if settings.stylize == "first_n_hits":
-        raise SettingsError("stylize=first_n_hits cannot be buffered: its styles nest (each level's children are "
-                            "styled again); use first_hit or first_object_hit")
+        raise SettingsError(
+            "stylize=first_n_hits cannot be buffered: its styles nest (each level's children are "
+            "styled again); use first_hit or first_object_hit"
+        )
     if settings.stylize_depth != 1:
-        raise SettingsError(f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
-                            f"level (1)")
+        raise SettingsError(
+            f"bad value {settings.stylize_depth} for 'stylize_depth': a buffer holds one stylized "
+            f"level (1)"
+        )
     if settings.expansion_pass:
-        raise SettingsError(f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each camera "
-                            f"sample's own children, not a pre-pass's expansion point; use expansion_pass=0")
+        raise SettingsError(
+            f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each camera "
+            f"sample's own children, not a pre-pass's expansion point; use expansion_pass=0"
+        )
     if settings.lines is not None:
-        raise SettingsError("feature lines (lines=true) cannot be buffered: a buffer keeps the radiance before g, "
-                            "not where lines replaced it; record without lines")
+        raise SettingsError(
+            "feature lines (lines=true) cannot be buffered: a buffer keeps the radiance before g, "
+            "not where lines replaced it; record without lines"
+        )
     if settings.aovs:
-        raise SettingsError("bad value True for 'aovs': a buffer keeps the children's means, not the error AOVs; "
-                            "render with aovs instead")
+        raise SettingsError(
+            "bad value True for 'aovs': a buffer keeps the children's means, not the error AOVs; "
+            "render with aovs instead"
+        )
     for slot in slots:
         if S.adaptive(slot.inner):
-            raise SettingsError(f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples': a buffer "
-                                f"keeps one fixed count of children per vertex; use a fixed count")
+            raise SettingsError(
+                f"bad value {','.join(map(str, slot.inner))!r} for 'inner_samples': a buffer "
+                f"keeps one fixed count of children per vertex; use a fixed count"
+            )
         if slot.style.per_sample:
-            raise SettingsError(f"style '{slot.style.name}' cannot be buffered: it applies g to every child "
-                                f"sample, a buffer keeps only their mean")
+            raise SettingsError(
+                f"style '{slot.style.name}' cannot be buffered: it applies g to every child "
+                f"sample, a buffer keeps only their mean"
+            )
 
 
 def check_film(scene: mi.Scene) -> mi.Film:
@@ -123,8 +124,12 @@ def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int,
     if "seq_count" in arrays:  # a sequence's events, children and uniform numbers follow their camera sample
         events = np.repeat(keep, arrays["seq_count"].astype(np.int64))
         kinds = arrays["seq_kind"]
-        out.update(seq_count=arrays["seq_count"][keep], seq_kind=kinds[events],
-                   child=arrays["child"][:, events[kinds == 1]], uniform=arrays["uniform"][events[kinds == 0]])
+        out.update(
+            seq_count=arrays["seq_count"][keep],
+            seq_kind=kinds[events],
+            child=arrays["child"][:, events[kinds == 1]],
+            uniform=arrays["uniform"][events[kinds == 0]],
+        )
     for k, a in arrays.items():
         if k not in out:
             out[k] = a[..., keep]
@@ -161,8 +166,16 @@ class RecordingIntegrator(StylizedIntegrator):
         if "slot" not in kept:  # no stylized vertex traced at all (first_object_hit without styled objects)
             width = dr.width(ray.d)
             zero = dr.zeros(mi.Vector3f, width)
-            kept.update(p=zero, n=zero, wo=zero, mean=mi.Color3f(zero), depth=dr.zeros(mi.UInt32, width),
-                        slot=dr.full(mi.Int32, -1, width), L_before=mi.Color3f(spec), beta=mi.Color3f(zero))
+            kept.update(
+                p=zero,
+                n=zero,
+                wo=zero,
+                mean=mi.Color3f(zero),
+                depth=dr.zeros(mi.UInt32, width),
+                slot=dr.full(mi.Int32, -1, width),
+                L_before=mi.Color3f(spec),
+                beta=mi.Color3f(zero),
+            )
         if self.settings.stylize == "first_hit":
             kept["L_before"] = dr.select(kept["slot"] >= 0, 0.0, spec)  # the environment where nothing was hit
         dr.schedule(*kept.values())  # evaluated by the same kernel as the image
@@ -235,8 +248,9 @@ class RecordingIntegrator(StylizedIntegrator):
             return smp.next_1d(), (smp,)
 
         emitted = emission(scene, si, active) if firefly_cap(self.settings) else None
-        value, _ = child_mean(slot, level, self.settings, emitted).run(draw, (sampler,), uniform, active,
-                                                                         like=mi.Color3f)
+        value, _ = child_mean(slot, level, self.settings, emitted).run(
+            draw, (sampler,), uniform, active, like=mi.Color3f
+        )
         return value
 
 
@@ -259,8 +273,12 @@ def sensor_description(sensor) -> dict:
 
 def _slots(integrator: StylizedIntegrator, scene: mi.Scene) -> list[dict]:
     targets = integrator.targets_for(scene)
-    return [slot_record(t.slot, "object" if t.bsdfs else "integrator", t.bsdfs[0].id() if t.bsdfs else "")
-            for t in targets]
+    return [
+        slot_record(
+            t.slot, "object" if t.bsdfs else "integrator", t.bsdfs[0].id() if t.bsdfs else ""
+        )
+        for t in targets
+    ]
 
 
 def _vec(x) -> np.ndarray:
@@ -286,10 +304,18 @@ def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) 
     return out
 
 
-def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int = 0, label: str = "",
-           max_samples: int = MAX_SAMPLES, lanes_per_pass: int = pass_loop.LANES_PER_PASS, pilot: Pilot | None = None,
-           pass_spp: int | None = None, recorder: Callable[..., RecordingIntegrator] | None = None
-           ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
+def record(
+    scene: mi.Scene,
+    integrator: StylizedIntegrator,
+    spp: int,
+    seed: int = 0,
+    label: str = "",
+    max_samples: int = MAX_SAMPLES,
+    lanes_per_pass: int = pass_loop.LANES_PER_PASS,
+    pilot: Pilot | None = None,
+    pass_spp: int | None = None,
+    recorder: Callable[..., RecordingIntegrator] | None = None,
+) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
     """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
     `Pilot` if the caller resolved the auto values with it already (`render_with_buffer`), so that the pilot
     is traced once for both (it is stored in the buffer). `pass_spp`: camera samples per pixel in one pass
@@ -298,8 +324,10 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
-    # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain copy of the
-    # integrator, losing the recording; with the pilot stored below (traced here if an auto value needs it)
+    # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain
+    # copy of the
+    # integrator, losing the recording; with the pilot stored below (traced here if an auto value
+    # needs it)
     integrator = resolve_defaults(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
@@ -321,27 +349,43 @@ def record(scene: mi.Scene, integrator: StylizedIntegrator, spp: int, seed: int 
         what = (f"~{max_samples * per / 2**20:.0f} MiB" if not sequence else
                 f"the children and uniforms of the '{slots[0].estimator}' estimator take up to "
                 f"up to {4 + per_sample * 18} bytes each")
-        raise UsageError(f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
-                         f"{max_samples} ({what}); lower spp or the image size")
+        raise UsageError(
+            f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
+            f"{max_samples} ({what}); lower spp or the image size"
+        )
     sensor = scene.sensors()[0]
     header = {
-        "format": FORMAT, "version": VERSION, "scene": label, "width": w, "height": h,
-        "crop_offset": [int(c) for c in film.crop_offset()], "filter": spec if filtered else "box",
+        "format": FORMAT,
+        "version": VERSION,
+        "scene": label,
+        "width": w,
+        "height": h,
+        "crop_offset": [int(c) for c in film.crop_offset()],
+        "filter": spec if filtered else "box",
         "seed": int(seed),
-        "stylize": rec.settings.stylize, "max_depth": rec.settings.max_depth, "rr_depth": rec.settings.rr_depth,
-        "slots": _slots(rec, scene), "stores": "sequence" if sequence else "mean",
-        "events_per_sample": per_sample, "view": list(camera_forward(scene)),
-        "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-        .tolist(), "sensor": sensor_description(sensor), "passes": [],
+        "stylize": rec.settings.stylize,
+        "max_depth": rec.settings.max_depth,
+        "rr_depth": rec.settings.rr_depth,
+        "slots": _slots(rec, scene),
+        "stores": "sequence" if sequence else "mean",
+        "events_per_sample": per_sample,
+        "view": list(camera_forward(scene)),
+        "sensor_to_world": np.array(sensor.world_transform().matrix, dtype=np.float64)
+        .reshape(4, 4, -1)[..., 0]
+        .tolist(),
+        "sensor": sensor_description(sensor),
+        "passes": [],
     }
     if filtered:
         header.update(sample_border=bool(border), layout=[_window(t) for t in layout])
-    # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of the scene would
+    # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of
+    # the scene would
     pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
-        # the values the pilot chose: a restyle that changes the slot's parameters chooses them again
+        # the values the pilot chose: a restyle that changes the slot's parameters chooses them
+        # again
         rec_slot["auto"] = list(getattr(target.slot.style, "chosen", ()))
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
@@ -367,11 +411,21 @@ def scene_label(scene: Any) -> str:
     return f"<{type(scene).__name__}>"
 
 
-def render_buffer(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
-                  estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
-                  integrator: StylizedIntegrator | None = None, max_samples: int = MAX_SAMPLES,
-                  callback: Callable[[pass_loop.Progress], None] | None = None, defines: dict[str, Any] | None = None,
-                  **params: Any) -> Buffer:
+def render_buffer(
+    scene: Any = None,
+    style: str | None = None,
+    spp: int | None = None,
+    inner: Any = None,
+    estimator: str | None = None,
+    seed: int = 0,
+    width: int | None = None,
+    height: int | None = None,
+    integrator: StylizedIntegrator | None = None,
+    max_samples: int = MAX_SAMPLES,
+    callback: Callable[[pass_loop.Progress], None] | None = None,
+    defines: dict[str, Any] | None = None,
+    **params: Any,
+) -> Buffer:
     """Render as `styletrace.render` does and return the expectation buffer of every camera sample.
 
     The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values

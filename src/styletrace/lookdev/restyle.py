@@ -1,29 +1,13 @@
-"""Restyling an expectation buffer: g_θ evaluated again over the stored camera samples, no ray traced.
+"""Restyling an expectation buffer: g_θ evaluated again over the stored camera samples.
 
-    img = styletrace.restyle(buf, style="cel", thresholds=(0.2, 0.6), levels=(0.1, 0.5, 0.9))  # H x W x 3
+    img = styletrace.restyle(buf, style="cel", thresholds=(0.2, 0.6))   # H x W x 3, linear
 
-Per camera sample the value is L_before + beta g_θ(mean, vertex) (see `lookdev.buffer`), computed by
-`style.apply` on Dr.Jit arrays with a `Vertex` built from the stored data on the active backend, and
-accumulated as the film accumulates it (`accumulate`): with a box filter the pixel is the mean of
-its samples; with another filter each sample weighs on the pixels it covers (`lookdev.film_filter`).
-With the same seed and the buffer's inner sample count this equals `styletrace.render` with the new
-style up to float rounding (tests/lookdev/test_restyle.py checks every style of the registry).
-
-Which slot changes: the integrator's own style for `first_hit` buffers, every styled object's style for
-`first_object_hit` buffers; other slots keep their recorded style. Parameters not given keep the
-recorded values while the style stays the same (a new style starts from its defaults). The estimator is
-the one given, else the recorded one where it applies to the style, else `direct`.
-
-A "sequence" buffer (recorded with an unbiased estimator) is restyled by replaying the estimator over
-each camera sample's stored children and uniform numbers (`lookdev.sequence.replay`). Where the new
-estimator asks for what is not stored, or in another order (another estimator, a larger n, a truncation
-that goes further), the result would not be a render's: refused in one line, naming how many camera
-samples it concerns.
-
-Refused with one line: estimators other than direct and affine on a "mean" buffer (they need the children
-themselves), another inner sample count than a mean buffer's, a per-sample style (acp), a style that needs
-children on a buffer recorded with a closed-form style (0 children), and a replay that needs more than
-the sequence buffer stores.
+Per camera sample L_before + beta g_θ(mean, vertex), accumulated as the film does (`accumulate`;
+`lookdev.film_filter` for other filters); equal to a fresh render with the same seed and n up to
+float rounding. Sequence buffers are replayed (`lookdev.sequence.replay`). Refused with one line:
+estimators other than direct and affine on a mean buffer, another n, a per-sample style (acp),
+children needed from a closed-form recording, a replay beyond what is stored. See
+docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 
@@ -52,7 +36,8 @@ from .sequence import device_arrays, replay
 RESTYLABLE_ESTIMATORS = ("direct", "affine")
 
 
-# ---- the value of one camera sample ----------------------------------------------------------------
+# ---- the value of one camera sample
+# ----------------------------------------------------------------
 
 def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
     """The slot's estimate from the mean of its n children, as its estimator computes it in the kernel."""
@@ -66,8 +51,9 @@ def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
     return style.apply(mean, v)
 
 
-#: (z, weight): 5-point Gauss-Hermite quadrature for z ~ N(0, 1) (numpy.polynomial.hermite_e.hermegauss(5),
-#: weights over sqrt(2 pi)); exact for polynomials in z up to degree 9
+#: (z, weight): 5-point Gauss-Hermite quadrature for z ~ N(0, 1)
+#: (numpy.polynomial.hermite_e.hermegauss(5), weights over sqrt(2 pi)); exact for polynomials in z
+#: up to degree 9
 SPREAD_NODES = ((0.0, 0.53333333), (1.35562618, 0.22207592), (-1.35562618, 0.22207592),
                 (2.85697001, 0.01125741), (-2.85697001, 0.01125741))
 
@@ -84,7 +70,8 @@ def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.
     return out
 
 
-# ---- slots: what the header records, and what a restyle makes of it ---------------------------------
+# ---- slots: what the header records, and what a restyle makes of it
+# ---------------------------------
 
 def _jsonable(value: Any) -> Any:
     if isinstance(value, Gradient):
@@ -106,8 +93,13 @@ def changed_owner(buffer: Buffer) -> str:
     return "object" if buffer.stylize == "first_object_hit" else "integrator"
 
 
-def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = None, inner: Any = None,
-              **params: Any) -> list[S.StyleSlot]:
+def slots_for(
+    buffer: Buffer,
+    style: str | None = None,
+    estimator: str | None = None,
+    inner: Any = None,
+    **params: Any,
+) -> list[S.StyleSlot]:
     """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they name."""
     slots = []
     for rec in buffer.header["slots"]:
@@ -121,33 +113,44 @@ def slots_for(buffer: Buffer, style: str | None = None, estimator: str | None = 
             values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
             new = get(str(values["style"]))()
             if inner is not None and S.adaptive(S.parse_inner(inner, 1)):
-                raise UsageError(f"bad value {inner!r} for inner: a buffer replays a fixed count of children; "
-                                 f"adaptive counts n0:n_max need a new render")
+                raise UsageError(
+                    f"bad value {inner!r} for inner: a buffer replays a fixed count of children; "
+                    f"adaptive counts n0:n_max need a new render"
+                )
             if inner is not None and buffer.stores == "sequence":
                 n = S.parse_inner(inner, 1)[0]  # the replay finds out whether the stored sequence suffices
             elif inner is not None and S.parse_inner(inner, 1) != (n,):
-                raise UsageError(f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
-                                 f"per camera sample; another n needs a new render")
+                raise UsageError(
+                    f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
+                    f"per camera sample; another n needs a new render"
+                )
             if new.per_sample:
-                raise UsageError(f"style '{new.name}' cannot restyle: it applies g to every child sample, and a "
-                                 f"buffer keeps only their mean")
+                raise UsageError(
+                    f"style '{new.name}' cannot restyle: it applies g to every child sample, and a "
+                    f"buffer keeps only their mean"
+                )
             if n == 0 and not new.closed_form:
-                raise UsageError(f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
-                                 f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
-                                 f"record the buffer with a style that traces children")
+                raise UsageError(
+                    f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
+                    f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
+                    f"record the buffer with a style that traces children"
+                )
             if estimator is not None:
                 est = estimator
             elif est not in applicable(new):
                 est = "direct"
         if est not in RESTYLABLE_ESTIMATORS and buffer.stores == "mean":
-            raise UsageError(f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
-                             f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}")
+            raise UsageError(
+                f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
+                f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}"
+            )
         slots.append(S.parse_slot({**values, "inner_samples": max(n, 1), "estimator": est},
                                   context="restyle"))
     return slots
 
 
-# ---- the kernel --------------------------------------------------------------------------------------
+# ---- the kernel
+# --------------------------------------------------------------------------------------
 
 def device(buffer: Buffer) -> dict[str, Any]:
     """The buffer's arrays as Dr.Jit arrays (made once per buffer and kept)."""
@@ -264,12 +267,18 @@ def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi
             f"{buffer.samples} camera samples it asks for a child or uniform number beyond the stored ones or in "
             f"another order than the recorded {', '.join(repr(n) for n in recorded)} (the buffer stores "
             f"{children / buffer.samples:.1f} children and {(events - children) / buffer.samples:.1f} uniform "
-            f"numbers per camera sample on average); this estimator needs more: record a buffer with it")
+            f"numbers per camera sample on average); this estimator needs more: record a buffer with it"
+        )
     return total
 
 
-def replay_lanes(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
-                 **params: Any) -> tuple[np.ndarray, np.ndarray]:
+def replay_lanes(
+    buffer: Any,
+    style: str | None = None,
+    estimator: str | None = None,
+    inner: Any = None,
+    **params: Any,
+) -> tuple[np.ndarray, np.ndarray]:
     """A sequence buffer's per-camera-sample contributions with a new style, and the samples whose
     replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and tests)."""
     buf = as_buffer(buffer)
@@ -332,5 +341,18 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
-__all__ = ["restyle", "finish", "finish_spread", "SPREAD_NODES", "slot_record", "slots_for", "sample_values", "accumulate", "device", "prepare",
-           "RESTYLABLE_ESTIMATORS", "as_buffer", "replay_lanes"]
+__all__ = [
+    "restyle",
+    "finish",
+    "finish_spread",
+    "SPREAD_NODES",
+    "slot_record",
+    "slots_for",
+    "sample_values",
+    "accumulate",
+    "device",
+    "prepare",
+    "RESTYLABLE_ESTIMATORS",
+    "as_buffer",
+    "replay_lanes",
+]

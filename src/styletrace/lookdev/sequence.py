@@ -1,33 +1,12 @@
-"""The per-camera-sample sequence of children and uniforms an estimator consumed: record it, replay it.
+"""The per-camera-sample sequence of children and uniforms an estimator consumed: record, replay.
 
-The unbiased estimators (series*, ustat, naive, telescoping, combined) are not functions of the children's
-mean: they use the children themselves and uniform numbers (truncation, Russian roulette) in an order of
-their own. The kernel contract (`estimators/__init__.py`) gives every estimator two sources,
-`draw(carry)` (one child) and `uniform(carry)` (one uniform number), both fed by the lane's one random
-stream. So a camera sample's estimate is determined by the sequence of calls it made and what each
-returned, and a restyle that asks for the same sequence in the same order sees exactly what a fresh render
-with the same seed would see.
-
-Recording (`Recorder`, used by `record.RecordingIntegrator`): every `draw` and `uniform` call of every
-style slot's estimator, with its position in the lane's call order (including the uniforms an
-estimator's start draws on lanes of other slots: they advance the same stream), is noted: children in
-one pool shared by the lanes of a pass (`dr.scatter_inc` hands out the places, so a lane with a long
-random truncation uses the room others left), uniforms in a fixed number of places per lane. After the
-pass both are sorted per lane (numpy) into the buffer's compact form:
-
-    seq_count uint32 (N,)    events stored per camera sample (offsets: their exclusive cumsum)
-    seq_kind  uint8  (E,)    1 = a child, 0 = a uniform number, per event in call order
-    child     float32 (3, C) the children in call order (C = number of kind-1 events)
-    uniform   float32 (U,)   the uniform numbers in call order (U = number of kind-0 events)
-
-The pool holds `budget(slots)` children per camera sample on average, the slab as many uniforms per
-camera sample (at most `MAX_EVENTS_PER_SAMPLE`); a lane whose events no longer fit keeps the prefix that
-did (its later events are not stored, and a replay that needs them is refused).
-
-Replay (`replay`): each slot's (new) estimator runs over all lanes with `active` = its lanes, as the
-integrator runs it; `draw` returns the lane's next stored child and `uniform` its next stored uniform. A
-lane whose estimator asks for an event that is not stored, or for a child where a uniform was recorded
-(or the reverse), is marked: its result would not be a fresh render's, so `restyle` refuses.
+Every estimator draws from two sources, `draw(carry)` and `uniform(carry)`, fed by the lane's one
+stream, so a camera sample's estimate is fixed by its sequence of calls and their results.
+`Recorder` notes every call of every slot's estimator in call order (children in a shared pool,
+uniforms in a slab) and sorts them per lane into seq_count, seq_kind, child and uniform; a lane that
+overflows keeps its prefix. `replay` runs a slot's estimator over the stored events and marks lanes
+that ask for an event not stored, or of the other kind; `restyle` refuses those. See
+docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
 
@@ -66,14 +45,16 @@ class Recorder:
 
     def __init__(self, width: int, per_sample: int):
         self.width, self.per_sample = width, per_sample
-        # children: one pool for the pass, places handed out by dr.scatter_inc (a loop body draws at one
+        # children: one pool for the pass, places handed out by dr.scatter_inc (a loop body draws at
+        # one
         # place, and Dr.Jit allows one scatter_inc on a counter per symbolic region)
         self.capacity = max(1, width * per_sample)
         self.counter = dr.zeros(mi.UInt32, 1)
         self.lane_of = dr.zeros(mi.UInt32, self.capacity)
         self.pos = dr.zeros(mi.UInt32, self.capacity)
         self.value = dr.zeros(mi.Color3f, self.capacity)
-        # uniforms: `per_sample` places per lane (an estimator may ask for them at several places per body)
+        # uniforms: `per_sample` places per lane (an estimator may ask for them at several places
+        # per body)
         self.u_pos = dr.zeros(mi.UInt32, self.capacity)
         self.u_value = dr.zeros(mi.Float, self.capacity)
         self.lanes = dr.arange(mi.UInt32, width)
@@ -118,9 +99,12 @@ class Recorder:
         first = np.searchsorted(lane, np.arange(self.width, dtype=np.int64))
         keep = pos == np.arange(lane.size, dtype=np.int64) - first[lane]  # each lane's prefix that was stored
         lane, kind, value = lane[keep], kind[keep], value[:, keep]
-        return {"seq_count": np.bincount(lane, minlength=self.width).astype(np.uint32), "seq_kind": kind,
-                "child": np.ascontiguousarray(value[:, kind == CHILD]),
-                "uniform": np.ascontiguousarray(value[0, kind == UNIFORM])}
+        return {
+            "seq_count": np.bincount(lane, minlength=self.width).astype(np.uint32),
+            "seq_kind": kind,
+            "child": np.ascontiguousarray(value[:, kind == CHILD]),
+            "uniform": np.ascontiguousarray(value[0, kind == UNIFORM]),
+        }
 
 
 def offsets(arrays: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -136,11 +120,15 @@ def device_arrays(arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     ev, ch, un = offsets(arrays)
     pad = lambda a: np.concatenate([a, np.zeros(a.shape[:-1] + (1,), a.dtype)], axis=-1)  # noqa: E731
     child = pad(arrays["child"])
-    return {"ev_start": mi.UInt32(ev[:-1].astype(np.uint32)), "ev_end": mi.UInt32(ev[1:].astype(np.uint32)),
-            "ch_start": mi.UInt32(ch[:-1].astype(np.uint32)), "un_start": mi.UInt32(un[:-1].astype(np.uint32)),
-            "kind": mi.UInt32(pad(arrays["seq_kind"]).astype(np.uint32)),
-            "child": mi.Color3f(*(mi.Float(np.ascontiguousarray(child[i])) for i in range(3))),
-            "uniform": mi.Float(pad(arrays["uniform"]))}
+    return {
+        "ev_start": mi.UInt32(ev[:-1].astype(np.uint32)),
+        "ev_end": mi.UInt32(ev[1:].astype(np.uint32)),
+        "ch_start": mi.UInt32(ch[:-1].astype(np.uint32)),
+        "un_start": mi.UInt32(un[:-1].astype(np.uint32)),
+        "kind": mi.UInt32(pad(arrays["seq_kind"]).astype(np.uint32)),
+        "child": mi.Color3f(*(mi.Float(np.ascontiguousarray(child[i])) for i in range(3))),
+        "uniform": mi.Float(pad(arrays["uniform"])),
+    }
 
 
 def replay(d: dict[str, Any], slot_of: mi.Int32, slots, v) -> tuple[mi.Color3f, mi.Bool]:

@@ -1,32 +1,13 @@
 """Scene-relative defaults: the styles' 'auto' parameters, resolved on the scene about to be rendered.
 
-    integrator, chosen = resolve(scene, integrator)   # before rendering (api.passes, the CLI's render)
+    integrator, chosen = resolve(scene, integrator)   # before rendering
 
-A fixed default in scene units or in absolute brightness suits one scene: hatching spacing 0.04 is pixel
-noise in a 550-unit box, a cel threshold of 0.75 leaves a dim scene in one band. A style declares such
-parameters with a default of None ('auto') and a rule (`Param.auto`, listed by `styletrace styles`);
-`Style.auto_values(facts)` applies the rule to the `Facts` of the scene computed here, and `resolve`
-returns the integrator with the values pinned (explicit values always win: only None is filled in) and
-one line naming them, which the CLI prints so that a user can pin them.
-
-What the rules may read (`Facts`, per style slot):
-- `camera`: the first sensor's frame (gooch, xtoon: the light follows the camera's up vector);
-- `brightness(qs)`: quantiles of the first-hit brightness (r+g+b)/3 the camera sees on the objects the
-  style covers: the integrator's style covers the objects without a `styled` BSDF, a `styled` BSDF its own.
-  A pilot of the path kernel (`path.exitant`, the scene's max_depth and rr_depth) traces PILOT_SPP
-  jittered camera rays in each cell of a grid of PILOT_CELLS cells along the film's longer side, and the
-  brightness is averaged per cell and slot (a cell estimate, like a stylized vertex's inner estimate
-  rather than one noisy path), the cells weighted by their number of samples on the slot's objects; in a
-  scene with participating media the pilot is volume.py's walk from the camera (through the sensor's
-  medium), so a sample's brightness is what reaches the camera along its ray;
-- `depth(qs)`: quantiles of the camera depth (p - c) . forward of those first hits (xtoon's depth mode).
-A composition's later operand sees the brightness of the earlier operands' output (`Facts.mapped`).
-
-Where the pilot runs: here, before Mitsuba's render call, never inside the integrator's `sample`; the pilot
-costs one small path-traced render (32 x 32 x 16 paths) and runs only if some style has a brightness rule left.
-Stylized levels below the first (first_n_hits, first_object_hit through glass) are resolved with the
-first hits' statistics. Rendering through mi.render directly skips this module: camera rules still apply
-(in `Style.prepare`), brightness and depth rules fall back to the fixed values each style documents.
+A style declares a parameter 'auto' (default None) with a rule (`Param.auto`);
+`Style.auto_values(facts)` applies it to the `Facts` computed here per style slot: `camera`,
+`brightness(qs)` (quantiles of a pilot's first-hit brightness on the slot's objects) and
+`depth(qs)`. `resolve` returns the integrator with the values pinned (given values win) and one line
+naming them. The pilot runs here, before Mitsuba's render call, and only if a brightness rule is
+left. Rationale and the pilot's design: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 
@@ -100,36 +81,67 @@ class Pilot:
         cell = np.repeat(np.arange(cx * cy), PILOT_SPP)
         ux = ((cell % cx) + rng.random(n)) / cx
         uy = ((cell // cx) + rng.random(n)) / cy
-        ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
-                                   mi.Point2f(0.5, 0.5))
+        ray, _ = sensor.sample_ray(
+            mi.Float(0.0),
+            mi.Float(0.5),
+            mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
+            mi.Point2f(0.5, 0.5),
+        )
         si = scene.ray_intersect(ray)
         sampler = mi.load_dict({"type": "independent"})
         sampler.seed(PILOT_SEED, n)
-        # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order Mitsuba
+        # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order
+        # Mitsuba
         # lists the emitters in, so the auto values (and the image) are the same for the same seed
         pi = scene.ray_intersect_preliminary(ray, coherent=True)
         graph = SceneGraph(scene)
         emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         if graph.has_media:
-            L = volume_walk(scene, sampler, pi, ray, mi.Bool(True), sensor.get_medium(), True, self.settings.max_depth,
-                            self.settings.rr_depth, emitters=emitters, nulls=graph.has_null).L
+            L = volume_walk(
+                scene,
+                sampler,
+                pi,
+                ray,
+                mi.Bool(True),
+                sensor.get_medium(),
+                True,
+                self.settings.max_depth,
+                self.settings.rr_depth,
+                emitters=emitters,
+                nulls=graph.has_null,
+            ).L
         else:
-            L = exitant(scene, sampler, pi, ray, mi.Bool(True), self.settings.max_depth, self.settings.rr_depth,
-                        emitters=emitters)
+            L = exitant(
+                scene,
+                sampler,
+                pi,
+                ray,
+                mi.Bool(True),
+                self.settings.max_depth,
+                self.settings.rr_depth,
+                emitters=emitters,
+            )
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
         owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
         hit = np.array(si.is_valid(), dtype=bool)
         owner[hit] = 0
-        # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for it (itself
+        # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for
+        # it (itself
         # and the wrappers that hold it): one traversal of the scene
         for k, (_, pointers, _) in enumerate(graph.styled, start=1):
             for ptr in pointers:
                 owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
         n_sh = dr.normalize(si.sh_frame.n)
-        return {"cell": cell, "owner": owner, "colour": np.array(L, dtype=np.float64).T,
-                "depth": np.array(depth, dtype=np.float64), "p": np.array(si.p).T, "n": np.array(n_sh).T,
-                "wo": -lanes(ray.d, n).T}
+        return {
+            "cell": cell,
+            "owner": owner,
+            "colour": np.array(L, dtype=np.float64).T,
+            "depth": np.array(depth, dtype=np.float64),
+            "p": np.array(si.p).T,
+            "n": np.array(n_sh).T,
+            "wo": -lanes(ray.d, n).T,
+        }
 
 
 def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -181,7 +193,8 @@ class Facts:
         s, mask = self.pilot.samples, self._mine
         colour, counts, inverse = cell_colours(s, mask)
         if self.styles:
-            # a representative first hit per cell (the last sample of the cell) for styles that read the vertex
+            # a representative first hit per cell (the last sample of the cell) for styles that read
+            # the vertex
             last = np.zeros(len(counts), dtype=np.int64)
             last[inverse] = np.arange(mask.sum())
             pick = lambda key: s[key][mask][last]  # noqa: E731
@@ -247,10 +260,17 @@ def describe(style: Style, values: dict[str, Any]) -> str:
 
 
 def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
-    """`integrator` with the auto values of its style and of the scene's `styled` BSDFs pinned (the BSDFs are
-    updated in place: they belong to the scene), and a one-line account of the values chosen ('' if none).
-    `pilot`: a `Pilot` of this scene to use (traced here only if an auto value needs it), so that a caller
-    that keeps the pilot's samples (the look-dev recorder) traces it once."""
+    """Pin the auto values of an integrator's style and of the scene's `styled` BSDFs.
+
+    Args:
+        scene: the scene about to be rendered; its `styled` BSDFs are updated in place.
+        integrator: the integrator to resolve (any other integrator is returned as it is).
+        pilot: a `Pilot` of this scene to reuse (traced only if an auto value needs it), so that a
+            caller that keeps the pilot's samples (the look-dev recorder) traces it once.
+
+    Returns:
+        (integrator, chosen): the integrator with values pinned, and a one-line account ('' if none).
+    """
     if not isinstance(integrator, StylizedIntegrator):
         return integrator, ""
     if pilot is None or not pilot.serves(scene, integrator.settings):
@@ -263,7 +283,8 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = No
         style = integrator.settings.style
         chosen = auto_values(style, Facts(scene, pilot, 0))
         if chosen:
-            # the parsed settings with only the style replaced (settings are parsed once, `settings` module)
+            # the parsed settings with only the style replaced (settings are parsed once, `settings`
+            # module)
             s = integrator.settings
             pinned = replace(s, slot=replace(s.slot, style=style.pinned(chosen)))
             integrator = StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen})

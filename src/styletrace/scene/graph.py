@@ -63,8 +63,10 @@ def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
         if isinstance(obj, StyledBSDF):
             found[id(obj)] = obj
             if styled_inside(obj.nested):
-                raise SceneError(f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, whose "
-                                 f"style would never apply: keep one 'styled' BSDF per surface")
+                raise SceneError(
+                    f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, whose "
+                    f"style would never apply: keep one 'styled' BSDF per surface"
+                )
             continue  # its traversal forwards to the nested BSDF's parameters, checked above
         stack.extend(children(obj))
     return list(found.values())
@@ -100,13 +102,17 @@ class SceneGraph:
                 self.has_null = True
                 self.has_see_through |= pure_null(bsdf.flags())
                 if shape.emitter() is not None:  # see path.first_scattering for why
-                    raise SceneError(f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
-                                     f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF")
+                    raise SceneError(
+                        f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
+                        f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF"
+                    )
             self.has_media |= shape.interior_medium() is not None or shape.exterior_medium() is not None
             styled = styled_inside(bsdf)
             if len(styled) > 1:
-                raise SceneError(f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} 'styled' "
-                                 f"BSDFs, but a surface takes one style: wrap the whole BSDF in one 'styled' instead")
+                raise SceneError(
+                    f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} 'styled' "
+                    f"BSDFs, but a surface takes one style: wrap the whole BSDF in one 'styled' instead"
+                )
             if not styled:
                 continue
             s = styled[0]

@@ -4,24 +4,15 @@ Reference: "Global Illumination-Aware Stylised Shading", Kohei Doi, Yuki Morimot
 (2021).
 
 Parameters
-- gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over (rescaled) brightness, clamped at the ends
-- range (floats lo,hi, default auto): the brightness mapped onto the gradient's first and last stop, as
-  `color_map`'s (auto: the 5% and 95% quantiles of the scene's first-hit brightness; unresolved: the first
-  and last stop, i.e. brightness taken absolutely)
+- gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over brightness, clamped at the
+  ends
+- range (floats lo,hi, default auto): the brightness mapped onto the first and last stop (auto: the
+  5% and 95% first-hit brightness quantiles; unresolved: the first and last stop)
 
-Applied to each single path sample L (not to an estimate of the expectation), with Y = (r+g+b)/3 of L and
-u_0, u_last the first and last stop positions:
-    Y' = u_0 + (Y - lo) (u_last - u_0) / (hi - lo),      g(L) = max(Y', 0.01) G(clamp(Y', u_0, u_last))
-and the pixel is the average of g over the samples. Y' is the position `color_map` maps the same brightness
-to, so with the same range the two use the same colours and differ only where the baseline is meant to
-differ: g of each sample rather than of their mean, and the shading factor max(Y', 0.01) (in gradient units,
-so that it, too, is the same on a dim and a bright scene). With range = the first and last stop, Y' = Y and
-this is Doi et al.'s g(L) = max(Y, 0.01) G(clamp(Y)).
-`per_sample = True` tells the integrator to apply g to every child sample and average, instead of applying
-g to the mean of the children. Because g is nonlinear, E[g(L)] differs from g(E[L]): this is biased with
-respect to the stylized rendering equation by design, and is there only as the baseline the paper's colour
-mapping (`color_map`) is compared with. `default_inner` matches `color_map`, so equal-cost comparisons need no
-extra settings.
+Applied to each path sample L, with Y = (r+g+b)/3 of L and u_0, u_last the first and last stops:
+    Y' = u_0 + (Y - lo) (u_last - u_0) / (hi - lo),   g(L) = max(Y', 0.01) G(clamp(Y', u_0, u_last))
+and the pixel averages g over the samples (`per_sample = True`): biased with respect to the stylized
+rendering equation by design. Rationale: docs/design/acp_baseline.md.
 """
 from __future__ import annotations
 

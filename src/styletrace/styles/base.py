@@ -54,7 +54,8 @@ class Style:
     summary: ClassVar[str] = ""
     params: ClassVar[tuple[Param, ...]] = ()
     default_inner: ClassVar[int] = 8
-    #: True for baselines that apply g to every child sample and average (not a function of expectation).
+    #: True for baselines that apply g to every child sample and average (not a function of
+    #: expectation).
     per_sample: ClassVar[bool] = False
 
     def __init__(self, **values: Any):
@@ -64,7 +65,8 @@ class Style:
                 allowed = ", ".join(known) if known else "none"
                 raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are {allowed}")
         self.values: dict[str, Any] = {}
-        #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in auto values
+        #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in
+        #: auto values
         self.given: dict[str, Any] = {k: v for k, v in values.items() if v is not None}
         #: the parameters `pinned` filled in from the scene (auto values), as opposed to given ones
         self.chosen: tuple[str, ...] = ()
@@ -201,8 +203,12 @@ def projection(scene: mi.Scene) -> Projection:
     cam = camera(scene)
     sensor = sensors[0]
     width = max(int(sensor.film().crop_size()[0]), 1)
-    ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), mi.Point2f([0.5, 0.5 + 1.0 / width], [0.5, 0.5]),
-                               mi.Point2f(0.5, 0.5))
+    ray, _ = sensor.sample_ray(
+        mi.Float(0.0),
+        mi.Float(0.5),
+        mi.Point2f([0.5, 0.5 + 1.0 / width], [0.5, 0.5]),
+        mi.Point2f(0.5, 0.5),
+    )
     d, o = lanes(ray.d, 2), lanes(ray.o, 2)
     f = np.array(cam.forward)
     a = float(np.linalg.norm(d[:, 1] / (d[:, 1] @ f) - d[:, 0] / (d[:, 0] @ f)))
@@ -237,22 +243,34 @@ def increasing(values) -> tuple[float, ...]:
     return tuple(out)
 
 
-#: The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's median
-#: first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et al. 2002),
-#: so a scene ten times dimmer gets ten times the exposure and looks the same.
+#: The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's
+#: median
+#: first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et al.
+#: 2002), so a scene ten times dimmer gets ten times the exposure and looks the same.
 EXPOSURE_KEY = 0.18
-#: Largest exposure. The unbiased series estimators take powers of exposed samples in float32: on the Cornell
-#: box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2 (measured), so the auto rule
-#: stops here: a scene whose median brightness is below 0.18 / 100 comes out darker than middle grey.
+#: Largest exposure. The unbiased series estimators take powers of exposed samples in float32: on
+#: the Cornell
+#: box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2 (measured), so
+#: the auto rule
+#: stops here: a scene whose median brightness is below 0.18 / 100 comes out darker than middle
+#: grey.
 MAX_EXPOSURE = 100.0
 
 
 def exposure_param(what: str = "") -> Param:
     """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see `auto_exposure`)."""
-    return Param("exposure", "float", None, "scale s of the expected radiance before the tone curve", low=0.0,
-                 low_open=True, high=MAX_EXPOSURE,
-                 auto=what or f"{EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at most "
-                              f"{MAX_EXPOSURE:g} (unresolved: 1)")
+    return Param(
+        "exposure",
+        "float",
+        None,
+        "scale s of the expected radiance before the tone curve",
+        low=0.0,
+        low_open=True,
+        high=MAX_EXPOSURE,
+        auto=what
+        or f"{EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at most "
+        f"{MAX_EXPOSURE:g} (unresolved: 1)",
+    )
 
 
 def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSURE) -> float:
@@ -273,6 +291,23 @@ def light_from_camera(cam: Camera) -> tuple[float, float, float]:
     return tuple(round(x / n, 4) for x in v)
 
 
-__all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "Camera", "camera", "camera_forward",
-           "Projection", "projection", "lanes", "light_from_camera", "rounded", "increasing", "EXPOSURE_KEY",
-           "MAX_EXPOSURE", "exposure_param", "auto_exposure"]
+__all__ = [
+    "Style",
+    "Vertex",
+    "Param",
+    "StyleError",
+    "brightness",
+    "Camera",
+    "camera",
+    "camera_forward",
+    "Projection",
+    "projection",
+    "lanes",
+    "light_from_camera",
+    "rounded",
+    "increasing",
+    "EXPOSURE_KEY",
+    "MAX_EXPOSURE",
+    "exposure_param",
+    "auto_exposure",
+]

@@ -1,23 +1,16 @@
 """cel: global-illumination cel shading (supplement S5.2).
 
 Parameters
-- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither thresholds nor levels is given
-- thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K
-- levels (floats, default auto): K+1 target brightnesses m_0..m_K
+- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither thresholds nor levels is
+  given
+- thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K; auto: the
+  brightness quantiles 1/(K+1), ..., K/(K+1) of the first hits (unresolved: k/(K+1))
+- levels (floats, default auto): K+1 target brightnesses m_0..m_K; auto: `tone.band_levels`
+  (unresolved: evenly spaced in lightness, `FALLBACK_LSTAR`)
 
-Auto thresholds (scene-relative, `scene.defaults`): the brightness quantiles 1/(K+1), ...,
-K/(K+1) of what the camera sees of the objects this style covers, from a pilot of the path kernel, so the
-K+1 bands hold about equal shares of the image whatever the scene's light level. Auto levels
-(`tone.band_levels`): each band's median brightness, exposed so that the scene's median is middle grey
-and spread at least 18 L* apart, so the bands are flat and distinct on any scene. The chosen values
-are printed (`styletrace render` logs them unless -q) and can be pinned. A style that was never
-resolved (rendered by calling mi.render directly) uses evenly spaced thresholds k/(K+1) and levels
-evenly spaced in lightness (`FALLBACK_LSTAR`).
-
-With u = (r+g+b)/3 of the inner estimate <I>, the target brightness is
-    u' = m(u) = m_j  where j = number of thresholds t_i <= u,
-and the output keeps the colour of global illumination:
-    g(<I>) = <I> u' / u          (grey (u',u',u') where u <= 0, since <I> has no colour there).
+With u = (r+g+b)/3 of the inner estimate <I>:
+    u' = m_j, j = number of thresholds t_i <= u;   g(<I>) = <I> u' / u   (grey (u',u',u') if u <= 0)
+Rationale of the auto rules: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 
@@ -35,13 +28,31 @@ class Cel(Style):
     name = "cel"
     summary = "GI cel shading: brightness quantized to levels, colour kept (S5.2)"
     params = (
-        Param("bands", "int", 3, "number of bands where neither thresholds nor levels is given", low=2, high=8),
-        Param("thresholds", "floats", None, "brightness steps between levels, increasing",
-              auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
-                   "unresolved: evenly spaced k/(K+1))"),
-        Param("levels", "floats", None, "target brightness of each band (one more than thresholds)", low=0.0,
-              auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
-                   "(unresolved: evenly spaced in lightness)"),
+        Param(
+            "bands",
+            "int",
+            3,
+            "number of bands where neither thresholds nor levels is given",
+            low=2,
+            high=8,
+        ),
+        Param(
+            "thresholds",
+            "floats",
+            None,
+            "brightness steps between levels, increasing",
+            auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
+            "unresolved: evenly spaced k/(K+1))",
+        ),
+        Param(
+            "levels",
+            "floats",
+            None,
+            "target brightness of each band (one more than thresholds)",
+            low=0.0,
+            auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
+            "(unresolved: evenly spaced in lightness)",
+        ),
     )
     default_inner = 16
 
@@ -97,7 +108,8 @@ class Cel(Style):
         return self.steps()
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
-        # constant along grey inside a band (I * level / u of a grey shift keeps the band's level); its
+        # constant along grey inside a band (I * level / u of a grey shift keeps the band's level);
+        # its
         # jumps are the thresholds
         return mi.Color3f(0.0)
 

@@ -26,17 +26,26 @@ from .registry import register
 class ColorMap(Style):
     name = "color_map"
     summary = "brightness mapped to a colour gradient, clamped to its ends (S5.1)"
-    params = (Param("gradient", "gradient", Gradient.parse("dusk"), "colour stops over brightness"),
-              Param("range", "floats", None, "brightness lo,hi mapped onto the first and last stop",
-                    auto="the 5% and 95% quantiles of the scene's first-hit brightness (unresolved: the "
-                         "first and last stop)"))
+    params = (
+        Param("gradient", "gradient", Gradient.parse("dusk"), "colour stops over brightness"),
+        Param(
+            "range",
+            "floats",
+            None,
+            "brightness lo,hi mapped onto the first and last stop",
+            auto="the 5% and 95% quantiles of the scene's first-hit brightness (unresolved: the "
+            "first and last stop)",
+        ),
+    )
     default_inner = 16
 
     def validate(self) -> None:
         r = self.range
         if r is not None and (len(r) != 2 or not r[1] > r[0]):
-            raise StyleError(f"bad value {','.join(map(str, r))!r} for parameter 'range': expected two "
-                             f"increasing numbers lo,hi")
+            raise StyleError(
+                f"bad value {','.join(map(str, r))!r} for parameter 'range': expected two "
+                f"increasing numbers lo,hi"
+            )
 
     def span(self) -> tuple[float, float]:
         """(lo, hi) in use: the given or resolved range, else the gradient's own ends."""

@@ -1,23 +1,15 @@
-"""compose: styles applied one after another as one style (supplement S5.4, Fig. 10; main paper Theorem 4.1).
+"""compose: styles applied one after another as one style (supplement S5.4, Fig. 10; Theorem 4.1).
 
-Spelling: `--style contrast+sepia` (or `"style": "contrast+sepia"`) applies contrast, then sepia:
-    g(<I>) = g_k( ... g_2(g_1(<I>)) ... )      for  `g_1+g_2+...+g_k`
+`--style contrast+sepia` applies contrast, then sepia:  g(<I>) = g_k( ... g_2(g_1(<I>)) ... ).
 
 Parameters
 - OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name, e.g.
-  `contrast.c`, `contrast.pivot`, `sepia.gradient`. A style may appear once.
+  `contrast.c`, `sepia.gradient`. A style may appear once.
 
-Estimators
-- every operand affine (identity, contrast, sepia): the composite is affine, A = A_k ... A_1 and
-  b = A_k (... (A_2 b_1 + b_2) ...) + b_k, so `affine` is unbiased with n children, like a single affine
-  style (and `combined` applies as well).
-- every operand with a form (affine, power series, polynomial fit): `combined` nests the operands' own
-  unbiased estimators (Theorem 4.1, composition): each sample an outer operand's estimator consumes is an
-  independent unbiased estimate of the operands inside it. Affine operands take 1 sample, series and
-  polynomial operands a pilot of n (`inner_samples`) for their expansion point, as they do on their own.
-  This is the paper's combined gu-estimator of Fig. 10 (sepia after contrast, 1 sample per operand).
-- otherwise only `direct` (and `telescoping` where every operand has a form) apply.
-Per-sample baselines (acp) cannot be composed: they are not functions of an expectation.
+Estimators: all operands affine -> the composite is affine (`affine`, `combined`); all operands with
+a form (affine, power series, polynomial fit) -> `combined` nests the operands' unbiased estimators
+(Theorem 4.1, composition; Fig. 10's gu-estimator); otherwise `direct` (and `telescoping` where
+every operand has a form). Per-sample baselines (acp) cannot be composed.
 """
 from __future__ import annotations
 
@@ -51,20 +43,36 @@ def composite_class(name: str, lookup) -> type[Style]:
     if len(ops) < 2 or any(not o for o in ops):
         raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. contrast+sepia")
     if len(set(ops)) != len(ops):
-        raise StyleError(f"bad style {name!r}: each style may appear once in a composition (its parameters are "
-                         f"named after it)")
+        raise StyleError(
+            f"bad style {name!r}: each style may appear once in a composition (its parameters are "
+            f"named after it)"
+        )
     classes = [lookup(o) for o in ops]
     for cls in classes:
         if cls.per_sample or is_composite(cls.name):
-            raise StyleError(f"bad style {name!r}: '{cls.name}' cannot be composed (it is not a function of "
-                             f"an expectation)" if cls.per_sample else f"bad style {name!r}: nested composition")
+            raise StyleError(
+                f"bad style {name!r}: '{cls.name}' cannot be composed (it is not a function of "
+                f"an expectation)"
+                if cls.per_sample
+                else f"bad style {name!r}: nested composition"
+            )
     params = tuple(replace(p, name=f"{cls.name}.{p.name}", doc=f"{cls.name}: {p.doc}")
                    for cls in classes for p in cls.params)
-    # the first operand sees the radiance: if it ignores it (closed form), so does the whole composition
+    # the first operand sees the radiance: if it ignores it (closed form), so does the whole
+    # composition
     inner = 0 if classes[0].default_inner == 0 else max(c.default_inner for c in classes)
     summary = " then ".join(ops) + ", as one style g = " + " o ".join(reversed(ops))
-    return type(f"Composite[{name}]", (Composite,), {"name": name, "summary": summary, "params": params,
-                                                     "default_inner": inner, "operand_classes": tuple(classes)})
+    return type(
+        f"Composite[{name}]",
+        (Composite,),
+        {
+            "name": name,
+            "summary": summary,
+            "params": params,
+            "default_inner": inner,
+            "operand_classes": tuple(classes),
+        },
+    )
 
 
 class Composite(Style):

@@ -29,7 +29,9 @@ class Contrast(Style):
     params = (
         Param("c", "float", 1.5, "contrast factor", low=0.0),
         Param("pivot", "float", 0.5, "pivot brightness p"),
-        exposure_param(f"{MID:g} / the median of the scene's first-hit brightness, at most 100 (unresolved: 1)"),
+        exposure_param(
+            f"{MID:g} / the median of the scene's first-hit brightness, at most 100 (unresolved: 1)"
+        ),
     )
     default_inner = 1
 
@@ -38,7 +40,8 @@ class Contrast(Style):
         return 1.0 if self.exposure is None else self.exposure
 
     def auto_values(self, facts) -> dict:
-        # contrast spreads tones about the pivot: the scene's median goes to the default pivot (middle grey,
+        # contrast spreads tones about the pivot: the scene's median goes to the default pivot
+        # (middle grey,
         # 0.18, would leave most of the image below 0 after c = 1.5 about 0.5)
         return {} if self.exposure is not None else {"exposure": auto_exposure(facts, MID)}
 

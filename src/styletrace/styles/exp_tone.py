@@ -31,11 +31,19 @@ K_AT_KEY = 1.5
 class ExpTone(Style):
     name = "exp_tone"
     summary = "exponential tone curve 1 - exp(-k I), per channel (series form, S14-S15)"
-    # k <= 87 < -ln(FLT_MIN) = 87.3: the series' base a = e^-k, and exp(-k I) at unit radiance, stay normal
-    # float32 numbers (above 1.2e-38) instead of flushing to 0, where ln(a) and the series break down
-    params = (replace(exposure_param(), doc="exposure k", high=MAX_EXPOSURE,
-                      auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
-                           f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})"),)
+    # k <= 87 < -ln(FLT_MIN) = 87.3: the series' base a = e^-k, and exp(-k I) at unit radiance, stay
+    # normal
+    # float32 numbers (above 1.2e-38) instead of flushing to 0, where ln(a) and the series break
+    # down
+    params = (
+        replace(
+            exposure_param(),
+            doc="exposure k",
+            high=MAX_EXPOSURE,
+            auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
+            f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})",
+        ),
+    )
     default_inner = 16
 
     @property

@@ -24,14 +24,16 @@ from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_para
 from .forms import SeriesForm
 from .registry import register
 
-#: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR) (exposed radiance).
+#: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR)
+#: (exposed radiance).
 PILOT_FLOOR = 0.02
 PILOT_SCALE = 1.5
-#: Smallest gamma: the exponent 1/gamma <= 10 keeps I^(1/gamma) below float32's 3.4e38 for radiance up to
-#: 7e3, beyond what a scene's lights reach, while as gamma -> 0 it overflows for any I > 1.
+#: Smallest gamma: the exponent 1/gamma <= 10 keeps I^(1/gamma) below float32's 3.4e38 for radiance
+#: up to 7e3, beyond what a scene's lights reach, while as gamma -> 0 it overflows for any I > 1.
 MIN_GAMMA = 0.1
-#: The radiance MIN_GAMMA was chosen for: (s I)^(1/gamma) must stay below float32's largest number for exposed
-#: radiance s I up to this, so an exposure and a small gamma that overflow together are refused.
+#: The radiance MIN_GAMMA was chosen for: (s I)^(1/gamma) must stay below float32's largest number
+#: for exposed radiance s I up to this, so an exposure and a small gamma that overflow together are
+#: refused.
 MAX_RADIANCE = 7e3
 FLOAT32_MAX = 3.4028234663852886e38
 
@@ -50,8 +52,10 @@ class Gamma(Style):
     def validate(self) -> None:
         top = self.scale * MAX_RADIANCE
         if top > 1.0 and math.log(top) / self.gamma > math.log(FLOAT32_MAX):
-            raise StyleError(f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
-                             f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma")
+            raise StyleError(
+                f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
+                f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma"
+            )
 
     def auto_values(self, facts) -> dict:
         return {} if self.exposure is not None else {"exposure": auto_exposure(facts)}
@@ -61,9 +65,17 @@ class Gamma(Style):
 
     def form(self):
         from ..estimators import gamma_series
-        # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the 1.5x
-        # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured in
-        # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its floor in
+        # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the
+        # 1.5x
+        # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured
+        # in
+        # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its
+        # floor in
         # exposed units: the same on a scene of any brightness)
-        return SeriesForm(gamma_series(self.gamma), gain=self.scale, pilot_lo=PILOT_FLOOR, pilot_scale=PILOT_SCALE,
-                          values=(0.0, None))
+        return SeriesForm(
+            gamma_series(self.gamma),
+            gain=self.scale,
+            pilot_lo=PILOT_FLOOR,
+            pilot_scale=PILOT_SCALE,
+            values=(0.0, None),
+        )

@@ -1,28 +1,20 @@
 """gooch: cool-to-warm shading for technical illustration, in closed form (supplement S5.6).
 
-Reference: "A Non-Photorealistic Lighting Model for Automatic Technical Illustration",
-Amy Gooch, Bruce Gooch, Peter Shirley, Elaine Cohen (1998).
+Reference: "A Non-Photorealistic Lighting Model for Automatic Technical Illustration", Amy Gooch,
+Bruce Gooch, Peter Shirley, Elaine Cohen (1998).
 
 Parameters
-- light_dir (vector, default auto): direction TOWARDS the light, normalised here; a global
-  illumination scene has no single light, so it is a user parameter (the paper points it at the area
-  lights above the model). Auto: the camera's up vector tilted towards the camera,
-  normalize(up - 0.3 forward), read in `prepare` (and pinned and printed by `scene.defaults`):
-  light from above the picture whichever world axis is up (a fixed 0,1,0.3 lit z-up scenes from the
-  side). For a y-up camera looking along -z it is the old default 0,1,0.3 (normalised).
+- light_dir (vector, default auto): direction towards the light, normalised; auto: the camera's up
+  vector tilted towards the camera, normalize(up - 0.3 forward), read in `prepare`
 - k_d (colour, default 0.8,0.8,0.8): the object's diffuse colour
-- blue (colour, default 0,0,0.55): k_blue, the cool tone
-- yellow (colour, default 0.3,0.3,0): k_yellow, the warm tone
-- alpha (float, default 0.25, >= 0), beta (float, default 0.5, >= 0): how much of k_d enters each tone
+- blue (colour, default 0,0,0.55), yellow (colour, default 0.3,0.3,0): the cool and warm tones
+- alpha (float, default 0.25, >= 0), beta (float, default 0.5, >= 0): how much of k_d enters each
+  tone
 
-With n the unit shading normal, l the unit light direction:
-    k_cool = k_blue + alpha k_d,   k_warm = k_yellow + beta k_d,   t = (1 + n.l) / 2
+    k_cool = blue + alpha k_d,   k_warm = yellow + beta k_d,   t = (1 + n.l) / 2
     g = t k_warm + (1 - t) k_cool
-Surfaces facing the light get the warm tone, surfaces facing away the cool one, which is the tone shift
-the paper describes (its printed formula attaches the factor (1 + n.l)/2 to k_cool; we follow the
-described behaviour). Faces seen from behind (n.wo < 0) use the flipped normal -n, so two-sided
-geometry shades the side that is visible. Closed form: g ignores the radiance estimate (0 samples);
-the highlights and edge lines of the original are not part of it.
+n is the shading normal, flipped where seen from behind. Closed form: g ignores the estimate.
+Rationale: docs/design/closed_form_styles.md.
 """
 from __future__ import annotations
 
@@ -69,7 +61,9 @@ class Gooch(CameraLight, Style):
     name = "gooch"
     summary = "Gooch cool-to-warm shading from a user light direction, closed form (Gooch et al. 1998)"
     params = (
-        Param("light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT),
+        Param(
+            "light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT
+        ),
         Param("k_d", "color", (0.8, 0.8, 0.8), "diffuse colour of the object", low=0.0),
         Param("blue", "color", (0.0, 0.0, 0.55), "cool tone k_blue", low=0.0),
         Param("yellow", "color", (0.3, 0.3, 0.0), "warm tone k_yellow", low=0.0),

@@ -63,9 +63,11 @@ class Gradient:
     @classmethod
     def parse(cls, raw: Any) -> "Gradient":
         """From a preset name, a 'pos:colour;...' string, or a sequence of (pos, colour) pairs."""
-        allowed = ("expected 'pos:colour;pos:colour;...' with finite positions that strictly increase (in float32 "
-                   "too) and colours "
-                   "'#rrggbb' or 'r,g,b', or a preset: " + ", ".join(cls.presets()))
+        allowed = (
+            "expected 'pos:colour;pos:colour;...' with finite positions that strictly increase (in float32 "
+            "too) and colours "
+            "'#rrggbb' or 'r,g,b', or a preset: " + ", ".join(cls.presets())
+        )
         try:
             if isinstance(raw, str):
                 spec = raw.strip()

@@ -1,38 +1,22 @@
-"""halftone: dots of brightness-dependent radius on a 3D grid (supplement S5.6).
+"""halftone: dots of brightness-dependent radius on a 3D or screen grid (supplement S5.6).
 
-Reference: "Non-photorealistic Rendering by Q-mapping", Peter Hall (1999).
+Reference: "Non-photorealistic Rendering by Q-mapping", Peter Hall (1999); the screen grid's
+canonical lifting after West, Mukherjee, Yue, "Lifting Lines and Tone" (2026).
 
 Parameters
-- spacing_px (float, default 8, > 0): grid interval on screen, in pixels (see "Screen grid" below)
-- spacing (float, default auto, > 0): grid interval d, in scene units; grid points are k d, k in Z^3;
-  given, it replaces spacing_px; auto: spacing_px is used
-- max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot radius as a fraction of half
-  the cell diagonal, the radius at which the dots cover everything: r_max = max_radius_fraction sqrt(3) d / 2
-  on the 3D grid, max_radius_fraction sqrt(2) d / 2 on the screen grid
-- tones (floats, default auto): the tone curve, as in `hatching`; the radius is r = (1 - F(u)) r_max
-- u_min (float), u_max (float, > u_min): brightness of the largest / no dot, a linear ramp between them
-  instead of the tone curve (the behaviour before `tones`), as in `hatching`
+- spacing_px (float, default 8, > 0): grid interval on screen, in pixels
+- spacing (float, default auto, > 0): grid interval d in scene units; given, it replaces spacing_px
+- max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot's radius over half the cell
+  diagonal (r_max = max_radius_fraction sqrt(3) d / 2; sqrt(2) spacing_px / 2 on the screen)
+- tones (floats, default auto): the tone curve, as in `hatching`; r = (1 - F(u)) r_max
+- u_min (float), u_max (float, > u_min): a linear ramp instead of the tone curve, as in `hatching`
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): where the screen grid is evaluated (spacing_px only): canonical, at the
-  vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py), so reflections and what lies
-  behind glass show the screen's grid; position, at the projection of the vertex's own position (before
-  LLaT; a point behind the camera seen in a mirror has no meaningful projection there)
+- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
+  projection)
 
-With u = (r+g+b)/3 of the inner estimate <I> and the vertex position p:
-    g_p = round(p / d) d                                       (nearest grid point, per component)
-    r   = (1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) r_max     (or (1 - F(u)) r_max with tones)
-    g(<I>) = dark if |p - g_p| < r else light
-`halftone_mask` is that predicate on Dr.Jit arrays.
-
-Screen grid (spacing_px, the default). A 3D grid of fixed interval is pixel noise on a large scene (0.05
-against a 550-unit box) and one dot on a small one, and a 3D grid whose interval followed depth would not
-be a grid. So by default the dots lie on a square grid of the screen, as in print: q = the vertex's
-screen position in pixels (`Projection.pixels`: its camera-space offset over the scene units per pixel
-at its depth, measured on the sensor), g_q = round(q / spacing_px) spacing_px, and the vertex is in a
-dot when |q - g_q| < r(u) with r_max = max_radius_fraction sqrt(2) spacing_px / 2. Dots keep their
-screen size at every depth; they belong to the screen, not to the objects. With lift=canonical q is the
-vertex's image coordinate `Vertex.s` (equal to the projection at depth 0), after "Lifting Lines and Tone:
-Image-space Stylization in Path-space", Rex West, Sayan Mukherjee, Yonghao Yue (2026).
+With u = (r+g+b)/3 of <I> and the vertex position p (on the screen grid: its pixel position q):
+    g_p = round(p / d) d,   r = (1 - F(u)) r_max,   g(<I>) = dark if |p - g_p| < r else light
+`halftone_mask` is that predicate. Rationale: docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
 
@@ -73,8 +57,16 @@ def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float, s: mi.Po
     return dr.sqrt(dr.square(x - gx) + dr.square(y - gy))
 
 
-def screen_halftone_mask(p: mi.Point3f, u: mi.Float, proj: Projection, spacing_px: float, r_max_px: float,
-                         u_min: float = 0.05, u_max: float = 0.9, s: mi.Point2f | None = None) -> mi.Bool:
+def screen_halftone_mask(
+    p: mi.Point3f,
+    u: mi.Float,
+    proj: Projection,
+    spacing_px: float,
+    r_max_px: float,
+    u_min: float = 0.05,
+    u_max: float = 0.9,
+    s: mi.Point2f | None = None,
+) -> mi.Bool:
     """True where p's screen position (the image coordinate `s` where given) is closer than r(u) pixels to its
     nearest screen grid point."""
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
@@ -89,18 +81,45 @@ class Halftone(BrightnessRange, Style):
     name = "halftone"
     summary = "half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness falls"
     params = (
-        Param("spacing_px", "float", 8.0, "grid interval on screen (pixels, a square grid of the image); used "
-              "unless spacing is given", low=0.0, low_open=True),
-        Param("spacing", "float", None, "grid interval d of a 3D grid (scene units), replacing spacing_px",
-              low=0.0, low_open=True, auto="not used: a screen grid spacing_px apart"),
-        Param("max_radius_fraction", "float", 0.75, "largest radius as a fraction of half the cell diagonal "
-              "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)", low=0.0, high=1.0, low_open=True),
+        Param(
+            "spacing_px",
+            "float",
+            8.0,
+            "grid interval on screen (pixels, a square grid of the image); used "
+            "unless spacing is given",
+            low=0.0,
+            low_open=True,
+        ),
+        Param(
+            "spacing",
+            "float",
+            None,
+            "grid interval d of a 3D grid (scene units), replacing spacing_px",
+            low=0.0,
+            low_open=True,
+            auto="not used: a screen grid spacing_px apart",
+        ),
+        Param(
+            "max_radius_fraction",
+            "float",
+            0.75,
+            "largest radius as a fraction of half the cell diagonal "
+            "(sqrt(3) d / 2 in 3D, sqrt(2) spacing_px / 2 on screen)",
+            low=0.0,
+            high=1.0,
+            low_open=True,
+        ),
         *tone_params("dots are largest", "dots vanish"),
         Param("dark", "color", (0.1, 0.1, 0.15), "colour inside the dots", low=0.0),
         Param("light", "color", (0.97, 0.95, 0.9), "colour outside the dots", low=0.0),
-        Param("lift", "choice", "canonical", "where the screen grid is evaluated: the vertex's image coordinate "
-              "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
-              choices=("canonical", "position")),
+        Param(
+            "lift",
+            "choice",
+            "canonical",
+            "where the screen grid is evaluated: the vertex's image coordinate "
+            "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
+            choices=("canonical", "position"),
+        ),
     )
     default_inner = 16
 

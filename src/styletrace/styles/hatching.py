@@ -1,64 +1,31 @@
 """hatching: cross-hatching by slabs around planes through the view direction (supplement S5.6).
 
-Reference: "An Illustration Technique Using Hardware-Based Intersections and Skeletons",
-Oliver Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte (1999).
+Reference: "An Illustration Technique Using Hardware-Based Intersections and Skeletons", Oliver
+Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte (1999); canonical lifting
+after "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
+Yonghao Yue (2026).
 
 Parameters
 - sets (int, default 3, in [1, 8]): number of hatching directions n
-- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in pixels
-- spacing (float, default auto, > 0): distance between neighbouring planes of a set, in scene units;
-  given, it replaces spacing_px (the fixed world-space planes below); auto: spacing_px is used
-- thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d, in the
-  units of the spacing in use (pixels with spacing_px, scene units with spacing)
+- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in
+  pixels
+- spacing (float, default auto, > 0): world-space plane distance; given, it replaces spacing_px
+- thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
-- tones (floats, default auto): the tone curve, brightnesses u_0 < ... < u_K at tone 0, 1/K, ..., 1
-  (`tone.tone_knots`: the scene's brightness distribution mixed with its lightness, so every level
-  covers a fair share of the image, a window or a lamp included); used unless u_min or u_max is given
-- u_min (float), u_max (float, > u_min): brightness of full / no hatching, a linear ramp between them
-  (the behaviour before `tones`); given one, the other is the 5% / 95% brightness quantile; unresolved
-  (mi.render called directly, no tones): 0.05 and 0.9
+- tones (floats, default auto): the tone curve u_0 < ... < u_K (`tone.tone_knots`)
+- u_min (float), u_max (float, > u_min): a linear ramp instead of tones (unresolved: 0.05 and 0.9)
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): where the screen lines are evaluated (spacing_px only).
-  canonical: at the vertex's image coordinate s (LLaT's mirror-anchor map, kernel/anchors.py): the pixel
-  for a direct view and behind perfect mirrors or glass, the MLS inverse of the anchor map otherwise;
-  position: at the pinhole projection of the vertex's own position (the pattern is anchored to the world
-  point and is scaled and mirrored in reflections; the behaviour before LLaT)
-- angle_reflected (float, default auto = angle): the first set's angle at vertices of path depth > 0
-  (seen in a mirror or through glass), e.g. angle + 90 to flip the hatching in reflections (LLaT Fig. 14)
+- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
+  projection)
+- angle_reflected (float, default auto = angle): the first set's angle at path depth > 0
 
-Set j (j = 0..n-1) is the family of parallel planes {x : x . n_j = k spacing, k integer} whose unit normal
-    n_j = cos(theta_j) e1 + sin(theta_j) e2,   theta_j = angle + j pi / n,
-with (e1, e2) an orthonormal basis perpendicular to the camera's view direction (e2 the camera's up
-vector made perpendicular): every plane contains the view direction, so n_i x n_j is parallel to it.
-The planes pass through the world origin (o = 0). With u = (r+g+b)/3 of the inner estimate <I>,
-    m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)      (m = 0 at u_max, n at u_min)
-or, with tones, m = min(n, floor((1 - F(u)) (n + 1))) with F the tone curve (each of the n + 1 levels
-an equal share of tone); sets 0..m-1 are active, and the vertex p is on a line when, for some active j,
-    dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2
-(the distance to the nearest plane of set j). g = line_color on a line, background elsewhere.
-`hatch_mask` is that predicate on Dr.Jit arrays; the camera is read in `prepare` (until then the
-camera of Mitsuba's default sensor is assumed: looking along +z, up +y).
-
-Screen spacing (spacing_px, the default). A fixed world spacing is pixel noise on a large scene and a
-few strokes on a small one (0.04 against a 550-unit box), so by default the planes of set j are
-    {x : (x - c) . n_j = k spacing_px s (x - c) . f,  k integer}
-with c the camera position, f its forward direction and s the scene units per pixel per unit depth
-(`Projection`, measured on the sensor: one pixel's ray angle; an orthographic sensor has a fixed
-width per pixel instead). Each is still a plane, but the family is now a pencil of planes through the
-camera (all containing the line through c along f x n_j) rather than parallel planes: the slab spacing
-grows with depth exactly as perspective shrinks it, so the lines land evenly, spacing_px apart, on the
-screen, and a vertex's distance to its nearest plane is measured in pixels at its own depth. The lines
-belong to the screen, not to the objects (moving the camera slides them over the surfaces; `spacing`
-fixes them in the world instead), the usual look of screen-space hatching.
-
-Canonical lifting (lift=canonical, the default with spacing_px). With s = (s_x, s_y) the vertex's image
-coordinate (pixels right and up of the centre, `Vertex.s`), set j's distance is
-    dist_j = |frac((cos(theta_j) s_x + sin(theta_j) s_y) / spacing_px + 1/2) - 1/2| spacing_px,
-which at depth 0 equals the pencil-of-planes distance above (s is then the projection of p, and
-(e1, e2) are the screen's right and up axes). Behind a mirror s is where the point is *seen*, so the
-reflection shows the screen's spacing and angle instead of the world point's projection.
-(Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
-Yonghao Yue, 2026.)
+Set j has normal n_j = cos(theta_j) e1 + sin(theta_j) e2, theta_j = angle + j pi / n, (e1, e2) the
+screen's axes. With u = (r+g+b)/3 of <I>, m = min(n, floor((1 - F(u)) (n + 1))) sets are active (the
+ramp: m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)), and p is on a line when
+    dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2      for some active j
+(with spacing_px: planes through the camera, or s . (cos, sin) / spacing_px with lift=canonical). g
+= line_color on a line, background elsewhere; `hatch_mask` is that predicate. Rationale:
+docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
 
@@ -154,8 +121,15 @@ def line_masks(p: mi.Point3f, normals: Sequence[Sequence[float]], spacing: float
     return out
 
 
-def coordinate_line_masks(s: mi.Point2f, depth: mi.UInt32, sets: int, angle: float, angle_reflected: float,
-                          spacing: float, thickness: float) -> list[mi.Bool]:
+def coordinate_line_masks(
+    s: mi.Point2f,
+    depth: mi.UInt32,
+    sets: int,
+    angle: float,
+    angle_reflected: float,
+    spacing: float,
+    thickness: float,
+) -> list[mi.Bool]:
     """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its lines, the
     set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc, canonical lifting)."""
     out = []
@@ -177,17 +151,38 @@ def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
 
 AUTO_U_MIN = "unused while tones applies; given u_max only: the 5% brightness quantile (unresolved: 0.05)"
 AUTO_U_MAX = "unused while tones applies; given u_min only: the 95% brightness quantile (unresolved: 0.9)"
-AUTO_TONES = ("the scene's first-hit brightness distribution mixed with its lightness at 9 knots, unless "
-              "u_min or u_max is given (unresolved: the linear ramp)")
+AUTO_TONES = (
+    "the scene's first-hit brightness distribution mixed with its lightness at 9 knots, unless "
+    "u_min or u_max is given (unresolved: the linear ramp)"
+)
 
 
 def tone_params(full: str, none: str) -> tuple[Param, ...]:
     """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear ramp, whose
     docs end with what happens at full tone (`full`) and at none (`none`)."""
-    return (Param("tones", "floats", None, "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
-                  auto=AUTO_TONES),
-            Param("u_min", "float", None, f"brightness at and below which {full} (a linear ramp)", auto=AUTO_U_MIN),
-            Param("u_max", "float", None, f"brightness at and above which {none} (a linear ramp)", auto=AUTO_U_MAX))
+    return (
+        Param(
+            "tones",
+            "floats",
+            None,
+            "the tone curve: brightnesses at tone 0, 1/K, .., 1 (K + 1 values)",
+            auto=AUTO_TONES,
+        ),
+        Param(
+            "u_min",
+            "float",
+            None,
+            f"brightness at and below which {full} (a linear ramp)",
+            auto=AUTO_U_MIN,
+        ),
+        Param(
+            "u_max",
+            "float",
+            None,
+            f"brightness at and above which {none} (a linear ramp)",
+            auto=AUTO_U_MAX,
+        ),
+    )
 
 
 class BrightnessRange:
@@ -219,11 +214,15 @@ class BrightnessRange:
         if self.tones is not None and (self.u_min is not None or self.u_max is not None):
             raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are alternatives; give one")
         if self.tones is not None and any(b < a for a, b in zip(self.tones, self.tones[1:])):
-            raise StyleError(f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "
-                             f"decrease")
+            raise StyleError(
+                f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "
+                f"decrease"
+            )
         if self.tones is not None and (len(self.tones) < 2 or not self.tones[-1] > self.tones[0]):
-            raise StyleError(f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': at least two "
-                             f"brightnesses, the last above the first")
+            raise StyleError(
+                f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': at least two "
+                f"brightnesses, the last above the first"
+            )
         lo, hi = self.u_range()
         if not hi > lo:
             raise StyleError(f"bad value {hi:g} for parameter 'u_max': must exceed u_min = {lo:g}")
@@ -249,21 +248,54 @@ class Hatching(BrightnessRange, Style):
     summary = "cross-hatching: brightness picks how many plane sets around the view direction draw lines"
     params = (
         Param("sets", "int", 3, "number of hatching directions", low=1, high=8),
-        Param("spacing_px", "float", 8.0, "distance between lines on screen (pixels, projected at each "
-              "vertex's depth); used unless spacing is given", low=0.0, low_open=True),
-        Param("spacing", "float", None, "distance between planes (scene units), replacing spacing_px",
-              low=0.0, low_open=True, auto="not used: lines spacing_px apart on screen"),
-        Param("thickness", "float", None, "line thickness d, in the units of the spacing in use, < spacing",
-              low=0.0, low_open=True, auto="0.3 * the spacing in use"),
-        Param("angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"),
+        Param(
+            "spacing_px",
+            "float",
+            8.0,
+            "distance between lines on screen (pixels, projected at each "
+            "vertex's depth); used unless spacing is given",
+            low=0.0,
+            low_open=True,
+        ),
+        Param(
+            "spacing",
+            "float",
+            None,
+            "distance between planes (scene units), replacing spacing_px",
+            low=0.0,
+            low_open=True,
+            auto="not used: lines spacing_px apart on screen",
+        ),
+        Param(
+            "thickness",
+            "float",
+            None,
+            "line thickness d, in the units of the spacing in use, < spacing",
+            low=0.0,
+            low_open=True,
+            auto="0.3 * the spacing in use",
+        ),
+        Param(
+            "angle", "float", 45.0, "rotation of the first set around the view direction (degrees)"
+        ),
         *tone_params("all sets are drawn", "no set is drawn"),
         Param("line_color", "color", (0.05, 0.05, 0.08), "colour of the lines", low=0.0),
         Param("background", "color", (0.97, 0.95, 0.9), "colour between the lines", low=0.0),
-        Param("lift", "choice", "canonical", "where screen lines are evaluated: the vertex's image coordinate "
-              "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
-              choices=("canonical", "position")),
-        Param("angle_reflected", "float", None, "the first set's angle at path depth > 0 (degrees)",
-              auto="the same as angle"),
+        Param(
+            "lift",
+            "choice",
+            "canonical",
+            "where screen lines are evaluated: the vertex's image coordinate "
+            "(canonical: LLaT's mirror-anchor map) or its own position's projection (position)",
+            choices=("canonical", "position"),
+        ),
+        Param(
+            "angle_reflected",
+            "float",
+            None,
+            "the first set's angle at path depth > 0 (degrees)",
+            auto="the same as angle",
+        ),
     )
     default_inner = 16
 
@@ -284,8 +316,10 @@ class Hatching(BrightnessRange, Style):
     def validate(self) -> None:
         if not self.line_thickness < self.pitch:
             which = "spacing_px" if self.spacing is None else "spacing"
-            raise StyleError(f"bad value {self.line_thickness:g} for parameter 'thickness': must be less than "
-                             f"{which} = {self.pitch:g}")
+            raise StyleError(
+                f"bad value {self.line_thickness:g} for parameter 'thickness': must be less than "
+                f"{which} = {self.pitch:g}"
+            )
         self.check_u_range()
 
     def set_camera(self, view: Sequence[float], up: Sequence[float]) -> None:
@@ -305,14 +339,26 @@ class Hatching(BrightnessRange, Style):
     def _masks(self, v: Vertex) -> list:
         """Per set j: v on one of its lines (drawn or not), by the mode in use."""
         if v.s is not None and self.wants_coordinate:
-            return coordinate_line_masks(v.s, v.depth, self.sets, self.angle, self.reflected_angle, self.pitch,
-                                         self.line_thickness)
+            return coordinate_line_masks(
+                v.s,
+                v.depth,
+                self.sets,
+                self.angle,
+                self.reflected_angle,
+                self.pitch,
+                self.line_thickness,
+            )
         # position mode; a depth-dependent angle picks the other plane normals at depth > 0
         masks = line_masks(v.p, self.normals, self.pitch, self.line_thickness,
                            projection=self.projection if self.spacing is None else None)
         if self.reflected_angle != self.angle:
-            other = line_masks(v.p, plane_normals(self.view, self.up, self.sets, self.reflected_angle), self.pitch,
-                               self.line_thickness, projection=self.projection if self.spacing is None else None)
+            other = line_masks(
+                v.p,
+                plane_normals(self.view, self.up, self.sets, self.reflected_angle),
+                self.pitch,
+                self.line_thickness,
+                projection=self.projection if self.spacing is None else None,
+            )
             masks = [dr.select(v.depth > 0, b, a) for a, b in zip(masks, other)]
         return masks
 

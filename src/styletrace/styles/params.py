@@ -25,8 +25,9 @@ LIMIT = 1e6
 
 
 def _is_seq(value: Any) -> bool:
-    return isinstance(value, (list, tuple)) or (hasattr(value, "__len__") and hasattr(value, "__getitem__")
-                                                and not isinstance(value, str))
+    return isinstance(value, (list, tuple)) or (
+        hasattr(value, "__len__") and hasattr(value, "__getitem__") and not isinstance(value, str)
+    )
 
 
 def _floats(text: str) -> list[float]:
@@ -41,7 +42,8 @@ class Param(Declaration):
     and the styles' spellings (bool also yes/no/on/off, True/False as numbers, a colour also '#rrggbb' or
     'r g b', a choice stripped)."""
 
-    #: for a default of None ('auto'): the rule that derives the value (from the scene or other parameters)
+    #: for a default of None ('auto'): the rule that derives the value (from the scene or other
+    #: parameters)
     auto: str = ""
 
     TRUE: ClassVar[tuple[str, ...]] = ("1", "true", "yes", "on")
@@ -49,8 +51,18 @@ class Param(Declaration):
     BOOL_IS_NUMBER: ClassVar[bool] = True
     STRIP_CHOICE: ClassVar[bool] = True
 
-    def __init__(self, name: str, kind: str, default: Any, doc: str, low: float | None = None,
-                 high: float | None = None, low_open: bool = False, choices: Sequence[str] = (), auto: str = ""):
+    def __init__(
+        self,
+        name: str,
+        kind: str,
+        default: Any,
+        doc: str,
+        low: float | None = None,
+        high: float | None = None,
+        low_open: bool = False,
+        choices: Sequence[str] = (),
+        auto: str = "",
+    ):
         Declaration.__init__(self, name, kind, default, doc, low, high, low_open, tuple(choices))
         object.__setattr__(self, "auto", auto)
 
@@ -64,8 +76,10 @@ class Param(Declaration):
         if self.kind == "choice":
             return "one of " + ", ".join(self.choices)
         if self.kind == "gradient":
-            return "a gradient 'pos:colour;pos:colour;...' (colour '#rrggbb' or 'r,g,b') or a preset: " + \
-                ", ".join(Gradient.presets())
+            return (
+                "a gradient 'pos:colour;pos:colour;...' (colour '#rrggbb' or 'r,g,b') or a preset: "
+                + ", ".join(Gradient.presets())
+            )
         if self.kind == "color":
             return f"an RGB colour: 'r,g,b' with each value{self._range()}, or '#rrggbb'"
         if self.kind == "vector":
@@ -122,9 +136,11 @@ class Param(Declaration):
             for pos, colour in gradient.stops:
                 for v in (pos, *colour):
                     if not -LIMIT <= v <= LIMIT:
-                        raise StyleError(f"bad gradient {gradient.spec!r} for parameter '{self.name}': stop "
-                                         f"positions and colour values must be finite numbers in "
-                                         f"[{-LIMIT:g}, {LIMIT:g}]")
+                        raise StyleError(
+                            f"bad gradient {gradient.spec!r} for parameter '{self.name}': stop "
+                            f"positions and colour values must be finite numbers in "
+                            f"[{-LIMIT:g}, {LIMIT:g}]"
+                        )
             return gradient
         if k in COMMON_KINDS:
             return super().convert(raw)

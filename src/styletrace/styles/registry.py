@@ -32,8 +32,10 @@ def get(name: str) -> type[Style]:
         if name not in _COMPOSITES:
             _COMPOSITES[name] = composite_class(name, get)
         return _COMPOSITES[name]
-    raise StyleError(f"unknown style '{name}': available styles are {', '.join(names())}, or a composition "
-                     f"such as contrast+sepia") from None
+    raise StyleError(
+        f"unknown style '{name}': available styles are {', '.join(names())}, or a composition "
+        f"such as contrast+sepia"
+    ) from None
 
 
 def create(name: str, **values: Any) -> Style:

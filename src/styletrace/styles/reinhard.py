@@ -19,8 +19,9 @@ from .base import Param, Style, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register
 
-#: Largest w: the unbiased estimators expand in float32 samples w + X, which resolve X only to w 2^-24
-#: (6e-5 at w = 1e3); at w = 3e5 the series estimator returned NaN (measured on the Cornell box).
+#: Largest w: the unbiased estimators expand in float32 samples w + X, which resolve X only to w
+#: 2^-24 (6e-5 at w = 1e3); at w = 3e5 the series estimator returned NaN (measured on the Cornell
+#: box).
 MAX_WHITE = 1e3
 
 
@@ -28,8 +29,18 @@ MAX_WHITE = 1e3
 class Reinhard(Style):
     name = "reinhard"
     summary = "reciprocal tone curve I/(w + I), per channel (reciprocal series, S16-S17)"
-    params = (Param("white", "float", 1.0, "exposed radiance mapped to 1/2", low=0.0, low_open=True, high=MAX_WHITE),
-              exposure_param())
+    params = (
+        Param(
+            "white",
+            "float",
+            1.0,
+            "exposed radiance mapped to 1/2",
+            low=0.0,
+            low_open=True,
+            high=MAX_WHITE,
+        ),
+        exposure_param(),
+    )
     default_inner = 16
 
     @property
@@ -46,5 +57,13 @@ class Reinhard(Style):
     def form(self):
         from ..estimators import reciprocal_series
         # samples of w + s X are >= w, so a pilot b >= w keeps the expansion on the positive side
-        return SeriesForm(reciprocal_series(self.white), gain=self.scale, shift=self.white, scale=-1.0, offset=1.0,
-                          pilot_lo=self.white, pilot_scale=1.5, values=(0.0, 1.0))
+        return SeriesForm(
+            reciprocal_series(self.white),
+            gain=self.scale,
+            shift=self.white,
+            scale=-1.0,
+            offset=1.0,
+            pilot_lo=self.white,
+            pilot_scale=1.5,
+            values=(0.0, 1.0),
+        )

@@ -33,9 +33,11 @@ class Sepia(Style):
     def validate(self) -> None:
         n = len(self.gradient.stops)
         if n != 2:
-            raise StyleError(f"bad value {self.gradient.spec!r} for parameter 'gradient': sepia needs exactly "
-                             f"2 stops (got {n}) so that it stays affine in the radiance, which the unbiased "
-                             f"estimators rely on; use color_map for multi-stop gradients")
+            raise StyleError(
+                f"bad value {self.gradient.spec!r} for parameter 'gradient': sepia needs exactly "
+                f"2 stops (got {n}) so that it stays affine in the radiance, which the unbiased "
+                f"estimators rely on; use color_map for multi-stop gradients"
+            )
 
     def affine(self) -> tuple[list[list[float]], list[float]]:
         """(A, b) with g(I) = A I + b: A a 3x3 matrix (list of rows), b a 3-vector."""

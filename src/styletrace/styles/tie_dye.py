@@ -1,26 +1,17 @@
 """tie_dye: per-channel cosine waves (supplement S5.5, the polynomial-approximation example).
 
 Parameters
-- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all channels)
+- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all
+  channels)
 - phases (floats, default 1,1.13,1.29): phi_r, phi_g, phi_b (one value: all channels)
-- domain_min (float, default -1), domain_max (float, default 4): the interval [lo, hi] on which the
-  estimator library fits the channel functions (Chebyshev, degree 20 in the paper); lo < hi
-- together: pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14, so float32 resolves the cosine's argument
-- exposure (float in (0, 100], default auto): s, the scale of <I> before the waves; auto: 0.18 / the median first-hit
-  brightness of the scene (`scene.defaults`, at most 100), so the waves fall on the same tones of a dim scene;
-  unresolved (mi.render directly): 1
+- domain_min (float, default -1), domain_max (float, default 4): the fit interval [lo, hi], lo < hi;
+  together pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median first-hit
+  brightness (at most 100; unresolved: 1)
 
-Per channel c in {r, g, b}, with x_c the channel of the inner estimate <I>:
-    g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2
-With the defaults: r' = (1 - cos(2 pi (r + 1)))/2, g' = (1 - cos(2.15 pi (g + 1.13)))/2,
-b' = (1 - cos(2.3 pi (b + 1.29)))/2, as printed in the supplement.
-The supplement clamps samples above the fit interval's maximum 4 (radiance may exceed 1). Direct
-application (`apply`) clamps the exposed inner estimate s <I>, so it targets g(clamp(s I)). The unbiased
-estimators (`ustat`, `naive`) expose and clamp every child sample before the degree-20 Chebyshev fit h sees
-it, as the paper does, so they target h(E[clamp(s X)]): the two differ by the fit error (at most 0.005, 0.023, 0.06 per
-channel) and wherever single samples exceed 4 while their mean does not (near lights).
-`channel_functions()` gives the three channel functions of the exposed value y = s x, clamp included, as
-numpy callables for the fit (on [lo, hi] in exposed units, whatever s is), and `domain()` the interval.
+Per channel c:  g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2.
+`channel_functions()` gives the channel functions of the exposed value (for the fit), `domain()` the
+interval. Where the clamp applies per estimator: docs/design/tie_dye_clamp.md.
 """
 from __future__ import annotations
 
@@ -34,9 +25,10 @@ from .registry import register
 
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20
-#: Largest cosine argument pi f (x + phi) the kernel is handed: float32 (24-bit mantissa) resolves an
-#: argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger arguments
-#: lose the radiance x in rounding, and huge ones make cos return NaN.
+#: Largest cosine argument pi f (x + phi) the kernel is handed: float32 (24-bit mantissa) resolves
+#: an
+#: argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger
+#: arguments lose the radiance x in rounding, and huge ones make cos return NaN.
 MAX_ARGUMENT = float(2 ** 14)
 
 
@@ -45,8 +37,14 @@ class TieDye(Style):
     name = "tie_dye"
     summary = "per-channel cosine waves (1 - cos(pi f (x + phi)))/2 (S5.5)"
     params = (
-        Param("frequencies", "floats", (2.0, 2.15, 2.3), "angular frequency per channel, in units of pi",
-              low=0.0, low_open=True),
+        Param(
+            "frequencies",
+            "floats",
+            (2.0, 2.15, 2.3),
+            "angular frequency per channel, in units of pi",
+            low=0.0,
+            low_open=True,
+        ),
         Param("phases", "floats", (1.0, 1.13, 1.29), "phase offset per channel"),
         Param("domain_min", "float", -1.0, "lower end of the clamp / fit interval"),
         Param("domain_max", "float", 4.0, "upper end of the clamp / fit interval"),
@@ -67,17 +65,23 @@ class TieDye(Style):
             if len(vals) == 1:
                 self.values[key] = vals * 3
             elif len(vals) != 3:
-                raise StyleError(f"bad value {','.join(f'{x:g}' for x in vals)!r} for parameter '{key}': "
-                                 f"expected 1 or 3 numbers (r,g,b)")
+                raise StyleError(
+                    f"bad value {','.join(f'{x:g}' for x in vals)!r} for parameter '{key}': "
+                    f"expected 1 or 3 numbers (r,g,b)"
+                )
         if not self.domain_min < self.domain_max:
-            raise StyleError(f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
-                             f"domain_min = {self.domain_min:g}")
+            raise StyleError(
+                f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
+                f"domain_min = {self.domain_min:g}"
+            )
         largest = math.pi * max(self.frequencies) * (max(-self.domain_min, self.domain_max) + max(map(abs, self.phases)))
         if largest > MAX_ARGUMENT:
-            raise StyleError(f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
-                             f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
-                             f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
-                             f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it")
+            raise StyleError(
+                f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
+                f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
+                f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
+                f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it"
+            )
 
     def domain(self) -> tuple[float, float]:
         return (self.domain_min, self.domain_max)
@@ -86,7 +90,8 @@ class TieDye(Style):
         from ..estimators import chebyshev_fit
         lo, hi = self.domain()
         # the paper's Fig. 11 setup: a degree-20 Chebyshev fit per channel on the clamp interval
-        # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the clamp
+        # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the
+        # clamp
         return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi, gain=self.scale)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:

@@ -78,8 +78,12 @@ def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) 
     steps = np.maximum(np.diff(lstar), MIN_STEP_LSTAR)
     least = MIN_STEP_LSTAR * len(steps)
     if steps.sum() > hi - lo:  # too wide: shrink what exceeds the least step, or make all steps equal
-        steps = (np.full_like(steps, (hi - lo) / max(len(steps), 1)) if least >= hi - lo else
-                 MIN_STEP_LSTAR + (steps - MIN_STEP_LSTAR) * (hi - lo - least) / (steps.sum() - least))
+        steps = (
+            np.full_like(steps, (hi - lo) / max(len(steps), 1))
+            if least >= hi - lo
+            else MIN_STEP_LSTAR
+            + (steps - MIN_STEP_LSTAR) * (hi - lo - least) / (steps.sum() - least)
+        )
     spread = np.concatenate([[0.0], np.cumsum(steps)])
     spread += lstar.mean() - spread.mean()
     spread += max(lo - spread[0], 0.0) - max(spread[-1] - hi, 0.0)

@@ -1,36 +1,19 @@
-"""xtoon: X-Toon, a toon shader with a second "tone detail" axis, in closed form (supplement S5.6).
+"""xtoon: X-Toon, a toon shader with a "tone detail" axis, in closed form (supplement S5.6).
 
 Reference: "X-Toon: An Extended Toon Shader", Pascal Barla, Joelle Thollot, Lee Markosian (2006).
-
-X-Toon looks up a 2D toon texture T(tone, D): the tone axis is the diffuse term n.l, the second axis a
-detail attribute D in [0, 1] (D = 1 full tone detail, D = 0 fully abstracted). We cannot ship texture
-images, so T is procedural: along the tone axis a colour gradient G, and with decreasing detail the
-colour fades to a flat `detail_color` (aerial perspective / backlighting):
-    T(tone, D) = D G(tone) + (1 - D) detail_color
-Detail attribute (`mode`), as in the X-Toon paper:
-- orientation: D = |n.wo|^r        (1 facing the viewer, 0 at silhouettes: rim / backlighting look)
-- depth:       D = 1 - log(z / z_min) / log(z_max / z_min),  z clamped to [z_min, z_max]
-               (1 at z_min, 0 at z_max: level of abstraction / aerial perspective), z the camera-space
-               depth (p - camera position) . view, the camera read from the scene in `prepare`
-Written with the "abstraction" A = 1 - D (so that A grows at silhouettes / far away) this is
-T = (1 - A) G(tone) + A detail_color.
+The 2D toon texture is procedural: T(tone, D) = D G(tone) + (1 - D) detail_color, tone = n.l, with
+the detail D = |n.wo|^r (orientation) or 1 - log(z / z_min) / log(z_max / z_min) (depth, z clamped).
 
 Parameters
-- light_dir (vector, default auto): direction TOWARDS the light, normalised; a user parameter
-  because a global illumination scene has no single light. Auto: as in `gooch`, the camera's up vector
-  tilted towards the camera, normalize(up - 0.3 forward)
+- light_dir (vector, default auto): direction towards the light; auto as in `gooch`
 - mode (choice orientation|depth, default orientation): the detail attribute
 - r (float, default 2, >= 0): exponent of the orientation mode (larger: thinner rim)
-- z_min (float, default auto, > 0), z_max (float, default auto, > z_min): depth range of the depth mode.
-  Auto (depth mode, `scene.defaults`): the 5% and 95% quantiles of the camera depth of the first
-  hits on the objects this style covers (pilot rays through a 32-cell grid of the film), so the fade
-  spans the visible depth at any scene scale; unresolved (mi.render called directly): 1 and 10
-- gradient (gradient, default a 3-band warm ramp over tone in [0, 1]): G; tone = n.l in [-1, 1] is
-  clamped to the gradient's end stops, so with stops on [0, 1] the back side gets the first colour
+- z_min (float, default auto, > 0), z_max (float, default auto, > z_min): depth range of the depth
+  mode; auto: 5% and 95% camera-depth quantiles of the first hits (unresolved: 1 and 10)
+- gradient (gradient, default a 3-band warm ramp over tone in [0, 1]): G, clamped at its end stops
 - detail_color (colour, default 0.95,0.92,0.85): colour at zero detail
 
-n is the unit shading normal flipped towards the viewer (n.wo >= 0), as in `gooch`. Closed form:
-g ignores the radiance estimate (0 samples).
+n is the shading normal flipped towards the viewer. Closed form: g ignores the estimate (0 samples).
 """
 from __future__ import annotations
 
@@ -56,13 +39,31 @@ class XToon(CameraLight, Style):
     name = "xtoon"
     summary = "X-Toon: toon ramp over n.l faded by an orientation or depth detail, closed form (Barla et al. 2006)"
     params = (
-        Param("light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT),
-        Param("mode", "choice", "orientation", "detail attribute", choices=("orientation", "depth")),
+        Param(
+            "light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT
+        ),
+        Param(
+            "mode", "choice", "orientation", "detail attribute", choices=("orientation", "depth")
+        ),
         Param("r", "float", 2.0, "orientation exponent: D = |n.wo|^r", low=0.0),
-        Param("z_min", "float", None, "depth of full detail (depth mode)", low=0.0, low_open=True,
-              auto="depth mode: the 5% quantile of the first hits' camera depth (unresolved: 1)"),
-        Param("z_max", "float", None, "depth of zero detail (depth mode)", low=0.0, low_open=True,
-              auto="depth mode: the 95% quantile of the first hits' camera depth (unresolved: 10)"),
+        Param(
+            "z_min",
+            "float",
+            None,
+            "depth of full detail (depth mode)",
+            low=0.0,
+            low_open=True,
+            auto="depth mode: the 5% quantile of the first hits' camera depth (unresolved: 1)",
+        ),
+        Param(
+            "z_max",
+            "float",
+            None,
+            "depth of zero detail (depth mode)",
+            low=0.0,
+            low_open=True,
+            auto="depth mode: the 95% quantile of the first hits' camera depth (unresolved: 10)",
+        ),
         Param("gradient", "gradient", Gradient.parse(BANDS), "toon colours over tone n.l"),
         Param("detail_color", "color", (0.95, 0.92, 0.85), "colour at zero detail", low=0.0),
     )
