@@ -254,5 +254,13 @@ def load_buffer(path: str) -> Buffer:
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 
-__all__ = ["Buffer", "load_buffer", "SPREAD", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
+def check_buffer_path(path: str) -> None:
+    """A one-line UsageError before the render if the buffer could not be written to `path` (an .npz)."""
+    if not path.lower().endswith(".npz"):
+        raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
+    from ..images import check_target
+    check_target(path)  # before the render: the buffer is written after it
+
+
+__all__ = ["Buffer", "load_buffer", "check_buffer_path", "SPREAD", "FORMAT", "VERSION", "MAX_SAMPLES", "MAX_SEQUENCE_SAMPLES", "fields_for",
            "bytes_per_sample", "filtered", "FILTERED"]
