@@ -46,24 +46,20 @@ from .runtime import init
 from .scene.defaults import resolve as resolve_defaults
 
 
-def render(*args: Any, denoise: str | None = None, cluster: str | None = None, **kw: Any):
+def render(*args: Any, denoise: str | None = None, cluster: str | None = None, callback: Any = None,
+           denoise_quality: str = "high", coverage: int | str = "auto", denoise_uncertainty: float | None = None,
+           **kw: Any):
     """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the arguments).
-    `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off; all but off hand the job
-    to the denoiser, a post-stage (docs/denoise.md); off is the paper's estimators exactly."""
-    from .denoise import NotDenoised, check_method, default_method
+    `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off; all but off run the job
+    with a denoiser as its finisher, a post-stage (docs/denoise.md); off is the paper's estimators exactly."""
+    from .denoise import check_method, default_method
     method = check_method(denoise if denoise is not None else default_method())
     if method == "off":
-        return pipeline_render(*args, cluster=cluster, **kw)
-    if cluster is not None:
-        if method != "auto":
-            raise UsageError("denoise= renders without cluster=: the denoiser needs the whole image in one process")
-        import warnings
-
-        from .denoise.default import why_not
-        warnings.warn(f"not denoised: {why_not(None, None, local=False)}", NotDenoised, stacklevel=2)
-        return pipeline_render(*args, cluster=cluster, **kw)
+        return pipeline_render(*args, cluster=cluster, callback=callback, **kw)
     from .denoise import render as denoised
-    return denoised(*args, denoise=method, **kw)
+    from .pipeline.job import python_job
+    return denoised(python_job(*args, **kw), method, callback, cluster, denoise_quality, coverage,
+                    denoise_uncertainty)
 
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,

@@ -4,8 +4,9 @@ Progress is reported after each pass (`update_progress`), the image so far is sh
 between passes: a cancel keeps the finished passes in the render result. The error AOVs (variance, bias,
 children; `aovs`) and, with lines, a line mask are added as render passes. With "Record buffer" the
 look-development buffer of the render is kept (`restyle`), so style changes restyle it in milliseconds.
-With Denoise on (`denoising`), the finished passes are denoised after the last one (or after a cancel), a Noisy
-pass keeps the image before denoising, and the error passes are off (they would not be the denoised pixel's).
+F12 is one pipeline run (`pipeline.run`: a Job resolved, the runner of `pipeline.runner`); with Denoise on its
+finisher denoises the finished passes after the last one (or after a cancel), a Noisy pass keeps the image
+before denoising, and the error passes are off (they would not be the denoised pixel's).
 Errors the user can cause (a bad style value, an unsupported scene) are one-line Blender error reports.
 """
 from __future__ import annotations
@@ -16,9 +17,9 @@ import traceback
 import bpy
 import numpy as np
 
-from ..denoise.default import with_firefly
+from ..denoise.finishers import Denoised
 from ..errors import StyletraceError
-from . import denoising, pipeline, restyle
+from . import pipeline, restyle
 
 COMBINED = "Combined"
 #: what the last render did: samples per pixel finished and asked for, whether it was cancelled, seconds
@@ -84,28 +85,20 @@ class StyletraceEngine(bpy.types.RenderEngine):
         size = sc.sensors()[0].film().crop_size()
         w, h = int(size[0]), int(size[1])
         aovs = pipeline.error_passes(st)
-        integ = pipeline.integrator(st, aovs=aovs)
-        used, note = denoising.method(sc, integ, st)
+        restyle.forget()
+        runner, note = pipeline.run(sc, st, aovs, restyle.keep if st.record_buffer else None)
         if note:
             self.report({"WARNING"}, f"styletrace: {note}")
-        integ = with_firefly(sc, integ, used)[0]  # the command line's default (`denoise.default`)
-        job = denoising.prepare(sc, integ, st, used)  # its refusals come before anything renders
+        denoised = isinstance(runner.finisher, Denoised)
         if aovs:
             for name, channels, ids in pipeline.AOV_PASSES.values():
                 self.add_pass(name, channels, ids)
-        if used != "off":
+        if denoised:
             self.add_pass(pipeline.NOISY, 3, "RGB")
         if st.lines:
             self.add_pass(pipeline.LINE_MASK, 1, "X")
         start = time.perf_counter()
-        if job is not None:
-            restyle.forget()
-            source = denoising.passes(job, sc, integ, st)
-        elif st.record_buffer:
-            source = restyle.record(sc, integ, st)
-        else:
-            restyle.forget()
-            source = pipeline.passes(sc, integ, st)
+        source = runner.passes()
         prog = None
         total = -(-st.spp // st.pass_spp)
         for k, prog in enumerate(source, start=1):
@@ -121,10 +114,10 @@ class StyletraceEngine(bpy.types.RenderEngine):
         mask = None
         if st.lines and not self.stop_requested():
             mask = pipeline.line_mask(sc, st, self.stop_requested)
-        image, noisy = None, (prog.image if used != "off" else None)
-        if noisy is not None and prog.spp_done >= 1:  # (cancelled before every tile had a pass: kept noisy)
+        image, noisy = None, (prog.image if denoised else None)
+        if noisy is not None and runner.finisher.ready(prog):  # (cancelled before every tile had a pass: noisy)
             self.progress(prog.spp_done / prog.spp_total, "styletrace: denoising")
-            image = denoising.finish(sc, st, job, prog)
+            image = runner.finish(prog)
             LAST["seconds"] = time.perf_counter() - start
         self._write(prog, aovs, mask, w, h, image, noisy)
 

@@ -28,7 +28,7 @@ PLATFORMS = {
 }
 #: what the add-on needs beyond Blender's own Python and numpy (pinned as in constraints.txt)
 REQUIREMENTS = ["mitsuba==3.9.1", "drjit==1.5.0", "tqdm==4.70.1",
-                # Denoise (Intel Open Image Denoise, blender/denoising.py): ~50-90 MB per platform
+                # Denoise (Intel Open Image Denoise, denoise/finishers.py): ~50-90 MB per platform
                 "pyoidn==2.5.1.0", "cffi==2.1.1", "pycparser==3.12"]
 ADDON_ID = "styletrace"
 

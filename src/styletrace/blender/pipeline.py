@@ -1,8 +1,10 @@
-"""From Blender's render settings to styletrace's pipeline: the scene, the integrator, the passes.
+"""From Blender's render settings to styletrace's pipeline: the scene, the integrator, the run of F12.
 
 The engine (F12), the restyle operator and the XML export all go through here, so that they agree on the
 scene, the style and the pass split: `styletrace render FILE.xml --seed K --pass-spp N` renders the image F12
-renders with seed K and N samples per pass.
+renders with seed K and N samples per pass. F12 is a pipeline run (`run`): a Job of the exported scene and
+the settings' integrator, resolved (auto values pinned), with the finisher of its Denoise and Record buffer
+settings (`denoise.finishers.plan`: plain, expectation or image denoising, the recorded buffer).
 """
 from __future__ import annotations
 
@@ -43,8 +45,35 @@ def integrator(settings, aovs: bool | None = None, **override):
     return api.make_integrator_from(values)
 
 
+def job(sc, integ, settings):
+    """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their sampling (the
+    pass split of `pass_spp`, tiles of the pass loop's own size)."""
+    from ..pipeline.job import Job
+    return Job(scene=sc, integrator=integ, spp=settings.spp, seed=settings.seed, pass_spp=settings.pass_spp,
+               lanes_per_pass=api.LANES_PER_PASS)
+
+
+def run(sc, settings, aovs: bool, keep: Callable | None = None):
+    """(F12's `pipeline.runner.Runner`, the one-line note where Denoise auto could not denoise): the Denoise
+    setting's finisher (`denoise.finishers.plan`); `keep`: called with the buffer to restyle (Record buffer).
+    Raises the refusals (one line each) before anything renders."""
+    from ..denoise.finishers import Image, plan
+    from ..errors import UsageError
+    from ..pipeline.resolve import resolve
+    resolved = resolve(job(sc, integrator(settings, aovs=aovs), settings), scene=sc)
+    runner, note = plan(resolved, settings.denoise, quality=settings.denoise_quality, label="<blender>", keep=keep)
+    if isinstance(runner.finisher, Image) and keep is not None:
+        raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would not be the "
+                         "denoised image; use Denoise 'expectation' (its buffer keeps the denoised expectation)")
+    return runner, note
+
+
 def passes(sc, integ, settings) -> Iterator[api.Progress]:
-    return api.passes(sc, integ, settings.spp, settings.seed, pass_spp=settings.pass_spp)
+    """The plain passes of `integ` with F12's sampling (a pipeline run, auto values pinned)."""
+    from ..pipeline.execute import InProcess
+    from ..pipeline.resolve import resolve
+    from ..pipeline.runner import Runner
+    return Runner(resolve(job(sc, integ, settings), scene=sc), InProcess()).passes()
 
 
 def line_mask(sc, settings, should_stop: Callable[[], bool] = lambda: False) -> np.ndarray | None:

@@ -13,7 +13,6 @@ import time
 import bpy
 import numpy as np
 
-from .. import api
 from ..errors import StyletraceError
 from .properties import ON_CHANGE, style_values
 
@@ -22,24 +21,12 @@ IMAGE = "styletrace restyle"
 _state: dict = {"buffer": None, "seconds": None, "error": ""}
 
 
-def record(sc, integ, settings):
-    """The passes of a render that records its buffer (`lookdev.record`), with F12's pass split."""
-    from ..lookdev.record import record as rec
-    size = sc.sensors()[0].film().crop_size()
-    lanes = settings.pass_spp * int(size[0]) * int(size[1])
-    _state["buffer"] = None
-    buf = None
-    for prog, buf in rec(sc, integ, settings.spp, settings.seed, "<blender>", lanes_per_pass=min(lanes, api.LANES_PER_PASS)):
-        yield prog
-    _state["buffer"] = buf
-
-
 def forget():
     _state["buffer"] = None
 
 
 def keep(buf):
-    """Keep `buf` for restyles (F12 with Denoise 'expectation' keeps its denoised buffer: `denoising`)."""
+    """Keep `buf` for restyles (F12 with Record buffer: its recorded buffer, the denoised one with Denoise 'expectation')."""
     _state["buffer"] = buf
 
 

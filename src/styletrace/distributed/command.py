@@ -1,10 +1,10 @@
 """The command line's hand-off: `styletrace render --ray [ADDRESS] [--resume]` and `--frames`.
 
-    source = passes(args, scene, integrator, lanes, lock)   # iterable like api.passes, plus save()/finish()
-    status = frames_command(args, scenes, parse_set, choose_integrator)
+    executor = executor_of(args)        # pipeline.execute.OnRay: a run.Render, with save()/finish()
+    status = frames_command(args, parse_set, parse_defines, check_output, say)
 
-`cli.cmd_render` keeps its loop, progress bar and signal handling; for `--ray` it iterates a `run.Render`
-instead of `api.passes` and calls its `save()` before it abandons a render on a second Ctrl-C, so the
+`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this executor: its
+loop, progress bar and signal handling, and `save()` before it abandons a render on a second Ctrl-C, so the
 checkpoint holds every finished pass. Frames have their own loop here (one image per task).
 """
 from __future__ import annotations
@@ -27,13 +27,16 @@ def cluster_of(args) -> str:
     return address
 
 
-def passes(args, resolved, lock):
-    """The command's resolved render (`pipeline.resolve`) on the cluster, checkpointed next to the output."""
-    from ..pipeline.execute import execute
+def executor_of(args):
+    """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray [ADDRESS]`
+    / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
+    from ..pipeline.execute import InProcess, OnRay
+    if args.ray is None and not args.resume:
+        return InProcess()
     if args.checkpoint_every is not None and args.checkpoint_every < 0:
         raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected seconds >= 0")
-    return execute(resolved, cluster_of(args), lock, output=args.output, resume=args.resume,
-                   checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every)
+    return OnRay(cluster_of(args), output=args.output, resume=args.resume,
+                 checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every)
 
 
 def frame_paths(output: str, count: int) -> list[str]:
@@ -47,6 +50,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
     from ..frontends.command_job import job_of
     from ..pipeline.execute import ray_job
+    from ..pipeline.job import check_counts
     from ..pipeline.resolve import resolve
     from ..runtime import init
     from ..sizing import lanes_per_pass
@@ -57,14 +61,11 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
         raise UsageError("--frames/--orbit turn one scene into a turntable; with several scene files each file is "
                          "one frame")
-    if args.frames is not None and args.frames < 1:
-        raise UsageError(f"bad value {args.frames} for --frames: expected an integer >= 1")
+    check_counts(("--frames", args.frames))
     if args.orbit is not None and args.frames is None:
         raise UsageError("--orbit needs --frames N (how many frames the rotation is split into)")
-    for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp),
-                        ("--pass-spp", args.pass_spp)):
-        if value is not None and value < 1:
-            raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
+    check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
+                 ("--pass-spp", args.pass_spp))
     for scene in scenes:
         check_output(args.output, scene)
     count = args.frames if len(scenes) == 1 else len(scenes)
@@ -113,4 +114,4 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     return 0
 
 
-__all__ = ["cluster_of", "passes", "frame_paths", "frames_command"]
+__all__ = ["cluster_of", "executor_of", "frame_paths", "frames_command"]

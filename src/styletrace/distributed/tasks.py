@@ -43,23 +43,15 @@ def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tu
     `seed`; returns the float32 window and this worker's process id."""
     import mitsuba as mi
     import numpy as np
+
+    from ..pipeline.passes import Crop
     scene, integrator = _prepare(job)
-    film = scene.sensors()[0].film()
-    base, full = tuple(int(v) for v in film.crop_offset()), tuple(int(v) for v in film.crop_size())
-    params = mi.traverse(scene.sensors()[0]) if tuple(size) != full else None
-    try:
-        if params is not None:  # as api.passes does for its tiles
-            params["film.crop_offset"] = mi.ScalarPoint2u(base[0] + offset[0], base[1] + offset[1])
-            params["film.crop_size"] = mi.ScalarVector2u(*size)
-            params.update()
-        with no_collection():  # as api.passes: no scene finalised while the pass is recorded
+    with Crop(scene.sensors()[0]) as crop:
+        if tuple(size) != crop.full:  # as the pass loop does for its tiles
+            crop.set(offset, size)
+        with no_collection():  # as the pass loop: no scene finalised while the pass is recorded
             img = mi.render(scene, integrator=integrator, spp=spp, seed=seed)
             arr = np.array(img, dtype=np.float32)[..., :3]
-    finally:
-        if params is not None:
-            params["film.crop_offset"] = mi.ScalarPoint2u(*base)
-            params["film.crop_size"] = mi.ScalarVector2u(*full)
-            params.update()
     return arr, os.getpid()
 
 
@@ -81,7 +73,8 @@ def render_frame(job: Job, to_world, spp: int, seed: int, lanes_per_pass: int, p
             params["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64))
             params.update()
         image = None
-        for prog in pass_loop.passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
+        for prog in pass_loop.passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp,
+                                     pinned=True):
             image = prog.image
     finally:
         if old is not None:

@@ -18,9 +18,9 @@ import warnings
 from typing import Sequence
 
 from ..errors import StyletraceError, UsageError
-from ..images import IMAGE_TYPES, check_target, nonfinite_pixels, save_safely
-from ..wild import warning as wild_warning
-from .signals import Passes, StopSignals, one_line, say  # noqa: F401  (StopSignals: tests import it here)
+from ..images import IMAGE_TYPES, check_target
+from ..pipeline.job import check_counts
+from ..pipeline.signals import StopSignals, one_line, say  # noqa: F401  (StopSignals: tests import it here)
 from .status import Status
 
 
@@ -105,6 +105,7 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
+    """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner` runs them."""
     from ..denoise import check_method, default_method
     method = check_method(args.denoise or default_method())
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
@@ -122,137 +123,41 @@ def cmd_render(args) -> int:
         args.denoise = None
         from ..distributed.command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
-    args.scene = args.scene[0] if args.scene else "cornell-box"
-    check_output(args.output, args.scene)
+    scene = args.scene[0] if args.scene else "cornell-box"
+    check_output(args.output, scene)
     params = _parse_set(args.set)
-    for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp),
-                        ("--pass-spp", args.pass_spp)):
-        if value is not None and value < 1:
-            raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
-
-    defines = _parse_defines(args.define)
-    status = Status(enabled=not args.quiet)
-    from .. import api
-    from ..images import check_format
-    from ..pipeline.execute import execute
-    from ..pipeline.resolve import resolve
+    check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
+                 ("--pass-spp", args.pass_spp))
+    from ..denoise.finishers import plan
+    from ..distributed.command import executor_of
+    from ..pipeline.runner import Voice
     from .command_job import job_of
+    status = Status(enabled=not args.quiet)
+    resolved = resolve_with_status(job_of(args, params, _parse_defines(args.define), scene=scene), status)
+    runner, note = plan(resolved, method, executor_of(args), args.buffer, args.denoise_quality,
+                        "auto" if args.coverage is None else args.coverage, args.denoise_uncertainty)
+    if note and not args.quiet:
+        say(f"styletrace: {note}")
+    return runner.write(args.output, Voice(args.quiet, status))
 
-    job = job_of(args, params, defines)
+
+def resolve_with_status(job, status):
+    """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's warnings
+    as one line each."""
+    from ..jit import backend
+    backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+    from ..pipeline.resolve import resolve
+    from ..pipeline.scene import SceneWarning, load_scene
     with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
-        warnings.simplefilter("always", api.SceneWarning)
-        with status.phase(f"loading scene {one_line(args.scene)}"):
-            loaded = api.load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
+        warnings.simplefilter("always", SceneWarning)
+        with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
+            loaded = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
         with status.phase("measuring the scene for its auto values: compiling and rendering a pilot"):
             resolved = resolve(job, scene=loaded)
         del loaded
     for w in caught:
         say(f"styletrace: warning: {w.message}")
-    from ..denoise.default import choose
-    plan = choose(resolved, method, local=args.ray is None and not args.resume)
-    if plan.note and not args.quiet:
-        say(f"styletrace: {plan.note}")
-    resolved, args.denoise = plan.resolved, (None if plan.method == "off" else plan.method)
-    scene, integrator = resolved.scene, resolved.integrator
-    args.spp = resolved.spp  # the scene author's count (its sampler's sample_count) unless --spp
-    size = scene.sensors()[0].film().crop_size()
-    ext = os.path.splitext(args.output)[1].lower()
-    pixel_format = api.film_format(scene)
-    try:
-        check_format(pixel_format, ext)
-    except ValueError as exc:
-        raise UsageError(f"bad output {args.output!r}: {exc}") from None
-    api.check_memory(int(size[0]), int(size[1]), ext)
-    if integrator.settings.aovs:
-        if ext != ".exr":
-            raise UsageError(f"bad output {args.output!r}: --aovs writes its channels into an .exr; a {ext} image "
-                             f"has no room for them")
-        if args.ray is not None or args.resume or args.buffer:
-            raise UsageError("--aovs renders locally without --buffer: the Ray passes and the buffer keep the image only")
-        if args.spp < 2:
-            raise UsageError(f"bad value {args.spp} for --spp with --aovs: the variance needs at least 2 samples per pixel")
-    if args.denoise:  # its refusals before anything is rendered (docs/denoise.md)
-        from ..denoise.command import precheck
-        precheck(args, scene, integrator, pixel_format)
-    if resolved.auto and not args.quiet:  # scene-relative defaults, printed to pin them
-        print(f"styletrace: auto values: {resolved.auto}", file=sys.stderr)
-    if args.denoise:  # docs/denoise.md
-        from ..denoise.command import render_denoised
-        return render_denoised(args, scene, integrator, pixel_format)
-    if args.buffer:
-        from ..lookdev.commands import render_with_buffer
-        return render_with_buffer(args, scene, integrator, resolved.lanes, resolved.pilot)
-
-    lanes, note = resolved.lanes, resolved.lanes_note
-    if note and not args.quiet:
-        say(f"styletrace: {note}")
-    run = Passes(args.spp, api.pass_count(scene, args.spp, lanes, pass_spp=args.pass_spp), args.quiet)
-
-    def write(prog, plain: bool = False) -> str:
-        image = prog.image
-        out = save_safely(image, args.output, pixel_format, getattr(prog, "aovs", None), plain)
-        bad = nonfinite_pixels(image)
-        if bad:
-            fix = "NaN as 0 and +inf as 1 in the PNG" if args.output.lower().endswith(".png") else "kept as they are"
-            say(f"styletrace: warning: {bad} pixel(s) are not finite (NaN or inf): {fix}")
-        return out
-
-    source = None
-
-    def abandon(signum):  # from the watcher thread: the pass under way is lost, the finished ones are not
-        status.stop()
-        if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass
-            source.save()
-        if run.latest is None:
-            say("styletrace: interrupted before the first pass finished; nothing written")
-        else:  # plain: Mitsuba's EXR writer would wait for the kernel under way (images.encode_plain)
-            out = write(run.latest, plain=True)
-            say(f"styletrace: interrupted; wrote {out} from {run.latest.spp_done} of {args.spp} spp")
-        sys.stderr.flush()
-        os._exit(128 + signum)
-
-    with StopSignals(abandon) as stop:
-        try:
-            if args.ray is not None or args.resume:  # the passes as Ray tasks, checkpointed
-                from ..distributed.command import passes as ray_passes
-                source = ray_passes(args, resolved, stop.lock)
-            else:
-                source = execute(resolved, lock=stop.lock)
-            if run.bar is not None:
-                status.follow(run.bar)
-            else:
-                status.start("compiling and rendering")
-            run.follow(source, stop)
-        finally:
-            status.stop()
-        with stop.lock:
-            stop.settled = True
-        run.close()  # the final write happens under the watcher too: a signal now does not cut it
-        latest, failure = run.latest, run.failure
-        if failure is not None:
-            out = write(latest)
-            say(f"styletrace: error after {latest.spp_done} of {args.spp} spp ({api.first_line(failure)}); wrote the "
-                f"finished passes to {out}")
-            return 1
-        if stop.count:
-            if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass, now (not
-                source.save()            # whenever its abandoned iterator is collected)
-            if latest is None:
-                say("styletrace: interrupted before the first pass finished; nothing written")
-                return stop.exit_status
-            out = write(latest)
-            say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {args.spp} spp")
-            return stop.exit_status
-        out = write(latest)
-        if out == args.output and hasattr(source, "finish"):
-            source.finish()
-        wild = wild_warning(latest.image, integrator.settings)  # after the write: the image is kept either way
-        if wild:
-            say(f"styletrace: warning: {wild}")
-        if not args.quiet:
-            import mitsuba as mi
-            say(f"wrote {out} ({mi.variant()}, {integrator.settings.style.describe()}, spp {args.spp})")
-        return 0 if out == args.output else 1
+    return resolved
 
 
 def choose_integrator(scene, args, params):

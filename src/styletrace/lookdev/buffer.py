@@ -220,9 +220,18 @@ def load_buffer(path: str) -> Buffer:
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 
+def check_buffer_path(path: str) -> None:
+    """A one-line UsageError before the render if the buffer could not be written to `path` (an .npz)."""
+    if not path.lower().endswith(".npz"):
+        raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
+    from ..images import check_target
+    check_target(path)  # before the render: the buffer is written after it
+
+
 __all__ = [
     "Buffer",
     "load_buffer",
+    "check_buffer_path",
     "SPREAD",
     "FORMAT",
     "VERSION",

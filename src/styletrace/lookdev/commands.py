@@ -5,12 +5,12 @@
     styletrace fit dragon.npz --style cel --target look.png -o fitted.png
     styletrace preview dragon --port 8765
 
+`render --buffer` runs through the pipeline's runner with `lookdev.record.Recorded` (`denoise.finishers.plan`).
 `cli.build_parser` calls `add_parsers`, handing over its own helpers (so this module never imports `cli`);
 nothing here loads Dr.Jit or Mitsuba before a command runs.
 """
 from __future__ import annotations
 
-import os
 import sys
 from functools import partial
 
@@ -23,50 +23,6 @@ BUFFER_HELP = (
     "and uniforms: at most 1048576 camera samples and 64 children per sample on average, 57 bytes + 13 "
     "per child + 5 per uniform each"
 )
-
-
-def check_buffer_path(path: str) -> None:
-    if not path.lower().endswith(".npz"):
-        raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
-    from ..images import check_target
-    check_target(path)  # before the render: the buffer is written after it
-
-
-def render_with_buffer(args, scene, integrator, lanes: int | None = None, pilot=None) -> int:
-    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass (`lanes`: camera
-    samples per pass, the render pipeline's for this device, so the image is the plain render's; `pilot`: the
-    scene-defaults pilot the auto values were resolved with, which record stores rather than tracing anew)."""
-    check_buffer_path(args.buffer)
-    from .. import api
-    from ..images import save_safely
-    from .record import record, scene_label
-
-    latest = buf = None
-    failure = None
-    try:
-        kw = {} if lanes is None else {"lanes_per_pass": lanes}
-        for latest, buf in record(scene, integrator, args.spp, args.seed, scene_label(args.scene), pilot=pilot, **kw):
-            pass
-    except (KeyboardInterrupt, RuntimeError) as exc:  # keep the finished passes (see cli.cmd_render)
-        if latest is None:
-            raise
-        failure = exc
-    out = save_safely(latest.image, args.output)
-    buf.save(args.buffer)
-    if failure is not None:
-        what = "interrupted" if isinstance(failure, KeyboardInterrupt) else f"error ({api.first_line(failure)})"
-        print(
-            f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished passes to {out} "
-            f"and {args.buffer}",
-            file=sys.stderr,
-        )
-        return 130 if isinstance(failure, KeyboardInterrupt) else 1
-    if not args.quiet:
-        print(
-            f"wrote {out} and {args.buffer} ({buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB)",
-            file=sys.stderr,
-        )
-    return 0 if out == args.output else 1
 
 
 def cmd_restyle(args, parse_set, check_output) -> int:
@@ -126,9 +82,8 @@ def cmd_preview(args, parse_set) -> int:
     params = parse_set(args.set)
     if not 0 <= args.port < 65536:
         raise UsageError(f"bad value {args.port} for --port: expected 0..65535")
-    for flag, value in (("--width", args.width), ("--height", args.height), ("--spp", args.spp)):
-        if value is not None and value < 1:
-            raise UsageError(f"bad value {value} for {flag}: expected an integer >= 1")
+    from ..pipeline.job import check_counts
+    check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp))
     from ..preview.server import serve
     return serve(args.scene, style=args.style, inner=args.inner, spp=args.spp, width=args.width,
                  height=args.height, port=args.port, params=params, open_browser=False)
@@ -172,4 +127,4 @@ def add_parsers(sub, parse_set, check_output) -> None:
     p.set_defaults(func=partial(cmd_preview, parse_set=parse_set))
 
 
-__all__ = ["add_parsers", "render_with_buffer", "BUFFER_HELP"]
+__all__ = ["add_parsers", "BUFFER_HELP"]

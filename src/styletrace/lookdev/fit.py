@@ -10,7 +10,6 @@ used. Rationale and the surrogates: docs/design/fitting_surrogates.md.
 """
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable

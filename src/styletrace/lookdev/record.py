@@ -20,12 +20,13 @@ from ..config import settings as S
 from ..config.estimator_registry import child_mean, firefly_cap, make_estimator
 from ..errors import SceneError, SettingsError, UsageError
 from ..gate import dr, mi
+from ..images import save_safely
 from ..kernel.integrator import StylizedIntegrator
 from ..kernel.vertex import emission
 from ..pipeline import passes as pass_loop
+from ..pipeline.runner import Finisher, Written
 from ..pipeline.scene import film_format
 from ..scene.defaults import Pilot, unique_styled
-from ..scene.defaults import resolve as resolve_defaults
 from ..styles.base import Vertex, camera_forward
 from . import film_filter
 from .buffer import (
@@ -324,11 +325,9 @@ def record(
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
-    # pin the scene-relative defaults first: `pipeline.passes` would otherwise pin them on a plain
-    # copy of the
-    # integrator, losing the recording; with the pilot stored below (traced here if an auto value
-    # needs it)
-    integrator = resolve_defaults(scene, integrator, pilot)[0]
+    # pin the scene-relative defaults on the integrator, not on the recording wrapper below: a copy would lose
+    # the recording; with the pilot stored below (traced here if an auto value needs it)
+    integrator = pass_loop.pin(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
     sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
@@ -388,7 +387,8 @@ def record(
         # again
         rec_slot["auto"] = list(getattr(target.slot.style, "chosen", ()))
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
-    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp)):
+    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp,
+                                                                  pinned=True)):
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
         if filtered and "pos" not in arrays:  # where Mitsuba put each sample
             seed_i = pass_loop.pass_seed(seed, index)
@@ -431,15 +431,53 @@ def render_buffer(
     The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values
     pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments
     and pass split)."""
+    from ..pipeline.execute import InProcess
     from ..pipeline.job import python_job
     from ..pipeline.resolve import resolve
+    from ..pipeline.runner import Runner
     r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, **params))
-    buf = None
-    for prog, buf in record(r.scene, r.integrator, r.spp, seed, scene_label(scene), max_samples, r.lanes, pilot=r.pilot):
-        buf.image = prog.image
-        if callback is not None:
-            callback(prog)
-    return buf
+    recorded = Recorded(label=scene_label(scene), max_samples=max_samples)
+    return Runner(r, InProcess(), recorded).result(callback)
 
 
-__all__ = ["RecordingIntegrator", "record", "render_buffer", "check_recordable", "check_film", "to_film"]
+class Recorded(Finisher):
+    """A run's finisher that records the expectation buffer of every finished pass (`record`) beside the
+    image: the command line's `--buffer FILE` (`path`), Blender's Record buffer (`keep(buffer)` after the
+    passes). `label`: how the buffer names its scene (`scene_label`)."""
+    local = "--buffer renders locally: the buffer is recorded in this process (no --ray)"
+
+    def __init__(self, path: str | None = None, label: str = "", keep: Callable[[Buffer], None] | None = None,
+                 max_samples: int = MAX_SAMPLES):
+        self.buffer, self.label, self.keep, self.max_samples = path, label, keep, max_samples
+        self.recorded: Buffer | None = None
+
+    def check(self, resolved, executor) -> None:
+        if resolved.integrator.aov_names():
+            raise UsageError("--aovs with --buffer: the buffer keeps the image only")
+        self.label = self.label or scene_label(resolved.job.scene)
+        if self.buffer is not None:
+            from .buffer import check_buffer_path
+            check_buffer_path(self.buffer)
+
+    def source(self, resolved, executor, lock) -> Iterator[pass_loop.Progress]:
+        job = resolved.job
+        for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed, self.label,
+                                self.max_samples, lanes_per_pass=resolved.lanes, pilot=resolved.pilot, pass_spp=job.pass_spp):
+            buf.image = prog.image
+            self.recorded = buf
+            yield prog
+        if self.keep is not None:
+            self.keep(self.recorded)
+
+    def result(self, prog) -> Buffer:
+        return self.recorded
+
+    def write(self, prog, output: str, pixel_format: str) -> Written:
+        out = save_safely(prog.image, output, pixel_format)
+        buf = self.recorded
+        buf.save(self.buffer)
+        return Written(out, (self.buffer,), prog.image,
+                       f"; {buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB")
+
+
+__all__ = ["RecordingIntegrator", "record", "render_buffer", "Recorded", "check_recordable", "check_film", "to_film"]

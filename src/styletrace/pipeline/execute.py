@@ -1,13 +1,13 @@
-"""Running a resolved render: its passes in this process (tiled), or as Ray tasks; and `styletrace.render`.
+"""Where the passes of a resolved render run: in this process (tiled), or as Ray tasks; and `styletrace.render`.
 
-    for prog in execute(resolve(job)):            # a passes.Progress after each pass (or Ray unit)
-        ...
+    source = InProcess().source(resolve(job))             # a passes.Progress after each pass
+    source = OnRay("local", output="o.exr").source(resolve(job), lock)   # the same launches as Ray tasks
     image = render("scene.xml", style="cel", defines={"depth": "3"}, cluster="local")
 
-In process the passes are `passes.passes`; with `cluster` ("local" or a Ray address) the same launches, with
-the same seeds and the same float32 merge, are Ray tasks (`distributed.run.Render`), so the image is
-bit-identical for the same seed and split. Ray workers receive the job's scene source and the resolved
-integrator's property values (auto values pinned), never the loaded objects.
+In process the passes are `passes.passes`; on Ray the same launches, with the same seeds and the same float32
+merge, are Ray tasks (`distributed.run.Render`), so the image is bit-identical for the same seed and split.
+Ray workers receive the job's scene source and the resolved integrator's property values (auto values
+pinned), never the loaded objects. A `runner.Runner` drives either (the executor of every front end).
 """
 from __future__ import annotations
 
@@ -16,7 +16,6 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ..errors import UsageError
 from .job import python_job
 from .passes import Progress, passes
 from .resolve import Resolved, resolve
@@ -30,35 +29,52 @@ def ray_job(resolved: Resolved):
     return job_for(job.scene, resolved.integrator, job.width, job.height, **load)
 
 
+class InProcess:
+    """The passes in this process (`passes.passes`: tiles, pass seeds, the float32 sum)."""
+    local = True
+
+    def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
+        """The render's passes, the running average after each; `lock` is held while the sum changes."""
+        job = resolved.job
+        return passes(resolved.scene, resolved.integrator, resolved.spp, job.seed, lanes_per_pass=resolved.lanes,
+                      pass_spp=job.pass_spp, lock=lock, pinned=True)
+
+
+class OnRay:
+    """The passes as Ray tasks on `cluster` ("local" or an address); `options`: output, resume and
+    checkpoint_every of `distributed.run.Render`. The source also has `save()` and `finish()`."""
+    local = False
+
+    def __init__(self, cluster: str | None = None, **options: Any):
+        self.cluster, self.options = cluster or "local", options
+
+    def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()):
+        from ..distributed.run import Render
+        job = resolved.job
+        width, height = resolved.size
+        return Render(ray_job(resolved), resolved.spp, job.seed, width, height, self.cluster, resolved.lanes,
+                      job.pass_spp, lock=lock, **self.options)
+
+
+def executor_for(cluster: str | None = None, **ray_options: Any):
+    """InProcess, or OnRay where a cluster is named or a checkpoint is to be resumed."""
+    if cluster is None and not ray_options.get("resume"):
+        return InProcess()
+    return OnRay(cluster, **ray_options)
+
+
 def execute(resolved: Resolved, cluster: str | None = None, lock: Any = contextlib.nullcontext(),
             **ray_options: Any) -> Iterator[Progress]:
-    """The render's passes, yielding the running average after each; on Ray with `cluster` (`ray_options`:
-    output, resume, checkpoint_every of `distributed.run.Render`). The returned Ray iterable also has
-    `save()`, `finish()` and `progress()`."""
-    job = resolved.job
-    if resolved.integrator.aov_names() and resolved.spp < 2:
-        raise UsageError(f"bad value {resolved.spp} for 'spp' with aovs=True: the variance needs at least 2 samples "
-                         f"per pixel")
-    if cluster is None and not ray_options.get("resume"):
-        return passes(resolved.scene, resolved.integrator, resolved.spp, job.seed, lanes_per_pass=resolved.lanes,
-                      pass_spp=job.pass_spp, lock=lock)
-    if resolved.integrator.aov_names():
-        raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the image only")
-    from ..distributed.run import Render
-    width, height = resolved.size
-    return Render(ray_job(resolved), resolved.spp, job.seed, width, height, cluster or "local", resolved.lanes,
-                  job.pass_spp, lock=lock, **ray_options)
+    """The render's passes through a plain `runner.Runner` (its checks first): in process, or on Ray with
+    `cluster` (`ray_options` as `OnRay`'s)."""
+    from .runner import Runner
+    return Runner(resolved, executor_for(cluster, **ray_options)).passes(lock)
 
 
 def run(resolved: Resolved, cluster: str | None = None, callback: Callable[[Progress], None] | None = None):
     """The final image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True."""
-    prog = None
-    for prog in execute(resolved, cluster):
-        if callback is not None:
-            callback(prog)
-    if resolved.integrator.aov_names():
-        return prog.image, prog.aovs
-    return prog.image
+    from .runner import Runner
+    return Runner(resolved, executor_for(cluster)).result(callback)
 
 
 def render(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
@@ -79,4 +95,4 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     return run(resolve(job), cluster, callback)
 
 
-__all__ = ["execute", "run", "render", "ray_job"]
+__all__ = ["InProcess", "OnRay", "executor_for", "execute", "run", "render", "ray_job"]

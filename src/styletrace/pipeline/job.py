@@ -63,4 +63,12 @@ def python_job(scene: Any = None, style: str | None = None, spp: int | None = No
                pass_spp=pass_spp)
 
 
-__all__ = ["Job", "given_values", "python_job", "PYTHON_STYLE"]
+def check_counts(*named: tuple[str, Any]) -> None:
+    """A one-line UsageError for the first (name, value) whose value is given (not None) and below 1: the
+    sizes and sample counts of the command line's render and preview."""
+    for name, value in named:
+        if value is not None and value < 1:
+            raise UsageError(f"bad value {value} for {name}: expected an integer >= 1")
+
+
+__all__ = ["Job", "given_values", "python_job", "check_counts", "PYTHON_STYLE"]

@@ -22,6 +22,7 @@ from ..errors import UsageError
 from ..gate import mi
 from ..images import PIXEL_FORMATS
 from ..jit import no_collection
+from ..scene.defaults import Pilot
 from ..scene.defaults import resolve as resolve_defaults
 from .scene import film_format
 
@@ -32,6 +33,13 @@ TILE_SIDE = 1024
 #: Host memory per lane of a pass (the film's block, the output, the sampler), for the up-front estimate;
 #: a 1024 x 1024 pass at 1 spp measured about 50 MB more than a 256 x 256 one (BENCHMARKS.md, memory).
 LANE_BYTES = 256
+
+def pin(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
+    """(`integrator` with its scene-relative `auto` values pinned on `scene`, the line naming them): the
+    pipeline's one pinning (`resolve.resolve`'s, and the pass loop's for a prebuilt integrator).
+    `pilot`: the scene-defaults pilot to draw them from (traced only if a value needs it)."""
+    return resolve_defaults(scene, integrator, pilot)
+
 
 def pass_seed(seed: int, index: int) -> int:
     """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams."""
@@ -74,6 +82,34 @@ def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
     th = min(height, max(1, max_pixels // tw))
     return [Tile((x, y), (tw, th), (ky, kx), (dy, dx))
             for y, ky, dy in _axis(height, th) for x, kx, dx in _axis(width, tw)]
+
+
+class Crop:
+    """Crop windows of a sensor's film, set one after another (`set`: offset and size relative to the film's
+    own crop window), and the film's own window back when the block ends."""
+
+    def __init__(self, sensor: mi.Sensor):
+        film = sensor.film()
+        self.sensor, self.params = sensor, None
+        self.base = tuple(int(v) for v in film.crop_offset())
+        self.full = tuple(int(v) for v in film.crop_size())
+
+    def set(self, offset: tuple[int, int], size: tuple[int, int]) -> None:
+        if self.params is None:
+            self.params = mi.traverse(self.sensor)
+        self.params["film.crop_offset"] = mi.ScalarPoint2u(self.base[0] + offset[0], self.base[1] + offset[1])
+        self.params["film.crop_size"] = mi.ScalarVector2u(*size)
+        self.params.update()
+
+    def __enter__(self) -> "Crop":
+        return self
+
+    def __exit__(self, *exc) -> bool:
+        if self.params is not None:  # leave the scene's film as it was
+            self.params["film.crop_offset"] = mi.ScalarPoint2u(*self.base)
+            self.params["film.crop_size"] = mi.ScalarVector2u(*self.full)
+            self.params.update()
+        return False
 
 
 def memory_needed(width: int, height: int, ext: str = ".exr") -> int:
@@ -176,7 +212,7 @@ def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER
 
 def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
-           lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
+           lock: Any = contextlib.nullcontext(), pinned: bool = False) -> Iterator[Progress]:
     """Render `spp` samples per pixel in passes; yield the running average after each pass.
 
     An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film); a pass
@@ -186,16 +222,16 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     A `stylized` integrator with expansion_pass > 0 renders its expansion pass for each tile before the tile's
     first pass (`expansion_seed`: another stream than the passes', the same for the same seed).
     An integrator with `aovs=True` adds its AOV channels (`aov_names`) to the film; they are summed with the
-    image and read as `Progress.aovs` (docs/adaptive.md)."""
+    image and read as `Progress.aovs` (docs/adaptive.md). A prebuilt integrator gets its scene-relative
+    `auto` values pinned here (`pin`) unless `pinned` says a resolve did it already."""
     check_passes_args(scene, integrator, spp, seed)
-    integrator = resolve_defaults(scene, integrator)[0]  # scene-relative 'auto' style values (scene_defaults)
+    if not pinned:
+        integrator = pin(scene, integrator)[0]
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
-    base = tuple(int(v) for v in film.crop_offset())
     check_memory(width, height)
     layout, per_pass = pass_size(width, height, spp, lanes_per_pass, pass_spp)
-    params = mi.traverse(sensor) if len(layout) > 1 else None
     channels = len(PIXEL_FORMATS[film_format(scene)])  # the film's own: RGB, Y, XYZ, with alpha or not
     extra = len(integrator.aov_names())  # error AOVs (StylizedIntegrator.aov_names), after the film's channels
     if extra and film_format(scene) not in ("rgb", "rgba"):
@@ -208,14 +244,12 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     expand = getattr(integrator, "prepare_expansion", None)
     if expand is not None:
         integrator.expansion.clear()
-    try:
+    with Crop(sensor) as crop:
         while counts[-1] < spp:
             for t, tile in enumerate(layout):
                 n = min(per_pass, spp - int(counts[t]))
-                if params is not None:
-                    params["film.crop_offset"] = mi.ScalarPoint2u(base[0] + tile.offset[0], base[1] + tile.offset[1])
-                    params["film.crop_size"] = mi.ScalarVector2u(*tile.size)
-                    params.update()
+                if len(layout) > 1:
+                    crop.set(tile.offset, tile.size)
                 if expand is not None:
                     expand(scene, expansion_seed(seed, t))
                 with no_collection():  # recorded and launched with no scene finalised meanwhile (jit.no_collection)
@@ -227,11 +261,6 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                 del img, arr
                 index += 1
                 yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n)
-    finally:
-        if params is not None:  # leave the scene's film as it was
-            params["film.crop_offset"] = mi.ScalarPoint2u(*base)
-            params["film.crop_size"] = mi.ScalarVector2u(width, height)
-            params.update()
 
 
 def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> int:
@@ -241,5 +270,6 @@ def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, 
     return len(layout) * math.ceil(spp / per_pass)
 
 
-__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "memory_needed",
+__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "Crop", "pin",
+           "memory_needed",
            "memory_available", "check_memory", "Progress", "pass_size", "passes", "pass_count"]

@@ -21,10 +21,10 @@ from ..gate import mi
 from ..kernel.integrator import StylizedIntegrator
 from ..runtime import init
 from ..scene.defaults import Pilot
-from ..scene.defaults import resolve as resolve_defaults
 from ..sizing import lanes_per_pass
 from .carried import carried_settings, nested_stylized
 from .job import Job
+from .passes import pin
 from .scene import load_scene, scene_spp
 
 
@@ -84,10 +84,10 @@ def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
     chosen = choose_integrator(scene, job)
     # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value needs it)
     pilot = Pilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
-    integrator, auto = resolve_defaults(scene, chosen, pilot)
+    integrator, auto = pin(scene, chosen, pilot)
     spp = scene_spp(scene) if job.spp is None else int(job.spp)
     lanes, note = lanes_for(job)
     return Resolved(job, scene, integrator, spp, lanes, auto, note, pilot)
 
 
-__all__ = ["Resolved", "resolve", "choose_integrator", "integrator_values", "lanes_for"]
+__all__ = ["Resolved", "resolve", "pin", "choose_integrator", "integrator_values", "lanes_for"]

@@ -17,7 +17,7 @@ import math
 from dataclasses import replace
 
 from ..gate import dr, mi
-from .base import EXPOSURE_KEY, Param, Style, Vertex, auto_exposure, exposure_param
+from .base import EXPOSURE_KEY, Style, Vertex, auto_exposure, exposure_param
 from .forms import SeriesForm
 from .registry import register
 

@@ -1,6 +1,5 @@
-"""Ctrl-C (SIGINT) and SIGTERM during a command-line render (`StopSignals`), and `say`, its one-line messages.
-
-Used by `styletrace render` (`frontends.cli`) and `styletrace render --denoise expectation` (`denoise.command`).
+"""Ctrl-C (SIGINT) and SIGTERM during a run that writes a file (`StopSignals`), its passes and progress bar
+(`Passes`), and `say`, its one-line messages on stderr. `pipeline.runner.Runner.write` uses them.
 """
 from __future__ import annotations
 

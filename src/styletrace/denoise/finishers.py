@@ -1,0 +1,158 @@
+"""The denoisers as a run's finishers, and the run of a resolved job at every front end's default.
+
+    runner, note = plan(resolve(job), method="auto", executor=InProcess(), buffer="b.npz")
+    image = runner.result()                       # or runner.write("out.exr", voice) on the command line
+
+`Expectation` records the expectation buffer pass by pass and, after the last pass or a stop, denoises it and
+applies g (`denoise.expectation.Job`); `Image` denoises the average of the finished passes
+(`denoise.image.finish`). `plan` picks the finisher of a resolved job (`denoise.default.choose`: auto,
+expectation, image or off; off with `buffer` records the buffer, `lookdev.record.Recorded`) and returns the
+one-line note where auto could not denoise.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+from ..errors import UsageError
+from ..images import save_safely
+from ..pipeline.runner import Finisher, Plain, Runner, Written
+from ..pipeline.scene import film_format
+
+#: why a denoiser needs the whole image in one process
+LOCAL = "--denoise renders locally: the denoiser needs the whole image in one process (no --ray, no cluster=)"
+NOT_DENOISED = ", NOT denoised (the pass under way did not end)"
+
+
+class Denoised(Finisher):
+    """What both denoisers share: OIDN and an rgb film required, a pass on every pixel before a result."""
+    how = ", denoised,"
+    local = LOCAL
+    plain_note = NOT_DENOISED
+
+    def __init__(self, quality: str = "high", buffer: str | None = None):
+        self.quality, self.buffer = quality, buffer
+
+    def check(self, resolved, executor) -> None:
+        from . import oidn
+        oidn.require()
+        oidn.check_quality(self.quality)
+        fmt = film_format(resolved.scene)
+        if fmt != "rgb":
+            raise UsageError(f"--denoise needs an rgb film, not '{fmt}'")
+
+    def ready(self, prog) -> bool:
+        return prog is not None and prog.spp_done >= 1
+
+    def write_plain(self, prog, output: str, pixel_format: str) -> str:
+        return save_safely(prog.image[..., :3], output, pixel_format, None, plain=True)
+
+
+class Expectation(Denoised):
+    """The per-pixel expectation denoised before g (`denoise.expectation`); `buffer`: the file that keeps
+    the denoised buffer (the command line's --buffer), `keep`: called with it (Blender's Record buffer)."""
+
+    def __init__(self, quality: str = "high", buffer: str | None = None, label: str = "",
+                 coverage: int | str = "auto", uncertainty: float | None = None,
+                 keep: Callable[[Any], None] | None = None):
+        super().__init__(quality, buffer)
+        from .expectation import UNCERTAINTY
+        self.label, self.coverage, self.keep = label, coverage, keep
+        self.uncertainty = UNCERTAINTY if uncertainty is None else uncertainty
+        self.job = None
+
+    def check(self, resolved, executor) -> None:
+        super().check(resolved, executor)
+        from ..lookdev.record import check_film, scene_label
+        from . import expectation
+        from .coverage import check_k
+        check_k(self.coverage)
+        expectation.check_uncertainty(self.uncertainty)
+        expectation.check(resolved.integrator)
+        check_film(resolved.scene)  # the buffer's conditions: an rgb film, a filter it can record
+        if self.buffer is not None:
+            from ..lookdev.buffer import check_buffer_path
+            check_buffer_path(self.buffer)
+        job = resolved.job
+        self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed, self.quality,
+                                   label=self.label or scene_label(job.scene), coverage=self.coverage,
+                                   uncertainty=self.uncertainty, lanes_per_pass=resolved.lanes,
+                                   pass_spp=job.pass_spp)
+        self.aovs = bool(resolved.integrator.settings.aovs)
+
+    def source(self, resolved, executor, lock):
+        return (prog for prog, _ in self.job.passes())
+
+    def ready(self, prog) -> bool:
+        return super().ready(prog) and self.job.buffer is not None and self.job.buffer.spp >= 1
+
+    def _finish(self):
+        image, buf = self.job.finish()
+        if self.keep is not None:
+            self.keep(buf)
+        return image, buf
+
+    def result(self, prog):
+        from .expectation import aovs
+        image, buf = self._finish()
+        return (image, aovs(buf, image)) if self.aovs else image
+
+    def write(self, prog, output: str, pixel_format: str) -> Written:
+        from .expectation import aovs
+        image, buf = self._finish()
+        out = save_safely(image, output, pixel_format, aovs(buf, image) if self.aovs else None)
+        if self.buffer is not None:
+            buf.save(self.buffer)
+        points = buf.header.get("denoise", {}).get("coverage")
+        how = (f"expectation, the style at {points} points per pixel" if points else
+               "expectation, the style at the camera samples")
+        return Written(out, (self.buffer,) if self.buffer else (), image, f", denoised: {how}")
+
+
+class Image(Denoised):
+    """The average of the finished passes denoised (`denoise.image`), the baseline."""
+
+    def check(self, resolved, executor) -> None:
+        super().check(resolved, executor)
+        if self.buffer is not None:
+            raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, which image "
+                             "denoising leaves noisy; use --denoise expectation")
+        self.scene, self.seed = resolved.scene, resolved.job.seed
+        self.aovs = bool(resolved.integrator.aov_names())
+
+    def _finish(self, prog):
+        from .image import finish
+        return finish(self.scene, prog, self.seed, self.quality)
+
+    def result(self, prog):
+        out, _, errs = self._finish(prog)
+        return (out, errs) if self.aovs else out
+
+    def write(self, prog, output: str, pixel_format: str) -> Written:
+        out, _, errs = self._finish(prog)
+        return Written(save_safely(out, output, pixel_format, errs), (), out, ", denoised: image")
+
+
+def plan(resolved, method: str | None = None, executor: Any = None, buffer: str | None = None,
+         quality: str = "high", coverage: int | str = "auto", uncertainty: float | None = None,
+         label: str = "", keep: Callable[[Any], None] | None = None) -> tuple[Runner, str]:
+    """(the run of `resolved` for `method` (None: the default, `default.default_method`), the note where auto
+    could not denoise). `executor`: the pipeline's (default in process); `buffer`: a file for the expectation
+    buffer; `keep`: called with the buffer kept for restyles; the rest as `Expectation`'s. Raises the
+    refusals of the run (UsageError, one line) before anything renders."""
+    from ..pipeline.execute import InProcess
+    from .default import choose
+    executor = executor if executor is not None else InProcess()
+    chosen = choose(resolved, method, local=executor.local)
+    if chosen.method == "expectation":
+        finisher = Expectation(quality, buffer, label, coverage, uncertainty, keep)
+    elif chosen.method == "image":
+        finisher = Image(quality, buffer)
+    elif buffer is not None or keep is not None:
+        from ..lookdev.record import Recorded
+        finisher = Recorded(buffer, label, keep)
+    else:
+        finisher = Plain()
+    return Runner(chosen.resolved, executor, finisher), chosen.note
+
+
+__all__ = ["Expectation", "Image", "plan", "LOCAL"]

@@ -1,0 +1,241 @@
+"""One way to run a job, for every front end: the passes, the checks, stops, the finished passes written.
+
+    runner = Runner(resolve(job), InProcess(), Plain())
+    image = runner.result(callback)                 # the Python API: image, or (image, aovs)
+    status = runner.write("out.exr", Voice())        # the command line: an exit status
+    for prog in runner.passes(): ...                # Blender and the preview: their own loop, then finish()
+
+A run is three parts. The resolved job (`resolve.resolve`: the scene loaded, its settings merged, `auto`
+values pinned there, once). An executor that yields a `passes.Progress` after each pass: `execute.InProcess`
+or `execute.OnRay`. A finisher that makes the result of the finished passes: `Plain` here, the denoisers'
+(`denoise.finishers`) and the recorded buffer's (`lookdev.record.Recorded`) above. `Runner.check` holds
+the refusals that depend on the three, one copy each, made before anything renders. `write` is the run
+that ends in files: Ctrl-C or SIGTERM stop it after the pass under way (`signals.StopSignals`), a failure
+after a finished pass keeps it, and either way the finished passes are written (atomically, `images`).
+"""
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from dataclasses import dataclass
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from ..errors import UsageError
+from ..images import check_format, nonfinite_pixels, save_safely
+from .passes import Progress, check_memory, pass_count
+from .resolve import Resolved
+from .scene import film_format, first_line
+from .signals import Passes, StopSignals, say
+
+
+@dataclass
+class Written:
+    """What a finisher wrote: the image's path (another one where the target could not be replaced), the
+    other files, the image itself (for the warnings) and a note for the summary line ('' for none)."""
+    path: str
+    extra: tuple[str, ...] = ()
+    image: np.ndarray | None = None
+    note: str = ""
+
+
+class Finisher:
+    """What a run makes of its finished passes (the base: the passes as they are, `Plain`).
+
+    `how`: words for a stopped run's line (", denoised,"); `local`: why it needs the passes in this
+    process ('' where it does not); `plain_note`: what a write that cannot wait for the pass under way
+    leaves out."""
+    how = ""
+    local = ""
+    plain_note = ""
+
+    def check(self, resolved: Resolved, executor: Any) -> None:
+        """Refusals of this finisher (one line each), before anything renders."""
+
+    def source(self, resolved: Resolved, executor: Any, lock: Any) -> Iterator[Progress]:
+        return executor.source(resolved, lock)
+
+    def ready(self, prog: Progress | None) -> bool:
+        """Whether the finished passes make a result (some finishers need a pass on every pixel)."""
+        return prog is not None
+
+    def result(self, prog: Progress) -> Any:
+        """The Python API's result of the finished passes: the image, or (image, aovs)."""
+        return (prog.image, prog.aovs) if prog.aovs is not None else prog.image
+
+    def write(self, prog: Progress, output: str, pixel_format: str) -> Written:
+        return Written(save_safely(prog.image, output, pixel_format, prog.aovs), image=prog.image)
+
+    def write_plain(self, prog: Progress, output: str, pixel_format: str) -> str:
+        """The finished passes as they are, written without Mitsuba (its writer waits for a running kernel)."""
+        return save_safely(prog.image, output, pixel_format, prog.aovs, plain=True)
+
+
+class Plain(Finisher):
+    """The average of the finished passes, with its error AOVs where the integrator has them."""
+
+
+@dataclass
+class Voice:
+    """How a run that writes files speaks: `quiet` (no bar, notes or summary), the stderr status line of
+    long waits (`frontends.status.Status`, or None)."""
+    quiet: bool = False
+    status: Any = None
+
+
+class Runner:
+    """A resolved job run by an executor (`execute.InProcess`, `execute.OnRay`), finished by a finisher
+    (default `Plain`; module doc). Raises the refusals of `check` (UsageError, one line) when made."""
+
+    def __init__(self, resolved: Resolved, executor: Any, finisher: Finisher | None = None):
+        self.resolved, self.executor = resolved, executor
+        self.finisher = finisher if finisher is not None else Plain()
+        self.check()
+
+    @property
+    def aovs(self) -> bool:
+        return bool(self.resolved.integrator.aov_names())
+
+    def check(self) -> None:
+        """The refusals that depend on the job, the executor and the finisher, one copy each."""
+        spp = self.resolved.spp
+        if self.aovs and spp < 2:
+            raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples "
+                             f"per pixel")
+        if self.finisher.local and not self.executor.local:
+            raise UsageError(self.finisher.local)
+        if self.aovs and not self.executor.local:
+            raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the image only")
+        self.finisher.check(self.resolved, self.executor)
+
+    def check_output(self, output: str) -> str:
+        """Refusals of the output file (its format, the memory of its write); returns the film's format."""
+        fmt = film_format(self.resolved.scene)
+        ext = os.path.splitext(output)[1].lower()
+        try:
+            check_format(fmt, ext)
+        except ValueError as exc:
+            raise UsageError(f"bad output {output!r}: {exc}") from None
+        check_memory(*self.resolved.size, ext)
+        if self.aovs and ext != ".exr":
+            raise UsageError(f"bad output {output!r}: --aovs writes its channels into an .exr; a {ext} image "
+                             f"has no room for them")
+        return fmt
+
+    def passes(self, lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
+        """The passes, the running state after each (a caller may stop taking them at any time)."""
+        return self.finisher.source(self.resolved, self.executor, lock)
+
+    def finish(self, prog: Progress) -> Any:
+        """The result of the finished passes up to `prog` (the finisher's)."""
+        return self.finisher.result(prog)
+
+    def result(self, callback: Callable[[Progress], None] | None = None) -> Any:
+        """Every pass, then the result (`callback` after each pass)."""
+        prog = None
+        for prog in self.passes():
+            if callback is not None:
+                callback(prog)
+        return self.finish(prog)
+
+    def write(self, output: str, voice: Voice | None = None) -> int:
+        """Run to files, as the command line does: the exit status (0; 1 where a later pass failed or the
+        image went to another path; 128 + the signal after Ctrl-C or SIGTERM). See the module doc."""
+        voice = voice or Voice()
+        status = voice.status if voice.status is not None else _Silent()
+        r, finisher = self.resolved, self.finisher
+        fmt = self.check_output(output)
+        if r.auto and not voice.quiet:  # scene-relative defaults, printed to pin them
+            say(f"styletrace: auto values: {r.auto}")
+        if r.lanes_note and not voice.quiet:
+            say(f"styletrace: {r.lanes_note}")
+        spp = r.spp
+        run = Passes(spp, pass_count(r.scene, spp, r.lanes, pass_spp=r.job.pass_spp), voice.quiet)
+        source = None
+
+        def abandon(signum):  # from the watcher thread: the pass under way is lost, the finished ones are not
+            status.stop()
+            if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass
+                source.save()
+            latest = run.latest
+            if latest is None or not finisher.ready(latest):
+                say("styletrace: interrupted before the first pass finished; nothing written")
+            else:
+                out = finisher.write_plain(latest, output, fmt)
+                say(f"styletrace: interrupted; wrote {out} from {latest.spp_done} of {spp} spp"
+                    f"{finisher.plain_note}")
+            sys.stderr.flush()
+            os._exit(128 + signum)  # the kernel under way cannot be stopped, nor waited for
+
+        with StopSignals(abandon) as stop:
+            try:
+                source = self.passes(stop.lock)
+                if run.bar is not None:
+                    status.follow(run.bar)
+                else:
+                    status.start("compiling and rendering")
+                run.follow(source, stop)
+            finally:
+                status.stop()
+                run.close()
+            with stop.lock:
+                stop.settled = True
+            # the final write happens under the watcher too: a signal now does not cut it
+            latest, failure = run.latest, run.failure
+            if stop.count and hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished
+                source.save()                           # pass now (not whenever its iterator is collected)
+            if not finisher.ready(latest):
+                if failure is not None:
+                    raise failure
+                say("styletrace: interrupted before every pixel had a pass; nothing written" if latest is not None
+                    else "styletrace: interrupted before the first pass finished; nothing written")
+                return stop.exit_status
+            done = finisher.write(latest, output, fmt)
+        self._warn(done)
+        outs = " and ".join((done.path, *done.extra))
+        if failure is not None:
+            say(f"styletrace: error after {latest.spp_done} of {spp} spp ({first_line(failure)}); wrote the finished "
+                f"passes{finisher.how} to {outs}")
+            return 1
+        if stop.count:
+            say(f"styletrace: interrupted; wrote the finished passes{finisher.how} to {outs} after {latest.spp_done} "
+                f"of {spp} spp")
+            return stop.exit_status
+        if done.path == output and hasattr(source, "finish"):
+            source.finish()  # a render on Ray: the checkpoint has served
+        if not voice.quiet:
+            import mitsuba as mi
+            say(f"wrote {outs} ({mi.variant()}, {r.integrator.settings.style.describe()}, spp {spp}{done.note})")
+        return 0 if done.path == output else 1
+
+    def _warn(self, done: Written) -> None:
+        """Non-finite pixels, and values that look wild (a diverging estimator); after the write: the image is
+        kept either way."""
+        if done.image is None:
+            return
+        bad = nonfinite_pixels(done.image)
+        if bad:
+            fix = "NaN as 0 and +inf as 1 in the PNG" if done.path.lower().endswith(".png") else "kept as they are"
+            say(f"styletrace: warning: {bad} pixel(s) are not finite (NaN or inf): {fix}")
+        from ..wild import warning
+        wild = warning(done.image, self.resolved.integrator.settings)
+        if wild:
+            say(f"styletrace: warning: {wild}")
+
+
+class _Silent:
+    """A status line that shows nothing (a run without one)."""
+
+    def start(self, *_):
+        pass
+
+    def follow(self, *_):
+        pass
+
+    def stop(self):
+        pass
+
+
+__all__ = ["Runner", "Finisher", "Plain", "Written", "Voice"]
