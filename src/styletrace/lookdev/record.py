@@ -452,8 +452,7 @@ class Recorded(Finisher):
         self.recorded: Buffer | None = None
 
     def check(self, resolved, executor) -> None:
-        if resolved.integrator.aov_names():
-            raise UsageError("--aovs with --buffer: the buffer keeps the image only")
+        check_recordable(resolved.integrator.settings, [])  # before the runner's generic checks
         self.label = self.label or scene_label(resolved.job.scene)
         if self.buffer is not None:
             from .buffer import check_buffer_path

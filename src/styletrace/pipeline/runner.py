@@ -100,6 +100,7 @@ class Runner:
 
     def check(self) -> None:
         """The refusals that depend on the job, the executor and the finisher, one copy each."""
+        self.finisher.check(self.resolved, self.executor)  # the finisher's refusal is the specific one
         spp = self.resolved.spp
         if self.aovs and spp < 2:
             raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples "
@@ -108,7 +109,6 @@ class Runner:
             raise UsageError(self.finisher.local)
         if self.aovs and not self.executor.local:
             raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the image only")
-        self.finisher.check(self.resolved, self.executor)
 
     def check_output(self, output: str) -> str:
         """Refusals of the output file (its format, the memory of its write); returns the film's format."""
