@@ -1,7 +1,7 @@
 """The path kernel in scenes with participating media: `walk` of path.py, but along rays through media.
 
-    w = volume_walk(scene, sampler, pi, ray, active, medium, flight=True, ...)   # a path.Walk
-    tr = transmittance(scene, sampler, it, ds, medium, channel, active)         # towards a sampled light
+    w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)  # a Walk
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active)      # towards a sampled light
 
 The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray in a
 medium a free-flight distance is drawn from the medium's majorant (`Medium.sample_interaction`); a
@@ -17,16 +17,17 @@ estimated by ratio tracking (`transmittance`), so a `null` shape bounding a medi
 In RGB the free-flight distance is drawn in one colour channel per path (chosen uniformly), and the
 throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel); media
 with grey extinction get weight 1 from the same formulas. Depth counts real scattering events at
-surfaces and in media (x at `depth0`), and roulette acts on the throughput after every scattering from
+surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every scattering from
 depth `rr_depth` + 1 on, as `volpath`'s.
 
-Stylization (integrator.py) uses the walk's `stop` to halt at surface scattering vertices: a stylized
-vertex is always a surface one. `flight` says whether the medium along the first ray is still to be
-sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already stands
-at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
-`delta_start`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
+`volume_walk` has path.walk's signature (path.WalkConfig, path.Start, path.Hooks). Stylization
+(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is always
+a surface one. `Start.flight` says whether the medium along the first ray is still to be sampled (a ray
+from the camera, or from a stylized vertex towards the next one) or the lane already stands at the
+surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
+`Start.delta`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
 through g at the next stylized vertex; see bounce.bounce), so emitters found past it get full weight.
-`hide_first`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
+`Start.hide`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
 """
 from __future__ import annotations
 
@@ -36,8 +37,7 @@ from typing import Any, Callable, Optional
 import drjit as dr
 import mitsuba as mi
 
-from .emitter_sampler import EmitterSampler
-from .path import finished, halt_at, mis_emission
+from .path import NO_HOOKS, Hooks, Start, Walk, WalkConfig, finished, halt_at, mis_emission
 from .vertex import depth_limit, mis_power, opaque_part, opaque_share
 
 
@@ -121,21 +121,19 @@ class VolumeState:
     first: mi.Bool                       # at the starting vertex
 
 
-def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f, active: mi.Bool,
-                medium, flight: bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
-                stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
-                emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
-                delta_start: bool = False, hide_first: bool = False):
-    """path.walk through participating media (module docstring); returns a path.Walk with the medium
-    each lane stands in."""
+def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
+    """path.walk through participating media (module docstring): the same parameters and hooks; returns
+    a path.Walk with the medium each lane stands in."""
+    scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
+    stop, skip_emitter = hooks.stop, hooks.skip_emitter
+    opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
     ctx, pctx = mi.BSDFContext(), mi.PhaseFunctionContext(None)
-    emitters = emitters if emitters is not None else EmitterSampler(scene)
-    limit = depth_limit(max_depth)
+    limit = depth_limit(cfg.max_depth)
     channel = mi.UInt32(dr.minimum(sampler.next_1d(active) * 3.0, 2.0))
 
-    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
-                        medium=dr.select(active, mi.MediumPtr(medium), mi.MediumPtr(None)),
-                        flight=mi.Bool(flight), active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0),
+    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi), ray=mi.Ray3f(start.ray),
+                        medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
+                        flight=mi.Bool(start.flight), active=mi.Bool(active), depth=mi.UInt32(start.depth), L=mi.Spectrum(0.0),
                         beta=mi.Spectrum(1.0), eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f),
                         pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True))
 
