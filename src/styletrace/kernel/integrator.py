@@ -26,8 +26,12 @@ Feature lines (`lines`, `line_mode lifted`; line_hooks.py, docs/lines.md): walks
 line state of the vertex they leave (`line_states`, one per stylized level); line_hooks.py decides the
 camera sample's own lines before anything else is traced.
 
-Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
-trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
+Every walk takes the render's `walk_config` (path.WalkConfig: depths, emitter sampler, null and media
+switches) and its own hooks (path.Hooks: where to halt, lights to skip, lines, tone); the surface and
+volume walks share both, so lines and LLaT's image coordinate reach every stylized level with media too.
+
+Participating media (volume.py; the switch `WalkConfig.media` is taken at trace time, so scenes without
+media trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
 to one (the camera ray, the bounce between first_n_hits levels, a first_object_hit walk) a lane whose free
 flight ends in a real medium collision first goes on as an ordinary volumetric path, unstylized; the
 others reach the surface with the transmittance weight and are stylized there. Children are full
@@ -150,10 +154,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         """path.walk, or volume.py's walk where the scene has media (a trace-time switch: scenes without
         media trace exactly the plain kernel); both take the render's `walk_config`."""
         cfg = self.walk_config
-        if cfg.media:  # lines on the camera ray only (`line_problem`): the volume walk tests no edges
-            # nor carries a tone state: styles there read the position's projection
-            return volume_walk(cfg, sampler, start, active, Hooks(hooks.stop, hooks.skip_emitter))
-        return walk(cfg, sampler, start, active, hooks)
+        return (volume_walk if cfg.media else walk)(cfg, sampler, start, active, hooks)
 
     def child(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
         """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x = `site`."""
@@ -170,7 +171,12 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             # the way goes on as an ordinary volumetric path (volume.py)
             first = mi.UInt32(site.depth)
             start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium, delta=True)
-            w = self._walk(sampler, start, active, Hooks(stop=lambda si2, d: d == first + 1))
+            w = self._walk(sampler, start, active, Hooks(stop=lambda si2, d: d == first + 1,
+                                                         lines=walk_lines(self, level),
+                                                         tone=self.tone_states.get(level)))
+            if self.lines is not None:
+                self.line_states[level + 1] = w.lines
+            self.tone_states[level + 1] = w.tone
             si2 = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
             deeper = self.stylized(level + 1, sampler, Site(w.pi, si2, w.ray, w.depth, w.medium), w.halted)
             return w.L + dr.select(w.halted, w.beta * deeper, 0.0)

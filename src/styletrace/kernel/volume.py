@@ -37,7 +37,9 @@ from typing import Any, Callable, Optional
 import drjit as dr
 import mitsuba as mi
 
-from .path import NO_HOOKS, Hooks, Start, Walk, WalkConfig, finished, halt_at, mis_emission
+from .anchors import ToneState, combine
+from .lines import LineState
+from .path import NO_HOOKS, Hooks, Start, Walk, WalkConfig, advance, finished, halt_at, mis_emission
 from .vertex import depth_limit, mis_power, opaque_part, opaque_share
 
 
@@ -119,13 +121,15 @@ class VolumeState:
     delta_prev: mi.Bool                  # its direction had no competing light sample: full weight
     halted: mi.Bool
     first: mi.Bool                       # at the starting vertex
+    lines: Optional[Any] = None          # lines.LineState where feature lines are on
+    tone: Optional[Any] = None           # anchors.ToneState where a style reads image coordinates
 
 
 def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
     """path.walk through participating media (module docstring): the same parameters and hooks; returns
     a path.Walk with the medium each lane stands in."""
     scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
-    stop, skip_emitter = hooks.stop, hooks.skip_emitter
+    stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
     opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
     ctx, pctx = mi.BSDFContext(), mi.PhaseFunctionContext(None)
     limit = depth_limit(cfg.max_depth)
@@ -135,7 +139,8 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
                         medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
                         flight=mi.Bool(start.flight), active=mi.Bool(active), depth=mi.UInt32(start.depth), L=mi.Spectrum(0.0),
                         beta=mi.Spectrum(1.0), eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f),
-                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True))
+                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True),
+                        lines=None if lines is None else lines[1], tone=tone)
 
     def body(s: VolumeState):
         # ---- the medium between the ray's origin and the surface `pi` (volpath's delta tracking)
@@ -220,6 +225,8 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         s.pdf_prev = dr.select(scat, phase_pdf_m, dr.select(real_s, bs.pdf, s.pdf_prev))
         s.delta_prev = dr.select(scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev))
         s.medium = dr.select(go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium)
+        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+            s.tone = scattered_in_medium(advance(s.tone, si, bs, s.depth, real_s), scat)
 
         # roulette after each scattering, from depth rr_depth + 1 on (volpath's)
         beta_max = dr.max(beta_next)
@@ -230,6 +237,12 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         go &= ~roulette | (s.sampler.next_1d(roulette) < q)
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=go)
+        if lines is not None:  # a line on the edge a surface scattering starts absorbs the path (lines.py)
+            seen, after = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
+                                        go & real_s)
+            s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
+            go &= ~seen.fired
+            s.lines = lines_past(after, pi_next, go & go_s & null_s, scat)
         # null collisions move the origin along the same ray; halted lanes keep their vertex
         moved = mi.Ray3f(s.ray)
         moved.o = mei.p
@@ -246,4 +259,21 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
 
     (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace volumetric path")
     # as at the end of path.walk: a sample that is not finite is dropped
-    return finished(out, medium=out.medium)
+    return finished(out, medium=out.medium, lines=out.lines, tone=out.tone)
+
+
+def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
+    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths reflect
+    or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins the prefix
+    key as no shape does, so no anchor matches and the coordinate takes its fallbacks (anchors.py)."""
+    key = combine(tone.key, mi.UInt32(0xFFFFFFFF))  # a shape id + 1 that no shape has: 0
+    return ToneState(key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0)
+
+
+def lines_past(state: LineState, pi: mi.PreliminaryIntersection3f, passed: mi.Bool,
+               scattered: mi.Bool) -> LineState:
+    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes on
+    through the surface (its lines were tested through it), its length grows by the next segment's.
+    `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later edge is tested."""
+    D = dr.select(passed, state.D + dr.select(pi.is_valid(), pi.t, dr.inf), state.D)
+    return LineState(D=D, alive=state.alive & ~scattered, angle=state.angle, spread=state.spread)
