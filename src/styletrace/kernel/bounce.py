@@ -26,18 +26,19 @@ class Bounce:
     tone: Optional[Any] = None           # anchors.ToneState at the next vertex (where tone is on)
 
 
-def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Bounce:
-    """One step from the vertex `site.si` (reached along `site.ray`) to the next vertex, for recursive
-    stylization. Returns the Bounce.
+def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
+           hooks: Hooks = NO_HOOKS) -> Bounce:
+    """One step from the vertex `site.si` (reached along `site.ray`) to the next vertex, for
+    recursive stylization. Returns the Bounce.
 
     The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
     surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
     spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
     alone get next-event estimation here, with weight 1.
 
-    With `cfg.nulls` x scatters by its opaque part only and the next vertex is the first scattering one
-    past null interactions (`first_scattering`). Of the `hooks` only `lines` (a line on the bounce's
-    edge ends it: weight x line colour joins L) and `tone` (advanced past x) apply.
+    With `cfg.nulls` x scatters by its opaque part only and the next vertex is the first scattering
+    one past null interactions (`first_scattering`). Of the `hooks` only `lines` (a line on the
+    bounce's edge ends it: weight x line colour joins L) and `tone` (advanced past x) apply.
     """
     scene, si, ray, depth, nulls = cfg.scene, site.si, site.ray, site.depth, cfg.nulls
     lines, tone = hooks.lines, hooks.tone

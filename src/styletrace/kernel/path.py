@@ -12,28 +12,29 @@ sampling (power heuristic on solid-angle densities, as Mitsuba's `path`) and Rus
 `rr_depth` on. An invalid `pi` means the ray escaped: the sample is then the environment's radiance.
 
 Next-event estimation picks its emitter with an `EmitterSampler` (emitter_sampler.py) rather than
-`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does not,
-so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples uses the
-same selection probabilities. Samples that are not finite are dropped at the end of a walk (see there).
+`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does
+not, so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples
+uses the same selection probabilities. Samples that are not finite are dropped at the end of a walk
+(see there).
 
 Depth follows Mitsuba's convention: x is at depth `start.depth` (0 for a camera ray's first hit), so
 `max_depth` = 1 returns emission only, and the tree camera ray -> x -> this path has the same
 longest path as Mitsuba's `path` with the same `max_depth` (-1 = unbounded).
 
-The hooks (`Hooks`): `stop(si, depth)` marks vertices where the walk must halt because a style applies
-there (per-object stylization): their radiance is g(...), not emission plus reflection, so the walk
-neither adds their emission nor reflects there, and next-event estimation skips the emitters
-`skip_emitter(ds)` marks (their light reaches the path through g instead). The caller gets the halted
-lanes back with their throughput, intersection and ray. `lines` detects feature lines on the walk's
-edges, `tone` carries LLaT's image-coordinate state (anchors.py) to the halting vertex.
+The hooks (`Hooks`): `stop(si, depth)` marks vertices where the walk must halt because a style
+applies there (per-object stylization): their radiance is g(...), not emission plus reflection, so
+the walk neither adds their emission nor reflects there, and next-event estimation skips the
+emitters `skip_emitter(ds)` marks (their light reaches the path through g instead). The caller gets
+the halted lanes back with their throughput, intersection and ray. `lines` detects feature lines on
+the walk's edges, `tone` carries LLaT's image-coordinate state (anchors.py) to the halting vertex.
 
-`bounce.bounce` is the single step that the recursive `first_n_hits` parametrization takes between two
-stylized vertices (bounce.py); vertex.py holds what both share at one vertex (emission, environment, the
-power heuristic, the depth limit, null parts).
+`bounce.bounce` is the single step that the recursive `first_n_hits` parametrization takes between
+two stylized vertices (bounce.py); vertex.py holds what both share at one vertex (emission,
+environment, the power heuristic, the depth limit, null parts).
 
-Scenes with participating media use volume.py's walk instead: the same signature, the same hooks and a
-`Walk` with the medium; the integrator chooses by `WalkConfig.media` at trace time, so this kernel has
-no medium code at all.
+Scenes with participating media use volume.py's walk instead: the same signature, the same hooks and
+a `Walk` with the medium; the integrator chooses by `WalkConfig.media` at trace time, so this kernel
+has no medium code at all.
 
 The loop carries the small preliminary intersection and rebuilds the full surface interaction at the
 top of each iteration, as Mitsuba's own path tracer does; the sampler is part of the loop state (a
@@ -57,9 +58,9 @@ class WalkConfig:
     """What every walk of one render shares (built once per render: render_context.py).
 
     scene: the scene traced; emitters: its EmitterSampler; max_depth, rr_depth: Mitsuba's (-1: no
-    limit); nulls: the scene has null-scattering surfaces; media: it has participating media (the walks
-    are volume.py's). The switches are Python values: a scene without such surfaces or media traces the
-    plain loop.
+    limit); nulls: the scene has null-scattering surfaces; media: it has participating media (the
+    walks are volume.py's). The switches are Python values: a scene without such surfaces or media
+    traces the plain loop.
     """
     scene: mi.Scene
     emitters: EmitterSampler
@@ -73,9 +74,9 @@ class WalkConfig:
 class Hooks:
     """What a caller adds to one walk (module docstring); None: that code is not traced.
 
-    stop: stop(si, depth) -> Bool, lanes that halt at si; skip_emitter: skip_emitter(ds) -> Bool, lights
-    that next-event estimation leaves out; lines: (lines.Lines, lines.LineState at the start vertex);
-    tone: anchors.ToneState at the start vertex.
+    stop: stop(si, depth) -> Bool, lanes that halt at si; skip_emitter: skip_emitter(ds) -> Bool,
+    lights that next-event estimation leaves out; lines: (lines.Lines, lines.LineState at the start
+    vertex); tone: anchors.ToneState at the start vertex.
     """
     stop: Optional[Callable] = None
     skip_emitter: Optional[Callable] = None
@@ -90,12 +91,13 @@ NO_HOOKS = Hooks()
 class Start:
     """Where a walk starts and how its start vertex scatters.
 
-    pi, ray: the start vertex's preliminary intersection and the ray that reaches it; depth: its depth.
-    opaque: it scatters by its opaque part only (`opaque_part`, where the scene has null surfaces).
-    came_from: (interaction, BSDF pdf, delta) of a vertex the caller sampled `ray` from: emission at the
-    start vertex is then MIS-weighted against that vertex's next-event estimation (surface walks).
-    Volume walks only: medium, the medium `ray` travels in; flight, sample it along `ray` before `pi`;
-    delta, the start vertex samples delta lights only; hide, no emission before the first scattering.
+    pi, ray: the start vertex's preliminary intersection and the ray that reaches it; depth: its
+    depth. opaque: it scatters by its opaque part only (`opaque_part`, where the scene has null
+    surfaces). came_from: (interaction, BSDF pdf, delta) of a vertex the caller sampled `ray` from:
+    emission at the start vertex is then MIS-weighted against that vertex's next-event estimation
+    (surface walks). Volume walks only: medium, the medium `ray` travels in; flight, sample it along
+    `ray` before `pi`; delta, the start vertex samples delta lights only; hide, no emission before
+    the first scattering.
     """
     pi: mi.PreliminaryIntersection3f
     ray: mi.Ray3f
@@ -197,13 +199,14 @@ def exitant(cfg: WalkConfig, sampler, start: Start, active: mi.Bool) -> mi.Spect
 
 
 def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
-    """The path loop (module docstring) from `start` on the `active` lanes, with the caller's `hooks`.
+    """The path loop (module docstring) from `start` on the `active` lanes, with the caller's
+    `hooks`.
 
     With `cfg.nulls`, halts at `stop` vertices pass through their null part (`null_split`), and with
-    `start.opaque` the start vertex, a stylized one, scatters by its opaque part only (`opaque_part`).
-    A line found on an edge absorbs the path (throughput x line colour); the tone state is advanced at
-    every scattering. Returns the Walk: radiance, and throughput, vertex, depth, line and tone state
-    where it halted.
+    `start.opaque` the start vertex, a stylized one, scatters by its opaque part only
+    (`opaque_part`). A line found on an edge absorbs the path (throughput x line colour); the tone
+    state is advanced at every scattering. Returns the Walk: radiance, and throughput, vertex,
+    depth, line and tone state where it halted.
     """
     scene, emitters, nulls = cfg.scene, cfg.emitters, cfg.nulls
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
@@ -215,10 +218,10 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
     # scattering event, exactly like a camera ray in Mitsuba's path tracer.
     si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
         else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
-    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi), ray=mi.Ray3f(start.ray),
-                      active=mi.Bool(active), depth=mi.UInt32(start.depth), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
-                      eta=mi.Float(1.0), si_prev=si_prev, pdf_prev=pdf_prev,
-                      delta_prev=delta_prev, halted=mi.Bool(False),
+    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi),
+                      ray=mi.Ray3f(start.ray), active=mi.Bool(active), depth=mi.UInt32(start.depth),
+                      L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0), eta=mi.Float(1.0),
+                      si_prev=si_prev, pdf_prev=pdf_prev, delta_prev=delta_prev, halted=mi.Bool(False),
                       first=mi.Bool(True) if nulls and opaque_start else None,
                       lines=None if lines is None else lines[1], tone=tone)
 

@@ -166,8 +166,8 @@ class RecordingIntegrator(StylizedIntegrator):
 
     def stylized(self, level, sampler, site, active):
         si = site.si
-        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-site.ray.d, view=mi.Vector3f(self.view),
-                   depth=mi.UInt32(site.depth))
+        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-site.ray.d,
+                   view=mi.Vector3f(self.view), depth=mi.UInt32(site.depth))
         styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total, slot, mean = mi.Spectrum(0.0), mi.Int32(-1), mi.Color3f(0.0)
         for i, target in enumerate(self.targets):
@@ -231,7 +231,8 @@ class RecordingIntegrator(StylizedIntegrator):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        emitted = emission(self.walk_config.scene, site.si, active) if firefly_cap(self.settings) else None
+        scene = self.walk_config.scene
+        emitted = emission(scene, site.si, active) if firefly_cap(self.settings) else None
         value, _ = child_mean(slot, level, self.settings, emitted).run(draw, (sampler,), uniform, active,
                                                                          like=mi.Color3f)
         return value

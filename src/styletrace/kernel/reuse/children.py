@@ -141,7 +141,8 @@ def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
         else:
             delta = mi.has_flag(c.bs.sampled_type, mi.BSDFFlags.Delta)
             came_from = (dr.detach(si, True), dr.select(pool, 0.0, c.bs.pdf), delta & ~pool)
-            w = walk(integ.walk_config, smp, Start(c.pi2, c.ray2, depth + 1, came_from=came_from), c.go)
+            start = Start(c.pi2, c.ray2, depth + 1, came_from=came_from)
+            w = walk(integ.walk_config, smp, start, c.go)
             Li = dr.select(c.go, w.L, 0.0)
         return i + 1, smp, total + c.store(span.slab.kids, span.lane * M + j, Li, on)
 
