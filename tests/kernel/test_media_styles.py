@@ -39,9 +39,11 @@ def test_a_style_renders_a_scene_with_media():
     assert np.abs(cel - ident).mean() > 0.05 * ident.mean()
 
 
-def test_lines_in_a_scene_with_media_are_drawn_on_the_camera_ray_only():
-    """The volume walk tests no edges: line_depth 1 draws the camera ray's lines (the glass sphere's outline
-    against the floor), a deeper line_depth is refused in one line rather than silently cut to 1."""
+def test_lines_in_a_scene_with_media():
+    """line_depth 1 draws the camera ray's lines (the glass sphere's outline against the floor); the volume
+    walk tests later edges as the surface walk does (line_depth 3 renders: tests/kernel/test_media_hooks.py
+    measures those lines). line_mode lifted, whose auxiliary paths know no media, refuses a deeper
+    line_depth in one line rather than silently cutting it to 1."""
     import pytest
     from styletrace.errors import SceneError
     scene = mi.load_dict(fog_ball())
@@ -50,5 +52,8 @@ def test_lines_in_a_scene_with_media_are_drawn_on_the_camera_ray_only():
     plain = list(passes(scene, make_integrator("identity", inner=1), SPP, seed=3))[-1].image
     assert np.all(np.isfinite(image))
     assert np.any(np.abs(image - plain).sum(axis=-1) > 0.5)   # some pixels took the (red) line colour
+    deep = make_integrator("identity", inner=1, lines=True, line_color="1,0,0", line_depth=3)
+    assert np.all(np.isfinite(list(passes(scene, deep, SPP, seed=3))[-1].image))
+    lifted = make_integrator("identity", inner=1, lines=True, line_mode="lifted", line_depth=3)
     with pytest.raises(SceneError, match="bad value 3 for 'line_depth'.*participating media"):
-        list(passes(scene, make_integrator("identity", inner=1, lines=True, line_depth=3), SPP, seed=3))
+        list(passes(scene, lifted, SPP, seed=3))

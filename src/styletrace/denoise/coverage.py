@@ -127,9 +127,10 @@ class CoverageIntegrator(RecordingIntegrator):
         _, pixel, _ = self._at
         return finish_spread(slot, m, v, dr.gather(mi.Float, self.field.spread, pixel))
 
-    def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
+    def _mean(self, slot, level, sampler, site, active) -> mi.Color3f:
         """D at the vertex in place of the children's mean (one lookup per camera ray, whatever the slot)."""
         pos, pixel, value = self._at
+        scene, si = self.walk_config.scene, site.si
         if value is None:
             valid = si.is_valid()
             albedo, _ = guides.through_delta(scene, si, valid)

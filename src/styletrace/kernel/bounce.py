@@ -7,9 +7,8 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 from ..gate import dr, mi
-from .emitter_sampler import EmitterSampler
-from .path import advance, first_scattering
-from .vertex import depth_limit, emission, opaque_part, opaque_share
+from .path import NO_HOOKS, Hooks, WalkConfig, advance, first_scattering
+from .vertex import Site, depth_limit, emission, opaque_part, opaque_share
 
 
 @dataclass
@@ -25,27 +24,28 @@ class Bounce:
     tone: Optional[Any] = None           # anchors.ToneState at the next vertex (where tone is on)
 
 
-def bounce(scene: mi.Scene, sampler, si: mi.SurfaceInteraction3f, ray: mi.Ray3f, active: mi.Bool, depth,
-           max_depth: int = -1, emitters: Optional[EmitterSampler] = None, nulls: bool = False,
-           lines=None, tone=None) -> Bounce:
-    """One step from the vertex `si` (reached along `ray`) to the next vertex, for recursive stylization.
+def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
+           hooks: Hooks = NO_HOOKS) -> Bounce:
+    """One step from the vertex `site.si` (reached along `site.ray`) to the next vertex, for
+    recursive stylization. Returns the Bounce.
 
     The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
     surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
     spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
     alone get next-event estimation here, with weight 1.
 
-    With `nulls` (the scene has null-scattering surfaces) x scatters by its opaque part only and the
-    next vertex is the first scattering one past null interactions (`first_scattering`).
-    `lines`: as in `walk`; a line on the bounce's edge ends it (weight x line colour joins L).
+    With `cfg.nulls` x scatters by its opaque part only and the next vertex is the first scattering
+    one past null interactions (`first_scattering`). Of the `hooks` only `lines` (a line on the
+    bounce's edge ends it: weight x line colour joins L) and `tone` (advanced past x) apply.
     """
+    scene, si, ray, depth, nulls = cfg.scene, site.si, site.ray, site.depth, cfg.nulls
+    lines, tone = hooks.lines, hooks.tone
     ctx = mi.BSDFContext()
     L = emission(scene, si, active)
-    go = active & (depth + 1 < depth_limit(max_depth))
+    go = active & (depth + 1 < depth_limit(cfg.max_depth))
     bsdf = si.bsdf(ray)
     to_light = go & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
-    emitters = emitters if emitters is not None else EmitterSampler(scene)
-    ds, em_weight = emitters.sample_direction(si, sampler.next_2d(), to_light)
+    ds, em_weight = cfg.emitters.sample_direction(si, sampler.next_2d(), to_light)
     to_light &= ds.delta & (ds.pdf != 0.0)
     scale = opaque_part(si, bsdf, go) if nulls else 1.0
     L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)

@@ -26,8 +26,12 @@ Feature lines (`lines`, `line_mode lifted`; line_hooks.py, docs/lines.md): walks
 line state of the vertex they leave (`line_states`, one per stylized level); line_hooks.py decides the
 camera sample's own lines before anything else is traced.
 
-Participating media (volume.py; the switch `self.media` is taken at trace time, so scenes without media
-trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
+Every walk takes the render's `walk_config` (path.WalkConfig: depths, emitter sampler, null and media
+switches) and its own hooks (path.Hooks: where to halt, lights to skip, lines, tone); the surface and
+volume walks share both, so lines and LLaT's image coordinate reach every stylized level with media too.
+
+Participating media (volume.py; the switch `WalkConfig.media` is taken at trace time, so scenes without
+media trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
 to one (the camera ray, the bounce between first_n_hits levels, a first_object_hit walk) a lane whose free
 flight ends in a real medium collision first goes on as an ordinary volumetric path, unstylized; the
 others reach the surface with the transmittance weight and are stylized there. Children are full
@@ -44,6 +48,8 @@ through area lights and see black where they escape, as in Mitsuba's `path`.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ..config import settings as S
 from ..config.estimator_registry import firefly_cap, make_estimator
 from ..gate import dr, mi
@@ -57,9 +63,9 @@ from .expansion import moments as pass_moments
 from .lane_sampler import LaneSampler
 from .line_hooks import camera_edge, line_problem, walk_lines
 from .line_hooks import lifted as lifted_lines
-from .path import first_scattering, past_area_emitters, walk
+from .path import NO_HOOKS, Hooks, Start, first_scattering, past_area_emitters, walk
 from .render_context import RenderContext
-from .vertex import emission, environment
+from .vertex import Site, emission, environment
 from .volume import volume_walk
 
 #: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:
@@ -89,6 +95,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     # per-render state, set and cleared by `render_context.RenderContext` only (its module doc says why)
     targets = ()         # the style targets of the scene being traced
     emitters = None      # its emitter sampler
+    walk_config = None   # path.WalkConfig: what every walk of the render shares (scene, emitters, depths)
     view = None          # its camera's forward vector
     nulls = media = see_through = False  # null-scattering surfaces / participating media / pure null BSDFs
     lines = None         # feature lines bound to the scene being traced (lines.py), else None
@@ -143,65 +150,63 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return _any_ptr(ds.emitter, [e for t in self.targets for e in t.emitters], mi.EmitterPtr)
 
     # ---- the tree ------------------------------------------------------------------------------
-    def _walk(self, scene, sampler, pi, ray, active, depth, medium=None, flight=False, **kw):
+    def _walk(self, sampler, start: Start, active, hooks: Hooks = NO_HOOKS):
         """path.walk, or volume.py's walk where the scene has media (a trace-time switch: scenes without
-        media trace exactly the plain kernel)."""
-        s = self.settings
-        if self.media:  # lines on the camera ray only (`line_problem`): the volume walk tests no edges
-            kw.pop("lines", None)
-            kw.pop("tone", None)  # nor carries a tone state: styles there read the position's projection
-            return volume_walk(scene, sampler, pi, ray, active, medium, flight, s.max_depth, s.rr_depth, depth,
-                               emitters=self.emitters, nulls=self.nulls, **kw)
-        return walk(scene, sampler, pi, ray, active, s.max_depth, s.rr_depth, depth, emitters=self.emitters,
-                    nulls=self.nulls, **kw)
+        media trace exactly the plain kernel); both take the render's `walk_config`."""
+        cfg = self.walk_config
+        return (volume_walk if cfg.media else walk)(cfg, sampler, start, active, hooks)
 
-    def child(self, level: int, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Spectrum:
-        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x (`pi`/`si` along `ray`; `medium`:
-        the medium on the side `ray` came from, in scenes with media)."""
+    def child(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
+        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x = `site`."""
         s = self.settings
         if level + 1 >= s.stylize_depth:
-            return self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True,
-                              lines=walk_lines(self, level)).L
+            start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium)
+            return self._walk(sampler, start, active, Hooks(lines=walk_lines(self, level))).L
         if s.stylize == "first_object_hit":
-            return self.walk(level + 1, scene, sampler, pi, ray, active, depth, halt_at_start=False, medium=medium)
+            start = Start(site.pi, site.ray, site.depth, medium=site.medium)
+            return self.walk(level + 1, sampler, start, active, halt_at_start=False)
         if self.media:
             # first_n_hits through media: x samples delta lights only, its BSDF sample flies through the media
             # to the next surface vertex, stylized at the next level; a lane that scatters in a medium on
             # the way goes on as an ordinary volumetric path (volume.py)
-            start = mi.UInt32(depth)
-            w = self._walk(scene, sampler, pi, ray, active, depth, medium, opaque_start=True, delta_start=True,
-                           stop=lambda si2, d: d == start + 1)
+            first = mi.UInt32(site.depth)
+            start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium, delta=True)
+            w = self._walk(sampler, start, active, Hooks(stop=lambda si2, d: d == first + 1,
+                                                         lines=walk_lines(self, level),
+                                                         tone=self.tone_states.get(level)))
+            if self.lines is not None:
+                self.line_states[level + 1] = w.lines
+            self.tone_states[level + 1] = w.tone
             si2 = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            deeper = self.stylized(level + 1, scene, sampler, w.pi, si2, w.ray, w.halted, w.depth, w.medium)
+            deeper = self.stylized(level + 1, sampler, Site(w.pi, si2, w.ray, w.depth, w.medium), w.halted)
             return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
-        b = bounce(scene, sampler, si, ray, active, depth, s.max_depth, self.emitters, self.nulls,
-                   lines=walk_lines(self, level), tone=self.tone_states.get(level))
+        b = bounce(self.walk_config, sampler, site, active,
+                   Hooks(lines=walk_lines(self, level), tone=self.tone_states.get(level)))
         if self.lines is not None:
             self.line_states[level + 1] = b.lines
         self.tone_states[level + 1] = b.tone
-        deeper = self.stylized(level + 1, scene, sampler, b.pi, b.si, b.ray, b.hit, depth + 1)
+        deeper = self.stylized(level + 1, sampler, Site(b.pi, b.si, b.ray, site.depth + 1), b.hit)
+        scene = self.walk_config.scene
         return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
 
-    def walk(self, level: int, scene, sampler, pi, ray, active, depth, halt_at_start: bool, medium=None,
-             flight: bool = False, hide: bool = False) -> mi.Spectrum:
-        """A path-traced walk that halts on styled objects and stylizes them at `level` (with media: from
-        `medium`, flying along `ray` first where `flight`; `hide`: no emission before the first scattering)."""
-        start = mi.UInt32(depth)
+    def walk(self, level: int, sampler, start: Start, active, halt_at_start: bool) -> mi.Spectrum:
+        """A path-traced walk from `start` that halts on styled objects and stylizes them at `level`
+        (with `halt_at_start`, at the start vertex too; else that vertex scatters by its opaque part)."""
+        first = mi.UInt32(start.depth)
 
         def stop(si, d):
             styled = self.styled_mask(si)
-            return styled if halt_at_start else styled & (d > start)
+            return styled if halt_at_start else styled & (d > first)
 
-        extra = dict(medium=medium, flight=flight, hide_first=hide) if self.media else {}
-        w = self._walk(scene, sampler, pi, ray, active, depth, stop=stop, skip_emitter=self._skip_emitter,
-                       opaque_start=not halt_at_start, lines=walk_lines(self, level - 1),
-                       tone=self.tone_states.get(level - 1), **extra)
+        hooks = Hooks(stop=stop, skip_emitter=self._skip_emitter, lines=walk_lines(self, level - 1),
+                      tone=self.tone_states.get(level - 1))
+        w = self._walk(sampler, replace(start, opaque=not halt_at_start), active, hooks)
         if self.lines is not None:
             self.line_states[level] = w.lines
         self.tone_states[level] = w.tone
         si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-        value = self.stylized(level, scene, sampler, w.pi, si, w.ray, w.halted, w.depth, w.medium)
+        value = self.stylized(level, sampler, Site(w.pi, si, w.ray, w.depth, w.medium), w.halted)
         return self.through(w, value)
 
     def through(self, w, value) -> mi.Spectrum:
@@ -209,29 +214,31 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         value where it halted (a seam for `lookdev.record`, which keeps both per camera sample)."""
         return w.L + dr.select(w.halted, w.beta * value, 0.0)
 
-    def stylized(self, level: int, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Spectrum:
-        """g(E[L_o]) at the level-`level` vertex si, each object with its own style."""
+    def stylized(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
+        """g(E[L_o]) at the level-`level` vertex `site`, each object with its own style."""
+        si, ray, depth = site.si, site.ray, site.depth
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
         if self.tone is not None:  # LLaT's image coordinate (anchors.py), traced only where a style reads it
-            v.s, v.method = self.tone.coordinate(scene, si, ray, depth, self.tone_states.get(level), active)
+            v.s, v.method = self.tone.coordinate(self.walk_config.scene, si, ray, depth,
+                                                 self.tone_states.get(level), active)
         styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total = mi.Spectrum(0.0)
         for target in self.targets:
             here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
-            total = dr.select(here, self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v,
-                                                   medium), total)
+            total = dr.select(here, self.estimate(target.slot, level, sampler, site, here, v), total)
         return total
 
-    def estimate(self, slot: S.StyleSlot, level, scene, sampler, pi, si, ray, active, depth, v,
-                  medium=None) -> mi.Spectrum:
+    def estimate(self, slot: S.StyleSlot, level, sampler, site: Site, active, v) -> mi.Spectrum:
+        """The slot's estimate of g(E[L_o]) at `site` on the `active` lanes (v: the style's Vertex)."""
+        scene, si = self.walk_config.scene, site.si
         style = slot.style
         if style.closed_form:  # no children: the AOVs keep 0 here
             return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
             (smp,) = carry
-            x = self.child(level, scene, smp, pi, si, ray, active, depth, medium)
+            x = self.child(level, smp, site, active)
             if style.per_sample:
                 x = style.apply(x, v)
             return x, (smp,)
@@ -245,7 +252,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             if slot.estimator == "series":
                 s1, s2 = pass_moments(lambda smp: draw((smp,))[0], sampler, active, collector.children,
                                       emission(scene, si, active))
-                collector.add(dr.width(ray.d), active, s1, s2)
+                collector.add(dr.width(site.ray.d), active, s1, s2)
             return mi.Color3f(0.0)
         moments = None
         if level == 0 and self._lane_moments is not None:  # the pass's moments of x - e, and this vertex's e
@@ -317,25 +324,24 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         valid = active & (pi.is_valid() | (scene.environment() is not None and not hide))
         if self.settings.stylize == "first_object_hit":
             if self.media:  # the walk hides what it meets before its first scattering (a medium scatters too)
-                value = self.walk(0, scene, sampler, pi, ray, active, mi.UInt32(0), halt_at_start=True, medium=medium,
-                                  flight=True, hide=hide)
-                return value, valid, []
+                start = Start(pi, ray, mi.UInt32(0), medium=medium, flight=True, hide=hide)
+                return self.walk(0, sampler, start, active, halt_at_start=True), valid, []
             start = active & pi.is_valid() if hide else active  # a hidden environment is black
-            return self.walk(0, scene, sampler, pi, ray, start, mi.UInt32(0), halt_at_start=True), valid, []
+            return self.walk(0, sampler, Start(pi, ray, mi.UInt32(0)), start, halt_at_start=True), valid, []
         if self.media:
             # the stylized vertex is the first surface that scatters; lanes that scatter in a medium before
             # reaching it go on as ordinary volumetric paths (volume.py), the others carry the transmittance
-            w = self._walk(scene, sampler, pi, ray, active, 0, medium, True, stop=lambda si, d: d == 0,
-                           hide_first=hide)
+            w = self._walk(sampler, Start(pi, ray, 0, medium=medium, flight=True, hide=hide), active,
+                           Hooks(stop=lambda si, d: d == 0))
             si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            value = self.stylized(0, scene, sampler, w.pi, si, w.ray, w.halted, mi.UInt32(0), w.medium)
+            value = self.stylized(0, sampler, Site(w.pi, si, w.ray, mi.UInt32(0), w.medium), w.halted)
             return self.through(w, value), valid | w.halted | (active & (w.depth > 0)), []
         if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
             front = first_scattering(scene, sampler, pi, ray, active)
             pi, ray = front.pi, front.ray
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
         hit = active & si.is_valid()
-        value = self.stylized(0, scene, sampler, pi, si, ray, hit, mi.UInt32(0))
+        value = self.stylized(0, sampler, Site(pi, si, ray, mi.UInt32(0)), hit)
         value = dr.select(hit, value, 0.0 if hide else environment(scene, si, active))
         if self.nulls:
             value = front.beta * value

@@ -1,14 +1,16 @@
 """Where the `stylized` integrator meets its feature lines: the camera sample's own lines, decided before
 anything else is traced for it (edge 0, LLaT's lifted lines), and the hook each walk or bounce carries.
 
-Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ray replaces the camera
-sample (nothing else is traced for it); walks and bounces carry the line state of the vertex they leave
-(`line_states`, one per stylized level) and end where a line absorbs them, so lines on later edges enter
-the expectation before g. With `lines` off no line code is traced. In scenes with participating media lines
-are detected on the camera ray only (`line_depth` above 1 is refused there: `line_problem`). `line_mode lifted`
-(LLaT's conditional lifting, lifted_lines.py) instead tests its line types once per camera sample, along
-auxiliary paths that follow the camera sample's own base path to `line_depth` vertices, before anything else
-is traced.
+Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ray replaces the
+camera sample (nothing else is traced for it); walks and bounces carry the line state of the vertex
+they leave (`line_states`, one per stylized level) and end where a line absorbs them, so lines on
+later edges enter the expectation before g. With `lines` off no line code is traced. The volume walk
+carries the same hook as the surface walk: in scenes with participating media a scattering in a
+medium ends line detection, as a diffuse vertex does. `line_mode lifted` (LLaT's conditional
+lifting, lifted_lines.py) instead tests its line types once per camera sample, along auxiliary paths
+that follow the camera sample's own base path to `line_depth` vertices, before anything else is
+traced; those paths know no media, so with media it draws the camera ray's lines only
+(`line_problem`).
 
 Each function takes the integrator (kernel/integrator.py) bound to a scene and `stylize`, its trace of the
 camera ray, which it calls for the lanes where no line fired.
@@ -23,16 +25,16 @@ from .lifted_lines import compose_sample
 def line_problem(settings: S.Settings, media: bool) -> str | None:
     """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`), or None."""
     lines = settings.lines
-    if media and lines is not None and lines.depth > 1:
-        return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: lines are detected "
-                "on the camera ray only there (line_depth 1)")
+    if media and lines is not None and lines.mode == "lifted" and lines.depth > 1:
+        return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: "
+                "line_mode lifted detects lines on the camera ray only there (line_depth 1)")
     return None
 
 
 def walk_lines(integ, level: int):
     """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's first
     vertex, where first_object_hit's camera walk starts): the line settings and that vertex's state."""
-    if integ.lines is None or integ.media:  # with media, lines on the camera ray only (`line_problem`)
+    if integ.lines is None:
         return None
     return integ.lines, integ.line_states[level]
 

@@ -1,34 +1,40 @@
 """The inner path tracer every stylized vertex reuses: one sample of exitant radiance.
 
-`exitant(scene, sampler, pi, ray, active, ...)` returns one unbiased sample of
+    cfg = WalkConfig(scene, emitters, max_depth, rr_depth, nulls, media)   # once per render
+    w = walk(cfg, sampler, Start(pi, ray, depth), active, Hooks(stop=...))  # a Walk
+
+`exitant(cfg, sampler, start, active)` returns one unbiased sample of
     L_o(x, wo) = L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi
-at the vertex x that `ray` reaches (`pi`, its preliminary intersection; wo = -ray.d). Emission at x is
-counted in full: in the stylized rendering equation it sits inside g. Below x the estimator is an
-ordinary unidirectional path tracer with next-event estimation, multiple importance sampling (power
-heuristic on solid-angle densities, as Mitsuba's `path`) and Russian roulette from `rr_depth` on. An
-invalid `pi` means the ray escaped: the sample is then the environment's radiance.
+at the vertex x that `start.ray` reaches (`start.pi`, its preliminary intersection; wo = -ray.d).
+Emission at x is counted in full: in the stylized rendering equation it sits inside g. Below x the
+estimator is an ordinary unidirectional path tracer with next-event estimation, multiple importance
+sampling (power heuristic on solid-angle densities, as Mitsuba's `path`) and Russian roulette from
+`rr_depth` on. An invalid `pi` means the ray escaped: the sample is then the environment's radiance.
 
 Next-event estimation picks its emitter with an `EmitterSampler` (emitter_sampler.py) rather than
-`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does not,
-so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples uses the
-same selection probabilities. Samples that are not finite are dropped at the end of a walk (see there).
+`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does
+not, so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples
+uses the same selection probabilities. Samples that are not finite are dropped at the end of a walk
+(see there).
 
-Depth follows Mitsuba's convention: x is at depth `depth0` (0 for a camera ray's first hit), so
+Depth follows Mitsuba's convention: x is at depth `start.depth` (0 for a camera ray's first hit), so
 `max_depth` = 1 returns emission only, and the tree camera ray -> x -> this path has the same
 longest path as Mitsuba's `path` with the same `max_depth` (-1 = unbounded).
 
-`stop(si, depth)`, if given, marks vertices where the walk must halt because a style applies there
-(per-object stylization): their radiance is g(...), not emission plus reflection, so the walk neither
-adds their emission nor reflects there, and next-event estimation skips the emitters `skip_emitter(ds)`
-marks (their light reaches the path through g instead). The caller gets the halted lanes back with
-their throughput, intersection and ray.
+The hooks (`Hooks`): `stop(si, depth)` marks vertices where the walk must halt because a style
+applies there (per-object stylization): their radiance is g(...), not emission plus reflection, so
+the walk neither adds their emission nor reflects there, and next-event estimation skips the
+emitters `skip_emitter(ds)` marks (their light reaches the path through g instead). The caller gets
+the halted lanes back with their throughput, intersection and ray. `lines` detects feature lines on
+the walk's edges, `tone` carries LLaT's image-coordinate state (anchors.py) to the halting vertex.
 
-`bounce.bounce(scene, sampler, si, ray, active, depth, max_depth)` is the single step that the recursive
-`first_n_hits` parametrization takes between two stylized vertices (bounce.py); vertex.py holds what
-both share at one vertex (emission, environment, the power heuristic, the depth limit, null parts).
+`bounce.bounce` is the single step that the recursive `first_n_hits` parametrization takes between
+two stylized vertices (bounce.py); vertex.py holds what both share at one vertex (emission,
+environment, the power heuristic, the depth limit, null parts).
 
-Scenes with participating media use volume.py's walk instead (same interface, a `Walk` with the medium);
-the integrator chooses at trace time, so this kernel has no medium code at all.
+Scenes with participating media use volume.py's walk instead: the same signature, the same hooks and
+a `Walk` with the medium; the integrator chooses by `WalkConfig.media` at trace time, so this kernel
+has no medium code at all.
 
 The loop carries the small preliminary intersection and rebuilds the full surface interaction at the
 top of each iteration, as Mitsuba's own path tracer does; the sampler is part of the loop state (a
@@ -43,6 +49,63 @@ from ..gate import dr, mi
 from .anchors import MAX_BITS, ToneState, combine, shape_id
 from .emitter_sampler import EmitterSampler
 from .vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share
+
+
+@dataclass(frozen=True)
+class WalkConfig:
+    """What every walk of one render shares (built once per render: render_context.py).
+
+    scene: the scene traced; emitters: its EmitterSampler; max_depth, rr_depth: Mitsuba's (-1: no
+    limit); nulls: the scene has null-scattering surfaces; media: it has participating media (the
+    walks are volume.py's). The switches are Python values: a scene without such surfaces or media
+    traces the plain loop.
+    """
+    scene: mi.Scene
+    emitters: EmitterSampler
+    max_depth: int = -1
+    rr_depth: int = 5
+    nulls: bool = False
+    media: bool = False
+
+
+@dataclass(frozen=True)
+class Hooks:
+    """What a caller adds to one walk (module docstring); None: that code is not traced.
+
+    stop: stop(si, depth) -> Bool, lanes that halt at si; skip_emitter: skip_emitter(ds) -> Bool,
+    lights that next-event estimation leaves out; lines: (lines.Lines, lines.LineState at the start
+    vertex); tone: anchors.ToneState at the start vertex.
+    """
+    stop: Optional[Callable] = None
+    skip_emitter: Optional[Callable] = None
+    lines: Optional[tuple] = None
+    tone: Optional[Any] = None
+
+
+NO_HOOKS = Hooks()
+
+
+@dataclass
+class Start:
+    """Where a walk starts and how its start vertex scatters.
+
+    pi, ray: the start vertex's preliminary intersection and the ray that reaches it; depth: its
+    depth. opaque: it scatters by its opaque part only (`opaque_part`, where the scene has null
+    surfaces). came_from: (interaction, BSDF pdf, delta) of a vertex the caller sampled `ray` from:
+    emission at the start vertex is then MIS-weighted against that vertex's next-event estimation
+    (surface walks). Volume walks only: medium, the medium `ray` travels in; flight, sample it along
+    `ray` before `pi`; delta, the start vertex samples delta lights only; hide, no emission before
+    the first scattering.
+    """
+    pi: mi.PreliminaryIntersection3f
+    ray: mi.Ray3f
+    depth: Any = 0
+    opaque: bool = False
+    came_from: Optional[tuple] = None
+    medium: Any = None
+    flight: bool = False
+    delta: bool = False
+    hide: bool = False
 
 
 @dataclass
@@ -128,39 +191,35 @@ class Walk:
     tone: Optional[Any] = None      # anchors.ToneState at the halting vertex (where tone is on)
 
 
-def exitant(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
-            active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
-            emitters: Optional[EmitterSampler] = None) -> mi.Spectrum:
-    """One sample of L_o at the vertex `ray` reaches (see the module docstring)."""
-    return walk(scene, sampler, pi, ray, active, max_depth, rr_depth, depth0, emitters=emitters).L
+def exitant(cfg: WalkConfig, sampler, start: Start, active: mi.Bool) -> mi.Spectrum:
+    """One sample of L_o at the vertex `start.ray` reaches (see the module docstring)."""
+    return walk(cfg, sampler, start, active).L
 
 
-def walk(scene: mi.Scene, sampler: mi.Sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
-         active: mi.Bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
-         stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
-         emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
-         came_from: Optional[tuple] = None, lines=None, tone=None) -> Walk:
-    """The path loop (module docstring). `nulls`: the scene has null-scattering surfaces; then halts at
-    `stop` vertices pass through their null part (`null_split`), and with `opaque_start` the starting
-    vertex, a stylized one, scatters by its opaque part only (`opaque_part`). Both are Python switches,
-    so scenes without such surfaces trace the plain loop. `came_from` = (interaction, BSDF pdf, delta) of
-    a vertex the caller sampled `ray` from: emission at the starting vertex is then MIS-weighted against
-    that vertex's next-event estimation instead of counted in full (the sample reuse of `reuse/`).
-    `lines`: (lines.Lines, lines.LineState at the starting vertex) to detect feature lines on the walk's
-    edges, or None (no line code is traced). `tone`: the anchors.ToneState at the starting vertex, advanced
-    at every scattering (anchors.py), or None."""
+def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
+    """The path loop (module docstring) from `start` on the `active` lanes, with the caller's
+    `hooks`.
+
+    With `cfg.nulls`, halts at `stop` vertices pass through their null part (`null_split`), and with
+    `start.opaque` the start vertex, a stylized one, scatters by its opaque part only
+    (`opaque_part`). A line found on an edge absorbs the path (throughput x line colour); the tone
+    state is advanced at every scattering. Returns the Walk: radiance, and throughput, vertex,
+    depth, line and tone state where it halted.
+    """
+    scene, emitters, nulls = cfg.scene, cfg.emitters, cfg.nulls
+    stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
+    opaque_start, came_from, rr_depth = start.opaque, start.came_from, cfg.rr_depth
     ctx = mi.BSDFContext()
-    emitters = emitters if emitters is not None else EmitterSampler(scene)
-    limit = depth_limit(max_depth)
+    limit = depth_limit(cfg.max_depth)
 
     # A starting vertex counts its emission in full: the previous vertex is treated as a delta
     # scattering event, exactly like a camera ray in Mitsuba's path tracer.
     si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
         else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
-    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
-                      active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0),
-                      eta=mi.Float(1.0), si_prev=si_prev, pdf_prev=pdf_prev,
-                      delta_prev=delta_prev, halted=mi.Bool(False),
+    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi),
+                      ray=mi.Ray3f(start.ray), active=mi.Bool(active), depth=mi.UInt32(start.depth),
+                      L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0), eta=mi.Float(1.0),
+                      si_prev=si_prev, pdf_prev=pdf_prev, delta_prev=delta_prev, halted=mi.Bool(False),
                       first=mi.Bool(True) if nulls and opaque_start else None,
                       lines=None if lines is None else lines[1], tone=tone)
 

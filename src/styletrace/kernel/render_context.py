@@ -3,14 +3,17 @@
     with RenderContext(integrator, scene):      # in `sample`, `reuse.render`, and a recording through them
         ... trace ...                            # integrator.targets, .emitters, .lines, .view, ... are set
 
-While a kernel is traced the integrator's methods read what the scene decides: the style targets (which
-BSDFs are styled, `targets_for`), whether the scene has media or null surfaces, the emitter sampler, the
-feature-line detector (West 2021's cone, or LLaT's lifted line types) and the line state per stylized level, LLaT's image-coordinate tracer and its state per
-level (only where a style reads the coordinate: anchors.py), the camera's forward vector, the expansion
-pass's lane moments and the adaptive statistics. This is the one place that sets them and the one place
-that clears them: Dr.Jit traces calls on every live instance of a class, and a BSDF or emitter of a scene
-the garbage collector is tearing down, still held by an integrator after its render, crashed a later trace
-(measured: a segfault in pdf_emitter_direction). No reference to the scene's objects outlives the context.
+While a kernel is traced the integrator's methods read what the scene decides: the style targets
+(which BSDFs are styled, `targets_for`), whether the scene has media or null surfaces, the emitter
+sampler, the feature-line detector (West 2021's cone, or LLaT's lifted line types) and the line
+state per stylized level, LLaT's image-coordinate tracer and its state per level (only where a style
+reads the coordinate: anchors.py), the camera's forward vector, the expansion pass's lane moments
+and the adaptive statistics, and the configuration every walk of the render shares
+(path.WalkConfig). This is the one place that sets them and the one place that clears them: Dr.Jit
+traces calls on every live instance of a class, and a BSDF or emitter of a scene the garbage
+collector is tearing down, still held by an integrator after its render, crashed a later trace
+(measured: a segfault in pdf_emitter_direction). No reference to the scene's objects outlives the
+context.
 """
 from __future__ import annotations
 
@@ -22,6 +25,7 @@ from .anchors import Tone
 from .emitter_sampler import EmitterSampler
 from .lifted_lines import Lifted
 from .lines import Lines
+from .path import WalkConfig
 
 
 class RenderContext:
@@ -55,6 +59,8 @@ class RenderContext:
             integ.tone_states = {}
             # emitter selection in an order of the scene's own (its emitter list changes order between runs)
             integ.emitters = EmitterSampler(scene, settings.emitter_sampling)
+            integ.walk_config = WalkConfig(scene, integ.emitters, settings.max_depth,
+                                           settings.rr_depth, nulls=integ.nulls, media=integ.media)
             integ.view = camera_forward(scene)
             integ.line_states = {}
             integ._lane_moments = None
@@ -68,6 +74,7 @@ class RenderContext:
         integ = self.integrator
         integ.targets = []
         integ.emitters = None
+        integ.walk_config = None
         integ.lines, integ.line_states = None, {}
         integ.lifted = None
         integ.tone, integ.tone_states = None, {}

@@ -1,9 +1,24 @@
-"""What the walks share at one vertex: its emission, the environment past an escaped ray, the power
-heuristic, Mitsuba's depth limit, and the split of a BSDF with a null-scattering part (the opaque part a
-stylized vertex stands for, and the probability of sampling it)."""
+"""What the walks share at one vertex: the vertex itself as the tree passes it on (`Site`), its
+emission, the environment past an escaped ray, the power heuristic, Mitsuba's depth limit, and the
+split of a BSDF with a null-scattering part (the opaque part a stylized vertex stands for, and the
+probability of sampling it)."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 from ..gate import dr, mi
+
+
+@dataclass
+class Site:
+    """A stylized vertex: its preliminary and full intersection, the ray that reached it, its depth,
+    and the medium on the side that ray came from (None: vacuum, or a scene without media)."""
+    pi: mi.PreliminaryIntersection3f
+    si: mi.SurfaceInteraction3f
+    ray: mi.Ray3f
+    depth: Any
+    medium: Any = None
 
 
 def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:

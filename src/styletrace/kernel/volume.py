@@ -1,7 +1,7 @@
 """The path kernel in scenes with participating media: `walk` of path.py, but along rays through media.
 
-    w = volume_walk(scene, sampler, pi, ray, active, medium, flight=True, ...)   # a path.Walk
-    tr = transmittance(scene, sampler, it, ds, medium, channel, active)         # towards a sampled light
+    w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)  # a Walk
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active)      # towards a sampled light
 
 The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray in a
 medium a free-flight distance is drawn from the medium's majorant (`Medium.sample_interaction`); a
@@ -17,25 +17,27 @@ estimated by ratio tracking (`transmittance`), so a `null` shape bounding a medi
 In RGB the free-flight distance is drawn in one colour channel per path (chosen uniformly), and the
 throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel); media
 with grey extinction get weight 1 from the same formulas. Depth counts real scattering events at
-surfaces and in media (x at `depth0`), and roulette acts on the throughput after every scattering from
+surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every scattering from
 depth `rr_depth` + 1 on, as `volpath`'s.
 
-Stylization (integrator.py) uses the walk's `stop` to halt at surface scattering vertices: a stylized
-vertex is always a surface one. `flight` says whether the medium along the first ray is still to be
-sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already stands
-at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
-`delta_start`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
+`volume_walk` has path.walk's signature (path.WalkConfig, path.Start, path.Hooks). Stylization
+(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is always
+a surface one. `Start.flight` says whether the medium along the first ray is still to be sampled (a ray
+from the camera, or from a stylized vertex towards the next one) or the lane already stands at the
+surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
+`Start.delta`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
 through g at the next stylized vertex; see bounce.bounce), so emitters found past it get full weight.
-`hide_first`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
+`Start.hide`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Optional
+from typing import Any, Optional
 
 from ..gate import dr, mi
-from .emitter_sampler import EmitterSampler
-from .path import finished, halt_at, mis_emission
+from .anchors import ToneState, combine
+from .lines import LineState
+from .path import NO_HOOKS, Hooks, Start, Walk, WalkConfig, advance, finished, halt_at, mis_emission
 from .vertex import depth_limit, mis_power, opaque_part, opaque_share
 
 
@@ -117,25 +119,26 @@ class VolumeState:
     delta_prev: mi.Bool                  # its direction had no competing light sample: full weight
     halted: mi.Bool
     first: mi.Bool                       # at the starting vertex
+    lines: Optional[Any] = None          # lines.LineState where feature lines are on
+    tone: Optional[Any] = None           # anchors.ToneState where a style reads image coordinates
 
 
-def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f, active: mi.Bool,
-                medium, flight: bool, max_depth: int = -1, rr_depth: int = 5, depth0=0,
-                stop: Optional[Callable] = None, skip_emitter: Optional[Callable] = None,
-                emitters: Optional[EmitterSampler] = None, nulls: bool = False, opaque_start: bool = False,
-                delta_start: bool = False, hide_first: bool = False):
-    """path.walk through participating media (module docstring); returns a path.Walk with the medium
-    each lane stands in."""
+def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
+    """path.walk through participating media (module docstring): the same parameters and hooks; returns
+    a path.Walk with the medium each lane stands in."""
+    scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
+    stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
+    opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
     ctx, pctx = mi.BSDFContext(), mi.PhaseFunctionContext(None)
-    emitters = emitters if emitters is not None else EmitterSampler(scene)
-    limit = depth_limit(max_depth)
+    limit = depth_limit(cfg.max_depth)
     channel = mi.UInt32(dr.minimum(sampler.next_1d(active) * 3.0, 2.0))
 
-    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
-                        medium=dr.select(active, mi.MediumPtr(medium), mi.MediumPtr(None)),
-                        flight=mi.Bool(flight), active=mi.Bool(active), depth=mi.UInt32(depth0), L=mi.Spectrum(0.0),
+    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi), ray=mi.Ray3f(start.ray),
+                        medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
+                        flight=mi.Bool(start.flight), active=mi.Bool(active), depth=mi.UInt32(start.depth), L=mi.Spectrum(0.0),
                         beta=mi.Spectrum(1.0), eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f),
-                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True))
+                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True),
+                        lines=None if lines is None else lines[1], tone=tone)
 
     def body(s: VolumeState):
         # ---- the medium between the ray's origin and the surface `pi` (volpath's delta tracking)
@@ -220,6 +223,8 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         s.pdf_prev = dr.select(scat, phase_pdf_m, dr.select(real_s, bs.pdf, s.pdf_prev))
         s.delta_prev = dr.select(scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev))
         s.medium = dr.select(go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium)
+        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+            s.tone = scattered_in_medium(advance(s.tone, si, bs, s.depth, real_s), scat)
 
         # roulette after each scattering, from depth rr_depth + 1 on (volpath's)
         beta_max = dr.max(beta_next)
@@ -230,6 +235,12 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
         go &= ~roulette | (s.sampler.next_1d(roulette) < q)
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=go)
+        if lines is not None:  # a line on the edge a surface scattering starts absorbs the path (lines.py)
+            seen, after = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
+                                        go & real_s)
+            s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
+            go &= ~seen.fired
+            s.lines = lines_past(after, pi_next, go & go_s & null_s, scat)
         # null collisions move the origin along the same ray; halted lanes keep their vertex
         moved = mi.Ray3f(s.ray)
         moved.o = mei.p
@@ -246,4 +257,21 @@ def volume_walk(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray:
 
     (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace volumetric path")
     # as at the end of path.walk: a sample that is not finite is dropped
-    return finished(out, medium=out.medium)
+    return finished(out, medium=out.medium, lines=out.lines, tone=out.tone)
+
+
+def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
+    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths reflect
+    or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins the prefix
+    key as no shape does, so no anchor matches and the coordinate takes its fallbacks (anchors.py)."""
+    key = combine(tone.key, mi.UInt32(0xFFFFFFFF))  # a shape id + 1 that no shape has: 0
+    return ToneState(key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0)
+
+
+def lines_past(state: LineState, pi: mi.PreliminaryIntersection3f, passed: mi.Bool,
+               scattered: mi.Bool) -> LineState:
+    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes on
+    through the surface (its lines were tested through it), its length grows by the next segment's.
+    `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later edge is tested."""
+    D = dr.select(passed, state.D + dr.select(pi.is_valid(), pi.t, dr.inf), state.D)
+    return LineState(D=D, alive=state.alive & ~scattered, angle=state.angle, spread=state.spread)

@@ -182,17 +182,18 @@ class RecordingIntegrator(StylizedIntegrator):
         dr.schedule(*kept.values())  # evaluated by the same kernel as the image
         return spec, valid, aovs
 
-    def stylized(self, level, scene, sampler, pi, si, ray, active, depth, medium=None):
-        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
-                   depth=mi.UInt32(depth))
+    def stylized(self, level, sampler, site, active):
+        si = site.si
+        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-site.ray.d,
+                   view=mi.Vector3f(self.view), depth=mi.UInt32(site.depth))
         styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total, slot, mean = mi.Spectrum(0.0), mi.Int32(-1), mi.Color3f(0.0)
         for i, target in enumerate(self.targets):
             here = active & (_any(si.bsdf(), target.bsdfs) if target.bsdfs else ~styled)
             if self.sequence:
-                value = self.estimate(target.slot, level, scene, sampler, pi, si, ray, here, depth, v, medium)
+                value = self.estimate(target.slot, level, sampler, site, here, v)
             else:
-                m = self._mean(target.slot, level, scene, sampler, pi, si, ray, here, depth, medium)
+                m = self._mean(target.slot, level, sampler, site, here)
                 value = self.finish_mean(target.slot, m, v)
                 mean = dr.select(here, m, mean)
             total = dr.select(here, value, total)
@@ -208,18 +209,18 @@ class RecordingIntegrator(StylizedIntegrator):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
         return super().through(w, value)
 
-    def estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
+    def estimate(self, slot, level, sampler, site, active, v) -> mi.Spectrum:
         """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's pool.
         The same calls on the same stream in the same order: the estimate is the render's."""
         if not self.sequence:
-            return super().estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
+            return super().estimate(slot, level, sampler, site, active, v)
         style, rec = slot.style, self.recorder
         if style.closed_form:
             return style.apply(mi.Color3f(0.0), v)
 
         def draw(carry):
             smp, count, ucount = carry
-            x = self.child(level, scene, smp, pi, si, ray, active, depth, medium)
+            x = self.child(level, smp, site, active)
             count = rec.child(count, x)
             if style.per_sample:
                 x = style.apply(x, v)
@@ -234,7 +235,7 @@ class RecordingIntegrator(StylizedIntegrator):
             draw, (sampler, rec.count, rec.ucount), uniform, active, like=mi.Color3f)
         return value
 
-    def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
+    def _mean(self, slot, level, sampler, site, active) -> mi.Color3f:
         """The mean of the slot's n children: the same draws, in the same order, and the same firefly control
         as the `direct` estimator."""
         if slot.style.closed_form:
@@ -242,16 +243,16 @@ class RecordingIntegrator(StylizedIntegrator):
 
         def draw(carry):
             (smp,) = carry
-            return self.child(level, scene, smp, pi, si, ray, active, depth, medium), (smp,)
+            return self.child(level, smp, site, active), (smp,)
 
         def uniform(carry):
             (smp,) = carry
             return smp.next_1d(), (smp,)
 
-        emitted = emission(scene, si, active) if firefly_cap(self.settings) else None
-        value, _ = child_mean(slot, level, self.settings, emitted).run(
-            draw, (sampler,), uniform, active, like=mi.Color3f
-        )
+        scene = self.walk_config.scene
+        emitted = emission(scene, site.si, active) if firefly_cap(self.settings) else None
+        value, _ = child_mean(slot, level, self.settings, emitted).run(draw, (sampler,), uniform, active,
+                                                                         like=mi.Color3f)
         return value
 
 

@@ -23,7 +23,7 @@ from ..gate import dr, mi
 from ..jit import no_collection
 from ..kernel.emitter_sampler import EmitterSampler
 from ..kernel.integrator import StylizedIntegrator
-from ..kernel.path import exitant
+from ..kernel.path import Start, WalkConfig, exitant
 from ..kernel.styled_bsdf import StyledBSDF
 from ..kernel.volume import volume_walk
 from ..styles.base import Camera, Style, Vertex, camera, lanes
@@ -96,31 +96,13 @@ class Pilot:
         pi = scene.ray_intersect_preliminary(ray, coherent=True)
         graph = SceneGraph(scene)
         emitters = EmitterSampler(scene, self.settings.emitter_sampling)
+        cfg = WalkConfig(scene, emitters, self.settings.max_depth, self.settings.rr_depth,
+                         nulls=graph.has_null, media=graph.has_media)
         if graph.has_media:
-            L = volume_walk(
-                scene,
-                sampler,
-                pi,
-                ray,
-                mi.Bool(True),
-                sensor.get_medium(),
-                True,
-                self.settings.max_depth,
-                self.settings.rr_depth,
-                emitters=emitters,
-                nulls=graph.has_null,
-            ).L
+            start = Start(pi, ray, medium=sensor.get_medium(), flight=True)
+            L = volume_walk(cfg, sampler, start, mi.Bool(True)).L
         else:
-            L = exitant(
-                scene,
-                sampler,
-                pi,
-                ray,
-                mi.Bool(True),
-                self.settings.max_depth,
-                self.settings.rr_depth,
-                emitters=emitters,
-            )
+            L = exitant(cfg, sampler, Start(pi, ray), mi.Bool(True))
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
         owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1

@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ...gate import dr, mi
-from ..path import walk
-from ..vertex import depth_limit, environment, mis_power
+from ..path import Start, walk
+from ..vertex import Site, depth_limit, environment, mis_power
 
 
 class Children:
@@ -134,12 +134,13 @@ def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
         c = Draw(scope, smp, parents, on, depth, nested)
         if nested:  # the level-1 vertex, stylized by the ordinary tree (deeper levels first), or the sky
             si2, hit2 = c.next_vertex()
-            Li = c.seen(scene, si2, hit2, integ.stylized(depth + 1, scene, smp, c.pi2, si2, c.ray2, hit2,
-                                                          mi.UInt32(depth + 1)))
+            site = Site(c.pi2, si2, c.ray2, mi.UInt32(depth + 1))
+            Li = c.seen(scene, si2, hit2, integ.stylized(depth + 1, smp, site, hit2))
         else:
             delta = mi.has_flag(c.bs.sampled_type, mi.BSDFFlags.Delta)
-            w = walk(scene, smp, c.pi2, c.ray2, c.go, s.max_depth, s.rr_depth, depth + 1, emitters=scope.emitters,
-                     came_from=(dr.detach(si, True), dr.select(pool, 0.0, c.bs.pdf), delta & ~pool))
+            came_from = (dr.detach(si, True), dr.select(pool, 0.0, c.bs.pdf), delta & ~pool)
+            start = Start(c.pi2, c.ray2, depth + 1, came_from=came_from)
+            w = walk(integ.walk_config, smp, start, c.go)
             Li = dr.select(c.go, w.L, 0.0)
         return i + 1, smp, total + c.store(span.slab.kids, span.lane * M + j, Li, on)
 
