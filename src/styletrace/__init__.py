@@ -8,8 +8,15 @@ The estimator library `styletrace.estimators` needs none of it and runs on numpy
 """
 from __future__ import annotations
 
-from .errors import BackendError, SceneError, SettingsError, StyleError, StyletraceError, UsageError
-from .runtime import init
+from styletrace.errors import (
+    BackendError,
+    SceneError,
+    SettingsError,
+    StyleError,
+    StyletraceError,
+    UsageError,
+)
+from styletrace.runtime import init
 
 __version__ = "0.1.0"
 
@@ -25,11 +32,11 @@ def __getattr__(name: str):
         return init()
     if name == "render":  # the render pipeline's, in process or on Ray with cluster= (api.render)
         init()
-        from .api import render
+        from styletrace.api import render
         return render
     if name in _API:
         init()
-        from . import api
+        from styletrace import api
         return getattr(api, name)
     if name in _LOOKDEV:
         init()

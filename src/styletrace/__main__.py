@@ -1,5 +1,5 @@
 import sys
 
-from .frontends.cli import main
+from styletrace.frontends.cli import main
 
 sys.exit(main())

@@ -11,13 +11,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from .errors import SceneError, UsageError
-from .images import PIXEL_FORMATS, save_safely, write_image
-from .kernel.integrator import StylizedIntegrator
-from .pipeline.carried import carried_settings
-from .pipeline.execute import render as pipeline_render
-from .pipeline.job import given_values
-from .pipeline.passes import (
+from styletrace.errors import SceneError, UsageError
+from styletrace.images import PIXEL_FORMATS, save_safely, write_image
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.pipeline.carried import carried_settings
+from styletrace.pipeline.execute import render as pipeline_render
+from styletrace.pipeline.job import given_values
+from styletrace.pipeline.passes import (
     LANE_BYTES,
     LANES_PER_PASS,
     TILE_SIDE,
@@ -33,7 +33,7 @@ from .pipeline.passes import (
     passes,
     tiles,
 )
-from .pipeline.scene import (
+from styletrace.pipeline.scene import (
     SceneWarning,
     canonical_normals,
     film_format,
@@ -42,8 +42,8 @@ from .pipeline.scene import (
     scene_dict,
     scene_spp,
 )
-from .runtime import init
-from .scene.defaults import resolve as resolve_defaults
+from styletrace.runtime import init
+from styletrace.scene.defaults import resolve as resolve_defaults
 
 
 def render(*args: Any, denoise: str | None = None, cluster: str | None = None, callback: Any = None,
@@ -52,12 +52,12 @@ def render(*args: Any, denoise: str | None = None, cluster: str | None = None, c
     """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the arguments).
     `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off; all but off run the job
     with a denoiser as its finisher, a post-stage (docs/denoise.md); off is the paper's estimators exactly."""
-    from .denoise import check_method, default_method
+    from styletrace.denoise import check_method, default_method
     method = check_method(denoise if denoise is not None else default_method())
     if method == "off":
         return pipeline_render(*args, cluster=cluster, callback=callback, **kw)
-    from .denoise import render as denoised
-    from .pipeline.job import python_job
+    from styletrace.denoise import render as denoised
+    from styletrace.pipeline.job import python_job
     return denoised(python_job(*args, **kw), method, callback, cluster, denoise_quality, coverage,
                     denoise_uncertainty)
 

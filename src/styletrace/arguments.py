@@ -12,8 +12,8 @@ import functools
 import numbers
 from typing import Any
 
-from .errors import SceneError, UsageError
-from .gate import mi
+from styletrace.errors import SceneError, UsageError
+from styletrace.gate import mi
 
 #: Seeds are 32-bit: Mitsuba's samplers take the seed modulo 2^32, so 0 and 2^32 would give one
 #: image.
@@ -54,11 +54,13 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     """The arguments of `passes`: a renderable scene as well."""
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
-    from .kernel.integrator import StylizedIntegrator  # needs a variant set, as the plugins do
-    from .kernel.line_hooks import line_problem
+    from styletrace.kernel.integrator import (
+        StylizedIntegrator,  # needs a variant set, as the plugins do
+    )
+    from styletrace.kernel.line_hooks import line_problem
     if isinstance(integrator, StylizedIntegrator) and integrator.settings.lines is not None:
-        from .kernel.lines import Lines
-        from .scene.graph import SceneGraph
+        from styletrace.kernel.lines import Lines
+        from styletrace.scene.graph import SceneGraph
         problem = line_problem(integrator.settings, SceneGraph(scene).has_media)
         if problem is not None:
             raise SceneError(problem)
@@ -115,7 +117,7 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     seen.clear()
     for name in sorted(names & set(UNRENDERABLE)):
         return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
-    from .scene.graph import SceneGraph  # needs a variant set, as the plugins do
+    from styletrace.scene.graph import SceneGraph  # needs a variant set, as the plugins do
     try:
         SceneGraph(scene)  # styled BSDFs where no style can apply
     except SceneError as exc:

@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from .errors import StyletraceError
+from styletrace.errors import StyletraceError
 
 #: the kind names of both sides, mapped to the common kinds parsed here
 COMMON_KINDS = {

@@ -2,14 +2,14 @@
 
 Every module that renders takes `dr` and `mi` from here:
 
-    from ..gate import dr, mi
+    from styletrace.gate import dr, mi
 
 Importing this module first picks a working libLLVM and the Mitsuba variant (`jit.backend`), since
 Dr.Jit binds its libLLVM when it is first imported. `import styletrace` alone does not load it.
 """
 from importlib import import_module
 
-from .jit import backend
+from styletrace.jit import backend
 
 backend()
 dr = import_module("drjit")

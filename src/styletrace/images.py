@@ -20,7 +20,7 @@ import zlib
 
 import numpy as np
 
-from .errors import UsageError
+from styletrace.errors import UsageError
 
 IMAGE_TYPES = (".exr", ".png")
 
@@ -84,7 +84,7 @@ def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
     `image` is H x W x C in the film's `pixel_format`: rgb, rgba, luminance (Y), luminance_alpha, xyz, xyza."""
     import mitsuba as mi
 
-    from .jit import backend
+    from styletrace.jit import backend
     backend()
     image = np.asarray(image)
     name = bitmap_format(pixel_format, image.shape[-1] if image.ndim == 3 else 1)
@@ -210,7 +210,7 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
     names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a PNG output.)"""
     import mitsuba as mi
 
-    from .jit import backend
+    from styletrace.jit import backend
     backend()
     image = np.asarray(image, dtype=np.float32)
     data, names = with_aovs(image, list(bitmap_format(pixel_format, image.shape[-1])), aovs)

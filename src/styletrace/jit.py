@@ -30,7 +30,7 @@ FIX = ("install a newer LLVM (Debian/Ubuntu: `apt-get install libllvm19`) or poi
        "DRJIT_LIBLLVM_PATH at a libLLVM.so of version >= %d" % MIN_LLVM_MAJOR)
 
 
-from .errors import BackendError  # noqa: E402  (re-exported: callers catch it from here)
+from styletrace.errors import BackendError  # noqa: E402  (re-exported: callers catch it from here)
 
 
 def llvm_major(path: str) -> int | None:

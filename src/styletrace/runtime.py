@@ -12,7 +12,7 @@ before `mi.load_file`. `import styletrace` alone does neither: it loads no Dr.Ji
 """
 from __future__ import annotations
 
-from . import jit
+from styletrace import jit
 
 _registered: set[str] = set()
 
@@ -23,8 +23,8 @@ def init(variant: str | None = None) -> str:
     if active not in _registered:
         import mitsuba as mi
 
-        from .kernel.standalone import from_properties
-        from .kernel.styled_bsdf import StyledBSDF
+        from styletrace.kernel.standalone import from_properties
+        from styletrace.kernel.styled_bsdf import StyledBSDF
 
         # from a scene file or dict: its `mi.render` pins the scene-relative auto values
         # (kernel/standalone.py)

@@ -18,8 +18,8 @@ import re
 import xml.etree.ElementTree as ET
 from typing import Any, Mapping
 
-from .errors import SceneError
-from .gate import mi
+from styletrace.errors import SceneError
+from styletrace.gate import mi
 
 #: an XML comment, for `parse_xml`
 COMMENT = re.compile(r"<!--.*?-->", re.S)

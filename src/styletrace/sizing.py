@@ -13,7 +13,7 @@ from __future__ import annotations
 import ctypes
 from typing import Callable, Optional
 
-from .pipeline import passes as pass_loop
+from styletrace.pipeline import passes as pass_loop
 
 CUDA_LANE_BYTES = 1024
 #: The share of the GPU's total memory a pass may use (the scene, the film and Dr.Jit's caches need

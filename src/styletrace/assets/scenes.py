@@ -18,7 +18,7 @@ from __future__ import annotations
 from importlib import resources
 from typing import Any, Callable
 
-from ..gate import mi
+from styletrace.gate import mi
 
 FURNACE_ALBEDO = (0.8, 0.5, 0.3)
 FURNACE_RADIANCE = 1.0

@@ -20,7 +20,7 @@ def node(d: dict) -> Any:
     """One description node -> what `mi.load_dict` accepts (a dict, or an object made here)."""
     import mitsuba as mi
 
-    from .mesh import to_mitsuba
+    from styletrace.blender.mesh import to_mitsuba
     kind = d.get("type")
     if kind == "blender_mesh":
         bsdf = mi.load_dict(node(d["bsdf"]))

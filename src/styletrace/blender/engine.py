@@ -17,9 +17,9 @@ import traceback
 import bpy
 import numpy as np
 
-from ..denoise.finishers import Denoised
-from ..errors import StyletraceError
-from . import pipeline, restyle
+from styletrace.blender import pipeline, restyle
+from styletrace.denoise.finishers import Denoised
+from styletrace.errors import StyletraceError
 
 COMBINED = "Combined"
 #: what the last render did: samples per pixel finished and asked for, whether it was cancelled, seconds

@@ -13,14 +13,14 @@ from typing import Callable
 
 import numpy as np
 
-from . import camera, lights, materials, mesh, world
+from styletrace.blender import camera, lights, materials, mesh, world
 
 
 def _material_style(material) -> dict | None:
     settings = getattr(material, "styletrace", None) if material is not None else None
     if settings is None or not settings.use_style:
         return None
-    from .properties import style_values
+    from styletrace.blender.properties import style_values
     return style_values(settings)
 
 

@@ -18,7 +18,7 @@ import sys
 import tempfile
 import zipfile
 
-from .. import __version__
+from styletrace import __version__
 
 #: Blender's platform names -> pip's platform tags for the wheels
 PLATFORMS = {

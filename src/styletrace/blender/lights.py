@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from . import units
+from styletrace.blender import units
 
 #: Mitsuba's rectangle and disk face +Z; Blender's area lights emit along -Z
 TURN = np.diag([1.0, -1.0, -1.0, 1.0])

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import units
+from styletrace.blender import units
 
 
 @dataclass

@@ -5,9 +5,9 @@ from __future__ import annotations
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from ..errors import StyletraceError
-from . import exporter, xml
-from .properties import integrator_values
+from styletrace.blender import exporter, xml
+from styletrace.blender.properties import integrator_values
+from styletrace.errors import StyletraceError
 
 
 def command_line(path: str, settings) -> str:

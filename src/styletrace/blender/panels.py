@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import bpy
 
-from ..styles import registry
-from .properties import key
+from styletrace.blender.properties import key
+from styletrace.styles import registry
 
 RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "line_mode", "line_types",
                "reuse", "spp", "pass_spp",

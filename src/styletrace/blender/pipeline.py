@@ -12,10 +12,10 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from .. import api
-from ..config.line_types import without_colours
-from . import build, exporter
-from .properties import integrator_values
+from styletrace import api
+from styletrace.blender import build, exporter
+from styletrace.blender.properties import integrator_values
+from styletrace.config.line_types import without_colours
 
 LINE_MASK = "LineMask"
 #: the image before denoising, beside the denoised Combined (as Cycles' "Noisy Image")
@@ -48,7 +48,7 @@ def integrator(settings, aovs: bool | None = None, **override):
 def job(sc, integ, settings):
     """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their sampling (the
     pass split of `pass_spp`, tiles of the pass loop's own size)."""
-    from ..pipeline.job import Job
+    from styletrace.pipeline.job import Job
     return Job(scene=sc, integrator=integ, spp=settings.spp, seed=settings.seed, pass_spp=settings.pass_spp,
                lanes_per_pass=api.LANES_PER_PASS)
 
@@ -57,9 +57,9 @@ def run(sc, settings, aovs: bool, keep: Callable | None = None):
     """(F12's `pipeline.runner.Runner`, the one-line note where Denoise auto could not denoise): the Denoise
     setting's finisher (`denoise.finishers.plan`); `keep`: called with the buffer to restyle (Record buffer).
     Raises the refusals (one line each) before anything renders."""
-    from ..denoise.finishers import Image, plan
-    from ..errors import UsageError
-    from ..pipeline.resolve import resolve
+    from styletrace.denoise.finishers import Image, plan
+    from styletrace.errors import UsageError
+    from styletrace.pipeline.resolve import resolve
     resolved = resolve(job(sc, integrator(settings, aovs=aovs), settings), scene=sc)
     runner, note = plan(resolved, settings.denoise, quality=settings.denoise_quality, label="<blender>", keep=keep)
     if isinstance(runner.finisher, Image) and keep is not None:
@@ -70,9 +70,9 @@ def run(sc, settings, aovs: bool, keep: Callable | None = None):
 
 def passes(sc, integ, settings) -> Iterator[api.Progress]:
     """The plain passes of `integ` with F12's sampling (a pipeline run, auto values pinned)."""
-    from ..pipeline.execute import InProcess
-    from ..pipeline.resolve import resolve
-    from ..pipeline.runner import Runner
+    from styletrace.pipeline.execute import InProcess
+    from styletrace.pipeline.resolve import resolve
+    from styletrace.pipeline.runner import Runner
     return Runner(resolve(job(sc, integ, settings), scene=sc), InProcess()).passes()
 
 

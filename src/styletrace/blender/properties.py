@@ -13,15 +13,15 @@ import math
 
 import bpy
 
-from .. import init
+from styletrace import init
 
 init()  # the registries below import Dr.Jit and Mitsuba
 
-from ..config import estimator_registry  # noqa: E402
-from ..config import settings as S  # noqa: E402
-from ..denoise import default_method  # noqa: E402
-from ..denoise.oidn import QUALITIES  # noqa: E402
-from ..styles import registry  # noqa: E402
+from styletrace.config import estimator_registry  # noqa: E402
+from styletrace.config import settings as S  # noqa: E402
+from styletrace.denoise import default_method  # noqa: E402
+from styletrace.denoise.oidn import QUALITIES  # noqa: E402
+from styletrace.styles import registry  # noqa: E402
 
 SEP = "__"
 

@@ -13,8 +13,8 @@ import time
 import bpy
 import numpy as np
 
-from ..errors import StyletraceError
-from .properties import ON_CHANGE, style_values
+from styletrace.blender.properties import ON_CHANGE, style_values
+from styletrace.errors import StyletraceError
 
 IMAGE = "styletrace restyle"
 
@@ -40,7 +40,7 @@ def last_seconds():
 
 def run(settings) -> np.ndarray:
     """Restyle the recorded buffer with the render settings' style; writes and returns the image (H x W x 3)."""
-    from ..lookdev.restyle import restyle as lookdev_restyle
+    from styletrace.lookdev.restyle import restyle as lookdev_restyle
     buf = _state["buffer"]
     if buf is None:
         raise StyletraceError("no recorded buffer: turn on Record buffer and render (F12) first")

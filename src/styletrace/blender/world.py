@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .materials import Context, image_array
+from styletrace.blender.materials import Context, image_array
 
 ENV_TO_WORLD = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 

@@ -90,7 +90,7 @@ class Writer:
 
     @staticmethod
     def _ply(part, name: str, path: str) -> None:
-        from .mesh import to_mitsuba
+        from styletrace.blender.mesh import to_mitsuba
         to_mitsuba(part, name).write_ply(path)
 
     @staticmethod

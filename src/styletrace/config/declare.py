@@ -18,8 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from ..declaration import Declaration
-from ..errors import SettingsError
+from styletrace.declaration import Declaration
+from styletrace.errors import SettingsError
 
 #: Largest depth or count: the kernel counts depths and samples in UInt32, and 2^32 - 1 stands for
 #: "unbounded" (`path.depth_limit`), so larger values would wrap around.

@@ -14,11 +14,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
-from .. import estimators as E
-from ..errors import SettingsError
-from ..gate import dr
-from ..styles.base import Style
-from ..styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
+from styletrace import estimators as E
+from styletrace.errors import SettingsError
+from styletrace.gate import dr
+from styletrace.styles.base import Style
+from styletrace.styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 
 #: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with
 #: fireflies

@@ -16,8 +16,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..errors import SettingsError
-from .declare import integer, number, rgb
+from styletrace.config.declare import integer, number, rgb
+from styletrace.errors import SettingsError
 
 MEASUREMENTS = ("shape_id", "material_id", "depth", "normal")
 STENCILS = ("disk", "square")

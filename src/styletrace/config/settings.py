@@ -14,24 +14,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
-from ..errors import SettingsError
-from ..styles import create, get
-from ..styles.base import Style
-from . import estimator_registry
-from .choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT
-from .choices import EMITTER_DEFAULT, EMITTER_MODES, LineSettings
-from .choices import MODES as LINE_MODES
-from .choices import TESTS as LINE_TESTS
-from .declare import (  # one declaration per property
-    COUNT_MAX,
-    Property,
-    boolean,
-    integer,
-    names,
-    number,
-    rgb,
-)
-from .line_types import parse_line_types
+from styletrace.config import estimator_registry
+from styletrace.config.choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT
+from styletrace.config.choices import EMITTER_DEFAULT, EMITTER_MODES, LineSettings
+from styletrace.config.choices import MODES as LINE_MODES
+from styletrace.config.choices import TESTS as LINE_TESTS
+from styletrace.config.declare import COUNT_MAX, Property, boolean, integer, names, number, rgb
+from styletrace.config.line_types import parse_line_types
+from styletrace.errors import SettingsError
+from styletrace.styles import create, get
+from styletrace.styles.base import Style
 
 STYLIZE_MODES = {
     "first_hit": "the camera ray's first hit; objects with a `styled` BSDF use their own style",

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .default import ENV, METHODS, check_method, default_method
+from styletrace.denoise.default import ENV, METHODS, check_method, default_method
 
 
 class NotDenoised(UserWarning):
@@ -33,9 +33,9 @@ def render(job: Any, denoise: str = "auto", callback: Any = None, cluster: str |
     `NotDenoised`), and run by the pipeline's runner with the denoiser as its finisher (docs/denoise.md).
     `cluster`: the passes on Ray, which no denoiser takes (auto renders them undenoised)."""
     check_method(denoise)
-    from ..pipeline.execute import executor_for
-    from ..pipeline.resolve import resolve
-    from .finishers import plan
+    from styletrace.denoise.finishers import plan
+    from styletrace.pipeline.execute import executor_for
+    from styletrace.pipeline.resolve import resolve
     runner, note = plan(resolve(job), denoise, executor_for(cluster), quality=denoise_quality, coverage=coverage,
                         uncertainty=denoise_uncertainty)
     if note:

@@ -23,14 +23,14 @@ from __future__ import annotations
 
 import math
 
-from ..errors import UsageError
-from ..gate import dr, mi
-from ..kernel.integrator import StylizedIntegrator
-from ..lookdev.buffer import MAX_SAMPLES, Buffer
-from ..lookdev.record import RecordingIntegrator, record
-from ..lookdev.restyle import finish_spread
-from ..pipeline.passes import pass_seed
-from . import guides
+from styletrace.denoise import guides
+from styletrace.errors import UsageError
+from styletrace.gate import dr, mi
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.lookdev.buffer import MAX_SAMPLES, Buffer
+from styletrace.lookdev.record import RecordingIntegrator, record
+from styletrace.lookdev.restyle import finish_spread
+from styletrace.pipeline.passes import pass_seed
 
 #: points per pixel of coverage="auto" (chosen on the Cornell box, BENCHMARKS.md denoise), less where the
 #: image is so large that they would not fit the buffer's cap

@@ -21,7 +21,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 #: the denoising methods; `auto` chooses among the other three (`method_for`)
 METHODS = ("auto", "expectation", "image", "off")
@@ -61,8 +61,8 @@ class Plan:
 def why_not(scene, integrator, local: bool = True, method: str = "expectation") -> str:
     """Why `method` (expectation or image) cannot denoise `integrator` on `scene` ('' where it can); `local`:
     the render runs in one process."""
-    from ..kernel.integrator import StylizedIntegrator
-    from ..pipeline.scene import film_format
+    from styletrace.kernel.integrator import StylizedIntegrator
+    from styletrace.pipeline.scene import film_format
     if not local:
         return "the render runs on Ray or as several images; the denoiser needs the whole image in one process"
     try:
@@ -75,7 +75,7 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
         return ""
     if not isinstance(integrator, StylizedIntegrator):
         return f"the integrator is Mitsuba's {type(integrator).__name__}, not stylized"
-    from . import expectation
+    from styletrace.denoise import expectation
     try:
         expectation.check(integrator)
     except UsageError as exc:
@@ -86,7 +86,7 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
 def nonlinear(integrator) -> bool:
     """Whether the first stylized level applies g to a mean of more than one child, so that denoising the
     expectation before g differs from denoising the image after it."""
-    from ..kernel.integrator import StylizedIntegrator
+    from styletrace.kernel.integrator import StylizedIntegrator
     if not isinstance(integrator, StylizedIntegrator):
         return False
     slot = integrator.settings.slot
@@ -103,7 +103,7 @@ def method_for(scene, integrator, method: str | None = None, local: bool = True,
     method = check_method(method or default_method())
     if method != "auto":
         return method, ""
-    from ..lookdev.buffer import MAX_SAMPLES
+    from styletrace.lookdev.buffer import MAX_SAMPLES
     why = why_not(scene, integrator, local, "expectation")
     if not why and samples > MAX_SAMPLES:
         why = f"{samples} camera samples, over the expectation buffer's cap of {MAX_SAMPLES}"
@@ -131,7 +131,7 @@ def with_firefly(scene, integrator, method: str, pilot=None):
     """(`integrator` with the firefly control a render of `method` gets at its default, the note naming the
     values chosen): on where the render denoises, unless `firefly` was given or error AOVs (which describe the
     paper's estimator) are on."""
-    from ..scene.defaults import pin_firefly
+    from styletrace.scene.defaults import pin_firefly
     s = integrator.settings
     if method == "off" or s.firefly is not None or s.aovs:
         return integrator, ""
@@ -140,7 +140,7 @@ def with_firefly(scene, integrator, method: str, pilot=None):
 
 def pin(resolved, method: str):
     """`resolved` with the firefly control on and, without a given spp, the budget spent on children."""
-    from ..kernel.integrator import StylizedIntegrator
+    from styletrace.kernel.integrator import StylizedIntegrator
     integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
     if not isinstance(integrator, StylizedIntegrator):
         return resolved
@@ -149,7 +149,7 @@ def pin(resolved, method: str):
     spp = resolved.spp
     n = int(integrator.settings.slot.n(0))
     if resolved.job.spp is None and n > 1:
-        from ..lookdev.buffer import MAX_SAMPLES
+        from styletrace.lookdev.buffer import MAX_SAMPLES
         w, h = resolved.size
         spp = max(MIN_SPP, round(SPEND * resolved.spp / n))
         if method == "expectation":  # within what the buffer holds

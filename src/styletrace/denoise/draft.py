@@ -10,7 +10,7 @@ The draft styles D at its own camera samples (`--coverage 0`): the page restyles
 """
 from __future__ import annotations
 
-from ..lookdev.buffer import Buffer
+from styletrace.lookdev.buffer import Buffer
 
 QUALITY = "balanced"
 
@@ -26,7 +26,7 @@ def available() -> bool:
 def draft(buf: Buffer, scene, seed: int, quality: str = QUALITY) -> bool:
     if not available() or buf.stylize != "first_hit" or buf.stores != "mean":
         return False
-    from .expectation import attach
+    from styletrace.denoise.expectation import attach
     attach(buf, scene, buf.spp, seed, quality)
     return True
 

@@ -37,16 +37,22 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from ..config import settings as S
-from ..errors import UsageError
-from ..gate import dr, mi
-from ..kernel.integrator import StylizedIntegrator
-from ..lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer
-from ..lookdev.record import record, scene_label
-from ..lookdev.restyle import RESTYLABLE_ESTIMATORS, accumulate, prepare, sample_values, slots_for
-from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed
-from . import coverage as coverage_module
-from . import guides, oidn
+from styletrace.config import settings as S
+from styletrace.denoise import coverage as coverage_module
+from styletrace.denoise import guides, oidn
+from styletrace.errors import UsageError
+from styletrace.gate import dr, mi
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer
+from styletrace.lookdev.record import record, scene_label
+from styletrace.lookdev.restyle import (
+    RESTYLABLE_ESTIMATORS,
+    accumulate,
+    prepare,
+    sample_values,
+    slots_for,
+)
+from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed
 
 #: the buffer array holding the denoised expectation at each camera sample (3 x samples, as `mean`)
 DENOISED = "denoised_mean"

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from ..errors import UsageError
-from ..images import save_safely
-from ..pipeline.runner import Finisher, Plain, Runner, Written
-from ..pipeline.scene import film_format
+from styletrace.errors import UsageError
+from styletrace.images import save_safely
+from styletrace.pipeline.runner import Finisher, Plain, Runner, Written
+from styletrace.pipeline.scene import film_format
 
 #: why a denoiser needs the whole image in one process
 LOCAL = "--denoise renders locally: the denoiser needs the whole image in one process (no --ray, no cluster=)"
@@ -33,7 +33,7 @@ class Denoised(Finisher):
         self.quality, self.buffer = quality, buffer
 
     def check(self, resolved, executor) -> None:
-        from . import oidn
+        from styletrace.denoise import oidn
         oidn.require()
         oidn.check_quality(self.quality)
         fmt = film_format(resolved.scene)
@@ -55,22 +55,22 @@ class Expectation(Denoised):
                  coverage: int | str = "auto", uncertainty: float | None = None,
                  keep: Callable[[Any], None] | None = None):
         super().__init__(quality, buffer)
-        from .expectation import UNCERTAINTY
+        from styletrace.denoise.expectation import UNCERTAINTY
         self.label, self.coverage, self.keep = label, coverage, keep
         self.uncertainty = UNCERTAINTY if uncertainty is None else uncertainty
         self.job = None
 
     def check(self, resolved, executor) -> None:
         super().check(resolved, executor)
-        from ..lookdev.record import check_film, scene_label
-        from . import expectation
-        from .coverage import check_k
+        from styletrace.denoise import expectation
+        from styletrace.denoise.coverage import check_k
+        from styletrace.lookdev.record import check_film, scene_label
         check_k(self.coverage)
         expectation.check_uncertainty(self.uncertainty)
         expectation.check(resolved.integrator)
         check_film(resolved.scene)  # the buffer's conditions: an rgb film, a filter it can record
         if self.buffer is not None:
-            from ..lookdev.buffer import check_buffer_path
+            from styletrace.lookdev.buffer import check_buffer_path
             check_buffer_path(self.buffer)
         job = resolved.job
         self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed, self.quality,
@@ -92,12 +92,12 @@ class Expectation(Denoised):
         return image, buf
 
     def result(self, prog):
-        from .expectation import aovs
+        from styletrace.denoise.expectation import aovs
         image, buf = self._finish()
         return (image, aovs(buf, image)) if self.aovs else image
 
     def write(self, prog, output: str, pixel_format: str) -> Written:
-        from .expectation import aovs
+        from styletrace.denoise.expectation import aovs
         image, buf = self._finish()
         out = save_safely(image, output, pixel_format, aovs(buf, image) if self.aovs else None)
         if self.buffer is not None:
@@ -120,7 +120,7 @@ class Image(Denoised):
         self.aovs = bool(resolved.integrator.aov_names())
 
     def _finish(self, prog):
-        from .image import finish
+        from styletrace.denoise.image import finish
         return finish(self.scene, prog, self.seed, self.quality)
 
     def result(self, prog):
@@ -139,8 +139,8 @@ def plan(resolved, method: str | None = None, executor: Any = None, buffer: str 
     could not denoise). `executor`: the pipeline's (default in process); `buffer`: a file for the expectation
     buffer; `keep`: called with the buffer kept for restyles; the rest as `Expectation`'s. Raises the
     refusals of the run (UsageError, one line) before anything renders."""
-    from ..pipeline.execute import InProcess
-    from .default import choose
+    from styletrace.denoise.default import choose
+    from styletrace.pipeline.execute import InProcess
     executor = executor if executor is not None else InProcess()
     chosen = choose(resolved, method, local=executor.local)
     if chosen.method == "expectation":
@@ -148,7 +148,7 @@ def plan(resolved, method: str | None = None, executor: Any = None, buffer: str 
     elif chosen.method == "image":
         finisher = Image(quality, buffer)
     elif buffer is not None or keep is not None:
-        from ..lookdev.record import Recorded
+        from styletrace.lookdev.record import Recorded
         finisher = Recorded(buffer, label, keep)
     else:
         finisher = Plain()

@@ -27,8 +27,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..gate import dr, mi
-from ..lookdev.film_filter import seeded_positions
+from styletrace.gate import dr, mi
+from styletrace.lookdev.film_filter import seeded_positions
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever); a chain
 #: still specular after them keeps its specular weight as albedo

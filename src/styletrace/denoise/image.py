@@ -16,8 +16,8 @@ from typing import Callable
 
 import numpy as np
 
-from ..pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes
-from . import guides, oidn
+from styletrace.denoise import guides, oidn
+from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes
 
 
 def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 QUALITIES = ("high", "balanced", "fast")
 EXTRA = "pip install 'styletrace[denoise]'"

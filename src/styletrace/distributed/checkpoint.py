@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UsageError
-from ..images import write_bytes_atomically, write_image
+from styletrace.errors import UsageError
+from styletrace.images import write_bytes_atomically, write_image
 
 VERSION = 1
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import os
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 LOCAL = "local"
 

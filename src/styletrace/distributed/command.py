@@ -12,8 +12,8 @@ from __future__ import annotations
 import os
 import re
 
-from ..errors import UsageError
-from .cluster import LOCAL
+from styletrace.distributed.cluster import LOCAL
+from styletrace.errors import UsageError
 
 _ADDRESS = re.compile(r"^(auto|ray://.+|[^\s:/]+:\d+)$")
 
@@ -30,7 +30,7 @@ def cluster_of(args) -> str:
 def executor_of(args):
     """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray [ADDRESS]`
     / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
-    from ..pipeline.execute import InProcess, OnRay
+    from styletrace.pipeline.execute import InProcess, OnRay
     if args.ray is None and not args.resume:
         return InProcess()
     if args.checkpoint_every is not None and args.checkpoint_every < 0:
@@ -48,14 +48,14 @@ def frame_paths(output: str, count: int) -> list[str]:
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
     scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
-    from ..frontends.command_job import job_of
-    from ..pipeline.execute import ray_job
-    from ..pipeline.job import check_counts
-    from ..pipeline.resolve import resolve
-    from ..runtime import init
-    from ..sizing import lanes_per_pass
-    from .frames import Manifest, frame_settings, render_frames
-    from .orbit import turntable
+    from styletrace.distributed.frames import Manifest, frame_settings, render_frames
+    from styletrace.distributed.orbit import turntable
+    from styletrace.frontends.command_job import job_of
+    from styletrace.pipeline.execute import ray_job
+    from styletrace.pipeline.job import check_counts
+    from styletrace.pipeline.resolve import resolve
+    from styletrace.runtime import init
+    from styletrace.sizing import lanes_per_pass
 
     scenes = args.scene or ["cornell-box"]
     if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
@@ -70,7 +70,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         check_output(args.output, scene)
     count = args.frames if len(scenes) == 1 else len(scenes)
     paths = frame_paths(args.output, count)
-    from ..images import check_target
+    from styletrace.images import check_target
     for path in paths + [args.output + ".frames.json"]:  # every numbered image and the manifest, as the output
         check_target(path)
     params = parse_set(args.set)

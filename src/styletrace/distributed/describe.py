@@ -19,7 +19,7 @@ from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 #: Scenes (with their integrators) a worker process keeps loaded; frames of an XML list go through it in turn.
 CACHE_SIZE = 2
@@ -95,15 +95,15 @@ class SceneSpec:
 def load(spec: SceneSpec, values: dict, variant: str):
     """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of the scene
     source with the driver's integrator values, cached by the scene and the integrator's values."""
-    from .. import runtime
+    from styletrace import runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
     if key in CACHE:
         CACHE.move_to_end(key)
         return CACHE[key]
-    from ..kernel.integrator import StylizedIntegrator
-    from ..pipeline.job import Job
-    from ..pipeline.resolve import resolve
+    from styletrace.kernel.integrator import StylizedIntegrator
+    from styletrace.pipeline.job import Job
+    from styletrace.pipeline.resolve import resolve
     unknown = sorted(set(spec.load_kwargs) - {"defines"})
     if unknown:
         raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..pipeline import passes as pass_loop  # the pass loop whose launches these are
+from styletrace.pipeline import passes as pass_loop  # the pass loop whose launches these are
 
 
 @dataclass(frozen=True)

@@ -20,13 +20,13 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ..errors import StyletraceError, UsageError
-from ..pipeline.passes import LANES_PER_PASS, Progress
-from ..pipeline.scene import first_line
-from .checkpoint import Checkpoint
-from .cluster import connect, cpus
-from .describe import SceneSpec
-from .plan import Merge, plan
+from styletrace.distributed.checkpoint import Checkpoint
+from styletrace.distributed.cluster import connect, cpus
+from styletrace.distributed.describe import SceneSpec
+from styletrace.distributed.plan import Merge, plan
+from styletrace.errors import StyletraceError, UsageError
+from styletrace.pipeline.passes import LANES_PER_PASS, Progress
+from styletrace.pipeline.scene import first_line
 
 #: Retries of a task whose worker process died (Ray re-runs it elsewhere; the unit's seed is fixed).
 MAX_RETRIES = 3
@@ -46,7 +46,7 @@ class Render:
                  lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
                  resume: bool = False, checkpoint_every: float = 10.0, cpus_per_task: int = 1,
                  gpus_per_task: float = 0, lock: Any = contextlib.nullcontext()):
-        from ..config.settings import parse
+        from styletrace.config.settings import parse
         if parse(job.values).expansion_pass:  # a unit is a bare mi.render: no pass map travels
             raise UsageError(f"bad value {job.values['expansion_pass']!r} for 'expansion_pass' in a cluster render: its "
                              f"pre-pass runs in a local render's passes only; render without --ray/cluster=, or use "
@@ -60,7 +60,7 @@ class Render:
             self.checkpoint = Checkpoint(output, settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
                                                               len(self.layout)))
         if self.checkpoint is not None:  # written beside the output, by the output's rules (images.check_target)
-            from ..images import check_target
+            from styletrace.images import check_target
             check_target(self.checkpoint.manifest)
         if self.checkpoint is not None and not resume and self.checkpoint.exists():
             raise UsageError(f"{output!r} has the checkpoint of an unfinished render ({self.checkpoint.manifest}): add "
@@ -94,7 +94,7 @@ class Render:
 
     def __iter__(self) -> Iterator[Progress]:
         ray = connect(self.cluster)
-        from .tasks import render_unit
+        from styletrace.distributed.tasks import render_unit
         todo = [u for u in self.units if u.round >= self.merge.rounds_done[u.tile]]
         todo.reverse()  # pop() from the end takes them in launch order
         window = max(2, 2 * cpus() // max(1, self.cpus_per_task))
@@ -145,8 +145,8 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
 
 def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
     """The Job of a scene argument and a `stylized` integrator (its property values travel, not the object)."""
-    from ..runtime import init
-    from .tasks import Job
+    from styletrace.distributed.tasks import Job
+    from styletrace.runtime import init
     values = getattr(integrator, "values", None)
     if not isinstance(values, dict):
         raise UsageError(f"bad integrator {type(integrator).__name__} for a cluster render: Ray workers rebuild the "

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import ray
 
-from ..jit import no_collection
-from .describe import SceneSpec, load
+from styletrace.distributed.describe import SceneSpec, load
+from styletrace.jit import no_collection
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tu
     import mitsuba as mi
     import numpy as np
 
-    from ..pipeline.passes import Crop
+    from styletrace.pipeline.passes import Crop
     scene, integrator = _prepare(job)
     with Crop(scene.sensors()[0]) as crop:
         if tuple(size) != crop.full:  # as the pass loop does for its tiles
@@ -62,7 +62,7 @@ def render_frame(job: Job, to_world, spp: int, seed: int, lanes_per_pass: int, p
     import mitsuba as mi
     import numpy as np
 
-    from ..pipeline import passes as pass_loop
+    from styletrace.pipeline import passes as pass_loop
     scene, integrator = _prepare(job)
     params = mi.traverse(scene.sensors()[0]) if to_world is not None else None
     old = None

@@ -16,64 +16,76 @@ helpers. Details and rationale: docs/design/estimator_kernel_contract.md.
 """
 from __future__ import annotations
 
-from .adaptive import AdaptiveDirect
-from .affine import Affine, Mean, apply_linear
-from .algebra import Compose, Product, Sum, inner_mean
-from .arrays import channel_mean
-from .base import Context, Estimator
-from .coefficients import (
-                           ExpSeries,
-                           PolynomialSeries,
-                           PowerFunctionSeries,
-                           ReciprocalSeries,
-                           Series,
-                           TaylorSeries,
-                           exp_series,
-                           gamma_series,
-                           polynomial_series,
-                           power_series,
-                           reciprocal_series,
-                           taylor_series,
-                           taylor_shift,
+from styletrace.estimators.adaptive import AdaptiveDirect
+from styletrace.estimators.affine import Affine, Mean, apply_linear
+from styletrace.estimators.algebra import Compose, Product, Sum, inner_mean
+from styletrace.estimators.arrays import channel_mean
+from styletrace.estimators.base import Context, Estimator
+from styletrace.estimators.coefficients import (
+    ExpSeries,
+    PolynomialSeries,
+    PowerFunctionSeries,
+    ReciprocalSeries,
+    Series,
+    TaylorSeries,
+    exp_series,
+    gamma_series,
+    polynomial_series,
+    power_series,
+    reciprocal_series,
+    taylor_series,
+    taylor_shift,
 )
-from .direct import Direct
-from .fits import (
-                           Fit,
-                           bernstein_fit,
-                           chebyshev_basis,
-                           chebyshev_fit,
-                           chebyshev_nodes,
-                           even_nodes,
-                           from_unit,
-                           gauss_legendre,
-                           legendre_basis,
-                           legendre_fit,
-                           taylor_fit,
-                           to_unit,
+from styletrace.estimators.direct import Direct
+from styletrace.estimators.fits import (
+    Fit,
+    bernstein_fit,
+    chebyshev_basis,
+    chebyshev_fit,
+    chebyshev_nodes,
+    even_nodes,
+    from_unit,
+    gauss_legendre,
+    legendre_basis,
+    legendre_fit,
+    taylor_fit,
+    to_unit,
 )
-from .harness import (
-                           Distribution,
-                           Exponential,
-                           NumpyEstimate,
-                           TwoPoint,
-                           Uniform,
-                           channel_means,
-                           estimate_drjit,
-                           estimate_numpy,
+from styletrace.estimators.harness import (
+    Distribution,
+    Exponential,
+    NumpyEstimate,
+    TwoPoint,
+    Uniform,
+    channel_means,
+    estimate_drjit,
+    estimate_numpy,
 )
-from .pilot import PerLane, Pilot
-from .polynomial import PolynomialNaive, PolynomialU, u_statistic_means, ustat_update
-from .series import SeriesEstimator
-from .telescoping import Telescoping
-from .tie_dye_chebyshev import TIE_DYE, tie_dye, tie_dye_b, tie_dye_fit, tie_dye_g, tie_dye_r
-from .truncation import (
-                           Cumulative,
-                           Geometric,
-                           Poisson,
-                           PoissonCMF,
-                           PowerLaw,
-                           Truncation,
-                           resolve_truncation,
+from styletrace.estimators.pilot import PerLane, Pilot
+from styletrace.estimators.polynomial import (
+    PolynomialNaive,
+    PolynomialU,
+    u_statistic_means,
+    ustat_update,
+)
+from styletrace.estimators.series import SeriesEstimator
+from styletrace.estimators.telescoping import Telescoping
+from styletrace.estimators.tie_dye_chebyshev import (
+    TIE_DYE,
+    tie_dye,
+    tie_dye_b,
+    tie_dye_fit,
+    tie_dye_g,
+    tie_dye_r,
+)
+from styletrace.estimators.truncation import (
+    Cumulative,
+    Geometric,
+    Poisson,
+    PoissonCMF,
+    PowerLaw,
+    Truncation,
+    resolve_truncation,
 )
 
 __all__ = [

@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import arrays as A
-from .base import Context, Estimator, check_count
+from styletrace.estimators import arrays as A
+from styletrace.estimators.base import Context, Estimator, check_count
 
 __all__ = ["Affine", "Mean", "MeanOfN", "apply_linear"]
 

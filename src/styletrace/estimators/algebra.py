@@ -12,9 +12,9 @@ factors draw in turn. `Compose(outer, inner)`: each outer sample is a fresh inne
 """
 from __future__ import annotations
 
-from . import arrays as A
-from .affine import Mean
-from .base import Context, Estimator, register_combinator
+from styletrace.estimators import arrays as A
+from styletrace.estimators.affine import Mean
+from styletrace.estimators.base import Context, Estimator, register_combinator
 
 __all__ = ["Sum", "Product", "Compose", "inner_mean"]
 

@@ -47,7 +47,7 @@ def _import_drjit():
     """drjit, imported through ``styletrace.jit.prepare_drjit`` (a working libLLVM) if nobody did yet."""
     dr = drjit()
     if dr is None:
-        from ..jit import prepare_drjit  # stdlib-only module: loads Dr.Jit, never Mitsuba
+        from styletrace.jit import prepare_drjit  # stdlib-only module: loads Dr.Jit, never Mitsuba
         prepare_drjit()
         import drjit as dr
     return dr
@@ -82,9 +82,7 @@ def backend_module(like=None):
     if variant and (variant.startswith("cuda") or variant.startswith("llvm")):
         backend = dr.JitBackend.CUDA if variant.startswith("cuda") else dr.JitBackend.LLVM
         return _module_for(dr, backend, "_ad_" in variant)
-    from ..jit import (
-        prepare_drjit,  # the package's one answer: CUDA where it works (STYLETRACE_NO_CUDA honoured)
-    )
+    from styletrace.jit import prepare_drjit
     cuda = prepare_drjit() == "cuda"
     return _module_for(dr, dr.JitBackend.CUDA if cuda else dr.JitBackend.LLVM, False)
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import arrays as A
+from styletrace.estimators import arrays as A
 
 __all__ = ["Context", "Estimator", "check_count", "register_combinator", "combinator"]
 

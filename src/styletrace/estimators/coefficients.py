@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from . import arrays as A
+from styletrace.estimators import arrays as A
 
 __all__ = [
     "Series",

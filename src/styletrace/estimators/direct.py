@@ -15,7 +15,7 @@ Parameters
 """
 from __future__ import annotations
 
-from .affine import MeanOfN
+from styletrace.estimators.affine import MeanOfN
 
 __all__ = ["Direct"]
 

@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-from . import arrays as A
-from .coefficients import PolynomialSeries, taylor_shift
+from styletrace.estimators import arrays as A
+from styletrace.estimators.coefficients import PolynomialSeries, taylor_shift
 
 __all__ = [
     "Fit",

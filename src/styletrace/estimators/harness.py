@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import arrays as A
+from styletrace.estimators import arrays as A
 
 __all__ = ["Distribution", "Uniform", "Exponential", "TwoPoint", "estimate_numpy", "estimate_drjit", "NumpyEstimate", "channel_means"]
 

@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from . import arrays as A
-from .base import check_count
+from styletrace.estimators import arrays as A
+from styletrace.estimators.base import check_count
 
 __all__ = ["Pilot", "PerLane", "ExpansionPoint"]
 

@@ -12,10 +12,10 @@ polynomial's centre), a fixed value or Pilot(n); cost: degree K samples (terms s
 """
 from __future__ import annotations
 
-from . import arrays as A
-from .base import Context, Estimator, check_count
-from .coefficients import PolynomialSeries
-from .pilot import ExpansionPoint
+from styletrace.estimators import arrays as A
+from styletrace.estimators.base import Context, Estimator, check_count
+from styletrace.estimators.coefficients import PolynomialSeries
+from styletrace.estimators.pilot import ExpansionPoint
 
 __all__ = ["ustat_update", "u_statistic_means", "PolynomialNaive", "PolynomialU", "as_polynomial"]
 

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import arrays as A
-from .base import Context, Estimator, check_count
-from .coefficients import Series
-from .pilot import ExpansionPoint, Pilot
-from .polynomial import ustat_update
-from .truncation import Cumulative, Poisson, PoissonCMF, resolve_truncation
+from styletrace.estimators import arrays as A
+from styletrace.estimators.base import Context, Estimator, check_count
+from styletrace.estimators.coefficients import Series
+from styletrace.estimators.pilot import ExpansionPoint, Pilot
+from styletrace.estimators.polynomial import ustat_update
+from styletrace.estimators.truncation import Cumulative, Poisson, PoissonCMF, resolve_truncation
 
 __all__ = ["SeriesEstimator", "SELECTIONS"]
 

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import arrays as A
-from .base import Context, Estimator, check_count
-from .truncation import PowerLaw, resolve_truncation
+from styletrace.estimators import arrays as A
+from styletrace.estimators.base import Context, Estimator, check_count
+from styletrace.estimators.truncation import PowerLaw, resolve_truncation
 
 __all__ = ["Telescoping"]
 

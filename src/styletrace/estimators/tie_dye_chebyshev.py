@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import math
 
-from . import arrays as A
-from .fits import Fit, chebyshev_fit
+from styletrace.estimators import arrays as A
+from styletrace.estimators.fits import Fit, chebyshev_fit
 
 __all__ = ["tie_dye_r", "tie_dye_g", "tie_dye_b", "TIE_DYE", "tie_dye", "tie_dye_fit"]
 

@@ -17,11 +17,11 @@ import sys
 import warnings
 from typing import Sequence
 
-from ..errors import StyletraceError, UsageError
-from ..images import IMAGE_TYPES, check_target
-from ..pipeline.job import check_counts
-from ..pipeline.signals import StopSignals, one_line, say  # noqa: F401  (StopSignals: tests import it here)
-from .status import Status
+from styletrace.errors import StyletraceError, UsageError
+from styletrace.frontends.status import Status
+from styletrace.images import IMAGE_TYPES, check_target
+from styletrace.pipeline.job import check_counts
+from styletrace.pipeline.signals import StopSignals, one_line, say  # noqa: F401  (StopSignals: tests import it here)
 
 
 def _parse_defines(items: Sequence[str]) -> dict[str, str]:
@@ -59,10 +59,10 @@ def check_output(path: str, scene: str | None = None) -> None:
 
 
 def cmd_styles(args) -> int:
-    from ..runtime import init
+    from styletrace.runtime import init
     init()
-    from ..config.estimator_registry import applicable
-    from ..styles import get, names
+    from styletrace.config.estimator_registry import applicable
+    from styletrace.styles import get, names
 
     for name in names():
         cls = get(name)
@@ -79,9 +79,9 @@ def cmd_styles(args) -> int:
 
 
 def cmd_lines(args) -> int:
-    from ..runtime import init
+    from styletrace.runtime import init
     init()
-    from ..config import settings
+    from styletrace.config import settings
 
     print("feature lines (West 2021) on path edges, with any style and stylize mode: `render --lines` and "
           "`--set NAME=VALUE` (Python: styletrace.render(..., lines=True, line_width=2)); docs/lines.md")
@@ -92,9 +92,9 @@ def cmd_lines(args) -> int:
 
 
 def cmd_estimators(args) -> int:
-    from ..runtime import init
+    from styletrace.runtime import init
     init()
-    from ..config.estimator_registry import kinds
+    from styletrace.config.estimator_registry import kinds
 
     for k in kinds():
         print(f"{k.name}: {k.doc}")
@@ -106,7 +106,7 @@ def cmd_estimators(args) -> int:
 
 def cmd_render(args) -> int:
     """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner` runs them."""
-    from ..denoise import check_method, default_method
+    from styletrace.denoise import check_method, default_method
     method = check_method(args.denoise or default_method())
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
         raise UsageError(f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation only")
@@ -118,20 +118,20 @@ def cmd_render(args) -> int:
         raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
     if several:  # numbered images, on Ray
         if method == "auto" and not args.quiet:
-            from ..denoise.default import why_not
+            from styletrace.denoise.default import why_not
             say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
         args.denoise = None
-        from ..distributed.command import frames_command
+        from styletrace.distributed.command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     scene = args.scene[0] if args.scene else "cornell-box"
     check_output(args.output, scene)
     params = _parse_set(args.set)
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                  ("--pass-spp", args.pass_spp))
-    from ..denoise.finishers import plan
-    from ..distributed.command import executor_of
-    from ..pipeline.runner import Voice
-    from .command_job import job_of
+    from styletrace.denoise.finishers import plan
+    from styletrace.distributed.command import executor_of
+    from styletrace.frontends.command_job import job_of
+    from styletrace.pipeline.runner import Voice
     status = Status(enabled=not args.quiet)
     resolved = resolve_with_status(job_of(args, params, _parse_defines(args.define), scene=scene), status)
     runner, note = plan(resolved, method, executor_of(args), args.buffer, args.denoise_quality,
@@ -144,10 +144,10 @@ def cmd_render(args) -> int:
 def resolve_with_status(job, status):
     """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's warnings
     as one line each."""
-    from ..jit import backend
+    from styletrace.jit import backend
     backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
-    from ..pipeline.resolve import resolve
-    from ..pipeline.scene import SceneWarning, load_scene
+    from styletrace.pipeline.resolve import resolve
+    from styletrace.pipeline.scene import SceneWarning, load_scene
     with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
         warnings.simplefilter("always", SceneWarning)
         with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
@@ -164,13 +164,13 @@ def choose_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
     (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
     and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise): `pipeline.resolve`'s."""
-    from ..pipeline.resolve import choose_integrator as choose
-    from .command_job import job_of
+    from styletrace.frontends.command_job import job_of
+    from styletrace.pipeline.resolve import choose_integrator as choose
     return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
 
 
 def cmd_gallery(args) -> int:
-    from . import gallery
+    from styletrace.frontends import gallery
 
     opts = gallery.QUICK if args.quick else gallery.Options()
     if args.size:
@@ -257,7 +257,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 
-    from ..lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
+    from styletrace.lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
     r.add_argument("--buffer", default=None, metavar="FILE", help=lookdev.BUFFER_HELP)
     lookdev.add_parsers(sub, parse_set=_parse_set, check_output=check_output)
 
@@ -297,7 +297,7 @@ def add_ray_flags(parser) -> None:
 
 def add_setting_flags(parser) -> None:
     """One flag per integrator property that has one; help and defaults come from the settings table."""
-    from ..config import settings
+    from styletrace.config import settings
     for p in settings.PROPERTIES:
         if not p.flag:
             continue

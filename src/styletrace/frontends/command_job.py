@@ -10,12 +10,12 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from ..pipeline.job import Job
+from styletrace.pipeline.job import Job
 
 
 def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
     """The integrator values the user gave: flags that were used, then `--set` values."""
-    from ..config import settings
+    from styletrace.config import settings
     given = {p.name: getattr(args, p.name, None) for p in settings.PROPERTIES
              if getattr(args, p.name, None) is not None}  # (properties without a flag come by --set)
     given.update(params)
@@ -24,7 +24,7 @@ def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
 
 def job_of(args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None) -> Job:
     """The job of `styletrace render` (`scene`: one of several scene arguments, else `args.scene`)."""
-    from ..config import settings
+    from styletrace.config import settings
     if scene is None:  # `render` takes several scene arguments (frames); a single render the first
         scene = args.scene[0] if isinstance(args.scene, list) and args.scene else args.scene
     return Job(scene=scene or None, defines=dict(defines or {}), width=args.width,

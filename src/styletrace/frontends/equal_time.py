@@ -34,7 +34,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..images import mse
+from styletrace.images import mse
 
 #: camera samples per pixel and seed of every render of the section (module docstring)
 SPP = 1
@@ -108,7 +108,7 @@ def show(inner: Any) -> str:
 
 def check(comparisons: list[Comparison]) -> None:
     """Build every integrator of the section (refused settings raise StyletraceError) before any renders."""
-    from .. import api
+    from styletrace import api
     for c in comparisons:
         for inner in (c.reference, fixed_inner(c, c.counts[0])):
             api.make_integrator(c.style, **{**c.integrator, **c.params, "inner": inner})
@@ -117,7 +117,7 @@ def check(comparisons: list[Comparison]) -> None:
 
 def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tuple[np.ndarray, list[float]]:
     """The image and the seconds of `repeats` renders, after one untimed render that compiles the kernels."""
-    from ..pipeline.execute import render
+    from styletrace.pipeline.execute import render
 
     def once() -> tuple[np.ndarray, float]:
         t = time.perf_counter()
@@ -132,8 +132,8 @@ def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tu
 def compare(c: Comparison, out_dir: str, size: int, repeats: int,
             log: Callable[[str], None] = print) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Render one comparison (module docstring); its gallery.json entry and its three images."""
-    from ..pipeline.execute import render
-    from ..pipeline.scene import load_scene
+    from styletrace.pipeline.execute import render
+    from styletrace.pipeline.scene import load_scene
 
     scene = load_scene(c.scene, size, size)
     t = time.perf_counter()
@@ -199,7 +199,7 @@ def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..images import srgb8, write_bytes_atomically
+    from styletrace.images import srgb8, write_bytes_atomically
     fig, axes = plt.subplots(1, 3, figsize=(9, 4.3))
     for ax, img, (what, numbers) in zip(axes, (images["reference"], images["fixed"], images["method"]), labels(e)):
         ax.imshow(srgb8(img), interpolation="nearest")

@@ -26,9 +26,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
-from . import equal_time
-from .equal_time import Comparison
+from styletrace.frontends import equal_time
+from styletrace.frontends.equal_time import Comparison
+from styletrace.images import mse  # noqa: F401  (the gallery's error measure; also used by its tests)
 
 
 @dataclass
@@ -143,16 +143,14 @@ def _quick(setup: Setup) -> Setup:
 
 
 def write_png(image: np.ndarray, path: str) -> None:
-    from ..images import write_image
+    from styletrace.images import write_image
     write_image(image, path)
 
 
 def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
-    from ..pipeline.execute import (
-        render,  # every image a pipeline Job on the scene loaded once here
-    )
-    from ..pipeline.scene import load_scene
+    from styletrace.pipeline.execute import render
+    from styletrace.pipeline.scene import load_scene
 
     os.makedirs(out_dir, exist_ok=True)
     setups, comparisons = select(only, skip)
@@ -226,7 +224,7 @@ def plot_mse(results: dict[str, Any], path: str) -> None:
     fig.tight_layout()
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
-    from ..images import write_bytes_atomically
+    from styletrace.images import write_bytes_atomically
     write_bytes_atomically(buf.getvalue(), path)
     plt.close(fig)
 
@@ -266,5 +264,5 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
 
 
 def write_text(path: str, text: str) -> None:
-    from ..images import write_bytes_atomically
+    from styletrace.images import write_bytes_atomically
     write_bytes_atomically(text.encode(), path)

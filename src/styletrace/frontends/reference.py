@@ -27,7 +27,7 @@ def _row(*cells) -> str:
 
 
 def integrator_table() -> str:
-    from ..config.settings import PROPERTIES
+    from styletrace.config.settings import PROPERTIES
     rows = [_row("property", "type", "default", "flag", "meaning"), "|---|---|---|---|---|"]
     for p in PROPERTIES:
         default = ("the style's" if p.name == "inner_samples" else "auto") if p.default is None else f"`{p.default}`"
@@ -39,8 +39,8 @@ def integrator_table() -> str:
 
 
 def estimator_table() -> str:
-    from ..config.estimator_registry import kinds
-    from ..styles import get, names
+    from styletrace.config.estimator_registry import kinds
+    from styletrace.styles import get, names
     styles = [get(n)() for n in names()]
     rows = [_row("estimator", "forms of g", "styles", "inner_samples n means", "what it is"), "|---|---|---|---|---|"]
     for k in kinds():
@@ -52,7 +52,7 @@ def estimator_table() -> str:
 
 
 def style_table(name: str) -> str:
-    from ..styles import get
+    from styletrace.styles import get
     cls = get(name)
     if not cls.params:
         return "No parameters.\n"
@@ -82,7 +82,7 @@ def files(root: str) -> list[str]:
 
 
 def main(argv=None) -> int:
-    from ..runtime import init
+    from styletrace.runtime import init
     init()
     args = sys.argv[1:] if argv is None else argv
     check = "--check" in args

@@ -26,7 +26,7 @@ import threading
 import time
 from typing import IO, Iterator
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 #: seconds a phase runs before its line appears
 DELAY = 2.0

@@ -7,7 +7,7 @@ geometric test (`near`): camera distances for the pixel window (reuse.pool.Grid)
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
+from styletrace.gate import dr, mi
 
 
 def accepted(neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str) -> mi.UInt64:

@@ -38,9 +38,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ..gate import dr, mi
-from ..styles.base import projection
-from . import mls
+from styletrace.gate import dr, mi
+from styletrace.kernel import mls
+from styletrace.styles.base import projection
 
 #: film offsets (pixels) of the anchors traced around a query's first-edge coordinate s0
 RING_RADII = (2.0, 6.0, 18.0, 54.0)

@@ -6,9 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Optional
 
-from ..gate import dr, mi
-from .path import NO_HOOKS, Hooks, WalkConfig, advance, first_scattering
-from .vertex import Site, depth_limit, emission, opaque_part, opaque_share
+from styletrace.gate import dr, mi
+from styletrace.kernel.path import NO_HOOKS, Hooks, WalkConfig, advance, first_scattering
+from styletrace.kernel.vertex import Site, depth_limit, emission, opaque_part, opaque_share
 
 
 @dataclass

@@ -24,10 +24,10 @@ emitter's registry id (one gather, whatever the number of emitters).
 """
 from __future__ import annotations
 
-from ..config.choices import EMITTER_DEFAULT as DEFAULT_MODE  # noqa: F401
-from ..config.choices import EMITTER_MODES as MODES
-from ..errors import SettingsError
-from ..gate import dr, mi
+from styletrace.config.choices import EMITTER_DEFAULT as DEFAULT_MODE  # noqa: F401
+from styletrace.config.choices import EMITTER_MODES as MODES
+from styletrace.errors import SettingsError
+from styletrace.gate import dr, mi
 
 #: samples of `sample_ray` per emitter for the power estimate (fixed, so the estimate is deterministic)
 POWER_SAMPLES = 1 << 12

@@ -2,7 +2,7 @@
 pixel's variance, its predicted direct-application bias and its children (docs/adaptive.md)."""
 from __future__ import annotations
 
-from ..gate import dr, mi
+from styletrace.gate import dr, mi
 
 #: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
 AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")

@@ -30,9 +30,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SettingsError
-from ..gate import dr, mi
-from ..jit import no_collection
+from styletrace.errors import SettingsError
+from styletrace.gate import dr, mi
+from styletrace.jit import no_collection
 
 #: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's footprint, not
 #: one point of it (a lane whose children are far brighter than its pixel's b diverges: see the docstring).

@@ -50,23 +50,30 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ..config import settings as S
-from ..config.estimator_registry import firefly_cap, make_estimator
-from ..gate import dr, mi
-from ..scene.graph import SceneGraph
-from ..scene.graph import any_ptr as _any_ptr
-from ..styles.base import Vertex
-from .bounce import bounce
-from .error_aovs import AOV_NAMES, error_aovs
-from .expansion import Expansion
-from .expansion import moments as pass_moments
-from .lane_sampler import LaneSampler
-from .line_hooks import camera_edge, line_problem, walk_lines
-from .line_hooks import lifted as lifted_lines
-from .path import NO_HOOKS, Hooks, Start, first_scattering, past_area_emitters, walk
-from .render_context import RenderContext
-from .vertex import Site, emission, environment
-from .volume import volume_walk
+from styletrace.config import settings as S
+from styletrace.config.estimator_registry import firefly_cap, make_estimator
+from styletrace.gate import dr, mi
+from styletrace.kernel.bounce import bounce
+from styletrace.kernel.error_aovs import AOV_NAMES, error_aovs
+from styletrace.kernel.expansion import Expansion
+from styletrace.kernel.expansion import moments as pass_moments
+from styletrace.kernel.lane_sampler import LaneSampler
+from styletrace.kernel.line_hooks import camera_edge, line_problem, walk_lines
+from styletrace.kernel.line_hooks import lifted as lifted_lines
+from styletrace.kernel.path import (
+    NO_HOOKS,
+    Hooks,
+    Start,
+    first_scattering,
+    past_area_emitters,
+    walk,
+)
+from styletrace.kernel.render_context import RenderContext
+from styletrace.kernel.vertex import Site, emission, environment
+from styletrace.kernel.volume import volume_walk
+from styletrace.scene.graph import SceneGraph
+from styletrace.scene.graph import any_ptr as _any_ptr
+from styletrace.styles.base import Vertex
 
 #: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:
 #: benchmarks/recursion_depth.py, tests/kernel/test_recursion_depth.py)
@@ -270,7 +277,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see each other). It is set
         on the instance only then: a Python `render` on the class, even one calling Mitsuba's, changed how
         a render in progress takes Ctrl-C (Mitsuba's own handler took the signal and the pass ran on)."""
-        from . import reuse
+        from styletrace.kernel import reuse
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         with tracing():
             image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))

@@ -14,7 +14,7 @@ struct, so it travels in loop state like Mitsuba's own samplers.
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
+from styletrace.gate import dr, mi
 
 
 class LaneSampler:

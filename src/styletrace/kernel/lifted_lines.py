@@ -29,10 +29,10 @@ and L is traced only where none fired (Eq. 34). West 2021's cone (kernel/lines.p
 """
 from __future__ import annotations
 
-from ..config.line_types import LineType
-from ..errors import SceneError
-from ..gate import dr, mi
-from .lines import object_shapes, on_shapes
+from styletrace.config.line_types import LineType
+from styletrace.errors import SceneError
+from styletrace.gate import dr, mi
+from styletrace.kernel.lines import object_shapes, on_shapes
 
 
 def chart(n: mi.Vector3f, v: mi.Vector3f):
@@ -146,7 +146,7 @@ class Lifted:
     auxiliary paths of a depth-of-field render leave from the sample's own lens point."""
 
     def __init__(self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False, objects=()):
-        from .anchors import Tone
+        from styletrace.kernel.anchors import Tone
         self.scene = scene
         self.tone = Tone(scene)          # film conversion and projection of the first sensor
         self.types = sorted(types, key=lambda t: t.priority)

@@ -17,9 +17,9 @@ camera ray, which it calls for the lanes where no line fired.
 """
 from __future__ import annotations
 
-from ..config import settings as S
-from ..gate import dr, mi
-from .lifted_lines import compose_sample
+from styletrace.config import settings as S
+from styletrace.gate import dr, mi
+from styletrace.kernel.lifted_lines import compose_sample
 
 
 def line_problem(settings: S.Settings, media: bool) -> str | None:

@@ -47,9 +47,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..config.choices import DEFAULT_TESTS, MODES, TESTS, LineSettings  # noqa: F401 (the kernel's names for them)
-from ..errors import SceneError
-from ..gate import dr, mi
+from styletrace.config.choices import DEFAULT_TESTS, MODES, TESTS, LineSettings  # noqa: F401 (the kernel's names for them)
+from styletrace.errors import SceneError
+from styletrace.gate import dr, mi
 
 #: at most this many `null` surfaces passed along one stencil ray (nested medium boundaries)
 MAX_NULL_PASSES = 16

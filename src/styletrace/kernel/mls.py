@@ -24,7 +24,7 @@ small and fixed), so no gather and no loop is traced.
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
+from styletrace.gate import dr, mi
 
 #: method codes, as the `coordinate` style and the docs report them
 CLOSED_PIXEL, CLOSED_DELTA, MLS, AFFINE, NEAREST, FIRST = 0, 1, 2, 3, 4, 5

@@ -45,10 +45,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable, Optional
 
-from ..gate import dr, mi
-from .anchors import MAX_BITS, ToneState, combine, shape_id
-from .emitter_sampler import EmitterSampler
-from .vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share
+from styletrace.gate import dr, mi
+from styletrace.kernel.anchors import MAX_BITS, ToneState, combine, shape_id
+from styletrace.kernel.emitter_sampler import EmitterSampler
+from styletrace.kernel.vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share
 
 
 @dataclass(frozen=True)

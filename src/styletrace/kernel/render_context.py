@@ -17,15 +17,15 @@ context.
 """
 from __future__ import annotations
 
-from ..errors import SceneError
-from ..gate import mi
-from ..scene.graph import SceneGraph
-from ..styles.base import camera_forward
-from .anchors import Tone
-from .emitter_sampler import EmitterSampler
-from .lifted_lines import Lifted
-from .lines import Lines
-from .path import WalkConfig
+from styletrace.errors import SceneError
+from styletrace.gate import mi
+from styletrace.kernel.anchors import Tone
+from styletrace.kernel.emitter_sampler import EmitterSampler
+from styletrace.kernel.lifted_lines import Lifted
+from styletrace.kernel.lines import Lines
+from styletrace.kernel.path import WalkConfig
+from styletrace.scene.graph import SceneGraph
+from styletrace.styles.base import camera_forward
 
 
 class RenderContext:

@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import weakref
 
-from ..gate import mi
-from ..scene.defaults import resolve
-from .integrator import StylizedIntegrator
+from styletrace.gate import mi
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.scene.defaults import resolve
 
 
 def scene_key(scene: mi.Scene) -> tuple:

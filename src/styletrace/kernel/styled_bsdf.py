@@ -17,9 +17,9 @@ the objects physically based.
 """
 from __future__ import annotations
 
-from ..config.settings import parse_slot
-from ..errors import SettingsError
-from ..gate import mi
+from styletrace.config.settings import parse_slot
+from styletrace.errors import SettingsError
+from styletrace.gate import mi
 
 
 class StyledBSDF(mi.BSDF):

@@ -7,7 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..gate import dr, mi
+from styletrace.gate import dr, mi
 
 
 @dataclass

@@ -34,11 +34,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Optional
 
-from ..gate import dr, mi
-from .anchors import ToneState, combine
-from .lines import LineState
-from .path import NO_HOOKS, Hooks, Start, Walk, WalkConfig, advance, finished, halt_at, mis_emission
-from .vertex import depth_limit, mis_power, opaque_part, opaque_share
+from styletrace.gate import dr, mi
+from styletrace.kernel.anchors import ToneState, combine
+from styletrace.kernel.lines import LineState
+from styletrace.kernel.path import (
+    NO_HOOKS,
+    Hooks,
+    Start,
+    Walk,
+    WalkConfig,
+    advance,
+    finished,
+    halt_at,
+    mis_emission,
+)
+from styletrace.kernel.vertex import depth_limit, mis_power, opaque_part, opaque_share
 
 
 def channel_of(c: mi.Spectrum, channel: mi.UInt32) -> mi.Float:

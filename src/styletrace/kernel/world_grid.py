@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gate import dr, mi
-from .acceptance import accepted
+from styletrace.gate import dr, mi
+from styletrace.kernel.acceptance import accepted
 
 #: bits per axis in a packed cell key (cells per axis are bounded by settings.MIN_REUSE_H)
 AXIS_BITS = 21

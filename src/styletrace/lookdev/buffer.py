@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UsageError
-from ..images import creation_mode, destination, unwritable_kind
+from styletrace.errors import UsageError
+from styletrace.images import creation_mode, destination, unwritable_kind
 
 FORMAT = "styletrace-buffer"
 VERSION = 3  # 3: filters other than a box; 2: "sequence" buffers; versions 1 and 2 still read
@@ -224,7 +224,7 @@ def check_buffer_path(path: str) -> None:
     """A one-line UsageError before the render if the buffer could not be written to `path` (an .npz)."""
     if not path.lower().endswith(".npz"):
         raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
-    from ..images import check_target
+    from styletrace.images import check_target
     check_target(path)  # before the render: the buffer is written after it
 
 

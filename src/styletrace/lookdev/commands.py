@@ -14,7 +14,7 @@ from __future__ import annotations
 import sys
 from functools import partial
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 BUFFER_HELP = (
     "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
@@ -28,9 +28,9 @@ BUFFER_HELP = (
 def cmd_restyle(args, parse_set, check_output) -> int:
     check_output(args.output)
     params = parse_set(args.set)
-    from ..images import write_image
-    from .buffer import load_buffer
-    from .restyle import restyle
+    from styletrace.images import write_image
+    from styletrace.lookdev.buffer import load_buffer
+    from styletrace.lookdev.restyle import restyle
 
     img = restyle(load_buffer(args.buffer), style=args.style, estimator=args.estimator, **params)
     write_atomically(img, args.output, write_image)
@@ -49,10 +49,10 @@ def cmd_fit(args, parse_set, check_output) -> int:
         check_output(args.output)
     initial = parse_set(args.set)
     fixed = tuple(k.strip() for k in args.fix.split(",") if k.strip()) if args.fix else ()
-    from ..images import write_image
-    from ..styles import get
-    from .buffer import load_buffer
-    from .fit import fit
+    from styletrace.images import write_image
+    from styletrace.lookdev.buffer import load_buffer
+    from styletrace.lookdev.fit import fit
+    from styletrace.styles import get
 
     buf = load_buffer(args.buffer)
     style = args.style or buf.header["slots"][0]["style"]
@@ -82,9 +82,9 @@ def cmd_preview(args, parse_set) -> int:
     params = parse_set(args.set)
     if not 0 <= args.port < 65536:
         raise UsageError(f"bad value {args.port} for --port: expected 0..65535")
-    from ..pipeline.job import check_counts
+    from styletrace.pipeline.job import check_counts
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp))
-    from ..preview.server import serve
+    from styletrace.preview.server import serve
     return serve(args.scene, style=args.style, inner=args.inner, spp=args.spp, width=args.width,
                  height=args.height, port=args.port, params=params, open_browser=False)
 

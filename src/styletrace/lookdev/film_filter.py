@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import SceneError
-from ..gate import dr, mi
+from styletrace.errors import SceneError
+from styletrace.gate import dr, mi
 
 BOX = {"type": "box"}
 #: Mitsuba class -> (plugin name, parameters read from its radius or description)

@@ -16,13 +16,20 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..config import settings as S
-from ..errors import BackendError, UsageError
-from ..gate import dr, mi
-from ..styles import create
-from ..styles.base import Style, brightness
-from ..styles.gradient import Gradient
-from .restyle import accumulate, as_buffer, changed_owner, prepare, sample_values, slots_for
+from styletrace.config import settings as S
+from styletrace.errors import BackendError, UsageError
+from styletrace.gate import dr, mi
+from styletrace.lookdev.restyle import (
+    accumulate,
+    as_buffer,
+    changed_owner,
+    prepare,
+    sample_values,
+    slots_for,
+)
+from styletrace.styles import create
+from styletrace.styles.base import Style, brightness
+from styletrace.styles.gradient import Gradient
 
 FITTABLE = ("float", "floats", "color", "gradient")
 #: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in
@@ -256,7 +263,7 @@ def fit(
     params = {p.name: _plain(p.kind, np.asarray(opt[p.name], dtype=np.float64), base.values[p.name]) for p in free}
     fitted = create(base.name, **{**{k: v for k, v in base.values.items() if k not in params}, **params})
     values = {p.name: fitted.values[p.name] for p in free}
-    from .restyle import restyle
+    from styletrace.lookdev.restyle import restyle
     image = restyle(buf, style=base.name, **{**_given(base), **values})
     loss = float(np.mean(np.square(image.astype(np.float64) - np.asarray(goal, dtype=np.float64).reshape(image.shape))))
     return FitResult(values, loss, done, seconds, history, image)

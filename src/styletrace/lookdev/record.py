@@ -15,21 +15,16 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ..assets.scenes import DEFAULT
-from ..config import settings as S
-from ..config.estimator_registry import child_mean, firefly_cap, make_estimator
-from ..errors import SceneError, SettingsError, UsageError
-from ..gate import dr, mi
-from ..images import save_safely
-from ..kernel.integrator import StylizedIntegrator
-from ..kernel.vertex import emission
-from ..pipeline import passes as pass_loop
-from ..pipeline.runner import Finisher, Written
-from ..pipeline.scene import film_format
-from ..scene.defaults import Pilot, unique_styled
-from ..styles.base import Vertex, camera_forward
-from . import film_filter
-from .buffer import (
+from styletrace.assets.scenes import DEFAULT
+from styletrace.config import settings as S
+from styletrace.config.estimator_registry import child_mean, firefly_cap, make_estimator
+from styletrace.errors import SceneError, SettingsError, UsageError
+from styletrace.gate import dr, mi
+from styletrace.images import save_safely
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.kernel.vertex import emission
+from styletrace.lookdev import film_filter
+from styletrace.lookdev.buffer import (
     FORMAT,
     MAX_SAMPLES,
     MAX_SEQUENCE_SAMPLES,
@@ -38,8 +33,13 @@ from .buffer import (
     Buffer,
     bytes_per_sample,
 )
-from .restyle import RESTYLABLE_ESTIMATORS, finish, slot_record
-from .sequence import Recorder, budget
+from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS, finish, slot_record
+from styletrace.lookdev.sequence import Recorder, budget
+from styletrace.pipeline import passes as pass_loop
+from styletrace.pipeline.runner import Finisher, Written
+from styletrace.pipeline.scene import film_format
+from styletrace.scene.defaults import Pilot, unique_styled
+from styletrace.styles.base import Vertex, camera_forward
 
 
 def check_recordable(settings: S.Settings, slots) -> None:
@@ -432,10 +432,10 @@ def render_buffer(
     The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values
     pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments
     and pass split)."""
-    from ..pipeline.execute import InProcess
-    from ..pipeline.job import python_job
-    from ..pipeline.resolve import resolve
-    from ..pipeline.runner import Runner
+    from styletrace.pipeline.execute import InProcess
+    from styletrace.pipeline.job import python_job
+    from styletrace.pipeline.resolve import resolve
+    from styletrace.pipeline.runner import Runner
     r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, **params))
     recorded = Recorded(label=scene_label(scene), max_samples=max_samples)
     return Runner(r, InProcess(), recorded).result(callback)
@@ -456,7 +456,7 @@ class Recorded(Finisher):
         check_recordable(resolved.integrator.settings, [])  # before the runner's generic checks
         self.label = self.label or scene_label(resolved.job.scene)
         if self.buffer is not None:
-            from .buffer import check_buffer_path
+            from styletrace.lookdev.buffer import check_buffer_path
             check_buffer_path(self.buffer)
 
     def source(self, resolved, executor, lock) -> Iterator[pass_loop.Progress]:

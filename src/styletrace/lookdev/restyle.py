@@ -18,19 +18,19 @@ from typing import Any
 
 import numpy as np
 
-from ..config import settings as S
-from ..config.estimator_registry import applicable
-from ..errors import UsageError
-from ..estimators import apply_linear
-from ..estimators.arrays import const_like
-from ..gate import dr, mi
-from ..scene.defaults import Facts, auto_values
-from ..styles import get
-from ..styles.base import Vertex
-from ..styles.gradient import Gradient
-from . import film_filter
-from .buffer import PILOT, SPREAD, Buffer, load_buffer
-from .sequence import device_arrays, replay
+from styletrace.config import settings as S
+from styletrace.config.estimator_registry import applicable
+from styletrace.errors import UsageError
+from styletrace.estimators import apply_linear
+from styletrace.estimators.arrays import const_like
+from styletrace.gate import dr, mi
+from styletrace.lookdev import film_filter
+from styletrace.lookdev.buffer import PILOT, SPREAD, Buffer, load_buffer
+from styletrace.lookdev.sequence import device_arrays, replay
+from styletrace.scene.defaults import Facts, auto_values
+from styletrace.styles import get
+from styletrace.styles.base import Vertex
+from styletrace.styles.gradient import Gradient
 
 #: estimators whose value is a function of the children's mean alone
 RESTYLABLE_ESTIMATORS = ("direct", "affine")

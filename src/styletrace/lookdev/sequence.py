@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..config.estimator_registry import SERIES_MAX_TERMS, make_estimator
-from ..gate import dr, mi
+from styletrace.config.estimator_registry import SERIES_MAX_TERMS, make_estimator
+from styletrace.gate import dr, mi
 
 #: most children (on average over a pass) and uniforms (each) per camera sample; bounds the pass's
 #: scratch (28 bytes per place) and the stored sequence (13 bytes per child, 5 per uniform)

@@ -23,7 +23,7 @@ import os
 import re
 from typing import Any, Mapping
 
-from ..gate import mi
+from styletrace.gate import mi
 
 #: integrator properties that `stylized` shares with Mitsuba's path tracers
 SHARED = ("max_depth", "rr_depth", "hide_emitters")
@@ -121,7 +121,7 @@ def loaded(integrator: mi.Integrator) -> dict[str, Any]:
 def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator; {} for none or a
     `stylized` one. `source`/`defines`: what the scene was loaded from, to read its declaration."""
-    from ..kernel.integrator import StylizedIntegrator
+    from styletrace.kernel.integrator import StylizedIntegrator
     own = scene.integrator()
     if own is None or isinstance(own, StylizedIntegrator):
         return {}

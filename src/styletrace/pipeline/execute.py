@@ -16,14 +16,14 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from .job import python_job
-from .passes import Progress, passes
-from .resolve import Resolved, resolve
+from styletrace.pipeline.job import python_job
+from styletrace.pipeline.passes import Progress, passes
+from styletrace.pipeline.resolve import Resolved, resolve
 
 
 def ray_job(resolved: Resolved):
     """What every Ray task of this render receives (`distributed.tasks.Job`)."""
-    from ..distributed.run import job_for
+    from styletrace.distributed.run import job_for
     job = resolved.job
     load = {"defines": dict(job.defines)} if job.defines else {}
     return job_for(job.scene, resolved.integrator, job.width, job.height, **load)
@@ -49,7 +49,7 @@ class OnRay:
         self.cluster, self.options = cluster or "local", options
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()):
-        from ..distributed.run import Render
+        from styletrace.distributed.run import Render
         job = resolved.job
         width, height = resolved.size
         return Render(ray_job(resolved), resolved.spp, job.seed, width, height, self.cluster, resolved.lanes,
@@ -67,13 +67,13 @@ def execute(resolved: Resolved, cluster: str | None = None, lock: Any = contextl
             **ray_options: Any) -> Iterator[Progress]:
     """The render's passes through a plain `runner.Runner` (its checks first): in process, or on Ray with
     `cluster` (`ray_options` as `OnRay`'s)."""
-    from .runner import Runner
+    from styletrace.pipeline.runner import Runner
     return Runner(resolved, executor_for(cluster, **ray_options)).passes(lock)
 
 
 def run(resolved: Resolved, cluster: str | None = None, callback: Callable[[Progress], None] | None = None):
     """The final image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True."""
-    from .runner import Runner
+    from styletrace.pipeline.runner import Runner
     return Runner(resolved, executor_for(cluster)).result(callback)
 
 

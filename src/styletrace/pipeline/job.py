@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
-from ..errors import UsageError
+from styletrace.errors import UsageError
 
 #: the style of a scene without a `stylized` integrator when the caller names none (Python: physically based)
 PYTHON_STYLE = "identity"

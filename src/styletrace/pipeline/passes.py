@@ -17,14 +17,14 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ..arguments import check_passes_args
-from ..errors import UsageError
-from ..gate import mi
-from ..images import PIXEL_FORMATS
-from ..jit import no_collection
-from ..scene.defaults import Pilot
-from ..scene.defaults import resolve as resolve_defaults
-from .scene import film_format
+from styletrace.arguments import check_passes_args
+from styletrace.errors import UsageError
+from styletrace.gate import mi
+from styletrace.images import PIXEL_FORMATS
+from styletrace.jit import no_collection
+from styletrace.pipeline.scene import film_format
+from styletrace.scene.defaults import Pilot
+from styletrace.scene.defaults import resolve as resolve_defaults
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
 LANES_PER_PASS = 1 << 20

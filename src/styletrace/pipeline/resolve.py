@@ -15,17 +15,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from ..arguments import check_render_args
-from ..config import settings as S
-from ..gate import mi
-from ..kernel.integrator import StylizedIntegrator
-from ..runtime import init
-from ..scene.defaults import Pilot
-from ..sizing import lanes_per_pass
-from .carried import carried_settings, nested_stylized
-from .job import Job
-from .passes import pin
-from .scene import load_scene, scene_spp
+from styletrace.arguments import check_render_args
+from styletrace.config import settings as S
+from styletrace.gate import mi
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.pipeline.carried import carried_settings, nested_stylized
+from styletrace.pipeline.job import Job
+from styletrace.pipeline.passes import pin
+from styletrace.pipeline.scene import load_scene, scene_spp
+from styletrace.runtime import init
+from styletrace.scene.defaults import Pilot
+from styletrace.sizing import lanes_per_pass
 
 
 @dataclass(frozen=True)

@@ -23,12 +23,12 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from ..errors import UsageError
-from ..images import check_format, nonfinite_pixels, save_safely
-from .passes import Progress, check_memory, pass_count
-from .resolve import Resolved
-from .scene import film_format, first_line
-from .signals import Passes, StopSignals, say
+from styletrace.errors import UsageError
+from styletrace.images import check_format, nonfinite_pixels, save_safely
+from styletrace.pipeline.passes import Progress, check_memory, pass_count
+from styletrace.pipeline.resolve import Resolved
+from styletrace.pipeline.scene import film_format, first_line
+from styletrace.pipeline.signals import Passes, StopSignals, say
 
 
 @dataclass
@@ -219,7 +219,7 @@ class Runner:
         if bad:
             fix = "NaN as 0 and +inf as 1 in the PNG" if done.path.lower().endswith(".png") else "kept as they are"
             say(f"styletrace: warning: {bad} pixel(s) are not finite (NaN or inf): {fix}")
-        from ..wild import warning
+        from styletrace.wild import warning
         wild = warning(done.image, self.resolved.integrator.settings)
         if wild:
             say(f"styletrace: warning: {wild}")

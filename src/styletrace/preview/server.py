@@ -18,17 +18,15 @@ import tempfile
 import time
 from typing import Any
 
-from ..errors import StyletraceError, UsageError
+from styletrace.errors import StyletraceError, UsageError
 
 PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 
 def styles_table() -> list[dict[str, Any]]:
-    from ..config.estimator_registry import applicable
-    from ..lookdev.restyle import (
-        RESTYLABLE_ESTIMATORS,  # the preview's buffer keeps the children's mean
-    )
-    from ..styles import get, names
+    from styletrace.config.estimator_registry import applicable
+    from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS
+    from styletrace.styles import get, names
     out = []
     for name in names():
         cls = get(name)
@@ -47,7 +45,7 @@ def styles_table() -> list[dict[str, Any]]:
 
 def encode(image, fmt: str) -> bytes:
     """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by `images.write_image`."""
-    from ..images import write_image
+    from styletrace.images import write_image
     fd, tmp = tempfile.mkstemp(suffix="." + fmt)
     os.close(fd)
     try:
@@ -143,8 +141,8 @@ def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: 
     """Run the preview server until Ctrl-C; prints the page's URL once it listens."""
     import uvicorn
 
-    from ..config.settings import parse_slot
-    from .session import Session
+    from styletrace.config.settings import parse_slot
+    from styletrace.preview.session import Session
     slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
     if slot.style.per_sample:
         raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "

@@ -19,17 +19,17 @@ from typing import Any
 
 import numpy as np
 
-from ..denoise.draft import QUALITY as DRAFT_QUALITY
-from ..denoise.draft import available as denoise_available
-from ..denoise.draft import draft as denoise_draft
-from ..denoise.expectation import attach
-from ..errors import UsageError
-from ..lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample
-from ..lookdev.record import record, scene_label
-from ..lookdev.restyle import restyle
-from ..pipeline.job import Job
-from ..pipeline.resolve import resolve
-from ..pipeline.scene import first_line
+from styletrace.denoise.draft import QUALITY as DRAFT_QUALITY
+from styletrace.denoise.draft import available as denoise_available
+from styletrace.denoise.draft import draft as denoise_draft
+from styletrace.denoise.expectation import attach
+from styletrace.errors import UsageError
+from styletrace.lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample
+from styletrace.lookdev.record import record, scene_label
+from styletrace.lookdev.restyle import restyle
+from styletrace.pipeline.job import Job
+from styletrace.pipeline.resolve import resolve
+from styletrace.pipeline.scene import first_line
 
 #: OIDN's quality on the full passes (the draft's is `denoise.draft.QUALITY`)
 FULL_QUALITY = "high"
@@ -66,7 +66,7 @@ class Session:
                              f"camera samples, over the preview's cap of {max_samples}; lower --spp or the size")
         self.integrator = resolved.integrator
         # every front end's default (`denoise.default`): the full passes' expectation denoised where it applies
-        from ..denoise.default import method_for
+        from styletrace.denoise.default import method_for
         method, self.note = method_for(self.scene, self.integrator, denoise)
         if denoise == "image":
             raise UsageError("the preview restyles the expectation: denoise 'image' would hide what the styles see; "

@@ -17,17 +17,17 @@ from typing import Any
 
 import numpy as np
 
-from ..config import settings as S
-from ..errors import StyleError
-from ..gate import dr, mi
-from ..jit import no_collection
-from ..kernel.emitter_sampler import EmitterSampler
-from ..kernel.integrator import StylizedIntegrator
-from ..kernel.path import Start, WalkConfig, exitant
-from ..kernel.styled_bsdf import StyledBSDF
-from ..kernel.volume import volume_walk
-from ..styles.base import Camera, Style, Vertex, camera, lanes
-from .graph import SceneGraph
+from styletrace.config import settings as S
+from styletrace.errors import StyleError
+from styletrace.gate import dr, mi
+from styletrace.jit import no_collection
+from styletrace.kernel.emitter_sampler import EmitterSampler
+from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.kernel.path import Start, WalkConfig, exitant
+from styletrace.kernel.styled_bsdf import StyledBSDF
+from styletrace.kernel.volume import volume_walk
+from styletrace.scene.graph import SceneGraph
+from styletrace.styles.base import Camera, Style, Vertex, camera, lanes
 
 #: the settings the pilot's trace reads (`Pilot._trace`)
 PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling")

@@ -19,10 +19,10 @@ emitter on a see-through surface (path.first_scattering says why).
 """
 from __future__ import annotations
 
-from ..errors import SceneError
-from ..gate import mi
-from ..kernel.lines import pure_null
-from ..kernel.styled_bsdf import StyledBSDF
+from styletrace.errors import SceneError
+from styletrace.gate import mi
+from styletrace.kernel.lines import pure_null
+from styletrace.kernel.styled_bsdf import StyledBSDF
 
 
 class _Collect(mi.TraversalCallback):

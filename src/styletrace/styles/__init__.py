@@ -6,27 +6,27 @@ arrays (see `base.Style`).
 """
 
 
-from ..errors import StyleError
-from . import (  # noqa: F401
-               acp,
-               cel,
-               color_map,
-               contrast,
-               coordinate,
-               exp_tone,
-               gamma,
-               gooch,
-               halftone,
-               hatching,
-               identity,  # (registration side effects)
-               reinhard,
-               saturation,
-               sepia,
-               tie_dye,
-               xtoon,
+from styletrace.errors import StyleError
+from styletrace.styles import (
+    acp,
+    cel,
+    color_map,
+    contrast,
+    coordinate,
+    exp_tone,
+    gamma,
+    gooch,
+    halftone,
+    hatching,
+    identity,
+    reinhard,
+    saturation,
+    sepia,
+    tie_dye,
+    xtoon,
 )
-from .base import Style, Vertex, brightness
-from .params import Param
-from .registry import create, get, names
+from styletrace.styles.base import Style, Vertex, brightness
+from styletrace.styles.params import Param
+from styletrace.styles.registry import create, get, names
 
 __all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "create", "get", "names"]

@@ -16,10 +16,10 @@ rendering equation by design. Rationale: docs/design/acp_baseline.md.
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
-from .base import Vertex, brightness
-from .color_map import ColorMap
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Vertex, brightness
+from styletrace.styles.color_map import ColorMap
+from styletrace.styles.registry import register
 
 
 @register

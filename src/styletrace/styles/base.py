@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
-from ..gate import dr, mi
-from .params import Param, StyleError
+from styletrace.gate import dr, mi
+from styletrace.styles.params import Param, StyleError
 
 
 def brightness(I: mi.Color3f) -> mi.Float:
@@ -122,7 +122,7 @@ class Style:
         controller's smooth rule and the bias AOV (Eq. 21) use it. Default: 0 for an affine g (its form says
         so), else the central second difference over +-h, h the children's standard error, which is g''(I)
         for a smooth g and |jump of g'|/h at a kink (colour-map stops, clamps): the Jensen gap that spread sees."""
-        from .forms import AffineForm, CompositeForm
+        from styletrace.styles.forms import AffineForm, CompositeForm
         form = self.form()
         if isinstance(form, AffineForm) or (isinstance(form, CompositeForm) and form.affine is not None):
             return mi.Color3f(0.0)

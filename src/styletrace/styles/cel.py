@@ -14,10 +14,10 @@ Rationale of the auto rules: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
-from .base import Param, Style, StyleError, Vertex, brightness, increasing, rounded
-from .registry import register
-from .tone import band_levels, luminance_of
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Style, StyleError, Vertex, brightness, increasing, rounded
+from styletrace.styles.registry import register
+from styletrace.styles.tone import band_levels, luminance_of
 
 #: the lightness range of the levels of an unresolved cel (evenly spaced over the bands)
 FALLBACK_LSTAR = (30.0, 85.0)

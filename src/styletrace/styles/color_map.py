@@ -16,10 +16,10 @@ what an unresolved style, rendered by calling mi.render directly, does).
 """
 from __future__ import annotations
 
-from ..gate import mi
-from .base import Param, Style, StyleError, Vertex, brightness, increasing
-from .gradient import Gradient
-from .registry import register
+from styletrace.gate import mi
+from styletrace.styles.base import Param, Style, StyleError, Vertex, brightness, increasing
+from styletrace.styles.gradient import Gradient
+from styletrace.styles.registry import register
 
 
 @register

@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import StyleError
-from .base import Style, Vertex
-from .forms import AffineForm, CompositeForm
+from styletrace.errors import StyleError
+from styletrace.styles.base import Style, Vertex
+from styletrace.styles.forms import AffineForm, CompositeForm
 
 SEPARATOR = "+"
 

@@ -13,10 +13,10 @@ Parameters
 """
 from __future__ import annotations
 
-from ..gate import mi
-from .base import Param, Style, Vertex, auto_exposure, exposure_param
-from .forms import AffineForm
-from .registry import register
+from styletrace.gate import mi
+from styletrace.styles.base import Param, Style, Vertex, auto_exposure, exposure_param
+from styletrace.styles.forms import AffineForm
+from styletrace.styles.registry import register
 
 #: where the auto exposure puts the scene's median brightness: the default pivot
 MID = 0.5

@@ -12,9 +12,9 @@ Without a coordinate (a renderer that computes none) s is the projection of the 
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
-from .base import Projection, Style, Vertex, projection
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Projection, Style, Vertex, projection
+from styletrace.styles.registry import register
 
 
 @register

@@ -16,10 +16,10 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from ..gate import dr, mi
-from .base import EXPOSURE_KEY, Style, Vertex, auto_exposure, exposure_param
-from .forms import SeriesForm
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import EXPOSURE_KEY, Style, Vertex, auto_exposure, exposure_param
+from styletrace.styles.forms import SeriesForm
+from styletrace.styles.registry import register
 
 #: Largest exposure k: e^-k must be a normal float32 (k < -ln(1.18e-38) = 87.3).
 MAX_EXPOSURE = 87.0
@@ -57,5 +57,5 @@ class ExpTone(Style):
         return 1.0 - dr.exp(-self.k * I)
 
     def form(self):
-        from ..estimators import exp_series
+        from styletrace.estimators import exp_series
         return SeriesForm(exp_series(math.exp(-self.k)), scale=-1.0, offset=1.0, values=(0.0, 1.0))

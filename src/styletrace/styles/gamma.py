@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import math
 
-from ..gate import dr, mi
-from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
-from .forms import SeriesForm
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
+from styletrace.styles.forms import SeriesForm
+from styletrace.styles.registry import register
 
 #: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR)
 #: (exposed radiance).
@@ -64,7 +64,7 @@ class Gamma(Style):
         return dr.power(dr.maximum(I * self.scale, 0.0), 1.0 / self.gamma)
 
     def form(self):
-        from ..estimators import gamma_series
+        from styletrace.estimators import gamma_series
         # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the
         # 1.5x
         # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured

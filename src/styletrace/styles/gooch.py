@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import math
 
-from ..gate import dr, mi
-from .base import Param, Style, Vertex, camera, light_from_camera
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Style, Vertex, camera, light_from_camera
+from styletrace.styles.registry import register
 
 
 def unit(v) -> tuple[float, float, float]:

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import StyleError
-from ..gate import dr, mi
+from styletrace.errors import StyleError
+from styletrace.gate import dr, mi
 
 PRESETS = {
     # dark blue -> terracotta -> warm sand: reads well on the built-in scenes' brightness range

@@ -22,11 +22,11 @@ from __future__ import annotations
 
 import math
 
-from ..gate import dr, mi
-from .base import Param, Projection, Style, Vertex, brightness, projection
-from .hatching import BrightnessRange, coverage, tone_params
-from .registry import register
-from .tone import tone_inverse
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Projection, Style, Vertex, brightness, projection
+from styletrace.styles.hatching import BrightnessRange, coverage, tone_params
+from styletrace.styles.registry import register
+from styletrace.styles.tone import tone_inverse
 
 
 def dot_radius(u: mi.Float, r_max: float, u_min: float = 0.05, u_max: float = 0.9) -> mi.Float:

@@ -32,8 +32,8 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-from ..gate import dr, mi
-from .base import (
+from styletrace.gate import dr, mi
+from styletrace.styles.base import (
     Param,
     Projection,
     Style,
@@ -45,8 +45,8 @@ from .base import (
     increasing,
     projection,
 )
-from .registry import register
-from .tone import tone_inverse, tone_knots, tone_of
+from styletrace.styles.registry import register
+from styletrace.styles.tone import tone_inverse, tone_knots, tone_of
 
 Vec = tuple[float, float, float]
 

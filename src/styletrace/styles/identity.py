@@ -5,10 +5,10 @@ With it, the `stylized` integrator converges to Mitsuba's `path` integrator (a t
 """
 from __future__ import annotations
 
-from ..gate import mi
-from .base import Style, Vertex
-from .forms import AffineForm
-from .registry import register
+from styletrace.gate import mi
+from styletrace.styles.base import Style, Vertex
+from styletrace.styles.forms import AffineForm
+from styletrace.styles.registry import register
 
 
 @register

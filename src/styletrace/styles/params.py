@@ -16,9 +16,9 @@ import math
 from dataclasses import dataclass
 from typing import Any, ClassVar, Sequence
 
-from ..declaration import COMMON_KINDS, Declaration
-from ..errors import StyleError
-from .gradient import Gradient
+from styletrace.declaration import COMMON_KINDS, Declaration
+from styletrace.errors import StyleError
+from styletrace.styles.gradient import Gradient
 
 #: Default bound on the magnitude of every real parameter value (see the module's reference block).
 LIMIT = 1e6

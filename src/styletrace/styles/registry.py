@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from .base import Style
-from .params import StyleError
+from styletrace.styles.base import Style
+from styletrace.styles.params import StyleError
 
 _STYLES: dict[str, type[Style]] = {}
 _COMPOSITES: dict[str, type[Style]] = {}  # made on first use, one class per spelling
@@ -27,7 +27,7 @@ def get(name: str) -> type[Style]:
         return _STYLES[name]
     except KeyError:
         pass
-    from .compose import composite_class, is_composite
+    from styletrace.styles.compose import composite_class, is_composite
     if is_composite(name):
         if name not in _COMPOSITES:
             _COMPOSITES[name] = composite_class(name, get)

@@ -14,10 +14,10 @@ w + s X are >= w > 0, so the expansion never straddles 0.
 """
 from __future__ import annotations
 
-from ..gate import mi
-from .base import Param, Style, Vertex, auto_exposure, exposure_param
-from .forms import SeriesForm
-from .registry import register
+from styletrace.gate import mi
+from styletrace.styles.base import Param, Style, Vertex, auto_exposure, exposure_param
+from styletrace.styles.forms import SeriesForm
+from styletrace.styles.registry import register
 
 #: Largest w: the unbiased estimators expand in float32 samples w + X, which resolve X only to w
 #: 2^-24 (6e-5 at w = 1e3); at w = 3e5 the series estimator returned NaN (measured on the Cornell
@@ -55,7 +55,7 @@ class Reinhard(Style):
         return x / (self.white + x)
 
     def form(self):
-        from ..estimators import reciprocal_series
+        from styletrace.estimators import reciprocal_series
         # samples of w + s X are >= w, so a pilot b >= w keeps the expansion on the positive side
         return SeriesForm(
             reciprocal_series(self.white),

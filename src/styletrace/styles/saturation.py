@@ -11,9 +11,9 @@ docs/design/saturation_normalisation.md.
 """
 from __future__ import annotations
 
-from ..gate import dr, mi
-from .base import Param, Style, Vertex, brightness
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Style, Vertex, brightness
+from styletrace.styles.registry import register
 
 
 @register

@@ -13,11 +13,11 @@ with contrast). A gradient with more stops would be piecewise linear, no longer 
 """
 from __future__ import annotations
 
-from ..gate import mi
-from .base import Param, Style, StyleError, Vertex, brightness
-from .forms import AffineForm
-from .gradient import Gradient
-from .registry import register
+from styletrace.gate import mi
+from styletrace.styles.base import Param, Style, StyleError, Vertex, brightness
+from styletrace.styles.forms import AffineForm
+from styletrace.styles.gradient import Gradient
+from styletrace.styles.registry import register
 
 DEFAULT = "0:#000000;1:#c4a27a"
 

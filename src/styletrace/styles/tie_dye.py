@@ -18,10 +18,10 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-from ..gate import dr, mi
-from .base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
-from .forms import PolynomialForm
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
+from styletrace.styles.forms import PolynomialForm
+from styletrace.styles.registry import register
 
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20
@@ -87,7 +87,7 @@ class TieDye(Style):
         return (self.domain_min, self.domain_max)
 
     def form(self):
-        from ..estimators import chebyshev_fit
+        from styletrace.estimators import chebyshev_fit
         lo, hi = self.domain()
         # the paper's Fig. 11 setup: a degree-20 Chebyshev fit per channel on the clamp interval
         # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the

@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import math
 
-from ..gate import dr, mi
-from .base import Param, Style, StyleError, Vertex, camera, increasing
-from .gooch import AUTO_LIGHT, CameraLight, facing
-from .gradient import Gradient
-from .registry import register
+from styletrace.gate import dr, mi
+from styletrace.styles.base import Param, Style, StyleError, Vertex, camera, increasing
+from styletrace.styles.gooch import AUTO_LIGHT, CameraLight, facing
+from styletrace.styles.gradient import Gradient
+from styletrace.styles.registry import register
 
 #: three flat bands (dark brown, terracotta, warm sand) with narrow linear transitions
 BANDS = "0:#4a2c2a;0.32:#4a2c2a;0.34:#b5563a;0.64:#b5563a;0.66:#f4c98b;1:#f4c98b"

@@ -12,16 +12,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...gate import dr, mi
-from ...styles.base import Vertex
-from ..lane_sampler import LaneSampler
-from ..path import past_area_emitters
-from ..vertex import emission, environment
-from .children import Children, Parents, Slab, Span, draw
-from .pool import Frame, Grid, Pools, pooled
-from .refine import Round, refine
-from .scope import children_per_lane, first_round, refined, slots, styled_value
-from .world import level1
+from styletrace.gate import dr, mi
+from styletrace.kernel.lane_sampler import LaneSampler
+from styletrace.kernel.path import past_area_emitters
+from styletrace.kernel.reuse.children import Children, Parents, Slab, Span, draw
+from styletrace.kernel.reuse.pool import Frame, Grid, Pools, pooled
+from styletrace.kernel.reuse.refine import Round, refine
+from styletrace.kernel.reuse.scope import (
+    children_per_lane,
+    first_round,
+    refined,
+    slots,
+    styled_value,
+)
+from styletrace.kernel.reuse.world import level1
+from styletrace.kernel.vertex import emission, environment
+from styletrace.styles.base import Vertex
 
 
 @dataclass(frozen=True)

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ...gate import dr, mi
-from ..path import Start, walk
-from ..vertex import Site, depth_limit, environment, mis_power
+from styletrace.gate import dr, mi
+from styletrace.kernel.path import Start, walk
+from styletrace.kernel.vertex import Site, depth_limit, environment, mis_power
 
 
 class Children:

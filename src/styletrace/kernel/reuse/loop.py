@@ -8,14 +8,14 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from ...config import settings as S
-from ...errors import SceneError
-from ...gate import dr, mi
-from ...jit import no_collection
-from ..render_context import RenderContext
-from .batch import Samples, batch
-from .pool import Frame
-from .scope import Scope, children_per_lane
+from styletrace.config import settings as S
+from styletrace.errors import SceneError
+from styletrace.gate import dr, mi
+from styletrace.jit import no_collection
+from styletrace.kernel.render_context import RenderContext
+from styletrace.kernel.reuse.batch import Samples, batch
+from styletrace.kernel.reuse.pool import Frame
+from styletrace.kernel.reuse.scope import Scope, children_per_lane
 
 #: children stored per batch of a pass (64 MB of child data)
 BATCH_CHILDREN = 1 << 20

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...estimators import channel_mean
-from ...gate import dr, mi
-from ..acceptance import accepted
+from styletrace.estimators import channel_mean
+from styletrace.gate import dr, mi
+from styletrace.kernel.acceptance import accepted
 
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
 NORMAL_MIN = 0.9

@@ -12,13 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...config.estimator_registry import adaptive_direct
-from ...estimators import channel_mean
-from ...gate import dr, mi
-from ..lane_sampler import LaneSampler
-from .children import Parents, Slab, Span, draw
-from .pool import Grid, Pools, pooled
-from .scope import Slots, most, refined
+from styletrace.config.estimator_registry import adaptive_direct
+from styletrace.estimators import channel_mean
+from styletrace.gate import dr, mi
+from styletrace.kernel.lane_sampler import LaneSampler
+from styletrace.kernel.reuse.children import Parents, Slab, Span, draw
+from styletrace.kernel.reuse.pool import Grid, Pools, pooled
+from styletrace.kernel.reuse.scope import Slots, most, refined
 
 
 @dataclass(frozen=True)

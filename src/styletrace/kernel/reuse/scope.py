@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ...gate import dr, mi
-from ...scene.graph import any_ptr
+from styletrace.gate import dr, mi
+from styletrace.scene.graph import any_ptr
 
 
 @dataclass(frozen=True)

@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...config import settings as S
-from ...gate import dr, mi
-from ...styles.base import Vertex
-from ..lane_sampler import LaneSampler
-from ..vertex import emission
-from ..world_grid import WorldGrid, density_h
-from . import pool as P
-from .children import Children, Draw, Parents, Slab, Span, draw
-from .scope import children_per_lane, first_round, slots, styled_value
+from styletrace.config import settings as S
+from styletrace.gate import dr, mi
+from styletrace.kernel.lane_sampler import LaneSampler
+from styletrace.kernel.reuse import pool as P
+from styletrace.kernel.reuse.children import Children, Draw, Parents, Slab, Span, draw
+from styletrace.kernel.reuse.scope import children_per_lane, first_round, slots, styled_value
+from styletrace.kernel.vertex import emission
+from styletrace.kernel.world_grid import WorldGrid, density_h
+from styletrace.styles.base import Vertex
 
 
 def level1(scope, lanes, parents: Parents, m, slab: Slab):
