@@ -3,7 +3,7 @@
     python benchmarks/bit_identity.py                  # print NAME SHA256 per configuration
     python benchmarks/bit_identity.py --check FILE     # compare with a recorded run; exit 1 on a difference
 
-Every configuration goes through `styletrace.api.passes` with a prebuilt integrator (the lowest public
+Every configuration goes through `styletrace.frontends.api.passes` with a prebuilt integrator (the lowest public
 seam, present before and after the render pipeline existed), so the hashes say whether the kernel and
 the pass loop draw the same samples, not whether a front end merges settings the same way. Sizes and
 counts are tiny: the point is the digest, not the picture.
@@ -22,7 +22,7 @@ styletrace.init()
 
 import numpy as np  # noqa: E402
 
-from styletrace import api  # noqa: E402
+from styletrace.frontends import api
 
 RES = 12
 #: cel's levels when the digests were recorded (its default then; now the levels follow the scene)

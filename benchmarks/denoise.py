@@ -74,7 +74,7 @@ import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 from _report import image_grid, machine_description, median_time, write_section  # noqa: E402
 from equal_time import envelope, fixed_mse_at  # noqa: E402
-from styletrace import api  # noqa: E402
+from styletrace.frontends import api
 from styletrace.denoise import render as denoised_render  # noqa: E402
 from styletrace.lookdev.record import render_buffer  # noqa: E402
 

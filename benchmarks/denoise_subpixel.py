@@ -25,7 +25,7 @@ import numpy as np  # noqa: E402
 
 import denoise as bench  # noqa: E402  (the scenes, R's cache, the method's setting)
 from _report import machine_description, write_section  # noqa: E402
-from styletrace import api  # noqa: E402
+from styletrace.frontends import api
 from styletrace.denoise import coverage, expectation as X, guides, oidn  # noqa: E402
 from styletrace.lookdev.record import render_buffer  # noqa: E402
 from styletrace.pipeline.passes import pass_seed  # noqa: E402

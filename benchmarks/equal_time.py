@@ -40,7 +40,7 @@ import styletrace  # noqa: E402
 styletrace.init()
 import numpy as np  # noqa: E402
 from _report import image_grid, machine_description, write_section  # noqa: E402
-from styletrace import api  # noqa: E402
+from styletrace.frontends import api
 from styletrace.errors import StyletraceError  # noqa: E402
 
 CACHE = os.path.join(os.path.dirname(__file__), ".cache")

@@ -47,7 +47,7 @@ import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 from styletrace import estimators as E  # noqa: E402
-from styletrace.assets import scenes  # noqa: E402
+from styletrace.scene import builtin as scenes
 from styletrace.config.estimator_registry import SERIES_MAX_TERMS  # noqa: E402
 from styletrace.styles import registry  # noqa: E402
 from _report import machine_description, write_section  # noqa: E402
@@ -153,7 +153,7 @@ def stats(v, truth):
 def timed_render(scene, estimator, inner, spp, seed, **params):
     """(image, seconds) of a render timed after an untimed one of the same spp (compiles the kernels: the
     wavefront's pixel index is a shift for a power-of-two spp and a division otherwise, two kernels)."""
-    from styletrace import api
+    from styletrace.frontends import api
     integ = api.make_integrator("gamma", inner=inner, estimator=estimator, gamma=GAMMA, **params)
     api.render(scene, integrator=integ, spp=spp, seed=999)
     t = time.perf_counter()

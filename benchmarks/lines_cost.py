@@ -34,7 +34,7 @@ CHILD = """
 import json, statistics, sys, time
 sys.path.insert(0, {src!r})
 import styletrace
-from styletrace.api import load_scene, make_integrator, render
+from styletrace.frontends.api import load_scene, make_integrator, render
 scene = load_scene({scene!r}, {res}, {res})
 configs = {configs!r}
 integs = []

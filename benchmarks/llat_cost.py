@@ -41,7 +41,7 @@ sys.path.insert(0, {src!r})
 import styletrace
 styletrace.init()
 import mitsuba as mi, numpy as np
-from styletrace.api import make_integrator, render
+from styletrace.frontends.api import make_integrator, render
 T = mi.ScalarTransform4f
 GREY = {{"type": "diffuse", "reflectance": {{"type": "rgb", "value": [0.5, 0.5, 0.5]}}}}
 

@@ -55,7 +55,7 @@ def main():
 
     import styletrace
     styletrace.init()
-    from styletrace import api
+    from styletrace.frontends import api
 
     rows = []
     for size in (int(s) for s in args.sizes.split(",")):

@@ -38,7 +38,7 @@ import mitsuba as mi  # noqa: E402
 
 from _report import image_grid, machine_description, write_section  # noqa: E402
 from styletrace import measures  # noqa: E402
-from styletrace.pipeline.scene import load_scene, scene_spp  # noqa: E402
+from styletrace.scene.loading import load_scene, scene_spp  # noqa: E402
 from styletrace.styles import names  # noqa: E402
 
 HERE = Path(__file__).resolve().parent

@@ -26,7 +26,7 @@ CHILD = """
 import json, resource, sys, time
 sys.path.insert(0, {src!r})
 import styletrace
-from styletrace.api import load_scene, make_integrator, passes
+from styletrace.frontends.api import load_scene, make_integrator, passes
 counts = {counts!r}
 scene = load_scene('dragon', {res}, {res})
 integ = make_integrator('saturation', inner=counts, w=0.5,

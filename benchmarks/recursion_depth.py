@@ -41,7 +41,7 @@ sys.path.insert(0, {src!r})
 import styletrace
 styletrace.init()
 import drjit as dr, mitsuba as mi
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.kernel import integrator as I
 I.OPTIMIZE_LOOPS = {on!r}
 dr.set_flag(dr.JitFlag.KernelHistory, True)
@@ -95,7 +95,7 @@ sys.path.insert(0, {src!r})
 import styletrace
 styletrace.init()
 import drjit as dr, mitsuba as mi
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.kernel import integrator as I
 dr.set_flag(dr.JitFlag.KernelHistory, True)
 out = {{}}

@@ -16,9 +16,9 @@ import styletrace  # noqa: E402
 styletrace.init()
 import numpy as np  # noqa: E402
 
-from styletrace import api  # noqa: E402
+from styletrace.frontends import api
 from styletrace.images import write_image  # noqa: E402
-from styletrace.assets.scenes import cornell_box, dragon, scaled  # noqa: E402
+from styletrace.scene.builtin import cornell_box, dragon, scaled  # noqa: E402
 from styletrace.styles import get, names  # noqa: E402
 
 SIZE, SPP, GAP = 96, 16, 4

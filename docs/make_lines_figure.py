@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends import gallery
 
 

@@ -24,7 +24,7 @@ styletrace.init()
 import numpy as np  # noqa: E402
 
 from corpus import scenes  # noqa: E402  (the corpus lives with its tests)
-from styletrace import api  # noqa: E402
+from styletrace.frontends import api
 from styletrace.images import srgb8, write_bytes_atomically  # noqa: E402
 
 SIZE, SPP, INNER, SEED = 128, 16, 8, 1

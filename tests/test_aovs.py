@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends.cli import main
 from styletrace.errors import UsageError
 from styletrace.images import AOV_CHANNELS

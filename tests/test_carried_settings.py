@@ -16,7 +16,7 @@ from styletrace.pipeline.carried import carried_settings, declared, loaded  # no
 from styletrace.pipeline.job import Job  # noqa: E402
 from styletrace.pipeline.resolve import resolve  # noqa: E402
 from styletrace.errors import SceneError  # noqa: E402
-from styletrace.pipeline.scene import SceneWarning, load_scene  # noqa: E402
+from styletrace.scene.loading import SceneWarning, load_scene  # noqa: E402
 
 SCENE = """<scene version="3.0.0">
   <default name="depth" value="7"/>

@@ -91,7 +91,7 @@ def test_the_python_call_keeps_the_files_settings(files, reference):
     """The same call again is the same image; without the carried settings (the depth, the hidden sky) it is
     another, and api.render is the same function."""
     assert np.array_equal(styletrace.render(files[0], **ARGS), reference[0])
-    from styletrace import api
+    from styletrace.frontends import api
     assert api.render is styletrace.render  # the one-line alias
     plain = styletrace.render(files[0], max_depth=6, hide_emitters=False, **ARGS)
     assert not np.array_equal(plain, reference[0])

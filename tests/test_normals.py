@@ -8,7 +8,7 @@ styletrace.init()
 
 import mitsuba as mi  # noqa: E402
 
-from styletrace.api import scene_dict  # noqa: E402
+from styletrace.frontends.api import scene_dict  # noqa: E402
 from styletrace.normals import TOLERANCE, angle_weighted, canonical_normals  # noqa: E402
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends.cli import build_parser, choose_integrator, main
 from styletrace.errors import SceneError
 from styletrace.images import save_safely

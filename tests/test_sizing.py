@@ -1,6 +1,6 @@
 """Pass sizes for the device: flat on the CPU, from the GPU's total memory on CUDA (a fake device here)."""
-from styletrace import api
-from styletrace.sizing import CUDA_LANE_BYTES, CUDA_LANES_MAX, lanes_per_pass
+from styletrace.frontends import api
+from styletrace.pipeline.sizing import CUDA_LANE_BYTES, CUDA_LANES_MAX, lanes_per_pass
 
 GiB = 1 << 30
 

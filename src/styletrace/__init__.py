@@ -3,7 +3,7 @@
 `import styletrace` loads neither Dr.Jit nor Mitsuba. The first use of the rendering API
 (`styletrace.render`, `styletrace.variant`, ...) or an explicit `styletrace.init()` picks a working
 libLLVM and the JIT variant (`cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`; a variant you set
-before is kept) and registers the Mitsuba plugins `stylized` and `styled` (see `styletrace.runtime`).
+before is kept) and registers the Mitsuba plugins `stylized` and `styled` (see `styletrace.scene.plugins`).
 The estimator library `styletrace.estimators` needs none of it and runs on numpy alone.
 """
 from __future__ import annotations
@@ -16,11 +16,11 @@ from styletrace.errors import (
     StyletraceError,
     UsageError,
 )
-from styletrace.runtime import init
+from styletrace.scene.plugins import init
 
 __version__ = "0.1.0"
 
-#: names served by `styletrace.api`, loaded (and the backend initialised) on first use
+#: names served by `styletrace.frontends.api`, loaded (and the backend initialised) on first use
 _API = ("render", "load_scene", "make_integrator", "passes", "write_image")
 #: names served by `styletrace.lookdev` (module, name), loaded the same way
 _LOOKDEV = {"render_buffer": "record", "restyle": "restyle", "load_buffer": "buffer", "fit": "fit",
@@ -32,11 +32,11 @@ def __getattr__(name: str):
         return init()
     if name == "render":  # the render pipeline's, in process or on Ray with cluster= (api.render)
         init()
-        from styletrace.api import render
+        from styletrace.frontends.api import render
         return render
     if name in _API:
         init()
-        from styletrace import api
+        from styletrace.frontends import api
         return getattr(api, name)
     if name in _LOOKDEV:
         init()

@@ -9,7 +9,7 @@ import pytest
 import styletrace
 from helpers import furnace
 from helpers.furnace import I, z_score
-from styletrace.api import make_integrator
+from styletrace.frontends.api import make_integrator
 from styletrace.errors import SettingsError
 from styletrace.styles import create
 
@@ -122,7 +122,7 @@ def test_per_object_estimator(mask):
     """A `styled` BSDF carries its own estimator: the furnace sphere styled with gamma and the iterative
     series estimator, rendered with first_object_hit, is unbiased for I^(1/2.2)."""
     import mitsuba as mi
-    d = styletrace.api.scene_dict("furnace", RES, RES)
+    d = styletrace.frontends.api.scene_dict("furnace", RES, RES)
     d["sphere"]["bsdf"] = {"type": "styled", "style": "gamma", "estimator": "series", "inner_samples": 4,
                            "exposure": 1.0, "bsdf": d["sphere"]["bsdf"]}
     vals = furnace.draws(mi.load_dict(d), mask, "identity", 1, 6, 77, stylize="first_object_hit")

@@ -4,7 +4,7 @@ import re
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends.cli import main
 from styletrace.errors import SettingsError, StyleError
 from styletrace.config import estimator_registry, settings

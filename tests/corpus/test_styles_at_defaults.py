@@ -15,7 +15,7 @@ styles and reports every failure at once.
 import numpy as np
 import pytest
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.styles import names
 
 from . import scenes

@@ -15,7 +15,7 @@ import mitsuba as mi
 import numpy as np
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 
 RES, N, REF = 48, 4, 4096
 LEVELS = (0.1, 0.4, 0.7, 1.0)

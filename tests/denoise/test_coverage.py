@@ -18,7 +18,7 @@ import pytest
 import mitsuba as mi
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import coverage as C
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError

@@ -94,7 +94,7 @@ def test_off_is_the_pass_loop_of_the_papers_estimators_bit_for_bit(name):
         import bit_identity
     finally:
         sys.path.pop(0)
-    from styletrace import api
+    from styletrace.frontends import api
     scene, spp, values = bit_identity.CONFIGS[name]
     image = styletrace.render(scene, spp=spp, seed=7, width=bit_identity.RES, height=bit_identity.RES,
                               denoise="off", **values)

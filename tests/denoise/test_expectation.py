@@ -11,7 +11,7 @@ found by its own albedo (not the pixel's mean albedo, which matches neither surf
 import numpy as np
 import pytest
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import expectation as X
 from styletrace.lookdev.record import record
 

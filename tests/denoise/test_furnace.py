@@ -1,7 +1,7 @@
 """The denoised expectation of a constant-radiance furnace is the constant.
 
 A diffuse sphere of albedo rho under a constant environment E has exitant radiance rho*E at every point
-(assets/scenes.py), so the per-pixel expectation M inside the silhouette is rho*E plus the children's noise,
+(scene/builtin.py), so the per-pixel expectation M inside the silhouette is rho*E plus the children's noise,
 and a correct denoiser must return the constant. Tolerances, from the noisy M itself (sigma: its per-pixel
 standard deviation over the N interior pixels, per channel):
 - the mean of D over the interior lies within Z = 4 standard errors sigma/sqrt(N) of rho*E (a filter that keeps
@@ -13,9 +13,9 @@ kernel at 16 stratified points per pixel), with the same tolerances, over the po
 """
 import numpy as np
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import expectation as X
-from styletrace.assets.scenes import FURNACE_ALBEDO, FURNACE_RADIANCE
+from styletrace.scene.builtin import FURNACE_ALBEDO, FURNACE_RADIANCE
 
 RES, Z = 64, 4.0
 

@@ -9,7 +9,7 @@ renders' sub-pixel samples differ there)."""
 import mitsuba as mi
 import numpy as np
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import guides
 
 RES = 32

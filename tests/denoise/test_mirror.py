@@ -7,7 +7,7 @@ import mitsuba as mi
 import numpy as np
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import expectation as X
 
 RES = 48

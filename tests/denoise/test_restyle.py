@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import expectation as X
 
 KW = dict(spp=2, inner=2, seed=11)
@@ -48,7 +48,7 @@ def test_aovs_say_denoised(tmp_path):
         assert np.allclose(aovs["denoise_change"], img - styletrace.render(
             "cornell-box", style="cel", spp=2, inner=2, width=16, height=16), atol=1e-5)
         out = tmp_path / f"{method}.exr"
-        styletrace.api.write_image(img, str(out), "rgb", aovs)
+        styletrace.frontends.api.write_image(img, str(out), "rgb", aovs)
         names = [mi.Bitmap(str(out)).struct_()[i].name for i in range(mi.Bitmap(str(out)).channel_count())]
         assert "noisy_variance.R" in names and "denoise_change.G" in names and "variance.R" not in names
 

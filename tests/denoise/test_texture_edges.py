@@ -12,7 +12,7 @@ import pytest
 
 import mitsuba as mi
 
-from styletrace import api
+from styletrace.frontends import api
 from helpers.denoise_edges import denoised_identity
 from styletrace.denoise import expectation as X
 

@@ -12,7 +12,7 @@ import pytest
 
 import mitsuba as mi
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.config import settings as S
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError

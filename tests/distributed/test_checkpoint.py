@@ -10,9 +10,9 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace import api
-from styletrace.distributed.checkpoint import Checkpoint
-from styletrace.distributed.run import Render, job_for
+from styletrace.frontends import api
+from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.ray_run import Render, job_for
 from styletrace.errors import UsageError
 
 from conftest import child_env

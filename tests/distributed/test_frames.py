@@ -7,9 +7,9 @@ import sys
 import mitsuba as mi
 import numpy as np
 
-from styletrace import api
-from styletrace.distributed.describe import SceneSpec, _decode
-from styletrace.distributed.orbit import camera_target, orbit, rotation, sensor_to_world
+from styletrace.frontends import api
+from styletrace.pipeline.ray_describe import SceneSpec, _decode
+from styletrace.pipeline.orbit import camera_target, orbit, rotation, sensor_to_world
 
 from conftest import child_env
 

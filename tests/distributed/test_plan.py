@@ -1,8 +1,8 @@
 """The (tile, pass) units are api.passes' launches; their merge is order-independent, bit for bit."""
 import numpy as np
 
-from styletrace import api
-from styletrace.distributed.plan import Merge, plan
+from styletrace.frontends import api
+from styletrace.pipeline.ray_plan import Merge, plan
 
 
 def test_units_follow_api_passes_launch_order_seeds_and_counts():

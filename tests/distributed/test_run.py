@@ -5,8 +5,8 @@ import signal
 import numpy as np
 
 import styletrace
-from styletrace import api
-from styletrace.distributed.run import Render, job_for
+from styletrace.frontends import api
+from styletrace.pipeline.ray_run import Render, job_for
 
 STYLE = {"style": "cel", "inner": 2, "max_depth": 3}
 

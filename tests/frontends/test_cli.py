@@ -269,7 +269,7 @@ def test_a_signal_in_a_long_pass_writes_the_finished_pass_within_the_promise(tmp
 
 
 def test_non_finite_pixels_are_counted_in_one_line(tmp_path, capsys, monkeypatch):
-    from styletrace import api
+    from styletrace.frontends import api
 
     def nan_passes(scene, integrator, spp, seed, **kw):
         layout = api.tiles(3, 2)
@@ -344,7 +344,7 @@ def test_malformed_arguments_are_one_line(args, capsys):
 
 
 def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypatch):
-    from styletrace import api
+    from styletrace.frontends import api
     real = api.passes
 
     def failing(*a, **k):

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import expectation as X
 
 

@@ -5,8 +5,8 @@ the pixels inside the silhouette are independent draws of one estimator (spp = 1
 """
 import numpy as np
 
-from styletrace.api import load_scene, make_integrator, passes
-from styletrace.assets.scenes import FURNACE_ALBEDO, FURNACE_RADIANCE
+from styletrace.frontends.api import load_scene, make_integrator, passes
+from styletrace.scene.builtin import FURNACE_ALBEDO, FURNACE_RADIANCE
 
 I = np.array(FURNACE_ALBEDO) * FURNACE_RADIANCE
 
@@ -33,7 +33,7 @@ def draws(scene, mask, style, n, seeds, seed0, **kw):
 def resolved(scene, style, **kw):
     """The style as a render of `scene` uses it: its scene-relative 'auto' values (the tone styles' exposure,
     from the pilot) pinned, as `passes` pins them."""
-    from styletrace.api import resolve_defaults
+    from styletrace.frontends.api import resolve_defaults
     return resolve_defaults(scene, make_integrator(style, **kw))[0].settings.slot.style
 
 

@@ -4,7 +4,7 @@ tested against its standard error (`mean_z`) and each 4 x 4 pixel block (`pixel_
 import mitsuba as mi
 import numpy as np
 
-from styletrace.api import passes
+from styletrace.frontends.api import passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K, RES = 10, 24

@@ -14,7 +14,7 @@ styletrace.init()
 
 import mitsuba as mi  # noqa: E402
 
-from styletrace.api import make_integrator  # noqa: E402
+from styletrace.frontends.api import make_integrator  # noqa: E402
 
 LOADS = 6
 
@@ -27,7 +27,7 @@ import hashlib, sys
 import styletrace
 styletrace.init()
 import mitsuba as mi, numpy as np
-from styletrace.api import canonical_normals, make_integrator, passes, scene_dict
+from styletrace.frontends.api import canonical_normals, make_integrator, passes, scene_dict
 d = scene_dict("mixed", 32, 32)
 if sys.argv[1] == "reversed":
     key, fill = d.pop("key_light"), d.pop("fill_light")

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends.cli import main
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.config import estimator_registry as estimation

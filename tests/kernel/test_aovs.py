@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from helpers.furnace import I, draws
-from styletrace import api
+from styletrace.frontends import api
 
 RES = 32
 Z = 4.0

@@ -11,7 +11,8 @@ import pytest
 
 from helpers import furnace
 from helpers.furnace import I, z_score
-from styletrace import api, wild
+from styletrace import wild
+from styletrace.frontends import api
 from styletrace.errors import SettingsError
 from styletrace.estimators.base import Context
 from styletrace.config import estimator_registry as estimation, settings as S
@@ -154,7 +155,7 @@ def test_cluster_renders_refuse_the_pass():
     """A cluster render's units are bare renders of one (tile, pass) on the workers: refused up front."""
     pytest.importorskip("ray")
     from types import SimpleNamespace
-    from styletrace.distributed.run import Render
+    from styletrace.pipeline.ray_run import Render
     from styletrace.errors import UsageError
     job = SimpleNamespace(values={"style": "gamma", "estimator": "series", "expansion_pass": "16"})
     with pytest.raises(UsageError) as err:

@@ -37,7 +37,7 @@ def test_inner_samples_are_independent(mask, sampler):
     constant, as ldsampler's) or correlate them (orthogonal). 4 samples per pixel: a size every one of
     these samplers accepts as it is."""
     n = 8
-    d = styletrace.api.scene_dict("furnace", RES, RES)
+    d = styletrace.frontends.api.scene_dict("furnace", RES, RES)
     d["sensor"]["sampler"] = {"type": sampler, "sample_count": 4}
     scene = mi.load_dict(d)
     ones = draws(scene, mask, "identity", 1, 12, 0)

@@ -4,8 +4,8 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.api import carried_settings, load_scene, make_integrator, passes
-from styletrace.api import scene_dict as scene_dict_of
+from styletrace.frontends.api import carried_settings, load_scene, make_integrator, passes
+from styletrace.frontends.api import scene_dict as scene_dict_of
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K = 16                 # independent renders per side

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import load_scene, make_integrator, passes
+from styletrace.frontends.api import load_scene, make_integrator, passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K = 16          # independent renders per side
@@ -69,7 +69,7 @@ def test_identity_matches_path_with_lights_of_very_different_power(mode):
 def test_identity_test_detects_a_darker_scene():
     """The same tests reject a reference whose albedos are 3% darker: they are not vacuous."""
     scene = load_scene("cornell-box", RES, RES)
-    d = styletrace.api.scene_dict("cornell-box", RES, RES)
+    d = styletrace.frontends.api.scene_dict("cornell-box", RES, RES)
     for key in ("white", "red", "green"):
         d[key]["reflectance"]["value"] = [0.97 * v for v in d[key]["reflectance"]["value"]]
     darker = mi.load_dict(d)

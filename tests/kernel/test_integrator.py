@@ -11,7 +11,7 @@ SCENARIO = """
 import gc, sys
 sys.path[:0] = [{tests!r}, {render!r}]
 import styletrace
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 from test_recursion import sky_scene
 kept = []
 

@@ -16,7 +16,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends.cli import main
 from styletrace.lookdev.record import record
 from styletrace.kernel import reuse
@@ -38,7 +38,7 @@ CHILD = r"""
 import gc, sys
 import styletrace; styletrace.init()
 import mitsuba as mi, numpy as np
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.kernel import integrator as integrator_module, reuse
 from kernel.test_reuse import plane_scene
 from kernel.test_reuse_depth2 import shell_scene

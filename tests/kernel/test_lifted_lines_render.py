@@ -85,7 +85,7 @@ def test_west_cone_drifts_in_the_convex_mirror_where_lifting_does_not():
     3 px wide): its width in the ball, relative to its own width on the directly seen box, departs from the
     image-space reference's ratio by far more than 10% (measured: 0.35 against 1.20; the cone ignores the
     ball's curvature), while the lifted lines keep the reference's ratio within 10% (measured 1.21)."""
-    from styletrace.api import make_integrator, passes
+    from styletrace.frontends.api import make_integrator, passes
     spec = scene()
     ball = ball_mask(spec)
     direct = (np.arange(RES)[None, :] < RES // 2) & ~ball

@@ -391,7 +391,7 @@ def test_expectation_mode_blends_line_colour_and_radiance():
     """g = (1 - w) c + w L per sample: two renders with the same seed and line colours 0 and (0, 5, 0) differ
     by 5 x (share of samples where a pair fired) in green alone, the radiance part being the same; the
     share is 0 away from the sphere's outline and positive along it."""
-    from styletrace.assets.scenes import furnace
+    from styletrace.scene.builtin import furnace
     common = dict(spp=4, seed=5, style="identity", lines=True, line_mode="expectation", line_k=4)
     black = styletrace.render(furnace(32, 32), line_color="0,0,0", **common)
     green = styletrace.render(furnace(32, 32), line_color="0,5,0", **common)

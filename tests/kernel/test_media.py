@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import make_integrator
+from styletrace.frontends.api import make_integrator
 from helpers.media import INNER, SCENES, SPP, Z_MAX, assert_matches_volpath, fog_ball, foggy_room, renders
 from helpers.stats import mean_z
 

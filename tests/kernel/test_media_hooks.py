@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 from tone.scenes import HATCH, first_hit_mask, mirror_scene
 
 T = mi.ScalarTransform4f

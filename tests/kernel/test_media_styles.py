@@ -4,7 +4,7 @@ import mitsuba as mi
 import numpy as np
 
 import styletrace  # noqa: F401
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 from helpers.media import INNER, SPP, T, assert_matches_volpath, fog_ball
 
 

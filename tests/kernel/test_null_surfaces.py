@@ -8,7 +8,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 T = mi.ScalarTransform4f

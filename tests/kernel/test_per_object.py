@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 T = mi.ScalarTransform4f

@@ -8,7 +8,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.kernel import integrator as I
 
 

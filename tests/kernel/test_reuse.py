@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.frontends.cli import main
 from styletrace.errors import SceneError, SettingsError
 from styletrace.kernel import reuse

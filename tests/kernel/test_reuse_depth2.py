@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.errors import SettingsError
 from styletrace.kernel import reuse
 

@@ -1,4 +1,4 @@
-"""reuse=pixels with an adaptive count n0:n_max (kernel/reuse/refine.py): the threshold-aware refinement round.
+"""reuse=pixels with an adaptive count n0:n_max (kernel/reuse_refine.py): the threshold-aware refinement round.
 
 Truth from outside the pooling code: the analytic radiance inside a glowing diffuse sphere, the rule's band
 recomputed here from the recorded statistics with numpy (Student's t bounded by its limits), and the
@@ -11,7 +11,7 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.errors import SettingsError
 from styletrace.estimators import AdaptiveDirect
 from styletrace.kernel import reuse

@@ -1,4 +1,4 @@
-"""reuse=pixels with stylize=first_n_hits and reuse_deep=world (kernel/reuse/world.py, kernel/world_grid.py): the
+"""reuse=pixels with stylize=first_n_hits and reuse_deep=world (kernel/reuse_world.py, kernel/world_grid.py): the
 second-level vertices pool their world-space neighbours' children too, then the first hits pool theirs.
 
 Truth from outside the pooling code: the analytic glowing shell, Mitsuba's `path` on the Cornell box, and the
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.errors import SettingsError
 from styletrace.kernel import reuse
 

@@ -1,12 +1,12 @@
-"""`stylized` as Mitsuba builds it (kernel/standalone.py): `mi.render` resolves the style's auto values on the
+"""`stylized` as Mitsuba builds it (scene/standalone.py): `mi.render` resolves the style's auto values on the
 scene once, caches them per scene, and renders what the pipeline renders."""
 import mitsuba as mi
 import numpy as np
 
 import styletrace
 from styletrace.pipeline.passes import pass_seed
-from styletrace.kernel import standalone
-from styletrace.assets.scenes import BUILTIN
+from styletrace.scene import standalone
+from styletrace.scene.builtin import BUILTIN
 
 
 def scene_with(integrator: dict) -> mi.Scene:
@@ -42,4 +42,4 @@ def test_integrators_built_from_values_keep_mitsubas_render():
     """Only Mitsuba-built integrators get the resolving `render` (on the instance): the pipeline's own do not."""
     built = mi.load_dict({"type": "stylized", "style": "cel"})
     assert "render" in vars(built)
-    assert "render" not in vars(styletrace.api.make_integrator("cel"))
+    assert "render" not in vars(styletrace.frontends.api.make_integrator("cel"))

@@ -1,7 +1,8 @@
 """The wild-estimate warning on real renders: the gamma series on the Cornell box (a small bright light)
 is wild, direct application and the furnace (no fireflies: every child equals the exitant radiance)
 are not. 32x32, 4 spp, fixed seeds."""
-from styletrace import api, wild
+from styletrace import wild
+from styletrace.frontends import api
 
 
 def render(scene, estimator):

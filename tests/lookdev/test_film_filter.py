@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
-from styletrace.assets.scenes import cornell_box
+from styletrace.frontends import api
+from styletrace.scene.builtin import cornell_box
 from styletrace.lookdev import film_filter
 from styletrace.lookdev.buffer import bytes_per_sample, load_buffer
 from styletrace.lookdev.fit import fit

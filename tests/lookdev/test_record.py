@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.denoise import expectation as X
 from styletrace.lookdev.buffer import load_buffer
 from styletrace.lookdev.record import record

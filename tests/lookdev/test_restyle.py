@@ -5,11 +5,11 @@ import pytest
 from helpers.same_render import assert_same_render
 
 import styletrace
-from styletrace import api
+from styletrace.frontends import api
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
-from styletrace.assets.scenes import cornell_box
+from styletrace.scene.builtin import cornell_box
 from styletrace.styles import get, names
 
 W, H, SPP, INNER, SEED = 20, 14, 3, 2, 7

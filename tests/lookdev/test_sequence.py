@@ -12,7 +12,7 @@ from styletrace.lookdev.buffer import MAX_SEQUENCE_SAMPLES, bytes_per_sample, lo
 from styletrace.lookdev.fit import fit
 from styletrace.lookdev.record import render_buffer
 from styletrace.lookdev.restyle import replay_lanes, restyle
-from styletrace.assets.scenes import cornell_box
+from styletrace.scene.builtin import cornell_box
 
 W, H, SPP, INNER, SEED = 16, 12, 2, 4, 7
 #: "up to float rounding": both images are float32 means of the same per-sample float32 values

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
-from styletrace.api import load_scene, make_integrator, passes, resolve_defaults
-from styletrace.assets.scenes import cornell_box, scaled
+from styletrace.frontends.api import load_scene, make_integrator, passes, resolve_defaults
+from styletrace.scene.builtin import cornell_box, scaled
 
 T = mi.ScalarTransform4f
 RES = 48

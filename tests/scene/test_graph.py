@@ -1,12 +1,12 @@
 """Styled BSDFs inside wrappers (twosided, mask, blendbsdf) and inside shapegroups used by instances are
-found and stylized (scene/graph.py); surfaces where a style cannot apply are refused in one line."""
+found and stylized (kernel/scene_graph.py); surfaces where a style cannot apply are refused in one line."""
 import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 from styletrace.errors import SceneError
-from styletrace.scene.graph import SceneGraph
+from styletrace.kernel.scene_graph import SceneGraph
 
 T = mi.ScalarTransform4f
 RES = 24

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.api import load_scene, make_integrator, resolve_defaults
+from styletrace.frontends.api import load_scene, make_integrator, resolve_defaults
 
 styletrace.init()
 

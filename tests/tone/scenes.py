@@ -5,7 +5,7 @@ from __future__ import annotations
 import mitsuba as mi
 import numpy as np
 
-from styletrace.api import make_integrator, passes
+from styletrace.frontends.api import make_integrator, passes
 
 T = mi.ScalarTransform4f
 RES = 128

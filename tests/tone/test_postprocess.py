@@ -6,7 +6,7 @@ then the camera sample's own pixel (depth 0 or an all-delta prefix) and its expe
 import mitsuba as mi
 import numpy as np
 
-from styletrace.api import passes
+from styletrace.frontends.api import passes
 from tone.scenes import T, first_hit_mask, render, sensor, styled
 
 RES = 96

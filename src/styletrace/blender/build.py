@@ -36,5 +36,5 @@ def node(d: dict) -> Any:
 
 
 def scene_dict(desc: dict) -> dict:
-    """The Mitsuba scene dict of a description, for `styletrace.api.load_scene` or `mi.load_dict`."""
+    """The Mitsuba scene dict of a description, for `styletrace.frontends.api.load_scene` or `mi.load_dict`."""
     return node(desc)

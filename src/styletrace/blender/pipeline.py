@@ -12,10 +12,10 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from styletrace import api
 from styletrace.blender import build, exporter
 from styletrace.blender.properties import integrator_values
 from styletrace.config.line_types import without_colours
+from styletrace.frontends import api
 
 LINE_MASK = "LineMask"
 #: the image before denoising, beside the denoised Combined (as Cycles' "Noisy Image")

@@ -62,7 +62,7 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
     """Why `method` (expectation or image) cannot denoise `integrator` on `scene` ('' where it can); `local`:
     the render runs in one process."""
     from styletrace.kernel.integrator import StylizedIntegrator
-    from styletrace.pipeline.scene import film_format
+    from styletrace.scene.loading import film_format
     if not local:
         return "the render runs on Ray or as several images; the denoiser needs the whole image in one process"
     try:

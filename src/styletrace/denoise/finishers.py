@@ -16,7 +16,7 @@ from typing import Any, Callable
 from styletrace.errors import UsageError
 from styletrace.images import save_safely
 from styletrace.pipeline.runner import Finisher, Plain, Runner, Written
-from styletrace.pipeline.scene import film_format
+from styletrace.scene.loading import film_format
 
 #: why a denoiser needs the whole image in one process
 LOCAL = "--denoise renders locally: the denoiser needs the whole image in one process (no --ray, no cluster=)"

@@ -59,7 +59,7 @@ def check_output(path: str, scene: str | None = None) -> None:
 
 
 def cmd_styles(args) -> int:
-    from styletrace.runtime import init
+    from styletrace.scene.plugins import init
     init()
     from styletrace.config.estimator_registry import applicable
     from styletrace.styles import get, names
@@ -79,7 +79,7 @@ def cmd_styles(args) -> int:
 
 
 def cmd_lines(args) -> int:
-    from styletrace.runtime import init
+    from styletrace.scene.plugins import init
     init()
     from styletrace.config import settings
 
@@ -92,7 +92,7 @@ def cmd_lines(args) -> int:
 
 
 def cmd_estimators(args) -> int:
-    from styletrace.runtime import init
+    from styletrace.scene.plugins import init
     init()
     from styletrace.config.estimator_registry import kinds
 
@@ -121,7 +121,7 @@ def cmd_render(args) -> int:
             from styletrace.denoise.default import why_not
             say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
         args.denoise = None
-        from styletrace.distributed.command import frames_command
+        from styletrace.frontends.ray_command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     scene = args.scene[0] if args.scene else "cornell-box"
     check_output(args.output, scene)
@@ -129,8 +129,8 @@ def cmd_render(args) -> int:
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                  ("--pass-spp", args.pass_spp))
     from styletrace.denoise.finishers import plan
-    from styletrace.distributed.command import executor_of
     from styletrace.frontends.command_job import job_of
+    from styletrace.frontends.ray_command import executor_of
     from styletrace.pipeline.runner import Voice
     status = Status(enabled=not args.quiet)
     resolved = resolve_with_status(job_of(args, params, _parse_defines(args.define), scene=scene), status)
@@ -147,7 +147,7 @@ def resolve_with_status(job, status):
     from styletrace.jit import backend
     backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
     from styletrace.pipeline.resolve import resolve
-    from styletrace.pipeline.scene import SceneWarning, load_scene
+    from styletrace.scene.loading import SceneWarning, load_scene
     with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
         warnings.simplefilter("always", SceneWarning)
         with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
@@ -257,7 +257,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 
-    from styletrace.lookdev import commands as lookdev  # restyle, fit, preview; render --buffer
+    from styletrace.frontends import lookdev_commands as lookdev
     r.add_argument("--buffer", default=None, metavar="FILE", help=lookdev.BUFFER_HELP)
     lookdev.add_parsers(sub, parse_set=_parse_set, check_output=check_output)
 
@@ -281,7 +281,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def add_ray_flags(parser) -> None:
-    """Rendering on Ray (styletrace.distributed): passes and frames as tasks, checkpoints, resume."""
+    """Rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks, checkpoints, resume."""
     parser.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
                         help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at ADDRESS "
                              "(HOST:PORT, as printed by `ray start --head`); give it after the scene")

@@ -108,7 +108,7 @@ def show(inner: Any) -> str:
 
 def check(comparisons: list[Comparison]) -> None:
     """Build every integrator of the section (refused settings raise StyletraceError) before any renders."""
-    from styletrace import api
+    from styletrace.frontends import api
     for c in comparisons:
         for inner in (c.reference, fixed_inner(c, c.counts[0])):
             api.make_integrator(c.style, **{**c.integrator, **c.params, "inner": inner})
@@ -133,7 +133,7 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
             log: Callable[[str], None] = print) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Render one comparison (module docstring); its gallery.json entry and its three images."""
     from styletrace.pipeline.execute import render
-    from styletrace.pipeline.scene import load_scene
+    from styletrace.scene.loading import load_scene
 
     scene = load_scene(c.scene, size, size)
     t = time.perf_counter()

@@ -150,7 +150,7 @@ def write_png(image: np.ndarray, path: str) -> None:
 def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
     from styletrace.pipeline.execute import render
-    from styletrace.pipeline.scene import load_scene
+    from styletrace.scene.loading import load_scene
 
     os.makedirs(out_dir, exist_ok=True)
     setups, comparisons = select(only, skip)

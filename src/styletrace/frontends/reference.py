@@ -82,7 +82,7 @@ def files(root: str) -> list[str]:
 
 
 def main(argv=None) -> int:
-    from styletrace.runtime import init
+    from styletrace.scene.plugins import init
     init()
     args = sys.argv[1:] if argv is None else argv
     check = "--check" in args

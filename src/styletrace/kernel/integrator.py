@@ -69,10 +69,10 @@ from styletrace.kernel.path import (
     walk,
 )
 from styletrace.kernel.render_context import RenderContext
+from styletrace.kernel.scene_graph import SceneGraph
+from styletrace.kernel.scene_graph import any_ptr as _any_ptr
 from styletrace.kernel.vertex import Site, emission, environment
 from styletrace.kernel.volume import volume_walk
-from styletrace.scene.graph import SceneGraph
-from styletrace.scene.graph import any_ptr as _any_ptr
 from styletrace.styles.base import Vertex
 
 #: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:

@@ -24,7 +24,7 @@ from styletrace.kernel.emitter_sampler import EmitterSampler
 from styletrace.kernel.lifted_lines import Lifted
 from styletrace.kernel.lines import Lines
 from styletrace.kernel.path import WalkConfig
-from styletrace.scene.graph import SceneGraph
+from styletrace.kernel.scene_graph import SceneGraph
 from styletrace.styles.base import camera_forward
 
 

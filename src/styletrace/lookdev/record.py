@@ -15,7 +15,6 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from styletrace.assets.scenes import DEFAULT
 from styletrace.config import settings as S
 from styletrace.config.estimator_registry import child_mean, firefly_cap, make_estimator
 from styletrace.errors import SceneError, SettingsError, UsageError
@@ -37,8 +36,9 @@ from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS, finish, slot_recor
 from styletrace.lookdev.sequence import Recorder, budget
 from styletrace.pipeline import passes as pass_loop
 from styletrace.pipeline.runner import Finisher, Written
-from styletrace.pipeline.scene import film_format
+from styletrace.scene.builtin import DEFAULT
 from styletrace.scene.defaults import Pilot, unique_styled
+from styletrace.scene.loading import film_format
 from styletrace.styles.base import Vertex, camera_forward
 
 

@@ -23,7 +23,7 @@ from styletrace.pipeline.resolve import Resolved, resolve
 
 def ray_job(resolved: Resolved):
     """What every Ray task of this render receives (`distributed.tasks.Job`)."""
-    from styletrace.distributed.run import job_for
+    from styletrace.pipeline.ray_run import job_for
     job = resolved.job
     load = {"defines": dict(job.defines)} if job.defines else {}
     return job_for(job.scene, resolved.integrator, job.width, job.height, **load)
@@ -49,7 +49,7 @@ class OnRay:
         self.cluster, self.options = cluster or "local", options
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()):
-        from styletrace.distributed.run import Render
+        from styletrace.pipeline.ray_run import Render
         job = resolved.job
         width, height = resolved.size
         return Render(ray_job(resolved), resolved.spp, job.seed, width, height, self.cluster, resolved.lanes,

@@ -17,14 +17,14 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from styletrace.arguments import check_passes_args
 from styletrace.errors import UsageError
 from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.jit import no_collection
-from styletrace.pipeline.scene import film_format
+from styletrace.scene.arguments import check_passes_args
 from styletrace.scene.defaults import Pilot
 from styletrace.scene.defaults import resolve as resolve_defaults
+from styletrace.scene.loading import film_format
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
 LANES_PER_PASS = 1 << 20

@@ -15,17 +15,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from styletrace.arguments import check_render_args
 from styletrace.config import settings as S
 from styletrace.gate import mi
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.pipeline.carried import carried_settings, nested_stylized
 from styletrace.pipeline.job import Job
 from styletrace.pipeline.passes import pin
-from styletrace.pipeline.scene import load_scene, scene_spp
-from styletrace.runtime import init
+from styletrace.pipeline.sizing import lanes_per_pass
+from styletrace.scene.arguments import check_render_args
 from styletrace.scene.defaults import Pilot
-from styletrace.sizing import lanes_per_pass
+from styletrace.scene.loading import load_scene, scene_spp
+from styletrace.scene.plugins import init
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,7 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
         return job.integrator
     values = integrator_values(scene, job)
     # from the values, also for the scene's own integrator as it is: Mitsuba's object resolves auto values in
-    # its own `render` (kernel/standalone.py); the pipeline pins them once, here, for every route
+    # its own `render` (scene/standalone.py); the pipeline pins them once, here, for every route
     return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
 
 

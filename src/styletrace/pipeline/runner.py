@@ -27,8 +27,8 @@ from styletrace.errors import UsageError
 from styletrace.images import check_format, nonfinite_pixels, save_safely
 from styletrace.pipeline.passes import Progress, check_memory, pass_count
 from styletrace.pipeline.resolve import Resolved
-from styletrace.pipeline.scene import film_format, first_line
 from styletrace.pipeline.signals import Passes, StopSignals, say
+from styletrace.scene.loading import film_format, first_line
 
 
 @dataclass

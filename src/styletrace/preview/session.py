@@ -29,7 +29,7 @@ from styletrace.lookdev.record import record, scene_label
 from styletrace.lookdev.restyle import restyle
 from styletrace.pipeline.job import Job
 from styletrace.pipeline.resolve import resolve
-from styletrace.pipeline.scene import first_line
+from styletrace.scene.loading import first_line
 
 #: OIDN's quality on the full passes (the draft's is `denoise.draft.QUALITY`)
 FULL_QUALITY = "high"

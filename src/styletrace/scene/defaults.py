@@ -24,9 +24,9 @@ from styletrace.jit import no_collection
 from styletrace.kernel.emitter_sampler import EmitterSampler
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.kernel.path import Start, WalkConfig, exitant
+from styletrace.kernel.scene_graph import SceneGraph
 from styletrace.kernel.styled_bsdf import StyledBSDF
 from styletrace.kernel.volume import volume_walk
-from styletrace.scene.graph import SceneGraph
 from styletrace.styles.base import Camera, Style, Vertex, camera, lanes
 
 #: the settings the pilot's trace reads (`Pilot._trace`)

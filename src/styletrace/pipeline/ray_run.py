@@ -20,13 +20,13 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from styletrace.distributed.checkpoint import Checkpoint
-from styletrace.distributed.cluster import connect, cpus
-from styletrace.distributed.describe import SceneSpec
-from styletrace.distributed.plan import Merge, plan
 from styletrace.errors import StyletraceError, UsageError
 from styletrace.pipeline.passes import LANES_PER_PASS, Progress
-from styletrace.pipeline.scene import first_line
+from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.ray_cluster import connect, cpus
+from styletrace.pipeline.ray_describe import SceneSpec
+from styletrace.pipeline.ray_plan import Merge, plan
+from styletrace.scene.loading import first_line
 
 #: Retries of a task whose worker process died (Ray re-runs it elsewhere; the unit's seed is fixed).
 MAX_RETRIES = 3
@@ -94,7 +94,7 @@ class Render:
 
     def __iter__(self) -> Iterator[Progress]:
         ray = connect(self.cluster)
-        from styletrace.distributed.tasks import render_unit
+        from styletrace.pipeline.ray_tasks import render_unit
         todo = [u for u in self.units if u.round >= self.merge.rounds_done[u.tile]]
         todo.reverse()  # pop() from the end takes them in launch order
         window = max(2, 2 * cpus() // max(1, self.cpus_per_task))
@@ -145,8 +145,8 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
 
 def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
     """The Job of a scene argument and a `stylized` integrator (its property values travel, not the object)."""
-    from styletrace.distributed.tasks import Job
-    from styletrace.runtime import init
+    from styletrace.pipeline.ray_tasks import Job
+    from styletrace.scene.plugins import init
     values = getattr(integrator, "values", None)
     if not isinstance(values, dict):
         raise UsageError(f"bad integrator {type(integrator).__name__} for a cluster render: Ray workers rebuild the "

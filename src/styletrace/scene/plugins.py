@@ -23,11 +23,11 @@ def init(variant: str | None = None) -> str:
     if active not in _registered:
         import mitsuba as mi
 
-        from styletrace.kernel.standalone import from_properties
         from styletrace.kernel.styled_bsdf import StyledBSDF
+        from styletrace.scene.standalone import from_properties
 
         # from a scene file or dict: its `mi.render` pins the scene-relative auto values
-        # (kernel/standalone.py)
+        # (scene/standalone.py)
         mi.register_integrator("stylized", lambda props: from_properties(props))
         mi.register_bsdf("styled", lambda props: StyledBSDF(props))
         _registered.add(active)

@@ -13,10 +13,10 @@ import numpy as np
 
 from styletrace.config import settings as S
 from styletrace.gate import dr, mi
+from styletrace.kernel import reuse_pool as P
 from styletrace.kernel.lane_sampler import LaneSampler
-from styletrace.kernel.reuse import pool as P
-from styletrace.kernel.reuse.children import Children, Draw, Parents, Slab, Span, draw
-from styletrace.kernel.reuse.scope import children_per_lane, first_round, slots, styled_value
+from styletrace.kernel.reuse_children import Children, Draw, Parents, Slab, Span, draw
+from styletrace.kernel.reuse_scope import children_per_lane, first_round, slots, styled_value
 from styletrace.kernel.vertex import emission
 from styletrace.kernel.world_grid import WorldGrid, density_h
 from styletrace.styles.base import Vertex

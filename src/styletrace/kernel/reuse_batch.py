@@ -15,17 +15,17 @@ import numpy as np
 from styletrace.gate import dr, mi
 from styletrace.kernel.lane_sampler import LaneSampler
 from styletrace.kernel.path import past_area_emitters
-from styletrace.kernel.reuse.children import Children, Parents, Slab, Span, draw
-from styletrace.kernel.reuse.pool import Frame, Grid, Pools, pooled
-from styletrace.kernel.reuse.refine import Round, refine
-from styletrace.kernel.reuse.scope import (
+from styletrace.kernel.reuse_children import Children, Parents, Slab, Span, draw
+from styletrace.kernel.reuse_pool import Frame, Grid, Pools, pooled
+from styletrace.kernel.reuse_refine import Round, refine
+from styletrace.kernel.reuse_scope import (
     children_per_lane,
     first_round,
     refined,
     slots,
     styled_value,
 )
-from styletrace.kernel.reuse.world import level1
+from styletrace.kernel.reuse_world import level1
 from styletrace.kernel.vertex import emission, environment
 from styletrace.styles.base import Vertex
 

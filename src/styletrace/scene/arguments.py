@@ -60,7 +60,7 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
     from styletrace.kernel.line_hooks import line_problem
     if isinstance(integrator, StylizedIntegrator) and integrator.settings.lines is not None:
         from styletrace.kernel.lines import Lines
-        from styletrace.scene.graph import SceneGraph
+        from styletrace.kernel.scene_graph import SceneGraph
         problem = line_problem(integrator.settings, SceneGraph(scene).has_media)
         if problem is not None:
             raise SceneError(problem)
@@ -117,7 +117,7 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     seen.clear()
     for name in sorted(names & set(UNRENDERABLE)):
         return f"{origin} cannot be rendered in {mi.variant()}: {UNRENDERABLE[name]}"
-    from styletrace.scene.graph import SceneGraph  # needs a variant set, as the plugins do
+    from styletrace.kernel.scene_graph import SceneGraph  # needs a variant set, as the plugins do
     try:
         SceneGraph(scene)  # styled BSDFs where no style can apply
     except SceneError as exc:

@@ -16,9 +16,9 @@ from styletrace.config.estimator_registry import adaptive_direct
 from styletrace.estimators import channel_mean
 from styletrace.gate import dr, mi
 from styletrace.kernel.lane_sampler import LaneSampler
-from styletrace.kernel.reuse.children import Parents, Slab, Span, draw
-from styletrace.kernel.reuse.pool import Grid, Pools, pooled
-from styletrace.kernel.reuse.scope import Slots, most, refined
+from styletrace.kernel.reuse_children import Parents, Slab, Span, draw
+from styletrace.kernel.reuse_pool import Grid, Pools, pooled
+from styletrace.kernel.reuse_scope import Slots, most, refined
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,8 @@ from styletrace.pipeline.passes import (
     passes,
     tiles,
 )
-from styletrace.pipeline.scene import (
+from styletrace.scene.defaults import resolve as resolve_defaults
+from styletrace.scene.loading import (
     SceneWarning,
     canonical_normals,
     film_format,
@@ -42,8 +43,7 @@ from styletrace.pipeline.scene import (
     scene_dict,
     scene_spp,
 )
-from styletrace.runtime import init
-from styletrace.scene.defaults import resolve as resolve_defaults
+from styletrace.scene.plugins import init
 
 
 def render(*args: Any, denoise: str | None = None, cluster: str | None = None, callback: Any = None,

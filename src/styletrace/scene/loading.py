@@ -12,14 +12,14 @@ import re
 import warnings
 from typing import Any
 
-from styletrace import scene_file
-from styletrace.arguments import check_scene, scene_problem
-from styletrace.assets.scenes import BUILTIN, DEFAULT
 from styletrace.errors import SceneError
 from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.normals import canonical_normals as _canonical
-from styletrace.runtime import init
+from styletrace.scene import xml_file as scene_file
+from styletrace.scene.arguments import check_scene, scene_problem
+from styletrace.scene.builtin import BUILTIN, DEFAULT
+from styletrace.scene.plugins import init
 
 
 def first_line(exc: BaseException) -> str:

@@ -13,9 +13,9 @@ from styletrace.errors import SceneError
 from styletrace.gate import dr, mi
 from styletrace.jit import no_collection
 from styletrace.kernel.render_context import RenderContext
-from styletrace.kernel.reuse.batch import Samples, batch
-from styletrace.kernel.reuse.pool import Frame
-from styletrace.kernel.reuse.scope import Scope, children_per_lane
+from styletrace.kernel.reuse_batch import Samples, batch
+from styletrace.kernel.reuse_pool import Frame
+from styletrace.kernel.reuse_scope import Scope, children_per_lane
 
 #: children stored per batch of a pass (64 MB of child data)
 BATCH_CHILDREN = 1 << 20

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from styletrace.gate import dr, mi
-from styletrace.scene.graph import any_ptr
+from styletrace.kernel.scene_graph import any_ptr
 
 
 @dataclass(frozen=True)

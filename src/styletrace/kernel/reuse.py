@@ -63,8 +63,8 @@ window and the pooled estimate), world.py (reuse_deep=world: the second level po
 refine.py (the refinement round of n0:n_max), batch.py (one batch: camera, first hits, children, pools, g),
 loop.py (the pass loop).
 """
-from styletrace.kernel.reuse import pool
-from styletrace.kernel.reuse.loop import render
-from styletrace.kernel.reuse.pool import pool_pixels, window
+from styletrace.kernel import reuse_pool as pool
+from styletrace.kernel.reuse_loop import render
+from styletrace.kernel.reuse_pool import pool_pixels, window
 
 __all__ = ["pool", "pool_pixels", "render", "window"]

@@ -13,10 +13,10 @@ from __future__ import annotations
 import json
 from typing import Any, Callable
 
-from styletrace.distributed.cluster import connect, cpus
-from styletrace.distributed.run import MAX_RETRIES, _result
 from styletrace.errors import UsageError
 from styletrace.images import save_safely, write_bytes_atomically
+from styletrace.pipeline.ray_cluster import connect, cpus
+from styletrace.pipeline.ray_run import MAX_RETRIES, _result
 
 
 class Manifest:
@@ -52,7 +52,7 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], spp: int, see
                   on_frame: Callable[[int, str], None] | None = None) -> list[int]:
     """Render `frames` (job, to_world or None) into `paths`; returns the frames written by this call."""
     ray = connect(cluster)
-    from styletrace.distributed.tasks import render_frame
+    from styletrace.pipeline.ray_tasks import render_frame
     skip = manifest.load() if resume else set()
     todo = [i for i in range(len(frames)) if i not in skip]
     todo.reverse()

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import ray
 
-from styletrace.distributed.describe import SceneSpec, load
 from styletrace.jit import no_collection
+from styletrace.pipeline.ray_describe import SceneSpec, load
 
 
 @dataclass(frozen=True)

@@ -95,7 +95,7 @@ class SceneSpec:
 def load(spec: SceneSpec, values: dict, variant: str):
     """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of the scene
     source with the driver's integrator values, cached by the scene and the integrator's values."""
-    from styletrace import runtime
+    from styletrace.scene import plugins as runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
     if key in CACHE:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import os
 import re
 
-from styletrace.distributed.cluster import LOCAL
 from styletrace.errors import UsageError
+from styletrace.pipeline.ray_cluster import LOCAL
 
 _ADDRESS = re.compile(r"^(auto|ray://.+|[^\s:/]+:\d+)$")
 
@@ -48,14 +48,14 @@ def frame_paths(output: str, count: int) -> list[str]:
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
     scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
-    from styletrace.distributed.frames import Manifest, frame_settings, render_frames
-    from styletrace.distributed.orbit import turntable
     from styletrace.frontends.command_job import job_of
     from styletrace.pipeline.execute import ray_job
+    from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
+    from styletrace.pipeline.orbit import turntable
     from styletrace.pipeline.resolve import resolve
-    from styletrace.runtime import init
-    from styletrace.sizing import lanes_per_pass
+    from styletrace.pipeline.sizing import lanes_per_pass
+    from styletrace.scene.plugins import init
 
     scenes = args.scene or ["cornell-box"]
     if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
