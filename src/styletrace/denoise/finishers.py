@@ -49,16 +49,26 @@ class Denoised(Finisher):
 
 class Expectation(Denoised):
     """The per-pixel expectation denoised before g (`denoise.expectation`); `buffer`: the file that keeps
-    the denoised buffer (the command line's --buffer), `keep`: called with it (Blender's Record buffer)."""
+    the denoised buffer (the command line's --buffer), `keep`: called with it (Blender's Record buffer),
+    `max_samples`: the buffer's cap. `live`: D also attached after every pass to the buffer so far, at
+    its camera samples (`expectation.attach`, k = 0), so a restyle of it styles D (the preview's)."""
 
     def __init__(self, quality: str = "high", buffer: str | None = None, label: str = "",
                  coverage: int | str = "auto", uncertainty: float | None = None,
-                 keep: Callable[[Any], None] | None = None):
+                 keep: Callable[[Any], None] | None = None, max_samples: int | None = None,
+                 live: bool = False):
         super().__init__(quality, buffer)
+        from ..lookdev.buffer import MAX_SAMPLES
         from .expectation import UNCERTAINTY
-        self.label, self.coverage, self.keep = label, coverage, keep
+        self.label, self.coverage, self.keep, self.live = label, coverage, keep, live
         self.uncertainty = UNCERTAINTY if uncertainty is None else uncertainty
+        self.max_samples = MAX_SAMPLES if max_samples is None else max_samples
         self.job = None
+
+    @property
+    def recorded(self):
+        """The noisy buffer of the passes so far (None before the first)."""
+        return self.job.buffer if self.job is not None else None
 
     def check(self, resolved, executor) -> None:
         super().check(resolved, executor)
@@ -73,14 +83,19 @@ class Expectation(Denoised):
             from ..lookdev.buffer import check_buffer_path
             check_buffer_path(self.buffer)
         job = resolved.job
-        self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed, self.quality,
+        self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed,
+                                   self.quality, self.max_samples,
                                    label=self.label or scene_label(job.scene), coverage=self.coverage,
                                    uncertainty=self.uncertainty, lanes_per_pass=resolved.lanes,
                                    pass_spp=job.pass_spp)
         self.aovs = bool(resolved.integrator.settings.aovs)
 
     def source(self, resolved, executor, lock):
-        return (prog for prog, _ in self.job.passes())
+        from .expectation import attach
+        for prog, buf in self.job.passes():
+            if self.live:
+                attach(buf, self.job.scene, buf.spp, self.job.seed, self.quality)
+            yield prog
 
     def ready(self, prog) -> bool:
         return super().ready(prog) and self.job.buffer is not None and self.job.buffer.spp >= 1
