@@ -3,14 +3,16 @@
     executor = executor_of(args)        # pipeline.execute.OnRay: a run.Render, with save()/finish()
     status = frames_command(args, parse_set, parse_defines, check_output, say)
 
-`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this executor: its
-loop, progress bar and signal handling, and `save()` before it abandons a render on a second Ctrl-C, so the
-checkpoint holds every finished pass. Frames have their own loop here (one image per task).
+`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this executor:
+its loop, progress bar and signal handling, and `save()` before it abandons a render on a second Ctrl-C,
+so the checkpoint holds every finished pass. Frames are runs of the same runner, one per frame, in turn
+(`frames.render_frames`).
 """
 from __future__ import annotations
 
 import os
 import re
+import sys
 
 from ..errors import UsageError
 from .cluster import LOCAL
@@ -49,9 +51,10 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
     scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
     from ..frontends.command_job import job_of
-    from ..pipeline.execute import ray_job
+    from ..pipeline.execute import OnRay, ray_job
     from ..pipeline.job import check_counts
     from ..pipeline.resolve import resolve
+    from ..pipeline.runner import Runner
     from ..runtime import init
     from ..sizing import lanes_per_pass
     from .frames import Manifest, frame_settings, render_frames
@@ -80,38 +83,40 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     lanes, note = lanes_per_pass(variant)
     if note and not args.quiet:
         say(f"styletrace: {note}")
-    frames, values = [], []
-    for name in scenes:  # each file resolved here once: a broken one fails before any task runs
+    frames, values, specs = [], [], []
+    for name in scenes:  # each file resolved here once: a broken one fails before any frame renders
         resolved = resolve(job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes))
+        Runner(resolved, OnRay(cluster))  # the refusals of its frames' runs, before any renders
         job = ray_job(resolved)
-        if len(scenes) == 1:
+        if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
             degrees = 360.0 if args.orbit is None else args.orbit
-            frames = [(job, m) for m in turntable(resolved.scene, count, degrees)]
-        else:
-            frames.append((job, None))
+            frames = [(resolved, m) for m in turntable(resolved.scene, count, degrees)]
+        else:  # a file's frame: its job with the integrator pinned here, loaded again when it comes
+            frames.append((resolved.job.with_(given={}, integrator=resolved.integrator), None))
         values.append(job.values)
+        specs.append(job.spec.describe())
         del resolved
-    settings = frame_settings("orbit" if len(scenes) == 1 else "files", [f[0].spec.describe() for f in frames[:1]]
-                              if len(scenes) == 1 else [f[0].spec.describe() for f in frames], values, args.spp,
+    settings = frame_settings("orbit" if len(scenes) == 1 else "files", specs, values, args.spp,
                               args.seed, count, args.orbit, lanes, args.pass_spp, variant)
     manifest = Manifest(args.output, settings)
     bar = None
     if not args.quiet:
         from tqdm import tqdm
-        bar = tqdm(total=count, unit="frame", desc="rendering", file=__import__("sys").stderr)
+        bar = tqdm(total=count, unit="frame", desc="rendering", file=sys.stderr)
     try:
-        written = render_frames(frames, paths, args.spp, args.seed, cluster, lanes, args.pass_spp, manifest,
-                                resume=args.resume, on_frame=lambda i, out: bar.update(1) if bar else None)
-    except KeyboardInterrupt:
+        written, status = render_frames(frames, paths, cluster, manifest, resume=args.resume,
+                                        on_frame=lambda i, out: bar.update(1) if bar else None)
+    except KeyboardInterrupt:  # between two frames' runs (a run stops on its own)
+        status = 130
+    finally:
         if bar is not None:
             bar.close()
-        say(f"styletrace: interrupted; {len(manifest.done)} of {count} frames written (--resume continues)")
-        return 130
-    if bar is not None:
-        bar.close()
+    if status:
+        stopped = "interrupted; " if status >= 128 else ""
+        say(f"styletrace: {stopped}{len(manifest.done)} of {count} frames written (--resume continues)")
+        return status
     if not args.quiet:
         say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {args.spp})")
     return 0
-
 
 __all__ = ["cluster_of", "executor_of", "frame_paths", "frames_command"]

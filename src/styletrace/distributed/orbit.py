@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..gate import mi
+
 
 def sensor_to_world(scene) -> np.ndarray:
     m = scene.sensors()[0].world_transform().matrix
@@ -19,7 +21,6 @@ def sensor_to_world(scene) -> np.ndarray:
 
 
 def camera_target(scene) -> np.ndarray:
-    import mitsuba as mi
     m = sensor_to_world(scene)
     origin, forward = m[:3, 3], m[:3, 2] / np.linalg.norm(m[:3, 2])
     si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, origin)), mi.Vector3f(*map(float, forward))))

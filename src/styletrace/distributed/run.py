@@ -34,9 +34,12 @@ MAX_RETRIES = 3
 
 def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, per_pass: int, tiles: int) -> dict:
     """What a checkpoint must match to be resumed."""
-    return {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
-            "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass, "tiles": tiles,
-            "variant": job.variant}
+    settings = {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
+                "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass, "tiles": tiles,
+                "variant": job.variant}
+    if job.camera is not None:  # a frame of a turntable
+        settings["camera"] = [list(row) for row in job.camera]
+    return settings
 
 
 class Render:
@@ -143,15 +146,18 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
         raise RuntimeError(f"a Ray task failed: {first_line(exc)}") from None
 
 
-def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
-    """The Job of a scene argument and a `stylized` integrator (its property values travel, not the object)."""
+def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None,
+            camera: Any = None, **load_kwargs):
+    """The Job of a scene argument and a `stylized` integrator (its property values travel, not the
+    object); `camera`: the sensor's to_world (4x4) in place of the scene's, or None."""
     from ..runtime import init
     from .tasks import Job
     values = getattr(integrator, "values", None)
     if not isinstance(values, dict):
         raise UsageError(f"bad integrator {type(integrator).__name__} for a cluster render: Ray workers rebuild the "
                          f"`stylized` integrator from its property values; pass style= and parameters instead")
-    return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init())
+    rows = None if camera is None else tuple(tuple(float(v) for v in row) for row in np.asarray(camera))
+    return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init(), rows)
 
 
 __all__ = ["Render", "job_for", "settings_of", "MAX_RETRIES"]

@@ -21,12 +21,13 @@ from .passes import Progress, passes
 from .resolve import Resolved, resolve
 
 
-def ray_job(resolved: Resolved):
-    """What every Ray task of this render receives (`distributed.tasks.Job`)."""
+def ray_job(resolved: Resolved, camera: Any = None):
+    """What every Ray task of this render receives (`distributed.tasks.Job`); `camera`: the sensor's
+    to_world (4x4) in place of the scene's (a frame of a turntable), or None."""
     from ..distributed.run import job_for
     job = resolved.job
     load = {"defines": dict(job.defines)} if job.defines else {}
-    return job_for(job.scene, resolved.integrator, job.width, job.height, **load)
+    return job_for(job.scene, resolved.integrator, job.width, job.height, camera, **load)
 
 
 class InProcess:
@@ -41,18 +42,20 @@ class InProcess:
 
 
 class OnRay:
-    """The passes as Ray tasks on `cluster` ("local" or an address); `options`: output, resume and
-    checkpoint_every of `distributed.run.Render`. The source also has `save()` and `finish()`."""
+    """The passes as Ray tasks on `cluster` ("local" or an address); `camera`: the sensor's to_world
+    (4x4) on the workers in place of the scene's (a frame of a turntable), or None; `options`: output,
+    resume and checkpoint_every of `distributed.run.Render`. The source also has `save()` and
+    `finish()`."""
     local = False
 
-    def __init__(self, cluster: str | None = None, **options: Any):
-        self.cluster, self.options = cluster or "local", options
+    def __init__(self, cluster: str | None = None, camera: Any = None, **options: Any):
+        self.cluster, self.camera, self.options = cluster or "local", camera, options
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()):
         from ..distributed.run import Render
         job = resolved.job
         width, height = resolved.size
-        return Render(ray_job(resolved), resolved.spp, job.seed, width, height, self.cluster, resolved.lanes,
+        return Render(ray_job(resolved, self.camera), resolved.spp, job.seed, width, height, self.cluster, resolved.lanes,
                       job.pass_spp, lock=lock, **self.options)
 
 

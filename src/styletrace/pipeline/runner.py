@@ -92,6 +92,8 @@ class Runner:
     def __init__(self, resolved: Resolved, executor: Any, finisher: Finisher | None = None):
         self.resolved, self.executor = resolved, executor
         self.finisher = finisher if finisher is not None else Plain()
+        #: what the last `write` wrote of a run that finished every pass (None: stopped or failed)
+        self.written: Written | None = None
         self.check()
 
     @property
@@ -143,6 +145,7 @@ class Runner:
     def write(self, output: str, voice: Voice | None = None) -> int:
         """Run to files, as the command line does: the exit status (0; 1 where a later pass failed or the
         image went to another path; 128 + the signal after Ctrl-C or SIGTERM). See the module doc."""
+        self.written = None
         voice = voice or Voice()
         status = voice.status if voice.status is not None else _Silent()
         r, finisher = self.resolved, self.finisher
@@ -203,6 +206,7 @@ class Runner:
             say(f"styletrace: interrupted; wrote the finished passes{finisher.how} to {outs} after {latest.spp_done} "
                 f"of {spp} spp")
             return stop.exit_status
+        self.written = done
         if done.path == output and hasattr(source, "finish"):
             source.finish()  # a render on Ray: the checkpoint has served
         if not voice.quiet:
