@@ -3,10 +3,10 @@
     executor = executor_of(args)        # pipeline.execute.OnRay: a run.Render, with save()/finish()
     status = frames_command(args, parse_set, parse_defines, check_output, say)
 
-`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this executor:
-its loop, progress bar and signal handling, and `save()` before it abandons a render on a second Ctrl-C,
-so the checkpoint holds every finished pass. Frames are runs of the same runner, one per frame, in turn
-(`frames.render_frames`).
+`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this
+executor: its loop, progress bar and signal handling, and `save()` before it abandons a render on a
+second Ctrl-C, so the checkpoint holds every finished pass. Frames are runs of the same runner, one
+per frame, in turn (`frames.render_frames`).
 """
 from __future__ import annotations
 
@@ -24,19 +24,20 @@ def cluster_of(args) -> str:
     """The cluster of `--ray [ADDRESS]` (and of `--resume` alone: a local one)."""
     address = args.ray if args.ray is not None else LOCAL
     if address != LOCAL and not _ADDRESS.match(address):
-        raise UsageError(f"bad --ray address {address!r}: expected HOST:PORT, ray://HOST:PORT or auto (written "
-                         f"after the scene, or as --ray=ADDRESS)")
+        raise UsageError(f"bad --ray address {address!r}: expected HOST:PORT, ray://HOST:PORT or "
+                         f"auto (written after the scene, or as --ray=ADDRESS)")
     return address
 
 
 def executor_of(args):
-    """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray [ADDRESS]`
-    / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
+    """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray
+    [ADDRESS]` / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
     from ..pipeline.execute import InProcess, OnRay
     if args.ray is None and not args.resume:
         return InProcess()
     if args.checkpoint_every is not None and args.checkpoint_every < 0:
-        raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected seconds >= 0")
+        raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected "
+                         f"seconds >= 0")
     return OnRay(cluster_of(args), output=args.output, resume=args.resume,
                  checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every)
 
@@ -48,8 +49,9 @@ def frame_paths(output: str, count: int) -> list[str]:
 
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
-    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
-    scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
+    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml
+    ...`: each scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as
+    Ray tasks."""
     from ..frontends.command_job import job_of
     from ..pipeline.execute import OnRay, ray_job
     from ..pipeline.job import check_counts
@@ -62,8 +64,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
 
     scenes = args.scene or ["cornell-box"]
     if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
-        raise UsageError("--frames/--orbit turn one scene into a turntable; with several scene files each file is "
-                         "one frame")
+        raise UsageError("--frames/--orbit turn one scene into a turntable; with several scene "
+                         "files each file is one frame")
     check_counts(("--frames", args.frames))
     if args.orbit is not None and args.frames is None:
         raise UsageError("--orbit needs --frames N (how many frames the rotation is split into)")
@@ -74,7 +76,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     count = args.frames if len(scenes) == 1 else len(scenes)
     paths = frame_paths(args.output, count)
     from ..images import check_target
-    for path in paths + [args.output + ".frames.json"]:  # every numbered image and the manifest, as the output
+    # every numbered image and the manifest, as the output
+    for path in paths + [args.output + ".frames.json"]:
         check_target(path)
     params = parse_set(args.set)
     defines = parse_defines(args.define)
@@ -113,7 +116,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             bar.close()
     if status:
         stopped = "interrupted; " if status >= 128 else ""
-        say(f"styletrace: {stopped}{len(manifest.done)} of {count} frames written (--resume continues)")
+        say(f"styletrace: {stopped}{len(manifest.done)} of {count} frames written "
+            f"(--resume continues)")
         return status
     if not args.quiet:
         say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {args.spp})")

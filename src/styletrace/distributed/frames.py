@@ -1,14 +1,14 @@
 """Frames on Ray: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
 
-    written, status = render_frames(frames, paths, cluster, manifest)   # out_0000.png, out_0001.png, ...
+    written, status = render_frames(frames, paths, cluster, manifest)   # out_0000.png, ...
 
 Each frame is a run of the render pipeline (`pipeline.runner.Runner`) whose passes are Ray tasks
-(`pipeline.execute.OnRay`, with the frame's camera): the runner owns its pass loop, its checks, its stop
-on Ctrl-C or SIGTERM and its atomic write. A frame written to its own path is recorded in a manifest
-(`OUT.frames.json`), so `--resume` renders only the frames not yet written. Every frame uses the render's
-seed: the noise pattern stays put from frame to frame instead of flickering. A stop ends the sequence
-after the frame under way (its finished passes written, as the runner writes them); the frames recorded
-stay.
+(`pipeline.execute.OnRay`, with the frame's camera): the runner owns its pass loop, its checks, its
+stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own path is recorded in a
+manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet written. Every frame
+uses the render's seed: the noise pattern stays put from frame to frame instead of flickering. A
+stop ends the sequence after the frame under way (its finished passes written, as the runner writes
+them); the frames recorded stay.
 """
 from __future__ import annotations
 
@@ -37,10 +37,11 @@ class Manifest:
         except FileNotFoundError:
             raise UsageError(f"cannot resume: no frames manifest {self.path!r}") from None
         except (OSError, ValueError) as exc:
-            raise UsageError(f"cannot resume: unreadable frames manifest {self.path!r} ({exc})") from None
+            raise UsageError(f"cannot resume: unreadable frames manifest {self.path!r} "
+                             f"({exc})") from None
         if body.get("settings") != self.settings:
-            raise UsageError(f"cannot resume {self.path!r}: its frames were rendered with other settings; "
-                             f"drop --resume to start over")
+            raise UsageError(f"cannot resume {self.path!r}: its frames were rendered with other "
+                             f"settings; drop --resume to start over")
         self.done = set(body.get("done", []))
         return self.done
 
@@ -59,7 +60,8 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str,
         frames: (job, camera) per frame. job: a `Resolved` job, or a `pipeline.job.Job` whose
             integrator is pinned already, resolved when its first frame comes (one scene loaded at a
             time); camera: the sensor's to_world (4x4) or None.
-        paths, cluster, manifest: the frames' images, the Ray cluster, the manifest of written frames.
+        paths, cluster, manifest: the frames' images, the Ray cluster, the written frames'
+            manifest.
         resume: skip the frames the manifest names. on_frame: called with (frame, path written).
 
     Returns:
