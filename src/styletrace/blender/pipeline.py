@@ -1,10 +1,12 @@
-"""From Blender's render settings to styletrace's pipeline: the scene, the integrator, the run of F12.
+"""From Blender's render settings to styletrace's pipeline: the scene, the integrator, the run of
+F12.
 
-The engine (F12), the restyle operator and the XML export all go through here, so that they agree on the
-scene, the style and the pass split: `styletrace render FILE.xml --seed K --pass-spp N` renders the image F12
-renders with seed K and N samples per pass. F12 is a pipeline run (`run`): a Job of the exported scene and
-the settings' integrator, resolved (auto values pinned), with the finisher of its Denoise and Record buffer
-settings (`denoise.finishers.plan`: plain, expectation or image denoising, the recorded buffer).
+The engine (F12), the restyle operator and the XML export all go through here, so that they agree on
+the scene, the style and the pass split: `styletrace render FILE.xml --seed K --pass-spp N` renders
+the image F12 renders with seed K and N samples per pass. F12 is a pipeline run (`run`): a Job of
+the exported scene and the settings' integrator, resolved (auto values pinned), with the finisher of
+its Denoise and Record buffer settings (`denoise.finishers.plan`: plain, expectation or image
+denoising, the recorded buffer).
 """
 from __future__ import annotations
 
@@ -20,12 +22,14 @@ from styletrace.frontends import api
 LINE_MASK = "LineMask"
 #: the image before denoising, beside the denoised Combined (as Cycles' "Noisy Image")
 NOISY = "Noisy"
-AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"), "children": ("Children", 1, "X")}
+AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"),
+              "children": ("Children", 1, "X")}
 
 
 def error_passes(settings) -> bool:
-    """Whether F12 adds the error AOVs: not for a recorded render (it keeps the image only), nor a denoised one
-    (the variance of the noisy pixel is not the error of the denoised one: docs/denoise.md)."""
+    """Whether F12 adds the error AOVs: not for a recorded render (it keeps the image only), nor a
+    denoised one (the variance of the noisy pixel is not the error of the denoised one:
+    docs/denoise.md)."""
     return bool(settings.aovs and not settings.record_buffer and settings.denoise == "off")
 
 
@@ -34,7 +38,8 @@ def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dic
 
 
 def scene(depsgraph, settings, warn: Callable[[str], None] = print):
-    """The loaded `mi.Scene` of the depsgraph (`api.load_scene` checks it as it checks every scene)."""
+    """The loaded `mi.Scene` of the depsgraph (`api.load_scene` checks it as it checks every
+    scene)."""
     return api.load_scene(build.scene_dict(description(depsgraph, settings, warn)))
 
 
@@ -46,25 +51,27 @@ def integrator(settings, aovs: bool | None = None, **override):
 
 
 def job(sc, integ, settings):
-    """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their sampling (the
-    pass split of `pass_spp`, tiles of the pass loop's own size)."""
+    """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their
+    sampling (the pass split of `pass_spp`, tiles of the pass loop's own size)."""
     from styletrace.pipeline.job import Job
-    return Job(scene=sc, integrator=integ, spp=settings.spp, seed=settings.seed, pass_spp=settings.pass_spp,
-               lanes_per_pass=api.LANES_PER_PASS)
+    return Job(scene=sc, integrator=integ, spp=settings.spp, seed=settings.seed,
+               pass_spp=settings.pass_spp, lanes_per_pass=api.LANES_PER_PASS)
 
 
 def run(sc, settings, aovs: bool, keep: Callable | None = None):
-    """(F12's `pipeline.runner.Runner`, the one-line note where Denoise auto could not denoise): the Denoise
-    setting's finisher (`denoise.finishers.plan`); `keep`: called with the buffer to restyle (Record buffer).
-    Raises the refusals (one line each) before anything renders."""
+    """(F12's `pipeline.runner.Runner`, the one-line note where Denoise auto could not denoise): the
+    Denoise setting's finisher (`denoise.finishers.plan`); `keep`: called with the buffer to restyle
+    (Record buffer). Raises the refusals (one line each) before anything renders."""
     from styletrace.denoise.finishers import Image, plan
     from styletrace.errors import UsageError
     from styletrace.pipeline.resolve import resolve
     resolved = resolve(job(sc, integrator(settings, aovs=aovs), settings), scene=sc)
-    runner, note = plan(resolved, settings.denoise, quality=settings.denoise_quality, label="<blender>", keep=keep)
+    runner, note = plan(resolved, settings.denoise, quality=settings.denoise_quality,
+                        label="<blender>", keep=keep)
     if isinstance(runner.finisher, Image) and keep is not None:
-        raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would not be the "
-                         "denoised image; use Denoise 'expectation' (its buffer keeps the denoised expectation)")
+        raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would "
+                         "not be the denoised image; use Denoise 'expectation' (its buffer keeps "
+                         "the denoised expectation)")
     return runner, note
 
 
@@ -77,16 +84,19 @@ def passes(sc, integ, settings) -> Iterator[api.Progress]:
 
 
 def line_mask(sc, settings, should_stop: Callable[[], bool] = lambda: False) -> np.ndarray | None:
-    """Where lines are drawn, in [0, 1]: the image with white lines minus the image with black lines, with the same
-    seed. Line decisions do not depend on the line colour, so everything but the lines cancels exactly; this
-    costs a second render of the lines' settings (documented in docs/blender.md)."""
+    """Where lines are drawn, in [0, 1]: the image with white lines minus the image with black
+    lines, with the same seed. Line decisions do not depend on the line colour, so everything but
+    the lines cancels exactly; this costs a second render of the lines' settings (documented in
+    docs/blender.md)."""
     images = []
-    # a line type's own colour= would not follow the override: every type takes line_color for the mask
-    types = {"line_types": without_colours(settings.line_types)} if settings.line_types.strip() else {}
+    # a line type's own colour= would not follow the override: every type takes line_color for the
+    # mask
+    types = ({"line_types": without_colours(settings.line_types)} if settings.line_types.strip()
+             else {})
     for colour in ("0,0,0", "1,1,1"):
         prog = None
-        for prog in passes(sc, integrator(settings, aovs=False, line_color=colour, line_gradient="", **types),
-                           settings):
+        masked = integrator(settings, aovs=False, line_color=colour, line_gradient="", **types)
+        for prog in passes(sc, masked, settings):
             if should_stop():
                 return None
         images.append(prog.image)

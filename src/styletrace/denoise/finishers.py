@@ -1,13 +1,13 @@
 """The denoisers as a run's finishers, and the run of a resolved job at every front end's default.
 
     runner, note = plan(resolve(job), method="auto", executor=InProcess(), buffer="b.npz")
-    image = runner.result()                       # or runner.write("out.exr", voice) on the command line
+    image = runner.result()                # or runner.write("out.exr", voice) on the command line
 
-`Expectation` records the expectation buffer pass by pass and, after the last pass or a stop, denoises it and
-applies g (`denoise.expectation.Job`); `Image` denoises the average of the finished passes
-(`denoise.image.finish`). `plan` picks the finisher of a resolved job (`denoise.default.choose`: auto,
-expectation, image or off; off with `buffer` records the buffer, `lookdev.record.Recorded`) and returns the
-one-line note where auto could not denoise.
+`Expectation` records the expectation buffer pass by pass and, after the last pass or a stop,
+denoises it and applies g (`denoise.expectation.Job`); `Image` denoises the average of the finished
+passes (`denoise.image.finish`). `plan` picks the finisher of a resolved job
+(`denoise.default.choose`: auto, expectation, image or off; off with `buffer` records the buffer,
+`lookdev.record.Recorded`) and returns the one-line note where auto could not denoise.
 """
 from __future__ import annotations
 
@@ -19,12 +19,14 @@ from styletrace.pipeline.runner import Finisher, Plain, Runner, Written
 from styletrace.scene.loading import film_format
 
 #: why a denoiser needs the whole image in one process
-LOCAL = "--denoise renders locally: the denoiser needs the whole image in one process (no --ray, no cluster=)"
+LOCAL = ("--denoise renders locally: the denoiser needs the whole image in one process (no --ray, "
+         "no cluster=)")
 NOT_DENOISED = ", NOT denoised (the pass under way did not end)"
 
 
 class Denoised(Finisher):
-    """What both denoisers share: OIDN and an rgb film required, a pass on every pixel before a result."""
+    """What both denoisers share: OIDN and an rgb film required, a pass on every pixel before a
+    result."""
     how = ", denoised,"
     local = LOCAL
     plain_note = NOT_DENOISED
@@ -48,17 +50,28 @@ class Denoised(Finisher):
 
 
 class Expectation(Denoised):
-    """The per-pixel expectation denoised before g (`denoise.expectation`); `buffer`: the file that keeps
-    the denoised buffer (the command line's --buffer), `keep`: called with it (Blender's Record buffer)."""
+    """The per-pixel expectation denoised before g (`denoise.expectation`); `buffer`: the file that
+    keeps the denoised buffer (the command line's --buffer), `keep`: called with it (Blender's
+    Record buffer), `max_samples`: the buffer's cap. `live`: D also attached after every pass to the
+    buffer so far, at its camera samples (`expectation.attach`, k = 0), so a restyle of it styles D
+    (the preview's)."""
 
     def __init__(self, quality: str = "high", buffer: str | None = None, label: str = "",
                  coverage: int | str = "auto", uncertainty: float | None = None,
-                 keep: Callable[[Any], None] | None = None):
+                 keep: Callable[[Any], None] | None = None, max_samples: int | None = None,
+                 live: bool = False):
         super().__init__(quality, buffer)
         from styletrace.denoise.expectation import UNCERTAINTY
-        self.label, self.coverage, self.keep = label, coverage, keep
+        from styletrace.lookdev.buffer import MAX_SAMPLES
+        self.label, self.coverage, self.keep, self.live = label, coverage, keep, live
         self.uncertainty = UNCERTAINTY if uncertainty is None else uncertainty
+        self.max_samples = MAX_SAMPLES if max_samples is None else max_samples
         self.job = None
+
+    @property
+    def recorded(self):
+        """The noisy buffer of the passes so far (None before the first)."""
+        return self.job.buffer if self.job is not None else None
 
     def check(self, resolved, executor) -> None:
         super().check(resolved, executor)
@@ -73,14 +86,19 @@ class Expectation(Denoised):
             from styletrace.lookdev.buffer import check_buffer_path
             check_buffer_path(self.buffer)
         job = resolved.job
-        self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed, self.quality,
-                                   label=self.label or scene_label(job.scene), coverage=self.coverage,
-                                   uncertainty=self.uncertainty, lanes_per_pass=resolved.lanes,
-                                   pass_spp=job.pass_spp)
+        self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed,
+                                   self.quality, self.max_samples,
+                                   label=self.label or scene_label(job.scene),
+                                   coverage=self.coverage, uncertainty=self.uncertainty,
+                                   lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp)
         self.aovs = bool(resolved.integrator.settings.aovs)
 
     def source(self, resolved, executor, lock):
-        return (prog for prog, _ in self.job.passes())
+        from styletrace.denoise.expectation import attach
+        for prog, buf in self.job.passes():
+            if self.live:
+                attach(buf, self.job.scene, buf.spp, self.job.seed, self.quality)
+            yield prog
 
     def ready(self, prog) -> bool:
         return super().ready(prog) and self.job.buffer is not None and self.job.buffer.spp >= 1
@@ -114,8 +132,8 @@ class Image(Denoised):
     def check(self, resolved, executor) -> None:
         super().check(resolved, executor)
         if self.buffer is not None:
-            raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, which image "
-                             "denoising leaves noisy; use --denoise expectation")
+            raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, "
+                             "which image denoising leaves noisy; use --denoise expectation")
         self.scene, self.seed = resolved.scene, resolved.job.seed
         self.aovs = bool(resolved.integrator.aov_names())
 
@@ -135,10 +153,11 @@ class Image(Denoised):
 def plan(resolved, method: str | None = None, executor: Any = None, buffer: str | None = None,
          quality: str = "high", coverage: int | str = "auto", uncertainty: float | None = None,
          label: str = "", keep: Callable[[Any], None] | None = None) -> tuple[Runner, str]:
-    """(the run of `resolved` for `method` (None: the default, `default.default_method`), the note where auto
-    could not denoise). `executor`: the pipeline's (default in process); `buffer`: a file for the expectation
-    buffer; `keep`: called with the buffer kept for restyles; the rest as `Expectation`'s. Raises the
-    refusals of the run (UsageError, one line) before anything renders."""
+    """(the run of `resolved` for `method` (None: the default, `default.default_method`), the
+    note where auto could not denoise). `executor`: the pipeline's (default in process);
+    `buffer`: a file for the expectation buffer; `keep`: called with the buffer kept for
+    restyles; the rest as `Expectation`'s. Raises the refusals of the run (UsageError, one line)
+    before anything renders."""
     from styletrace.denoise.default import choose
     from styletrace.pipeline.execute import InProcess
     executor = executor if executor is not None else InProcess()

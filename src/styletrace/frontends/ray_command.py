@@ -3,14 +3,16 @@
     executor = executor_of(args)        # pipeline.execute.OnRay: a run.Render, with save()/finish()
     status = frames_command(args, parse_set, parse_defines, check_output, say)
 
-`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this executor: its
-loop, progress bar and signal handling, and `save()` before it abandons a render on a second Ctrl-C, so the
-checkpoint holds every finished pass. Frames have their own loop here (one image per task).
+`--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this
+executor: its loop, progress bar and signal handling, and `save()` before it abandons a render on a
+second Ctrl-C, so the checkpoint holds every finished pass. Frames are runs of the same runner, one
+per frame, in turn (`frames.render_frames`).
 """
 from __future__ import annotations
 
 import os
 import re
+import sys
 
 from styletrace.errors import UsageError
 from styletrace.pipeline.ray_cluster import LOCAL
@@ -22,19 +24,20 @@ def cluster_of(args) -> str:
     """The cluster of `--ray [ADDRESS]` (and of `--resume` alone: a local one)."""
     address = args.ray if args.ray is not None else LOCAL
     if address != LOCAL and not _ADDRESS.match(address):
-        raise UsageError(f"bad --ray address {address!r}: expected HOST:PORT, ray://HOST:PORT or auto (written "
-                         f"after the scene, or as --ray=ADDRESS)")
+        raise UsageError(f"bad --ray address {address!r}: expected HOST:PORT, ray://HOST:PORT or "
+                         f"auto (written after the scene, or as --ray=ADDRESS)")
     return address
 
 
 def executor_of(args):
-    """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray [ADDRESS]`
-    / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
+    """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray
+    [ADDRESS]` / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
     from styletrace.pipeline.execute import InProcess, OnRay
     if args.ray is None and not args.resume:
         return InProcess()
     if args.checkpoint_every is not None and args.checkpoint_every < 0:
-        raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected seconds >= 0")
+        raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected "
+                         f"seconds >= 0")
     return OnRay(cluster_of(args), output=args.output, resume=args.resume,
                  checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every)
 
@@ -46,21 +49,23 @@ def frame_paths(output: str, count: int) -> list[str]:
 
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
-    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml ...`: each
-    scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as Ray tasks."""
+    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml
+    ...`: each scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as
+    Ray tasks."""
     from styletrace.frontends.command_job import job_of
-    from styletrace.pipeline.execute import ray_job
+    from styletrace.pipeline.execute import OnRay, ray_job
     from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
     from styletrace.pipeline.orbit import turntable
     from styletrace.pipeline.resolve import resolve
+    from styletrace.pipeline.runner import Runner
     from styletrace.pipeline.sizing import lanes_per_pass
     from styletrace.scene.plugins import init
 
     scenes = args.scene or ["cornell-box"]
     if len(scenes) > 1 and (args.frames is not None or args.orbit is not None):
-        raise UsageError("--frames/--orbit turn one scene into a turntable; with several scene files each file is "
-                         "one frame")
+        raise UsageError("--frames/--orbit turn one scene into a turntable; with several scene "
+                         "files each file is one frame")
     check_counts(("--frames", args.frames))
     if args.orbit is not None and args.frames is None:
         raise UsageError("--orbit needs --frames N (how many frames the rotation is split into)")
@@ -71,7 +76,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     count = args.frames if len(scenes) == 1 else len(scenes)
     paths = frame_paths(args.output, count)
     from styletrace.images import check_target
-    for path in paths + [args.output + ".frames.json"]:  # every numbered image and the manifest, as the output
+    # every numbered image and the manifest, as the output
+    for path in paths + [args.output + ".frames.json"]:
         check_target(path)
     params = parse_set(args.set)
     defines = parse_defines(args.define)
@@ -80,38 +86,41 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     lanes, note = lanes_per_pass(variant)
     if note and not args.quiet:
         say(f"styletrace: {note}")
-    frames, values = [], []
-    for name in scenes:  # each file resolved here once: a broken one fails before any task runs
+    frames, values, specs = [], [], []
+    for name in scenes:  # each file resolved here once: a broken one fails before any frame renders
         resolved = resolve(job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes))
+        Runner(resolved, OnRay(cluster))  # the refusals of its frames' runs, before any renders
         job = ray_job(resolved)
-        if len(scenes) == 1:
+        if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
             degrees = 360.0 if args.orbit is None else args.orbit
-            frames = [(job, m) for m in turntable(resolved.scene, count, degrees)]
-        else:
-            frames.append((job, None))
+            frames = [(resolved, m) for m in turntable(resolved.scene, count, degrees)]
+        else:  # a file's frame: its job with the integrator pinned here, loaded again when it comes
+            frames.append((resolved.job.with_(given={}, integrator=resolved.integrator), None))
         values.append(job.values)
+        specs.append(job.spec.describe())
         del resolved
-    settings = frame_settings("orbit" if len(scenes) == 1 else "files", [f[0].spec.describe() for f in frames[:1]]
-                              if len(scenes) == 1 else [f[0].spec.describe() for f in frames], values, args.spp,
+    settings = frame_settings("orbit" if len(scenes) == 1 else "files", specs, values, args.spp,
                               args.seed, count, args.orbit, lanes, args.pass_spp, variant)
     manifest = Manifest(args.output, settings)
     bar = None
     if not args.quiet:
         from tqdm import tqdm
-        bar = tqdm(total=count, unit="frame", desc="rendering", file=__import__("sys").stderr)
+        bar = tqdm(total=count, unit="frame", desc="rendering", file=sys.stderr)
     try:
-        written = render_frames(frames, paths, args.spp, args.seed, cluster, lanes, args.pass_spp, manifest,
-                                resume=args.resume, on_frame=lambda i, out: bar.update(1) if bar else None)
-    except KeyboardInterrupt:
+        written, status = render_frames(frames, paths, cluster, manifest, resume=args.resume,
+                                        on_frame=lambda i, out: bar.update(1) if bar else None)
+    except KeyboardInterrupt:  # between two frames' runs (a run stops on its own)
+        status = 130
+    finally:
         if bar is not None:
             bar.close()
-        say(f"styletrace: interrupted; {len(manifest.done)} of {count} frames written (--resume continues)")
-        return 130
-    if bar is not None:
-        bar.close()
+    if status:
+        stopped = "interrupted; " if status >= 128 else ""
+        say(f"styletrace: {stopped}{len(manifest.done)} of {count} frames written "
+            f"(--resume continues)")
+        return status
     if not args.quiet:
         say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {args.spp})")
     return 0
-
 
 __all__ = ["cluster_of", "executor_of", "frame_paths", "frames_command"]

@@ -1,12 +1,14 @@
-"""Frames as Ray tasks: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
+"""Frames on Ray: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
 
-    paths = render_frames(jobs_and_cameras, spp, seed, output, cluster)   # out_0000.png, out_0001.png, ...
+    written, status = render_frames(frames, paths, cluster, manifest)   # out_0000.png, ...
 
-One task renders one whole frame with `api.passes` on its worker (memory flat as in a local render) and
-returns the image; the driver writes each as it arrives (atomically) and records it in a manifest
-(`OUT.frames.json`), so `--resume` renders only the frames not yet written. Every frame uses the render's
-seed: the noise pattern stays put from frame to frame instead of flickering. Ctrl-C cancels the frames
-under way; the written ones stay.
+Each frame is a run of the render pipeline (`pipeline.runner.Runner`) whose passes are Ray tasks
+(`pipeline.execute.OnRay`, with the frame's camera): the runner owns its pass loop, its checks, its
+stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own path is recorded in a
+manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet written. Every frame
+uses the render's seed: the noise pattern stays put from frame to frame instead of flickering. A
+stop ends the sequence after the frame under way (its finished passes written, as the runner writes
+them); the frames recorded stay.
 """
 from __future__ import annotations
 
@@ -14,9 +16,10 @@ import json
 from typing import Any, Callable
 
 from styletrace.errors import UsageError
-from styletrace.images import save_safely, write_bytes_atomically
-from styletrace.pipeline.ray_cluster import connect, cpus
-from styletrace.pipeline.ray_run import MAX_RETRIES, _result
+from styletrace.images import write_bytes_atomically
+from styletrace.pipeline.execute import OnRay
+from styletrace.pipeline.resolve import Resolved, resolve
+from styletrace.pipeline.runner import Runner, Voice
 
 
 class Manifest:
@@ -34,10 +37,11 @@ class Manifest:
         except FileNotFoundError:
             raise UsageError(f"cannot resume: no frames manifest {self.path!r}") from None
         except (OSError, ValueError) as exc:
-            raise UsageError(f"cannot resume: unreadable frames manifest {self.path!r} ({exc})") from None
+            raise UsageError(f"cannot resume: unreadable frames manifest {self.path!r} "
+                             f"({exc})") from None
         if body.get("settings") != self.settings:
-            raise UsageError(f"cannot resume {self.path!r}: its frames were rendered with other settings; drop "
-                             f"--resume to start over")
+            raise UsageError(f"cannot resume {self.path!r}: its frames were rendered with other "
+                             f"settings; drop --resume to start over")
         self.done = set(body.get("done", []))
         return self.done
 
@@ -47,49 +51,48 @@ class Manifest:
         write_bytes_atomically(json.dumps(body, indent=1, sort_keys=True).encode(), self.path)
 
 
-def render_frames(frames: list[tuple[Any, Any]], paths: list[str], spp: int, seed: int, cluster: str,
-                  lanes_per_pass: int, pass_spp: int | None, manifest: Manifest, resume: bool = False,
-                  on_frame: Callable[[int, str], None] | None = None) -> list[int]:
-    """Render `frames` (job, to_world or None) into `paths`; returns the frames written by this call."""
-    ray = connect(cluster)
-    from styletrace.pipeline.ray_tasks import render_frame
+def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str, manifest: Manifest,
+                  resume: bool = False, on_frame: Callable[[int, str], None] | None = None
+                  ) -> tuple[list[int], int]:
+    """Render each frame through its runner into its path, in order.
+
+    Args:
+        frames: (job, camera) per frame. job: a `Resolved` job, or a `pipeline.job.Job` whose
+            integrator is pinned already, resolved when its first frame comes (one scene loaded at a
+            time); camera: the sensor's to_world (4x4) or None.
+        paths, cluster, manifest: the frames' images, the Ray cluster, the written frames'
+            manifest.
+        resume: skip the frames the manifest names. on_frame: called with (frame, path written).
+
+    Returns:
+        (the frames written by this call, 0 or the exit status of the frame that stopped or failed).
+    """
     skip = manifest.load() if resume else set()
-    todo = [i for i in range(len(frames)) if i not in skip]
-    todo.reverse()
-    task = render_frame.options(num_cpus=1, max_retries=MAX_RETRIES)
-    window = max(2, 2 * cpus())
-    refs: dict[Any, Any] = {}
-    jobs: dict[int, Any] = {}
-    written = []
-    try:
-        while todo or refs:
-            while todo and len(refs) < window:
-                i = todo.pop()
-                job, to_world = frames[i]
-                if id(job) not in jobs:
-                    jobs[id(job)] = ray.put(job)
-                m = None if to_world is None else to_world.tolist()
-                refs[task.remote(jobs[id(job)], m, spp, seed, lanes_per_pass, pass_spp)] = i
-            done, _ = ray.wait(list(refs), num_returns=1)
-            for ref in done:
-                i = refs.pop(ref)
-                image, _pid = _result(ray, ref)
-                out = save_safely(image.copy(), paths[i])  # Ray hands out read-only arrays; Mitsuba needs writable
-                if out == paths[i]:
-                    manifest.add(i)
-                written.append(i)
-                if on_frame is not None:
-                    on_frame(i, out)
-    finally:
-        for ref in refs:
-            ray.cancel(ref)
-    return written
+    written: list[int] = []
+    job, resolved = None, None
+    for i, (frame_job, camera) in enumerate(frames):
+        if i in skip:
+            continue
+        if frame_job is not job:
+            job = frame_job
+            resolved = job if isinstance(job, Resolved) else resolve(job)
+        runner = Runner(resolved, OnRay(cluster, camera))
+        status = runner.write(paths[i], Voice(quiet=True))
+        if runner.written is None:  # stopped, or a pass failed: its finished passes were written
+            return written, status
+        if runner.written.path == paths[i]:
+            manifest.add(i)
+        written.append(i)
+        if on_frame is not None:
+            on_frame(i, runner.written.path)
+    return written, 0
 
 
-def frame_settings(kind: str, scenes: list, values: list, spp: int, seed: int, count: int, orbit: float | None,
-                   lanes: int, pass_spp: int | None, variant: str) -> dict:
-    return {"kind": kind, "scenes": scenes, "integrators": values, "spp": spp, "seed": seed, "frames": count,
-            "orbit": orbit, "lanes_per_pass": lanes, "pass_spp": pass_spp, "variant": variant}
+def frame_settings(kind: str, scenes: list, values: list, spp: int, seed: int, count: int,
+                   orbit: float | None, lanes: int, pass_spp: int | None, variant: str) -> dict:
+    return {"kind": kind, "scenes": scenes, "integrators": values, "spp": spp, "seed": seed,
+            "frames": count, "orbit": orbit, "lanes_per_pass": lanes, "pass_spp": pass_spp,
+            "variant": variant}
 
 
 __all__ = ["render_frames", "Manifest", "frame_settings"]

@@ -1,16 +1,19 @@
 """A turntable: the camera rotated about the up axis through the point it looks at.
 
-    target = camera_target(scene)                       # where the camera's central ray hits the scene
-    mats = orbit(to_world, target, up, frames=120, degrees=360)   # 4x4 sensor to_world of each frame
+    target = camera_target(scene)                   # where the camera's central ray hits the scene
+    mats = orbit(to_world, target, up, frames=120, degrees=360)   # each frame's sensor to_world
 
-The target is the first hit of the ray through the image centre (Mitsuba cameras look along their local
-+Z), so the turntable turns about what the picture is centred on; if that ray hits nothing, the centre of
-the scene's bounding box. The axis is the camera's own up vector (its local +Y) through the target.
-Frame k is turned by degrees * k / frames: a full 360 over N frames loops without a repeated frame.
+The target is the first hit of the ray through the image centre (Mitsuba cameras look along their
+local +Z), so the turntable turns about what the picture is centred on; if that ray hits nothing,
+the centre of the scene's bounding box. The axis is the camera's own up vector (its local +Y)
+through the target. Frame k is turned by degrees * k / frames: a full 360 over N frames loops
+without a repeated frame.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from styletrace.gate import mi
 
 
 def sensor_to_world(scene) -> np.ndarray:
@@ -19,10 +22,10 @@ def sensor_to_world(scene) -> np.ndarray:
 
 
 def camera_target(scene) -> np.ndarray:
-    import mitsuba as mi
     m = sensor_to_world(scene)
     origin, forward = m[:3, 3], m[:3, 2] / np.linalg.norm(m[:3, 2])
-    si = scene.ray_intersect(mi.Ray3f(mi.Point3f(*map(float, origin)), mi.Vector3f(*map(float, forward))))
+    ray = mi.Ray3f(mi.Point3f(*map(float, origin)), mi.Vector3f(*map(float, forward)))
+    si = scene.ray_intersect(ray)
     if bool(np.array(si.is_valid())[0]):
         return np.array(si.p, dtype=np.float64).reshape(3, -1)[:, 0]
     box = scene.bbox()
@@ -37,7 +40,8 @@ def rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
     return np.eye(3) + np.sin(t) * k + (1 - np.cos(t)) * (k @ k)
 
 
-def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int, degrees: float) -> list[np.ndarray]:
+def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int,
+          degrees: float) -> list[np.ndarray]:
     """The sensor's to_world for each frame: T(target) R(up, angle) T(-target) to_world."""
     out = []
     for k in range(frames):

@@ -1,16 +1,18 @@
-"""The driver of a render on Ray: hand out (tile, pass) units, merge them, checkpoint, report progress.
+"""The driver of a render on Ray: hand out (tile, pass) units, merge them, checkpoint, report
+progress.
 
     run = Render(job, spp=256, seed=0, width=512, height=512, cluster="local", checkpoint=ck)
-    for prog in run:          # a pipeline.passes.Progress after each finished unit, as the pass loop yields
+    for prog in run:          # a pipeline.passes.Progress after each finished unit
         ...
-    image = styletrace.render("cornell-box", style="cel", spp=64, cluster="local")   # via pipeline.execute
+    image = styletrace.render("cornell-box", style="cel", spp=64, cluster="local")  # the API
 
-Units are submitted in launch order, at most `window` at a time (twice the tasks the cluster can run at
-once), so the driver holds a bounded number of results. A task whose worker dies is run again by Ray
-(`MAX_RETRIES`); one that fails in styletrace (a bad scene) raises its own one-line error here. Breaking
-out of the loop (Ctrl-C in the command line) cancels the units under way and checkpoints the finished
-ones. Checkpoints are written at most every `checkpoint_every` seconds and when the loop ends; their
-timing changes nothing in the image, because the checkpoint holds the exact float32 sum.
+Units are submitted in launch order, at most `window` at a time (twice the tasks the cluster can run
+at once), so the driver holds a bounded number of results. A task whose worker dies is run again by
+Ray (`MAX_RETRIES`); one that fails in styletrace (a bad scene) raises its own one-line error here.
+Breaking out of the loop (Ctrl-C in the command line) cancels the units under way and checkpoints
+the finished ones. Checkpoints are written at most every `checkpoint_every` seconds and when the
+loop ends; their timing changes nothing in the image, because the checkpoint holds the exact float32
+sum.
 """
 from __future__ import annotations
 
@@ -32,46 +34,57 @@ from styletrace.scene.loading import first_line
 MAX_RETRIES = 3
 
 
-def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, per_pass: int, tiles: int) -> dict:
+def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, per_pass: int,
+                tiles: int) -> dict:
     """What a checkpoint must match to be resumed."""
-    return {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
-            "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass, "tiles": tiles,
-            "variant": job.variant}
+    settings = {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
+                "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass,
+                "tiles": tiles, "variant": job.variant}
+    if job.camera is not None:  # a frame of a turntable
+        settings["camera"] = [list(row) for row in job.camera]
+    return settings
 
 
 class Render:
-    """Iterating renders; `progress()` after the loop is the final state, `worker_pids` who rendered."""
+    """Iterating renders; `progress()` after the loop is the final state, `worker_pids` who
+    rendered."""
 
     def __init__(self, job, spp: int, seed: int, width: int, height: int, cluster: str = "local",
-                 lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None, output: str | None = None,
-                 resume: bool = False, checkpoint_every: float = 10.0, cpus_per_task: int = 1,
-                 gpus_per_task: float = 0, lock: Any = contextlib.nullcontext()):
+                 lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
+                 output: str | None = None, resume: bool = False, checkpoint_every: float = 10.0,
+                 cpus_per_task: int = 1, gpus_per_task: float = 0,
+                 lock: Any = contextlib.nullcontext()):
         from styletrace.config.settings import parse
         if parse(job.values).expansion_pass:  # a unit is a bare mi.render: no pass map travels
-            raise UsageError(f"bad value {job.values['expansion_pass']!r} for 'expansion_pass' in a cluster render: its "
-                             f"pre-pass runs in a local render's passes only; render without --ray/cluster=, or use "
-                             f"expansion_pass=0")
+            raise UsageError(f"bad value {job.values['expansion_pass']!r} for 'expansion_pass' in "
+                             f"a cluster render: its pre-pass runs in a local render's passes "
+                             f"only; render without --ray/cluster=, or use expansion_pass=0")
         self.job, self.spp, self.seed, self.width, self.height = job, spp, seed, width, height
         self.cluster, self.lock = cluster, lock
         self.layout, self.units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
         per_pass = self.units[0].spp
         self.checkpoint = None
         if output is not None:
-            self.checkpoint = Checkpoint(output, settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
-                                                              len(self.layout)))
-        if self.checkpoint is not None:  # written beside the output, by the output's rules (images.check_target)
+            settings = settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
+                                   len(self.layout))
+            self.checkpoint = Checkpoint(output, settings)
+        # written beside the output, by the output's rules (images.check_target)
+        if self.checkpoint is not None:
             from styletrace.images import check_target
             check_target(self.checkpoint.manifest)
         if self.checkpoint is not None and not resume and self.checkpoint.exists():
-            raise UsageError(f"{output!r} has the checkpoint of an unfinished render ({self.checkpoint.manifest}): add "
-                             f"--resume to continue it, or delete that file to start over")
+            raise UsageError(f"{output!r} has the checkpoint of an unfinished render "
+                             f"({self.checkpoint.manifest}): add --resume to continue it, or "
+                             f"delete that file to start over")
         total, rounds = self.checkpoint.load() if resume else (None, None)
         self.merge = Merge(width, height, spp, self.layout, total, rounds)
         self.merge.restore_counts(self.units)
         self.resumed_units = sum(rounds) if rounds else 0
-        self.checkpoint_every, self.cpus_per_task, self.gpus_per_task = checkpoint_every, cpus_per_task, gpus_per_task
+        self.checkpoint_every = checkpoint_every
+        self.cpus_per_task, self.gpus_per_task = cpus_per_task, gpus_per_task
         self.worker_pids: set[int] = set()
-        self.on_result: Callable[[int], None] | None = None  # called with the worker's pid after each result
+        # called with the worker's pid after each result
+        self.on_result: Callable[[int], None] | None = None
         self._last_save = time.monotonic()
 
     @property
@@ -82,7 +95,8 @@ class Render:
         return self.merge.progress()
 
     def save(self) -> None:
-        """Checkpoint the finished units now (the command line's watcher calls it before it abandons)."""
+        """Checkpoint the finished units now (the command line's watcher calls it before it
+        abandons)."""
         if self.checkpoint is not None and int(self.merge.counts.min()) < self.spp:
             self.checkpoint.save(self.merge.total, self.merge.rounds_done)
         self._last_save = time.monotonic()
@@ -119,7 +133,8 @@ class Render:
                     self.worker_pids.add(pid)
                     if self.on_result is not None:
                         self.on_result(pid)
-                    if self.checkpoint is not None and time.monotonic() - self._last_save >= self.checkpoint_every:
+                    due = time.monotonic() - self._last_save >= self.checkpoint_every
+                    if self.checkpoint is not None and due:
                         with self.lock:
                             self.save()
                     yield self.merge.progress()
@@ -131,7 +146,8 @@ class Render:
 
 
 def _result(ray, ref) -> tuple[np.ndarray, int]:
-    """A task's result; its styletrace error as that error (one line), any other failure as RuntimeError."""
+    """A task's result; its styletrace error as that error (one line), any other failure as
+    RuntimeError."""
     try:
         return ray.get(ref)
     except ray.exceptions.RayTaskError as exc:
@@ -143,15 +159,20 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
         raise RuntimeError(f"a Ray task failed: {first_line(exc)}") from None
 
 
-def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None, **load_kwargs):
-    """The Job of a scene argument and a `stylized` integrator (its property values travel, not the object)."""
+def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None,
+            camera: Any = None, **load_kwargs):
+    """The Job of a scene argument and a `stylized` integrator (its property values travel, not the
+    object); `camera`: the sensor's to_world (4x4) in place of the scene's, or None."""
     from styletrace.pipeline.ray_tasks import Job
     from styletrace.scene.plugins import init
     values = getattr(integrator, "values", None)
     if not isinstance(values, dict):
-        raise UsageError(f"bad integrator {type(integrator).__name__} for a cluster render: Ray workers rebuild the "
-                         f"`stylized` integrator from its property values; pass style= and parameters instead")
-    return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init())
+        raise UsageError(f"bad integrator {type(integrator).__name__} for a cluster render: Ray "
+                         f"workers rebuild the `stylized` integrator from its property values; "
+                         f"pass style= and parameters instead")
+    rows = (None if camera is None else
+            tuple(tuple(float(v) for v in row) for row in np.asarray(camera)))
+    return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init(), rows)
 
 
 __all__ = ["Render", "job_for", "settings_of", "MAX_RETRIES"]

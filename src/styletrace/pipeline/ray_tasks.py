@@ -1,16 +1,20 @@
-"""What Ray workers run: one (tile, pass) unit, or one whole frame.
+"""What Ray workers run: one (tile, pass) unit of a render.
 
-    ref = render_unit.options(num_cpus=1, max_retries=3).remote(job, unit, tile)   # -> (float32 tile, pid)
+    ref = render_unit.options(num_cpus=1, max_retries=3).remote(job, spp, seed, offset, size)
 
-A worker is a long-lived process: `describe.load` keeps the scene and the integrator it built, so only a
-worker's first task loads anything. Each task first sets Dr.Jit's thread count to the CPUs Ray assigned
-to it (`num_cpus` of the task), so several workers on one machine do not oversubscribe its cores.
+A worker is a long-lived process: `describe.load` keeps the scene and the integrator it built, so
+only a worker's first task loads anything. Each task first sets Dr.Jit's thread count to the CPUs
+Ray assigned to it (`num_cpus` of the task), so several workers on one machine do not oversubscribe
+its cores. A job's `camera` (a frame of a turntable) replaces the sensor's to_world while the unit
+renders.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass
 
+import numpy as np
 import ray
 
 from styletrace.jit import no_collection
@@ -19,10 +23,12 @@ from styletrace.pipeline.ray_describe import SceneSpec, load
 
 @dataclass(frozen=True)
 class Job:
-    """What every task of a render shares: the scene, the integrator's property values, the variant."""
+    """What every task of a render shares: the scene, the integrator's property values, the variant
+    and the camera (the sensor's to_world as 4 rows of 4, or None for the scene's own)."""
     spec: SceneSpec
     values: dict
     variant: str
+    camera: tuple | None = None
 
 
 def _threads() -> int:
@@ -31,22 +37,39 @@ def _threads() -> int:
 
 
 def _prepare(job: Job):
-    import drjit as dr
     scene, integrator = load(job.spec, job.values, job.variant)
+    from styletrace.gate import dr  # deliberately here: after `load` chose the driver's variant
     dr.set_thread_count(_threads())
     return scene, integrator
 
 
+@contextlib.contextmanager
+def _camera(sensor, to_world):
+    """The sensor's to_world replaced by the 4x4 `to_world` in the block (None: left as it is)."""
+    if to_world is None:
+        yield
+        return
+    from styletrace.gate import mi
+    params = mi.traverse(sensor)
+    own = np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
+    params["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64))
+    params.update()
+    try:
+        yield
+    finally:
+        params["to_world"] = mi.ScalarTransform4f(own)
+        params.update()
+
+
 @ray.remote
 def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int]):
-    """Render the crop window (`offset`, `size`, relative to the film's own crop) with `spp` samples and
-    `seed`; returns the float32 window and this worker's process id."""
-    import mitsuba as mi
-    import numpy as np
-
-    from styletrace.pipeline.passes import Crop
+    """Render the crop window (`offset`, `size`, relative to the film's own crop) with `spp` samples
+    and `seed`; returns the float32 window and this worker's process id."""
     scene, integrator = _prepare(job)
-    with Crop(scene.sensors()[0]) as crop:
+    from styletrace.gate import mi  # deliberately here: after `load` chose the driver's variant
+    from styletrace.pipeline.passes import Crop
+    sensor = scene.sensors()[0]
+    with _camera(sensor, job.camera), Crop(sensor) as crop:
         if tuple(size) != crop.full:  # as the pass loop does for its tiles
             crop.set(offset, size)
         with no_collection():  # as the pass loop: no scene finalised while the pass is recorded
@@ -55,32 +78,4 @@ def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tu
     return arr, os.getpid()
 
 
-@ray.remote
-def render_frame(job: Job, to_world, spp: int, seed: int, lanes_per_pass: int, pass_spp: int | None):
-    """One whole frame with `api.passes` (the sensor's to_world replaced by the 4x4 `to_world`, if given);
-    returns the float32 image and this worker's process id."""
-    import mitsuba as mi
-    import numpy as np
-
-    from styletrace.pipeline import passes as pass_loop
-    scene, integrator = _prepare(job)
-    params = mi.traverse(scene.sensors()[0]) if to_world is not None else None
-    old = None
-    try:
-        if params is not None:
-            old = mi.ScalarTransform4f(np.array(scene.sensors()[0].world_transform().matrix, dtype=np.float64)
-                                       .reshape(4, 4, -1)[..., 0])
-            params["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64))
-            params.update()
-        image = None
-        for prog in pass_loop.passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp,
-                                     pinned=True):
-            image = prog.image
-    finally:
-        if old is not None:
-            params["to_world"] = old
-            params.update()
-    return image, os.getpid()
-
-
-__all__ = ["Job", "render_unit", "render_frame"]
+__all__ = ["Job", "render_unit"]

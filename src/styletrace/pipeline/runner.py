@@ -1,17 +1,18 @@
-"""One way to run a job, for every front end: the passes, the checks, stops, the finished passes written.
+"""One way to run a job, for every front end: the passes, the checks, stops, the passes written.
 
     runner = Runner(resolve(job), InProcess(), Plain())
     image = runner.result(callback)                 # the Python API: image, or (image, aovs)
     status = runner.write("out.exr", Voice())        # the command line: an exit status
-    for prog in runner.passes(): ...                # Blender and the preview: their own loop, then finish()
+    for prog in runner.passes(): ...                # Blender, the preview: own loop, then finish()
 
-A run is three parts. The resolved job (`resolve.resolve`: the scene loaded, its settings merged, `auto`
-values pinned there, once). An executor that yields a `passes.Progress` after each pass: `execute.InProcess`
-or `execute.OnRay`. A finisher that makes the result of the finished passes: `Plain` here, the denoisers'
-(`denoise.finishers`) and the recorded buffer's (`lookdev.record.Recorded`) above. `Runner.check` holds
-the refusals that depend on the three, one copy each, made before anything renders. `write` is the run
-that ends in files: Ctrl-C or SIGTERM stop it after the pass under way (`signals.StopSignals`), a failure
-after a finished pass keeps it, and either way the finished passes are written (atomically, `images`).
+A run is three parts. The resolved job (`resolve.resolve`: the scene loaded, its settings merged,
+`auto` values pinned there, once). An executor that yields a `passes.Progress` after each pass:
+`execute.InProcess` or `execute.OnRay`. A finisher that makes the result of the finished passes:
+`Plain` here, the denoisers' (`denoise.finishers`) and the recorded buffer's
+(`lookdev.record.Recorded`) above. `Runner.check` holds the refusals that depend on the three, one
+copy each, made before anything renders. `write` is the run that ends in files: Ctrl-C or SIGTERM
+stop it after the pass under way (`signals.StopSignals`), a failure after a finished pass keeps it,
+and either way the finished passes are written (atomically, `images`).
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from styletrace.errors import UsageError
+from styletrace.gate import mi
 from styletrace.images import check_format, nonfinite_pixels, save_safely
 from styletrace.pipeline.passes import Progress, check_memory, pass_count
 from styletrace.pipeline.resolve import Resolved
@@ -33,8 +35,9 @@ from styletrace.scene.loading import film_format, first_line
 
 @dataclass
 class Written:
-    """What a finisher wrote: the image's path (another one where the target could not be replaced), the
-    other files, the image itself (for the warnings) and a note for the summary line ('' for none)."""
+    """What a finisher wrote: the image's path (another one where the target could not be replaced),
+    the other files, the image itself (for the warnings) and a note for the summary line ('' for
+    none)."""
     path: str
     extra: tuple[str, ...] = ()
     image: np.ndarray | None = None
@@ -45,8 +48,8 @@ class Finisher:
     """What a run makes of its finished passes (the base: the passes as they are, `Plain`).
 
     `how`: words for a stopped run's line (", denoised,"); `local`: why it needs the passes in this
-    process ('' where it does not); `plain_note`: what a write that cannot wait for the pass under way
-    leaves out."""
+    process ('' where it does not); `plain_note`: what a write that cannot wait for the pass under
+    way leaves out."""
     how = ""
     local = ""
     plain_note = ""
@@ -69,7 +72,8 @@ class Finisher:
         return Written(save_safely(prog.image, output, pixel_format, prog.aovs), image=prog.image)
 
     def write_plain(self, prog: Progress, output: str, pixel_format: str) -> str:
-        """The finished passes as they are, written without Mitsuba (its writer waits for a running kernel)."""
+        """The finished passes as they are, written without Mitsuba (its writer waits for a running
+        kernel)."""
         return save_safely(prog.image, output, pixel_format, prog.aovs, plain=True)
 
 
@@ -79,19 +83,22 @@ class Plain(Finisher):
 
 @dataclass
 class Voice:
-    """How a run that writes files speaks: `quiet` (no bar, notes or summary), the stderr status line of
-    long waits (`frontends.status.Status`, or None)."""
+    """How a run that writes files speaks: `quiet` (no bar, notes or summary), the stderr status
+    line of long waits (`frontends.status.Status`, or None)."""
     quiet: bool = False
     status: Any = None
 
 
 class Runner:
-    """A resolved job run by an executor (`execute.InProcess`, `execute.OnRay`), finished by a finisher
-    (default `Plain`; module doc). Raises the refusals of `check` (UsageError, one line) when made."""
+    """A resolved job run by an executor (`execute.InProcess`, `execute.OnRay`), finished by a
+    finisher (default `Plain`; module doc). Raises the refusals of `check` (UsageError, one line)
+    when made."""
 
     def __init__(self, resolved: Resolved, executor: Any, finisher: Finisher | None = None):
         self.resolved, self.executor = resolved, executor
         self.finisher = finisher if finisher is not None else Plain()
+        #: what the last `write` wrote of a run that finished every pass (None: stopped or failed)
+        self.written: Written | None = None
         self.check()
 
     @property
@@ -103,15 +110,17 @@ class Runner:
         self.finisher.check(self.resolved, self.executor)  # the finisher's refusal is the specific one
         spp = self.resolved.spp
         if self.aovs and spp < 2:
-            raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at least 2 samples "
-                             f"per pixel")
+            raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at "
+                             f"least 2 samples per pixel")
         if self.finisher.local and not self.executor.local:
             raise UsageError(self.finisher.local)
         if self.aovs and not self.executor.local:
-            raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the image only")
+            raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the "
+                             "image only")
 
     def check_output(self, output: str) -> str:
-        """Refusals of the output file (its format, the memory of its write); returns the film's format."""
+        """Refusals of the output file (its format, the memory of its write); returns the film's
+        format."""
         fmt = film_format(self.resolved.scene)
         ext = os.path.splitext(output)[1].lower()
         try:
@@ -120,8 +129,8 @@ class Runner:
             raise UsageError(f"bad output {output!r}: {exc}") from None
         check_memory(*self.resolved.size, ext)
         if self.aovs and ext != ".exr":
-            raise UsageError(f"bad output {output!r}: --aovs writes its channels into an .exr; a {ext} image "
-                             f"has no room for them")
+            raise UsageError(f"bad output {output!r}: --aovs writes its channels into an .exr; a "
+                             f"{ext} image has no room for them")
         return fmt
 
     def passes(self, lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
@@ -141,8 +150,10 @@ class Runner:
         return self.finish(prog)
 
     def write(self, output: str, voice: Voice | None = None) -> int:
-        """Run to files, as the command line does: the exit status (0; 1 where a later pass failed or the
-        image went to another path; 128 + the signal after Ctrl-C or SIGTERM). See the module doc."""
+        """Run to files, as the command line does: the exit status (0; 1 where a later pass failed
+        or the image went to another path; 128 + the signal after Ctrl-C or SIGTERM). See the module
+        doc."""
+        self.written = None
         voice = voice or Voice()
         status = voice.status if voice.status is not None else _Silent()
         r, finisher = self.resolved, self.finisher
@@ -155,7 +166,8 @@ class Runner:
         run = Passes(spp, pass_count(r.scene, spp, r.lanes, pass_spp=r.job.pass_spp), voice.quiet)
         source = None
 
-        def abandon(signum):  # from the watcher thread: the pass under way is lost, the finished ones are not
+        # from the watcher thread: the pass under way is lost, the finished ones are not
+        def abandon(signum):
             status.stop()
             if hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished pass
                 source.save()
@@ -184,40 +196,45 @@ class Runner:
                 stop.settled = True
             # the final write happens under the watcher too: a signal now does not cut it
             latest, failure = run.latest, run.failure
-            if stop.count and hasattr(source, "save"):  # a render on Ray: its checkpoint gets every finished
-                source.save()                           # pass now (not whenever its iterator is collected)
+            # a render on Ray: its checkpoint gets every finished pass now (not whenever its
+            # iterator is collected)
+            if stop.count and hasattr(source, "save"):
+                source.save()
             if not finisher.ready(latest):
                 if failure is not None:
                     raise failure
-                say("styletrace: interrupted before every pixel had a pass; nothing written" if latest is not None
+                say("styletrace: interrupted before every pixel had a pass; nothing written"
+                    if latest is not None
                     else "styletrace: interrupted before the first pass finished; nothing written")
                 return stop.exit_status
             done = finisher.write(latest, output, fmt)
         self._warn(done)
         outs = " and ".join((done.path, *done.extra))
         if failure is not None:
-            say(f"styletrace: error after {latest.spp_done} of {spp} spp ({first_line(failure)}); wrote the finished "
-                f"passes{finisher.how} to {outs}")
+            say(f"styletrace: error after {latest.spp_done} of {spp} spp ({first_line(failure)}); "
+                f"wrote the finished passes{finisher.how} to {outs}")
             return 1
         if stop.count:
-            say(f"styletrace: interrupted; wrote the finished passes{finisher.how} to {outs} after {latest.spp_done} "
-                f"of {spp} spp")
+            say(f"styletrace: interrupted; wrote the finished passes{finisher.how} to {outs} after "
+                f"{latest.spp_done} of {spp} spp")
             return stop.exit_status
+        self.written = done
         if done.path == output and hasattr(source, "finish"):
             source.finish()  # a render on Ray: the checkpoint has served
         if not voice.quiet:
-            import mitsuba as mi
-            say(f"wrote {outs} ({mi.variant()}, {r.integrator.settings.style.describe()}, spp {spp}{done.note})")
+            style = r.integrator.settings.style.describe()
+            say(f"wrote {outs} ({mi.variant()}, {style}, spp {spp}{done.note})")
         return 0 if done.path == output else 1
 
     def _warn(self, done: Written) -> None:
-        """Non-finite pixels, and values that look wild (a diverging estimator); after the write: the image is
-        kept either way."""
+        """Non-finite pixels, and values that look wild (a diverging estimator); after the write:
+        the image is kept either way."""
         if done.image is None:
             return
         bad = nonfinite_pixels(done.image)
         if bad:
-            fix = "NaN as 0 and +inf as 1 in the PNG" if done.path.lower().endswith(".png") else "kept as they are"
+            png = done.path.lower().endswith(".png")
+            fix = "NaN as 0 and +inf as 1 in the PNG" if png else "kept as they are"
             say(f"styletrace: warning: {bad} pixel(s) are not finite (NaN or inf): {fix}")
         from styletrace.wild import warning
         wild = warning(done.image, self.resolved.integrator.settings)
