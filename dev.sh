@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One entry point for a fresh machine:  bash dev.sh render [ARGS...]  |  bash dev.sh test [PYTEST ARGS...]
-# `bash dev.sh test` without arguments runs the whole suite: tests/ in .venv (numpy 2), then tests/blender in
+# `bash dev.sh test` without arguments runs ruff, then the whole suite: tests/ in .venv (numpy 2), then
+# tests/blender in
 # .venv-blender (bpy 5.0 needs numpy < 2: constraints-blender.txt). With arguments it runs pytest in .venv only;
 # `bash dev.sh test-blender [PYTEST ARGS...]` runs the Blender tests alone.
 # The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because
@@ -70,6 +71,7 @@ case "$cmd" in
           exec "$VENV/bin/styletrace" render "$@" ;;
   test)   if [ $# -gt 0 ]; then setup test; exec "$VENV/bin/python" -m pytest -q "$@"; fi
           setup_blender
+          "$VENV/bin/ruff" check .  # the house rules: imports, line length 100 (pyproject.toml)
           "$VENV/bin/python" -m pytest -q --ignore=tests/blender
           exec "$BLENDER_VENV/bin/python" -m pytest -q tests/blender ;;
   test-blender) setup_blender; exec "$BLENDER_VENV/bin/python" -m pytest -q tests/blender "$@" ;;
