@@ -67,7 +67,6 @@ def convert(light, matrix, warn) -> dict | None:
                 "intensity": _rgb(light, units.point_intensity(light.energy))}
     if kind == "SPOT":
         half = light.spot_size / 2.0
-        cos_half = math.cos(half)
         beam = spot_beam(half, light.spot_blend)
         return {"type": "spot", "to_world": _unscaled(m) @ SPOT, "cutoff_angle": math.degrees(half),
                 "beam_width": math.degrees(min(beam, half)),

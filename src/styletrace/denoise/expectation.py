@@ -148,7 +148,7 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     remodulation."""
     a = buf.arrays
     own_albedo, emission = own
-    w, h = buf.width, buf.height
+    w = buf.width
     pix = a["pixel"].astype(np.int64)
     px, py = pix % w, pix // w
     found = a["slot"] >= 0

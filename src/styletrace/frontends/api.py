@@ -76,6 +76,10 @@ def make_integrator_from(values: dict[str, Any]) -> StylizedIntegrator:
     return StylizedIntegrator.from_values(values)
 
 
-__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning", "make_integrator",
-           "make_integrator_from", "passes", "resolve_defaults", "pass_count", "SceneError", "Progress",
-           "StylizedIntegrator", "write_image", "save_safely"]
+__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning",
+           "make_integrator", "make_integrator_from", "passes", "resolve_defaults", "pass_count",
+           "SceneError", "Progress", "StylizedIntegrator", "write_image", "save_safely",
+           # re-exported under their established names (the module docstring)
+           "UsageError", "PIXEL_FORMATS", "LANE_BYTES", "LANES_PER_PASS", "TILE_SIDE", "Tile",
+           "check_memory", "expansion_seed", "memory_available", "memory_needed", "pass_seed",
+           "pass_size", "tiles", "canonical_normals", "first_line", "scene_dict"]
