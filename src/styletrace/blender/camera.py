@@ -1,12 +1,13 @@
 """The scene camera and render settings -> a Mitsuba sensor description.
 
-Blender cameras look down their local -Z with +Y up and +X to the right; Mitsuba's look down +Z with +X to the
-*left* of the image. So the sensor's to_world is the camera's world matrix (scale removed) times
-diag(-1, 1, -1). The field of view follows Blender's sensor fit: AUTO fits the sensor width to the larger image
-side. Shift moves the principal point by a fraction of the fitted side (Mitsuba's `principal_point_offset_*`
-are fractions of the image's width and height). Orthographic: Mitsuba's image spans [-1, 1] along x, scaled by
-to_world; Blender's ortho scale spans the fitted side. Depth of field uses a `thinlens` with aperture radius
-lens / (2 f-stop), Cycles' rule (Mitsuba's thin lens has no shift: a shift is ignored there, with a warning).
+Blender cameras look down their local -Z with +Y up and +X to the right; Mitsuba's look down +Z with
++X to the *left* of the image. So the sensor's to_world is the camera's world matrix (scale removed)
+times diag(-1, 1, -1). The field of view follows Blender's sensor fit: AUTO fits the sensor width to
+the larger image side. Shift moves the principal point by a fraction of the fitted side (Mitsuba's
+`principal_point_offset_*` are fractions of the image's width and height). Orthographic: Mitsuba's
+image spans [-1, 1] along x, scaled by to_world; Blender's ortho scale spans the fitted side. Depth
+of field uses a `thinlens` with aperture radius lens / (2 f-stop), Cycles' rule (Mitsuba's thin lens
+has no shift: a shift is ignored there, with a warning).
 """
 from __future__ import annotations
 
@@ -74,8 +75,8 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
     else:
         out["type"] = "perspective"
         if cam.shift_x or cam.shift_y:
-            # Blender's shift is a fraction of the fitted side; Mitsuba's offsets are fractions of each side, x
-            # towards the image's right and y towards its bottom
+            # Blender's shift is a fraction of the fitted side; Mitsuba's offsets are fractions of
+            # each side, x towards the image's right and y towards its bottom
             fitted = width if fit_x else height
             out["principal_point_offset_x"] = cam.shift_x * fitted / width
             out["principal_point_offset_y"] = -cam.shift_y * fitted / height

@@ -1,11 +1,12 @@
-"""The evaluated depsgraph -> a scene description: a Mitsuba scene dict whose meshes are `mesh.Part`s and whose
-images are numpy arrays. `build.scene` turns it into Mitsuba objects in process; `xml.write` into a Mitsuba
-XML file with PLY meshes and EXR images. Both start from this one description, so F12 and the exported file
-render the same scene.
+"""The evaluated depsgraph -> a scene description: a Mitsuba scene dict whose meshes are
+`mesh.Part`s and whose images are numpy arrays. `build.scene` turns it into Mitsuba objects in
+process; `xml.write` into a Mitsuba XML file with PLY meshes and EXR images. Both start from this
+one description, so F12 and the exported file render the same scene.
 
-Objects are visited through `depsgraph.object_instances`. A mesh placed once is written in world space, one
-shape per material slot. A mesh that is drawn as an instance (collection instances, particles, geometry
-nodes instances) becomes one `shapegroup` in its local space and one `instance` per placement.
+Objects are visited through `depsgraph.object_instances`. A mesh placed once is written in world
+space, one shape per material slot. A mesh that is drawn as an instance (collection instances,
+particles, geometry nodes instances) becomes one `shapegroup` in its local space and one `instance`
+per placement.
 """
 from __future__ import annotations
 

@@ -1,13 +1,14 @@
 """Build the Blender extension (Blender 4.2+): a zip with `blender_manifest.toml`, the add-on's entry module and
-the wheels it needs (styletrace itself, Mitsuba, Dr.Jit, tqdm, and pyoidn with cffi for Denoise; numpy comes with
-Blender).
+the wheels it needs (styletrace itself, Mitsuba, Dr.Jit, tqdm, and pyoidn with cffi for Denoise; numpy
+comes with Blender).
 
     python -m styletrace.blender.extension -o DIR [--platform linux-x64] [--python 3.11]
 
 Blender installs it from Edit -> Preferences -> Get Extensions -> Install from Disk (or
-`blender --command extension install-file -r user_default FILE.zip`). Wheels are platform-specific, so each
-zip is for one platform; Blender 4.2 to 5.0 embed Python 3.11. Runs without Blender (does not import bpy).
-"""
+`blender --command extension install-file -r user_default FILE.zip`). Wheels are platform-specific,
+so each zip is for one platform; Blender 4.2 to 5.0 embed Python 3.11. Runs without Blender (does
+not import bpy).
+"""  # noqa: E501 (the first line is the command's --help description, kept as it was)
 from __future__ import annotations
 
 import argparse
@@ -86,7 +87,8 @@ def project_root() -> str:
 
 
 def _source_copy(tmp: str) -> str:
-    """A copy of the source tree to build the wheel in: setuptools leaves a build/ folder where it builds."""
+    """A copy of the source tree to build the wheel in: setuptools leaves a build/ folder where
+    it builds."""
     root, dest = project_root(), os.path.join(tmp, "source")
     shutil.copytree(os.path.join(root, "src"), os.path.join(dest, "src"),
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))

@@ -1,20 +1,22 @@
 """Blender materials -> Mitsuba BSDF descriptions (plain dicts, numpy images).
 
-Supported: Principled BSDF (base colour from a value or an Image Texture, roughness, metallic, transmission
-and IOR, emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes behind the active Material
-Output. The mapping (docs/blender.md, "Materials"):
+Supported: Principled BSDF (base colour from a value or an Image Texture, roughness, metallic,
+transmission and IOR, emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes behind
+the active Material Output. The mapping (docs/blender.md, "Materials"):
 
-- Principled: a dielectric base (`diffuse` when Specular IOR Level is 0, else `roughplastic` with the IOR),
-  blended with a `roughdielectric` by Transmission Weight and with a `roughconductor` (Fresnel of the base
-  colour taken as 1, as Cycles' F82 at normal incidence) by Metallic. Mitsuba's microfacet alpha is
-  Blender's roughness squared, as in Cycles.
-- Glossy: `roughconductor` without Fresnel (`material = none`), tinted by its colour, as Cycles' Glossy.
+- Principled: a dielectric base (`diffuse` when Specular IOR Level is 0, else `roughplastic` with
+  the IOR), blended with a `roughdielectric` by Transmission Weight and with a `roughconductor`
+  (Fresnel of the base colour taken as 1, as Cycles' F82 at normal incidence) by Metallic. Mitsuba's
+  microfacet alpha is Blender's roughness squared, as in Cycles.
+- Glossy: `roughconductor` without Fresnel (`material = none`), tinted by its colour, as
+  Cycles' Glossy.
 - Glass: `roughdielectric` with the IOR, both lobes tinted by its colour.
-- Emission (and Principled emission): an `area` emitter whose radiance is colour x strength (Cycles' strength
-  on a mesh is radiance).
+- Emission (and Principled emission): an `area` emitter whose radiance is colour x strength (Cycles'
+  strength on a mesh is radiance).
 
 Every other node behind the output is named in one warning per export and rendered as grey diffuse.
-Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a styletrace style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF.
+Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a styletrace
+style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF.
 """
 from __future__ import annotations
 
@@ -28,8 +30,8 @@ SMOOTH = 1e-4
 
 
 class Context:
-    """What the exporter collects while converting materials: warnings (one per unsupported node type) and
-    image textures (converted once per image)."""
+    """What the exporter collects while converting materials: warnings (one per unsupported node
+    type) and image textures (converted once per image)."""
 
     def __init__(self, warn: Callable[[str], None]):
         self.warn = warn
@@ -51,8 +53,8 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
 
 
 def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
-    """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3) or
-    'alpha' (H x W x 1)."""
+    """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3)
+    or 'alpha' (H x W x 1)."""
     key = (image.name, channel)
     if key not in ctx.images:
         w, h = image.size
@@ -71,7 +73,8 @@ def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
 
 
 def texture(data: np.ndarray) -> dict:
-    """A bitmap texture description; `data` stays a numpy array until the scene is built or written."""
+    """A bitmap texture description; `data` stays a numpy array until the scene is built
+    or written."""
     return {"type": "bitmap", "data": data, "filter_type": "bilinear", "wrap_mode": "repeat", "raw": True}
 
 
@@ -208,7 +211,8 @@ def convert(material, ctx: Context, style: dict | None = None) -> tuple[dict, di
         out = output_node(material)
         src = _source(out.inputs["Surface"]) if out is not None else None
         if src is None:
-            # no node tree (or nothing connected): Blender's viewport colour, as Cycles renders an unlinked output black
+            # no node tree (or nothing connected): Blender's viewport colour, as Cycles renders an
+            # unlinked output black
             bsdf, emitter, opacity = ({"type": "diffuse", "reflectance": {"type": "rgb", "value":
                                        tuple(float(c) for c in material.diffuse_color[:3])}}, None, 1.0)
             if out is not None:

@@ -1,6 +1,6 @@
-"""The style panels, drawn from the registries: Render Properties -> styletrace, Material Properties -> styletrace
-style. `layout_rows` lists what a panel shows (the same walk as `draw`), so the layout can be checked and
-documented headless, where Blender draws no UI."""
+"""The style panels, drawn from the registries: Render Properties -> styletrace, Material
+Properties -> styletrace style. `layout_rows` lists what a panel shows (the same walk as `draw`), so the layout
+can be checked and documented headless, where Blender draws no UI."""
 from __future__ import annotations
 
 import bpy
@@ -30,8 +30,8 @@ def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
 
 
 def dump(settings, material: bool = False) -> list[str]:
-    """The panel as text, one row each: label, value and Blender property type (docs/blender.md shows it next to
-    a screenshot: `bpy` as a module draws no UI)."""
+    """The panel as text, one row each: label, value and Blender property type (docs/blender.md
+    shows it next to a screenshot: `bpy` as a module draws no UI)."""
     lines = []
     for owner, name in layout_rows(settings, material):
         prop = owner.bl_rna.properties[name]

@@ -1,11 +1,13 @@
-"""Blender properties generated from styletrace's registries: no hand-written list of styles or parameters.
+"""Blender properties generated from styletrace's registries: no hand-written list of styles
+or parameters.
 
 `StyleParams` holds one Blender property per (style, parameter) of the style registry, named
-`<style>__<parameter>`, typed by the parameter's kind (float, int, bool, colour, choice; lists, gradients and
-'auto' defaults are strings in the spelling `--set` takes). The render settings (`SceneSettings`) and each
-material's settings (`MaterialSettings`) carry a style name and one `StyleParams`; panels draw the parameters of
-the chosen style only. Values go to styletrace as given, so the registry (`Param.parse`) is the one judge of
-what is allowed; its refusals reach the user as one-line Blender error reports (engine, operators).
+`<style>__<parameter>`, typed by the parameter's kind (float, int, bool, colour, choice; lists,
+gradients and 'auto' defaults are strings in the spelling `--set` takes). The render settings
+(`SceneSettings`) and each material's settings (`MaterialSettings`) carry a style name and one
+`StyleParams`; panels draw the parameters of the chosen style only. Values go to styletrace as
+given, so the registry (`Param.parse`) is the one judge of what is allowed; its refusals reach the
+user as one-line Blender error reports (engine, operators).
 """
 from __future__ import annotations
 
@@ -69,7 +71,8 @@ ON_CHANGE: list = []
 
 
 def changed(self, context):
-    """A style setting changed: tell the listeners (restyling from the recorded buffer, if there is one)."""
+    """A style setting changed: tell the listeners (restyling from the recorded buffer, if there
+    is one)."""
     for listener in ON_CHANGE:
         listener(context)
 
@@ -83,7 +86,8 @@ StyleParams = type("StyleParams", (bpy.types.PropertyGroup,), {"__annotations__"
 
 
 def params_of(style: str, params) -> dict:
-    """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba properties take."""
+    """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba
+    properties take."""
     out = {}
     for p in registry.get(style).params:
         v = getattr(params, key(style, p.name))

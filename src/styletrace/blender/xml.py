@@ -1,9 +1,9 @@
-"""A scene description (`exporter`) -> a Mitsuba 3 XML file that `styletrace render` accepts, with each mesh in a
-PLY file and each image in an EXR file in a folder next to it (`<name>_files/`).
+"""A scene description (`exporter`) -> a Mitsuba 3 XML file that `styletrace render` accepts, with
+each mesh in a PLY file and each image in an EXR file in a folder next to it (`<name>_files/`).
 
-Meshes are written with `mi.Mesh.write_ply` from the same in-memory mesh F12 renders, and images as float32
-EXR, so the file renders the same scene; with the same seed and pass split the images are equal
-(tests/blender/test_xml.py).
+Meshes are written with `mi.Mesh.write_ply` from the same in-memory mesh F12 renders, and images as
+float32 EXR, so the file renders the same scene; with the same seed and pass split the images are
+equal (tests/blender/test_xml.py).
 """
 from __future__ import annotations
 
@@ -117,5 +117,6 @@ class Writer:
 
 
 def write(desc: dict, path: str, integrator: dict | None = None) -> str:
-    """Write `desc` (with the `stylized` integrator's properties `integrator`) to the XML file `path`."""
+    """Write `desc` (with the `stylized` integrator's properties `integrator`) to the XML
+    file `path`."""
     return Writer(path).write(desc, integrator)

@@ -1,4 +1,5 @@
-"""Command line: `styletrace render`, `styletrace styles`, `styletrace estimators`, `styletrace gallery`.
+"""Command line: `styletrace render`, `styletrace styles`, `styletrace estimators`,
+`styletrace gallery`.
 
 Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
 unwritable output, an image too large for memory, malformed arguments) ends with one line on stderr
@@ -6,8 +7,9 @@ unwritable output, an image too large for memory, malformed arguments) ends with
 integrator only where given. A failure after some passes still writes them. Ctrl-C or SIGTERM during
 a render stops after the pass under way, or within `StopSignals.GRACE` seconds if that pass takes
 longer (a second signal: at once); the average of the finished passes is written, then the exit
-status is 130 (Ctrl-C) or 143 (SIGTERM). A wait of more than two seconds (loading the scene, the auto values'
-pilot, the first pass with its kernel compilation) names itself on a stderr status line (`status.py`).
+status is 130 (Ctrl-C) or 143 (SIGTERM). A wait of more than two seconds (loading the scene, the
+auto values' pilot, the first pass with its kernel compilation) names itself on a stderr status line
+(`status.py`).
 """
 from __future__ import annotations
 
@@ -25,7 +27,8 @@ from styletrace.pipeline.signals import StopSignals, one_line, say  # noqa: F401
 
 
 def _parse_defines(items: Sequence[str]) -> dict[str, str]:
-    """`-D NAME=VALUE` (repeatable): values of the scene file's <default> parameters, as Mitsuba's own -D."""
+    """`-D NAME=VALUE` (repeatable): values of the scene file's <default> parameters, as Mitsuba's
+    own -D."""
     out = {}
     for item in items:
         key, eq, value = item.partition("=")
@@ -47,7 +50,8 @@ def _parse_set(items: Sequence[str]) -> dict[str, str]:
 
 
 def check_output(path: str, scene: str | None = None) -> None:
-    """Fail before rendering, not after, if the image could not be written or would overwrite the scene."""
+    """Fail before rendering, not after, if the image could not be written or would overwrite
+    the scene."""
     if scene is not None and os.path.exists(scene) and os.path.exists(path) and os.path.samefile(scene, path) \
             or scene is not None and os.path.realpath(scene) == os.path.realpath(path):
         raise UsageError(f"bad output {path!r}: it is the scene file being rendered")
@@ -105,7 +109,8 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
-    """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner` runs them."""
+    """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner`
+    runs them."""
     from styletrace.denoise import check_method, default_method
     method = check_method(args.denoise or default_method())
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
@@ -142,13 +147,15 @@ def cmd_render(args) -> int:
 
 
 def resolve_with_status(job, status):
-    """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's warnings
-    as one line each."""
+    """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's
+    warnings as one line each."""
     from styletrace.jit import backend
-    backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+    # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+    backend()
     from styletrace.pipeline.resolve import resolve
     from styletrace.scene.loading import SceneWarning, load_scene
-    with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
+    # the render pipeline: load, merge, pin auto values
+    with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
         with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
             loaded = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
@@ -161,9 +168,10 @@ def resolve_with_status(job, status):
 
 
 def choose_integrator(scene, args, params):
-    """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
-    (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
-    and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise): `pipeline.resolve`'s."""
+    """The scene's own `stylized` integrator with the flags and --set values the user gave applied
+    on top (a scene without one starts from the command line's default style and keeps the
+    max_depth, rr_depth and hide_emitters of its own Mitsuba integrator, unless a flag says
+    otherwise): `pipeline.resolve`'s."""
     from styletrace.frontends.command_job import job_of
     from styletrace.pipeline.resolve import choose_integrator as choose
     return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
@@ -192,8 +200,8 @@ def cmd_gallery(args) -> int:
 
 
 def check_gallery_folder(path: str) -> None:
-    """The gallery's folder may be new, but like `render`'s output its parent folder must exist: fail (or
-    create it) before rendering, not after."""
+    """The gallery's folder may be new, but like `render`'s output its parent folder must exist:
+    fail (or create it) before rendering, not after."""
     if os.path.exists(path):
         if not os.path.isdir(path):
             raise UsageError(f"bad output {path!r}: expected a folder")
@@ -281,7 +289,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def add_ray_flags(parser) -> None:
-    """Rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks, checkpoints, resume."""
+    """Rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks,
+    checkpoints, resume."""
     parser.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
                         help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at ADDRESS "
                              "(HOST:PORT, as printed by `ray start --head`); give it after the scene")
@@ -296,14 +305,17 @@ def add_ray_flags(parser) -> None:
 
 
 def add_setting_flags(parser) -> None:
-    """One flag per integrator property that has one; help and defaults come from the settings table."""
+    """One flag per integrator property that has one; help and defaults come from the
+    settings table."""
     from styletrace.config import settings
     for p in settings.PROPERTIES:
         if not p.flag:
             continue
         default = f"the scene's stylized integrator's, else {settings.COMMAND_LINE_STYLE}" if p.name == "style" \
             else p.show_default()
-        if p.bare:  # a switch (`--lines`): no value, so it never takes the scene's name; off with --set NAME=false
+        # a switch (`--lines`): no value, so it never takes the scene's name; off with
+        # --set NAME=false
+        if p.bare:
             parser.add_argument(p.flag, dest=p.name, default=None, action="store_const", const="true",
                                 help=f"{p.doc} (default: off)")
             continue
@@ -313,7 +325,8 @@ def add_setting_flags(parser) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     try:
-        # the flags' help comes from the settings table, which needs the backend: errors there are one line too
+        # the flags' help comes from the settings table, which needs the backend: errors there are
+        # one line too
         args = build_parser().parse_args(argv)
         return args.func(args)
     except KeyboardInterrupt:

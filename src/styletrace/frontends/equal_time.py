@@ -1,25 +1,28 @@
-"""The gallery's equal-time section: one method against the tree sampler's fixed counts at the same time.
+"""The gallery's equal-time section: one method against the tree sampler's fixed counts at the
+same time.
 
     for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):   # integrators checked, none rendered
         entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)   # writes gallery/KEY.png
     equal_time.pick([0.10, 0.14, 0.22], 0.18)   # -> 1: the largest fixed count not slower than the method
-    equal_time.verdict(0.8)                      # -> "loss": a lower error at equal time is the only win
+    equal_time.verdict(0.8) # -> "loss": a lower error at equal time is the only win
 
 Protocol, per comparison (that of benchmarks/equal_time.py, on one seed):
-- Every render is 1 camera sample per pixel with seed 0, and so is the reference (direct application with a
-  large inner count): the same seed places the same camera rays, so the error measured is the stylized
-  estimate's, not the pixel noise all renders share. The reference's own error is part of every MSE.
-- Time: wall-clock seconds of `styletrace.render` after one untimed render that compiles the kernels; the
-  median of `repeats` renders (1 in quick mode).
-- The method is timed first. Then the fixed counts n (n doubling) render in increasing order until one
-  takes longer than the method; the count at equal time is the largest n whose time does not exceed the
-  method's, or the smallest n if even that one is slower (then the fixed count gets more time than the
-  method: a comparison in the method's favour, marked in the entry).
-- ratio = MSE(fixed n at equal time) / MSE(method). The verdict is "win" only when ratio > 1: a method that
-  wins at equal inner counts but loses at equal time is reported as a loss.
+- Every render is 1 camera sample per pixel with seed 0, and so is the reference (direct application
+  with a large inner count): the same seed places the same camera rays, so the error measured is the
+  stylized estimate's, not the pixel noise all renders share. The reference's own error is part of
+  every MSE.
+- Time: wall-clock seconds of `styletrace.render` after one untimed render that compiles the
+  kernels; the median of `repeats` renders (1 in quick mode).
+- The method is timed first. Then the fixed counts n (n doubling) render in increasing order until
+  one takes longer than the method; the count at equal time is the largest n whose time does not
+  exceed the method's, or the smallest n if even that one is slower (then the fixed count gets more
+  time than the method: a comparison in the method's favour, marked in the entry).
+- ratio = MSE(fixed n at equal time) / MSE(method). The verdict is "win" only when ratio > 1: a
+  method that wins at equal inner counts but loses at equal time is reported as a loss.
 
-Each comparison writes `KEY.png` (reference | fixed n at equal time | method, labelled with times and
-errors) and an entry of `gallery.json`; `sheet_md` / `sheet_html` give its part of the contact sheet.
+Each comparison writes `KEY.png` (reference | fixed n at equal time | method, labelled with times
+and errors) and an entry of `gallery.json`; `sheet_md` / `sheet_html` give its part of the
+contact sheet.
 """
 from __future__ import annotations
 
@@ -39,8 +42,8 @@ from styletrace.images import mse
 #: camera samples per pixel and seed of every render of the section (module docstring)
 SPP = 1
 SEED = 0
-#: quick mode: the reference's children per pixel at most (split evenly over its levels), and the number of
-#: fixed counts at most (the smallest ones)
+#: quick mode: the reference's children per pixel at most (split evenly over its levels), and the
+#: number of fixed counts at most (the smallest ones)
 QUICK_REFERENCE = 64
 QUICK_COUNTS = 3
 
@@ -53,9 +56,11 @@ class Comparison:
     method: dict[str, Any]              # integrator keywords of the method (inner, reuse, ...)
     reference: int | tuple[int, ...]    # inner count(s) of the reference, direct application
     params: dict[str, Any] = field(default_factory=dict)      # the style's parameters
-    integrator: dict[str, Any] = field(default_factory=dict)  # keywords shared by every render (stylize, ...)
+    # keywords shared by every render (stylize, ...)
+    integrator: dict[str, Any] = field(default_factory=dict)
     counts: tuple[int, ...] = (4, 8, 16, 32, 64, 128)         # fixed first-level counts n, doubling
-    below: tuple[int, ...] = ()         # the fixed renders' counts at the deeper levels, held constant
+    # the fixed renders' counts at the deeper levels, held constant
+    below: tuple[int, ...] = ()
     scene: str = "cornell-box"
 
 
@@ -68,9 +73,9 @@ def fixed_inner(c: Comparison, n: int) -> int | tuple[int, ...]:
 
 
 def quick(c: Comparison) -> Comparison:
-    """A small reference (QUICK_REFERENCE children per pixel at most) and at most QUICK_COUNTS fixed counts, all
-    below the reference's: a fixed count equal to the reference's would share its children (same seed) and
-    measure no error at all."""
+    """A small reference (QUICK_REFERENCE children per pixel at most) and at most QUICK_COUNTS fixed
+    counts, all below the reference's: a fixed count equal to the reference's would share its
+    children (same seed) and measure no error at all."""
     ref = levels(c.reference)
     cap = max(1, int(round(QUICK_REFERENCE ** (1 / len(ref)))))
     small = tuple(min(n, cap) for n in ref)
@@ -79,15 +84,15 @@ def quick(c: Comparison) -> Comparison:
 
 
 def pick(fixed_seconds: list[float], method_seconds: float) -> int:
-    """Index (in increasing n) of the fixed count at equal time: the largest n whose time does not exceed
-    the method's; 0, the smallest, when every one is slower."""
+    """Index (in increasing n) of the fixed count at equal time: the largest n whose time does not
+    exceed the method's; 0, the smallest, when every one is slower."""
     within = [i for i, t in enumerate(fixed_seconds) if t <= method_seconds]
     return max(within) if within else 0
 
 
 def verdict(ratio: float) -> str:
-    """'win' when the method's MSE is strictly below the fixed count's at equal time, else 'loss' (a tie
-    at the method's own cost is no win)."""
+    """'win' when the method's MSE is strictly below the fixed count's at equal time, else 'loss' (a
+    tie at the method's own cost is no win)."""
     return "win" if ratio > 1 else "loss"
 
 
@@ -102,12 +107,14 @@ def describe(config: dict[str, Any]) -> str:
 
 
 def show(inner: Any) -> str:
-    """A count as the command line writes it: 8, '8:64,4', (64, 64) and gallery.json's [64, 64] as 64,64."""
+    """A count as the command line writes it: 8, '8:64,4', (64, 64) and gallery.json's [64, 64]
+    as 64,64."""
     return ",".join(str(n) for n in inner) if isinstance(inner, (tuple, list)) else str(inner)
 
 
 def check(comparisons: list[Comparison]) -> None:
-    """Build every integrator of the section (refused settings raise StyletraceError) before any renders."""
+    """Build every integrator of the section (refused settings raise StyletraceError) before
+    any renders."""
     from styletrace.frontends import api
     for c in comparisons:
         for inner in (c.reference, fixed_inner(c, c.counts[0])):
@@ -116,7 +123,8 @@ def check(comparisons: list[Comparison]) -> None:
 
 
 def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tuple[np.ndarray, list[float]]:
-    """The image and the seconds of `repeats` renders, after one untimed render that compiles the kernels."""
+    """The image and the seconds of `repeats` renders, after one untimed render that compiles
+    the kernels."""
     from styletrace.pipeline.execute import render
 
     def once() -> tuple[np.ndarray, float]:
@@ -153,7 +161,8 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
         images.append(img)
         log(f"{c.key}: fixed n={n}: {fixed[-1]['seconds']:.3f} s, MSE {fixed[-1]['mse']:.3g}")
         if fixed[-1]["seconds"] > method["seconds"]:
-            break  # every larger count is slower still (in expectation): none of them can be at equal time
+            # every larger count is slower still (in expectation): none of them can be at equal time
+            break
     i = pick([f["seconds"] for f in fixed], method["seconds"])
     ratio = ratio_of(fixed[i]["mse"], method["mse"])
     entry = {"key": c.key, "title": c.title, "scene": c.scene, "size": size, "spp": SPP, "seed": SEED,
@@ -169,8 +178,8 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
 
 
 def prepare(comparisons: list[Comparison], quick_mode: bool = False) -> list[Comparison]:
-    """The comparisons as they will render (`quick` ones in quick mode), every integrator built once so that
-    refused settings raise StyletraceError before anything renders."""
+    """The comparisons as they will render (`quick` ones in quick mode), every integrator built once
+    so that refused settings raise StyletraceError before anything renders."""
     comparisons = [quick(c) for c in comparisons] if quick_mode else list(comparisons)
     check(comparisons)
     return comparisons
@@ -194,7 +203,8 @@ def labels(e: dict[str, Any]) -> list[tuple[str, str]]:
 
 
 def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
-    """reference | fixed n at equal time | method, tone-mapped as the gallery's PNGs, written atomically."""
+    """reference | fixed n at equal time | method, tone-mapped as the gallery's PNGs, written
+    atomically."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -1,15 +1,17 @@
-"""`styletrace gallery`: the paper's result setups (supplement S5, Figs. 7-12) on the built-in dragon.
+"""`styletrace gallery`: the paper's result setups (supplement S5, Figs. 7-12) on the
+built-in dragon.
 
 Each setup renders the dragon scene with one style at several inner sample counts n. Setups with a
-brute-force reference (the colour map at 1024 samples per style evaluation and cel at 4096, as in the
-supplement) also get the mean squared error of every render against it, plotted against n. The
-results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a contact
-sheet `index.html` / `index.md`.
+brute-force reference (the colour map at 1024 samples per style evaluation and cel at 4096, as in
+the supplement) also get the mean squared error of every render against it, plotted against n. The
+results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a
+contact sheet `index.html` / `index.md`.
 
-The equal-time section (`EQUAL_TIME`, rendered by `equal_time.py`) puts one method of each comparison side by
-side with the fixed count n that renders in the same time, both against a brute-force reference on the
-Cornell box, and says "win" or "LOSS": a method that wins at equal inner counts but loses at equal time is a
-loss. `--only equal_time` runs that section alone, `--skip equal_time` leaves it out.
+The equal-time section (`EQUAL_TIME`, rendered by `equal_time.py`) puts one method of each
+comparison side by side with the fixed count n that renders in the same time, both against a
+brute-force reference on the Cornell box, and says "win" or "LOSS": a method that wins at equal
+inner counts but loses at equal time is a loss. `--only equal_time` runs that section alone, `--skip
+equal_time` leaves it out.
 
 Quick mode (`--quick`) shrinks image size, counts and references so that it finishes in well under a
 minute; CI runs it.
@@ -45,7 +47,8 @@ class Setup:
     estimator: str = "direct"
 
 
-#: feature lines (docs/lines.md): on, with a gradient from deep blue at the feet to warm red at the top
+#: feature lines (docs/lines.md): on, with a gradient from deep blue at the feet to warm red at
+#: the top
 LINES = {"lines": True, "line_width": 1.5}
 LINE_GRADIENT = "0.05,0.1,0.5;0.8,0.15,0.05;0;1"
 
@@ -84,8 +87,10 @@ SETUPS = [
           integrator=dict(LINES, line_gradient=LINE_GRADIENT, line_depth=3), scene="lines"),
 ]
 
-#: The equal-time section: each method against the fixed counts at equal time (protocol: equal_time.py). Edit
-#: the `method` configurations here; each is any set of integrator keywords (inner, reuse, reuse_k, ...).
+#: The equal-time section: each method against the fixed counts at equal time (protocol:
+#: equal_time.py). Edit the `method` configurations here; each is any set of integrator keywords
+#: (inner, reuse,
+#: reuse_k, ...).
 POOLED = {"reuse": "pixels", "reuse_mis": "pairwise"}
 EQUAL_TIME = [
     Comparison("equal_time_cel", "GI cel shading, first hit: reuse with a refinement round against fixed n", "cel",
@@ -94,7 +99,8 @@ EQUAL_TIME = [
                "hatching", method={"inner": "2:32", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
     Comparison("equal_time_color_map", "Colour mapping, first hit: reuse against fixed n", "color_map",
                method={"inner": 4, **POOLED, "reuse_k": 24}, reference=1024),
-    # the fixed curve n,1: the cheapest split of the two levels' counts at equal time (BENCHMARKS.md equal_time)
+    # the fixed curve n,1: the cheapest split of the two levels' counts at equal time
+    # (BENCHMARKS.md equal_time)
     Comparison("equal_time_saturation", "Saturation, first 2 hits: reuse at the first hits against fixed n,1",
                "saturation", method={"inner": "2,1", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=(256, 16),
                integrator={"stylize": "first_n_hits", "stylize_depth": 2}, counts=(2, 4, 8, 16, 32, 64), below=(1,)),
@@ -117,14 +123,15 @@ QUICK = Options(size=48, spp=2, reference_spp=2, quick=True, equal_time_size=32,
 
 
 def keys() -> list[str]:
-    """Everything --only and --skip accept: the setups, the comparisons and the equal-time section."""
+    """Everything --only and --skip accept: the setups, the comparisons and the
+    equal-time section."""
     return [s.key for s in SETUPS] + [c.key for c in EQUAL_TIME] + [EQUAL_TIME_SECTION]
 
 
 def select(only: list[str] | None = None,
            skip: list[str] | None = None) -> tuple[list[Setup], list[Comparison]]:
-    """The setups and comparisons to run: those `only` names (all when None) less those `skip` names;
-    `equal_time` names every comparison. ValueError names an unknown key."""
+    """The setups and comparisons to run: those `only` names (all when None) less those `skip`
+    names; `equal_time` names every comparison. ValueError names an unknown key."""
     unknown = sorted(set(only or ()).union(skip or ()) - set(keys()))
     if unknown:
         raise ValueError(f"unknown gallery setup(s) {', '.join(unknown)}: available are {', '.join(keys())}")
@@ -156,7 +163,8 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
     setups, comparisons = select(only, skip)
     results: dict[str, Any] = {"options": options.__dict__, "setups": [], "equal_time": []}
     t_all = time.perf_counter()
-    comparisons = equal_time.prepare(comparisons, options.quick)  # refused settings stop it before any render
+    # refused settings stop it before any render
+    comparisons = equal_time.prepare(comparisons, options.quick)
     for setup in setups:
         if options.quick:
             setup = _quick(setup)
@@ -190,7 +198,8 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
         results["setups"].append(entry)
     plot_mse(results, os.path.join(out_dir, "mse.png"))
     save(results, out_dir, t_all)
-    for c in comparisons:  # saved after each: an error or Ctrl-C in a later one loses none of the finished
+    # saved after each: an error or Ctrl-C in a later one loses none of the finished
+    for c in comparisons:
         results["equal_time"].append(equal_time.compare(c, out_dir, options.equal_time_size,
                                                         options.equal_time_repeats, log)[0])
         save(results, out_dir, t_all)

@@ -5,9 +5,9 @@
     styletrace fit dragon.npz --style cel --target look.png -o fitted.png
     styletrace preview dragon --port 8765
 
-`render --buffer` runs through the pipeline's runner with `lookdev.record.Recorded` (`denoise.finishers.plan`).
-`cli.build_parser` calls `add_parsers`, handing over its own helpers (so this module never imports `cli`);
-nothing here loads Dr.Jit or Mitsuba before a command runs.
+`render --buffer` runs through the pipeline's runner with `lookdev.record.Recorded`
+(`denoise.finishers.plan`). `cli.build_parser` calls `add_parsers`, handing over its own helpers (so
+this module never imports `cli`); nothing here loads Dr.Jit or Mitsuba before a command runs.
 """
 from __future__ import annotations
 
@@ -39,8 +39,8 @@ def cmd_restyle(args, parse_set, check_output) -> int:
 
 
 def write_atomically(img, path: str, write_image) -> None:
-    """Write an image: `images.write_image` is atomic itself (temporary file beside the target, fsync,
-    rename) and writes through a symbolic link instead of replacing it."""
+    """Write an image: `images.write_image` is atomic itself (temporary file beside the target,
+    fsync, rename) and writes through a symbolic link instead of replacing it."""
     write_image(img, path)
 
 

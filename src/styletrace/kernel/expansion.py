@@ -1,30 +1,34 @@
-"""The expansion pass: every pixel's E[X] and E[X^2] at its first stylized vertex, for the series' b*.
+"""The expansion pass: every pixel's E[X] and E[X^2] at its first stylized vertex, for the
+series' b*.
 
-Why (docs/estimators.md, "Gamma and the series estimators"): a series estimate is a sum of products of
-(x - b) / b over children, whose second moments grow like rho^k with rho = E[(X - b)^2] / b^2; rho is smallest
-at b* = E[X^2] / E[X] (rho = cv^2 / (1 + cv^2) < 1). b* is a ratio of moments that the rare bright children
-dominate, so it needs many children (64 per pixel measured on three firefly scenes; 16 fail): too many to draw
-per estimate, cheap once per pixel. This module draws them once per pixel, before the render.
+Why (docs/estimators.md, "Gamma and the series estimators"): a series estimate is a sum of products
+of (x - b) / b over children, whose second moments grow like rho^k with rho = E[(X - b)^2] / b^2;
+rho is smallest at b* = E[X^2] / E[X] (rho = cv^2 / (1 + cv^2) < 1). b* is a ratio of moments that
+the rare bright children dominate, so it needs many children (64 per pixel measured on three firefly
+scenes; 16 fail): too many to draw per estimate, cheap once per pixel. This module draws them once
+per pixel, before the render.
 
 How
     The pass is Mitsuba's own render loop at PASS_SPP camera samples per pixel (another seed than the
-    render's passes: `api.expansion_seed`), with the integrator in collecting mode: at the first stylized
-    vertex each lane draws ceil(m / PASS_SPP) children and keeps the sums of r and r^2 per channel, r = x - e,
-    e the vertex's own emission (part of every child, known per lane: it is added back per lane, so a render
-    lane on a light in a pixel whose pass saw the wall beside it still gets a b above its emission); nothing
-    else is estimated there. The sums are taken per pixel on the host. Mitsuba lays a wavefront out pixel by
-    pixel, each pixel's spp samples next to each other (lane i is pixel i // spp of the film's crop, border
-    included; SamplingIntegrator::render in Mitsuba's integrator.cpp), so `lane_pixels` is a render lane's
-    pixel. A render lane then reads its pixel's moments (`Moments.lookup`), a function of its lane only,
-    never of its own children, and `estimator_registry.series_with_pass` expands about b = PASS_B_SCALE x the larger
-    of E[(e + R)^2] / E[e + R] over the pixel's own children and over its 3 x 3 window's (9x the children:
-    a bright child that one pixel's m missed is often seen by its neighbours'), with its own e: the series
-    estimate stays unbiased. A pixel whose pass samples reached no stylized vertex (they saw the
-    environment) takes its window's moments, else none (b falls to the style's floor).
+    render's passes: `api.expansion_seed`), with the integrator in collecting mode: at the first
+    stylized vertex each lane draws ceil(m / PASS_SPP) children and keeps the sums of r and r^2 per
+    channel, r = x - e, e the vertex's own emission (part of every child, known per lane: it is
+    added back per lane, so a render lane on a light in a pixel whose pass saw the wall beside it
+    still gets a b above its emission); nothing else is estimated there. The sums are taken per
+    pixel on the host. Mitsuba lays a wavefront out pixel by pixel, each pixel's spp samples next to
+    each other (lane i is pixel i // spp of the film's crop, border included;
+    SamplingIntegrator::render in Mitsuba's integrator.cpp), so `lane_pixels` is a render lane's
+    pixel. A render lane then reads its pixel's moments (`Moments.lookup`), a function of its lane
+    only, never of its own children, and `estimator_registry.series_with_pass` expands about b =
+    PASS_B_SCALE x the larger of E[(e + R)^2] / E[e + R] over the pixel's own children and over its
+    3 x 3 window's (9x the children: a bright child that one pixel's m missed is often seen by its
+    neighbours'), with its own e: the series estimate stays unbiased. A pixel whose pass samples
+    reached no stylized vertex (they saw the environment) takes its window's moments, else none (b
+    falls to the style's floor).
 
     maps = Expansion()                            # the integrator's
-    maps.prepare(integrator, scene, m, seed)      # per film crop, before its passes (api.passes does it)
-    m1, m2 = maps.lookup(scene, width, m)         # in sample(): the lane's pixel's mean r and r^2 (Color3f)
+    maps.prepare(integrator, scene, m, seed) # per film crop, before its passes (api.passes does it)
+    m1, m2 = maps.lookup(scene, width, m) # in sample(): the lane's pixel's mean r and r^2 (Color3f)
 """
 from __future__ import annotations
 
@@ -34,13 +38,16 @@ from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
 from styletrace.jit import no_collection
 
-#: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's footprint, not
-#: one point of it (a lane whose children are far brighter than its pixel's b diverges: see the docstring).
+#: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's
+#: footprint, not one point of it (a lane whose children are far brighter than its pixel's b
+#: diverges: see
+#: the docstring).
 PASS_SPP = 4
 
 
 def crop_key(scene: mi.Scene) -> tuple:
-    """What fixes the lane -> pixel layout of a render of the scene's first sensor: its film's crop and border."""
+    """What fixes the lane -> pixel layout of a render of the scene's first sensor: its film's crop
+    and border."""
     film = scene.sensors()[0].film()
     border = int(film.rfilter().border_size()) if film.sample_border() else 0
     return (tuple(int(v) for v in film.crop_offset()), tuple(int(v) for v in film.crop_size()), border)
@@ -60,8 +67,8 @@ def lane_pixels(width: int, pixels: int) -> mi.UInt32:
 
 
 def moments(draw, sampler, active, m: int, known):
-    """(sum of r, sum of r^2) over m draws x = `draw(sampler)` per active lane, r = x - known (the part of x
-    that is the same in every child: the vertex's own emission), in one symbolic loop."""
+    """(sum of r, sum of r^2) over m draws x = `draw(sampler)` per active lane, r = x - known (the
+    part of x that is the same in every child: the vertex's own emission), in one symbolic loop."""
     def cond(i, s1, s2, smp):
         return active & (i < m)
 
@@ -75,8 +82,9 @@ def moments(draw, sampler, active, m: int, known):
 
 
 class Collector:
-    """The pass's sums per lane (PASS_SPP lanes per pixel): r and r^2 per channel, and whether the lane reached a
-    stylized vertex; summed per pixel on the host in a fixed order (float atomics would not be)."""
+    """The pass's sums per lane (PASS_SPP lanes per pixel): r and r^2 per channel, and whether the
+    lane reached a stylized vertex; summed per pixel on the host in a fixed order (float atomics
+    would not be)."""
 
     def __init__(self, pixels: int, m: int):
         self.pixels, self.m = pixels, m
@@ -95,8 +103,8 @@ class Collector:
         dr.scatter(self.hit, mi.Float(1.0), lane, active)
 
     def means(self, key: tuple) -> list[tuple[np.ndarray, np.ndarray]]:
-        """[(mean r, mean r^2) of each pixel's own children, the same over its 3 x 3 window], each (rows, columns,
-        3); a pixel without children of its own takes its window's."""
+        """[(mean r, mean r^2) of each pixel's own children, the same over its 3 x 3 window], each
+        (rows, columns, 3); a pixel without children of its own takes its window's."""
         (_, (w, h), border) = key
         rows, cols = h + 2 * border, w + 2 * border
         n = np.asarray(self.hit, dtype=np.float64).reshape(rows, cols, PASS_SPP).sum(axis=2)[..., None]
@@ -116,18 +124,20 @@ class Collector:
 
 
 class Moments:
-    """One crop's per-pixel means of r and r^2 on the device (one or more sets), and its key and seed."""
+    """One crop's per-pixel means of r and r^2 on the device (one or more sets), and its key
+    and seed."""
 
     def __init__(self, key: tuple, seed: int, sets):
         self.key, self.seed = key, seed
-        self.host = [(m1.astype(np.float32), m2.astype(np.float32)) for m1, m2 in sets]  # (rows, cols, 3) each
+        # (rows, cols, 3) each
+        self.host = [(m1.astype(np.float32), m2.astype(np.float32)) for m1, m2 in sets]
         self.device = [(mi.Float(np.ascontiguousarray(m1).ravel()), mi.Float(np.ascontiguousarray(m2).ravel()))
                        for m1, m2 in self.host]
         self.pixels = pixel_count(key)
 
     def b_star(self, known=0.0) -> np.ndarray:
-        """b* = E[x^2] / E[x] per pixel and channel for x = known + r (0 where E[x] is 0), before any clamp
-        (the largest over the sets)."""
+        """b* = E[x^2] / E[x] per pixel and channel for x = known + r (0 where E[x] is 0), before
+        any clamp (the largest over the sets)."""
         out = None
         for m1, m2 in self.host:
             m1, m2 = m1.astype(np.float64), m2.astype(np.float64)
@@ -143,7 +153,8 @@ class Moments:
 
 
 class Expansion:
-    """The pass results of the render under way, one per film crop (api.passes renders tiles as crops)."""
+    """The pass results of the render under way, one per film crop (api.passes renders tiles
+    as crops)."""
 
     def __init__(self):
         self.maps: dict[tuple, Moments] = {}
@@ -153,7 +164,8 @@ class Expansion:
         self.maps = {}
 
     def prepare(self, integrator, scene: mi.Scene, m: int, seed: int) -> Moments:
-        """The moments of the scene's current film crop, from a pass with `seed` (rendered once per crop)."""
+        """The moments of the scene's current film crop, from a pass with `seed` (rendered once
+        per crop)."""
         key = crop_key(scene)
         done = self.maps.get(key)
         if done is not None and done.seed == seed:

@@ -1,4 +1,5 @@
-"""The per-render state of a `stylized` integrator, bound to one scene for one render and always released.
+"""The per-render state of a `stylized` integrator, bound to one scene for one render and
+always released.
 
     with RenderContext(integrator, scene):      # in `sample`, `reuse.render`, and a recording through them
         ... trace ...                            # integrator.targets, .emitters, .lines, .view, ... are set
@@ -29,7 +30,8 @@ from styletrace.styles.base import camera_forward
 
 
 class RenderContext:
-    """Binds `scene` to one render of `integrator` (see the module doc); re-entering it is an error."""
+    """Binds `scene` to one render of `integrator` (see the module doc); re-entering it is
+    an error."""
 
     def __init__(self, integrator, scene: mi.Scene):
         self.integrator, self.scene = integrator, scene
@@ -40,7 +42,8 @@ class RenderContext:
             raise RuntimeError("a stylized integrator renders one scene at a time: its render context is taken")
         try:
             graph = SceneGraph(scene)
-            # plain flags only: a kept reference to a scene's objects breaks later traces (module doc)
+            # plain flags only: a kept reference to a scene's objects breaks later traces
+            # (module doc)
             integ.nulls, integ.media, integ.see_through = graph.has_null, graph.has_media, graph.has_see_through
             integ.targets = integ.targets_for(scene, graph)
             problem = integ.scene_problem()
@@ -50,14 +53,16 @@ class RenderContext:
             lifted = settings.lines is not None and settings.lines.mode == "lifted"
             integ.lines = None if settings.lines is None or lifted else Lines(settings.lines, scene,
                                                                               see_through=integ.see_through)
-            # LLaT's conditional lifting tests its line types per camera sample before L (lifted_lines.py)
+            # LLaT's conditional lifting tests its line types per camera sample before L
+            # (lifted_lines.py)
             integ.lifted = (Lifted(scene, settings.lines.types, depth=settings.lines.depth,
                                    through_diffuse=settings.lines.diffuse, objects=settings.lines.objects)
                             if lifted and scene.sensors() else None)
             wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in integ.targets)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
             integ.tone_states = {}
-            # emitter selection in an order of the scene's own (its emitter list changes order between runs)
+            # emitter selection in an order of the scene's own (its emitter list changes order
+            # between runs)
             integ.emitters = EmitterSampler(scene, settings.emitter_sampling)
             integ.walk_config = WalkConfig(scene, integ.emitters, settings.max_depth,
                                            settings.rr_depth, nulls=integ.nulls, media=integ.media)

@@ -1,8 +1,10 @@
-"""The reuse pass loop: a pass of `spp` samples per pixel rendered in batches, each splatted onto one block.
+"""The reuse pass loop: a pass of `spp` samples per pixel rendered in batches, each splatted onto
+one block.
 
-The children of a pass are stored (16 floats each, side by side), so a pass is split into batches of samples
-per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one batch of one crop window
-(`api.passes` tiles images above a million pixels; a window is clipped at a tile's edge).
+The children of a pass are stored (16 floats each, side by side), so a pass is split into batches of
+samples per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one batch of
+one crop window (`api.passes` tiles images above a million pixels; a window is clipped at a
+tile's edge).
 """
 from __future__ import annotations
 
@@ -27,12 +29,13 @@ def batch_seed(seed: int, batch: int) -> int:
 
 def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weights: str | None = None,
            keep: dict | None = None) -> mi.TensorXf:
-    """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render` returns).
-    `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
-    by its own density (wrong: the tests' negative control);
-    `keep`, a dict, receives the first batch's pools as numpy arrays (`pool_pixels`)."""
-    # no scene may be finalised while a pass is recorded (jit.no_collection), and none needs collecting first
-    with no_collection(), RenderContext(integ, scene):  # targets, emitters, view bound to this scene, released after
+    """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render`
+    returns). `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides
+    each pooled BSDF sample by its own density (wrong: the tests' negative control); `keep`, a dict,
+    receives the first batch's pools as numpy arrays (`pool_pixels`)."""
+    # no scene may be finalised while a pass is recorded (jit.no_collection), and none needs
+    # collecting first targets, emitters, view bound to this scene, released after
+    with no_collection(), RenderContext(integ, scene):
         if integ.nulls or integ.media:
             what = "participating media" if integ.media else "null-scattering surfaces (masks, null BSDFs)"
             raise SceneError(f"reuse=pixels does not support scenes with {what} yet: render with reuse=off")

@@ -11,9 +11,9 @@
 
 Properties: `style` (required), the style's parameters, `inner_samples` and `estimator` (as on the
 `stylized` integrator), and exactly one nested BSDF. For light transport the wrapper *is* the nested
-BSDF: every query is forwarded. The `stylized` integrator finds the wrappers in the scene and applies
-their styles where paths meet these objects (see its `stylize` property); other integrators render
-the objects physically based.
+BSDF: every query is forwarded. The `stylized` integrator finds the wrappers in the scene and
+applies their styles where paths meet these objects (see its `stylize` property); other integrators
+render the objects physically based.
 """
 from __future__ import annotations
 

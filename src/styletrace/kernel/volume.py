@@ -1,33 +1,36 @@
-"""The path kernel in scenes with participating media: `walk` of path.py, but along rays through media.
+"""The path kernel in scenes with participating media: `walk` of path.py, but along rays
+through media.
 
     w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)  # a Walk
-    tr = transmittance(scene, sampler, it, ds, medium, channel, active)      # towards a sampled light
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active) # towards a sampled light
 
-The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray in a
-medium a free-flight distance is drawn from the medium's majorant (`Medium.sample_interaction`); a
-collision before the next surface is real (scattering, probability sigma_t / majorant) or null (the ray
-goes on from there, nothing added). A real collision scatters by the medium's phase function: next-event
-estimation (power heuristic against phase sampling), then a phase-sampled direction. Surfaces scatter as
-in path.py (next-event estimation, MIS against BSDF sampling, roulette). A transmission through a
-surface that bounds a medium (`si.is_medium_transition()`) moves the path into `si.target_medium(d)`.
-Null-scattering surfaces (`null`, masks) add no depth and keep the last real vertex for MIS, as in
-`volpath`. Light reaches a vertex through media and null surfaces: the shadow ray's transmittance is
-estimated by ratio tracking (`transmittance`), so a `null` shape bounding a medium does not block it.
+The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray
+in a medium a free-flight distance is drawn from the medium's majorant
+(`Medium.sample_interaction`); a collision before the next surface is real (scattering, probability
+sigma_t / majorant) or null (the ray goes on from there, nothing added). A real collision scatters
+by the medium's phase function: next-event estimation (power heuristic against phase sampling), then
+a phase-sampled direction. Surfaces scatter as in path.py (next-event estimation, MIS against BSDF
+sampling, roulette). A transmission through a surface that bounds a medium
+(`si.is_medium_transition()`) moves the path into `si.target_medium(d)`. Null-scattering surfaces
+(`null`, masks) add no depth and keep the last real vertex for MIS, as in `volpath`. Light reaches a
+vertex through media and null surfaces: the shadow ray's transmittance is estimated by ratio
+tracking (`transmittance`), so a `null` shape bounding a medium does not block it.
 
 In RGB the free-flight distance is drawn in one colour channel per path (chosen uniformly), and the
-throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel); media
-with grey extinction get weight 1 from the same formulas. Depth counts real scattering events at
-surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every scattering from
-depth `rr_depth` + 1 on, as `volpath`'s.
+throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel);
+media with grey extinction get weight 1 from the same formulas. Depth counts real scattering events
+at surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every
+scattering from depth `rr_depth` + 1 on, as `volpath`'s.
 
 `volume_walk` has path.walk's signature (path.WalkConfig, path.Start, path.Hooks). Stylization
-(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is always
-a surface one. `Start.flight` says whether the medium along the first ray is still to be sampled (a ray
-from the camera, or from a stylized vertex towards the next one) or the lane already stands at the
-surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
-`Start.delta`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
-through g at the next stylized vertex; see bounce.bounce), so emitters found past it get full weight.
-`Start.hide`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
+(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is
+always a surface one. `Start.flight` says whether the medium along the first ray is still to be
+sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already
+stands at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the
+parent). `Start.delta`: the start vertex samples delta lights only (its other light is reached by
+the BSDF sample, through g at the next stylized vertex; see bounce.bounce), so emitters found past
+it get full weight. `Start.hide`: no emission is counted before the first scattering
+(`hide_emitters` on a camera ray).
 """
 from __future__ import annotations
 
@@ -83,7 +86,8 @@ def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.Directi
                   channel: mi.UInt32, active: mi.Bool) -> mi.Spectrum:
     """Ratio-tracking estimate of the transmittance from `it` to the light point ds.p: through media
     (null collisions weigh sigma_n over the channel's density) and through surfaces by their null
-    transmission (0 at opaque ones: an occlusion test). `medium`: the medium the shadow ray starts in."""
+    transmission (0 at opaque ones: an occlusion test). `medium`: the medium the shadow ray
+    starts in."""
     state = ShadowState(sampler=sampler, ray=it.spawn_ray_to(ds.p), medium=mi.MediumPtr(medium),
                         tr=mi.Spectrum(1.0), active=mi.Bool(active))
 
@@ -113,7 +117,8 @@ def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.Directi
 
 @dataclass
 class VolumeState:
-    """The loop state of `volume_walk` (path.PathState plus the medium and the free-flight switch)."""
+    """The loop state of `volume_walk` (path.PathState plus the medium and the
+    free-flight switch)."""
     sampler: Any
     pi: mi.PreliminaryIntersection3f     # the next surface along `ray` (its t measured from ray.o)
     ray: mi.Ray3f
@@ -134,8 +139,8 @@ class VolumeState:
 
 
 def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
-    """path.walk through participating media (module docstring): the same parameters and hooks; returns
-    a path.Walk with the medium each lane stands in."""
+    """path.walk through participating media (module docstring): the same parameters and hooks;
+    returns a path.Walk with the medium each lane stands in."""
     scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
     opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
@@ -175,11 +180,12 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         here, passes, w_pass = halt_at(s, si, bsdf, at_surf, stop, nulls)
         s.L += mis_emission(scene, emitters, s, si, here & (s.depth > 0) if hide_first else here)
 
-        # the BSDF is sampled at the last depth too: a null component sampled there goes on at the same depth
+        # the BSDF is sampled at the last depth too: a null component sampled there goes on at the
+        # same depth
         sample_s = here & ~passes & si.is_valid()
         active_s = sample_s & (s.depth + 1 < limit)
 
-        # ---- next-event estimation from the medium collision or the surface vertex, one light sample
+        # ---- next-event estimation from the medium collision or the surface vertex, one light samp
         sample_m = scat & mei.medium.use_emitter_sampling()
         em_on = sample_m | (active_s & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth))
         it = dr.select(scat, it_m, mi.Interaction3f(si))
@@ -195,13 +201,15 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         phase_val, phase_pdf = phase.eval_pdf(pctx, mei, ds.d, sample_m)
         wo = si.to_local(ds.d)
         u1 = s.sampler.next_1d(sample_s)
-        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+        # the stylized starting vertex samples its opaque part alone (opaque_share)
+        if nulls and opaque_start:
             keep = dr.select(s.first, opaque_share(si, bsdf, sample_s & s.first), 1.0)
             u1 = dr.select(s.first, u1 * keep, u1)
         bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(sample_s),
                                                                    sample_s)
         scale = mi.Spectrum(1.0)
-        if nulls and opaque_start:  # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
+        # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
+        if nulls and opaque_start:
             scale = dr.select(s.first, opaque_part(si, bsdf, sample_s & s.first), 1.0)
             ok = keep > 0
             bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
@@ -233,7 +241,8 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         s.pdf_prev = dr.select(scat, phase_pdf_m, dr.select(real_s, bs.pdf, s.pdf_prev))
         s.delta_prev = dr.select(scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev))
         s.medium = dr.select(go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium)
-        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+        # the prefix the next vertex's image coordinate is searched with (anchors.py)
+        if tone is not None:
             s.tone = scattered_in_medium(advance(s.tone, si, bs, s.depth, real_s), scat)
 
         # roulette after each scattering, from depth rr_depth + 1 on (volpath's)
@@ -245,7 +254,8 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         go &= ~roulette | (s.sampler.next_1d(roulette) < q)
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=go)
-        if lines is not None:  # a line on the edge a surface scattering starts absorbs the path (lines.py)
+        # a line on the edge a surface scattering starts absorbs the path (lines.py)
+        if lines is not None:
             seen, after = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
                                         go & real_s)
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
@@ -271,17 +281,19 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
 
 
 def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
-    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths reflect
-    or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins the prefix
-    key as no shape does, so no anchor matches and the coordinate takes its fallbacks (anchors.py)."""
+    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths
+    reflect or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins
+    the prefix key as no shape does, so no anchor matches and the coordinate takes its fallbacks
+    (anchors.py)."""
     key = combine(tone.key, mi.UInt32(0xFFFFFFFF))  # a shape id + 1 that no shape has: 0
     return ToneState(key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0)
 
 
 def lines_past(state: LineState, pi: mi.PreliminaryIntersection3f, passed: mi.Bool,
                scattered: mi.Bool) -> LineState:
-    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes on
-    through the surface (its lines were tested through it), its length grows by the next segment's.
-    `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later edge is tested."""
+    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes
+    on through the surface (its lines were tested through it), its length grows by the next
+    segment's. `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later
+    edge is tested."""
     D = dr.select(passed, state.D + dr.select(pi.is_valid(), pi.t, dr.inf), state.D)
     return LineState(D=D, alive=state.alive & ~scattered, angle=state.angle, spread=state.spread)

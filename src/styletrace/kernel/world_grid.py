@@ -4,17 +4,18 @@ Reference
     Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering
     takes the neighbours of a deeper vertex within a radius h in world space (their hash grid).
 
-The second-level vertices of neighbouring pixels are not neighbours in space (their first bounces go in
-independent directions), so they are found in a uniform grid of cell size h over the scene's bounding box. The
-grid is built on the host with numpy: each vertex's cell is packed into one integer key, the keys are sorted
-with a stable argsort and each lookup is a binary search, so the same vertices give the same neighbours on any
-thread count (a hash table filled with atomics would not: its order depends on the threads' timing).
+The second-level vertices of neighbouring pixels are not neighbours in space (their first bounces go
+in independent directions), so they are found in a uniform grid of cell size h over the scene's
+bounding box. The grid is built on the host with numpy: each vertex's cell is packed into one
+integer key, the keys are sorted with a stable argsort and each lookup is a binary search, so the
+same vertices give the same neighbours on any thread count (a hash table filled with atomics would
+not: its order depends on the threads' timing).
 
-A vertex looks up the cell of its position jittered by up to h/2 on each axis (so cell borders do not decide who
-is a neighbour), takes K consecutive candidates of that cell from a random start, itself excluded, and accepts
-those within distance h with the same style target, the same BSDF object and shading normals with
-n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of `reuse.pool.Grid`'s, so `reuse.pool.pooled` pools
-over either.
+A vertex looks up the cell of its position jittered by up to h/2 on each axis (so cell borders do
+not decide who is a neighbour), takes K consecutive candidates of that cell from a random start,
+itself excluded, and accepts those within distance h with the same style target, the same BSDF
+object and shading normals with n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of
+`reuse.pool.Grid`'s, so `reuse.pool.pooled` pools over either.
 """
 from __future__ import annotations
 
@@ -28,10 +29,11 @@ AXIS_BITS = 21
 
 
 def uint32(a: np.ndarray) -> mi.UInt32:
-    """A numpy array as a Dr.Jit array in Dr.Jit's own (aligned) memory: a kernel reading numpy's memory directly
-    is compiled for its alignment, so the large kernels that read these would be compiled anew (about a second)
-    whenever numpy's allocation is aligned otherwise."""
-    out = mi.UInt32(a.astype(np.uint32)) + dr.opaque(mi.UInt32, 0)  # a tiny kernel's output, in Dr.Jit's memory
+    """A numpy array as a Dr.Jit array in Dr.Jit's own (aligned) memory: a kernel reading numpy's
+    memory directly is compiled for its alignment, so the large kernels that read these would be
+    compiled anew (about a second) whenever numpy's allocation is aligned otherwise."""
+    # a tiny kernel's output, in Dr.Jit's memory
+    out = mi.UInt32(a.astype(np.uint32)) + dr.opaque(mi.UInt32, 0)
     dr.eval(out)
     return out
 
@@ -43,10 +45,10 @@ def cell_keys(P: np.ndarray, corner: np.ndarray, h: float) -> np.ndarray:
 
 
 def density_h(p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: float, rounds: int = 4) -> float:
-    """The cell size at which a vertex's own cell holds about K + 1 of the `valid` vertices (itself included),
-    averaged over them. Path vertices lie on surfaces, so a cell's count grows as h^2: each round rescales h
-    by sqrt((K + 1) / count), starting from the bounding box `high` (its diagonal) split evenly; kept in
-    [low, high]."""
+    """The cell size at which a vertex's own cell holds about K + 1 of the `valid` vertices (itself
+    included), averaged over them. Path vertices lie on surfaces, so a cell's count grows as h^2:
+    each round rescales h by sqrt((K + 1) / count), starting from the bounding box `high` (its
+    diagonal) split evenly; kept in [low, high]."""
     P = np.asarray(p, dtype=np.float64).reshape(3, -1)[:, np.asarray(valid, dtype=bool)]
     if P.shape[1] < 2:
         return high
@@ -59,18 +61,20 @@ def density_h(p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: f
 
 
 class WorldGrid:
-    """Slot 0 is the vertex itself, slot q >= 1 the q-th candidate of its jittered cell (module docstring)."""
+    """Slot 0 is the vertex itself, slot q >= 1 the q-th candidate of its jittered cell (module
+    docstring)."""
 
     def __init__(self, p: mi.Point3f, valid: mi.Bool, h: float, K: int, jitter: mi.Point3f, start: mi.Float,
                  origin):
-        """`p`: the vertices; `valid`: those that may be found; `h`: cell size and radius (world units);
-        `jitter` in [0, 1)^3 and `start` in [0, 1): per vertex, its lookup's offset and first candidate;
-        `origin`: a corner below every vertex (the scene's bounding box)."""
+        """`p`: the vertices; `valid`: those that may be found; `h`: cell size and radius (world
+        units); `jitter` in [0, 1)^3 and `start` in [0, 1): per vertex, its lookup's offset and
+        first candidate; `origin`: a corner below every vertex (the scene's bounding box)."""
         self.h, self.K = float(h), K
         self.p = p
         width = dr.width(p)
         self.lane = dr.arange(mi.UInt32, width)
-        corner = np.asarray(origin, dtype=np.float64).reshape(3, 1) - h  # a jittered lookup stays above it
+        # a jittered lookup stays above it
+        corner = np.asarray(origin, dtype=np.float64).reshape(3, 1) - h
         P = np.asarray(p, dtype=np.float64).reshape(3, width)
         keys = self.keys(P, corner)
         keys[~np.asarray(valid, dtype=bool)] = np.iinfo(np.int64).max   # never found
@@ -96,8 +100,10 @@ class WorldGrid:
         return dr.select(ok, at, self.lane), first | ok
 
     def accepted(self, target, bsdf, pool, n, normal_min) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py; within h)."""
-        h2 = dr.opaque(mi.Float, self.h * self.h)  # not a literal: h changes from pass to pass, the kernel not
+        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py;
+        within h)."""
+        # not a literal: h changes from pass to pass, the kernel not
+        h2 = dr.opaque(mi.Float, self.h * self.h)
 
         def near(at, ok):
             return dr.squared_norm(dr.gather(mi.Point3f, self.p, at, ok) - self.p) <= h2

@@ -1,17 +1,18 @@
 """Checkpoints of a render on Ray: the sum of the finished passes as an EXR, and a JSON manifest.
 
     ck = Checkpoint("out.png", settings)     # OUT.checkpoint.json + OUT.checkpoint-<generation>.exr
-    ck.save(total, rounds_done)               # atomically; the previous generation's EXR is then removed
+    ck.save(total, rounds_done) # atomically; the previous generation's EXR is then removed
     total, rounds_done = ck.load()            # for --resume; UsageError if the settings differ
     ck.remove()                               # once the render is written
 
-The EXR holds the float32 running *sum* of the finished passes (not their average), so a resumed render
-adds the remaining passes to exactly the numbers it would have had: the result is bit-identical to the
-undisturbed render. The manifest records the render's settings (scene, integrator values, spp, seed,
-size, the pass split, the variant) and, per tile, how many of its passes are summed (`rounds_done`; tiles
-are summed in pass order, so the done units of a tile are a prefix). Both files are written with
-`images.write_bytes_atomically` (temporary file, fsync, rename); the EXR of a new generation is written
-before the manifest that names it, so a kill at any moment leaves a manifest naming a complete EXR.
+The EXR holds the float32 running *sum* of the finished passes (not their average), so a resumed
+render adds the remaining passes to exactly the numbers it would have had: the result is
+bit-identical to the undisturbed render. The manifest records the render's settings (scene,
+integrator values, spp, seed, size, the pass split, the variant) and, per tile, how many of its
+passes are summed (`rounds_done`; tiles are summed in pass order, so the done units of a tile are a
+prefix). Both files are written with `images.write_bytes_atomically` (temporary file, fsync,
+rename); the EXR of a new generation is written before the manifest that names it, so a kill at any
+moment leaves a manifest naming a complete EXR.
 """
 from __future__ import annotations
 
@@ -90,7 +91,8 @@ class Checkpoint:
         return total, list(body["rounds_done"])
 
     def remove(self) -> None:
-        """After the final image is written: the manifest first, so no manifest names a missing EXR."""
+        """After the final image is written: the manifest first, so no manifest names a
+        missing EXR."""
         if self.exists():
             os.remove(self.manifest)
         self._drop(self.generation)

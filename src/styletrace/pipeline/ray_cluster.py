@@ -3,9 +3,9 @@
     connect("local")            # start Ray here (the embedded default: one laptop is enough)
     connect("10.0.0.5:6379")    # join a cluster started with `ray start --head` on that machine
 
-A process that already called `ray.init` (a script, the test suite) keeps its connection. Workers of a
-local instance inherit this process's environment, PYTHONPATH included; the machines of a real cluster
-need styletrace, Mitsuba and Dr.Jit installed in the same versions as here.
+A process that already called `ray.init` (a script, the test suite) keeps its connection. Workers of
+a local instance inherit this process's environment, PYTHONPATH included; the machines of a real
+cluster need styletrace, Mitsuba and Dr.Jit installed in the same versions as here.
 """
 from __future__ import annotations
 
@@ -29,8 +29,9 @@ def connect(cluster: str):
     ray = ray_module()
     if not isinstance(cluster, str) or not cluster.strip():
         raise UsageError(f"bad cluster {cluster!r}: expected None, 'local' or a Ray address such as HOST:6379")
-    # every result the driver wants it gets (and raises); the only results left unread are those of units
-    # cancelled on Ctrl-C, whose KeyboardInterrupt tracebacks Ray would otherwise print at exit
+    # every result the driver wants it gets (and raises); the only results left unread are those of
+    # units cancelled on Ctrl-C, whose KeyboardInterrupt tracebacks Ray would otherwise print
+    # at exit
     os.environ.setdefault("RAY_IGNORE_UNHANDLED_ERRORS", "1")
     if ray.is_initialized():
         return ray

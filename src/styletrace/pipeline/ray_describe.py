@@ -1,14 +1,15 @@
-"""Scene descriptions that travel to Ray workers, and loading them there (cached per worker process).
+"""Scene descriptions that travel to Ray workers, and loading them there (cached per
+worker process).
 
     spec = SceneSpec.of("cornell-box", width=256, height=256)   # or an XML path, or a scene dict
-    scene = load(spec)                                            # in a worker: api.load_scene(...), cached
+    scene = load(spec) # in a worker: api.load_scene(...), cached
 
-An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in name,
-an XML path, or a scene dict, plus the width/height and any further keyword arguments of `load_scene`
-(`load_kwargs`: the defines of an XML file). Scene dicts may
-hold Mitsuba scalar values (`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either:
-`SceneSpec.of` replaces each by its class name and numbers, and `load` builds it again. A worker keeps the
-last few scenes and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
+An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in
+name, an XML path, or a scene dict, plus the width/height and any further keyword arguments of
+`load_scene` (`load_kwargs`: the defines of an XML file). Scene dicts may hold Mitsuba scalar values
+(`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either: `SceneSpec.of` replaces
+each by its class name and numbers, and `load` builds it again. A worker keeps the last few scenes
+and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
 """
 from __future__ import annotations
 
@@ -21,7 +22,8 @@ from typing import Any
 
 from styletrace.errors import UsageError
 
-#: Scenes (with their integrators) a worker process keeps loaded; frames of an XML list go through it in turn.
+#: Scenes (with their integrators) a worker process keeps loaded; frames of an XML list go through
+#: it in turn.
 CACHE_SIZE = 2
 CACHE: "OrderedDict[bytes, Any]" = OrderedDict()
 
@@ -93,8 +95,9 @@ class SceneSpec:
 
 
 def load(spec: SceneSpec, values: dict, variant: str):
-    """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of the scene
-    source with the driver's integrator values, cached by the scene and the integrator's values."""
+    """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of
+    the scene source with the driver's integrator values, cached by the scene and the
+    integrator's values."""
     from styletrace.scene import plugins as runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
@@ -108,9 +111,9 @@ def load(spec: SceneSpec, values: dict, variant: str):
     if unknown:
         raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
-    # the render pipeline's resolve, with the driver's resolved values as the integrator: the same load, and
-    # scene-relative 'auto' values pinned on the whole scene before any tile's crop (the pilot is
-    # deterministic: fixed seed, our path kernel), so every worker pins what the driver did
+    # the render pipeline's resolve, with the driver's resolved values as the integrator: the same
+    # load, and scene-relative 'auto' values pinned on the whole scene before any tile's crop (the
+    # pilot is deterministic: fixed seed, our path kernel), so every worker pins what the driver did
     job = Job(scene=scene, width=spec.width, height=spec.height, defines=dict(spec.load_kwargs.get("defines") or {}),
               integrator=StylizedIntegrator.from_values(values), lanes_per_pass=1)
     resolved = resolve(job)

@@ -26,8 +26,9 @@ MemoryQuery = Callable[[], Optional[tuple]]  # () -> (free bytes, total bytes) o
 
 
 def cuda_memory(ordinal: int = 0) -> tuple[int, int] | None:
-    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where unavailable.
-    Dr.Jit uses the device's primary context, so retaining it here creates nothing new."""
+    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where
+    unavailable. Dr.Jit uses the device's primary context, so retaining it here creates
+    nothing new."""
     try:
         cuda = ctypes.CDLL("libcuda.so.1")
     except OSError:

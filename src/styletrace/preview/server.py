@@ -2,11 +2,12 @@
 
 Routes (JSON API documented in docs/preview.md):
     GET  /              the page (page.html)
-    GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices) and
+    GET /api/styles the style registry: every style's parameters (kind, default, range, choices) and
                         the estimators that can restyle it
     GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
-    POST /api/restyle   {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "draft", "ms", "command"}
-    POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
+    POST /api/restyle {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "draft",
+    "ms", "command"} POST /api/save {"style", "params", "estimator", "format": "png"|"exr"} -> the
+    image file
 A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
 """
 from __future__ import annotations
@@ -44,7 +45,8 @@ def styles_table() -> list[dict[str, Any]]:
 
 
 def encode(image, fmt: str) -> bytes:
-    """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by `images.write_image`."""
+    """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by
+    `images.write_image`."""
     from styletrace.images import write_image
     fd, tmp = tempfile.mkstemp(suffix="." + fmt)
     os.close(fd)
@@ -143,7 +145,8 @@ def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: 
 
     from styletrace.config.settings import parse_slot
     from styletrace.preview.session import Session
-    slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
+    # a bad start fails here, in one line
+    slot = parse_slot({"style": style, **(params or {})}, context="preview")
     if slot.style.per_sample:
         raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
                          f"preview's buffer keeps only their mean")
