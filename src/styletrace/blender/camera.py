@@ -48,8 +48,13 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
     to_world = _unscaled(obj.matrix_world) @ FLIP
     film = {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb",
             "rfilter": {"type": "box"}}
-    out = {"to_world": to_world, "near_clip": float(cam.clip_start), "far_clip": float(cam.clip_end),
-           "film": film, "sampler": {"type": "independent", "sample_count": int(spp)}}
+    out = {
+        "to_world": to_world,
+        "near_clip": float(cam.clip_start),
+        "far_clip": float(cam.clip_end),
+        "film": film,
+        "sampler": {"type": "independent", "sample_count": int(spp)},
+    }
     if cam.type == "ORTHO":
         half_x = cam.ortho_scale / 2.0 if fit_x else cam.ortho_scale / 2.0 * width / height
         scaled = to_world @ np.diag([half_x, half_x, 1.0, 1.0])
@@ -59,19 +64,28 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
         shift[1, 3] = cam.shift_y * cam.ortho_scale / half_x
         out.update(type="orthographic", to_world=scaled @ shift)
         return out
-    sensor_size = cam.sensor_width if (cam.sensor_fit in ("AUTO", "HORIZONTAL")) else cam.sensor_height
+    sensor_size = (
+        cam.sensor_width if (cam.sensor_fit in ("AUTO", "HORIZONTAL")) else cam.sensor_height
+    )
     fov = math.degrees(2.0 * math.atan(sensor_size / (2.0 * cam.lens)))
     out.update(fov=fov, fov_axis="x" if fit_x else "y")
     if cam.dof.use_dof and cam.dof.aperture_fstop > 0:
         focus = cam.dof.focus_distance
         if cam.dof.focus_object is not None:
-            d = np.array(cam.dof.focus_object.matrix_world.translation) - np.array(obj.matrix_world.translation)
+            d = np.array(cam.dof.focus_object.matrix_world.translation) - np.array(
+                obj.matrix_world.translation
+            )
             forward = -np.array(obj.matrix_world)[:3, 2]
             focus = float(abs(d @ forward / np.linalg.norm(forward)))
         if cam.shift_x or cam.shift_y:
-            warn(f"styletrace: camera '{cam.name}' has depth of field and a shift: the shift is ignored")
-        out.update(type="thinlens", aperture_radius=cam.lens / 1000.0 / (2.0 * cam.dof.aperture_fstop),
-                   focus_distance=max(float(focus), 1e-4))
+            warn(
+                f"styletrace: camera '{cam.name}' has depth of field and a shift: the shift is ignored"
+            )
+        out.update(
+            type="thinlens",
+            aperture_radius=cam.lens / 1000.0 / (2.0 * cam.dof.aperture_fstop),
+            focus_distance=max(float(focus), 1e-4),
+        )
     else:
         out["type"] = "perspective"
         if cam.shift_x or cam.shift_y:

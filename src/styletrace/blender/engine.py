@@ -66,7 +66,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
         self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", "COLOR")
         if pipeline.error_passes(st):
             for name, channels, ids in pipeline.AOV_PASSES.values():
-                self.register_pass(scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE")
+                self.register_pass(
+                    scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE"
+                )
         if st.denoise != "off":
             self.register_pass(scene, renderlayer, pipeline.NOISY, 3, "RGB", "COLOR")
         if st.lines:
@@ -106,13 +108,20 @@ class StyletraceEngine(bpy.types.RenderEngine):
         prog = None
         total = -(-st.spp // st.pass_spp)
         for k, prog in enumerate(source, start=1):
-            self.progress(prog.spp_done / prog.spp_total, f"styletrace: pass {k}/{total}, {prog.spp_done}/"
-                                                           f"{prog.spp_total} spp, {time.perf_counter() - start:.1f} s")
+            self.progress(
+                prog.spp_done / prog.spp_total,
+                f"styletrace: pass {k}/{total}, {prog.spp_done}/"
+                f"{prog.spp_total} spp, {time.perf_counter() - start:.1f} s",
+            )
             self._show(prog.image, w, h)
             if self.stop_requested():
                 break
-        LAST.update(spp_done=prog.spp_done if prog else 0, spp_total=st.spp, cancelled=self.stop_requested(),
-                    seconds=time.perf_counter() - start)
+        LAST.update(
+            spp_done=prog.spp_done if prog else 0,
+            spp_total=st.spp,
+            cancelled=self.stop_requested(),
+            seconds=time.perf_counter() - start,
+        )
         if prog is None:
             return
         mask = None

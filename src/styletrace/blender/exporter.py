@@ -57,14 +57,22 @@ class Exporter:
         for part in parts:
             mat = slots[part.slot].material if part.slot < len(slots) else None
             bsdf, emitter = self._material(mat)
-            shape = {"type": "blender_mesh", "part": part, "bsdf": bsdf, "name": f"{obj.name}.{part.slot}"}
+            shape = {
+                "type": "blender_mesh",
+                "part": part,
+                "bsdf": bsdf,
+                "name": f"{obj.name}.{part.slot}",
+            }
             if emitter is not None:
                 shape["emitter"] = emitter
             shapes.append(shape)
         return shapes
 
     def export(self) -> dict:
-        desc: dict = {"type": "scene", "sensor": camera.sensor(self.scene, self.spp, warn=self.warn)}
+        desc: dict = {
+            "type": "scene",
+            "sensor": camera.sensor(self.scene, self.spp, warn=self.warn),
+        }
         groups: dict[str, list[dict]] = {}
         n = 0
         for inst in self.depsgraph.object_instances:
@@ -83,8 +91,11 @@ class Exporter:
                     if key not in groups:
                         groups[key] = self._shapes(obj, None)
                     if groups[key]:
-                        desc[f"instance_{n}"] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"group_{key}"},
-                                                 "to_world": matrix}
+                        desc[f"instance_{n}"] = {
+                            "type": "instance",
+                            "shapegroup": {"type": "ref", "id": f"group_{key}"},
+                            "to_world": matrix,
+                        }
                         n += 1
                 else:
                     for shape in self._shapes(obj, matrix):
@@ -92,7 +103,10 @@ class Exporter:
                         n += 1
         for key, shapes in groups.items():
             if shapes:
-                desc[f"group_{key}"] = {"type": "shapegroup", **{f"part_{i}": s for i, s in enumerate(shapes)}}
+                desc[f"group_{key}"] = {
+                    "type": "shapegroup",
+                    **{f"part_{i}": s for i, s in enumerate(shapes)},
+                }
         env = world.convert(self.scene.world, self.ctx)
         if env is not None:
             desc["world"] = env

@@ -23,9 +23,19 @@ from styletrace import __version__
 
 #: Blender's platform names -> pip's platform tags for the wheels
 PLATFORMS = {
-    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64"],
+    "linux-x64": [
+        "manylinux_2_28_x86_64",
+        "manylinux_2_27_x86_64",
+        "manylinux_2_17_x86_64",
+        "manylinux2014_x86_64",
+    ],
     "windows-x64": ["win_amd64"],
-    "macos-arm64": ["macosx_11_0_arm64", "macosx_12_0_arm64", "macosx_13_0_arm64", "macosx_14_0_arm64"],
+    "macos-arm64": [
+        "macosx_11_0_arm64",
+        "macosx_12_0_arm64",
+        "macosx_13_0_arm64",
+        "macosx_14_0_arm64",
+    ],
 }
 #: what the add-on needs beyond Blender's own Python and numpy (pinned as in constraints.txt)
 REQUIREMENTS = ["mitsuba==3.9.1", "drjit==1.5.0", "tqdm==4.70.1",
@@ -82,7 +92,9 @@ def project_root() -> str:
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.abspath(os.path.join(here, "..", "..", ".."))
     if not os.path.isfile(os.path.join(root, "pyproject.toml")):
-        raise SystemExit("styletrace extension: build from a source checkout (pyproject.toml not found)")
+        raise SystemExit(
+            "styletrace extension: build from a source checkout (pyproject.toml not found)"
+        )
     return root
 
 
@@ -100,12 +112,26 @@ def _source_copy(tmp: str) -> str:
 def build(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> str:
     """Write `styletrace-VERSION-PLATFORM.zip` into `out_dir`; returns its path."""
     if platform not in PLATFORMS:
-        raise SystemExit(f"styletrace extension: unknown platform '{platform}': one of {', '.join(PLATFORMS)}")
+        raise SystemExit(
+            f"styletrace extension: unknown platform '{platform}': one of {', '.join(PLATFORMS)}"
+        )
     os.makedirs(out_dir, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         wheels = os.path.join(tmp, "wheels")
         os.makedirs(wheels)
-        _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", wheels, _source_copy(tmp)])
+        _run(
+            [
+                sys.executable,
+                "-m",
+                "pip",
+                "wheel",
+                "--no-deps",
+                "-q",
+                "-w",
+                wheels,
+                _source_copy(tmp),
+            ]
+        )
         cmd = [sys.executable, "-m", "pip", "download", "-q", "--no-deps", "--only-binary=:all:",
                "--python-version", python, "-d", wheels]
         for tag in PLATFORMS[platform]:
@@ -123,10 +149,16 @@ def build(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> st
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m styletrace.blender.extension", description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", required=True, help="folder to write the extension zip into")
+    parser = argparse.ArgumentParser(
+        prog="python -m styletrace.blender.extension", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument(
+        "-o", "--output", required=True, help="folder to write the extension zip into"
+    )
     parser.add_argument("--platform", default="linux-x64", choices=sorted(PLATFORMS))
-    parser.add_argument("--python", default="3.11", help="Blender's Python version (3.11 for Blender 4.2 to 5.0)")
+    parser.add_argument(
+        "--python", default="3.11", help="Blender's Python version (3.11 for Blender 4.2 to 5.0)"
+    )
     args = parser.parse_args(argv)
     print(build(args.output, args.platform, args.python))
     return 0

@@ -87,7 +87,9 @@ def convert(light, matrix, warn) -> dict | None:
         base = _unscaled(m)
         if light.shape in ("DISK", "ELLIPSE"):
             if light.shape == "ELLIPSE" and abs(size_x * sx - size_y * sy) > 1e-6:
-                warn(f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of the mean diameter")
+                warn(
+                    f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of the mean diameter"
+                )
             r = (size_x * sx + size_y * sy) / 4.0
             area = math.pi * r * r
             shape = {"type": "disk", "to_world": base @ np.diag([r, r, 1.0, 1.0]) @ TURN}
@@ -98,8 +100,14 @@ def convert(light, matrix, warn) -> dict | None:
         # Cycles' lights block no light; styletrace refuses emitters on see-through (null) surfaces,
         # so the light is a black, one-sided emitter that absorbs what reaches its back
         # (docs/blender.md)
-        shape["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}
-        shape["emitter"] = {"type": "area", "radiance": _rgb(light, units.area_radiance(light.energy, area))}
+        shape["bsdf"] = {
+            "type": "diffuse",
+            "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)},
+        }
+        shape["emitter"] = {
+            "type": "area",
+            "radiance": _rgb(light, units.area_radiance(light.energy, area)),
+        }
         return shape
     warn(f"styletrace: light '{light.name}' of type {kind} is not supported: left out")
     return None

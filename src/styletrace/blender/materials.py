@@ -43,8 +43,10 @@ class Context:
 
     def flush(self) -> None:
         for kind, mats in sorted(self.unsupported.items()):
-            self.warn(f"styletrace: node {kind} is not supported (material {', '.join(sorted(set(mats)))}): "
-                      f"rendered as grey diffuse")
+            self.warn(
+                f"styletrace: node {kind} is not supported (material {', '.join(sorted(set(mats)))}): "
+                f"rendered as grey diffuse"
+            )
         self.unsupported.clear()
 
 
@@ -75,7 +77,13 @@ def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
 def texture(data: np.ndarray) -> dict:
     """A bitmap texture description; `data` stays a numpy array until the scene is built
     or written."""
-    return {"type": "bitmap", "data": data, "filter_type": "bilinear", "wrap_mode": "repeat", "raw": True}
+    return {
+        "type": "bitmap",
+        "data": data,
+        "filter_type": "bilinear",
+        "wrap_mode": "repeat",
+        "raw": True,
+    }
 
 
 def _source(socket):
@@ -138,8 +146,14 @@ def principled(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
     if level <= 0:
         bsdf = {"type": "diffuse", "reflectance": base}
     else:
-        bsdf = {"type": "roughplastic", "diffuse_reflectance": base, "int_ior": max(ior, 1.0 + 1e-4),
-                "alpha": alpha(rough), "distribution": "ggx", "nonlinear": True}
+        bsdf = {
+            "type": "roughplastic",
+            "diffuse_reflectance": base,
+            "int_ior": max(ior, 1.0 + 1e-4),
+            "alpha": alpha(rough),
+            "distribution": "ggx",
+            "nonlinear": True,
+        }
     bsdf = _blend(trans, bsdf, _glass(base, rough, ior))
     bsdf = _blend(metal, bsdf, _conductor(base, rough))
     strength = scalar(inp["Emission Strength"], ctx, material)
@@ -165,15 +179,24 @@ def convert_node(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
     if kind == "ShaderNodeBsdfDiffuse":
         return {"type": "diffuse", "reflectance": colour(inp["Color"], ctx, material)}, None, 1.0
     if kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
-        return _conductor(colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material)), None, 1.0
+        return (
+            _conductor(
+                colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material)
+            ),
+            None,
+            1.0,
+        )
     if kind == "ShaderNodeBsdfGlass":
         return (_glass(colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material),
                        scalar(inp["IOR"], ctx, material)), None, 1.0)
     if kind == "ShaderNodeEmission":
         c = colour(inp["Color"], ctx, material)
         s = scalar(inp["Strength"], ctx, material)
-        radiance = ({"type": "rgb", "value": tuple(v * s for v in c["value"])} if c.get("type") == "rgb"
-                    else texture(c["data"] * np.float32(s)))
+        radiance = (
+            {"type": "rgb", "value": tuple(v * s for v in c["value"])}
+            if c.get("type") == "rgb"
+            else texture(c["data"] * np.float32(s))
+        )
         return {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}, \
             {"type": "area", "radiance": radiance}, 1.0
     ctx.unknown(node, material)
@@ -187,8 +210,14 @@ def grey() -> dict:
 def _transmits(bsdf: dict) -> bool:
     if bsdf["type"] in ("roughdielectric", "dielectric", "thindielectric"):
         return True
-    return any(_transmits(v) for v in bsdf.values() if isinstance(v, dict) and "type" in v and v is not bsdf
-               and v["type"] not in ("rgb", "bitmap"))
+    return any(
+        _transmits(v)
+        for v in bsdf.values()
+        if isinstance(v, dict)
+        and "type" in v
+        and v is not bsdf
+        and v["type"] not in ("rgb", "bitmap")
+    )
 
 
 def output_node(material):
@@ -213,8 +242,17 @@ def convert(material, ctx: Context, style: dict | None = None) -> tuple[dict, di
         if src is None:
             # no node tree (or nothing connected): Blender's viewport colour, as Cycles renders an
             # unlinked output black
-            bsdf, emitter, opacity = ({"type": "diffuse", "reflectance": {"type": "rgb", "value":
-                                       tuple(float(c) for c in material.diffuse_color[:3])}}, None, 1.0)
+            bsdf, emitter, opacity = (
+                {
+                    "type": "diffuse",
+                    "reflectance": {
+                        "type": "rgb",
+                        "value": tuple(float(c) for c in material.diffuse_color[:3]),
+                    },
+                },
+                None,
+                1.0,
+            )
             if out is not None:
                 bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}
         else:

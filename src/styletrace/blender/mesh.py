@@ -52,7 +52,9 @@ def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
         co = (co @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
         # normals move with the inverse transpose (non-uniform scale), then are renormalised
         normals = normals @ np.linalg.inv(m[:3, :3])
-        normals = (normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-20)).astype(np.float32)
+        normals = (
+            normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-20)
+        ).astype(np.float32)
         if np.linalg.det(m[:3, :3]) < 0:  # a mirroring transform turns the winding round
             corners = corners[:, ::-1]
     parts = []

@@ -17,8 +17,10 @@ def command_line(path: str, settings) -> str:
         else f" --denoise-quality {settings.denoise_quality}")
     # --spp: F12 renders the Samples as camera samples, which the command line's default would spend
     # on children
-    return (f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp {settings.pass_spp}"
-            f"{denoise}")
+    return (
+        f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp {settings.pass_spp}"
+        f"{denoise}"
+    )
 
 
 class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
@@ -40,7 +42,9 @@ class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
         except (StyletraceError, OSError, ValueError) as exc:
             self.report({"ERROR"}, str(exc).strip().splitlines()[-1])
             return {"CANCELLED"}
-        self.report({"INFO"}, f"wrote {self.filepath}; the F12 image: {command_line(self.filepath, st)}")
+        self.report(
+            {"INFO"}, f"wrote {self.filepath}; the F12 image: {command_line(self.filepath, st)}"
+        )
         return {"FINISHED"}
 
 

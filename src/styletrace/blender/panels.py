@@ -8,16 +8,34 @@ import bpy
 from styletrace.blender.properties import key
 from styletrace.styles import registry
 
-RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "line_mode", "line_types",
-               "reuse", "spp", "pass_spp",
-               "max_depth", "seed", "aovs", "record_buffer", "denoise", "denoise_quality",
-               "firefly", "firefly_k")
+RENDER_ROWS = (
+    "inner_samples",
+    "estimator",
+    "stylize",
+    "stylize_depth",
+    "lines",
+    "line_mode",
+    "line_types",
+    "reuse",
+    "spp",
+    "pass_spp",
+    "max_depth",
+    "seed",
+    "aovs",
+    "record_buffer",
+    "denoise",
+    "denoise_quality",
+    "firefly",
+    "firefly_k",
+)
 
 
 def style_rows(settings) -> list[tuple[object, str]]:
     """(owner, property name) of the style selector and the chosen style's parameters."""
     rows = [(settings, "style")]
-    rows += [(settings.params, key(settings.style, p.name)) for p in registry.get(settings.style).params]
+    rows += [
+        (settings.params, key(settings.style, p.name)) for p in registry.get(settings.style).params
+    ]
     return rows
 
 
@@ -40,7 +58,9 @@ def dump(settings, material: bool = False) -> list[str]:
             value = "(" + ", ".join(f"{v:g}" for v in value) + ")"
         elif isinstance(value, float):
             value = f"{value:g}"
-        lines.append(f"{prop.name:<24} {str(value)!s:<28} [{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]")
+        lines.append(
+            f"{prop.name:<24} {str(value)!s:<28} [{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]"
+        )
     return lines
 
 

@@ -14,7 +14,9 @@ import numpy as np
 
 from styletrace.blender.materials import Context, image_array
 
-ENV_TO_WORLD = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+ENV_TO_WORLD = np.array(
+    [[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+)
 
 
 def latitudes(rows: np.ndarray) -> np.ndarray:
@@ -50,8 +52,12 @@ def convert(world, ctx: Context) -> dict | None:
     if col.is_linked:
         src = col.links[0].from_node
         if src.bl_idname == "ShaderNodeTexEnvironment" and src.image is not None:
-            return {"type": "envmap", "data": latitudes(image_array(src.image, ctx)), "scale": strength,
-                    "to_world": ENV_TO_WORLD}
+            return {
+                "type": "envmap",
+                "data": latitudes(image_array(src.image, ctx)),
+                "scale": strength,
+                "to_world": ENV_TO_WORLD,
+            }
         ctx.unsupported.setdefault(src.bl_idname, []).append(f"world {world.name}")
         return None
     c = tuple(float(v) * strength for v in col.default_value[:3])

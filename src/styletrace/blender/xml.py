@@ -13,11 +13,27 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-TAGS = {"perspective": "sensor", "orthographic": "sensor", "thinlens": "sensor",
-        "point": "emitter", "spot": "emitter", "directional": "emitter", "area": "emitter", "constant": "emitter",
-        "envmap": "emitter", "rectangle": "shape", "disk": "shape", "blender_mesh": "shape", "instance": "shape",
-        "shapegroup": "shape", "bitmap": "texture", "hdrfilm": "film", "box": "rfilter", "independent": "sampler",
-        "stylized": "integrator"}
+TAGS = {
+    "perspective": "sensor",
+    "orthographic": "sensor",
+    "thinlens": "sensor",
+    "point": "emitter",
+    "spot": "emitter",
+    "directional": "emitter",
+    "area": "emitter",
+    "constant": "emitter",
+    "envmap": "emitter",
+    "rectangle": "shape",
+    "disk": "shape",
+    "blender_mesh": "shape",
+    "instance": "shape",
+    "shapegroup": "shape",
+    "bitmap": "texture",
+    "hdrfilm": "film",
+    "box": "rfilter",
+    "independent": "sampler",
+    "stylized": "integrator",
+}
 POINTS = {"position"}
 VECTORS = {"direction"}
 
@@ -99,9 +115,11 @@ class Writer:
         mi.Bitmap(np.ascontiguousarray(data, dtype=np.float32)).write(path)
 
     def write(self, desc: dict, integrator: dict | None) -> str:
-        self.lines = ['<?xml version="1.0" encoding="utf-8"?>',
-                      "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace render` -->",
-                      '<scene version="3.0.0">']
+        self.lines = [
+            '<?xml version="1.0" encoding="utf-8"?>',
+            "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace render` -->",
+            '<scene version="3.0.0">',
+        ]
         if integrator is not None:
             self._object({"type": "stylized", **integrator}, 1)
         for key, value in desc.items():

@@ -28,8 +28,15 @@ class NotDenoised(UserWarning):
     one line."""
 
 
-def render(job: Any, denoise: str = "auto", callback: Any = None, cluster: str | None = None,
-           denoise_quality: str = "high", coverage: int | str = "auto", denoise_uncertainty: float | None = None):
+def render(
+    job: Any,
+    denoise: str = "auto",
+    callback: Any = None,
+    cluster: str | None = None,
+    denoise_quality: str = "high",
+    coverage: int | str = "auto",
+    denoise_uncertainty: float | None = None,
+):
     """`styletrace.render(..., denoise=...)`: the pipeline's `job` (`pipeline.job.Job`) resolved,
     planned (`finishers.plan`: auto picks expectation where it applies, else renders as the pipeline
     does and warns `NotDenoised`), and run by the pipeline's runner with the denoiser as its
@@ -39,8 +46,15 @@ def render(job: Any, denoise: str = "auto", callback: Any = None, cluster: str |
     from styletrace.denoise.finishers import plan
     from styletrace.pipeline.execute import executor_for
     from styletrace.pipeline.resolve import resolve
-    runner, note = plan(resolve(job), denoise, executor_for(cluster), quality=denoise_quality, coverage=coverage,
-                        uncertainty=denoise_uncertainty)
+
+    runner, note = plan(
+        resolve(job),
+        denoise,
+        executor_for(cluster),
+        quality=denoise_quality,
+        coverage=coverage,
+        uncertainty=denoise_uncertainty,
+    )
     if note:
         import warnings
         warnings.warn(note, NotDenoised, stacklevel=3)

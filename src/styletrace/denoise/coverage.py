@@ -50,8 +50,10 @@ def check_k(k) -> int | str:
     if isinstance(k, str) and k.strip().isdigit():
         value = int(k)
     if value is None or value < 0 or (value and math.isqrt(value) ** 2 != value):
-        raise UsageError(f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a square "
-                         f"number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)")
+        raise UsageError(
+            f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a square "
+            f"number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)"
+        )
     return value
 
 
@@ -64,9 +66,11 @@ def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int
     if k == AUTO:
         return min(DEFAULT_K, math.isqrt(max_samples // pixels) ** 2)
     if k * pixels > max_samples:
-        raise UsageError(f"bad value {k} for coverage: {width}x{height} at {k} points per pixel is {k * pixels} "
-                         f"points, over the buffer's cap of {max_samples}; use at most "
-                         f"{math.isqrt(max_samples // pixels) ** 2} or 'auto'")
+        raise UsageError(
+            f"bad value {k} for coverage: {width}x{height} at {k} points per pixel is {k * pixels} "
+            f"points, over the buffer's cap of {max_samples}; use at most "
+            f"{math.isqrt(max_samples // pixels) ** 2} or 'auto'"
+        )
     return k
 
 
@@ -109,7 +113,9 @@ class CoverageIntegrator(RecordingIntegrator):
         aperture = sampler.next_2d()
         # the sensor's position sample spans the crop window (as SamplingIntegrator::render_sample
         # makes it)
-        placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture)
+        placed, _ = sensor.sample_ray_differential(
+            mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture
+        )
         on_film = mi.Point2f(pos + off)  # the point's film position: the restyle splats it there
         # (0, 0) but in a tile: D, its guides and spread are the whole film's
         shift = off - self.origin
@@ -142,19 +148,30 @@ class CoverageIntegrator(RecordingIntegrator):
         if value is None:
             valid = si.is_valid()
             albedo, _ = guides.through_delta(scene, si, valid)
-            emission = (mi.Color3f(si.emitter(scene, valid).eval(si, valid)) if self.field.emission_apart
-                        else mi.Color3f(0.0))
+            emission = (
+                mi.Color3f(si.emitter(scene, valid).eval(si, valid))
+                if self.field.emission_apart
+                else mi.Color3f(0.0)
+            )
             at, own = pos, pixel
             if self.scale != 1:  # D's own pixel of the point
                 at = pos * self.scale
                 own = mi.UInt32(dr.floor(at.y)) * self.field.w + mi.UInt32(dr.floor(at.x))
-            value = self.field.at(at.x, at.y, si.p, mi.Vector3f(si.sh_frame.n), own, albedo, emission, valid)
+            value = self.field.at(
+                at.x, at.y, si.p, mi.Vector3f(si.sh_frame.n), own, albedo, emission, valid
+            )
             self._at = (pos, pixel, value)
         return value
 
 
-def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0,
-           scale: int = 1) -> Buffer:
+def points(
+    scene: mi.Scene,
+    integrator: StylizedIntegrator,
+    field,
+    k: int = DEFAULT_K,
+    seed: int = 0,
+    scale: int = 1,
+) -> Buffer:
     """The denoised render at k stratified points per pixel: a Buffer whose means are D at each
     point (pixel, slot, vertex, L_before as a render's), `buf.image` its image (the render loop's:
     with a filter other than a box `expectation.attach` replaces it by the buffer's restyle, which
@@ -163,8 +180,14 @@ def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFA
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None
     origin = tuple(int(v) for v in scene.sensors()[0].film().crop_offset())
-    for prog, buf in record(scene, integrator, k, pass_seed(seed, COVERAGE_PASS), pass_spp=k,
-                            recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin, scale)):
+    for prog, buf in record(
+        scene,
+        integrator,
+        k,
+        pass_seed(seed, COVERAGE_PASS),
+        pass_spp=k,
+        recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin, scale),
+    ):
         buf.image = prog.image
     return buf
 

@@ -162,5 +162,19 @@ def pin(resolved, method: str):
     return replace(resolved, integrator=integrator, spp=spp, auto="; ".join(a for a in auto if a))
 
 
-__all__ = ["METHODS", "ENV", "check_method", "default_method", "Plan", "choose", "method_for", "why_not",
-           "nonlinear", "with_firefly", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]
+__all__ = [
+    "METHODS",
+    "ENV",
+    "check_method",
+    "default_method",
+    "Plan",
+    "choose",
+    "method_for",
+    "why_not",
+    "nonlinear",
+    "with_firefly",
+    "pin",
+    "FIREFLY_K",
+    "SPEND",
+    "MIN_SPP",
+]

@@ -66,11 +66,15 @@ def check(integrator) -> None:
     s = integrator.settings
     why = None
     if s.stylize == "first_object_hit":
-        why = ("stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where the "
-               "pixel's guides describe another surface; use first_hit or --denoise image")
+        why = (
+            "stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where the "
+            "pixel's guides describe another surface; use first_hit or --denoise image"
+        )
     elif s.stylize == "first_n_hits" or s.stylize_depth != 1:
-        why = ("stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the inner levels' "
-               "vertices are not the pixel's); use first_hit or --denoise image")
+        why = (
+            "stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the inner levels' "
+            "vertices are not the pixel's); use first_hit or --denoise image"
+        )
     elif s.lines is not None:
         why = "feature lines: lines replace radiance inside the estimate; use --denoise image"
     elif s.reuse != "off":
@@ -78,8 +82,10 @@ def check(integrator) -> None:
     elif s.expansion_pass:
         why = "expansion_pass: it serves the series estimators, which denoising replaces by direct application"
     elif s.slot.estimator not in RESTYLABLE_ESTIMATORS:
-        why = (f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct application; "
-               f"use direct or affine")
+        why = (
+            f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct application; "
+            f"use direct or affine"
+        )
     elif S.adaptive(s.inner):
         why = "adaptive counts n0:n_max: give a fixed count (the denoiser does the averaging)"
     elif s.style.per_sample:
@@ -92,7 +98,11 @@ def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
     """M: per pixel, the mean of its camera samples' children means where a stylized vertex was
     found (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each
     sample's own emitted radiance is taken off first (M is then the reflected part alone)."""
-    return _moments(buf, reflected(buf, emission))[1].reshape(buf.height, buf.width, 3).astype(np.float32)
+    return (
+        _moments(buf, reflected(buf, emission))[1]
+        .reshape(buf.height, buf.width, 3)
+        .astype(np.float32)
+    )
 
 
 def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
@@ -114,8 +124,12 @@ def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
     v = values[found]
-    s1 = np.stack([np.bincount(pix, weights=v[:, c], minlength=size) for c in range(v.shape[1])], -1)
-    s2 = np.stack([np.bincount(pix, weights=v[:, c] * v[:, c], minlength=size) for c in range(v.shape[1])], -1)
+    s1 = np.stack(
+        [np.bincount(pix, weights=v[:, c], minlength=size) for c in range(v.shape[1])], -1
+    )
+    s2 = np.stack(
+        [np.bincount(pix, weights=v[:, c] * v[:, c], minlength=size) for c in range(v.shape[1])], -1
+    )
     n = np.maximum(count, 1.0)[:, None]
     mean = s1 / n
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -133,7 +147,9 @@ def raster(scene, p: np.ndarray) -> np.ndarray:
     ds, _ = sensor.sample_direction(it, mi.Point2f(0.5, 0.5))
     # uv is in pixels of the crop window already (tests/denoise/test_expectation.py measures it on
     # a crop)
-    return np.stack([np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1)
+    return np.stack(
+        [np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1
+    )
 
 
 def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) -> np.ndarray:
@@ -179,9 +195,17 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     # no emission
     albedo = np.where(found[:, None], own_albedo, np.nan)
     emitted = np.where(found[:, None], emission, 0.0)
-    out = Field(d, g, diag).at(fx, fy, vec(a["p"], mi.Point3f), vec(a["n"], mi.Vector3f),
-                               mi.UInt32(np.ascontiguousarray(pix, np.uint32)), vec(albedo, mi.Color3f),
-                               vec(emitted, mi.Color3f), mi.Bool(True), near)
+    out = Field(d, g, diag).at(
+        fx,
+        fy,
+        vec(a["p"], mi.Point3f),
+        vec(a["n"], mi.Vector3f),
+        mi.UInt32(np.ascontiguousarray(pix, np.uint32)),
+        vec(albedo, mi.Color3f),
+        vec(emitted, mi.Color3f),
+        mi.Bool(True),
+        near,
+    )
     dr.eval(out)  # one kernel for the three channels
     return np.ascontiguousarray(np.stack([np.asarray(out[i], np.float32) for i in range(3)]))
 
@@ -202,7 +226,12 @@ class Field:
             return mi.Float(np.ascontiguousarray(a, np.float32).ravel())
         self.h, self.w = d.shape[:2]
         self.diag = float(diag)
-        self.D, self.A, self.NRM, self.POS = image(d), image(g.albedo), image(g.surface_normal), image(g.position)
+        self.D, self.A, self.NRM, self.POS = (
+            image(d),
+            image(g.albedo),
+            image(g.surface_normal),
+            image(g.position),
+        )
 
     @staticmethod
     def _get(img, idx, mask):
@@ -234,7 +263,9 @@ class Field:
             for dx in (0, 1):
                 qx, qy = dr.clip(x0 + dx, 0, w - 1), dr.clip(y0 + dy, 0, h - 1)
                 q = mi.UInt32(qy * w + qx)
-                wt = dr.clip(1 - dr.abs(fx - mi.Float(x0 + dx)), 0, 1) * dr.clip(1 - dr.abs(fy - mi.Float(y0 + dy)), 0, 1)
+                wt = dr.clip(1 - dr.abs(fx - mi.Float(x0 + dx)), 0, 1) * dr.clip(
+                    1 - dr.abs(fy - mi.Float(y0 + dy)), 0, 1
+                )
                 gap = get(self.POS, q, valid) - ps
                 aq = get(self.A, q, valid)
                 same = dr.dot(get(self.NRM, q, valid), ns) > 0.95
@@ -294,8 +325,10 @@ def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
     eps = 1e-4 * max(diag, 1e-6)
     o = p + wo * eps
-    ray = mi.Ray3f(mi.Point3f(*(mi.Float(np.ascontiguousarray(o[i], np.float32)) for i in range(3))),
-                   mi.Vector3f(*(mi.Float(np.ascontiguousarray(-wo[i], np.float32)) for i in range(3))))
+    ray = mi.Ray3f(
+        mi.Point3f(*(mi.Float(np.ascontiguousarray(o[i], np.float32)) for i in range(3))),
+        mi.Vector3f(*(mi.Float(np.ascontiguousarray(-wo[i], np.float32)) for i in range(3))),
+    )
     ray.maxt = mi.Float(3.0 * eps)
     si = scene.ray_intersect(ray)
     dr.eval(si)  # measured: the chain after an evaluated hit costs half of one kernel doing both
@@ -332,14 +365,24 @@ def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.maximum(out, 0.0)
 
 
-def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integrator=None, k: int = 0,
-           uncertainty: float = 0.0):
+def attach(
+    buf: Buffer,
+    scene,
+    spp: int,
+    seed: int,
+    quality: str = "high",
+    integrator=None,
+    k: int = 0,
+    uncertainty: float = 0.0,
+):
     """Denoise the buffer's expectation. k = 0: keep D at each camera sample in the buffer (restyles
     then style it); returns (D per pixel H x W x 3, None). k > 0: g is evaluated at k stratified
     points per pixel instead (`coverage.points`, which needs the `integrator`), averaged over D's
     uncertainty where `uncertainty` > 0 (`spread`); returns (D, the points' buffer)."""
     if buf.stores != "mean":
-        raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
+        raise UsageError(
+            "--denoise expectation needs a buffer of children means (direct or affine estimator)"
+        )
     g = guides.first_hit(scene, spp, pass_seed(seed, 0), footprint="pixel")  # M's footprint
     own = _own(scene, buf)
     # the reflected part: each sample's own emission goes back in at_samples
@@ -356,7 +399,9 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integ
             field.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
         cover = coverage_module.points(scene, integrator, field, k, seed)
         if rel is not None:  # per point, its pixel's: restyles average g over it too
-            cover.arrays[SPREAD] = np.ascontiguousarray(rel.ravel()[cover.arrays["pixel"]], dtype=np.float32)
+            cover.arrays[SPREAD] = np.ascontiguousarray(
+                rel.ravel()[cover.arrays["pixel"]], dtype=np.float32
+            )
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
         if cover.filtered:  # the render loop splatted each point at its sample_pos, not the point's
             cover.image = image_of(cover)
@@ -379,8 +424,10 @@ def check_uncertainty(value) -> float:
     except (TypeError, ValueError):
         u = float("nan")
     if isinstance(value, bool) or not np.isfinite(u) or u < 0 or u > 10:
-        raise UsageError(f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D itself) "
-                         f"to 10, the residual error of D as a fraction of the noisy estimate's standard error")
+        raise UsageError(
+            f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D itself) "
+            f"to 10, the residual error of D as a fraction of the noisy estimate's standard error"
+        )
     return u
 
 
@@ -416,7 +463,9 @@ def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:
 def image_of(buf: Buffer) -> np.ndarray:
     """The buffer's image with its recorded styles (denoised where the buffer holds D)."""
     slots = prepare(buf, slots_for(buf))
-    return np.asarray(accumulate(buf, sample_values(buf, slots)), dtype=np.float32).reshape(buf.height, buf.width, 3)
+    return np.asarray(accumulate(buf, sample_values(buf, slots)), dtype=np.float32).reshape(
+        buf.height, buf.width, 3
+    )
 
 
 def noisy_variance(buf: Buffer) -> np.ndarray:
@@ -437,17 +486,38 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
     return var.reshape(buf.height, buf.width, 3).astype(np.float32)
 
 
-def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-           callback: Callable[[Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
-           label: str = "", coverage: int | str = "auto", uncertainty: float = UNCERTAINTY,
-           lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> tuple[np.ndarray, Buffer]:
+def render(
+    scene,
+    integrator,
+    spp: int,
+    seed: int = 0,
+    quality: str = "high",
+    callback: Callable[[Progress], None] | None = None,
+    max_samples: int = MAX_SAMPLES,
+    label: str = "",
+    coverage: int | str = "auto",
+    uncertainty: float = UNCERTAINTY,
+    lanes_per_pass: int = LANES_PER_PASS,
+    pass_spp: int | None = None,
+) -> tuple[np.ndarray, Buffer]:
     """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy
     render). `coverage` k > 0: g is evaluated at k stratified first hits per pixel
     (`coverage.points`), not at the camera samples; the buffer returned is then the coverage points'
     (`buf.source`: the camera samples'). `lanes_per_pass`, `pass_spp`: the pass split, as
     `pipeline.passes`."""
-    job = Job(scene, integrator, spp, seed, quality, max_samples, label, coverage, uncertainty, lanes_per_pass,
-              pass_spp)
+    job = Job(
+        scene,
+        integrator,
+        spp,
+        seed,
+        quality,
+        max_samples,
+        label,
+        coverage,
+        uncertainty,
+        lanes_per_pass,
+        pass_spp,
+    )
     for prog, _ in job.passes():
         if callback is not None:
             callback(prog)
@@ -461,9 +531,20 @@ class Job:
     cancelled render. Bad values are refused in one line when the job is made, before
     anything renders."""
 
-    def __init__(self, scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-                 max_samples: int = MAX_SAMPLES, label: str = "", coverage: int | str = "auto",
-                 uncertainty: float = UNCERTAINTY, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None):
+    def __init__(
+        self,
+        scene,
+        integrator,
+        spp: int,
+        seed: int = 0,
+        quality: str = "high",
+        max_samples: int = MAX_SAMPLES,
+        label: str = "",
+        coverage: int | str = "auto",
+        uncertainty: float = UNCERTAINTY,
+        lanes_per_pass: int = LANES_PER_PASS,
+        pass_spp: int | None = None,
+    ):
         oidn.require()
         oidn.check_quality(quality)
         check(integrator)
@@ -473,14 +554,33 @@ class Job:
         # the buffer records without them; `aovs` below derives them from it
         if integrator.settings.aovs:
             integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
-        self.scene, self.integrator, self.spp, self.seed, self.quality = scene, integrator, spp, seed, quality
-        self.max_samples, self.label, self.lanes, self.pass_spp = max_samples, label, lanes_per_pass, pass_spp
+        self.scene, self.integrator, self.spp, self.seed, self.quality = (
+            scene,
+            integrator,
+            spp,
+            seed,
+            quality,
+        )
+        self.max_samples, self.label, self.lanes, self.pass_spp = (
+            max_samples,
+            label,
+            lanes_per_pass,
+            pass_spp,
+        )
         #: the noisy buffer of the passes recorded so far (None before the first)
         self.buffer: Buffer | None = None
 
     def passes(self) -> Iterator[tuple[Progress, Buffer]]:
-        for prog, buf in record(self.scene, self.integrator, self.spp, self.seed, self.label or scene_label(None),
-                                self.max_samples, self.lanes, pass_spp=self.pass_spp):
+        for prog, buf in record(
+            self.scene,
+            self.integrator,
+            self.spp,
+            self.seed,
+            self.label or scene_label(None),
+            self.max_samples,
+            self.lanes,
+            pass_spp=self.pass_spp,
+        ):
             buf.image = prog.image
             self.buffer = buf
             yield prog, buf
@@ -492,8 +592,16 @@ class Job:
         buf = self.buffer
         if buf is None or buf.spp < 1:
             raise UsageError("nothing to denoise: no pass of the render finished")
-        _, cover = attach(buf, self.scene, buf.spp, self.seed, self.quality, self.integrator, self.k,
-                          self.uncertainty)
+        _, cover = attach(
+            buf,
+            self.scene,
+            buf.spp,
+            self.seed,
+            self.quality,
+            self.integrator,
+            self.k,
+            self.uncertainty,
+        )
         if cover is None:
             return image_of(buf), buf
         image = np.asarray(cover.image, dtype=np.float32)[..., :3]
@@ -508,9 +616,24 @@ def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
     noisy image)."""
     src = getattr(buf, "source", None) or buf  # coverage points: the camera samples with children
     n = max(int(s["inner"]) for s in src.header["slots"])
-    return {"noisy_variance": noisy_variance(src),
-            "children": np.full((src.height, src.width), float(n), dtype=np.float32),
-            "denoise_change": (np.asarray(image, np.float32) - np.asarray(src.image, np.float32)[..., :3])}
+    return {
+        "noisy_variance": noisy_variance(src),
+        "children": np.full((src.height, src.width), float(n), dtype=np.float32),
+        "denoise_change": (
+            np.asarray(image, np.float32) - np.asarray(src.image, np.float32)[..., :3]
+        ),
+    }
 
 
-__all__ = ["render", "Job", "attach", "Field", "check", "expectation", "image_of", "noisy_variance", "aovs", "DENOISED"]
+__all__ = [
+    "render",
+    "Job",
+    "attach",
+    "Field",
+    "check",
+    "expectation",
+    "image_of",
+    "noisy_variance",
+    "aovs",
+    "DENOISED",
+]

@@ -45,7 +45,9 @@ class Guides(NamedTuple):
     surface_normal: np.ndarray
 
 
-def through_delta(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> tuple[mi.Color3f, mi.Vector3f]:
+def through_delta(
+    scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool
+) -> tuple[mi.Color3f, mi.Vector3f]:
     """(albedo, shading normal) of the first surface along si's specular chain that is not
     purely specular.
 

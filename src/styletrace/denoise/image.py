@@ -29,13 +29,17 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     oidn.require()
     oidn.check_quality(quality)
     prog = None
-    for prog in passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
+    for prog in passes(
+        scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp
+    ):
         if callback is not None:
             callback(prog)
     return finish(scene, prog, seed, quality)
 
 
-def finish(scene, prog: Progress, seed: int = 0, quality: str = "high") -> tuple[np.ndarray, np.ndarray, dict | None]:
+def finish(
+    scene, prog: Progress, seed: int = 0, quality: str = "high"
+) -> tuple[np.ndarray, np.ndarray, dict | None]:
     """`render`'s result from the passes' last progress (the finished passes of a stopped render
     too; the guides take as many camera samples per pixel as they did)."""
     noisy = np.asarray(prog.image, dtype=np.float32)
@@ -43,8 +47,12 @@ def finish(scene, prog: Progress, seed: int = 0, quality: str = "high") -> tuple
     out = oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
     errs = prog.aovs
     if errs is not None:
-        errs = {"noisy_variance": errs["variance"], "noisy_bias": errs["bias"], "children": errs["children"],
-                "denoise_change": out - noisy[..., :3]}
+        errs = {
+            "noisy_variance": errs["variance"],
+            "noisy_bias": errs["bias"],
+            "children": errs["children"],
+            "denoise_change": out - noisy[..., :3],
+        }
     return out, noisy, errs
 
 

@@ -26,13 +26,17 @@ def require():
     try:
         import pyoidn
     except ImportError:
-        raise UsageError(f"--denoise needs Intel Open Image Denoise (pyoidn), the 'denoise' extra: {EXTRA}") from None
+        raise UsageError(
+            f"--denoise needs Intel Open Image Denoise (pyoidn), the 'denoise' extra: {EXTRA}"
+        ) from None
     return pyoidn
 
 
 def check_quality(quality: str) -> str:
     if quality not in QUALITIES:
-        raise UsageError(f"bad value {quality!r} for denoise quality: expected one of {', '.join(QUALITIES)}")
+        raise UsageError(
+            f"bad value {quality!r} for denoise quality: expected one of {', '.join(QUALITIES)}"
+        )
     return quality
 
 
@@ -49,8 +53,10 @@ def run(color, albedo, normal, quality: str = "high", to_sensor=None) -> np.ndar
     if mi.variant() and mi.variant().startswith("cuda") and hasattr(mi, "OptixDenoiser"):
         return _optix(color, albedo, normal, to_sensor)
     pyoidn = require()
-    return np.asarray(pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True, quality=quality),
-                      dtype=np.float32)
+    return np.asarray(
+        pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True, quality=quality),
+        dtype=np.float32,
+    )
 
 
 def _optix(color, albedo, normal, to_sensor) -> np.ndarray:
@@ -59,7 +65,9 @@ def _optix(color, albedo, normal, to_sensor) -> np.ndarray:
     world-to-camera transform; None keeps world space)."""
     import mitsuba as mi
     h, w = color.shape[:2]
-    den = mi.OptixDenoiser(input_size=mi.ScalarVector2u(w, h), albedo=True, normals=True, temporal=False)
+    den = mi.OptixDenoiser(
+        input_size=mi.ScalarVector2u(w, h), albedo=True, normals=True, temporal=False
+    )
     kwargs = {"albedo": mi.TensorXf(albedo), "normals": mi.TensorXf(normal)}
     if to_sensor is not None:
         kwargs["to_sensor"] = to_sensor

@@ -47,9 +47,16 @@ from styletrace.scene.loading import (
 from styletrace.scene.plugins import init
 
 
-def render(*args: Any, denoise: str | None = None, cluster: str | None = None, callback: Any = None,
-           denoise_quality: str = "high", coverage: int | str = "auto", denoise_uncertainty: float | None = None,
-           **kw: Any):
+def render(
+    *args: Any,
+    denoise: str | None = None,
+    cluster: str | None = None,
+    callback: Any = None,
+    denoise_quality: str = "high",
+    coverage: int | str = "auto",
+    denoise_uncertainty: float | None = None,
+    **kw: Any,
+):
     """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the
     arguments). `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off;
     all but off run the job with a denoiser as its finisher, a post-stage (docs/denoise.md); off is

@@ -25,15 +25,25 @@ def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
     return given
 
 
-def job_of(args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None) -> Job:
+def job_of(
+    args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None
+) -> Job:
     """The job of `styletrace render` (`scene`: one of several scene arguments, else
     `args.scene`)."""
     from styletrace.config import settings
     if scene is None:  # `render` takes several scene arguments (frames); a single render the first
         scene = args.scene[0] if isinstance(args.scene, list) and args.scene else args.scene
-    return Job(scene=scene or None, defines=dict(defines or {}), width=args.width,
-               height=args.height, given=given_flags(args, params), default_style=settings.COMMAND_LINE_STYLE,
-               spp=args.spp, seed=args.seed, pass_spp=args.pass_spp)
+    return Job(
+        scene=scene or None,
+        defines=dict(defines or {}),
+        width=args.width,
+        height=args.height,
+        given=given_flags(args, params),
+        default_style=settings.COMMAND_LINE_STYLE,
+        spp=args.spp,
+        seed=args.seed,
+        pass_spp=args.pass_spp,
+    )
 
 
 __all__ = ["job_of", "given_flags"]

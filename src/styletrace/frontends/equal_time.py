@@ -80,7 +80,9 @@ def quick(c: Comparison) -> Comparison:
     cap = max(1, int(round(QUICK_REFERENCE ** (1 / len(ref)))))
     small = tuple(min(n, cap) for n in ref)
     counts = tuple(n for n in c.counts if n < small[0])[:QUICK_COUNTS] or c.counts[:1]
-    return Comparison(**{**c.__dict__, "reference": small if len(small) > 1 else small[0], "counts": counts})
+    return Comparison(
+        **{**c.__dict__, "reference": small if len(small) > 1 else small[0], "counts": counts}
+    )
 
 
 def pick(fixed_seconds: list[float], method_seconds: float) -> int:
@@ -122,14 +124,18 @@ def check(comparisons: list[Comparison]) -> None:
         api.make_integrator(c.style, **{**c.integrator, **c.params, **c.method})
 
 
-def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tuple[np.ndarray, list[float]]:
+def timed(
+    scene: Any, c: Comparison, config: dict[str, Any], repeats: int
+) -> tuple[np.ndarray, list[float]]:
     """The image and the seconds of `repeats` renders, after one untimed render that compiles
     the kernels."""
     from styletrace.pipeline.execute import render
 
     def once() -> tuple[np.ndarray, float]:
         t = time.perf_counter()
-        img = render(scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config})
+        img = render(
+            scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config}
+        )
         return img, time.perf_counter() - t
 
     once()
@@ -156,8 +162,15 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
     fixed, images = [], []
     for n in c.counts:
         img, times = timed(scene, c, {"inner": fixed_inner(c, n)}, repeats)
-        fixed.append({"n": n, "inner": fixed_inner(c, n), "seconds": statistics.median(times), "times": times,
-                      "mse": mse(img, reference)})
+        fixed.append(
+            {
+                "n": n,
+                "inner": fixed_inner(c, n),
+                "seconds": statistics.median(times),
+                "times": times,
+                "mse": mse(img, reference),
+            }
+        )
         images.append(img)
         log(f"{c.key}: fixed n={n}: {fixed[-1]['seconds']:.3f} s, MSE {fixed[-1]['mse']:.3g}")
         if fixed[-1]["seconds"] > method["seconds"]:
@@ -165,15 +178,31 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
             break
     i = pick([f["seconds"] for f in fixed], method["seconds"])
     ratio = ratio_of(fixed[i]["mse"], method["mse"])
-    entry = {"key": c.key, "title": c.title, "scene": c.scene, "size": size, "spp": SPP, "seed": SEED,
-             "style": c.style, "params": c.params, "integrator": c.integrator, "repeats": repeats,
-             "reference": {"inner": c.reference, "seconds": ref_seconds},
-             "method": method, "fixed": fixed, "equal_time": i,
-             "fixed_slower": fixed[i]["seconds"] > method["seconds"],
-             "ratio": ratio, "verdict": verdict(ratio), "file": f"{c.key}.png"}
+    entry = {
+        "key": c.key,
+        "title": c.title,
+        "scene": c.scene,
+        "size": size,
+        "spp": SPP,
+        "seed": SEED,
+        "style": c.style,
+        "params": c.params,
+        "integrator": c.integrator,
+        "repeats": repeats,
+        "reference": {"inner": c.reference, "seconds": ref_seconds},
+        "method": method,
+        "fixed": fixed,
+        "equal_time": i,
+        "fixed_slower": fixed[i]["seconds"] > method["seconds"],
+        "ratio": ratio,
+        "verdict": verdict(ratio),
+        "file": f"{c.key}.png",
+    }
     imgs = {"reference": reference, "fixed": images[i], "method": method_img}
     figure(entry, imgs, os.path.join(out_dir, entry["file"]))
-    log(f"{c.key}: fixed n={fixed[i]['n']} at equal time; MSE ratio {ratio:.2f}: {entry['verdict'].upper()}")
+    log(
+        f"{c.key}: fixed n={fixed[i]['n']} at equal time; MSE ratio {ratio:.2f}: {entry['verdict'].upper()}"
+    )
     return entry, imgs
 
 
@@ -196,10 +225,14 @@ def labels(e: dict[str, Any]) -> list[tuple[str, str]]:
     """(what, numbers) of the three panels: reference, fixed n at equal time, method."""
     f, m = e["fixed"][e["equal_time"]], e["method"]
     note = " (slower than the method: no fixed count is faster)" if e["fixed_slower"] else ""
-    return [(f"reference, inner {show(e['reference']['inner'])}", f"{e['reference']['seconds']:.1f} s"),
-            (f"fixed n={f['n']} (inner {show(f['inner'])}), equal time{note}",
-             f"{f['seconds']:.3f} s, MSE {f['mse']:.2e}"),
-            (f"method: {describe(m['config'])}", f"{m['seconds']:.3f} s, MSE {m['mse']:.2e}")]
+    return [
+        (f"reference, inner {show(e['reference']['inner'])}", f"{e['reference']['seconds']:.1f} s"),
+        (
+            f"fixed n={f['n']} (inner {show(f['inner'])}), equal time{note}",
+            f"{f['seconds']:.3f} s, MSE {f['mse']:.2e}",
+        ),
+        (f"method: {describe(m['config'])}", f"{m['seconds']:.3f} s, MSE {m['mse']:.2e}"),
+    ]
 
 
 def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
@@ -211,7 +244,9 @@ def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
 
     from styletrace.images import srgb8, write_bytes_atomically
     fig, axes = plt.subplots(1, 3, figsize=(9, 4.3))
-    for ax, img, (what, numbers) in zip(axes, (images["reference"], images["fixed"], images["method"]), labels(e)):
+    for ax, img, (what, numbers) in zip(
+        axes, (images["reference"], images["fixed"], images["method"]), labels(e)
+    ):
         ax.imshow(srgb8(img), interpolation="nearest")
         ax.set_title(textwrap.fill(what, 38) + "\n" + numbers, fontsize=8)
         ax.axis("off")
@@ -224,30 +259,47 @@ def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
     plt.close(fig)
 
 
-INTRO = ("Each comparison renders at 1 camera sample per pixel with one seed, against a reference of the same "
-         "seed (the same camera rays: the error is the stylized estimate's); times are the median of {repeats} "
-         "timed render(s) after one that compiles the kernels. The fixed count at equal time is the largest n "
-         "whose render is not slower than the method's (the smallest n when all are slower). Ratio: the fixed "
-         "count's MSE over the method's; at 1 or below the method loses at equal time, whatever it gains at "
-         "equal inner counts. Protocol: the docstring of styletrace/frontends/equal_time.py.")
+INTRO = (
+    "Each comparison renders at 1 camera sample per pixel with one seed, against a reference of the same "
+    "seed (the same camera rays: the error is the stylized estimate's); times are the median of {repeats} "
+    "timed render(s) after one that compiles the kernels. The fixed count at equal time is the largest n "
+    "whose render is not slower than the method's (the smallest n when all are slower). Ratio: the fixed "
+    "count's MSE over the method's; at 1 or below the method loses at equal time, whatever it gains at "
+    "equal inner counts. Protocol: the docstring of styletrace/frontends/equal_time.py."
+)
 
 
 def rows(e: dict[str, Any]) -> list[tuple[str, str, str, str]]:
     f, m = e["fixed"][e["equal_time"]], e["method"]
-    return [("reference", show(e["reference"]["inner"]), f"{e['reference']['seconds']:.1f}", ""),
-            (f"fixed n={f['n']} (equal time)", show(f["inner"]), f"{f['seconds']:.3f}", f"{f['mse']:.3e}"),
-            ("method", describe(m["config"]), f"{m['seconds']:.3f}", f"{m['mse']:.3e}")]
+    return [
+        ("reference", show(e["reference"]["inner"]), f"{e['reference']['seconds']:.1f}", ""),
+        (
+            f"fixed n={f['n']} (equal time)",
+            show(f["inner"]),
+            f"{f['seconds']:.3f}",
+            f"{f['mse']:.3e}",
+        ),
+        ("method", describe(m["config"]), f"{m['seconds']:.3f}", f"{m['mse']:.3e}"),
+    ]
 
 
 def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
     if not entries:
         return []
     e0 = entries[0]
-    md = [f"## Equal time: a method against the fixed counts ({e0['scene']}, {e0['size']}x{e0['size']})", "",
-          INTRO.format(repeats=e0["repeats"]), "",
-          "| comparison | method | fixed n at equal time | MSE ratio | verdict |", "|---|---|---:|---:|---|"]
-    md += [f"| {e['title']} | `{describe(e['method']['config'])}` | {e['fixed'][e['equal_time']]['n']} | "
-           f"{e['ratio']:.2f} | {'win' if e['verdict'] == 'win' else '**LOSS**'} |" for e in entries]
+    md = [
+        f"## Equal time: a method against the fixed counts ({e0['scene']}, {e0['size']}x{e0['size']})",
+        "",
+        INTRO.format(repeats=e0["repeats"]),
+        "",
+        "| comparison | method | fixed n at equal time | MSE ratio | verdict |",
+        "|---|---|---:|---:|---|",
+    ]
+    md += [
+        f"| {e['title']} | `{describe(e['method']['config'])}` | {e['fixed'][e['equal_time']]['n']} | "
+        f"{e['ratio']:.2f} | {'win' if e['verdict'] == 'win' else '**LOSS**'} |"
+        for e in entries
+    ]
     for e in entries:
         md += ["", f"### {e['title']}: {'win' if e['verdict'] == 'win' else '**LOSS**'}", "",
                f"`{e['style']}` {describe({**e['params'], **e['integrator']})}".rstrip(), "",
@@ -266,18 +318,28 @@ def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
     def mark(e):
         return ("<strong style='color:#1a7f1a'>win</strong>" if e["verdict"] == "win"
                 else "<strong style='color:#b00000;font-size:1.2em'>LOSS</strong>")
-    h = [f"<h2>Equal time: a method against the fixed counts ({esc(e0['scene'])}, {e0['size']}x{e0['size']})</h2>",
-         f"<p>{esc(INTRO.format(repeats=e0['repeats']))}</p>",
-         "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
-         "<tr><th>comparison<th>method<th>fixed n at equal time<th>MSE ratio<th>verdict</tr>"]
-    h += [f"<tr><td>{esc(e['title'])}<td><code>{esc(describe(e['method']['config']))}</code>"
-          f"<td>{e['fixed'][e['equal_time']]['n']}<td>{e['ratio']:.2f}<td>{mark(e)}</tr>" for e in entries]
+
+    h = [
+        f"<h2>Equal time: a method against the fixed counts ({esc(e0['scene'])}, {e0['size']}x{e0['size']})</h2>",
+        f"<p>{esc(INTRO.format(repeats=e0['repeats']))}</p>",
+        "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
+        "<tr><th>comparison<th>method<th>fixed n at equal time<th>MSE ratio<th>verdict</tr>",
+    ]
+    h += [
+        f"<tr><td>{esc(e['title'])}<td><code>{esc(describe(e['method']['config']))}</code>"
+        f"<td>{e['fixed'][e['equal_time']]['n']}<td>{e['ratio']:.2f}<td>{mark(e)}</tr>"
+        for e in entries
+    ]
     h += ["</table>"]
     for e in entries:
-        h += [f"<h3>{esc(e['title'])}: {mark(e)}</h3>",
-              f"<p><code>{esc(e['style'])}</code> {esc(describe({**e['params'], **e['integrator']}))}</p>",
-              "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
-              "<tr><th>render<th>inner<th>s<th>MSE</tr>"
-              + "".join(f"<tr><td>{esc(a)}<td>{esc(b)}<td>{c}<td>{d}</tr>" for a, b, c, d in rows(e)) + "</table>",
-              f"<p>{esc(headline(e))}.</p>", f"<img src='{e['file']}' style='width:900px;image-rendering:auto'>"]
+        h += [
+            f"<h3>{esc(e['title'])}: {mark(e)}</h3>",
+            f"<p><code>{esc(e['style'])}</code> {esc(describe({**e['params'], **e['integrator']}))}</p>",
+            "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
+            "<tr><th>render<th>inner<th>s<th>MSE</tr>"
+            + "".join(f"<tr><td>{esc(a)}<td>{esc(b)}<td>{c}<td>{d}</tr>" for a, b, c, d in rows(e))
+            + "</table>",
+            f"<p>{esc(headline(e))}.</p>",
+            f"<img src='{e['file']}' style='width:900px;image-rendering:auto'>",
+        ]
     return h

@@ -59,7 +59,9 @@ def _isatty(stream) -> bool:
 class Status:
     """At most one phase at a time; `start` ends the phase under way before it begins the next."""
 
-    def __init__(self, enabled: bool = True, delay: float | None = None, stream: IO[str] | None = None):
+    def __init__(
+        self, enabled: bool = True, delay: float | None = None, stream: IO[str] | None = None
+    ):
         self.enabled = enabled
         self.delay = delay_from_env() if delay is None else delay
         self.stream = stream if stream is not None else sys.stderr
@@ -116,7 +118,14 @@ class Status:
 
         def now() -> str:  # the phase's own time, not the line's (which appears `delay` late)
             return f"{text} ({time.monotonic() - began:.0f} s)"
-        line = tqdm(total=None, desc=now(), file=self.stream, bar_format="styletrace: {desc}", mininterval=0.0)
+
+        line = tqdm(
+            total=None,
+            desc=now(),
+            file=self.stream,
+            bar_format="styletrace: {desc}",
+            mininterval=0.0,
+        )
         try:
             while not done.wait(1.0 if tty else None):
                 line.set_description_str(now())

@@ -12,7 +12,9 @@ from __future__ import annotations
 from styletrace.gate import dr, mi
 
 
-def accepted(neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str) -> mi.UInt64:
+def accepted(
+    neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str
+) -> mi.UInt64:
     """Bit q set where slot q's vertex may be pooled with the vertex's own. `neighbour(q)` gives
     (index, exists) of slot q; `near(at, ok)` the grid's geometric test of the candidates
     at `at`."""

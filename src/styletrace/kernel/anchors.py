@@ -71,8 +71,13 @@ def has_aperture(sensor) -> bool:
     """Whether rays through one film point leave from different points for different
     lens samples."""
     import numpy as np
-    ray, _ = sensor.sample_ray(mi.Float(0.0, 0.0), mi.Float(0.5, 0.5), mi.Point2f([0.5, 0.5], [0.5, 0.5]),
-                               mi.Point2f([0.05, 0.95], [0.05, 0.95]))
+
+    ray, _ = sensor.sample_ray(
+        mi.Float(0.0, 0.0),
+        mi.Float(0.5, 0.5),
+        mi.Point2f([0.5, 0.5], [0.5, 0.5]),
+        mi.Point2f([0.05, 0.95], [0.05, 0.95]),
+    )
     o = np.array(ray.o, dtype=np.float64).reshape(3, -1)
     if o.shape[1] < 2:   # the origin did not depend on the lens sample at all
         return False
@@ -104,8 +109,12 @@ class Tone:
     def start(self, ray: mi.Ray3f, pi, active) -> ToneState:
         """The state of a camera ray reaching its first vertex `pi`: empty prefix, s0 = that
         vertex's pixel."""
-        x, y = self.projection.pixels(mi.Point3f(ray.o + ray.d * dr.select(active & pi.is_valid(), pi.t, 1.0)))
-        return ToneState(key=mi.UInt32(2166136261), bits=mi.UInt32(0), delta=mi.Bool(True), s0=mi.Point2f(x, y))
+        x, y = self.projection.pixels(
+            mi.Point3f(ray.o + ray.d * dr.select(active & pi.is_valid(), pi.t, 1.0))
+        )
+        return ToneState(
+            key=mi.UInt32(2166136261), bits=mi.UInt32(0), delta=mi.Bool(True), s0=mi.Point2f(x, y)
+        )
 
     def coordinate(self, scene: mi.Scene, si, ray: mi.Ray3f, depth, tone: ToneState | None, active):
         """(s, method) of the vertex `si` reached along `ray` at path depth `depth` with `tone`
@@ -119,8 +128,7 @@ class Tone:
         first = depth == 0
         # the all-delta closed form holds for a pinhole (or orthographic) camera only: through a
         # lens the anchor (from the lens centre) and the sample's ray (from elsewhere on the lens)
-        # part after the
-        # first vertex
+        # part after the first vertex
         closed = first | (tone.delta & (not self.lens))
         s = dr.select(first, direct, tone.s0)
         method = dr.select(first, mi.UInt32(mls.CLOSED_PIXEL), mi.UInt32(mls.CLOSED_DELTA))
@@ -148,9 +156,14 @@ class Tone:
         ctx = mi.BSDFContext()
         ctx.type_mask = int(mi.BSDFFlags.Transmission)
         n = len(coords)
-        state = (mi.UInt32(0), [mi.Bool(active) for _ in range(n)], rays,
-                 [mi.UInt32(2166136261) for _ in range(n)], [dr.zeros(mi.Point3f) for _ in range(n)],
-                 [mi.Bool(False) for _ in range(n)])
+        state = (
+            mi.UInt32(0),
+            [mi.Bool(active) for _ in range(n)],
+            rays,
+            [mi.UInt32(2166136261) for _ in range(n)],
+            [dr.zeros(mi.Point3f) for _ in range(n)],
+            [mi.Bool(False) for _ in range(n)],
+        )
 
         def cond(j, alive, rays, keys, pts, ok):
             out = mi.Bool(False)
@@ -161,7 +174,9 @@ class Tone:
         def body(j, alive, rays, keys, pts, ok):
             for m in range(n):
                 a = alive[m]
-                hit = scene.ray_intersect(rays[m], ray_flags=mi.RayFlags.All, coherent=False, active=a)
+                hit = scene.ray_intersect(
+                    rays[m], ray_flags=mi.RayFlags.All, coherent=False, active=a
+                )
                 a &= hit.is_valid()
                 last = a & (j == depth)
                 pts[m] = dr.select(last, hit.p, pts[m])

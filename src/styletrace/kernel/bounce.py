@@ -50,7 +50,9 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     ds, em_weight = cfg.emitters.sample_direction(si, sampler.next_2d(), to_light)
     to_light &= ds.delta & (ds.pdf != 0.0)
     scale = opaque_part(si, bsdf, go) if nulls else 1.0
-    L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
+    L += dr.select(
+        to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0
+    )
     u1 = sampler.next_1d()
     if nulls:  # x samples its opaque part alone (opaque_share): the weight is that part's f/pdf
         keep = opaque_share(si, bsdf, go)
@@ -58,7 +60,9 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     bs, weight = bsdf.sample(ctx, si, u1, sampler.next_2d(), go)
     ray2 = si.spawn_ray(si.to_world(bs.wo))
     if nulls:
-        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight)
+        weight = dr.select(
+            mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight
+        )
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
     line_state = None
@@ -73,5 +77,14 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
     tone = None if tone is None else advance(tone, si, bs, depth, go)
-    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state,
-                  tone=tone)
+    return Bounce(
+        L=L,
+        weight=weight,
+        pi=pi2,
+        si=si2,
+        ray=ray2,
+        go=go,
+        hit=go & si2.is_valid(),
+        lines=line_state,
+        tone=tone,
+    )

@@ -96,7 +96,9 @@ class EmitterSampler:
         self.prob_by_id = mi.Float(prob)
         self.probabilities = [w / total for w in weights]  # in key order, for tests and reports
 
-    def sample_direction(self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True):
+    def sample_direction(
+        self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True
+    ):
         """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded (with
         `visible`; without, the caller estimates the transmittance: volume.py) or none."""
         if self.count == 0:
@@ -118,9 +120,13 @@ class EmitterSampler:
             return mi.Float(0.0)
         return dr.gather(mi.Float, self.prob_by_id, emitter_id(emitter), active & (emitter != None))  # noqa: E711
 
-    def pdf_direction(self, ref: mi.Interaction3f, ds: mi.DirectionSample3f, active: mi.Bool) -> mi.Float:
+    def pdf_direction(
+        self, ref: mi.Interaction3f, ds: mi.DirectionSample3f, active: mi.Bool
+    ) -> mi.Float:
         """Solid-angle density with which `sample_direction` from `ref` produces the direction
         of `ds`."""
         if self.count == 0:
             return mi.Float(0.0)
-        return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(ds.emitter, active)
+        return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(
+            ds.emitter, active
+        )

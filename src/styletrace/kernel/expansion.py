@@ -40,8 +40,7 @@ from styletrace.jit import no_collection
 
 #: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's
 #: footprint, not one point of it (a lane whose children are far brighter than its pixel's b
-#: diverges: see
-#: the docstring).
+#: diverges: see the docstring).
 PASS_SPP = 4
 
 
@@ -50,7 +49,11 @@ def crop_key(scene: mi.Scene) -> tuple:
     and border."""
     film = scene.sensors()[0].film()
     border = int(film.rfilter().border_size()) if film.sample_border() else 0
-    return (tuple(int(v) for v in film.crop_offset()), tuple(int(v) for v in film.crop_size()), border)
+    return (
+        tuple(int(v) for v in film.crop_offset()),
+        tuple(int(v) for v in film.crop_size()),
+        border,
+    )
 
 
 def pixel_count(key: tuple) -> int:
@@ -61,8 +64,10 @@ def pixel_count(key: tuple) -> int:
 def lane_pixels(width: int, pixels: int) -> mi.UInt32:
     """The film pixel of every lane of a wavefront of `width` lanes over `pixels` pixels."""
     if width % pixels:
-        raise SettingsError(f"bad wavefront of {width} lanes for a film of {pixels} pixels with expansion_pass: "
-                            f"expected a multiple (Mitsuba's pixel-major layout)")
+        raise SettingsError(
+            f"bad wavefront of {width} lanes for a film of {pixels} pixels with expansion_pass: "
+            f"expected a multiple (Mitsuba's pixel-major layout)"
+        )
     return dr.arange(mi.UInt32, width) // (width // pixels)
 
 
@@ -76,8 +81,9 @@ def moments(draw, sampler, active, m: int, known):
         r = draw(smp) - known
         return i + 1, s1 + r, s2 + r * r, smp
 
-    _, s1, s2, _ = dr.while_loop(state=(mi.UInt32(0), mi.Color3f(0.0), mi.Color3f(0.0), sampler), cond=cond,
-                                 body=body)
+    _, s1, s2, _ = dr.while_loop(
+        state=(mi.UInt32(0), mi.Color3f(0.0), mi.Color3f(0.0), sampler), cond=cond, body=body
+    )
     return s1, s2
 
 
@@ -95,7 +101,9 @@ class Collector:
 
     def add(self, width: int, active, s1: mi.Color3f, s2: mi.Color3f) -> None:
         if width != self.pixels * PASS_SPP:
-            raise SettingsError(f"bad wavefront of {width} lanes in the expansion pass: expected {PASS_SPP} per pixel")
+            raise SettingsError(
+                f"bad wavefront of {width} lanes in the expansion pass: expected {PASS_SPP} per pixel"
+            )
         lane = dr.arange(mi.UInt32, width)
         for c in range(3):
             dr.scatter(self.s1, s1[c], 3 * lane + c, active)
@@ -107,7 +115,11 @@ class Collector:
         (rows, columns, 3); a pixel without children of its own takes its window's."""
         (_, (w, h), border) = key
         rows, cols = h + 2 * border, w + 2 * border
-        n = np.asarray(self.hit, dtype=np.float64).reshape(rows, cols, PASS_SPP).sum(axis=2)[..., None]
+        n = (
+            np.asarray(self.hit, dtype=np.float64)
+            .reshape(rows, cols, PASS_SPP)
+            .sum(axis=2)[..., None]
+        )
         n = n * self.children
         s1 = np.asarray(self.s1, dtype=np.float64).reshape(rows, cols, PASS_SPP, 3).sum(axis=2)
         s2 = np.asarray(self.s2, dtype=np.float64).reshape(rows, cols, PASS_SPP, 3).sum(axis=2)
@@ -120,7 +132,10 @@ class Collector:
         n = np.where(hole[..., None], wn, n)
         s1 = np.where(hole[..., None], w1, s1)
         s2 = np.where(hole[..., None], w2, s2)
-        return [(s1 / np.maximum(n, 1.0), s2 / np.maximum(n, 1.0)), (w1 / np.maximum(wn, 1.0), w2 / np.maximum(wn, 1.0))]
+        return [
+            (s1 / np.maximum(n, 1.0), s2 / np.maximum(n, 1.0)),
+            (w1 / np.maximum(wn, 1.0), w2 / np.maximum(wn, 1.0)),
+        ]
 
 
 class Moments:
@@ -131,8 +146,10 @@ class Moments:
         self.key, self.seed = key, seed
         # (rows, cols, 3) each
         self.host = [(m1.astype(np.float32), m2.astype(np.float32)) for m1, m2 in sets]
-        self.device = [(mi.Float(np.ascontiguousarray(m1).ravel()), mi.Float(np.ascontiguousarray(m2).ravel()))
-                       for m1, m2 in self.host]
+        self.device = [
+            (mi.Float(np.ascontiguousarray(m1).ravel()), mi.Float(np.ascontiguousarray(m2).ravel()))
+            for m1, m2 in self.host
+        ]
         self.pixels = pixel_count(key)
 
     def b_star(self, known=0.0) -> np.ndarray:
@@ -183,9 +200,11 @@ class Expansion:
     def lookup(self, scene: mi.Scene, width: int, m: int) -> list[tuple[mi.Color3f, mi.Color3f]]:
         found = self.maps.get(crop_key(scene))
         if found is None:
-            raise SettingsError(f"bad value {m} for 'expansion_pass' here: its pre-pass runs in styletrace's passes "
-                                f"(styletrace.render, api.passes, the command line), not in a bare mi.render; render "
-                                f"through them or use expansion_pass=0")
+            raise SettingsError(
+                f"bad value {m} for 'expansion_pass' here: its pre-pass runs in styletrace's passes "
+                f"(styletrace.render, api.passes, the command line), not in a bare mi.render; render "
+                f"through them or use expansion_pass=0"
+            )
         return found.lookup(width)
 
 

@@ -124,7 +124,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     #: saving: benchmarks/lines_cost.py)
     line_short_circuit = True
 
-    def __init__(self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None):
+    def __init__(
+        self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None
+    ):
         """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
         (`S.parse(values)`; the Python API and the CLI build it this way, parsing once)."""
         super().__init__(props)
@@ -156,7 +158,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         instances: scene_graph.py; `bsdfs[0]` is the styled BSDF itself), then the integrator's own
         style for all other objects."""
         graph = SceneGraph(scene) if graph is None else graph
-        targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
+        targets = [
+            Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled
+        ]
         if self.settings.stylize != "first_object_hit":
             targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
         return targets
@@ -189,15 +193,21 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             # the media to the next surface vertex, stylized at the next level; a lane that scatters
             # in a medium on the way goes on as an ordinary volumetric path (volume.py)
             first = mi.UInt32(site.depth)
-            start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium, delta=True)
+            start = Start(
+                site.pi, site.ray, site.depth, opaque=True, medium=site.medium, delta=True
+            )
             w = self._walk(sampler, start, active, Hooks(stop=lambda si2, d: d == first + 1,
                                                          lines=walk_lines(self, level),
                                                          tone=self.tone_states.get(level)))
             if self.lines is not None:
                 self.line_states[level + 1] = w.lines
             self.tone_states[level + 1] = w.tone
-            si2 = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            deeper = self.stylized(level + 1, sampler, Site(w.pi, si2, w.ray, w.depth, w.medium), w.halted)
+            si2 = w.pi.compute_surface_interaction(
+                w.ray, ray_flags=mi.RayFlags.All, active=w.halted
+            )
+            deeper = self.stylized(
+                level + 1, sampler, Site(w.pi, si2, w.ray, w.depth, w.medium), w.halted
+            )
             return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
         b = bounce(self.walk_config, sampler, site, active,
@@ -207,7 +217,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self.tone_states[level + 1] = b.tone
         deeper = self.stylized(level + 1, sampler, Site(b.pi, b.si, b.ray, site.depth + 1), b.hit)
         scene = self.walk_config.scene
-        return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
+        return b.L + dr.select(
+            b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0
+        )
 
     def walk(self, level: int, sampler, start: Start, active, halt_at_start: bool) -> mi.Spectrum:
         """A path-traced walk from `start` that halts on styled objects and stylizes them at `level`
@@ -247,8 +259,12 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total = mi.Spectrum(0.0)
         for target in self.targets:
-            here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
-            total = dr.select(here, self.estimate(target.slot, level, sampler, site, here, v), total)
+            here = active & (
+                _any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled
+            )
+            total = dr.select(
+                here, self.estimate(target.slot, level, sampler, site, here, v), total
+            )
         return total
 
     def estimate(self, slot: S.StyleSlot, level, sampler, site: Site, active, v) -> mi.Spectrum:
@@ -274,8 +290,13 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # the expansion pass: the first vertex's moments only
         if collector is not None and level == 0:
             if slot.estimator == "series":
-                s1, s2 = pass_moments(lambda smp: draw((smp,))[0], sampler, active, collector.children,
-                                      emission(scene, si, active))
+                s1, s2 = pass_moments(
+                    lambda smp: draw((smp,))[0],
+                    sampler,
+                    active,
+                    collector.children,
+                    emission(scene, si, active),
+                )
                 collector.add(dr.width(site.ray.d), active, s1, s2)
             return mi.Color3f(0.0)
         moments = None
@@ -300,7 +321,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         from styletrace.kernel import reuse
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         with tracing():
-            image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
+            image = reuse.render(
+                self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count())
+            )
         return image if develop else mi.TensorXf()
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
@@ -338,10 +361,14 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
                               if m and self.expansion.collector is None else None)
         if self.lifted is not None:
-            return lifted_lines(self, self._stylize, scene, sampler, camera_ray, ray, active, medium)
+            return lifted_lines(
+                self, self._stylize, scene, sampler, camera_ray, ray, active, medium
+            )
         if self.lines is None:
             return self._stylize(scene, sampler, ray, active, medium)
-        return camera_edge(self, self._stylize, scene, sampler, camera_ray, ray, active, medium, spp)
+        return camera_edge(
+            self, self._stylize, scene, sampler, camera_ray, ray, active, medium, spp
+        )
 
     def _stylize(self, scene, sampler, ray, active, medium=None):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
@@ -359,16 +386,25 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                 start = Start(pi, ray, mi.UInt32(0), medium=medium, flight=True, hide=hide)
                 return self.walk(0, sampler, start, active, halt_at_start=True), valid, []
             start = active & pi.is_valid() if hide else active  # a hidden environment is black
-            return self.walk(0, sampler, Start(pi, ray, mi.UInt32(0)), start, halt_at_start=True), valid, []
+            return (
+                self.walk(0, sampler, Start(pi, ray, mi.UInt32(0)), start, halt_at_start=True),
+                valid,
+                [],
+            )
         if self.media:
             # the stylized vertex is the first surface that scatters; lanes that scatter in a medium
             # before reaching it go on as ordinary volumetric paths (volume.py), the others
-            # carry the
-            # transmittance
-            w = self._walk(sampler, Start(pi, ray, 0, medium=medium, flight=True, hide=hide), active,
-                           Hooks(stop=lambda si, d: d == 0))
+            # carry the transmittance
+            w = self._walk(
+                sampler,
+                Start(pi, ray, 0, medium=medium, flight=True, hide=hide),
+                active,
+                Hooks(stop=lambda si, d: d == 0),
+            )
             si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            value = self.stylized(0, sampler, Site(w.pi, si, w.ray, mi.UInt32(0), w.medium), w.halted)
+            value = self.stylized(
+                0, sampler, Site(w.pi, si, w.ray, mi.UInt32(0), w.medium), w.halted
+            )
             return self.through(w, value), valid | w.halted | (active & (w.depth > 0)), []
         if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
             front = first_scattering(scene, sampler, pi, ray, active)

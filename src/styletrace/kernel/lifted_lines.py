@@ -158,7 +158,9 @@ class Lifted:
     focus), so the base and auxiliary paths of a depth-of-field render leave from the sample's own
     lens point."""
 
-    def __init__(self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False, objects=()):
+    def __init__(
+        self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False, objects=()
+    ):
         from styletrace.kernel.anchors import Tone
         self.scene = scene
         self.tone = Tone(scene)          # film conversion and projection of the first sensor
@@ -174,8 +176,10 @@ class Lifted:
         if self.tone.lens:
             params = mi.traverse(sensor)
             if "aperture_radius" not in params:
-                raise SceneError(f"lifted lines: sensor {sensor.class_name()} has an aperture whose lens model "
-                                 "is not known here (supported: perspective, orthographic, thinlens)")
+                raise SceneError(
+                    f"lifted lines: sensor {sensor.class_name()} has an aperture whose lens model "
+                    "is not known here (supported: perspective, orthographic, thinlens)"
+                )
             m = sensor.world_transform()
             self.lens = (m, m.inverse(), float(dr.ravel(params["aperture_radius"])[0]),
                          float(dr.ravel(sensor.focus_distance())[0]))
@@ -202,8 +206,9 @@ class Lifted:
 
     def _ray(self, s: mi.Point2f, active, aperture=None):
         aperture = mi.Point2f(0.5, 0.5) if aperture is None else aperture
-        ray, _ = self.tone.sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), self.tone.film_uv(s.x, s.y),
-                                             aperture, active)
+        ray, _ = self.tone.sensor.sample_ray(
+            mi.Float(0.0), mi.Float(0.5), self.tone.film_uv(s.x, s.y), aperture, active
+        )
         return mi.Ray3f(ray)
 
     @staticmethod
@@ -247,8 +252,19 @@ class Lifted:
             eta = dr.select(through, bs.eta, 1.0)
             h = dr.normalize(dr.select(through, ray.d - eta * d, d - ray.d))
             go = hit & (bs.pdf > 0) & (~diffuse if not self.through_diffuse else True)
-            base.append(dict(alive=alive, n=n, v=mi.Vector3f(ray.d), h=h, d=d, diffuse=diffuse, through=through,
-                             eta=eta, go=go))
+            base.append(
+                dict(
+                    alive=alive,
+                    n=n,
+                    v=mi.Vector3f(ray.d),
+                    h=h,
+                    d=d,
+                    diffuse=diffuse,
+                    through=through,
+                    eta=eta,
+                    go=go,
+                )
+            )
             ray = si.spawn_ray(d)
             alive = go
         out = []
@@ -269,7 +285,10 @@ class Lifted:
                     for k in range(2):
                         travelled[k] = travelled[k] + dr.select(hits[k], sis[k].t, 0.0)
                     if t.measurement in ("shape_id", "material_id"):
-                        fa, fb = self._measure(t.measurement, sis[0], None), self._measure(t.measurement, sis[1], None)
+                        fa, fb = (
+                            self._measure(t.measurement, sis[0], None),
+                            self._measure(t.measurement, sis[1], None),
+                        )
                         fire |= both & (fa != fb)
                     else:
                         fa = self._measure(t.measurement, sis[0], travelled[0])

@@ -134,7 +134,9 @@ class Lines:
     def _draws(self, si) -> mi.Bool:
         return on_shapes(si, self.shapes)
 
-    def trace(self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False) -> mi.SurfaceInteraction3f:
+    def trace(
+        self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False
+    ) -> mi.SurfaceInteraction3f:
         """The first hit along `ray` that is not a pure `null` surface; its `t` is measured
         from ray.o."""
         if not self.see_through:
@@ -142,20 +144,31 @@ class Lines:
         minimal = mi.RayFlags.Minimal
         pi = scene.ray_intersect_preliminary(ray, coherent=coherent, active=active)
         first = pi.compute_surface_interaction(ray, ray_flags=minimal, active=active)
-        state = (pi, mi.Ray3f(ray), mi.Float(0.0), active & first.is_valid() & pure_null(first.bsdf().flags()),
-                 mi.UInt32(0))
+        state = (
+            pi,
+            mi.Ray3f(ray),
+            mi.Float(0.0),
+            active & first.is_valid() & pure_null(first.bsdf().flags()),
+            mi.UInt32(0),
+        )
 
         def body(pi, ray, t, passing, n):
             si = pi.compute_surface_interaction(ray, ray_flags=minimal, active=passing)
             ahead = si.spawn_ray(ray.d)
             t = dr.select(passing, t + pi.t, t)
             ray = dr.select(passing, ahead, ray)
-            pi = dr.select(passing, scene.ray_intersect_preliminary(ahead, coherent=False, active=passing), pi)
+            pi = dr.select(
+                passing, scene.ray_intersect_preliminary(ahead, coherent=False, active=passing), pi
+            )
             nxt = pi.compute_surface_interaction(ray, ray_flags=minimal, active=passing)
             return pi, ray, t, passing & nxt.is_valid() & pure_null(nxt.bsdf().flags()), n + 1
 
-        pi, ray, t, _, _ = dr.while_loop(state, lambda pi, ray, t, passing, n: passing & (n < MAX_NULL_PASSES),
-                                         body, label="styletrace lines through null surfaces")
+        pi, ray, t, _, _ = dr.while_loop(
+            state,
+            lambda pi, ray, t, passing, n: passing & (n < MAX_NULL_PASSES),
+            body,
+            label="styletrace lines through null surfaces",
+        )
         si = pi.compute_surface_interaction(ray, ray_flags=self.flags, active=active)
         si.t = dr.select(si.is_valid(), si.t + t, si.t)
         return si
@@ -175,11 +188,22 @@ class Lines:
             return mi.Ray3f(o + a * ox + b * oy, dr.normalize(d + a * dx + b * dy))
 
         seen = self._detect(scene, sampler, q, aux, lambda t: spread + angle * t, active)
-        return seen, LineState(D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle,
-                               spread=spread)
+        return seen, LineState(
+            D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle, spread=spread
+        )
 
-    def edge(self, scene, sampler, state: LineState, si, bs, ray: mi.Ray3f, pi: mi.PreliminaryIntersection3f,
-             index, active: mi.Bool):
+    def edge(
+        self,
+        scene,
+        sampler,
+        state: LineState,
+        si,
+        bs,
+        ray: mi.Ray3f,
+        pi: mi.PreliminaryIntersection3f,
+        index,
+        active: mi.Bool,
+    ):
         """The edge `ray` (leaving vertex si by the sample bs, reaching pi) with index `index`:
         (Seen, LineState after it)."""
         alive = state.alive & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Diffuse)
@@ -205,8 +229,12 @@ class Lines:
 
         seen = self._detect(scene, sampler, q, aux, state.width, go)
         # lanes that do not take this edge (halted at a stylized vertex, ended) keep their state
-        after = LineState(D=dr.select(active, D0 + dr.select(pi.is_valid(), pi.t, dr.inf), D0),
-                          alive=dr.select(active, alive, state.alive), angle=state.angle, spread=state.spread)
+        after = LineState(
+            D=dr.select(active, D0 + dr.select(pi.is_valid(), pi.t, dr.inf), D0),
+            alive=dr.select(active, alive, state.alive),
+            angle=state.angle,
+            spread=state.spread,
+        )
         return seen, after
 
     def _pair(self, a, b, radius_at, active):
@@ -251,7 +279,13 @@ class Lines:
         def body(j, smp, fired, best_t, best_p):
             fire, p, t = self._pair(hit(smp) if pairs else q, hit(smp), radius_at, active)
             better = fire & (t < best_t)
-            return j + 1, smp, fired | fire, dr.select(better, t, best_t), dr.select(better, p, best_p)
+            return (
+                j + 1,
+                smp,
+                fired | fire,
+                dr.select(better, t, best_t),
+                dr.select(better, p, best_p),
+            )
 
         count = s.k if pairs else s.samples
         state = (mi.UInt32(0), sampler, mi.Bool(False), mi.Float(dr.inf), mi.Point3f(0.0))

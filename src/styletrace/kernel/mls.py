@@ -112,6 +112,9 @@ def invert(x: mi.Point3f, d: mi.Vector3f, points, coords, valid, first: mi.Point
     s_aff, ok_aff, _ = fit([mi.Float(1.0)] * len(q))
     has = count >= 1
     s = dr.select(ok_mls, s_mls, dr.select(ok_aff, s_aff, dr.select(has, near, first)))
-    method = dr.select(ok_mls, mi.UInt32(MLS), dr.select(ok_aff, mi.UInt32(AFFINE),
-                                                          dr.select(has, mi.UInt32(NEAREST), mi.UInt32(FIRST))))
+    method = dr.select(
+        ok_mls,
+        mi.UInt32(MLS),
+        dr.select(ok_aff, mi.UInt32(AFFINE), dr.select(has, mi.UInt32(NEAREST), mi.UInt32(FIRST))),
+    )
     return s, method

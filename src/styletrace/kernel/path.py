@@ -220,14 +220,28 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
 
     # A starting vertex counts its emission in full: the previous vertex is treated as a delta
     # scattering event, exactly like a camera ray in Mitsuba's path tracer.
-    si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
+    si_prev, pdf_prev, delta_prev = (
+        (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True))
+        if came_from is None
         else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
-    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi),
-                      ray=mi.Ray3f(start.ray), active=mi.Bool(active), depth=mi.UInt32(start.depth),
-                      L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0), eta=mi.Float(1.0),
-                      si_prev=si_prev, pdf_prev=pdf_prev, delta_prev=delta_prev, halted=mi.Bool(False),
-                      first=mi.Bool(True) if nulls and opaque_start else None,
-                      lines=None if lines is None else lines[1], tone=tone)
+    )
+    state = PathState(
+        sampler=sampler,
+        pi=mi.PreliminaryIntersection3f(start.pi),
+        ray=mi.Ray3f(start.ray),
+        active=mi.Bool(active),
+        depth=mi.UInt32(start.depth),
+        L=mi.Spectrum(0.0),
+        beta=mi.Spectrum(1.0),
+        eta=mi.Float(1.0),
+        si_prev=si_prev,
+        pdf_prev=pdf_prev,
+        delta_prev=delta_prev,
+        halted=mi.Bool(False),
+        first=mi.Bool(True) if nulls and opaque_start else None,
+        lines=None if lines is None else lines[1],
+        tone=tone,
+    )
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
@@ -250,7 +264,9 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
             keep = dr.select(s.first, opaque_share(si, bsdf, active_next & s.first), 1.0)
             u1 = dr.select(s.first, u1 * keep, u1)
         # One BSDF call both evaluates the light direction and samples the continuation.
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(), active_next)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(
+            ctx, si, wo, u1, s.sampler.next_2d(), active_next
+        )
         scale = mi.Spectrum(1.0)
         if nulls and opaque_start:
             # the opaque part's f and pdf: the BSDF's own are (1 - T) and (1 - p) times theirs,
@@ -296,8 +312,9 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=active_next)
         if lines is not None:  # a feature line on the new edge absorbs the path (lines.py)
-            seen, s.lines = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
-                                          active_next)
+            seen, s.lines = lines[0].edge(
+                scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next, active_next
+            )
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
             active_next &= ~seen.fired
         if stop is not None:  # halted lanes keep their vertex
@@ -325,11 +342,20 @@ def finished(out, **extra) -> Walk:
     `walk`). The throughput counts only where the walk halted (lanes that Russian roulette ended may
     hold inf * 0)."""
     finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
-    return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
-                depth=out.depth, halted=out.halted, **extra)
+    return Walk(
+        L=dr.select(finite, out.L, 0.0),
+        beta=dr.select(finite, out.beta, 0.0),
+        pi=out.pi,
+        ray=out.ray,
+        depth=out.depth,
+        halted=out.halted,
+        **extra,
+    )
 
 
-def halt_at(s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool):
+def halt_at(
+    s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool
+):
     """Where a walk's `stop` halts it at si among the lanes that `reached` it: (lanes that shade si,
     lanes that pass straight on through a null part, their pass weight). A stylized vertex is a
     scattering one, so with `nulls` a halting lane first passes through the null part (`null_split`)
@@ -368,10 +394,14 @@ def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):
     depth = mi.UInt32(depth)
     through = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission) & (depth < MAX_BITS)
     bit = mi.UInt32(1) << dr.minimum(depth, MAX_BITS - 1)
-    return ToneState(key=dr.select(active, combine(tone.key, shape_id(si)), tone.key),
-                     bits=dr.select(active & through, tone.bits | bit, tone.bits),
-                     delta=dr.select(active, tone.delta & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), tone.delta),
-                     s0=tone.s0)
+    return ToneState(
+        key=dr.select(active, combine(tone.key, shape_id(si)), tone.key),
+        bits=dr.select(active & through, tone.bits | bit, tone.bits),
+        delta=dr.select(
+            active, tone.delta & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), tone.delta
+        ),
+        s0=tone.s0,
+    )
 
 
 def past_area_emitters(scene, ray, pi, active):
@@ -385,5 +415,7 @@ def past_area_emitters(scene, ray, pi, active):
         return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
 
     skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
-    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
+    ray, pi, _ = dr.while_loop(
+        (mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters"
+    )
     return ray, pi

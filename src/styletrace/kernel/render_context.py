@@ -39,25 +39,42 @@ class RenderContext:
     def __enter__(self) -> "RenderContext":
         integ, scene = self.integrator, self.scene
         if integ.targets:
-            raise RuntimeError("a stylized integrator renders one scene at a time: its render context is taken")
+            raise RuntimeError(
+                "a stylized integrator renders one scene at a time: its render context is taken"
+            )
         try:
             graph = SceneGraph(scene)
             # plain flags only: a kept reference to a scene's objects breaks later traces
             # (module doc)
-            integ.nulls, integ.media, integ.see_through = graph.has_null, graph.has_media, graph.has_see_through
+            integ.nulls, integ.media, integ.see_through = (
+                graph.has_null,
+                graph.has_media,
+                graph.has_see_through,
+            )
             integ.targets = integ.targets_for(scene, graph)
             problem = integ.scene_problem()
             if problem is not None:
                 raise SceneError(problem)
             settings = integ.settings
             lifted = settings.lines is not None and settings.lines.mode == "lifted"
-            integ.lines = None if settings.lines is None or lifted else Lines(settings.lines, scene,
-                                                                              see_through=integ.see_through)
+            integ.lines = (
+                None
+                if settings.lines is None or lifted
+                else Lines(settings.lines, scene, see_through=integ.see_through)
+            )
             # LLaT's conditional lifting tests its line types per camera sample before L
             # (lifted_lines.py)
-            integ.lifted = (Lifted(scene, settings.lines.types, depth=settings.lines.depth,
-                                   through_diffuse=settings.lines.diffuse, objects=settings.lines.objects)
-                            if lifted and scene.sensors() else None)
+            integ.lifted = (
+                Lifted(
+                    scene,
+                    settings.lines.types,
+                    depth=settings.lines.depth,
+                    through_diffuse=settings.lines.diffuse,
+                    objects=settings.lines.objects,
+                )
+                if lifted and scene.sensors()
+                else None
+            )
             wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in integ.targets)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
             integ.tone_states = {}

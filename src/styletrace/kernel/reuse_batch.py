@@ -98,7 +98,9 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     # the children, stored per lane: child j of lane i at i * M + j
     slab = Slab(Children(N * M), M)
     kids = slab.kids
-    base = dr.select(hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit))
+    base = dr.select(
+        hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit)
+    )
     lane = dr.arange(mi.UInt32, N)
     if s.reuse_deep == "world":
         own = level1(scope, lanes, Parents(si, bsdf, hit & (m > 0), None), m, slab)
@@ -111,15 +113,44 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     depth = dr.norm(si.p - origin)
     # the refinement round seeds its children from the lanes' generators: evaluated with the first
     # round's children, or reading them would trace the first round again
-    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos, lanes if again else ())
+    dr.eval(
+        kids,
+        own,
+        base,
+        si,
+        target,
+        m,
+        pool,
+        depth,
+        start,
+        bsdf,
+        valid,
+        ray_weight,
+        pos,
+        lanes if again else (),
+    )
 
     grid = Grid(frame, s.reuse_radius, K, start)
     mask = grid.accepted(target, bsdf, pool, mi.Vector3f(si.sh_frame.n), depth)
     dr.eval(mask)
     if keep is not None:
-        keep.update(mask=np.asarray(mask, dtype=np.uint64), start=np.asarray(start, dtype=np.int64), spp=spp,
-                    width=width, height=height, K=K, radius=s.reuse_radius, target=np.asarray(target))
-    v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(scope.view), depth=mi.UInt32(0))
+        keep.update(
+            mask=np.asarray(mask, dtype=np.uint64),
+            start=np.asarray(start, dtype=np.int64),
+            spp=spp,
+            width=width,
+            height=height,
+            K=K,
+            radius=s.reuse_radius,
+            target=np.asarray(target),
+        )
+    v = Vertex(
+        p=si.p,
+        n=mi.Vector3f(si.sh_frame.n),
+        wo=-ray.d,
+        view=mi.Vector3f(scope.view),
+        depth=mi.UInt32(0),
+    )
     count = m
     pools = Pools(grid, mask, si, bsdf, m)
     if again:

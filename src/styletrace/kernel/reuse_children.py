@@ -38,8 +38,14 @@ class Children:
     def load(self, c, active):
         """(wl, E, wb, pdf, Li, fLi) of the children at flat indices c."""
         a, b, d, e = (dr.gather(mi.Vector4f, self.data, c * 4 + t, active) for t in range(4))
-        return (mi.Vector3f(a.x, a.y, a.z), mi.Spectrum(a.w, b.x, b.y), mi.Vector3f(b.z, b.w, d.x), d.y,
-                mi.Spectrum(d.z, d.w, e.x), mi.Spectrum(e.y, e.z, e.w))
+        return (
+            mi.Vector3f(a.x, a.y, a.z),
+            mi.Spectrum(a.w, b.x, b.y),
+            mi.Vector3f(b.z, b.w, d.x),
+            d.y,
+            mi.Spectrum(d.z, d.w, e.x),
+            mi.Spectrum(e.y, e.z, e.w),
+        )
 
     def directions(self):
         """wl of every stored child (zero where none was stored)."""
@@ -90,14 +96,14 @@ class Draw:
         to_light &= ds.pdf != 0.0
         if nested:
             to_light &= ds.delta
-        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(mi.BSDFContext(), si, si.to_local(ds.d), smp.next_1d(),
-                                                   smp.next_2d(), step)
+        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(
+            mi.BSDFContext(), si, si.to_local(ds.d), smp.next_1d(), smp.next_2d(), step
+        )
         # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all
         # the emission it can reach (weight 1) and the BSDF sample none of the first emission it
         # meets (pdf 0 below), so the two pooled sums are each unbiased whatever the neighbours'
         # densities; MIS weights computed at different vertices would not add up to one.
-        # (first_n_hits splits them
-        # so already.)
+        # (first_n_hits splits them so already.)
         w_nee = dr.select(ds.delta | parents.pool, 1.0, mis_power(ds.pdf, pdf_l))
         self.to_light, self.val, self.ds, self.bs, self.w_b = to_light, val, ds, bs, w_b
         self.E = dr.select(to_light, em_weight * w_nee, 0.0)
@@ -108,7 +114,9 @@ class Draw:
 
     def next_vertex(self):
         """(si2, hit2): the surface the BSDF sample reaches, where it reaches one."""
-        si2 = self.pi2.compute_surface_interaction(self.ray2, ray_flags=mi.RayFlags.All, active=self.go)
+        si2 = self.pi2.compute_surface_interaction(
+            self.ray2, ray_flags=mi.RayFlags.All, active=self.go
+        )
         return si2, self.go & si2.is_valid()
 
     def seen(self, scene, si2, hit2, value):
@@ -152,7 +160,11 @@ def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
             Li = dr.select(c.go, w.L, 0.0)
         return i + 1, smp, total + c.store(span.slab.kids, span.lane * M + j, Li, on)
 
-    _, lanes_out, total = dr.while_loop((mi.UInt32(0), lanes, mi.Spectrum(0.0)), lambda i, smp, t: i < span.J,
-                                        body, label="styletrace reuse children")
+    _, lanes_out, total = dr.while_loop(
+        (mi.UInt32(0), lanes, mi.Spectrum(0.0)),
+        lambda i, smp, t: i < span.J,
+        body,
+        label="styletrace reuse children",
+    )
     lanes.rng = lanes_out.rng
     return total

@@ -34,7 +34,12 @@ def window(radius: int) -> np.ndarray:
     """The (2r+1)^2 - 1 pixel offsets around a pixel (itself excluded) in a fixed shuffled order: a
     lane takes K consecutive ones from a random start, so each offset is pooled with probability K
     / len."""
-    offsets = [(dx, dy) for dy in range(-radius, radius + 1) for dx in range(-radius, radius + 1) if dx or dy]
+    offsets = [
+        (dx, dy)
+        for dy in range(-radius, radius + 1)
+        for dx in range(-radius, radius + 1)
+        if dx or dy
+    ]
     order = np.random.default_rng(0x5EED).permutation(len(offsets))
     return np.array([offsets[i] for i in order], dtype=np.int32)
 
@@ -74,7 +79,9 @@ class Grid:
         x = self.x + dr.select(first, 0, dr.gather(mi.Int32, self.dx, o, ~first))
         y = self.y + dr.select(first, 0, dr.gather(mi.Int32, self.dy, o, ~first))
         inside = (x >= 0) & (x < self.width) & (y >= 0) & (y < self.height)
-        at = (mi.UInt32(dr.maximum(y, 0)) * self.width + mi.UInt32(dr.maximum(x, 0))) * self.spp + self.s
+        at = (
+            mi.UInt32(dr.maximum(y, 0)) * self.width + mi.UInt32(dr.maximum(x, 0))
+        ) * self.spp + self.s
         return dr.select(inside, at, self.lane), inside
 
     def accepted(self, target, bsdf, pool, n, depth) -> mi.UInt64:
@@ -82,7 +89,18 @@ class Grid:
         distances within DEPTH_TOL)."""
         def near(at, ok):
             return dr.abs(dr.gather(mi.Float, depth, at, ok) - depth) <= DEPTH_TOL * depth
-        return accepted(self.neighbour, self.K, target, bsdf, pool, n, NORMAL_MIN, near, "styletrace reuse accept")
+
+        return accepted(
+            self.neighbour,
+            self.K,
+            target,
+            bsdf,
+            pool,
+            n,
+            NORMAL_MIN,
+            near,
+            "styletrace reuse accept",
+        )
 
 
 @dataclass(frozen=True)
@@ -235,7 +253,14 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
     with unequal ones a layer beyond the first round's n0 holds only the refined members, so its
     loop visits those alone (the set bits of P_j), where the counts' weights would need every
     member's density for each of v's n_max children."""
-    grid, mask, si, bsdf, count, equal = pools.grid, pools.mask, pools.si, pools.bsdf, pools.count, pools.equal
+    grid, mask, si, bsdf, count, equal = (
+        pools.grid,
+        pools.mask,
+        pools.si,
+        pools.bsdf,
+        pools.count,
+        pools.equal,
+    )
     kids, M = slab.kids, slab.M
     ctx = mi.BSDFContext()
     K = grid.K
@@ -274,8 +299,9 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
             there = here & theirs
             sk = dr.gather(mi.SurfaceInteraction3f, si_all, at, there)
             p_k = bsdf.pdf(ctx, sk, sk.to_local(wv), there)
-            canonical += dr.select(there, dr.rcp(others * ck * p_k + cv * pv) if equal else dr.rcp(n_j * p_k + pv),
-                                   0.0)
+            canonical += dr.select(
+                there, dr.rcp(others * ck * p_k + cv * pv) if equal else dr.rcp(n_j * p_k + pv), 0.0
+            )
             return direct + d, indirect + b, s1, s2, canonical
 
         if equal:  # every slot q = 1 .. K
@@ -283,15 +309,21 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
                 here = active & _has(mask, q)
                 return q + 1, *term(q, here, *acc)
             _, direct, indirect, s1, s2, canonical = dr.while_loop(
-                (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda q, *_: q <= K, member,
-                label="styletrace reuse pool members")
+                (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)),
+                lambda q, *_: q <= K,
+                member,
+                label="styletrace reuse pool members",
+            )
         else:      # the layer's members k != v alone: its set bits, lowest first
             def member(bits, *acc):
                 q = mi.UInt32(dr.tzcnt(bits))
                 return bits & (bits - mi.UInt64(1)), *term(q, bits != 0, *acc)
             _, direct, indirect, s1, s2, canonical = dr.while_loop(
-                (layer & ~mi.UInt64(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda bits, *_: bits != 0,
-                member, label="styletrace reuse pool layer")
+                (layer & ~mi.UInt64(1), direct, indirect, s1, s2, mi.Float(0.0)),
+                lambda bits, *_: bits != 0,
+                member,
+                label="styletrace reuse pool layer",
+            )
         d = dr.select(mine, bsdf.eval(ctx, si, si.to_local(wl), mine) * E, 0.0)
         if equal:
             w = dr.select(alone, dr.rcp(cv * pv), canonical / others)

@@ -52,7 +52,9 @@ def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round)
     flag, n_max = mi.Bool(False), mi.UInt32(m)
     for i in which:
         slot = targets[i].slot
-        est = adaptive_direct(slot.style, int(slot.n(0)), most(slot.n(0)), v, s.adaptive_z, s.adaptive_bias)
+        est = adaptive_direct(
+            slot.style, int(slot.n(0)), most(slot.n(0)), v, s.adaptive_z, s.adaptive_bias
+        )
         state["tau"] = tuple(dr.zeros(mi.Float, dr.width(C)) + t for t in est.thresholds)
         here = (target == i) & pool
         flag |= here & est.needs_more(state)
@@ -61,8 +63,12 @@ def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round)
     idx = dr.compress(flag)
     count = dr.select(flag, n_max, m)
     if keep is not None:
-        keep.update(flag=np.asarray(flag), mean_u=np.asarray(state["mean_u"]), m2_u=np.asarray(state["m2_u"]),
-                    count=np.asarray(C))
+        keep.update(
+            flag=np.asarray(flag),
+            mean_u=np.asarray(state["mean_u"]),
+            m2_u=np.asarray(state["m2_u"]),
+            count=np.asarray(C),
+        )
     if dr.width(idx) == 0:
         return mean, count
     more = max(most(targets[i].slot.n(0)) - int(targets[i].slot.n(0)) for i in which)
@@ -70,9 +76,23 @@ def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round)
     si, bsdf, grid = first.si, first.bsdf, first.grid
     si_k, bsdf_k = dr.gather(mi.SurfaceInteraction3f, si, idx), dr.gather(mi.BSDFPtr, bsdf, idx)
     dr.eval(slab.kids, count)
-    sub_grid = Grid(grid.frame, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx), lane=idx)
-    again = pooled(Pools(sub_grid, dr.gather(mi.UInt64, first.mask, idx), si_k, bsdf_k, count, si_all=si,
-                         equal=False), slab, slab.M, scope.weights)
+    sub_grid = Grid(
+        grid.frame, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx), lane=idx
+    )
+    again = pooled(
+        Pools(
+            sub_grid,
+            dr.gather(mi.UInt64, first.mask, idx),
+            si_k,
+            bsdf_k,
+            count,
+            si_all=si,
+            equal=False,
+        ),
+        slab,
+        slab.M,
+        scope.weights,
+    )
     mean = mi.Spectrum(mean)
     dr.eval(mean)
     dr.scatter(mean, again, idx)
@@ -88,7 +108,15 @@ def _draw_more(scope, lanes, first: Pools, slab: Slab, idx, counts):
     at = dr.gather(mi.UInt32, idx, f // more)
     sub = LaneSampler(mi.PCG32(dr.width(f), initstate=dr.gather(mi.UInt64, lanes.rng.state, at),
                                initseq=mi.UInt64(f)))
-    parents = Parents(dr.gather(mi.SurfaceInteraction3f, first.si, at), dr.gather(mi.BSDFPtr, first.bsdf, at),
-                      mi.Bool(True), mi.Bool(True))
-    draw(scope, sub, parents, Span(dr.gather(mi.UInt32, m, at) + f % more, dr.gather(mi.UInt32, n_max, at), 1,
-                                   slab, at))
+    parents = Parents(
+        dr.gather(mi.SurfaceInteraction3f, first.si, at),
+        dr.gather(mi.BSDFPtr, first.bsdf, at),
+        mi.Bool(True),
+        mi.Bool(True),
+    )
+    draw(
+        scope,
+        sub,
+        parents,
+        Span(dr.gather(mi.UInt32, m, at) + f % more, dr.gather(mi.UInt32, n_max, at), 1, slab, at),
+    )

@@ -30,7 +30,16 @@ class Scope:
 
     @classmethod
     def of(cls, integ, scene: mi.Scene, weights: str, keep: dict | None) -> "Scope":
-        return cls(integ, scene, integ.settings, tuple(integ.targets), integ.emitters, integ.view, weights, keep)
+        return cls(
+            integ,
+            scene,
+            integ.settings,
+            tuple(integ.targets),
+            integ.emitters,
+            integ.view,
+            weights,
+            keep,
+        )
 
 
 @dataclass(frozen=True)
@@ -76,7 +85,9 @@ def slots(scope: Scope, si, hit, bsdf, level: int) -> Slots:
         target = dr.select(here, i, target)
         m = dr.select(here, 0 if t.slot.style.closed_form else int(t.slot.n(level)), m)
     flags = bsdf.flags()
-    pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
+    pool = (
+        (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
+    )
     return Slots(target, m, pool)
 
 

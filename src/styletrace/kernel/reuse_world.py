@@ -39,8 +39,19 @@ def level1(scope, lanes, parents: Parents, m, slab: Slab):
     lo = dr.gather(mi.UInt32, dr.reinterpret_array(mi.UInt32, lanes.next_1d()), owner)
     smp = LaneSampler(mi.PCG32(N * M, initstate=(mi.UInt64(hi) << 32) | mi.UInt64(lo),
                                initseq=dr.arange(mi.UInt64, N * M)))
-    c = Draw(scope, smp, Parents(dr.gather(mi.SurfaceInteraction3f, si, owner), dr.gather(mi.BSDFPtr, bsdf, owner),
-                                 on, mi.Bool(True)), on, 0, nested=True)
+    c = Draw(
+        scope,
+        smp,
+        Parents(
+            dr.gather(mi.SurfaceInteraction3f, si, owner),
+            dr.gather(mi.BSDFPtr, bsdf, owner),
+            on,
+            mi.Bool(True),
+        ),
+        on,
+        0,
+        nested=True,
+    )
     si2, hit2 = c.next_vertex()
     x = c.store(kids, idx, c.seen(scene, si2, hit2, level2(scope, smp, si2, c.ray2, hit2)), on)
     lane = dr.arange(mi.UInt32, N)
@@ -70,15 +81,26 @@ def level2(scope, smp, si, ray, hit):
     dr.eval(slab.kids, own, base, si, target, m, pool, jitter, start, bsdf, smp)
     box = scene.bbox()
     diag = float(dr.norm(box.extents()))
-    h = s.reuse_h * diag if s.reuse_h > 0 else density_h(si.p, pool, s.reuse_k2, box.min, S.MIN_REUSE_H * diag, diag)
+    h = (
+        s.reuse_h * diag
+        if s.reuse_h > 0
+        else density_h(si.p, pool, s.reuse_k2, box.min, S.MIN_REUSE_H * diag, diag)
+    )
     grid = WorldGrid(si.p, pool, h, s.reuse_k2, jitter, start, box.min)
     mask = grid.accepted(target, bsdf, pool, n, P.NORMAL_MIN)
     dr.eval(mask)
     if keep is not None:
-        keep.update(world_mask=np.asarray(mask, dtype=np.uint64), world_p=np.asarray(si.p, dtype=np.float64),
-                    world_pool=np.asarray(pool, dtype=bool), world_h=grid.h, world_k=grid.K,
-                    world_order=np.asarray(grid.order), world_first=np.asarray(grid.first),
-                    world_count=np.asarray(grid.count), world_offset=np.asarray(grid.offset))
+        keep.update(
+            world_mask=np.asarray(mask, dtype=np.uint64),
+            world_p=np.asarray(si.p, dtype=np.float64),
+            world_pool=np.asarray(pool, dtype=bool),
+            world_h=grid.h,
+            world_k=grid.K,
+            world_order=np.asarray(grid.order),
+            world_first=np.asarray(grid.first),
+            world_count=np.asarray(grid.count),
+            world_offset=np.asarray(grid.offset),
+        )
     mean = P.pooled(P.Pools(grid, mask, si, bsdf, m), slab, J, scope.weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     v = Vertex(p=si.p, n=n, wo=-ray.d, view=mi.Vector3f(scope.view), depth=mi.UInt32(1))

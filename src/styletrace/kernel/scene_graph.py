@@ -108,7 +108,9 @@ class SceneGraph:
                         f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
                         f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF"
                     )
-            self.has_media |= shape.interior_medium() is not None or shape.exterior_medium() is not None
+            self.has_media |= (
+                shape.interior_medium() is not None or shape.exterior_medium() is not None
+            )
             styled = styled_inside(bsdf)
             if len(styled) > 1:
                 raise SceneError(

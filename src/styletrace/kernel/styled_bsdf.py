@@ -33,7 +33,9 @@ class StyledBSDF(mi.BSDF):
             else:
                 values[key] = value
         if len(nested) != 1:
-            raise SettingsError(f"a 'styled' BSDF needs exactly one nested BSDF, found {len(nested)}")
+            raise SettingsError(
+                f"a 'styled' BSDF needs exactly one nested BSDF, found {len(nested)}"
+            )
         if "style" not in values:
             raise SettingsError("a 'styled' BSDF needs a 'style' property")
         self.nested = nested[0]

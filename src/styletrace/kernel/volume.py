@@ -111,7 +111,9 @@ def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.Directi
         s.active = (coll | surf) & dr.any(s.tr != 0.0)
         return (s,)
 
-    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace shadow transmittance")
+    (out,) = dr.while_loop(
+        (state,), lambda s: s.active, body, label="styletrace shadow transmittance"
+    )
     return dr.select(active, out.tr, 0.0)
 
 
@@ -138,7 +140,9 @@ class VolumeState:
     tone: Optional[Any] = None           # anchors.ToneState where a style reads image coordinates
 
 
-def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
+def volume_walk(
+    cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS
+) -> Walk:
     """path.walk through participating media (module docstring): the same parameters and hooks;
     returns a path.Walk with the medium each lane stands in."""
     scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
@@ -148,12 +152,25 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
     limit = depth_limit(cfg.max_depth)
     channel = mi.UInt32(dr.minimum(sampler.next_1d(active) * 3.0, 2.0))
 
-    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi), ray=mi.Ray3f(start.ray),
-                        medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
-                        flight=mi.Bool(start.flight), active=mi.Bool(active), depth=mi.UInt32(start.depth), L=mi.Spectrum(0.0),
-                        beta=mi.Spectrum(1.0), eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f),
-                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True),
-                        lines=None if lines is None else lines[1], tone=tone)
+    state = VolumeState(
+        sampler=sampler,
+        pi=mi.PreliminaryIntersection3f(start.pi),
+        ray=mi.Ray3f(start.ray),
+        medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
+        flight=mi.Bool(start.flight),
+        active=mi.Bool(active),
+        depth=mi.UInt32(start.depth),
+        L=mi.Spectrum(0.0),
+        beta=mi.Spectrum(1.0),
+        eta=mi.Float(1.0),
+        si_prev=dr.zeros(mi.Interaction3f),
+        pdf_prev=mi.Float(1.0),
+        delta_prev=mi.Bool(True),
+        halted=mi.Bool(False),
+        first=mi.Bool(True),
+        lines=None if lines is None else lines[1],
+        tone=tone,
+    )
 
     def body(s: VolumeState):
         # ---- the medium between the ray's origin and the surface `pi` (volpath's delta tracking)
@@ -163,10 +180,15 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         mei.t = dr.select(mei.t > t_surf, dr.inf, mei.t)
         s.beta *= free_flight_weight(s.medium, mei, t_surf, channel, in_med)
         real = in_med & mei.is_valid()
-        majorant_c, sigma_t_c = channel_of(mei.combined_extinction, channel), channel_of(mei.sigma_t, channel)
+        majorant_c, sigma_t_c = (
+            channel_of(mei.combined_extinction, channel),
+            channel_of(mei.sigma_t, channel),
+        )
         null_coll = real & (s.sampler.next_1d(real) >= sigma_t_c / majorant_c)
         sigma_n_c = channel_of(mei.sigma_n, channel)
-        s.beta *= dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0)
+        s.beta *= dr.select(
+            null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0
+        )
         scat = real & ~null_coll
         depth_m = s.depth + 1
         scat &= depth_m < limit                  # a collision past the last depth ends the path
@@ -189,7 +211,9 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         sample_m = scat & mei.medium.use_emitter_sampling()
         em_on = sample_m | (active_s & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth))
         it = dr.select(scat, it_m, mi.Interaction3f(si))
-        ds, em_weight = emitters.sample_direction(it, s.sampler.next_2d(em_on), em_on, visible=False)
+        ds, em_weight = emitters.sample_direction(
+            it, s.sampler.next_2d(em_on), em_on, visible=False
+        )
         em_on &= ds.pdf != 0.0
         if skip_emitter is not None:
             em_on &= ~skip_emitter(ds)
@@ -205,8 +229,9 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         if nulls and opaque_start:
             keep = dr.select(s.first, opaque_share(si, bsdf, sample_s & s.first), 1.0)
             u1 = dr.select(s.first, u1 * keep, u1)
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(sample_s),
-                                                                   sample_s)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(
+            ctx, si, wo, u1, s.sampler.next_2d(sample_s), sample_s
+        )
         scale = mi.Spectrum(1.0)
         # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
         if nulls and opaque_start:
@@ -218,11 +243,14 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         f_val = dr.select(scat, phase_val, scale * bsdf_val)
         f_pdf = dr.select(scat, phase_pdf, bsdf_pdf)
         w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, f_pdf))
-        s.L += dr.select(em_on, dr.select(scat, beta_m, s.beta) * f_val * em_weight * tr * w_nee, 0.0)
+        s.L += dr.select(
+            em_on, dr.select(scat, beta_m, s.beta) * f_val * em_weight * tr * w_nee, 0.0
+        )
 
         # ---- the next ray: phase sample in the medium, BSDF sample (or straight on) at the surface
-        wo_m, phase_weight, phase_pdf_m = phase.sample(pctx, mei, s.sampler.next_1d(scat), s.sampler.next_2d(scat),
-                                                       scat)
+        wo_m, phase_weight, phase_pdf_m = phase.sample(
+            pctx, mei, s.sampler.next_1d(scat), s.sampler.next_2d(scat), scat
+        )
         scat &= phase_pdf_m > 0.0
         null_s = passes | mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
         go_s = (sample_s & (null_s | active_s)) | (here & passes)
@@ -237,10 +265,16 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         go = scat | go_s
         s.eta *= dr.select(go_s & ~null_s, bs.eta, 1.0)
         real_s = go_s & ~null_s
-        s.si_prev = dr.select(scat, it_m, dr.select(real_s, mi.Interaction3f(dr.detach(si, True)), s.si_prev))
+        s.si_prev = dr.select(
+            scat, it_m, dr.select(real_s, mi.Interaction3f(dr.detach(si, True)), s.si_prev)
+        )
         s.pdf_prev = dr.select(scat, phase_pdf_m, dr.select(real_s, bs.pdf, s.pdf_prev))
-        s.delta_prev = dr.select(scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev))
-        s.medium = dr.select(go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium)
+        s.delta_prev = dr.select(
+            scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev)
+        )
+        s.medium = dr.select(
+            go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium
+        )
         # the prefix the next vertex's image coordinate is searched with (anchors.py)
         if tone is not None:
             s.tone = scattered_in_medium(advance(s.tone, si, bs, s.depth, real_s), scat)
@@ -256,8 +290,9 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=go)
         # a line on the edge a surface scattering starts absorbs the path (lines.py)
         if lines is not None:
-            seen, after = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
-                                        go & real_s)
+            seen, after = lines[0].edge(
+                scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next, go & real_s
+            )
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
             go &= ~seen.fired
             s.lines = lines_past(after, pi_next, go & go_s & null_s, scat)
@@ -286,7 +321,9 @@ def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
     the prefix key as no shape does, so no anchor matches and the coordinate takes its fallbacks
     (anchors.py)."""
     key = combine(tone.key, mi.UInt32(0xFFFFFFFF))  # a shape id + 1 that no shape has: 0
-    return ToneState(key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0)
+    return ToneState(
+        key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0
+    )
 
 
 def lines_past(state: LineState, pi: mi.PreliminaryIntersection3f, passed: mi.Bool,

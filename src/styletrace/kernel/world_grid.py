@@ -44,7 +44,9 @@ def cell_keys(P: np.ndarray, corner: np.ndarray, h: float) -> np.ndarray:
     return (cell[0] << (2 * AXIS_BITS)) | (cell[1] << AXIS_BITS) | cell[2]
 
 
-def density_h(p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: float, rounds: int = 4) -> float:
+def density_h(
+    p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: float, rounds: int = 4
+) -> float:
     """The cell size at which a vertex's own cell holds about K + 1 of the `valid` vertices (itself
     included), averaged over them. Path vertices lie on surfaces, so a cell's count grows as h^2:
     each round rescales h by sqrt((K + 1) / count), starting from the bounding box `high` (its
@@ -55,7 +57,9 @@ def density_h(p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: f
     corner = np.asarray(corner, dtype=np.float64).reshape(3, 1)
     h = float(np.clip(high * np.sqrt((K + 1) / P.shape[1]), low, high))
     for _ in range(rounds):
-        _, inverse, counts = np.unique(cell_keys(P, corner, h), return_inverse=True, return_counts=True)
+        _, inverse, counts = np.unique(
+            cell_keys(P, corner, h), return_inverse=True, return_counts=True
+        )
         h = float(np.clip(h * np.sqrt((K + 1) / counts[inverse].mean()), low, high))
     return h
 
@@ -64,8 +68,16 @@ class WorldGrid:
     """Slot 0 is the vertex itself, slot q >= 1 the q-th candidate of its jittered cell (module
     docstring)."""
 
-    def __init__(self, p: mi.Point3f, valid: mi.Bool, h: float, K: int, jitter: mi.Point3f, start: mi.Float,
-                 origin):
+    def __init__(
+        self,
+        p: mi.Point3f,
+        valid: mi.Bool,
+        h: float,
+        K: int,
+        jitter: mi.Point3f,
+        start: mi.Float,
+        origin,
+    ):
         """`p`: the vertices; `valid`: those that may be found; `h`: cell size and radius (world
         units); `jitter` in [0, 1)^3 and `start` in [0, 1): per vertex, its lookup's offset and
         first candidate; `origin`: a corner below every vertex (the scene's bounding box)."""
@@ -84,8 +96,12 @@ class WorldGrid:
         q = self.keys(Q, corner)
         first = np.searchsorted(sorted_keys, q, side="left")
         count = np.searchsorted(sorted_keys, q, side="right") - first
-        offset = np.minimum((np.asarray(start, dtype=np.float64) * count).astype(np.int64), np.maximum(count - 1, 0))
-        self.order, self.first, self.count, self.offset = (uint32(a) for a in (order, first, count, offset))
+        offset = np.minimum(
+            (np.asarray(start, dtype=np.float64) * count).astype(np.int64), np.maximum(count - 1, 0)
+        )
+        self.order, self.first, self.count, self.offset = (
+            uint32(a) for a in (order, first, count, offset)
+        )
 
     def keys(self, P: np.ndarray, corner: np.ndarray) -> np.ndarray:
         return cell_keys(P, corner, self.h)
@@ -95,7 +111,9 @@ class WorldGrid:
         first = q == 0
         k = q - 1
         ok = ~first & (k < self.count)
-        at = dr.gather(mi.UInt32, self.order, self.first + (self.offset + k) % dr.maximum(self.count, 1), ok)
+        at = dr.gather(
+            mi.UInt32, self.order, self.first + (self.offset + k) % dr.maximum(self.count, 1), ok
+        )
         ok &= at != self.lane
         return dr.select(ok, at, self.lane), first | ok
 

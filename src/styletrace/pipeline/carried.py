@@ -65,7 +65,9 @@ def _rendering_node(source: Any, defines: Mapping[str, Any] | None):
         if isinstance(source, dict):
             state = parser.parse_dict(config, source)
         elif isinstance(source, (str, os.PathLike)) and os.path.isfile(source):
-            state = parser.parse_file(config, os.fspath(source), **{k: str(v) for k, v in (defines or {}).items()})
+            state = parser.parse_file(
+                config, os.fspath(source), **{k: str(v) for k, v in (defines or {}).items()}
+            )
         else:
             return None
     # the loader reports a broken scene in its own words; here it only means "unknown"
@@ -126,7 +128,9 @@ def loaded(integrator: mi.Integrator) -> dict[str, Any]:
     return out
 
 
-def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None) -> dict[str, Any]:
+def carried_settings(
+    scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
     """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator; {} for
     none or a `stylized` one. `source`/`defines`: what the scene was loaded from, to read its
     declaration."""

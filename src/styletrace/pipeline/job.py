@@ -40,8 +40,10 @@ class Job:
 
     def __post_init__(self):
         if self.integrator is not None and self.given:
-            raise UsageError(f"bad arguments: integrator= is used as it is, so {', '.join(sorted(self.given))} "
-                             f"cannot refine it; pass either a prebuilt integrator or style= and parameters")
+            raise UsageError(
+                f"bad arguments: integrator= is used as it is, so {', '.join(sorted(self.given))} "
+                f"cannot refine it; pass either a prebuilt integrator or style= and parameters"
+            )
 
     def with_(self, **changes: Any) -> "Job":
         """This job with some fields replaced (a frame of a turntable, another seed)."""
@@ -55,15 +57,33 @@ def given_values(style: str | None = None, inner: Any = None, estimator: str | N
     return {k: v for k, v in given.items() if v is not None}
 
 
-def python_job(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
-               estimator: str | None = None, seed: int = 0, width: int | None = None, height: int | None = None,
-               integrator: Any = None, defines: dict[str, Any] | None = None, pass_spp: int | None = None,
-               **params: Any) -> "Job":
+def python_job(
+    scene: Any = None,
+    style: str | None = None,
+    spp: int | None = None,
+    inner: Any = None,
+    estimator: str | None = None,
+    seed: int = 0,
+    width: int | None = None,
+    height: int | None = None,
+    integrator: Any = None,
+    defines: dict[str, Any] | None = None,
+    pass_spp: int | None = None,
+    **params: Any,
+) -> "Job":
     """The Job of a Python API call (`styletrace.render`, `render_buffer`, `render(denoise=...)`):
     its keywords as the pipeline's description, integrator values given only where not None."""
-    return Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
-               given=given_values(style, inner, estimator, **params), integrator=integrator, spp=spp, seed=seed,
-               pass_spp=pass_spp)
+    return Job(
+        scene=scene,
+        defines=dict(defines or {}),
+        width=width,
+        height=height,
+        given=given_values(style, inner, estimator, **params),
+        integrator=integrator,
+        spp=spp,
+        seed=seed,
+        pass_spp=pass_spp,
+    )
 
 
 def check_counts(*named: tuple[str, Any]) -> None:

@@ -36,7 +36,9 @@ TILE_SIDE = 1024
 #: (BENCHMARKS.md, memory).
 LANE_BYTES = 256
 
-def pin(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
+def pin(
+    scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None
+) -> tuple[mi.Integrator, str]:
     """(`integrator` with its scene-relative `auto` values pinned on `scene`, the line naming them):
     the pipeline's one pinning (`resolve.resolve`'s, and the pass loop's for a prebuilt integrator).
     `pilot`: the scene-defaults pilot to draw them from (traced only if a value needs it)."""
@@ -82,7 +84,9 @@ def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
     LANES_PER_PASS)."""
     max_pixels = max_pixels or LANES_PER_PASS
     if width * height <= max_pixels:
-        return [Tile((0, 0), (width, height), (slice(None), slice(None)), (slice(None), slice(None)))]
+        return [
+            Tile((0, 0), (width, height), (slice(None), slice(None)), (slice(None), slice(None)))
+        ]
     tw = min(width, TILE_SIDE, max_pixels)
     th = min(height, max(1, max_pixels // tw))
     return [Tile((x, y), (tw, th), (ky, kx), (dy, dx))
@@ -102,7 +106,9 @@ class Crop:
     def set(self, offset: tuple[int, int], size: tuple[int, int]) -> None:
         if self.params is None:
             self.params = mi.traverse(self.sensor)
-        self.params["film.crop_offset"] = mi.ScalarPoint2u(self.base[0] + offset[0], self.base[1] + offset[1])
+        self.params["film.crop_offset"] = mi.ScalarPoint2u(
+            self.base[0] + offset[0], self.base[1] + offset[1]
+        )
         self.params["film.crop_size"] = mi.ScalarVector2u(*size)
         self.params.update()
 
@@ -149,8 +155,10 @@ def check_memory(width: int, height: int, ext: str = ".exr") -> None:
     need, have = memory_needed(width, height, ext), memory_available()
     if width >= 1 << 31 or height >= 1 << 31 or (have is not None and need > have):
         have_txt = f"{have / 2**30:.1f} GiB available" if have is not None else "too large"
-        raise UsageError(f"image {width}x{height} is too large: it needs about {need / 2**30:.1f} GiB of "
-                         f"memory ({have_txt}); render a smaller --width/--height")
+        raise UsageError(
+            f"image {width}x{height} is too large: it needs about {need / 2**30:.1f} GiB of "
+            f"memory ({have_txt}); render a smaller --width/--height"
+        )
 
 
 class Progress:
@@ -158,8 +166,17 @@ class Progress:
     may have one more pass); `image` is the average of the finished passes, computed when
     asked for."""
 
-    def __init__(self, spp_done: int, spp_total: int, total: np.ndarray, counts: np.ndarray, layout: list[Tile],
-                 channels: int | None = None, tile: int = 0, samples: int = 0):
+    def __init__(
+        self,
+        spp_done: int,
+        spp_total: int,
+        total: np.ndarray,
+        counts: np.ndarray,
+        layout: list[Tile],
+        channels: int | None = None,
+        tile: int = 0,
+        samples: int = 0,
+    ):
         self.spp_done, self.spp_total = spp_done, spp_total
         #: the pass just done: the index in `layout` of the tile it rendered, and its samples per
         #: pixel (a recording maps that pass's lanes to the film's pixels with them:
@@ -247,8 +264,10 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     # error AOVs (StylizedIntegrator.aov_names), after the film's channels
     extra = len(integrator.aov_names())
     if extra and film_format(scene) not in ("rgb", "rgba"):
-        raise UsageError(f"aovs need an rgb or rgba film (the variance is per RGB channel); the scene's film is "
-                         f"{film_format(scene)!r}")
+        raise UsageError(
+            f"aovs need an rgb or rgba film (the variance is per RGB channel); the scene's film is "
+            f"{film_format(scene)!r}"
+        )
     total = np.zeros((height, width, channels + extra), dtype=np.float32)
     counts = np.zeros(len(layout), dtype=np.int64)
     index = 0
@@ -267,7 +286,9 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     expand(scene, expansion_seed(seed, t))
                 # recorded and launched with no scene finalised meanwhile (jit.no_collection)
                 with no_collection():
-                    img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
+                    img = mi.render(
+                        scene, integrator=integrator, spp=n, seed=pass_seed(seed, index)
+                    )
                     arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
@@ -277,13 +298,30 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                 yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n)
 
 
-def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> int:
+def pass_count(
+    scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None
+) -> int:
     """How many kernel launches `passes` makes (tiles times passes per tile)."""
     size = scene.sensors()[0].film().crop_size()
     layout, per_pass = pass_size(int(size[0]), int(size[1]), spp, lanes_per_pass, pass_spp)
     return len(layout) * math.ceil(spp / per_pass)
 
 
-__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "Crop", "pin",
-           "memory_needed",
-           "memory_available", "check_memory", "Progress", "pass_size", "passes", "pass_count"]
+__all__ = [
+    "LANES_PER_PASS",
+    "TILE_SIDE",
+    "LANE_BYTES",
+    "pass_seed",
+    "expansion_seed",
+    "Tile",
+    "tiles",
+    "Crop",
+    "pin",
+    "memory_needed",
+    "memory_available",
+    "check_memory",
+    "Progress",
+    "pass_size",
+    "passes",
+    "pass_count",
+]

@@ -52,8 +52,13 @@ class Checkpoint:
             return  # nothing new since the last one
         generation = self.generation + 1
         write_image(total, self._image(generation))
-        body = {"version": VERSION, "settings": self.settings, "rounds_done": [int(r) for r in rounds_done],
-                "image": os.path.basename(self._image(generation)), "generation": generation}
+        body = {
+            "version": VERSION,
+            "settings": self.settings,
+            "rounds_done": [int(r) for r in rounds_done],
+            "image": os.path.basename(self._image(generation)),
+            "generation": generation,
+        }
         write_bytes_atomically(json.dumps(body, indent=1, sort_keys=True).encode(), self.manifest)
         old, self.generation, self.saved_rounds = self.generation, generation, list(rounds_done)
         self._drop(old)
@@ -67,26 +72,36 @@ class Checkpoint:
     def load(self) -> tuple[np.ndarray, list[int]]:
         """The saved sum and rounds per tile; refuses (one line) a checkpoint of other settings."""
         if not self.exists():
-            raise UsageError(f"cannot resume {self.output!r}: no checkpoint {self.manifest!r} (it is written while "
-                             f"a --ray render runs and removed when it finishes)")
+            raise UsageError(
+                f"cannot resume {self.output!r}: no checkpoint {self.manifest!r} (it is written while "
+                f"a --ray render runs and removed when it finishes)"
+            )
         try:
             with open(self.manifest) as f:
                 body = json.load(f)
             saved = body["settings"]
         except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise UsageError(f"cannot resume {self.output!r}: unreadable checkpoint {self.manifest!r} ({exc})") from None
+            raise UsageError(
+                f"cannot resume {self.output!r}: unreadable checkpoint {self.manifest!r} ({exc})"
+            ) from None
         if saved != self.settings:
-            diff = sorted(k for k in set(saved) | set(self.settings) if saved.get(k) != self.settings.get(k))
+            diff = sorted(
+                k for k in set(saved) | set(self.settings) if saved.get(k) != self.settings.get(k)
+            )
             k = diff[0]
-            raise UsageError(f"cannot resume {self.output!r}: its checkpoint was made with other settings ({k} "
-                             f"{json.dumps(saved.get(k))}, now {json.dumps(self.settings.get(k))}); drop --resume "
-                             f"to start over")
+            raise UsageError(
+                f"cannot resume {self.output!r}: its checkpoint was made with other settings ({k} "
+                f"{json.dumps(saved.get(k))}, now {json.dumps(self.settings.get(k))}); drop --resume "
+                f"to start over"
+            )
         import mitsuba as mi
         path = os.path.join(os.path.dirname(os.path.abspath(self.manifest)), body["image"])
         try:
             total = np.array(mi.Bitmap(path), dtype=np.float32)[..., :3].copy()
         except Exception as exc:
-            raise UsageError(f"cannot resume {self.output!r}: cannot read {path!r} ({exc})") from None
+            raise UsageError(
+                f"cannot resume {self.output!r}: cannot read {path!r} ({exc})"
+            ) from None
         self.generation, self.saved_rounds = int(body["generation"]), list(body["rounds_done"])
         return total, list(body["rounds_done"])
 

@@ -20,7 +20,9 @@ def ray_module():
     try:
         import ray
     except ImportError:
-        raise UsageError("rendering on Ray needs the 'ray' package: pip install 'styletrace[ray]'") from None
+        raise UsageError(
+            "rendering on Ray needs the 'ray' package: pip install 'styletrace[ray]'"
+        ) from None
     return ray
 
 
@@ -28,7 +30,9 @@ def connect(cluster: str):
     """Ray, connected to `cluster` ("local" or an address such as HOST:6379 or ray://HOST:10001)."""
     ray = ray_module()
     if not isinstance(cluster, str) or not cluster.strip():
-        raise UsageError(f"bad cluster {cluster!r}: expected None, 'local' or a Ray address such as HOST:6379")
+        raise UsageError(
+            f"bad cluster {cluster!r}: expected None, 'local' or a Ray address such as HOST:6379"
+        )
     # every result the driver wants it gets (and raises); the only results left unread are those of
     # units cancelled on Ctrl-C, whose KeyboardInterrupt tracebacks Ray would otherwise print
     # at exit
@@ -42,8 +46,9 @@ def connect(cluster: str):
             ray.init(address=cluster, logging_level="warning", log_to_driver=False)
     except (ConnectionError, ValueError, RuntimeError) as exc:
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-        raise UsageError(f"cannot join the Ray cluster at {cluster!r}: {lines[0] if lines else type(exc).__name__}"
-                         ) from None
+        raise UsageError(
+            f"cannot join the Ray cluster at {cluster!r}: {lines[0] if lines else type(exc).__name__}"
+        ) from None
     return ray
 
 

@@ -44,8 +44,10 @@ def _encode(value: Any, where: str) -> Any:
             return (_TAG, "ScalarTransform4f", np.asarray(value.matrix, dtype=np.float64).tolist())
         if name.startswith("Scalar") and hasattr(value, "__len__"):
             return (_TAG, name, np.asarray(value, dtype=np.float64).tolist())
-        raise UsageError(f"cannot send the scene dict to Ray workers: {where[1:]} holds a {name}; use plain "
-                         f"numbers, Mitsuba scalar values, or an XML file")
+        raise UsageError(
+            f"cannot send the scene dict to Ray workers: {where[1:]} holds a {name}; use plain "
+            f"numbers, Mitsuba scalar values, or an XML file"
+        )
     return value
 
 
@@ -71,7 +73,9 @@ class SceneSpec:
     load_kwargs: dict = field(default_factory=dict)
 
     @classmethod
-    def of(cls, scene: Any, width: int | None = None, height: int | None = None, **load_kwargs: Any) -> "SceneSpec":
+    def of(
+        cls, scene: Any, width: int | None = None, height: int | None = None, **load_kwargs: Any
+    ) -> "SceneSpec":
         if scene is None or isinstance(scene, dict):
             return cls(_encode(scene, "") if scene else scene, width, height, dict(load_kwargs))
         if isinstance(scene, (str, os.PathLike)):
@@ -80,8 +84,10 @@ class SceneSpec:
             if os.path.isfile(name):
                 name = os.path.abspath(name)
             return cls(name, width, height, dict(load_kwargs))
-        raise UsageError(f"bad scene {type(scene).__name__} for a cluster render: Ray workers cannot receive an "
-                         f"mi.Scene; pass a built-in name, an XML path or a scene dict")
+        raise UsageError(
+            f"bad scene {type(scene).__name__} for a cluster render: Ray workers cannot receive an "
+            f"mi.Scene; pass a built-in name, an XML path or a scene dict"
+        )
 
     def describe(self) -> Any:
         """A JSON-able summary for a checkpoint's manifest (dict scenes by their hash)."""
@@ -90,8 +96,11 @@ class SceneSpec:
                 "load_kwargs": {k: repr(v) for k, v in sorted(self.load_kwargs.items())}}
 
     def key(self) -> bytes:
-        return hashlib.sha256(pickle.dumps((self.scene, self.width, self.height, sorted(self.load_kwargs.items())),
-                                           protocol=4)).digest()
+        return hashlib.sha256(
+            pickle.dumps(
+                (self.scene, self.width, self.height, sorted(self.load_kwargs.items())), protocol=4
+            )
+        ).digest()
 
 
 def load(spec: SceneSpec, values: dict, variant: str):
@@ -109,13 +118,21 @@ def load(spec: SceneSpec, values: dict, variant: str):
     from styletrace.pipeline.resolve import resolve
     unknown = sorted(set(spec.load_kwargs) - {"defines"})
     if unknown:
-        raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")
+        raise UsageError(
+            f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only"
+        )
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
     # the render pipeline's resolve, with the driver's resolved values as the integrator: the same
     # load, and scene-relative 'auto' values pinned on the whole scene before any tile's crop (the
     # pilot is deterministic: fixed seed, our path kernel), so every worker pins what the driver did
-    job = Job(scene=scene, width=spec.width, height=spec.height, defines=dict(spec.load_kwargs.get("defines") or {}),
-              integrator=StylizedIntegrator.from_values(values), lanes_per_pass=1)
+    job = Job(
+        scene=scene,
+        width=spec.width,
+        height=spec.height,
+        defines=dict(spec.load_kwargs.get("defines") or {}),
+        integrator=StylizedIntegrator.from_values(values),
+        lanes_per_pass=1,
+    )
     resolved = resolve(job)
     loaded = (resolved.scene, resolved.integrator)
     CACHE[key] = loaded

@@ -31,8 +31,14 @@ class Unit:
     seed: int
 
 
-def plan(width: int, height: int, spp: int, seed: int, lanes_per_pass: int = pass_loop.LANES_PER_PASS,
-         pass_spp: int | None = None) -> tuple[list[pass_loop.Tile], list[Unit]]:
+def plan(
+    width: int,
+    height: int,
+    spp: int,
+    seed: int,
+    lanes_per_pass: int = pass_loop.LANES_PER_PASS,
+    pass_spp: int | None = None,
+) -> tuple[list[pass_loop.Tile], list[Unit]]:
     """The tiles of the film and every unit of the render, in launch order."""
     layout, per_pass = pass_loop.pass_size(width, height, spp, lanes_per_pass, pass_spp)
     rounds = -(-spp // per_pass)
@@ -75,7 +81,9 @@ class Merge:
         return added
 
     def progress(self) -> pass_loop.Progress:
-        return pass_loop.Progress(int(self.counts.min()), self.spp, self.total, self.counts, self.layout)
+        return pass_loop.Progress(
+            int(self.counts.min()), self.spp, self.total, self.counts, self.layout
+        )
 
 
 __all__ = ["Unit", "plan", "Merge"]

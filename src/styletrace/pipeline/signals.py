@@ -111,7 +111,12 @@ class Passes:
         if total > 1 and not quiet:
             from tqdm import tqdm
             # the first pass includes the kernel's compilation: the bar says so until it is done
-            self.bar = tqdm(total=spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
+            self.bar = tqdm(
+                total=spp,
+                unit="spp",
+                desc=f"compiling and rendering pass 1 of {total}",
+                file=sys.stderr,
+            )
 
     def follow(self, source, stop: StopSignals) -> None:
         """Take the passes of `source` until it ends or `stop` has a signal; a KeyboardInterrupt or

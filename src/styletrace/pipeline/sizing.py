@@ -73,7 +73,10 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
     if memory is None:  # no driver API to ask: the CPU's size is safe everywhere
         return pass_loop.LANES_PER_PASS, None
     free, total = memory
-    lanes = min(CUDA_LANES_MAX, max(pass_loop.LANES_PER_PASS, _pow2_floor(total * CUDA_MEMORY_SHARE // CUDA_LANE_BYTES)))
+    lanes = min(
+        CUDA_LANES_MAX,
+        max(pass_loop.LANES_PER_PASS, _pow2_floor(total * CUDA_MEMORY_SHARE // CUDA_LANE_BYTES)),
+    )
     default = lanes
     while lanes > pass_loop.LANES_PER_PASS and lanes * CUDA_LANE_BYTES > free:
         lanes //= 2
@@ -86,4 +89,10 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
     return lanes, note
 
 
-__all__ = ["lanes_per_pass", "cuda_memory", "CUDA_LANE_BYTES", "CUDA_MEMORY_SHARE", "CUDA_LANES_MAX"]
+__all__ = [
+    "lanes_per_pass",
+    "cuda_memory",
+    "CUDA_LANE_BYTES",
+    "CUDA_MEMORY_SHARE",
+    "CUDA_LANES_MAX",
+]
