@@ -79,7 +79,8 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
             focus = float(abs(d @ forward / np.linalg.norm(forward)))
         if cam.shift_x or cam.shift_y:
             warn(
-                f"styletrace: camera '{cam.name}' has depth of field and a shift: the shift is ignored"
+                f"styletrace: camera '{cam.name}' has depth of field and a shift: the shift is "
+                "ignored"
             )
         out.update(
             type="thinlens",

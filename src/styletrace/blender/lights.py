@@ -88,7 +88,8 @@ def convert(light, matrix, warn) -> dict | None:
         if light.shape in ("DISK", "ELLIPSE"):
             if light.shape == "ELLIPSE" and abs(size_x * sx - size_y * sy) > 1e-6:
                 warn(
-                    f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of the mean diameter"
+                    f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of "
+                    "the mean diameter"
                 )
             r = (size_x * sx + size_y * sy) / 4.0
             area = math.pi * r * r

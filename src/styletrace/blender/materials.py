@@ -44,8 +44,8 @@ class Context:
     def flush(self) -> None:
         for kind, mats in sorted(self.unsupported.items()):
             self.warn(
-                f"styletrace: node {kind} is not supported (material {', '.join(sorted(set(mats)))}): "
-                f"rendered as grey diffuse"
+                f"styletrace: node {kind} is not supported (material "
+                f"{', '.join(sorted(set(mats)))}): rendered as grey diffuse"
             )
         self.unsupported.clear()
 

@@ -18,8 +18,8 @@ def command_line(path: str, settings) -> str:
     # --spp: F12 renders the Samples as camera samples, which the command line's default would spend
     # on children
     return (
-        f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp {settings.pass_spp}"
-        f"{denoise}"
+        f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp "
+        f"{settings.pass_spp}{denoise}"
     )
 
 

@@ -59,7 +59,8 @@ def dump(settings, material: bool = False) -> list[str]:
         elif isinstance(value, float):
             value = f"{value:g}"
         lines.append(
-            f"{prop.name:<24} {str(value)!s:<28} [{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]"
+            f"{prop.name:<24} {str(value)!s:<28} "
+            f"[{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]"
         )
     return lines
 

@@ -137,8 +137,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Inner samples",
         default="",
         update=changed,
-        description="n: child estimates per stylized vertex ('8', '8,4' per level, '4:64' adaptive); "
-        "empty: the style's default",
+        description="n: child estimates per stylized vertex ('8', '8,4' per level, '4:64' "
+        "adaptive); empty: the style's default",
     )
     estimator: bpy.props.EnumProperty(
         name="Estimator", items=_enum(estimator_registry.names()), default="direct", update=changed
@@ -158,14 +158,15 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Line mode",
         items=_enum(S.LINE_MODES),
         default="absorb",
-        description="absorb: West 2021's cone along the path; lifted: LLaT's conditional lifting, one auxiliary "
-        "path pair per line type, lines that keep their screen width in mirrors and glass",
+        description="absorb: West 2021's cone along the path; lifted: LLaT's conditional lifting, "
+        "one auxiliary path pair per line type, lines that keep their screen width in mirrors and "
+        "glass",
     )
     line_types: bpy.props.StringProperty(
         name="Line types",
         default="",
-        description="lifted mode: the line dictionary in priority order, e.g. 'shape_id color=1,0,0; depth "
-        "threshold=0.05; normal threshold=0.5'; empty: styletrace's default",
+        description="lifted mode: the line dictionary in priority order, e.g. 'shape_id "
+        "color=1,0,0; depth threshold=0.05; normal threshold=0.5'; empty: styletrace's default",
     )
     reuse: bpy.props.EnumProperty(name="Reuse", items=_enum(S.REUSE_MODES), default="off")
     spp: bpy.props.IntProperty(
@@ -175,8 +176,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         name="Samples per pass",
         default=4,
         min=1,
-        description="camera samples per pixel in one pass: cancel and progress act between passes; the same "
-        "seed and split give the same image (`styletrace render --pass-spp`)",
+        description="camera samples per pixel in one pass: cancel and progress act between passes; "
+        "the same seed and split give the same image (`styletrace render --pass-spp`)",
     )
     max_depth: bpy.props.IntProperty(name="Max depth", default=-1, min=-1)
     seed: bpy.props.IntProperty(name="Seed", default=0, min=0)
@@ -185,7 +186,8 @@ class SceneSettings(bpy.types.PropertyGroup):
     record_buffer: bpy.props.BoolProperty(
         name="Record buffer",
         default=False,
-        description="keep the look-development buffer of the last render; style changes then restyle it",
+        description="keep the look-development buffer of the last render; style changes then "
+                    "restyle it",
     )
     denoise: bpy.props.EnumProperty(
         name="Denoise",
@@ -207,8 +209,8 @@ class SceneSettings(bpy.types.PropertyGroup):
             ),
             ("image", "Image", "denoise the final image, as an ordinary renderer does"),
         ],
-        description="OIDN with albedo and normal guides (the 'denoise' extra); error passes are off while it is on, "
-        "and a Noisy pass keeps the image before denoising",
+        description="OIDN with albedo and normal guides (the 'denoise' extra); error passes are "
+        "off while it is on, and a Noisy pass keeps the image before denoising",
     )
     denoise_quality: bpy.props.EnumProperty(name="Denoise quality", items=_enum(QUALITIES),
                                             default="high")

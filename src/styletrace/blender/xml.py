@@ -117,7 +117,8 @@ class Writer:
     def write(self, desc: dict, integrator: dict | None) -> str:
         self.lines = [
             '<?xml version="1.0" encoding="utf-8"?>',
-            "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace render` -->",
+            "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace "
+            "render` -->",
             '<scene version="3.0.0">',
         ]
         if integrator is not None:

@@ -51,8 +51,8 @@ def check_k(k) -> int | str:
         value = int(k)
     if value is None or value < 0 or (value and math.isqrt(value) ** 2 != value):
         raise UsageError(
-            f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a square "
-            f"number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)"
+            f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a "
+            "square number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)"
         )
     return value
 

@@ -66,7 +66,8 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
     from styletrace.kernel.integrator import StylizedIntegrator
     from styletrace.scene.loading import film_format
     if not local:
-        return "the render runs on Ray or as several images; the denoiser needs the whole image in one process"
+        return ("the render runs on Ray or as several images; the denoiser needs the whole image "
+                "in one process")
     try:
         import pyoidn  # noqa: F401
     except ImportError:

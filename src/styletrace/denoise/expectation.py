@@ -67,29 +67,31 @@ def check(integrator) -> None:
     why = None
     if s.stylize == "first_object_hit":
         why = (
-            "stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where the "
-            "pixel's guides describe another surface; use first_hit or --denoise image"
+            "stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where "
+            "the pixel's guides describe another surface; use first_hit or --denoise image"
         )
     elif s.stylize == "first_n_hits" or s.stylize_depth != 1:
         why = (
-            "stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the inner levels' "
-            "vertices are not the pixel's); use first_hit or --denoise image"
+            "stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the "
+            "inner levels' vertices are not the pixel's); use first_hit or --denoise image"
         )
     elif s.lines is not None:
         why = "feature lines: lines replace radiance inside the estimate; use --denoise image"
     elif s.reuse != "off":
         why = f"reuse={s.reuse}: denoising and reuse both filter the expectation; use one"
     elif s.expansion_pass:
-        why = "expansion_pass: it serves the series estimators, which denoising replaces by direct application"
+        why = ("expansion_pass: it serves the series estimators, which denoising replaces by "
+               "direct application")
     elif s.slot.estimator not in RESTYLABLE_ESTIMATORS:
         why = (
-            f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct application; "
-            f"use direct or affine"
+            f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct "
+            "application; use direct or affine"
         )
     elif S.adaptive(s.inner):
         why = "adaptive counts n0:n_max: give a fixed count (the denoiser does the averaging)"
     elif s.style.per_sample:
-        why = f"style '{s.style.name}': it applies g to every child, there is no expectation to denoise"
+        why = (f"style '{s.style.name}': it applies g to every child, there is no expectation to "
+               "denoise")
     if why is not None:
         raise UsageError(f"--denoise expectation cannot render {why}")
 
@@ -425,8 +427,9 @@ def check_uncertainty(value) -> float:
         u = float("nan")
     if isinstance(value, bool) or not np.isfinite(u) or u < 0 or u > 10:
         raise UsageError(
-            f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D itself) "
-            f"to 10, the residual error of D as a fraction of the noisy estimate's standard error"
+            f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D "
+            "itself) to 10, the residual error of D as a fraction of the noisy estimate's standard "
+            "error"
         )
     return u
 

@@ -90,9 +90,10 @@ def cmd_styles(args) -> int:
             print(f"    {p.name} = {p.show(p.default)}    {p.explain()}; {p.allowed()}")
         print(f"    estimators: {', '.join(applicable(cls()))}")
     print(
-        "compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. contrast+sepia; "
-        "parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or affine / combined / telescoping "
-        "where every operand has a form (docs/styles.md#compositions)"
+        "compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. "
+        "contrast+sepia; parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or "
+        "affine / combined / telescoping where every operand has a form "
+        "(docs/styles.md#compositions)"
     )
     print("feature lines: any style with --lines (`styletrace lines` lists their settings)")
     return 0
@@ -104,8 +105,9 @@ def cmd_lines(args) -> int:
     from styletrace.config import settings
 
     print(
-        "feature lines (West 2021) on path edges, with any style and stylize mode: `render --lines` and "
-        "`--set NAME=VALUE` (Python: styletrace.render(..., lines=True, line_width=2)); docs/lines.md"
+        "feature lines (West 2021) on path edges, with any style and stylize mode: `render "
+        "--lines` and `--set NAME=VALUE` (Python: styletrace.render(..., lines=True, "
+        "line_width=2)); docs/lines.md"
     )
     for p in settings.PROPERTIES:
         if p.name == "lines" or p.name.startswith("line_"):
@@ -133,12 +135,13 @@ def cmd_render(args) -> int:
     method = check_method(args.denoise or default_method())
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
         raise UsageError(
-            f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation only"
+            f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation "
+            "only"
         )
     if args.coverage is not None and method not in ("expectation", "auto"):
         raise UsageError(
-            f"--coverage {args.coverage} applies to --denoise expectation only (the points where the "
-            f"style meets the denoised expectation)"
+            f"--coverage {args.coverage} applies to --denoise expectation only (the points where "
+            "the style meets the denoised expectation)"
         )
     several = len(args.scene) > 1 or args.frames is not None or args.orbit is not None
     if several and method in ("expectation", "image"):
@@ -287,8 +290,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_const",
         const=True,
         default=None,
-        help="also write the error AOVs (variance, predicted bias, children used) as channels of the "
-        "EXR output (refused with a PNG output); docs/adaptive.md",
+        help="also write the error AOVs (variance, predicted bias, children used) as channels of "
+        "the EXR output (refused with a PNG output); docs/adaptive.md",
     )
     r.add_argument(
         "--spp",
@@ -307,7 +310,8 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="value of a <default> parameter of the scene file ($NAME), as Mitsuba's -D; repeatable",
+        help="value of a <default> parameter of the scene file ($NAME), as Mitsuba's -D; "
+             "repeatable",
     )
     r.add_argument(
         "--seed", type=int, default=0, help="random seed; the same seed gives the same image"
@@ -323,10 +327,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--denoise",
         choices=("auto", "expectation", "image", "off"),
         default=None,
-        help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or on "
-        "the final image; auto (the default, or $STYLETRACE_DENOISE): expectation where it applies, "
-        "with the firefly control and the scene's samples spent on children; off: the paper's "
-        "estimators exactly (docs/denoise.md, docs/look.md)",
+        help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or "
+        "on the final image; auto (the default, or $STYLETRACE_DENOISE): expectation where it "
+        "applies, with the firefly control and the scene's samples spent on children; off: the "
+        "paper's estimators exactly (docs/denoise.md, docs/look.md)",
     )
     r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
                    help="OIDN's filter quality with --denoise (default: high)")
@@ -334,17 +338,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--coverage",
         default=None,
         metavar="K",
-        help="with --denoise expectation: points per pixel where the style is applied to the denoised "
-        "expectation, a square (16, 64, ...), 0 for the camera samples, or auto (default: 64, fewer "
-        "where the image would not fit the buffer's cap)",
+        help="with --denoise expectation: points per pixel where the style is applied to the "
+        "denoised expectation, a square (16, 64, ...), 0 for the camera samples, or auto (default: "
+        "64, fewer where the image would not fit the buffer's cap)",
     )
     r.add_argument(
         "--denoise-uncertainty",
         default=None,
         metavar="U",
-        help="with --denoise expectation and coverage points: the style is averaged over the denoised "
-        "expectation's residual error, taken as U times the noisy estimate's standard error "
-        "(default 0.3; 0: the style of the denoised expectation itself)",
+        help="with --denoise expectation and coverage points: the style is averaged over the "
+        "denoised expectation's residual error, taken as U times the noisy estimate's standard "
+        "error (default 0.3; 0: the style of the denoised expectation itself)",
     )
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
@@ -390,8 +394,8 @@ def add_ray_flags(parser) -> None:
         const="local",
         default=None,
         metavar="ADDRESS",
-        help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at ADDRESS "
-        "(HOST:PORT, as printed by `ray start --head`); give it after the scene",
+        help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at "
+        "ADDRESS (HOST:PORT, as printed by `ray start --head`); give it after the scene",
     )
     parser.add_argument(
         "--resume",

@@ -201,7 +201,8 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
     imgs = {"reference": reference, "fixed": images[i], "method": method_img}
     figure(entry, imgs, os.path.join(out_dir, entry["file"]))
     log(
-        f"{c.key}: fixed n={fixed[i]['n']} at equal time; MSE ratio {ratio:.2f}: {entry['verdict'].upper()}"
+        f"{c.key}: fixed n={fixed[i]['n']} at equal time; MSE ratio {ratio:.2f}: "
+        f"{entry['verdict'].upper()}"
     )
     return entry, imgs
 
@@ -260,12 +261,13 @@ def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
 
 
 INTRO = (
-    "Each comparison renders at 1 camera sample per pixel with one seed, against a reference of the same "
-    "seed (the same camera rays: the error is the stylized estimate's); times are the median of {repeats} "
-    "timed render(s) after one that compiles the kernels. The fixed count at equal time is the largest n "
-    "whose render is not slower than the method's (the smallest n when all are slower). Ratio: the fixed "
-    "count's MSE over the method's; at 1 or below the method loses at equal time, whatever it gains at "
-    "equal inner counts. Protocol: the docstring of styletrace/frontends/equal_time.py."
+    "Each comparison renders at 1 camera sample per pixel with one seed, against a reference of "
+    "the same seed (the same camera rays: the error is the stylized estimate's); times are the "
+    "median of {repeats} timed render(s) after one that compiles the kernels. The fixed count at "
+    "equal time is the largest n whose render is not slower than the method's (the smallest n when "
+    "all are slower). Ratio: the fixed count's MSE over the method's; at 1 or below the method "
+    "loses at equal time, whatever it gains at equal inner counts. Protocol: the docstring of "
+    "styletrace/frontends/equal_time.py."
 )
 
 
@@ -288,7 +290,8 @@ def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
         return []
     e0 = entries[0]
     md = [
-        f"## Equal time: a method against the fixed counts ({e0['scene']}, {e0['size']}x{e0['size']})",
+        f"## Equal time: a method against the fixed counts ({e0['scene']}, "
+        f"{e0['size']}x{e0['size']})",
         "",
         INTRO.format(repeats=e0["repeats"]),
         "",
@@ -296,8 +299,9 @@ def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
         "|---|---|---:|---:|---|",
     ]
     md += [
-        f"| {e['title']} | `{describe(e['method']['config'])}` | {e['fixed'][e['equal_time']]['n']} | "
-        f"{e['ratio']:.2f} | {'win' if e['verdict'] == 'win' else '**LOSS**'} |"
+        f"| {e['title']} | `{describe(e['method']['config'])}` | "
+        f"{e['fixed'][e['equal_time']]['n']} | {e['ratio']:.2f} | "
+        f"{'win' if e['verdict'] == 'win' else '**LOSS**'} |"
         for e in entries
     ]
     for e in entries:
@@ -320,7 +324,8 @@ def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
                 else "<strong style='color:#b00000;font-size:1.2em'>LOSS</strong>")
 
     h = [
-        f"<h2>Equal time: a method against the fixed counts ({esc(e0['scene'])}, {e0['size']}x{e0['size']})</h2>",
+        f"<h2>Equal time: a method against the fixed counts ({esc(e0['scene'])}, "
+        f"{e0['size']}x{e0['size']})</h2>",
         f"<p>{esc(INTRO.format(repeats=e0['repeats']))}</p>",
         "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
         "<tr><th>comparison<th>method<th>fixed n at equal time<th>MSE ratio<th>verdict</tr>",
@@ -334,7 +339,8 @@ def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
     for e in entries:
         h += [
             f"<h3>{esc(e['title'])}: {mark(e)}</h3>",
-            f"<p><code>{esc(e['style'])}</code> {esc(describe({**e['params'], **e['integrator']}))}</p>",
+            f"<p><code>{esc(e['style'])}</code> "
+            f"{esc(describe({**e['params'], **e['integrator']}))}</p>",
             "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
             "<tr><th>render<th>inner<th>s<th>MSE</tr>"
             + "".join(f"<tr><td>{esc(a)}<td>{esc(b)}<td>{c}<td>{d}</tr>" for a, b, c, d in rows(e))

@@ -169,7 +169,8 @@ SETUPS = [
     ),
     Setup(
         "lines",
-        "Colour map with physically based feature lines, colour over world y (Fig. 12 middle, West 2021)",
+        "Colour map with physically based feature lines, colour over world y (Fig. 12 middle, West "
+        "2021)",
         "color_map",
         (8,),
         params={"gradient": "dusk"},
@@ -323,7 +324,8 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
                 "note": setup.reference_note,
             }
             log(
-                f"{setup.key}: reference n={setup.reference} in {entry['reference']['seconds']:.1f} s"
+                f"{setup.key}: reference n={setup.reference} in "
+                f"{entry['reference']['seconds']:.1f} s"
             )
         for n in setup.counts:
             t = time.perf_counter()
@@ -398,17 +400,18 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
         "# styletrace gallery",
         "",
         f"Dragon scene, {o['size']}x{o['size']}, {o['spp']} camera samples per pixel; total "
-        f"{results['seconds']:.0f} s. `mse.png` plots the error of each render against its reference.",
+        f"{results['seconds']:.0f} s. `mse.png` plots the error of each render against its "
+        "reference.",
         "",
         "![MSE vs n](mse.png)",
         "",
     ]
     h = [
         "<!doctype html><meta charset='utf-8'><title>styletrace gallery</title>",
-        "<style>body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:4px;text-align:center}"
-        "img{image-rendering:pixelated;width:192px}figcaption{font-size:12px}</style>",
+        "<style>body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:4px;text-align:center}img{image-rendering:pixelated;width:192px}figcaption{font-size:12px}</style>",
         "<h1>styletrace gallery</h1>",
-        f"<p>Dragon scene, {o['size']}x{o['size']}, {o['spp']} spp; total {results['seconds']:.0f} s.</p>",
+        f"<p>Dragon scene, {o['size']}x{o['size']}, {o['spp']} spp; total {results['seconds']:.0f} "
+        "s.</p>",
         "<img src='mse.png' style='width:480px'>",
     ]
     for e in results["setups"]:
@@ -416,7 +419,8 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
                                                    "estimator": e["estimator"]}.items())
         md += [f"## {e['title']}", "", f"`{e['style']}` {params}", ""]
         h += [
-            f"<h2>{html.escape(e['title'])}</h2><p><code>{html.escape(e['style'])}</code> {html.escape(params)}</p>"
+            f"<h2>{html.escape(e['title'])}</h2><p><code>{html.escape(e['style'])}</code> "
+            f"{html.escape(params)}</p>"
         ]
         cells = []
         for r in e["renders"]:

@@ -19,9 +19,9 @@ from styletrace.errors import UsageError
 BUFFER_HELP = (
     "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
     "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
-    "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's children "
-    "and uniforms: at most 1048576 camera samples and 64 children per sample on average, 57 bytes + 13 "
-    "per child + 5 per uniform each"
+    "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's "
+    "children and uniforms: at most 1048576 camera samples and 64 children per sample on average, "
+    "57 bytes + 13 per child + 5 per uniform each"
 )
 
 
@@ -70,7 +70,8 @@ def cmd_fit(args, parse_set, check_output) -> int:
     shown = {k: v for k, v in initial.items() if k not in result.params}
     shown.update({k: params[k].show(v) for k, v in result.params.items()})
     print(
-        f"fitted in {result.iterations} iterations ({result.seconds:.2f} s), mean squared error {result.loss:.3g}"
+        f"fitted in {result.iterations} iterations ({result.seconds:.2f} s), mean squared error "
+        f"{result.loss:.3g}"
     )
     print(shlex.join(["styletrace", "restyle", args.buffer, "--style", style]
                      + [w for k, v in shown.items() for w in ("--set", f"{k}={v}")]))

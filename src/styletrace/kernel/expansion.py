@@ -102,7 +102,8 @@ class Collector:
     def add(self, width: int, active, s1: mi.Color3f, s2: mi.Color3f) -> None:
         if width != self.pixels * PASS_SPP:
             raise SettingsError(
-                f"bad wavefront of {width} lanes in the expansion pass: expected {PASS_SPP} per pixel"
+                f"bad wavefront of {width} lanes in the expansion pass: expected {PASS_SPP} per "
+                "pixel"
             )
         lane = dr.arange(mi.UInt32, width)
         for c in range(3):
@@ -201,9 +202,9 @@ class Expansion:
         found = self.maps.get(crop_key(scene))
         if found is None:
             raise SettingsError(
-                f"bad value {m} for 'expansion_pass' here: its pre-pass runs in styletrace's passes "
-                f"(styletrace.render, api.passes, the command line), not in a bare mi.render; render "
-                f"through them or use expansion_pass=0"
+                f"bad value {m} for 'expansion_pass' here: its pre-pass runs in styletrace's "
+                "passes (styletrace.render, api.passes, the command line), not in a bare "
+                "mi.render; render through them or use expansion_pass=0"
             )
         return found.lookup(width)
 

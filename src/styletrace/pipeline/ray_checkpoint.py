@@ -73,8 +73,8 @@ class Checkpoint:
         """The saved sum and rounds per tile; refuses (one line) a checkpoint of other settings."""
         if not self.exists():
             raise UsageError(
-                f"cannot resume {self.output!r}: no checkpoint {self.manifest!r} (it is written while "
-                f"a --ray render runs and removed when it finishes)"
+                f"cannot resume {self.output!r}: no checkpoint {self.manifest!r} (it is written "
+                "while a --ray render runs and removed when it finishes)"
             )
         try:
             with open(self.manifest) as f:
@@ -91,8 +91,8 @@ class Checkpoint:
             k = diff[0]
             raise UsageError(
                 f"cannot resume {self.output!r}: its checkpoint was made with other settings ({k} "
-                f"{json.dumps(saved.get(k))}, now {json.dumps(self.settings.get(k))}); drop --resume "
-                f"to start over"
+                f"{json.dumps(saved.get(k))}, now {json.dumps(self.settings.get(k))}); drop "
+                "--resume to start over"
             )
         import mitsuba as mi
         path = os.path.join(os.path.dirname(os.path.abspath(self.manifest)), body["image"])

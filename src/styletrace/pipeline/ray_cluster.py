@@ -47,7 +47,8 @@ def connect(cluster: str):
     except (ConnectionError, ValueError, RuntimeError) as exc:
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
         raise UsageError(
-            f"cannot join the Ray cluster at {cluster!r}: {lines[0] if lines else type(exc).__name__}"
+            f"cannot join the Ray cluster at {cluster!r}: "
+            f"{lines[0] if lines else type(exc).__name__}"
         ) from None
     return ray
 

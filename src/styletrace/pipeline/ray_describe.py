@@ -119,7 +119,8 @@ def load(spec: SceneSpec, values: dict, variant: str):
     unknown = sorted(set(spec.load_kwargs) - {"defines"})
     if unknown:
         raise UsageError(
-            f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only"
+            f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines "
+            "only"
         )
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
     # the render pipeline's resolve, with the driver's resolved values as the integrator: the same
