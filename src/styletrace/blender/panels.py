@@ -1,6 +1,6 @@
 """The style panels, drawn from the registries: Render Properties -> styletrace, Material
-Properties -> styletrace style. `layout_rows` lists what a panel shows (the same walk as `draw`), so the layout
-can be checked and documented headless, where Blender draws no UI."""
+Properties -> styletrace style. `layout_rows` lists what a panel shows (the same walk as
+`draw`), so the layout can be checked and documented headless, where Blender draws no UI."""
 from __future__ import annotations
 
 import bpy

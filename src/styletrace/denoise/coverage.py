@@ -1,6 +1,7 @@
 """Coverage points: where g is evaluated once E[L] is denoised, apart from where E[L] was estimated.
 
-    cov = points(scene, integrator, k=16, seed=0)   # a Buffer of k first hits per pixel, no children traced
+    # a Buffer of k first hits per pixel, no children traced
+    cov = points(scene, integrator, k=16, seed=0)
 
 With the expectation denoised, the value of a pixel is the integral over its footprint of g(D(x)),
 and the camera samples with children are only one way of placing the points x. They are an expensive

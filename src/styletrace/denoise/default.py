@@ -2,7 +2,8 @@
 sample budget.
 
     plan = choose(resolved, method="auto", local=True)
-    plan.method, plan.resolved, plan.note # "expectation" | "image" | "off", the pinned job, why not
+    # "expectation" | "image" | "off", the pinned job, why not
+    plan.method, plan.resolved, plan.note
 
 `auto` (the default of every front end, `denoise.default_method`) is `expectation` for a style of
 more than one child where the expectation denoiser applies (`expectation.check`; the `denoise` extra

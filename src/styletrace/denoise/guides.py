@@ -1,6 +1,7 @@
 """The denoiser's guides: albedo and shading normal per pixel, seen through mirrors and glass.
 
-    g = first_hit(scene, spp=16, seed=0)   # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
+    # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
+    g = first_hit(scene, spp=16, seed=0)
     g = first_hit(scene, 16, 0, footprint="pixel")   # each pixel the mean inside it, any filter
 
 Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the

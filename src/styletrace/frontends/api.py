@@ -1,7 +1,8 @@
 """The Python API: load a scene, build the `stylized` integrator, render in passes.
 
     import styletrace
-    img = styletrace.render("cornell-box", style="cel", spp=16, inner=8) # H x W x 3 float32, linear
+    # H x W x 3 float32, linear
+    img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)
 
 `render` is the render pipeline's (`pipeline.execute.render`): a `Job` resolved once and executed.
 The building blocks live in `pipeline/` and are re-exported here under their established names:

@@ -1,10 +1,14 @@
 """The gallery's equal-time section: one method against the tree sampler's fixed counts at the
 same time.
 
-    for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):   # integrators checked, none rendered
-        entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)   # writes gallery/KEY.png
-    equal_time.pick([0.10, 0.14, 0.22], 0.18)   # -> 1: the largest fixed count not slower than the method
-    equal_time.verdict(0.8) # -> "loss": a lower error at equal time is the only win
+    # integrators checked, none rendered
+    for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):
+        # writes gallery/KEY.png
+        entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)
+    # -> 1: the largest fixed count not slower than the method
+    equal_time.pick([0.10, 0.14, 0.22], 0.18)
+    # -> "loss": a lower error at equal time is the only win
+    equal_time.verdict(0.8)
 
 Protocol, per comparison (that of benchmarks/equal_time.py, on one seed):
 - Every render is 1 camera sample per pixel with seed 0, and so is the reference (direct application

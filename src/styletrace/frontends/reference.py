@@ -10,8 +10,8 @@ rewrites each block from the code:
 | `style:NAME` | a style's parameters (`styles` registry) |
 
     python -m styletrace.frontends.reference            # rewrite README.md and docs/*.md in place
-    python -m styletrace.frontends.reference --check # exit 1 if a block is stale (the tests check
-    this too)
+    # exit 1 if a block is stale (the tests check this too)
+    python -m styletrace.frontends.reference --check
 """
 from __future__ import annotations
 

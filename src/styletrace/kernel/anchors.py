@@ -6,14 +6,16 @@ the anchor cache).
 
 Every stylized vertex x at path depth k gets an image coordinate s (pixels right and up of the image
 centre, the units of `styles.base.Projection.pixels`), which styles read from `Vertex.s`:
-    k = 0                       s = the pinhole projection of x: the pixel x is seen in (method "pixel");
+    k = 0                       s = the pinhole projection of x: the pixel x is seen in
+                                (method "pixel");
     every vertex before x delta s = s0, the first-edge coordinate: the projection of the camera
-    ray's first (pinhole cameras) hit (method "all-delta"): a perfect mirror or glass carries the
-    pixel along;
-                                through a lens (depth of field) the MLS inverse below, so that what a mirror
-                                shows out of focus gets a lens-dependent coordinate and its
-                                tone blurs;
-    otherwise                   s = phi_k^-1(x) by linear MLS over anchor vertices (mls.py), with its fallbacks.
+    (pinhole cameras)           ray's first hit (method "all-delta"): a perfect mirror or glass
+                                carries the pixel along;
+                                through a lens (depth of field) the MLS inverse below, so that
+                                what a mirror shows out of focus gets a lens-dependent coordinate
+                                and its tone blurs;
+    otherwise                   s = phi_k^-1(x) by linear MLS over anchor vertices (mls.py), with
+                                its fallbacks.
 The anchor map phi_k sends an image coordinate s to the depth-k vertex of the *anchor path* from s:
 a ray from the lens centre through s that reflects perfectly about the **geometric** normal at every
 vertex, whatever the material, or refracts through it where the query path transmitted there (the

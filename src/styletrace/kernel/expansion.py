@@ -9,8 +9,8 @@ scenes; 16 fail): too many to draw per estimate, cheap once per pixel. This modu
 per pixel, before the render.
 
 How
-    The pass is Mitsuba's own render loop at PASS_SPP camera samples per pixel (another seed than the
-    render's passes: `api.expansion_seed`), with the integrator in collecting mode: at the first
+    The pass is Mitsuba's own render loop at PASS_SPP camera samples per pixel (another seed than
+    the render's passes: `api.expansion_seed`), with the integrator in collecting mode: at the first
     stylized vertex each lane draws ceil(m / PASS_SPP) children and keeps the sums of r and r^2 per
     channel, r = x - e, e the vertex's own emission (part of every child, known per lane: it is
     added back per lane, so a render lane on a light in a pixel whose pass saw the wall beside it
@@ -27,8 +27,10 @@ How
     falls to the style's floor).
 
     maps = Expansion()                            # the integrator's
-    maps.prepare(integrator, scene, m, seed) # per film crop, before its passes (api.passes does it)
-    m1, m2 = maps.lookup(scene, width, m) # in sample(): the lane's pixel's mean r and r^2 (Color3f)
+    # per film crop, before its passes (api.passes does it)
+    maps.prepare(integrator, scene, m, seed)
+    # in sample(): the lane's pixel's mean r and r^2 (Color3f)
+    m1, m2 = maps.lookup(scene, width, m)
 """
 from __future__ import annotations
 

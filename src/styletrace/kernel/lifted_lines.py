@@ -9,10 +9,10 @@ An auxiliary path keeps the base path's conditioning xi (the lens sample, each h
 each reflect/refract choice) while its image coordinate moves. At a glossy or specular vertex the
 base path's half-vector h (unit, in the hemisphere of the shading normal n) is carried to the
 auxiliary vertex, whose normal is n2 and incoming direction v2:
-    c = h . n,  s = sqrt(1 - c^2),  u = (h - c n) / s                       (Eq. 14: tilt and azimuth)
-    t1 = normalize(n x v), t2 = t1 x n, alpha = atan2(u . t2, u . t1) (Eqs. 17-18: the chart of v)
+    c = h . n,  s = sqrt(1 - c^2),  u = (h - c n) / s                   (Eq. 14: tilt and azimuth)
+    t1 = normalize(n x v),  t2 = t1 x n,  alpha = atan2(u . t2, u . t1) (Eqs. 17-18: chart of v)
     u2 = cos(alpha) t1' + sin(alpha) t2',  t1' = normalize(n2 x v2), t2' = t1' x n2
-    h2 = c n2 + s u2 (Eq. 16: the tilt is kept)
+    h2 = c n2 + s u2                                                     (Eq. 16: tilt kept)
 then the auxiliary direction leaves by reflection d = v - 2 (v . h) h (Eq. 19) or refraction
 d = eta v - (eta (v . h) + sqrt(1 - eta^2 (1 - (v . h)^2))) h with h facing v (Eq. 20). At a diffuse
 vertex the base direction is turned by the minimal rotation taking n to n2 (supplement S1.4).

@@ -9,14 +9,14 @@ Given candidate anchor vertices p_i (world points) with their image coordinates 
 point x reached along the incoming direction d:
     chart:  the plane through x with normal n = -d/|d|; e1, e2 an orthonormal basis of it;
             q_i = ((p_i - x) . e1, (p_i - x) . e2) / sigma,  sigma = mean_i |q_i| (before scaling)
-    weights w_i = exp(-|q_i|^2)                                  (Gaussian, sigma = mean candidate distance)
+    weights w_i = exp(-|q_i|^2)            (Gaussian, sigma = mean candidate distance)
     fit     min_{A,b} sum_i w_i |A q_i + b - s_i|^2,   s(x) = b   (x is the chart's origin)
 The two 3x3 normal equations share one matrix M = sum_i w_i (1, q_i)(1, q_i)^T; b = first row of
 M^-1 (sum_i w_i s_i (1, q_i)). Working in sigma units keeps M's scale independent of the scene's.
 
 Fallbacks (supplement S2.5's chain), each taken where the one before it is not trusted:
-    MLS      M well conditioned (det M / (sum w)^3 > COND) and the weighted centroid of the q_i within
-             CENTRE sigma of the query: the fit interpolates rather than extrapolates;
+    MLS      M well conditioned (det M / (sum w)^3 > COND) and the weighted centroid of the q_i
+             within CENTRE sigma of the query: the fit interpolates rather than extrapolates;
     affine   the same fit with w_i = 1 (all candidates count equally), M well conditioned;
     nearest  the s_i of the candidate closest in the chart;
     first    the caller's first-edge coordinate.

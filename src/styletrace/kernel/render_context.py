@@ -1,8 +1,10 @@
 """The per-render state of a `stylized` integrator, bound to one scene for one render and
 always released.
 
-    with RenderContext(integrator, scene):      # in `sample`, `reuse.render`, and a recording through them
-        ... trace ...                            # integrator.targets, .emitters, .lines, .view, ... are set
+    # in `sample`, `reuse.render`, and a recording through them
+    with RenderContext(integrator, scene):
+        # integrator.targets, .emitters, .lines, .view, ... are set
+        ... trace ...
 
 While a kernel is traced the integrator's methods read what the scene decides: the style targets
 (which BSDFs are styled, `targets_for`), whether the scene has media or null surfaces, the emitter

@@ -2,10 +2,10 @@
 their children.
 
 Reference
-    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering,
-    here restricted to the first stylized vertex, with the image as the neighbour grid (a pixel
-    window, no hash grid). Veach and Guibas, "Optimally Combining Sampling Techniques for Monte
-    Carlo Rendering", SIGGRAPH 1995: the multi-sample balance heuristic that gives the pooled
+    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path
+    filtering, here restricted to the first stylized vertex, with the image as the neighbour grid (a
+    pixel window, no hash grid). Veach and Guibas, "Optimally Combining Sampling Techniques for
+    Monte Carlo Rendering", SIGGRAPH 1995: the multi-sample balance heuristic that gives the pooled
     samples their weights. Bitterli, "Correlations and Reuse for Fast and Accurate Physically Based
     Light Transport" (PhD thesis, 2021), and Lin et al., "Generalized Resampled Importance
     Sampling", SIGGRAPH 2022: pairwise MIS.
@@ -18,7 +18,7 @@ P(v) is v and its accepted neighbours among K drawn from the (2r+1)^2 pixel wind
 index of the pass): same style target, same BSDF object, shading normals with n.n' > NORMAL_MIN and
 camera distances within DEPTH_TOL. Then, with v's own BSDF f_v (cosine included),
 
-    direct(v)   = 1/(|P| m) sum_{k in P} sum_j f_v(wl_kj) E_kj                  (neighbours' visibility reused)
+    direct(v)   = 1/(|P| m) sum_{k in P} sum_j f_v(wl_kj) E_kj      (neighbours' visibility reused)
     indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj w_k(wb_kj) / (m p_k(wb_kj))
     L(v) = g( L_e(v) + direct + indirect )
 

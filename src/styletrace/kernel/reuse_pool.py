@@ -6,7 +6,7 @@ sample index of the pass): same style target, same BSDF object, shading normals 
 NORMAL_MIN and camera distances within DEPTH_TOL (the world grid, world_grid.py, serves the same
 `neighbour`/`accepted` for the second level). With v's own BSDF f_v (cosine included),
 
-    direct(v)   = 1/C sum_{k in P} sum_j f_v(wl_kj) E_kj                  (neighbours' visibility reused)
+    direct(v)   = 1/C sum_{k in P} sum_j f_v(wl_kj) E_kj      (neighbours' visibility reused)
     indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj w_k(wb_kj)
 
 over the C = sum_P c_k children of the members, with multi-sample MIS weights w_k over the pool's

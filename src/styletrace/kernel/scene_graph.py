@@ -2,10 +2,12 @@
 wherever they sit, null-scattering surfaces (masks, `null`), participating media.
 
     graph = SceneGraph(scene)
-    graph.styled # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
+    # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
+    graph.styled
     graph.has_null      # some surface BSDF has a Null component (a `mask`, a `null` BSDF, ...)
-    graph.has_see_through # some surface BSDF is a pure `null` (feature lines pass it:
-    lines.pure_null) graph.has_media # some shape bounds a medium, or the sensor sits in one
+    # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
+    graph.has_see_through
+    graph.has_media     # some shape bounds a medium, or the sensor sits in one
 
 Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled`
 BSDF wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is

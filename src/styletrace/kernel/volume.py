@@ -1,8 +1,10 @@
 """The path kernel in scenes with participating media: `walk` of path.py, but along rays
 through media.
 
-    w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)  # a Walk
-    tr = transmittance(scene, sampler, it, ds, medium, channel, active) # towards a sampled light
+    # a Walk
+    w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)
+    # towards a sampled light
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active)
 
 The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray
 in a medium a free-flight distance is drawn from the medium's majorant

@@ -1,8 +1,9 @@
 """World-space neighbours of stored path vertices for reuse=pixels at the second stylized level.
 
 Reference
-    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering
-    takes the neighbours of a deeper vertex within a radius h in world space (their hash grid).
+    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path
+    filtering takes the neighbours of a deeper vertex within a radius h in world space (their
+    hash grid).
 
 The second-level vertices of neighbouring pixels are not neighbours in space (their first bounces go
 in independent directions), so they are found in a uniform grid of cell size h over the scene's

@@ -1,7 +1,8 @@
 """The settings a scene's own Mitsuba integrator shares with `stylized`: max_depth, rr_depth,
 hide_emitters.
 
-    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})   # {"max_depth": 3, ...}
+    # {"max_depth": 3, ...}
+    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})
 
 Two sources, because neither alone sees everything in Mitsuba 3.9:
 - the declaration, read with Mitsuba's own scene parser (`mitsuba.parser`, $parameters resolved with

@@ -1,7 +1,8 @@
 """Checkpoints of a render on Ray: the sum of the finished passes as an EXR, and a JSON manifest.
 
     ck = Checkpoint("out.png", settings)     # OUT.checkpoint.json + OUT.checkpoint-<generation>.exr
-    ck.save(total, rounds_done) # atomically; the previous generation's EXR is then removed
+    # atomically; the previous generation's EXR is then removed
+    ck.save(total, rounds_done)
     total, rounds_done = ck.load()            # for --resume; UsageError if the settings differ
     ck.remove()                               # once the render is written
 

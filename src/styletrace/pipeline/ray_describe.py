@@ -2,7 +2,8 @@
 worker process).
 
     spec = SceneSpec.of("cornell-box", width=256, height=256)   # or an XML path, or a scene dict
-    scene = load(spec) # in a worker: api.load_scene(...), cached
+    # in a worker: api.load_scene(...), cached
+    scene = load(spec)
 
 An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in
 name, an XML path, or a scene dict, plus the width/height and any further keyword arguments of

@@ -2,7 +2,8 @@
 
     layout, units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
     merge = Merge(width, height, spp, layout)
-    merge.add(unit, rendered_tile) # any order; summed per tile in the order of `pass_loop.passes`
+    # any order; summed per tile in the order of `pass_loop.passes`
+    merge.add(unit, rendered_tile)
     merge.progress()                   # a pipeline.passes.Progress: spp_done, image
 
 The units are exactly the kernel launches of `pass_loop.passes`: its tiles and pass size

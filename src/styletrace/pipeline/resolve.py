@@ -2,8 +2,8 @@
 values pinned.
 
     r = resolve(Job(scene="scene.xml", given={"style": "cel"}))
-    r.scene, r.integrator, r.spp, r.lanes, r.auto # what `execute` runs; r.auto names the
-    pinned values
+    # what `execute` runs; r.auto names the pinned values
+    r.scene, r.integrator, r.spp, r.lanes, r.auto
 
 The integrator of a render is, in this order of precedence: a prebuilt one given as it is; else the
 values the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator (also one

@@ -65,7 +65,8 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
         query: returns the CUDA device's (free, total) bytes, or None where it cannot tell.
 
     Returns:
-        (lanes, note): the pass size, and a note for the user when free memory lowered it, else None.
+        (lanes, note): the pass size, and a note for the user when free memory lowered it,
+        else None.
     """
     if not variant.startswith("cuda"):
         return pass_loop.LANES_PER_PASS, None

@@ -2,12 +2,12 @@
 
 Routes (JSON API documented in docs/preview.md):
     GET  /              the page (page.html)
-    GET /api/styles the style registry: every style's parameters (kind, default, range, choices) and
-                        the estimators that can restyle it
+    GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices)
+                        and the estimators that can restyle it
     GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
-    POST /api/restyle {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "draft",
-    "ms", "command"} POST /api/save {"style", "params", "estimator", "format": "png"|"exr"} -> the
-    image file
+    POST /api/restyle   {"style", "params", "estimator"}
+                        -> {"image": PNG data URL, "spp", "draft", "ms", "command"}
+    POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
 A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
 """
 from __future__ import annotations
