@@ -1,5 +1,6 @@
-"""A scene description (`exporter`) -> a Mitsuba scene dict with objects made in process: meshes become
-`mi.Mesh`es filled from numpy, images `mi.Bitmap`s, matrices `mi.ScalarTransform4f`s. No file is written."""
+"""A scene description (`exporter`) -> a Mitsuba scene dict with objects made in process: meshes
+become `mi.Mesh`es filled from numpy, images `mi.Bitmap`s, matrices `mi.ScalarTransform4f`s. No file
+is written."""
 from __future__ import annotations
 
 from typing import Any
@@ -36,5 +37,6 @@ def node(d: dict) -> Any:
 
 
 def scene_dict(desc: dict) -> dict:
-    """The Mitsuba scene dict of a description, for `styletrace.frontends.api.load_scene` or `mi.load_dict`."""
+    """The Mitsuba scene dict of a description, for `styletrace.frontends.api.load_scene` or
+    `mi.load_dict`."""
     return node(desc)

@@ -1,13 +1,14 @@
 """The `styletrace` render engine: F12 renders the evaluated depsgraph through styletrace's passes.
 
-Progress is reported after each pass (`update_progress`), the image so far is shown, and `test_break` is asked
-between passes: a cancel keeps the finished passes in the render result. The error AOVs (variance, bias,
-children; `aovs`) and, with lines, a line mask are added as render passes. With "Record buffer" the
-look-development buffer of the render is kept (`restyle`), so style changes restyle it in milliseconds.
-F12 is one pipeline run (`pipeline.run`: a Job resolved, the runner of `pipeline.runner`); with Denoise on its
-finisher denoises the finished passes after the last one (or after a cancel), a Noisy pass keeps the image
-before denoising, and the error passes are off (they would not be the denoised pixel's).
-Errors the user can cause (a bad style value, an unsupported scene) are one-line Blender error reports.
+Progress is reported after each pass (`update_progress`), the image so far is shown, and
+`test_break` is asked between passes: a cancel keeps the finished passes in the render result. The
+error AOVs (variance, bias, children; `aovs`) and, with lines, a line mask are added as render
+passes. With "Record buffer" the look-development buffer of the render is kept (`restyle`), so style
+changes restyle it in milliseconds. F12 is one pipeline run (`pipeline.run`: a Job resolved, the
+runner of `pipeline.runner`); with Denoise on its finisher denoises the finished passes after the
+last one (or after a cancel), a Noisy pass keeps the image before denoising, and the error passes
+are off (they would not be the denoised pixel's). Errors the user can cause (a bad style value, an
+unsupported scene) are one-line Blender error reports.
 """
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
 COMBINED = "Combined"
-#: what the last render did: samples per pixel finished and asked for, whether it was cancelled, seconds
+#: what the last render did: samples per pixel finished and asked for, whether it was
+#: cancelled, seconds
 LAST: dict = {}
 
 
@@ -49,12 +51,13 @@ class StyletraceEngine(bpy.types.RenderEngine):
     bl_use_postprocess = True
 
     def stop_requested(self) -> bool:
-        """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can press it."""
+        """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can
+        press it."""
         return self.test_break()
 
     def progress(self, fraction: float, status: str) -> None:
-        """Blender's progress bar and status line; a method of our own, so that a test can read them (Blender's
-        own `update_progress` cannot be replaced on a registered engine)."""
+        """Blender's progress bar and status line; a method of our own, so that a test can read them
+        (Blender's own `update_progress` cannot be replaced on a registered engine)."""
         self.update_progress(fraction)
         self.update_stats("", status)
 
@@ -63,7 +66,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
         self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", "COLOR")
         if pipeline.error_passes(st):
             for name, channels, ids in pipeline.AOV_PASSES.values():
-                self.register_pass(scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE")
+                self.register_pass(
+                    scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE"
+                )
         if st.denoise != "off":
             self.register_pass(scene, renderlayer, pipeline.NOISY, 3, "RGB", "COLOR")
         if st.lines:
@@ -74,7 +79,8 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self._render(depsgraph)
         except StyletraceError as exc:
             self.report({"ERROR"}, _message(exc))
-        except Exception as exc:  # Mitsuba's refusals of the exported scene, or a bug: one line, the trace on stderr
+        # Mitsuba's refusals of the exported scene, or a bug: one line, the trace on stderr
+        except Exception as exc:
             traceback.print_exc()
             self.report({"ERROR"}, f"styletrace: {type(exc).__name__}: {_message(exc)}")
 
@@ -102,20 +108,28 @@ class StyletraceEngine(bpy.types.RenderEngine):
         prog = None
         total = -(-st.spp // st.pass_spp)
         for k, prog in enumerate(source, start=1):
-            self.progress(prog.spp_done / prog.spp_total, f"styletrace: pass {k}/{total}, {prog.spp_done}/"
-                                                           f"{prog.spp_total} spp, {time.perf_counter() - start:.1f} s")
+            self.progress(
+                prog.spp_done / prog.spp_total,
+                f"styletrace: pass {k}/{total}, {prog.spp_done}/"
+                f"{prog.spp_total} spp, {time.perf_counter() - start:.1f} s",
+            )
             self._show(prog.image, w, h)
             if self.stop_requested():
                 break
-        LAST.update(spp_done=prog.spp_done if prog else 0, spp_total=st.spp, cancelled=self.stop_requested(),
-                    seconds=time.perf_counter() - start)
+        LAST.update(
+            spp_done=prog.spp_done if prog else 0,
+            spp_total=st.spp,
+            cancelled=self.stop_requested(),
+            seconds=time.perf_counter() - start,
+        )
         if prog is None:
             return
         mask = None
         if st.lines and not self.stop_requested():
             mask = pipeline.line_mask(sc, st, self.stop_requested)
         image, noisy = None, (prog.image if denoised else None)
-        if noisy is not None and runner.finisher.ready(prog):  # (cancelled before every tile had a pass: noisy)
+        # (cancelled before every tile had a pass: noisy)
+        if noisy is not None and runner.finisher.ready(prog):
             self.progress(prog.spp_done / prog.spp_total, "styletrace: denoising")
             image = runner.finish(prog)
             LAST["seconds"] = time.perf_counter() - start

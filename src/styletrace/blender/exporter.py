@@ -1,11 +1,12 @@
-"""The evaluated depsgraph -> a scene description: a Mitsuba scene dict whose meshes are `mesh.Part`s and whose
-images are numpy arrays. `build.scene` turns it into Mitsuba objects in process; `xml.write` into a Mitsuba
-XML file with PLY meshes and EXR images. Both start from this one description, so F12 and the exported file
-render the same scene.
+"""The evaluated depsgraph -> a scene description: a Mitsuba scene dict whose meshes are
+`mesh.Part`s and whose images are numpy arrays. `build.scene` turns it into Mitsuba objects in
+process; `xml.write` into a Mitsuba XML file with PLY meshes and EXR images. Both start from this
+one description, so F12 and the exported file render the same scene.
 
-Objects are visited through `depsgraph.object_instances`. A mesh placed once is written in world space, one
-shape per material slot. A mesh that is drawn as an instance (collection instances, particles, geometry
-nodes instances) becomes one `shapegroup` in its local space and one `instance` per placement.
+Objects are visited through `depsgraph.object_instances`. A mesh placed once is written in world
+space, one shape per material slot. A mesh that is drawn as an instance (collection instances,
+particles, geometry nodes instances) becomes one `shapegroup` in its local space and one `instance`
+per placement.
 """
 from __future__ import annotations
 
@@ -56,14 +57,22 @@ class Exporter:
         for part in parts:
             mat = slots[part.slot].material if part.slot < len(slots) else None
             bsdf, emitter = self._material(mat)
-            shape = {"type": "blender_mesh", "part": part, "bsdf": bsdf, "name": f"{obj.name}.{part.slot}"}
+            shape = {
+                "type": "blender_mesh",
+                "part": part,
+                "bsdf": bsdf,
+                "name": f"{obj.name}.{part.slot}",
+            }
             if emitter is not None:
                 shape["emitter"] = emitter
             shapes.append(shape)
         return shapes
 
     def export(self) -> dict:
-        desc: dict = {"type": "scene", "sensor": camera.sensor(self.scene, self.spp, warn=self.warn)}
+        desc: dict = {
+            "type": "scene",
+            "sensor": camera.sensor(self.scene, self.spp, warn=self.warn),
+        }
         groups: dict[str, list[dict]] = {}
         n = 0
         for inst in self.depsgraph.object_instances:
@@ -82,8 +91,11 @@ class Exporter:
                     if key not in groups:
                         groups[key] = self._shapes(obj, None)
                     if groups[key]:
-                        desc[f"instance_{n}"] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"group_{key}"},
-                                                 "to_world": matrix}
+                        desc[f"instance_{n}"] = {
+                            "type": "instance",
+                            "shapegroup": {"type": "ref", "id": f"group_{key}"},
+                            "to_world": matrix,
+                        }
                         n += 1
                 else:
                     for shape in self._shapes(obj, matrix):
@@ -91,7 +103,10 @@ class Exporter:
                         n += 1
         for key, shapes in groups.items():
             if shapes:
-                desc[f"group_{key}"] = {"type": "shapegroup", **{f"part_{i}": s for i, s in enumerate(shapes)}}
+                desc[f"group_{key}"] = {
+                    "type": "shapegroup",
+                    **{f"part_{i}": s for i, s in enumerate(shapes)},
+                }
         env = world.convert(self.scene.world, self.ctx)
         if env is not None:
             desc["world"] = env

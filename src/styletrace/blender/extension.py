@@ -1,13 +1,14 @@
 """Build the Blender extension (Blender 4.2+): a zip with `blender_manifest.toml`, the add-on's entry module and
-the wheels it needs (styletrace itself, Mitsuba, Dr.Jit, tqdm, and pyoidn with cffi for Denoise; numpy comes with
-Blender).
+the wheels it needs (styletrace itself, Mitsuba, Dr.Jit, tqdm, and pyoidn with cffi for Denoise; numpy
+comes with Blender).
 
     python -m styletrace.blender.extension -o DIR [--platform linux-x64] [--python 3.11]
 
 Blender installs it from Edit -> Preferences -> Get Extensions -> Install from Disk (or
-`blender --command extension install-file -r user_default FILE.zip`). Wheels are platform-specific, so each
-zip is for one platform; Blender 4.2 to 5.0 embed Python 3.11. Runs without Blender (does not import bpy).
-"""
+`blender --command extension install-file -r user_default FILE.zip`). Wheels are platform-specific,
+so each zip is for one platform; Blender 4.2 to 5.0 embed Python 3.11. Runs without Blender (does
+not import bpy).
+"""  # noqa: E501 (the first line is the command's --help description, kept as it was)
 from __future__ import annotations
 
 import argparse
@@ -22,9 +23,19 @@ from styletrace import __version__
 
 #: Blender's platform names -> pip's platform tags for the wheels
 PLATFORMS = {
-    "linux-x64": ["manylinux_2_28_x86_64", "manylinux_2_27_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64"],
+    "linux-x64": [
+        "manylinux_2_28_x86_64",
+        "manylinux_2_27_x86_64",
+        "manylinux_2_17_x86_64",
+        "manylinux2014_x86_64",
+    ],
     "windows-x64": ["win_amd64"],
-    "macos-arm64": ["macosx_11_0_arm64", "macosx_12_0_arm64", "macosx_13_0_arm64", "macosx_14_0_arm64"],
+    "macos-arm64": [
+        "macosx_11_0_arm64",
+        "macosx_12_0_arm64",
+        "macosx_13_0_arm64",
+        "macosx_14_0_arm64",
+    ],
 }
 #: what the add-on needs beyond Blender's own Python and numpy (pinned as in constraints.txt)
 REQUIREMENTS = ["mitsuba==3.9.1", "drjit==1.5.0", "tqdm==4.70.1",
@@ -43,7 +54,7 @@ def register():
 def unregister():
     from styletrace.blender import unregister as _unregister
     _unregister()
-'''
+'''  # noqa: E501 (the entry module's text, as it was)
 
 
 def manifest(wheels: list[str], platform: str) -> str:
@@ -81,12 +92,15 @@ def project_root() -> str:
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.abspath(os.path.join(here, "..", "..", ".."))
     if not os.path.isfile(os.path.join(root, "pyproject.toml")):
-        raise SystemExit("styletrace extension: build from a source checkout (pyproject.toml not found)")
+        raise SystemExit(
+            "styletrace extension: build from a source checkout (pyproject.toml not found)"
+        )
     return root
 
 
 def _source_copy(tmp: str) -> str:
-    """A copy of the source tree to build the wheel in: setuptools leaves a build/ folder where it builds."""
+    """A copy of the source tree to build the wheel in: setuptools leaves a build/ folder where
+    it builds."""
     root, dest = project_root(), os.path.join(tmp, "source")
     shutil.copytree(os.path.join(root, "src"), os.path.join(dest, "src"),
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
@@ -98,12 +112,26 @@ def _source_copy(tmp: str) -> str:
 def build(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> str:
     """Write `styletrace-VERSION-PLATFORM.zip` into `out_dir`; returns its path."""
     if platform not in PLATFORMS:
-        raise SystemExit(f"styletrace extension: unknown platform '{platform}': one of {', '.join(PLATFORMS)}")
+        raise SystemExit(
+            f"styletrace extension: unknown platform '{platform}': one of {', '.join(PLATFORMS)}"
+        )
     os.makedirs(out_dir, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         wheels = os.path.join(tmp, "wheels")
         os.makedirs(wheels)
-        _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", wheels, _source_copy(tmp)])
+        _run(
+            [
+                sys.executable,
+                "-m",
+                "pip",
+                "wheel",
+                "--no-deps",
+                "-q",
+                "-w",
+                wheels,
+                _source_copy(tmp),
+            ]
+        )
         cmd = [sys.executable, "-m", "pip", "download", "-q", "--no-deps", "--only-binary=:all:",
                "--python-version", python, "-d", wheels]
         for tag in PLATFORMS[platform]:
@@ -121,10 +149,16 @@ def build(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> st
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m styletrace.blender.extension", description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", required=True, help="folder to write the extension zip into")
+    parser = argparse.ArgumentParser(
+        prog="python -m styletrace.blender.extension", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument(
+        "-o", "--output", required=True, help="folder to write the extension zip into"
+    )
     parser.add_argument("--platform", default="linux-x64", choices=sorted(PLATFORMS))
-    parser.add_argument("--python", default="3.11", help="Blender's Python version (3.11 for Blender 4.2 to 5.0)")
+    parser.add_argument(
+        "--python", default="3.11", help="Blender's Python version (3.11 for Blender 4.2 to 5.0)"
+    )
     args = parser.parse_args(argv)
     print(build(args.output, args.platform, args.python))
     return 0

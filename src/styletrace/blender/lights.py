@@ -1,10 +1,12 @@
 """Blender lights -> Mitsuba emitters, with the unit conversions of `units`.
 
-Point and spot lights are points (a radius only softens shadows in Cycles; the intensity far away is the same);
-a spot's cone is Blender's full spot size; Cycles' blend (a smoothstep over the cosine) becomes Mitsuba's linear
-ramp in angle (beam_width) that emits the same power (`spot_beam`; tests/blender/test_units.py). Suns are directional (their angle
-is ignored). Area lights are Mitsuba `rectangle`s or `disk`s turned to emit along the light's -Z, carrying an
-`area` emitter on a black surface (unlike Cycles' lights, it blocks what reaches its back); ellipses become disks of the mean diameter (with a warning).
+Point and spot lights are points (a radius only softens shadows in Cycles; the intensity far away is
+the same); a spot's cone is Blender's full spot size; Cycles' blend (a smoothstep over the cosine)
+becomes Mitsuba's linear ramp in angle (beam_width) that emits the same power (`spot_beam`;
+tests/blender/test_units.py). Suns are directional (their angle is ignored). Area lights are Mitsuba
+`rectangle`s or `disk`s turned to emit along the light's -Z, carrying an `area` emitter on a black
+surface (unlike Cycles' lights, it blocks what reaches its back); ellipses become disks of the mean
+diameter (with a warning).
 """
 from __future__ import annotations
 
@@ -37,15 +39,17 @@ def _smoothstep(x: float) -> float:
 
 
 def _power(profile, half: float, steps: int = 400) -> float:
-    """The power a spot of angular profile `profile(theta)` emits into its cone, up to a constant (midpoint rule)."""
+    """The power a spot of angular profile `profile(theta)` emits into its cone, up to a constant
+    (midpoint rule)."""
     h = half / steps
     return sum(profile((i + 0.5) * h) * math.sin((i + 0.5) * h) for i in range(steps)) * h
 
 
 def spot_beam(half: float, blend: float) -> float:
-    """Mitsuba's beam_width (radians) for a Blender spot of half angle `half` and `blend`: Cycles' attenuation is a
-    smoothstep over the cosine, from the cone's edge to cos(half) + (1 - cos(half)) blend; Mitsuba's is linear in
-    angle from beam_width to the edge. The beam width is chosen so that both emit the same power (bisection)."""
+    """Mitsuba's beam_width (radians) for a Blender spot of half angle `half` and `blend`: Cycles'
+    attenuation is a smoothstep over the cosine, from the cone's edge to cos(half) + (1 - cos(half))
+    blend; Mitsuba's is linear in angle from beam_width to the edge. The beam width is chosen so
+    that both emit the same power (bisection)."""
     if blend <= 0:
         return half
     c = math.cos(half)
@@ -59,7 +63,8 @@ def spot_beam(half: float, blend: float) -> float:
 
 
 def convert(light, matrix, warn) -> dict | None:
-    """The emitter (or emitting shape) description of a `bpy.types.Light` placed by `matrix` (4x4)."""
+    """The emitter (or emitting shape) description of a `bpy.types.Light` placed by
+    `matrix` (4x4)."""
     m = np.array(matrix, dtype=np.float64)
     kind = light.type
     if kind == "POINT":
@@ -67,7 +72,6 @@ def convert(light, matrix, warn) -> dict | None:
                 "intensity": _rgb(light, units.point_intensity(light.energy))}
     if kind == "SPOT":
         half = light.spot_size / 2.0
-        cos_half = math.cos(half)
         beam = spot_beam(half, light.spot_blend)
         return {"type": "spot", "to_world": _unscaled(m) @ SPOT, "cutoff_angle": math.degrees(half),
                 "beam_width": math.degrees(min(beam, half)),
@@ -83,7 +87,10 @@ def convert(light, matrix, warn) -> dict | None:
         base = _unscaled(m)
         if light.shape in ("DISK", "ELLIPSE"):
             if light.shape == "ELLIPSE" and abs(size_x * sx - size_y * sy) > 1e-6:
-                warn(f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of the mean diameter")
+                warn(
+                    f"styletrace: area light '{light.name}' is an ellipse: rendered as a disk of "
+                    "the mean diameter"
+                )
             r = (size_x * sx + size_y * sy) / 4.0
             area = math.pi * r * r
             shape = {"type": "disk", "to_world": base @ np.diag([r, r, 1.0, 1.0]) @ TURN}
@@ -91,10 +98,17 @@ def convert(light, matrix, warn) -> dict | None:
             hx, hy = size_x * sx / 2.0, size_y * sy / 2.0
             area = 4.0 * hx * hy
             shape = {"type": "rectangle", "to_world": base @ np.diag([hx, hy, 1.0, 1.0]) @ TURN}
-        # Cycles' lights block no light; styletrace refuses emitters on see-through (null) surfaces, so the
-        # light is a black, one-sided emitter that absorbs what reaches its back (docs/blender.md)
-        shape["bsdf"] = {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}
-        shape["emitter"] = {"type": "area", "radiance": _rgb(light, units.area_radiance(light.energy, area))}
+        # Cycles' lights block no light; styletrace refuses emitters on see-through (null) surfaces,
+        # so the light is a black, one-sided emitter that absorbs what reaches its back
+        # (docs/blender.md)
+        shape["bsdf"] = {
+            "type": "diffuse",
+            "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)},
+        }
+        shape["emitter"] = {
+            "type": "area",
+            "radiance": _rgb(light, units.area_radiance(light.energy, area)),
+        }
         return shape
     warn(f"styletrace: light '{light.name}' of type {kind} is not supported: left out")
     return None

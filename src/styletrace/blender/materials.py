@@ -1,20 +1,22 @@
 """Blender materials -> Mitsuba BSDF descriptions (plain dicts, numpy images).
 
-Supported: Principled BSDF (base colour from a value or an Image Texture, roughness, metallic, transmission
-and IOR, emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes behind the active Material
-Output. The mapping (docs/blender.md, "Materials"):
+Supported: Principled BSDF (base colour from a value or an Image Texture, roughness, metallic,
+transmission and IOR, emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes behind
+the active Material Output. The mapping (docs/blender.md, "Materials"):
 
-- Principled: a dielectric base (`diffuse` when Specular IOR Level is 0, else `roughplastic` with the IOR),
-  blended with a `roughdielectric` by Transmission Weight and with a `roughconductor` (Fresnel of the base
-  colour taken as 1, as Cycles' F82 at normal incidence) by Metallic. Mitsuba's microfacet alpha is
-  Blender's roughness squared, as in Cycles.
-- Glossy: `roughconductor` without Fresnel (`material = none`), tinted by its colour, as Cycles' Glossy.
+- Principled: a dielectric base (`diffuse` when Specular IOR Level is 0, else `roughplastic` with
+  the IOR), blended with a `roughdielectric` by Transmission Weight and with a `roughconductor`
+  (Fresnel of the base colour taken as 1, as Cycles' F82 at normal incidence) by Metallic. Mitsuba's
+  microfacet alpha is Blender's roughness squared, as in Cycles.
+- Glossy: `roughconductor` without Fresnel (`material = none`), tinted by its colour, as
+  Cycles' Glossy.
 - Glass: `roughdielectric` with the IOR, both lobes tinted by its colour.
-- Emission (and Principled emission): an `area` emitter whose radiance is colour x strength (Cycles' strength
-  on a mesh is radiance).
+- Emission (and Principled emission): an `area` emitter whose radiance is colour x strength (Cycles'
+  strength on a mesh is radiance).
 
 Every other node behind the output is named in one warning per export and rendered as grey diffuse.
-Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a styletrace style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF.
+Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a styletrace
+style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF.
 """
 from __future__ import annotations
 
@@ -28,8 +30,8 @@ SMOOTH = 1e-4
 
 
 class Context:
-    """What the exporter collects while converting materials: warnings (one per unsupported node type) and
-    image textures (converted once per image)."""
+    """What the exporter collects while converting materials: warnings (one per unsupported node
+    type) and image textures (converted once per image)."""
 
     def __init__(self, warn: Callable[[str], None]):
         self.warn = warn
@@ -41,8 +43,10 @@ class Context:
 
     def flush(self) -> None:
         for kind, mats in sorted(self.unsupported.items()):
-            self.warn(f"styletrace: node {kind} is not supported (material {', '.join(sorted(set(mats)))}): "
-                      f"rendered as grey diffuse")
+            self.warn(
+                f"styletrace: node {kind} is not supported (material "
+                f"{', '.join(sorted(set(mats)))}): rendered as grey diffuse"
+            )
         self.unsupported.clear()
 
 
@@ -51,8 +55,8 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
 
 
 def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
-    """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3) or
-    'alpha' (H x W x 1)."""
+    """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3)
+    or 'alpha' (H x W x 1)."""
     key = (image.name, channel)
     if key not in ctx.images:
         w, h = image.size
@@ -71,8 +75,15 @@ def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
 
 
 def texture(data: np.ndarray) -> dict:
-    """A bitmap texture description; `data` stays a numpy array until the scene is built or written."""
-    return {"type": "bitmap", "data": data, "filter_type": "bilinear", "wrap_mode": "repeat", "raw": True}
+    """A bitmap texture description; `data` stays a numpy array until the scene is built
+    or written."""
+    return {
+        "type": "bitmap",
+        "data": data,
+        "filter_type": "bilinear",
+        "wrap_mode": "repeat",
+        "raw": True,
+    }
 
 
 def _source(socket):
@@ -135,8 +146,14 @@ def principled(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
     if level <= 0:
         bsdf = {"type": "diffuse", "reflectance": base}
     else:
-        bsdf = {"type": "roughplastic", "diffuse_reflectance": base, "int_ior": max(ior, 1.0 + 1e-4),
-                "alpha": alpha(rough), "distribution": "ggx", "nonlinear": True}
+        bsdf = {
+            "type": "roughplastic",
+            "diffuse_reflectance": base,
+            "int_ior": max(ior, 1.0 + 1e-4),
+            "alpha": alpha(rough),
+            "distribution": "ggx",
+            "nonlinear": True,
+        }
     bsdf = _blend(trans, bsdf, _glass(base, rough, ior))
     bsdf = _blend(metal, bsdf, _conductor(base, rough))
     strength = scalar(inp["Emission Strength"], ctx, material)
@@ -162,15 +179,24 @@ def convert_node(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
     if kind == "ShaderNodeBsdfDiffuse":
         return {"type": "diffuse", "reflectance": colour(inp["Color"], ctx, material)}, None, 1.0
     if kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
-        return _conductor(colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material)), None, 1.0
+        return (
+            _conductor(
+                colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material)
+            ),
+            None,
+            1.0,
+        )
     if kind == "ShaderNodeBsdfGlass":
         return (_glass(colour(inp["Color"], ctx, material), scalar(inp["Roughness"], ctx, material),
                        scalar(inp["IOR"], ctx, material)), None, 1.0)
     if kind == "ShaderNodeEmission":
         c = colour(inp["Color"], ctx, material)
         s = scalar(inp["Strength"], ctx, material)
-        radiance = ({"type": "rgb", "value": tuple(v * s for v in c["value"])} if c.get("type") == "rgb"
-                    else texture(c["data"] * np.float32(s)))
+        radiance = (
+            {"type": "rgb", "value": tuple(v * s for v in c["value"])}
+            if c.get("type") == "rgb"
+            else texture(c["data"] * np.float32(s))
+        )
         return {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}, \
             {"type": "area", "radiance": radiance}, 1.0
     ctx.unknown(node, material)
@@ -184,8 +210,14 @@ def grey() -> dict:
 def _transmits(bsdf: dict) -> bool:
     if bsdf["type"] in ("roughdielectric", "dielectric", "thindielectric"):
         return True
-    return any(_transmits(v) for v in bsdf.values() if isinstance(v, dict) and "type" in v and v is not bsdf
-               and v["type"] not in ("rgb", "bitmap"))
+    return any(
+        _transmits(v)
+        for v in bsdf.values()
+        if isinstance(v, dict)
+        and "type" in v
+        and v is not bsdf
+        and v["type"] not in ("rgb", "bitmap")
+    )
 
 
 def output_node(material):
@@ -208,9 +240,19 @@ def convert(material, ctx: Context, style: dict | None = None) -> tuple[dict, di
         out = output_node(material)
         src = _source(out.inputs["Surface"]) if out is not None else None
         if src is None:
-            # no node tree (or nothing connected): Blender's viewport colour, as Cycles renders an unlinked output black
-            bsdf, emitter, opacity = ({"type": "diffuse", "reflectance": {"type": "rgb", "value":
-                                       tuple(float(c) for c in material.diffuse_color[:3])}}, None, 1.0)
+            # no node tree (or nothing connected): Blender's viewport colour, as Cycles renders an
+            # unlinked output black
+            bsdf, emitter, opacity = (
+                {
+                    "type": "diffuse",
+                    "reflectance": {
+                        "type": "rgb",
+                        "value": tuple(float(c) for c in material.diffuse_color[:3]),
+                    },
+                },
+                None,
+                1.0,
+            )
             if out is not None:
                 bsdf = {"type": "diffuse", "reflectance": {"type": "rgb", "value": (0.0, 0.0, 0.0)}}
         else:

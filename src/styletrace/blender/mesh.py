@@ -1,9 +1,10 @@
 """Evaluated Blender meshes -> Mitsuba meshes in memory, one per material slot.
 
-The evaluated object's mesh (modifiers applied) is read with `foreach_get` into numpy: the loop triangles,
-their corners' positions, loop ("corner") normals and the active UV map. Corner normals are what Blender
-shades with, so smooth, flat and auto-smooth edges come out as Blender shows them. Corners that share
-position, normal and UV are merged again (`np.unique`), so a smooth mesh keeps about one vertex per vertex.
+The evaluated object's mesh (modifiers applied) is read with `foreach_get` into numpy: the loop
+triangles, their corners' positions, loop ("corner") normals and the active UV map. Corner normals
+are what Blender shades with, so smooth, flat and auto-smooth edges come out as Blender shows them.
+Corners that share position, normal and UV are merged again (`np.unique`), so a smooth mesh keeps
+about one vertex per vertex.
 """
 from __future__ import annotations
 
@@ -33,7 +34,8 @@ def _get(collection, attr: str, width: int, dtype) -> np.ndarray:
 
 
 def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
-    """The parts of an evaluated `bpy.types.Mesh`; `matrix` (4x4) moves them to world space (None: keep local)."""
+    """The parts of an evaluated `bpy.types.Mesh`; `matrix` (4x4) moves them to world space (None:
+    keep local)."""
     mesh.calc_loop_triangles()
     tris = mesh.loop_triangles
     if len(tris) == 0:
@@ -50,7 +52,9 @@ def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
         co = (co @ m[:3, :3].T + m[:3, 3]).astype(np.float32)
         # normals move with the inverse transpose (non-uniform scale), then are renormalised
         normals = normals @ np.linalg.inv(m[:3, :3])
-        normals = (normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-20)).astype(np.float32)
+        normals = (
+            normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-20)
+        ).astype(np.float32)
         if np.linalg.det(m[:3, :3]) < 0:  # a mirroring transform turns the winding round
             corners = corners[:, ::-1]
     parts = []

@@ -1,5 +1,6 @@
-"""File -> Export -> Mitsuba XML (styletrace): the evaluated scene as a Mitsuba XML file with PLY meshes, with the
-render settings as its `stylized` integrator. The report names the command line that renders the F12 image."""
+"""File -> Export -> Mitsuba XML (styletrace): the evaluated scene as a Mitsuba XML file with PLY
+meshes, with the render settings as its `stylized` integrator. The report names the command line
+that renders the F12 image."""
 from __future__ import annotations
 
 import bpy
@@ -14,9 +15,12 @@ def command_line(path: str, settings) -> str:
     denoise = f" --denoise {settings.denoise}" + (
         "" if settings.denoise == "off" or settings.denoise_quality == "high"
         else f" --denoise-quality {settings.denoise_quality}")
-    # --spp: F12 renders the Samples as camera samples, which the command line's default would spend on children
-    return (f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp {settings.pass_spp}"
-            f"{denoise}")
+    # --spp: F12 renders the Samples as camera samples, which the command line's default would spend
+    # on children
+    return (
+        f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp "
+        f"{settings.pass_spp}{denoise}"
+    )
 
 
 class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
@@ -38,7 +42,9 @@ class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
         except (StyletraceError, OSError, ValueError) as exc:
             self.report({"ERROR"}, str(exc).strip().splitlines()[-1])
             return {"CANCELLED"}
-        self.report({"INFO"}, f"wrote {self.filepath}; the F12 image: {command_line(self.filepath, st)}")
+        self.report(
+            {"INFO"}, f"wrote {self.filepath}; the F12 image: {command_line(self.filepath, st)}"
+        )
         return {"FINISHED"}
 
 

@@ -1,6 +1,6 @@
-"""The style panels, drawn from the registries: Render Properties -> styletrace, Material Properties -> styletrace
-style. `layout_rows` lists what a panel shows (the same walk as `draw`), so the layout can be checked and
-documented headless, where Blender draws no UI."""
+"""The style panels, drawn from the registries: Render Properties -> styletrace, Material
+Properties -> styletrace style. `layout_rows` lists what a panel shows (the same walk as
+`draw`), so the layout can be checked and documented headless, where Blender draws no UI."""
 from __future__ import annotations
 
 import bpy
@@ -8,16 +8,34 @@ import bpy
 from styletrace.blender.properties import key
 from styletrace.styles import registry
 
-RENDER_ROWS = ("inner_samples", "estimator", "stylize", "stylize_depth", "lines", "line_mode", "line_types",
-               "reuse", "spp", "pass_spp",
-               "max_depth", "seed", "aovs", "record_buffer", "denoise", "denoise_quality",
-               "firefly", "firefly_k")
+RENDER_ROWS = (
+    "inner_samples",
+    "estimator",
+    "stylize",
+    "stylize_depth",
+    "lines",
+    "line_mode",
+    "line_types",
+    "reuse",
+    "spp",
+    "pass_spp",
+    "max_depth",
+    "seed",
+    "aovs",
+    "record_buffer",
+    "denoise",
+    "denoise_quality",
+    "firefly",
+    "firefly_k",
+)
 
 
 def style_rows(settings) -> list[tuple[object, str]]:
     """(owner, property name) of the style selector and the chosen style's parameters."""
     rows = [(settings, "style")]
-    rows += [(settings.params, key(settings.style, p.name)) for p in registry.get(settings.style).params]
+    rows += [
+        (settings.params, key(settings.style, p.name)) for p in registry.get(settings.style).params
+    ]
     return rows
 
 
@@ -30,8 +48,8 @@ def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
 
 
 def dump(settings, material: bool = False) -> list[str]:
-    """The panel as text, one row each: label, value and Blender property type (docs/blender.md shows it next to
-    a screenshot: `bpy` as a module draws no UI)."""
+    """The panel as text, one row each: label, value and Blender property type (docs/blender.md
+    shows it next to a screenshot: `bpy` as a module draws no UI)."""
     lines = []
     for owner, name in layout_rows(settings, material):
         prop = owner.bl_rna.properties[name]
@@ -40,7 +58,10 @@ def dump(settings, material: bool = False) -> list[str]:
             value = "(" + ", ".join(f"{v:g}" for v in value) + ")"
         elif isinstance(value, float):
             value = f"{value:g}"
-        lines.append(f"{prop.name:<24} {str(value)!s:<28} [{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]")
+        lines.append(
+            f"{prop.name:<24} {str(value)!s:<28} "
+            f"[{prop.type.lower()}{'/' + prop.subtype.lower() if prop.subtype != 'NONE' else ''}]"
+        )
     return lines
 
 

@@ -1,11 +1,13 @@
-"""Blender properties generated from styletrace's registries: no hand-written list of styles or parameters.
+"""Blender properties generated from styletrace's registries: no hand-written list of styles
+or parameters.
 
 `StyleParams` holds one Blender property per (style, parameter) of the style registry, named
-`<style>__<parameter>`, typed by the parameter's kind (float, int, bool, colour, choice; lists, gradients and
-'auto' defaults are strings in the spelling `--set` takes). The render settings (`SceneSettings`) and each
-material's settings (`MaterialSettings`) carry a style name and one `StyleParams`; panels draw the parameters of
-the chosen style only. Values go to styletrace as given, so the registry (`Param.parse`) is the one judge of
-what is allowed; its refusals reach the user as one-line Blender error reports (engine, operators).
+`<style>__<parameter>`, typed by the parameter's kind (float, int, bool, colour, choice; lists,
+gradients and 'auto' defaults are strings in the spelling `--set` takes). The render settings
+(`SceneSettings`) and each material's settings (`MaterialSettings`) carry a style name and one
+`StyleParams`; panels draw the parameters of the chosen style only. Values go to styletrace as
+given, so the registry (`Param.parse`) is the one judge of what is allowed; its refusals reach the
+user as one-line Blender error reports (engine, operators).
 """
 from __future__ import annotations
 
@@ -44,19 +46,37 @@ def blender_property(p):
     if p.kind == "float":
         kw = {"min": lo} if _finite(lo) else {}
         kw.update({"max": hi} if _finite(hi) else {})
-        return bpy.props.FloatProperty(name=p.name, description=text, default=p.default, update=changed, **kw)
+        return bpy.props.FloatProperty(
+            name=p.name, description=text, default=p.default, update=changed, **kw
+        )
     if p.kind == "int":
         kw = {"min": int(lo)} if _finite(lo) else {}
         kw.update({"max": int(hi)} if _finite(hi) else {})
-        return bpy.props.IntProperty(name=p.name, description=text, default=p.default, update=changed, **kw)
+        return bpy.props.IntProperty(
+            name=p.name, description=text, default=p.default, update=changed, **kw
+        )
     if p.kind == "bool":
-        return bpy.props.BoolProperty(name=p.name, description=text, default=p.default, update=changed)
+        return bpy.props.BoolProperty(
+            name=p.name, description=text, default=p.default, update=changed
+        )
     if p.kind == "color":
-        return bpy.props.FloatVectorProperty(name=p.name, description=text, default=p.default, size=3,
-                                             subtype="COLOR", min=0.0, update=changed)
+        return bpy.props.FloatVectorProperty(
+            name=p.name,
+            description=text,
+            default=p.default,
+            size=3,
+            subtype="COLOR",
+            min=0.0,
+            update=changed,
+        )
     if p.kind == "choice":
-        return bpy.props.EnumProperty(name=p.name, description=text, items=[(c, c, "") for c in p.choices],
-                                      default=p.default, update=changed)
+        return bpy.props.EnumProperty(
+            name=p.name,
+            description=text,
+            items=[(c, c, "") for c in p.choices],
+            default=p.default,
+            update=changed,
+        )
     raise AssertionError(f"no Blender property for parameter kind {p.kind}")
 
 
@@ -69,21 +89,30 @@ ON_CHANGE: list = []
 
 
 def changed(self, context):
-    """A style setting changed: tell the listeners (restyling from the recorded buffer, if there is one)."""
+    """A style setting changed: tell the listeners (restyling from the recorded buffer, if there
+    is one)."""
     for listener in ON_CHANGE:
         listener(context)
 
 
 def _annotations() -> dict:
-    return {key(n, p.name): blender_property(p) for n in registry.names() for p in registry.get(n).params}
+    return {
+        key(n, p.name): blender_property(p)
+        for n in registry.names()
+        for p in registry.get(n).params
+    }
 
 
-StyleParams = type("StyleParams", (bpy.types.PropertyGroup,), {"__annotations__": _annotations(),
-                                                                "__doc__": "Every registered style's parameters"})
+StyleParams = type(
+    "StyleParams",
+    (bpy.types.PropertyGroup,),
+    {"__annotations__": _annotations(), "__doc__": "Every registered style's parameters"},
+)
 
 
 def params_of(style: str, params) -> dict:
-    """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba properties take."""
+    """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba
+    properties take."""
     out = {}
     for p in registry.get(style).params:
         v = getattr(params, key(style, p.name))
@@ -100,50 +129,89 @@ def _enum(names):
 class SceneSettings(bpy.types.PropertyGroup):
     """The render settings of the styletrace engine (the `stylized` integrator's properties)."""
 
-    style: bpy.props.EnumProperty(name="Style", items=style_items(), default="identity", update=changed)
+    style: bpy.props.EnumProperty(
+        name="Style", items=style_items(), default="identity", update=changed
+    )
     params: bpy.props.PointerProperty(type=StyleParams)
     inner_samples: bpy.props.StringProperty(
-        name="Inner samples", default="", update=changed,
-        description="n: child estimates per stylized vertex ('8', '8,4' per level, '4:64' adaptive); "
-                    "empty: the style's default")
-    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimator_registry.names()), default="direct",
-                                      update=changed)
-    stylize: bpy.props.EnumProperty(name="Stylize", items=_enum(S.STYLIZE_MODES), default="first_hit")
-    stylize_depth: bpy.props.IntProperty(name="Stylize depth", default=1, min=1, max=S.MAX_STYLIZE_DEPTH)
-    lines: bpy.props.BoolProperty(name="Lines", default=False,
-                                  description="physically based feature lines; adds a line mask pass")
+        name="Inner samples",
+        default="",
+        update=changed,
+        description="n: child estimates per stylized vertex ('8', '8,4' per level, '4:64' "
+        "adaptive); empty: the style's default",
+    )
+    estimator: bpy.props.EnumProperty(
+        name="Estimator", items=_enum(estimator_registry.names()), default="direct", update=changed
+    )
+    stylize: bpy.props.EnumProperty(
+        name="Stylize", items=_enum(S.STYLIZE_MODES), default="first_hit"
+    )
+    stylize_depth: bpy.props.IntProperty(
+        name="Stylize depth", default=1, min=1, max=S.MAX_STYLIZE_DEPTH
+    )
+    lines: bpy.props.BoolProperty(
+        name="Lines",
+        default=False,
+        description="physically based feature lines; adds a line mask pass",
+    )
     line_mode: bpy.props.EnumProperty(
-        name="Line mode", items=_enum(S.LINE_MODES), default="absorb",
-        description="absorb: West 2021's cone along the path; lifted: LLaT's conditional lifting, one auxiliary "
-                    "path pair per line type, lines that keep their screen width in mirrors and glass")
+        name="Line mode",
+        items=_enum(S.LINE_MODES),
+        default="absorb",
+        description="absorb: West 2021's cone along the path; lifted: LLaT's conditional lifting, "
+        "one auxiliary path pair per line type, lines that keep their screen width in mirrors and "
+        "glass",
+    )
     line_types: bpy.props.StringProperty(
-        name="Line types", default="",
-        description="lifted mode: the line dictionary in priority order, e.g. 'shape_id color=1,0,0; depth "
-                    "threshold=0.05; normal threshold=0.5'; empty: styletrace's default")
+        name="Line types",
+        default="",
+        description="lifted mode: the line dictionary in priority order, e.g. 'shape_id "
+        "color=1,0,0; depth threshold=0.05; normal threshold=0.5'; empty: styletrace's default",
+    )
     reuse: bpy.props.EnumProperty(name="Reuse", items=_enum(S.REUSE_MODES), default="off")
-    spp: bpy.props.IntProperty(name="Samples", default=16, min=1, description="camera samples per pixel")
+    spp: bpy.props.IntProperty(
+        name="Samples", default=16, min=1, description="camera samples per pixel"
+    )
     pass_spp: bpy.props.IntProperty(
-        name="Samples per pass", default=4, min=1,
-        description="camera samples per pixel in one pass: cancel and progress act between passes; the same "
-                    "seed and split give the same image (`styletrace render --pass-spp`)")
+        name="Samples per pass",
+        default=4,
+        min=1,
+        description="camera samples per pixel in one pass: cancel and progress act between passes; "
+        "the same seed and split give the same image (`styletrace render --pass-spp`)",
+    )
     max_depth: bpy.props.IntProperty(name="Max depth", default=-1, min=-1)
     seed: bpy.props.IntProperty(name="Seed", default=0, min=0)
     aovs: bpy.props.BoolProperty(name="Error passes", default=True,
                                  description="variance, bias and children render passes")
     record_buffer: bpy.props.BoolProperty(
-        name="Record buffer", default=False,
-        description="keep the look-development buffer of the last render; style changes then restyle it")
+        name="Record buffer",
+        default=False,
+        description="keep the look-development buffer of the last render; style changes then "
+                    "restyle it",
+    )
     denoise: bpy.props.EnumProperty(
-        name="Denoise", default=default_method(),
-        items=[("auto", "Auto", "expectation for a style of several children where it applies, else image, else "
-                                "off with a warning; with the firefly control: every front end's default "
-                                "(docs/look.md)"),
-               ("off", "Off", "no denoising: the paper's estimators exactly"),
-               ("expectation", "Expectation", "denoise the expectation at the stylized vertex, then apply the "
-                                              "style: step styles stay free of band flips (docs/denoise.md)"),
-               ("image", "Image", "denoise the final image, as an ordinary renderer does")],
-        description="OIDN with albedo and normal guides (the 'denoise' extra); error passes are off while it is on, "
-                    "and a Noisy pass keeps the image before denoising")
+        name="Denoise",
+        default=default_method(),
+        items=[
+            (
+                "auto",
+                "Auto",
+                "expectation for a style of several children where it applies, else image, else "
+                "off with a warning; with the firefly control: every front end's default "
+                "(docs/look.md)",
+            ),
+            ("off", "Off", "no denoising: the paper's estimators exactly"),
+            (
+                "expectation",
+                "Expectation",
+                "denoise the expectation at the stylized vertex, then apply the "
+                "style: step styles stay free of band flips (docs/denoise.md)",
+            ),
+            ("image", "Image", "denoise the final image, as an ordinary renderer does"),
+        ],
+        description="OIDN with albedo and normal guides (the 'denoise' extra); error passes are "
+        "off while it is on, and a Noisy pass keeps the image before denoising",
+    )
     denoise_quality: bpy.props.EnumProperty(name="Denoise quality", items=_enum(QUALITIES),
                                             default="high")
     firefly: bpy.props.EnumProperty(
@@ -152,8 +220,12 @@ class SceneSettings(bpy.types.PropertyGroup):
                ("off", "Off", "the paper's estimator: every child as it is"),
                ("on", "On", "cap the brightest child at k times the others' mean brightness")],
         description="the firefly control at the stylized vertex (`firefly`)")
-    firefly_k: bpy.props.FloatProperty(name="Firefly k", default=4.0, min=1.0,
-                                       description="the cap, in units of the other children's mean brightness")
+    firefly_k: bpy.props.FloatProperty(
+        name="Firefly k",
+        default=4.0,
+        min=1.0,
+        description="the cap, in units of the other children's mean brightness",
+    )
 
 
 class MaterialSettings(bpy.types.PropertyGroup):
@@ -163,7 +235,9 @@ class MaterialSettings(bpy.types.PropertyGroup):
     style: bpy.props.EnumProperty(name="Style", items=style_items(), default="cel", update=changed)
     params: bpy.props.PointerProperty(type=StyleParams)
     inner_samples: bpy.props.StringProperty(name="Inner samples", default="", update=changed)
-    estimator: bpy.props.EnumProperty(name="Estimator", items=_enum(estimator_registry.names()), default="direct")
+    estimator: bpy.props.EnumProperty(
+        name="Estimator", items=_enum(estimator_registry.names()), default="direct"
+    )
 
 
 def style_values(settings) -> dict:

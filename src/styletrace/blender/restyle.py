@@ -1,10 +1,12 @@
-"""Restyle inside Blender: the last render's look-development buffer, re-evaluated when a style setting changes.
+"""Restyle inside Blender: the last render's look-development buffer, re-evaluated when a style
+setting changes.
 
-With "Record buffer" on, F12 records the buffer (`styletrace.lookdev`: per camera sample, everything the image
-depends on except the style's parameters). A later change of the render style or its parameters restyles the
-buffer (milliseconds for small images) into the image datablock `IMAGE`, which an Image Editor shows. A
-refused value is a one-line error report of the `styletrace.restyle` operator; a change made through a
-property's update callback prints that line and keeps the previous image.
+With "Record buffer" on, F12 records the buffer (`styletrace.lookdev`: per camera sample, everything
+the image depends on except the style's parameters). A later change of the render style or its
+parameters restyles the buffer (milliseconds for small images) into the image datablock `IMAGE`,
+which an Image Editor shows. A refused value is a one-line error report of the `styletrace.restyle`
+operator; a change made through a property's update callback prints that line and keeps the
+previous image.
 """
 from __future__ import annotations
 
@@ -26,7 +28,8 @@ def forget():
 
 
 def keep(buf):
-    """Keep `buf` for restyles (F12 with Record buffer: its recorded buffer, the denoised one with Denoise 'expectation')."""
+    """Keep `buf` for restyles (F12 with Record buffer: its recorded buffer, the denoised one with
+    Denoise 'expectation')."""
     _state["buffer"] = buf
 
 
@@ -39,7 +42,8 @@ def last_seconds():
 
 
 def run(settings) -> np.ndarray:
-    """Restyle the recorded buffer with the render settings' style; writes and returns the image (H x W x 3)."""
+    """Restyle the recorded buffer with the render settings' style; writes and returns the image (H
+    x W x 3)."""
     from styletrace.lookdev.restyle import restyle as lookdev_restyle
     buf = _state["buffer"]
     if buf is None:
@@ -69,7 +73,8 @@ def _write(img: np.ndarray) -> None:
 
 
 def on_change(context) -> None:
-    """A style setting changed: restyle if a buffer is kept (errors are reported by the operator)."""
+    """A style setting changed: restyle if a buffer is kept (errors are reported by the
+    operator)."""
     scene = getattr(context, "scene", None)
     if _state["buffer"] is None or scene is None or not scene.styletrace.record_buffer:
         return

@@ -1,15 +1,18 @@
-"""Blender light units -> Mitsuba emitter parameters, so that watts in Blender give the radiance Cycles renders.
+"""Blender light units -> Mitsuba emitter parameters, so that watts in Blender give the radiance
+Cycles renders.
 
 Derivations (docs/blender.md, "Light units"; checked against Cycles by tests/blender/test_units.py):
 
-- point and spot, power P [W]: Cycles spreads P over the whole sphere whatever the cone, so the radiant
-  intensity is I = P / (4 pi) W/sr (Mitsuba `point`/`spot` `intensity`).
-- sun, strength S [W/m^2]: the irradiance on a surface facing the sun (Mitsuba `directional` `irradiance`).
-- area, power P [W] over area A [m^2], emitting on one side with a cosine lobe: P = pi A L, so the radiance is
-  L = P / (pi A) (Mitsuba `area` `radiance` on a rectangle or disk).
+- point and spot, power P [W]: Cycles spreads P over the whole sphere whatever the cone, so the
+  radiant intensity is I = P / (4 pi) W/sr (Mitsuba `point`/`spot` `intensity`).
+- sun, strength S [W/m^2]: the irradiance on a surface facing the sun (Mitsuba `directional`
+  `irradiance`).
+- area, power P [W] over area A [m^2], emitting on one side with a cosine lobe: P = pi A L, so the
+  radiance is L = P / (pi A) (Mitsuba `area` `radiance` on a rectangle or disk).
 - emission shaders on meshes and the world background: their strength is already radiance.
 
-Each conversion is one function, so that a test can break one on purpose and see the Cycles comparison fail.
+Each conversion is one function, so that a test can break one on purpose and see the Cycles
+comparison fail.
 """
 from __future__ import annotations
 

@@ -1,11 +1,12 @@
 """The Blender world -> a Mitsuba environment emitter.
 
-A Background node gives a `constant` emitter of colour x strength; an Environment Texture behind it an `envmap`
-of the image scaled by the strength. Cycles reads its equirectangular map (+Z up, the image's centre column
-looking along +X) at u = 1/2 - atan2(d_y, d_x) / 2 pi, v = 1/2 + asin(d_z) / pi; Mitsuba's envmap at
-u = atan2(l_x, -l_z) / 2 pi, v = acos(l_y) / pi (v from the top row) in its local frame l. Equal u and v need
-l = (d_y, d_z, d_x), so to_world (d = M l) is the rotation ENV_TO_WORLD (checked against Cycles:
-tests/blender/test_cycles.py, the textured plane's sky and lighting).
+A Background node gives a `constant` emitter of colour x strength; an Environment Texture behind it
+an `envmap` of the image scaled by the strength. Cycles reads its equirectangular map (+Z up, the
+image's centre column looking along +X) at u = 1/2 - atan2(d_y, d_x) / 2 pi, v = 1/2 + asin(d_z) /
+pi; Mitsuba's envmap at u = atan2(l_x, -l_z) / 2 pi, v = acos(l_y) / pi (v from the top row) in its
+local frame l. Equal u and v need l = (d_y, d_z, d_x), so to_world (d = M l) is the rotation
+ENV_TO_WORLD (checked against Cycles: tests/blender/test_cycles.py, the textured plane's sky
+and lighting).
 """
 from __future__ import annotations
 
@@ -13,14 +14,16 @@ import numpy as np
 
 from styletrace.blender.materials import Context, image_array
 
-ENV_TO_WORLD = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+ENV_TO_WORLD = np.array(
+    [[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+)
 
 
 def latitudes(rows: np.ndarray) -> np.ndarray:
-    """The map's rows resampled for Mitsuba: Cycles puts row i (of h, top first) at v = (i + 1/2) / h and
-    interpolates linearly between rows; Mitsuba's envmap puts row k (of h') at v = k / (h' - 1). Rows at
-    v = j / 2h, j = 0 .. 2h (the rows themselves and the midpoints between them, the poles clamped) give Mitsuba's
-    linear interpolation Cycles' curve exactly."""
+    """The map's rows resampled for Mitsuba: Cycles puts row i (of h, top first) at v = (i + 1/2) /
+    h and interpolates linearly between rows; Mitsuba's envmap puts row k (of h') at v = k / (h' -
+    1). Rows at v = j / 2h, j = 0 .. 2h (the rows themselves and the midpoints between them, the
+    poles clamped) give Mitsuba's linear interpolation Cycles' curve exactly."""
     h = rows.shape[0]
     out = np.empty((2 * h + 1, *rows.shape[1:]), dtype=np.float32)
     out[1::2] = rows
@@ -49,8 +52,12 @@ def convert(world, ctx: Context) -> dict | None:
     if col.is_linked:
         src = col.links[0].from_node
         if src.bl_idname == "ShaderNodeTexEnvironment" and src.image is not None:
-            return {"type": "envmap", "data": latitudes(image_array(src.image, ctx)), "scale": strength,
-                    "to_world": ENV_TO_WORLD}
+            return {
+                "type": "envmap",
+                "data": latitudes(image_array(src.image, ctx)),
+                "scale": strength,
+                "to_world": ENV_TO_WORLD,
+            }
         ctx.unsupported.setdefault(src.bl_idname, []).append(f"world {world.name}")
         return None
     c = tuple(float(v) * strength for v in col.default_value[:3])

@@ -1,9 +1,9 @@
-"""A scene description (`exporter`) -> a Mitsuba 3 XML file that `styletrace render` accepts, with each mesh in a
-PLY file and each image in an EXR file in a folder next to it (`<name>_files/`).
+"""A scene description (`exporter`) -> a Mitsuba 3 XML file that `styletrace render` accepts, with
+each mesh in a PLY file and each image in an EXR file in a folder next to it (`<name>_files/`).
 
-Meshes are written with `mi.Mesh.write_ply` from the same in-memory mesh F12 renders, and images as float32
-EXR, so the file renders the same scene; with the same seed and pass split the images are equal
-(tests/blender/test_xml.py).
+Meshes are written with `mi.Mesh.write_ply` from the same in-memory mesh F12 renders, and images as
+float32 EXR, so the file renders the same scene; with the same seed and pass split the images are
+equal (tests/blender/test_xml.py).
 """
 from __future__ import annotations
 
@@ -13,11 +13,27 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-TAGS = {"perspective": "sensor", "orthographic": "sensor", "thinlens": "sensor",
-        "point": "emitter", "spot": "emitter", "directional": "emitter", "area": "emitter", "constant": "emitter",
-        "envmap": "emitter", "rectangle": "shape", "disk": "shape", "blender_mesh": "shape", "instance": "shape",
-        "shapegroup": "shape", "bitmap": "texture", "hdrfilm": "film", "box": "rfilter", "independent": "sampler",
-        "stylized": "integrator"}
+TAGS = {
+    "perspective": "sensor",
+    "orthographic": "sensor",
+    "thinlens": "sensor",
+    "point": "emitter",
+    "spot": "emitter",
+    "directional": "emitter",
+    "area": "emitter",
+    "constant": "emitter",
+    "envmap": "emitter",
+    "rectangle": "shape",
+    "disk": "shape",
+    "blender_mesh": "shape",
+    "instance": "shape",
+    "shapegroup": "shape",
+    "bitmap": "texture",
+    "hdrfilm": "film",
+    "box": "rfilter",
+    "independent": "sampler",
+    "stylized": "integrator",
+}
 POINTS = {"position"}
 VECTORS = {"direction"}
 
@@ -99,9 +115,12 @@ class Writer:
         mi.Bitmap(np.ascontiguousarray(data, dtype=np.float32)).write(path)
 
     def write(self, desc: dict, integrator: dict | None) -> str:
-        self.lines = ['<?xml version="1.0" encoding="utf-8"?>',
-                      "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace render` -->",
-                      '<scene version="3.0.0">']
+        self.lines = [
+            '<?xml version="1.0" encoding="utf-8"?>',
+            "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace "
+            "render` -->",
+            '<scene version="3.0.0">',
+        ]
         if integrator is not None:
             self._object({"type": "stylized", **integrator}, 1)
         for key, value in desc.items():
@@ -117,5 +136,6 @@ class Writer:
 
 
 def write(desc: dict, path: str, integrator: dict | None = None) -> str:
-    """Write `desc` (with the `stylized` integrator's properties `integrator`) to the XML file `path`."""
+    """Write `desc` (with the `stylized` integrator's properties `integrator`) to the XML
+    file `path`."""
     return Writer(path).write(desc, integrator)

@@ -1,23 +1,25 @@
 """Coverage points: where g is evaluated once E[L] is denoised, apart from where E[L] was estimated.
 
-    cov = points(scene, integrator, k=16, seed=0)   # a Buffer of k first hits per pixel, no children traced
+    # a Buffer of k first hits per pixel, no children traced
+    cov = points(scene, integrator, k=16, seed=0)
 
-With the expectation denoised, the value of a pixel is the integral over its footprint of g(D(x)), and the
-camera samples with children are only one way of placing the points x. They are an expensive one: each
-carries n child paths. A coverage point is a camera ray to its first hit and nothing more (the stylized
-vertex, its style slot, the radiance before it: the same kernel as a render, `record`), so many can be
-spent per pixel for the cost of a few children, and they are stratified: k = m x m points, one jittered point
-in each cell of an m x m grid over the pixel.
+With the expectation denoised, the value of a pixel is the integral over its footprint of g(D(x)),
+and the camera samples with children are only one way of placing the points x. They are an expensive
+one: each carries n child paths. A coverage point is a camera ray to its first hit and nothing more
+(the stylized vertex, its style slot, the radiance before it: the same kernel as a render,
+`record`), so many can be spent per pixel for the cost of a few children, and they are stratified:
+k = m x m points, one jittered point in each cell of an m x m grid over the pixel.
 
-Why: a step style's pixel near a band boundary, and hatching's screen-space line pattern in every pixel, is
-a fraction of the footprint. At s independent points per pixel that fraction has variance p (1 - p) / s; on an
-m x m jittered grid it falls as s^-3/2 for a boundary that is a smooth curve. Measured on the Cornell box
-(BENCHMARKS.md, denoise): with D nearly noise-free, hatching's error at 32 camera samples per pixel was
-mostly this sampling of the pattern.
+Why: a step style's pixel near a band boundary, and hatching's screen-space line pattern in every
+pixel, is a fraction of the footprint. At s independent points per pixel that fraction has variance
+p (1 - p) / s; on an m x m jittered grid it falls as s^-3/2 for a boundary that is a smooth curve.
+Measured on the Cornell box (BENCHMARKS.md, denoise): with D nearly noise-free, hatching's error at
+32 camera samples per pixel was mostly this sampling of the pattern.
 
-Parameters: `k` points per pixel, a square (1, 4, 9, 16, ...), or "auto" (the default of `render`: `DEFAULT_K`,
-64, fewer where the image would not fit the buffer's cap); 0 evaluates g at the camera samples instead; `seed`
-the render's seed (the points' stream is `COVERAGE_PASS` passes away from the render's own).
+Parameters: `k` points per pixel, a square (1, 4, 9, 16, ...), or "auto" (the default of `render`:
+`DEFAULT_K`, 64, fewer where the image would not fit the buffer's cap); 0 evaluates g at the camera
+samples instead; `seed` the render's seed (the points' stream is `COVERAGE_PASS` passes away from
+the render's own).
 """
 from __future__ import annotations
 
@@ -32,8 +34,8 @@ from styletrace.lookdev.record import RecordingIntegrator, record
 from styletrace.lookdev.restyle import finish_spread
 from styletrace.pipeline.passes import pass_seed
 
-#: points per pixel of coverage="auto" (chosen on the Cornell box, BENCHMARKS.md denoise), less where the
-#: image is so large that they would not fit the buffer's cap
+#: points per pixel of coverage="auto" (chosen on the Cornell box, BENCHMARKS.md denoise), less
+#: where the image is so large that they would not fit the buffer's cap
 DEFAULT_K = 64
 AUTO = "auto"
 #: the pass index whose seed the coverage points use: far from any render's own passes
@@ -41,29 +43,35 @@ COVERAGE_PASS = 1 << 30
 
 
 def check_k(k) -> int | str:
-    """k as an int, "auto", or a one-line UsageError: "auto", 0 (g at the camera samples) or a square >= 1."""
+    """k as an int, "auto", or a one-line UsageError: "auto", 0 (g at the camera samples) or a
+    square >= 1."""
     if k == AUTO:
         return AUTO
     value = k if isinstance(k, int) and not isinstance(k, bool) else None
     if isinstance(k, str) and k.strip().isdigit():
         value = int(k)
     if value is None or value < 0 or (value and math.isqrt(value) ** 2 != value):
-        raise UsageError(f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a square "
-                         f"number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)")
+        raise UsageError(
+            f"bad value {k!r} for coverage: expected 'auto', 0 (g at the camera samples) or a "
+            "square number of points per pixel (1, 4, 9, 16, 25, 36, 49, 64, ...)"
+        )
     return value
 
 
 def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int:
-    """The points per pixel of a render: "auto" is DEFAULT_K, or the largest square whose points fit the
-    buffer's cap (0 where not even one does); a number given must fit the cap (one-line UsageError)."""
+    """The points per pixel of a render: "auto" is DEFAULT_K, or the largest square whose points fit
+    the buffer's cap (0 where not even one does); a number given must fit the cap (one-line
+    UsageError)."""
     k = check_k(k)
     pixels = max(1, width * height)
     if k == AUTO:
         return min(DEFAULT_K, math.isqrt(max_samples // pixels) ** 2)
     if k * pixels > max_samples:
-        raise UsageError(f"bad value {k} for coverage: {width}x{height} at {k} points per pixel is {k * pixels} "
-                         f"points, over the buffer's cap of {max_samples}; use at most "
-                         f"{math.isqrt(max_samples // pixels) ** 2} or 'auto'")
+        raise UsageError(
+            f"bad value {k} for coverage: {width}x{height} at {k} points per pixel is {k * pixels} "
+            f"points, over the buffer's cap of {max_samples}; use at most "
+            f"{math.isqrt(max_samples // pixels) ** 2} or 'auto'"
+        )
     return k
 
 
@@ -79,10 +87,11 @@ class CoverageIntegrator(RecordingIntegrator):
     def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0), scale: int = 1):
         super().__init__(base)
         self.k, self.m, self.field = k, math.isqrt(k), field
-        #: the film's crop offset: a tile's (`pipeline.passes`) lies at its crop offset minus this in D
+        #: the film's crop offset: a tile's (`pipeline.passes`) lies at its crop offset minus this
+        #: in D
         self.origin = mi.ScalarVector2f(origin)
-        #: D's pixels per film pixel along each axis (1; more for a D below the pixel, benchmarks/denoise_subpixel.py);
-        #: the spread stays per film pixel
+        #: D's pixels per film pixel along each axis (1; more for a D below the pixel,
+        #: benchmarks/denoise_subpixel.py); the spread stays per film pixel
         self.scale = int(scale)
         self.width = field.w // self.scale
         self._at = None
@@ -103,10 +112,14 @@ class CoverageIntegrator(RecordingIntegrator):
         pos = mi.Point2f(px + (cx + jitter.x) / self.m, py + (cy + jitter.y) / self.m)
         wavelength = sampler.next_1d()
         aperture = sampler.next_2d()
-        # the sensor's position sample spans the crop window (as SamplingIntegrator::render_sample makes it)
-        placed, _ = sensor.sample_ray_differential(mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture)
+        # the sensor's position sample spans the crop window (as SamplingIntegrator::render_sample
+        # makes it)
+        placed, _ = sensor.sample_ray_differential(
+            mi.Float(0.0), wavelength, pos / mi.ScalarVector2f(cw, ch), aperture
+        )
         on_film = mi.Point2f(pos + off)  # the point's film position: the restyle splats it there
-        shift = off - self.origin  # (0, 0) but in a tile: D, its guides and spread are the whole film's
+        # (0, 0) but in a tile: D, its guides and spread are the whole film's
+        shift = off - self.origin
         pos = pos + shift
         # a border point looks D up from the nearest pixel of the crop
         px, py = dr.clip(px, 0, cw - 1), dr.clip(py, 0, ch - 1)
@@ -121,42 +134,61 @@ class CoverageIntegrator(RecordingIntegrator):
         return out
 
     def finish_mean(self, slot, m, v):
-        """g averaged over D's uncertainty at the point's pixel where the field has one (`restyle.finish_spread`)."""
+        """g averaged over D's uncertainty at the point's pixel where the field has one
+        (`restyle.finish_spread`)."""
         if self.field.spread is None:
             return super().finish_mean(slot, m, v)
         _, pixel, _ = self._at
         return finish_spread(slot, m, v, dr.gather(mi.Float, self.field.spread, pixel))
 
     def _mean(self, slot, level, sampler, site, active) -> mi.Color3f:
-        """D at the vertex in place of the children's mean (one lookup per camera ray, whatever the slot)."""
+        """D at the vertex in place of the children's mean (one lookup per camera ray, whatever
+        the slot)."""
         pos, pixel, value = self._at
         scene, si = self.walk_config.scene, site.si
         if value is None:
             valid = si.is_valid()
             albedo, _ = guides.through_delta(scene, si, valid)
-            emission = (mi.Color3f(si.emitter(scene, valid).eval(si, valid)) if self.field.emission_apart
-                        else mi.Color3f(0.0))
+            emission = (
+                mi.Color3f(si.emitter(scene, valid).eval(si, valid))
+                if self.field.emission_apart
+                else mi.Color3f(0.0)
+            )
             at, own = pos, pixel
             if self.scale != 1:  # D's own pixel of the point
                 at = pos * self.scale
                 own = mi.UInt32(dr.floor(at.y)) * self.field.w + mi.UInt32(dr.floor(at.x))
-            value = self.field.at(at.x, at.y, si.p, mi.Vector3f(si.sh_frame.n), own, albedo, emission, valid)
+            value = self.field.at(
+                at.x, at.y, si.p, mi.Vector3f(si.sh_frame.n), own, albedo, emission, valid
+            )
             self._at = (pos, pixel, value)
         return value
 
 
-def points(scene: mi.Scene, integrator: StylizedIntegrator, field, k: int = DEFAULT_K, seed: int = 0,
-           scale: int = 1) -> Buffer:
-    """The denoised render at k stratified points per pixel: a Buffer whose means are D at each point (pixel,
-    slot, vertex, L_before as a render's), `buf.image` its image (the render loop's: with a filter other
-    than a box `expectation.attach` replaces it by the buffer's restyle, which splats each point at its
-    own position). `scale`: D's pixels per film pixel (1)."""
+def points(
+    scene: mi.Scene,
+    integrator: StylizedIntegrator,
+    field,
+    k: int = DEFAULT_K,
+    seed: int = 0,
+    scale: int = 1,
+) -> Buffer:
+    """The denoised render at k stratified points per pixel: a Buffer whose means are D at each
+    point (pixel, slot, vertex, L_before as a render's), `buf.image` its image (the render loop's:
+    with a filter other than a box `expectation.attach` replaces it by the buffer's restyle, which
+    splats each point at its own position). `scale`: D's pixels per film pixel (1)."""
     if not isinstance(k, int) or k < 1:
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None
     origin = tuple(int(v) for v in scene.sensors()[0].film().crop_offset())
-    for prog, buf in record(scene, integrator, k, pass_seed(seed, COVERAGE_PASS), pass_spp=k,
-                            recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin, scale)):
+    for prog, buf in record(
+        scene,
+        integrator,
+        k,
+        pass_seed(seed, COVERAGE_PASS),
+        pass_spp=k,
+        recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin, scale),
+    ):
         buf.image = prog.image
     return buf
 

@@ -1,19 +1,21 @@
-"""What a render does at defaults: denoise where it can, with the firefly control and the sample budget.
+"""What a render does at defaults: denoise where it can, with the firefly control and the
+sample budget.
 
     plan = choose(resolved, method="auto", local=True)
-    plan.method, plan.resolved, plan.note          # "expectation" | "image" | "off", the pinned job, why not
+    # "expectation" | "image" | "off", the pinned job, why not
+    plan.method, plan.resolved, plan.note
 
-`auto` (the default of every front end, `denoise.default_method`) is `expectation` for a style of more than
-one child where the expectation denoiser applies (`expectation.check`; the `denoise` extra installed; an rgb
-film; one process); `image` for the rest that the image denoiser takes (an affine or closed-form style, where
-both are the same, a per-sample style, first_n_hits, first_object_hit); and `off` elsewhere (feature lines,
-which an image denoiser blurs; Ray), with a one-line note saying why. A render that denoises also gets,
-unless the caller set them:
+`auto` (the default of every front end, `denoise.default_method`) is `expectation` for a style of
+more than one child where the expectation denoiser applies (`expectation.check`; the `denoise` extra
+installed; an rgb film; one process); `image` for the rest that the image denoiser takes (an affine
+or closed-form style, where both are the same, a per-sample style, first_n_hits, first_object_hit);
+and `off` elsewhere (feature lines, which an image denoiser blurs; Ray), with a one-line note saying
+why. A render that denoises also gets, unless the caller set them:
 - the firefly control of direct application (`firefly` = FIREFLY_K, its floor the scene's median
   brightness: `estimators.affine.MeanOfN`);
 - without a given spp, the scene's sample count S spent as camera samples times children:
-  spp = max(MIN_SPP, round(SPEND * S / n)) for n children per stylized vertex, about SPEND times the paths
-  of the physically based render at S spp, and at most what the buffer holds (docs/look.md).
+  spp = max(MIN_SPP, round(SPEND * S / n)) for n children per stylized vertex, about SPEND times the
+  paths of the physically based render at S spp, and at most what the buffer holds (docs/look.md).
 `off` is the paper's estimators exactly: no denoiser, no firefly control.
 """
 from __future__ import annotations
@@ -44,7 +46,8 @@ def check_method(method) -> str:
 
 
 def default_method() -> str:
-    """The default of `--denoise` / `denoise=` in every front end: $STYLETRACE_DENOISE, else auto."""
+    """The default of `--denoise` / `denoise=` in every front end: $STYLETRACE_DENOISE,
+    else auto."""
     value = os.environ.get(ENV, "").strip().lower() or "auto"
     if value not in METHODS:
         raise UsageError(f"bad value {value!r} for ${ENV}: expected one of {', '.join(METHODS)}")
@@ -59,12 +62,13 @@ class Plan:
 
 
 def why_not(scene, integrator, local: bool = True, method: str = "expectation") -> str:
-    """Why `method` (expectation or image) cannot denoise `integrator` on `scene` ('' where it can); `local`:
-    the render runs in one process."""
+    """Why `method` (expectation or image) cannot denoise `integrator` on `scene` ('' where it can);
+    `local`: the render runs in one process."""
     from styletrace.kernel.integrator import StylizedIntegrator
     from styletrace.scene.loading import film_format
     if not local:
-        return "the render runs on Ray or as several images; the denoiser needs the whole image in one process"
+        return ("the render runs on Ray or as several images; the denoiser needs the whole image "
+                "in one process")
     try:
         import pyoidn  # noqa: F401
     except ImportError:
@@ -84,8 +88,8 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
 
 
 def nonlinear(integrator) -> bool:
-    """Whether the first stylized level applies g to a mean of more than one child, so that denoising the
-    expectation before g differs from denoising the image after it."""
+    """Whether the first stylized level applies g to a mean of more than one child, so that
+    denoising the expectation before g differs from denoising the image after it."""
     from styletrace.kernel.integrator import StylizedIntegrator
     if not isinstance(integrator, StylizedIntegrator):
         return False
@@ -96,10 +100,11 @@ def nonlinear(integrator) -> bool:
 
 def method_for(scene, integrator, method: str | None = None, local: bool = True, samples: int = 0
                ) -> tuple[str, str]:
-    """(expectation | image | off, the one-line note where auto could not denoise, else ''). auto: expectation
-    for a style of more than one child where it applies; else image (an affine or closed-form style, a
-    per-sample style, where the expectation's denoiser refuses); else off. `samples`: the camera samples of a
-    given spp (width x height x spp), which the expectation's buffer must hold; 0 where spp is not given."""
+    """(expectation | image | off, the one-line note where auto could not denoise, else ''). auto:
+    expectation for a style of more than one child where it applies; else image (an affine or
+    closed-form style, a per-sample style, where the expectation's denoiser refuses); else off.
+    `samples`: the camera samples of a given spp (width x height x spp), which the expectation's
+    buffer must hold; 0 where spp is not given."""
     method = check_method(method or default_method())
     if method != "auto":
         return method, ""
@@ -128,9 +133,9 @@ def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
 
 
 def with_firefly(scene, integrator, method: str, pilot=None):
-    """(`integrator` with the firefly control a render of `method` gets at its default, the note naming the
-    values chosen): on where the render denoises, unless `firefly` was given or error AOVs (which describe the
-    paper's estimator) are on."""
+    """(`integrator` with the firefly control a render of `method` gets at its default, the note
+    naming the values chosen): on where the render denoises, unless `firefly` was given or error
+    AOVs (which describe the paper's estimator) are on."""
     from styletrace.scene.defaults import pin_firefly
     s = integrator.settings
     if method == "off" or s.firefly is not None or s.aovs:
@@ -139,7 +144,8 @@ def with_firefly(scene, integrator, method: str, pilot=None):
 
 
 def pin(resolved, method: str):
-    """`resolved` with the firefly control on and, without a given spp, the budget spent on children."""
+    """`resolved` with the firefly control on and, without a given spp, the budget spent on
+    children."""
     from styletrace.kernel.integrator import StylizedIntegrator
     integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
     if not isinstance(integrator, StylizedIntegrator):
@@ -158,5 +164,19 @@ def pin(resolved, method: str):
     return replace(resolved, integrator=integrator, spp=spp, auto="; ".join(a for a in auto if a))
 
 
-__all__ = ["METHODS", "ENV", "check_method", "default_method", "Plan", "choose", "method_for", "why_not",
-           "nonlinear", "with_firefly", "pin", "FIREFLY_K", "SPEND", "MIN_SPP"]
+__all__ = [
+    "METHODS",
+    "ENV",
+    "check_method",
+    "default_method",
+    "Plan",
+    "choose",
+    "method_for",
+    "why_not",
+    "nonlinear",
+    "with_firefly",
+    "pin",
+    "FIREFLY_K",
+    "SPEND",
+    "MIN_SPP",
+]

@@ -1,12 +1,14 @@
-"""The preview's draft pass, denoised: the 1-spp, n = 1 draft buffer gets a denoised expectation, so the
-restyles shown while the first full pass renders are clean instead of speckled (docs/preview.md).
+"""The preview's draft pass, denoised: the 1-spp, n = 1 draft buffer gets a denoised expectation, so
+the restyles shown while the first full pass renders are clean instead of speckled
+(docs/preview.md).
 
     denoised = draft(buf, scene, seed)     # True when the buffer now holds D, False without pyoidn
 
-Parameters: `quality` OIDN's filter quality, default "balanced" for the draft (interaction first: about half of
-"high"'s time, BENCHMARKS.md). Without the `denoise` extra the draft stays as it was (the preview must open on
-any install); the full passes are never denoised (they converge to the render the page's command line makes).
-The draft styles D at its own camera samples (`--coverage 0`): the page restyles this very buffer, in place.
+Parameters: `quality` OIDN's filter quality, default "balanced" for the draft (interaction first:
+about half of "high"'s time, BENCHMARKS.md). Without the `denoise` extra the draft stays as it was
+(the preview must open on any install); the full passes are never denoised (they converge to the
+render the page's command line makes). The draft styles D at its own camera samples (`--coverage
+0`): the page restyles this very buffer, in place.
 """
 from __future__ import annotations
 

@@ -2,28 +2,30 @@
 
     image, buf = render(scene, integrator, spp=16, seed=0, quality="high")
 
-Per camera sample the renderer records (as `lookdev.record` does for an expectation buffer) the stylized
-vertex, the radiance before it and the mean of its n children, the estimate of E[L] there. Per pixel the
-means of the camera samples that found a stylized vertex, less each one's own emission (`own_surface`), are
-averaged: the pixel's estimate of the reflected part of the expectation, M. M is denoised by OIDN with albedo
-and normal guides (`guides`, `oidn`), giving D, and every such camera sample then takes its own style slot's g
-of D interpolated at its own film position (`at_samples`: guided bilinear, so a threshold crossing is placed
-within the pixel; remodulated by its own albedo; its own emission added back) at its own vertex
-(hatching's lines and per-object styles stay per sample): value = g(D(sample), vertex); pixel = mean of its
-samples. D at the samples is kept in the buffer (`denoised_mean`, 3 x samples, in place of the children's
-means when restyling), so a restyle of the buffer (`lookdev.restyle`) styles D too, at the usual milliseconds.
+Per camera sample the renderer records (as `lookdev.record` does for an expectation buffer) the
+stylized vertex, the radiance before it and the mean of its n children, the estimate of E[L] there.
+Per pixel the means of the camera samples that found a stylized vertex, less each one's own emission
+(`own_surface`), are averaged: the pixel's estimate of the reflected part of the expectation, M. M
+is denoised by OIDN with albedo and normal guides (`guides`, `oidn`), giving D, and every such
+camera sample then takes its own style slot's g of D interpolated at its own film position
+(`at_samples`: guided bilinear, so a threshold crossing is placed within the pixel; remodulated by
+its own albedo; its own emission added back) at its own vertex (hatching's lines and per-object
+styles stay per sample): value = g(D(sample), vertex); pixel = mean of its samples. D at the samples
+is kept in the buffer (`denoised_mean`, 3 x samples, in place of the children's means when
+restyling), so a restyle of the buffer (`lookdev.restyle`) styles D too, at the usual milliseconds.
 
-Why before g: a step style (cel, hatching) turns the noise of M into band flips, which a denoiser of the
-final image sees as edges and keeps; the noise of M itself is the smooth Monte Carlo noise denoisers are
-trained on. The price is the denoiser's bias (docs/denoise.md).
+Why before g: a step style (cel, hatching) turns the noise of M into band flips, which a denoiser of
+the final image sees as edges and keeps; the noise of M itself is the smooth Monte Carlo noise
+denoisers are trained on. The price is the denoiser's bias (docs/denoise.md).
 
 Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `max_samples` the buffer's cap
 (`lookdev.buffer.MAX_SAMPLES`, 4,194,304 camera samples).
 
-Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the `direct` and
-`affine` estimators, fixed counts n. Refused, one line each (`check`): first_object_hit, first_n_hits /
-stylize_depth > 1, lines, reuse, adaptive counts, the unbiased estimators, the expansion pass, per-sample
-styles (acp), Ray (cluster=), films other than rgb (the buffer's own conditions).
+Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the `direct`
+and `affine` estimators, fixed counts n. Refused, one line each (`check`): first_object_hit,
+first_n_hits / stylize_depth > 1, lines, reuse, adaptive counts, the unbiased estimators, the
+expansion pass, per-sample styles (acp), Ray (cluster=), films other than rgb (the buffer's own
+conditions).
 
 Films with a reconstruction filter other than a box (`lookdev.film_filter`): M stays the mean of
 each pixel's own camera samples (its guides too: `guides.first_hit(footprint="pixel")`), D is
@@ -59,37 +61,50 @@ DENOISED = "denoised_mean"
 
 
 def check(integrator) -> None:
-    """Refuse, in one line, what the expectation denoiser does not support (see the module docstring)."""
+    """Refuse, in one line, what the expectation denoiser does not support (see the module
+    docstring)."""
     s = integrator.settings
     why = None
     if s.stylize == "first_object_hit":
-        why = ("stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where the "
-               "pixel's guides describe another surface; use first_hit or --denoise image")
+        why = (
+            "stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where "
+            "the pixel's guides describe another surface; use first_hit or --denoise image"
+        )
     elif s.stylize == "first_n_hits" or s.stylize_depth != 1:
-        why = ("stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the inner levels' "
-               "vertices are not the pixel's); use first_hit or --denoise image")
+        why = (
+            "stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the "
+            "inner levels' vertices are not the pixel's); use first_hit or --denoise image"
+        )
     elif s.lines is not None:
         why = "feature lines: lines replace radiance inside the estimate; use --denoise image"
     elif s.reuse != "off":
         why = f"reuse={s.reuse}: denoising and reuse both filter the expectation; use one"
     elif s.expansion_pass:
-        why = "expansion_pass: it serves the series estimators, which denoising replaces by direct application"
+        why = ("expansion_pass: it serves the series estimators, which denoising replaces by "
+               "direct application")
     elif s.slot.estimator not in RESTYLABLE_ESTIMATORS:
-        why = (f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct application; "
-               f"use direct or affine")
+        why = (
+            f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct "
+            "application; use direct or affine"
+        )
     elif S.adaptive(s.inner):
         why = "adaptive counts n0:n_max: give a fixed count (the denoiser does the averaging)"
     elif s.style.per_sample:
-        why = f"style '{s.style.name}': it applies g to every child, there is no expectation to denoise"
+        why = (f"style '{s.style.name}': it applies g to every child, there is no expectation to "
+               "denoise")
     if why is not None:
         raise UsageError(f"--denoise expectation cannot render {why}")
 
 
 def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
-    """M: per pixel, the mean of its camera samples' children means where a stylized vertex was found
-    (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each sample's own emitted
-    radiance is taken off first (M is then the reflected part alone)."""
-    return _moments(buf, reflected(buf, emission))[1].reshape(buf.height, buf.width, 3).astype(np.float32)
+    """M: per pixel, the mean of its camera samples' children means where a stylized vertex was
+    found (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each
+    sample's own emitted radiance is taken off first (M is then the reflected part alone)."""
+    return (
+        _moments(buf, reflected(buf, emission))[1]
+        .reshape(buf.height, buf.width, 3)
+        .astype(np.float32)
+    )
 
 
 def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
@@ -99,9 +114,10 @@ def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
 
 
 def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
-    """Per pixel, over its samples with a stylized vertex (or those of `found`) of `values` (N x C): (count,
-    mean, variance of the mean = (mean of squares - squared mean) / (count - 1)); mean 0 where a pixel has no
-    such sample, variance NaN below 2. Float64, flat over the pixels (H*W, and H*W x C)."""
+    """Per pixel, over its samples with a stylized vertex (or those of `found`) of `values` (N x C):
+    (count, mean, variance of the mean = (mean of squares - squared mean) / (count - 1)); mean 0
+    where a pixel has no such sample, variance NaN below 2. Float64, flat over the pixels (H*W, and
+    H*W x C)."""
     a = buf.arrays
     found = a["slot"] >= 0 if found is None else found
     if "own" in a:  # a filtered buffer: each pixel's own samples (not the border's, a neighbour's)
@@ -110,8 +126,12 @@ def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
     v = values[found]
-    s1 = np.stack([np.bincount(pix, weights=v[:, c], minlength=size) for c in range(v.shape[1])], -1)
-    s2 = np.stack([np.bincount(pix, weights=v[:, c] * v[:, c], minlength=size) for c in range(v.shape[1])], -1)
+    s1 = np.stack(
+        [np.bincount(pix, weights=v[:, c], minlength=size) for c in range(v.shape[1])], -1
+    )
+    s2 = np.stack(
+        [np.bincount(pix, weights=v[:, c] * v[:, c], minlength=size) for c in range(v.shape[1])], -1
+    )
     n = np.maximum(count, 1.0)[:, None]
     mean = s1 / n
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -121,34 +141,39 @@ def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
 
 
 def raster(scene, p: np.ndarray) -> np.ndarray:
-    """Each vertex's position on the film in pixels of the crop window (N x 2): where its camera ray left the
-    sensor, found by projecting the vertex (`Sensor.sample_direction`'s uv)."""
+    """Each vertex's position on the film in pixels of the crop window (N x 2): where its camera ray
+    left the sensor, found by projecting the vertex (`Sensor.sample_direction`'s uv)."""
     sensor = scene.sensors()[0]
     it = dr.zeros(mi.Interaction3f, p.shape[1])
     it.p = mi.Point3f(*(mi.Float(np.ascontiguousarray(p[i])) for i in range(3)))
     ds, _ = sensor.sample_direction(it, mi.Point2f(0.5, 0.5))
-    # uv is in pixels of the crop window already (tests/denoise/test_expectation.py measures it on a crop)
-    return np.stack([np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1)
+    # uv is in pixels of the crop window already (tests/denoise/test_expectation.py measures it on
+    # a crop)
+    return np.stack(
+        [np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1
+    )
 
 
 def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) -> np.ndarray:
-    """D at each camera sample's own film position (3 x N): bilinear between the four nearest pixel centres,
-    keeping only the pixels that show the sample's own surface (normal within ~18 degrees, the pixel's
-    first hit within ~6 degrees of the sample's tangent plane, albedo within 0.05), renormalised; the
-    sample's own pixel's D where none qualifies or the projection fails (a camera model without one).
+    """D at each camera sample's own film position (3 x N): bilinear between the four nearest pixel
+    centres, keeping only the pixels that show the sample's own surface (normal within ~18 degrees,
+    the pixel's first hit within ~6 degrees of the sample's tangent plane, albedo within 0.05),
+    renormalised; the sample's own pixel's D where none qualifies or the projection fails (a camera
+    model without one).
 
-    Why: at a cel threshold the reference's band boundary runs through pixels, and its camera samples fall
-    on either side of it; D constant per pixel puts the whole pixel on one side. Interpolating D at the
-    sample's position places the boundary to a fraction of a pixel (BENCHMARKS.md: ~18% lower MSE on the
-    Cornell box at n = 32; the choice was made there). The guide tests keep the interpolation from mixing
-    surfaces across geometric edges and texture edges.
+    Why: at a cel threshold the reference's band boundary runs through pixels, and its camera
+    samples fall on either side of it; D constant per pixel puts the whole pixel on one side.
+    Interpolating D at the sample's position places the boundary to a fraction of a pixel
+    (BENCHMARKS.md: ~18% lower MSE on the Cornell box at n = 32; the choice was made there). The
+    guide tests keep the interpolation from mixing surfaces across geometric edges and
+    texture edges.
 
-    `own`: (albedo, emission) at each sample's vertex (`own_surface`). D is the reflected part, M formed
-    without the emission (`attach`): each sample's own emission is added back after the interpolation and the
-    remodulation."""
+    `own`: (albedo, emission) at each sample's vertex (`own_surface`). D is the reflected part, M
+    formed without the emission (`attach`): each sample's own emission is added back after the
+    interpolation and the remodulation."""
     a = buf.arrays
     own_albedo, emission = own
-    w, h = buf.width, buf.height
+    w = buf.width
     pix = a["pixel"].astype(np.int64)
     px, py = pix % w, pix // w
     found = a["slot"] >= 0
@@ -168,48 +193,65 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     near = mi.Bool(np.ascontiguousarray(good))
     fx = dr.select(near, mi.Float(np.ascontiguousarray(uv[:, 0], np.float32)), 0.5)
     fy = dr.select(near, mi.Float(np.ascontiguousarray(uv[:, 1], np.float32)), 0.5)
-    # samples without a vertex keep their pixel's D as it is: no albedo (no remodulation), no emission
+    # samples without a vertex keep their pixel's D as it is: no albedo (no remodulation),
+    # no emission
     albedo = np.where(found[:, None], own_albedo, np.nan)
     emitted = np.where(found[:, None], emission, 0.0)
-    out = Field(d, g, diag).at(fx, fy, vec(a["p"], mi.Point3f), vec(a["n"], mi.Vector3f),
-                               mi.UInt32(np.ascontiguousarray(pix, np.uint32)), vec(albedo, mi.Color3f),
-                               vec(emitted, mi.Color3f), mi.Bool(True), near)
+    out = Field(d, g, diag).at(
+        fx,
+        fy,
+        vec(a["p"], mi.Point3f),
+        vec(a["n"], mi.Vector3f),
+        mi.UInt32(np.ascontiguousarray(pix, np.uint32)),
+        vec(albedo, mi.Color3f),
+        vec(emitted, mi.Color3f),
+        mi.Bool(True),
+        near,
+    )
     dr.eval(out)  # one kernel for the three channels
     return np.ascontiguousarray(np.stack([np.asarray(out[i], np.float32) for i in range(3)]))
 
 
 class Field:
-    """D and its guides as Dr.Jit arrays, for lookups inside a kernel (`lookup`, `at`): `at_samples` for the
-    camera samples, `coverage.CoverageIntegrator` for its points."""
+    """D and its guides as Dr.Jit arrays, for lookups inside a kernel (`lookup`, `at`): `at_samples`
+    for the camera samples, `coverage.CoverageIntegrator` for its points."""
 
     def __init__(self, d: np.ndarray, g: guides.Guides, diag: float):
-        #: whether D is the reflected part alone (`EMISSION_APART`): a lookup adds the vertex's own emission back
+        #: whether D is the reflected part alone (`EMISSION_APART`): a lookup adds the vertex's own
+        #: emission back
         self.emission_apart = EMISSION_APART
-        #: D's relative uncertainty per pixel (Dr.Jit Float, H x W) where the style is averaged over it, else None
+        #: D's relative uncertainty per pixel (Dr.Jit Float, H x W) where the style is averaged over
+        #: it, else None
         self.spread = None
 
         def image(a):
             return mi.Float(np.ascontiguousarray(a, np.float32).ravel())
         self.h, self.w = d.shape[:2]
         self.diag = float(diag)
-        self.D, self.A, self.NRM, self.POS = image(d), image(g.albedo), image(g.surface_normal), image(g.position)
+        self.D, self.A, self.NRM, self.POS = (
+            image(d),
+            image(g.albedo),
+            image(g.surface_normal),
+            image(g.position),
+        )
 
     @staticmethod
     def _get(img, idx, mask):
         return mi.Vector3f(dr.gather(mi.Vector3f, img, idx, mask))
 
     def lookup(self, fx, fy, ps, ns, pix, valid, near=None, albedo=None):
-        """Sums over the four pixel centres around film position (fx, fy) (pixels of the crop window) of a vertex
-        at ps with normal ns in pixel pix: (sum of w D, sum of w albedo, sum of w), w the bilinear weight where
-        the pixel shows the vertex's own surface (normal within ~18 degrees, the pixel's first hit within ~6
-        degrees of the vertex's tangent plane, albedo within 0.05 of the vertex's own `albedo`, or of pix's
-        where that is not given or not finite), 0 elsewhere. `valid` masks the lanes; `near` (default `valid`)
-        those whose film position can be trusted (w = 0 elsewhere).
+        """Sums over the four pixel centres around film position (fx, fy) (pixels of the crop
+        window) of a vertex at ps with normal ns in pixel pix: (sum of w D, sum of w albedo, sum of
+        w), w the bilinear weight where the pixel shows the vertex's own surface (normal within ~18
+        degrees, the pixel's first hit within ~6 degrees of the vertex's tangent plane, albedo
+        within 0.05 of the vertex's own `albedo`, or of pix's where that is not given or not
+        finite), 0 elsewhere. `valid` masks the lanes; `near` (default `valid`) those whose film
+        position can be trusted (w = 0 elsewhere).
 
-        Why the vertex's own albedo: pix's guide albedo is the mean over its camera samples, so on a silhouette
-        (an orange dragon over a white floor) it matched neither surface; every neighbour failed the test and
-        the vertex took pix's own D, a mix of both surfaces' light (measured: the Cornell box's MSE fell 6-7%,
-        the dragon's cel 13%, BENCHMARKS.md)."""
+        Why the vertex's own albedo: pix's guide albedo is the mean over its camera samples, so on a
+        silhouette (an orange dragon over a white floor) it matched neither surface; every neighbour
+        failed the test and the vertex took pix's own D, a mix of both surfaces' light (measured:
+        the Cornell box's MSE fell 6-7%, the dragon's cel 13%, BENCHMARKS.md)."""
         near = valid if near is None else near
         w, h, get = self.w, self.h, self._get
         fx, fy = fx - 0.5, fy - 0.5
@@ -223,7 +265,9 @@ class Field:
             for dx in (0, 1):
                 qx, qy = dr.clip(x0 + dx, 0, w - 1), dr.clip(y0 + dy, 0, h - 1)
                 q = mi.UInt32(qy * w + qx)
-                wt = dr.clip(1 - dr.abs(fx - mi.Float(x0 + dx)), 0, 1) * dr.clip(1 - dr.abs(fy - mi.Float(y0 + dy)), 0, 1)
+                wt = dr.clip(1 - dr.abs(fx - mi.Float(x0 + dx)), 0, 1) * dr.clip(
+                    1 - dr.abs(fy - mi.Float(y0 + dy)), 0, 1
+                )
                 gap = get(self.POS, q, valid) - ps
                 aq = get(self.A, q, valid)
                 same = dr.dot(get(self.NRM, q, valid), ns) > 0.95
@@ -236,15 +280,17 @@ class Field:
         return acc, acc_a, wsum
 
     def at(self, fx, fy, ps, ns, pix, own_albedo, emission, valid, near=None) -> mi.Color3f:
-        """D for one vertex inside a kernel (`at_samples`, `coverage.CoverageIntegrator`): interpolated (`lookup`;
-        the own pixel's D where no neighbour qualifies), remodulated, its own emission added.
+        """D for one vertex inside a kernel (`at_samples`, `coverage.CoverageIntegrator`):
+        interpolated (`lookup`; the own pixel's D where no neighbour qualifies), remodulated, its
+        own emission added.
 
-        Remodulated (`REMODULATE`): D x the vertex's own albedo / the albedo D was formed under (the guide albedo
-        with the same weights), per channel, where both are positive (a NaN albedo: left as it is). Why: a pixel
-        on a texture edge averages two albedos into its M, and so into D (E[L] of a diffuse surface is albedo x
-        irradiance); its samples on the dark side would take the bright side's share and the other way round.
-        The irradiance D / albedo varies slowly across the edge, so each sample takes its own albedo times it.
-        Where the albedos agree (no texture edge in the pixel) the factor is 1."""
+        Remodulated (`REMODULATE`): D x the vertex's own albedo / the albedo D was formed under (the
+        guide albedo with the same weights), per channel, where both are positive (a NaN albedo:
+        left as it is). Why: a pixel on a texture edge averages two albedos into its M, and so into
+        D (E[L] of a diffuse surface is albedo x irradiance); its samples on the dark side would
+        take the bright side's share and the other way round. The irradiance D / albedo varies
+        slowly across the edge, so each sample takes its own albedo times it. Where the albedos
+        agree (no texture edge in the pixel) the factor is 1."""
         acc, acc_a, wsum = self.lookup(fx, fy, ps, ns, pix, valid, near, own_albedo)
         some = wsum > 1e-6
         inv = dr.rcp(dr.maximum(wsum, 1e-12))
@@ -256,7 +302,8 @@ class Field:
         return mi.Color3f(out + emission)
 
 
-#: the lookup's same-surface test compares a neighbour's albedo with the vertex's own (`Field.lookup`)
+#: the lookup's same-surface test compares a neighbour's albedo with the vertex's own
+#: (`Field.lookup`)
 OWN_ALBEDO = True
 #: rescale D at each camera sample by its own albedo over the pixel's (`Field.at`)
 REMODULATE = True
@@ -265,29 +312,33 @@ EMISSION_APART = True
 
 
 def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
-    """(albedo, emission) at each camera sample's own vertex, N x 3 each, at the surface found by a ray from
-    just in front of the vertex (along wo) back onto it.
+    """(albedo, emission) at each camera sample's own vertex, N x 3 each, at the surface found by a
+    ray from just in front of the vertex (along wo) back onto it.
 
-    albedo: the albedo guide as `guides.first_hit` forms it (through mirrors and glass, `guides.through_delta`);
-    NaN where the ray does not find the vertex again (`Field.at` then leaves the sample as it is).
-    emission: the radiance the vertex emits towards wo (an area light's, 0 elsewhere and where not found).
-    E[L] at a vertex on a light includes its emission, which no guide tells apart from a coplanar surface of
-    the same albedo (the Cornell box's light in its ceiling): `attach` denoises the reflected part alone and
-    adds each sample's own emission back, so a ceiling sample next to the light does not take the light's."""
+    albedo: the albedo guide as `guides.first_hit` forms it (through mirrors and glass,
+    `guides.through_delta`); NaN where the ray does not find the vertex again (`Field.at` then
+    leaves the sample as it is). emission: the radiance the vertex emits towards wo (an area
+    light's, 0 elsewhere and where not found). E[L] at a vertex on a light includes its emission,
+    which no guide tells apart from a coplanar surface of the same albedo (the Cornell box's light
+    in its ceiling): `attach` denoises the reflected part alone and adds each sample's own emission
+    back, so a ceiling sample next to the light does not take the light's."""
     p = np.asarray(a["p"], np.float64)
     wo = np.asarray(a["wo"], np.float64)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
     eps = 1e-4 * max(diag, 1e-6)
     o = p + wo * eps
-    ray = mi.Ray3f(mi.Point3f(*(mi.Float(np.ascontiguousarray(o[i], np.float32)) for i in range(3))),
-                   mi.Vector3f(*(mi.Float(np.ascontiguousarray(-wo[i], np.float32)) for i in range(3))))
+    ray = mi.Ray3f(
+        mi.Point3f(*(mi.Float(np.ascontiguousarray(o[i], np.float32)) for i in range(3))),
+        mi.Vector3f(*(mi.Float(np.ascontiguousarray(-wo[i], np.float32)) for i in range(3))),
+    )
     ray.maxt = mi.Float(3.0 * eps)
     si = scene.ray_intersect(ray)
     dr.eval(si)  # measured: the chain after an evaluated hit costs half of one kernel doing both
     found = si.is_valid()
     alb, _ = guides.through_delta(scene, si, found)
     le = mi.Color3f(si.emitter(scene, found).eval(si, found))
-    dr.eval(alb, le, found)  # one kernel: reading the channels one by one would trace the chain three times
+    # one kernel: reading the channels one by one would trace the chain three times
+    dr.eval(alb, le, found)
     hit = np.asarray(found, bool)
     albedo = np.stack([np.asarray(alb[i], np.float64) for i in range(3)], -1)
     albedo[~hit] = np.nan  # not found again: no correction for this sample
@@ -296,17 +347,19 @@ def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
     return albedo, np.nan_to_num(emission)
 
 
-#: OIDN's output is trusted down to this fraction of the image's mean brightness (see `below_resolution`)
+#: OIDN's output is trusted down to this fraction of the image's mean brightness (see
+#: `below_resolution`)
 RESOLUTION = 1e-3
 
 
 def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
     """D with the pixels darker than RESOLUTION x the mean brightness of M set to 0.
 
-    Why: where the expectation is about 0 (a mirror reflecting the empty space behind the camera), OIDN leaks
-    a little of the neighbours' light, with a random hue. Chroma-preserving styles (cel: I level / brightness(I))
-    amplify that hue into saturated speckle, where the reference, whose I is 0 or neutral there, shows the
-    style's plain level. Below the denoiser's resolution the value carries no information: 0 it is."""
+    Why: where the expectation is about 0 (a mirror reflecting the empty space behind the camera),
+    OIDN leaks a little of the neighbours' light, with a random hue. Chroma-preserving styles (cel:
+    I level / brightness(I)) amplify that hue into saturated speckle, where the reference, whose I
+    is 0 or neutral there, shows the style's plain level. Below the denoiser's resolution the value
+    carries no information: 0 it is."""
     lum = d.mean(-1)
     scale = float(np.mean(m.mean(-1)))
     out = d.copy()
@@ -314,17 +367,28 @@ def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.maximum(out, 0.0)
 
 
-def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integrator=None, k: int = 0,
-           uncertainty: float = 0.0):
-    """Denoise the buffer's expectation. k = 0: keep D at each camera sample in the buffer (restyles then style
-    it); returns (D per pixel H x W x 3, None). k > 0: g is evaluated at k stratified points per pixel instead
-    (`coverage.points`, which needs the `integrator`), averaged over D's uncertainty where `uncertainty` > 0
-    (`spread`); returns (D, the points' buffer)."""
+def attach(
+    buf: Buffer,
+    scene,
+    spp: int,
+    seed: int,
+    quality: str = "high",
+    integrator=None,
+    k: int = 0,
+    uncertainty: float = 0.0,
+):
+    """Denoise the buffer's expectation. k = 0: keep D at each camera sample in the buffer (restyles
+    then style it); returns (D per pixel H x W x 3, None). k > 0: g is evaluated at k stratified
+    points per pixel instead (`coverage.points`, which needs the `integrator`), averaged over D's
+    uncertainty where `uncertainty` > 0 (`spread`); returns (D, the points' buffer)."""
     if buf.stores != "mean":
-        raise UsageError("--denoise expectation needs a buffer of children means (direct or affine estimator)")
+        raise UsageError(
+            "--denoise expectation needs a buffer of children means (direct or affine estimator)"
+        )
     g = guides.first_hit(scene, spp, pass_seed(seed, 0), footprint="pixel")  # M's footprint
     own = _own(scene, buf)
-    m = expectation(buf, own[1])  # the reflected part: each sample's own emission goes back in at_samples
+    # the reflected part: each sample's own emission goes back in at_samples
+    m = expectation(buf, own[1])
     d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
     header = {"method": "expectation", "quality": quality,
@@ -337,7 +401,9 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integ
             field.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
         cover = coverage_module.points(scene, integrator, field, k, seed)
         if rel is not None:  # per point, its pixel's: restyles average g over it too
-            cover.arrays[SPREAD] = np.ascontiguousarray(rel.ravel()[cover.arrays["pixel"]], dtype=np.float32)
+            cover.arrays[SPREAD] = np.ascontiguousarray(
+                rel.ravel()[cover.arrays["pixel"]], dtype=np.float32
+            )
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
         if cover.filtered:  # the render loop splatted each point at its sample_pos, not the point's
             cover.image = image_of(cover)
@@ -348,8 +414,8 @@ def attach(buf: Buffer, scene, spp: int, seed: int, quality: str = "high", integ
     return d, None
 
 
-#: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error, chosen on the
-#: Cornell box (BENCHMARKS.md denoise: 0.15, 0.2, 0.3, 0.45 and 1 tried)
+#: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error,
+#: chosen on the Cornell box (BENCHMARKS.md denoise: 0.15, 0.2, 0.3, 0.45 and 1 tried)
 UNCERTAINTY = 0.3
 
 
@@ -360,23 +426,26 @@ def check_uncertainty(value) -> float:
     except (TypeError, ValueError):
         u = float("nan")
     if isinstance(value, bool) or not np.isfinite(u) or u < 0 or u > 10:
-        raise UsageError(f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D itself) "
-                         f"to 10, the residual error of D as a fraction of the noisy estimate's standard error")
+        raise UsageError(
+            f"bad value {value!r} for denoise uncertainty: expected a number from 0 (g of D "
+            "itself) to 10, the residual error of D as a fraction of the noisy estimate's standard "
+            "error"
+        )
     return u
 
 
 def spread(buf: Buffer, emission: np.ndarray, uncertainty: float) -> np.ndarray:
-    """D's relative uncertainty per pixel (H x W float64): `uncertainty` x the relative standard error of M, from
-    the spread of its camera samples' children means (brightness, the emission taken off), its square averaged
-    over the pixel's 3 x 3 neighbourhood (edges repeated), capped at 1; a pixel with fewer than 2 samples with a
-    stylized vertex counts 0 in that average.
+    """D's relative uncertainty per pixel (H x W float64): `uncertainty` x the relative standard
+    error of M, from the spread of its camera samples' children means (brightness, the emission
+    taken off), its square averaged over the pixel's 3 x 3 neighbourhood (edges repeated), capped at
+    1; a pixel with fewer than 2 samples with a stylized vertex counts 0 in that average.
 
-    Why: OIDN leaves part of M's noise, in proportion to it; where D lies within that of a step style's
-    threshold, g(D) is a coin toss between two bands, and the mean of g over the spread (`finish_spread`) is
-    the estimate with the least squared error (docs/denoise.md, step 7). The neighbourhood: a pixel's own few
-    samples give a noisy estimate of its error level, and D at a pixel is formed from its neighbours too (the
-    Cornell box: MSE 2.60e-3 to 2.50e-3 for cel, 1.83e-3 to 1.75e-3 for hatching; 5 x 5 gave the same). It goes
-    to 0 as the samples grow."""
+    Why: OIDN leaves part of M's noise, in proportion to it; where D lies within that of a step
+    style's threshold, g(D) is a coin toss between two bands, and the mean of g over the spread
+    (`finish_spread`) is the estimate with the least squared error (docs/denoise.md, step 7). The
+    neighbourhood: a pixel's own few samples give a noisy estimate of its error level, and D at a
+    pixel is formed from its neighbours too (the Cornell box: MSE 2.60e-3 to 2.50e-3 for cel,
+    1.83e-3 to 1.75e-3 for hatching; 5 x 5 gave the same). It goes to 0 as the samples grow."""
     _, mean, var = _moments(buf, reflected(buf, emission).mean(1, keepdims=True))
     mean, var_of_mean = mean[:, 0], np.nan_to_num(var[:, 0])  # below 2 samples: 0
     floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
@@ -397,12 +466,15 @@ def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:
 def image_of(buf: Buffer) -> np.ndarray:
     """The buffer's image with its recorded styles (denoised where the buffer holds D)."""
     slots = prepare(buf, slots_for(buf))
-    return np.asarray(accumulate(buf, sample_values(buf, slots)), dtype=np.float32).reshape(buf.height, buf.width, 3)
+    return np.asarray(accumulate(buf, sample_values(buf, slots)), dtype=np.float32).reshape(
+        buf.height, buf.width, 3
+    )
 
 
 def noisy_variance(buf: Buffer) -> np.ndarray:
-    """The variance of each pixel's *undenoised* estimate from its camera samples' values, (mean of squares -
-    squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines `variance`; NaN below 2 samples."""
+    """The variance of each pixel's *undenoised* estimate from its camera samples' values, (mean of
+    squares - squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines `variance`; NaN
+    below 2 samples."""
     slots = prepare(buf, slots_for(buf))
     held = buf.arrays.pop(DENOISED, None)
     buf.device.clear()
@@ -417,16 +489,38 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
     return var.reshape(buf.height, buf.width, 3).astype(np.float32)
 
 
-def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-           callback: Callable[[Progress], None] | None = None, max_samples: int = MAX_SAMPLES,
-           label: str = "", coverage: int | str = "auto", uncertainty: float = UNCERTAINTY,
-           lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> tuple[np.ndarray, Buffer]:
-    """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy render).
-    `coverage` k > 0: g is evaluated at k stratified first hits per pixel (`coverage.points`), not at the camera
-    samples; the buffer returned is then the coverage points' (`buf.source`: the camera samples').
-    `lanes_per_pass`, `pass_spp`: the pass split, as `pipeline.passes`."""
-    job = Job(scene, integrator, spp, seed, quality, max_samples, label, coverage, uncertainty, lanes_per_pass,
-              pass_spp)
+def render(
+    scene,
+    integrator,
+    spp: int,
+    seed: int = 0,
+    quality: str = "high",
+    callback: Callable[[Progress], None] | None = None,
+    max_samples: int = MAX_SAMPLES,
+    label: str = "",
+    coverage: int | str = "auto",
+    uncertainty: float = UNCERTAINTY,
+    lanes_per_pass: int = LANES_PER_PASS,
+    pass_spp: int | None = None,
+) -> tuple[np.ndarray, Buffer]:
+    """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy
+    render). `coverage` k > 0: g is evaluated at k stratified first hits per pixel
+    (`coverage.points`), not at the camera samples; the buffer returned is then the coverage points'
+    (`buf.source`: the camera samples'). `lanes_per_pass`, `pass_spp`: the pass split, as
+    `pipeline.passes`."""
+    job = Job(
+        scene,
+        integrator,
+        spp,
+        seed,
+        quality,
+        max_samples,
+        label,
+        coverage,
+        uncertainty,
+        lanes_per_pass,
+        pass_spp,
+    )
     for prog, _ in job.passes():
         if callback is not None:
             callback(prog)
@@ -434,42 +528,83 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
 
 
 class Job:
-    """A denoised-expectation render in two steps, for callers that show and cancel passes (the Blender engine):
-    `passes()` records the noisy buffer pass by pass (`buffer`, whose `image` is the noisy render so far),
-    `finish()` denoises it and applies g, also to the finished passes of a cancelled render. Bad values are
-    refused in one line when the job is made, before anything renders."""
+    """A denoised-expectation render in two steps, for callers that show and cancel passes (the
+    Blender engine): `passes()` records the noisy buffer pass by pass (`buffer`, whose `image` is
+    the noisy render so far), `finish()` denoises it and applies g, also to the finished passes of a
+    cancelled render. Bad values are refused in one line when the job is made, before
+    anything renders."""
 
-    def __init__(self, scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-                 max_samples: int = MAX_SAMPLES, label: str = "", coverage: int | str = "auto",
-                 uncertainty: float = UNCERTAINTY, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None):
+    def __init__(
+        self,
+        scene,
+        integrator,
+        spp: int,
+        seed: int = 0,
+        quality: str = "high",
+        max_samples: int = MAX_SAMPLES,
+        label: str = "",
+        coverage: int | str = "auto",
+        uncertainty: float = UNCERTAINTY,
+        lanes_per_pass: int = LANES_PER_PASS,
+        pass_spp: int | None = None,
+    ):
         oidn.require()
         oidn.check_quality(quality)
         check(integrator)
         w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
         self.k = coverage_module.resolve_k(coverage, w, h, max_samples)
         self.uncertainty = check_uncertainty(uncertainty)
-        if integrator.settings.aovs:  # the buffer records without them; `aovs` below derives them from it
+        # the buffer records without them; `aovs` below derives them from it
+        if integrator.settings.aovs:
             integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
-        self.scene, self.integrator, self.spp, self.seed, self.quality = scene, integrator, spp, seed, quality
-        self.max_samples, self.label, self.lanes, self.pass_spp = max_samples, label, lanes_per_pass, pass_spp
+        self.scene, self.integrator, self.spp, self.seed, self.quality = (
+            scene,
+            integrator,
+            spp,
+            seed,
+            quality,
+        )
+        self.max_samples, self.label, self.lanes, self.pass_spp = (
+            max_samples,
+            label,
+            lanes_per_pass,
+            pass_spp,
+        )
         #: the noisy buffer of the passes recorded so far (None before the first)
         self.buffer: Buffer | None = None
 
     def passes(self) -> Iterator[tuple[Progress, Buffer]]:
-        for prog, buf in record(self.scene, self.integrator, self.spp, self.seed, self.label or scene_label(None),
-                                self.max_samples, self.lanes, pass_spp=self.pass_spp):
+        for prog, buf in record(
+            self.scene,
+            self.integrator,
+            self.spp,
+            self.seed,
+            self.label or scene_label(None),
+            self.max_samples,
+            self.lanes,
+            pass_spp=self.pass_spp,
+        ):
             buf.image = prog.image
             self.buffer = buf
             yield prog, buf
 
     def finish(self) -> tuple[np.ndarray, Buffer]:
-        """(the denoised image, the buffer that restyles to it) from the recorded buffer; one-line UsageError
-        if not every pixel has a camera sample yet (a render cancelled in its first round of tiles)."""
+        """(the denoised image, the buffer that restyles to it) from the recorded buffer; one-line
+        UsageError if not every pixel has a camera sample yet (a render cancelled in its first round
+        of tiles)."""
         buf = self.buffer
         if buf is None or buf.spp < 1:
             raise UsageError("nothing to denoise: no pass of the render finished")
-        _, cover = attach(buf, self.scene, buf.spp, self.seed, self.quality, self.integrator, self.k,
-                          self.uncertainty)
+        _, cover = attach(
+            buf,
+            self.scene,
+            buf.spp,
+            self.seed,
+            self.quality,
+            self.integrator,
+            self.k,
+            self.uncertainty,
+        )
         if cover is None:
             return image_of(buf), buf
         image = np.asarray(cover.image, dtype=np.float32)[..., :3]
@@ -478,14 +613,30 @@ class Job:
 
 
 def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
-    """Honest error AOVs of a denoised-expectation render (docs/denoise.md): the variance of the pixel
-    *before* denoising (not the denoised pixel's error, which no per-pixel statistic here measures), the
-    children per camera sample, and what denoising changed (denoised - noisy image)."""
+    """Honest error AOVs of a denoised-expectation render (docs/denoise.md): the variance of the
+    pixel *before* denoising (not the denoised pixel's error, which no per-pixel statistic here
+    measures), the children per camera sample, and what denoising changed (denoised -
+    noisy image)."""
     src = getattr(buf, "source", None) or buf  # coverage points: the camera samples with children
     n = max(int(s["inner"]) for s in src.header["slots"])
-    return {"noisy_variance": noisy_variance(src),
-            "children": np.full((src.height, src.width), float(n), dtype=np.float32),
-            "denoise_change": (np.asarray(image, np.float32) - np.asarray(src.image, np.float32)[..., :3])}
+    return {
+        "noisy_variance": noisy_variance(src),
+        "children": np.full((src.height, src.width), float(n), dtype=np.float32),
+        "denoise_change": (
+            np.asarray(image, np.float32) - np.asarray(src.image, np.float32)[..., :3]
+        ),
+    }
 
 
-__all__ = ["render", "Job", "attach", "Field", "check", "expectation", "image_of", "noisy_variance", "aovs", "DENOISED"]
+__all__ = [
+    "render",
+    "Job",
+    "attach",
+    "Field",
+    "check",
+    "expectation",
+    "image_of",
+    "noisy_variance",
+    "aovs",
+    "DENOISED",
+]

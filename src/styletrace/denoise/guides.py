@@ -1,25 +1,29 @@
 """The denoiser's guides: albedo and shading normal per pixel, seen through mirrors and glass.
 
-    g = first_hit(scene, spp=16, seed=0)   # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
+    # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
+    g = first_hit(scene, spp=16, seed=0)
     g = first_hit(scene, 16, 0, footprint="pixel")   # each pixel the mean inside it, any filter
 
-Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the callers,
-so the guides cover the pixel as its camera samples do), `seed` (default 0: the render's first pass seed).
-The guide pass is a sampling integrator of its own (`GuidePass`), so `mi.render` gives it the render's camera
-rays; one ray per camera sample, no path continues, so the guides carry none of the children's noise.
+Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the
+callers, so the guides cover the pixel as its camera samples do), `seed` (default 0: the render's
+first pass seed). The guide pass is a sampling integrator of its own (`GuidePass`), so `mi.render`
+gives it the render's camera rays; one ray per camera sample, no path continues, so the guides carry
+none of the children's noise.
 
-- `albedo`: the BSDF's diffuse reflectance (Mitsuba's `albedo` AOV: textures included) at the first surface
-  that is not purely specular, times the specular weights of the mirror and glass bounces before it
-  (`through_delta`). Why through: E[L] at a mirror's vertex is the reflected surface's radiance, whose texture
-  and shadow edges OIDN can only keep if the guide shows them; a constant guide there let it blur the
-  reflected checkerboard (the floor-and-mirror scene of `benchmarks/denoise.py`). OIDN's documentation
-  recommends this for perfect specular surfaces. A surface with no diffuse reflectance (a rough conductor)
-  gets 1 there: 0 would tell OIDN "black, nothing to keep".
+- `albedo`: the BSDF's diffuse reflectance (Mitsuba's `albedo` AOV: textures included) at the first
+  surface that is not purely specular, times the specular weights of the mirror and glass bounces
+  before it (`through_delta`). Why through: E[L] at a mirror's vertex is the reflected surface's
+  radiance, whose texture and shadow edges OIDN can only keep if the guide shows them; a constant
+  guide there let it blur the reflected checkerboard (the floor-and-mirror scene of
+  `benchmarks/denoise.py`). OIDN's documentation recommends this for perfect specular surfaces. A
+  surface with no diffuse reflectance (a rough conductor) gets 1 there: 0 would tell OIDN "black,
+  nothing to keep".
 - `normal`: the world-space shading normal of that same surface (OIDN's guide).
-- `position`, `surface_normal`: the first hit's mean position and shading normal, the camera sample's own
-  vertex (`denoise.expectation.at_samples` compares them with a sample's vertex).
-Pixels where the camera ray escapes get 0 everywhere (OIDN's convention for "nothing there"); a chain that
-escapes after a specular bounce keeps its specular weight as albedo and the last surface's normal.
+- `position`, `surface_normal`: the first hit's mean position and shading normal, the camera
+  sample's own vertex (`denoise.expectation.at_samples` compares them with a sample's vertex).
+Pixels where the camera ray escapes get 0 everywhere (OIDN's convention for "nothing there"); a
+chain that escapes after a specular bounce keeps its specular weight as albedo and the last
+surface's normal.
 """
 from __future__ import annotations
 
@@ -30,8 +34,8 @@ import numpy as np
 from styletrace.gate import dr, mi
 from styletrace.lookdev.film_filter import seeded_positions
 
-#: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever); a chain
-#: still specular after them keeps its specular weight as albedo
+#: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever);
+#: a chain still specular after them keeps its specular weight as albedo
 DELTA_BOUNCES = 4
 
 
@@ -42,13 +46,17 @@ class Guides(NamedTuple):
     surface_normal: np.ndarray
 
 
-def through_delta(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> tuple[mi.Color3f, mi.Vector3f]:
-    """(albedo, shading normal) of the first surface along si's specular chain that is not purely specular.
+def through_delta(
+    scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool
+) -> tuple[mi.Color3f, mi.Vector3f]:
+    """(albedo, shading normal) of the first surface along si's specular chain that is not
+    purely specular.
 
-    At a purely specular surface (only delta lobes: a smooth conductor, smooth glass) the chain goes on along
-    its transmission lobe where it has one (what one sees through glass), else its reflection, and the albedo is
-    weighted by that lobe's weight (Fresnel, tint). One lobe is enabled at a time, so the sampled direction is
-    the lobe's own and no random number decides it: the guide stays noise-free."""
+    At a purely specular surface (only delta lobes: a smooth conductor, smooth glass) the chain goes
+    on along its transmission lobe where it has one (what one sees through glass), else its
+    reflection, and the albedo is weighted by that lobe's weight (Fresnel, tint). One lobe is
+    enabled at a time, so the sampled direction is the lobe's own and no random number decides it:
+    the guide stays noise-free."""
     throughput = mi.Color3f(1.0)
     albedo = mi.Color3f(0.0)
     normal = mi.Vector3f(si.sh_frame.n)

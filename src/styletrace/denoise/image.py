@@ -2,13 +2,15 @@
 
     image, noisy, aovs = render(scene, integrator, spp=16, seed=0, quality="high")
 
-The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same albedo and normal
-guides as `--denoise expectation`. Every mode of the renderer works (it is a post-process), but
-a step style's band flips are edges to the denoiser, which keeps them (docs/denoise.md, BENCHMARKS.md).
+The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same
+albedo and normal guides as `--denoise expectation`. Every mode of the renderer works (it is a
+post-process), but a step style's band flips are edges to the denoiser, which keeps them
+(docs/denoise.md, BENCHMARKS.md).
 
 Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `lanes_per_pass`/`pass_spp` as
-`pipeline.passes`. With `aovs=True` on the integrator the error AOVs are those of the noisy render, renamed
-(`noisy_variance`, `noisy_bias`, `children`) and joined by `denoise_change` (denoised - noisy).
+`pipeline.passes`. With `aovs=True` on the integrator the error AOVs are those of the noisy render,
+renamed (`noisy_variance`, `noisy_bias`, `children`) and joined by `denoise_change` (denoised -
+noisy).
 """
 from __future__ import annotations
 
@@ -27,22 +29,30 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     oidn.require()
     oidn.check_quality(quality)
     prog = None
-    for prog in passes(scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp):
+    for prog in passes(
+        scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp
+    ):
         if callback is not None:
             callback(prog)
     return finish(scene, prog, seed, quality)
 
 
-def finish(scene, prog: Progress, seed: int = 0, quality: str = "high") -> tuple[np.ndarray, np.ndarray, dict | None]:
-    """`render`'s result from the passes' last progress (the finished passes of a stopped render too; the guides
-    take as many camera samples per pixel as they did)."""
+def finish(
+    scene, prog: Progress, seed: int = 0, quality: str = "high"
+) -> tuple[np.ndarray, np.ndarray, dict | None]:
+    """`render`'s result from the passes' last progress (the finished passes of a stopped render
+    too; the guides take as many camera samples per pixel as they did)."""
     noisy = np.asarray(prog.image, dtype=np.float32)
     g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0))
     out = oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
     errs = prog.aovs
     if errs is not None:
-        errs = {"noisy_variance": errs["variance"], "noisy_bias": errs["bias"], "children": errs["children"],
-                "denoise_change": out - noisy[..., :3]}
+        errs = {
+            "noisy_variance": errs["variance"],
+            "noisy_bias": errs["bias"],
+            "children": errs["children"],
+            "denoise_change": out - noisy[..., :3],
+        }
     return out, noisy, errs
 
 

@@ -1,13 +1,15 @@
-"""The denoiser itself: Intel Open Image Denoise (`pyoidn`) on the CPU, Mitsuba's OptiX denoiser on CUDA.
+"""The denoiser itself: Intel Open Image Denoise (`pyoidn`) on the CPU, Mitsuba's OptiX denoiser
+on CUDA.
 
     out = run(color, albedo, normal, quality="high")     # H x W x 3 float32 each, linear HDR
 
-Parameters: `quality` "high" (default), "balanced" or "fast" (OIDN's filter qualities; OptiX has none).
-The colour is treated as HDR (`hdr=True`: linear radiance, not display values) and the guides as clean
-(`cleanAux=True`): they come from the same camera rays as the colour and carry no Monte Carlo noise of
-the children, whose noise is the one removed here (docs/denoise.md).
+Parameters: `quality` "high" (default), "balanced" or "fast" (OIDN's filter qualities; OptiX has
+none). The colour is treated as HDR (`hdr=True`: linear radiance, not display values) and the guides
+as clean (`cleanAux=True`): they come from the same camera rays as the colour and carry no Monte
+Carlo noise of the children, whose noise is the one removed here (docs/denoise.md).
 
-`pyoidn` (and `cffi`) are the `styletrace[denoise]` extra; `require()` refuses in one line without it.
+`pyoidn` (and `cffi`) are the `styletrace[denoise]` extra; `require()` refuses in one line
+without it.
 """
 from __future__ import annotations
 
@@ -24,13 +26,17 @@ def require():
     try:
         import pyoidn
     except ImportError:
-        raise UsageError(f"--denoise needs Intel Open Image Denoise (pyoidn), the 'denoise' extra: {EXTRA}") from None
+        raise UsageError(
+            f"--denoise needs Intel Open Image Denoise (pyoidn), the 'denoise' extra: {EXTRA}"
+        ) from None
     return pyoidn
 
 
 def check_quality(quality: str) -> str:
     if quality not in QUALITIES:
-        raise UsageError(f"bad value {quality!r} for denoise quality: expected one of {', '.join(QUALITIES)}")
+        raise UsageError(
+            f"bad value {quality!r} for denoise quality: expected one of {', '.join(QUALITIES)}"
+        )
     return quality
 
 
@@ -47,17 +53,21 @@ def run(color, albedo, normal, quality: str = "high", to_sensor=None) -> np.ndar
     if mi.variant() and mi.variant().startswith("cuda") and hasattr(mi, "OptixDenoiser"):
         return _optix(color, albedo, normal, to_sensor)
     pyoidn = require()
-    return np.asarray(pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True, quality=quality),
-                      dtype=np.float32)
+    return np.asarray(
+        pyoidn.denoise(color, albedo, normal, hdr=True, clean_aux=True, quality=quality),
+        dtype=np.float32,
+    )
 
 
 def _optix(color, albedo, normal, to_sensor) -> np.ndarray:
-    """CUDA only, UNTESTED (the development machines have no GPU): Mitsuba's OptiX AI denoiser with the same
-    guides. OptiX wants normals in the sensor's frame, hence `to_sensor` (the sensor's world-to-camera
-    transform; None keeps world space)."""
+    """CUDA only, UNTESTED (the development machines have no GPU): Mitsuba's OptiX AI denoiser with
+    the same guides. OptiX wants normals in the sensor's frame, hence `to_sensor` (the sensor's
+    world-to-camera transform; None keeps world space)."""
     import mitsuba as mi
     h, w = color.shape[:2]
-    den = mi.OptixDenoiser(input_size=mi.ScalarVector2u(w, h), albedo=True, normals=True, temporal=False)
+    den = mi.OptixDenoiser(
+        input_size=mi.ScalarVector2u(w, h), albedo=True, normals=True, temporal=False
+    )
     kwargs = {"albedo": mi.TensorXf(albedo), "normals": mi.TensorXf(normal)}
     if to_sensor is not None:
         kwargs["to_sensor"] = to_sensor

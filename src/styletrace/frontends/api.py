@@ -1,11 +1,13 @@
 """The Python API: load a scene, build the `stylized` integrator, render in passes.
 
     import styletrace
-    img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)   # H x W x 3 float32, linear
+    # H x W x 3 float32, linear
+    img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)
 
-`render` is the render pipeline's (`pipeline.execute.render`): a `Job` resolved once and executed. The
-building blocks live in `pipeline/` and are re-exported here under their established names: loading
-(`pipeline.scene`), the pass loop (`pipeline.passes`), the carried settings (`pipeline.carried`).
+`render` is the render pipeline's (`pipeline.execute.render`): a `Job` resolved once and executed.
+The building blocks live in `pipeline/` and are re-exported here under their established names:
+loading (`pipeline.scene`), the pass loop (`pipeline.passes`), the carried settings
+(`pipeline.carried`).
 """
 from __future__ import annotations
 
@@ -46,12 +48,20 @@ from styletrace.scene.loading import (
 from styletrace.scene.plugins import init
 
 
-def render(*args: Any, denoise: str | None = None, cluster: str | None = None, callback: Any = None,
-           denoise_quality: str = "high", coverage: int | str = "auto", denoise_uncertainty: float | None = None,
-           **kw: Any):
-    """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the arguments).
-    `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off; all but off run the job
-    with a denoiser as its finisher, a post-stage (docs/denoise.md); off is the paper's estimators exactly."""
+def render(
+    *args: Any,
+    denoise: str | None = None,
+    cluster: str | None = None,
+    callback: Any = None,
+    denoise_quality: str = "high",
+    coverage: int | str = "auto",
+    denoise_uncertainty: float | None = None,
+    **kw: Any,
+):
+    """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the
+    arguments). `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off;
+    all but off run the job with a denoiser as its finisher, a post-stage (docs/denoise.md); off is
+    the paper's estimators exactly."""
     from styletrace.denoise import check_method, default_method
     method = check_method(denoise if denoise is not None else default_method())
     if method == "off":
@@ -64,18 +74,23 @@ def render(*args: Any, denoise: str | None = None, cluster: str | None = None, c
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,
                     **params: Any) -> StylizedIntegrator:
-    """A `stylized` integrator. Integrator properties (stylize, stylize_depth, max_depth, rr_depth) and the
-    style's parameters go in **params under their names; what is not given takes the default of
-    `config.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
+    """A `stylized` integrator. Integrator properties (stylize, stylize_depth, max_depth, rr_depth)
+    and the style's parameters go in **params under their names; what is not given takes the default
+    of `config.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
     return make_integrator_from(given_values(style, inner, estimator, **params))
 
 
 def make_integrator_from(values: dict[str, Any]) -> StylizedIntegrator:
-    """A `stylized` integrator from its property values (style, style parameters, inner_samples, ...)."""
+    """A `stylized` integrator from its property values (style, style parameters,
+    inner_samples, ...)."""
     init()
     return StylizedIntegrator.from_values(values)
 
 
-__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning", "make_integrator",
-           "make_integrator_from", "passes", "resolve_defaults", "pass_count", "SceneError", "Progress",
-           "StylizedIntegrator", "write_image", "save_safely"]
+__all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning",
+           "make_integrator", "make_integrator_from", "passes", "resolve_defaults", "pass_count",
+           "SceneError", "Progress", "StylizedIntegrator", "write_image", "save_safely",
+           # re-exported under their established names (the module docstring)
+           "UsageError", "PIXEL_FORMATS", "LANE_BYTES", "LANES_PER_PASS", "TILE_SIDE", "Tile",
+           "check_memory", "expansion_seed", "memory_available", "memory_needed", "pass_seed",
+           "pass_size", "tiles", "canonical_normals", "first_line", "scene_dict"]

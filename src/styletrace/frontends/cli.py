@@ -1,4 +1,5 @@
-"""Command line: `styletrace render`, `styletrace styles`, `styletrace estimators`, `styletrace gallery`.
+"""Command line: `styletrace render`, `styletrace styles`, `styletrace estimators`,
+`styletrace gallery`.
 
 Every error a user can cause (unknown style or parameter, bad value, missing or broken scene,
 unwritable output, an image too large for memory, malformed arguments) ends with one line on stderr
@@ -6,8 +7,9 @@ unwritable output, an image too large for memory, malformed arguments) ends with
 integrator only where given. A failure after some passes still writes them. Ctrl-C or SIGTERM during
 a render stops after the pass under way, or within `StopSignals.GRACE` seconds if that pass takes
 longer (a second signal: at once); the average of the finished passes is written, then the exit
-status is 130 (Ctrl-C) or 143 (SIGTERM). A wait of more than two seconds (loading the scene, the auto values'
-pilot, the first pass with its kernel compilation) names itself on a stderr status line (`status.py`).
+status is 130 (Ctrl-C) or 143 (SIGTERM). A wait of more than two seconds (loading the scene, the
+auto values' pilot, the first pass with its kernel compilation) names itself on a stderr status line
+(`status.py`).
 """
 from __future__ import annotations
 
@@ -25,13 +27,16 @@ from styletrace.pipeline.signals import StopSignals, one_line, say  # noqa: F401
 
 
 def _parse_defines(items: Sequence[str]) -> dict[str, str]:
-    """`-D NAME=VALUE` (repeatable): values of the scene file's <default> parameters, as Mitsuba's own -D."""
+    """`-D NAME=VALUE` (repeatable): values of the scene file's <default> parameters, as Mitsuba's
+    own -D."""
     out = {}
     for item in items:
         key, eq, value = item.partition("=")
         if not eq or not key.strip().isidentifier():
-            raise UsageError(f"bad -D {item!r}: expected NAME=VALUE for a <default name=\"NAME\"> of the scene, "
-                             f"e.g. -D spp=64")
+            raise UsageError(
+                f"bad -D {item!r}: expected NAME=VALUE for a <default name=\"NAME\"> of the scene, "
+                f"e.g. -D spp=64"
+            )
         out[key.strip()] = value.strip()
     return out
 
@@ -47,14 +52,23 @@ def _parse_set(items: Sequence[str]) -> dict[str, str]:
 
 
 def check_output(path: str, scene: str | None = None) -> None:
-    """Fail before rendering, not after, if the image could not be written or would overwrite the scene."""
-    if scene is not None and os.path.exists(scene) and os.path.exists(path) and os.path.samefile(scene, path) \
-            or scene is not None and os.path.realpath(scene) == os.path.realpath(path):
+    """Fail before rendering, not after, if the image could not be written or would overwrite
+    the scene."""
+    if (
+        scene is not None
+        and os.path.exists(scene)
+        and os.path.exists(path)
+        and os.path.samefile(scene, path)
+        or scene is not None
+        and os.path.realpath(scene) == os.path.realpath(path)
+    ):
         raise UsageError(f"bad output {path!r}: it is the scene file being rendered")
     ext = os.path.splitext(path)[1].lower()
     if ext not in IMAGE_TYPES:
-        raise UsageError(f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
-                         f"(.exr is linear, .png is sRGB)")
+        raise UsageError(
+            f"bad output {path!r}: the extension must be one of {', '.join(IMAGE_TYPES)} "
+            f"(.exr is linear, .png is sRGB)"
+        )
     check_target(path)
 
 
@@ -66,14 +80,21 @@ def cmd_styles(args) -> int:
 
     for name in names():
         cls = get(name)
-        inner = "closed form, 0 samples" if cls.default_inner == 0 else f"default inner samples {cls.default_inner}"
+        inner = (
+            "closed form, 0 samples"
+            if cls.default_inner == 0
+            else f"default inner samples {cls.default_inner}"
+        )
         print(f"{name}: {cls.summary} [{inner}]")
         for p in cls.params:
             print(f"    {p.name} = {p.show(p.default)}    {p.explain()}; {p.allowed()}")
         print(f"    estimators: {', '.join(applicable(cls()))}")
-    print("compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. contrast+sepia; "
-          "parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or affine / combined / telescoping "
-          "where every operand has a form (docs/styles.md#compositions)")
+    print(
+        "compositions: STYLE+STYLE[+...] applies the styles in order as one style, e.g. "
+        "contrast+sepia; parameters are STYLE.PARAM (contrast.c=1.6); estimators: direct, or "
+        "affine / combined / telescoping where every operand has a form "
+        "(docs/styles.md#compositions)"
+    )
     print("feature lines: any style with --lines (`styletrace lines` lists their settings)")
     return 0
 
@@ -83,8 +104,11 @@ def cmd_lines(args) -> int:
     init()
     from styletrace.config import settings
 
-    print("feature lines (West 2021) on path edges, with any style and stylize mode: `render --lines` and "
-          "`--set NAME=VALUE` (Python: styletrace.render(..., lines=True, line_width=2)); docs/lines.md")
+    print(
+        "feature lines (West 2021) on path edges, with any style and stylize mode: `render "
+        "--lines` and `--set NAME=VALUE` (Python: styletrace.render(..., lines=True, "
+        "line_width=2)); docs/lines.md"
+    )
     for p in settings.PROPERTIES:
         if p.name == "lines" or p.name.startswith("line_"):
             print(f"    {p.name} = {p.show_default()}    {p.doc}")
@@ -105,17 +129,25 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
-    """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner` runs them."""
+    """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner`
+    runs them."""
     from styletrace.denoise import check_method, default_method
     method = check_method(args.denoise or default_method())
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
-        raise UsageError(f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation only")
+        raise UsageError(
+            f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation "
+            "only"
+        )
     if args.coverage is not None and method not in ("expectation", "auto"):
-        raise UsageError(f"--coverage {args.coverage} applies to --denoise expectation only (the points where the "
-                         f"style meets the denoised expectation)")
+        raise UsageError(
+            f"--coverage {args.coverage} applies to --denoise expectation only (the points where "
+            "the style meets the denoised expectation)"
+        )
     several = len(args.scene) > 1 or args.frames is not None or args.orbit is not None
     if several and method in ("expectation", "image"):
-        raise UsageError("--denoise renders one image locally: not with several scenes, --frames or --orbit")
+        raise UsageError(
+            "--denoise renders one image locally: not with several scenes, --frames or --orbit"
+        )
     if several:  # numbered images, on Ray
         if method == "auto" and not args.quiet:
             from styletrace.denoise.default import why_not
@@ -133,26 +165,39 @@ def cmd_render(args) -> int:
     from styletrace.frontends.ray_command import executor_of
     from styletrace.pipeline.runner import Voice
     status = Status(enabled=not args.quiet)
-    resolved = resolve_with_status(job_of(args, params, _parse_defines(args.define), scene=scene), status)
-    runner, note = plan(resolved, method, executor_of(args), args.buffer, args.denoise_quality,
-                        "auto" if args.coverage is None else args.coverage, args.denoise_uncertainty)
+    resolved = resolve_with_status(
+        job_of(args, params, _parse_defines(args.define), scene=scene), status
+    )
+    runner, note = plan(
+        resolved,
+        method,
+        executor_of(args),
+        args.buffer,
+        args.denoise_quality,
+        "auto" if args.coverage is None else args.coverage,
+        args.denoise_uncertainty,
+    )
     if note and not args.quiet:
         say(f"styletrace: {note}")
     return runner.write(args.output, Voice(args.quiet, status))
 
 
 def resolve_with_status(job, status):
-    """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's warnings
-    as one line each."""
+    """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's
+    warnings as one line each."""
     from styletrace.jit import backend
-    backend()  # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+    # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
+    backend()
     from styletrace.pipeline.resolve import resolve
     from styletrace.scene.loading import SceneWarning, load_scene
-    with warnings.catch_warnings(record=True) as caught:  # the render pipeline: load, merge, pin auto values
+    # the render pipeline: load, merge, pin auto values
+    with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
         with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
             loaded = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
-        with status.phase("measuring the scene for its auto values: compiling and rendering a pilot"):
+        with status.phase(
+            "measuring the scene for its auto values: compiling and rendering a pilot"
+        ):
             resolved = resolve(job, scene=loaded)
         del loaded
     for w in caught:
@@ -161,9 +206,10 @@ def resolve_with_status(job, status):
 
 
 def choose_integrator(scene, args, params):
-    """The scene's own `stylized` integrator with the flags and --set values the user gave applied on top
-    (a scene without one starts from the command line's default style and keeps the max_depth, rr_depth
-    and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise): `pipeline.resolve`'s."""
+    """The scene's own `stylized` integrator with the flags and --set values the user gave applied
+    on top (a scene without one starts from the command line's default style and keeps the
+    max_depth, rr_depth and hide_emitters of its own Mitsuba integrator, unless a flag says
+    otherwise): `pipeline.resolve`'s."""
     from styletrace.frontends.command_job import job_of
     from styletrace.pipeline.resolve import choose_integrator as choose
     return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
@@ -192,8 +238,8 @@ def cmd_gallery(args) -> int:
 
 
 def check_gallery_folder(path: str) -> None:
-    """The gallery's folder may be new, but like `render`'s output its parent folder must exist: fail (or
-    create it) before rendering, not after."""
+    """The gallery's folder may be new, but like `render`'s output its parent folder must exist:
+    fail (or create it) before rendering, not after."""
     if os.path.exists(path):
         if not os.path.isdir(path):
             raise UsageError(f"bad output {path!r}: expected a folder")
@@ -217,43 +263,93 @@ class Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = Parser(prog="styletrace", description="Stylized global illumination as a function of expectation.")
+    p = Parser(
+        prog="styletrace", description="Stylized global illumination as a function of expectation."
+    )
     sub = p.add_subparsers(dest="command", required=True)
 
     r = sub.add_parser("render", help="render a scene with a style")
-    r.add_argument("scene", nargs="*", default=[],
-                   help="built-in scene (cornell-box, dragon, mixed, furnace) or a Mitsuba XML file "
-                        "(default: cornell-box); several XML files render as numbered frames on Ray")
-    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style or integrator parameter")
+    r.add_argument(
+        "scene",
+        nargs="*",
+        default=[],
+        help="built-in scene (cornell-box, dragon, mixed, furnace) or a Mitsuba XML file "
+        "(default: cornell-box); several XML files render as numbered frames on Ray",
+    )
+    r.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a style or integrator parameter",
+    )
     add_setting_flags(r)
-    r.add_argument("--aovs", dest="aovs", action="store_const", const=True, default=None,
-                   help="also write the error AOVs (variance, predicted bias, children used) as channels of the "
-                        "EXR output (refused with a PNG output); docs/adaptive.md")
-    r.add_argument("--spp", type=int, default=None, help="camera samples per pixel; overrides the scene sampler's "
-                   "sample_count (default: that count; 16 for the built-in scenes)")
+    r.add_argument(
+        "--aovs",
+        dest="aovs",
+        action="store_const",
+        const=True,
+        default=None,
+        help="also write the error AOVs (variance, predicted bias, children used) as channels of "
+        "the EXR output (refused with a PNG output); docs/adaptive.md",
+    )
+    r.add_argument(
+        "--spp",
+        type=int,
+        default=None,
+        help="camera samples per pixel; overrides the scene sampler's "
+        "sample_count (default: that count; 16 for the built-in scenes)",
+    )
     r.add_argument("--width", type=int, default=None, help="image width (resizes the scene's film)")
-    r.add_argument("--height", type=int, default=None, help="image height (resizes the scene's film)")
-    r.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE",
-                   help="value of a <default> parameter of the scene file ($NAME), as Mitsuba's -D; repeatable")
-    r.add_argument("--seed", type=int, default=0, help="random seed; the same seed gives the same image")
-    r.add_argument("--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)")
-    r.add_argument("-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)")
+    r.add_argument(
+        "--height", type=int, default=None, help="image height (resizes the scene's film)"
+    )
+    r.add_argument(
+        "-D",
+        "--define",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="value of a <default> parameter of the scene file ($NAME), as Mitsuba's -D; "
+             "repeatable",
+    )
+    r.add_argument(
+        "--seed", type=int, default=0, help="random seed; the same seed gives the same image"
+    )
+    r.add_argument(
+        "--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)"
+    )
+    r.add_argument(
+        "-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)"
+    )
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
-    r.add_argument("--denoise", choices=("auto", "expectation", "image", "off"), default=None,
-                   help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or on "
-                        "the final image; auto (the default, or $STYLETRACE_DENOISE): expectation where it applies, "
-                        "with the firefly control and the scene's samples spent on children; off: the paper's "
-                        "estimators exactly (docs/denoise.md, docs/look.md)")
+    r.add_argument(
+        "--denoise",
+        choices=("auto", "expectation", "image", "off"),
+        default=None,
+        help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or "
+        "on the final image; auto (the default, or $STYLETRACE_DENOISE): expectation where it "
+        "applies, with the firefly control and the scene's samples spent on children; off: the "
+        "paper's estimators exactly (docs/denoise.md, docs/look.md)",
+    )
     r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
                    help="OIDN's filter quality with --denoise (default: high)")
-    r.add_argument("--coverage", default=None, metavar="K",
-                   help="with --denoise expectation: points per pixel where the style is applied to the denoised "
-                        "expectation, a square (16, 64, ...), 0 for the camera samples, or auto (default: 64, fewer "
-                        "where the image would not fit the buffer's cap)")
-    r.add_argument("--denoise-uncertainty", default=None, metavar="U",
-                   help="with --denoise expectation and coverage points: the style is averaged over the denoised "
-                        "expectation's residual error, taken as U times the noisy estimate's standard error "
-                        "(default 0.3; 0: the style of the denoised expectation itself)")
+    r.add_argument(
+        "--coverage",
+        default=None,
+        metavar="K",
+        help="with --denoise expectation: points per pixel where the style is applied to the "
+        "denoised expectation, a square (16, 64, ...), 0 for the camera samples, or auto (default: "
+        "64, fewer where the image would not fit the buffer's cap)",
+    )
+    r.add_argument(
+        "--denoise-uncertainty",
+        default=None,
+        metavar="U",
+        help="with --denoise expectation and coverage points: the style is averaged over the "
+        "denoised expectation's residual error, taken as U times the noisy estimate's standard "
+        "error (default 0.3; 0: the style of the denoised expectation itself)",
+    )
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)
 
@@ -265,15 +361,24 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("-o", "--output", default="gallery", help="output folder (default: gallery)")
     g.add_argument("--quick", action="store_true", help="small and fast (under a minute)")
     g.add_argument("--size", type=int, default=None, help="image size in pixels (square)")
-    g.add_argument("--only", default=None, help="comma-separated setup keys to run (equal_time: the whole "
-                   "equal-time section, equal_time_cel: one of its comparisons)")
-    g.add_argument("--skip", default=None, help="comma-separated setup keys to leave out (equal_time: the "
-                   "equal-time section)")
+    g.add_argument(
+        "--only",
+        default=None,
+        help="comma-separated setup keys to run (equal_time: the whole "
+        "equal-time section, equal_time_cel: one of its comparisons)",
+    )
+    g.add_argument(
+        "--skip",
+        default=None,
+        help="comma-separated setup keys to leave out (equal_time: the equal-time section)",
+    )
     g.set_defaults(func=cmd_gallery)
 
     s = sub.add_parser("styles", help="list the styles and their parameters")
     s.set_defaults(func=cmd_styles)
-    ln = sub.add_parser("lines", help="list the feature line settings (--lines, --set line_width=2, ...)")
+    ln = sub.add_parser(
+        "lines", help="list the feature line settings (--lines, --set line_width=2, ...)"
+    )
     ln.set_defaults(func=cmd_lines)
     e = sub.add_parser("estimators", help="list the estimators of g(E[L]) and the forms they need")
     e.set_defaults(func=cmd_estimators)
@@ -281,39 +386,78 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def add_ray_flags(parser) -> None:
-    """Rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks, checkpoints, resume."""
-    parser.add_argument("--ray", nargs="?", const="local", default=None, metavar="ADDRESS",
-                        help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at ADDRESS "
-                             "(HOST:PORT, as printed by `ray start --head`); give it after the scene")
-    parser.add_argument("--resume", action="store_true",
-                        help="continue an interrupted --ray render of the same output from its checkpoint")
-    parser.add_argument("--checkpoint-every", type=float, default=None, metavar="SECONDS",
-                        help="write the --ray checkpoint at most this often (default 10; 0: after every pass)")
-    parser.add_argument("--frames", type=int, default=None, metavar="N",
-                        help="render N frames of a turntable around the camera's target (numbered images, on Ray)")
+    """Rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks,
+    checkpoints, resume."""
+    parser.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        default=None,
+        metavar="ADDRESS",
+        help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at "
+        "ADDRESS (HOST:PORT, as printed by `ray start --head`); give it after the scene",
+    )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted --ray render of the same output from its checkpoint",
+    )
+    parser.add_argument(
+        "--checkpoint-every",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="write the --ray checkpoint at most this often (default 10; 0: after every pass)",
+    )
+    parser.add_argument(
+        "--frames",
+        type=int,
+        default=None,
+        metavar="N",
+        help="render N frames of a turntable around the camera's target (numbered images, on Ray)",
+    )
     parser.add_argument("--orbit", type=float, default=None, metavar="DEGREES",
                         help="the turntable's total rotation about the up axis (default 360)")
 
 
 def add_setting_flags(parser) -> None:
-    """One flag per integrator property that has one; help and defaults come from the settings table."""
+    """One flag per integrator property that has one; help and defaults come from the
+    settings table."""
     from styletrace.config import settings
     for p in settings.PROPERTIES:
         if not p.flag:
             continue
-        default = f"the scene's stylized integrator's, else {settings.COMMAND_LINE_STYLE}" if p.name == "style" \
+        default = (
+            f"the scene's stylized integrator's, else {settings.COMMAND_LINE_STYLE}"
+            if p.name == "style"
             else p.show_default()
-        if p.bare:  # a switch (`--lines`): no value, so it never takes the scene's name; off with --set NAME=false
-            parser.add_argument(p.flag, dest=p.name, default=None, action="store_const", const="true",
-                                help=f"{p.doc} (default: off)")
+        )
+        # a switch (`--lines`): no value, so it never takes the scene's name; off with
+        # --set NAME=false
+        if p.bare:
+            parser.add_argument(
+                p.flag,
+                dest=p.name,
+                default=None,
+                action="store_const",
+                const="true",
+                help=f"{p.doc} (default: off)",
+            )
             continue
-        parser.add_argument(p.flag, dest=p.name, default=None, metavar=p.metavar,
-                            type=int if p.kind == "int" else str, help=f"{p.doc} (default: {default})")
+        parser.add_argument(
+            p.flag,
+            dest=p.name,
+            default=None,
+            metavar=p.metavar,
+            type=int if p.kind == "int" else str,
+            help=f"{p.doc} (default: {default})",
+        )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     try:
-        # the flags' help comes from the settings table, which needs the backend: errors there are one line too
+        # the flags' help comes from the settings table, which needs the backend: errors there are
+        # one line too
         args = build_parser().parse_args(argv)
         return args.func(args)
     except KeyboardInterrupt:

@@ -1,10 +1,12 @@
-"""The command line's render description: a pipeline `Job` from `styletrace render`'s parsed arguments.
+"""The command line's render description: a pipeline `Job` from `styletrace render`'s
+parsed arguments.
 
     job = job_of(args, params={"thresholds": "0.3"}, defines={"depth": "3"})
 
-The integrator values given are the setting flags that were used (each property's flag, `settings.PROPERTIES`)
-and the `--set` values; a scene without a `stylized` integrator starts from `settings.COMMAND_LINE_STYLE`.
-`render`, `render --buffer`, `--ray` and the frames/orbit runner all build their job here.
+The integrator values given are the setting flags that were used (each property's flag,
+`settings.PROPERTIES`) and the `--set` values; a scene without a `stylized` integrator starts from
+`settings.COMMAND_LINE_STYLE`. `render`, `render --buffer`, `--ray` and the frames/orbit runner all
+build their job here.
 """
 from __future__ import annotations
 
@@ -17,19 +19,31 @@ def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
     """The integrator values the user gave: flags that were used, then `--set` values."""
     from styletrace.config import settings
     given = {p.name: getattr(args, p.name, None) for p in settings.PROPERTIES
-             if getattr(args, p.name, None) is not None}  # (properties without a flag come by --set)
+             # (properties without a flag come by --set)
+             if getattr(args, p.name, None) is not None}
     given.update(params)
     return given
 
 
-def job_of(args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None) -> Job:
-    """The job of `styletrace render` (`scene`: one of several scene arguments, else `args.scene`)."""
+def job_of(
+    args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None
+) -> Job:
+    """The job of `styletrace render` (`scene`: one of several scene arguments, else
+    `args.scene`)."""
     from styletrace.config import settings
     if scene is None:  # `render` takes several scene arguments (frames); a single render the first
         scene = args.scene[0] if isinstance(args.scene, list) and args.scene else args.scene
-    return Job(scene=scene or None, defines=dict(defines or {}), width=args.width,
-               height=args.height, given=given_flags(args, params), default_style=settings.COMMAND_LINE_STYLE,
-               spp=args.spp, seed=args.seed, pass_spp=args.pass_spp)
+    return Job(
+        scene=scene or None,
+        defines=dict(defines or {}),
+        width=args.width,
+        height=args.height,
+        given=given_flags(args, params),
+        default_style=settings.COMMAND_LINE_STYLE,
+        spp=args.spp,
+        seed=args.seed,
+        pass_spp=args.pass_spp,
+    )
 
 
 __all__ = ["job_of", "given_flags"]

@@ -1,25 +1,32 @@
-"""The gallery's equal-time section: one method against the tree sampler's fixed counts at the same time.
+"""The gallery's equal-time section: one method against the tree sampler's fixed counts at the
+same time.
 
-    for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):   # integrators checked, none rendered
-        entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)   # writes gallery/KEY.png
-    equal_time.pick([0.10, 0.14, 0.22], 0.18)   # -> 1: the largest fixed count not slower than the method
-    equal_time.verdict(0.8)                      # -> "loss": a lower error at equal time is the only win
+    # integrators checked, none rendered
+    for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):
+        # writes gallery/KEY.png
+        entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)
+    # -> 1: the largest fixed count not slower than the method
+    equal_time.pick([0.10, 0.14, 0.22], 0.18)
+    # -> "loss": a lower error at equal time is the only win
+    equal_time.verdict(0.8)
 
 Protocol, per comparison (that of benchmarks/equal_time.py, on one seed):
-- Every render is 1 camera sample per pixel with seed 0, and so is the reference (direct application with a
-  large inner count): the same seed places the same camera rays, so the error measured is the stylized
-  estimate's, not the pixel noise all renders share. The reference's own error is part of every MSE.
-- Time: wall-clock seconds of `styletrace.render` after one untimed render that compiles the kernels; the
-  median of `repeats` renders (1 in quick mode).
-- The method is timed first. Then the fixed counts n (n doubling) render in increasing order until one
-  takes longer than the method; the count at equal time is the largest n whose time does not exceed the
-  method's, or the smallest n if even that one is slower (then the fixed count gets more time than the
-  method: a comparison in the method's favour, marked in the entry).
-- ratio = MSE(fixed n at equal time) / MSE(method). The verdict is "win" only when ratio > 1: a method that
-  wins at equal inner counts but loses at equal time is reported as a loss.
+- Every render is 1 camera sample per pixel with seed 0, and so is the reference (direct application
+  with a large inner count): the same seed places the same camera rays, so the error measured is the
+  stylized estimate's, not the pixel noise all renders share. The reference's own error is part of
+  every MSE.
+- Time: wall-clock seconds of `styletrace.render` after one untimed render that compiles the
+  kernels; the median of `repeats` renders (1 in quick mode).
+- The method is timed first. Then the fixed counts n (n doubling) render in increasing order until
+  one takes longer than the method; the count at equal time is the largest n whose time does not
+  exceed the method's, or the smallest n if even that one is slower (then the fixed count gets more
+  time than the method: a comparison in the method's favour, marked in the entry).
+- ratio = MSE(fixed n at equal time) / MSE(method). The verdict is "win" only when ratio > 1: a
+  method that wins at equal inner counts but loses at equal time is reported as a loss.
 
-Each comparison writes `KEY.png` (reference | fixed n at equal time | method, labelled with times and
-errors) and an entry of `gallery.json`; `sheet_md` / `sheet_html` give its part of the contact sheet.
+Each comparison writes `KEY.png` (reference | fixed n at equal time | method, labelled with times
+and errors) and an entry of `gallery.json`; `sheet_md` / `sheet_html` give its part of the
+contact sheet.
 """
 from __future__ import annotations
 
@@ -39,8 +46,8 @@ from styletrace.images import mse
 #: camera samples per pixel and seed of every render of the section (module docstring)
 SPP = 1
 SEED = 0
-#: quick mode: the reference's children per pixel at most (split evenly over its levels), and the number of
-#: fixed counts at most (the smallest ones)
+#: quick mode: the reference's children per pixel at most (split evenly over its levels), and the
+#: number of fixed counts at most (the smallest ones)
 QUICK_REFERENCE = 64
 QUICK_COUNTS = 3
 
@@ -53,9 +60,11 @@ class Comparison:
     method: dict[str, Any]              # integrator keywords of the method (inner, reuse, ...)
     reference: int | tuple[int, ...]    # inner count(s) of the reference, direct application
     params: dict[str, Any] = field(default_factory=dict)      # the style's parameters
-    integrator: dict[str, Any] = field(default_factory=dict)  # keywords shared by every render (stylize, ...)
+    # keywords shared by every render (stylize, ...)
+    integrator: dict[str, Any] = field(default_factory=dict)
     counts: tuple[int, ...] = (4, 8, 16, 32, 64, 128)         # fixed first-level counts n, doubling
-    below: tuple[int, ...] = ()         # the fixed renders' counts at the deeper levels, held constant
+    # the fixed renders' counts at the deeper levels, held constant
+    below: tuple[int, ...] = ()
     scene: str = "cornell-box"
 
 
@@ -68,26 +77,28 @@ def fixed_inner(c: Comparison, n: int) -> int | tuple[int, ...]:
 
 
 def quick(c: Comparison) -> Comparison:
-    """A small reference (QUICK_REFERENCE children per pixel at most) and at most QUICK_COUNTS fixed counts, all
-    below the reference's: a fixed count equal to the reference's would share its children (same seed) and
-    measure no error at all."""
+    """A small reference (QUICK_REFERENCE children per pixel at most) and at most QUICK_COUNTS fixed
+    counts, all below the reference's: a fixed count equal to the reference's would share its
+    children (same seed) and measure no error at all."""
     ref = levels(c.reference)
     cap = max(1, int(round(QUICK_REFERENCE ** (1 / len(ref)))))
     small = tuple(min(n, cap) for n in ref)
     counts = tuple(n for n in c.counts if n < small[0])[:QUICK_COUNTS] or c.counts[:1]
-    return Comparison(**{**c.__dict__, "reference": small if len(small) > 1 else small[0], "counts": counts})
+    return Comparison(
+        **{**c.__dict__, "reference": small if len(small) > 1 else small[0], "counts": counts}
+    )
 
 
 def pick(fixed_seconds: list[float], method_seconds: float) -> int:
-    """Index (in increasing n) of the fixed count at equal time: the largest n whose time does not exceed
-    the method's; 0, the smallest, when every one is slower."""
+    """Index (in increasing n) of the fixed count at equal time: the largest n whose time does not
+    exceed the method's; 0, the smallest, when every one is slower."""
     within = [i for i, t in enumerate(fixed_seconds) if t <= method_seconds]
     return max(within) if within else 0
 
 
 def verdict(ratio: float) -> str:
-    """'win' when the method's MSE is strictly below the fixed count's at equal time, else 'loss' (a tie
-    at the method's own cost is no win)."""
+    """'win' when the method's MSE is strictly below the fixed count's at equal time, else 'loss' (a
+    tie at the method's own cost is no win)."""
     return "win" if ratio > 1 else "loss"
 
 
@@ -102,12 +113,14 @@ def describe(config: dict[str, Any]) -> str:
 
 
 def show(inner: Any) -> str:
-    """A count as the command line writes it: 8, '8:64,4', (64, 64) and gallery.json's [64, 64] as 64,64."""
+    """A count as the command line writes it: 8, '8:64,4', (64, 64) and gallery.json's [64, 64]
+    as 64,64."""
     return ",".join(str(n) for n in inner) if isinstance(inner, (tuple, list)) else str(inner)
 
 
 def check(comparisons: list[Comparison]) -> None:
-    """Build every integrator of the section (refused settings raise StyletraceError) before any renders."""
+    """Build every integrator of the section (refused settings raise StyletraceError) before
+    any renders."""
     from styletrace.frontends import api
     for c in comparisons:
         for inner in (c.reference, fixed_inner(c, c.counts[0])):
@@ -115,13 +128,18 @@ def check(comparisons: list[Comparison]) -> None:
         api.make_integrator(c.style, **{**c.integrator, **c.params, **c.method})
 
 
-def timed(scene: Any, c: Comparison, config: dict[str, Any], repeats: int) -> tuple[np.ndarray, list[float]]:
-    """The image and the seconds of `repeats` renders, after one untimed render that compiles the kernels."""
+def timed(
+    scene: Any, c: Comparison, config: dict[str, Any], repeats: int
+) -> tuple[np.ndarray, list[float]]:
+    """The image and the seconds of `repeats` renders, after one untimed render that compiles
+    the kernels."""
     from styletrace.pipeline.execute import render
 
     def once() -> tuple[np.ndarray, float]:
         t = time.perf_counter()
-        img = render(scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config})
+        img = render(
+            scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config}
+        )
         return img, time.perf_counter() - t
 
     once()
@@ -148,29 +166,54 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
     fixed, images = [], []
     for n in c.counts:
         img, times = timed(scene, c, {"inner": fixed_inner(c, n)}, repeats)
-        fixed.append({"n": n, "inner": fixed_inner(c, n), "seconds": statistics.median(times), "times": times,
-                      "mse": mse(img, reference)})
+        fixed.append(
+            {
+                "n": n,
+                "inner": fixed_inner(c, n),
+                "seconds": statistics.median(times),
+                "times": times,
+                "mse": mse(img, reference),
+            }
+        )
         images.append(img)
         log(f"{c.key}: fixed n={n}: {fixed[-1]['seconds']:.3f} s, MSE {fixed[-1]['mse']:.3g}")
         if fixed[-1]["seconds"] > method["seconds"]:
-            break  # every larger count is slower still (in expectation): none of them can be at equal time
+            # every larger count is slower still (in expectation): none of them can be at equal time
+            break
     i = pick([f["seconds"] for f in fixed], method["seconds"])
     ratio = ratio_of(fixed[i]["mse"], method["mse"])
-    entry = {"key": c.key, "title": c.title, "scene": c.scene, "size": size, "spp": SPP, "seed": SEED,
-             "style": c.style, "params": c.params, "integrator": c.integrator, "repeats": repeats,
-             "reference": {"inner": c.reference, "seconds": ref_seconds},
-             "method": method, "fixed": fixed, "equal_time": i,
-             "fixed_slower": fixed[i]["seconds"] > method["seconds"],
-             "ratio": ratio, "verdict": verdict(ratio), "file": f"{c.key}.png"}
+    entry = {
+        "key": c.key,
+        "title": c.title,
+        "scene": c.scene,
+        "size": size,
+        "spp": SPP,
+        "seed": SEED,
+        "style": c.style,
+        "params": c.params,
+        "integrator": c.integrator,
+        "repeats": repeats,
+        "reference": {"inner": c.reference, "seconds": ref_seconds},
+        "method": method,
+        "fixed": fixed,
+        "equal_time": i,
+        "fixed_slower": fixed[i]["seconds"] > method["seconds"],
+        "ratio": ratio,
+        "verdict": verdict(ratio),
+        "file": f"{c.key}.png",
+    }
     imgs = {"reference": reference, "fixed": images[i], "method": method_img}
     figure(entry, imgs, os.path.join(out_dir, entry["file"]))
-    log(f"{c.key}: fixed n={fixed[i]['n']} at equal time; MSE ratio {ratio:.2f}: {entry['verdict'].upper()}")
+    log(
+        f"{c.key}: fixed n={fixed[i]['n']} at equal time; MSE ratio {ratio:.2f}: "
+        f"{entry['verdict'].upper()}"
+    )
     return entry, imgs
 
 
 def prepare(comparisons: list[Comparison], quick_mode: bool = False) -> list[Comparison]:
-    """The comparisons as they will render (`quick` ones in quick mode), every integrator built once so that
-    refused settings raise StyletraceError before anything renders."""
+    """The comparisons as they will render (`quick` ones in quick mode), every integrator built once
+    so that refused settings raise StyletraceError before anything renders."""
     comparisons = [quick(c) for c in comparisons] if quick_mode else list(comparisons)
     check(comparisons)
     return comparisons
@@ -187,21 +230,28 @@ def labels(e: dict[str, Any]) -> list[tuple[str, str]]:
     """(what, numbers) of the three panels: reference, fixed n at equal time, method."""
     f, m = e["fixed"][e["equal_time"]], e["method"]
     note = " (slower than the method: no fixed count is faster)" if e["fixed_slower"] else ""
-    return [(f"reference, inner {show(e['reference']['inner'])}", f"{e['reference']['seconds']:.1f} s"),
-            (f"fixed n={f['n']} (inner {show(f['inner'])}), equal time{note}",
-             f"{f['seconds']:.3f} s, MSE {f['mse']:.2e}"),
-            (f"method: {describe(m['config'])}", f"{m['seconds']:.3f} s, MSE {m['mse']:.2e}")]
+    return [
+        (f"reference, inner {show(e['reference']['inner'])}", f"{e['reference']['seconds']:.1f} s"),
+        (
+            f"fixed n={f['n']} (inner {show(f['inner'])}), equal time{note}",
+            f"{f['seconds']:.3f} s, MSE {f['mse']:.2e}",
+        ),
+        (f"method: {describe(m['config'])}", f"{m['seconds']:.3f} s, MSE {m['mse']:.2e}"),
+    ]
 
 
 def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
-    """reference | fixed n at equal time | method, tone-mapped as the gallery's PNGs, written atomically."""
+    """reference | fixed n at equal time | method, tone-mapped as the gallery's PNGs, written
+    atomically."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from styletrace.images import srgb8, write_bytes_atomically
     fig, axes = plt.subplots(1, 3, figsize=(9, 4.3))
-    for ax, img, (what, numbers) in zip(axes, (images["reference"], images["fixed"], images["method"]), labels(e)):
+    for ax, img, (what, numbers) in zip(
+        axes, (images["reference"], images["fixed"], images["method"]), labels(e)
+    ):
         ax.imshow(srgb8(img), interpolation="nearest")
         ax.set_title(textwrap.fill(what, 38) + "\n" + numbers, fontsize=8)
         ax.axis("off")
@@ -214,30 +264,50 @@ def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
     plt.close(fig)
 
 
-INTRO = ("Each comparison renders at 1 camera sample per pixel with one seed, against a reference of the same "
-         "seed (the same camera rays: the error is the stylized estimate's); times are the median of {repeats} "
-         "timed render(s) after one that compiles the kernels. The fixed count at equal time is the largest n "
-         "whose render is not slower than the method's (the smallest n when all are slower). Ratio: the fixed "
-         "count's MSE over the method's; at 1 or below the method loses at equal time, whatever it gains at "
-         "equal inner counts. Protocol: the docstring of styletrace/frontends/equal_time.py.")
+INTRO = (
+    "Each comparison renders at 1 camera sample per pixel with one seed, against a reference of "
+    "the same seed (the same camera rays: the error is the stylized estimate's); times are the "
+    "median of {repeats} timed render(s) after one that compiles the kernels. The fixed count at "
+    "equal time is the largest n whose render is not slower than the method's (the smallest n when "
+    "all are slower). Ratio: the fixed count's MSE over the method's; at 1 or below the method "
+    "loses at equal time, whatever it gains at equal inner counts. Protocol: the docstring of "
+    "styletrace/frontends/equal_time.py."
+)
 
 
 def rows(e: dict[str, Any]) -> list[tuple[str, str, str, str]]:
     f, m = e["fixed"][e["equal_time"]], e["method"]
-    return [("reference", show(e["reference"]["inner"]), f"{e['reference']['seconds']:.1f}", ""),
-            (f"fixed n={f['n']} (equal time)", show(f["inner"]), f"{f['seconds']:.3f}", f"{f['mse']:.3e}"),
-            ("method", describe(m["config"]), f"{m['seconds']:.3f}", f"{m['mse']:.3e}")]
+    return [
+        ("reference", show(e["reference"]["inner"]), f"{e['reference']['seconds']:.1f}", ""),
+        (
+            f"fixed n={f['n']} (equal time)",
+            show(f["inner"]),
+            f"{f['seconds']:.3f}",
+            f"{f['mse']:.3e}",
+        ),
+        ("method", describe(m["config"]), f"{m['seconds']:.3f}", f"{m['mse']:.3e}"),
+    ]
 
 
 def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
     if not entries:
         return []
     e0 = entries[0]
-    md = [f"## Equal time: a method against the fixed counts ({e0['scene']}, {e0['size']}x{e0['size']})", "",
-          INTRO.format(repeats=e0["repeats"]), "",
-          "| comparison | method | fixed n at equal time | MSE ratio | verdict |", "|---|---|---:|---:|---|"]
-    md += [f"| {e['title']} | `{describe(e['method']['config'])}` | {e['fixed'][e['equal_time']]['n']} | "
-           f"{e['ratio']:.2f} | {'win' if e['verdict'] == 'win' else '**LOSS**'} |" for e in entries]
+    md = [
+        f"## Equal time: a method against the fixed counts ({e0['scene']}, "
+        f"{e0['size']}x{e0['size']})",
+        "",
+        INTRO.format(repeats=e0["repeats"]),
+        "",
+        "| comparison | method | fixed n at equal time | MSE ratio | verdict |",
+        "|---|---|---:|---:|---|",
+    ]
+    md += [
+        f"| {e['title']} | `{describe(e['method']['config'])}` | "
+        f"{e['fixed'][e['equal_time']]['n']} | {e['ratio']:.2f} | "
+        f"{'win' if e['verdict'] == 'win' else '**LOSS**'} |"
+        for e in entries
+    ]
     for e in entries:
         md += ["", f"### {e['title']}: {'win' if e['verdict'] == 'win' else '**LOSS**'}", "",
                f"`{e['style']}` {describe({**e['params'], **e['integrator']})}".rstrip(), "",
@@ -256,18 +326,30 @@ def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
     def mark(e):
         return ("<strong style='color:#1a7f1a'>win</strong>" if e["verdict"] == "win"
                 else "<strong style='color:#b00000;font-size:1.2em'>LOSS</strong>")
-    h = [f"<h2>Equal time: a method against the fixed counts ({esc(e0['scene'])}, {e0['size']}x{e0['size']})</h2>",
-         f"<p>{esc(INTRO.format(repeats=e0['repeats']))}</p>",
-         "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
-         "<tr><th>comparison<th>method<th>fixed n at equal time<th>MSE ratio<th>verdict</tr>"]
-    h += [f"<tr><td>{esc(e['title'])}<td><code>{esc(describe(e['method']['config']))}</code>"
-          f"<td>{e['fixed'][e['equal_time']]['n']}<td>{e['ratio']:.2f}<td>{mark(e)}</tr>" for e in entries]
+
+    h = [
+        f"<h2>Equal time: a method against the fixed counts ({esc(e0['scene'])}, "
+        f"{e0['size']}x{e0['size']})</h2>",
+        f"<p>{esc(INTRO.format(repeats=e0['repeats']))}</p>",
+        "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
+        "<tr><th>comparison<th>method<th>fixed n at equal time<th>MSE ratio<th>verdict</tr>",
+    ]
+    h += [
+        f"<tr><td>{esc(e['title'])}<td><code>{esc(describe(e['method']['config']))}</code>"
+        f"<td>{e['fixed'][e['equal_time']]['n']}<td>{e['ratio']:.2f}<td>{mark(e)}</tr>"
+        for e in entries
+    ]
     h += ["</table>"]
     for e in entries:
-        h += [f"<h3>{esc(e['title'])}: {mark(e)}</h3>",
-              f"<p><code>{esc(e['style'])}</code> {esc(describe({**e['params'], **e['integrator']}))}</p>",
-              "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
-              "<tr><th>render<th>inner<th>s<th>MSE</tr>"
-              + "".join(f"<tr><td>{esc(a)}<td>{esc(b)}<td>{c}<td>{d}</tr>" for a, b, c, d in rows(e)) + "</table>",
-              f"<p>{esc(headline(e))}.</p>", f"<img src='{e['file']}' style='width:900px;image-rendering:auto'>"]
+        h += [
+            f"<h3>{esc(e['title'])}: {mark(e)}</h3>",
+            f"<p><code>{esc(e['style'])}</code> "
+            f"{esc(describe({**e['params'], **e['integrator']}))}</p>",
+            "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
+            "<tr><th>render<th>inner<th>s<th>MSE</tr>"
+            + "".join(f"<tr><td>{esc(a)}<td>{esc(b)}<td>{c}<td>{d}</tr>" for a, b, c, d in rows(e))
+            + "</table>",
+            f"<p>{esc(headline(e))}.</p>",
+            f"<img src='{e['file']}' style='width:900px;image-rendering:auto'>",
+        ]
     return h

@@ -1,15 +1,17 @@
-"""`styletrace gallery`: the paper's result setups (supplement S5, Figs. 7-12) on the built-in dragon.
+"""`styletrace gallery`: the paper's result setups (supplement S5, Figs. 7-12) on the
+built-in dragon.
 
 Each setup renders the dragon scene with one style at several inner sample counts n. Setups with a
-brute-force reference (the colour map at 1024 samples per style evaluation and cel at 4096, as in the
-supplement) also get the mean squared error of every render against it, plotted against n. The
-results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a contact
-sheet `index.html` / `index.md`.
+brute-force reference (the colour map at 1024 samples per style evaluation and cel at 4096, as in
+the supplement) also get the mean squared error of every render against it, plotted against n. The
+results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a
+contact sheet `index.html` / `index.md`.
 
-The equal-time section (`EQUAL_TIME`, rendered by `equal_time.py`) puts one method of each comparison side by
-side with the fixed count n that renders in the same time, both against a brute-force reference on the
-Cornell box, and says "win" or "LOSS": a method that wins at equal inner counts but loses at equal time is a
-loss. `--only equal_time` runs that section alone, `--skip equal_time` leaves it out.
+The equal-time section (`EQUAL_TIME`, rendered by `equal_time.py`) puts one method of each
+comparison side by side with the fixed count n that renders in the same time, both against a
+brute-force reference on the Cornell box, and says "win" or "LOSS": a method that wins at equal
+inner counts but loses at equal time is a loss. `--only equal_time` runs that section alone, `--skip
+equal_time` leaves it out.
 
 Quick mode (`--quick`) shrinks image size, counts and references so that it finishes in well under a
 minute; CI runs it.
@@ -45,59 +47,183 @@ class Setup:
     estimator: str = "direct"
 
 
-#: feature lines (docs/lines.md): on, with a gradient from deep blue at the feet to warm red at the top
+#: feature lines (docs/lines.md): on, with a gradient from deep blue at the feet to warm red at
+#: the top
 LINES = {"lines": True, "line_width": 1.5}
 LINE_GRADIENT = "0.05,0.1,0.5;0.8,0.15,0.05;0;1"
 
 SETUPS = [
-    Setup("color_map", "Colour mapping, direct estimator (Fig. 7)", "color_map", (1, 4, 16, 64), reference=1024,
-          params={"gradient": "dusk"}),
-    Setup("acp", "ACP baseline: colour map per path sample (Fig. 7, Doi et al. 2021)", "acp", (1, 4, 16, 64),
-          params={"gradient": "dusk"}),
-    Setup("cel", "GI cel shading, direct estimator (Fig. 8)", "cel", (1, 4, 16, 64), reference=4096,
-          params={"thresholds": "0.3", "levels": "0.25,0.85"}),
-    Setup("saturation", "Recursive saturation, first 2 hits, 8 samples per evaluation, w = 0.5 (Fig. 9)",
-          "saturation", (8,), params={"w": 0.5}, integrator={"stylize": "first_n_hits", "stylize_depth": 2}),
-    Setup("gamma_direct", "Gamma 1/2.2, direct application (biased) (Fig. 10)", "gamma", (1, 4, 16)),
-    Setup("gamma_series", "Gamma 1/2.2, unbiased power series: iterative prefix sum, pilot of n (Fig. 10)",
-          "gamma", (4, 16), estimator="series"),
-    Setup("gamma_roulette", "Gamma 1/2.2, unbiased power series: Russian roulette prefix sum (Fig. 10)",
-          "gamma", (4, 16), estimator="series_recursive"),
-    Setup("contrast", "Contrast c(I - p) + p, affine, unbiased (Fig. 10)", "contrast", (1, 8),
-          params={"c": 1.6, "pivot": 0.3}, estimator="affine"),
-    Setup("sepia", "Sepia: affine colour map over [0, inf), unbiased (Fig. 10)", "sepia", (1, 8), estimator="affine"),
-    Setup("combined", "Sepia after contrast as one style, combined gu-estimator, 1 sample per operand (Fig. 10)",
-          "contrast+sepia", (1, 8), params={"contrast.c": 1.6, "contrast.pivot": 0.3}, estimator="combined"),
-    Setup("tie_dye", "Tie-dye via its degree-20 Chebyshev fit, U-statistic, unbiased for the fit (Fig. 11)",
-          "tie_dye", (20, 64), estimator="ustat"),
-    Setup("gooch", "Gooch shading, closed form, 0 samples (Fig. 12)", "gooch", (0,),
-          params={"light_dir": "0.2,1,0.3"}),
-    Setup("xtoon", "X-Toon, closed form, 0 samples (Fig. 12)", "xtoon", (0,), params={"light_dir": "0.2,1,0.3"}),
-    Setup("hatching", "Cross-hatching (Fig. 12)", "hatching", (16,),
-          params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.45}),
-    Setup("halftone", "Half-tone (Fig. 12)", "halftone", (16,), params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.6}),
-    Setup("mixed", "Per object: cel dragon, hatched floor, PBR glass; seen through the glass too", "identity", (1,),
-          integrator={"stylize": "first_object_hit"}, scene="mixed"),
-    Setup("lines", "Colour map with physically based feature lines, colour over world y (Fig. 12 middle, West 2021)",
-          "color_map", (8,), params={"gradient": "dusk"}, integrator=dict(LINES, line_gradient=LINE_GRADIENT)),
-    Setup("lines_mirror", "Feature lines seen in a mirror and through a glass sphere (line_depth 3)", "identity", (1,),
-          integrator=dict(LINES, line_gradient=LINE_GRADIENT, line_depth=3), scene="lines"),
+    Setup(
+        "color_map",
+        "Colour mapping, direct estimator (Fig. 7)",
+        "color_map",
+        (1, 4, 16, 64),
+        reference=1024,
+        params={"gradient": "dusk"},
+    ),
+    Setup(
+        "acp",
+        "ACP baseline: colour map per path sample (Fig. 7, Doi et al. 2021)",
+        "acp",
+        (1, 4, 16, 64),
+        params={"gradient": "dusk"},
+    ),
+    Setup(
+        "cel",
+        "GI cel shading, direct estimator (Fig. 8)",
+        "cel",
+        (1, 4, 16, 64),
+        reference=4096,
+        params={"thresholds": "0.3", "levels": "0.25,0.85"},
+    ),
+    Setup(
+        "saturation",
+        "Recursive saturation, first 2 hits, 8 samples per evaluation, w = 0.5 (Fig. 9)",
+        "saturation",
+        (8,),
+        params={"w": 0.5},
+        integrator={"stylize": "first_n_hits", "stylize_depth": 2},
+    ),
+    Setup(
+        "gamma_direct", "Gamma 1/2.2, direct application (biased) (Fig. 10)", "gamma", (1, 4, 16)
+    ),
+    Setup(
+        "gamma_series",
+        "Gamma 1/2.2, unbiased power series: iterative prefix sum, pilot of n (Fig. 10)",
+        "gamma",
+        (4, 16),
+        estimator="series",
+    ),
+    Setup(
+        "gamma_roulette",
+        "Gamma 1/2.2, unbiased power series: Russian roulette prefix sum (Fig. 10)",
+        "gamma",
+        (4, 16),
+        estimator="series_recursive",
+    ),
+    Setup(
+        "contrast",
+        "Contrast c(I - p) + p, affine, unbiased (Fig. 10)",
+        "contrast",
+        (1, 8),
+        params={"c": 1.6, "pivot": 0.3},
+        estimator="affine",
+    ),
+    Setup(
+        "sepia",
+        "Sepia: affine colour map over [0, inf), unbiased (Fig. 10)",
+        "sepia",
+        (1, 8),
+        estimator="affine",
+    ),
+    Setup(
+        "combined",
+        "Sepia after contrast as one style, combined gu-estimator, 1 sample per operand (Fig. 10)",
+        "contrast+sepia",
+        (1, 8),
+        params={"contrast.c": 1.6, "contrast.pivot": 0.3},
+        estimator="combined",
+    ),
+    Setup(
+        "tie_dye",
+        "Tie-dye via its degree-20 Chebyshev fit, U-statistic, unbiased for the fit (Fig. 11)",
+        "tie_dye",
+        (20, 64),
+        estimator="ustat",
+    ),
+    Setup(
+        "gooch",
+        "Gooch shading, closed form, 0 samples (Fig. 12)",
+        "gooch",
+        (0,),
+        params={"light_dir": "0.2,1,0.3"},
+    ),
+    Setup(
+        "xtoon",
+        "X-Toon, closed form, 0 samples (Fig. 12)",
+        "xtoon",
+        (0,),
+        params={"light_dir": "0.2,1,0.3"},
+    ),
+    Setup(
+        "hatching",
+        "Cross-hatching (Fig. 12)",
+        "hatching",
+        (16,),
+        params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.45},
+    ),
+    Setup(
+        "halftone",
+        "Half-tone (Fig. 12)",
+        "halftone",
+        (16,),
+        params={"spacing": 0.05, "u_min": 0.05, "u_max": 0.6},
+    ),
+    Setup(
+        "mixed",
+        "Per object: cel dragon, hatched floor, PBR glass; seen through the glass too",
+        "identity",
+        (1,),
+        integrator={"stylize": "first_object_hit"},
+        scene="mixed",
+    ),
+    Setup(
+        "lines",
+        "Colour map with physically based feature lines, colour over world y (Fig. 12 middle, West "
+        "2021)",
+        "color_map",
+        (8,),
+        params={"gradient": "dusk"},
+        integrator=dict(LINES, line_gradient=LINE_GRADIENT),
+    ),
+    Setup(
+        "lines_mirror",
+        "Feature lines seen in a mirror and through a glass sphere (line_depth 3)",
+        "identity",
+        (1,),
+        integrator=dict(LINES, line_gradient=LINE_GRADIENT, line_depth=3),
+        scene="lines",
+    ),
 ]
 
-#: The equal-time section: each method against the fixed counts at equal time (protocol: equal_time.py). Edit
-#: the `method` configurations here; each is any set of integrator keywords (inner, reuse, reuse_k, ...).
+#: The equal-time section: each method against the fixed counts at equal time (protocol:
+#: equal_time.py). Edit the `method` configurations here; each is any set of integrator keywords
+#: (inner, reuse, reuse_k, ...).
 POOLED = {"reuse": "pixels", "reuse_mis": "pairwise"}
 EQUAL_TIME = [
-    Comparison("equal_time_cel", "GI cel shading, first hit: reuse with a refinement round against fixed n", "cel",
-               method={"inner": "2:16", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
-    Comparison("equal_time_hatching", "Cross-hatching, first hit: reuse with a refinement round against fixed n",
-               "hatching", method={"inner": "2:32", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=4096),
-    Comparison("equal_time_color_map", "Colour mapping, first hit: reuse against fixed n", "color_map",
-               method={"inner": 4, **POOLED, "reuse_k": 24}, reference=1024),
-    # the fixed curve n,1: the cheapest split of the two levels' counts at equal time (BENCHMARKS.md equal_time)
-    Comparison("equal_time_saturation", "Saturation, first 2 hits: reuse at the first hits against fixed n,1",
-               "saturation", method={"inner": "2,1", **POOLED, "reuse_radius": 3, "reuse_k": 48}, reference=(256, 16),
-               integrator={"stylize": "first_n_hits", "stylize_depth": 2}, counts=(2, 4, 8, 16, 32, 64), below=(1,)),
+    Comparison(
+        "equal_time_cel",
+        "GI cel shading, first hit: reuse with a refinement round against fixed n",
+        "cel",
+        method={"inner": "2:16", **POOLED, "reuse_radius": 3, "reuse_k": 48},
+        reference=4096,
+    ),
+    Comparison(
+        "equal_time_hatching",
+        "Cross-hatching, first hit: reuse with a refinement round against fixed n",
+        "hatching",
+        method={"inner": "2:32", **POOLED, "reuse_radius": 3, "reuse_k": 48},
+        reference=4096,
+    ),
+    Comparison(
+        "equal_time_color_map",
+        "Colour mapping, first hit: reuse against fixed n",
+        "color_map",
+        method={"inner": 4, **POOLED, "reuse_k": 24},
+        reference=1024,
+    ),
+    # the fixed curve n,1: the cheapest split of the two levels' counts at equal time
+    # (BENCHMARKS.md equal_time)
+    Comparison(
+        "equal_time_saturation",
+        "Saturation, first 2 hits: reuse at the first hits against fixed n,1",
+        "saturation",
+        method={"inner": "2,1", **POOLED, "reuse_radius": 3, "reuse_k": 48},
+        reference=(256, 16),
+        integrator={"stylize": "first_n_hits", "stylize_depth": 2},
+        counts=(2, 4, 8, 16, 32, 64),
+        below=(1,),
+    ),
 ]
 #: the --only / --skip key of the whole equal-time section
 EQUAL_TIME_SECTION = "equal_time"
@@ -113,21 +239,26 @@ class Options:
     equal_time_repeats: int = 3  # timed renders per configuration; the median counts
 
 
-QUICK = Options(size=48, spp=2, reference_spp=2, quick=True, equal_time_size=32, equal_time_repeats=1)
+QUICK = Options(
+    size=48, spp=2, reference_spp=2, quick=True, equal_time_size=32, equal_time_repeats=1
+)
 
 
 def keys() -> list[str]:
-    """Everything --only and --skip accept: the setups, the comparisons and the equal-time section."""
+    """Everything --only and --skip accept: the setups, the comparisons and the
+    equal-time section."""
     return [s.key for s in SETUPS] + [c.key for c in EQUAL_TIME] + [EQUAL_TIME_SECTION]
 
 
 def select(only: list[str] | None = None,
            skip: list[str] | None = None) -> tuple[list[Setup], list[Comparison]]:
-    """The setups and comparisons to run: those `only` names (all when None) less those `skip` names;
-    `equal_time` names every comparison. ValueError names an unknown key."""
+    """The setups and comparisons to run: those `only` names (all when None) less those `skip`
+    names; `equal_time` names every comparison. ValueError names an unknown key."""
     unknown = sorted(set(only or ()).union(skip or ()) - set(keys()))
     if unknown:
-        raise ValueError(f"unknown gallery setup(s) {', '.join(unknown)}: available are {', '.join(keys())}")
+        raise ValueError(
+            f"unknown gallery setup(s) {', '.join(unknown)}: available are {', '.join(keys())}"
+        )
 
     def chosen(names: set[str]) -> bool:  # names: the key and the section it belongs to
         return (only is None or bool(names & set(only))) and not names & set(skip or ())
@@ -156,29 +287,59 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
     setups, comparisons = select(only, skip)
     results: dict[str, Any] = {"options": options.__dict__, "setups": [], "equal_time": []}
     t_all = time.perf_counter()
-    comparisons = equal_time.prepare(comparisons, options.quick)  # refused settings stop it before any render
+    # refused settings stop it before any render
+    comparisons = equal_time.prepare(comparisons, options.quick)
     for setup in setups:
         if options.quick:
             setup = _quick(setup)
         scene = load_scene(setup.scene, options.size, options.size)
-        entry: dict[str, Any] = {"key": setup.key, "title": setup.title, "style": setup.style,
-                                 "estimator": setup.estimator,
-                                 "params": setup.params, "integrator": setup.integrator, "renders": []}
+        entry: dict[str, Any] = {
+            "key": setup.key,
+            "title": setup.title,
+            "style": setup.style,
+            "estimator": setup.estimator,
+            "params": setup.params,
+            "integrator": setup.integrator,
+            "renders": [],
+        }
         reference = None
         if setup.reference:
             t = time.perf_counter()
-            reference = render(scene, style=setup.style, inner=setup.reference, spp=options.reference_spp,
-                               seed=10_000, **setup.integrator, **setup.params)
+            reference = render(
+                scene,
+                style=setup.style,
+                inner=setup.reference,
+                spp=options.reference_spp,
+                seed=10_000,
+                **setup.integrator,
+                **setup.params,
+            )
             name = f"{setup.key}_reference.png"
             write_png(reference, os.path.join(out_dir, name))
-            entry["reference"] = {"file": name, "inner": setup.reference, "spp": options.reference_spp,
-                                  "seconds": time.perf_counter() - t, "note": setup.reference_note}
-            log(f"{setup.key}: reference n={setup.reference} in {entry['reference']['seconds']:.1f} s")
+            entry["reference"] = {
+                "file": name,
+                "inner": setup.reference,
+                "spp": options.reference_spp,
+                "seconds": time.perf_counter() - t,
+                "note": setup.reference_note,
+            }
+            log(
+                f"{setup.key}: reference n={setup.reference} in "
+                f"{entry['reference']['seconds']:.1f} s"
+            )
         for n in setup.counts:
             t = time.perf_counter()
             inner = None if n == 0 else n
-            img = render(scene, style=setup.style, inner=inner, estimator=setup.estimator if n else "direct",
-                         spp=options.spp, seed=n, **setup.integrator, **setup.params)
+            img = render(
+                scene,
+                style=setup.style,
+                inner=inner,
+                estimator=setup.estimator if n else "direct",
+                spp=options.spp,
+                seed=n,
+                **setup.integrator,
+                **setup.params,
+            )
             secs = time.perf_counter() - t
             name = f"{setup.key}_n{n}.png"
             write_png(img, os.path.join(out_dir, name))
@@ -186,11 +347,15 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
             if reference is not None:
                 r["mse"] = mse(img, reference)
             entry["renders"].append(r)
-            log(f"{setup.key}: n={n} in {secs:.1f} s" + (f", MSE {r['mse']:.3g}" if "mse" in r else ""))
+            log(
+                f"{setup.key}: n={n} in {secs:.1f} s"
+                + (f", MSE {r['mse']:.3g}" if "mse" in r else "")
+            )
         results["setups"].append(entry)
     plot_mse(results, os.path.join(out_dir, "mse.png"))
     save(results, out_dir, t_all)
-    for c in comparisons:  # saved after each: an error or Ctrl-C in a later one loses none of the finished
+    # saved after each: an error or Ctrl-C in a later one loses none of the finished
+    for c in comparisons:
         results["equal_time"].append(equal_time.compare(c, out_dir, options.equal_time_size,
                                                         options.equal_time_repeats, log)[0])
         save(results, out_dir, t_all)
@@ -231,32 +396,56 @@ def plot_mse(results: dict[str, Any], path: str) -> None:
 
 def write_sheets(results: dict[str, Any], out_dir: str) -> None:
     o = results["options"]
-    md = ["# styletrace gallery", "",
-          f"Dragon scene, {o['size']}x{o['size']}, {o['spp']} camera samples per pixel; total "
-          f"{results['seconds']:.0f} s. `mse.png` plots the error of each render against its reference.", "",
-          "![MSE vs n](mse.png)", ""]
-    h = ["<!doctype html><meta charset='utf-8'><title>styletrace gallery</title>",
-         "<style>body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:4px;text-align:center}"
-         "img{image-rendering:pixelated;width:192px}figcaption{font-size:12px}</style>",
-         "<h1>styletrace gallery</h1>",
-         f"<p>Dragon scene, {o['size']}x{o['size']}, {o['spp']} spp; total {results['seconds']:.0f} s.</p>",
-         "<img src='mse.png' style='width:480px'>"]
+    md = [
+        "# styletrace gallery",
+        "",
+        f"Dragon scene, {o['size']}x{o['size']}, {o['spp']} camera samples per pixel; total "
+        f"{results['seconds']:.0f} s. `mse.png` plots the error of each render against its "
+        "reference.",
+        "",
+        "![MSE vs n](mse.png)",
+        "",
+    ]
+    h = [
+        "<!doctype html><meta charset='utf-8'><title>styletrace gallery</title>",
+        "<style>body{font-family:sans-serif;margin:2em}figure{display:inline-block;margin:4px;text-align:center}img{image-rendering:pixelated;width:192px}figcaption{font-size:12px}</style>",
+        "<h1>styletrace gallery</h1>",
+        f"<p>Dragon scene, {o['size']}x{o['size']}, {o['spp']} spp; total {results['seconds']:.0f} "
+        "s.</p>",
+        "<img src='mse.png' style='width:480px'>",
+    ]
     for e in results["setups"]:
         params = ", ".join(f"{k}={v}" for k, v in {**e["params"], **e["integrator"],
                                                    "estimator": e["estimator"]}.items())
         md += [f"## {e['title']}", "", f"`{e['style']}` {params}", ""]
-        h += [f"<h2>{html.escape(e['title'])}</h2><p><code>{html.escape(e['style'])}</code> {html.escape(params)}</p>"]
+        h += [
+            f"<h2>{html.escape(e['title'])}</h2><p><code>{html.escape(e['style'])}</code> "
+            f"{html.escape(params)}</p>"
+        ]
         cells = []
         for r in e["renders"]:
-            cap = f"n={r['n']}, {r['seconds']:.1f} s" + (f", MSE {r['mse']:.2e}" if "mse" in r else "")
+            cap = f"n={r['n']}, {r['seconds']:.1f} s" + (
+                f", MSE {r['mse']:.2e}" if "mse" in r else ""
+            )
             cells.append((r["file"], cap))
         if "reference" in e:
             ref = e["reference"]
-            cells.append((ref["file"], f"reference n={ref['inner']}" + (f" ({ref['note']})" if ref["note"] else "")))
+            cells.append(
+                (
+                    ref["file"],
+                    f"reference n={ref['inner']}" + (f" ({ref['note']})" if ref["note"] else ""),
+                )
+            )
         md += [" | ".join(c for _, c in cells), " | ".join("---" for _ in cells),
                " | ".join(f"![{c}]({f})" for f, c in cells), ""]
-        h += ["<div>" + "".join(f"<figure><img src='{f}'><figcaption>{html.escape(c)}</figcaption></figure>"
-                                for f, c in cells) + "</div>"]
+        h += [
+            "<div>"
+            + "".join(
+                f"<figure><img src='{f}'><figcaption>{html.escape(c)}</figcaption></figure>"
+                for f, c in cells
+            )
+            + "</div>"
+        ]
     md += equal_time.sheet_md(results.get("equal_time", []))
     h += equal_time.sheet_html(results.get("equal_time", []))
     write_text(os.path.join(out_dir, "index.md"), "\n".join(md) + "\n")

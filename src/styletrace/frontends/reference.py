@@ -10,7 +10,8 @@ rewrites each block from the code:
 | `style:NAME` | a style's parameters (`styles` registry) |
 
     python -m styletrace.frontends.reference            # rewrite README.md and docs/*.md in place
-    python -m styletrace.frontends.reference --check    # exit 1 if a block is stale (the tests check this too)
+    # exit 1 if a block is stale (the tests check this too)
+    python -m styletrace.frontends.reference --check
 """
 from __future__ import annotations
 
@@ -19,7 +20,9 @@ import os
 import re
 import sys
 
-BLOCK = re.compile(r"(<!-- reference:(?P<name>[\w:]+) -->\n)(?P<body>.*?)(<!-- /reference -->)", re.S)
+BLOCK = re.compile(
+    r"(<!-- reference:(?P<name>[\w:]+) -->\n)(?P<body>.*?)(<!-- /reference -->)", re.S
+)
 
 
 def _row(*cells) -> str:
@@ -30,7 +33,11 @@ def integrator_table() -> str:
     from styletrace.config.settings import PROPERTIES
     rows = [_row("property", "type", "default", "flag", "meaning"), "|---|---|---|---|---|"]
     for p in PROPERTIES:
-        default = ("the style's" if p.name == "inner_samples" else "auto") if p.default is None else f"`{p.default}`"
+        default = (
+            ("the style's" if p.name == "inner_samples" else "auto")
+            if p.default is None
+            else f"`{p.default}`"
+        )
         rows.append(_row(f"`{p.name}`", p.kind, default, f"`{p.flag}`" if p.flag else "", p.doc))
         if p.name == "style":
             rows.append(_row("*style parameters*", "", "the style's", "`--set KEY=VALUE`",
@@ -42,12 +49,22 @@ def estimator_table() -> str:
     from styletrace.config.estimator_registry import kinds
     from styletrace.styles import get, names
     styles = [get(n)() for n in names()]
-    rows = [_row("estimator", "forms of g", "styles", "inner_samples n means", "what it is"), "|---|---|---|---|---|"]
+    rows = [
+        _row("estimator", "forms of g", "styles", "inner_samples n means", "what it is"),
+        "|---|---|---|---|---|",
+    ]
     for k in kinds():
         extra = "; ".join(f"{key} {value}" for key, value in k.params.items())
         fits = [s.name for s in styles if k.accepts(s)]
-        rows.append(_row(f"`{k.name}`", k.describe_forms(), "all" if len(fits) == len(styles) else ", ".join(fits),
-                         k.inner, k.doc + (f" ({extra})" if extra else "")))
+        rows.append(
+            _row(
+                f"`{k.name}`",
+                k.describe_forms(),
+                "all" if len(fits) == len(styles) else ", ".join(fits),
+                k.inner,
+                k.doc + (f" ({extra})" if extra else ""),
+            )
+        )
     return "\n".join(rows) + "\n"
 
 

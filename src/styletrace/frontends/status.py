@@ -4,18 +4,19 @@
     with status.phase("loading scene dragon"):
         scene = load_scene("dragon")
 
-A phase that ends within `delay` seconds (2 by default; `STYLETRACE_STATUS_DELAY` sets it) shows nothing,
-so quick renders stay quiet. A longer one gets a tqdm line, `styletrace: loading scene dragon (3 s)`,
-from a timer thread: the wait itself is in C++ (Mitsuba's loader, Dr.Jit's compiler and kernels), which
-releases the GIL, so the thread runs meanwhile. On a terminal the line is redrawn every second; written to
-a file or pipe it is drawn when it appears and once more, with the final time, when the phase ends (no
-stream of carriage returns in a log). The line goes to stderr only, never into the image.
+A phase that ends within `delay` seconds (2 by default; `STYLETRACE_STATUS_DELAY` sets it) shows
+nothing, so quick renders stay quiet. A longer one gets a tqdm line, `styletrace: loading scene
+dragon (3 s)`, from a timer thread: the wait itself is in C++ (Mitsuba's loader, Dr.Jit's compiler
+and kernels), which releases the GIL, so the thread runs meanwhile. On a terminal the line is
+redrawn every second; written to a file or pipe it is drawn when it appears and once more, with the
+final time, when the phase ends (no stream of carriage returns in a log). The line goes to stderr
+only, never into the image.
 
 The phases are named by what the command does, honestly: a kernel's first launch includes its JIT
-compilation (or the load of Dr.Jit's cached kernel), and nothing cheaper than Dr.Jit's kernel history
-could tell the two apart, so the first pass is "compiling and rendering". A render of several passes
-has its tqdm bar from the start; `follow` keeps it redrawn, its description saying "compiling and
-rendering pass 1 of N" until the first pass is done, "rendering" after.
+compilation (or the load of Dr.Jit's cached kernel), and nothing cheaper than Dr.Jit's kernel
+history could tell the two apart, so the first pass is "compiling and rendering". A render of
+several passes has its tqdm bar from the start; `follow` keeps it redrawn, its description saying
+"compiling and rendering pass 1 of N" until the first pass is done, "rendering" after.
 """
 from __future__ import annotations
 
@@ -58,7 +59,9 @@ def _isatty(stream) -> bool:
 class Status:
     """At most one phase at a time; `start` ends the phase under way before it begins the next."""
 
-    def __init__(self, enabled: bool = True, delay: float | None = None, stream: IO[str] | None = None):
+    def __init__(
+        self, enabled: bool = True, delay: float | None = None, stream: IO[str] | None = None
+    ):
         self.enabled = enabled
         self.delay = delay_from_env() if delay is None else delay
         self.stream = stream if stream is not None else sys.stderr
@@ -76,8 +79,8 @@ class Status:
         self._thread.start()
 
     def follow(self, bar) -> None:
-        """A phase shown by a tqdm bar already on screen (the passes' bar): redrawn every second on a terminal,
-        so that its time runs on while a long pass holds its count still."""
+        """A phase shown by a tqdm bar already on screen (the passes' bar): redrawn every second on
+        a terminal, so that its time runs on while a long pass holds its count still."""
         self.stop()
         if not self.enabled or not _isatty(self.stream):
             return
@@ -115,7 +118,14 @@ class Status:
 
         def now() -> str:  # the phase's own time, not the line's (which appears `delay` late)
             return f"{text} ({time.monotonic() - began:.0f} s)"
-        line = tqdm(total=None, desc=now(), file=self.stream, bar_format="styletrace: {desc}", mininterval=0.0)
+
+        line = tqdm(
+            total=None,
+            desc=now(),
+            file=self.stream,
+            bar_format="styletrace: {desc}",
+            mininterval=0.0,
+        )
         try:
             while not done.wait(1.0 if tty else None):
                 line.set_description_str(now())

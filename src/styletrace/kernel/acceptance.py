@@ -1,18 +1,23 @@
-"""Which candidate neighbours a stored vertex may pool with (reuse=pixels): one test for both neighbour grids.
+"""Which candidate neighbours a stored vertex may pool with (reuse=pixels): one test for both
+neighbour grids.
 
-A candidate in slot q (slot 0: the vertex itself) is accepted when it exists, both may pool, and it has the same
-style target, the same BSDF object and a shading normal within `normal_min` (n.n'); the grid adds its own
-geometric test (`near`): camera distances for the pixel window (reuse.pool.Grid), world distance for the world grid
-(world_grid.WorldGrid). The result is one bit per slot, K + 1 slots in a UInt64 (K <= 63).
+A candidate in slot q (slot 0: the vertex itself) is accepted when it exists, both may pool, and it
+has the same style target, the same BSDF object and a shading normal within `normal_min` (n.n'); the
+grid adds its own geometric test (`near`): camera distances for the pixel window (reuse.pool.Grid),
+world distance for the world grid (world_grid.WorldGrid). The result is one bit per slot, K + 1
+slots in a UInt64 (K <= 63).
 """
 from __future__ import annotations
 
 from styletrace.gate import dr, mi
 
 
-def accepted(neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str) -> mi.UInt64:
-    """Bit q set where slot q's vertex may be pooled with the vertex's own. `neighbour(q)` gives (index,
-    exists) of slot q; `near(at, ok)` the grid's geometric test of the candidates at `at`."""
+def accepted(
+    neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str
+) -> mi.UInt64:
+    """Bit q set where slot q's vertex may be pooled with the vertex's own. `neighbour(q)` gives
+    (index, exists) of slot q; `near(at, ok)` the grid's geometric test of the candidates
+    at `at`."""
     def body(q, mask):
         at, found = neighbour(q)
         ok = found & pool & dr.gather(mi.Bool, pool, at, found)

@@ -1,37 +1,43 @@
 """Image coordinates of stylized vertices: LLaT's canonical lifting of tone (the mirror-anchor map).
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee and
-Yonghao Yue (ACM TOG 45(4), 2026), Sections 5 (canonical lifting) and S2 (its inverse, the anchor cache).
+Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
+Mukherjee and Yonghao Yue (ACM TOG 45(4), 2026), Sections 5 (canonical lifting) and S2 (its inverse,
+the anchor cache).
 
-Every stylized vertex x at path depth k gets an image coordinate s (pixels right and up of the image centre,
-the units of `styles.base.Projection.pixels`), which styles read from `Vertex.s`:
-    k = 0                       s = the pinhole projection of x: the pixel x is seen in (method "pixel");
-    every vertex before x delta s = s0, the first-edge coordinate: the projection of the camera ray's first
-    (pinhole cameras)           hit (method "all-delta"): a perfect mirror or glass carries the pixel along;
-                                through a lens (depth of field) the MLS inverse below, so that what a mirror
-                                shows out of focus gets a lens-dependent coordinate and its tone blurs;
-    otherwise                   s = phi_k^-1(x) by linear MLS over anchor vertices (mls.py), with its fallbacks.
-The anchor map phi_k sends an image coordinate s to the depth-k vertex of the *anchor path* from s: a ray
-from the lens centre through s that reflects perfectly about the **geometric** normal at every vertex,
-whatever the material, or refracts through it where the query path transmitted there (the relative index
-of refraction is the material's own: its transmission lobe is sampled once for bs.eta). So phi depends on
-geometry and on the query's reflect/refract choices only, never on roughness: a glossy reflection is
-styled with the coordinate its mirror-like counterpart would have, and the lobe then blurs the pattern
-("tone blurs because transport blurs").
+Every stylized vertex x at path depth k gets an image coordinate s (pixels right and up of the image
+centre, the units of `styles.base.Projection.pixels`), which styles read from `Vertex.s`:
+    k = 0                       s = the pinhole projection of x: the pixel x is seen in
+                                (method "pixel");
+    every vertex before x delta s = s0, the first-edge coordinate: the projection of the camera
+    (pinhole cameras)           ray's first hit (method "all-delta"): a perfect mirror or glass
+                                carries the pixel along;
+                                through a lens (depth of field) the MLS inverse below, so that
+                                what a mirror shows out of focus gets a lens-dependent coordinate
+                                and its tone blurs;
+    otherwise                   s = phi_k^-1(x) by linear MLS over anchor vertices (mls.py), with
+                                its fallbacks.
+The anchor map phi_k sends an image coordinate s to the depth-k vertex of the *anchor path* from s:
+a ray from the lens centre through s that reflects perfectly about the **geometric** normal at every
+vertex, whatever the material, or refracts through it where the query path transmitted there (the
+relative index of refraction is the material's own: its transmission lobe is sampled once for
+bs.eta). So phi depends on geometry and on the query's reflect/refract choices only, never on
+roughness: a glossy reflection is styled with the coordinate its mirror-like counterpart would have,
+and the lobe then blurs the pattern ("tone blurs because transport blurs").
 
 Anchor cache: streamed per camera sample. At a query, ANCHORS anchor paths start at s0 + the offsets
-`RING_OFFSETS` (a centre and rings of 4 at 2, 6, 18 and 54 px, each ring turned 22.5 degrees from the last)
-and are traced to depth k following the query's own branch bits. A candidate is an anchor whose depth-k
-vertex lies on the query's shape and whose path crossed the same shapes (the prefix key: a hash of the
-shape ids at depths 0..k-1). Why streamed and not a pre-pass per image (the paper's prefix tree with an
-image-space hash): a pre-pass must trace both branches at every dielectric (2^k anchors per pixel) and
-search a spatial structure per query, where the streamed anchors follow the one branch sequence the query
-took and need no gather; their cost is measured in BENCHMARKS.md (benchmarks/llat_cost.py) against plain
-hatching. The price: the anchors reach only 54 px from s0, so a vertex whose mirror image lies farther
-from the sample's own pixel (very rough reflections) falls back to nearest / first edge (docs/llat.md).
+`RING_OFFSETS` (a centre and rings of 4 at 2, 6, 18 and 54 px, each ring turned 22.5 degrees from
+the last) and are traced to depth k following the query's own branch bits. A candidate is an anchor
+whose depth-k vertex lies on the query's shape and whose path crossed the same shapes (the prefix
+key: a hash of the shape ids at depths 0..k-1). Why streamed and not a pre-pass per image (the
+paper's prefix tree with an image-space hash): a pre-pass must trace both branches at every
+dielectric (2^k anchors per pixel) and search a spatial structure per query, where the streamed
+anchors follow the one branch sequence the query took and need no gather; their cost is measured in
+BENCHMARKS.md (benchmarks/llat_cost.py) against plain hatching. The price: the anchors reach only 54
+px from s0, so a vertex whose mirror image lies farther from the sample's own pixel (very rough
+reflections) falls back to nearest / first edge (docs/llat.md).
 
-`ToneState` is what a path carries from the camera to its stylized vertex to make this possible: the prefix
-key, the transmission bits, whether every scattering so far was delta, and s0.
+`ToneState` is what a path carries from the camera to its stylized vertex to make this possible: the
+prefix key, the transmission bits, whether every scattering so far was delta, and s0.
 """
 from __future__ import annotations
 
@@ -55,7 +61,8 @@ MAX_BITS = 32
 
 @dataclass
 class ToneState:
-    """Carried along a path (a Dr.Jit PyTree): what the anchor search needs at its next stylized vertex."""
+    """Carried along a path (a Dr.Jit PyTree): what the anchor search needs at its next
+    stylized vertex."""
     key: mi.UInt32      # hash of the shape ids at depths 0..k-1
     bits: mi.UInt32     # bit j set: the path transmitted at depth j
     delta: mi.Bool      # every scattering at depths 0..k-1 was a delta event
@@ -63,10 +70,16 @@ class ToneState:
 
 
 def has_aperture(sensor) -> bool:
-    """Whether rays through one film point leave from different points for different lens samples."""
+    """Whether rays through one film point leave from different points for different
+    lens samples."""
     import numpy as np
-    ray, _ = sensor.sample_ray(mi.Float(0.0, 0.0), mi.Float(0.5, 0.5), mi.Point2f([0.5, 0.5], [0.5, 0.5]),
-                               mi.Point2f([0.05, 0.95], [0.05, 0.95]))
+
+    ray, _ = sensor.sample_ray(
+        mi.Float(0.0, 0.0),
+        mi.Float(0.5, 0.5),
+        mi.Point2f([0.5, 0.5], [0.5, 0.5]),
+        mi.Point2f([0.05, 0.95], [0.05, 0.95]),
+    )
     o = np.array(ray.o, dtype=np.float64).reshape(3, -1)
     if o.shape[1] < 2:   # the origin did not depend on the lens sample at all
         return False
@@ -84,7 +97,8 @@ def combine(key: mi.UInt32, sid: mi.UInt32) -> mi.UInt32:
 
 
 class Tone:
-    """Image coordinates for one scene's stylized vertices (built per traced kernel, like lines.Lines)."""
+    """Image coordinates for one scene's stylized vertices (built per traced kernel, like
+    lines.Lines)."""
 
     def __init__(self, scene: mi.Scene):
         self.projection = projection(scene)
@@ -95,20 +109,28 @@ class Tone:
         self.lens = has_aperture(sensor)
 
     def start(self, ray: mi.Ray3f, pi, active) -> ToneState:
-        """The state of a camera ray reaching its first vertex `pi`: empty prefix, s0 = that vertex's pixel."""
-        x, y = self.projection.pixels(mi.Point3f(ray.o + ray.d * dr.select(active & pi.is_valid(), pi.t, 1.0)))
-        return ToneState(key=mi.UInt32(2166136261), bits=mi.UInt32(0), delta=mi.Bool(True), s0=mi.Point2f(x, y))
+        """The state of a camera ray reaching its first vertex `pi`: empty prefix, s0 = that
+        vertex's pixel."""
+        x, y = self.projection.pixels(
+            mi.Point3f(ray.o + ray.d * dr.select(active & pi.is_valid(), pi.t, 1.0))
+        )
+        return ToneState(
+            key=mi.UInt32(2166136261), bits=mi.UInt32(0), delta=mi.Bool(True), s0=mi.Point2f(x, y)
+        )
 
     def coordinate(self, scene: mi.Scene, si, ray: mi.Ray3f, depth, tone: ToneState | None, active):
-        """(s, method) of the vertex `si` reached along `ray` at path depth `depth` with `tone` (module doc)."""
+        """(s, method) of the vertex `si` reached along `ray` at path depth `depth` with `tone`
+        (module doc)."""
         px, py = self.projection.pixels(si.p)
         direct = mi.Point2f(px, py)
-        if tone is None:  # a walk that carries no tone state (participating media): the position's projection
+        # a walk that carries no tone state (participating media): the position's projection
+        if tone is None:
             return direct, mi.UInt32(mls.CLOSED_PIXEL)
         depth = mi.UInt32(depth)
         first = depth == 0
-        # the all-delta closed form holds for a pinhole (or orthographic) camera only: through a lens the anchor
-        # (from the lens centre) and the sample's ray (from elsewhere on the lens) part after the first vertex
+        # the all-delta closed form holds for a pinhole (or orthographic) camera only: through a
+        # lens the anchor (from the lens centre) and the sample's ray (from elsewhere on the lens)
+        # part after the first vertex
         closed = first | (tone.delta & (not self.lens))
         s = dr.select(first, direct, tone.s0)
         method = dr.select(first, mi.UInt32(mls.CLOSED_PIXEL), mi.UInt32(mls.CLOSED_DELTA))
@@ -118,12 +140,14 @@ class Tone:
         return dr.select(need, s_inv, s), dr.select(need, m_inv, method)
 
     def film_uv(self, x, y):
-        """Film position (Mitsuba's [0,1]^2, x right, y down) of screen pixels (x right, y up of the centre)."""
+        """Film position (Mitsuba's [0,1]^2, x right, y down) of screen pixels (x right, y up of
+        the centre)."""
         return mi.Point2f(0.5 - x * (1.0 / self.width), 0.5 - y * (1.0 / self.height))
 
     def trace(self, scene: mi.Scene, si, depth: mi.UInt32, tone: ToneState, active):
-        """The anchor paths from s0 + RING_OFFSETS to depth `depth`: (their depth-k points, their image
-        coordinates, whether each is a candidate: same shapes along the way and at depth k)."""
+        """The anchor paths from s0 + RING_OFFSETS to depth `depth`: (their depth-k points, their
+        image coordinates, whether each is a candidate: same shapes along the way and at
+        depth k)."""
         coords = [(tone.s0.x + dx, tone.s0.y + dy) for dx, dy in RING_OFFSETS]
         rays = []
         for cx, cy in coords:
@@ -134,9 +158,14 @@ class Tone:
         ctx = mi.BSDFContext()
         ctx.type_mask = int(mi.BSDFFlags.Transmission)
         n = len(coords)
-        state = (mi.UInt32(0), [mi.Bool(active) for _ in range(n)], rays,
-                 [mi.UInt32(2166136261) for _ in range(n)], [dr.zeros(mi.Point3f) for _ in range(n)],
-                 [mi.Bool(False) for _ in range(n)])
+        state = (
+            mi.UInt32(0),
+            [mi.Bool(active) for _ in range(n)],
+            rays,
+            [mi.UInt32(2166136261) for _ in range(n)],
+            [dr.zeros(mi.Point3f) for _ in range(n)],
+            [mi.Bool(False) for _ in range(n)],
+        )
 
         def cond(j, alive, rays, keys, pts, ok):
             out = mi.Bool(False)
@@ -147,14 +176,17 @@ class Tone:
         def body(j, alive, rays, keys, pts, ok):
             for m in range(n):
                 a = alive[m]
-                hit = scene.ray_intersect(rays[m], ray_flags=mi.RayFlags.All, coherent=False, active=a)
+                hit = scene.ray_intersect(
+                    rays[m], ray_flags=mi.RayFlags.All, coherent=False, active=a
+                )
                 a &= hit.is_valid()
                 last = a & (j == depth)
                 pts[m] = dr.select(last, hit.p, pts[m])
                 ok[m] |= last & (shape_id(hit) == target) & (keys[m] == tone.key)
                 go = a & (j < depth)
                 keys[m] = dr.select(go, combine(keys[m], shape_id(hit)), keys[m])
-                # the query's branch at depth j: transmit (refract with the material's eta) or reflect
+                # the query's branch at depth j: transmit (refract with the material's eta)
+                # or reflect
                 bit = dr.select(j < MAX_BITS, (tone.bits >> dr.minimum(j, MAX_BITS - 1)) & 1, 0)
                 refract = go & (bit == 1)
                 d = rays[m].d

@@ -1,6 +1,6 @@
-"""One step of the recursive `first_n_hits` parametrization between two stylized vertices: emission at x,
-next-event estimation towards delta lights only (no BSDF sample can reach them), one BSDF sample and the
-intersection of its ray (`bounce`; path.py walks below the last stylized vertex)."""
+"""One step of the recursive `first_n_hits` parametrization between two stylized vertices: emission
+at x, next-event estimation towards delta lights only (no BSDF sample can reach them), one BSDF
+sample and the intersection of its ray (`bounce`; path.py walks below the last stylized vertex)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -13,13 +13,15 @@ from styletrace.kernel.vertex import Site, depth_limit, emission, opaque_part, o
 
 @dataclass
 class Bounce:
-    L: mi.Spectrum                       # emission at x plus next-event estimation towards delta lights
+    # emission at x plus next-event estimation towards delta lights
+    L: mi.Spectrum
     weight: mi.Spectrum                  # BSDF sample weight f cos / pdf (valid where `go`)
     pi: mi.PreliminaryIntersection3f     # the next vertex
     si: mi.SurfaceInteraction3f
     ray: mi.Ray3f
     go: mi.Bool                          # lanes that took the bounce
-    hit: mi.Bool                         # ... and reached a surface (the others see the environment)
+    # ... and reached a surface (the others see the environment)
+    hit: mi.Bool
     lines: Optional[Any] = None          # lines.LineState at the next vertex (where lines are on)
     tone: Optional[Any] = None           # anchors.ToneState at the next vertex (where tone is on)
 
@@ -29,10 +31,10 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     """One step from the vertex `site.si` (reached along `site.ray`) to the next vertex, for
     recursive stylization. Returns the Bounce.
 
-    The next vertex is stylized too, and its whole exitant radiance, emission included, goes through g:
-    surface lights cannot be split off by next-event estimation, the BSDF sample reaches them. Point,
-    spot and directional lights are no vertex (never stylized) and no BSDF sample can hit them, so they
-    alone get next-event estimation here, with weight 1.
+    The next vertex is stylized too, and its whole exitant radiance, emission included, goes through
+    g: surface lights cannot be split off by next-event estimation, the BSDF sample reaches them.
+    Point, spot and directional lights are no vertex (never stylized) and no BSDF sample can hit
+    them, so they alone get next-event estimation here, with weight 1.
 
     With `cfg.nulls` x scatters by its opaque part only and the next vertex is the first scattering
     one past null interactions (`first_scattering`). Of the `hooks` only `lines` (a line on the
@@ -48,7 +50,9 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     ds, em_weight = cfg.emitters.sample_direction(si, sampler.next_2d(), to_light)
     to_light &= ds.delta & (ds.pdf != 0.0)
     scale = opaque_part(si, bsdf, go) if nulls else 1.0
-    L += dr.select(to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0)
+    L += dr.select(
+        to_light, scale * bsdf.eval(ctx, si, si.to_local(ds.d), to_light) * em_weight, 0.0
+    )
     u1 = sampler.next_1d()
     if nulls:  # x samples its opaque part alone (opaque_share): the weight is that part's f/pdf
         keep = opaque_share(si, bsdf, go)
@@ -56,7 +60,9 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     bs, weight = bsdf.sample(ctx, si, u1, sampler.next_2d(), go)
     ray2 = si.spawn_ray(si.to_world(bs.wo))
     if nulls:
-        weight = dr.select(mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight)
+        weight = dr.select(
+            mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null) | (keep <= 0), 0.0, weight
+        )
     go &= dr.max(weight) > 0
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
     line_state = None
@@ -71,5 +77,14 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     finite = dr.all(dr.isfinite(L)) & (~go | dr.all(dr.isfinite(weight)))  # as at the end of `walk`
     L, weight = dr.select(finite, L, 0.0), dr.select(finite, weight, 0.0)
     tone = None if tone is None else advance(tone, si, bs, depth, go)
-    return Bounce(L=L, weight=weight, pi=pi2, si=si2, ray=ray2, go=go, hit=go & si2.is_valid(), lines=line_state,
-                  tone=tone)
+    return Bounce(
+        L=L,
+        weight=weight,
+        pi=pi2,
+        si=si2,
+        ray=ray2,
+        go=go,
+        hit=go & si2.is_valid(),
+        lines=line_state,
+        tone=tone,
+    )

@@ -1,26 +1,29 @@
-"""Emitter selection for next-event estimation, independent of the order Mitsuba lists the emitters in.
+"""Emitter selection for next-event estimation, independent of the order Mitsuba lists the
+emitters in.
 
-Mitsuba 3.9.1 loads a scene's objects in parallel, so `scene.emitters()` comes back in a different order
-from one process to the next (measured on the built-in `mixed` scene: the two area lights swap in about
-one load in six). `scene.sample_emitter_direction` picks an emitter by its index in that list, so the
-same seed gave different images (Mitsuba's own `path` too). `EmitterSampler` orders the emitters by a
-key built from what they are, not from when they were loaded: the emitter's description (`str`: type,
-radiance, position, ...) and, for area lights, its shape's description and bounding box. Emitters with
-equal keys are interchangeable, so their relative order cannot change an image.
+Mitsuba 3.9.1 loads a scene's objects in parallel, so `scene.emitters()` comes back in a different
+order from one process to the next (measured on the built-in `mixed` scene: the two area lights swap
+in about one load in six). `scene.sample_emitter_direction` picks an emitter by its index in that
+list, so the same seed gave different images (Mitsuba's own `path` too). `EmitterSampler` orders the
+emitters by a key built from what they are, not from when they were loaded: the emitter's
+description (`str`: type, radiance, position, ...) and, for area lights, its shape's description and
+bounding box. Emitters with equal keys are interchangeable, so their relative order cannot change
+an image.
 
 Selection (`mode`):
-- `uniform`: probability proportional to each emitter's `sampling_weight` (1 by default), as Mitsuba.
-- `power`: proportional to `sampling_weight` times an estimate of the emitted power Phi, the mean weight
-  of `Emitter.sample_ray` over a fixed set of samples (its expectation is Phi for every emitter type;
-  for environment and directional lights it is the power through the scene's bounding disk).
-  An emitter with no estimated power is never chosen by next-event estimation; BSDF sampling still
-  reaches it and the MIS densities below stay consistent, so the estimate stays unbiased.
+- `uniform`: probability proportional to each emitter's `sampling_weight` (1 by default),
+  as Mitsuba.
+- `power`: proportional to `sampling_weight` times an estimate of the emitted power Phi, the mean
+  weight of `Emitter.sample_ray` over a fixed set of samples (its expectation is Phi for every
+  emitter type; for environment and directional lights it is the power through the scene's bounding
+  disk). An emitter with no estimated power is never chosen by next-event estimation; BSDF sampling
+  still reaches it and the MIS densities below stay consistent, so the estimate stays unbiased.
 
-`sample_direction` matches `Scene.sample_emitter_direction` (one 2D sample: its x picks the emitter and is
-reused for the direction; the weight is divided and the density multiplied by the selection probability;
-occluded samples get weight 0). `pdf_direction` is the matching solid-angle density of a direction
-that reached an emitter: the emitter's own density times its selection probability, looked up by the
-emitter's registry id (one gather, whatever the number of emitters).
+`sample_direction` matches `Scene.sample_emitter_direction` (one 2D sample: its x picks the emitter
+and is reused for the direction; the weight is divided and the density multiplied by the selection
+probability; occluded samples get weight 0). `pdf_direction` is the matching solid-angle density of
+a direction that reached an emitter: the emitter's own density times its selection probability,
+looked up by the emitter's registry id (one gather, whatever the number of emitters).
 """
 from __future__ import annotations
 
@@ -29,12 +32,14 @@ from styletrace.config.choices import EMITTER_MODES as MODES
 from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
 
-#: samples of `sample_ray` per emitter for the power estimate (fixed, so the estimate is deterministic)
+#: samples of `sample_ray` per emitter for the power estimate (fixed, so the estimate is
+#: deterministic)
 POWER_SAMPLES = 1 << 12
 
 
 def emitter_id(ptr) -> mi.UInt32:
-    """The registry id of each lane's emitter (0 for none): a dense small integer per live emitter."""
+    """The registry id of each lane's emitter (0 for none): a dense small integer per
+    live emitter."""
     return dr.reinterpret_array(mi.UInt32, ptr)
 
 
@@ -47,7 +52,8 @@ def stable_key(emitter: mi.Emitter) -> tuple:
 
 
 def estimated_power(emitter: mi.Emitter) -> float:
-    """Phi estimated as the mean weight of `sample_ray` (averaged over the channels) over fixed samples."""
+    """Phi estimated as the mean weight of `sample_ray` (averaged over the channels) over
+    fixed samples."""
     n = POWER_SAMPLES
     rng = mi.PCG32(n, initseq=dr.arange(mi.UInt64, n))
     u = [rng.next_float32() for _ in range(5)]
@@ -90,9 +96,11 @@ class EmitterSampler:
         self.prob_by_id = mi.Float(prob)
         self.probabilities = [w / total for w in weights]  # in key order, for tests and reports
 
-    def sample_direction(self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True):
-        """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded (with `visible`; without,
-        the caller estimates the transmittance: volume.py) or none."""
+    def sample_direction(
+        self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True
+    ):
+        """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded (with
+        `visible`; without, the caller estimates the transmittance: volume.py) or none."""
         if self.count == 0:
             return dr.zeros(mi.DirectionSample3f), mi.Spectrum(0.0)
         index, x, pmf = self.distr.sample_reuse_pmf(sample.x, active)
@@ -112,8 +120,13 @@ class EmitterSampler:
             return mi.Float(0.0)
         return dr.gather(mi.Float, self.prob_by_id, emitter_id(emitter), active & (emitter != None))  # noqa: E711
 
-    def pdf_direction(self, ref: mi.Interaction3f, ds: mi.DirectionSample3f, active: mi.Bool) -> mi.Float:
-        """Solid-angle density with which `sample_direction` from `ref` produces the direction of `ds`."""
+    def pdf_direction(
+        self, ref: mi.Interaction3f, ds: mi.DirectionSample3f, active: mi.Bool
+    ) -> mi.Float:
+        """Solid-angle density with which `sample_direction` from `ref` produces the direction
+        of `ds`."""
         if self.count == 0:
             return mi.Float(0.0)
-        return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(ds.emitter, active)
+        return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(
+            ds.emitter, active
+        )

@@ -1,17 +1,20 @@
-"""The error AOVs of a camera sample (`aovs=True`): the film channels that `pipeline.passes` turns into each
-pixel's variance, its predicted direct-application bias and its children (docs/adaptive.md)."""
+"""The error AOVs of a camera sample (`aovs=True`): the film channels that `pipeline.passes` turns
+into each pixel's variance, its predicted direct-application bias and its children
+(docs/adaptive.md)."""
 from __future__ import annotations
 
 from styletrace.gate import dr, mi
 
-#: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias, the children
+#: the film channels of `aovs=True`: the sample's squared value per channel, the predicted bias,
+#: the children
 AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
 
 
 def error_aovs(value, stats: list) -> list:
-    """One camera sample's AOVs in AOV_NAMES' order: its value squared per channel (the film's average of it
-    gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias prediction and the number
-    of children, from `stats`, the (lanes, AdaptiveDirect.stats) of each style slot there."""
+    """One camera sample's AOVs in AOV_NAMES' order: its value squared per channel (the film's
+    average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias
+    prediction and the number of children, from `stats`, the (lanes, AdaptiveDirect.stats) of each
+    style slot there."""
     bias, children = mi.Float(0.0), mi.Float(0.0)
     for lanes, st in stats:
         bias = dr.select(lanes, st["bias"], bias)

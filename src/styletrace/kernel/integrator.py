@@ -12,36 +12,38 @@ child estimates of the argument of g in a nested symbolic loop in the same SIMD 
 replication, so memory does not grow with n) and hands them to the estimator.
 
 Where styles apply (`stylize`):
-- first_hit: the camera ray's first hit. Objects whose BSDF is a `styled` wrapper use their own style
-  there; all other objects use the integrator's style.
-- first_n_hits: the first N = stylize_depth vertices of every path, recursively (a child of a level-l
-  vertex takes one BSDF-sampled bounce to the level-(l+1) vertex; children of the last level are
-  ordinary path-traced samples). Cost per camera sample is the product of the per-level counts.
+- first_hit: the camera ray's first hit. Objects whose BSDF is a `styled` wrapper use their own
+  style there; all other objects use the integrator's style.
+- first_n_hits: the first N = stylize_depth vertices of every path, recursively (a child of a
+  level-l vertex takes one BSDF-sampled bounce to the level-(l+1) vertex; children of the last level
+  are ordinary path-traced samples). Cost per camera sample is the product of the per-level counts.
 - first_object_hit: the first vertex *on a styled object* along each path, at any depth: a stylized
-  object seen through a mirror or a glass is still stylized. Paths are ordinary path-traced walks that
-  halt on styled objects; with N > 1 the children halt again on the next styled object, N levels deep.
-  The integrator's own style must be identity here.
+  object seen through a mirror or a glass is still stylized. Paths are ordinary path-traced walks
+  that halt on styled objects; with N > 1 the children halt again on the next styled object, N
+  levels deep. The integrator's own style must be identity here.
 
-Feature lines (`lines`, `line_mode lifted`; line_hooks.py, docs/lines.md): walks and bounces carry the
-line state of the vertex they leave (`line_states`, one per stylized level); line_hooks.py decides the
-camera sample's own lines before anything else is traced.
+Feature lines (`lines`, `line_mode lifted`; line_hooks.py, docs/lines.md): walks and bounces carry
+the line state of the vertex they leave (`line_states`, one per stylized level); line_hooks.py
+decides the camera sample's own lines before anything else is traced.
 
-Every walk takes the render's `walk_config` (path.WalkConfig: depths, emitter sampler, null and media
-switches) and its own hooks (path.Hooks: where to halt, lights to skip, lines, tone); the surface and
-volume walks share both, so lines and LLaT's image coordinate reach every stylized level with media too.
+Every walk takes the render's `walk_config` (path.WalkConfig: depths, emitter sampler, null and
+media switches) and its own hooks (path.Hooks: where to halt, lights to skip, lines, tone); the
+surface and volume walks share both, so lines and LLaT's image coordinate reach every stylized level
+with media too.
 
-Participating media (volume.py; the switch `WalkConfig.media` is taken at trace time, so scenes without
-media trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex. Along a ray that leads
-to one (the camera ray, the bounce between first_n_hits levels, a first_object_hit walk) a lane whose free
-flight ends in a real medium collision first goes on as an ordinary volumetric path, unstylized; the
-others reach the surface with the transmittance weight and are stylized there. Children are full
-volumetric paths, so with the identity style the image is Mitsuba's `volpath`.
+Participating media (volume.py; the switch `WalkConfig.media` is taken at trace time, so scenes
+without media trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex.
+Along a ray that leads to one (the camera ray, the bounce between first_n_hits levels, a
+first_object_hit walk) a lane whose free flight ends in a real medium collision first goes on as an
+ordinary volumetric path, unstylized; the others reach the surface with the transmittance weight and
+are stylized there. Children are full volumetric paths, so with the identity style the image is
+Mitsuba's `volpath`.
 
-The expansion pass (`expansion_pass` m > 0, estimator series; expansion.py): before a render's passes the
-front end calls `prepare_expansion`, a render of a few camera samples per pixel in which the first stylized
-vertex only collects the moments of m children per pixel (less its emission); the render's series
-estimators at the first stylized level then expand about a b from their pixel's moments
-(`estimator_registry.series_with_pass`). Deeper levels keep their in-lane pilot.
+The expansion pass (`expansion_pass` m > 0, estimator series; expansion.py): before a render's
+passes the front end calls `prepare_expansion`, a render of a few camera samples per pixel in which
+the first stylized vertex only collects the moments of m children per pixel (less its emission); the
+render's series estimators at the first stylized level then expand about a b from their pixel's
+moments (`estimator_registry.series_with_pass`). Deeper levels keep their in-lane pilot.
 
 Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
 through area lights and see black where they escape, as in Mitsuba's `path`.
@@ -75,46 +77,56 @@ from styletrace.kernel.vertex import Site, emission, environment
 from styletrace.kernel.volume import volume_walk
 from styletrace.styles.base import Vertex
 
-#: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it costs:
-#: benchmarks/recursion_depth.py, tests/kernel/test_recursion_depth.py)
+#: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it
+#: costs: benchmarks/recursion_depth.py, tests/kernel/test_recursion_depth.py)
 OPTIMIZE_LOOPS = False
 
 
 def tracing():
-    """The Dr.Jit flags under which styletrace traces its kernels (scoped: a user's own Dr.Jit code keeps
-    its settings). OptimizeLoops off: with it, Dr.Jit traces every symbolic loop's body twice (a second
-    pass drops the state that the first found loop-invariant), and a stylized level's loop body holds the
-    next level's loop, so the trace time doubled per level (identity, inner 1: 10 s at 12 levels and 107 s at
-    14 with the flag, below 0.06 s at any depth up to 16 without; BENCHMARKS.md, recursion depth). The images
-    are bit-identical either way (tests/kernel/test_recursion_depth.py), and the kernels' run time shows no
-    consistent difference."""
+    """The Dr.Jit flags under which styletrace traces its kernels (scoped: a user's own Dr.Jit code
+    keeps its settings). OptimizeLoops off: with it, Dr.Jit traces every symbolic loop's body twice
+    (a second pass drops the state that the first found loop-invariant), and a stylized level's loop
+    body holds the next level's loop, so the trace time doubled per level (identity, inner 1: 10 s
+    at 12 levels and 107 s at 14 with the flag, below 0.06 s at any depth up to 16 without;
+    BENCHMARKS.md, recursion depth). The images are bit-identical either way
+    (tests/kernel/test_recursion_depth.py), and the kernels' run time shows no consistent
+    difference."""
     return dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS)
 
 
 class Target:
-    """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with these BSDFs."""
+    """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with
+    these BSDFs."""
 
     def __init__(self, slot: S.StyleSlot, bsdfs=(), emitters=()):
         self.slot, self.bsdfs, self.emitters = slot, list(bsdfs), list(emitters)
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
-    # per-render state, set and cleared by `render_context.RenderContext` only (its module doc says why)
+    # per-render state, set and cleared by `render_context.RenderContext` only (its module doc
+    # says why)
     targets = ()         # the style targets of the scene being traced
     emitters = None      # its emitter sampler
-    walk_config = None   # path.WalkConfig: what every walk of the render shares (scene, emitters, depths)
+    # path.WalkConfig: what every walk of the render shares (scene, emitters, depths)
+    walk_config = None
     view = None          # its camera's forward vector
-    nulls = media = see_through = False  # null-scattering surfaces / participating media / pure null BSDFs
+    # null-scattering surfaces / participating media / pure null BSDFs
+    nulls = media = see_through = False
     lines = None         # feature lines bound to the scene being traced (lines.py), else None
-    lifted = None        # line_mode lifted: LLaT's line types bound to the scene (lifted_lines.py), else None
-    line_states = {}     # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
+    # line_mode lifted: LLaT's line types bound to the scene (lifted_lines.py), else None
+    lifted = None
+    # lines.LineState at the vertex of each stylized level (-1: the camera), while tracing
+    line_states = {}
     tone = None          # anchors.Tone where a style reads image coordinates (Vertex.s), else None
-    tone_states = {}     # anchors.ToneState at the vertex of each stylized level (-1: the camera), while tracing
-    #: lanes where a line fired on the camera ray trace nothing more (False only to measure the saving:
-    #: benchmarks/lines_cost.py)
+    # anchors.ToneState at the vertex of each stylized level (-1: the camera), while tracing
+    tone_states = {}
+    #: lanes where a line fired on the camera ray trace nothing more (False only to measure the
+    #: saving: benchmarks/lines_cost.py)
     line_short_circuit = True
 
-    def __init__(self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None):
+    def __init__(
+        self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None
+    ):
         """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
         (`S.parse(values)`; the Python API and the CLI build it this way, parsing once)."""
         super().__init__(props)
@@ -128,23 +140,27 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     @classmethod
     def from_values(cls, values: dict) -> "StylizedIntegrator":
-        """A `stylized` integrator from property values (style, style parameters, inner_samples, ...)."""
+        """A `stylized` integrator from property values (style, style parameters,
+        inner_samples, ...)."""
         values = {k: v for k, v in values.items() if k != "type"}
         return cls(mi.Properties(), S.parse(values), values)
 
     def prepare_expansion(self, scene: mi.Scene, seed: int):
-        """Run the expansion pass for the scene's current film crop with `seed` (once per crop and seed; a no-op
-        with expansion_pass 0); returns its `expansion.Moments` or None."""
+        """Run the expansion pass for the scene's current film crop with `seed` (once per crop and
+        seed; a no-op with expansion_pass 0); returns its `expansion.Moments` or None."""
         m = self.settings.expansion_pass
         return self.expansion.prepare(self, scene, m, int(seed)) if m else None
 
     # ---- which styles apply where --------------------------------------------------------------
     def targets_for(self, scene: mi.Scene, graph: SceneGraph | None = None) -> list[Target]:
-        """Which style applies where in `scene`: its styled BSDFs wherever they sit (on shapes, inside wrappers
-        such as twosided, mask, blendbsdf, and in shapegroups seen through instances: scene_graph.py;
-        `bsdfs[0]` is the styled BSDF itself), then the integrator's own style for all other objects."""
+        """Which style applies where in `scene`: its styled BSDFs wherever they sit (on shapes,
+        inside wrappers such as twosided, mask, blendbsdf, and in shapegroups seen through
+        instances: scene_graph.py; `bsdfs[0]` is the styled BSDF itself), then the integrator's own
+        style for all other objects."""
         graph = SceneGraph(scene) if graph is None else graph
-        targets = [Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled]
+        targets = [
+            Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled
+        ]
         if self.settings.stylize != "first_object_hit":
             targets.append(Target(self.settings.slot))  # the integrator's style: all other objects
         return targets
@@ -158,8 +174,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     # ---- the tree ------------------------------------------------------------------------------
     def _walk(self, sampler, start: Start, active, hooks: Hooks = NO_HOOKS):
-        """path.walk, or volume.py's walk where the scene has media (a trace-time switch: scenes without
-        media trace exactly the plain kernel); both take the render's `walk_config`."""
+        """path.walk, or volume.py's walk where the scene has media (a trace-time switch: scenes
+        without media trace exactly the plain kernel); both take the render's `walk_config`."""
         cfg = self.walk_config
         return (volume_walk if cfg.media else walk)(cfg, sampler, start, active, hooks)
 
@@ -173,19 +189,25 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             start = Start(site.pi, site.ray, site.depth, medium=site.medium)
             return self.walk(level + 1, sampler, start, active, halt_at_start=False)
         if self.media:
-            # first_n_hits through media: x samples delta lights only, its BSDF sample flies through the media
-            # to the next surface vertex, stylized at the next level; a lane that scatters in a medium on
-            # the way goes on as an ordinary volumetric path (volume.py)
+            # first_n_hits through media: x samples delta lights only, its BSDF sample flies through
+            # the media to the next surface vertex, stylized at the next level; a lane that scatters
+            # in a medium on the way goes on as an ordinary volumetric path (volume.py)
             first = mi.UInt32(site.depth)
-            start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium, delta=True)
+            start = Start(
+                site.pi, site.ray, site.depth, opaque=True, medium=site.medium, delta=True
+            )
             w = self._walk(sampler, start, active, Hooks(stop=lambda si2, d: d == first + 1,
                                                          lines=walk_lines(self, level),
                                                          tone=self.tone_states.get(level)))
             if self.lines is not None:
                 self.line_states[level + 1] = w.lines
             self.tone_states[level + 1] = w.tone
-            si2 = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            deeper = self.stylized(level + 1, sampler, Site(w.pi, si2, w.ray, w.depth, w.medium), w.halted)
+            si2 = w.pi.compute_surface_interaction(
+                w.ray, ray_flags=mi.RayFlags.All, active=w.halted
+            )
+            deeper = self.stylized(
+                level + 1, sampler, Site(w.pi, si2, w.ray, w.depth, w.medium), w.halted
+            )
             return w.L + dr.select(w.halted, w.beta * deeper, 0.0)
         # first_n_hits: one bounce to the next vertex, which is stylized as well
         b = bounce(self.walk_config, sampler, site, active,
@@ -195,11 +217,14 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         self.tone_states[level + 1] = b.tone
         deeper = self.stylized(level + 1, sampler, Site(b.pi, b.si, b.ray, site.depth + 1), b.hit)
         scene = self.walk_config.scene
-        return b.L + dr.select(b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0)
+        return b.L + dr.select(
+            b.go, b.weight * dr.select(b.hit, deeper, environment(scene, b.si, b.go)), 0.0
+        )
 
     def walk(self, level: int, sampler, start: Start, active, halt_at_start: bool) -> mi.Spectrum:
         """A path-traced walk from `start` that halts on styled objects and stylizes them at `level`
-        (with `halt_at_start`, at the start vertex too; else that vertex scatters by its opaque part)."""
+        (with `halt_at_start`, at the start vertex too; else that vertex scatters by its
+        opaque part)."""
         first = mi.UInt32(start.depth)
 
         def stop(si, d):
@@ -217,8 +242,9 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return self.through(w, value)
 
     def through(self, w, value) -> mi.Spectrum:
-        """The walk's radiance: what it gathered before halting plus its throughput times the stylized
-        value where it halted (a seam for `lookdev.record`, which keeps both per camera sample)."""
+        """The walk's radiance: what it gathered before halting plus its throughput times the
+        stylized value where it halted (a seam for `lookdev.record`, which keeps both per
+        camera sample)."""
         return w.L + dr.select(w.halted, w.beta * value, 0.0)
 
     def stylized(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
@@ -226,18 +252,24 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         si, ray, depth = site.si, site.ray, site.depth
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
-        if self.tone is not None:  # LLaT's image coordinate (anchors.py), traced only where a style reads it
+        # LLaT's image coordinate (anchors.py), traced only where a style reads it
+        if self.tone is not None:
             v.s, v.method = self.tone.coordinate(self.walk_config.scene, si, ray, depth,
                                                  self.tone_states.get(level), active)
         styled = self.styled_mask(si) if len(self.targets) > 1 else mi.Bool(False)
         total = mi.Spectrum(0.0)
         for target in self.targets:
-            here = active & (_any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled)
-            total = dr.select(here, self.estimate(target.slot, level, sampler, site, here, v), total)
+            here = active & (
+                _any_ptr(si.bsdf(), target.bsdfs, mi.BSDFPtr) if target.bsdfs else ~styled
+            )
+            total = dr.select(
+                here, self.estimate(target.slot, level, sampler, site, here, v), total
+            )
         return total
 
     def estimate(self, slot: S.StyleSlot, level, sampler, site: Site, active, v) -> mi.Spectrum:
-        """The slot's estimate of g(E[L_o]) at `site` on the `active` lanes (v: the style's Vertex)."""
+        """The slot's estimate of g(E[L_o]) at `site` on the `active` lanes (v: the
+        style's Vertex)."""
         scene, si = self.walk_config.scene, site.si
         style = slot.style
         if style.closed_form:  # no children: the AOVs keep 0 here
@@ -255,47 +287,61 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             return smp.next_1d(), (smp,)
 
         collector = self.expansion.collector
-        if collector is not None and level == 0:  # the expansion pass: the first vertex's moments only
+        # the expansion pass: the first vertex's moments only
+        if collector is not None and level == 0:
             if slot.estimator == "series":
-                s1, s2 = pass_moments(lambda smp: draw((smp,))[0], sampler, active, collector.children,
-                                      emission(scene, si, active))
+                s1, s2 = pass_moments(
+                    lambda smp: draw((smp,))[0],
+                    sampler,
+                    active,
+                    collector.children,
+                    emission(scene, si, active),
+                )
                 collector.add(dr.width(site.ray.d), active, s1, s2)
             return mi.Color3f(0.0)
         moments = None
-        if level == 0 and self._lane_moments is not None:  # the pass's moments of x - e, and this vertex's e
+        # the pass's moments of x - e, and this vertex's e
+        if level == 0 and self._lane_moments is not None:
             moments = (self._lane_moments, emission(scene, si, active))
         emitted = emission(scene, si, active) if firefly_cap(self.settings) else None
         est = make_estimator(slot, level, v, self.settings, moments, emitted)
         value, _ = est.run(draw, (sampler,), uniform, active, like=mi.Color3f)
-        stats = getattr(est.inner, "stats", None)  # AdaptiveDirect's; none for a styled object's other estimator
+        # AdaptiveDirect's; none for a styled object's other estimator
+        stats = getattr(est.inner, "stats", None)
         if level == 0 and self.settings.aovs and stats is not None:
             self._stats.append((active, stats))
         return value
 
     def _render_reuse(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
-        """`render` with reuse=pixels: a pass is rendered by `reuse.render`, which needs every camera sample's
-        neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see each other). It is set
-        on the instance only then: a Python `render` on the class, even one calling Mitsuba's, changed how
-        a render in progress takes Ctrl-C (Mitsuba's own handler took the signal and the pass ran on)."""
+        """`render` with reuse=pixels: a pass is rendered by `reuse.render`, which needs every
+        camera sample's neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see
+        each other). It is set on the instance only then: a Python `render` on the class, even one
+        calling Mitsuba's, changed how a render in progress takes Ctrl-C (Mitsuba's own handler took
+        the signal and the pass ran on)."""
         from styletrace.kernel import reuse
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         with tracing():
-            image = reuse.render(self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count()))
+            image = reuse.render(
+                self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count())
+            )
         return image if develop else mi.TensorXf()
 
     def sample(self, scene, sampler, ray, medium=None, active=True):
-        with RenderContext(self, scene):  # binds the scene's targets, emitters, lines, view; always releases them
+        # binds the scene's targets, emitters, lines, view; always releases them
+        with RenderContext(self, scene):
             if medium is None and scene.sensors():
                 medium = scene.sensors()[0].get_medium()
             with tracing():
                 return self._sample(scene, sampler, ray, active, medium)
 
     def scene_problem(self) -> str | None:
-        """Why this integrator cannot render the scene bound to it (its lines with media), or None."""
+        """Why this integrator cannot render the scene bound to it (its lines with media),
+        or None."""
         return line_problem(self.settings, self.media)
 
     def _sample(self, scene, sampler, ray, active, medium=None):
-        self._stats = []  # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
+        # (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex
+        self._stats = []
         value, valid, _ = self._radiance(scene, sampler, ray, active, medium)
         aovs = error_aovs(value, self._stats) if self.settings.aovs else []
         self._stats = []
@@ -310,14 +356,19 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # every random decision below the camera ray comes from an independent stream per lane
         sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
         m = self.settings.expansion_pass
-        # the lane's pixel's moments from the expansion pass (none while that pass itself is rendered)
+        # the lane's pixel's moments from the expansion pass (none while that pass itself
+        # is rendered)
         self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
                               if m and self.expansion.collector is None else None)
         if self.lifted is not None:
-            return lifted_lines(self, self._stylize, scene, sampler, camera_ray, ray, active, medium)
+            return lifted_lines(
+                self, self._stylize, scene, sampler, camera_ray, ray, active, medium
+            )
         if self.lines is None:
             return self._stylize(scene, sampler, ray, active, medium)
-        return camera_edge(self, self._stylize, scene, sampler, camera_ray, ray, active, medium, spp)
+        return camera_edge(
+            self, self._stylize, scene, sampler, camera_ray, ray, active, medium, spp
+        )
 
     def _stylize(self, scene, sampler, ray, active, medium=None):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)
@@ -330,18 +381,30 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # alpha, as Mitsuba's `path`: the camera ray found a surface, or a visible environment
         valid = active & (pi.is_valid() | (scene.environment() is not None and not hide))
         if self.settings.stylize == "first_object_hit":
-            if self.media:  # the walk hides what it meets before its first scattering (a medium scatters too)
+            # the walk hides what it meets before its first scattering (a medium scatters too)
+            if self.media:
                 start = Start(pi, ray, mi.UInt32(0), medium=medium, flight=True, hide=hide)
                 return self.walk(0, sampler, start, active, halt_at_start=True), valid, []
             start = active & pi.is_valid() if hide else active  # a hidden environment is black
-            return self.walk(0, sampler, Start(pi, ray, mi.UInt32(0)), start, halt_at_start=True), valid, []
+            return (
+                self.walk(0, sampler, Start(pi, ray, mi.UInt32(0)), start, halt_at_start=True),
+                valid,
+                [],
+            )
         if self.media:
-            # the stylized vertex is the first surface that scatters; lanes that scatter in a medium before
-            # reaching it go on as ordinary volumetric paths (volume.py), the others carry the transmittance
-            w = self._walk(sampler, Start(pi, ray, 0, medium=medium, flight=True, hide=hide), active,
-                           Hooks(stop=lambda si, d: d == 0))
+            # the stylized vertex is the first surface that scatters; lanes that scatter in a medium
+            # before reaching it go on as ordinary volumetric paths (volume.py), the others
+            # carry the transmittance
+            w = self._walk(
+                sampler,
+                Start(pi, ray, 0, medium=medium, flight=True, hide=hide),
+                active,
+                Hooks(stop=lambda si, d: d == 0),
+            )
             si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            value = self.stylized(0, sampler, Site(w.pi, si, w.ray, mi.UInt32(0), w.medium), w.halted)
+            value = self.stylized(
+                0, sampler, Site(w.pi, si, w.ray, mi.UInt32(0), w.medium), w.halted
+            )
             return self.through(w, value), valid | w.halted | (active & (w.depth > 0)), []
         if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
             front = first_scattering(scene, sampler, pi, ray, active)

@@ -3,11 +3,11 @@
 The n children of a stylized vertex must be independent draws: the unbiased estimators rely on it
 (products and U-statistics of samples) and direct application's bias depends on it. Mitsuba's
 samplers stratify across camera samples, not across the iterations of a symbolic loop, and some of
-them cannot advance inside one at all: `ldsampler`'s dimension counter is a trace-time constant, so all
-n children receive the same numbers (measured: Var(<I>_n) does not fall with n), and `orthogonal`
-correlates them. So the scene's sampler only places the camera ray and seeds this generator: a PCG32
-stream per lane (initstate from two of the scene sampler's numbers, stream index from the lane), used
-for every random decision below the first hit.
+them cannot advance inside one at all: `ldsampler`'s dimension counter is a trace-time constant, so
+all n children receive the same numbers (measured: Var(<I>_n) does not fall with n), and
+`orthogonal` correlates them. So the scene's sampler only places the camera ray and seeds this
+generator: a PCG32 stream per lane (initstate from two of the scene sampler's numbers, stream index
+from the lane), used for every random decision below the first hit.
 
 It offers the two Sampler methods the path tracer uses, `next_1d` and `next_2d`, and is a Dr.Jit
 struct, so it travels in loop state like Mitsuba's own samplers.

@@ -1,5 +1,6 @@
-"""Where the `stylized` integrator meets its feature lines: the camera sample's own lines, decided before
-anything else is traced for it (edge 0, LLaT's lifted lines), and the hook each walk or bounce carries.
+"""Where the `stylized` integrator meets its feature lines: the camera sample's own lines, decided
+before anything else is traced for it (edge 0, LLaT's lifted lines), and the hook each walk or
+bounce carries.
 
 Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ray replaces the
 camera sample (nothing else is traced for it); walks and bounces carry the line state of the vertex
@@ -12,8 +13,8 @@ that follow the camera sample's own base path to `line_depth` vertices, before a
 traced; those paths know no media, so with media it draws the camera ray's lines only
 (`line_problem`).
 
-Each function takes the integrator (kernel/integrator.py) bound to a scene and `stylize`, its trace of the
-camera ray, which it calls for the lanes where no line fired.
+Each function takes the integrator (kernel/integrator.py) bound to a scene and `stylize`, its trace
+of the camera ray, which it calls for the lanes where no line fired.
 """
 from __future__ import annotations
 
@@ -23,7 +24,8 @@ from styletrace.kernel.lifted_lines import compose_sample
 
 
 def line_problem(settings: S.Settings, media: bool) -> str | None:
-    """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`), or None."""
+    """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`),
+    or None."""
     lines = settings.lines
     if media and lines is not None and lines.mode == "lifted" and lines.depth > 1:
         return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: "
@@ -32,18 +34,20 @@ def line_problem(settings: S.Settings, media: bool) -> str | None:
 
 
 def walk_lines(integ, level: int):
-    """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's first
-    vertex, where first_object_hit's camera walk starts): the line settings and that vertex's state."""
+    """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's
+    first vertex, where first_object_hit's camera walk starts): the line settings and that
+    vertex's state."""
     if integ.lines is None:
         return None
     return integ.lines, integ.line_states[level]
 
 
 def camera_edge(integ, stylize, scene, sampler, camera_ray, ray, active, medium, spp):
-    """Edge 0: a feature line on the camera ray replaces the pixel sample (lines.py); the other lanes are
-    stylized, their walks starting from the camera's line state."""
+    """Edge 0: a feature line on the camera ray replaces the pixel sample (lines.py); the other
+    lanes are stylized, their walks starting from the camera's line state."""
     seen, camera = integ.lines.camera(scene, sampler, camera_ray, spp, active)
-    # the camera ray's first hit: where first_object_hit's walk starts and the first_hit/first_n_hits vertex
+    # the camera ray's first hit: where first_object_hit's walk starts and the
+    # first_hit/first_n_hits vertex
     integ.line_states = {-1: camera, 0: camera}
     live = active & ~seen.fired if integ.line_short_circuit else active
     value, valid, aovs = stylize(scene, sampler, ray, live, medium)
@@ -51,9 +55,9 @@ def camera_edge(integ, stylize, scene, sampler, camera_ray, ray, active, medium,
 
 
 def lifted(integ, stylize, scene, sampler, camera_ray, ray, active, medium):
-    """line_mode lifted (LLaT Eq. 34): each line type's auxiliary pairs are tested for the camera sample
-    (its film point and lens sample kept); the first type in priority order that fires gives the sample
-    its colour, and L is traced only where none fired."""
+    """line_mode lifted (LLaT Eq. 34): each line type's auxiliary pairs are tested for the camera
+    sample (its film point and lens sample kept); the first type in priority order that fires gives
+    the sample its colour, and L is traced only where none fired."""
     bound = integ.lifted
     s, aperture = bound.conditioning(camera_ray)
     fired = bound.fired(s, sampler, active, aperture)

@@ -1,46 +1,49 @@
-"""Physically based feature lines on path edges (West 2021, "Physically-Based Feature Line Rendering",
-ACM TOG 40(6) 246; as described in West, Mukherjee and Yue 2026, "Lifting Lines and Tone").
+"""Physically based feature lines on path edges (West 2021, "Physically-Based Feature Line
+Rendering", ACM TOG 40(6) 246; as described in West, Mukherjee and Yue 2026, "Lifting Lines
+and Tone").
 
-A line is detected on an *edge* of a camera path (the camera ray is edge 0, the ray leaving the first
-hit edge 1, ...) for edges 0 .. `depth` - 1, and only while every vertex before the edge scattered
-non-diffusely (a line is seen in a mirror, through glass, out of focus; not in diffuse reflection).
-Where a line is found the path absorbs: it returns throughput x line colour and ends.
+A line is detected on an *edge* of a camera path (the camera ray is edge 0, the ray leaving the
+first hit edge 1, ...) for edges 0 .. `depth` - 1, and only while every vertex before the edge
+scattered non-diffusely (a line is seen in a mirror, through glass, out of focus; not in diffuse
+reflection). Where a line is found the path absorbs: it returns throughput x line colour and ends.
 
-Detection: N auxiliary rays in a cone around the base edge, one stencil point (a, b) per ray, uniform
-and independent in a disc of radius `width` / 2 pixels (so a line is `width` pixels wide, and a line
-is found by each ray with the same probability q: coverage 1 - (1 - q)^N).
-- Camera edge: o_j = o + a (o_x - o) + b (o_y - o), d_j = normalize(d + a (d_x - d) + b (d_y - d)) from
-  the camera ray's own differentials (one-pixel ones: Mitsuba scales them by 1/sqrt(spp)), so depth of
-  field is shared.
-- Later edges: the beam of one pixel, its width at the camera (`spread`, |o_x - o|: 0 for a pinhole, whose
-  differentials share the origin, about 0 for a thin lens (Mitsuba's near-clip offset); the pixel's width for an orthographic sensor, whose
-  rays are parallel) and its angle (`angle`, |d_x - d|), with the accumulated path length D from the
-  camera set the stencil: origins on the vertex's tangent plane at lateral offset
-  (spread + angle * D) * (a, b), directions d + angle * (a, b). After a flat mirror this is exactly the
-  beam of the mirrored camera, so a reflected line keeps its screen width.
+Detection: N auxiliary rays in a cone around the base edge, one stencil point (a, b) per ray,
+uniform and independent in a disc of radius `width` / 2 pixels (so a line is `width` pixels wide,
+and a line is found by each ray with the same probability q: coverage 1 - (1 - q)^N).
+- Camera edge: o_j = o + a (o_x - o) + b (o_y - o), d_j = normalize(d + a (d_x - d) + b (d_y - d))
+  from the camera ray's own differentials (one-pixel ones: Mitsuba scales them by 1/sqrt(spp)), so
+  depth of field is shared.
+- Later edges: the beam of one pixel, its width at the camera (`spread`, |o_x - o|: 0 for a pinhole,
+  whose differentials share the origin, about 0 for a thin lens (Mitsuba's near-clip offset); the
+  pixel's width for an orthographic sensor, whose rays are parallel) and its angle (`angle`, |d_x -
+  d|), with the accumulated path length D from the camera set the stencil: origins on the vertex's
+  tangent plane at lateral offset (spread + angle * D) * (a, b), directions d + angle * (a, b).
+  After a flat mirror this is exactly the beam of the mirrored camera, so a reflected line keeps its
+  screen width.
 Tests between the base hit q and an auxiliary hit s (any one fires; each can be switched off):
 - silhouette: one of the two hits a surface, the other escapes;
-- boundary: both hit, on different shapes (as the loaded scene holds them: Mitsuba merges meshes that
-  share a BSDF into one shape when it loads a scene, so their seams draw nothing here);
+- boundary: both hit, on different shapes (as the loaded scene holds them: Mitsuba merges meshes
+  that share a BSDF into one shape when it loads a scene, so their seams draw nothing here);
 - crease: 1 - |n_q . n_s| > `crease` (geometric normals; |.| so flipped normals do not fire);
 - albedo: |lum(albedo_q) - lum(albedo_s)| > `albedo`;
-- depth: the distance of either point from the other's tangent plane exceeds `slope` times the beam's
-  radius at q, spread + angle * t per pixel (slope-aware: any plane, however slanted, gives 0). The beam
-  of an orthographic sensor has angle 0 and a constant width: with a radius of angle * t alone, every
-  rounding error of a flat floor fired and an orthographic image was all line.
-Every ray of the stencil (the base ray too) passes surfaces with a pure `null` BSDF, which nothing sees
-(the boundary of a participating medium): outlining them drew the box of a medium. Masks, partly opaque,
-stay surfaces. The line point is the nearest (along its ray) of the points of the pairs that fire; its world y picks the
-colour of a `gradient`. `objects`: ids of the shapes that draw lines (empty: all); a pair draws where
-either of its hits is on one of them.
+- depth: the distance of either point from the other's tangent plane exceeds `slope` times the
+  beam's radius at q, spread + angle * t per pixel (slope-aware: any plane, however slanted, gives
+  0). The beam of an orthographic sensor has angle 0 and a constant width: with a radius of angle *
+  t alone, every rounding error of a flat floor fired and an orthographic image was all line.
+Every ray of the stencil (the base ray too) passes surfaces with a pure `null` BSDF, which nothing
+sees (the boundary of a participating medium): outlining them drew the box of a medium. Masks,
+partly opaque, stay surfaces. The line point is the nearest (along its ray) of the points of the
+pairs that fire; its world y picks the colour of a `gradient`. `objects`: ids of the shapes that
+draw lines (empty: all); a pair draws where either of its hits is on one of them.
 
 `mode` expectation (LLaT, West, Mukherjee and Yue 2026): lines as a style of expectation,
     g = (1 - w) c + w L,  w = E[m]^k,
-m(u, v) = "no line between the stencil points u and v" for a random pair of auxiliary rays (the same tests
-between their two hits). The product of k independent metric samples estimates E[m]^k without bias, and,
-m being binary, it is 0 as soon as one pair fires: the sample is then c and L is never traced (the
-integrator masks those lanes off). k is the opacity control. The absorbing mode is the same composition
-with N rays tested against the base ray, so both share `Seen` and the integrator's and walk's hooks.
+m(u, v) = "no line between the stencil points u and v" for a random pair of auxiliary rays (the same
+tests between their two hits). The product of k independent metric samples estimates E[m]^k without
+bias, and, m being binary, it is 0 as soon as one pair fires: the sample is then c and L is never
+traced (the integrator masks those lanes off). k is the opacity control. The absorbing mode is the
+same composition with N rays tested against the base ray, so both share `Seen` and the integrator's
+and walk's hooks.
 """
 from __future__ import annotations
 
@@ -55,9 +58,9 @@ from styletrace.gate import dr, mi
 MAX_NULL_PASSES = 16
 
 class LineState:
-    """What a path carries for lines: accumulated length from the camera, whether no diffuse vertex was
-    met yet, and one pixel's beam (from the camera ray's differentials): its angle and its width at the
-    camera."""
+    """What a path carries for lines: accumulated length from the camera, whether no diffuse vertex
+    was met yet, and one pixel's beam (from the camera ray's differentials): its angle and its width
+    at the camera."""
     DRJIT_STRUCT = {"D": mi.Float, "alive": mi.Bool, "angle": mi.Float, "spread": mi.Float}
 
     def __init__(self, D=None, alive=None, angle=None, spread=None):
@@ -78,7 +81,8 @@ class Seen:
 
 
 def object_shapes(scene: mi.Scene, objects) -> list:
-    """The shapes named by `line_objects` (empty: all draw lines); an unknown id is refused in one line."""
+    """The shapes named by `line_objects` (empty: all draw lines); an unknown id is refused in
+    one line."""
     if not objects:
         return []
     by_id = {shape.id(): shape for shape in scene.shapes()}
@@ -100,13 +104,16 @@ def on_shapes(si, shapes: list) -> mi.Bool:
 
 
 class Lines:
-    """The line settings bound to one scene for one trace (shape pointers, the gradient's y range)."""
+    """The line settings bound to one scene for one trace (shape pointers, the gradient's
+    y range)."""
 
     def __init__(self, settings: LineSettings, scene: mi.Scene, see_through: bool = False):
-        """`see_through`: the scene has a surface with a pure `null` BSDF (`SceneGraph.has_see_through`), so
-        the stencil's rays must pass such surfaces (a loop per ray that other scenes do without)."""
+        """`see_through`: the scene has a surface with a pure `null` BSDF
+        (`SceneGraph.has_see_through`), so the stencil's rays must pass such surfaces (a loop per
+        ray that other scenes do without)."""
         self.s = settings
-        # positions, geometric normals and shapes are all the tests need; the albedo test evaluates textures
+        # positions, geometric normals and shapes are all the tests need; the albedo test
+        # evaluates textures
         self.flags = mi.RayFlags.All if "albedo" in settings.tests else mi.RayFlags.Minimal
         self.shapes = object_shapes(scene, settings.objects)
         self.see_through = see_through
@@ -127,32 +134,46 @@ class Lines:
     def _draws(self, si) -> mi.Bool:
         return on_shapes(si, self.shapes)
 
-    def trace(self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False) -> mi.SurfaceInteraction3f:
-        """The first hit along `ray` that is not a pure `null` surface; its `t` is measured from ray.o."""
+    def trace(
+        self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False
+    ) -> mi.SurfaceInteraction3f:
+        """The first hit along `ray` that is not a pure `null` surface; its `t` is measured
+        from ray.o."""
         if not self.see_through:
             return scene.ray_intersect(ray, ray_flags=self.flags, coherent=coherent, active=active)
         minimal = mi.RayFlags.Minimal
         pi = scene.ray_intersect_preliminary(ray, coherent=coherent, active=active)
         first = pi.compute_surface_interaction(ray, ray_flags=minimal, active=active)
-        state = (pi, mi.Ray3f(ray), mi.Float(0.0), active & first.is_valid() & pure_null(first.bsdf().flags()),
-                 mi.UInt32(0))
+        state = (
+            pi,
+            mi.Ray3f(ray),
+            mi.Float(0.0),
+            active & first.is_valid() & pure_null(first.bsdf().flags()),
+            mi.UInt32(0),
+        )
 
         def body(pi, ray, t, passing, n):
             si = pi.compute_surface_interaction(ray, ray_flags=minimal, active=passing)
             ahead = si.spawn_ray(ray.d)
             t = dr.select(passing, t + pi.t, t)
             ray = dr.select(passing, ahead, ray)
-            pi = dr.select(passing, scene.ray_intersect_preliminary(ahead, coherent=False, active=passing), pi)
+            pi = dr.select(
+                passing, scene.ray_intersect_preliminary(ahead, coherent=False, active=passing), pi
+            )
             nxt = pi.compute_surface_interaction(ray, ray_flags=minimal, active=passing)
             return pi, ray, t, passing & nxt.is_valid() & pure_null(nxt.bsdf().flags()), n + 1
 
-        pi, ray, t, _, _ = dr.while_loop(state, lambda pi, ray, t, passing, n: passing & (n < MAX_NULL_PASSES),
-                                         body, label="styletrace lines through null surfaces")
+        pi, ray, t, _, _ = dr.while_loop(
+            state,
+            lambda pi, ray, t, passing, n: passing & (n < MAX_NULL_PASSES),
+            body,
+            label="styletrace lines through null surfaces",
+        )
         si = pi.compute_surface_interaction(ray, ray_flags=self.flags, active=active)
         si.t = dr.select(si.is_valid(), si.t + t, si.t)
         return si
 
-    # ---- the edges --------------------------------------------------------------------------------
+    # ---- the edges -------------------------------------------------------------------------------
     def camera(self, scene, sampler, ray: mi.RayDifferential3f, spp: int, active: mi.Bool):
         """Edge 0, from the camera ray's differentials: (Seen, LineState for the edges below)."""
         scale = float(spp) ** 0.5   # undo Mitsuba's 1/sqrt(spp) scaling: one-pixel differentials
@@ -167,11 +188,22 @@ class Lines:
             return mi.Ray3f(o + a * ox + b * oy, dr.normalize(d + a * dx + b * dy))
 
         seen = self._detect(scene, sampler, q, aux, lambda t: spread + angle * t, active)
-        return seen, LineState(D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle,
-                               spread=spread)
+        return seen, LineState(
+            D=dr.select(q.is_valid(), q.t, dr.inf), alive=mi.Bool(True), angle=angle, spread=spread
+        )
 
-    def edge(self, scene, sampler, state: LineState, si, bs, ray: mi.Ray3f, pi: mi.PreliminaryIntersection3f,
-             index, active: mi.Bool):
+    def edge(
+        self,
+        scene,
+        sampler,
+        state: LineState,
+        si,
+        bs,
+        ray: mi.Ray3f,
+        pi: mi.PreliminaryIntersection3f,
+        index,
+        active: mi.Bool,
+    ):
         """The edge `ray` (leaving vertex si by the sample bs, reaching pi) with index `index`:
         (Seen, LineState after it)."""
         alive = state.alive & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Diffuse)
@@ -197,8 +229,12 @@ class Lines:
 
         seen = self._detect(scene, sampler, q, aux, state.width, go)
         # lanes that do not take this edge (halted at a stylized vertex, ended) keep their state
-        after = LineState(D=dr.select(active, D0 + dr.select(pi.is_valid(), pi.t, dr.inf), D0),
-                          alive=dr.select(active, alive, state.alive), angle=state.angle, spread=state.spread)
+        after = LineState(
+            D=dr.select(active, D0 + dr.select(pi.is_valid(), pi.t, dr.inf), D0),
+            alive=dr.select(active, alive, state.alive),
+            angle=state.angle,
+            spread=state.spread,
+        )
         return seen, after
 
     def _pair(self, a, b, radius_at, active):
@@ -217,7 +253,8 @@ class Lines:
             lum_a = mi.luminance(a.bsdf().eval_diffuse_reflectance(a, both))
             lum_b = mi.luminance(b.bsdf().eval_diffuse_reflectance(b, both))
             fire |= both & (dr.abs(lum_a - lum_b) > s.albedo)
-        # the pair's point: the nearer of its two hits (an occluder's outline is drawn over what is behind)
+        # the pair's point: the nearer of its two hits (an occluder's outline is drawn over what
+        # is behind)
         use_b = b_valid & (~a_valid | (b.t < a.t))
         t = dr.select(use_b, b.t, a.t)
         if "depth" in s.tests:
@@ -227,9 +264,10 @@ class Lines:
         return fire, dr.select(use_b, b.p, a.p), t
 
     def _detect(self, scene, sampler, q, aux, radius_at, active) -> Seen:
-        """absorb: N auxiliary rays `aux(a, b)` against the base hit q; expectation: k pairs of auxiliary
-        rays against each other. (a, b) uniform in the disc of radius width/2 pixels; `radius_at(t)`: the
-        beam's width per pixel at distance t along the edge (for the depth test)."""
+        """absorb: N auxiliary rays `aux(a, b)` against the base hit q; expectation: k pairs of
+        auxiliary rays against each other. (a, b) uniform in the disc of radius width/2 pixels;
+        `radius_at(t)`: the beam's width per pixel at distance t along the edge (for the
+        depth test)."""
         s = self.s
         half = 0.5 * s.width
         pairs = s.mode == "expectation"
@@ -241,20 +279,27 @@ class Lines:
         def body(j, smp, fired, best_t, best_p):
             fire, p, t = self._pair(hit(smp) if pairs else q, hit(smp), radius_at, active)
             better = fire & (t < best_t)
-            return j + 1, smp, fired | fire, dr.select(better, t, best_t), dr.select(better, p, best_p)
+            return (
+                j + 1,
+                smp,
+                fired | fire,
+                dr.select(better, t, best_t),
+                dr.select(better, p, best_p),
+            )
 
         count = s.k if pairs else s.samples
         state = (mi.UInt32(0), sampler, mi.Bool(False), mi.Float(dr.inf), mi.Point3f(0.0))
-        # lanes that test nothing (past line_depth, after a diffuse vertex, ended) leave the loop at once
+        # lanes that test nothing (past line_depth, after a diffuse vertex, ended) leave the loop
+        # at once
         _, _, fired, _, point = dr.while_loop(state, lambda j, *rest: active & (j < count), body,
                                               label="styletrace lines")
         return Seen(fired=fired, color=self.color(point))
 
 
 def pure_null(flags) -> Any:
-    """BSDF flags of a surface that lets every ray through unchanged (a `null` BSDF): of the lobe flags
-    (`BSDFFlags.All`) only Null, whatever the side flags; a mask or a BSDF with a null lobe besides others
-    is not. Works on a Python int and on a Dr.Jit UInt32."""
+    """BSDF flags of a surface that lets every ray through unchanged (a `null` BSDF): of the lobe
+    flags (`BSDFFlags.All`) only Null, whatever the side flags; a mask or a BSDF with a null lobe
+    besides others is not. Works on a Python int and on a Dr.Jit UInt32."""
     null, lobes = int(mi.BSDFFlags.Null), int(mi.BSDFFlags.All)
     if isinstance(flags, int):
         return flags & lobes == null

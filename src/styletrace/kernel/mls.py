@@ -1,26 +1,27 @@
-"""The local inverse of the mirror-anchor map: linear moving least squares (LLaT, Eq. 35, supplement S2.5).
+"""The local inverse of the mirror-anchor map: linear moving least squares (LLaT, Eq. 35,
+supplement S2.5).
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee and
-Yonghao Yue (ACM TOG 45(4), 2026); linear MLS after "Image Deformation Using Moving Least Squares",
-Scott Schaefer, Travis McPhail and Joe Warren (2006).
+Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
+Mukherjee and Yonghao Yue (ACM TOG 45(4), 2026); linear MLS after "Image Deformation Using Moving
+Least Squares", Scott Schaefer, Travis McPhail and Joe Warren (2006).
 
-Given candidate anchor vertices p_i (world points) with their image coordinates s_i and a query point x
-reached along the incoming direction d:
+Given candidate anchor vertices p_i (world points) with their image coordinates s_i and a query
+point x reached along the incoming direction d:
     chart:  the plane through x with normal n = -d/|d|; e1, e2 an orthonormal basis of it;
             q_i = ((p_i - x) . e1, (p_i - x) . e2) / sigma,  sigma = mean_i |q_i| (before scaling)
-    weights w_i = exp(-|q_i|^2)                                  (Gaussian, sigma = mean candidate distance)
+    weights w_i = exp(-|q_i|^2)            (Gaussian, sigma = mean candidate distance)
     fit     min_{A,b} sum_i w_i |A q_i + b - s_i|^2,   s(x) = b   (x is the chart's origin)
 The two 3x3 normal equations share one matrix M = sum_i w_i (1, q_i)(1, q_i)^T; b = first row of
 M^-1 (sum_i w_i s_i (1, q_i)). Working in sigma units keeps M's scale independent of the scene's.
 
 Fallbacks (supplement S2.5's chain), each taken where the one before it is not trusted:
-    MLS      M well conditioned (det M / (sum w)^3 > COND) and the weighted centroid of the q_i within
-             CENTRE sigma of the query: the fit interpolates rather than extrapolates;
+    MLS      M well conditioned (det M / (sum w)^3 > COND) and the weighted centroid of the q_i
+             within CENTRE sigma of the query: the fit interpolates rather than extrapolates;
     affine   the same fit with w_i = 1 (all candidates count equally), M well conditioned;
     nearest  the s_i of the candidate closest in the chart;
     first    the caller's first-edge coordinate.
-All functions here run on Dr.Jit arrays over lanes, the candidates unrolled as Python lists (their count is
-small and fixed), so no gather and no loop is traced.
+All functions here run on Dr.Jit arrays over lanes, the candidates unrolled as Python lists (their
+count is small and fixed), so no gather and no loop is traced.
 """
 from __future__ import annotations
 
@@ -30,16 +31,18 @@ from styletrace.gate import dr, mi
 CLOSED_PIXEL, CLOSED_DELTA, MLS, AFFINE, NEAREST, FIRST = 0, 1, 2, 3, 4, 5
 METHOD_NAMES = ("pixel", "all-delta", "mls", "affine", "nearest", "first-edge")
 
-#: det M / (sum w)^3 below this: the candidates are (nearly) collinear in the chart. For 3 candidates at unit
-#: distance spread evenly the ratio is 27/4 / 27 = 0.25; 1e-4 refuses only near-degenerate layouts.
+#: det M / (sum w)^3 below this: the candidates are (nearly) collinear in the chart. For 3
+#: candidates at unit distance spread evenly the ratio is 27/4 / 27 = 0.25; 1e-4 refuses only
+#: near-degenerate layouts.
 COND = 1e-4
 #: the weighted centroid farther than this many sigma from the query: the fit would extrapolate
 CENTRE = 0.75
 
 
 def _solve_b(sums, ss):
-    """b = e_0^T M^-1 r for the symmetric 3x3 M of `sums` = (S, Sx, Sy, Sxx, Sxy, Syy) and right-hand sides
-    `ss` = [(R, Rx, Ry) per output coordinate]; also det M. Cramer's rule on the first unknown."""
+    """b = e_0^T M^-1 r for the symmetric 3x3 M of `sums` = (S, Sx, Sy, Sxx, Sxy, Syy) and
+    right-hand sides `ss` = [(R, Rx, Ry) per output coordinate]; also det M. Cramer's rule on the
+    first unknown."""
     S, Sx, Sy, Sxx, Sxy, Syy = sums
     c00 = Sxx * Syy - Sxy * Sxy   # cofactors of the first column
     c01 = Sxy * Sy - Sx * Syy
@@ -64,14 +67,15 @@ def _sums(q, s, w, valid):
 
 
 def chart(x: mi.Point3f, d: mi.Vector3f):
-    """An orthonormal basis (e1, e2) of the plane through x normal to -d (the incoming direction's chart)."""
+    """An orthonormal basis (e1, e2) of the plane through x normal to -d (the incoming
+    direction's chart)."""
     e1, e2 = mi.coordinate_system(dr.normalize(-d))
     return e1, e2
 
 
 def invert(x: mi.Point3f, d: mi.Vector3f, points, coords, valid, first: mi.Point2f):
-    """s(x) from the candidates (world `points`, image `coords` as (Float, Float), `valid` masks) by the
-    chain MLS -> affine -> nearest -> `first`; returns (Point2f, method code UInt32)."""
+    """s(x) from the candidates (world `points`, image `coords` as (Float, Float), `valid` masks) by
+    the chain MLS -> affine -> nearest -> `first`; returns (Point2f, method code UInt32)."""
     e1, e2 = chart(x, d)
     raw = []
     for p in points:
@@ -108,6 +112,9 @@ def invert(x: mi.Point3f, d: mi.Vector3f, points, coords, valid, first: mi.Point
     s_aff, ok_aff, _ = fit([mi.Float(1.0)] * len(q))
     has = count >= 1
     s = dr.select(ok_mls, s_mls, dr.select(ok_aff, s_aff, dr.select(has, near, first)))
-    method = dr.select(ok_mls, mi.UInt32(MLS), dr.select(ok_aff, mi.UInt32(AFFINE),
-                                                          dr.select(has, mi.UInt32(NEAREST), mi.UInt32(FIRST))))
+    method = dr.select(
+        ok_mls,
+        mi.UInt32(MLS),
+        dr.select(ok_aff, mi.UInt32(AFFINE), dr.select(has, mi.UInt32(NEAREST), mi.UInt32(FIRST))),
+    )
     return s, method

@@ -127,15 +127,17 @@ class FrontState:
 
 def first_scattering(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
                      active: mi.Bool) -> Front:
-    """Follow `ray` through null interactions (masks, `null` BSDFs) to the first vertex that scatters.
+    """Follow `ray` through null interactions (masks, `null` BSDFs) to the first vertex
+    that scatters.
 
-    A stylized vertex is a scattering vertex: a ray that meets a mask passes it with probability T (its
-    null transmission) and goes on; otherwise the mask is an opaque surface there, and the lane's weight
-    is (1 - T)/(1 - p) (1 for grey T). The stylized value at that vertex is the radiance of the opaque part
-    (`opaque_part`), so for the identity style the mixture is exactly the physically based one. Null
-    interactions add no depth. Emitters on see-through surfaces are refused with the scene
-    (scene_graph.py): evaluating emission in this loop as well made Dr.Jit 1.5's LLVM backend emit one
-    emitter callable twice into a kernel ("invalid redefinition of function"), a crash.
+    A stylized vertex is a scattering vertex: a ray that meets a mask passes it with probability T
+    (its null transmission) and goes on; otherwise the mask is an opaque surface there, and the
+    lane's weight is (1 - T)/(1 - p) (1 for grey T). The stylized value at that vertex is the
+    radiance of the opaque part (`opaque_part`), so for the identity style the mixture is exactly
+    the physically based one. Null interactions add no depth. Emitters on see-through surfaces are
+    refused with the scene (scene_graph.py): evaluating emission in this loop as well made Dr.Jit
+    1.5's LLVM backend emit one emitter callable twice into a kernel ("invalid redefinition of
+    function"), a crash.
     """
     state = FrontState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
                        beta=mi.Spectrum(1.0), active=mi.Bool(active))
@@ -161,7 +163,8 @@ def first_scattering(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f,
 class PathState:
     """What the path loop carries from one vertex to the next (a Dr.Jit PyTree: the loop state)."""
 
-    sampler: Any                             # LaneSampler (or a Mitsuba sampler): must travel in the state
+    # LaneSampler (or a Mitsuba sampler): must travel in the state
+    sampler: Any
     pi: mi.PreliminaryIntersection3f         # the vertex about to be shaded
     ray: mi.Ray3f                            # the ray that reached it
     active: mi.Bool
@@ -173,9 +176,11 @@ class PathState:
     pdf_prev: mi.Float                       # BSDF density of the direction that reached the vertex
     delta_prev: mi.Bool                      # was that direction a delta (specular) sample?
     halted: mi.Bool                          # halted at a stylized vertex
-    first: Optional[mi.Bool]                 # at the starting vertex (only where `opaque_start` needs it)
+    # at the starting vertex (only where `opaque_start` needs it)
+    first: Optional[mi.Bool]
     lines: Optional[Any] = None              # lines.LineState where feature lines are on (lines.py)
-    tone: Optional[Any] = None               # anchors.ToneState where a style reads image coordinates
+    # anchors.ToneState where a style reads image coordinates
+    tone: Optional[Any] = None
 
 
 @dataclass
@@ -187,7 +192,8 @@ class Walk:
     depth: mi.UInt32
     halted: mi.Bool
     lines: Optional[Any] = None     # lines.LineState at the halting vertex (where lines are on)
-    medium: Any = None              # MediumPtr: the medium each lane stands in (volume.py's walk only)
+    # MediumPtr: the medium each lane stands in (volume.py's walk only)
+    medium: Any = None
     tone: Optional[Any] = None      # anchors.ToneState at the halting vertex (where tone is on)
 
 
@@ -214,14 +220,28 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
 
     # A starting vertex counts its emission in full: the previous vertex is treated as a delta
     # scattering event, exactly like a camera ray in Mitsuba's path tracer.
-    si_prev, pdf_prev, delta_prev = (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True)) if came_from is None \
+    si_prev, pdf_prev, delta_prev = (
+        (dr.zeros(mi.Interaction3f), mi.Float(1.0), mi.Bool(True))
+        if came_from is None
         else (mi.Interaction3f(came_from[0]), mi.Float(came_from[1]), mi.Bool(came_from[2]))
-    state = PathState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi),
-                      ray=mi.Ray3f(start.ray), active=mi.Bool(active), depth=mi.UInt32(start.depth),
-                      L=mi.Spectrum(0.0), beta=mi.Spectrum(1.0), eta=mi.Float(1.0),
-                      si_prev=si_prev, pdf_prev=pdf_prev, delta_prev=delta_prev, halted=mi.Bool(False),
-                      first=mi.Bool(True) if nulls and opaque_start else None,
-                      lines=None if lines is None else lines[1], tone=tone)
+    )
+    state = PathState(
+        sampler=sampler,
+        pi=mi.PreliminaryIntersection3f(start.pi),
+        ray=mi.Ray3f(start.ray),
+        active=mi.Bool(active),
+        depth=mi.UInt32(start.depth),
+        L=mi.Spectrum(0.0),
+        beta=mi.Spectrum(1.0),
+        eta=mi.Float(1.0),
+        si_prev=si_prev,
+        pdf_prev=pdf_prev,
+        delta_prev=delta_prev,
+        halted=mi.Bool(False),
+        first=mi.Bool(True) if nulls and opaque_start else None,
+        lines=None if lines is None else lines[1],
+        tone=tone,
+    )
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
@@ -239,15 +259,19 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
             active_em &= ~skip_emitter(ds)
         wo = si.to_local(ds.d)
         u1 = s.sampler.next_1d()
-        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+        # the stylized starting vertex samples its opaque part alone (opaque_share)
+        if nulls and opaque_start:
             keep = dr.select(s.first, opaque_share(si, bsdf, active_next & s.first), 1.0)
             u1 = dr.select(s.first, u1 * keep, u1)
         # One BSDF call both evaluates the light direction and samples the continuation.
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(), active_next)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(
+            ctx, si, wo, u1, s.sampler.next_2d(), active_next
+        )
         scale = mi.Spectrum(1.0)
         if nulls and opaque_start:
-            # the opaque part's f and pdf: the BSDF's own are (1 - T) and (1 - p) times theirs, while the
-            # weight f/pdf of a sample drawn from the opaque part alone is already that part's
+            # the opaque part's f and pdf: the BSDF's own are (1 - T) and (1 - p) times theirs,
+            # while the weight f/pdf of a sample drawn from the opaque part alone is already
+            # that part's
             scale = dr.select(s.first, opaque_part(si, bsdf, active_next & s.first), 1.0)
             ok = keep > 0
             bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
@@ -265,13 +289,15 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
         s.si_prev = mi.Interaction3f(dr.detach(si, True))
         s.pdf_prev = bs.pdf
         s.delta_prev = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta)
-        if nulls and stop is not None:  # straight on through the null part, like a sampled null component
+        # straight on through the null part, like a sampled null component
+        if nulls and stop is not None:
             beta_next = dr.select(passes, s.beta * w_pass, beta_next)
             ray_next = dr.select(passes, si.spawn_ray(s.ray.d), ray_next)
             s.delta_prev |= passes
         if nulls and opaque_start:
             s.first = mi.Bool(False)
-        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+        # the prefix the next vertex's image coordinate is searched with (anchors.py)
+        if tone is not None:
             s.tone = advance(s.tone, si, bs, s.depth, active_next & ~passes)
 
         # Russian roulette on the throughput, as in Mitsuba's path tracer (which counts the depth of
@@ -286,8 +312,9 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=active_next)
         if lines is not None:  # a feature line on the new edge absorbs the path (lines.py)
-            seen, s.lines = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
-                                          active_next)
+            seen, s.lines = lines[0].edge(
+                scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next, active_next
+            )
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
             active_next &= ~seen.fired
         if stop is not None:  # halted lanes keep their vertex
@@ -301,28 +328,39 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
         return (s,)
 
     (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace path")
-    # A sample that is not finite is dropped here, before it reaches a style's estimator or the film:
-    # one NaN poisons its pixel for good (every pass is averaged in) and g of a mean containing it. Such
-    # samples come from measure-zero events (degenerate geometry, 0 * inf), so dropping them costs a
-    # bias no larger than their probability times their true value; the causes known are fixed at
-    # their source (`mis_power`), this keeps an unknown one from destroying a render.
+    # A sample that is not finite is dropped here, before it reaches a style's estimator or the
+    # film: one NaN poisons its pixel for good (every pass is averaged in) and g of a mean
+    # containing it. Such samples come from measure-zero events (degenerate geometry, 0 * inf), so
+    # dropping them costs a bias no larger than their probability times their true value; the causes
+    # known are fixed at their source (`mis_power`), this keeps an unknown one from destroying
+    # a render.
     return finished(out, lines=out.lines, tone=out.tone)
 
 
 def finished(out, **extra) -> Walk:
-    """The Walk of a finished loop state `out`, its sample dropped where it is not finite (see `walk`).
-    The throughput counts only where the walk halted (lanes that Russian roulette ended may hold inf * 0)."""
+    """The Walk of a finished loop state `out`, its sample dropped where it is not finite (see
+    `walk`). The throughput counts only where the walk halted (lanes that Russian roulette ended may
+    hold inf * 0)."""
     finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
-    return Walk(L=dr.select(finite, out.L, 0.0), beta=dr.select(finite, out.beta, 0.0), pi=out.pi, ray=out.ray,
-                depth=out.depth, halted=out.halted, **extra)
+    return Walk(
+        L=dr.select(finite, out.L, 0.0),
+        beta=dr.select(finite, out.beta, 0.0),
+        pi=out.pi,
+        ray=out.ray,
+        depth=out.depth,
+        halted=out.halted,
+        **extra,
+    )
 
 
-def halt_at(s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool):
-    """Where a walk's `stop` halts it at si among the lanes that `reached` it: (lanes that shade si, lanes
-    that pass straight on through a null part, their pass weight). A stylized vertex is a scattering one,
-    so with `nulls` a halting lane first passes through the null part (`null_split`) and the stay weight
-    goes into the throughput; `s.halted` gains the halted lanes. `s`: the loop state (sampler, beta,
-    depth, halted)."""
+def halt_at(
+    s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool
+):
+    """Where a walk's `stop` halts it at si among the lanes that `reached` it: (lanes that shade si,
+    lanes that pass straight on through a null part, their pass weight). A stylized vertex is a
+    scattering one, so with `nulls` a halting lane first passes through the null part (`null_split`)
+    and the stay weight goes into the throughput; `s.halted` gains the halted lanes. `s`: the loop
+    state (sampler, beta, depth, halted)."""
     here, passes, w_pass = mi.Bool(reached), mi.Bool(False), mi.Spectrum(1.0)
     if stop is not None:
         halt = reached & si.is_valid() & stop(si, s.depth)
@@ -338,9 +376,9 @@ def halt_at(s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Option
 
 def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInteraction3f,
                  hit: mi.Bool) -> mi.Spectrum:
-    """Emission at si (the environment where the ray escaped) on the lanes `hit`, times the throughput and
-    MIS-weighted against the light sampling done at the previous vertex (`s`: the loop state's beta,
-    si_prev, pdf_prev, delta_prev)."""
+    """Emission at si (the environment where the ray escaped) on the lanes `hit`, times the
+    throughput and MIS-weighted against the light sampling done at the previous vertex (`s`: the
+    loop state's beta, si_prev, pdf_prev, delta_prev)."""
     emitter = si.emitter(scene)
     hit_em = hit & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
     ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
@@ -350,21 +388,26 @@ def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInt
 
 
 def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):
-    """The anchors.ToneState past the vertex `si` at `depth`, scattered by `bs` on the `active` lanes: its shape
-    joins the prefix key, a transmission sets the depth's bit, a non-delta event ends the all-delta prefix."""
+    """The anchors.ToneState past the vertex `si` at `depth`, scattered by `bs` on the `active`
+    lanes: its shape joins the prefix key, a transmission sets the depth's bit, a non-delta event
+    ends the all-delta prefix."""
     depth = mi.UInt32(depth)
     through = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission) & (depth < MAX_BITS)
     bit = mi.UInt32(1) << dr.minimum(depth, MAX_BITS - 1)
-    return ToneState(key=dr.select(active, combine(tone.key, shape_id(si)), tone.key),
-                     bits=dr.select(active & through, tone.bits | bit, tone.bits),
-                     delta=dr.select(active, tone.delta & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), tone.delta),
-                     s0=tone.s0)
+    return ToneState(
+        key=dr.select(active, combine(tone.key, shape_id(si)), tone.key),
+        bits=dr.select(active & through, tone.bits | bit, tone.bits),
+        delta=dr.select(
+            active, tone.delta & mi.has_flag(bs.sampled_type, mi.BSDFFlags.Delta), tone.delta
+        ),
+        s0=tone.s0,
+    )
 
 
 def past_area_emitters(scene, ray, pi, active):
-    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the ray
-    spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance measured
-    from a ray it does not hand back, so the lights are stepped through here)."""
+    """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the
+    ray spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance
+    measured from a ray it does not hand back, so the lights are stepped through here)."""
     def through(ray, pi, skip):
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
         ray = dr.select(skip, si.spawn_ray(ray.d), ray)
@@ -372,5 +415,7 @@ def past_area_emitters(scene, ray, pi, active):
         return ray, pi, skip & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
 
     skip = active & pi.is_valid() & (pi.shape.emitter() != None)  # noqa: E711
-    ray, pi, _ = dr.while_loop((mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters")
+    ray, pi, _ = dr.while_loop(
+        (mi.Ray3f(ray), pi, skip), lambda r, p, s: s, through, label="hide emitters"
+    )
     return ray, pi

@@ -1,7 +1,10 @@
-"""The per-render state of a `stylized` integrator, bound to one scene for one render and always released.
+"""The per-render state of a `stylized` integrator, bound to one scene for one render and
+always released.
 
-    with RenderContext(integrator, scene):      # in `sample`, `reuse.render`, and a recording through them
-        ... trace ...                            # integrator.targets, .emitters, .lines, .view, ... are set
+    # in `sample`, `reuse.render`, and a recording through them
+    with RenderContext(integrator, scene):
+        # integrator.targets, .emitters, .lines, .view, ... are set
+        ... trace ...
 
 While a kernel is traced the integrator's methods read what the scene decides: the style targets
 (which BSDFs are styled, `targets_for`), whether the scene has media or null surfaces, the emitter
@@ -29,7 +32,8 @@ from styletrace.styles.base import camera_forward
 
 
 class RenderContext:
-    """Binds `scene` to one render of `integrator` (see the module doc); re-entering it is an error."""
+    """Binds `scene` to one render of `integrator` (see the module doc); re-entering it is
+    an error."""
 
     def __init__(self, integrator, scene: mi.Scene):
         self.integrator, self.scene = integrator, scene
@@ -37,27 +41,47 @@ class RenderContext:
     def __enter__(self) -> "RenderContext":
         integ, scene = self.integrator, self.scene
         if integ.targets:
-            raise RuntimeError("a stylized integrator renders one scene at a time: its render context is taken")
+            raise RuntimeError(
+                "a stylized integrator renders one scene at a time: its render context is taken"
+            )
         try:
             graph = SceneGraph(scene)
-            # plain flags only: a kept reference to a scene's objects breaks later traces (module doc)
-            integ.nulls, integ.media, integ.see_through = graph.has_null, graph.has_media, graph.has_see_through
+            # plain flags only: a kept reference to a scene's objects breaks later traces
+            # (module doc)
+            integ.nulls, integ.media, integ.see_through = (
+                graph.has_null,
+                graph.has_media,
+                graph.has_see_through,
+            )
             integ.targets = integ.targets_for(scene, graph)
             problem = integ.scene_problem()
             if problem is not None:
                 raise SceneError(problem)
             settings = integ.settings
             lifted = settings.lines is not None and settings.lines.mode == "lifted"
-            integ.lines = None if settings.lines is None or lifted else Lines(settings.lines, scene,
-                                                                              see_through=integ.see_through)
-            # LLaT's conditional lifting tests its line types per camera sample before L (lifted_lines.py)
-            integ.lifted = (Lifted(scene, settings.lines.types, depth=settings.lines.depth,
-                                   through_diffuse=settings.lines.diffuse, objects=settings.lines.objects)
-                            if lifted and scene.sensors() else None)
+            integ.lines = (
+                None
+                if settings.lines is None or lifted
+                else Lines(settings.lines, scene, see_through=integ.see_through)
+            )
+            # LLaT's conditional lifting tests its line types per camera sample before L
+            # (lifted_lines.py)
+            integ.lifted = (
+                Lifted(
+                    scene,
+                    settings.lines.types,
+                    depth=settings.lines.depth,
+                    through_diffuse=settings.lines.diffuse,
+                    objects=settings.lines.objects,
+                )
+                if lifted and scene.sensors()
+                else None
+            )
             wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in integ.targets)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
             integ.tone_states = {}
-            # emitter selection in an order of the scene's own (its emitter list changes order between runs)
+            # emitter selection in an order of the scene's own (its emitter list changes order
+            # between runs)
             integ.emitters = EmitterSampler(scene, settings.emitter_sampling)
             integ.walk_config = WalkConfig(scene, integ.emitters, settings.max_depth,
                                            settings.rr_depth, nulls=integ.nulls, media=integ.media)

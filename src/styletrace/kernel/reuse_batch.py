@@ -1,10 +1,12 @@
-"""One batch of a reuse pass: camera rays, first hits, their children drawn and stored, pooled, then g.
+"""One batch of a reuse pass: camera rays, first hits, their children drawn and stored, pooled,
+then g.
 
-Every camera sample i traces its ray to the first hit v_i and draws m children there (m = its style slot's
-inner_samples, children.py); the pool of v_i (pool.py; its world-space second level with reuse_deep=world,
-world.py; the refinement round of an adaptive count, refine.py) gives L(v) = g(L_e(v) + direct + indirect).
-Lanes whose BSDF has a delta or null component, closed-form styles and escaped rays use their own children
-only (the ordinary estimate, with MIS); a pool of v alone is the ordinary estimate too.
+Every camera sample i traces its ray to the first hit v_i and draws m children there (m = its style
+slot's inner_samples, children.py); the pool of v_i (pool.py; its world-space second level with
+reuse_deep=world, world.py; the refinement round of an adaptive count, refine.py) gives L(v) =
+g(L_e(v) + direct + indirect). Lanes whose BSDF has a delta or null component, closed-form styles
+and escaped rays use their own children only (the ordinary estimate, with MIS); a pool of v alone is
+the ordinary estimate too.
 """
 from __future__ import annotations
 
@@ -32,8 +34,8 @@ from styletrace.styles.base import Vertex
 
 @dataclass(frozen=True)
 class Samples:
-    """A batch's camera samples: their values (g of the pooled estimate, times the ray weight), which are
-    valid, their film positions and wavelengths."""
+    """A batch's camera samples: their values (g of the pooled estimate, times the ray weight),
+    which are valid, their film positions and wavelengths."""
     value: mi.Spectrum
     valid: mi.Bool
     pos: mi.Point2f
@@ -41,7 +43,8 @@ class Samples:
 
 
 def camera(sensor, sampler, frame: Frame, spp_total: int):
-    """Camera rays as Mitsuba's SamplingIntegrator::render makes them: lane = pixel * spp + sample index."""
+    """Camera rays as Mitsuba's SamplingIntegrator::render makes them: lane = pixel * spp +
+    sample index."""
     film = sensor.film()
     width, spp = frame.width, frame.spp
     N = width * frame.height * spp
@@ -65,7 +68,8 @@ def camera(sensor, sampler, frame: Frame, spp_total: int):
 
 
 def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
-    """The `Samples` of one batch: frame.spp samples per pixel of a pass of spp_total, sampler seed `seed`."""
+    """The `Samples` of one batch: frame.spp samples per pixel of a pass of spp_total, sampler
+    seed `seed`."""
     s, scene, keep, targets = scope.settings, scope.scene, scope.keep, scope.targets
     width, height, spp = frame.width, frame.height, frame.spp
     N = width * height * spp
@@ -94,7 +98,9 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     # the children, stored per lane: child j of lane i at i * M + j
     slab = Slab(Children(N * M), M)
     kids = slab.kids
-    base = dr.select(hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit))
+    base = dr.select(
+        hit, emission(scene, si, hit), 0.0 if s.hide_emitters else environment(scene, si, ~hit)
+    )
     lane = dr.arange(mi.UInt32, N)
     if s.reuse_deep == "world":
         own = level1(scope, lanes, Parents(si, bsdf, hit & (m > 0), None), m, slab)
@@ -105,17 +111,46 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     K = min(s.reuse_k, W)  # settings.parse keeps K <= MAX_REUSE_K
     start = mi.UInt32(dr.minimum(lanes.next_1d() * W, W - 1)) if K < W else dr.zeros(mi.UInt32, N)
     depth = dr.norm(si.p - origin)
-    # the refinement round seeds its children from the lanes' generators: evaluated with the first round's
-    # children, or reading them would trace the first round again
-    dr.eval(kids, own, base, si, target, m, pool, depth, start, bsdf, valid, ray_weight, pos, lanes if again else ())
+    # the refinement round seeds its children from the lanes' generators: evaluated with the first
+    # round's children, or reading them would trace the first round again
+    dr.eval(
+        kids,
+        own,
+        base,
+        si,
+        target,
+        m,
+        pool,
+        depth,
+        start,
+        bsdf,
+        valid,
+        ray_weight,
+        pos,
+        lanes if again else (),
+    )
 
     grid = Grid(frame, s.reuse_radius, K, start)
     mask = grid.accepted(target, bsdf, pool, mi.Vector3f(si.sh_frame.n), depth)
     dr.eval(mask)
     if keep is not None:
-        keep.update(mask=np.asarray(mask, dtype=np.uint64), start=np.asarray(start, dtype=np.int64), spp=spp,
-                    width=width, height=height, K=K, radius=s.reuse_radius, target=np.asarray(target))
-    v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(scope.view), depth=mi.UInt32(0))
+        keep.update(
+            mask=np.asarray(mask, dtype=np.uint64),
+            start=np.asarray(start, dtype=np.int64),
+            spp=spp,
+            width=width,
+            height=height,
+            K=K,
+            radius=s.reuse_radius,
+            target=np.asarray(target),
+        )
+    v = Vertex(
+        p=si.p,
+        n=mi.Vector3f(si.sh_frame.n),
+        wo=-ray.d,
+        view=mi.Vector3f(scope.view),
+        depth=mi.UInt32(0),
+    )
     count = m
     pools = Pools(grid, mask, si, bsdf, m)
     if again:
@@ -125,7 +160,8 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
         mean = pooled(pools, slab, first_round(targets), scope.weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     x = base + mean
-    if keep is not None:  # what g sees, the children each lane pooled as its own, and those it stored
+    # what g sees, the children each lane pooled as its own, and those it stored
+    if keep is not None:
         stored = np.asarray(dr.squared_norm(kids.directions()) > 0).reshape(N, M).sum(axis=1)
         keep.update(x=np.asarray(x), children=np.asarray(count), stored=stored)
     value = styled_value(scope, target, x, v, base)

@@ -1,9 +1,10 @@
 """Drawing and storing the children of reuse's vertices.
 
-A child is two samples at its vertex v: a next-event sample (direction wl, E = L_e vis / p_light) and a BSDF
-sample (direction wb, density p(wb), and the radiance Li arriving along it: the ordinary path kernel's, less the
-first emission it meets at lanes that pool, or the next stylized level's value with first_n_hits). Children are
-stored 16 floats each, side by side, for the pool to read every member's.
+A child is two samples at its vertex v: a next-event sample (direction wl, E = L_e vis / p_light)
+and a BSDF sample (direction wb, density p(wb), and the radiance Li arriving along it: the ordinary
+path kernel's, less the first emission it meets at lanes that pool, or the next stylized level's
+value with first_n_hits). Children are stored 16 floats each, side by side, for the pool to read
+every member's.
 """
 from __future__ import annotations
 
@@ -15,9 +16,10 @@ from styletrace.kernel.vertex import Site, depth_limit, environment, mis_power
 
 
 class Children:
-    """The stored children (see the module docstring), 16 floats each, side by side in one flat array: a child
-    is read with four 4-float loads instead of 16 scattered gathers (the pool reads every child K + 1 times).
-    Layout: wl, E, wb, pdf, Li, and fLi = f_i(wb) Li at the child's own vertex (pairwise's own samples)."""
+    """The stored children (see the module docstring), 16 floats each, side by side in one flat
+    array: a child is read with four 4-float loads instead of 16 scattered gathers (the pool reads
+    every child K + 1 times). Layout: wl, E, wb, pdf, Li, and fLi = f_i(wb) Li at the child's own
+    vertex (pairwise's own samples)."""
     DRJIT_STRUCT = {"data": mi.Float}
     SIZE = 16
 
@@ -25,7 +27,8 @@ class Children:
         self.data = dr.zeros(mi.Float, size * self.SIZE)
 
     def store(self, c, sample, Li, fLi, active):
-        """Store at flat indices c the child whose samples are `sample` (wl, E, wb, pdf) with its Li and fLi."""
+        """Store at flat indices c the child whose samples are `sample` (wl, E, wb, pdf) with its Li
+        and fLi."""
         wl, E, wb, pdf = sample
         packets = (mi.Vector4f(wl.x, wl.y, wl.z, E[0]), mi.Vector4f(E[1], E[2], wb.x, wb.y),
                    mi.Vector4f(wb.z, pdf, Li[0], Li[1]), mi.Vector4f(Li[2], fLi[0], fLi[1], fLi[2]))
@@ -35,8 +38,14 @@ class Children:
     def load(self, c, active):
         """(wl, E, wb, pdf, Li, fLi) of the children at flat indices c."""
         a, b, d, e = (dr.gather(mi.Vector4f, self.data, c * 4 + t, active) for t in range(4))
-        return (mi.Vector3f(a.x, a.y, a.z), mi.Spectrum(a.w, b.x, b.y), mi.Vector3f(b.z, b.w, d.x), d.y,
-                mi.Spectrum(d.z, d.w, e.x), mi.Spectrum(e.y, e.z, e.w))
+        return (
+            mi.Vector3f(a.x, a.y, a.z),
+            mi.Spectrum(a.w, b.x, b.y),
+            mi.Vector3f(b.z, b.w, d.x),
+            d.y,
+            mi.Spectrum(d.z, d.w, e.x),
+            mi.Spectrum(e.y, e.z, e.w),
+        )
 
     def directions(self):
         """wl of every stored child (zero where none was stored)."""
@@ -53,8 +62,8 @@ class Slab:
 
 @dataclass(frozen=True)
 class Parents:
-    """The vertices children are drawn at, per lane: the interaction, its BSDF, the lanes that draw (`active`)
-    and those that pool (whose light is split by technique)."""
+    """The vertices children are drawn at, per lane: the interaction, its BSDF, the lanes that draw
+    (`active`) and those that pool (whose light is split by technique)."""
     si: mi.SurfaceInteraction3f
     bsdf: mi.BSDFPtr
     active: mi.Bool
@@ -63,8 +72,8 @@ class Parents:
 
 @dataclass(frozen=True)
 class Span:
-    """Which children `draw` draws: first .. last - 1 of each of the lanes `lane` (at most J of them), stored
-    at lane * M + j of `slab`."""
+    """Which children `draw` draws: first .. last - 1 of each of the lanes `lane` (at most J of
+    them), stored at lane * M + j of `slab`."""
     first: mi.UInt32
     last: mi.UInt32
     J: int
@@ -73,10 +82,11 @@ class Span:
 
 
 class Draw:
-    """One child's two samples at its parent's vertex (its lane `on`): a next-event sample (direction ds.d, E)
-    and a BSDF sample (direction wb, density bs.pdf, weight w_b) with the ray to what it reaches (ray2, pi2).
-    At a non-last level of first_n_hits (`nested`) next-event estimation samples delta lights only, as
-    `bounce.bounce`: the BSDF sample reaches every other emitter, which the next level stylizes."""
+    """One child's two samples at its parent's vertex (its lane `on`): a next-event sample
+    (direction ds.d, E) and a BSDF sample (direction wb, density bs.pdf, weight w_b) with the ray to
+    what it reaches (ray2, pi2). At a non-last level of first_n_hits (`nested`) next-event
+    estimation samples delta lights only, as `bounce.bounce`: the BSDF sample reaches every other
+    emitter, which the next level stylizes."""
 
     def __init__(self, scope, smp, parents: Parents, on, depth: int, nested: bool):
         si, bsdf = parents.si, parents.bsdf
@@ -86,12 +96,14 @@ class Draw:
         to_light &= ds.pdf != 0.0
         if nested:
             to_light &= ds.delta
-        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(mi.BSDFContext(), si, si.to_local(ds.d), smp.next_1d(),
-                                                   smp.next_2d(), step)
-        # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all the
-        # emission it can reach (weight 1) and the BSDF sample none of the first emission it meets (pdf 0
-        # below), so the two pooled sums are each unbiased whatever the neighbours' densities; MIS weights
-        # computed at different vertices would not add up to one. (first_n_hits splits them so already.)
+        val, pdf_l, bs, w_b = bsdf.eval_pdf_sample(
+            mi.BSDFContext(), si, si.to_local(ds.d), smp.next_1d(), smp.next_2d(), step
+        )
+        # Lanes that pool split the light by technique, not by MIS: next-event estimation takes all
+        # the emission it can reach (weight 1) and the BSDF sample none of the first emission it
+        # meets (pdf 0 below), so the two pooled sums are each unbiased whatever the neighbours'
+        # densities; MIS weights computed at different vertices would not add up to one.
+        # (first_n_hits splits them so already.)
         w_nee = dr.select(ds.delta | parents.pool, 1.0, mis_power(ds.pdf, pdf_l))
         self.to_light, self.val, self.ds, self.bs, self.w_b = to_light, val, ds, bs, w_b
         self.E = dr.select(to_light, em_weight * w_nee, 0.0)
@@ -102,16 +114,19 @@ class Draw:
 
     def next_vertex(self):
         """(si2, hit2): the surface the BSDF sample reaches, where it reaches one."""
-        si2 = self.pi2.compute_surface_interaction(self.ray2, ray_flags=mi.RayFlags.All, active=self.go)
+        si2 = self.pi2.compute_surface_interaction(
+            self.ray2, ray_flags=mi.RayFlags.All, active=self.go
+        )
         return si2, self.go & si2.is_valid()
 
     def seen(self, scene, si2, hit2, value):
-        """The radiance Li along the BSDF sample: `value` where it hit a surface, else the environment."""
+        """The radiance Li along the BSDF sample: `value` where it hit a surface, else the
+        environment."""
         return dr.select(self.go, dr.select(hit2, value, environment(scene, si2, self.go)), 0.0)
 
     def store(self, kids, at, Li, on):
-        """Store the child at flat index `at` with its Li; its ordinary estimate x (0 where not `on` or not
-        finite)."""
+        """Store the child at flat index `at` with its Li; its ordinary estimate x (0 where not `on`
+        or not finite)."""
         go, bs = self.go, self.bs
         x = dr.select(self.to_light, self.val * self.E, 0.0) + dr.select(go, self.w_b * Li, 0.0)
         ok = on & dr.all(dr.isfinite(x))
@@ -121,9 +136,9 @@ class Draw:
 
 
 def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
-    """Draw the children `span` names at the `parents` (the first hit, or with `depth` 1 a second-level vertex
-    whose children are ordinary paths), store them, and return each lane's sum of their ordinary estimates
-    (next-event plus BSDF-sampled radiance, emission at v left out)."""
+    """Draw the children `span` names at the `parents` (the first hit, or with `depth` 1 a
+    second-level vertex whose children are ordinary paths), store them, and return each lane's sum
+    of their ordinary estimates (next-event plus BSDF-sampled radiance, emission at v left out)."""
     s, scene, integ = scope.settings, scope.scene, scope.integ
     nested = s.stylize == "first_n_hits" and s.stylize_depth > depth + 1
     si, pool, M = parents.si, parents.pool, span.slab.M
@@ -132,7 +147,8 @@ def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
         j = span.first + i
         on = parents.active & (j < span.last)
         c = Draw(scope, smp, parents, on, depth, nested)
-        if nested:  # the level-1 vertex, stylized by the ordinary tree (deeper levels first), or the sky
+        # the level-1 vertex, stylized by the ordinary tree (deeper levels first), or the sky
+        if nested:
             si2, hit2 = c.next_vertex()
             site = Site(c.pi2, si2, c.ray2, mi.UInt32(depth + 1))
             Li = c.seen(scene, si2, hit2, integ.stylized(depth + 1, smp, site, hit2))
@@ -144,7 +160,11 @@ def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
             Li = dr.select(c.go, w.L, 0.0)
         return i + 1, smp, total + c.store(span.slab.kids, span.lane * M + j, Li, on)
 
-    _, lanes_out, total = dr.while_loop((mi.UInt32(0), lanes, mi.Spectrum(0.0)), lambda i, smp, t: i < span.J,
-                                        body, label="styletrace reuse children")
+    _, lanes_out, total = dr.while_loop(
+        (mi.UInt32(0), lanes, mi.Spectrum(0.0)),
+        lambda i, smp, t: i < span.J,
+        body,
+        label="styletrace reuse children",
+    )
     lanes.rng = lanes_out.rng
     return total

@@ -1,8 +1,10 @@
-"""The reuse pass loop: a pass of `spp` samples per pixel rendered in batches, each splatted onto one block.
+"""The reuse pass loop: a pass of `spp` samples per pixel rendered in batches, each splatted onto
+one block.
 
-The children of a pass are stored (16 floats each, side by side), so a pass is split into batches of samples
-per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one batch of one crop window
-(`api.passes` tiles images above a million pixels; a window is clipped at a tile's edge).
+The children of a pass are stored (16 floats each, side by side), so a pass is split into batches of
+samples per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one batch of
+one crop window (`api.passes` tiles images above a million pixels; a window is clipped at a
+tile's edge).
 """
 from __future__ import annotations
 
@@ -22,25 +24,47 @@ BATCH_CHILDREN = 1 << 20
 
 
 def batch_seed(seed: int, batch: int) -> int:
-    return seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
+    return (
+        seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
+    )
 
 
-def render(integ, scene: mi.Scene, sensor: mi.Sensor, seed: int, spp: int, weights: str | None = None,
-           keep: dict | None = None) -> mi.TensorXf:
-    """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render` returns).
-    `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF sample
-    by its own density (wrong: the tests' negative control);
-    `keep`, a dict, receives the first batch's pools as numpy arrays (`pool_pixels`)."""
-    # no scene may be finalised while a pass is recorded (jit.no_collection), and none needs collecting first
-    with no_collection(), RenderContext(integ, scene):  # targets, emitters, view bound to this scene, released after
+def render(
+    integ,
+    scene: mi.Scene,
+    sensor: mi.Sensor,
+    seed: int,
+    spp: int,
+    weights: str | None = None,
+    keep: dict | None = None,
+) -> mi.TensorXf:
+    """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render`
+    returns). `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides
+    each pooled BSDF sample by its own density (wrong: the tests' negative control); `keep`, a dict,
+    receives the first batch's pools as numpy arrays (`pool_pixels`)."""
+    # no scene may be finalised while a pass is recorded (jit.no_collection), and none needs
+    # collecting first targets, emitters, view bound to this scene, released after
+    with no_collection(), RenderContext(integ, scene):
         if integ.nulls or integ.media:
-            what = "participating media" if integ.media else "null-scattering surfaces (masks, null BSDFs)"
-            raise SceneError(f"reuse=pixels does not support scenes with {what} yet: render with reuse=off")
+            what = (
+                "participating media"
+                if integ.media
+                else "null-scattering surfaces (masks, null BSDFs)"
+            )
+            raise SceneError(
+                f"reuse=pixels does not support scenes with {what} yet: render with reuse=off"
+            )
         for t in integ.targets:
             if t.bsdfs:
-                S.check_reusable(t.slot, f"a styled BSDF's style '{t.slot.style.name}'", integ.settings.reuse_deep)
+                S.check_reusable(
+                    t.slot,
+                    f"a styled BSDF's style '{t.slot.style.name}'",
+                    integ.settings.reuse_deep,
+                )
             t.slot.style.prepare(scene)
-        return _passes(Scope.of(integ, scene, weights or integ.settings.reuse_mis, keep), sensor, seed, spp)
+        return _passes(
+            Scope.of(integ, scene, weights or integ.settings.reuse_mis, keep), sensor, seed, spp
+        )
 
 
 def _passes(scope: Scope, sensor, seed: int, spp: int):
@@ -51,14 +75,18 @@ def _passes(scope: Scope, sensor, seed: int, spp: int):
         size += 2 * film.rfilter().border_size()
     width, height = int(size[0]), int(size[1])
     M = children_per_lane(scope.targets)
-    stored = M * (1 + children_per_lane(scope.targets, 1)) if scope.settings.reuse_deep == "world" else M
+    stored = (
+        M * (1 + children_per_lane(scope.targets, 1)) if scope.settings.reuse_deep == "world" else M
+    )
     per_batch = max(1, min(spp, BATCH_CHILDREN // max(width * height * stored, 1)))
     block = film.create_block()
     done, index = 0, 0
     while done < spp:
         n = min(per_batch, spp - done)
         here = scope if index == 0 else replace(scope, keep=None)
-        _splat(block, film, batch(here, sensor, Frame(width, height, n), batch_seed(seed, index), spp))
+        _splat(
+            block, film, batch(here, sensor, Frame(width, height, n), batch_seed(seed, index), spp)
+        )
         dr.eval(block.tensor())
         done, index = done + n, index + 1
     film.put_block(block)
@@ -69,7 +97,10 @@ def _splat(block, film, samples: Samples):
     value, valid, pos, wavelengths = samples.value, samples.valid, samples.pos, samples.wavelengths
     alpha = dr.select(valid, mi.Float(1.0), mi.Float(0.0))
     if dr.all(mi.has_flag(film.flags(), mi.FilmFlags.Special)):
-        block.put(pos, film.prepare_sample(value, wavelengths, block.channel_count(), weight=1.0, alpha=alpha))
+        block.put(
+            pos,
+            film.prepare_sample(value, wavelengths, block.channel_count(), weight=1.0, alpha=alpha),
+        )
     elif mi.has_flag(film.flags(), mi.FilmFlags.Alpha):
         block.put(pos, [value.x, value.y, value.z, alpha, mi.Float(1.0)])
     else:

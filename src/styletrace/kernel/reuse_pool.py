@@ -1,17 +1,18 @@
-"""Pooling: the pixel window of neighbours, and the pooled estimate of each vertex from its members' children.
+"""Pooling: the pixel window of neighbours, and the pooled estimate of each vertex from its
+members' children.
 
-The pool P(v) is v and its accepted neighbours among K drawn from the (2r+1)^2 pixel window (same sample index
-of the pass): same style target, same BSDF object, shading normals with n.n' > NORMAL_MIN and camera distances
-within DEPTH_TOL (the world grid, world_grid.py, serves the same `neighbour`/`accepted` for the second level).
-With v's own BSDF f_v (cosine included),
+The pool P(v) is v and its accepted neighbours among K drawn from the (2r+1)^2 pixel window (same
+sample index of the pass): same style target, same BSDF object, shading normals with n.n' >
+NORMAL_MIN and camera distances within DEPTH_TOL (the world grid, world_grid.py, serves the same
+`neighbour`/`accepted` for the second level). With v's own BSDF f_v (cosine included),
 
-    direct(v)   = 1/C sum_{k in P} sum_j f_v(wl_kj) E_kj                  (neighbours' visibility reused)
+    direct(v)   = 1/C sum_{k in P} sum_j f_v(wl_kj) E_kj      (neighbours' visibility reused)
     indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj w_k(wb_kj)
 
-over the C = sum_P c_k children of the members, with multi-sample MIS weights w_k over the pool's BSDF-sampling
-techniques (`reuse_mis`; the package docstring): balance, 1 / sum_k c_k p_k; pairwise, each neighbour's
-technique against v's only (`pairwise`, by layers where the counts differ); 'own', 1 / (C p_k), the tests'
-negative control.
+over the C = sum_P c_k children of the members, with multi-sample MIS weights w_k over the pool's
+BSDF-sampling techniques (`reuse_mis`; the package docstring): balance, 1 / sum_k c_k p_k; pairwise,
+each neighbour's technique against v's only (`pairwise`, by layers where the counts differ); 'own',
+1 / (C p_k), the tests' negative control.
 """
 from __future__ import annotations
 
@@ -23,31 +24,39 @@ from styletrace.estimators import channel_mean
 from styletrace.gate import dr, mi
 from styletrace.kernel.acceptance import accepted
 
-#: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within 5 percent
+#: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within
+#: 5 percent
 NORMAL_MIN = 0.9
 DEPTH_TOL = 0.05
 
 
 def window(radius: int) -> np.ndarray:
-    """The (2r+1)^2 - 1 pixel offsets around a pixel (itself excluded) in a fixed shuffled order: a lane takes
-    K consecutive ones from a random start, so each offset is pooled with probability K / len."""
-    offsets = [(dx, dy) for dy in range(-radius, radius + 1) for dx in range(-radius, radius + 1) if dx or dy]
+    """The (2r+1)^2 - 1 pixel offsets around a pixel (itself excluded) in a fixed shuffled order: a
+    lane takes K consecutive ones from a random start, so each offset is pooled with probability K
+    / len."""
+    offsets = [
+        (dx, dy)
+        for dy in range(-radius, radius + 1)
+        for dx in range(-radius, radius + 1)
+        if dx or dy
+    ]
     order = np.random.default_rng(0x5EED).permutation(len(offsets))
     return np.array([offsets[i] for i in order], dtype=np.int32)
 
 
 @dataclass(frozen=True)
 class Frame:
-    """The pass's lanes: width x height pixels of spp samples each (lane = pixel * spp + sample index)."""
+    """The pass's lanes: width x height pixels of spp samples each (lane = pixel * spp +
+    sample index)."""
     width: int
     height: int
     spp: int
 
 
 class Grid:
-    """The neighbour slots of each lane: slot 0 is the lane itself, slot q >= 1 the pixel at window offset
-    order[(start + q - 1) mod W], same sample index. `lane`: the lanes (indices into the pass) this grid
-    serves, all of them by default, with `start` given per served lane."""
+    """The neighbour slots of each lane: slot 0 is the lane itself, slot q >= 1 the pixel at window
+    offset order[(start + q - 1) mod W], same sample index. `lane`: the lanes (indices into the
+    pass) this grid serves, all of them by default, with `start` given per served lane."""
 
     def __init__(self, frame: Frame, radius, K, start, lane=None):
         width, height, spp = frame.width, frame.height, frame.spp
@@ -70,23 +79,36 @@ class Grid:
         x = self.x + dr.select(first, 0, dr.gather(mi.Int32, self.dx, o, ~first))
         y = self.y + dr.select(first, 0, dr.gather(mi.Int32, self.dy, o, ~first))
         inside = (x >= 0) & (x < self.width) & (y >= 0) & (y < self.height)
-        at = (mi.UInt32(dr.maximum(y, 0)) * self.width + mi.UInt32(dr.maximum(x, 0))) * self.spp + self.s
+        at = (
+            mi.UInt32(dr.maximum(y, 0)) * self.width + mi.UInt32(dr.maximum(x, 0))
+        ) * self.spp + self.s
         return dr.select(inside, at, self.lane), inside
 
     def accepted(self, target, bsdf, pool, n, depth) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the lane's own (acceptance.py; camera distances
-        within DEPTH_TOL)."""
+        """Bit q set where slot q's vertex may be pooled with the lane's own (acceptance.py; camera
+        distances within DEPTH_TOL)."""
         def near(at, ok):
             return dr.abs(dr.gather(mi.Float, depth, at, ok) - depth) <= DEPTH_TOL * depth
-        return accepted(self.neighbour, self.K, target, bsdf, pool, n, NORMAL_MIN, near, "styletrace reuse accept")
+
+        return accepted(
+            self.neighbour,
+            self.K,
+            target,
+            bsdf,
+            pool,
+            n,
+            NORMAL_MIN,
+            near,
+            "styletrace reuse accept",
+        )
 
 
 @dataclass(frozen=True)
 class Pools:
-    """The pools of the lanes `grid` serves: `mask` (bit q: slot q is a member), their vertices `si` and BSDFs;
-    `count`, every lane's children count, and `si_all`, every lane's vertex (default si), of the pass; `equal`:
-    every member has v's count (the first round: members share v's style slot), so C = |P| c_v without a loop
-    over the slots."""
+    """The pools of the lanes `grid` serves: `mask` (bit q: slot q is a member), their vertices `si`
+    and BSDFs; `count`, every lane's children count, and `si_all`, every lane's vertex (default si),
+    of the pass; `equal`: every member has v's count (the first round: members share v's style
+    slot), so C = |P| c_v without a loop over the slots."""
     grid: Grid
     mask: mi.UInt64
     si: mi.SurfaceInteraction3f
@@ -117,15 +139,16 @@ def _pool_count(grid, mask, count):
 
 
 def _total(grid, mask, count, equal):
-    """C = sum over the pool's members of their children counts: |P| c_v where all members have v's count."""
+    """C = sum over the pool's members of their children counts: |P| c_v where all members have
+    v's count."""
     if equal:
         return mi.Float(dr.popcnt(mask)) * mi.Float(dr.gather(mi.UInt32, count, grid.lane))
     return mi.Float(_pool_count(grid, mask, count))
 
 
 def _counts(pools: Pools):
-    """(c_v, C, member_count): v's own children count, C = sum over the pool of c_k, and c_k of the members at
-    lanes `at` (v's own where all members have it: `equal`)."""
+    """(c_v, C, member_count): v's own children count, C = sum over the pool of c_k, and c_k of the
+    members at lanes `at` (v's own where all members have it: `equal`)."""
     grid, mask, count, equal = pools.grid, pools.mask, pools.count, pools.equal
     cv = mi.Float(dr.gather(mi.UInt32, count, grid.lane))
 
@@ -135,11 +158,11 @@ def _counts(pools: Pools):
 
 
 def pooled(pools: Pools, slab, J: int, weights: str, moments: bool = False):
-    """(direct + indirect)(v) of the module docstring for every lane the grid serves (meaningful where the lane
-    pools), from the children stored in `slab` (member k contributes its first c_k = count_k children, at most
-    J). With `moments`, also the first two moments of the per-child estimates' brightness, sum_i u_i and
-    sum_i u_i^2, u_i = C x_i (x_i child i's terms of the sums, C = sum_P c_k), which give the pooled mean's
-    sample variance, and C."""
+    """(direct + indirect)(v) of the module docstring for every lane the grid serves (meaningful
+    where the lane pools), from the children stored in `slab` (member k contributes its first c_k =
+    count_k children, at most J). With `moments`, also the first two moments of the per-child
+    estimates' brightness, sum_i u_i and sum_i u_i^2, u_i = C x_i (x_i child i's terms of the sums,
+    C = sum_P c_k), which give the pooled mean's sample variance, and C."""
     if weights == "pairwise":
         return _pairwise(pools, slab, J, moments)
     grid, mask, si, bsdf = pools.grid, pools.mask, pools.si, pools.bsdf
@@ -154,8 +177,8 @@ def pooled(pools: Pools, slab, J: int, weights: str, moments: bool = False):
         return active & _has(mask, q)
 
     def mixture(wb, on):
-        """sum over pool members q of c_q p_q(wb), p_q at member q's own vertex (v's BSDF object: accepted
-        members share it): a loop over the K + 1 slots."""
+        """sum over pool members q of c_q p_q(wb), p_q at member q's own vertex (v's BSDF object:
+        accepted members share it): a loop over the K + 1 slots."""
         def body(q, total):
             here = on & has(q)
             at, _ = grid.neighbour(q)
@@ -177,7 +200,8 @@ def pooled(pools: Pools, slab, J: int, weights: str, moments: bool = False):
         f = bsdf.eval(ctx, si, si.to_local(wb), take) * Li
         if weights == "balance":    # f Li / sum_P c_k p_k
             w = dr.rcp(mixture(wb, take))
-        else:                       # 'own': f Li / p_k, averaged over the C samples (wrong: the negative control)
+        # 'own': f Li / p_k, averaged over the C samples (wrong: the negative control)
+        else:
             w = dr.rcp(pdf * C)
         b = dr.select(take & dr.isfinite(w) & (w > 0), f * w, 0.0)
         direct, indirect = direct + d, indirect + b
@@ -193,13 +217,15 @@ def pooled(pools: Pools, slab, J: int, weights: str, moments: bool = False):
 
 
 def _moments(s1, s2, on, y):
-    """The running sums of u and u^2, u the brightness (channel mean) of a child's estimate y, where `on`."""
+    """The running sums of u and u^2, u the brightness (channel mean) of a child's estimate y,
+    where `on`."""
     u = channel_mean(y)
     return s1 + dr.select(on, u, 0.0), s2 + dr.select(on, dr.square(u), 0.0)
 
 
 def _layer(grid, mask, count, j, active):
-    """The pool members with more than j children (their slot bits; slot 0, v itself, where c_v > j)."""
+    """The pool members with more than j children (their slot bits; slot 0, v itself, where c_v
+    > j)."""
     def body(q, bits):
         here = active & _has(mask, q)
         at, _ = grid.neighbour(q)
@@ -211,20 +237,30 @@ def _layer(grid, mask, count, j, active):
 
 
 def _pairwise(pools: Pools, slab, J: int, moments: bool):
-    """`pooled` with pairwise weights, n = |P| - 1 (counts c_k: Veach's multi-sample form of each pair):
+    """`pooled` with pairwise weights, n = |P| - 1 (counts c_k: Veach's multi-sample form of
+    each pair):
         a member k's sample:  f_v Li / (n c_k p_k + c_v p_v)
         v's own sample:       f_v Li (1/n) sum_{k != v} 1 / (n c_k p_k + c_v p_v)
-    (for equal counts m: w_k = p_k / (n p_k + p_v) and w_v = (1/n) sum_k p_v / (n p_k + p_v), over m samples).
-    Per child index j, one loop over the members k != v gives both v's terms for k's child j and k's term of
-    the canonical sum of v's own child j; v's own child's f_v Li was stored when it was drawn.
+    (for equal counts m: w_k = p_k / (n p_k + p_v) and w_v = (1/n) sum_k p_v / (n p_k + p_v), over m
+    samples). Per child index j, one loop over the members k != v gives both v's terms for k's child
+    j and k's term of the canonical sum of v's own child j; v's own child's f_v Li was stored when
+    it was drawn.
 
-    Unequal counts (the refinement round's pools): child index j is a layer, P_j the members with c_k > j, each
-    layer pooled with pairwise weights over its own members (n_j = |P_j| - 1, one sample per technique) and
-    the layers averaged with weights |P_j| / C (each layer is unbiased where the pool's is, and the weights sum
-    to one). With equal counts this is the formula above; with unequal ones a layer beyond the first round's n0
-    holds only the refined members, so its loop visits those alone (the set bits of P_j), where the counts'
-    weights would need every member's density for each of v's n_max children."""
-    grid, mask, si, bsdf, count, equal = pools.grid, pools.mask, pools.si, pools.bsdf, pools.count, pools.equal
+    Unequal counts (the refinement round's pools): child index j is a layer, P_j the members with
+    c_k > j, each layer pooled with pairwise weights over its own members (n_j = |P_j| - 1, one
+    sample per technique) and the layers averaged with weights |P_j| / C (each layer is unbiased
+    where the pool's is, and the weights sum to one). With equal counts this is the formula above;
+    with unequal ones a layer beyond the first round's n0 holds only the refined members, so its
+    loop visits those alone (the set bits of P_j), where the counts' weights would need every
+    member's density for each of v's n_max children."""
+    grid, mask, si, bsdf, count, equal = (
+        pools.grid,
+        pools.mask,
+        pools.si,
+        pools.bsdf,
+        pools.count,
+        pools.equal,
+    )
     kids, M = slab.kids, slab.M
     ctx = mi.BSDFContext()
     K = grid.K
@@ -263,8 +299,9 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
             there = here & theirs
             sk = dr.gather(mi.SurfaceInteraction3f, si_all, at, there)
             p_k = bsdf.pdf(ctx, sk, sk.to_local(wv), there)
-            canonical += dr.select(there, dr.rcp(others * ck * p_k + cv * pv) if equal else dr.rcp(n_j * p_k + pv),
-                                   0.0)
+            canonical += dr.select(
+                there, dr.rcp(others * ck * p_k + cv * pv) if equal else dr.rcp(n_j * p_k + pv), 0.0
+            )
             return direct + d, indirect + b, s1, s2, canonical
 
         if equal:  # every slot q = 1 .. K
@@ -272,15 +309,21 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
                 here = active & _has(mask, q)
                 return q + 1, *term(q, here, *acc)
             _, direct, indirect, s1, s2, canonical = dr.while_loop(
-                (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda q, *_: q <= K, member,
-                label="styletrace reuse pool members")
+                (mi.UInt32(1), direct, indirect, s1, s2, mi.Float(0.0)),
+                lambda q, *_: q <= K,
+                member,
+                label="styletrace reuse pool members",
+            )
         else:      # the layer's members k != v alone: its set bits, lowest first
             def member(bits, *acc):
                 q = mi.UInt32(dr.tzcnt(bits))
                 return bits & (bits - mi.UInt64(1)), *term(q, bits != 0, *acc)
             _, direct, indirect, s1, s2, canonical = dr.while_loop(
-                (layer & ~mi.UInt64(1), direct, indirect, s1, s2, mi.Float(0.0)), lambda bits, *_: bits != 0,
-                member, label="styletrace reuse pool layer")
+                (layer & ~mi.UInt64(1), direct, indirect, s1, s2, mi.Float(0.0)),
+                lambda bits, *_: bits != 0,
+                member,
+                label="styletrace reuse pool layer",
+            )
         d = dr.select(mine, bsdf.eval(ctx, si, si.to_local(wl), mine) * E, 0.0)
         if equal:
             w = dr.select(alone, dr.rcp(cv * pv), canonical / others)
@@ -299,7 +342,8 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
 
 
 def pool_pixels(keep: dict) -> list[list[tuple[int, int]]]:
-    """From `render(..., keep=d)`: per lane, the (x, y) pixels of its pool, itself first (tests, docs)."""
+    """From `render(..., keep=d)`: per lane, the (x, y) pixels of its pool, itself first
+    (tests, docs)."""
     offsets = window(keep["radius"])
     W, spp, width = len(offsets), keep["spp"], keep["width"]
     out = []

@@ -1,10 +1,11 @@
 """The refinement round of adaptive counts n0:n_max at the first hit (reuse=pixels).
 
-Lanes draw n0 children and pool them; the lanes whose pooled mean AdaptiveDirect's rule finds too close to a
-style threshold (or too curved), told the pool's C = sum_P c_k samples and their second moment, draw
-n_max - n0 more and recompute their pools with every member's children: direct / C; balance with Veach's
-multi-sample weights with per-member counts c_k, 1 / sum_k c_k p_k; pairwise by layers, one per child index j
-over the members with c_k > j, averaged with weights |P_j| / C (pool.py).
+Lanes draw n0 children and pool them; the lanes whose pooled mean AdaptiveDirect's rule finds too
+close to a style threshold (or too curved), told the pool's C = sum_P c_k samples and their second
+moment, draw n_max - n0 more and recompute their pools with every member's children: direct / C;
+balance with Veach's multi-sample weights with per-member counts c_k, 1 / sum_k c_k p_k; pairwise by
+layers, one per child index j over the members with c_k > j, averaged with weights |P_j| /
+C (pool.py).
 """
 from __future__ import annotations
 
@@ -23,8 +24,9 @@ from styletrace.kernel.reuse_scope import Slots, most, refined
 
 @dataclass(frozen=True)
 class Round:
-    """The first round's pooled result per lane: what g adds it to (`base`: emission at v), the pooled mean,
-    the moments s1 = sum u_i and s2 = sum u_i^2 of its children's brightness, and their count C."""
+    """The first round's pooled result per lane: what g adds it to (`base`: emission at v), the
+    pooled mean, the moments s1 = sum u_i and s2 = sum u_i^2 of its children's brightness, and their
+    count C."""
     base: mi.Spectrum
     mean: mi.Spectrum
     s1: mi.Float
@@ -34,21 +36,25 @@ class Round:
 
 def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round):
     """The pooling lanes whose first-round pooled mean (`done`; pools `first`) the style's rule
-    (estimators.AdaptiveDirect.needs_more, told the pool's |P| n0 samples and their moments) finds too close
-    to a threshold, or too curved, draw n_max - n0 more children (those lanes alone, compacted), and recompute
-    their pools with every member's children. Returns (pooled mean, children per lane)."""
+    (estimators.AdaptiveDirect.needs_more, told the pool's |P| n0 samples and their moments) finds
+    too close to a threshold, or too curved, draw n_max - n0 more children (those lanes alone,
+    compacted), and recompute their pools with every member's children. Returns (pooled mean,
+    children per lane)."""
     s, keep, targets = scope.settings, scope.keep, scope.targets
     target, m, pool = slots.target, slots.m, slots.pool
     mean, s1, s2, C = done.mean, done.s1, done.s2, done.C
     which = refined(targets)
-    dr.eval(mean, s1, s2, C)  # one kernel for the first round's pool (each output traced alone re-runs the loop)
+    # one kernel for the first round's pool (each output traced alone re-runs the loop)
+    dr.eval(mean, s1, s2, C)
     x = done.base + mean
     state = {"count": C, "sum": x * C, "mean_u": channel_mean(x),
              "m2_u": dr.maximum(s2 - dr.square(s1) / dr.maximum(C, 1.0), 0.0)}
     flag, n_max = mi.Bool(False), mi.UInt32(m)
     for i in which:
         slot = targets[i].slot
-        est = adaptive_direct(slot.style, int(slot.n(0)), most(slot.n(0)), v, s.adaptive_z, s.adaptive_bias)
+        est = adaptive_direct(
+            slot.style, int(slot.n(0)), most(slot.n(0)), v, s.adaptive_z, s.adaptive_bias
+        )
         state["tau"] = tuple(dr.zeros(mi.Float, dr.width(C)) + t for t in est.thresholds)
         here = (target == i) & pool
         flag |= here & est.needs_more(state)
@@ -57,8 +63,12 @@ def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round)
     idx = dr.compress(flag)
     count = dr.select(flag, n_max, m)
     if keep is not None:
-        keep.update(flag=np.asarray(flag), mean_u=np.asarray(state["mean_u"]), m2_u=np.asarray(state["m2_u"]),
-                    count=np.asarray(C))
+        keep.update(
+            flag=np.asarray(flag),
+            mean_u=np.asarray(state["mean_u"]),
+            m2_u=np.asarray(state["m2_u"]),
+            count=np.asarray(C),
+        )
     if dr.width(idx) == 0:
         return mean, count
     more = max(most(targets[i].slot.n(0)) - int(targets[i].slot.n(0)) for i in which)
@@ -66,9 +76,23 @@ def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round)
     si, bsdf, grid = first.si, first.bsdf, first.grid
     si_k, bsdf_k = dr.gather(mi.SurfaceInteraction3f, si, idx), dr.gather(mi.BSDFPtr, bsdf, idx)
     dr.eval(slab.kids, count)
-    sub_grid = Grid(grid.frame, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx), lane=idx)
-    again = pooled(Pools(sub_grid, dr.gather(mi.UInt64, first.mask, idx), si_k, bsdf_k, count, si_all=si,
-                         equal=False), slab, slab.M, scope.weights)
+    sub_grid = Grid(
+        grid.frame, grid.radius, grid.K, dr.gather(mi.UInt32, grid.start, idx), lane=idx
+    )
+    again = pooled(
+        Pools(
+            sub_grid,
+            dr.gather(mi.UInt64, first.mask, idx),
+            si_k,
+            bsdf_k,
+            count,
+            si_all=si,
+            equal=False,
+        ),
+        slab,
+        slab.M,
+        scope.weights,
+    )
     mean = mi.Spectrum(mean)
     dr.eval(mean)
     dr.scatter(mean, again, idx)
@@ -76,15 +100,23 @@ def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round)
 
 
 def _draw_more(scope, lanes, first: Pools, slab: Slab, idx, counts):
-    """The extra children of the flagged lanes `idx` (counts: m, n_max per lane and the most extra children),
-    one lane each (flagged lane x extra child: wide and loop-free), each on its own random stream: the flagged
-    lane's state, a stream index per extra child."""
+    """The extra children of the flagged lanes `idx` (counts: m, n_max per lane and the most extra
+    children), one lane each (flagged lane x extra child: wide and loop-free), each on its own
+    random stream: the flagged lane's state, a stream index per extra child."""
     m, n_max, more = counts
     f = dr.arange(mi.UInt32, dr.width(idx) * more)
     at = dr.gather(mi.UInt32, idx, f // more)
     sub = LaneSampler(mi.PCG32(dr.width(f), initstate=dr.gather(mi.UInt64, lanes.rng.state, at),
                                initseq=mi.UInt64(f)))
-    parents = Parents(dr.gather(mi.SurfaceInteraction3f, first.si, at), dr.gather(mi.BSDFPtr, first.bsdf, at),
-                      mi.Bool(True), mi.Bool(True))
-    draw(scope, sub, parents, Span(dr.gather(mi.UInt32, m, at) + f % more, dr.gather(mi.UInt32, n_max, at), 1,
-                                   slab, at))
+    parents = Parents(
+        dr.gather(mi.SurfaceInteraction3f, first.si, at),
+        dr.gather(mi.BSDFPtr, first.bsdf, at),
+        mi.Bool(True),
+        mi.Bool(True),
+    )
+    draw(
+        scope,
+        sub,
+        parents,
+        Span(dr.gather(mi.UInt32, m, at) + f % more, dr.gather(mi.UInt32, n_max, at), 1, slab, at),
+    )

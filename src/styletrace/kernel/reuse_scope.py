@@ -1,9 +1,9 @@
 """What one reuse render reads, and which style slot each lane draws for.
 
-`Scope` holds the integrator's public per-render state as its RenderContext bound it (targets, emitter
-sampler, camera forward vector, settings) with the render's options; the helpers below read the targets'
-style slots: the children a vertex of a level draws (n, or n0 then n_max of an adaptive count), its slot per
-lane, and g of that slot.
+`Scope` holds the integrator's public per-render state as its RenderContext bound it (targets,
+emitter sampler, camera forward vector, settings) with the render's options; the helpers below read
+the targets' style slots: the children a vertex of a level draws (n, or n0 then n_max of an adaptive
+count), its slot per lane, and g of that slot.
 """
 from __future__ import annotations
 
@@ -15,9 +15,10 @@ from styletrace.kernel.scene_graph import any_ptr
 
 @dataclass(frozen=True)
 class Scope:
-    """One reuse render: the integrator (its public seams `styled_mask` and `stylized`), the scene, what the
-    integrator's RenderContext set for it, the pooled samples' weights ('balance', 'pairwise', 'own') and
-    `keep`, a dict receiving the first batch's pools (None for other batches)."""
+    """One reuse render: the integrator (its public seams `styled_mask` and `stylized`), the scene,
+    what the integrator's RenderContext set for it, the pooled samples' weights ('balance',
+    'pairwise', 'own') and `keep`, a dict receiving the first batch's pools (None for other
+    batches)."""
     integ: object
     scene: mi.Scene
     settings: object
@@ -29,13 +30,23 @@ class Scope:
 
     @classmethod
     def of(cls, integ, scene: mi.Scene, weights: str, keep: dict | None) -> "Scope":
-        return cls(integ, scene, integ.settings, tuple(integ.targets), integ.emitters, integ.view, weights, keep)
+        return cls(
+            integ,
+            scene,
+            integ.settings,
+            tuple(integ.targets),
+            integ.emitters,
+            integ.view,
+            weights,
+            keep,
+        )
 
 
 @dataclass(frozen=True)
 class Slots:
-    """Per lane: its target (style slot index, -1 where none), its children count m (n0 of an adaptive count),
-    and whether it may pool (it draws children and its BSDF has no delta or null part)."""
+    """Per lane: its target (style slot index, -1 where none), its children count m (n0 of an
+    adaptive count), and whether it may pool (it draws children and its BSDF has no delta or
+    null part)."""
     target: mi.Int32
     m: mi.UInt32
     pool: mi.Bool
@@ -47,23 +58,26 @@ def most(n) -> int:
 
 
 def children_per_lane(targets, level: int = 0) -> int:
-    """M, the children stored per vertex of `level`: the largest count of a style slot that draws children (n_max
-    for an adaptive count n0:n_max)."""
+    """M, the children stored per vertex of `level`: the largest count of a style slot that draws
+    children (n_max for an adaptive count n0:n_max)."""
     return max([most(t.slot.n(level)) for t in targets if not t.slot.style.closed_form] or [1])
 
 
 def first_round(targets, level: int = 0) -> int:
-    """The most children any vertex of `level` draws before the refinement round (n0 of an adaptive count)."""
+    """The most children any vertex of `level` draws before the refinement round (n0 of an
+    adaptive count)."""
     return max([int(t.slot.n(level)) for t in targets if not t.slot.style.closed_form] or [1])
 
 
 def refined(targets) -> list[int]:
-    """The targets whose first-level count is adaptive (n0:n_max): those the refinement round serves."""
+    """The targets whose first-level count is adaptive (n0:n_max): those the refinement
+    round serves."""
     return [i for i, t in enumerate(targets) if most(t.slot.n(0)) > int(t.slot.n(0))]
 
 
 def slots(scope: Scope, si, hit, bsdf, level: int) -> Slots:
-    """The `Slots` of the lanes at vertices `si` (`hit`: a surface) with BSDFs `bsdf`, at stylized `level`."""
+    """The `Slots` of the lanes at vertices `si` (`hit`: a surface) with BSDFs `bsdf`, at
+    stylized `level`."""
     styled = scope.integ.styled_mask(si) if len(scope.targets) > 1 else mi.Bool(False)
     target, m = mi.Int32(-1), mi.UInt32(0)
     for i, t in enumerate(scope.targets):
@@ -71,12 +85,15 @@ def slots(scope: Scope, si, hit, bsdf, level: int) -> Slots:
         target = dr.select(here, i, target)
         m = dr.select(here, 0 if t.slot.style.closed_form else int(t.slot.n(level)), m)
     flags = bsdf.flags()
-    pool = (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
+    pool = (
+        (m > 0) & ~mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Null)
+    )
     return Slots(target, m, pool)
 
 
 def styled_value(scope: Scope, target, x, v, fallback):
-    """g of each lane's target applied to x (closed-form styles to nothing), `fallback` where no target."""
+    """g of each lane's target applied to x (closed-form styles to nothing), `fallback` where
+    no target."""
     value = mi.Spectrum(fallback)
     for i, t in enumerate(scope.targets):
         style = t.slot.style

@@ -1,11 +1,12 @@
-"""reuse_deep=world: the second stylized level pools too, with world-space neighbours (Tong and Hachisuka's
-path filtering; first_n_hits with N = 2 only).
+"""reuse_deep=world: the second stylized level pools too, with world-space neighbours (Tong and
+Hachisuka's path filtering; first_n_hits with N = 2 only).
 
-All children of a batch are drawn at once, one lane each (child j of lane i at i * M + j): a delta-light sample
-and a BSDF sample from the first hit, as `bounce.bounce`. The level-1 vertices they reach (one per child) draw
-m2 children each (children.draw: ordinary paths beyond the last level), and each pools with the accepted ones
-of K2 candidates from its jittered cell of a world-space grid (world_grid.py: same target, BSDF and normal,
-within distance h), with the weights of pool.py; g of that pooled value is the child's Li.
+All children of a batch are drawn at once, one lane each (child j of lane i at i * M + j): a
+delta-light sample and a BSDF sample from the first hit, as `bounce.bounce`. The level-1 vertices
+they reach (one per child) draw m2 children each (children.draw: ordinary paths beyond the last
+level), and each pools with the accepted ones of K2 candidates from its jittered cell of a
+world-space grid (world_grid.py: same target, BSDF and normal, within distance h), with the weights
+of pool.py; g of that pooled value is the child's Li.
 """
 from __future__ import annotations
 
@@ -23,10 +24,10 @@ from styletrace.styles.base import Vertex
 
 
 def level1(scope, lanes, parents: Parents, m, slab: Slab):
-    """`children.draw` for first_n_hits at depth 2 with the second level pooled too: the children of every lane
-    of `parents` that draws (m of them each) at once, their second-level vertices shaded together by `level2`,
-    whose value is the child's Li. Stores the children in `slab`; returns each lane's sum of their ordinary
-    estimates."""
+    """`children.draw` for first_n_hits at depth 2 with the second level pooled too: the children of
+    every lane of `parents` that draws (m of them each) at once, their second-level vertices shaded
+    together by `level2`, whose value is the child's Li. Stores the children in `slab`; returns each
+    lane's sum of their ordinary estimates."""
     scene, M, kids = scope.scene, slab.M, slab.kids
     si, bsdf = parents.si, parents.bsdf
     N = dr.width(si.p)
@@ -38,8 +39,19 @@ def level1(scope, lanes, parents: Parents, m, slab: Slab):
     lo = dr.gather(mi.UInt32, dr.reinterpret_array(mi.UInt32, lanes.next_1d()), owner)
     smp = LaneSampler(mi.PCG32(N * M, initstate=(mi.UInt64(hi) << 32) | mi.UInt64(lo),
                                initseq=dr.arange(mi.UInt64, N * M)))
-    c = Draw(scope, smp, Parents(dr.gather(mi.SurfaceInteraction3f, si, owner), dr.gather(mi.BSDFPtr, bsdf, owner),
-                                 on, mi.Bool(True)), on, 0, nested=True)
+    c = Draw(
+        scope,
+        smp,
+        Parents(
+            dr.gather(mi.SurfaceInteraction3f, si, owner),
+            dr.gather(mi.BSDFPtr, bsdf, owner),
+            on,
+            mi.Bool(True),
+        ),
+        on,
+        0,
+        nested=True,
+    )
     si2, hit2 = c.next_vertex()
     x = c.store(kids, idx, c.seen(scene, si2, hit2, level2(scope, smp, si2, c.ray2, hit2)), on)
     lane = dr.arange(mi.UInt32, N)
@@ -50,9 +62,10 @@ def level1(scope, lanes, parents: Parents, m, slab: Slab):
 
 
 def level2(scope, smp, si, ray, hit):
-    """The stylized value of second-level vertices `si` (reached along `ray`; `hit`: a surface) that pool the
-    children of their world-space neighbours (world_grid.py): m2 children each by `children.draw` (ordinary
-    paths beyond the last stylized level), pooled exactly as at the first hit, then g of the vertex's slot."""
+    """The stylized value of second-level vertices `si` (reached along `ray`; `hit`: a surface) that
+    pool the children of their world-space neighbours (world_grid.py): m2 children each by
+    `children.draw` (ordinary paths beyond the last stylized level), pooled exactly as at the first
+    hit, then g of the vertex's slot."""
     s, scene, keep = scope.settings, scope.scene, scope.keep
     bsdf = si.bsdf(ray)
     lanes = slots(scope, si, hit, bsdf, 1)
@@ -68,15 +81,26 @@ def level2(scope, smp, si, ray, hit):
     dr.eval(slab.kids, own, base, si, target, m, pool, jitter, start, bsdf, smp)
     box = scene.bbox()
     diag = float(dr.norm(box.extents()))
-    h = s.reuse_h * diag if s.reuse_h > 0 else density_h(si.p, pool, s.reuse_k2, box.min, S.MIN_REUSE_H * diag, diag)
+    h = (
+        s.reuse_h * diag
+        if s.reuse_h > 0
+        else density_h(si.p, pool, s.reuse_k2, box.min, S.MIN_REUSE_H * diag, diag)
+    )
     grid = WorldGrid(si.p, pool, h, s.reuse_k2, jitter, start, box.min)
     mask = grid.accepted(target, bsdf, pool, n, P.NORMAL_MIN)
     dr.eval(mask)
     if keep is not None:
-        keep.update(world_mask=np.asarray(mask, dtype=np.uint64), world_p=np.asarray(si.p, dtype=np.float64),
-                    world_pool=np.asarray(pool, dtype=bool), world_h=grid.h, world_k=grid.K,
-                    world_order=np.asarray(grid.order), world_first=np.asarray(grid.first),
-                    world_count=np.asarray(grid.count), world_offset=np.asarray(grid.offset))
+        keep.update(
+            world_mask=np.asarray(mask, dtype=np.uint64),
+            world_p=np.asarray(si.p, dtype=np.float64),
+            world_pool=np.asarray(pool, dtype=bool),
+            world_h=grid.h,
+            world_k=grid.K,
+            world_order=np.asarray(grid.order),
+            world_first=np.asarray(grid.first),
+            world_count=np.asarray(grid.count),
+            world_offset=np.asarray(grid.offset),
+        )
     mean = P.pooled(P.Pools(grid, mask, si, bsdf, m), slab, J, scope.weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))
     v = Vertex(p=si.p, n=n, wo=-ray.d, view=mi.Vector3f(scope.view), depth=mi.UInt32(1))

@@ -2,20 +2,23 @@
 wherever they sit, null-scattering surfaces (masks, `null`), participating media.
 
     graph = SceneGraph(scene)
-    graph.styled        # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
+    # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
+    graph.styled
     graph.has_null      # some surface BSDF has a Null component (a `mask`, a `null` BSDF, ...)
-    graph.has_see_through  # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
+    # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
+    graph.has_see_through
     graph.has_media     # some shape bounds a medium, or the sensor sits in one
 
-Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled` BSDF
-wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is registered with
-the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in `scene.shapes()`, but an
-intersection with an `instance` of the group reports the group shape's own BSDF; the graph reaches
-those shapes through the scene's traversal (`Object.traverse` with a `TraversalCallback`, which hands
-every child object to `put`). A surface whose BSDF holds two different styled BSDFs (a `blendbsdf` of
-two styles, a `twosided` with a different style on each side) cannot take both styles: it is refused
-with a `SceneError`, as is a styled BSDF inside another one (the inner style would never apply), and an
-emitter on a see-through surface (path.first_scattering says why).
+Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled`
+BSDF wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is
+registered with the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in
+`scene.shapes()`, but an intersection with an `instance` of the group reports the group shape's own
+BSDF; the graph reaches those shapes through the scene's traversal (`Object.traverse` with a
+`TraversalCallback`, which hands every child object to `put`). A surface whose BSDF holds two
+different styled BSDFs (a `blendbsdf` of two styles, a `twosided` with a different style on each
+side) cannot take both styles: it is refused with a `SceneError`, as is a styled BSDF inside another
+one (the inner style would never apply), and an emitter on a see-through surface
+(path.first_scattering says why).
 """
 from __future__ import annotations
 
@@ -26,10 +29,10 @@ from styletrace.kernel.styled_bsdf import StyledBSDF
 
 
 class _Collect(mi.TraversalCallback):
-    """Gathers the child objects a traversal hands over. One class for the module: a class made per call
-    (a closure over the list) sits in a reference cycle, so the objects it reached lived on until the
-    cyclic garbage collector ran, possibly in the middle of a later scene's trace, where Dr.Jit traces
-    calls on every live instance (measured: a segfault in the next test's render)."""
+    """Gathers the child objects a traversal hands over. One class for the module: a class made per
+    call (a closure over the list) sits in a reference cycle, so the objects it reached lived on
+    until the cyclic garbage collector ran, possibly in the middle of a later scene's trace, where
+    Dr.Jit traces calls on every live instance (measured: a segfault in the next test's render)."""
 
     def __init__(self):
         super().__init__()
@@ -64,8 +67,8 @@ def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
             found[id(obj)] = obj
             if styled_inside(obj.nested):
                 raise SceneError(
-                    f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, whose "
-                    f"style would never apply: keep one 'styled' BSDF per surface"
+                    f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, "
+                    "whose style would never apply: keep one 'styled' BSDF per surface"
                 )
             continue  # its traversal forwards to the nested BSDF's parameters, checked above
         stack.extend(children(obj))
@@ -73,7 +76,8 @@ def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
 
 
 def all_shapes(scene: mi.Scene) -> list[mi.Shape]:
-    """Every shape of the scene with a surface, those inside shapegroups (seen through instances) too."""
+    """Every shape of the scene with a surface, those inside shapegroups (seen through
+    instances) too."""
     shapes: dict[int, mi.Shape] = {id(s): s for s in scene.shapes()}
     stack, seen = list(children(scene)), set()
     while stack:
@@ -103,15 +107,19 @@ class SceneGraph:
                 self.has_see_through |= pure_null(bsdf.flags())
                 if shape.emitter() is not None:  # see path.first_scattering for why
                     raise SceneError(
-                        f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
-                        f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF"
+                        f"shape '{_name(shape)}' emits light through a see-through "
+                        f"{bsdf.class_name()} BSDF, which 'stylized' does not support: give the "
+                        "emitter an opaque BSDF"
                     )
-            self.has_media |= shape.interior_medium() is not None or shape.exterior_medium() is not None
+            self.has_media |= (
+                shape.interior_medium() is not None or shape.exterior_medium() is not None
+            )
             styled = styled_inside(bsdf)
             if len(styled) > 1:
                 raise SceneError(
-                    f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} 'styled' "
-                    f"BSDFs, but a surface takes one style: wrap the whole BSDF in one 'styled' instead"
+                    f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} "
+                    "'styled' BSDFs, but a surface takes one style: wrap the whole BSDF in one "
+                    "'styled' instead"
                 )
             if not styled:
                 continue

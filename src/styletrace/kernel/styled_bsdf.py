@@ -11,9 +11,9 @@
 
 Properties: `style` (required), the style's parameters, `inner_samples` and `estimator` (as on the
 `stylized` integrator), and exactly one nested BSDF. For light transport the wrapper *is* the nested
-BSDF: every query is forwarded. The `stylized` integrator finds the wrappers in the scene and applies
-their styles where paths meet these objects (see its `stylize` property); other integrators render
-the objects physically based.
+BSDF: every query is forwarded. The `stylized` integrator finds the wrappers in the scene and
+applies their styles where paths meet these objects (see its `stylize` property); other integrators
+render the objects physically based.
 """
 from __future__ import annotations
 
@@ -33,7 +33,9 @@ class StyledBSDF(mi.BSDF):
             else:
                 values[key] = value
         if len(nested) != 1:
-            raise SettingsError(f"a 'styled' BSDF needs exactly one nested BSDF, found {len(nested)}")
+            raise SettingsError(
+                f"a 'styled' BSDF needs exactly one nested BSDF, found {len(nested)}"
+            )
         if "style" not in values:
             raise SettingsError("a 'styled' BSDF needs a 'style' property")
         self.nested = nested[0]

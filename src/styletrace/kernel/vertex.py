@@ -24,11 +24,12 @@ class Site:
 def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:
     """Power heuristic weight a^2 / (a^2 + b^2) of strategy a against b, finite for every input.
 
-    Written as 1 / (1 + (b/a)^2): squaring first overflows float32 for densities above ~1.8e19, which
-    a grazing direction towards an area light reaches (pdf = dist^2 / (cos * area) with cos ~ 1e-17
-    from a rotation's rounding), and inf / inf made the weight NaN and the sample with it, even where
-    it multiplied a zero contribution. The ratio form gives the right limits instead (a -> inf: 1,
-    b -> inf: 0); 0 where a vanishes, 1/2 where both are infinite (the two weights still sum to 1).
+    Written as 1 / (1 + (b/a)^2): squaring first overflows float32 for densities above ~1.8e19,
+    which a grazing direction towards an area light reaches (pdf = dist^2 / (cos * area) with cos ~
+    1e-17 from a rotation's rounding), and inf / inf made the weight NaN and the sample with it,
+    even where it multiplied a zero contribution. The ratio form gives the right limits instead (a
+    -> inf: 1, b -> inf: 0); 0 where a vanishes, 1/2 where both are infinite (the two weights still
+    sum to 1).
     """
     r = pdf_b / pdf_a
     w = dr.rcp(dr.fma(r, r, 1.0))
@@ -52,13 +53,13 @@ def emission(scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool) -> m
 
 
 def null_split(si: mi.SurfaceInteraction3f, bsdf, u: mi.Float, active: mi.Bool):
-    """Where a surface lets light through unscattered (a `mask`'s transparent part, a `null` BSDF), choose
-    between passing through and scattering: (passes, pass weight, stay weight).
+    """Where a surface lets light through unscattered (a `mask`'s transparent part, a `null` BSDF),
+    choose between passing through and scattering: (passes, pass weight, stay weight).
 
-    The null transmission T = `eval_null_transmission` is the part of the BSDF that continues straight
-    on; the ray passes with probability p = mean(T) and weight T/p, else it scatters here with weight
-    (1 - T)/(1 - p) (both 1 where T is grey, as for masks). Mitsuba's BSDFs sample their null component
-    with probability T, so this choice is the one their own `sample` would make.
+    The null transmission T = `eval_null_transmission` is the part of the BSDF that continues
+    straight on; the ray passes with probability p = mean(T) and weight T/p, else it scatters here
+    with weight (1 - T)/(1 - p) (both 1 where T is grey, as for masks). Mitsuba's BSDFs sample their
+    null component with probability T, so this choice is the one their own `sample` would make.
     """
     T = bsdf.eval_null_transmission(si, active)
     p = dr.clip(dr.mean(T), 0.0, 1.0)
@@ -69,18 +70,18 @@ def null_split(si: mi.SurfaceInteraction3f, bsdf, u: mi.Float, active: mi.Bool):
 
 
 def opaque_part(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Spectrum:
-    """1 / (1 - T): the factor that turns a BSDF's scattering into that of its opaque part alone (the part
-    a stylized vertex stands for, see `first_scattering`); 0 where nothing scatters."""
+    """1 / (1 - T): the factor that turns a BSDF's scattering into that of its opaque part alone
+    (the part a stylized vertex stands for, see `first_scattering`); 0 where nothing scatters."""
     keep = 1.0 - bsdf.eval_null_transmission(si, active)
     return dr.select(keep > 0, dr.rcp(keep), 0.0)
 
 
 def opaque_share(si: mi.SurfaceInteraction3f, bsdf, active: mi.Bool) -> mi.Float:
-    """1 - p, p = mean(T) as in `null_split`: the probability with which Mitsuba's BSDFs sample their
-    scattering (non-null) part. They sample it where their first uniform `sample1` is below 1 - p (a `mask`
-    its nested BSDF where sample1 < opacity, a `thindielectric` its reflection where sample1 <= R), and
-    pass sample1 / (1 - p) on to that part. So a stylized vertex scales its sample1 into [0, 1 - p): its
-    children sample the opaque part alone, as the opaque surface itself would, with weight f/pdf of that
-    part, and none is spent on the null part (`walk`, `bounce`)."""
+    """1 - p, p = mean(T) as in `null_split`: the probability with which Mitsuba's BSDFs sample
+    their scattering (non-null) part. They sample it where their first uniform `sample1` is below
+    1 - p (a `mask` its nested BSDF where sample1 < opacity, a `thindielectric` its reflection where
+    sample1 <= R), and pass sample1 / (1 - p) on to that part. So a stylized vertex scales its
+    sample1 into [0, 1 - p): its children sample the opaque part alone, as the opaque surface itself
+    would, with weight f/pdf of that part, and none is spent on the null part (`walk`, `bounce`)."""
     T = bsdf.eval_null_transmission(si, active)
     return 1.0 - dr.clip(dr.mean(T), 0.0, 1.0)

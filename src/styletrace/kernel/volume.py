@@ -1,33 +1,38 @@
-"""The path kernel in scenes with participating media: `walk` of path.py, but along rays through media.
+"""The path kernel in scenes with participating media: `walk` of path.py, but along rays
+through media.
 
-    w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)  # a Walk
-    tr = transmittance(scene, sampler, it, ds, medium, channel, active)      # towards a sampled light
+    # a Walk
+    w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)
+    # towards a sampled light
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active)
 
-The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray in a
-medium a free-flight distance is drawn from the medium's majorant (`Medium.sample_interaction`); a
-collision before the next surface is real (scattering, probability sigma_t / majorant) or null (the ray
-goes on from there, nothing added). A real collision scatters by the medium's phase function: next-event
-estimation (power heuristic against phase sampling), then a phase-sampled direction. Surfaces scatter as
-in path.py (next-event estimation, MIS against BSDF sampling, roulette). A transmission through a
-surface that bounds a medium (`si.is_medium_transition()`) moves the path into `si.target_medium(d)`.
-Null-scattering surfaces (`null`, masks) add no depth and keep the last real vertex for MIS, as in
-`volpath`. Light reaches a vertex through media and null surfaces: the shadow ray's transmittance is
-estimated by ratio tracking (`transmittance`), so a `null` shape bounding a medium does not block it.
+The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray
+in a medium a free-flight distance is drawn from the medium's majorant
+(`Medium.sample_interaction`); a collision before the next surface is real (scattering, probability
+sigma_t / majorant) or null (the ray goes on from there, nothing added). A real collision scatters
+by the medium's phase function: next-event estimation (power heuristic against phase sampling), then
+a phase-sampled direction. Surfaces scatter as in path.py (next-event estimation, MIS against BSDF
+sampling, roulette). A transmission through a surface that bounds a medium
+(`si.is_medium_transition()`) moves the path into `si.target_medium(d)`. Null-scattering surfaces
+(`null`, masks) add no depth and keep the last real vertex for MIS, as in `volpath`. Light reaches a
+vertex through media and null surfaces: the shadow ray's transmittance is estimated by ratio
+tracking (`transmittance`), so a `null` shape bounding a medium does not block it.
 
 In RGB the free-flight distance is drawn in one colour channel per path (chosen uniformly), and the
-throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel); media
-with grey extinction get weight 1 from the same formulas. Depth counts real scattering events at
-surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every scattering from
-depth `rr_depth` + 1 on, as `volpath`'s.
+throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel);
+media with grey extinction get weight 1 from the same formulas. Depth counts real scattering events
+at surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every
+scattering from depth `rr_depth` + 1 on, as `volpath`'s.
 
 `volume_walk` has path.walk's signature (path.WalkConfig, path.Start, path.Hooks). Stylization
-(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is always
-a surface one. `Start.flight` says whether the medium along the first ray is still to be sampled (a ray
-from the camera, or from a stylized vertex towards the next one) or the lane already stands at the
-surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the parent).
-`Start.delta`: the start vertex samples delta lights only (its other light is reached by the BSDF sample,
-through g at the next stylized vertex; see bounce.bounce), so emitters found past it get full weight.
-`Start.hide`: no emission is counted before the first scattering (`hide_emitters` on a camera ray).
+(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is
+always a surface one. `Start.flight` says whether the medium along the first ray is still to be
+sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already
+stands at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the
+parent). `Start.delta`: the start vertex samples delta lights only (its other light is reached by
+the BSDF sample, through g at the next stylized vertex; see bounce.bounce), so emitters found past
+it get full weight. `Start.hide`: no emission is counted before the first scattering
+(`hide_emitters` on a camera ray).
 """
 from __future__ import annotations
 
@@ -83,7 +88,8 @@ def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.Directi
                   channel: mi.UInt32, active: mi.Bool) -> mi.Spectrum:
     """Ratio-tracking estimate of the transmittance from `it` to the light point ds.p: through media
     (null collisions weigh sigma_n over the channel's density) and through surfaces by their null
-    transmission (0 at opaque ones: an occlusion test). `medium`: the medium the shadow ray starts in."""
+    transmission (0 at opaque ones: an occlusion test). `medium`: the medium the shadow ray
+    starts in."""
     state = ShadowState(sampler=sampler, ray=it.spawn_ray_to(ds.p), medium=mi.MediumPtr(medium),
                         tr=mi.Spectrum(1.0), active=mi.Bool(active))
 
@@ -107,13 +113,16 @@ def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.Directi
         s.active = (coll | surf) & dr.any(s.tr != 0.0)
         return (s,)
 
-    (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace shadow transmittance")
+    (out,) = dr.while_loop(
+        (state,), lambda s: s.active, body, label="styletrace shadow transmittance"
+    )
     return dr.select(active, out.tr, 0.0)
 
 
 @dataclass
 class VolumeState:
-    """The loop state of `volume_walk` (path.PathState plus the medium and the free-flight switch)."""
+    """The loop state of `volume_walk` (path.PathState plus the medium and the
+    free-flight switch)."""
     sampler: Any
     pi: mi.PreliminaryIntersection3f     # the next surface along `ray` (its t measured from ray.o)
     ray: mi.Ray3f
@@ -133,9 +142,11 @@ class VolumeState:
     tone: Optional[Any] = None           # anchors.ToneState where a style reads image coordinates
 
 
-def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
-    """path.walk through participating media (module docstring): the same parameters and hooks; returns
-    a path.Walk with the medium each lane stands in."""
+def volume_walk(
+    cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS
+) -> Walk:
+    """path.walk through participating media (module docstring): the same parameters and hooks;
+    returns a path.Walk with the medium each lane stands in."""
     scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
     opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
@@ -143,12 +154,25 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
     limit = depth_limit(cfg.max_depth)
     channel = mi.UInt32(dr.minimum(sampler.next_1d(active) * 3.0, 2.0))
 
-    state = VolumeState(sampler=sampler, pi=mi.PreliminaryIntersection3f(start.pi), ray=mi.Ray3f(start.ray),
-                        medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
-                        flight=mi.Bool(start.flight), active=mi.Bool(active), depth=mi.UInt32(start.depth), L=mi.Spectrum(0.0),
-                        beta=mi.Spectrum(1.0), eta=mi.Float(1.0), si_prev=dr.zeros(mi.Interaction3f),
-                        pdf_prev=mi.Float(1.0), delta_prev=mi.Bool(True), halted=mi.Bool(False), first=mi.Bool(True),
-                        lines=None if lines is None else lines[1], tone=tone)
+    state = VolumeState(
+        sampler=sampler,
+        pi=mi.PreliminaryIntersection3f(start.pi),
+        ray=mi.Ray3f(start.ray),
+        medium=dr.select(active, mi.MediumPtr(start.medium), mi.MediumPtr(None)),
+        flight=mi.Bool(start.flight),
+        active=mi.Bool(active),
+        depth=mi.UInt32(start.depth),
+        L=mi.Spectrum(0.0),
+        beta=mi.Spectrum(1.0),
+        eta=mi.Float(1.0),
+        si_prev=dr.zeros(mi.Interaction3f),
+        pdf_prev=mi.Float(1.0),
+        delta_prev=mi.Bool(True),
+        halted=mi.Bool(False),
+        first=mi.Bool(True),
+        lines=None if lines is None else lines[1],
+        tone=tone,
+    )
 
     def body(s: VolumeState):
         # ---- the medium between the ray's origin and the surface `pi` (volpath's delta tracking)
@@ -158,10 +182,15 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         mei.t = dr.select(mei.t > t_surf, dr.inf, mei.t)
         s.beta *= free_flight_weight(s.medium, mei, t_surf, channel, in_med)
         real = in_med & mei.is_valid()
-        majorant_c, sigma_t_c = channel_of(mei.combined_extinction, channel), channel_of(mei.sigma_t, channel)
+        majorant_c, sigma_t_c = (
+            channel_of(mei.combined_extinction, channel),
+            channel_of(mei.sigma_t, channel),
+        )
         null_coll = real & (s.sampler.next_1d(real) >= sigma_t_c / majorant_c)
         sigma_n_c = channel_of(mei.sigma_n, channel)
-        s.beta *= dr.select(null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0)
+        s.beta *= dr.select(
+            null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0
+        )
         scat = real & ~null_coll
         depth_m = s.depth + 1
         scat &= depth_m < limit                  # a collision past the last depth ends the path
@@ -175,15 +204,18 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         here, passes, w_pass = halt_at(s, si, bsdf, at_surf, stop, nulls)
         s.L += mis_emission(scene, emitters, s, si, here & (s.depth > 0) if hide_first else here)
 
-        # the BSDF is sampled at the last depth too: a null component sampled there goes on at the same depth
+        # the BSDF is sampled at the last depth too: a null component sampled there goes on at the
+        # same depth
         sample_s = here & ~passes & si.is_valid()
         active_s = sample_s & (s.depth + 1 < limit)
 
-        # ---- next-event estimation from the medium collision or the surface vertex, one light sample
+        # ---- next-event estimation from the medium collision or the surface vertex, one light samp
         sample_m = scat & mei.medium.use_emitter_sampling()
         em_on = sample_m | (active_s & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth))
         it = dr.select(scat, it_m, mi.Interaction3f(si))
-        ds, em_weight = emitters.sample_direction(it, s.sampler.next_2d(em_on), em_on, visible=False)
+        ds, em_weight = emitters.sample_direction(
+            it, s.sampler.next_2d(em_on), em_on, visible=False
+        )
         em_on &= ds.pdf != 0.0
         if skip_emitter is not None:
             em_on &= ~skip_emitter(ds)
@@ -195,13 +227,16 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         phase_val, phase_pdf = phase.eval_pdf(pctx, mei, ds.d, sample_m)
         wo = si.to_local(ds.d)
         u1 = s.sampler.next_1d(sample_s)
-        if nulls and opaque_start:  # the stylized starting vertex samples its opaque part alone (opaque_share)
+        # the stylized starting vertex samples its opaque part alone (opaque_share)
+        if nulls and opaque_start:
             keep = dr.select(s.first, opaque_share(si, bsdf, sample_s & s.first), 1.0)
             u1 = dr.select(s.first, u1 * keep, u1)
-        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(ctx, si, wo, u1, s.sampler.next_2d(sample_s),
-                                                                   sample_s)
+        bsdf_val, bsdf_pdf, bs, bsdf_weight = bsdf.eval_pdf_sample(
+            ctx, si, wo, u1, s.sampler.next_2d(sample_s), sample_s
+        )
         scale = mi.Spectrum(1.0)
-        if nulls and opaque_start:  # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
+        # the opaque part's f (NEE) and pdfs; the sample's weight is that part's
+        if nulls and opaque_start:
             scale = dr.select(s.first, opaque_part(si, bsdf, sample_s & s.first), 1.0)
             ok = keep > 0
             bsdf_pdf = dr.select(ok, bsdf_pdf / dr.select(ok, keep, 1.0), 0.0)
@@ -210,11 +245,14 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         f_val = dr.select(scat, phase_val, scale * bsdf_val)
         f_pdf = dr.select(scat, phase_pdf, bsdf_pdf)
         w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, f_pdf))
-        s.L += dr.select(em_on, dr.select(scat, beta_m, s.beta) * f_val * em_weight * tr * w_nee, 0.0)
+        s.L += dr.select(
+            em_on, dr.select(scat, beta_m, s.beta) * f_val * em_weight * tr * w_nee, 0.0
+        )
 
         # ---- the next ray: phase sample in the medium, BSDF sample (or straight on) at the surface
-        wo_m, phase_weight, phase_pdf_m = phase.sample(pctx, mei, s.sampler.next_1d(scat), s.sampler.next_2d(scat),
-                                                       scat)
+        wo_m, phase_weight, phase_pdf_m = phase.sample(
+            pctx, mei, s.sampler.next_1d(scat), s.sampler.next_2d(scat), scat
+        )
         scat &= phase_pdf_m > 0.0
         null_s = passes | mi.has_flag(bs.sampled_type, mi.BSDFFlags.Null)
         go_s = (sample_s & (null_s | active_s)) | (here & passes)
@@ -229,11 +267,18 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         go = scat | go_s
         s.eta *= dr.select(go_s & ~null_s, bs.eta, 1.0)
         real_s = go_s & ~null_s
-        s.si_prev = dr.select(scat, it_m, dr.select(real_s, mi.Interaction3f(dr.detach(si, True)), s.si_prev))
+        s.si_prev = dr.select(
+            scat, it_m, dr.select(real_s, mi.Interaction3f(dr.detach(si, True)), s.si_prev)
+        )
         s.pdf_prev = dr.select(scat, phase_pdf_m, dr.select(real_s, bs.pdf, s.pdf_prev))
-        s.delta_prev = dr.select(scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev))
-        s.medium = dr.select(go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium)
-        if tone is not None:  # the prefix the next vertex's image coordinate is searched with (anchors.py)
+        s.delta_prev = dr.select(
+            scat, ~mei.medium.use_emitter_sampling(), dr.select(go_s, delta_s, s.delta_prev)
+        )
+        s.medium = dr.select(
+            go_s & si.is_medium_transition(), si.target_medium(ray_next.d), s.medium
+        )
+        # the prefix the next vertex's image coordinate is searched with (anchors.py)
+        if tone is not None:
             s.tone = scattered_in_medium(advance(s.tone, si, bs, s.depth, real_s), scat)
 
         # roulette after each scattering, from depth rr_depth + 1 on (volpath's)
@@ -245,9 +290,11 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
         go &= ~roulette | (s.sampler.next_1d(roulette) < q)
 
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=go)
-        if lines is not None:  # a line on the edge a surface scattering starts absorbs the path (lines.py)
-            seen, after = lines[0].edge(scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next,
-                                        go & real_s)
+        # a line on the edge a surface scattering starts absorbs the path (lines.py)
+        if lines is not None:
+            seen, after = lines[0].edge(
+                scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next, go & real_s
+            )
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
             go &= ~seen.fired
             s.lines = lines_past(after, pi_next, go & go_s & null_s, scat)
@@ -271,17 +318,21 @@ def volume_walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: 
 
 
 def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
-    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths reflect
-    or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins the prefix
-    key as no shape does, so no anchor matches and the coordinate takes its fallbacks (anchors.py)."""
+    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths
+    reflect or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins
+    the prefix key as no shape does, so no anchor matches and the coordinate takes its fallbacks
+    (anchors.py)."""
     key = combine(tone.key, mi.UInt32(0xFFFFFFFF))  # a shape id + 1 that no shape has: 0
-    return ToneState(key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0)
+    return ToneState(
+        key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0
+    )
 
 
 def lines_past(state: LineState, pi: mi.PreliminaryIntersection3f, passed: mi.Bool,
                scattered: mi.Bool) -> LineState:
-    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes on
-    through the surface (its lines were tested through it), its length grows by the next segment's.
-    `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later edge is tested."""
+    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes
+    on through the surface (its lines were tested through it), its length grows by the next
+    segment's. `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later
+    edge is tested."""
     D = dr.select(passed, state.D + dr.select(pi.is_valid(), pi.t, dr.inf), state.D)
     return LineState(D=D, alive=state.alive & ~scattered, angle=state.angle, spread=state.spread)

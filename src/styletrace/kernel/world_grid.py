@@ -1,20 +1,22 @@
 """World-space neighbours of stored path vertices for reuse=pixels at the second stylized level.
 
 Reference
-    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path filtering
-    takes the neighbours of a deeper vertex within a radius h in world space (their hash grid).
+    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path
+    filtering takes the neighbours of a deeper vertex within a radius h in world space (their
+    hash grid).
 
-The second-level vertices of neighbouring pixels are not neighbours in space (their first bounces go in
-independent directions), so they are found in a uniform grid of cell size h over the scene's bounding box. The
-grid is built on the host with numpy: each vertex's cell is packed into one integer key, the keys are sorted
-with a stable argsort and each lookup is a binary search, so the same vertices give the same neighbours on any
-thread count (a hash table filled with atomics would not: its order depends on the threads' timing).
+The second-level vertices of neighbouring pixels are not neighbours in space (their first bounces go
+in independent directions), so they are found in a uniform grid of cell size h over the scene's
+bounding box. The grid is built on the host with numpy: each vertex's cell is packed into one
+integer key, the keys are sorted with a stable argsort and each lookup is a binary search, so the
+same vertices give the same neighbours on any thread count (a hash table filled with atomics would
+not: its order depends on the threads' timing).
 
-A vertex looks up the cell of its position jittered by up to h/2 on each axis (so cell borders do not decide who
-is a neighbour), takes K consecutive candidates of that cell from a random start, itself excluded, and accepts
-those within distance h with the same style target, the same BSDF object and shading normals with
-n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of `reuse.pool.Grid`'s, so `reuse.pool.pooled` pools
-over either.
+A vertex looks up the cell of its position jittered by up to h/2 on each axis (so cell borders do
+not decide who is a neighbour), takes K consecutive candidates of that cell from a random start,
+itself excluded, and accepts those within distance h with the same style target, the same BSDF
+object and shading normals with n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of
+`reuse.pool.Grid`'s, so `reuse.pool.pooled` pools over either.
 """
 from __future__ import annotations
 
@@ -28,10 +30,11 @@ AXIS_BITS = 21
 
 
 def uint32(a: np.ndarray) -> mi.UInt32:
-    """A numpy array as a Dr.Jit array in Dr.Jit's own (aligned) memory: a kernel reading numpy's memory directly
-    is compiled for its alignment, so the large kernels that read these would be compiled anew (about a second)
-    whenever numpy's allocation is aligned otherwise."""
-    out = mi.UInt32(a.astype(np.uint32)) + dr.opaque(mi.UInt32, 0)  # a tiny kernel's output, in Dr.Jit's memory
+    """A numpy array as a Dr.Jit array in Dr.Jit's own (aligned) memory: a kernel reading numpy's
+    memory directly is compiled for its alignment, so the large kernels that read these would be
+    compiled anew (about a second) whenever numpy's allocation is aligned otherwise."""
+    # a tiny kernel's output, in Dr.Jit's memory
+    out = mi.UInt32(a.astype(np.uint32)) + dr.opaque(mi.UInt32, 0)
     dr.eval(out)
     return out
 
@@ -42,35 +45,49 @@ def cell_keys(P: np.ndarray, corner: np.ndarray, h: float) -> np.ndarray:
     return (cell[0] << (2 * AXIS_BITS)) | (cell[1] << AXIS_BITS) | cell[2]
 
 
-def density_h(p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: float, rounds: int = 4) -> float:
-    """The cell size at which a vertex's own cell holds about K + 1 of the `valid` vertices (itself included),
-    averaged over them. Path vertices lie on surfaces, so a cell's count grows as h^2: each round rescales h
-    by sqrt((K + 1) / count), starting from the bounding box `high` (its diagonal) split evenly; kept in
-    [low, high]."""
+def density_h(
+    p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: float, rounds: int = 4
+) -> float:
+    """The cell size at which a vertex's own cell holds about K + 1 of the `valid` vertices (itself
+    included), averaged over them. Path vertices lie on surfaces, so a cell's count grows as h^2:
+    each round rescales h by sqrt((K + 1) / count), starting from the bounding box `high` (its
+    diagonal) split evenly; kept in [low, high]."""
     P = np.asarray(p, dtype=np.float64).reshape(3, -1)[:, np.asarray(valid, dtype=bool)]
     if P.shape[1] < 2:
         return high
     corner = np.asarray(corner, dtype=np.float64).reshape(3, 1)
     h = float(np.clip(high * np.sqrt((K + 1) / P.shape[1]), low, high))
     for _ in range(rounds):
-        _, inverse, counts = np.unique(cell_keys(P, corner, h), return_inverse=True, return_counts=True)
+        _, inverse, counts = np.unique(
+            cell_keys(P, corner, h), return_inverse=True, return_counts=True
+        )
         h = float(np.clip(h * np.sqrt((K + 1) / counts[inverse].mean()), low, high))
     return h
 
 
 class WorldGrid:
-    """Slot 0 is the vertex itself, slot q >= 1 the q-th candidate of its jittered cell (module docstring)."""
+    """Slot 0 is the vertex itself, slot q >= 1 the q-th candidate of its jittered cell (module
+    docstring)."""
 
-    def __init__(self, p: mi.Point3f, valid: mi.Bool, h: float, K: int, jitter: mi.Point3f, start: mi.Float,
-                 origin):
-        """`p`: the vertices; `valid`: those that may be found; `h`: cell size and radius (world units);
-        `jitter` in [0, 1)^3 and `start` in [0, 1): per vertex, its lookup's offset and first candidate;
-        `origin`: a corner below every vertex (the scene's bounding box)."""
+    def __init__(
+        self,
+        p: mi.Point3f,
+        valid: mi.Bool,
+        h: float,
+        K: int,
+        jitter: mi.Point3f,
+        start: mi.Float,
+        origin,
+    ):
+        """`p`: the vertices; `valid`: those that may be found; `h`: cell size and radius (world
+        units); `jitter` in [0, 1)^3 and `start` in [0, 1): per vertex, its lookup's offset and
+        first candidate; `origin`: a corner below every vertex (the scene's bounding box)."""
         self.h, self.K = float(h), K
         self.p = p
         width = dr.width(p)
         self.lane = dr.arange(mi.UInt32, width)
-        corner = np.asarray(origin, dtype=np.float64).reshape(3, 1) - h  # a jittered lookup stays above it
+        # a jittered lookup stays above it
+        corner = np.asarray(origin, dtype=np.float64).reshape(3, 1) - h
         P = np.asarray(p, dtype=np.float64).reshape(3, width)
         keys = self.keys(P, corner)
         keys[~np.asarray(valid, dtype=bool)] = np.iinfo(np.int64).max   # never found
@@ -80,8 +97,12 @@ class WorldGrid:
         q = self.keys(Q, corner)
         first = np.searchsorted(sorted_keys, q, side="left")
         count = np.searchsorted(sorted_keys, q, side="right") - first
-        offset = np.minimum((np.asarray(start, dtype=np.float64) * count).astype(np.int64), np.maximum(count - 1, 0))
-        self.order, self.first, self.count, self.offset = (uint32(a) for a in (order, first, count, offset))
+        offset = np.minimum(
+            (np.asarray(start, dtype=np.float64) * count).astype(np.int64), np.maximum(count - 1, 0)
+        )
+        self.order, self.first, self.count, self.offset = (
+            uint32(a) for a in (order, first, count, offset)
+        )
 
     def keys(self, P: np.ndarray, corner: np.ndarray) -> np.ndarray:
         return cell_keys(P, corner, self.h)
@@ -91,13 +112,17 @@ class WorldGrid:
         first = q == 0
         k = q - 1
         ok = ~first & (k < self.count)
-        at = dr.gather(mi.UInt32, self.order, self.first + (self.offset + k) % dr.maximum(self.count, 1), ok)
+        at = dr.gather(
+            mi.UInt32, self.order, self.first + (self.offset + k) % dr.maximum(self.count, 1), ok
+        )
         ok &= at != self.lane
         return dr.select(ok, at, self.lane), first | ok
 
     def accepted(self, target, bsdf, pool, n, normal_min) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py; within h)."""
-        h2 = dr.opaque(mi.Float, self.h * self.h)  # not a literal: h changes from pass to pass, the kernel not
+        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py;
+        within h)."""
+        # not a literal: h changes from pass to pass, the kernel not
+        h2 = dr.opaque(mi.Float, self.h * self.h)
 
         def near(at, ok):
             return dr.squared_norm(dr.gather(mi.Point3f, self.p, at, ok) - self.p) <= h2

@@ -1,14 +1,18 @@
-"""The one render pipeline: describe a render (`job.Job`), resolve it once (`resolve`), run it (`runner`).
+"""The one render pipeline: describe a render (`job.Job`), resolve it once (`resolve`), run
+it (`runner`).
 
-- `job`: the frozen description every front end builds (scene source, defines, size, given settings, seed,
-  spp, pass split).
+- `job`: the frozen description every front end builds (scene source, defines, size, given settings,
+  seed, spp, pass split).
 - `scene`: loading a scene source (built-in name, XML with defines and a new size, dict, mi.Scene).
-- `carried`: the max_depth, rr_depth and hide_emitters a scene's own Mitsuba integrator shares with `stylized`.
+- `carried`: the max_depth, rr_depth and hide_emitters a scene's own Mitsuba integrator shares
+  with `stylized`.
 - `resolve`: load, merge the scene's own integrator settings, pin the `auto` values.
 - `passes`: the pass loop (tiles, seeds, the float32 sum, memory checks).
-- `execute`: the executors, the passes in process or as Ray tasks; `render`, which `styletrace.render` is.
+- `execute`: the executors, the passes in process or as Ray tasks; `render`, which
+  `styletrace.render` is.
 - `runner`: one run of a resolved job by an executor and a finisher: checks, passes, stops, writes.
-- `signals`: Ctrl-C and SIGTERM during a run that writes files, its progress bar and one-line messages.
+- `signals`: Ctrl-C and SIGTERM during a run that writes files, its progress bar and
+  one-line messages.
 
 Importing this package needs the backend chosen (`styletrace.init()`): its modules import Mitsuba.
 """

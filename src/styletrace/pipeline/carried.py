@@ -1,21 +1,24 @@
-"""The settings a scene's own Mitsuba integrator shares with `stylized`: max_depth, rr_depth, hide_emitters.
+"""The settings a scene's own Mitsuba integrator shares with `stylized`: max_depth, rr_depth,
+hide_emitters.
 
-    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})   # {"max_depth": 3, ...}
+    # {"max_depth": 3, ...}
+    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})
 
 Two sources, because neither alone sees everything in Mitsuba 3.9:
-- the declaration, read with Mitsuba's own scene parser (`mitsuba.parser`, $parameters resolved with the same
-  defines): it sees through wrappers (`moment`, `aov`) to the integrator that renders, whose `hide_emitters`
-  the loaded wrapper does not report (its own `hide_emitters` is False whatever the nested one says);
-- the loaded object: the values Mitsuba resolved, defaults included (prb's max_depth 6), from the attributes
-  of Python integrators (`prb`, `prbvolpath` expose `max_depth` and `rr_depth`), the `hide_emitters`
-  property, and for C++ integrators, whose depths Mitsuba exposes nowhere else, their description
-  (`PathIntegrator[max_depth = 6, rr_depth = 5]`).
-What is declared wins; the object fills in what was left to Mitsuba's defaults. `direct` is emission plus
-direct light: max_depth 2 (also nested in a wrapper, and whatever max_depth it declares). The declaration's
-$parameters are Mitsuba's own: `<integrator type="$integrator">` with `<default name="integrator"
-value="direct"/>` is `direct`, and a define `integrator=path` makes it `path`, exactly as if written out.
-A `stylized` integrator carries nothing here: its own values are the base, also when it is nested in a
-wrapper (`nested_stylized` reads them from the declaration).
+- the declaration, read with Mitsuba's own scene parser (`mitsuba.parser`, $parameters resolved with
+  the same defines): it sees through wrappers (`moment`, `aov`) to the integrator that renders,
+  whose `hide_emitters` the loaded wrapper does not report (its own `hide_emitters` is False
+  whatever the nested one says);
+- the loaded object: the values Mitsuba resolved, defaults included (prb's max_depth 6), from the
+  attributes of Python integrators (`prb`, `prbvolpath` expose `max_depth` and `rr_depth`), the
+  `hide_emitters` property, and for C++ integrators, whose depths Mitsuba exposes nowhere else,
+  their description (`PathIntegrator[max_depth = 6, rr_depth = 5]`).
+What is declared wins; the object fills in what was left to Mitsuba's defaults. `direct` is emission
+plus direct light: max_depth 2 (also nested in a wrapper, and whatever max_depth it declares). The
+declaration's $parameters are Mitsuba's own: `<integrator type="$integrator">` with `<default
+name="integrator" value="direct"/>` is `direct`, and a define `integrator=path` makes it `path`,
+exactly as if written out. A `stylized` integrator carries nothing here: its own values are the
+base, also when it is nested in a wrapper (`nested_stylized` reads them from the declaration).
 """
 from __future__ import annotations
 
@@ -39,7 +42,8 @@ def _depth(value: Any) -> int:
 
 
 def rendering_node(state, node):
-    """The integrator node that renders: `node`, or through wrappers the first integrator nested in it."""
+    """The integrator node that renders: `node`, or through wrappers the first integrator nested
+    in it."""
     seen = set()
     while node.props.plugin_name() in WRAPPERS and id(node) not in seen:
         seen.add(id(node))
@@ -53,18 +57,22 @@ def rendering_node(state, node):
 
 
 def _rendering_node(source: Any, defines: Mapping[str, Any] | None):
-    """(the scene's top integrator node, the node that renders) as Mitsuba's parser reads the source; None
-    where the source cannot be read this way (an mi.Scene) or declares no integrator."""
+    """(the scene's top integrator node, the node that renders) as Mitsuba's parser reads the
+    source; None where the source cannot be read this way (an mi.Scene) or declares no
+    integrator."""
     import mitsuba.parser as parser
     config = parser.ParserConfig(mi.variant())
     try:
         if isinstance(source, dict):
             state = parser.parse_dict(config, source)
         elif isinstance(source, (str, os.PathLike)) and os.path.isfile(source):
-            state = parser.parse_file(config, os.fspath(source), **{k: str(v) for k, v in (defines or {}).items()})
+            state = parser.parse_file(
+                config, os.fspath(source), **{k: str(v) for k, v in (defines or {}).items()}
+            )
         else:
             return None
-    except Exception:  # the loader reports a broken scene in its own words; here it only means "unknown"
+    # the loader reports a broken scene in its own words; here it only means "unknown"
+    except Exception:
         return None
     root = state.nodes[0]
     tops = [state.nodes[root.props[k].index()] for k in root.props.keys()
@@ -76,8 +84,9 @@ def _rendering_node(source: Any, defines: Mapping[str, Any] | None):
 
 
 def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
-    """The shared settings the scene source declares for the integrator that renders, plus its `type`; None
-    where the source cannot be read this way (an mi.Scene) or declares no integrator."""
+    """The shared settings the scene source declares for the integrator that renders, plus its
+    `type`; None where the source cannot be read this way (an mi.Scene) or declares no
+    integrator."""
     nodes = _rendering_node(source, defines)
     if nodes is None:
         return None
@@ -90,8 +99,9 @@ def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str,
 
 
 def nested_stylized(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
-    """The property values of a `stylized` integrator nested in a wrapper (`moment`, `aov`) of the scene
-    source, as the declaration gives them; None for none (no wrapper, another integrator, an mi.Scene)."""
+    """The property values of a `stylized` integrator nested in a wrapper (`moment`, `aov`) of the
+    scene source, as the declaration gives them; None for none (no wrapper, another integrator, an
+    mi.Scene)."""
     nodes = _rendering_node(source, defines)
     if nodes is None or nodes[0] is nodes[1] or nodes[1].props.plugin_name() != "stylized":
         return None
@@ -108,7 +118,8 @@ def loaded(integrator: mi.Integrator) -> dict[str, Any]:
         if isinstance(value, int) and not isinstance(value, bool):
             out[key] = _depth(value)
             continue
-        found = re.search(rf"\b{key}\s*=\s*(-?\d+)", text)  # C++ integrators: their description only
+        # C++ integrators: their description only
+        found = re.search(rf"\b{key}\s*=\s*(-?\d+)", text)
         if found:
             out[key] = _depth(found.group(1))
     if text.startswith("DirectIntegrator"):
@@ -118,9 +129,12 @@ def loaded(integrator: mi.Integrator) -> dict[str, Any]:
     return out
 
 
-def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator; {} for none or a
-    `stylized` one. `source`/`defines`: what the scene was loaded from, to read its declaration."""
+def carried_settings(
+    scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
+    """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator; {} for
+    none or a `stylized` one. `source`/`defines`: what the scene was loaded from, to read its
+    declaration."""
     from styletrace.kernel.integrator import StylizedIntegrator
     own = scene.integrator()
     if own is None or isinstance(own, StylizedIntegrator):
@@ -129,8 +143,8 @@ def carried_settings(scene: mi.Scene, source: Any = None, defines: Mapping[str, 
     decl = declared(source, defines) if source is not None else None
     if decl is not None and decl.get("type") != "stylized":
         if decl["type"] == "direct":
-            # emission plus direct light, whatever max_depth it declares; also nested in `moment` or `aov`,
-            # whose loaded object reports no depth of it
+            # emission plus direct light, whatever max_depth it declares; also nested in `moment` or
+            # `aov`, whose loaded object reports no depth of it
             decl["max_depth"] = 2
         out.update({k: v for k, v in decl.items() if k in SHARED})
     if out.get("hide_emitters") is False:

@@ -26,37 +26,43 @@ from styletrace.scene.defaults import Pilot
 from styletrace.scene.defaults import resolve as resolve_defaults
 from styletrace.scene.loading import film_format
 
-#: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred bytes each).
+#: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred
+#: bytes each).
 LANES_PER_PASS = 1 << 20
 #: Width of a tile when an image has more than LANES_PER_PASS pixels (a tile is 1024 x 1024 then).
 TILE_SIDE = 1024
-#: Host memory per lane of a pass (the film's block, the output, the sampler), for the up-front estimate;
-#: a 1024 x 1024 pass at 1 spp measured about 50 MB more than a 256 x 256 one (BENCHMARKS.md, memory).
+#: Host memory per lane of a pass (the film's block, the output, the sampler), for the up-front
+#: estimate; a 1024 x 1024 pass at 1 spp measured about 50 MB more than a 256 x 256 one
+#: (BENCHMARKS.md, memory).
 LANE_BYTES = 256
 
-def pin(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
-    """(`integrator` with its scene-relative `auto` values pinned on `scene`, the line naming them): the
-    pipeline's one pinning (`resolve.resolve`'s, and the pass loop's for a prebuilt integrator).
+def pin(
+    scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None
+) -> tuple[mi.Integrator, str]:
+    """(`integrator` with its scene-relative `auto` values pinned on `scene`, the line naming them):
+    the pipeline's one pinning (`resolve.resolve`'s, and the pass loop's for a prebuilt integrator).
     `pilot`: the scene-defaults pilot to draw them from (traced only if a value needs it)."""
     return resolve_defaults(scene, integrator, pilot)
 
 
 def pass_seed(seed: int, index: int) -> int:
-    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams."""
+    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated
+    sample streams."""
     return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
 
 
 def expansion_seed(seed: int, tile: int) -> int:
-    """Seed of the expansion pass of tile `tile` (`StylizedIntegrator.prepare_expansion`): pass_seed's stream at
-    indices from 2^31 on, which no render reaches, so it differs from every pass seed of the same render."""
+    """Seed of the expansion pass of tile `tile` (`StylizedIntegrator.prepare_expansion`):
+    pass_seed's stream at indices from 2^31 on, which no render reaches, so it differs from every
+    pass seed of the same render."""
     return pass_seed(seed, (1 << 31) + tile)
 
 
 @dataclass(frozen=True)
 class Tile:
-    """One crop window of the film (all tiles of a render share one size, so the kernel compiles once per
-    offset and not per size) and the part of it that is new: edge tiles are shifted inwards to stay inside
-    the film, and the pixels they share with their neighbour are dropped."""
+    """One crop window of the film (all tiles of a render share one size, so the kernel compiles
+    once per offset and not per size) and the part of it that is new: edge tiles are shifted inwards
+    to stay inside the film, and the pixels they share with their neighbour are dropped."""
     offset: tuple[int, int]   # x, y of the crop window
     size: tuple[int, int]     # width, height of the crop window
     keep: tuple[slice, slice]  # rows, columns of the rendered tile that are new
@@ -73,11 +79,14 @@ def _axis(length: int, tile: int) -> list[tuple[int, slice, slice]]:
 
 
 def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
-    """The film as one tile if it has at most `max_pixels` pixels, else as tiles of TILE_SIDE columns
-    (or the width, if narrower) and as many rows as fit into `max_pixels` (default LANES_PER_PASS)."""
+    """The film as one tile if it has at most `max_pixels` pixels, else as tiles of TILE_SIDE
+    columns (or the width, if narrower) and as many rows as fit into `max_pixels` (default
+    LANES_PER_PASS)."""
     max_pixels = max_pixels or LANES_PER_PASS
     if width * height <= max_pixels:
-        return [Tile((0, 0), (width, height), (slice(None), slice(None)), (slice(None), slice(None)))]
+        return [
+            Tile((0, 0), (width, height), (slice(None), slice(None)), (slice(None), slice(None)))
+        ]
     tw = min(width, TILE_SIDE, max_pixels)
     th = min(height, max(1, max_pixels // tw))
     return [Tile((x, y), (tw, th), (ky, kx), (dy, dx))
@@ -85,8 +94,8 @@ def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
 
 
 class Crop:
-    """Crop windows of a sensor's film, set one after another (`set`: offset and size relative to the film's
-    own crop window), and the film's own window back when the block ends."""
+    """Crop windows of a sensor's film, set one after another (`set`: offset and size relative to
+    the film's own crop window), and the film's own window back when the block ends."""
 
     def __init__(self, sensor: mi.Sensor):
         film = sensor.film()
@@ -97,7 +106,9 @@ class Crop:
     def set(self, offset: tuple[int, int], size: tuple[int, int]) -> None:
         if self.params is None:
             self.params = mi.traverse(self.sensor)
-        self.params["film.crop_offset"] = mi.ScalarPoint2u(self.base[0] + offset[0], self.base[1] + offset[1])
+        self.params["film.crop_offset"] = mi.ScalarPoint2u(
+            self.base[0] + offset[0], self.base[1] + offset[1]
+        )
         self.params["film.crop_size"] = mi.ScalarVector2u(*size)
         self.params.update()
 
@@ -114,15 +125,16 @@ class Crop:
 
 def memory_needed(width: int, height: int, ext: str = ".exr") -> int:
     """Bytes of host memory a render of this size needs at its peak, while the file is written: the
-    float32 accumulator, the averaged image, Mitsuba's bitmap of it, and the encoded file (up to twice in
-    the growing memory stream, once more as bytes), plus the lanes of one pass."""
+    float32 accumulator, the averaged image, Mitsuba's bitmap of it, and the encoded file (up to
+    twice in the growing memory stream, once more as bytes), plus the lanes of one pass."""
     image = width * height * 3 * 4
     encoded = width * height * 3 * (1 if ext == ".png" else 4)
     return 3 * image + 3 * encoded + LANE_BYTES * LANES_PER_PASS
 
 
 def memory_available() -> int | None:
-    """MemAvailable of /proc/meminfo, or less if an address-space limit is set; None where unknown."""
+    """MemAvailable of /proc/meminfo, or less if an address-space limit is set; None
+    where unknown."""
     import resource
     limits = []
     try:
@@ -143,19 +155,32 @@ def check_memory(width: int, height: int, ext: str = ".exr") -> None:
     need, have = memory_needed(width, height, ext), memory_available()
     if width >= 1 << 31 or height >= 1 << 31 or (have is not None and need > have):
         have_txt = f"{have / 2**30:.1f} GiB available" if have is not None else "too large"
-        raise UsageError(f"image {width}x{height} is too large: it needs about {need / 2**30:.1f} GiB of "
-                         f"memory ({have_txt}); render a smaller --width/--height")
+        raise UsageError(
+            f"image {width}x{height} is too large: it needs about {need / 2**30:.1f} GiB of "
+            f"memory ({have_txt}); render a smaller --width/--height"
+        )
 
 
 class Progress:
-    """State after a pass: `spp_done` is what every pixel has at least (tiles of a pass under way may
-    have one more pass); `image` is the average of the finished passes, computed when asked for."""
+    """State after a pass: `spp_done` is what every pixel has at least (tiles of a pass under way
+    may have one more pass); `image` is the average of the finished passes, computed when
+    asked for."""
 
-    def __init__(self, spp_done: int, spp_total: int, total: np.ndarray, counts: np.ndarray, layout: list[Tile],
-                 channels: int | None = None, tile: int = 0, samples: int = 0):
+    def __init__(
+        self,
+        spp_done: int,
+        spp_total: int,
+        total: np.ndarray,
+        counts: np.ndarray,
+        layout: list[Tile],
+        channels: int | None = None,
+        tile: int = 0,
+        samples: int = 0,
+    ):
         self.spp_done, self.spp_total = spp_done, spp_total
-        #: the pass just done: the index in `layout` of the tile it rendered, and its samples per pixel (a
-        #: recording maps that pass's lanes to the film's pixels with them: `lookdev.record`)
+        #: the pass just done: the index in `layout` of the tile it rendered, and its samples per
+        #: pixel (a recording maps that pass's lanes to the film's pixels with them:
+        #: `lookdev.record`)
         self.tile, self.samples = tile, samples
         self._total, self._counts, self._tiles = total, counts, layout
         #: the image's channels in `total`; the error AOVs' sums follow them (`AOV_NAMES`)
@@ -180,11 +205,12 @@ class Progress:
     @property
     def aovs(self) -> dict[str, np.ndarray] | None:
         """The error AOVs of an integrator with `aovs=True` (else None), float32 H x W (x 3):
-        `variance`: the variance of each pixel's estimate (its mean over the camera samples), per RGB channel:
-        (mean of the squared samples - squared mean) / (spp - 1), the unbiased sample variance over spp;
-        NaN where a pixel has fewer than 2 samples. `bias`: the predicted direct-application bias of Eq. 21,
-        g''(<I>_n) s^2 / (2n), at the first stylized vertex, averaged over the pixel's samples (0 where no
-        child was drawn). `children`: the children used there, averaged (n for a fixed count)."""
+        `variance`: the variance of each pixel's estimate (its mean over the camera samples), per
+        RGB channel: (mean of the squared samples - squared mean) / (spp - 1), the unbiased sample
+        variance over spp; NaN where a pixel has fewer than 2 samples. `bias`: the predicted
+        direct-application bias of Eq. 21, g''(<I>_n) s^2 / (2n), at the first stylized vertex,
+        averaged over the pixel's samples (0 where no child was drawn). `children`: the children
+        used there, averaged (n for a fixed count)."""
         if self._channels == self._total.shape[-1]:
             return None
         mean = self._mean().astype(np.float64)
@@ -202,8 +228,8 @@ class Progress:
 
 def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER_PASS,
               pass_spp: int | None = None) -> tuple[list[Tile], int]:
-    """The tiles and the samples per pixel of one pass. A function of the image size and the counts only,
-    never of measured time: the same seed gives the same image on every run."""
+    """The tiles and the samples per pixel of one pass. A function of the image size and the counts
+    only, never of measured time: the same seed gives the same image on every run."""
     layout = tiles(width, height)
     tw, th = layout[0].size
     per_pass = pass_spp if pass_spp else max(1, lanes_per_pass // (tw * th))
@@ -215,15 +241,16 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lock: Any = contextlib.nullcontext(), pinned: bool = False) -> Iterator[Progress]:
     """Render `spp` samples per pixel in passes; yield the running average after each pass.
 
-    An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film); a pass
-    is then one tile at a time, and every tile gets its passes in turn. The sum of the passes is kept in
-    float32, one image's worth of memory. `lock` (a context manager) is held while it is updated, so that
-    another thread may read a consistent `Progress.image` meanwhile (the command line's signal watcher).
-    A `stylized` integrator with expansion_pass > 0 renders its expansion pass for each tile before the tile's
-    first pass (`expansion_seed`: another stream than the passes', the same for the same seed).
-    An integrator with `aovs=True` adds its AOV channels (`aov_names`) to the film; they are summed with the
-    image and read as `Progress.aovs` (docs/adaptive.md). A prebuilt integrator gets its scene-relative
-    `auto` values pinned here (`pin`) unless `pinned` says a resolve did it already."""
+    An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film);
+    a pass is then one tile at a time, and every tile gets its passes in turn. The sum of the passes
+    is kept in float32, one image's worth of memory. `lock` (a context manager) is held while it is
+    updated, so that another thread may read a consistent `Progress.image` meanwhile (the command
+    line's signal watcher). A `stylized` integrator with expansion_pass > 0 renders its expansion
+    pass for each tile before the tile's first pass (`expansion_seed`: another stream than the
+    passes', the same for the same seed). An integrator with `aovs=True` adds its AOV channels
+    (`aov_names`) to the film; they are summed with the image and read as `Progress.aovs`
+    (docs/adaptive.md). A prebuilt integrator gets its scene-relative `auto` values pinned here
+    (`pin`) unless `pinned` says a resolve did it already."""
     check_passes_args(scene, integrator, spp, seed)
     if not pinned:
         integrator = pin(scene, integrator)[0]
@@ -232,15 +259,20 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     width, height = (int(v) for v in film.crop_size())
     check_memory(width, height)
     layout, per_pass = pass_size(width, height, spp, lanes_per_pass, pass_spp)
-    channels = len(PIXEL_FORMATS[film_format(scene)])  # the film's own: RGB, Y, XYZ, with alpha or not
-    extra = len(integrator.aov_names())  # error AOVs (StylizedIntegrator.aov_names), after the film's channels
+    # the film's own: RGB, Y, XYZ, with alpha or not
+    channels = len(PIXEL_FORMATS[film_format(scene)])
+    # error AOVs (StylizedIntegrator.aov_names), after the film's channels
+    extra = len(integrator.aov_names())
     if extra and film_format(scene) not in ("rgb", "rgba"):
-        raise UsageError(f"aovs need an rgb or rgba film (the variance is per RGB channel); the scene's film is "
-                         f"{film_format(scene)!r}")
+        raise UsageError(
+            f"aovs need an rgb or rgba film (the variance is per RGB channel); the scene's film is "
+            f"{film_format(scene)!r}"
+        )
     total = np.zeros((height, width, channels + extra), dtype=np.float32)
     counts = np.zeros(len(layout), dtype=np.int64)
     index = 0
-    # the expansion pass (expansion_pass > 0): once per tile and render, before the tile's first pass
+    # the expansion pass (expansion_pass > 0): once per tile and render, before the tile's
+    # first pass
     expand = getattr(integrator, "prepare_expansion", None)
     if expand is not None:
         integrator.expansion.clear()
@@ -252,8 +284,11 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     crop.set(tile.offset, tile.size)
                 if expand is not None:
                     expand(scene, expansion_seed(seed, t))
-                with no_collection():  # recorded and launched with no scene finalised meanwhile (jit.no_collection)
-                    img = mi.render(scene, integrator=integrator, spp=n, seed=pass_seed(seed, index))
+                # recorded and launched with no scene finalised meanwhile (jit.no_collection)
+                with no_collection():
+                    img = mi.render(
+                        scene, integrator=integrator, spp=n, seed=pass_seed(seed, index)
+                    )
                     arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
@@ -263,13 +298,30 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                 yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n)
 
 
-def pass_count(scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None) -> int:
+def pass_count(
+    scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None
+) -> int:
     """How many kernel launches `passes` makes (tiles times passes per tile)."""
     size = scene.sensors()[0].film().crop_size()
     layout, per_pass = pass_size(int(size[0]), int(size[1]), spp, lanes_per_pass, pass_spp)
     return len(layout) * math.ceil(spp / per_pass)
 
 
-__all__ = ["LANES_PER_PASS", "TILE_SIDE", "LANE_BYTES", "pass_seed", "expansion_seed", "Tile", "tiles", "Crop", "pin",
-           "memory_needed",
-           "memory_available", "check_memory", "Progress", "pass_size", "passes", "pass_count"]
+__all__ = [
+    "LANES_PER_PASS",
+    "TILE_SIDE",
+    "LANE_BYTES",
+    "pass_seed",
+    "expansion_seed",
+    "Tile",
+    "tiles",
+    "Crop",
+    "pin",
+    "memory_needed",
+    "memory_available",
+    "check_memory",
+    "Progress",
+    "pass_size",
+    "passes",
+    "pass_count",
+]

@@ -1,17 +1,19 @@
 """Checkpoints of a render on Ray: the sum of the finished passes as an EXR, and a JSON manifest.
 
     ck = Checkpoint("out.png", settings)     # OUT.checkpoint.json + OUT.checkpoint-<generation>.exr
-    ck.save(total, rounds_done)               # atomically; the previous generation's EXR is then removed
+    # atomically; the previous generation's EXR is then removed
+    ck.save(total, rounds_done)
     total, rounds_done = ck.load()            # for --resume; UsageError if the settings differ
     ck.remove()                               # once the render is written
 
-The EXR holds the float32 running *sum* of the finished passes (not their average), so a resumed render
-adds the remaining passes to exactly the numbers it would have had: the result is bit-identical to the
-undisturbed render. The manifest records the render's settings (scene, integrator values, spp, seed,
-size, the pass split, the variant) and, per tile, how many of its passes are summed (`rounds_done`; tiles
-are summed in pass order, so the done units of a tile are a prefix). Both files are written with
-`images.write_bytes_atomically` (temporary file, fsync, rename); the EXR of a new generation is written
-before the manifest that names it, so a kill at any moment leaves a manifest naming a complete EXR.
+The EXR holds the float32 running *sum* of the finished passes (not their average), so a resumed
+render adds the remaining passes to exactly the numbers it would have had: the result is
+bit-identical to the undisturbed render. The manifest records the render's settings (scene,
+integrator values, spp, seed, size, the pass split, the variant) and, per tile, how many of its
+passes are summed (`rounds_done`; tiles are summed in pass order, so the done units of a tile are a
+prefix). Both files are written with `images.write_bytes_atomically` (temporary file, fsync,
+rename); the EXR of a new generation is written before the manifest that names it, so a kill at any
+moment leaves a manifest naming a complete EXR.
 """
 from __future__ import annotations
 
@@ -51,8 +53,13 @@ class Checkpoint:
             return  # nothing new since the last one
         generation = self.generation + 1
         write_image(total, self._image(generation))
-        body = {"version": VERSION, "settings": self.settings, "rounds_done": [int(r) for r in rounds_done],
-                "image": os.path.basename(self._image(generation)), "generation": generation}
+        body = {
+            "version": VERSION,
+            "settings": self.settings,
+            "rounds_done": [int(r) for r in rounds_done],
+            "image": os.path.basename(self._image(generation)),
+            "generation": generation,
+        }
         write_bytes_atomically(json.dumps(body, indent=1, sort_keys=True).encode(), self.manifest)
         old, self.generation, self.saved_rounds = self.generation, generation, list(rounds_done)
         self._drop(old)
@@ -66,31 +73,42 @@ class Checkpoint:
     def load(self) -> tuple[np.ndarray, list[int]]:
         """The saved sum and rounds per tile; refuses (one line) a checkpoint of other settings."""
         if not self.exists():
-            raise UsageError(f"cannot resume {self.output!r}: no checkpoint {self.manifest!r} (it is written while "
-                             f"a --ray render runs and removed when it finishes)")
+            raise UsageError(
+                f"cannot resume {self.output!r}: no checkpoint {self.manifest!r} (it is written "
+                "while a --ray render runs and removed when it finishes)"
+            )
         try:
             with open(self.manifest) as f:
                 body = json.load(f)
             saved = body["settings"]
         except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise UsageError(f"cannot resume {self.output!r}: unreadable checkpoint {self.manifest!r} ({exc})") from None
+            raise UsageError(
+                f"cannot resume {self.output!r}: unreadable checkpoint {self.manifest!r} ({exc})"
+            ) from None
         if saved != self.settings:
-            diff = sorted(k for k in set(saved) | set(self.settings) if saved.get(k) != self.settings.get(k))
+            diff = sorted(
+                k for k in set(saved) | set(self.settings) if saved.get(k) != self.settings.get(k)
+            )
             k = diff[0]
-            raise UsageError(f"cannot resume {self.output!r}: its checkpoint was made with other settings ({k} "
-                             f"{json.dumps(saved.get(k))}, now {json.dumps(self.settings.get(k))}); drop --resume "
-                             f"to start over")
+            raise UsageError(
+                f"cannot resume {self.output!r}: its checkpoint was made with other settings ({k} "
+                f"{json.dumps(saved.get(k))}, now {json.dumps(self.settings.get(k))}); drop "
+                "--resume to start over"
+            )
         import mitsuba as mi
         path = os.path.join(os.path.dirname(os.path.abspath(self.manifest)), body["image"])
         try:
             total = np.array(mi.Bitmap(path), dtype=np.float32)[..., :3].copy()
         except Exception as exc:
-            raise UsageError(f"cannot resume {self.output!r}: cannot read {path!r} ({exc})") from None
+            raise UsageError(
+                f"cannot resume {self.output!r}: cannot read {path!r} ({exc})"
+            ) from None
         self.generation, self.saved_rounds = int(body["generation"]), list(body["rounds_done"])
         return total, list(body["rounds_done"])
 
     def remove(self) -> None:
-        """After the final image is written: the manifest first, so no manifest names a missing EXR."""
+        """After the final image is written: the manifest first, so no manifest names a
+        missing EXR."""
         if self.exists():
             os.remove(self.manifest)
         self._drop(self.generation)

@@ -3,9 +3,9 @@
     connect("local")            # start Ray here (the embedded default: one laptop is enough)
     connect("10.0.0.5:6379")    # join a cluster started with `ray start --head` on that machine
 
-A process that already called `ray.init` (a script, the test suite) keeps its connection. Workers of a
-local instance inherit this process's environment, PYTHONPATH included; the machines of a real cluster
-need styletrace, Mitsuba and Dr.Jit installed in the same versions as here.
+A process that already called `ray.init` (a script, the test suite) keeps its connection. Workers of
+a local instance inherit this process's environment, PYTHONPATH included; the machines of a real
+cluster need styletrace, Mitsuba and Dr.Jit installed in the same versions as here.
 """
 from __future__ import annotations
 
@@ -20,7 +20,9 @@ def ray_module():
     try:
         import ray
     except ImportError:
-        raise UsageError("rendering on Ray needs the 'ray' package: pip install 'styletrace[ray]'") from None
+        raise UsageError(
+            "rendering on Ray needs the 'ray' package: pip install 'styletrace[ray]'"
+        ) from None
     return ray
 
 
@@ -28,9 +30,12 @@ def connect(cluster: str):
     """Ray, connected to `cluster` ("local" or an address such as HOST:6379 or ray://HOST:10001)."""
     ray = ray_module()
     if not isinstance(cluster, str) or not cluster.strip():
-        raise UsageError(f"bad cluster {cluster!r}: expected None, 'local' or a Ray address such as HOST:6379")
-    # every result the driver wants it gets (and raises); the only results left unread are those of units
-    # cancelled on Ctrl-C, whose KeyboardInterrupt tracebacks Ray would otherwise print at exit
+        raise UsageError(
+            f"bad cluster {cluster!r}: expected None, 'local' or a Ray address such as HOST:6379"
+        )
+    # every result the driver wants it gets (and raises); the only results left unread are those of
+    # units cancelled on Ctrl-C, whose KeyboardInterrupt tracebacks Ray would otherwise print
+    # at exit
     os.environ.setdefault("RAY_IGNORE_UNHANDLED_ERRORS", "1")
     if ray.is_initialized():
         return ray
@@ -41,8 +46,10 @@ def connect(cluster: str):
             ray.init(address=cluster, logging_level="warning", log_to_driver=False)
     except (ConnectionError, ValueError, RuntimeError) as exc:
         lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
-        raise UsageError(f"cannot join the Ray cluster at {cluster!r}: {lines[0] if lines else type(exc).__name__}"
-                         ) from None
+        raise UsageError(
+            f"cannot join the Ray cluster at {cluster!r}: "
+            f"{lines[0] if lines else type(exc).__name__}"
+        ) from None
     return ray
 
 

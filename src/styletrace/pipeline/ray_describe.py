@@ -1,14 +1,16 @@
-"""Scene descriptions that travel to Ray workers, and loading them there (cached per worker process).
+"""Scene descriptions that travel to Ray workers, and loading them there (cached per
+worker process).
 
     spec = SceneSpec.of("cornell-box", width=256, height=256)   # or an XML path, or a scene dict
-    scene = load(spec)                                            # in a worker: api.load_scene(...), cached
+    # in a worker: api.load_scene(...), cached
+    scene = load(spec)
 
-An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in name,
-an XML path, or a scene dict, plus the width/height and any further keyword arguments of `load_scene`
-(`load_kwargs`: the defines of an XML file). Scene dicts may
-hold Mitsuba scalar values (`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either:
-`SceneSpec.of` replaces each by its class name and numbers, and `load` builds it again. A worker keeps the
-last few scenes and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
+An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in
+name, an XML path, or a scene dict, plus the width/height and any further keyword arguments of
+`load_scene` (`load_kwargs`: the defines of an XML file). Scene dicts may hold Mitsuba scalar values
+(`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either: `SceneSpec.of` replaces
+each by its class name and numbers, and `load` builds it again. A worker keeps the last few scenes
+and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
 """
 from __future__ import annotations
 
@@ -21,7 +23,8 @@ from typing import Any
 
 from styletrace.errors import UsageError
 
-#: Scenes (with their integrators) a worker process keeps loaded; frames of an XML list go through it in turn.
+#: Scenes (with their integrators) a worker process keeps loaded; frames of an XML list go through
+#: it in turn.
 CACHE_SIZE = 2
 CACHE: "OrderedDict[bytes, Any]" = OrderedDict()
 
@@ -42,8 +45,10 @@ def _encode(value: Any, where: str) -> Any:
             return (_TAG, "ScalarTransform4f", np.asarray(value.matrix, dtype=np.float64).tolist())
         if name.startswith("Scalar") and hasattr(value, "__len__"):
             return (_TAG, name, np.asarray(value, dtype=np.float64).tolist())
-        raise UsageError(f"cannot send the scene dict to Ray workers: {where[1:]} holds a {name}; use plain "
-                         f"numbers, Mitsuba scalar values, or an XML file")
+        raise UsageError(
+            f"cannot send the scene dict to Ray workers: {where[1:]} holds a {name}; use plain "
+            f"numbers, Mitsuba scalar values, or an XML file"
+        )
     return value
 
 
@@ -69,7 +74,9 @@ class SceneSpec:
     load_kwargs: dict = field(default_factory=dict)
 
     @classmethod
-    def of(cls, scene: Any, width: int | None = None, height: int | None = None, **load_kwargs: Any) -> "SceneSpec":
+    def of(
+        cls, scene: Any, width: int | None = None, height: int | None = None, **load_kwargs: Any
+    ) -> "SceneSpec":
         if scene is None or isinstance(scene, dict):
             return cls(_encode(scene, "") if scene else scene, width, height, dict(load_kwargs))
         if isinstance(scene, (str, os.PathLike)):
@@ -78,8 +85,10 @@ class SceneSpec:
             if os.path.isfile(name):
                 name = os.path.abspath(name)
             return cls(name, width, height, dict(load_kwargs))
-        raise UsageError(f"bad scene {type(scene).__name__} for a cluster render: Ray workers cannot receive an "
-                         f"mi.Scene; pass a built-in name, an XML path or a scene dict")
+        raise UsageError(
+            f"bad scene {type(scene).__name__} for a cluster render: Ray workers cannot receive an "
+            f"mi.Scene; pass a built-in name, an XML path or a scene dict"
+        )
 
     def describe(self) -> Any:
         """A JSON-able summary for a checkpoint's manifest (dict scenes by their hash)."""
@@ -88,13 +97,17 @@ class SceneSpec:
                 "load_kwargs": {k: repr(v) for k, v in sorted(self.load_kwargs.items())}}
 
     def key(self) -> bytes:
-        return hashlib.sha256(pickle.dumps((self.scene, self.width, self.height, sorted(self.load_kwargs.items())),
-                                           protocol=4)).digest()
+        return hashlib.sha256(
+            pickle.dumps(
+                (self.scene, self.width, self.height, sorted(self.load_kwargs.items())), protocol=4
+            )
+        ).digest()
 
 
 def load(spec: SceneSpec, values: dict, variant: str):
-    """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of the scene
-    source with the driver's integrator values, cached by the scene and the integrator's values."""
+    """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of
+    the scene source with the driver's integrator values, cached by the scene and the
+    integrator's values."""
     from styletrace.scene import plugins as runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()
@@ -106,13 +119,22 @@ def load(spec: SceneSpec, values: dict, variant: str):
     from styletrace.pipeline.resolve import resolve
     unknown = sorted(set(spec.load_kwargs) - {"defines"})
     if unknown:
-        raise UsageError(f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines only")
+        raise UsageError(
+            f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines "
+            "only"
+        )
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
-    # the render pipeline's resolve, with the driver's resolved values as the integrator: the same load, and
-    # scene-relative 'auto' values pinned on the whole scene before any tile's crop (the pilot is
-    # deterministic: fixed seed, our path kernel), so every worker pins what the driver did
-    job = Job(scene=scene, width=spec.width, height=spec.height, defines=dict(spec.load_kwargs.get("defines") or {}),
-              integrator=StylizedIntegrator.from_values(values), lanes_per_pass=1)
+    # the render pipeline's resolve, with the driver's resolved values as the integrator: the same
+    # load, and scene-relative 'auto' values pinned on the whole scene before any tile's crop (the
+    # pilot is deterministic: fixed seed, our path kernel), so every worker pins what the driver did
+    job = Job(
+        scene=scene,
+        width=spec.width,
+        height=spec.height,
+        defines=dict(spec.load_kwargs.get("defines") or {}),
+        integrator=StylizedIntegrator.from_values(values),
+        lanes_per_pass=1,
+    )
     resolved = resolve(job)
     loaded = (resolved.scene, resolved.integrator)
     CACHE[key] = loaded

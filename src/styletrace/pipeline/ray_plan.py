@@ -2,15 +2,17 @@
 
     layout, units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
     merge = Merge(width, height, spp, layout)
-    merge.add(unit, rendered_tile)     # any order; summed per tile in the order of `pass_loop.passes`
+    # any order; summed per tile in the order of `pass_loop.passes`
+    merge.add(unit, rendered_tile)
     merge.progress()                   # a pipeline.passes.Progress: spp_done, image
 
-The units are exactly the kernel launches of `pass_loop.passes`: its tiles and pass size (`pass_loop.pass_size`) and,
-for launch number `index` (round r of tile t is index r * tiles + t), the seed `pass_loop.pass_seed(seed, index)`
-and min(per_pass, spp - r * per_pass) samples per pixel. So which worker renders a unit changes nothing.
-Results arrive in any order; `Merge` keeps the early ones aside and adds each tile's passes in round order,
-with the same float32 operations as `pass_loop.passes`, so the merged image is bit-identical to the
-single-process render of the same seed and split (not merely equal up to the order of summation).
+The units are exactly the kernel launches of `pass_loop.passes`: its tiles and pass size
+(`pass_loop.pass_size`) and, for launch number `index` (round r of tile t is index r * tiles + t),
+the seed `pass_loop.pass_seed(seed, index)` and min(per_pass, spp - r * per_pass) samples per pixel.
+So which worker renders a unit changes nothing. Results arrive in any order; `Merge` keeps the early
+ones aside and adds each tile's passes in round order, with the same float32 operations as
+`pass_loop.passes`, so the merged image is bit-identical to the single-process render of the same
+seed and split (not merely equal up to the order of summation).
 """
 from __future__ import annotations
 
@@ -30,8 +32,14 @@ class Unit:
     seed: int
 
 
-def plan(width: int, height: int, spp: int, seed: int, lanes_per_pass: int = pass_loop.LANES_PER_PASS,
-         pass_spp: int | None = None) -> tuple[list[pass_loop.Tile], list[Unit]]:
+def plan(
+    width: int,
+    height: int,
+    spp: int,
+    seed: int,
+    lanes_per_pass: int = pass_loop.LANES_PER_PASS,
+    pass_spp: int | None = None,
+) -> tuple[list[pass_loop.Tile], list[Unit]]:
     """The tiles of the film and every unit of the render, in launch order."""
     layout, per_pass = pass_loop.pass_size(width, height, spp, lanes_per_pass, pass_spp)
     rounds = -(-spp // per_pass)
@@ -59,7 +67,8 @@ class Merge:
                 self.counts[u.tile] += u.spp
 
     def add(self, unit: Unit, tile_image: np.ndarray) -> int:
-        """Take a unit's rendered crop window (float32 h x w x 3); returns how many units were summed."""
+        """Take a unit's rendered crop window (float32 h x w x 3); returns how many units
+        were summed."""
         self._pending[(unit.tile, unit.round)] = (unit, tile_image)
         added = 0
         t = unit.tile
@@ -73,7 +82,9 @@ class Merge:
         return added
 
     def progress(self) -> pass_loop.Progress:
-        return pass_loop.Progress(int(self.counts.min()), self.spp, self.total, self.counts, self.layout)
+        return pass_loop.Progress(
+            int(self.counts.min()), self.spp, self.total, self.counts, self.layout
+        )
 
 
 __all__ = ["Unit", "plan", "Merge"]

@@ -1,14 +1,17 @@
-"""Resolving a `Job`, once: the scene loaded, its own integrator settings merged, `auto` values pinned.
+"""Resolving a `Job`, once: the scene loaded, its own integrator settings merged, `auto`
+values pinned.
 
     r = resolve(Job(scene="scene.xml", given={"style": "cel"}))
-    r.scene, r.integrator, r.spp, r.lanes, r.auto      # what `execute` runs; r.auto names the pinned values
+    # what `execute` runs; r.auto names the pinned values
+    r.scene, r.integrator, r.spp, r.lanes, r.auto
 
-The integrator of a render is, in this order of precedence: a prebuilt one given as it is; else the values
-the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator (also one nested in a
-`moment` or `aov` wrapper, read from the declaration); else over the shared
-settings of the scene's own Mitsuba integrator (`carried`: max_depth, rr_depth, hide_emitters, seen
-through `moment` and `aov`) with the job's default style. Its scene-relative `auto` values are then pinned
-on this scene (`scene_defaults.resolve`), so every route that renders the result draws the same image.
+The integrator of a render is, in this order of precedence: a prebuilt one given as it is; else the
+values the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator (also one
+nested in a `moment` or `aov` wrapper, read from the declaration); else over the shared settings of
+the scene's own Mitsuba integrator (`carried`: max_depth, rr_depth, hide_emitters, seen through
+`moment` and `aov`) with the job's default style. Its scene-relative `auto` values are then pinned
+on this scene (`scene_defaults.resolve`), so every route that renders the result draws the
+same image.
 """
 from __future__ import annotations
 
@@ -38,7 +41,8 @@ class Resolved:
     lanes: int
     auto: str = ""        # the auto values pinned, one line ('' if none)
     lanes_note: str | None = None  # why the device's pass size is below its default, if it is
-    pilot: Pilot | None = None     # the scene-defaults pilot the auto values came from (the recorder stores it)
+    # the scene-defaults pilot the auto values came from (the recorder stores it)
+    pilot: Pilot | None = None
 
     @property
     def size(self) -> tuple[int, int]:
@@ -47,12 +51,14 @@ class Resolved:
 
 
 def integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
-    """The property values of the job's integrator on this scene; None: the scene's own `stylized` as it is."""
+    """The property values of the job's integrator on this scene; None: the scene's own `stylized`
+    as it is."""
     own = scene.integrator()
     given = dict(job.given)
     if isinstance(own, StylizedIntegrator):
         return S.refine(own.values, given) if given else None
-    nested = nested_stylized(job.scene, job.defines)   # `stylized` inside `moment` or `aov`: its values
+    # `stylized` inside `moment` or `aov`: its values
+    nested = nested_stylized(job.scene, job.defines)
     if nested is not None:
         return S.refine(nested, given)
     base = {"style": job.default_style, **carried_settings(scene, job.scene, job.defines)}
@@ -64,8 +70,9 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
     if job.integrator is not None:
         return job.integrator
     values = integrator_values(scene, job)
-    # from the values, also for the scene's own integrator as it is: Mitsuba's object resolves auto values in
-    # its own `render` (scene/standalone.py); the pipeline pins them once, here, for every route
+    # from the values, also for the scene's own integrator as it is: Mitsuba's object resolves auto
+    # values in its own `render` (scene/standalone.py); the pipeline pins them once, here, for
+    # every route
     return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
 
 
@@ -77,12 +84,14 @@ def lanes_for(job: Job) -> tuple[int, str | None]:
 
 
 def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
-    """Load (unless `scene`, already loaded from `job.scene`, is given), merge, pin: see the module doc."""
+    """Load (unless `scene`, already loaded from `job.scene`, is given), merge, pin: see the
+    module doc."""
     check_render_args(1 if job.spp is None else job.spp, job.seed, job.integrator)
     if scene is None:
         scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
     chosen = choose_integrator(scene, job)
-    # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value needs it)
+    # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value
+    # needs it)
     pilot = Pilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
     integrator, auto = pin(scene, chosen, pilot)
     spp = scene_spp(scene) if job.spp is None else int(job.spp)

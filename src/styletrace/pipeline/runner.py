@@ -107,7 +107,8 @@ class Runner:
 
     def check(self) -> None:
         """The refusals that depend on the job, the executor and the finisher, one copy each."""
-        self.finisher.check(self.resolved, self.executor)  # the finisher's refusal is the specific one
+        # the finisher's refusal is the specific one
+        self.finisher.check(self.resolved, self.executor)
         spp = self.resolved.spp
         if self.aovs and spp < 2:
             raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at "

@@ -1,5 +1,6 @@
-"""Ctrl-C (SIGINT) and SIGTERM during a run that writes a file (`StopSignals`), its passes and progress bar
-(`Passes`), and `say`, its one-line messages on stderr. `pipeline.runner.Runner.write` uses them.
+"""Ctrl-C (SIGINT) and SIGTERM during a run that writes a file (`StopSignals`), its passes and
+progress bar (`Passes`), and `say`, its one-line messages on stderr. `pipeline.runner.Runner.write`
+uses them.
 """
 from __future__ import annotations
 
@@ -24,16 +25,17 @@ class StopSignals:
     """Ctrl-C (SIGINT) and SIGTERM during a render.
 
     The first signal asks the pass loop to stop after the pass under way. A kernel launch cannot be
-    interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns of
-    the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if the pass
-    has not finished `GRACE` seconds after the first signal, or a second signal comes, the watcher
-    calls `abandon(signum)`, which writes the finished passes and ends the process (`os._exit`: the
-    kernel is left running). That write must not touch Mitsuba: its EXR writer waits for the kernel
-    (`images.encode_plain`). Exit status: 128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM).
+    interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns
+    of the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if
+    the pass has not finished `GRACE` seconds after the first signal, or a second signal comes, the
+    watcher calls `abandon(signum)`, which writes the finished passes and ends the process
+    (`os._exit`: the kernel is left running). That write must not touch Mitsuba: its EXR writer
+    waits for the kernel (`images.encode_plain`). Exit status: 128 + the signal's number (130 for
+    Ctrl-C, 143 for SIGTERM).
 
-    A Ctrl-C in the few milliseconds in which Mitsuba's C++ `render` traces a pass goes to Mitsuba's own
-    handler (it logs "Received interrupt signal, winding down") instead; the pass then runs on and a
-    further Ctrl-C counts as the first.
+    A Ctrl-C in the few milliseconds in which Mitsuba's C++ `render` traces a pass goes to Mitsuba's
+    own handler (it logs "Received interrupt signal, winding down") instead; the pass then runs on
+    and a further Ctrl-C counts as the first.
     """
 
     GRACE = 1.0
@@ -43,7 +45,8 @@ class StopSignals:
         self._abandon = abandon
         self.signum = 0  # the first signal received, 0 if none
         self.count = 0
-        self.lock = threading.Lock()  # held by the loop while it settles, by the watcher while it abandons
+        # held by the loop while it settles, by the watcher while it abandons
+        self.lock = threading.Lock()
         self.settled = False
 
     def __enter__(self):
@@ -88,17 +91,19 @@ class StopSignals:
     def __exit__(self, *exc):
         signal.set_wakeup_fd(self._old_fd)
         for s, handler in self._old.items():
-            # after a stop the render is saved and the exit status decided: a second Ctrl-C during the
-            # interpreter's shutdown (which restores the default handlers) must not turn it into a kill
+            # after a stop the render is saved and the exit status decided: a second Ctrl-C during
+            # the interpreter's shutdown (which restores the default handlers) must not turn it into
+            # a kill
             signal.signal(s, signal.SIG_IGN if self.count else handler)
         os.close(self._w)
         return False
 
 
 class Passes:
-    """The passes of a command-line render as they finish: a tqdm bar over the samples per pixel (where there is more
-    than one pass and the command is not quiet), `latest` (the last finished pass's progress, which an `abandon`
-    of `StopSignals` writes) and `failure` (the error of a later pass, which must not cost the finished ones)."""
+    """The passes of a command-line render as they finish: a tqdm bar over the samples per pixel
+    (where there is more than one pass and the command is not quiet), `latest` (the last finished
+    pass's progress, which an `abandon` of `StopSignals` writes) and `failure` (the error of a later
+    pass, which must not cost the finished ones)."""
 
     def __init__(self, spp: int, total: int, quiet: bool):
         self.latest = self.failure = None
@@ -106,11 +111,16 @@ class Passes:
         if total > 1 and not quiet:
             from tqdm import tqdm
             # the first pass includes the kernel's compilation: the bar says so until it is done
-            self.bar = tqdm(total=spp, unit="spp", desc=f"compiling and rendering pass 1 of {total}", file=sys.stderr)
+            self.bar = tqdm(
+                total=spp,
+                unit="spp",
+                desc=f"compiling and rendering pass 1 of {total}",
+                file=sys.stderr,
+            )
 
     def follow(self, source, stop: StopSignals) -> None:
-        """Take the passes of `source` until it ends or `stop` has a signal; a KeyboardInterrupt or RuntimeError
-        after a finished pass is kept in `failure` (before one, it is raised)."""
+        """Take the passes of `source` until it ends or `stop` has a signal; a KeyboardInterrupt or
+        RuntimeError after a finished pass is kept in `failure` (before one, it is raised)."""
         try:
             for prog in source:
                 if self.bar is not None:

@@ -26,8 +26,9 @@ MemoryQuery = Callable[[], Optional[tuple]]  # () -> (free bytes, total bytes) o
 
 
 def cuda_memory(ordinal: int = 0) -> tuple[int, int] | None:
-    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where unavailable.
-    Dr.Jit uses the device's primary context, so retaining it here creates nothing new."""
+    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where
+    unavailable. Dr.Jit uses the device's primary context, so retaining it here creates
+    nothing new."""
     try:
         cuda = ctypes.CDLL("libcuda.so.1")
     except OSError:
@@ -64,7 +65,8 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
         query: returns the CUDA device's (free, total) bytes, or None where it cannot tell.
 
     Returns:
-        (lanes, note): the pass size, and a note for the user when free memory lowered it, else None.
+        (lanes, note): the pass size, and a note for the user when free memory lowered it,
+        else None.
     """
     if not variant.startswith("cuda"):
         return pass_loop.LANES_PER_PASS, None
@@ -72,7 +74,10 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
     if memory is None:  # no driver API to ask: the CPU's size is safe everywhere
         return pass_loop.LANES_PER_PASS, None
     free, total = memory
-    lanes = min(CUDA_LANES_MAX, max(pass_loop.LANES_PER_PASS, _pow2_floor(total * CUDA_MEMORY_SHARE // CUDA_LANE_BYTES)))
+    lanes = min(
+        CUDA_LANES_MAX,
+        max(pass_loop.LANES_PER_PASS, _pow2_floor(total * CUDA_MEMORY_SHARE // CUDA_LANE_BYTES)),
+    )
     default = lanes
     while lanes > pass_loop.LANES_PER_PASS and lanes * CUDA_LANE_BYTES > free:
         lanes //= 2
@@ -80,9 +85,16 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
     if lanes != default:
         note = (
             f"only {free / 2**30:.1f} GiB of GPU memory free: passes of {lanes} samples instead of "
-            f"{default}, so the image differs from this device's default split (--pass-spp fixes it)"
+            f"{default}, so the image differs from this device's default split (--pass-spp fixes "
+            "it)"
         )
     return lanes, note
 
 
-__all__ = ["lanes_per_pass", "cuda_memory", "CUDA_LANE_BYTES", "CUDA_MEMORY_SHARE", "CUDA_LANES_MAX"]
+__all__ = [
+    "lanes_per_pass",
+    "cuda_memory",
+    "CUDA_LANE_BYTES",
+    "CUDA_MEMORY_SHARE",
+    "CUDA_LANES_MAX",
+]

@@ -2,10 +2,11 @@
 
 Routes (JSON API documented in docs/preview.md):
     GET  /              the page (page.html)
-    GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices) and
-                        the estimators that can restyle it
+    GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices)
+                        and the estimators that can restyle it
     GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
-    POST /api/restyle   {"style", "params", "estimator"} -> {"image": PNG data URL, "spp", "draft", "ms", "command"}
+    POST /api/restyle   {"style", "params", "estimator"}
+                        -> {"image": PNG data URL, "spp", "draft", "ms", "command"}
     POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
 A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
 """
@@ -33,18 +34,34 @@ def styles_table() -> list[dict[str, Any]]:
         if cls.per_sample:
             continue  # cannot restyle (a buffer keeps the children's mean)
         style = cls()
-        out.append({
-            "name": name, "summary": cls.summary, "closed_form": style.closed_form,
-            "estimators": [e for e in applicable(style) if e in RESTYLABLE_ESTIMATORS],
-            "params": [{"name": p.name, "kind": p.kind, "default": p.show(style.values[p.name]), "doc": p.doc,
-                        "low": p.low, "high": p.high, "low_open": p.low_open, "choices": list(p.choices),
-                        "allowed": p.allowed()} for p in cls.params],
-        })
+        out.append(
+            {
+                "name": name,
+                "summary": cls.summary,
+                "closed_form": style.closed_form,
+                "estimators": [e for e in applicable(style) if e in RESTYLABLE_ESTIMATORS],
+                "params": [
+                    {
+                        "name": p.name,
+                        "kind": p.kind,
+                        "default": p.show(style.values[p.name]),
+                        "doc": p.doc,
+                        "low": p.low,
+                        "high": p.high,
+                        "low_open": p.low_open,
+                        "choices": list(p.choices),
+                        "allowed": p.allowed(),
+                    }
+                    for p in cls.params
+                ],
+            }
+        )
     return out
 
 
 def encode(image, fmt: str) -> bytes:
-    """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by `images.write_image`."""
+    """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by
+    `images.write_image`."""
     from styletrace.images import write_image
     fd, tmp = tempfile.mkstemp(suffix="." + fmt)
     os.close(fd)
@@ -80,8 +97,12 @@ def make_app(session):
         if not isinstance(style, str) or style not in known:
             raise ValueError(f"bad style {style!r}: expected one of {', '.join(sorted(known))}")
         params = body.get("params") or {}
-        if not isinstance(params, dict) or not all(isinstance(v, (str, int, float, bool)) for v in params.values()):
-            raise ValueError("bad params: expected an object of name -> value (string, number or boolean)")
+        if not isinstance(params, dict) or not all(
+            isinstance(v, (str, int, float, bool)) for v in params.values()
+        ):
+            raise ValueError(
+                "bad params: expected an object of name -> value (string, number or boolean)"
+            )
         estimator = body.get("estimator") or None
         if estimator is not None and not isinstance(estimator, str):
             raise ValueError(f"bad estimator {estimator!r}: expected a name")
@@ -109,8 +130,15 @@ def make_app(session):
         png = await run_in_threadpool(encode, img, "png")
         draft = inner != session.inner
         command = session.command(style, estimator, params, *((spp, inner) if draft else ()))
-        return JSONResponse({"image": "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
-                             "spp": 0 if draft else spp, "draft": draft, "ms": ms, "command": command})
+        return JSONResponse(
+            {
+                "image": "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
+                "spp": 0 if draft else spp,
+                "draft": draft,
+                "ms": ms,
+                "command": command,
+            }
+        )
 
     async def save(request: Request):
         try:
@@ -126,27 +154,49 @@ def make_app(session):
             return bad("no image yet: the first pass is still rendering", 409)
         data = await run_in_threadpool(encode, img, fmt)
         media = "image/png" if fmt == "png" else "image/x-exr"
-        return Response(data, media_type=media, headers={
-            "Content-Disposition": f'attachment; filename="{style}-{spp}spp.{fmt}"', "X-Spp": str(spp)})
+        return Response(
+            data,
+            media_type=media,
+            headers={
+                "Content-Disposition": f'attachment; filename="{style}-{spp}spp.{fmt}"',
+                "X-Spp": str(spp),
+            },
+        )
 
-    return Starlette(routes=[
-        Route("/", page), Route("/api/styles", styles), Route("/api/state", state),
-        Route("/api/restyle", do_restyle, methods=["POST"]), Route("/api/save", save, methods=["POST"]),
-    ])
+    return Starlette(
+        routes=[
+            Route("/", page),
+            Route("/api/styles", styles),
+            Route("/api/state", state),
+            Route("/api/restyle", do_restyle, methods=["POST"]),
+            Route("/api/save", save, methods=["POST"]),
+        ]
+    )
 
 
-def serve(scene: Any = None, style: str = "cel", inner: int | None = None, spp: int | None = None,
-          width: int | None = None, height: int | None = None, port: int = 8765, params: dict | None = None,
-          open_browser: bool = False) -> int:
+def serve(
+    scene: Any = None,
+    style: str = "cel",
+    inner: int | None = None,
+    spp: int | None = None,
+    width: int | None = None,
+    height: int | None = None,
+    port: int = 8765,
+    params: dict | None = None,
+    open_browser: bool = False,
+) -> int:
     """Run the preview server until Ctrl-C; prints the page's URL once it listens."""
     import uvicorn
 
     from styletrace.config.settings import parse_slot
     from styletrace.preview.session import Session
-    slot = parse_slot({"style": style, **(params or {})}, context="preview")  # a bad start fails here, in one line
+    # a bad start fails here, in one line
+    slot = parse_slot({"style": style, **(params or {})}, context="preview")
     if slot.style.per_sample:
-        raise UsageError(f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
-                         f"preview's buffer keeps only their mean")
+        raise UsageError(
+            f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
+            f"preview's buffer keeps only their mean"
+        )
     session = Session(scene, inner=inner, spp=spp, width=width, height=height)
     app = make_app(session)
     session.initial = {"style": style, "params": params or {}}
