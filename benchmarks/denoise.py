@@ -74,8 +74,9 @@ import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
 from _report import image_grid, machine_description, median_time, write_section  # noqa: E402
 from equal_time import envelope, fixed_mse_at  # noqa: E402
+
+from styletrace.denoise import render_denoised as denoised_render  # noqa: E402
 from styletrace.frontends import api
-from styletrace.denoise import render as denoised_render  # noqa: E402
 from styletrace.lookdev.record import render_buffer  # noqa: E402
 
 CACHE = os.path.join(os.path.dirname(__file__), ".cache")
@@ -878,8 +879,8 @@ def timing(size: int = 512, runs: int = 3) -> dict:
     g = guides.first_hit(scene, 1, api.pass_seed(0, 0))
     out["guides (guide pass)"] = med(lambda: guides.first_hit(scene, 1, api.pass_seed(0, 0)))
     for q in ("high", "balanced", "fast"):
-        out[f"OIDN {q}"] = med(lambda: oidn.run(m, g.albedo, g.normal, q))
-    d = oidn.run(m, g.albedo, g.normal)
+        out[f"OIDN {q}"] = med(lambda: oidn.denoise_oidn(m, g.albedo, g.normal, q))
+    d = oidn.denoise_oidn(m, g.albedo, g.normal)
     out["own albedo and emission (one ray per sample)"] = med(lambda: X.own_surface(scene, buf.arrays))
     out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, g, own))
     out["attach (guides + OIDN high + interpolation at the camera samples, coverage 0)"] = med(

@@ -21,16 +21,16 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import numpy as np  # noqa: E402
-
 import denoise as bench  # noqa: E402  (the scenes, R's cache, the method's setting)
+import mitsuba as mi  # noqa: E402
+import numpy as np  # noqa: E402
 from _report import machine_description, write_section  # noqa: E402
+
+from styletrace.denoise import coverage, guides, oidn  # noqa: E402
+from styletrace.denoise import expectation as X
 from styletrace.frontends import api
-from styletrace.denoise import coverage, expectation as X, guides, oidn  # noqa: E402
 from styletrace.lookdev.record import render_buffer  # noqa: E402
 from styletrace.pipeline.passes import pass_seed  # noqa: E402
-
-import mitsuba as mi  # noqa: E402
 
 SIZE = 128  # the pixel protocol's
 BUDGETS = ((8, 8), (64, 64))
@@ -69,7 +69,7 @@ def image(name, style, spp, n, seed, scale) -> np.ndarray:
         at = bench.load(name, SIZE * scale)
         g = guides.first_hit(at, max(1, spp // scale ** 2) * 4, pass_seed(seed, 0))
         fine = finer_m(scene, buf, m, emission, scale)
-    d = X.below_resolution(oidn.run(fine, g.albedo, g.normal, "high", guides.to_sensor(at)), fine)
+    d = X.below_resolution(oidn.denoise_oidn(fine, g.albedo, g.normal, "high", guides.to_sensor(at)), fine)
     field = X.Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
     field.spread = mi.Float(np.ascontiguousarray(X.spread(buf, emission, U).ravel(), dtype=np.float32))
     return np.asarray(coverage.points(scene, integ, field, K, seed, scale).image, dtype=np.float64)[..., :3]

@@ -22,10 +22,11 @@ import styletrace  # noqa: E402
 styletrace.init()
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
+from _report import machine_description, write_section  # noqa: E402
+from kernel.test_identity import two_lights  # noqa: E402
+
 from styletrace.frontends.api import load_scene, make_integrator  # noqa: E402
 from styletrace.kernel import emitter_sampler  # noqa: E402
-from kernel.test_identity import two_lights  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
 
 RES, SPP, RUNS, REF_SPP = 64, 64, 6, 16384
 

@@ -40,8 +40,9 @@ import styletrace  # noqa: E402
 styletrace.init()
 import numpy as np  # noqa: E402
 from _report import image_grid, machine_description, write_section  # noqa: E402
-from styletrace.frontends import api
+
 from styletrace.errors import StyletraceError  # noqa: E402
+from styletrace.frontends import api
 
 CACHE = os.path.join(os.path.dirname(__file__), ".cache")
 FIXED = (4, 8, 16, 32, 64, 128)

@@ -46,11 +46,12 @@ styletrace.init()
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
 import numpy as np  # noqa: E402
-from styletrace import estimators as E  # noqa: E402
-from styletrace.scene import builtin as scenes
-from styletrace.config.estimator_registry import SERIES_MAX_TERMS  # noqa: E402
-from styletrace.styles import registry  # noqa: E402
 from _report import machine_description, write_section  # noqa: E402
+
+from styletrace import estimators as E  # noqa: E402
+from styletrace.config.estimator_registry import SERIES_MAX_TERMS  # noqa: E402
+from styletrace.scene import builtin as scenes
+from styletrace.styles import registry  # noqa: E402
 
 RES, CHILDREN, REPS, GAMMA, SPP = 32, 1024, 32, 2.2, 64
 PASS_M, SEEDS = 64, (3, 4, 5)
@@ -197,7 +198,7 @@ def render_rows():
 
 
 def main():
-    gamma = registry.get("gamma")(gamma=GAMMA)
+    gamma = registry.style_class("gamma")(gamma=GAMMA)
     form = gamma.form()
     renderer = E.SeriesEstimator(form.series, b=E.Pilot(16, lo=form.pilot_lo, scale=form.pilot_scale),
                                  selection="iterative", max_terms=SERIES_MAX_TERMS)

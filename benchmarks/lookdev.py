@@ -30,6 +30,7 @@ import styletrace  # noqa: E402
 styletrace.init()
 import numpy as np  # noqa: E402
 from _report import machine_description, median_time, write_section  # noqa: E402
+
 from styletrace.lookdev.fit import fit  # noqa: E402
 from styletrace.lookdev.record import render_buffer  # noqa: E402
 from styletrace.lookdev.restyle import device, restyle  # noqa: E402

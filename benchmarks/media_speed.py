@@ -23,9 +23,10 @@ import styletrace  # noqa: E402
 
 styletrace.init()  # first: it points Dr.Jit at a working libLLVM
 import mitsuba as mi  # noqa: E402
-from styletrace.frontends.api import make_integrator  # noqa: E402
 from _report import machine_description, write_section  # noqa: E402
 from render_speed import timed  # noqa: E402
+
+from styletrace.frontends.api import make_integrator  # noqa: E402
 
 RES = 128
 S, N = 8, 8

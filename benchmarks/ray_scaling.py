@@ -26,10 +26,11 @@ import styletrace  # noqa: E402
 
 styletrace.init()
 import ray  # noqa: E402
+from _report import machine_description, median_time, write_section  # noqa: E402
+
 from styletrace.frontends import api
 from styletrace.pipeline.ray_checkpoint import Checkpoint  # noqa: E402
 from styletrace.pipeline.ray_run import Render, job_for  # noqa: E402
-from _report import machine_description, median_time, write_section  # noqa: E402
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 

@@ -35,11 +35,11 @@ import styletrace  # noqa: E402
 styletrace.init()
 
 import mitsuba as mi  # noqa: E402
-
 from _report import image_grid, machine_description, write_section  # noqa: E402
+
 from styletrace import measures  # noqa: E402
 from styletrace.scene.loading import load_scene, scene_spp  # noqa: E402
-from styletrace.styles import names  # noqa: E402
+from styletrace.styles import style_names  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 MANIFEST = HERE / "panel.json"
@@ -173,7 +173,7 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
     panel = json.loads(MANIFEST.read_text())["scenes"]
     chosen = [e for e in panel if not args.scenes or e["name"] in args.scenes.split(",")]
-    styles = args.styles.split(",") if args.styles else ["identity"] + [s for s in names() if s != "identity"]
+    styles = args.styles.split(",") if args.styles else ["identity"] + [s for s in style_names() if s != "identity"]
     missing = [e["name"] for e in chosen if not (Path(args.panel) / e["name"] / "scene.xml").exists()]
     if missing:
         print(f"real_scenes: the panel's scenes are not in {args.panel}: {', '.join(missing)} (benchmarks/panel.json "

@@ -43,8 +43,9 @@ import styletrace  # noqa: E402
 styletrace.init()  # first: it points Dr.Jit at a working libLLVM
 import drjit as dr  # noqa: E402
 import mitsuba as mi  # noqa: E402
-from styletrace.frontends.api import load_scene, make_integrator, passes, resolve_defaults  # noqa: E402
 from _report import REPORT, machine_description, write_section  # noqa: E402
+
+from styletrace.frontends.api import load_scene, make_integrator, passes, resolve_defaults  # noqa: E402
 
 RES = 256
 S, N = 16, 8

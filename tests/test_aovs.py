@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 import styletrace
+from styletrace.errors import UsageError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import UsageError
 from styletrace.images import AOV_CHANNELS
 
 styletrace.init()

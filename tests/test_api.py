@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SettingsError, StyleError, UsageError
+from styletrace.frontends import api
 
 
 def test_render_returns_linear_float32_hwc():

@@ -12,10 +12,10 @@ styletrace.init()
 
 import mitsuba as mi  # noqa: E402
 
+from styletrace.errors import SceneError  # noqa: E402
 from styletrace.pipeline.carried import carried_settings, declared, loaded  # noqa: E402
 from styletrace.pipeline.job import Job  # noqa: E402
 from styletrace.pipeline.resolve import resolve  # noqa: E402
-from styletrace.errors import SceneError  # noqa: E402
 from styletrace.scene.loading import SceneWarning, load_scene  # noqa: E402
 
 SCENE = """<scene version="3.0.0">

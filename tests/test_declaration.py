@@ -4,14 +4,14 @@ implementation of the common kinds, and each gives its type, default, bounds, ch
 command-line / docs row."""
 import pytest
 
-from styletrace.frontends.cli import build_parser, main
-from styletrace.frontends.command_job import given_flags
 from styletrace.config import settings
 from styletrace.config.declare import Property
 from styletrace.declaration import Declaration
 from styletrace.errors import SettingsError, StyleError
+from styletrace.frontends.cli import build_parser, main
+from styletrace.frontends.command_job import given_flags
 from styletrace.frontends.reference import integrator_table, style_table
-from styletrace.styles import get
+from styletrace.styles import style_class
 from styletrace.styles.params import Param
 
 KNOB = Property("test_knob", 3, "int", "a knob only this test has", "--test-knob", "K", low=1, high=9)
@@ -24,7 +24,7 @@ def declared(monkeypatch):
     monkeypatch.setattr(settings, "PROPERTIES", settings.PROPERTIES)
     monkeypatch.setattr(settings, "DEFAULTS", dict(settings.DEFAULTS))
     settings.declare(KNOB)
-    sepia = get("sepia")
+    sepia = style_class("sepia")
     monkeypatch.setattr(sepia, "params", tuple(sepia.params) + (AMOUNT, MODE))
 
 

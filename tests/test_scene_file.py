@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
-from styletrace.frontends.cli import build_parser, choose_integrator, main
 from styletrace.errors import SceneError
+from styletrace.frontends import api
+from styletrace.frontends.cli import build_parser, cli_integrator, main
 from styletrace.images import save_safely
 
 styletrace.init()
@@ -55,9 +55,9 @@ def test_cli_keeps_the_scenes_depths_and_hide_emitters_and_a_flag_wins(tmp_path)
                                '<integer name="rr_depth" value="3"/><boolean name="hide_emitters" value="true"/>'
                                '</integrator>'))
     scene = api.load_scene(path)
-    s = choose_integrator(scene, args_of(path), {}).settings
+    s = cli_integrator(scene, args_of(path), {}).settings
     assert (s.max_depth, s.rr_depth, s.hide_emitters, s.style.name) == (6, 3, True, "cel")
-    s = choose_integrator(scene, args_of(path, "--max-depth", "2", "--hide-emitters", "false"), {}).settings
+    s = cli_integrator(scene, args_of(path, "--max-depth", "2", "--hide-emitters", "false"), {}).settings
     assert (s.max_depth, s.rr_depth, s.hide_emitters) == (2, 3, False)
 
 

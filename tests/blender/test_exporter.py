@@ -2,8 +2,8 @@
 material slot, the material mapping, and one warning per unsupported node."""
 import bpy
 import numpy as np
-
 import scenes as S
+
 from styletrace.blender import build, exporter
 
 
@@ -42,7 +42,7 @@ def test_modifiers_normals_uvs_and_slots():
     assert parts["Sphere.0"].uvs is not None and parts["Sphere.0"].uvs.shape[1] == 2
     # the description builds into a Mitsuba scene
     import styletrace
-    scene = styletrace.frontends.api.load_scene(build.scene_dict(desc))
+    scene = styletrace.frontends.api.load_scene(build.description_scene_dict(desc))
     assert len(scene.shapes()) == 3
 
 

@@ -2,8 +2,8 @@
 Blender error reports (never a traceback)."""
 import bpy
 import pytest
-
 import scenes as S
+
 from styletrace.blender import panels, properties
 from styletrace.styles import registry
 
@@ -12,12 +12,12 @@ def test_every_style_parameter_has_a_property_and_a_row():
     S.reset(16)
     st = bpy.context.scene.styletrace
     style_enum = {i.identifier for i in st.bl_rna.properties["style"].enum_items}
-    assert style_enum == set(registry.names())
-    for name in registry.names():
+    assert style_enum == set(registry.style_names())
+    for name in registry.style_names():
         st.style = name
         rows = [prop for owner, prop in panels.layout_rows(st) if owner == st.params]
-        assert rows == [properties.key(name, p.name) for p in registry.get(name).params]
-        for p in registry.get(name).params:  # the default shown is the registry's, in --set spelling
+        assert rows == [properties.key(name, p.name) for p in registry.style_class(name).params]
+        for p in registry.style_class(name).params:  # the default shown is the registry's, in --set spelling
             value = getattr(st.params, properties.key(name, p.name))
             if isinstance(value, str):
                 assert value == p.show(p.default)

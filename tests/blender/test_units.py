@@ -8,7 +8,6 @@ import math
 import os
 
 import pytest
-
 import scenes as S
 
 LIGHTS = {

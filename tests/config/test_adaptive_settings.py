@@ -2,10 +2,10 @@
 import pytest
 
 import styletrace
-from styletrace.frontends.cli import main
-from styletrace.errors import SettingsError
 from styletrace.config import estimator_registry, settings
 from styletrace.config.settings import AdaptiveCount
+from styletrace.errors import SettingsError
+from styletrace.frontends.cli import main
 
 styletrace.init()
 

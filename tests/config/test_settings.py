@@ -4,11 +4,11 @@ import re
 import pytest
 
 import styletrace
+from styletrace.config import estimator_registry, settings
+from styletrace.errors import SettingsError, StyleError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import SettingsError, StyleError
-from styletrace.config import estimator_registry, settings
-from styletrace.styles import get, names
+from styletrace.styles import style_class, style_names
 
 styletrace.init()
 
@@ -18,8 +18,8 @@ def test_defaults_come_from_the_table():
     assert s.style.name == settings.DEFAULTS["style"] == "identity"
     assert s.slot.estimator == settings.DEFAULTS["estimator"] == "direct"
     assert (s.stylize, s.stylize_depth, s.max_depth, s.rr_depth) == ("first_hit", 1, -1, 5)
-    assert s.inner == (max(get("identity").default_inner, 1),)
-    assert settings.parse({"style": "cel"}).inner == (get("cel").default_inner,)
+    assert s.inner == (max(style_class("identity").default_inner, 1),)
+    assert settings.parse({"style": "cel"}).inner == (style_class("cel").default_inner,)
 
 
 @pytest.mark.parametrize("raw,expected", [(3, (3,)), ("8,4", (8, 4)), ((8, 4), (8, 4)), ([2, 3], (2, 3)),
@@ -55,9 +55,9 @@ def test_inner_samples_are_parsed_once_from_flag_to_kernel(monkeypatch, tmp_path
 
 def test_refine_drops_the_old_styles_parameters_only_when_the_style_changes():
     base = {"style": "cel", "levels": "0.1,0.9", "inner_samples": 8, "max_depth": 6}
-    same = settings.refine(base, {"inner_samples": 2})
+    same = settings.refine_values(base, {"inner_samples": 2})
     assert same == {"style": "cel", "levels": "0.1,0.9", "inner_samples": 2, "max_depth": 6}
-    other = settings.refine(base, {"style": "gamma"})
+    other = settings.refine_values(base, {"style": "gamma"})
     assert other == {"style": "gamma", "inner_samples": 8, "max_depth": 6}
     assert settings.parse(other).style.name == "gamma"
 
@@ -75,9 +75,9 @@ def test_settings_errors_have_their_own_type():
 
 
 def test_the_estimator_registry_mirrors_the_forms():
-    assert estimator_registry.names()[0] == "direct"
-    for name in names():
-        style = get(name)()
+    assert estimator_registry.estimator_names()[0] == "direct"
+    for name in style_names():
+        style = style_class(name)()
         ok = estimator_registry.applicable(style)
         assert "direct" in ok
         form = style.form()
@@ -85,12 +85,12 @@ def test_the_estimator_registry_mirrors_the_forms():
         for kind in estimator_registry.kinds():
             assert kind.doc and kind.inner and callable(kind.build)
             if kind.name in ok:
-                assert estimator_registry.check(kind.name, style) == kind.name
+                assert estimator_registry.check_estimator(kind.name, style) == kind.name
             else:
                 with pytest.raises(SettingsError, match=f"estimator '{kind.name}' does not apply to style '{name}'"):
-                    estimator_registry.check(kind.name, style)
+                    estimator_registry.check_estimator(kind.name, style)
     with pytest.raises(SettingsError, match="unknown estimator 'magic': available are direct, affine"):
-        estimator_registry.get("magic")
+        estimator_registry.estimator_entry("magic")
 
 
 def test_every_property_with_a_flag_is_on_the_command_line(capsys):
@@ -144,7 +144,9 @@ def test_emitter_sampling_is_a_setting():
 
 def test_the_integrator_samples_emitters_the_way_it_is_told(monkeypatch):
     """The setting reaches the kernel's emitter sampler (power selection renders a different image)."""
-    from styletrace.kernel import render_context as module  # where a render binds its emitter sampler
+    from styletrace.kernel import (
+        render_context as module,  # where a render binds its emitter sampler
+    )
     modes = []
     real = module.EmitterSampler
     monkeypatch.setattr(module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode))

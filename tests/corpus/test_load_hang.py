@@ -11,7 +11,6 @@ import sys
 import mitsuba as mi
 import numpy as np
 import pytest
-
 from conftest import child_env
 
 from . import scenes

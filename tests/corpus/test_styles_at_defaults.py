@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from styletrace.frontends import api
-from styletrace.styles import names
+from styletrace.styles import style_names
 
 from . import scenes
 
@@ -27,7 +27,7 @@ LINES = ["cel", "identity"]
 
 def setups():
     """(label, render keywords): every registered style, the compositions, and --lines with two styles."""
-    out = [(style, {"style": style}) for style in names()]
+    out = [(style, {"style": style}) for style in style_names()]
     out += [(style, {"style": style}) for style in COMPOSED]
     out += [(f"{style} --lines", {"style": style, "lines": True}) for style in LINES]
     return out

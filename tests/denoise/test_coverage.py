@@ -12,16 +12,15 @@
 """
 import math
 
+import mitsuba as mi
 import numpy as np
 import pytest
 
-import mitsuba as mi
-
 import styletrace
-from styletrace.frontends import api
 from styletrace.denoise import coverage as C
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError
+from styletrace.frontends import api
 
 RES = 12
 
@@ -51,7 +50,7 @@ def test_each_point_lies_in_its_own_cell(k, tiled, crop, monkeypatch):
         assert len(pass_loop.tiles(*(crop[2:] if crop else (RES, RES)))) == 4
     scene = plane(crop)
     w = crop[2] if crop else RES
-    image, buf = X.render(scene, api.make_integrator(style="cel", inner=1), spp=1, seed=5, coverage=k)
+    image, buf = X.render_denoised_expectation(scene, api.make_integrator(style="cel", inner=1), spp=1, seed=5, coverage=k)
     assert buf.header.get("tiles", 1) == (4 if tiled else 1)
     np.testing.assert_allclose(styletrace.restyle(buf, style="cel"), image, atol=2e-6)
     a = buf.arrays
@@ -68,7 +67,7 @@ def test_each_point_lies_in_its_own_cell(k, tiled, crop, monkeypatch):
 def test_points_differ_by_seed_and_stay_by_seed():
     scene = plane()
     integ = api.make_integrator(style="cel", inner=1)
-    p = [X.render(scene, integ, spp=1, seed=s, coverage=4)[1].arrays["p"] for s in (1, 1, 2)]
+    p = [X.render_denoised_expectation(scene, integ, spp=1, seed=s, coverage=4)[1].arrays["p"] for s in (1, 1, 2)]
     assert np.array_equal(p[0], p[1]) and not np.allclose(p[0], p[2])
 
 

@@ -6,14 +6,13 @@ same albedo lying on it (a hair in front): E[L] is A L everywhere plus the light
 Albedo and normal are the same on both sides of the light's edge, so no guide separates them; in a pixel the
 edge crosses, M mixes Le into the plane's samples. With the emission apart the plane's samples there get A L
 again; without it they take a share of Le. Both at the camera samples (coverage 0) and at coverage points."""
+import mitsuba as mi
 import numpy as np
 import pytest
-
-import mitsuba as mi
-
-from styletrace.frontends import api
 from helpers.denoise_edges import denoised_identity
+
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 
 RES, SKY, ALBEDO, LE = 48, 0.7, 0.5, 6.0
 

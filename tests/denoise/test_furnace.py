@@ -13,8 +13,8 @@ kernel at 16 stratified points per pixel), with the same tolerances, over the po
 """
 import numpy as np
 
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 from styletrace.scene.builtin import FURNACE_ALBEDO, FURNACE_RADIANCE
 
 RES, Z = 64, 4.0
@@ -33,7 +33,7 @@ def interior(buf):
 
 def test_denoised_furnace_is_the_constant():
     scene = api.load_scene("furnace", RES, RES)
-    _, buf = X.render(scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3, coverage=0)
+    _, buf = X.render_denoised_expectation(scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3, coverage=0)
     exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
     mask = interior(buf)
     assert mask.sum() > 500
@@ -50,8 +50,8 @@ def test_denoised_furnace_is_the_constant():
 def test_denoised_furnace_is_the_constant_at_coverage_points():
     scene = api.load_scene("furnace", RES, RES)
     integ = api.make_integrator(style="identity", inner=1)
-    _, cam = X.render(scene, integ, spp=1, seed=3, coverage=0)
-    _, cover = X.render(scene, integ, spp=1, seed=3, coverage=16)
+    _, cam = X.render_denoised_expectation(scene, integ, spp=1, seed=3, coverage=0)
+    _, cover = X.render_denoised_expectation(scene, integ, spp=1, seed=3, coverage=16)
     assert cover.spp == 16 and cover.source.spp == 1
     exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
     mask = interior(cam).ravel()

@@ -9,8 +9,8 @@ renders' sub-pixel samples differ there)."""
 import mitsuba as mi
 import numpy as np
 
-from styletrace.frontends import api
 from styletrace.denoise import guides
+from styletrace.frontends import api
 
 RES = 32
 WALL = {"type": "rectangle", "to_world": mi.ScalarTransform4f().translate([0, 0, 6]).rotate([0, 1, 0], 180).scale(8),

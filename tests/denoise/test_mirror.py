@@ -7,8 +7,8 @@ import mitsuba as mi
 import numpy as np
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 
 RES = 48
 

@@ -7,14 +7,13 @@ edge crosses, M mixes the two albedos, and so does OIDN's D; with the remodulati
 albedo times L again, without it the samples on either side share the pixel's mixture, off by the albedo
 contrast (dark 0.15 against bright 0.8). Both where the style is applied: at the camera samples (coverage 0,
 `at_samples`) and at coverage points (`coverage.CoverageIntegrator`, the lookup in the kernel)."""
+import mitsuba as mi
 import numpy as np
 import pytest
-
-import mitsuba as mi
-
-from styletrace.frontends import api
 from helpers.denoise_edges import denoised_identity
+
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 
 RES, SKY = 48, 0.7
 DARK, BRIGHT = 0.15, 0.8

@@ -7,17 +7,16 @@
   its square averaged over the 3 x 3 neighbourhood, computed here by numpy from a hand-made buffer.
 - With uncertainty 0 a render keeps no spread and styles D itself; with the default it keeps one per point.
 """
+import mitsuba as mi
 import numpy as np
 import pytest
 
-import mitsuba as mi
-
-from styletrace.frontends import api
 from styletrace.config import settings as S
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError
+from styletrace.frontends import api
 from styletrace.lookdev.buffer import SPREAD, Buffer
-from styletrace.lookdev.restyle import SPREAD_NODES, finish, finish_spread
+from styletrace.lookdev.restyle import SPREAD_NODES, finish_slot, finish_spread
 from styletrace.styles.base import Vertex
 
 
@@ -43,11 +42,11 @@ def test_a_linear_style_is_unchanged_and_spread_zero_is_finish():
     cel = S.parse_slot({"style": "cel", "thresholds": "0.3,0.6", "levels": "0.1,0.5,0.9", "inner_samples": 1,
                         "estimator": "direct"},
                        context="test")
-    np.testing.assert_allclose(np.array(finish_spread(cel, mean, v, mi.Float(0.0))), np.array(finish(cel, mean, v)),
+    np.testing.assert_allclose(np.array(finish_spread(cel, mean, v, mi.Float(0.0))), np.array(finish_slot(cel, mean, v)),
                                rtol=1e-6)
     # a mean on a threshold, with spread: between the two bands, not on either
     on = mi.Color3f(0.3, 0.3, 0.3)
-    lo, hi = (np.array(finish(cel, mi.Color3f(x, x, x), vertex(1)))[:, 0] for x in (0.29, 0.31))
+    lo, hi = (np.array(finish_slot(cel, mi.Color3f(x, x, x), vertex(1)))[:, 0] for x in (0.29, 0.31))
     mid = np.array(finish_spread(cel, on, vertex(1), mi.Float(0.2)))[:, 0]
     assert np.all(np.minimum(lo, hi) < mid) and np.all(mid < np.maximum(lo, hi))
 
@@ -84,8 +83,8 @@ def test_bad_uncertainty_is_refused(bad):
 def test_uncertainty_zero_styles_d_itself():
     scene = api.load_scene("cornell-box", 16, 16)
     integ = api.make_integrator(style="cel", inner=2)
-    img0, b0 = X.render(scene, integ, spp=2, seed=1, coverage=4, uncertainty=0)
-    img1, b1 = X.render(scene, integ, spp=2, seed=1, coverage=4)
+    img0, b0 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4, uncertainty=0)
+    img1, b1 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4)
     assert SPREAD not in b0.arrays and SPREAD in b1.arrays
     assert b1.header["denoise"]["uncertainty"] == X.UNCERTAINTY and np.all(b1.arrays[SPREAD] >= 0)
     np.testing.assert_array_equal(b0.arrays["mean"], b1.arrays["mean"])  # the same D at the same points

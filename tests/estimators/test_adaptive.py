@@ -2,8 +2,8 @@
 that at the same mean number of children it beats a fixed count on a step function."""
 import numpy as np
 import pytest
-
 from estimator_stats import Z
+
 from styletrace.estimators import AdaptiveDirect, Direct, channel_mean
 
 

@@ -1,10 +1,23 @@
 """Theorem 4.1: sums (shared samples), products (independent groups), compositions."""
 import numpy as np
 import pytest
-
 from estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates
-from styletrace.estimators import (Affine, Compose, Direct, Mean, Poisson, PolynomialNaive, PolynomialU, Product,
-                                   SeriesEstimator, Sum, channel_means, exp_series, inner_mean)
+
+from styletrace.estimators import (
+    Affine,
+    Compose,
+    Direct,
+    Mean,
+    Poisson,
+    PolynomialNaive,
+    PolynomialU,
+    Product,
+    SeriesEstimator,
+    Sum,
+    channel_means,
+    exp_series,
+    inner_mean,
+)
 
 SEPIA = np.array([[0.393, 0.769, 0.189], [0.349, 0.686, 0.168], [0.272, 0.534, 0.131]])
 

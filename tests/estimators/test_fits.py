@@ -4,12 +4,22 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from estimator_stats import BACKENDS, assert_unbiased, run_estimates
 from numpy.polynomial import chebyshev as npcheb
 from numpy.polynomial import legendre as npleg
 
-from estimator_stats import BACKENDS, assert_unbiased, run_estimates
-from styletrace.estimators import (Pilot, PolynomialU, SeriesEstimator, Uniform, bernstein_fit, chebyshev_fit,
-                                   from_unit, legendre_fit, taylor_fit, to_unit)
+from styletrace.estimators import (
+    Pilot,
+    PolynomialU,
+    SeriesEstimator,
+    Uniform,
+    bernstein_fit,
+    chebyshev_fit,
+    from_unit,
+    legendre_fit,
+    taylor_fit,
+    to_unit,
+)
 
 EPS = np.finfo(np.float64).eps
 FUNCS = {

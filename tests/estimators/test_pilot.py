@@ -1,8 +1,8 @@
 """Expansion points from pilot samples: independent of the terms, counted, clamped."""
 import numpy as np
 import pytest
-
 from estimator_stats import DISTS, assert_unbiased, run_estimates
+
 from styletrace.estimators import Pilot, PolynomialU, SeriesEstimator, gamma_series
 from styletrace.estimators.pilot import ExpansionPoint
 

@@ -9,8 +9,8 @@ smallest rho, cv^2 / (1 + cv^2) = 0.85 < 1. Variances are compared with a margin
 sample variance, sqrt((m4 / var^2 - 1) / n) (m4 the fourth central moment).
 """
 import numpy as np
-
 from estimator_stats import Z, assert_unbiased
+
 from styletrace.estimators import Direct, Geometric, Pilot, SeriesEstimator, TwoPoint, gamma_series
 from styletrace.estimators.harness import estimate_numpy
 

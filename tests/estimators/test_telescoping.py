@@ -1,8 +1,8 @@
 """Telescoping debiasing of the direct estimator (Eq. 15 form)."""
 import numpy as np
 import pytest
-
 from estimator_stats import DISTS, Z, assert_unbiased, run_estimates
+
 from styletrace.estimators import Direct, Geometric, PowerLaw, Telescoping, TwoPoint
 
 

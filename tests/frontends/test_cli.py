@@ -9,12 +9,11 @@ import time
 import mitsuba as mi
 import numpy as np
 import pytest
+from conftest import child_env
 
 import styletrace
 from styletrace.frontends.cli import StopSignals, main
-from styletrace.styles import get, names
-
-from conftest import child_env
+from styletrace.styles import style_class, style_names
 
 ENV = child_env()
 SMALL = ["--width", "24", "--height", "16", "--spp", "4", "--inner", "2", "-q"]
@@ -39,9 +38,9 @@ def srgb(x):
 def test_styles_lists_every_style_with_parameters(capsys):
     assert main(["styles"]) == 0
     out = capsys.readouterr().out
-    for name in names():
+    for name in style_names():
         assert f"{name}:" in out
-        for p in get(name).params:
+        for p in style_class(name).params:
             assert f"    {p.name} = " in out
 
 
@@ -436,6 +435,7 @@ def test_a_slow_first_pass_is_named_at_the_default_delay(tmp_path):
 
 def test_status_shows_only_phases_longer_than_its_delay():
     import io
+
     from styletrace.errors import UsageError
     from styletrace.frontends.status import Status, delay_from_env
     out = io.StringIO()

@@ -129,16 +129,16 @@ def test_refused_settings_in_the_table_stop_the_gallery_before_it_renders(tmp_pa
 
 
 def test_only_and_skip_select_setups_and_the_equal_time_section():
-    setups, comps = gallery.select(["equal_time"])
+    setups, comps = gallery.select_setups(["equal_time"])
     assert setups == [] and comps == gallery.EQUAL_TIME
-    setups, comps = gallery.select(None, ["equal_time"])
+    setups, comps = gallery.select_setups(None, ["equal_time"])
     assert setups == gallery.SETUPS and comps == []
-    setups, comps = gallery.select(["cel", gallery.EQUAL_TIME[0].key])
+    setups, comps = gallery.select_setups(["cel", gallery.EQUAL_TIME[0].key])
     assert [s.key for s in setups] == ["cel"] and comps == gallery.EQUAL_TIME[:1]
-    setups, comps = gallery.select(["equal_time", "cel"], [gallery.EQUAL_TIME[0].key, "cel"])
+    setups, comps = gallery.select_setups(["equal_time", "cel"], [gallery.EQUAL_TIME[0].key, "cel"])
     assert setups == [] and comps == gallery.EQUAL_TIME[1:]
     with pytest.raises(ValueError, match="unknown gallery setup.s. nope: available are .*equal_time"):
-        gallery.select(None, ["nope"])
+        gallery.select_setups(None, ["nope"])
 
 
 def test_unknown_setup_is_one_line(tmp_path, capsys):

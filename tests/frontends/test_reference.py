@@ -6,9 +6,9 @@ import sys
 import pytest
 
 import styletrace
-from styletrace.frontends import reference
 from styletrace.config.settings import PROPERTIES
-from styletrace.styles import get, names
+from styletrace.frontends import reference
+from styletrace.styles import style_class, style_names
 
 styletrace.init()
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
@@ -26,8 +26,8 @@ def test_every_table_has_its_block():
     estimators_md = open(os.path.join(ROOT, "docs", "estimators.md"), encoding="utf-8").read()
     assert "<!-- reference:integrator -->" in python_md
     assert "<!-- reference:estimators -->" in estimators_md
-    for name in names():
-        if get(name).params:
+    for name in style_names():
+        if style_class(name).params:
             assert f"<!-- reference:style:{name} -->" in styles_md, name
 
 
@@ -35,8 +35,8 @@ def test_the_tables_carry_every_registry_entry():
     table = reference.integrator_table()
     for p in PROPERTIES:
         assert f"`{p.name}`" in table and p.doc in table
-    for name in names():
-        for p in get(name).params:
+    for name in style_names():
+        for p in style_class(name).params:
             assert p.doc.replace("|", "\\|") in reference.style_table(name)
 
 
@@ -46,10 +46,10 @@ def test_a_stale_block_is_rewritten():
     assert "| old | table |" not in fresh and reference.style_table("cel") in fresh and fresh.endswith("end\n")
 
 
-@pytest.mark.parametrize("name", names())
+@pytest.mark.parametrize("name", style_names())
 def test_each_style_module_opens_with_its_parameters_and_defaults(name):
     """The third place a style's parameters appear, its module's reference block, names each with its default."""
-    cls = get(name)
+    cls = style_class(name)
     doc = sys.modules[cls.__module__].__doc__
     for p in cls.params:
         assert f"- {p.name} (" in doc or f", {p.name} (" in doc, (name, p.name)

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 
 
 @dataclass
@@ -30,7 +30,7 @@ class Samples:
 
 
 def denoised_identity(scene, spp: int = 8, inner: int = 4, seed: int = 2, coverage: int = 0) -> Samples:
-    _, buf = X.render(scene, api.make_integrator(style="identity", inner=inner), spp=spp, seed=seed,
+    _, buf = X.render_denoised_expectation(scene, api.make_integrator(style="identity", inner=inner), spp=spp, seed=seed,
                       coverage=coverage)
     a = buf.arrays
     albedo, emission = X.own_surface(scene, a)

@@ -4,8 +4,8 @@ tested against its standard error (`mean_z`) and each 4 x 4 pixel block (`pixel_
 import mitsuba as mi
 import numpy as np
 
-from styletrace.frontends.api import passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
+from styletrace.frontends.api import passes
 
 K, RES = 10, 24
 SPP, INNER = 4, 4

@@ -6,9 +6,9 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import child_env
 
 import styletrace
-from conftest import child_env
 
 styletrace.init()
 

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import styletrace
+from styletrace.config import estimator_registry as estimation
+from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
-from styletrace.config import estimator_registry as estimation
-from styletrace.styles import get, names
+from styletrace.styles import style_class, style_names
 
 BLACKBODY_XML = """<scene version="3.0.0">
   <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
@@ -150,9 +150,9 @@ def _edges(p):
     return [hi, low]
 
 
-EDGES = [(name, p.name, v, est) for name in names() for p in get(name).params
+EDGES = [(name, p.name, v, est) for name in style_names() for p in style_class(name).params
          if p.kind in ("float", "color", "vector", "floats", "int") for v in _edges(p)
-         for est in estimation.applicable(get(name)())]
+         for est in estimation.applicable(style_class(name)())]
 
 
 @pytest.fixture(scope="module")
@@ -168,7 +168,7 @@ def test_accepted_extremes_render_finite_images(style, param, value, estimator, 
         image = api.render(box, style=style, spp=2, estimator=estimator, **{param: value})
     except StyleError as exc:
         # refused by a check across parameters (u_max must exceed u_min, ...), never by the value's own range
-        assert "\n" not in str(exc) and next(p for p in get(style).params if p.name == param).allowed() not in str(exc), exc
+        assert "\n" not in str(exc) and next(p for p in style_class(style).params if p.name == param).allowed() not in str(exc), exc
         return
     assert np.isfinite(image).all(), f"{(~np.isfinite(image)).sum()} non-finite values"
 
@@ -177,7 +177,7 @@ def test_the_exp_tone_bound_is_where_float32_stops_resolving():
     """exposure 87 is accepted and renders; just above -ln(FLT_MIN) e^-k would flush to zero in float32."""
     assert np.float32(math.exp(-87.0)) >= np.finfo(np.float32).tiny
     assert np.float32(math.exp(-88.0)) < np.finfo(np.float32).tiny
-    assert get("exp_tone").params[0].high == 87.0
+    assert style_class("exp_tone").params[0].high == 87.0
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/maps"), reason="Linux only")

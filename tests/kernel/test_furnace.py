@@ -8,10 +8,10 @@ pixels inside the sphere's silhouette are independent draws, which gives standar
 import mitsuba as mi
 import numpy as np
 import pytest
-
-import styletrace
 from helpers import furnace
 from helpers.furnace import I, draws
+
+import styletrace
 
 RES = 128
 GAMMA = 2.2

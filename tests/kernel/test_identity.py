@@ -2,10 +2,10 @@
 import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import load_scene, make_integrator, passes
-from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K = 16          # independent renders per side
 SPP, INNER = 8, 8

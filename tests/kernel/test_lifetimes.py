@@ -15,14 +15,14 @@ from pathlib import Path
 import mitsuba as mi
 import numpy as np
 import pytest
+from conftest import child_env
 
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.lookdev.record import record
 from styletrace.kernel import reuse
+from styletrace.lookdev.record import record
 from styletrace.scene import defaults as scene_defaults
 
-from conftest import child_env
 from .test_reuse import plane_scene
 
 TESTS = Path(__file__).resolve().parents[1]
@@ -97,7 +97,7 @@ def test_reuse_render_collects_no_garbage_and_leaves_the_collector_as_it_was(mon
         (gc.enable if enabled else gc.disable)()
         try:
             for seed in range(2):
-                reuse.render(integ, mi.load_dict(plane_scene(8)) if seed else scene, scene.sensors()[0], seed, 1)
+                reuse.render_reuse(integ, mi.load_dict(plane_scene(8)) if seed else scene, scene.sensors()[0], seed, 1)
             assert gc.isenabled() == enabled
         finally:
             gc.enable()
@@ -108,7 +108,7 @@ def test_reuse_render_collects_no_garbage_and_leaves_the_collector_as_it_was(mon
 def counted_pilot(monkeypatch):
     """How often the scene-defaults pilot is traced (its `samples`, a cached property, computed)."""
     traces = []
-    original = scene_defaults.Pilot.__dict__["samples"].func
+    original = scene_defaults.ScenePilot.__dict__["samples"].func
 
     @functools.wraps(original)
     def samples(self):
@@ -116,8 +116,8 @@ def counted_pilot(monkeypatch):
         return original(self)
 
     prop = functools.cached_property(samples)
-    prop.__set_name__(scene_defaults.Pilot, "samples")
-    monkeypatch.setattr(scene_defaults.Pilot, "samples", prop)
+    prop.__set_name__(scene_defaults.ScenePilot, "samples")
+    monkeypatch.setattr(scene_defaults.ScenePilot, "samples", prop)
     return traces
 
 

@@ -12,9 +12,10 @@ import styletrace
 styletrace.init()
 
 from helpers.line_scenes import ball_mask, line_scene, reference  # noqa: E402
-from styletrace.frontends import api
+
 from styletrace.config.line_types import LineType  # noqa: E402
 from styletrace.errors import SceneError  # noqa: E402
+from styletrace.frontends import api
 from styletrace.kernel.lifted_lines import Lifted  # noqa: E402
 
 T = mi.ScalarTransform4f

@@ -12,9 +12,9 @@ import styletrace
 
 styletrace.init()
 
-from styletrace.kernel.lifted_lines import Lifted, LineType  # noqa: E402
-
 from helpers.line_scenes import RES, ball_mask, line_scene, reference  # noqa: E402
+
+from styletrace.kernel.lifted_lines import Lifted, LineType  # noqa: E402
 
 
 def scene(alpha=0.0, flat=False):

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.errors import SettingsError
 from styletrace.config import settings
+from styletrace.config.settings import parse_lines
+from styletrace.errors import SettingsError
 from styletrace.kernel.lane_sampler import LaneSampler
 from styletrace.kernel.lines import Lines
-from styletrace.config.settings import parse_lines
 
 T = mi.ScalarTransform4f
 FOV = 40.0

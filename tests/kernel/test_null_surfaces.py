@@ -7,9 +7,9 @@ with the mask made opaque (the mixture of a stylized surface and what lies behin
 import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 from styletrace.frontends.api import make_integrator, passes
-from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 T = mi.ScalarTransform4f
 RES = 24

@@ -11,7 +11,6 @@ import pytest
 from styletrace.frontends import api
 from styletrace.kernel import integrator as I
 
-
 #: traces per measurement; the least counts
 REPEATS = 7
 

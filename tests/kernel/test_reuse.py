@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import styletrace
+from styletrace.errors import SceneError, SettingsError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import SceneError, SettingsError
 from styletrace.kernel import reuse
 
 T = mi.ScalarTransform4f
@@ -53,7 +53,7 @@ def seed_means(scene, integ, seeds, spp, mask=None, **kw):
     sensor = scene.sensors()[0]
     out = []
     for s in range(seeds):
-        img = np.asarray(reuse.render(integ, scene, sensor, 1000 + s, spp, **kw), dtype=np.float64)[..., :3]
+        img = np.asarray(reuse.render_reuse(integ, scene, sensor, 1000 + s, spp, **kw), dtype=np.float64)[..., :3]
         out.append(img[mask].mean() if mask is not None else img.mean())
     return np.array(out)
 
@@ -144,7 +144,7 @@ def test_pools_never_cross_style_slots():
     scene = mi.load_dict(two_slots_scene())
     integ = api.make_integrator("identity", inner=2, reuse="pixels", reuse_radius=2, reuse_k=24)
     keep = {}
-    reuse.render(integ, scene, scene.sensors()[0], 0, 2, keep=keep)
+    reuse.render_reuse(integ, scene, scene.sensors()[0], 0, 2, keep=keep)
     half = keep["width"] // 2
     sizes, crossing = [], 0
     for members in reuse.pool_pixels(keep):
@@ -161,7 +161,7 @@ def test_null_surfaces_refused_in_one_line():
     scene = mi.load_dict(d)
     integ = api.make_integrator("identity", reuse="pixels")
     with pytest.raises(SceneError, match="null-scattering") as err:
-        reuse.render(integ, scene, scene.sensors()[0], 0, 1)
+        reuse.render_reuse(integ, scene, scene.sensors()[0], 0, 1)
     assert "\n" not in str(err.value)
 
 
@@ -172,7 +172,7 @@ def test_media_refused_in_one_line():
     scene = mi.load_dict(d)
     integ = api.make_integrator("identity", reuse="pixels")
     with pytest.raises(SceneError, match="participating media") as err:
-        reuse.render(integ, scene, scene.sensors()[0], 0, 1)
+        reuse.render_reuse(integ, scene, scene.sensors()[0], 0, 1)
     assert "\n" not in str(err.value)
 
 

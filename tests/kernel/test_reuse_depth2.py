@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SettingsError
+from styletrace.frontends import api
 from styletrace.kernel import reuse
 
 from .test_reuse import Z, film, room_scene, seed_means

@@ -11,9 +11,9 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.frontends import api
 from styletrace.errors import SettingsError
 from styletrace.estimators import AdaptiveDirect
+from styletrace.frontends import api
 from styletrace.kernel import reuse
 
 from .test_reuse import T, film
@@ -24,7 +24,7 @@ Z = 4.0
 def refined(scene, style="cel", inner="2:8", seed=0, spp=2, weights=None, **params):
     integ = api.make_integrator(style, inner=inner, reuse="pixels", reuse_radius=2, reuse_k=12, **params)
     keep = {}
-    img = reuse.render(integ, scene, scene.sensors()[0], seed, spp, weights=weights, keep=keep)
+    img = reuse.render_reuse(integ, scene, scene.sensors()[0], seed, spp, weights=weights, keep=keep)
     return np.asarray(img, dtype=np.float64)[..., :3], keep
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SettingsError
+from styletrace.frontends import api
 from styletrace.kernel import reuse
 
 from .test_reuse import Z, seed_means
@@ -59,7 +59,7 @@ def test_world_pools_on_the_cornell_box_hold_neighbours_within_h_only():
     scene = api.load_scene("cornell-box", 16, 16)
     integ = api.make_integrator("identity", inner="2,1", reuse_k=8, reuse_k2=12, **WORLD)
     keep = {}
-    reuse.render(integ, scene, scene.sensors()[0], 5, 4, keep=keep)
+    reuse.render_reuse(integ, scene, scene.sensors()[0], 5, 4, keep=keep)
     P, mask, h = keep["world_p"], keep["world_mask"], keep["world_h"]
     order, first, count, offset = (keep[k].astype(np.int64) for k in ("world_order", "world_first", "world_count",
                                                                          "world_offset"))

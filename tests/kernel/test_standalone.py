@@ -17,8 +17,8 @@ def scene_with(integrator: dict) -> mi.Scene:
 
 def test_auto_values_resolve_once_per_scene(monkeypatch):
     calls = []
-    real = standalone.resolve
-    monkeypatch.setattr(standalone, "resolve", lambda scene, integ: calls.append(1) or real(scene, integ))
+    real = standalone.resolve_defaults
+    monkeypatch.setattr(standalone, "resolve_defaults", lambda scene, integ: calls.append(1) or real(scene, integ))
     scene = scene_with({"type": "stylized", "style": "cel", "inner_samples": 2})
     first = np.array(mi.render(scene, spp=2, seed=3))
     second = np.array(mi.render(scene, spp=2, seed=3))

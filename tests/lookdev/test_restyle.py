@@ -1,16 +1,15 @@
 """Restyling a buffer equals a fresh render with the new style (same seed, same n), for every style."""
 import numpy as np
 import pytest
-
 from helpers.same_render import assert_same_render
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
+from styletrace.frontends import api
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
 from styletrace.scene.builtin import cornell_box
-from styletrace.styles import get, names
+from styletrace.styles import style_class, style_names
 
 W, H, SPP, INNER, SEED = 20, 14, 3, 2, 7
 #: "up to float rounding": both images are float32 means of the same per-sample float32 values
@@ -31,17 +30,17 @@ def test_recorded_image_is_the_render(buf):
     np.testing.assert_allclose(restyle(buf), buf.image, rtol=RTOL, atol=ATOL)
 
 
-@pytest.mark.parametrize("name", names())
+@pytest.mark.parametrize("name", style_names())
 def test_restyle_equals_a_fresh_render(buf, name):
-    if get(name).per_sample:
+    if style_class(name).per_sample:
         with pytest.raises(UsageError, match=f"style '{name}' cannot restyle: it applies g to every child"):
             restyle(buf, style=name)
         return
     np.testing.assert_allclose(restyle(buf, style=name), fresh(name), rtol=RTOL, atol=ATOL)
 
 
-@pytest.mark.parametrize("name", [n for n in names() if "affine" in
-                                  __import__("styletrace.config.estimator_registry", fromlist=["x"]).applicable(get(n)())])
+@pytest.mark.parametrize("name", [n for n in style_names() if "affine" in
+                                  __import__("styletrace.config.estimator_registry", fromlist=["x"]).applicable(style_class(n)())])
 def test_restyle_with_the_affine_estimator(buf, name):
     np.testing.assert_allclose(restyle(buf, style=name, estimator="affine"), fresh(name, estimator="affine"),
                                rtol=RTOL, atol=ATOL)

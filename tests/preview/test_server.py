@@ -10,7 +10,7 @@ from starlette.testclient import TestClient
 
 from styletrace.lookdev.restyle import restyle
 from styletrace.preview.server import make_app
-from styletrace.styles import get, names
+from styletrace.styles import style_class, style_names
 
 
 @pytest.fixture(scope="module")
@@ -20,7 +20,7 @@ def client(session):
 
 def test_styles_come_from_the_registry(client):
     table = {s["name"]: s for s in client.get("/api/styles").json()["styles"]}
-    assert set(table) == {n for n in names() if not get(n).per_sample}
+    assert set(table) == {n for n in style_names() if not style_class(n).per_sample}
     cel = {p["name"]: p for p in table["cel"]["params"]}
     assert cel["levels"]["kind"] == "floats" and cel["levels"]["low"] == 0.0 and cel["levels"]["default"] == "auto"
     assert cel["bands"]["default"] == "3"

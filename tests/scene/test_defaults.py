@@ -103,7 +103,7 @@ def test_the_pilot_sees_through_participating_media():
     reaching the camera: the sky behind the spheres arrives through at least 9 units of fog, times
     exp(-0.2 * 9) < 0.17, and the spheres' light is dimmed as well, so the mean falls below a third of the
     clear scene's. A pilot that ignored the medium would see no change."""
-    from styletrace.scene.defaults import Pilot
+    from styletrace.scene.defaults import ScenePilot
     grey = lambda a: {"type": "diffuse", "reflectance": {"type": "rgb", "value": [a, a, a]}}  # noqa: E731
 
     def scene(fog):
@@ -119,7 +119,7 @@ def test_the_pilot_sees_through_participating_media():
         return mi.load_dict(d)
 
     settings = make_integrator("cel").settings
-    foggy, clear = (Pilot(scene(f), settings).samples["colour"].mean() for f in (True, False))
+    foggy, clear = (ScenePilot(scene(f), settings).samples["colour"].mean() for f in (True, False))
     assert np.isfinite(foggy) and 0 < foggy < clear / 3, (foggy, clear)
 
 
@@ -202,10 +202,10 @@ def test_a_given_exposure_wins_and_an_unresolvable_one_falls_back():
 
 
 def test_auto_exposure_maps_the_median_to_middle_grey():
-    from styletrace.scene.defaults import Facts, Pilot
+    from styletrace.scene.defaults import Facts, ScenePilot
     scene = dimmed_box(1.0)
     integ = make_integrator(style="reinhard")
-    (median,) = Facts(scene, Pilot(scene, integ.settings), 0).brightness([0.5])
+    (median,) = Facts(scene, ScenePilot(scene, integ.settings), 0).brightness([0.5])
     chosen = resolve_defaults(scene, integ)[0].settings.slot.style
     assert chosen.exposure == pytest.approx(0.18 / median, rel=1e-3)
     contrast = resolve_defaults(scene, make_integrator(style="contrast", pivot=0.4))[0].settings.slot.style
@@ -221,6 +221,7 @@ def test_acp_takes_the_colour_maps_auto_range_and_colours():
     certain (no variance, so per-sample and of-the-mean application agree) it is the colour map's colour times
     the shading factor max(Y', 0.01), Y' the position in the gradient."""
     import mitsuba as mi
+
     from styletrace.styles.base import Vertex
     scene = dimmed_box(1.0)
     acp = resolve_defaults(scene, make_integrator(style="acp"))[0].settings.slot.style

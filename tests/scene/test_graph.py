@@ -4,8 +4,8 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.frontends.api import make_integrator, passes
 from styletrace.errors import SceneError
+from styletrace.frontends.api import make_integrator, passes
 from styletrace.kernel.scene_graph import SceneGraph
 
 T = mi.ScalarTransform4f

@@ -30,8 +30,8 @@ def test_custom_gradient_against_numpy():
 
 
 def test_only_acp_is_per_sample():
-    from styletrace.styles import get, names
-    assert [n for n in names() if getattr(get(n), "per_sample", False)] == ["acp"]
+    from styletrace.styles import style_class, style_names
+    assert [n for n in style_names() if getattr(style_class(n), "per_sample", False)] == ["acp"]
 
 
 def test_parameters():

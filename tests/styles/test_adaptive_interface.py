@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from styletrace.styles import create, names
+from styletrace.styles import create, style_names
 
 from .support import color, tonp, vertex
 
@@ -33,7 +33,7 @@ def thresholds_of(style, v) -> np.ndarray:
     return np.array([np.broadcast_to(np.array(t, dtype=np.float64), (LANES,)) for t in ts]).reshape(-1, LANES)
 
 
-@pytest.mark.parametrize("name", [n for n in names()] + ["contrast+sepia"])
+@pytest.mark.parametrize("name", [n for n in style_names()] + ["contrast+sepia"])
 def test_every_jump_is_a_declared_threshold(name):
     # brute force along the grey axis: between two neighbouring brightnesses where g jumps (moves more than a
     # continuous style can over 1e-3), one of the lane's declared thresholds must lie

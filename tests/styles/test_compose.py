@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
+from styletrace.config import estimator_registry as estimation
+from styletrace.config import settings
 from styletrace.errors import StyleError
-from styletrace.config import estimator_registry as estimation, settings
-from styletrace.styles import create, get, names
+from styletrace.styles import create, style_class, style_names
 from styletrace.styles.forms import AffineForm, CompositeForm
 
 from .support import run
@@ -21,13 +22,13 @@ def test_applies_its_operands_in_order():
 
 
 def test_parameters_are_the_operands_under_their_names():
-    cls = get("contrast+sepia")
+    cls = style_class("contrast+sepia")
     assert [p.name for p in cls.params] == ["contrast.c", "contrast.pivot", "contrast.exposure", "sepia.gradient"]
     comp = create("contrast+sepia", **{"contrast.c": "2"})
-    assert comp.operands[0].c == 2.0 and comp.operands[0].pivot == get("contrast")().pivot
+    assert comp.operands[0].c == 2.0 and comp.operands[0].pivot == style_class("contrast")().pivot
     assert comp.describe().startswith("contrast+sepia(contrast.c=2, contrast.pivot=0.5, contrast.exposure=auto, sepia.gradient=")
-    assert get("contrast+sepia") is cls  # one class per spelling
-    assert "contrast+sepia" not in names()  # compositions are spelled, not registered
+    assert style_class("contrast+sepia") is cls  # one class per spelling
+    assert "contrast+sepia" not in style_names()  # compositions are spelled, not registered
 
 
 def test_affine_operands_compose_into_one_affine_form():
@@ -56,7 +57,7 @@ def test_estimators_follow_the_operands_forms():
 ])
 def test_bad_compositions_are_one_line(name, message):
     with pytest.raises(StyleError, match=message):
-        get(name)
+        style_class(name)
 
 
 def test_bad_operand_parameter_names_both():
@@ -72,6 +73,6 @@ def test_settings_accept_prefixed_parameters():
 
 
 def test_a_closed_form_first_operand_makes_a_closed_form_composite():
-    assert get("gooch+contrast").default_inner == 0  # contrast acts on gooch's colour, not on radiance
-    assert get("contrast+gooch").default_inner == get("contrast").default_inner
-    assert get("cel+gamma").default_inner == max(get("cel").default_inner, get("gamma").default_inner)
+    assert style_class("gooch+contrast").default_inner == 0  # contrast acts on gooch's colour, not on radiance
+    assert style_class("contrast+gooch").default_inner == style_class("contrast").default_inner
+    assert style_class("cel+gamma").default_inner == max(style_class("cel").default_inner, style_class("gamma").default_inner)

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from styletrace.styles import StyleError, create, get, names
+from styletrace.styles import StyleError, create, style_class, style_names
 from styletrace.styles.gradient import Gradient
 from styletrace.styles.params import LIMIT, Param
 
@@ -55,8 +55,8 @@ def test_tie_dye_keeps_the_cosine_argument_resolvable():
 
 
 def test_every_real_parameter_has_a_finite_range():
-    for name in names():
-        for p in get(name).params:
+    for name in style_names():
+        for p in style_class(name).params:
             if p.kind in ("float", "color", "vector", "floats"):
                 lo, hi = p.bounds()
                 assert math.isfinite(lo) and math.isfinite(hi), (name, p.name)

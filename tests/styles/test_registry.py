@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from styletrace.styles import Style, StyleError, create, get, names
+from styletrace.styles import Style, StyleError, create, style_class, style_names
 
 from .support import run, vertex
 
@@ -10,7 +10,7 @@ EXPECTED = ["acp", "cel", "color_map", "contrast", "gamma", "gooch", "halftone",
        "saturation", "sepia", "tie_dye", "xtoon"]
 
 
-ALL = names()
+ALL = style_names()
 
 
 def test_all_styles_registered():
@@ -19,12 +19,12 @@ def test_all_styles_registered():
 
 def test_unknown_style():
     with pytest.raises(StyleError, match="unknown style 'nope'.*gooch"):
-        get("nope")
+        style_class("nope")
 
 
 @pytest.mark.parametrize("name", ALL)
 def test_metadata_and_round_trip(name):
-    cls = get(name)
+    cls = style_class(name)
     assert issubclass(cls, Style) and cls.name == name and cls.summary and cls.default_inner >= 0
     assert cls.__module__.rsplit(".", 1)[1] == name
     style = create(name)

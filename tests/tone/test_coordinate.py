@@ -5,8 +5,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest
-
 from helpers.pattern import peak
+
 from styletrace.kernel import mls
 from styletrace.kernel.anchors import Tone, ToneState, combine, shape_id
 from tone.scenes import T, mirror_scene, render, sensor, styled

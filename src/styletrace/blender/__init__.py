@@ -27,10 +27,10 @@ def _modules():
 
 
 def register():
-    for module in _modules():
-        module.register()
+    for name, module in zip(_MODULES, _modules()):
+        getattr(module, f"register_{name}")()
 
 
 def unregister():
-    for module in reversed(_modules()):
-        module.unregister()
+    for name, module in reversed(list(zip(_MODULES, _modules()))):
+        getattr(module, f"unregister_{name}")()

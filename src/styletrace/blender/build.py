@@ -36,7 +36,7 @@ def node(d: dict) -> Any:
     return out
 
 
-def scene_dict(desc: dict) -> dict:
+def description_scene_dict(desc: dict) -> dict:
     """The Mitsuba scene dict of a description, for `styletrace.frontends.api.load_scene` or
     `mi.load_dict`."""
     return node(desc)

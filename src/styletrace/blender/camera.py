@@ -24,7 +24,7 @@ def resolution(scene) -> tuple[int, int]:
     return max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
 
 
-def _unscaled(matrix) -> np.ndarray:
+def _unscaled_camera(matrix) -> np.ndarray:
     m = np.array(matrix, dtype=np.float64)
     for i in range(3):
         m[:3, i] /= np.linalg.norm(m[:3, i])
@@ -45,7 +45,7 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
     cam = obj.data
     width, height = resolution(scene)
     fit_x = _fit_x(cam, width, height)
-    to_world = _unscaled(obj.matrix_world) @ FLIP
+    to_world = _unscaled_camera(obj.matrix_world) @ FLIP
     film = {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb",
             "rfilter": {"type": "box"}}
     out = {

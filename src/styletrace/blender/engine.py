@@ -4,7 +4,7 @@ Progress is reported after each pass (`update_progress`), the image so far is sh
 `test_break` is asked between passes: a cancel keeps the finished passes in the render result. The
 error AOVs (variance, bias, children; `aovs`) and, with lines, a line mask are added as render
 passes. With "Record buffer" the look-development buffer of the render is kept (`restyle`), so style
-changes restyle it in milliseconds. F12 is one pipeline run (`pipeline.run`: a Job resolved, the
+changes restyle it in milliseconds. F12 is one pipeline run (`f12.run_f12`: a Job resolved, the
 runner of `pipeline.runner`); with Denoise on its finisher denoises the finished passes after the
 last one (or after a cancel), a Noisy pass keeps the image before denoising, and the error passes
 are off (they would not be the denoised pixel's). Errors the user can cause (a bad style value, an
@@ -18,7 +18,7 @@ import traceback
 import bpy
 import numpy as np
 
-from styletrace.blender import pipeline, restyle
+from styletrace.blender import f12, restyle
 from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
@@ -64,15 +64,15 @@ class StyletraceEngine(bpy.types.RenderEngine):
     def update_render_passes(self, scene=None, renderlayer=None):
         st = scene.styletrace
         self.register_pass(scene, renderlayer, COMBINED, 4, "RGBA", "COLOR")
-        if pipeline.error_passes(st):
-            for name, channels, ids in pipeline.AOV_PASSES.values():
+        if f12.error_passes(st):
+            for name, channels, ids in f12.AOV_PASSES.values():
                 self.register_pass(
                     scene, renderlayer, name, channels, ids, "COLOR" if channels == 3 else "VALUE"
                 )
         if st.denoise != "off":
-            self.register_pass(scene, renderlayer, pipeline.NOISY, 3, "RGB", "COLOR")
+            self.register_pass(scene, renderlayer, f12.NOISY, 3, "RGB", "COLOR")
         if st.lines:
-            self.register_pass(scene, renderlayer, pipeline.LINE_MASK, 1, "X", "VALUE")
+            self.register_pass(scene, renderlayer, f12.LINE_MASK, 1, "X", "VALUE")
 
     def render(self, depsgraph):
         try:
@@ -87,22 +87,22 @@ class StyletraceEngine(bpy.types.RenderEngine):
     def _render(self, depsgraph):
         st = depsgraph.scene.styletrace
         self.update_stats("", "styletrace: exporting the scene")
-        sc = pipeline.scene(depsgraph, st, warn=lambda m: self.report({"WARNING"}, m))
+        sc = f12.scene(depsgraph, st, warn=lambda m: self.report({"WARNING"}, m))
         size = sc.sensors()[0].film().crop_size()
         w, h = int(size[0]), int(size[1])
-        aovs = pipeline.error_passes(st)
+        aovs = f12.error_passes(st)
         restyle.forget()
-        runner, note = pipeline.run(sc, st, aovs, restyle.keep if st.record_buffer else None)
+        runner, note = f12.run_f12(sc, st, aovs, restyle.keep if st.record_buffer else None)
         if note:
             self.report({"WARNING"}, f"styletrace: {note}")
         denoised = isinstance(runner.finisher, Denoised)
         if aovs:
-            for name, channels, ids in pipeline.AOV_PASSES.values():
+            for name, channels, ids in f12.AOV_PASSES.values():
                 self.add_pass(name, channels, ids)
         if denoised:
-            self.add_pass(pipeline.NOISY, 3, "RGB")
+            self.add_pass(f12.NOISY, 3, "RGB")
         if st.lines:
-            self.add_pass(pipeline.LINE_MASK, 1, "X")
+            self.add_pass(f12.LINE_MASK, 1, "X")
         start = time.perf_counter()
         source = runner.passes()
         prog = None
@@ -126,7 +126,7 @@ class StyletraceEngine(bpy.types.RenderEngine):
             return
         mask = None
         if st.lines and not self.stop_requested():
-            mask = pipeline.line_mask(sc, st, self.stop_requested)
+            mask = f12.line_mask(sc, st, self.stop_requested)
         image, noisy = None, (prog.image if denoised else None)
         # (cancelled before every tile had a pass: noisy)
         if noisy is not None and runner.finisher.ready(prog):
@@ -146,13 +146,13 @@ class StyletraceEngine(bpy.types.RenderEngine):
         layer = result.layers[0]
         layer.passes[COMBINED].rect = _rows(prog.image if image is None else image, 4)
         if noisy is not None:
-            layer.passes[pipeline.NOISY].rect = _rows(noisy, 3)
+            layer.passes[f12.NOISY].rect = _rows(noisy, 3)
         if aovs:
-            for key, (name, channels, _) in pipeline.AOV_PASSES.items():
+            for key, (name, channels, _) in f12.AOV_PASSES.items():
                 value = np.nan_to_num(prog.aovs[key])
                 layer.passes[name].rect = _rows(value, channels)
         if mask is not None:
-            layer.passes[pipeline.LINE_MASK].rect = _rows(mask, 1)
+            layer.passes[f12.LINE_MASK].rect = _rows(mask, 1)
         self.end_result(result)
 
 
@@ -166,13 +166,13 @@ def _compatible_panels():
             yield panel
 
 
-def register():
+def register_engine():
     bpy.utils.register_class(StyletraceEngine)
     for panel in _compatible_panels():
         panel.COMPAT_ENGINES.add(StyletraceEngine.bl_idname)
 
 
-def unregister():
+def unregister_engine():
     for panel in _compatible_panels():
         panel.COMPAT_ENGINES.discard(StyletraceEngine.bl_idname)
     bpy.utils.unregister_class(StyletraceEngine)

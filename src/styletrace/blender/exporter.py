@@ -30,14 +30,16 @@ class Exporter:
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.spp = spp
-        self.ctx = materials.Context(warn)
+        self.ctx = materials.MaterialContext(warn)
         self.warn = warn
         self._bsdfs: dict[str, tuple[dict, dict | None]] = {}
 
     def _material(self, material) -> tuple[dict, dict | None]:
         key = material.name if material is not None else ""
         if key not in self._bsdfs:
-            self._bsdfs[key] = materials.convert(material, self.ctx, _material_style(material))
+            self._bsdfs[key] = materials.convert_material(
+                material, self.ctx, _material_style(material)
+            )
         return self._bsdfs[key]
 
     def _shapes(self, obj, matrix) -> list[dict]:
@@ -81,7 +83,7 @@ class Exporter:
                 continue
             matrix = np.array(inst.matrix_world, dtype=np.float64)
             if obj.type == "LIGHT":
-                e = lights.convert(obj.data, matrix, self.warn)
+                e = lights.convert_light(obj.data, matrix, self.warn)
                 if e is not None:
                     desc[f"light_{n}"] = e
                     n += 1
@@ -107,7 +109,7 @@ class Exporter:
                     "type": "shapegroup",
                     **{f"part_{i}": s for i, s in enumerate(shapes)},
                 }
-        env = world.convert(self.scene.world, self.ctx)
+        env = world.convert_world(self.scene.world, self.ctx)
         if env is not None:
             desc["world"] = env
         self.ctx.flush()

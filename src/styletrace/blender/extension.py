@@ -109,7 +109,7 @@ def _source_copy(tmp: str) -> str:
     return dest
 
 
-def build(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> str:
+def build_extension(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> str:
     """Write `styletrace-VERSION-PLATFORM.zip` into `out_dir`; returns its path."""
     if platform not in PLATFORMS:
         raise SystemExit(
@@ -148,7 +148,7 @@ def build(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> st
     return path
 
 
-def main(argv: list[str] | None = None) -> int:
+def extension_main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m styletrace.blender.extension", description=__doc__.split("\n")[0]
     )
@@ -160,9 +160,9 @@ def main(argv: list[str] | None = None) -> int:
         "--python", default="3.11", help="Blender's Python version (3.11 for Blender 4.2 to 5.0)"
     )
     args = parser.parse_args(argv)
-    print(build(args.output, args.platform, args.python))
+    print(build_extension(args.output, args.platform, args.python))
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(extension_main())

@@ -26,7 +26,7 @@ def _rgb(light, factor: float) -> dict:
     return {"type": "rgb", "value": tuple(float(c) * factor for c in light.color)}
 
 
-def _unscaled(m: np.ndarray) -> np.ndarray:
+def _unscaled_light(m: np.ndarray) -> np.ndarray:
     m = m.copy()
     for i in range(3):
         m[:3, i] /= np.linalg.norm(m[:3, i])
@@ -62,7 +62,7 @@ def spot_beam(half: float, blend: float) -> float:
     return (lo + hi) / 2
 
 
-def convert(light, matrix, warn) -> dict | None:
+def convert_light(light, matrix, warn) -> dict | None:
     """The emitter (or emitting shape) description of a `bpy.types.Light` placed by
     `matrix` (4x4)."""
     m = np.array(matrix, dtype=np.float64)
@@ -73,7 +73,8 @@ def convert(light, matrix, warn) -> dict | None:
     if kind == "SPOT":
         half = light.spot_size / 2.0
         beam = spot_beam(half, light.spot_blend)
-        return {"type": "spot", "to_world": _unscaled(m) @ SPOT, "cutoff_angle": math.degrees(half),
+        return {"type": "spot", "to_world": _unscaled_light(m) @ SPOT,
+                "cutoff_angle": math.degrees(half),
                 "beam_width": math.degrees(min(beam, half)),
                 "intensity": _rgb(light, units.point_intensity(light.energy))}
     if kind == "SUN":
@@ -84,7 +85,7 @@ def convert(light, matrix, warn) -> dict | None:
         sx, sy = np.linalg.norm(m[:3, 0]), np.linalg.norm(m[:3, 1])
         size_x = light.size
         size_y = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
-        base = _unscaled(m)
+        base = _unscaled_light(m)
         if light.shape in ("DISK", "ELLIPSE"):
             if light.shape == "ELLIPSE" and abs(size_x * sx - size_y * sy) > 1e-6:
                 warn(

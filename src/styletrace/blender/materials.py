@@ -29,7 +29,7 @@ GREY = (0.5, 0.5, 0.5)
 SMOOTH = 1e-4
 
 
-class Context:
+class MaterialContext:
     """What the exporter collects while converting materials: warnings (one per unsupported node
     type) and image textures (converted once per image)."""
 
@@ -54,7 +54,7 @@ def srgb_to_linear(x: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
-def image_array(image, ctx: Context, channel: str = "rgb") -> np.ndarray:
+def image_array(image, ctx: MaterialContext, channel: str = "rgb") -> np.ndarray:
     """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3)
     or 'alpha' (H x W x 1)."""
     key = (image.name, channel)
@@ -93,7 +93,7 @@ def _source(socket):
     return link.from_node, link.from_socket
 
 
-def colour(socket, ctx: Context, material) -> Any:
+def colour(socket, ctx: MaterialContext, material) -> Any:
     """An RGB input: a constant, or an Image Texture node's colour; other nodes are reported."""
     src = _source(socket)
     if src is None:
@@ -105,7 +105,7 @@ def colour(socket, ctx: Context, material) -> Any:
     return {"type": "rgb", "value": GREY}
 
 
-def scalar(socket, ctx: Context, material) -> float:
+def scalar(socket, ctx: MaterialContext, material) -> float:
     src = _source(socket)
     if src is not None:
         ctx.unknown(src[0], material)
@@ -135,7 +135,7 @@ def _blend(weight: float, a: dict, b: dict) -> dict:
     return {"type": "blendbsdf", "weight": weight, "a": a, "b": b}
 
 
-def principled(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
+def principled(node, ctx: MaterialContext, material) -> tuple[dict, dict | None, Any]:
     inp = node.inputs
     base = colour(inp["Base Color"], ctx, material)
     rough = scalar(inp["Roughness"], ctx, material)
@@ -170,7 +170,7 @@ def principled(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
     return bsdf, emitter, opacity
 
 
-def convert_node(node, ctx: Context, material) -> tuple[dict, dict | None, Any]:
+def convert_node(node, ctx: MaterialContext, material) -> tuple[dict, dict | None, Any]:
     """(bsdf, emitter or None, opacity) of the shader node feeding a Material Output."""
     kind = node.bl_idname
     inp = node.inputs
@@ -231,7 +231,9 @@ def output_node(material):
     return outputs[0] if outputs else None
 
 
-def convert(material, ctx: Context, style: dict | None = None) -> tuple[dict, dict | None]:
+def convert_material(
+    material, ctx: MaterialContext, style: dict | None = None
+) -> tuple[dict, dict | None]:
     """(bsdf, emitter or None) of a Blender material; `style` (the material's styletrace settings as
     `styled` properties) wraps the BSDF in a `styled` BSDF."""
     if material is None:

@@ -7,7 +7,7 @@ import bpy
 from bpy_extras.io_utils import ExportHelper
 
 from styletrace.blender import exporter, xml
-from styletrace.blender.properties import integrator_values
+from styletrace.blender.properties import settings_integrator_values
 from styletrace.errors import StyletraceError
 
 
@@ -36,7 +36,7 @@ class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
         try:
             desc = exporter.export(context.evaluated_depsgraph_get(), spp=st.spp,
                                    warn=lambda m: self.report({"WARNING"}, m))
-            values = integrator_values(st)
+            values = settings_integrator_values(st)
             values["aovs"] = False
             xml.write(desc, self.filepath, values)
         except (StyletraceError, OSError, ValueError) as exc:
@@ -52,11 +52,11 @@ def menu(self, context):
     self.layout.operator(STYLETRACE_OT_export_xml.bl_idname, text="Mitsuba XML (styletrace)")
 
 
-def register():
+def register_operators():
     bpy.utils.register_class(STYLETRACE_OT_export_xml)
     bpy.types.TOPBAR_MT_file_export.append(menu)
 
 
-def unregister():
+def unregister_operators():
     bpy.types.TOPBAR_MT_file_export.remove(menu)
     bpy.utils.unregister_class(STYLETRACE_OT_export_xml)

@@ -34,7 +34,8 @@ def style_rows(settings) -> list[tuple[object, str]]:
     """(owner, property name) of the style selector and the chosen style's parameters."""
     rows = [(settings, "style")]
     rows += [
-        (settings.params, key(settings.style, p.name)) for p in registry.get(settings.style).params
+        (settings.params, key(settings.style, p.name))
+        for p in registry.style_class(settings.style).params
     ]
     return rows
 
@@ -108,11 +109,11 @@ class STYLETRACE_PT_material(bpy.types.Panel):
 CLASSES = (STYLETRACE_PT_render, STYLETRACE_PT_material)
 
 
-def register():
+def register_panels():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
 
 
-def unregister():
+def unregister_panels():
     for cls in reversed(CLASSES):
         bpy.utils.unregister_class(cls)

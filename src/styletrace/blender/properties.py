@@ -81,7 +81,7 @@ def blender_property(p):
 
 
 def style_items():
-    return [(n, n, registry.get(n).summary[:200]) for n in registry.names()]
+    return [(n, n, registry.style_class(n).summary[:200]) for n in registry.style_names()]
 
 
 #: called with the context when a style setting changes (`restyle` registers its restyling here)
@@ -98,8 +98,8 @@ def changed(self, context):
 def _annotations() -> dict:
     return {
         key(n, p.name): blender_property(p)
-        for n in registry.names()
-        for p in registry.get(n).params
+        for n in registry.style_names()
+        for p in registry.style_class(n).params
     }
 
 
@@ -114,7 +114,7 @@ def params_of(style: str, params) -> dict:
     """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba
     properties take."""
     out = {}
-    for p in registry.get(style).params:
+    for p in registry.style_class(style).params:
         v = getattr(params, key(style, p.name))
         if p.kind == "color":
             v = ",".join(f"{c:g}" for c in v)
@@ -141,7 +141,8 @@ class SceneSettings(bpy.types.PropertyGroup):
         "adaptive); empty: the style's default",
     )
     estimator: bpy.props.EnumProperty(
-        name="Estimator", items=_enum(estimator_registry.names()), default="direct", update=changed
+        name="Estimator", items=_enum(estimator_registry.estimator_names()), default="direct",
+        update=changed
     )
     stylize: bpy.props.EnumProperty(
         name="Stylize", items=_enum(S.STYLIZE_MODES), default="first_hit"
@@ -236,7 +237,7 @@ class MaterialSettings(bpy.types.PropertyGroup):
     params: bpy.props.PointerProperty(type=StyleParams)
     inner_samples: bpy.props.StringProperty(name="Inner samples", default="", update=changed)
     estimator: bpy.props.EnumProperty(
-        name="Estimator", items=_enum(estimator_registry.names()), default="direct"
+        name="Estimator", items=_enum(estimator_registry.estimator_names()), default="direct"
     )
 
 
@@ -250,7 +251,7 @@ def style_values(settings) -> dict:
     return out
 
 
-def integrator_values(settings) -> dict:
+def settings_integrator_values(settings) -> dict:
     """The `stylized` integrator's properties from the render settings."""
     out = style_values(settings)
     out.update(stylize=settings.stylize, stylize_depth=settings.stylize_depth, lines=settings.lines,
@@ -267,14 +268,14 @@ def integrator_values(settings) -> dict:
 CLASSES = (StyleParams, SceneSettings, MaterialSettings)
 
 
-def register():
+def register_properties():
     for cls in CLASSES:
         bpy.utils.register_class(cls)
     bpy.types.Scene.styletrace = bpy.props.PointerProperty(type=SceneSettings)
     bpy.types.Material.styletrace = bpy.props.PointerProperty(type=MaterialSettings)
 
 
-def unregister():
+def unregister_properties():
     del bpy.types.Material.styletrace
     del bpy.types.Scene.styletrace
     for cls in reversed(CLASSES):

@@ -41,7 +41,7 @@ def last_seconds():
     return _state["seconds"]
 
 
-def run(settings) -> np.ndarray:
+def restyle_recorded(settings) -> np.ndarray:
     """Restyle the recorded buffer with the render settings' style; writes and returns the image (H
     x W x 3)."""
     from styletrace.lookdev.restyle import restyle as lookdev_restyle
@@ -79,7 +79,7 @@ def on_change(context) -> None:
     if _state["buffer"] is None or scene is None or not scene.styletrace.record_buffer:
         return
     try:
-        run(scene.styletrace)
+        restyle_recorded(scene.styletrace)
         _state["error"] = ""
     except StyletraceError as exc:
         _state["error"] = str(exc).splitlines()[0]
@@ -94,7 +94,7 @@ class STYLETRACE_OT_restyle(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            run(context.scene.styletrace)
+            restyle_recorded(context.scene.styletrace)
         except StyletraceError as exc:
             self.report({"ERROR"}, str(exc).splitlines()[0])
             return {"CANCELLED"}
@@ -102,12 +102,12 @@ class STYLETRACE_OT_restyle(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def register():
+def register_restyle():
     bpy.utils.register_class(STYLETRACE_OT_restyle)
     ON_CHANGE.append(on_change)
 
 
-def unregister():
+def unregister_restyle():
     ON_CHANGE.remove(on_change)
     bpy.utils.unregister_class(STYLETRACE_OT_restyle)
     forget()

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from styletrace.blender.materials import Context, image_array
+from styletrace.blender.materials import MaterialContext, image_array
 
 ENV_TO_WORLD = np.array(
     [[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
@@ -32,7 +32,7 @@ def latitudes(rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def convert(world, ctx: Context) -> dict | None:
+def convert_world(world, ctx: MaterialContext) -> dict | None:
     if world is None:
         return None
     tree = world.node_tree

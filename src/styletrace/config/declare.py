@@ -35,7 +35,7 @@ def number(key: str, raw: Any, low: float, high: float = float("inf"), low_open:
     return Property(key, None, "float", "", low=low, high=high, low_open=low_open).parse(raw)
 
 
-def names(key: str, raw: Any) -> tuple[str, ...]:
+def parse_names(key: str, raw: Any) -> tuple[str, ...]:
     """A list of names from 'a,b' or a list/tuple of strings."""
     return Property(key, None, "list", "").parse(raw)
 
@@ -124,4 +124,4 @@ class Property(Declaration):
         return super().convert(raw)
 
 
-__all__ = ["Property", "COUNT_MAX", "integer", "number", "boolean", "names", "rgb"]
+__all__ = ["Property", "COUNT_MAX", "integer", "number", "boolean", "parse_names", "rgb"]

@@ -91,11 +91,11 @@ def estimator(name: str, forms, doc: str, inner: str, when=None, **params: str):
     return deco
 
 
-def names() -> list[str]:
+def estimator_names() -> list[str]:
     return list(_REGISTRY)
 
 
-def get(name: str) -> EstimatorKind:
+def estimator_entry(name: str) -> EstimatorKind:
     try:
         return _REGISTRY[name]
     except KeyError:
@@ -111,9 +111,9 @@ def applicable(style: Style) -> list[str]:
     return [k.name for k in _REGISTRY.values() if k.accepts(style)]
 
 
-def check(name: str, style: Style) -> str:
+def check_estimator(name: str, style: Style) -> str:
     """`name` if it is an estimator that applies to `style`; a SettingsError otherwise."""
-    if not get(name).accepts(style):
+    if not estimator_entry(name).accepts(style):
         form = style.form()
         what = FORM_NAMES.get(type(form), "no unbiased") + " form"
         if isinstance(form, CompositeForm) and form.affine is not None:
@@ -194,7 +194,7 @@ def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitte
     cap = firefly_cap(settings)
     if cap is not None and slot.estimator == "direct" and not slot.style.per_sample:
         return _capped(lambda I: slot.style.apply(I, vertex), int(n), cap, emitted)
-    return get(slot.estimator).build(slot.style, int(n), vertex)
+    return estimator_entry(slot.estimator).build(slot.style, int(n), vertex)
 
 
 def _capped(g, n: int, cap: tuple[float, float], emitted) -> Transformed:
@@ -377,11 +377,11 @@ def _combined(style, n, vertex):
 __all__ = [
     "EstimatorKind",
     "estimator",
-    "names",
-    "get",
+    "estimator_names",
+    "estimator_entry",
     "kinds",
     "applicable",
-    "check",
+    "check_estimator",
     "check_adaptive",
     "adaptive_direct",
     "make_estimator",

@@ -19,10 +19,18 @@ from styletrace.config.choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT
 from styletrace.config.choices import EMITTER_DEFAULT, EMITTER_MODES, LineSettings
 from styletrace.config.choices import MODES as LINE_MODES
 from styletrace.config.choices import TESTS as LINE_TESTS
-from styletrace.config.declare import COUNT_MAX, Property, boolean, integer, names, number, rgb
+from styletrace.config.declare import (
+    COUNT_MAX,
+    Property,
+    boolean,
+    integer,
+    number,
+    parse_names,
+    rgb,
+)
 from styletrace.config.line_types import parse_line_types
 from styletrace.errors import SettingsError
-from styletrace.styles import create, get
+from styletrace.styles import create, style_class
 from styletrace.styles.base import Style
 
 STYLIZE_MODES = {
@@ -113,7 +121,7 @@ PROPERTIES = (
         "estimator",
         "direct",
         "string",
-        "how g(E[L]) is estimated from the children: " + ", ".join(estimator_registry.names()),
+        "how g(E[L]) is estimated from the children: " + ", ".join(estimator_registry.estimator_names()),
         "--estimator",
         "NAME",
     ),
@@ -527,7 +535,7 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
     """The `line_*` properties: None where `lines` is off (then the others are still checked)."""
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
     on = boolean("lines", get_("lines"))
-    tests = names("line_tests", get_("line_tests"))
+    tests = parse_names("line_tests", get_("line_tests"))
     for t in tests:
         if t not in LINE_TESTS:
             raise SettingsError(f"bad value {t!r} in 'line_tests': expected some of {', '.join(LINE_TESTS)}")
@@ -614,7 +622,7 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
     """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are errors."""
     values = dict(values)
     style_name = str(values.pop("style", DEFAULTS["style"]))
-    cls = get(style_name)
+    cls = style_class(style_name)
     style_keys = {p.name for p in cls.params}
     style_values = {k: values.pop(k) for k in list(values) if k in style_keys}
     for k in values:
@@ -626,7 +634,7 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
     style = create(style_name, **style_values)
     inner = parse_inner(values.get("inner_samples"), max(style.default_inner, 1))
     name = str(values.get("estimator", DEFAULTS["estimator"]))
-    slot = StyleSlot(style=style, inner=inner, estimator=estimator_registry.check(name, style))
+    slot = StyleSlot(style=style, inner=inner, estimator=estimator_registry.check_estimator(name, style))
     if adaptive(inner):
         estimator_registry.check_adaptive(name, style, values.get("inner_samples"))
     return slot
@@ -790,13 +798,13 @@ def check_reusable(slot: StyleSlot, where: str = "the integrator's style", deep:
         )
 
 
-def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
+def refine_values(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
     """`base` property values (a scene's own integrator) with `changes` applied; a new style drops the old
     style's parameters, which belong to it."""
     values = dict(base)
     new_style = changes.get("style")
     if new_style is not None and new_style != values.get("style", DEFAULTS["style"]):
-        old = {p.name for p in get(str(values.get("style", DEFAULTS["style"]))).params}
+        old = {p.name for p in style_class(str(values.get("style", DEFAULTS["style"]))).params}
         values = {k: v for k, v in values.items() if k not in old}
     values.update(changes)
     return values
@@ -828,6 +836,6 @@ __all__ = [
     "integer",
     "number",
     "boolean",
-    "refine",
+    "refine_values",
     "properties_of",
 ]

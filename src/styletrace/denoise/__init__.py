@@ -28,7 +28,7 @@ class NotDenoised(UserWarning):
     one line."""
 
 
-def render(
+def render_denoised(
     job: Any,
     denoise: str = "auto",
     callback: Any = None,
@@ -43,11 +43,11 @@ def render(
     finisher (docs/denoise.md). `cluster`: the passes on Ray, which no denoiser takes (auto renders
     them undenoised)."""
     check_method(denoise)
-    from styletrace.denoise.finishers import plan
+    from styletrace.denoise.finishers import plan_finisher
     from styletrace.pipeline.execute import executor_for
     from styletrace.pipeline.resolve import resolve
 
-    runner, note = plan(
+    runner, note = plan_finisher(
         resolve(job),
         denoise,
         executor_for(cluster),

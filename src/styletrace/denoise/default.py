@@ -81,7 +81,7 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
         return f"the integrator is Mitsuba's {type(integrator).__name__}, not stylized"
     from styletrace.denoise import expectation
     try:
-        expectation.check(integrator)
+        expectation.check_expectation(integrator)
     except UsageError as exc:
         return str(exc).replace("--denoise expectation cannot render ", "")
     return ""
@@ -129,7 +129,7 @@ def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
     method, note = method_for(resolved.scene, resolved.integrator, method, local, given)
     if method == "off":
         return Plan("off", resolved, note)
-    return Plan(method, pin(resolved, method), note)
+    return Plan(method, pin_denoise_budget(resolved, method), note)
 
 
 def with_firefly(scene, integrator, method: str, pilot=None):
@@ -143,7 +143,7 @@ def with_firefly(scene, integrator, method: str, pilot=None):
     return pin_firefly(scene, integrator, pilot, FIREFLY_K)
 
 
-def pin(resolved, method: str):
+def pin_denoise_budget(resolved, method: str):
     """`resolved` with the firefly control on and, without a given spp, the budget spent on
     children."""
     from styletrace.kernel.integrator import StylizedIntegrator
@@ -175,7 +175,7 @@ __all__ = [
     "why_not",
     "nonlinear",
     "with_firefly",
-    "pin",
+    "pin_denoise_budget",
     "FIREFLY_K",
     "SPEND",
     "MIN_SPP",

@@ -50,7 +50,7 @@ from styletrace.lookdev.record import record, scene_label
 from styletrace.lookdev.restyle import (
     RESTYLABLE_ESTIMATORS,
     accumulate,
-    prepare,
+    prepare_slots,
     sample_values,
     slots_for,
 )
@@ -60,7 +60,7 @@ from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed
 DENOISED = "denoised_mean"
 
 
-def check(integrator) -> None:
+def check_expectation(integrator) -> None:
     """Refuse, in one line, what the expectation denoiser does not support (see the module
     docstring)."""
     s = integrator.settings
@@ -101,7 +101,7 @@ def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
     found (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each
     sample's own emitted radiance is taken off first (M is then the reflected part alone)."""
     return (
-        _moments(buf, reflected(buf, emission))[1]
+        _sample_moments(buf, reflected(buf, emission))[1]
         .reshape(buf.height, buf.width, 3)
         .astype(np.float32)
     )
@@ -113,7 +113,7 @@ def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
     return mean if emission is None else mean - emission
 
 
-def _moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
+def _sample_moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
     """Per pixel, over its samples with a stylized vertex (or those of `found`) of `values` (N x C):
     (count, mean, variance of the mean = (mean of squares - squared mean) / (count - 1)); mean 0
     where a pixel has no such sample, variance NaN below 2. Float64, flat over the pixels (H*W, and
@@ -389,7 +389,7 @@ def attach(
     own = _own(scene, buf)
     # the reflected part: each sample's own emission goes back in at_samples
     m = expectation(buf, own[1])
-    d = oidn.run(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
+    d = oidn.denoise_oidn(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
     header = {"method": "expectation", "quality": quality,
               "guides": "albedo and shading normal through specular chains (guides.first_hit)",
@@ -446,7 +446,7 @@ def spread(buf: Buffer, emission: np.ndarray, uncertainty: float) -> np.ndarray:
     neighbourhood: a pixel's own few samples give a noisy estimate of its error level, and D at a
     pixel is formed from its neighbours too (the Cornell box: MSE 2.60e-3 to 2.50e-3 for cel,
     1.83e-3 to 1.75e-3 for hatching; 5 x 5 gave the same). It goes to 0 as the samples grow."""
-    _, mean, var = _moments(buf, reflected(buf, emission).mean(1, keepdims=True))
+    _, mean, var = _sample_moments(buf, reflected(buf, emission).mean(1, keepdims=True))
     mean, var_of_mean = mean[:, 0], np.nan_to_num(var[:, 0])  # below 2 samples: 0
     floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
     rel2 = (var_of_mean / np.maximum(np.abs(mean), floor) ** 2).reshape(buf.height, buf.width)
@@ -465,7 +465,7 @@ def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:
 
 def image_of(buf: Buffer) -> np.ndarray:
     """The buffer's image with its recorded styles (denoised where the buffer holds D)."""
-    slots = prepare(buf, slots_for(buf))
+    slots = prepare_slots(buf, slots_for(buf))
     return np.asarray(accumulate(buf, sample_values(buf, slots)), dtype=np.float32).reshape(
         buf.height, buf.width, 3
     )
@@ -475,7 +475,7 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
     """The variance of each pixel's *undenoised* estimate from its camera samples' values, (mean of
     squares - squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines `variance`; NaN
     below 2 samples."""
-    slots = prepare(buf, slots_for(buf))
+    slots = prepare_slots(buf, slots_for(buf))
     held = buf.arrays.pop(DENOISED, None)
     buf.device.clear()
     try:
@@ -485,11 +485,11 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
         if held is not None:
             buf.arrays[DENOISED] = held
         buf.device.clear()
-    var = _moments(buf, vals, np.ones(buf.samples, bool))[2]  # every sample, vertex or not
+    var = _sample_moments(buf, vals, np.ones(buf.samples, bool))[2]  # every sample, vertex or not
     return var.reshape(buf.height, buf.width, 3).astype(np.float32)
 
 
-def render(
+def render_denoised_expectation(
     scene,
     integrator,
     spp: int,
@@ -508,7 +508,7 @@ def render(
     (`coverage.points`), not at the camera samples; the buffer returned is then the coverage points'
     (`buf.source`: the camera samples'). `lanes_per_pass`, `pass_spp`: the pass split, as
     `pipeline.passes`."""
-    job = Job(
+    job = ExpectationJob(
         scene,
         integrator,
         spp,
@@ -527,7 +527,7 @@ def render(
     return job.finish()
 
 
-class Job:
+class ExpectationJob:
     """A denoised-expectation render in two steps, for callers that show and cancel passes (the
     Blender engine): `passes()` records the noisy buffer pass by pass (`buffer`, whose `image` is
     the noisy render so far), `finish()` denoises it and applies g, also to the finished passes of a
@@ -550,7 +550,7 @@ class Job:
     ):
         oidn.require()
         oidn.check_quality(quality)
-        check(integrator)
+        check_expectation(integrator)
         w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
         self.k = coverage_module.resolve_k(coverage, w, h, max_samples)
         self.uncertainty = check_uncertainty(uncertainty)
@@ -629,11 +629,11 @@ def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
 
 
 __all__ = [
-    "render",
-    "Job",
+    "render_denoised_expectation",
+    "ExpectationJob",
     "attach",
     "Field",
-    "check",
+    "check_expectation",
     "expectation",
     "image_of",
     "noisy_variance",

@@ -80,13 +80,14 @@ class Expectation(Denoised):
         from styletrace.lookdev.record import check_film, scene_label
         check_k(self.coverage)
         expectation.check_uncertainty(self.uncertainty)
-        expectation.check(resolved.integrator)
+        expectation.check_expectation(resolved.integrator)
         check_film(resolved.scene)  # the buffer's conditions: an rgb film, a filter it can record
         if self.buffer is not None:
             from styletrace.lookdev.buffer import check_buffer_path
             check_buffer_path(self.buffer)
         job = resolved.job
-        self.job = expectation.Job(resolved.scene, resolved.integrator, resolved.spp, job.seed,
+        self.job = expectation.ExpectationJob(resolved.scene, resolved.integrator, resolved.spp,
+                                              job.seed,
                                    self.quality, self.max_samples,
                                    label=self.label or scene_label(job.scene),
                                    coverage=self.coverage, uncertainty=self.uncertainty,
@@ -138,8 +139,8 @@ class Image(Denoised):
         self.aovs = bool(resolved.integrator.aov_names())
 
     def _finish(self, prog):
-        from styletrace.denoise.image import finish
-        return finish(self.scene, prog, self.seed, self.quality)
+        from styletrace.denoise.image import finish_denoised_image
+        return finish_denoised_image(self.scene, prog, self.seed, self.quality)
 
     def result(self, prog):
         out, _, errs = self._finish(prog)
@@ -150,7 +151,8 @@ class Image(Denoised):
         return Written(save_safely(out, output, pixel_format, errs), (), out, ", denoised: image")
 
 
-def plan(resolved, method: str | None = None, executor: Any = None, buffer: str | None = None,
+def plan_finisher(resolved, method: str | None = None, executor: Any = None,
+                  buffer: str | None = None,
          quality: str = "high", coverage: int | str = "auto", uncertainty: float | None = None,
          label: str = "", keep: Callable[[Any], None] | None = None) -> tuple[Runner, str]:
     """(the run of `resolved` for `method` (None: the default, `default.default_method`), the
@@ -174,4 +176,4 @@ def plan(resolved, method: str | None = None, executor: Any = None, buffer: str 
     return Runner(chosen.resolved, executor, finisher), chosen.note
 
 
-__all__ = ["Expectation", "Image", "plan", "LOCAL"]
+__all__ = ["Expectation", "Image", "plan_finisher", "LOCAL"]

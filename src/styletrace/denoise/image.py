@@ -22,7 +22,7 @@ from styletrace.denoise import guides, oidn
 from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes
 
 
-def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
+def render_denoised_image(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
            callback: Callable[[Progress], None] | None = None, lanes_per_pass: int = LANES_PER_PASS,
            pass_spp: int | None = None) -> tuple[np.ndarray, np.ndarray, dict | None]:
     """(denoised image, noisy image, honest AOVs or None), H x W x 3 float32."""
@@ -34,17 +34,17 @@ def render(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
     ):
         if callback is not None:
             callback(prog)
-    return finish(scene, prog, seed, quality)
+    return finish_denoised_image(scene, prog, seed, quality)
 
 
-def finish(
+def finish_denoised_image(
     scene, prog: Progress, seed: int = 0, quality: str = "high"
 ) -> tuple[np.ndarray, np.ndarray, dict | None]:
     """`render`'s result from the passes' last progress (the finished passes of a stopped render
     too; the guides take as many camera samples per pixel as they did)."""
     noisy = np.asarray(prog.image, dtype=np.float32)
     g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0))
-    out = oidn.run(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
+    out = oidn.denoise_oidn(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
     errs = prog.aovs
     if errs is not None:
         errs = {
@@ -56,4 +56,4 @@ def finish(
     return out, noisy, errs
 
 
-__all__ = ["render", "finish"]
+__all__ = ["render_denoised_image", "finish_denoised_image"]

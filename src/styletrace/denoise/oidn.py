@@ -45,7 +45,7 @@ def _as_rgb(a) -> np.ndarray:
     return np.ascontiguousarray(np.nan_to_num(a[..., :3], nan=0.0, posinf=0.0, neginf=0.0))
 
 
-def run(color, albedo, normal, quality: str = "high", to_sensor=None) -> np.ndarray:
+def denoise_oidn(color, albedo, normal, quality: str = "high", to_sensor=None) -> np.ndarray:
     """Denoise `color` (H x W x 3 linear radiance) guided by `albedo` and `normal` (H x W x 3)."""
     check_quality(quality)
     color, albedo, normal = _as_rgb(color), _as_rgb(albedo), _as_rgb(normal)
@@ -74,4 +74,4 @@ def _optix(color, albedo, normal, to_sensor) -> np.ndarray:
     return np.asarray(den(mi.TensorXf(color), **kwargs), dtype=np.float32)
 
 
-__all__ = ["run", "require", "check_quality", "QUALITIES", "EXTRA"]
+__all__ = ["denoise_oidn", "require", "check_quality", "QUALITIES", "EXTRA"]

@@ -17,7 +17,7 @@ from styletrace.errors import SceneError, UsageError
 from styletrace.images import PIXEL_FORMATS, save_safely, write_image
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.pipeline.carried import carried_settings
-from styletrace.pipeline.execute import render as pipeline_render
+from styletrace.pipeline.execute import render_pipeline as pipeline_render
 from styletrace.pipeline.job import given_values
 from styletrace.pipeline.passes import (
     LANE_BYTES,
@@ -35,10 +35,10 @@ from styletrace.pipeline.passes import (
     passes,
     tiles,
 )
-from styletrace.scene.defaults import resolve as resolve_defaults
+from styletrace.scene.defaults import resolve_defaults as resolve_defaults
 from styletrace.scene.loading import (
     SceneWarning,
-    canonical_normals,
+    canonical_scene_normals,
     film_format,
     first_line,
     load_scene,
@@ -66,7 +66,7 @@ def render(
     method = check_method(denoise if denoise is not None else default_method())
     if method == "off":
         return pipeline_render(*args, cluster=cluster, callback=callback, **kw)
-    from styletrace.denoise import render as denoised
+    from styletrace.denoise import render_denoised as denoised
     from styletrace.pipeline.job import python_job
     return denoised(python_job(*args, **kw), method, callback, cluster, denoise_quality, coverage,
                     denoise_uncertainty)
@@ -93,4 +93,4 @@ __all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp
            # re-exported under their established names (the module docstring)
            "UsageError", "PIXEL_FORMATS", "LANE_BYTES", "LANES_PER_PASS", "TILE_SIDE", "Tile",
            "check_memory", "expansion_seed", "memory_available", "memory_needed", "pass_seed",
-           "pass_size", "tiles", "canonical_normals", "first_line", "scene_dict"]
+           "pass_size", "tiles", "canonical_scene_normals", "first_line", "scene_dict"]

@@ -76,10 +76,10 @@ def cmd_styles(args) -> int:
     from styletrace.scene.plugins import init
     init()
     from styletrace.config.estimator_registry import applicable
-    from styletrace.styles import get, names
+    from styletrace.styles import style_class, style_names
 
-    for name in names():
-        cls = get(name)
+    for name in style_names():
+        cls = style_class(name)
         inner = (
             "closed form, 0 samples"
             if cls.default_inner == 0
@@ -160,7 +160,7 @@ def cmd_render(args) -> int:
     params = _parse_set(args.set)
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                  ("--pass-spp", args.pass_spp))
-    from styletrace.denoise.finishers import plan
+    from styletrace.denoise.finishers import plan_finisher
     from styletrace.frontends.command_job import job_of
     from styletrace.frontends.ray_command import executor_of
     from styletrace.pipeline.runner import Voice
@@ -168,7 +168,7 @@ def cmd_render(args) -> int:
     resolved = resolve_with_status(
         job_of(args, params, _parse_defines(args.define), scene=scene), status
     )
-    runner, note = plan(
+    runner, note = plan_finisher(
         resolved,
         method,
         executor_of(args),
@@ -205,7 +205,7 @@ def resolve_with_status(job, status):
     return resolved
 
 
-def choose_integrator(scene, args, params):
+def cli_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied
     on top (a scene without one starts from the command line's default style and keeps the
     max_depth, rr_depth and hide_emitters of its own Mitsuba integrator, unless a flag says
@@ -224,12 +224,12 @@ def cmd_gallery(args) -> int:
     only = [k.strip() for k in args.only.split(",")] if args.only else None
     skip = [k.strip() for k in args.skip.split(",")] if args.skip else None
     try:
-        gallery.select(only, skip)  # unknown keys fail here, before the folder is made
+        gallery.select_setups(only, skip)  # unknown keys fail here, before the folder is made
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     check_gallery_folder(args.output)
     try:
-        res = gallery.run(args.output, opts, only, log=say, skip=skip)
+        res = gallery.run_gallery(args.output, opts, only, log=say, skip=skip)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     say(f"wrote {os.path.join(args.output, 'index.html')} ({len(res['setups'])} setups, "

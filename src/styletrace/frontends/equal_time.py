@@ -108,7 +108,7 @@ def ratio_of(fixed_mse: float, method_mse: float) -> float:
     return fixed_mse / method_mse
 
 
-def describe(config: dict[str, Any]) -> str:
+def describe_comparison(config: dict[str, Any]) -> str:
     return ", ".join(f"{k}={show(v)}" for k, v in config.items())
 
 
@@ -118,7 +118,7 @@ def show(inner: Any) -> str:
     return ",".join(str(n) for n in inner) if isinstance(inner, (tuple, list)) else str(inner)
 
 
-def check(comparisons: list[Comparison]) -> None:
+def check_comparisons(comparisons: list[Comparison]) -> None:
     """Build every integrator of the section (refused settings raise StyletraceError) before
     any renders."""
     from styletrace.frontends import api
@@ -133,11 +133,11 @@ def timed(
 ) -> tuple[np.ndarray, list[float]]:
     """The image and the seconds of `repeats` renders, after one untimed render that compiles
     the kernels."""
-    from styletrace.pipeline.execute import render
+    from styletrace.pipeline.execute import render_pipeline
 
     def once() -> tuple[np.ndarray, float]:
         t = time.perf_counter()
-        img = render(
+        img = render_pipeline(
             scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config}
         )
         return img, time.perf_counter() - t
@@ -150,19 +150,20 @@ def timed(
 def compare(c: Comparison, out_dir: str, size: int, repeats: int,
             log: Callable[[str], None] = print) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Render one comparison (module docstring); its gallery.json entry and its three images."""
-    from styletrace.pipeline.execute import render
+    from styletrace.pipeline.execute import render_pipeline
     from styletrace.scene.loading import load_scene
 
     scene = load_scene(c.scene, size, size)
     t = time.perf_counter()
-    reference = render(scene, style=c.style, spp=SPP, seed=SEED,
+    reference = render_pipeline(scene, style=c.style, spp=SPP, seed=SEED,
                            **{**c.integrator, **c.params, "inner": c.reference})
     ref_seconds = time.perf_counter() - t
     log(f"{c.key}: reference inner {show(c.reference)} in {ref_seconds:.1f} s")
     method_img, times = timed(scene, c, c.method, repeats)
     method = {"config": c.method, "seconds": statistics.median(times), "times": times,
               "mse": mse(method_img, reference)}
-    log(f"{c.key}: method {describe(c.method)}: {method['seconds']:.3f} s, MSE {method['mse']:.3g}")
+    log(f"{c.key}: method {describe_comparison(c.method)}: {method['seconds']:.3f} s, "
+        f"MSE {method['mse']:.3g}")
     fixed, images = [], []
     for n in c.counts:
         img, times = timed(scene, c, {"inner": fixed_inner(c, n)}, repeats)
@@ -211,11 +212,13 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
     return entry, imgs
 
 
-def prepare(comparisons: list[Comparison], quick_mode: bool = False) -> list[Comparison]:
+def prepare_comparisons(
+    comparisons: list[Comparison], quick_mode: bool = False
+) -> list[Comparison]:
     """The comparisons as they will render (`quick` ones in quick mode), every integrator built once
     so that refused settings raise StyletraceError before anything renders."""
     comparisons = [quick(c) for c in comparisons] if quick_mode else list(comparisons)
-    check(comparisons)
+    check_comparisons(comparisons)
     return comparisons
 
 
@@ -236,7 +239,8 @@ def labels(e: dict[str, Any]) -> list[tuple[str, str]]:
             f"fixed n={f['n']} (inner {show(f['inner'])}), equal time{note}",
             f"{f['seconds']:.3f} s, MSE {f['mse']:.2e}",
         ),
-        (f"method: {describe(m['config'])}", f"{m['seconds']:.3f} s, MSE {m['mse']:.2e}"),
+        (f"method: {describe_comparison(m['config'])}",
+         f"{m['seconds']:.3f} s, MSE {m['mse']:.2e}"),
     ]
 
 
@@ -285,7 +289,7 @@ def rows(e: dict[str, Any]) -> list[tuple[str, str, str, str]]:
             f"{f['seconds']:.3f}",
             f"{f['mse']:.3e}",
         ),
-        ("method", describe(m["config"]), f"{m['seconds']:.3f}", f"{m['mse']:.3e}"),
+        ("method", describe_comparison(m["config"]), f"{m['seconds']:.3f}", f"{m['mse']:.3e}"),
     ]
 
 
@@ -303,14 +307,16 @@ def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
         "|---|---|---:|---:|---|",
     ]
     md += [
-        f"| {e['title']} | `{describe(e['method']['config'])}` | "
+        f"| {e['title']} | `{describe_comparison(e['method']['config'])}` | "
         f"{e['fixed'][e['equal_time']]['n']} | {e['ratio']:.2f} | "
         f"{'win' if e['verdict'] == 'win' else '**LOSS**'} |"
         for e in entries
     ]
     for e in entries:
         md += ["", f"### {e['title']}: {'win' if e['verdict'] == 'win' else '**LOSS**'}", "",
-               f"`{e['style']}` {describe({**e['params'], **e['integrator']})}".rstrip(), "",
+               f"`{e['style']}` "
+               f"{describe_comparison({**e['params'], **e['integrator']})}".rstrip(),
+               "",
                "| render | inner | s | MSE |", "|---|---|---:|---:|",
                *(f"| {a} | {b} | {c} | {d} |" for a, b, c, d in rows(e)), "",
                f"{headline(e)}.", "", f"![{e['title']}]({e['file']})"]
@@ -335,7 +341,7 @@ def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
         "<tr><th>comparison<th>method<th>fixed n at equal time<th>MSE ratio<th>verdict</tr>",
     ]
     h += [
-        f"<tr><td>{esc(e['title'])}<td><code>{esc(describe(e['method']['config']))}</code>"
+        f"<tr><td>{esc(e['title'])}<td><code>{esc(describe_comparison(e['method']['config']))}</code>"
         f"<td>{e['fixed'][e['equal_time']]['n']}<td>{e['ratio']:.2f}<td>{mark(e)}</tr>"
         for e in entries
     ]
@@ -344,7 +350,7 @@ def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
         h += [
             f"<h3>{esc(e['title'])}: {mark(e)}</h3>",
             f"<p><code>{esc(e['style'])}</code> "
-            f"{esc(describe({**e['params'], **e['integrator']}))}</p>",
+            f"{esc(describe_comparison({**e['params'], **e['integrator']}))}</p>",
             "<table border='1' cellpadding='4' style='border-collapse:collapse'>"
             "<tr><th>render<th>inner<th>s<th>MSE</tr>"
             + "".join(f"<tr><td>{esc(a)}<td>{esc(b)}<td>{c}<td>{d}</tr>" for a, b, c, d in rows(e))

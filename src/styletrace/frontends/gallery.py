@@ -250,7 +250,7 @@ def keys() -> list[str]:
     return [s.key for s in SETUPS] + [c.key for c in EQUAL_TIME] + [EQUAL_TIME_SECTION]
 
 
-def select(only: list[str] | None = None,
+def select_setups(only: list[str] | None = None,
            skip: list[str] | None = None) -> tuple[list[Setup], list[Comparison]]:
     """The setups and comparisons to run: those `only` names (all when None) less those `skip`
     names; `equal_time` names every comparison. ValueError names an unknown key."""
@@ -278,17 +278,17 @@ def write_png(image: np.ndarray, path: str) -> None:
     write_image(image, path)
 
 
-def run(out_dir: str, options: Options = Options(), only: list[str] | None = None,
+def run_gallery(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
-    from styletrace.pipeline.execute import render
+    from styletrace.pipeline.execute import render_pipeline
     from styletrace.scene.loading import load_scene
 
     os.makedirs(out_dir, exist_ok=True)
-    setups, comparisons = select(only, skip)
+    setups, comparisons = select_setups(only, skip)
     results: dict[str, Any] = {"options": options.__dict__, "setups": [], "equal_time": []}
     t_all = time.perf_counter()
     # refused settings stop it before any render
-    comparisons = equal_time.prepare(comparisons, options.quick)
+    comparisons = equal_time.prepare_comparisons(comparisons, options.quick)
     for setup in setups:
         if options.quick:
             setup = _quick(setup)
@@ -305,7 +305,7 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
         reference = None
         if setup.reference:
             t = time.perf_counter()
-            reference = render(
+            reference = render_pipeline(
                 scene,
                 style=setup.style,
                 inner=setup.reference,
@@ -330,7 +330,7 @@ def run(out_dir: str, options: Options = Options(), only: list[str] | None = Non
         for n in setup.counts:
             t = time.perf_counter()
             inner = None if n == 0 else n
-            img = render(
+            img = render_pipeline(
                 scene,
                 style=setup.style,
                 inner=inner,

@@ -52,7 +52,7 @@ def cmd_fit(args, parse_set, check_output) -> int:
     from styletrace.images import write_image
     from styletrace.lookdev.buffer import load_buffer
     from styletrace.lookdev.fit import fit
-    from styletrace.styles import get
+    from styletrace.styles import style_class
 
     buf = load_buffer(args.buffer)
     style = args.style or buf.header["slots"][0]["style"]
@@ -66,7 +66,7 @@ def cmd_fit(args, parse_set, check_output) -> int:
         **initial,
     )
     import shlex
-    params = {p.name: p for p in get(style).params}
+    params = {p.name: p for p in style_class(style).params}
     shown = {k: v for k, v in initial.items() if k not in result.params}
     shown.update({k: params[k].show(v) for k, v in result.params.items()})
     print(

@@ -47,8 +47,8 @@ def integrator_table() -> str:
 
 def estimator_table() -> str:
     from styletrace.config.estimator_registry import kinds
-    from styletrace.styles import get, names
-    styles = [get(n)() for n in names()]
+    from styletrace.styles import style_class, style_names
+    styles = [style_class(n)() for n in style_names()]
     rows = [
         _row("estimator", "forms of g", "styles", "inner_samples n means", "what it is"),
         "|---|---|---|---|---|",
@@ -69,8 +69,8 @@ def estimator_table() -> str:
 
 
 def style_table(name: str) -> str:
-    from styletrace.styles import get
-    cls = get(name)
+    from styletrace.styles import style_class
+    cls = style_class(name)
     if not cls.params:
         return "No parameters.\n"
     rows = [_row("parameter", "type", "default", "meaning", "allowed"), "|---|---|---|---|---|"]
@@ -98,7 +98,7 @@ def files(root: str) -> list[str]:
     return [os.path.join(root, "README.md")] + sorted(glob.glob(os.path.join(root, "docs", "*.md")))
 
 
-def main(argv=None) -> int:
+def reference_main(argv=None) -> int:
     from styletrace.scene.plugins import init
     init()
     args = sys.argv[1:] if argv is None else argv
@@ -121,4 +121,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(reference_main())

@@ -321,7 +321,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         from styletrace.kernel import reuse
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         with tracing():
-            image = reuse.render(
+            image = reuse.render_reuse(
                 self, scene, sensor, int(seed), int(spp) or int(sensor.sampler().sample_count())
             )
         return image if develop else mi.TensorXf()

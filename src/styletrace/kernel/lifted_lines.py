@@ -39,7 +39,7 @@ from styletrace.gate import dr, mi
 from styletrace.kernel.lines import object_shapes, on_shapes
 
 
-def chart(n: mi.Vector3f, v: mi.Vector3f):
+def tangent_chart(n: mi.Vector3f, v: mi.Vector3f):
     """(t1, t2): t1 = normalize(n x v), t2 = t1 x n (Eq. 17); where v is parallel to n any
     tangent frame."""
     t1 = dr.cross(n, v)
@@ -55,13 +55,13 @@ def transport_half_vector(h: mi.Vector3f, n: mi.Vector3f, v: mi.Vector3f, n2: mi
     n and its azimuth alpha in the chart of the incoming direction (Eqs. 13-18)."""
     c = dr.clip(dr.dot(h, n), -1.0, 1.0)
     s = dr.sqrt(dr.maximum(1.0 - c * c, 0.0))
-    t1, t2 = chart(n, v)
+    t1, t2 = tangent_chart(n, v)
     u = h - c * n
     a1, a2 = dr.dot(u, t1), dr.dot(u, t2)
     flat = (a1 * a1 + a2 * a2) < 1e-24            # h = n: no azimuth, any will do
     a1 = dr.select(flat, 1.0, a1)
     a2 = dr.select(flat, 0.0, a2)
-    t1b, t2b = chart(n2, v2)
+    t1b, t2b = tangent_chart(n2, v2)
     u2 = dr.normalize(a1 * t1b + a2 * t2b)
     # u2 is perpendicular to n2 up to rounding; remove what rounding left so that h2 . n2 = c to
     # float precision

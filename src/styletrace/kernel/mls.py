@@ -66,7 +66,7 @@ def _sums(q, s, w, valid):
     return (S, Sx, Sy, Sxx, Sxy, Syy), (Ru, Rv)
 
 
-def chart(x: mi.Point3f, d: mi.Vector3f):
+def plane_chart(x: mi.Point3f, d: mi.Vector3f):
     """An orthonormal basis (e1, e2) of the plane through x normal to -d (the incoming
     direction's chart)."""
     e1, e2 = mi.coordinate_system(dr.normalize(-d))
@@ -76,7 +76,7 @@ def chart(x: mi.Point3f, d: mi.Vector3f):
 def invert(x: mi.Point3f, d: mi.Vector3f, points, coords, valid, first: mi.Point2f):
     """s(x) from the candidates (world `points`, image `coords` as (Float, Float), `valid` masks) by
     the chain MLS -> affine -> nearest -> `first`; returns (Point2f, method code UInt32)."""
-    e1, e2 = chart(x, d)
+    e1, e2 = plane_chart(x, d)
     raw = []
     for p in points:
         r = mi.Vector3f(p - x)

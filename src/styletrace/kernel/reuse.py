@@ -70,7 +70,7 @@ space), refine.py (the refinement round of n0:n_max), batch.py (one batch: camer
 children, pools, g), loop.py (the pass loop).
 """
 from styletrace.kernel import reuse_pool as pool
-from styletrace.kernel.reuse_loop import render
+from styletrace.kernel.reuse_loop import render_reuse
 from styletrace.kernel.reuse_pool import pool_pixels, window
 
-__all__ = ["pool", "pool_pixels", "render", "window"]
+__all__ = ["pool", "pool_pixels", "render_reuse", "window"]

@@ -19,7 +19,7 @@ from styletrace.kernel.lane_sampler import LaneSampler
 from styletrace.kernel.path import past_area_emitters
 from styletrace.kernel.reuse_children import Children, Parents, Slab, Span, draw
 from styletrace.kernel.reuse_pool import Frame, Grid, Pools, pooled
-from styletrace.kernel.reuse_refine import Round, refine
+from styletrace.kernel.reuse_refine import Round, refine_pools
 from styletrace.kernel.reuse_scope import (
     children_per_lane,
     first_round,
@@ -42,7 +42,7 @@ class Samples:
     wavelengths: object
 
 
-def camera(sensor, sampler, frame: Frame, spp_total: int):
+def camera_rays(sensor, sampler, frame: Frame, spp_total: int):
     """Camera rays as Mitsuba's SamplingIntegrator::render makes them: lane = pixel * spp +
     sample index."""
     film = sensor.film()
@@ -77,7 +77,7 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     sampler.set_sample_count(spp)
     sampler.set_samples_per_wavefront(spp)
     sampler.seed(seed, N)
-    ray, ray_weight, pos = camera(sensor, sampler, frame, spp_total)
+    ray, ray_weight, pos = camera_rays(sensor, sampler, frame, spp_total)
     ray = mi.Ray3f(ray)
     origin = mi.Point3f(ray.o)
     lanes = LaneSampler.seeded_from(sampler, N)
@@ -155,7 +155,8 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     pools = Pools(grid, mask, si, bsdf, m)
     if again:
         mean, s1, s2, C = pooled(pools, slab, first_round(targets), scope.weights, moments=True)
-        mean, count = refine(scope, lanes, pools, lane_slots, slab, v, Round(base, mean, s1, s2, C))
+        first = Round(base, mean, s1, s2, C)
+        mean, count = refine_pools(scope, lanes, pools, lane_slots, slab, v, first)
     else:
         mean = pooled(pools, slab, first_round(targets), scope.weights)
     mean = dr.select(pool, mean, own / mi.Float(dr.maximum(m, 1)))

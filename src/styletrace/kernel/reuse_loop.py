@@ -29,7 +29,7 @@ def batch_seed(seed: int, batch: int) -> int:
     )
 
 
-def render(
+def render_reuse(
     integ,
     scene: mi.Scene,
     sensor: mi.Sensor,

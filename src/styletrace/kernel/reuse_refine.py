@@ -34,7 +34,7 @@ class Round:
     C: mi.Float
 
 
-def refine(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round):
+def refine_pools(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round):
     """The pooling lanes whose first-round pooled mean (`done`; pools `first`) the style's rule
     (estimators.AdaptiveDirect.needs_more, told the pool's |P| n0 samples and their moments) finds
     too close to a threshold, or too curved, draw n_max - n0 more children (those lanes alone,

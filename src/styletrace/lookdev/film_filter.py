@@ -54,17 +54,17 @@ def _candidates(rfilter) -> list[dict]:
     return [{"type": kind, "B": x, "C": y} for x in near[0] for y in near[1]]
 
 
-def describe(rfilter) -> dict:
+def describe_filter(rfilter) -> dict:
     """The film's filter as a plugin dict that `build` turns back into the same filter (its `eval`
     equal at every tested offset); SceneError (one line) for a filter that cannot be rebuilt so."""
     xs = mi.Float(np.linspace(-4.0, 4.0, 257, dtype=np.float32))
     want = np.asarray(rfilter.eval(xs))
     for spec in _candidates(rfilter):
         try:
-            got = np.asarray(build(_key(spec)).eval(xs))
+            got = np.asarray(build_filter(_key(spec)).eval(xs))
         except Exception:  # noqa: BLE001 - a parameter Mitsuba refuses: try the next candidate
             continue
-        same_radius = float(build(_key(spec)).radius()) == float(rfilter.radius())
+        same_radius = float(build_filter(_key(spec)).radius()) == float(rfilter.radius())
         if np.array_equal(got, want) and same_radius:
             return spec
     raise SceneError(f"the film's reconstruction filter '{rfilter.class_name()}' cannot be "
@@ -77,14 +77,14 @@ def _key(spec: dict) -> tuple:
 
 
 @lru_cache(maxsize=16)
-def build(key: tuple):
+def build_filter(key: tuple):
     """The Mitsuba filter of a spec (as `_key` orders it), made once per variant and spec."""
     return mi.load_dict(dict(key))
 
 
 def rebuild(spec: Any):
     """The filter of a header's entry (`is_box` entries: a box)."""
-    return build(_key(BOX if is_box(spec) else dict(spec)))
+    return build_filter(_key(BOX if is_box(spec) else dict(spec)))
 
 
 def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)):
@@ -160,4 +160,4 @@ def develop(buffer, values) -> mi.Float:
     return total / mi.Float(np.repeat(np.maximum(spp, 1.0), 3))
 
 
-__all__ = ["describe", "build", "rebuild", "is_box", "positions", "develop", "BOX"]
+__all__ = ["describe_filter", "build_filter", "rebuild", "is_box", "positions", "develop", "BOX"]

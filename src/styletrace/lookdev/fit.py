@@ -23,7 +23,7 @@ from styletrace.lookdev.restyle import (
     accumulate,
     as_buffer,
     changed_owner,
-    prepare,
+    prepare_slots,
     sample_values,
     slots_for,
 )
@@ -81,7 +81,7 @@ def _unflatten(kind: str, flat: mi.Float, like: Any) -> Any:
     return tuple(parts)
 
 
-def _plain(kind: str, flat: np.ndarray, like: Any) -> Any:
+def _plain_value(kind: str, flat: np.ndarray, like: Any) -> Any:
     """The fitted value as the style's parameter parser takes it."""
     if kind == "float":
         return float(flat[0])
@@ -199,7 +199,7 @@ def fit(
         )
     # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a
     # render would)
-    slots = prepare(buf, slots_for(buf, style, "direct", None, **initial))
+    slots = prepare_slots(buf, slots_for(buf, style, "direct", None, **initial))
     owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
     if not owned:
         raise UsageError("this buffer has no styled object to fit (first_object_hit without styled objects)")
@@ -260,7 +260,7 @@ def fit(
             if exact <= tol:
                 break
     seconds = time.perf_counter() - start
-    params = {p.name: _plain(p.kind, np.asarray(opt[p.name], dtype=np.float64), base.values[p.name]) for p in free}
+    params = {p.name: _plain_value(p.kind, np.asarray(opt[p.name], dtype=np.float64), base.values[p.name]) for p in free}
     fitted = create(base.name, **{**{k: v for k, v in base.values.items() if k not in params}, **params})
     values = {p.name: fitted.values[p.name] for p in free}
     from styletrace.lookdev.restyle import restyle

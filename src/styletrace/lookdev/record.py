@@ -32,12 +32,12 @@ from styletrace.lookdev.buffer import (
     Buffer,
     bytes_per_sample,
 )
-from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS, finish, slot_record
+from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS, finish_slot, slot_record
 from styletrace.lookdev.sequence import Recorder, budget
 from styletrace.pipeline import passes as pass_loop
 from styletrace.pipeline.runner import Finisher, Written
 from styletrace.scene.builtin import DEFAULT
-from styletrace.scene.defaults import Pilot, unique_styled
+from styletrace.scene.defaults import ScenePilot, unique_styled
 from styletrace.scene.loading import film_format
 from styletrace.styles.base import Vertex, camera_forward
 
@@ -92,7 +92,7 @@ def check_film(scene: mi.Scene) -> mi.Film:
     film = scene.sensors()[0].film()
     if film_format(scene) != "rgb":
         raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb film")
-    film_filter.describe(film.rfilter())
+    film_filter.describe_filter(film.rfilter())
     return film
 
 
@@ -203,7 +203,7 @@ class RecordingIntegrator(StylizedIntegrator):
 
     def finish_mean(self, slot, m, v):
         """The slot's estimate from the children's mean m (`restyle.finish`; `denoise.coverage` overrides it)."""
-        return finish(slot, m, v)
+        return finish_slot(slot, m, v)
 
     def through(self, w, value):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))
@@ -314,7 +314,7 @@ def record(
     label: str = "",
     max_samples: int = MAX_SAMPLES,
     lanes_per_pass: int = pass_loop.LANES_PER_PASS,
-    pilot: Pilot | None = None,
+    pilot: ScenePilot | None = None,
     pass_spp: int | None = None,
     recorder: Callable[..., RecordingIntegrator] | None = None,
 ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
@@ -325,10 +325,10 @@ def record(
     (default `RecordingIntegrator`; `denoise.coverage` places its own camera rays)."""
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
-        pilot = Pilot(scene, integrator.settings)
+        pilot = ScenePilot(scene, integrator.settings)
     # pin the scene-relative defaults on the integrator, not on the recording wrapper below: a copy would lose
     # the recording; with the pilot stored below (traced here if an auto value needs it)
-    integrator = pass_loop.pin(scene, integrator, pilot)[0]
+    integrator = pass_loop.pin_auto_values(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
     sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
@@ -336,7 +336,7 @@ def record(
     rec = (recorder or RecordingIntegrator)(integrator, sequence, per_sample)
     size = film.crop_size()
     w, h = int(size[0]), int(size[1])
-    spec = film_filter.describe(film.rfilter())
+    spec = film_filter.describe_filter(film.rfilter())
     filtered = not film_filter.is_box(spec)
     border = int(film.rfilter().border_size()) if film.sample_border() and filtered else 0
     layout = pass_loop.tiles(w, h)

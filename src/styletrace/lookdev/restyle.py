@@ -28,7 +28,7 @@ from styletrace.lookdev import film_filter
 from styletrace.lookdev.buffer import PILOT, SPREAD, Buffer, load_buffer
 from styletrace.lookdev.sequence import device_arrays, replay
 from styletrace.scene.defaults import Facts, auto_values
-from styletrace.styles import get
+from styletrace.styles import style_class
 from styletrace.styles.base import Vertex
 from styletrace.styles.gradient import Gradient
 
@@ -39,7 +39,7 @@ RESTYLABLE_ESTIMATORS = ("direct", "affine")
 # ---- the value of one camera sample
 # ----------------------------------------------------------------
 
-def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
+def finish_slot(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
     """The slot's estimate from the mean of its n children, as its estimator computes it in the kernel."""
     style = slot.style
     if style.closed_form:
@@ -66,7 +66,7 @@ def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.
     with the least squared error when the error is Gaussian (docs/denoise.md, step 7)."""
     out = mi.Color3f(0.0)
     for z, weight in SPREAD_NODES:
-        out += weight * finish(slot, dr.maximum(mean * (1.0 + spread * z), 0.0), v)
+        out += weight * finish_slot(slot, dr.maximum(mean * (1.0 + spread * z), 0.0), v)
     return out
 
 
@@ -110,8 +110,8 @@ def slots_for(
             given = {k: v for k, v in params.items() if v is not None}
             if given and style in (None, rec["style"]):  # new values: the pilot's choices are made again
                 values = {k: v for k, v in values.items() if k not in rec.get("auto", ())}
-            values = S.refine(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
-            new = get(str(values["style"]))()
+            values = S.refine_values(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
+            new = style_class(str(values["style"]))()
             if inner is not None and S.adaptive(S.parse_inner(inner, 1)):
                 raise UsageError(
                     f"bad value {inner!r} for inner: a buffer replays a fixed count of children; "
@@ -224,7 +224,7 @@ def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> l
     return out
 
 
-def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]:
+def prepare_slots(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]:
     """The slots ready to evaluate: auto values resolved, each style prepared on the recorded camera."""
     scene = camera_scene(buffer)
     slots = resolve_auto(buffer, slots, scene)
@@ -243,7 +243,7 @@ def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
     else:
         total = mi.Color3f(0.0)
         for i, slot in enumerate(slots):
-            value = finish(slot, d["mean"], v) if "spread" not in d else finish_spread(slot, d["mean"], v, d["spread"])
+            value = finish_slot(slot, d["mean"], v) if "spread" not in d else finish_spread(slot, d["mean"], v, d["spread"])
             total = dr.select(d["slot"] == i, value, total)
     found = d["slot"] >= 0
     if "beta" in d:
@@ -284,7 +284,7 @@ def replay_lanes(
     buf = as_buffer(buffer)
     if buf.stores != "sequence":
         raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased estimator)")
-    slots = prepare(buf, slots_for(buf, style, estimator, inner, **params))
+    slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
     d = device(buf)
     v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buf.header["view"]), depth=d["depth"])
     total, bad = replay(d, d["slot"], slots, v)
@@ -336,14 +336,14 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
             **params: Any) -> np.ndarray:
     """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32, linear."""
     buf = as_buffer(buffer)
-    slots = prepare(buf, slots_for(buf, style, estimator, inner, **params))
+    slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
     img = accumulate(buf, sample_values(buf, slots))
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
 __all__ = [
     "restyle",
-    "finish",
+    "finish_slot",
     "finish_spread",
     "SPREAD_NODES",
     "slot_record",
@@ -351,7 +351,7 @@ __all__ = [
     "sample_values",
     "accumulate",
     "device",
-    "prepare",
+    "prepare_slots",
     "RESTYLABLE_ESTIMATORS",
     "as_buffer",
     "replay_lanes",

@@ -77,14 +77,15 @@ def execute(resolved: Resolved, cluster: str | None = None, lock: Any = contextl
     return Runner(resolved, executor_for(cluster, **ray_options)).passes(lock)
 
 
-def run(resolved: Resolved, cluster: str | None = None,
+def run_resolved(resolved: Resolved, cluster: str | None = None,
         callback: Callable[[Progress], None] | None = None):
     """The final image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True."""
     from styletrace.pipeline.runner import Runner
     return Runner(resolved, executor_for(cluster)).result(callback)
 
 
-def render(scene: Any = None, style: str | None = None, spp: int | None = None, inner: Any = None,
+def render_pipeline(scene: Any = None, style: str | None = None, spp: int | None = None,
+                    inner: Any = None,
            estimator: str | None = None, seed: int = 0, width: int | None = None,
            height: int | None = None, integrator: Any = None,
            callback: Callable[[Progress], None] | None = None, cluster: str | None = None,
@@ -103,7 +104,8 @@ def render(scene: Any = None, style: str | None = None, spp: int | None = None, 
     the split (default: by the device's memory)."""
     job = python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines,
                      pass_spp, **params)
-    return run(resolve(job), cluster, callback)
+    return run_resolved(resolve(job), cluster, callback)
 
 
-__all__ = ["InProcess", "OnRay", "executor_for", "execute", "run", "render", "ray_job"]
+__all__ = ["InProcess", "OnRay", "executor_for", "execute", "run_resolved", "render_pipeline",
+           "ray_job"]

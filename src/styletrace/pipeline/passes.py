@@ -22,8 +22,8 @@ from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.jit import no_collection
 from styletrace.scene.arguments import check_passes_args
-from styletrace.scene.defaults import Pilot
-from styletrace.scene.defaults import resolve as resolve_defaults
+from styletrace.scene.defaults import ScenePilot
+from styletrace.scene.defaults import resolve_defaults as resolve_defaults
 from styletrace.scene.loading import film_format
 
 #: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred
@@ -36,8 +36,8 @@ TILE_SIDE = 1024
 #: (BENCHMARKS.md, memory).
 LANE_BYTES = 256
 
-def pin(
-    scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None
+def pin_auto_values(
+    scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePilot | None = None
 ) -> tuple[mi.Integrator, str]:
     """(`integrator` with its scene-relative `auto` values pinned on `scene`, the line naming them):
     the pipeline's one pinning (`resolve.resolve`'s, and the pass loop's for a prebuilt integrator).
@@ -253,7 +253,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     (`pin`) unless `pinned` says a resolve did it already."""
     check_passes_args(scene, integrator, spp, seed)
     if not pinned:
-        integrator = pin(scene, integrator)[0]
+        integrator = pin_auto_values(scene, integrator)[0]
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
@@ -316,7 +316,7 @@ __all__ = [
     "Tile",
     "tiles",
     "Crop",
-    "pin",
+    "pin_auto_values",
     "memory_needed",
     "memory_available",
     "check_memory",

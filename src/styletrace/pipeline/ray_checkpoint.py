@@ -29,7 +29,7 @@ from styletrace.images import write_bytes_atomically, write_image
 VERSION = 1
 
 
-def _plain(value: Any) -> Any:
+def _plain_settings(value: Any) -> Any:
     """Settings as JSON reads them back (tuples as lists, other objects by repr), for comparison."""
     return json.loads(json.dumps(value, sort_keys=True, default=repr))
 
@@ -38,7 +38,7 @@ class Checkpoint:
     def __init__(self, output: str, settings: dict[str, Any]):
         self.output = output
         self.manifest = output + ".checkpoint.json"
-        self.settings = _plain(settings)
+        self.settings = _plain_settings(settings)
         self.generation = 0
         self.saved_rounds: list[int] | None = None
 

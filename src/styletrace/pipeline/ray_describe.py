@@ -104,7 +104,7 @@ class SceneSpec:
         ).digest()
 
 
-def load(spec: SceneSpec, values: dict, variant: str):
+def load_on_worker(spec: SceneSpec, values: dict, variant: str):
     """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of
     the scene source with the driver's integrator values, cached by the scene and the
     integrator's values."""
@@ -143,4 +143,4 @@ def load(spec: SceneSpec, values: dict, variant: str):
     return loaded
 
 
-__all__ = ["SceneSpec", "load", "CACHE", "CACHE_SIZE"]
+__all__ = ["SceneSpec", "load_on_worker", "CACHE", "CACHE_SIZE"]

@@ -32,7 +32,7 @@ class Unit:
     seed: int
 
 
-def plan(
+def plan_units(
     width: int,
     height: int,
     spp: int,
@@ -87,4 +87,4 @@ class Merge:
         )
 
 
-__all__ = ["Unit", "plan", "Merge"]
+__all__ = ["Unit", "plan_units", "Merge"]

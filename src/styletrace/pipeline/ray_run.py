@@ -27,7 +27,7 @@ from styletrace.pipeline.passes import LANES_PER_PASS, Progress
 from styletrace.pipeline.ray_checkpoint import Checkpoint
 from styletrace.pipeline.ray_cluster import connect, cpus
 from styletrace.pipeline.ray_describe import SceneSpec
-from styletrace.pipeline.ray_plan import Merge, plan
+from styletrace.pipeline.ray_plan import Merge, plan_units
 from styletrace.scene.loading import first_line
 
 #: Retries of a task whose worker process died (Ray re-runs it elsewhere; the unit's seed is fixed).
@@ -61,7 +61,7 @@ class Render:
                              f"only; render without --ray/cluster=, or use expansion_pass=0")
         self.job, self.spp, self.seed, self.width, self.height = job, spp, seed, width, height
         self.cluster, self.lock = cluster, lock
-        self.layout, self.units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
+        self.layout, self.units = plan_units(width, height, spp, seed, lanes_per_pass, pass_spp)
         per_pass = self.units[0].spp
         self.checkpoint = None
         if output is not None:
@@ -163,7 +163,7 @@ def job_for(scene: Any, integrator: Any, width: int | None = None, height: int |
             camera: Any = None, **load_kwargs):
     """The Job of a scene argument and a `stylized` integrator (its property values travel, not the
     object); `camera`: the sensor's to_world (4x4) in place of the scene's, or None."""
-    from styletrace.pipeline.ray_tasks import Job
+    from styletrace.pipeline.ray_tasks import RayJob
     from styletrace.scene.plugins import init
     values = getattr(integrator, "values", None)
     if not isinstance(values, dict):
@@ -172,7 +172,7 @@ def job_for(scene: Any, integrator: Any, width: int | None = None, height: int |
                          f"pass style= and parameters instead")
     rows = (None if camera is None else
             tuple(tuple(float(v) for v in row) for row in np.asarray(camera)))
-    return Job(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init(), rows)
+    return RayJob(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init(), rows)
 
 
 __all__ = ["Render", "job_for", "settings_of", "MAX_RETRIES"]

@@ -18,11 +18,11 @@ import numpy as np
 import ray
 
 from styletrace.jit import no_collection
-from styletrace.pipeline.ray_describe import SceneSpec, load
+from styletrace.pipeline.ray_describe import SceneSpec, load_on_worker
 
 
 @dataclass(frozen=True)
-class Job:
+class RayJob:
     """What every task of a render shares: the scene, the integrator's property values, the variant
     and the camera (the sensor's to_world as 4 rows of 4, or None for the scene's own)."""
     spec: SceneSpec
@@ -36,8 +36,8 @@ def _threads() -> int:
     return max(1, int(round(cpus)))
 
 
-def _prepare(job: Job):
-    scene, integrator = load(job.spec, job.values, job.variant)
+def _prepare(job: RayJob):
+    scene, integrator = load_on_worker(job.spec, job.values, job.variant)
     from styletrace.gate import dr  # deliberately here: after `load` chose the driver's variant
     dr.set_thread_count(_threads())
     return scene, integrator
@@ -62,7 +62,7 @@ def _camera(sensor, to_world):
 
 
 @ray.remote
-def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int]):
+def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int]):
     """Render the crop window (`offset`, `size`, relative to the film's own crop) with `spp` samples
     and `seed`; returns the float32 window and this worker's process id."""
     scene, integrator = _prepare(job)
@@ -78,4 +78,4 @@ def render_unit(job: Job, spp: int, seed: int, offset: tuple[int, int], size: tu
     return arr, os.getpid()
 
 
-__all__ = ["Job", "render_unit"]
+__all__ = ["RayJob", "render_unit"]

@@ -23,10 +23,10 @@ from styletrace.gate import mi
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.pipeline.carried import carried_settings, nested_stylized
 from styletrace.pipeline.job import Job
-from styletrace.pipeline.passes import pin
+from styletrace.pipeline.passes import pin_auto_values
 from styletrace.pipeline.sizing import lanes_per_pass
 from styletrace.scene.arguments import check_render_args
-from styletrace.scene.defaults import Pilot
+from styletrace.scene.defaults import ScenePilot
 from styletrace.scene.loading import load_scene, scene_spp
 from styletrace.scene.plugins import init
 
@@ -42,7 +42,7 @@ class Resolved:
     auto: str = ""        # the auto values pinned, one line ('' if none)
     lanes_note: str | None = None  # why the device's pass size is below its default, if it is
     # the scene-defaults pilot the auto values came from (the recorder stores it)
-    pilot: Pilot | None = None
+    pilot: ScenePilot | None = None
 
     @property
     def size(self) -> tuple[int, int]:
@@ -50,26 +50,26 @@ class Resolved:
         return int(size[0]), int(size[1])
 
 
-def integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
+def job_integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
     """The property values of the job's integrator on this scene; None: the scene's own `stylized`
     as it is."""
     own = scene.integrator()
     given = dict(job.given)
     if isinstance(own, StylizedIntegrator):
-        return S.refine(own.values, given) if given else None
+        return S.refine_values(own.values, given) if given else None
     # `stylized` inside `moment` or `aov`: its values
     nested = nested_stylized(job.scene, job.defines)
     if nested is not None:
-        return S.refine(nested, given)
+        return S.refine_values(nested, given)
     base = {"style": job.default_style, **carried_settings(scene, job.scene, job.defines)}
-    return S.refine(base, given)
+    return S.refine_values(base, given)
 
 
 def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
     """The job's integrator before its auto values are pinned (see the module doc)."""
     if job.integrator is not None:
         return job.integrator
-    values = integrator_values(scene, job)
+    values = job_integrator_values(scene, job)
     # from the values, also for the scene's own integrator as it is: Mitsuba's object resolves auto
     # values in its own `render` (scene/standalone.py); the pipeline pins them once, here, for
     # every route
@@ -92,11 +92,12 @@ def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
     chosen = choose_integrator(scene, job)
     # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value
     # needs it)
-    pilot = Pilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
-    integrator, auto = pin(scene, chosen, pilot)
+    pilot = ScenePilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
+    integrator, auto = pin_auto_values(scene, chosen, pilot)
     spp = scene_spp(scene) if job.spp is None else int(job.spp)
     lanes, note = lanes_for(job)
     return Resolved(job, scene, integrator, spp, lanes, auto, note, pilot)
 
 
-__all__ = ["Resolved", "resolve", "pin", "choose_integrator", "integrator_values", "lanes_for"]
+__all__ = ["Resolved", "resolve", "pin_auto_values", "choose_integrator", "job_integrator_values",
+           "lanes_for"]

@@ -27,10 +27,10 @@ PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 def styles_table() -> list[dict[str, Any]]:
     from styletrace.config.estimator_registry import applicable
     from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS
-    from styletrace.styles import get, names
+    from styletrace.styles import style_class, style_names
     out = []
-    for name in names():
-        cls = get(name)
+    for name in style_names():
+        cls = style_class(name)
         if cls.per_sample:
             continue  # cannot restyle (a buffer keeps the children's mean)
         style = cls()
@@ -59,7 +59,7 @@ def styles_table() -> list[dict[str, Any]]:
     return out
 
 
-def encode(image, fmt: str) -> bytes:
+def encode_image_file(image, fmt: str) -> bytes:
     """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by
     `images.write_image`."""
     from styletrace.images import write_image
@@ -127,7 +127,7 @@ def make_app(session):
             return bad(str(exc))
         if img is None:
             return bad("no image yet: the first pass is still rendering", 409)
-        png = await run_in_threadpool(encode, img, "png")
+        png = await run_in_threadpool(encode_image_file, img, "png")
         draft = inner != session.inner
         command = session.command(style, estimator, params, *((spp, inner) if draft else ()))
         return JSONResponse(
@@ -152,7 +152,7 @@ def make_app(session):
             return bad(str(exc))
         if img is None:
             return bad("no image yet: the first pass is still rendering", 409)
-        data = await run_in_threadpool(encode, img, fmt)
+        data = await run_in_threadpool(encode_image_file, img, fmt)
         media = "image/png" if fmt == "png" else "image/x-exr"
         return Response(
             data,
@@ -220,4 +220,4 @@ def serve(
     return 0
 
 
-__all__ = ["make_app", "serve", "styles_table", "encode"]
+__all__ = ["make_app", "serve", "styles_table", "encode_image_file"]

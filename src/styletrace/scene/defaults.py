@@ -53,7 +53,7 @@ def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[floa
     return [float(x) for x in v[np.minimum(index, len(v) - 1)]]
 
 
-class Pilot:
+class ScenePilot:
     """The pilot's camera samples: per sample its cell, first hit (BSDF, position, normal, direction, depth)
     and one `path` estimate of the radiance there. Traced on first use, once per `resolve`."""
 
@@ -136,7 +136,7 @@ def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return colour, counts, inverse
 
 
-def median_brightness(pilot: Pilot) -> float | None:
+def median_brightness(pilot: ScenePilot) -> float | None:
     """The median first-hit brightness (r+g+b)/3 the camera sees, over every object (cells weighted by
     their samples), or None where it sees none: the firefly control's floor (`firefly_floor`)."""
     mask = pilot.samples["owner"] >= 0
@@ -149,7 +149,7 @@ def median_brightness(pilot: Pilot) -> float | None:
 class Facts:
     """What a style's auto rule may read about the part of the scene it covers (see the module doc)."""
 
-    def __init__(self, scene: mi.Scene, pilot: Pilot, owner: int, styles: tuple[Style, ...] = ()):
+    def __init__(self, scene: mi.Scene, pilot: ScenePilot, owner: int, styles: tuple[Style, ...] = ()):
         self.scene, self.pilot, self.owner, self.styles = scene, pilot, owner, styles
 
     @cached_property
@@ -236,12 +236,12 @@ def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
     return [styled for styled, _, _ in SceneGraph(scene).styled]
 
 
-def describe(style: Style, values: dict[str, Any]) -> str:
+def describe_defaults(style: Style, values: dict[str, Any]) -> str:
     params = {p.name: p for p in type(style).params}
     return f"{style.name} " + " ".join(f"{k}={params[k].show(v)}" for k, v in values.items())
 
 
-def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = None) -> tuple[mi.Integrator, str]:
+def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePilot | None = None) -> tuple[mi.Integrator, str]:
     """Pin the auto values of an integrator's style and of the scene's `styled` BSDFs.
 
     Args:
@@ -256,7 +256,7 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = No
     if not isinstance(integrator, StylizedIntegrator):
         return integrator, ""
     if pilot is None or not pilot.serves(scene, integrator.settings):
-        pilot = Pilot(scene, integrator.settings)
+        pilot = ScenePilot(scene, integrator.settings)
     notes = []
     if integrator.settings.firefly:
         integrator, note = pin_firefly(scene, integrator, pilot, integrator.settings.firefly)
@@ -270,24 +270,24 @@ def resolve(scene: mi.Scene, integrator: mi.Integrator, pilot: Pilot | None = No
             s = integrator.settings
             pinned = replace(s, slot=replace(s.slot, style=style.pinned(chosen)))
             integrator = StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen})
-            notes.append(describe(style, chosen))
+            notes.append(describe_defaults(style, chosen))
     for k, bsdf in enumerate(unique_styled(scene), start=1):
         style = bsdf.slot.style
         chosen = auto_values(style, Facts(scene, pilot, k))
         if chosen:
             bsdf.slot = replace(bsdf.slot, style=style.pinned(chosen))
-            notes.append(f"{describe(style, chosen)} (styled BSDF {bsdf.id() or k})")
+            notes.append(f"{describe_defaults(style, chosen)} (styled BSDF {bsdf.id() or k})")
     return integrator, "; ".join(n for n in notes if n)
 
 
-def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: Pilot | None, k: float
+def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: ScenePilot | None, k: float
                 ) -> tuple[StylizedIntegrator, str]:
     """`integrator` with the firefly control's k and, unless given, its floor (the scene's median brightness,
     `median_brightness`) pinned, and the note naming what was chosen ('' if nothing)."""
     s = integrator.settings
     chosen = {} if s.firefly == k else {"firefly": float(k)}
     if s.firefly_floor is None:
-        pilot = pilot if pilot is not None and pilot.serves(scene, s) else Pilot(scene, s)
+        pilot = pilot if pilot is not None and pilot.serves(scene, s) else ScenePilot(scene, s)
         floor = median_brightness(pilot)
         if floor is not None:
             chosen["firefly_floor"] = float(f"{max(floor, 0.0):.4g}")
@@ -298,4 +298,4 @@ def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: Pilot | 
     return StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen}), note
 
 
-__all__ = ["resolve", "pin_firefly", "Facts", "Pilot", "weighted_quantiles", "PILOT_CELLS", "PILOT_SPP"]
+__all__ = ["resolve_defaults", "pin_firefly", "Facts", "ScenePilot", "weighted_quantiles", "PILOT_CELLS", "PILOT_SPP"]

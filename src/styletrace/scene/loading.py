@@ -40,7 +40,7 @@ def scene_dict(name: str, width: int | None = None, height: int | None = None) -
     return BUILTIN[name](**_size(width, height))
 
 
-def canonical_normals(scene: mi.Scene) -> mi.Scene:
+def canonical_scene_normals(scene: mi.Scene) -> mi.Scene:
     """The scene with its computed vertex normals made the same in every process (`normals`): the same seed
     then gives the same image to the bit. Scenes load on all of Dr.Jit's threads (one thread deadlocks
     Mitsuba's OpenEXR reader)."""
@@ -78,14 +78,14 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         if problem is not None:
             del loaded  # see arguments.scene_problem: a refused scene must not outlive this call
             raise SceneError(problem)
-        return canonical_normals(loaded)
+        return canonical_scene_normals(loaded)
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"bad scene {scene!r}: expected a built-in name ({', '.join(sorted(BUILTIN))}), an XML "
                          f"path, a scene dict or an mi.Scene")
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
-            return canonical_normals(mi.load_dict(scene_dict(name, width, height)))
+            return canonical_scene_normals(mi.load_dict(scene_dict(name, width, height)))
         except Exception as exc:
             raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
@@ -94,7 +94,7 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     if not os.path.isfile(name):
         raise SceneError(f"scene file '{name}' does not exist")
     try:
-        loaded, notes = scene_file.load(name, width, height, defines)
+        loaded, notes = scene_file.load_xml(name, width, height, defines)
     except SceneError:
         raise
     except Exception as exc:
@@ -109,7 +109,7 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         raise SceneError(problem)
     for note in notes:
         warnings.warn(note, SceneWarning, stacklevel=2)
-    return canonical_normals(loaded)
+    return canonical_scene_normals(loaded)
 
 
 class SceneWarning(UserWarning):
@@ -132,4 +132,4 @@ def scene_spp(scene: mi.Scene) -> int:
     return int(scene.sensors()[0].sampler().sample_count())
 
 
-__all__ = ["load_scene", "scene_dict", "canonical_normals", "first_line", "SceneWarning", "film_format", "scene_spp"]
+__all__ = ["load_scene", "scene_dict", "canonical_scene_normals", "first_line", "SceneWarning", "film_format", "scene_spp"]

@@ -19,7 +19,7 @@ import weakref
 
 from styletrace.gate import mi
 from styletrace.kernel.integrator import StylizedIntegrator
-from styletrace.scene.defaults import resolve
+from styletrace.scene.defaults import resolve_defaults
 
 
 def scene_key(scene: mi.Scene) -> tuple:
@@ -45,7 +45,7 @@ class ResolvingRender:
         key = scene_key(scene)
         if self.resolved_for is None or self.resolved_for[0] != key:
             fresh = StylizedIntegrator.from_values(self.owner().values)
-            self.resolved_for = (key, resolve(scene, fresh)[0])
+            self.resolved_for = (key, resolve_defaults(scene, fresh)[0])
         return self.resolved_for[1].render(scene, sensor, seed, spp, develop, evaluate)
 
 

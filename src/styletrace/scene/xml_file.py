@@ -272,7 +272,7 @@ def parse_xml(path: str) -> ET.ElementTree:
         return ET.ElementTree(ET.fromstring(text))
 
 
-def load(path: str, width: int | None = None, height: int | None = None,
+def load_xml(path: str, width: int | None = None, height: int | None = None,
          defines: Mapping[str, Any] | None = None) -> tuple[Any, list[str]]:
     """Load a Mitsuba XML scene file with the command line's changes applied.
 
@@ -324,4 +324,4 @@ def load(path: str, width: int | None = None, height: int | None = None,
     return _load_text(text, os.path.dirname(os.path.abspath(path)), used_defines(defines, before, text)), notes
 
 
-__all__ = ["load", "resize", "replace_integrator", "known_integrator", "expand_includes", "substitute", "SHARED"]
+__all__ = ["load_xml", "resize", "replace_integrator", "known_integrator", "expand_includes", "substitute", "SHARED"]

@@ -27,6 +27,6 @@ from styletrace.styles import (
 )
 from styletrace.styles.base import Style, Vertex, brightness
 from styletrace.styles.params import Param
-from styletrace.styles.registry import create, get, names
+from styletrace.styles.registry import create, style_class, style_names
 
 __all__ = ["Style", "Vertex", "Param", "StyleError", "brightness", "create", "get", "names"]

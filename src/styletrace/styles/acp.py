@@ -19,10 +19,10 @@ from __future__ import annotations
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Vertex, brightness
 from styletrace.styles.color_map import ColorMap
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 
-@register
+@register_style
 class ACP(ColorMap):
     """The colour map's parameters, range rule and checks (`ColorMap`), applied per path sample."""
     name = "acp"

@@ -16,14 +16,14 @@ from __future__ import annotations
 
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Style, StyleError, Vertex, brightness, increasing, rounded
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 from styletrace.styles.tone import band_levels, luminance_of
 
 #: the lightness range of the levels of an unresolved cel (evenly spaced over the bands)
 FALLBACK_LSTAR = (30.0, 85.0)
 
 
-@register
+@register_style
 class Cel(Style):
     name = "cel"
     summary = "GI cel shading: brightness quantized to levels, colour kept (S5.2)"

@@ -19,10 +19,10 @@ from __future__ import annotations
 from styletrace.gate import mi
 from styletrace.styles.base import Param, Style, StyleError, Vertex, brightness, increasing
 from styletrace.styles.gradient import Gradient
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 
-@register
+@register_style
 class ColorMap(Style):
     name = "color_map"
     summary = "brightness mapped to a colour gradient, clamped to its ends (S5.1)"

@@ -16,13 +16,13 @@ from __future__ import annotations
 from styletrace.gate import mi
 from styletrace.styles.base import Param, Style, Vertex, auto_exposure, exposure_param
 from styletrace.styles.forms import AffineForm
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 #: where the auto exposure puts the scene's median brightness: the default pivot
 MID = 0.5
 
 
-@register
+@register_style
 class Contrast(Style):
     name = "contrast"
     summary = "affine contrast c(s I - p) + p about a pivot p, exposure s (S5.4)"

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Projection, Style, Vertex, projection
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 
-@register
+@register_style
 class Coordinate(Style):
     name = "coordinate"
     summary = "debug: the vertex's image coordinate (pixels) and how it was found (LLaT) as r, g, b"

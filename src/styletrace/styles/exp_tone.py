@@ -19,7 +19,7 @@ from dataclasses import replace
 from styletrace.gate import dr, mi
 from styletrace.styles.base import EXPOSURE_KEY, Style, Vertex, auto_exposure, exposure_param
 from styletrace.styles.forms import SeriesForm
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 #: Largest exposure k: e^-k must be a normal float32 (k < -ln(1.18e-38) = 87.3).
 MAX_EXPOSURE = 87.0
@@ -27,7 +27,7 @@ MAX_EXPOSURE = 87.0
 K_AT_KEY = 1.5
 
 
-@register
+@register_style
 class ExpTone(Style):
     name = "exp_tone"
     summary = "exponential tone curve 1 - exp(-k I), per channel (series form, S14-S15)"

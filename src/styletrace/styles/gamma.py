@@ -22,7 +22,7 @@ import math
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
 from styletrace.styles.forms import SeriesForm
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 #: Expansion point of the unbiased estimators: b = max(PILOT_SCALE * pilot mean, PILOT_FLOOR)
 #: (exposed radiance).
@@ -38,7 +38,7 @@ MAX_RADIANCE = 7e3
 FLOAT32_MAX = 3.4028234663852886e38
 
 
-@register
+@register_style
 class Gamma(Style):
     name = "gamma"
     summary = "per-channel gamma I^(1/gamma) (Eq. 24)"

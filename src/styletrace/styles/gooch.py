@@ -22,7 +22,7 @@ import math
 
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Style, Vertex, camera, light_from_camera
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 
 def unit(v) -> tuple[float, float, float]:
@@ -56,7 +56,7 @@ class CameraLight:
         return {} if self.light_dir is not None else {"light_dir": light_from_camera(facts.camera)}
 
 
-@register
+@register_style
 class Gooch(CameraLight, Style):
     name = "gooch"
     summary = "Gooch cool-to-warm shading from a user light direction, closed form (Gooch et al. 1998)"

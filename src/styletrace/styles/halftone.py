@@ -25,7 +25,7 @@ import math
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Projection, Style, Vertex, brightness, projection
 from styletrace.styles.hatching import BrightnessRange, coverage, tone_params
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 from styletrace.styles.tone import tone_inverse
 
 
@@ -76,7 +76,7 @@ def screen_halftone_mask(
     return dr.square(x - gx) + dr.square(y - gy) < r * r
 
 
-@register
+@register_style
 class Halftone(BrightnessRange, Style):
     name = "halftone"
     summary = "half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness falls"

@@ -45,7 +45,7 @@ from styletrace.styles.base import (
     increasing,
     projection,
 )
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 from styletrace.styles.tone import tone_inverse, tone_knots, tone_of
 
 Vec = tuple[float, float, float]
@@ -242,7 +242,7 @@ class BrightnessRange:
         return {k: v for k, v in (("u_min", lo), ("u_max", hi)) if self.values[k] is None}
 
 
-@register
+@register_style
 class Hatching(BrightnessRange, Style):
     name = "hatching"
     summary = "cross-hatching: brightness picks how many plane sets around the view direction draw lines"

@@ -8,10 +8,10 @@ from __future__ import annotations
 from styletrace.gate import mi
 from styletrace.styles.base import Style, Vertex
 from styletrace.styles.forms import AffineForm
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 
-@register
+@register_style
 class Identity(Style):
     name = "identity"
     summary = "physically based rendering: g(I) = I"

@@ -10,18 +10,18 @@ _STYLES: dict[str, type[Style]] = {}
 _COMPOSITES: dict[str, type[Style]] = {}  # made on first use, one class per spelling
 
 
-def register(cls: type[Style]) -> type[Style]:
+def register_style(cls: type[Style]) -> type[Style]:
     if not cls.name or cls.name in _STYLES:
         raise ValueError(f"style name {cls.name!r} is empty or taken")
     _STYLES[cls.name] = cls
     return cls
 
 
-def names() -> list[str]:
+def style_names() -> list[str]:
     return sorted(_STYLES)
 
 
-def get(name: str) -> type[Style]:
+def style_class(name: str) -> type[Style]:
     """The class of a registered style, or of a composition 'a+b+...' (see `compose`)."""
     try:
         return _STYLES[name]
@@ -30,13 +30,13 @@ def get(name: str) -> type[Style]:
     from styletrace.styles.compose import composite_class, is_composite
     if is_composite(name):
         if name not in _COMPOSITES:
-            _COMPOSITES[name] = composite_class(name, get)
+            _COMPOSITES[name] = composite_class(name, style_class)
         return _COMPOSITES[name]
     raise StyleError(
-        f"unknown style '{name}': available styles are {', '.join(names())}, or a composition "
+        f"unknown style '{name}': available styles are {', '.join(style_names())}, or a composition "
         f"such as contrast+sepia"
     ) from None
 
 
 def create(name: str, **values: Any) -> Style:
-    return get(name)(**values)
+    return style_class(name)(**values)

@@ -17,7 +17,7 @@ from __future__ import annotations
 from styletrace.gate import mi
 from styletrace.styles.base import Param, Style, Vertex, auto_exposure, exposure_param
 from styletrace.styles.forms import SeriesForm
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 #: Largest w: the unbiased estimators expand in float32 samples w + X, which resolve X only to w
 #: 2^-24 (6e-5 at w = 1e3); at w = 3e5 the series estimator returned NaN (measured on the Cornell
@@ -25,7 +25,7 @@ from styletrace.styles.registry import register
 MAX_WHITE = 1e3
 
 
-@register
+@register_style
 class Reinhard(Style):
     name = "reinhard"
     summary = "reciprocal tone curve I/(w + I), per channel (reciprocal series, S16-S17)"

@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Style, Vertex, brightness
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 
-@register
+@register_style
 class Saturation(Style):
     name = "saturation"
     summary = "blend of grey and maximally saturated colour at the same brightness (S5.3)"

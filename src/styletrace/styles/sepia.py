@@ -17,12 +17,12 @@ from styletrace.gate import mi
 from styletrace.styles.base import Param, Style, StyleError, Vertex, brightness
 from styletrace.styles.forms import AffineForm
 from styletrace.styles.gradient import Gradient
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 DEFAULT = "0:#000000;1:#c4a27a"
 
 
-@register
+@register_style
 class Sepia(Style):
     name = "sepia"
     summary = "affine colour map: two-stop gradient extrapolated over [0, inf) (S5.4)"

@@ -21,7 +21,7 @@ from typing import Callable
 from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Style, StyleError, Vertex, auto_exposure, exposure_param
 from styletrace.styles.forms import PolynomialForm
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20
@@ -32,7 +32,7 @@ FIT_DEGREE = 20
 MAX_ARGUMENT = float(2 ** 14)
 
 
-@register
+@register_style
 class TieDye(Style):
     name = "tie_dye"
     summary = "per-channel cosine waves (1 - cos(pi f (x + phi)))/2 (S5.5)"

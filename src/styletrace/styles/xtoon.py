@@ -23,7 +23,7 @@ from styletrace.gate import dr, mi
 from styletrace.styles.base import Param, Style, StyleError, Vertex, camera, increasing
 from styletrace.styles.gooch import AUTO_LIGHT, CameraLight, facing
 from styletrace.styles.gradient import Gradient
-from styletrace.styles.registry import register
+from styletrace.styles.registry import register_style
 
 #: three flat bands (dark brown, terracotta, warm sand) with narrow linear transitions
 BANDS = "0:#4a2c2a;0.32:#4a2c2a;0.34:#b5563a;0.64:#b5563a;0.66:#f4c98b;1:#f4c98b"
@@ -34,7 +34,7 @@ def camera_position(scene: mi.Scene) -> tuple[float, float, float]:
     return camera(scene).position
 
 
-@register
+@register_style
 class XToon(CameraLight, Style):
     name = "xtoon"
     summary = "X-Toon: toon ramp over n.l faded by an orientation or depth detail, closed form (Barla et al. 2006)"

@@ -15,7 +15,7 @@ from typing import Callable, Iterator
 import numpy as np
 
 from styletrace.blender import build, exporter
-from styletrace.blender.properties import integrator_values
+from styletrace.blender.properties import settings_integrator_values
 from styletrace.config.line_types import without_colours
 from styletrace.frontends import api
 
@@ -40,11 +40,11 @@ def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dic
 def scene(depsgraph, settings, warn: Callable[[str], None] = print):
     """The loaded `mi.Scene` of the depsgraph (`api.load_scene` checks it as it checks every
     scene)."""
-    return api.load_scene(build.scene_dict(description(depsgraph, settings, warn)))
+    return api.load_scene(build.description_scene_dict(description(depsgraph, settings, warn)))
 
 
 def integrator(settings, aovs: bool | None = None, **override):
-    values = integrator_values(settings)
+    values = settings_integrator_values(settings)
     values["aovs"] = settings.aovs if aovs is None else aovs
     values.update(override)
     return api.make_integrator_from(values)
@@ -58,15 +58,15 @@ def job(sc, integ, settings):
                pass_spp=settings.pass_spp, lanes_per_pass=api.LANES_PER_PASS)
 
 
-def run(sc, settings, aovs: bool, keep: Callable | None = None):
+def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
     """(F12's `pipeline.runner.Runner`, the one-line note where Denoise auto could not denoise): the
     Denoise setting's finisher (`denoise.finishers.plan`); `keep`: called with the buffer to restyle
     (Record buffer). Raises the refusals (one line each) before anything renders."""
-    from styletrace.denoise.finishers import Image, plan
+    from styletrace.denoise.finishers import Image, plan_finisher
     from styletrace.errors import UsageError
     from styletrace.pipeline.resolve import resolve
     resolved = resolve(job(sc, integrator(settings, aovs=aovs), settings), scene=sc)
-    runner, note = plan(resolved, settings.denoise, quality=settings.denoise_quality,
+    runner, note = plan_finisher(resolved, settings.denoise, quality=settings.denoise_quality,
                         label="<blender>", keep=keep)
     if isinstance(runner.finisher, Image) and keep is not None:
         raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would "
@@ -75,7 +75,7 @@ def run(sc, settings, aovs: bool, keep: Callable | None = None):
     return runner, note
 
 
-def passes(sc, integ, settings) -> Iterator[api.Progress]:
+def f12_passes(sc, integ, settings) -> Iterator[api.Progress]:
     """The plain passes of `integ` with F12's sampling (a pipeline run, auto values pinned)."""
     from styletrace.pipeline.execute import InProcess
     from styletrace.pipeline.resolve import resolve
@@ -96,7 +96,7 @@ def line_mask(sc, settings, should_stop: Callable[[], bool] = lambda: False) -> 
     for colour in ("0,0,0", "1,1,1"):
         prog = None
         masked = integrator(settings, aovs=False, line_color=colour, line_gradient="", **types)
-        for prog in passes(sc, masked, settings):
+        for prog in f12_passes(sc, masked, settings):
             if should_stop():
                 return None
         images.append(prog.image)
