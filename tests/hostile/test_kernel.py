@@ -27,7 +27,7 @@ import hashlib, sys
 import styletrace
 styletrace.init()
 import mitsuba as mi, numpy as np
-from styletrace.frontends.api import canonical_normals, make_integrator, passes, scene_dict
+from styletrace.frontends.api import canonical_scene_normals as canonical_normals, make_integrator, passes, scene_dict
 d = scene_dict("mixed", 32, 32)
 if sys.argv[1] == "reversed":
     key, fill = d.pop("key_light"), d.pop("fill_light")

@@ -51,7 +51,7 @@ shell = mi.load_dict(shell_scene())
 if mode == "reuse":
     integ = api.make_integrator("identity", inner=2, stylize="first_n_hits", stylize_depth=2, reuse="pixels",
                                 reuse_k=12)
-    render = lambda seed: reuse.render(integ, shell, shell.sensors()[0], seed, 8)
+    render = lambda seed: reuse.render_reuse(integ, shell, shell.sensors()[0], seed, 8)
 else:
     integ = api.make_integrator("identity", inner=2, stylize="first_n_hits", stylize_depth=2)
     render = lambda seed: next(iter(api.passes(shell, integ, 4, seed))).image

@@ -313,7 +313,7 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return value
 
     def _render_reuse(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
-        """`render` with reuse=pixels: a pass is rendered by `reuse.render`, which needs every
+        """`render` with reuse=pixels: a pass is rendered by `reuse.render_reuse`, which needs every
         camera sample's neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see
         each other). It is set on the instance only then: a Python `render` on the class, even one
         calling Mitsuba's, changed how a render in progress takes Ctrl-C (Mitsuba's own handler took

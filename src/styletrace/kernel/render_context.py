@@ -1,7 +1,7 @@
 """The per-render state of a `stylized` integrator, bound to one scene for one render and
 always released.
 
-    # in `sample`, `reuse.render`, and a recording through them
+    # in `sample`, `reuse.render_reuse`, and a recording through them
     with RenderContext(integrator, scene):
         # integrator.targets, .emitters, .lines, .view, ... are set
         ... trace ...
