@@ -103,8 +103,8 @@ def scene_problem(scene: Any, origin: str) -> str | None:
     if not isinstance(scene, mi.Scene):
         kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
         return (
-            f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
-            f"holding a sensor, shapes and emitters"
+            f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML "
+            "<scene>) holding a sensor, shapes and emitters"
         )
     if not scene.sensors():
         return (f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "

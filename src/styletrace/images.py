@@ -64,9 +64,11 @@ def bitmap_format(pixel_format: str, channels: int) -> str:
     """The Bitmap pixel format name ('RGB', 'Y', 'XYZA', ...) of an image with `channels` channels."""
     name = PIXEL_FORMATS.get(pixel_format.lower())
     if name is None:
-        raise ValueError(f"unknown pixel format {pixel_format!r}: expected one of {', '.join(PIXEL_FORMATS)}")
+        raise ValueError(f"unknown pixel format {pixel_format!r}: expected one of "
+                         f"{', '.join(PIXEL_FORMATS)}")
     if len(name) != channels:
-        raise ValueError(f"an image of {channels} channel(s) is not in pixel format {pixel_format!r}")
+        raise ValueError(f"an image of {channels} channel(s) is not in pixel format "
+                         f"{pixel_format!r}")
     return name
 
 
@@ -269,7 +271,8 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
     a device such as /dev/null, a fifo, a folder) raises OSError untouched: a rename would replace it."""
     kind = unwritable_kind(path)
     if kind is not None:
-        raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced atomically")
+        raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced "
+                      "atomically")
     path = destination(path)
     folder = os.path.dirname(os.path.abspath(path))
     mode = creation_mode(path)
@@ -349,7 +352,8 @@ def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
             os.remove(fallback)
             raise
         reason = str(exc).replace("\n", " ")
-        print(f"styletrace: could not write {path!r} ({reason}); saved the render to {fallback}", file=sys.stderr)
+        print(f"styletrace: could not write {path!r} ({reason}); saved the "
+              f"render to {fallback}", file=sys.stderr)
         return fallback
 
 
@@ -362,7 +366,8 @@ def check_target(path: str) -> None:
     kind = unwritable_kind(path)
     if kind is not None:
         via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
-        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a new name")
+        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a "
+                         "new name")
     target = destination(path)
     folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):

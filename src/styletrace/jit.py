@@ -80,11 +80,13 @@ def configure_llvm() -> str:
             raise BackendError(f"DRJIT_LIBLLVM_PATH={user} does not exist; {FIX}")
         major = llvm_major_of_file(user)
         if major is not None and major < MIN_LLVM_MAJOR:
-            raise BackendError(f"DRJIT_LIBLLVM_PATH={user} is LLVM {major}, which crashes Dr.Jit 1.5; {FIX}")
+            raise BackendError(f"DRJIT_LIBLLVM_PATH={user} is LLVM {major}, which crashes Dr.Jit "
+                               f"1.5; {FIX}")
         return user
     found = find_libllvm()
     if found is None:
-        raise BackendError(f"styletrace found no libLLVM >= {MIN_LLVM_MAJOR} for the CPU backend; {FIX}")
+        raise BackendError(f"styletrace found no libLLVM >= {MIN_LLVM_MAJOR} for the CPU backend; "
+                           f"{FIX}")
     os.environ["DRJIT_LIBLLVM_PATH"] = found
     return found
 
@@ -128,7 +130,8 @@ def prepare_drjit() -> str:
     if cuda_usable():
         return "cuda"
     if not dr.has_backend(dr.JitBackend.LLVM):
-        raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
+        raise BackendError("Dr.Jit could not load libLLVM "
+                           f"({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
     # Dr.Jit picks its own libLLVM when it was imported before styletrace; refuse one that crashes
     loaded = loaded_libllvm()
     major = llvm_major_of_file(loaded) if loaded else None
@@ -159,7 +162,8 @@ def select_variant(requested: str | None = None) -> str:
     import mitsuba as mi
     if requested is not None:
         if requested not in mi.variants():
-            raise BackendError(f"unknown variant {requested!r}: this Mitsuba has {', '.join(mi.variants())}")
+            raise BackendError(f"unknown variant {requested!r}: this Mitsuba has "
+                               f"{', '.join(mi.variants())}")
         if mi.variant() != requested:
             mi.set_variant(requested)
         return requested

@@ -170,8 +170,8 @@ class _Includes:
         name = self.subst(node.get("filename", ""))
         if depth + 1 >= MAX_INCLUDE_DEPTH:
             self.problem = (
-                f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
-                f"levels at '{name}'"
+                f"{self.origin}: <include> nests deeper than Mitsuba's limit of "
+                f"{MAX_INCLUDE_DEPTH} levels at '{name}'"
             )
             return None
         lookup = [folder, *resolver]

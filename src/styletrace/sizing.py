@@ -80,7 +80,8 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
     if lanes != default:
         note = (
             f"only {free / 2**30:.1f} GiB of GPU memory free: passes of {lanes} samples instead of "
-            f"{default}, so the image differs from this device's default split (--pass-spp fixes it)"
+            f"{default}, so the image differs from this device's default split (--pass-spp fixes "
+            "it)"
         )
     return lanes, note
 

@@ -57,8 +57,9 @@ def warning(image, settings) -> str | None:
     advice = ("use --expansion-pass 64 or --estimator direct" if slot.estimator == "series"
               and not getattr(settings, "expansion_pass", 0) else "use --estimator direct")
     return (
-        f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: {100 * fraction:.2g}% of "
-        f"pixel values lie outside {slot.style.name}'s range {span} (observed {vmin:.3g} to {vmax:.3g}, median "
-        f"|value| {med:.3g}); its variance is unbounded on radiance with fireflies (small bright lights, glossy "
-        f"highlights): {advice}, or see docs/estimators.md (Gamma and the series estimators)"
+        f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: "
+        f"{100 * fraction:.2g}% of pixel values lie outside {slot.style.name}'s range {span} "
+        f"(observed {vmin:.3g} to {vmax:.3g}, median |value| {med:.3g}); its variance is unbounded "
+        f"on radiance with fireflies (small bright lights, glossy highlights): {advice}, or see "
+        "docs/estimators.md (Gamma and the series estimators)"
     )

@@ -33,7 +33,8 @@ class LineSettings:
         if self.mode == "lifted":
             kinds = ",".join(t.measurement for t in self.types)
             return f"lines(lifted, depth={self.depth}, types={kinds})"
-        return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, tests={','.join(self.tests)})")
+        return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, "
+                f"tests={','.join(self.tests)})")
 
 
 EMITTER_MODES = ("uniform", "power")

@@ -99,7 +99,8 @@ def get(name: str) -> EstimatorKind:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise SettingsError(f"unknown estimator '{name}': available are {', '.join(_REGISTRY)}") from None
+        raise SettingsError(f"unknown estimator '{name}': available are "
+                            f"{', '.join(_REGISTRY)}") from None
 
 
 def kinds() -> list[EstimatorKind]:
@@ -226,7 +227,8 @@ def child_mean(slot, level: int, settings=None, emitted=None) -> Transformed:
 
 # ---- the registry ------------------------------------------------------------------------------
 
-@estimator("direct", None, "g(mean of n children), biased O(1/n) (Eq. 19); with n0:n_max adaptive, n chosen per "
+@estimator("direct", None,
+           "g(mean of n children), biased O(1/n) (Eq. 19); with n0:n_max adaptive, n chosen per "
            "vertex (estimators/adaptive.py)", "children per estimate (or n0:n_max)")
 def _direct(style, n, vertex):
     if style.per_sample:  # the children arrive already styled (a baseline): just average them
@@ -239,8 +241,8 @@ def _affine_form(form):
     return form.affine if isinstance(form, CompositeForm) else form
 
 
-@estimator("affine", (AffineForm, CompositeForm), "a1 <I>_n + a0, unbiased (S1-S3)", "children per estimate",
-           when=lambda form: _affine_form(form) is not None)
+@estimator("affine", (AffineForm, CompositeForm), "a1 <I>_n + a0, unbiased (S1-S3)",
+           "children per estimate", when=lambda form: _affine_form(form) is not None)
 def _affine(style, n, vertex):
     form = _affine_form(style.form())
     return Transformed(E.Affine(form.a1, form.a0, n=n))
@@ -324,7 +326,8 @@ estimator(
 )(_series("single"))
 
 
-@estimator("ustat", (PolynomialForm,), "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
+@estimator("ustat", (PolynomialForm,),
+           "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
            "children (at least the fit's degree)", pilot="1 sample")
 def _ustat(style, n, vertex):
     form = style.form()
@@ -332,7 +335,8 @@ def _ustat(style, n, vertex):
     return Transformed(est, _clamp_sample(form))
 
 
-@estimator("naive", (PolynomialForm,), "products of independent children per polynomial term (S6)", _PILOT)
+@estimator("naive", (PolynomialForm,),
+           "products of independent children per polynomial term (S6)", _PILOT)
 def _naive(style, n, vertex):
     form = style.form()
     return Transformed(E.PolynomialNaive(form.fit, b=E.Pilot(n)), _clamp_sample(form))
@@ -363,9 +367,10 @@ def _operand(form, n: int):
     raise AssertionError(f"no operand estimator for {form!r}")
 
 
-@estimator("combined", (CompositeForm,), "a composition's operands' unbiased estimators nested (Theorem 4.1): "
-           "each outer operand consumes independent estimates of the inner ones", "pilot samples of series "
-           "and polynomial operands (affine operands take 1)")
+@estimator("combined", (CompositeForm,),
+           "a composition's operands' unbiased estimators nested (Theorem 4.1): each outer operand "
+           "consumes independent estimates of the inner ones",
+           "pilot samples of series and polynomial operands (affine operands take 1)")
 def _combined(style, n, vertex):
     forms = style.form().forms
     est = _operand(forms[0], n)

@@ -26,7 +26,8 @@ class AdaptiveDirect(Estimator):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")
         if curvature is not None and not callable(curvature):
-            raise ValueError(f"curvature must be None or a callable (mean, h) -> g''(mean), got {curvature!r}")
+            raise ValueError("curvature must be None or a callable (mean, h) -> g''(mean), got "
+                             f"{curvature!r}")
         self.n0 = check_count("n0", n0)
         self.n_max = check_count("n_max", n_max, self.n0)
         if not (np.isfinite(z) and z > 0) or not (np.isfinite(bias) and bias > 0):

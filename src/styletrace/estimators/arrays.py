@@ -70,7 +70,8 @@ def backend_module(like=None):
     if like is not None:
         tp = like if isinstance(like, type) else type(like)
         if not issubclass(tp, dr.ArrayBase) or dr.backend_v(tp) not in (dr.JitBackend.CUDA, dr.JitBackend.LLVM):
-            raise TypeError(f"backend_module: {tp.__name__} is not a JIT (CUDA or LLVM) Dr.Jit array type")
+            raise TypeError(f"backend_module: {tp.__name__} is not a JIT (CUDA or LLVM) Dr.Jit "
+                            "array type")
         return _module_for(dr, dr.backend_v(tp), bool(dr.is_diff_v(tp)))
     mi = sys.modules.get("mitsuba")
     variant = None
@@ -185,7 +186,8 @@ def const_like(c, x):
         dr = drjit()
         n = dr.size_v(type(x)) if dr.depth_v(x) > 1 else 1
         if n != c.shape[0]:
-            raise ValueError(f"{c.shape[0]} per-channel constants for a value of type {type(x).__name__} with {n} channel(s)")
+            raise ValueError(f"{c.shape[0]} per-channel constants for a value of type "
+                             f"{type(x).__name__} with {n} channel(s)")
         return type(x)(*[float(v) for v in c])
     x = np.asarray(x)
     if x.ndim == 0 or x.shape[-1] != c.shape[0]:

@@ -80,9 +80,9 @@ class Context:
             return cls("drjit", like_t=like_t, uniform=uniform), carry
         if like is not None and not isinstance(like, np.ndarray):
             raise ValueError(
-                f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
-                f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
-                f"got {like!r}"
+                "like must be the type (or an instance) of the samples draw() returns: a Dr.Jit "
+                "array type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, "
+                f"C); got {like!r}"
             )
         if A.is_drjit(active):
             raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>, "
@@ -102,7 +102,8 @@ class Context:
         if lanes is None:  # nothing says how many lanes: ask the random stream
             u, carry = uniform(carry)
             if A.is_drjit(u):
-                raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>")
+                raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() "
+                                 "returns>")
             lanes = np.asarray(u).shape[0]
         return cls("numpy", lanes=lanes, dtype=dtype, channels=channels, ndim=ndim, uniform=uniform), carry
 
@@ -132,7 +133,8 @@ class Context:
         if self.is_drjit or c.ndim != 1:  # scalars, bad shapes and Dr.Jit values: const_like's checks
             return A.const_like(c, self.like_t(0.0) if self.is_drjit else np.zeros(c.shape[-1:] or (1,)))
         if self.channels is not None and self.channels != c.shape[0]:
-            raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} channel(s)")
+            raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} "
+                             "channel(s)")
         self.channels = c.shape[0]
         return c
 
@@ -151,7 +153,8 @@ class Context:
         """A sample from draw() in the estimators' layout, checked against what we expect."""
         if self.is_drjit:
             if not A.is_drjit(x):
-                raise ValueError(f"draw() returned {type(x).__name__}; like={self.like_t.__name__} promised a Dr.Jit array")
+                raise ValueError(f"draw() returned {type(x).__name__}; like={self.like_t.__name__} "
+                                 "promised a Dr.Jit array")
             if type(x) is not self.like_t:
                 x = self.like_t(x)
             return x

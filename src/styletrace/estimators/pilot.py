@@ -69,7 +69,8 @@ class ExpansionPoint:
             b = default if b is None else b
             arr = np.asarray(b, dtype=np.float64)
             if arr.ndim > 1 or not np.all(np.isfinite(arr)):
-                raise ValueError(f"expansion point b must be a finite scalar, a per-channel vector or Pilot(...), got {b!r}")
+                raise ValueError("expansion point b must be a finite scalar, a per-channel vector "
+                                 f"or Pilot(...), got {b!r}")
             if series is not None:
                 series.check_center(arr)
             self.fixed = arr

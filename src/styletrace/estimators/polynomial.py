@@ -136,7 +136,8 @@ class PolynomialU(_PolynomialBase):
         super().__init__(poly, b)
         self.n = check_count("n", n)
         if self.n < self.K:
-            raise ValueError(f"the U-statistic of a degree-{self.K} polynomial needs n >= {self.K} samples, got n={self.n}")
+            raise ValueError(f"the U-statistic of a degree-{self.K} polynomial needs n >= {self.K} "
+                             f"samples, got n={self.n}")
         self.name = f"poly-U(K={self.K}, n={self.n}, {self.point.describe()})"
 
     def start(self, ctx: Context, carry):

@@ -62,8 +62,8 @@ class SeriesEstimator(Estimator):
         self.scaled = bool(scaled)
         if self.scaled and not (selection == "iterative" and terms == "ustat" and hasattr(series, "ratio")):
             raise ValueError(
-                f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
-                f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
+                "scaled=True needs selection='iterative', terms='ustat' and a series defined by "
+                f"its coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
             )
         if self.truncation.adaptive and selection != "recursive":
             raise ValueError(f"{self.truncation.name} truncation adapts to the samples, so only "

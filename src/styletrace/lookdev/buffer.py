@@ -132,7 +132,8 @@ class Buffer:
             raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
         kind = unwritable_kind(path)
         if kind is not None:
-            raise UsageError(f"cannot write {path!r}: it is {kind}; expected a regular file or a new name")
+            raise UsageError(f"cannot write {path!r}: it is {kind}; expected a regular file or a "
+                             "new name")
         target = destination(path)  # a symbolic link is written through, as the images are
         folder = os.path.dirname(os.path.abspath(target))
         if not os.path.isdir(folder):
@@ -197,7 +198,8 @@ def load_buffer(path: str) -> Buffer:
         want = (seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (2, n) if k == "pos"
                 else (3, n))
         if a.shape != want:
-            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, "
+                             f"expected {want}")
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
     tiles = header.get("tiles", 1)
@@ -209,14 +211,16 @@ def load_buffer(path: str) -> Buffer:
             for p in header["passes"]
         )
     ):
-        raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
+        raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its "
+                         f"{tiles!r} tiles")
     if filtered(header) and sum(int(p.get("samples", -1)) for p in header["passes"]) != n:
         raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} "
                          f"camera samples")
     for k, a in denoised.items():
         want = (n,) if k == SPREAD else (3, n)
         if a.shape != want:
-            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, "
+                             f"expected {want}")
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 

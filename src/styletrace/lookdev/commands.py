@@ -19,9 +19,9 @@ from ..errors import UsageError
 BUFFER_HELP = (
     "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
     "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
-    "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's children "
-    "and uniforms: at most 1048576 camera samples and 64 children per sample on average, 57 bytes + 13 "
-    "per child + 5 per uniform each"
+    "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's "
+    "children and uniforms: at most 1048576 camera samples and 64 children per sample on average, "
+    "57 bytes + 13 per child + 5 per uniform each"
 )
 
 
@@ -56,14 +56,15 @@ def render_with_buffer(args, scene, integrator, lanes: int | None = None, pilot=
     if failure is not None:
         what = "interrupted" if isinstance(failure, KeyboardInterrupt) else f"error ({api.first_line(failure)})"
         print(
-            f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished passes to {out} "
-            f"and {args.buffer}",
+            f"styletrace: {what} after {latest.spp_done} of {args.spp} spp; wrote the finished "
+            f"passes to {out} and {args.buffer}",
             file=sys.stderr,
         )
         return 130 if isinstance(failure, KeyboardInterrupt) else 1
     if not args.quiet:
         print(
-            f"wrote {out} and {args.buffer} ({buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB)",
+            f"wrote {out} and {args.buffer} ({buf.samples} camera samples, "
+            f"{buf.nbytes / 2**20:.1f} MiB)",
             file=sys.stderr,
         )
     return 0 if out == args.output else 1
@@ -113,7 +114,8 @@ def cmd_fit(args, parse_set, check_output) -> int:
     params = {p.name: p for p in get(style).params}
     shown = {k: v for k, v in initial.items() if k not in result.params}
     shown.update({k: params[k].show(v) for k, v in result.params.items()})
-    print(f"fitted in {result.iterations} iterations ({result.seconds:.2f} s), mean squared error {result.loss:.3g}")
+    print(f"fitted in {result.iterations} iterations ({result.seconds:.2f} s), mean squared error "
+          f"{result.loss:.3g}")
     print(shlex.join(["styletrace", "restyle", args.buffer, "--style", style]
                      + [w for k, v in shown.items() for w in ("--set", f"{k}={v}")]))
     if args.output:
@@ -135,7 +137,8 @@ def cmd_preview(args, parse_set) -> int:
 
 
 def add_parsers(sub, parse_set, check_output) -> None:
-    r = sub.add_parser("restyle", help="restyle an expectation buffer (from render --buffer) without tracing")
+    r = sub.add_parser("restyle", help="restyle an expectation buffer (from render --buffer) "
+                                       "without tracing")
     r.add_argument("buffer", help="buffer file (.npz) written by `styletrace render --buffer`")
     r.add_argument("--style", default=None, help="new style (default: the recorded one)")
     r.add_argument(
@@ -146,27 +149,36 @@ def add_parsers(sub, parse_set, check_output) -> None:
         "otherwise) (default: the recorded one where it applies)",
     )
     r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a style parameter")
-    r.add_argument("-o", "--output", default="restyle.png", help="output image: .exr (linear) or .png (sRGB)")
+    r.add_argument("-o", "--output", default="restyle.png", help="output image: .exr (linear) or "
+            ".png (sRGB)")
     r.set_defaults(func=partial(cmd_restyle, parse_set=parse_set, check_output=check_output))
 
-    f = sub.add_parser("fit", help="fit a style's parameters so the restyled buffer matches a target image")
+    f = sub.add_parser("fit", help="fit a style's parameters so the restyled buffer matches a "
+                                   "target image")
     f.add_argument("buffer", help="buffer file (.npz) written by `styletrace render --buffer`")
     f.add_argument("--style", default=None, help="style to fit (default: the recorded one)")
-    f.add_argument("--target", required=True, help="target image, the buffer's size (.exr linear, .png sRGB)")
+    f.add_argument("--target", required=True, help="target image, the buffer's size (.exr linear, "
+                                                   ".png sRGB)")
     f.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a starting value")
-    f.add_argument("--fix", default=None, metavar="K1,K2", help="parameters to keep at their starting values")
+    f.add_argument("--fix", default=None, metavar="K1,K2", help="parameters to keep at their "
+            "starting values")
     f.add_argument("--iterations", type=int, default=300, help="most gradient steps (default 300)")
     f.add_argument("--lr", type=float, default=0.1, help="Adam's first learning rate (default 0.1)")
-    f.add_argument("-o", "--output", default=None, help="also write the fitted restyle (.exr or .png)")
+    f.add_argument("-o", "--output", default=None, help="also write the fitted restyle (.exr or "
+                                                        ".png)")
     f.set_defaults(func=partial(cmd_fit, parse_set=parse_set, check_output=check_output))
 
-    p = sub.add_parser("preview", help="tune a style live in the browser (serves http://127.0.0.1:PORT)")
-    p.add_argument("scene", nargs="?", default="cornell-box", help="built-in scene or Mitsuba XML file")
-    p.add_argument("--port", type=int, default=8765, help="port on 127.0.0.1 (default 8765; 0 picks a free one)")
+    p = sub.add_parser("preview", help="tune a style live in the browser (serves "
+                                       "http://127.0.0.1:PORT)")
+    p.add_argument("scene", nargs="?", default="cornell-box", help="built-in scene or Mitsuba XML "
+            "file")
+    p.add_argument("--port", type=int, default=8765, help="port on 127.0.0.1 (default 8765; 0 "
+                                                          "picks a free one)")
     p.add_argument("--style", default="cel", help="style to start with (default cel)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a starting style parameter")
     p.add_argument("--inner", type=int, default=None, help="children per camera sample (default 8)")
-    p.add_argument("--spp", type=int, default=None, help="camera samples per pixel to refine to (default 16)")
+    p.add_argument("--spp", type=int, default=None, help="camera samples per pixel to refine to "
+                                                         "(default 16)")
     p.add_argument("--width", type=int, default=None, help="image width (default 256)")
     p.add_argument("--height", type=int, default=None, help="image height (default 256)")
     p.set_defaults(func=partial(cmd_preview, parse_set=parse_set))

@@ -59,8 +59,8 @@ def check_recordable(settings: S.Settings, slots) -> None:
         )
     if settings.expansion_pass:
         raise SettingsError(
-            f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each camera "
-            f"sample's own children, not a pre-pass's expansion point; use expansion_pass=0"
+            f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each "
+            "camera sample's own children, not a pre-pass's expansion point; use expansion_pass=0"
         )
     if settings.lines is not None:
         raise SettingsError(
@@ -90,7 +90,8 @@ def check_film(scene: mi.Scene) -> mi.Film:
     border); SceneError (one line) otherwise."""
     film = scene.sensors()[0].film()
     if film_format(scene) != "rgb":
-        raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb film")
+        raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb "
+                         "film")
     film_filter.describe(film.rfilter())
     return film
 

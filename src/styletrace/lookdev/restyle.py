@@ -132,8 +132,8 @@ def slots_for(
             if n == 0 and not new.closed_form:
                 raise UsageError(
                     f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
-                    f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
-                    f"record the buffer with a style that traces children"
+                    f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= "
+                    "1; record the buffer with a style that traces children"
                 )
             if estimator is not None:
                 est = estimator
@@ -263,11 +263,13 @@ def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi
         names = sorted({s.estimator for s in slots})
         recorded = sorted({r["estimator"] for r in buffer.header["slots"]})
         raise UsageError(
-            f"estimator {', '.join(repr(n) for n in names)} cannot restyle this buffer: on {missing} of "
-            f"{buffer.samples} camera samples it asks for a child or uniform number beyond the stored ones or in "
-            f"another order than the recorded {', '.join(repr(n) for n in recorded)} (the buffer stores "
-            f"{children / buffer.samples:.1f} children and {(events - children) / buffer.samples:.1f} uniform "
-            f"numbers per camera sample on average); this estimator needs more: record a buffer with it"
+            f"estimator {', '.join(repr(n) for n in names)} cannot restyle this buffer: on "
+            f"{missing} of {buffer.samples} camera samples it asks for a child or uniform number "
+            "beyond the stored ones or in another order than the recorded "
+            f"{', '.join(repr(n) for n in recorded)} (the buffer stores "
+            f"{children / buffer.samples:.1f} children and "
+            f"{(events - children) / buffer.samples:.1f} uniform numbers per camera sample on "
+            "average); this estimator needs more: record a buffer with it"
         )
     return total
 
@@ -283,7 +285,8 @@ def replay_lanes(
     replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and tests)."""
     buf = as_buffer(buffer)
     if buf.stores != "sequence":
-        raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased estimator)")
+        raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased "
+                         "estimator)")
     slots = prepare(buf, slots_for(buf, style, estimator, inner, **params))
     d = device(buf)
     v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buf.header["view"]), depth=d["depth"])
@@ -329,7 +332,8 @@ def as_buffer(buffer: Any) -> Buffer:
         return buffer
     if isinstance(buffer, (str, os.PathLike)):
         return load_buffer(buffer)
-    raise UsageError(f"bad buffer {type(buffer).__name__}: expected a styletrace Buffer or a .npz path")
+    raise UsageError(f"bad buffer {type(buffer).__name__}: expected a styletrace Buffer or a .npz "
+                     "path")
 
 
 def restyle(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,

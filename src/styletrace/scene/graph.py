@@ -64,8 +64,8 @@ def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
             found[id(obj)] = obj
             if styled_inside(obj.nested):
                 raise SceneError(
-                    f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, whose "
-                    f"style would never apply: keep one 'styled' BSDF per surface"
+                    f"a 'styled' BSDF ({obj.slot.style.describe()}) holds another 'styled' BSDF, "
+                    "whose style would never apply: keep one 'styled' BSDF per surface"
                 )
             continue  # its traversal forwards to the nested BSDF's parameters, checked above
         stack.extend(children(obj))
@@ -103,15 +103,17 @@ class SceneGraph:
                 self.has_see_through |= pure_null(bsdf.flags())
                 if shape.emitter() is not None:  # see path.first_scattering for why
                     raise SceneError(
-                        f"shape '{_name(shape)}' emits light through a see-through {bsdf.class_name()} "
-                        f"BSDF, which 'stylized' does not support: give the emitter an opaque BSDF"
+                        f"shape '{_name(shape)}' emits light through a see-through "
+                        f"{bsdf.class_name()} BSDF, which 'stylized' does not support: give the "
+                        "emitter an opaque BSDF"
                     )
             self.has_media |= shape.interior_medium() is not None or shape.exterior_medium() is not None
             styled = styled_inside(bsdf)
             if len(styled) > 1:
                 raise SceneError(
-                    f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} 'styled' "
-                    f"BSDFs, but a surface takes one style: wrap the whole BSDF in one 'styled' instead"
+                    f"shape '{_name(shape)}': its {bsdf.class_name()} BSDF holds {len(styled)} "
+                    "'styled' BSDFs, but a surface takes one style: wrap the whole BSDF in one "
+                    "'styled' instead"
                 )
             if not styled:
                 continue

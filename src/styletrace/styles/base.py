@@ -63,7 +63,8 @@ class Style:
         for key in values:
             if key not in known:
                 allowed = ", ".join(known) if known else "none"
-                raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are {allowed}")
+                raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are "
+                                 f"{allowed}")
         self.values: dict[str, Any] = {}
         #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in
         #: auto values

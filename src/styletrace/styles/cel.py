@@ -41,8 +41,8 @@ class Cel(Style):
             "floats",
             None,
             "brightness steps between levels, increasing",
-            auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
-            "unresolved: evenly spaced k/(K+1))",
+            auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels "
+                 "(equal bands; unresolved: evenly spaced k/(K+1))",
         ),
         Param(
             "levels",
@@ -50,8 +50,8 @@ class Cel(Style):
             None,
             "target brightness of each band (one more than thresholds)",
             low=0.0,
-            auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
-            "(unresolved: evenly spaced in lightness)",
+            auto="each band's median brightness with the scene's median at middle grey, >= 18 L* "
+                 "apart (unresolved: evenly spaced in lightness)",
         ),
     )
     default_inner = 16
@@ -59,7 +59,8 @@ class Cel(Style):
     def validate(self) -> None:
         t, m = self.thresholds, self.levels
         if t is not None and any(b <= a for a, b in zip(t, t[1:])):
-            raise StyleError(f"bad value {','.join(map(str, t))!r} for parameter 'thresholds': must increase")
+            raise StyleError(f"bad value {','.join(map(str, t))!r} for parameter 'thresholds': "
+                             "must increase")
         if t is not None and m is not None and len(m) != len(t) + 1:
             raise StyleError(f"bad value {','.join(map(str, m))!r} for parameter 'levels': "
                              f"expected {len(t) + 1} levels for {len(t)} thresholds")

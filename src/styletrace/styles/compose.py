@@ -41,7 +41,8 @@ def composite_class(name: str, lookup) -> type[Style]:
     """The Style class of `name` = 'a+b+...'; `lookup(op)` returns an operand's class."""
     ops = [o.strip() for o in name.split(SEPARATOR)]
     if len(ops) < 2 or any(not o for o in ops):
-        raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. contrast+sepia")
+        raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. "
+                         "contrast+sepia")
     if len(set(ops)) != len(ops):
         raise StyleError(
             f"bad style {name!r}: each style may appear once in a composition (its parameters are "

@@ -40,8 +40,8 @@ class ExpTone(Style):
             exposure_param(),
             doc="exposure k",
             high=MAX_EXPOSURE,
-            auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
-            f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})",
+            auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit "
+                 f"brightness, at most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})",
         ),
     )
     default_inner = 16

@@ -53,8 +53,9 @@ class Gamma(Style):
         top = self.scale * MAX_RADIANCE
         if top > 1.0 and math.log(top) / self.gamma > math.log(FLOAT32_MAX):
             raise StyleError(
-                f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
-                f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma"
+                f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) "
+                f"overflows float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or "
+                "raise gamma"
             )
 
     def auto_values(self, facts) -> dict:

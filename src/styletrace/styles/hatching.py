@@ -212,7 +212,8 @@ class BrightnessRange:
 
     def check_u_range(self) -> None:
         if self.tones is not None and (self.u_min is not None or self.u_max is not None):
-            raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are alternatives; give one")
+            raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are "
+                             "alternatives; give one")
         if self.tones is not None and any(b < a for a, b in zip(self.tones, self.tones[1:])):
             raise StyleError(
                 f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "

@@ -103,7 +103,8 @@ class Param(Declaration):
         return f" in {'(' if self.low_open else '['}{lo_text}, {hi_text}{')' if hi == math.inf else ']'}"
 
     def fail(self, value: Any) -> StyleError:
-        return StyleError(f"bad value {value!r} for parameter '{self.name}': expected {self.allowed()}")
+        return StyleError(f"bad value {value!r} for parameter '{self.name}': expected "
+                          f"{self.allowed()}")
 
     def colour_text(self, text: str) -> list[Any]:
         s = text.strip()

@@ -20,7 +20,8 @@ from .registry import register
 class Saturation(Style):
     name = "saturation"
     summary = "blend of grey and maximally saturated colour at the same brightness (S5.3)"
-    params = (Param("w", "float", 0.5, "weight of grey (1 = grey, 0 = maximally saturated)", low=0.0, high=1.0),)
+    params = (Param("w", "float", 0.5, "weight of grey (1 = grey, 0 = "
+                                       "maximally saturated)", low=0.0, high=1.0),)
     default_inner = 8
 
     def saturated(self, I: mi.Color3f) -> mi.Color3f:

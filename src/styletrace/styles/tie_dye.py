@@ -79,8 +79,8 @@ class TieDye(Style):
             raise StyleError(
                 f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
                 f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
-                f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
-                f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it"
+                f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches "
+                f"{largest:.3g}; it must stay below {MAX_ARGUMENT:g} for float32 to resolve it"
             )
 
     def domain(self) -> tuple[float, float]:
