@@ -5,8 +5,8 @@ The LLVM backend `dlopen`s a system libLLVM. Dr.Jit 1.5 aborts the whole process
 and hand it to Dr.Jit through `DRJIT_LIBLLVM_PATH` before the first `import drjit`.
 Then the variant: `cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`, unless the user chose one.
 
-`no_collection()` keeps Python's cyclic garbage collector from running while a pass is traced and launched
-(see its docstring: a scene freed by it in the middle of a trace made LLVM abort).
+`no_collection()` keeps Python's cyclic garbage collector from running while a pass is traced and
+launched (see its docstring: a scene freed by it in the middle of a trace made LLVM abort).
 """
 from __future__ import annotations
 
@@ -34,7 +34,8 @@ from .errors import BackendError  # noqa: E402  (re-exported: callers catch it f
 
 
 def llvm_major(path: str) -> int | None:
-    """Major version encoded in a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1, libLLVM-15.0.7.so...)."""
+    """Major version encoded in a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1,
+    libLLVM-15.0.7.so...)."""
     name = os.path.basename(path)
     m = re.match(r"libLLVM(?:-(\d+)[.\d]*\.(?:so|dylib)|\.so\.(\d+)|\.(\d+)\.dylib)", name)
     if not m:
@@ -43,9 +44,10 @@ def llvm_major(path: str) -> int | None:
 
 
 def llvm_major_of_file(path: str) -> int | None:
-    """Major version of the libLLVM at `path`, read from the file itself: libLLVM exports its symbols under
-    an ELF symbol version named `LLVM_<major>[.<minor>]` (in .dynstr, near the start of the file), so a
-    copy renamed to plain libLLVM.so is still recognised. Falls back to the file name; None if neither says."""
+    """Major version of the libLLVM at `path`, read from the file itself: libLLVM exports its
+    symbols under an ELF symbol version named `LLVM_<major>[.<minor>]` (in .dynstr, near the start
+    of the file), so a copy renamed to plain libLLVM.so is still recognised. Falls back to the file
+    name; None if neither says."""
     try:
         with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
             at = data.find(b"\0LLVM_")
@@ -92,7 +94,8 @@ def configure_llvm() -> str:
 
 
 def cuda_usable() -> bool:
-    """True when Dr.Jit can run CUDA kernels here (checked without creating a CUDA context if the driver is absent)."""
+    """True when Dr.Jit can run CUDA kernels here (checked without creating a CUDA context if the
+    driver is absent)."""
     if os.environ.get("STYLETRACE_NO_CUDA"):
         return False
     if not any(glob.glob(os.path.join(d, "libcuda.so*")) for d in SEARCH_DIRS):
@@ -154,8 +157,8 @@ def check_variant(variant: str) -> str:
 
 
 def select_variant(requested: str | None = None) -> str:
-    """Set the Mitsuba variant and return it: `requested` if given, else the one the user already set,
-    else `cuda_ad_rgb` where CUDA works and `llvm_ad_rgb` otherwise."""
+    """Set the Mitsuba variant and return it: `requested` if given, else the one the user already
+    set, else `cuda_ad_rgb` where CUDA works and `llvm_ad_rgb` otherwise."""
     if requested is not None:
         check_variant(requested)
     backend = prepare_drjit()
@@ -176,10 +179,12 @@ def select_variant(requested: str | None = None) -> str:
 
 
 def backend(variant: str | None = None) -> str:
-    """Choose libLLVM and the Mitsuba variant once (`variant` switches to another) and return the variant.
+    """Choose libLLVM and the Mitsuba variant once (`variant` switches to another) and return the
+    variant.
 
     Idempotent and cheap once chosen; every styletrace module that imports Dr.Jit or Mitsuba when it
-    loads calls it first. A variant the user set before is kept (and refused if styles cannot run on it)."""
+    loads calls it first. A variant the user set before is kept (and refused if styles cannot run on
+    it)."""
     mi = sys.modules.get("mitsuba")
     if variant is None and mi is not None and mi.variant():
         return check_variant(mi.variant())
@@ -188,16 +193,18 @@ def backend(variant: str | None = None) -> str:
 
 @contextlib.contextmanager
 def no_collection():
-    """No automatic cyclic garbage collection inside the block (the previous state is restored after it).
+    """No automatic cyclic garbage collection inside the block (the previous state is restored after
+    it).
 
-    Dr.Jit records a virtual call (a BSDF's `eval`, say) over every live instance of the class. Python's
-    cyclic collector runs at arbitrary allocations; when it finalised a scene that had become cyclic garbage
-    (a refused render's traceback held by an exception, say) while a pass was being recorded, that scene's
-    BSDFs left Dr.Jit's registry in the middle of the recording, and the kernel LLVM then compiled had one
-    function defined twice: "invalid redefinition of function", an abort (measured: the collector ran
-    inside reuse's child walk, a while_loop body; tests/test_jit.py reproduces it in a subprocess). Such
-    garbage is collected before or after the pass instead: reference counting still frees everything that
-    is not in a cycle at once, and the collector runs at the next allocation after the block."""
+    Dr.Jit records a virtual call (a BSDF's `eval`, say) over every live instance of the class.
+    Python's cyclic collector runs at arbitrary allocations; when it finalised a scene that had
+    become cyclic garbage (a refused render's traceback held by an exception, say) while a pass was
+    being recorded, that scene's BSDFs left Dr.Jit's registry in the middle of the recording, and
+    the kernel LLVM then compiled had one function defined twice: "invalid redefinition of
+    function", an abort (measured: the collector ran inside reuse's child walk, a while_loop body;
+    tests/test_jit.py reproduces it in a subprocess). Such garbage is collected before or after the
+    pass instead: reference counting still frees everything that is not in a cycle at once, and the
+    collector runs at the next allocation after the block."""
     was = gc.isenabled()
     gc.disable()
     try:

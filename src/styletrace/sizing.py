@@ -26,8 +26,9 @@ MemoryQuery = Callable[[], Optional[tuple]]  # () -> (free bytes, total bytes) o
 
 
 def cuda_memory(ordinal: int = 0) -> tuple[int, int] | None:
-    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where unavailable.
-    Dr.Jit uses the device's primary context, so retaining it here creates nothing new."""
+    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where
+    unavailable. Dr.Jit uses the device's primary context, so retaining it here creates nothing
+    new."""
     try:
         cuda = ctypes.CDLL("libcuda.so.1")
     except OSError:
@@ -64,7 +65,8 @@ def lanes_per_pass(variant: str, query: MemoryQuery = cuda_memory) -> tuple[int,
         query: returns the CUDA device's (free, total) bytes, or None where it cannot tell.
 
     Returns:
-        (lanes, note): the pass size, and a note for the user when free memory lowered it, else None.
+        (lanes, note): the pass size, and a note for the user when free memory lowered it, else
+        None.
     """
     if not variant.startswith("cuda"):
         return pass_loop.LANES_PER_PASS, None

@@ -1,5 +1,5 @@
-"""The named choices the kernel offers, which the settings parse and the kernel reads: feature-line tests and
-modes with the parsed line group (`LineSettings`; kernel/lines.py), emitter-sampling modes
+"""The named choices the kernel offers, which the settings parse and the kernel reads: feature-line
+tests and modes with the parsed line group (`LineSettings`; kernel/lines.py), emitter-sampling modes
 (kernel/emitter_sampler.py)."""
 from __future__ import annotations
 

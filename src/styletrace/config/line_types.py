@@ -40,8 +40,8 @@ class LineType:
 
 
 def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tuple[LineType, ...]:
-    """`line_types` (module doc) with the line group's width (pixels), sample count and colour as the
-    defaults of radius, count and colour. One-line `SettingsError` on a bad entry."""
+    """`line_types` (module doc) with the line group's width (pixels), sample count and colour as
+    the defaults of radius, count and colour. One-line `SettingsError` on a bad entry."""
     text = "" if raw is None else raw
     if not isinstance(text, str):
         raise SettingsError(f"bad value {raw!r} for 'line_types': expected a string like "
@@ -96,8 +96,9 @@ def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tupl
 
 
 def without_colours(raw: str) -> str:
-    """`line_types` with every entry's own `color=` field dropped, the rest as given: each type then takes the
-    line group's colour (the Blender add-on's line mask renders the lines once black and once white)."""
+    """`line_types` with every entry's own `color=` field dropped, the rest as given: each type then
+    takes the line group's colour (the Blender add-on's line mask renders the lines once black and
+    once white)."""
     return "; ".join(" ".join(w for w in entry.split() if w.partition("=")[0] != "color")
                      for entry in raw.split(";") if entry.strip())
 

@@ -1,4 +1,5 @@
-"""The `stylized` integrator's settings: their names, defaults, parsing, docs and refinement, in one place.
+"""The `stylized` integrator's settings: their names, defaults, parsing, docs and refinement, in one
+place.
 
 Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
 `--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
@@ -396,7 +397,8 @@ DEFAULTS = {p.name: p.default for p in PROPERTIES}
 
 
 def declare(prop: Property) -> Property:
-    """Add an integrator property: its flag, docs row, parsing and `Settings` attribute follow (declare.py)."""
+    """Add an integrator property: its flag, docs row, parsing and `Settings` attribute follow
+    (declare.py)."""
     global PROPERTIES
     if prop.name in DEFAULTS:
         raise ValueError(f"integrator property {prop.name!r} is declared already")
@@ -406,7 +408,8 @@ def declare(prop: Property) -> Property:
 
 
 def value(key: str, values: Mapping[str, Any]) -> Any:
-    """The value of property `key` in `values` (else its default), parsed as its declaration says."""
+    """The value of property `key` in `values` (else its default), parsed as its declaration
+    says."""
     prop = next(p for p in PROPERTIES if p.name == key)
     raw = values.get(key, prop.default)
     return None if raw is None and prop.default is None else prop.parse(raw)
@@ -429,7 +432,8 @@ MAX_STYLIZE_DEPTH = 16
 
 
 class AdaptiveCount(int):
-    """An adaptive inner count `n0:n_max`: an int equal to n0 (what code that wants one count sees), with n_max."""
+    """An adaptive inner count `n0:n_max`: an int equal to n0 (what code that wants one count sees),
+    with n_max."""
 
     def __new__(cls, n0: int, n_max: int):
         out = super().__new__(cls, n0)
@@ -454,7 +458,8 @@ def adaptive(inner: tuple[int, ...]) -> bool:
 
 @dataclass(frozen=True)
 class StyleSlot:
-    """A style with its inner sample counts (one per stylized level, or one for all) and estimator."""
+    """A style with its inner sample counts (one per stylized level, or one for all) and
+    estimator."""
 
     style: Style
     inner: tuple[int, ...]
@@ -466,7 +471,8 @@ class StyleSlot:
 
 @dataclass(frozen=True)
 class Settings:
-    """The parsed properties (`parse` fills every field; the defaults live in the declarations, PROPERTIES)."""
+    """The parsed properties (`parse` fills every field; the defaults live in the declarations,
+    PROPERTIES)."""
     slot: StyleSlot                 # the integrator's own style (identity: physically based)
     stylize: str
     stylize_depth: int
@@ -593,8 +599,8 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
 
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
-    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4)); a count `n0:n_max`
-    (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'."""
+    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4)); a count
+    `n0:n_max` (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'."""
     if raw is None:
         return (default,)
     if isinstance(raw, str):
@@ -626,7 +632,8 @@ def _count(part: Any) -> int:
 
 def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrator",
                extra_keys: tuple[str, ...] = ()) -> StyleSlot:
-    """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are errors."""
+    """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are
+    errors."""
     values = dict(values)
     style_name = str(values.pop("style", DEFAULTS["style"]))
     cls = get(style_name)
@@ -648,8 +655,8 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
 
 
 def parse(values: Mapping[str, Any]) -> Settings:
-    """Validated integrator settings from a flat name -> value mapping (property values, CLI strings or
-    Python values); missing names take DEFAULTS."""
+    """Validated integrator settings from a flat name -> value mapping (property values, CLI strings
+    or Python values); missing names take DEFAULTS."""
     if "samples_per_pass" in values:
         raise SettingsError(
             f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
@@ -727,7 +734,8 @@ def parse(values: Mapping[str, Any]) -> Settings:
 
 
 def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
-    """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator only."""
+    """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator
+    only."""
     m = value("expansion_pass", values)
     if m and slot.estimator not in EXPANSION_ESTIMATORS:
         raise SettingsError(
@@ -738,7 +746,8 @@ def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
 
 
 def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
-    """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is implemented."""
+    """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is
+    implemented."""
     mode = str(values.get("reuse", DEFAULTS["reuse"])).strip().lower()
     if mode not in REUSE_MODES:
         raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of "
@@ -790,9 +799,9 @@ def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, sty
 
 def check_reusable(slot: StyleSlot, where: str = "the integrator's "
                                                  "style", deep: str = "tree") -> None:
-    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation (an
-    adaptive count n0:n_max adds a refinement round at the first hit, docs/reuse.md; not with reuse_deep=world,
-    whose first-level children are drawn all at once)."""
+    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of
+    expectation (an adaptive count n0:n_max adds a refinement round at the first hit, docs/reuse.md;
+    not with reuse_deep=world, whose first-level children are drawn all at once)."""
     if deep == "world":
         for level in (0, 1):
             n = slot.n(level)
@@ -813,8 +822,8 @@ def check_reusable(slot: StyleSlot, where: str = "the integrator's "
 
 
 def refine(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
-    """`base` property values (a scene's own integrator) with `changes` applied; a new style drops the old
-    style's parameters, which belong to it."""
+    """`base` property values (a scene's own integrator) with `changes` applied; a new style drops
+    the old style's parameters, which belong to it."""
     values = dict(base)
     new_style = changes.get("style")
     if new_style is not None and new_style != values.get("style", DEFAULTS["style"]):

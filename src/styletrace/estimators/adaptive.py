@@ -78,7 +78,8 @@ class AdaptiveDirect(Estimator):
         return A.select(n > 1.5, A.maximum(state["m2_u"], 0.0) / A.maximum(n - 1.0, 1.0), 0.0 * n)
 
     def predicted_bias(self, state, signed: bool):
-        """g''(<I>_n) s^2 / (2n): per-channel magnitudes' largest (the rule) or the channels' signed mean."""
+        """g''(<I>_n) s^2 / (2n): per-channel magnitudes' largest (the rule) or the channels' signed
+        mean."""
         n = A.maximum(state["count"], 1.0)
         var = self.variance(state)
         if self.curvature is None:
@@ -88,10 +89,10 @@ class AdaptiveDirect(Estimator):
         return per * var / (2.0 * n)
 
     def band_width(self, n):
-        """The band's half-width in standard errors at n children: Student's t quantile with n - 1 degrees of
-        freedom at z's normal confidence (s is estimated from the same few children), by its expansion in 1/v
-        (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3, where the exact quantile is
-        3.307), tending to z as n grows."""
+        """The band's half-width in standard errors at n children: Student's t quantile with n - 1
+        degrees of freedom at z's normal confidence (s is estimated from the same few children), by
+        its expansion in 1/v (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3,
+        where the exact quantile is 3.307), tending to z as n grows."""
         z = self.z
         w = 1.0 / A.maximum(n - 1.0, 1.0)
         terms = [(z ** 3 + z) / 4.0, (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96.0,

@@ -37,11 +37,13 @@ def apply_linear(a1: np.ndarray, x):
 
 
 class MeanOfN(Estimator):
-    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish from.
+    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish
+    from.
 
     `cap` = (k, floor), or None: the firefly control. The brightest draw (by channel mean) is scaled
-    down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1) to at
-    most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how much."""
+    down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1)
+    to at most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how
+    much."""
 
     #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp
     #: of 10 at the exposure that maps the median to middle grey (10 / 0.18)

@@ -139,7 +139,8 @@ class Context:
         return c
 
     def value_array(self, c):
-        """A per-lane value holding constant c (state entries must be arrays, never Python floats)."""
+        """A per-lane value holding constant c (state entries must be arrays, never Python
+        floats)."""
         return self.vzero() + self.vconst(c)
 
     # -- randomness and samples -----------------------------------------------------------------
@@ -197,7 +198,8 @@ class Context:
     def count_above(self, survival: np.ndarray, u):
         """#{k >= 1 : survival[k] > u} for a non-increasing table with survival[0] = 1 > u.
 
-        A binary search with a fixed number of steps, so the traced kernel has no data-dependent loop.
+        A binary search with a fixed number of steps, so the traced kernel has no data-dependent
+        loop.
         """
         K = len(survival) - 1
         lo = self.lane(0.0)            # survival[lo] > u holds
@@ -215,10 +217,12 @@ class Context:
         return np.floor(x)
 
     def when(self, mask, compute, otherwise):
-        """select(mask, compute(), otherwise), skipping the computation on numpy when no lane needs it.
+        """select(mask, compute(), otherwise), skipping the computation on numpy when no lane needs
+        it.
 
-        (A traced Dr.Jit kernel evaluates both sides anyway; numpy can save expensive per-estimate work,
-        like re-expanding a polynomial about a pilot b, on the iterations where no lane finished.)
+        (A traced Dr.Jit kernel evaluates both sides anyway; numpy can save expensive per-estimate
+        work, like re-expanding a polynomial about a pilot b, on the iterations where no lane
+        finished.)
         """
         if not self.is_drjit and not np.any(mask):
             return otherwise
@@ -278,7 +282,8 @@ class Estimator:
 
     @property
     def mean_samples(self):
-        """Expected draw() calls per estimate; None where it depends on the data (adaptive truncation)."""
+        """Expected draw() calls per estimate; None where it depends on the data (adaptive
+        truncation)."""
         raise NotImplementedError
 
     @property
@@ -312,7 +317,8 @@ class Estimator:
         return self._run(draw, carry, uniform, active, like)
 
     def _run(self, draw, carry, uniform, active, like, observe=None):
-        """``run``'s loop; ``observe(state)`` (optional) sees the final state before the value is taken."""
+        """``run``'s loop; ``observe(state)`` (optional) sees the final state before the value is
+        taken."""
         ctx, carry = Context.for_run(like, active, uniform, carry)
         if ctx.is_drjit:
             act = active if active is not None else ctx.mask(True)

@@ -1,4 +1,5 @@
-"""Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k for a (possibly per-lane) expansion point b.
+"""Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k for a (possibly per-lane) expansion point
+b.
 
 Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3-S2.6
 and Eq. 24: exp (S15, any b), reciprocal a/I (S17, |b - I| < |b|), power I^p (Eq. 24, b > 0), Taylor
@@ -318,7 +319,8 @@ class PolynomialSeries(_TableSeries):
 
 
 class TaylorSeries(_TableSeries):
-    """a_k = derivative(k, b) / k! for k <= order (S10 truncated, i.e. the Taylor fit S25 about b)."""
+    """a_k = derivative(k, b) / k! for k <= order (S10 truncated, i.e. the Taylor fit S25 about
+    b)."""
 
     def __init__(self, derivative, order: int, function=None):
         if not callable(derivative):

@@ -178,7 +178,8 @@ class Fit:
         return out
 
     def to_monomial(self, b=None) -> np.ndarray:
-        """c_k with h(x) = sum_k c_k (x - b)^k in the original variable (b defaults to the center)."""
+        """c_k with h(x) = sum_k c_k (x - b)^k in the original variable (b defaults to the
+        center)."""
         b = self.center if b is None else float(b)
         d = self.monomial_in_u()
         ub = self.alpha * b + self.beta

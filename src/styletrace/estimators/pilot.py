@@ -43,7 +43,8 @@ class Pilot:
 
 
 class PerLane:
-    """b per lane, computed by the caller from samples independent of the estimate's own (lo: a floor)."""
+    """b per lane, computed by the caller from samples independent of the estimate's own (lo: a
+    floor)."""
 
     def __init__(self, b, lo=None):
         if lo is not None and not (isinstance(lo, (int, float)) and math.isfinite(lo)):

@@ -29,8 +29,9 @@ MAX_USTAT_TERMS = 64
 
 
 def _term(coefficient, estimate):
-    """a_k * <(I - b)^k>, exactly 0 where the term estimate is 0: a_k itself may overflow to inf in float32
-    (e.g. C(p, k) b^(p - k) for small b and large k), and inf * 0 would turn a zero term into NaN."""
+    """a_k * <(I - b)^k>, exactly 0 where the term estimate is 0: a_k itself may overflow to inf in
+    float32 (e.g. C(p, k) b^(p - k) for small b and large k), and inf * 0 would turn a zero term
+    into NaN."""
     return A.select(estimate == 0, estimate * 0.0, coefficient * estimate)
 
 

@@ -70,7 +70,8 @@ PILOT = "pilot_"
 
 @dataclass
 class Buffer:
-    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module doc)."""
+    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module
+    doc)."""
 
     header: dict[str, Any]
     arrays: dict[str, np.ndarray]
@@ -95,7 +96,8 @@ class Buffer:
 
     @property
     def spp(self) -> int:
-        """Camera samples per pixel: of every pixel, where a tiled film has a round of tiles under way."""
+        """Camera samples per pixel: of every pixel, where a tiled film has a round of tiles under
+        way."""
         per_tile = [0] * int(self.header.get("tiles", 1))
         for p in self.header["passes"]:
             per_tile[int(p.get("tile", 0))] += int(p["spp"])
@@ -153,8 +155,8 @@ class Buffer:
         return path
 
     def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int, tile: int | None = None) -> None:
-        """Add one pass's camera samples (in the order the render loop made them); `tile`: the index of the crop
-        window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
+        """Add one pass's camera samples (in the order the render loop made them); `tile`: the index
+        of the crop window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
         for k in fields_for(self.stylize, self.stores, self.filtered):
             a = arrays[k]
             self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
@@ -168,7 +170,8 @@ class Buffer:
 
 
 def load_buffer(path: str) -> Buffer:
-    """Read a buffer written by `Buffer.save`; one-line UsageError for a missing, foreign or newer file."""
+    """Read a buffer written by `Buffer.save`; one-line UsageError for a missing, foreign or newer
+    file."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise UsageError(f"buffer file {path!r} does not exist")

@@ -5,8 +5,8 @@
     styletrace fit dragon.npz --style cel --target look.png -o fitted.png
     styletrace preview dragon --port 8765
 
-`cli.build_parser` calls `add_parsers`, handing over its own helpers (so this module never imports `cli`);
-nothing here loads Dr.Jit or Mitsuba before a command runs.
+`cli.build_parser` calls `add_parsers`, handing over its own helpers (so this module never imports
+`cli`); nothing here loads Dr.Jit or Mitsuba before a command runs.
 """
 from __future__ import annotations
 
@@ -33,9 +33,10 @@ def check_buffer_path(path: str) -> None:
 
 
 def render_with_buffer(args, scene, integrator, lanes: int | None = None, pilot=None) -> int:
-    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass (`lanes`: camera
-    samples per pass, the render pipeline's for this device, so the image is the plain render's; `pilot`: the
-    scene-defaults pilot the auto values were resolved with, which record stores rather than tracing anew)."""
+    """`styletrace render ... --buffer FILE`: the render, and the buffer of every finished pass
+    (`lanes`: camera samples per pass, the render pipeline's for this device, so the image is the
+    plain render's; `pilot`: the scene-defaults pilot the auto values were resolved with, which
+    record stores rather than tracing anew)."""
     check_buffer_path(args.buffer)
     from .. import api
     from ..images import save_safely
@@ -84,8 +85,8 @@ def cmd_restyle(args, parse_set, check_output) -> int:
 
 
 def write_atomically(img, path: str, write_image) -> None:
-    """Write an image: `images.write_image` is atomic itself (temporary file beside the target, fsync,
-    rename) and writes through a symbolic link instead of replacing it."""
+    """Write an image: `images.write_image` is atomic itself (temporary file beside the target,
+    fsync, rename) and writes through a symbolic link instead of replacing it."""
     write_image(img, path)
 
 

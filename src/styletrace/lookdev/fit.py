@@ -100,7 +100,8 @@ def _sigmoid(x):
 
 
 class Smoothed:
-    """A style whose `apply` is a smooth surrogate of temperature `tau` (everything else delegates)."""
+    """A style whose `apply` is a smooth surrogate of temperature `tau` (everything else
+    delegates)."""
 
     def __init__(self, style: Style, tau: mi.Float):
         self.style, self.tau = style, tau
@@ -176,9 +177,10 @@ def fit(
     callback: Callable[[int, float], None] | None = None,
     **initial: Any,
 ) -> FitResult:
-    """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled buffer matches
-    `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB). `initial` gives starting
-    values (the style's defaults otherwise); `fixed` names parameters to keep."""
+    """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled
+    buffer matches `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB).
+    `initial` gives starting values (the style's defaults otherwise); `fixed` names parameters to
+    keep."""
     if not mi.variant().endswith("_ad_rgb") and "_ad_" not in mi.variant():
         raise BackendError("fitting needs an AD variant (llvm_ad_rgb or cuda_ad_rgb), not "
                            f"{mi.variant()}")

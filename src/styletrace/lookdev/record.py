@@ -149,7 +149,8 @@ def _window(tile: pass_loop.Tile) -> dict:
 
 
 class RecordingIntegrator(StylizedIntegrator):
-    """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each `sample()`."""
+    """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each
+    `sample()`."""
 
     def __init__(self, base: StylizedIntegrator, sequence: bool = False, per_sample: int = 0):
         super().__init__(mi.Properties(), base.settings, base.values)
@@ -201,7 +202,8 @@ class RecordingIntegrator(StylizedIntegrator):
         return total
 
     def finish_mean(self, slot, m, v):
-        """The slot's estimate from the children's mean m (`restyle.finish`; `denoise.coverage` overrides it)."""
+        """The slot's estimate from the children's mean m (`restyle.finish`; `denoise.coverage`
+        overrides it)."""
         return finish(slot, m, v)
 
     def through(self, w, value):
@@ -209,8 +211,8 @@ class RecordingIntegrator(StylizedIntegrator):
         return super().through(w, value)
 
     def estimate(self, slot, level, scene, sampler, pi, si, ray, active, depth, v, medium=None) -> mi.Spectrum:
-        """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's pool.
-        The same calls on the same stream in the same order: the estimate is the render's."""
+        """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's
+        pool. The same calls on the same stream in the same order: the estimate is the render's."""
         if not self.sequence:
             return super().estimate(slot, level, scene, sampler, pi, si, ray, active, depth, v, medium)
         style, rec = slot.style, self.recorder
@@ -235,8 +237,8 @@ class RecordingIntegrator(StylizedIntegrator):
         return value
 
     def _mean(self, slot, level, scene, sampler, pi, si, ray, active, depth, medium=None) -> mi.Color3f:
-        """The mean of the slot's n children: the same draws, in the same order, and the same firefly control
-        as the `direct` estimator."""
+        """The mean of the slot's n children: the same draws, in the same order, and the same
+        firefly control as the `direct` estimator."""
         if slot.style.closed_form:
             return mi.Color3f(0.0)
 
@@ -263,7 +265,8 @@ def _any(ptr, bsdfs) -> mi.Bool:
 
 
 def sensor_description(sensor) -> dict:
-    """What a restyle needs to rebuild the camera (`restyle.camera_scene`): its kind, field of view and film."""
+    """What a restyle needs to rebuild the camera (`restyle.camera_scene`): its kind, field of view
+    and film."""
     params = mi.traverse(sensor)
     film = sensor.film()
     return {"kind": "perspective" if "x_fov" in params else "orthographic",
@@ -317,11 +320,12 @@ def record(
     pass_spp: int | None = None,
     recorder: Callable[..., RecordingIntegrator] | None = None,
 ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
-    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
-    `Pilot` if the caller resolved the auto values with it already (`render_with_buffer`), so that the pilot
-    is traced once for both (it is stored in the buffer). `pass_spp`: camera samples per pixel in one pass
-    (`pipeline.passes`); `recorder`: makes the recording integrator from (integrator, sequence, per_sample)
-    (default `RecordingIntegrator`; `denoise.coverage` places its own camera rays)."""
+    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`:
+    the scene's `Pilot` if the caller resolved the auto values with it already
+    (`render_with_buffer`), so that the pilot is traced once for both (it is stored in the buffer).
+    `pass_spp`: camera samples per pixel in one pass (`pipeline.passes`); `recorder`: makes the
+    recording integrator from (integrator, sequence, per_sample) (default `RecordingIntegrator`;
+    `denoise.coverage` places its own camera rays)."""
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = Pilot(scene, integrator.settings)
@@ -429,9 +433,9 @@ def render_buffer(
 ) -> Buffer:
     """Render as `styletrace.render` does and return the expectation buffer of every camera sample.
 
-    The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values
-    pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments
-    and pass split)."""
+    The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged,
+    auto values pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for
+    the same arguments and pass split)."""
     from ..pipeline.job import python_job
     from ..pipeline.resolve import resolve
     r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, **params))

@@ -40,7 +40,8 @@ RESTYLABLE_ESTIMATORS = ("direct", "affine")
 # ----------------------------------------------------------------
 
 def finish(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
-    """The slot's estimate from the mean of its n children, as its estimator computes it in the kernel."""
+    """The slot's estimate from the mean of its n children, as its estimator computes it in the
+    kernel."""
     style = slot.style
     if style.closed_form:
         return style.apply(mi.Color3f(0.0), v)
@@ -60,10 +61,11 @@ SPREAD_NODES = ((0.0, 0.53333333), (1.35562618, 0.22207592), (-1.35562618, 0.222
 
 def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.Color3f:
     """The slot's estimate averaged over a relative uncertainty of the mean: E over z ~ N(0, 1) of
-    finish(slot, mean (1 + spread z)) (SPREAD_NODES; the scaled mean is clamped at 0). With spread 0 it is
-    `finish`. Why: a denoised expectation D carries a residual error, and g of it flips a step style's band
-    wherever that error crosses a threshold; the mean of g over the error's spread is the estimate of g(E[L])
-    with the least squared error when the error is Gaussian (docs/denoise.md, step 7)."""
+    finish(slot, mean (1 + spread z)) (SPREAD_NODES; the scaled mean is clamped at 0). With spread 0
+    it is `finish`. Why: a denoised expectation D carries a residual error, and g of it flips a step
+    style's band wherever that error crosses a threshold; the mean of g over the error's spread is
+    the estimate of g(E[L]) with the least squared error when the error is Gaussian
+    (docs/denoise.md, step 7)."""
     out = mi.Color3f(0.0)
     for z, weight in SPREAD_NODES:
         out += weight * finish(slot, dr.maximum(mean * (1.0 + spread * z), 0.0), v)
@@ -100,7 +102,8 @@ def slots_for(
     inner: Any = None,
     **params: Any,
 ) -> list[S.StyleSlot]:
-    """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they name."""
+    """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they
+    name."""
     slots = []
     for rec in buffer.header["slots"]:
         values = {"style": rec["style"], **rec["params"]}
@@ -194,8 +197,9 @@ def device(buffer: Buffer) -> dict[str, Any]:
 
 
 def camera_scene(buffer: Buffer) -> mi.Scene:
-    """A scene holding only the recorded camera (kind, field of view, film), for styles that read it in
-    `prepare` (hatching and halftone project their spacing through it, gooch and xtoon take its frame)."""
+    """A scene holding only the recorded camera (kind, field of view, film), for styles that read it
+    in `prepare` (hatching and halftone project their spacing through it, gooch and xtoon take its
+    frame)."""
     m = mi.ScalarTransform4f(np.asarray(buffer.header["sensor_to_world"], dtype=np.float64))
     sensor = buffer.header.get("sensor")
     if sensor is None:  # a buffer written before the sensor was kept: its frame alone
@@ -211,8 +215,8 @@ def camera_scene(buffer: Buffer) -> mi.Scene:
 
 
 def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> list[S.StyleSlot]:
-    """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render of the
-    scene pins them (`scene.defaults`); unchanged for a buffer without a pilot."""
+    """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render
+    of the scene pins them (`scene.defaults`); unchanged for a buffer without a pilot."""
     pilot = {k[len(PILOT):]: v for k, v in buffer.arrays.items() if k.startswith(PILOT)}
     if not pilot:
         return slots
@@ -225,7 +229,8 @@ def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> l
 
 
 def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]:
-    """The slots ready to evaluate: auto values resolved, each style prepared on the recorded camera."""
+    """The slots ready to evaluate: auto values resolved, each style prepared on the recorded
+    camera."""
     scene = camera_scene(buffer)
     slots = resolve_auto(buffer, slots, scene)
     for slot in slots:
@@ -234,8 +239,8 @@ def prepare(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]:
 
 
 def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
-    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the styles' θ
-    for "mean" buffers."""
+    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the
+    styles' θ for "mean" buffers."""
     d = device(buffer)
     v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buffer.header["view"]), depth=d["depth"])
     if buffer.stores == "sequence":
@@ -252,7 +257,8 @@ def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
 
 
 def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi.Color3f:
-    """The slots' estimators replayed over the stored sequences; refused where one needs more than is stored."""
+    """The slots' estimators replayed over the stored sequences; refused where one needs more than
+    is stored."""
     total, bad = replay(d, d["slot"], slots, v)
     bad = bad & (d["slot"] >= 0)
     dr.eval(total, bad)
@@ -282,7 +288,8 @@ def replay_lanes(
     **params: Any,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A sequence buffer's per-camera-sample contributions with a new style, and the samples whose
-    replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and tests)."""
+    replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and
+    tests)."""
     buf = as_buffer(buffer)
     if buf.stores != "sequence":
         raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased "
@@ -338,7 +345,8 @@ def as_buffer(buffer: Any) -> Buffer:
 
 def restyle(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
             **params: Any) -> np.ndarray:
-    """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32, linear."""
+    """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32,
+    linear."""
     buf = as_buffer(buffer)
     slots = prepare(buf, slots_for(buf, style, estimator, inner, **params))
     img = accumulate(buf, sample_values(buf, slots))

@@ -7,15 +7,16 @@ wherever they sit, null-scattering surfaces (masks, `null`), participating media
     graph.has_see_through  # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
     graph.has_media     # some shape bounds a medium, or the sensor sits in one
 
-Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled` BSDF
-wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is registered with
-the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in `scene.shapes()`, but an
-intersection with an `instance` of the group reports the group shape's own BSDF; the graph reaches
-those shapes through the scene's traversal (`Object.traverse` with a `TraversalCallback`, which hands
-every child object to `put`). A surface whose BSDF holds two different styled BSDFs (a `blendbsdf` of
-two styles, a `twosided` with a different style on each side) cannot take both styles: it is refused
-with a `SceneError`, as is a styled BSDF inside another one (the inner style would never apply), and an
-emitter on a see-through surface (path.first_scattering says why).
+Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled`
+BSDF wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is
+registered with the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in
+`scene.shapes()`, but an intersection with an `instance` of the group reports the group shape's own
+BSDF; the graph reaches those shapes through the scene's traversal (`Object.traverse` with a
+`TraversalCallback`, which hands every child object to `put`). A surface whose BSDF holds two
+different styled BSDFs (a `blendbsdf` of two styles, a `twosided` with a different style on each
+side) cannot take both styles: it is refused with a `SceneError`, as is a styled BSDF inside another
+one (the inner style would never apply), and an emitter on a see-through surface
+(path.first_scattering says why).
 """
 from __future__ import annotations
 
@@ -26,10 +27,10 @@ from ..kernel.styled_bsdf import StyledBSDF
 
 
 class _Collect(mi.TraversalCallback):
-    """Gathers the child objects a traversal hands over. One class for the module: a class made per call
-    (a closure over the list) sits in a reference cycle, so the objects it reached lived on until the
-    cyclic garbage collector ran, possibly in the middle of a later scene's trace, where Dr.Jit traces
-    calls on every live instance (measured: a segfault in the next test's render)."""
+    """Gathers the child objects a traversal hands over. One class for the module: a class made per
+    call (a closure over the list) sits in a reference cycle, so the objects it reached lived on
+    until the cyclic garbage collector ran, possibly in the middle of a later scene's trace, where
+    Dr.Jit traces calls on every live instance (measured: a segfault in the next test's render)."""
 
     def __init__(self):
         super().__init__()
@@ -73,7 +74,8 @@ def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
 
 
 def all_shapes(scene: mi.Scene) -> list[mi.Shape]:
-    """Every shape of the scene with a surface, those inside shapegroups (seen through instances) too."""
+    """Every shape of the scene with a surface, those inside shapegroups (seen through instances)
+    too."""
     shapes: dict[int, mi.Shape] = {id(s): s for s in scene.shapes()}
     stack, seen = list(children(scene)), set()
     while stack:

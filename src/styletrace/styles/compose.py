@@ -94,8 +94,8 @@ class Composite(Style):
             op.prepare(scene)
 
     def auto_values(self, facts) -> dict:
-        """Each operand's auto values, under its prefix; an operand's brightness is that of the operands
-        before it applied to the scene (`facts.mapped`), as it sees it in the kernel."""
+        """Each operand's auto values, under its prefix; an operand's brightness is that of the
+        operands before it applied to the scene (`facts.mapped`), as it sees it in the kernel."""
         out = {}
         for op in self.operands:
             own = op.auto_values(facts)

@@ -42,7 +42,8 @@ FALLBACK_LIGHT = (0.0, 1.0, 0.3)
 
 
 class CameraLight:
-    """Mixin of gooch and xtoon: light_dir 'auto' follows the camera (see gooch's reference block)."""
+    """Mixin of gooch and xtoon: light_dir 'auto' follows the camera (see gooch's reference
+    block)."""
 
     def light(self) -> tuple[float, float, float]:
         if self.light_dir is not None:

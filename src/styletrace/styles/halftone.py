@@ -49,8 +49,8 @@ def grid_distance(p: mi.Point3f, spacing: float) -> mi.Float:
 
 
 def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float, s: mi.Point2f | None = None) -> mi.Float:
-    """Distance in pixels from p's screen position (the image coordinate `s` where given) to its nearest
-    screen grid point."""
+    """Distance in pixels from p's screen position (the image coordinate `s` where given) to its
+    nearest screen grid point."""
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
@@ -67,8 +67,8 @@ def screen_halftone_mask(
     u_max: float = 0.9,
     s: mi.Point2f | None = None,
 ) -> mi.Bool:
-    """True where p's screen position (the image coordinate `s` where given) is closer than r(u) pixels to its
-    nearest screen grid point."""
+    """True where p's screen position (the image coordinate `s` where given) is closer than r(u)
+    pixels to its nearest screen grid point."""
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
@@ -132,7 +132,8 @@ class Halftone(BrightnessRange, Style):
 
     @property
     def r_max(self) -> float:
-        """Largest dot radius: scene units on the 3D grid (spacing given), pixels on the screen grid."""
+        """Largest dot radius: scene units on the 3D grid (spacing given), pixels on the screen
+        grid."""
         if self.spacing is None:
             return self.max_radius_fraction * 0.5 * math.sqrt(2.0) * self.spacing_px
         return self.max_radius_fraction * 0.5 * math.sqrt(3.0) * self.spacing
@@ -142,14 +143,16 @@ class Halftone(BrightnessRange, Style):
 
     @property
     def wants_coordinate(self) -> bool:
-        """The integrator computes Vertex.s for this style (canonical lifting of the screen grid)."""
+        """The integrator computes Vertex.s for this style (canonical lifting of the screen
+        grid)."""
         return self.spacing is None and self.lift == "canonical"
 
     def _coordinate(self, v: Vertex):
         return v.s if self.wants_coordinate else None
 
     def _distance(self, v: Vertex) -> mi.Float:
-        """v's distance to its nearest grid point: pixels on the screen grid, scene units on the 3D grid."""
+        """v's distance to its nearest grid point: pixels on the screen grid, scene units on the 3D
+        grid."""
         if self.spacing is None:
             return screen_distance(v.p, self.projection, self.spacing_px, self._coordinate(v))
         return grid_distance(v.p, self.spacing)
@@ -159,8 +162,8 @@ class Halftone(BrightnessRange, Style):
         return dr.select(dot, mi.Color3f(*self.dark), mi.Color3f(*self.light))
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """The brightness at which the dot's edge passes v, where r(u) = d; none (+inf) where v is farther
-        than r_max from its grid point (never inside a dot)."""
+        """The brightness at which the dot's edge passes v, where r(u) = d; none (+inf) where v is
+        farther than r_max from its grid point (never inside a dot)."""
         d = self._distance(v)
         if self.uses_tones:
             t = tone_inverse(1.0 - d * (1.0 / self.r_max), self.tones)

@@ -84,7 +84,8 @@ def plane_normals(view: Sequence[float], up: Sequence[float], sets: int, angle_d
 
 
 def coverage(u: mi.Float, u_min: float, u_max: float) -> mi.Float:
-    """1 - clamp((u - u_min) / (u_max - u_min), 0, 1): 1 at (or below) u_min, 0 at (or above) u_max."""
+    """1 - clamp((u - u_min) / (u_max - u_min), 0, 1): 1 at (or below) u_min, 0 at (or above)
+    u_max."""
     return 1.0 - dr.clip((u - u_min) * (1.0 / (u_max - u_min)), 0.0, 1.0)
 
 
@@ -96,8 +97,9 @@ def active_sets(u: mi.Float, sets: int, u_min: float, u_max: float) -> mi.Float:
 def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], spacing: float,
                thickness: float, u_min: float = 0.05, u_max: float = 0.9,
                projection: Projection | None = None) -> mi.Bool:
-    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module doc).
-    With `projection`, spacing and thickness are in pixels: the planes form pencils through the camera."""
+    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module
+    doc). With `projection`, spacing and thickness are in pixels: the planes form pencils through
+    the camera."""
     m = active_sets(u, len(normals), u_min, u_max)
     hit = dr.zeros(mi.Bool, dr.width(p))
     for j, on_line in enumerate(line_masks(p, normals, spacing, thickness, projection)):
@@ -130,8 +132,9 @@ def coordinate_line_masks(
     spacing: float,
     thickness: float,
 ) -> list[mi.Bool]:
-    """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its lines, the
-    set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc, canonical lifting)."""
+    """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its
+    lines, the set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc,
+    canonical lifting)."""
     out = []
     for j in range(sets):
         t0 = math.radians(angle) + j * math.pi / sets
@@ -145,7 +148,8 @@ def coordinate_line_masks(
 
 
 def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
-    """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) > j)."""
+    """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) >
+    j)."""
     return [u_max - (j + 0.5) * (u_max - u_min) / sets for j in range(sets)]
 
 
@@ -158,8 +162,8 @@ AUTO_TONES = (
 
 
 def tone_params(full: str, none: str) -> tuple[Param, ...]:
-    """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear ramp, whose
-    docs end with what happens at full tone (`full`) and at none (`none`)."""
+    """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear
+    ramp, whose docs end with what happens at full tone (`full`) and at none (`none`)."""
     return (
         Param(
             "tones",
@@ -186,8 +190,9 @@ def tone_params(full: str, none: str) -> tuple[Param, ...]:
 
 
 class BrightnessRange:
-    """Mixin of hatching and halftone: the tone of a brightness, by the tone curve `tones` (auto: the scene's
-    distribution, `tone.tone_knots`) or by a linear ramp between u_min and u_max where either is given."""
+    """Mixin of hatching and halftone: the tone of a brightness, by the tone curve `tones` (auto:
+    the scene's distribution, `tone.tone_knots`) or by a linear ramp between u_min and u_max where
+    either is given."""
 
     @property
     def uses_tones(self) -> bool:
@@ -387,8 +392,9 @@ class Hatching(BrightnessRange, Style):
         return dr.select(line, mi.Color3f(*self.line_color), mi.Color3f(*self.background))
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover v; v turns
-        line-coloured there and stays so below it. +inf where v is on no line (g is constant there)."""
+        """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover
+        v; v turns line-coloured there and stays so below it. +inf where v is on no line (g is
+        constant there)."""
         masks = self._masks(v)
         out = mi.Float(dr.inf)
         for on, t in reversed(list(zip(masks, self.thresholds_of_sets()))):

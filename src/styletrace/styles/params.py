@@ -36,11 +36,11 @@ def _floats(text: str) -> list[float]:
 
 @dataclass(frozen=True, init=False)
 class Param(Declaration):
-    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice. The styles'
-    side of the shared `styletrace.declaration.Declaration`: the common kinds (float, int, bool, color, choice)
-    are parsed there; here the `auto` rule, the vector, floats and gradient kinds, the ±LIMIT bound on reals
-    and the styles' spellings (bool also yes/no/on/off, True/False as numbers, a colour also '#rrggbb' or
-    'r g b', a choice stripped)."""
+    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice.
+    The styles' side of the shared `styletrace.declaration.Declaration`: the common kinds (float,
+    int, bool, color, choice) are parsed there; here the `auto` rule, the vector, floats and
+    gradient kinds, the ±LIMIT bound on reals and the styles' spellings (bool also yes/no/on/off,
+    True/False as numbers, a colour also '#rrggbb' or 'r g b', a choice stripped)."""
 
     #: for a default of None ('auto'): the rule that derives the value (from the scene or other
     #: parameters)
@@ -114,8 +114,8 @@ class Param(Declaration):
         return _is_seq(raw)
 
     def parse(self, raw: Any) -> Any:
-        """Turn a string, number, sequence or Mitsuba colour into the validated Python value ('auto': None, for
-        a parameter whose default is derived)."""
+        """Turn a string, number, sequence or Mitsuba colour into the validated Python value
+        ('auto': None, for a parameter whose default is derived)."""
         if self.default is None and isinstance(raw, str) and raw.strip().lower() == "auto":
             return None
         return super().parse(raw)
@@ -148,11 +148,13 @@ class Param(Declaration):
         raise AssertionError(f"unknown parameter kind {k}")
 
     def explain(self) -> str:
-        """The doc line with the rule of an 'auto' default, as `styletrace styles` and the docs show it."""
+        """The doc line with the rule of an 'auto' default, as `styletrace styles` and the docs show
+        it."""
         return f"{self.doc}; auto: {self.auto}" if self.auto else self.doc
 
     def show(self, value: Any) -> str:
-        """Format a value the way `parse` reads it back ('auto' for a default the style derives itself)."""
+        """Format a value the way `parse` reads it back ('auto' for a default the style derives
+        itself)."""
         if value is None:
             return "auto"
         if isinstance(value, Gradient):

@@ -25,7 +25,8 @@ class Saturation(Style):
     default_inner = 8
 
     def saturated(self, I: mi.Color3f) -> mi.Color3f:
-        """The maximally saturated colour of brightness u = brightness(I) (I_min where I is grey)."""
+        """The maximally saturated colour of brightness u = brightness(I) (I_min where I is
+        grey)."""
         u = brightness(I)
         c_min = dr.minimum(dr.minimum(I.x, I.y), I.z)
         D = I - c_min                      # >= 0, smallest channel exactly 0

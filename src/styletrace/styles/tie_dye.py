@@ -95,8 +95,9 @@ class TieDye(Style):
         return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi, gain=self.scale)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:
-        """g_r, g_g, g_b of the exposed value y = s x as numpy callables (array in, array out), clamp to the
-        domain included (the fit's functions: the estimators expose the samples themselves)."""
+        """g_r, g_g, g_b of the exposed value y = s x as numpy callables (array in, array out),
+        clamp to the domain included (the fit's functions: the estimators expose the samples
+        themselves)."""
         import numpy as np
         lo, hi = self.domain()
 

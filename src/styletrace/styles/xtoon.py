@@ -79,8 +79,8 @@ class XToon(CameraLight, Style):
             raise StyleError(f"bad value {hi:g} for parameter 'z_max': must exceed z_min = {lo:g}")
 
     def depth_range(self) -> tuple[float, float]:
-        """(z_min, z_max) in use; an unresolved auto end is 1 or 10 (the other end times or over 10 where
-        only one is given)."""
+        """(z_min, z_max) in use; an unresolved auto end is 1 or 10 (the other end times or over 10
+        where only one is given)."""
         lo, hi = self.z_min, self.z_max
         if lo is None:
             lo = 1.0 if hi is None else min(1.0, hi / 10)
