@@ -2,14 +2,10 @@
 
     scene, notes = load("cbox.xml", width=64, height=48, defines={"spp": "4"})
 
-- `defines`: the file's `<default>` parameters, as `mitsuba -D name=value`.
-- `width`/`height` resize the film of the first top-level sensor, its `<include>`s expanded as
-  Mitsuba expands them (`expand_includes`); a crop window or a sensor behind a `<ref>` is refused in
-  one line.
-- An unknown top-level integrator type is replaced by `path` keeping `max_depth`, `rr_depth` and
-  `hide_emitters`, with one note.
-A file that needs none of this goes to `mi.load_file` unchanged. Details:
-docs/design/scene_files.md.
+`defines` are the file's `<default>` parameters (as `mitsuba -D`); `width`/`height` resize the
+film of the first top-level sensor, includes expanded as Mitsuba expands them; an unknown
+top-level integrator becomes `path` with one note. A file that needs none of this goes to
+`mi.load_file` unchanged. Details: docs/design/scene_files.md.
 """
 from __future__ import annotations
 

@@ -1,19 +1,10 @@
-"""Wild estimates: pixel values an unbiased estimator put outside the range its style function can
-take.
+"""Wild estimates: pixel values an unbiased estimator put outside the range its style can take.
 
-Reference
-    An unbiased estimator of g(I) with a random number of terms (power series, telescoping) is exact
-    on average, yet a single estimate can land far outside g's range: the gamma series on radiance
-    with fireflies gives pixels of -600 where g >= 0 (docs/estimators.md, "Gamma and the series
-    estimators"). Such an image is unusable even though its expectation is right, so the CLI
-    measures it and says so.
-
-What it measures
-    For the integrator's own style slot, when its estimator is not `direct` and its form declares
-    the values g takes on radiance >= 0 (`SeriesForm.values`, e.g. gamma [0, inf), exp_tone and
-    reinhard [0, 1]): the fraction of finite channel values outside that range by more than
-    TOLERANCE times the image's median |value| (less is invisible noise). It reports when that
-    fraction is at least WILD_FRACTION. Styles on per-object `styled` BSDFs are not checked.
+For the integrator's own style slot, when its estimator is not `direct` and its form declares
+the values g takes on radiance >= 0 (`SeriesForm.values`): the fraction of finite channel values
+outside that range by more than TOLERANCE times the image's median |value|, reported when it is
+at least WILD_FRACTION. Styles on per-object `styled` BSDFs are not checked. Rationale:
+docs/design/wild_estimates.md.
 """
 from __future__ import annotations
 

@@ -1,18 +1,12 @@
 """Built-in scenes, as Mitsuba scene dictionaries.
 
 - `cornell-box` (default): Mitsuba's Cornell box.
-- `dragon`: the bundled scanned dragon, normalized to unit height, on a ground plane under two area
-  lights with a dim sky, in the spirit of the paper's result setups (Figs. 7-12).
-- `mixed`: the dragon scene with per-object styles (cel dragon, hatched floor, PBR glass sphere).
-- `lines`: the dragon scene with a mirror behind the dragon and a glass sphere in front, for feature
-  lines seen in reflection and through glass (docs/lines.md).
-- `furnace`: a diffuse sphere of albedo rho under a constant environment E. Every first hit then has
-  exitant radiance exactly rho*E (a convex object sees only the environment), so g(I) is known
-  exactly.
+- `dragon`: the bundled scanned dragon on a ground plane under two area lights and a dim sky.
+- `mixed`: the dragon scene with per-object styles (cel dragon, hatched floor, glass sphere).
+- `lines`: the dragon with a mirror behind and a glass sphere in front (docs/lines.md).
+- `furnace`: a diffuse sphere of albedo rho under a constant environment E (exitant rho*E).
 
-All use the `independent` sampler (nested inner loops draw an unbounded number of dimensions per
-pixel sample, which stratified samplers are not built for) and a box pixel filter (each camera
-sample lands in exactly one pixel, so averaging passes equals one long render).
+All use the `independent` sampler and a box pixel filter (docs/design/builtin_scenes.md).
 """
 from __future__ import annotations
 

@@ -1,19 +1,11 @@
-"""One declaration per integrator property: type, default, bounds, choices, doc line, CLI flag and
-docs row.
+"""One declaration per integrator property: type, default, bounds, choices, doc line, CLI flag.
 
     Property("line_k", 12, "int", "expectation mode: k, the opacity control", low=1, high=256)
 
-A `Property` is everything the project knows about one setting of the `stylized` integrator: the
-command line makes its flag from it (`cli.add_setting_flags`), the docs their table row
-(`reference.integrator_table`), and `settings.parse` its value (`Property.parse`: the kind, the
-bounds and the choices declared here), so adding a property is one declaration in
-`settings.PROPERTIES` (or `settings.declare(...)`). `Property` is the integrator's side of the
-shared `styletrace.declaration.Declaration` (style parameters are the other side): the common kinds
-are parsed there, once. Properties whose value depends on others (inner_samples and stylize_depth,
-the reuse family, lines) keep their cross-checks in `settings.parse`; their single values are still
-parsed here. Also here: the value parsers every front end shares (integer, number, boolean, names,
-rgb), each a throwaway `Property` parsing one value, failing with one line naming the value and what
-is allowed.
+`Property` is the integrator's side of `styletrace.declaration.Declaration`: the command line makes
+its flag from it, the docs their table row, `settings.parse` its value. Also here: the shared value
+parsers (integer, number, boolean, names, rgb), each failing with one line naming the value and
+what is allowed. Rationale: docs/design/declarations.md.
 """
 from __future__ import annotations
 

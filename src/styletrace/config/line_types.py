@@ -1,15 +1,12 @@
 """The line dictionary of `line_mode lifted`: `line_types`, parsed into `LineType`s.
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
-Mukherjee, Yonghao Yue (2026), Section 4.3 (Eqs. 23, 31-34). A type measures f at the vertex an
-auxiliary path reaches and fires where |f(v) - f(u)| / |v - u| >= threshold for a pair drawn from a
-stencil; types are in priority order, the first that fires colours the camera sample.
+Reference: West, Mukherjee, Yue, "Lifting Lines and Tone" (2026), Section 4.3 (Eqs. 23, 31-34).
 
     line_types = "shape_id color=0.8,0,0; depth threshold=0.05 radius=1.5 count=16; normal"
 
 Measurements: shape_id, material_id (any difference fires), depth (0.1 per pixel), normal (0.3).
 Fields: threshold (> 0), stencil (disk | square), radius (pixels), count (1 .. 256), color. Empty:
-one shape_id type. Spelled out in docs/lines.md, "Conditional lifting".
+one shape_id type. Types fire in priority order (docs/design/line_dictionary.md, docs/lines.md).
 """
 from __future__ import annotations
 

@@ -1,15 +1,13 @@
 """Direct application with adaptive stopping: n0 children, more only where the error is large.
 
-Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eqs. 19 and 21; the
-step rule is the sequential rule of Broadie, Du and Moallemi, "Efficient risk estimation via nested
-sequential simulation" (2011). Each lane draws n0 samples, then one more per iteration while n <
-n_max and
+Reference: West & Mukherjee, Eqs. 19 and 21; Broadie, Du, Moallemi (2011). Each lane draws n0
+samples, then one more while n < n_max and
     step:    |m - tau_k| < t_(n-1)(z) s / sqrt(n) for some threshold tau_k, or
     smooth:  max_c |g_c''(<I>_n)| s^2 / (2n) > bias,
-m and s^2 the running mean and variance of the samples' brightness. The estimate is g(<I>_n).
+m and s^2 the running brightness mean and variance. The estimate is g(<I>_n).
 
-`AdaptiveDirect(g, n0, n_max, thresholds=(), curvature=None, z=2, bias=1e-3)`; after `run`, `stats`
-holds per-lane `children`, `variance` and `bias`. Rationale: docs/design/adaptive_stopping.md.
+`AdaptiveDirect(g, n0, n_max, thresholds=(), curvature=None, z=2, bias=1e-3)`; after `run`,
+`stats` holds per-lane `children`, `variance` and `bias` (docs/design/adaptive_stopping.md).
 """
 from __future__ import annotations
 

@@ -1,22 +1,14 @@
-"""What a loaded scene holds that the `stylized` integrator must know before it traces: styled BSDFs
-wherever they sit, null-scattering surfaces (masks, `null`), participating media.
+"""What a loaded scene holds that the `stylized` integrator must know before it traces.
 
     graph = SceneGraph(scene)
-    graph.styled        # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]
+    graph.styled        # [(StyledBSDF, [pointers reported for it], [its shapes' emitters])]
     graph.has_null      # some surface BSDF has a Null component (a `mask`, a `null` BSDF, ...)
-    graph.has_see_through  # some surface BSDF is a pure `null` (feature lines pass it: lines.pure_null)
+    graph.has_see_through  # some surface BSDF is a pure `null` (feature lines pass it)
     graph.has_media     # some shape bounds a medium, or the sensor sits in one
 
-Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled`
-BSDF wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is
-registered with the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in
-`scene.shapes()`, but an intersection with an `instance` of the group reports the group shape's own
-BSDF; the graph reaches those shapes through the scene's traversal (`Object.traverse` with a
-`TraversalCallback`, which hands every child object to `put`). A surface whose BSDF holds two
-different styled BSDFs (a `blendbsdf` of two styles, a `twosided` with a different style on each
-side) cannot take both styles: it is refused with a `SceneError`, as is a styled BSDF inside another
-one (the inner style would never apply), and an emitter on a see-through surface
-(path.first_scattering says why).
+Styled BSDFs are found inside wrappers and shape groups. Raises `SceneError` for a surface holding
+two different styled BSDFs, a styled BSDF inside another, or an emitter on a see-through surface.
+Rationale: docs/design/scene_graph.md.
 """
 from __future__ import annotations
 

@@ -3,17 +3,12 @@
 A style declares
 - `name`, `summary`: registry key and one line for `styletrace styles`;
 - `params`: its parameters theta (`Param`), validated on construction;
-- `default_inner`: the inner sample count n it wants per evaluation (0 for closed-form styles,
-  which use only the vertex and theta and never trace a child path);
-- `apply(I, v)`: g_theta(I) for a radiance estimate I (mi.Color3f) at vertex `v` (`Vertex`).
-  It runs inside the render kernel on Dr.Jit arrays, so it must be branch-free (dr.select, no `if`
-  on array values).
-- optionally `form()`: g as an affine map, a power series or a polynomial fit, which the unbiased
-  estimators consume (`forms.py`).
-- what adaptive inner counts (`--inner 4:64`, estimators/adaptive.py) need to know: `step_thresholds(v)`, the
-  brightness values at which g jumps at vertex v (step styles: cel, hatching, halftone), and
-  `curvature(I, v, h)`, g'' along the grey direction (smooth styles; a second difference over +-h by
-  default, 0 for affine styles and step styles).
+- `default_inner`: the inner sample count n it wants per evaluation (0 for closed-form styles);
+- `apply(I, v)`: g_theta(I) for a radiance estimate I (mi.Color3f) at vertex `v` (`Vertex`),
+  branch-free on Dr.Jit arrays (dr.select, no `if` on array values);
+- optionally `form()`: g as an affine map, a power series or a polynomial fit (`forms.py`);
+- for adaptive inner counts: `step_thresholds(v)`, the brightnesses where g jumps, and
+  `curvature(I, v, h)`, g'' along the grey direction (docs/design/adaptive_stopping.md).
 """
 from __future__ import annotations
 

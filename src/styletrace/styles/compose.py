@@ -3,13 +3,12 @@
 `--style contrast+sepia` applies contrast, then sepia:  g(<I>) = g_k( ... g_2(g_1(<I>)) ... ).
 
 Parameters
-- OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name, e.g.
-  `contrast.c`, `sepia.gradient`. A style may appear once.
+- OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name,
+  e.g. `contrast.c`, `sepia.gradient`. A style may appear once.
 
-Estimators: all operands affine -> the composite is affine (`affine`, `combined`); all operands with
-a form (affine, power series, polynomial fit) -> `combined` nests the operands' unbiased estimators
-(Theorem 4.1, composition; Fig. 10's gu-estimator); otherwise `direct` (and `telescoping` where
-every operand has a form). Per-sample baselines (acp) cannot be composed.
+Estimators: all operands affine: `affine`, `combined`; all with a form: `combined` (Theorem 4.1);
+otherwise `direct` (and `telescoping` where every operand has a form). Per-sample baselines (acp)
+cannot be composed (docs/design/estimator_algebra.md).
 """
 from __future__ import annotations
 

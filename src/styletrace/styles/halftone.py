@@ -1,22 +1,19 @@
 """halftone: dots of brightness-dependent radius on a 3D or screen grid (supplement S5.6).
 
-Reference: "Non-photorealistic Rendering by Q-mapping", Peter Hall (1999); the screen grid's
-canonical lifting after West, Mukherjee, Yue, "Lifting Lines and Tone" (2026).
+Reference: Peter Hall, "Non-photorealistic Rendering by Q-mapping" (1999); lifting after West,
+Mukherjee, Yue (2026).
 
 Parameters
 - spacing_px (float, default 8, > 0): grid interval on screen, in pixels
 - spacing (float, default auto, > 0): grid interval d in scene units; given, it replaces spacing_px
-- max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot's radius over half the cell
-  diagonal (r_max = max_radius_fraction sqrt(3) d / 2; sqrt(2) spacing_px / 2 on the screen)
+- max_radius_fraction (float, default 0.75, in (0, 1]): darkest dot's radius / half the diagonal
 - tones (floats, default auto): the tone curve, as in `hatching`; r = (1 - F(u)) r_max
-- u_min (float), u_max (float, > u_min): a linear ramp instead of the tone curve, as in `hatching`
+- u_min (float), u_max (float, > u_min): a linear ramp instead of the tone curve
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
-  projection)
+- lift (choice, default canonical): canonical (image coordinate s) or position (own projection)
 
-With u = (r+g+b)/3 of <I> and the vertex position p (on the screen grid: its pixel position q):
-    g_p = round(p / d) d,   r = (1 - F(u)) r_max,   g(<I>) = dark if |p - g_p| < r else light
-`halftone_mask` is that predicate. Rationale: docs/design/screen_space_patterns.md.
+g = dark where `halftone_mask` holds (|p - round(p / d) d| < r), light elsewhere. Formulas and
+rationale: docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
 

@@ -1,30 +1,21 @@
 """hatching: cross-hatching by slabs around planes through the view direction (supplement S5.6).
 
-Reference: "An Illustration Technique Using Hardware-Based Intersections and Skeletons", Oliver
-Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte (1999); canonical lifting
-after "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
-Yonghao Yue (2026).
+Reference: Deussen, Hamel, Raab, Schlechtweg, Strothotte, "An Illustration Technique Using
+Hardware-Based Intersections and Skeletons" (1999); lifting after West, Mukherjee, Yue (2026).
 
 Parameters
 - sets (int, default 3, in [1, 8]): number of hatching directions n
-- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in
-  pixels
+- spacing_px (float, default 8, > 0): line distance on screen, in pixels
 - spacing (float, default auto, > 0): world-space plane distance; given, it replaces spacing_px
 - thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
 - tones (floats, default auto): the tone curve u_0 < ... < u_K (`tone.tone_knots`)
 - u_min (float), u_max (float, > u_min): a linear ramp instead of tones (unresolved: 0.05 and 0.9)
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
-  projection)
+- lift (choice, default canonical): canonical (image coordinate s) or position (own projection)
 - angle_reflected (float, default auto = angle): the first set's angle at path depth > 0
 
-Set j has normal n_j = cos(theta_j) e1 + sin(theta_j) e2, theta_j = angle + j pi / n, (e1, e2) the
-screen's axes. With u = (r+g+b)/3 of <I>, m = min(n, floor((1 - F(u)) (n + 1))) sets are active (the
-ramp: m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)), and p is on a line when
-    dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2      for some active j
-(with spacing_px: planes through the camera, or s . (cos, sin) / spacing_px with lift=canonical). g
-= line_color on a line, background elsewhere; `hatch_mask` is that predicate. Rationale:
+g = line_color where `hatch_mask` holds, background elsewhere. Formulas and rationale:
 docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations

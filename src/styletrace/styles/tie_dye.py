@@ -1,17 +1,15 @@
 """tie_dye: per-channel cosine waves (supplement S5.5, the polynomial-approximation example).
 
 Parameters
-- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all
-  channels)
+- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all)
 - phases (floats, default 1,1.13,1.29): phi_r, phi_g, phi_b (one value: all channels)
-- domain_min (float, default -1), domain_max (float, default 4): the fit interval [lo, hi], lo < hi;
-  together pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14
-- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median first-hit
-  brightness (at most 100; unresolved: 1)
+- domain_min (float, default -1), domain_max (float, default 4): the fit interval [lo, hi], lo <
+  hi, with pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median
+  first-hit brightness (at most 100; unresolved: 1)
 
-Per channel c:  g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2.
-`channel_functions()` gives the channel functions of the exposed value (for the fit), `domain()` the
-interval. Where the clamp applies per estimator: docs/design/tie_dye_clamp.md.
+Per channel c:  g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2. Where the clamp
+applies: docs/design/tie_dye_clamp.md.
 """
 from __future__ import annotations
 

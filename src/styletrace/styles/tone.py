@@ -1,19 +1,12 @@
 """Tone from the scene's brightness distribution: where step styles put their levels.
 
-Reference
-    "Real-Time Hatching", Emil Praun, Hugues Hoppe, Matthew Webb, Adam Finkelstein (SIGGRAPH 2001): tone is
-    matched to brightness as perceived, not to linear radiance. CIE 1976 L* is the perceived lightness.
+Reference: Praun, Hoppe, Webb, Finkelstein, "Real-Time Hatching" (2001); CIE 1976 L*.
 
-A linear ramp of radiance between two quantiles puts a high-dynamic-range scene (a window, a lamp) almost
-all into the darkest levels. Here the tone of a brightness u is
-
-    F(u) = (1 - PERCEPTUAL) CDF(u) + PERCEPTUAL L*(u / white) / 100,      white = the 98% quantile,
-
-the scene's own cumulative distribution (equal area per level) mixed with its lightness, which keeps
-near-equal brightnesses from being stretched apart on a flat scene. `tone_knots` returns the brightness
-at F = 0, 1/K, ..., 1 (piecewise linear in between); `tone_of` evaluates F from knots inside a kernel.
-`band_levels` places cel's levels at the median brightness of each band, exposed so that the scene's median
-is middle grey, at least MIN_STEP_LSTAR of lightness apart (docs/look.md).
+The tone of a brightness u is
+    F(u) = (1 - PERCEPTUAL) CDF(u) + PERCEPTUAL L*(u / white) / 100,   white = the 98% quantile.
+`tone_knots` returns the brightness at F = 0, 1/K, ..., 1 (piecewise linear in between); `tone_of`
+evaluates F from knots inside a kernel; `band_levels` places cel's levels. Rationale:
+docs/design/tone_curve.md.
 """
 from __future__ import annotations
 
