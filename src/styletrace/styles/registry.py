@@ -11,6 +11,17 @@ _COMPOSITES: dict[str, type[Style]] = {}  # made on first use, one class per spe
 
 
 def register(cls: type[Style]) -> type[Style]:
+    """Add a style class to the registry (a class decorator).
+
+    Args:
+        cls: the style class; its `name` is the registry key.
+
+    Returns:
+        cls, unchanged.
+
+    Raises:
+        ValueError: a style of that name is registered already.
+    """
     if not cls.name or cls.name in _STYLES:
         raise ValueError(f"style name {cls.name!r} is empty or taken")
     _STYLES[cls.name] = cls
@@ -22,7 +33,17 @@ def names() -> list[str]:
 
 
 def get(name: str) -> type[Style]:
-    """The class of a registered style, or of a composition 'a+b+...' (see `compose`)."""
+    """The class of a registered style, or of a composition 'a+b+...' (see `compose`).
+
+    Args:
+        name: a registered style name, or names joined by '+'.
+
+    Returns:
+        The style class.
+
+    Raises:
+        StyleError: an unknown name, or a composition that cannot be built.
+    """
     try:
         return _STYLES[name]
     except KeyError:
@@ -39,4 +60,16 @@ def get(name: str) -> type[Style]:
 
 
 def create(name: str, **values: Any) -> Style:
+    """A style instance by name, its parameters validated.
+
+    Args:
+        name: as for `get`.
+        **values: parameter values, as `Param.parse` reads them.
+
+    Returns:
+        The style.
+
+    Raises:
+        StyleError: an unknown style or a bad parameter value.
+    """
     return get(name)(**values)
