@@ -1,19 +1,12 @@
-"""One declaration per setting, for the `stylized` integrator's properties and the styles' parameters alike.
+"""One declaration per setting, for the integrator's properties and the styles' parameters alike.
 
     Declaration(name, kind, default, doc, low=..., high=..., low_open=..., choices=...)
 
-A `Declaration` is everything the project knows about one setting: its kind, default, bounds, choices and
-doc line, and the one parsing of the common kinds here (`parse`): int (exact: 1.5 and '2.7' are refused, not
-truncated), float (finite, in its bounds, the low end excluded with `low_open`), bool, a choice among names,
-and an RGB triple. Each side is a small subclass that adds what is its own and says how it fails:
-
-- `config.declare.Property`: an integrator property (flag, metavar, bare switch; list of names; SettingsError
-  "bad value X for 'key': expected ...");
-- `styles.params.Param`: a style parameter (the `auto` rule, vector, floats and gradient kinds, the ±LIMIT
-  bound on reals; StyleError "bad value X for parameter 'name': expected ...").
-
-Where the two sides accept different spellings of one kind, the difference is a declared option of the
-subclass (the class attributes below), not a second parser.
+A `Declaration` holds a setting's kind, default, bounds, choices and doc line, and parses the
+common kinds (`parse`): int (exact), float (finite, in bounds), bool, a choice, an RGB triple.
+Subclasses: `config.declare.Property` (SettingsError) and `styles.params.Param` (StyleError); a
+spelling one side accepts and the other does not is a class attribute of the subclass.
+Rationale: docs/design/declarations.md.
 """
 from __future__ import annotations
 
@@ -37,8 +30,9 @@ COMMON_KINDS = {
 
 @dataclass(frozen=True)
 class Declaration:
-    """One setting (see the module doc): `low`/`high` bound a number (or each component of a colour);
-    `low_open`: the low end excluded; `choices`: the strings a choice accepts (none: any string)."""
+    """One setting (see the module doc): `low`/`high` bound a number (or each component of a
+    colour); `low_open`: the low end excluded; `choices`: the strings a choice accepts (none: any
+    string)."""
 
     name: str
     kind: str
@@ -74,7 +68,8 @@ class Declaration:
 
     # The one parsing of the common kinds:
     def parse(self, raw: Any) -> Any:
-        """The value `raw` (a CLI string, a Mitsuba property, a Python value) as this setting declares it."""
+        """The value `raw` (a CLI string, a Mitsuba property, a Python value) as this setting
+        declares it."""
         try:
             return self.convert(raw)
         except StyletraceError:

@@ -19,7 +19,8 @@ class StyleError(StyletraceError, ValueError):
 
 
 class SettingsError(StyletraceError, ValueError):
-    """A bad setting of the `stylized` integrator (inner samples, estimator, stylize, depths, ...)."""
+    """A bad setting of the `stylized` integrator (inner samples, estimator, stylize, depths,
+    ...)."""
 
 
 class SceneError(StyletraceError, ValueError):

@@ -32,14 +32,15 @@ def nonfinite_pixels(image) -> int:
 
 
 def mse(image, reference) -> float:
-    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest answer,
-    so numpy's warnings about it are silenced here rather than sent to stderr)."""
+    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest
+    answer, so numpy's warnings about it are silenced here rather than sent to stderr)."""
     with np.errstate(over="ignore", invalid="ignore"):
         return float(np.mean((np.asarray(image, dtype=np.float64) - reference) ** 2))
 
 
 def srgb8(image) -> np.ndarray:
-    """Linear radiance -> sRGB-encoded uint8: NaN -> 0, +inf -> 1 (255), everything clamped to [0, 1]."""
+    """Linear radiance -> sRGB-encoded uint8: NaN -> 0, +inf -> 1 (255), everything clamped to [0,
+    1]."""
     x = np.nan_to_num(np.asarray(image, dtype=np.float32), nan=0.0, posinf=1.0, neginf=0.0)
     x = np.clip(x, 0.0, 1.0)  # before the power, so that no negative base reaches it
     enc = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
@@ -61,12 +62,15 @@ PIXEL_FORMATS = {
 
 
 def bitmap_format(pixel_format: str, channels: int) -> str:
-    """The Bitmap pixel format name ('RGB', 'Y', 'XYZA', ...) of an image with `channels` channels."""
+    """The Bitmap pixel format name ('RGB', 'Y', 'XYZA', ...) of an image with `channels`
+    channels."""
     name = PIXEL_FORMATS.get(pixel_format.lower())
     if name is None:
-        raise ValueError(f"unknown pixel format {pixel_format!r}: expected one of {', '.join(PIXEL_FORMATS)}")
+        raise ValueError(f"unknown pixel format {pixel_format!r}: expected one of "
+                         f"{', '.join(PIXEL_FORMATS)}")
     if len(name) != channels:
-        raise ValueError(f"an image of {channels} channel(s) is not in pixel format {pixel_format!r}")
+        raise ValueError(f"an image of {channels} channel(s) is not in pixel format "
+                         f"{pixel_format!r}")
     return name
 
 
@@ -80,8 +84,9 @@ def check_format(pixel_format: str, ext: str) -> None:
 
 
 def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
-    """The file contents of `image` as `.exr` (linear float32) or `.png` (sRGB 8 bit; alpha stays linear).
-    `image` is H x W x C in the film's `pixel_format`: rgb, rgba, luminance (Y), luminance_alpha, xyz, xyza."""
+    """The file contents of `image` as `.exr` (linear float32) or `.png` (sRGB 8 bit; alpha stays
+    linear). `image` is H x W x C in the film's `pixel_format`: rgb, rgba, luminance (Y),
+    luminance_alpha, xyz, xyza."""
     import mitsuba as mi
 
     from styletrace.jit import backend
@@ -143,7 +148,8 @@ def _png_chunk(kind: bytes, body: bytes) -> bytes:
 
 
 def _plain_png(data: np.ndarray) -> bytes:
-    """An 8-bit PNG (grey, grey+alpha, RGB or RGBA by the channel count) tagged sRGB; filter 0 per line."""
+    """An 8-bit PNG (grey, grey+alpha, RGB or RGBA by the channel count) tagged sRGB; filter 0 per
+    line."""
     height, width, channels = data.shape
     colour = {1: 0, 2: 4, 3: 2, 4: 6}[channels]
     rows = np.concatenate([np.zeros((height, 1), np.uint8), data.reshape(height, -1)], axis=1)
@@ -157,8 +163,9 @@ def _plain_png(data: np.ndarray) -> bytes:
 
 
 def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None = None) -> bytes:
-    """What `encode` (`encode_with_aovs` with `aovs`) writes, the same pixel values, without Mitsuba: for a
-    thread that must write while a kernel runs. EXR: float32, uncompressed; PNG: `srgb8`'s bytes."""
+    """What `encode` (`encode_with_aovs` with `aovs`) writes, the same pixel values, without
+    Mitsuba: for a thread that must write while a kernel runs. EXR: float32, uncompressed; PNG:
+    `srgb8`'s bytes."""
     image = np.asarray(image, dtype=np.float32)
     if image.ndim == 2:
         image = image[..., None]
@@ -193,9 +200,9 @@ DENOISED_AOV_CHANNELS = (
 
 
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
-    """The image's channels (`names`) followed by the AOVs present in `aovs` (`AOV_CHANNELS`, or with
-    denoising `DENOISED_AOV_CHANNELS`), as one float32 H x W x C array and its channel names: what both EXR
-    writers lay out."""
+    """The image's channels (`names`) followed by the AOVs present in `aovs` (`AOV_CHANNELS`, or
+    with denoising `DENOISED_AOV_CHANNELS`), as one float32 H x W x C array and its channel names:
+    what both EXR writers lay out."""
     layers = [image]
     table = AOV_CHANNELS if "variance" in aovs else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs]
     for key, channels in table if aovs else ():
@@ -206,8 +213,9 @@ def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarr
 
 
 def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
-    """A multi-channel float32 EXR: the image's channels (R, G, B[, A]) and then the error AOVs under the
-    names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a PNG output.)"""
+    """A multi-channel float32 EXR: the image's channels (R, G, B[, A]) and then the error AOVs
+    under the names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a
+    PNG output.)"""
     import mitsuba as mi
 
     from styletrace.jit import backend
@@ -222,8 +230,9 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
 
 
 def creation_mode(path: str) -> int:
-    """The permission bits `path` should get: those of the file it replaces, else what `open` would give a
-    new file (0o666 less the umask). A temporary file is created 0o600, which a rename would keep."""
+    """The permission bits `path` should get: those of the file it replaces, else what `open` would
+    give a new file (0o666 less the umask). A temporary file is created 0o600, which a rename would
+    keep."""
     try:
         return os.stat(path).st_mode & 0o7777
     except OSError:
@@ -233,15 +242,17 @@ def creation_mode(path: str) -> int:
 
 
 def destination(path: str) -> str:
-    """Where a write of `path` lands: `path` itself, or for a symbolic link its final target (a link to a
-    link is followed to the end), so that the rename replaces the target and the link stays a link."""
+    """Where a write of `path` lands: `path` itself, or for a symbolic link its final target (a link
+    to a link is followed to the end), so that the rename replaces the target and the link stays a
+    link."""
     return os.path.realpath(path) if os.path.islink(path) else path
 
 
 def unwritable_kind(path: str) -> str | None:
-    """Why `path` cannot be replaced by a rename of a new file ("a folder", "a character device", ...), or
-    None: a regular file, a name not yet taken, or a link to either. Nothing is opened: a fifo or a device
-    is only looked at (stat)."""
+    """Why `path` cannot be replaced by a rename of a new file ("a folder", "a character device",
+    ...), or
+    None: a regular file, a name not yet taken, or a link to either. Nothing is opened: a fifo or a
+    device is only looked at (stat)."""
     try:
         mode = os.stat(path).st_mode  # follows links
     except FileNotFoundError:
@@ -263,13 +274,15 @@ def unwritable_kind(path: str) -> str | None:
 
 
 def write_bytes_atomically(data: bytes, path: str) -> None:
-    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`. A symbolic
-    link is written through: the temporary file goes beside its target and is renamed over the target
-    (`destination`), so the link keeps pointing there. A `path` that is no regular file (`unwritable_kind`:
-    a device such as /dev/null, a fifo, a folder) raises OSError untouched: a rename would replace it."""
+    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`. A
+    symbolic link is written through: the temporary file goes beside its target and is renamed over
+    the target (`destination`), so the link keeps pointing there. A `path` that is no regular file
+    (`unwritable_kind`: a device such as /dev/null, a fifo, a folder) raises OSError untouched: a
+    rename would replace it."""
     kind = unwritable_kind(path)
     if kind is not None:
-        raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced atomically")
+        raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced "
+                      "atomically")
     path = destination(path)
     folder = os.path.dirname(os.path.abspath(path))
     mode = creation_mode(path)
@@ -349,20 +362,23 @@ def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
             os.remove(fallback)
             raise
         reason = str(exc).replace("\n", " ")
-        print(f"styletrace: could not write {path!r} ({reason}); saved the render to {fallback}", file=sys.stderr)
+        print(f"styletrace: could not write {path!r} ({reason}); saved the "
+              f"render to {fallback}", file=sys.stderr)
         return fallback
 
 
 
 def check_target(path: str) -> None:
-    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a regular
-    file or a new name in an existing, writable folder; a symbolic link counts as its target, which is
-    where the file goes (the link stays). Devices (/dev/null included: the rename would replace the
-    device node, so it is refused rather than written to), fifos, sockets and folders are refused untouched."""
+    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a
+    regular file or a new name in an existing, writable folder; a symbolic link counts as its
+    target, which is where the file goes (the link stays). Devices (/dev/null included: the rename
+    would replace the device node, so it is refused rather than written to), fifos, sockets and
+    folders are refused untouched."""
     kind = unwritable_kind(path)
     if kind is not None:
         via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
-        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a new name")
+        raise UsageError(f"cannot write {path!r}: it is {kind}{via}; expected a regular file or a "
+                         "new name")
     target = destination(path)
     folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):

@@ -5,8 +5,8 @@ The LLVM backend `dlopen`s a system libLLVM. Dr.Jit 1.5 aborts the whole process
 and hand it to Dr.Jit through `DRJIT_LIBLLVM_PATH` before the first `import drjit`.
 Then the variant: `cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`, unless the user chose one.
 
-`no_collection()` keeps Python's cyclic garbage collector from running while a pass is traced and launched
-(see its docstring: a scene freed by it in the middle of a trace made LLVM abort).
+`no_collection()` keeps Python's cyclic garbage collector from running while a pass is traced and
+launched (see its docstring: a scene freed by it in the middle of a trace made LLVM abort).
 """
 from __future__ import annotations
 
@@ -34,7 +34,8 @@ from styletrace.errors import BackendError  # noqa: E402  (re-exported: callers 
 
 
 def llvm_major(path: str) -> int | None:
-    """Major version encoded in a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1, libLLVM-15.0.7.so...)."""
+    """Major version encoded in a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1,
+    libLLVM-15.0.7.so...)."""
     name = os.path.basename(path)
     m = re.match(r"libLLVM(?:-(\d+)[.\d]*\.(?:so|dylib)|\.so\.(\d+)|\.(\d+)\.dylib)", name)
     if not m:
@@ -43,9 +44,10 @@ def llvm_major(path: str) -> int | None:
 
 
 def llvm_major_of_file(path: str) -> int | None:
-    """Major version of the libLLVM at `path`, read from the file itself: libLLVM exports its symbols under
-    an ELF symbol version named `LLVM_<major>[.<minor>]` (in .dynstr, near the start of the file), so a
-    copy renamed to plain libLLVM.so is still recognised. Falls back to the file name; None if neither says."""
+    """Major version of the libLLVM at `path`, read from the file itself: libLLVM exports its
+    symbols under an ELF symbol version named `LLVM_<major>[.<minor>]` (in .dynstr, near the start
+    of the file), so a copy renamed to plain libLLVM.so is still recognised. Falls back to the file
+    name; None if neither says."""
     try:
         with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
             at = data.find(b"\0LLVM_")
@@ -80,17 +82,20 @@ def configure_llvm() -> str:
             raise BackendError(f"DRJIT_LIBLLVM_PATH={user} does not exist; {FIX}")
         major = llvm_major_of_file(user)
         if major is not None and major < MIN_LLVM_MAJOR:
-            raise BackendError(f"DRJIT_LIBLLVM_PATH={user} is LLVM {major}, which crashes Dr.Jit 1.5; {FIX}")
+            raise BackendError(f"DRJIT_LIBLLVM_PATH={user} is LLVM {major}, which crashes Dr.Jit "
+                               f"1.5; {FIX}")
         return user
     found = find_libllvm()
     if found is None:
-        raise BackendError(f"styletrace found no libLLVM >= {MIN_LLVM_MAJOR} for the CPU backend; {FIX}")
+        raise BackendError(f"styletrace found no libLLVM >= {MIN_LLVM_MAJOR} for the CPU backend; "
+                           f"{FIX}")
     os.environ["DRJIT_LIBLLVM_PATH"] = found
     return found
 
 
 def cuda_usable() -> bool:
-    """True when Dr.Jit can run CUDA kernels here (checked without creating a CUDA context if the driver is absent)."""
+    """True when Dr.Jit can run CUDA kernels here (checked without creating a CUDA context if the
+    driver is absent)."""
     if os.environ.get("STYLETRACE_NO_CUDA"):
         return False
     if not any(glob.glob(os.path.join(d, "libcuda.so*")) for d in SEARCH_DIRS):
@@ -128,7 +133,8 @@ def prepare_drjit() -> str:
     if cuda_usable():
         return "cuda"
     if not dr.has_backend(dr.JitBackend.LLVM):
-        raise BackendError(f"Dr.Jit could not load libLLVM ({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
+        raise BackendError("Dr.Jit could not load libLLVM "
+                           f"({os.environ.get('DRJIT_LIBLLVM_PATH')}); {FIX}")
     # Dr.Jit picks its own libLLVM when it was imported before styletrace; refuse one that crashes
     loaded = loaded_libllvm()
     major = llvm_major_of_file(loaded) if loaded else None
@@ -151,15 +157,16 @@ def check_variant(variant: str) -> str:
 
 
 def select_variant(requested: str | None = None) -> str:
-    """Set the Mitsuba variant and return it: `requested` if given, else the one the user already set,
-    else `cuda_ad_rgb` where CUDA works and `llvm_ad_rgb` otherwise."""
+    """Set the Mitsuba variant and return it: `requested` if given, else the one the user already
+    set, else `cuda_ad_rgb` where CUDA works and `llvm_ad_rgb` otherwise."""
     if requested is not None:
         check_variant(requested)
     backend = prepare_drjit()
     import mitsuba as mi
     if requested is not None:
         if requested not in mi.variants():
-            raise BackendError(f"unknown variant {requested!r}: this Mitsuba has {', '.join(mi.variants())}")
+            raise BackendError(f"unknown variant {requested!r}: this Mitsuba has "
+                               f"{', '.join(mi.variants())}")
         if mi.variant() != requested:
             mi.set_variant(requested)
         return requested
@@ -172,10 +179,12 @@ def select_variant(requested: str | None = None) -> str:
 
 
 def backend(variant: str | None = None) -> str:
-    """Choose libLLVM and the Mitsuba variant once (`variant` switches to another) and return the variant.
+    """Choose libLLVM and the Mitsuba variant once (`variant` switches to another) and return the
+    variant.
 
     Idempotent and cheap once chosen; every styletrace module that imports Dr.Jit or Mitsuba when it
-    loads calls it first. A variant the user set before is kept (and refused if styles cannot run on it)."""
+    loads calls it first. A variant the user set before is kept (and refused if styles cannot run on
+    it)."""
     mi = sys.modules.get("mitsuba")
     if variant is None and mi is not None and mi.variant():
         return check_variant(mi.variant())
@@ -184,16 +193,18 @@ def backend(variant: str | None = None) -> str:
 
 @contextlib.contextmanager
 def no_collection():
-    """No automatic cyclic garbage collection inside the block (the previous state is restored after it).
+    """No automatic cyclic garbage collection inside the block (the previous state is restored after
+    it).
 
-    Dr.Jit records a virtual call (a BSDF's `eval`, say) over every live instance of the class. Python's
-    cyclic collector runs at arbitrary allocations; when it finalised a scene that had become cyclic garbage
-    (a refused render's traceback held by an exception, say) while a pass was being recorded, that scene's
-    BSDFs left Dr.Jit's registry in the middle of the recording, and the kernel LLVM then compiled had one
-    function defined twice: "invalid redefinition of function", an abort (measured: the collector ran
-    inside reuse's child walk, a while_loop body; tests/test_jit.py reproduces it in a subprocess). Such
-    garbage is collected before or after the pass instead: reference counting still frees everything that
-    is not in a cycle at once, and the collector runs at the next allocation after the block."""
+    Dr.Jit records a virtual call (a BSDF's `eval`, say) over every live instance of the class.
+    Python's cyclic collector runs at arbitrary allocations; when it finalised a scene that had
+    become cyclic garbage (a refused render's traceback held by an exception, say) while a pass was
+    being recorded, that scene's BSDFs left Dr.Jit's registry in the middle of the recording, and
+    the kernel LLVM then compiled had one function defined twice: "invalid redefinition of
+    function", an abort (measured: the collector ran inside reuse's child walk, a while_loop body;
+    tests/test_jit.py reproduces it in a subprocess). Such garbage is collected before or after the
+    pass instead: reference counting still frees everything that is not in a cycle at once, and the
+    collector runs at the next allocation after the block."""
     was = gc.isenabled()
     gc.disable()
     try:

@@ -5,8 +5,8 @@
     clipped_share(img), crushed_share(img)   pixels with every channel >= 0.99 / <= 0.01 in display space
     tone_correlation(img, ref, period)       rank correlation of local luminance with a converged render
 
-Images are H x W x 3 float arrays of linear radiance; display space is sRGB of the values clamped to [0, 1].
-numpy only.
+Images are H x W x 3 float arrays of linear radiance; display space is sRGB of the values clamped to
+[0, 1]. numpy only.
 """
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ def luminance(img: np.ndarray) -> np.ndarray:
 
 
 def noise_psnr(a: np.ndarray, b: np.ndarray) -> float:
-    """PSNR in dB of one render's noise, from two renders differing only in seed: the per-render variance is
-    mean((a - b)^2) / 2 in display space (peak 1). inf for identical images."""
+    """PSNR in dB of one render's noise, from two renders differing only in seed: the per-render
+    variance is mean((a - b)^2) / 2 in display space (peak 1). inf for identical images."""
     var = float(np.mean((srgb(a) - srgb(b)) ** 2)) / 2.0
     return float("inf") if var == 0.0 else float(10.0 * np.log10(1.0 / var))
 
@@ -46,8 +46,9 @@ def _windows(x: np.ndarray, size: int) -> np.ndarray:
 
 
 def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO, size: int = FIREFLY_WINDOW) -> float:
-    """Share of pixels whose luminance exceeds `ratio` times the median of their `size` x `size` neighbourhood
-    (edges repeated), that median taken as at least FIREFLY_FLOOR, of the linear image (negative values as 0)."""
+    """Share of pixels whose luminance exceeds `ratio` times the median of their `size` x `size`
+    neighbourhood (edges repeated), that median taken as at least FIREFLY_FLOOR, of the linear image
+    (negative values as 0)."""
     lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
     median = np.median(_windows(lum, size), axis=(-2, -1))
     return float(np.mean(lum > ratio * np.maximum(median, FIREFLY_FLOOR)))
@@ -80,9 +81,9 @@ def _ranks(x: np.ndarray) -> np.ndarray:
 
 
 def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8) -> float:
-    """Spearman's rank correlation between the display luminance of `img` and of a converged `reference`,
-    both blurred by a box of about `period` pixels (the pattern's period, so a screen of lines or dots reads
-    as its tone)."""
+    """Spearman's rank correlation between the display luminance of `img` and of a converged
+    `reference`, both blurred by a box of about `period` pixels (the pattern's period, so a screen
+    of lines or dots reads as its tone)."""
     a = _box_blur(luminance(srgb(img)), period).ravel()
     b = _box_blur(luminance(srgb(reference)), period).ravel()
     ra, rb = _ranks(a), _ranks(b)

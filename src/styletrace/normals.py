@@ -1,17 +1,10 @@
 """Vertex normals that are the same in every process.
 
-A mesh without normals of its own (a PLY or OBJ without them, `face_normals` off) gets angle-weighted vertex
-normals from Mitsuba at load time. Mitsuba 3.9.1 sums the faces' contributions with an atomic scatter-add in a
-Dr.Jit kernel, which on several CPU threads adds in a different order from run to run: the last bits of the
-normals, and so of a few pixels, changed between processes with the same seed (the bundled dragon: 2 normal
-buffers in 8 loads, each giving its own image). Loading on one Dr.Jit thread avoided it, but Mitsuba's OpenEXR
-reader waits on that thread pool and deadlocks there, so every scene with an EXR texture or environment map hung.
-
-`canonical_normals` recomputes those normals on the host, in a fixed order (numpy's bincount), with Mitsuba's
-formula: the sum over the faces at a vertex of the face's unit normal times its interior angle there, normalized
-(Thürmer and Wüthrich, "Computing vertex normals from polygonal facets"). It replaces a mesh's normals only
-where they agree with that formula to `TOLERANCE` (they were computed, not read from the file); normals a file
-carries are left alone.
+`canonical_normals` recomputes a mesh's computed vertex normals on the host, in a fixed order,
+with Mitsuba's formula: the sum over the faces at a vertex of the face's unit normal times its
+interior angle there, normalized (Thürmer and Wüthrich). It replaces a mesh's normals only where
+they agree with that formula to `TOLERANCE`; normals a file carries are left alone. Rationale:
+docs/design/canonical_normals.md.
 """
 from __future__ import annotations
 
@@ -25,8 +18,9 @@ TOLERANCE = 1e-4
 
 
 def angle_weighted(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Unit vertex normals (V x 3, float64) of a triangle mesh: per vertex, the sum of its faces' unit normals
-    weighted by the interior angle at the vertex. Vertices of degenerate faces only get zero (NaN-free)."""
+    """Unit vertex normals (V x 3, float64) of a triangle mesh: per vertex, the sum of its faces'
+    unit normals weighted by the interior angle at the vertex. Vertices of degenerate faces only get
+    zero (NaN-free)."""
     v = [positions[faces[:, i]] for i in range(3)]
     n = np.cross(v[1] - v[0], v[2] - v[0])
     length = np.linalg.norm(n, axis=1, keepdims=True)
@@ -47,8 +41,9 @@ def angle_weighted(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def canonical_normals(scene: Any) -> int:
-    """Replace every mesh's computed vertex normals (those matching `angle_weighted` to TOLERANCE) by the
-    host's deterministic ones; returns how many meshes changed. Meshes inside shape groups are included."""
+    """Replace every mesh's computed vertex normals (those matching `angle_weighted` to TOLERANCE)
+    by the host's deterministic ones; returns how many meshes changed. Meshes inside shape groups
+    are included."""
     import mitsuba as mi
     params = mi.traverse(scene)
     changed = 0

@@ -1,17 +1,10 @@
-"""Wild estimates: pixel values an unbiased estimator put outside the range its style function can take.
+"""Wild estimates: pixel values an unbiased estimator put outside the range its style can take.
 
-Reference
-    An unbiased estimator of g(I) with a random number of terms (power series, telescoping) is exact on
-    average, yet a single estimate can land far outside g's range: the gamma series on radiance with
-    fireflies gives pixels of -600 where g >= 0 (docs/estimators.md, "Gamma and the series estimators").
-    Such an image is unusable even though its expectation is right, so the CLI measures it and says so.
-
-What it measures
-    For the integrator's own style slot, when its estimator is not `direct` and its form declares the values
-    g takes on radiance >= 0 (`SeriesForm.values`, e.g. gamma [0, inf), exp_tone and reinhard [0, 1]): the
-    fraction of finite channel values outside that range by more than TOLERANCE times the image's median
-    |value| (less is invisible noise). It reports when that fraction is at least WILD_FRACTION.
-    Styles on per-object `styled` BSDFs are not checked.
+For the integrator's own style slot, when its estimator is not `direct` and its form declares
+the values g takes on radiance >= 0 (`SeriesForm.values`): the fraction of finite channel values
+outside that range by more than TOLERANCE times the image's median |value|, reported when it is
+at least WILD_FRACTION. Styles on per-object `styled` BSDFs are not checked. Rationale:
+docs/design/wild_estimates.md.
 """
 from __future__ import annotations
 
@@ -57,8 +50,9 @@ def warning(image, settings) -> str | None:
     advice = ("use --expansion-pass 64 or --estimator direct" if slot.estimator == "series"
               and not getattr(settings, "expansion_pass", 0) else "use --estimator direct")
     return (
-        f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: {100 * fraction:.2g}% of "
-        f"pixel values lie outside {slot.style.name}'s range {span} (observed {vmin:.3g} to {vmax:.3g}, median "
-        f"|value| {med:.3g}); its variance is unbounded on radiance with fireflies (small bright lights, glossy "
-        f"highlights): {advice}, or see docs/estimators.md (Gamma and the series estimators)"
+        f"the '{slot.estimator}' estimator's {slot.style.name} estimates are wild: "
+        f"{100 * fraction:.2g}% of pixel values lie outside {slot.style.name}'s range {span} "
+        f"(observed {vmin:.3g} to {vmax:.3g}, median |value| {med:.3g}); its variance is unbounded "
+        f"on radiance with fireflies (small bright lights, glossy highlights): {advice}, or see "
+        "docs/estimators.md (Gamma and the series estimators)"
     )

@@ -1,5 +1,5 @@
-"""The named choices the kernel offers, which the settings parse and the kernel reads: feature-line tests and
-modes with the parsed line group (`LineSettings`; kernel/lines.py), emitter-sampling modes
+"""The named choices the kernel offers, which the settings parse and the kernel reads: feature-line
+tests and modes with the parsed line group (`LineSettings`; kernel/lines.py), emitter-sampling modes
 (kernel/emitter_sampler.py)."""
 from __future__ import annotations
 
@@ -33,7 +33,8 @@ class LineSettings:
         if self.mode == "lifted":
             kinds = ",".join(t.measurement for t in self.types)
             return f"lines(lifted, depth={self.depth}, types={kinds})"
-        return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, tests={','.join(self.tests)})")
+        return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, "
+                f"tests={','.join(self.tests)})")
 
 
 EMITTER_MODES = ("uniform", "power")

@@ -1,17 +1,11 @@
-"""One declaration per integrator property: type, default, bounds, choices, doc line, CLI flag and docs row.
+"""One declaration per integrator property: type, default, bounds, choices, doc line, CLI flag.
 
     Property("line_k", 12, "int", "expectation mode: k, the opacity control", low=1, high=256)
 
-A `Property` is everything the project knows about one setting of the `stylized` integrator: the command
-line makes its flag from it (`cli.add_setting_flags`), the docs their table row (`reference.integrator_table`),
-and `settings.parse` its value (`Property.parse`: the kind, the bounds and the choices declared here), so
-adding a property is one declaration in `settings.PROPERTIES` (or `settings.declare(...)`). `Property` is the
-integrator's side of the shared `styletrace.declaration.Declaration` (style parameters are the other side):
-the common kinds are parsed there, once. Properties whose
-value depends on others (inner_samples and stylize_depth, the reuse family, lines) keep their cross-checks
-in `settings.parse`; their single values are still parsed here. Also here: the value parsers every front end
-shares (integer, number, boolean, names, rgb), each a throwaway `Property` parsing one value, failing with one
-line naming the value and what is allowed.
+`Property` is the integrator's side of `styletrace.declaration.Declaration`: the command line makes
+its flag from it, the docs their table row, `settings.parse` its value. Also here: the shared value
+parsers (integer, number, boolean, names, rgb), each failing with one line naming the value and
+what is allowed. Rationale: docs/design/declarations.md.
 """
 from __future__ import annotations
 
@@ -26,7 +20,8 @@ from styletrace.errors import SettingsError
 COUNT_MAX = 2 ** 32 - 2
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
-    """An integer in [low, high] from a number or a string; exact (1.5 and '2.7' are refused, not truncated)."""
+    """An integer in [low, high] from a number or a string; exact (1.5 and '2.7' are refused, not
+    truncated)."""
     return Property(key, None, "int", "", low=low, high=high).parse(raw)
 
 
@@ -52,11 +47,11 @@ def boolean(key: str, raw: Any) -> bool:
 
 @dataclass(frozen=True, init=False)
 class Property(Declaration):
-    """One integrator property (see the module doc): a `Declaration` with its command-line flag. `kind`:
-    int | float | bool | string | list | rgb | the docs' wording for the few parsed in `settings.parse` (int
-    or list); `low`/`high` bound a number (`low_open`: the low end excluded); `choices`: the strings a
-    `string` accepts. Spellings: bool is true/false/1/0; an int or float is never True/False; an rgb is
-    'r,g,b' with each value >= 0."""
+    """One integrator property (see the module doc): a `Declaration` with its command-line flag.
+    `kind`: int | float | bool | string | list | rgb | the docs' wording for the few parsed in
+    `settings.parse` (int or list); `low`/`high` bound a number (`low_open`: the low end excluded);
+    `choices`: the strings a `string` accepts. Spellings: bool is true/false/1/0; an int or float is
+    never True/False; an rgb is 'r,g,b' with each value >= 0."""
 
     flag: str = ""            # the `styletrace render` flag, if it has its own
     metavar: str = ""
@@ -84,7 +79,8 @@ class Property(Declaration):
         object.__setattr__(self, "bare", bare)
 
     def show_default(self) -> str:
-        """The default as the docs show it: None is the style's own count (inner_samples) or auto."""
+        """The default as the docs show it: None is the style's own count (inner_samples) or
+        auto."""
         if self.default is None:
             return "style's" if self.name == "inner_samples" else "auto"
         return str(self.default)

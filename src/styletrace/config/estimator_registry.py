@@ -1,8 +1,9 @@
 """The estimator registry: how the `stylized` integrator turns n child samples into g(E[L]).
 
-Each entry names the forms of g it accepts (`styles.forms`), what `inner_samples` n means for it, its
-fixed parameters and a doc line; `styletrace styles` and the docs print this table, the settings check
-names against it, and `make_estimator` builds the kernel object from it. It mirrors the style registry.
+Each entry names the forms of g it accepts (`styles.forms`), what `inner_samples` n means for it,
+its fixed parameters and a doc line; `styletrace styles` and the docs print this table, the settings
+check names against it, and `make_estimator` builds the kernel object from it. It mirrors the style
+registry.
 
     make_estimator(slot, level, vertex).run(draw, carry, uniform, active, like=mi.Color3f) -> (value, carry)
 
@@ -99,7 +100,8 @@ def estimator_entry(name: str) -> EstimatorKind:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise SettingsError(f"unknown estimator '{name}': available are {', '.join(_REGISTRY)}") from None
+        raise SettingsError(f"unknown estimator '{name}': available are "
+                            f"{', '.join(_REGISTRY)}") from None
 
 
 def kinds() -> list[EstimatorKind]:
@@ -126,7 +128,8 @@ def check_estimator(name: str, style: Style) -> str:
 
 
 class Transformed:
-    """An estimator of h(X') with X' = f(X) per sample and the result mapped by scale * value + offset."""
+    """An estimator of h(X') with X' = f(X) per sample and the result mapped by scale * value +
+    offset."""
 
     def __init__(self, inner, sample=None, scale=1.0, offset=0.0):
         self.inner, self.sample, self.scale, self.offset = inner, sample, scale, offset
@@ -146,8 +149,9 @@ class Transformed:
 
 
 def check_adaptive(name: str, style: Style, raw) -> None:
-    """Adaptive inner counts (`n0:n_max`) only with direct application of a function of expectation: the
-    unbiased estimators' guarantee does not survive a data-dependent number of children (docs/adaptive.md)."""
+    """Adaptive inner counts (`n0:n_max`) only with direct application of a function of expectation:
+    the unbiased estimators' guarantee does not survive a data-dependent number of children
+    (docs/adaptive.md)."""
     if name != "direct":
         raise SettingsError(
             f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
@@ -163,8 +167,8 @@ def check_adaptive(name: str, style: Style, raw) -> None:
 
 
 def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
-    """Direct application with adaptive stopping (`estimators.AdaptiveDirect`), told by the style where its
-    steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`)."""
+    """Direct application with adaptive stopping (`estimators.AdaptiveDirect`), told by the style
+    where its steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`)."""
     return E.AdaptiveDirect(
         lambda I: style.apply(I, vertex),
         n0,
@@ -177,12 +181,13 @@ def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
 
 
 def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitted=None) -> Transformed:
-    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time). An adaptive
-    count (`settings.AdaptiveCount`), or error AOVs asked for in `settings`, give `AdaptiveDirect` (its
-    `stats` feed the AOVs); `moments` (the lane's pixel's mean x and x^2 from the expansion pass) at level 0
-    give the series about that pixel's b* (`series_with_pass`); a fixed count without AOVs takes the
-    registry's builder as before. `emitted`: the vertex's own emission, which the firefly control of
-    direct application leaves out of its cap (`child_mean`)."""
+    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace
+    time). An adaptive count (`settings.AdaptiveCount`), or error AOVs asked for in `settings`,
+    give `AdaptiveDirect` (its `stats` feed the AOVs); `moments` (the lane's pixel's mean x and
+    x^2 from the expansion pass) at level 0 give the series about that pixel's b*
+    (`series_with_pass`); a fixed count without AOVs takes the registry's builder as before.
+    `emitted`: the vertex's own emission, which the firefly control of direct application leaves
+    out of its cap (`child_mean`)."""
     if moments is not None and level == 0 and slot.estimator == "series":
         return series_with_pass(slot.style, *moments)
     n = slot.n(level)
@@ -198,17 +203,18 @@ def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitte
 
 
 def _capped(g, n: int, cap: tuple[float, float], emitted) -> Transformed:
-    """Direct application of g with the firefly cap on the children's reflected part (each child less
-    the vertex's own emission `emitted`, added back before g; None: the children as they are)."""
+    """Direct application of g with the firefly cap on the children's reflected part (each child
+    less the vertex's own emission `emitted`, added back before g; None: the children as they
+    are)."""
     if emitted is None:
         return Transformed(E.Direct(g, n, cap=cap))
     return Transformed(E.Direct(lambda I: g(I + emitted), n, cap=cap), sample=lambda x: x - emitted)
 
 
 def firefly_cap(settings) -> tuple[float, float] | None:
-    """(k, floor) of the firefly control for direct application (`estimators.affine.MeanOfN`), or None where
-    it is off (firefly 0, no settings, or error AOVs, which describe the paper's estimator). An unresolved floor
-    (no pilot ran) is 0."""
+    """(k, floor) of the firefly control for direct application (`estimators.affine.MeanOfN`), or
+    None where it is off (firefly 0, no settings, or error AOVs, which describe the paper's
+    estimator). An unresolved floor (no pilot ran) is 0."""
     k = getattr(settings, "firefly", 0.0) if settings is not None else 0.0
     if not k or settings.aovs:
         return None
@@ -216,8 +222,8 @@ def firefly_cap(settings) -> tuple[float, float] | None:
 
 
 def child_mean(slot, level: int, settings=None, emitted=None) -> Transformed:
-    """The mean of a slot's n children as direct application computes it (the firefly control included):
-    what an expectation buffer keeps and restyles from (`lookdev.record`)."""
+    """The mean of a slot's n children as direct application computes it (the firefly control
+    included): what an expectation buffer keeps and restyles from (`lookdev.record`)."""
     cap = firefly_cap(settings) if slot.estimator == "direct" and not slot.style.per_sample else None
     if cap is None:
         return Transformed(E.Direct(lambda x: x, slot.n(level)))
@@ -226,7 +232,8 @@ def child_mean(slot, level: int, settings=None, emitted=None) -> Transformed:
 
 # ---- the registry ------------------------------------------------------------------------------
 
-@estimator("direct", None, "g(mean of n children), biased O(1/n) (Eq. 19); with n0:n_max adaptive, n chosen per "
+@estimator("direct", None,
+           "g(mean of n children), biased O(1/n) (Eq. 19); with n0:n_max adaptive, n chosen per "
            "vertex (estimators/adaptive.py)", "children per estimate (or n0:n_max)")
 def _direct(style, n, vertex):
     if style.per_sample:  # the children arrive already styled (a baseline): just average them
@@ -239,8 +246,8 @@ def _affine_form(form):
     return form.affine if isinstance(form, CompositeForm) else form
 
 
-@estimator("affine", (AffineForm, CompositeForm), "a1 <I>_n + a0, unbiased (S1-S3)", "children per estimate",
-           when=lambda form: _affine_form(form) is not None)
+@estimator("affine", (AffineForm, CompositeForm), "a1 <I>_n + a0, unbiased (S1-S3)",
+           "children per estimate", when=lambda form: _affine_form(form) is not None)
 def _affine(style, n, vertex):
     form = _affine_form(style.form())
     return Transformed(E.Affine(form.a1, form.a0, n=n))
@@ -270,11 +277,11 @@ def _series(selection):
 
 
 def series_with_pass(style, sets, known=0.0) -> Transformed:
-    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample X' = gain X + shift
-    = gain known + shift + gain R, the largest over `sets`: the expansion pass's (mean r, mean r^2) of the lane's pixel
-    and of its window, and the lane's own `known` part of every child (its vertex's emission). No pilot
-    children; b floored at the form's pilot_lo and clamped into the series' convergence region as a pilot's
-    b is."""
+    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample X'
+    = gain X + shift = gain known + shift + gain R, the largest over `sets`: the expansion pass's
+    (mean r, mean r^2) of the lane's pixel and of its window, and the lane's own `known` part of
+    every child (its vertex's emission). No pilot children; b floored at the form's pilot_lo and
+    clamped into the series' convergence region as a pilot's b is."""
     form = style.form()
     gain = form.gain
     e = known * gain + form.shift
@@ -324,7 +331,8 @@ estimator(
 )(_series("single"))
 
 
-@estimator("ustat", (PolynomialForm,), "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
+@estimator("ustat", (PolynomialForm,),
+           "U-statistic of the fitted polynomial about a pilot b (S7-S8, Eq. 17)",
            "children (at least the fit's degree)", pilot="1 sample")
 def _ustat(style, n, vertex):
     form = style.form()
@@ -332,7 +340,8 @@ def _ustat(style, n, vertex):
     return Transformed(est, _clamp_sample(form))
 
 
-@estimator("naive", (PolynomialForm,), "products of independent children per polynomial term (S6)", _PILOT)
+@estimator("naive", (PolynomialForm,),
+           "products of independent children per polynomial term (S6)", _PILOT)
 def _naive(style, n, vertex):
     form = style.form()
     return Transformed(E.PolynomialNaive(form.fit, b=E.Pilot(n)), _clamp_sample(form))
@@ -345,9 +354,10 @@ def _telescoping(style, n, vertex):
 
 
 def _operand(form, n: int):
-    """An estimator that consumes samples of an operand's input and returns an unbiased estimate of the
-    operand applied to their mean, as the single-style builders above do (sample maps become 1-sample
-    inner estimators: a gain and shift is Affine(gain, shift), a clamp is Direct(clip, 1))."""
+    """An estimator that consumes samples of an operand's input and returns an unbiased estimate
+    of the operand applied to their mean, as the single-style builders above do (sample maps
+    become 1-sample inner estimators: a gain and shift is Affine(gain, shift), a clamp is
+    Direct(clip, 1))."""
     if isinstance(form, AffineForm):
         return E.Affine(form.a1, form.a0, n=1)
     if isinstance(form, SeriesForm):
@@ -363,9 +373,10 @@ def _operand(form, n: int):
     raise AssertionError(f"no operand estimator for {form!r}")
 
 
-@estimator("combined", (CompositeForm,), "a composition's operands' unbiased estimators nested (Theorem 4.1): "
-           "each outer operand consumes independent estimates of the inner ones", "pilot samples of series "
-           "and polynomial operands (affine operands take 1)")
+@estimator("combined", (CompositeForm,),
+           "a composition's operands' unbiased estimators nested (Theorem 4.1): each outer operand "
+           "consumes independent estimates of the inner ones",
+           "pilot samples of series and polynomial operands (affine operands take 1)")
 def _combined(style, n, vertex):
     forms = style.form().forms
     est = _operand(forms[0], n)

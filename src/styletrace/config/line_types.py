@@ -1,15 +1,12 @@
 """The line dictionary of `line_mode lifted`: `line_types`, parsed into `LineType`s.
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
-Mukherjee, Yonghao Yue (2026), Section 4.3 (Eqs. 23, 31-34). A type measures f at the vertex an
-auxiliary path reaches and fires where |f(v) - f(u)| / |v - u| >= threshold for a pair drawn from a
-stencil; types are in priority order, the first that fires colours the camera sample.
+Reference: West, Mukherjee, Yue, "Lifting Lines and Tone" (2026), Section 4.3 (Eqs. 23, 31-34).
 
     line_types = "shape_id color=0.8,0,0; depth threshold=0.05 radius=1.5 count=16; normal"
 
 Measurements: shape_id, material_id (any difference fires), depth (0.1 per pixel), normal (0.3).
 Fields: threshold (> 0), stencil (disk | square), radius (pixels), count (1 .. 256), color. Empty:
-one shape_id type. Spelled out in docs/lines.md, "Conditional lifting".
+one shape_id type. Types fire in priority order (docs/design/line_dictionary.md, docs/lines.md).
 """
 from __future__ import annotations
 
@@ -40,8 +37,8 @@ class LineType:
 
 
 def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tuple[LineType, ...]:
-    """`line_types` (module doc) with the line group's width (pixels), sample count and colour as the
-    defaults of radius, count and colour. One-line `SettingsError` on a bad entry."""
+    """`line_types` (module doc) with the line group's width (pixels), sample count and colour as
+    the defaults of radius, count and colour. One-line `SettingsError` on a bad entry."""
     text = "" if raw is None else raw
     if not isinstance(text, str):
         raise SettingsError(f"bad value {raw!r} for 'line_types': expected a string like "
@@ -96,8 +93,9 @@ def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tupl
 
 
 def without_colours(raw: str) -> str:
-    """`line_types` with every entry's own `color=` field dropped, the rest as given: each type then takes the
-    line group's colour (the Blender add-on's line mask renders the lines once black and once white)."""
+    """`line_types` with every entry's own `color=` field dropped, the rest as given: each type then
+    takes the line group's colour (the Blender add-on's line mask renders the lines once black and
+    once white)."""
     return "; ".join(" ".join(w for w in entry.split() if w.partition("=")[0] != "color")
                      for entry in raw.split(";") if entry.strip())
 

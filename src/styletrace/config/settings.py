@@ -1,4 +1,5 @@
-"""The `stylized` integrator's settings: their names, defaults, parsing, docs and refinement, in one place.
+"""The `stylized` integrator's settings: their names, defaults, parsing, docs and refinement, in one
+place.
 
 Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
 `--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
@@ -36,17 +37,20 @@ from styletrace.styles.base import Style
 STYLIZE_MODES = {
     "first_hit": "the camera ray's first hit; objects with a `styled` BSDF use their own style",
     "first_n_hits": "the first N vertices of every path, recursively",
-    "first_object_hit": "the first vertex on a styled object at any depth (through mirrors and glass)",
+    "first_object_hit": "the first vertex on a styled object at any depth (through mirrors and "
+                        "glass)",
 }
 
 REUSE_MODES = {
     "off": "every camera sample uses its own children (the tree sampler)",
-    "pixels": "pool the children of neighbouring pixels' first hits (first_hit, first_n_hits; docs/reuse.md)",
+    "pixels": "pool the children of neighbouring pixels' first hits (first_hit, first_n_hits; "
+              "docs/reuse.md)",
 }
 REUSE_WEIGHTS = ("balance", "pairwise")
 REUSE_DEEP = {
     "tree": "each child's second-level value from the tree sampler (its own children)",
-    "world": "second-level vertices pool their world-space neighbours' children too (within reuse_h)",
+    "world": "second-level vertices pool their world-space neighbours' children too (within "
+             "reuse_h)",
 }
 #: Smallest world-space radius reuse_h (a fraction of the scene's bounding-box diagonal): the world
 #: grid packs 21 bits per axis of a cell index into one key (world_grid.py).
@@ -76,9 +80,9 @@ PROPERTIES = (
         "inner_samples",
         None,
         "int or list",
-        "n: child estimates per stylized vertex; `8,4` sets one per "
-        "level; `4:64` is adaptive: 4 children, up to 64 where the predicted error is large (direct only; "
-        "docs/adaptive.md; with reuse=pixels, a refinement round of the pooled mean, docs/reuse.md)",
+        "n: child estimates per stylized vertex; `8,4` sets one per level; `4:64` is adaptive: 4 "
+        "children, up to 64 where the predicted error is large (direct only; docs/adaptive.md; "
+        "with reuse=pixels, a refinement round of the pooled mean, docs/reuse.md)",
         "--inner",
         "N",
     ),
@@ -86,8 +90,8 @@ PROPERTIES = (
         "adaptive_z",
         2.0,
         "float",
-        "adaptive `n0:n_max`: keep drawing while a threshold of a step style "
-        "lies within a confidence band of the children's mean brightness: adaptive_z normal deviations' "
+        "adaptive `n0:n_max`: keep drawing while a threshold of a step style lies within a "
+        "confidence band of the children's mean brightness: adaptive_z normal deviations' "
         "confidence, Student's t standard errors",
         "",
         "",
@@ -111,9 +115,8 @@ PROPERTIES = (
         "aovs",
         False,
         "bool",
-        "also output per-pixel error channels: the variance of the pixel's estimate, "
-        "the predicted bias (Eq. 21) and the children used at the first stylized vertex (direct only; "
-        "`--aovs`)",
+        "also output per-pixel error channels: the variance of the pixel's estimate, the predicted "
+        "bias (Eq. 21) and the children used at the first stylized vertex (direct only; `--aovs`)",
         "",
         "",
     ),
@@ -129,10 +132,11 @@ PROPERTIES = (
         "expansion_pass",
         0,
         "int",
-        "estimator series: m > 0 runs a pre-pass of m children per pixel at the "
-        "first stylized vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of "
-        f"the pixel's and its 3x3 window's children (independent of the estimate's; m at most "
-        f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot (docs/estimators.md)",
+        "estimator series: m > 0 runs a pre-pass of m children per pixel at the first stylized "
+        "vertex; the first level's series then expands about 2x the larger b* = E[x^2]/E[x] of the "
+        "pixel's and its 3x3 window's children (independent of the estimate's; m at most "
+        f"{MAX_EXPANSION_PASS}), geometric truncation; 0: b from each estimate's own pilot "
+        "(docs/estimators.md)",
         "--expansion-pass",
         "M",
         low=0,
@@ -142,10 +146,10 @@ PROPERTIES = (
         "firefly",
         None,
         "float",
-        "firefly control of direct application: the brightest of a stylized "
-        "vertex's n children is capped at k times the larger of the others' mean brightness and "
-        "firefly_floor (a lone child: 10 / 0.18 times firefly_floor); 0: off, the paper's estimator; "
-        "auto: 4 where the render is denoised, else 0 (docs/look.md)",
+        "firefly control of direct application: the brightest of a stylized vertex's n children is "
+        "capped at k times the larger of the others' mean brightness and firefly_floor (a lone "
+        "child: 10 / 0.18 times firefly_floor); 0: off, the paper's estimator; auto: 4 where the "
+        "render is denoised, else 0 (docs/look.md)",
         "--firefly",
         "K",
         low=0.0,
@@ -187,9 +191,9 @@ PROPERTIES = (
         "emitter_sampling",
         EMITTER_DEFAULT,
         "string",
-        "how next-event estimation picks a light: uniform (as "
-        "Mitsuba) or power (by estimated emitted power: better with lights of very different strengths, worse "
-        "where a sky dominates the estimate; BENCHMARKS.md)",
+        "how next-event estimation picks a light: uniform (as Mitsuba) or power (by estimated "
+        "emitted power: better with lights of very different strengths, worse where a sky "
+        "dominates the estimate; BENCHMARKS.md)",
         "--emitter-sampling",
         "MODE",
         choices=tuple(EMITTER_MODES),
@@ -290,9 +294,9 @@ PROPERTIES = (
         "line_mode",
         "absorb",
         "string",
-        "absorb (West 2021: N rays against the path's own ray; a line ends "
-        "the path), expectation (LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs) or lifted "
-        "(LLaT's conditional lifting: auxiliary paths per `line_types` entry; the first type that fires "
+        "absorb (West 2021: N rays against the path's own ray; a line ends the path), expectation "
+        "(LLaT: g = (1 - w) c + w L, w = E[m]^k from k random stencil pairs) or lifted (LLaT's "
+        "conditional lifting: auxiliary paths per `line_types` entry; the first type that fires "
         "colours the camera sample, L is traced only where none does)",
         choices=tuple(LINE_MODES),
     ),
@@ -308,16 +312,16 @@ PROPERTIES = (
         "line_types",
         "",
         "string",
-        "lifted mode: the line dictionary, in priority order: `measurement "
-        "key=value ...; ...` (measurements shape_id, material_id, depth, normal; fields threshold, stencil, "
-        "radius, count, color; docs/lines.md). Empty: one shape_id type",
+        "lifted mode: the line dictionary, in priority order: `measurement key=value ...; ...` "
+        "(measurements shape_id, material_id, depth, normal; fields threshold, stencil, radius, "
+        "count, color; docs/lines.md). Empty: one shape_id type",
     ),
     Property(
         "line_diffuse",
         False,
         "bool",
-        "lifted mode: auxiliary paths go on through diffuse vertices by the "
-        "minimal rotation of the base path's direction (off: they stop there, as in the other modes)",
+        "lifted mode: auxiliary paths go on through diffuse vertices by the minimal rotation of "
+        "the base path's direction (off: they stop there, as in the other modes)",
     ),
     Property(
         "reuse",
@@ -351,9 +355,9 @@ PROPERTIES = (
         "reuse_mis",
         "balance",
         "string",
-        "reuse=pixels: weights of the pooled BSDF samples: balance (the "
-        "mixture density of the whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against "
-        "the vertex itself, 2K+1; docs/reuse.md)",
+        "reuse=pixels: weights of the pooled BSDF samples: balance (the mixture density of the "
+        "whole pool, (K+1)^2 density evaluations) or pairwise (each neighbour against the vertex "
+        "itself, 2K+1; docs/reuse.md)",
         "--reuse-mis",
         "NAME",
     ),
@@ -361,8 +365,8 @@ PROPERTIES = (
         "reuse_deep",
         "tree",
         "string",
-        "reuse=pixels with first_n_hits at depth 2: the second level's values: "
-        "tree (estimated per child) or world (pooled over world-space neighbours, Tong and Hachisuka 2025; "
+        "reuse=pixels with first_n_hits at depth 2: the second level's values: tree (estimated per "
+        "child) or world (pooled over world-space neighbours, Tong and Hachisuka 2025; "
         "docs/reuse.md)",
         "",
         "",
@@ -371,9 +375,9 @@ PROPERTIES = (
         "reuse_h",
         0.0,
         "float",
-        f"reuse_deep=world: radius h of a second-level vertex's neighbours and the "
-        f"world grid's cell size, as a fraction of the scene's bounding-box diagonal (at least {MIN_REUSE_H:g}); "
-        f"0: from the vertices' density, a cell holding about reuse_k2 of them",
+        "reuse_deep=world: radius h of a second-level vertex's neighbours and the world grid's "
+        "cell size, as a fraction of the scene's bounding-box diagonal (at least "
+        f"{MIN_REUSE_H:g}); 0: from the vertices' density, a cell holding about reuse_k2 of them",
         "",
         "",
     ),
@@ -393,7 +397,8 @@ DEFAULTS = {p.name: p.default for p in PROPERTIES}
 
 
 def declare(prop: Property) -> Property:
-    """Add an integrator property: its flag, docs row, parsing and `Settings` attribute follow (declare.py)."""
+    """Add an integrator property: its flag, docs row, parsing and `Settings` attribute follow
+    (declare.py)."""
     global PROPERTIES
     if prop.name in DEFAULTS:
         raise ValueError(f"integrator property {prop.name!r} is declared already")
@@ -403,7 +408,8 @@ def declare(prop: Property) -> Property:
 
 
 def value(key: str, values: Mapping[str, Any]) -> Any:
-    """The value of property `key` in `values` (else its default), parsed as its declaration says."""
+    """The value of property `key` in `values` (else its default), parsed as its declaration
+    says."""
     prop = next(p for p in PROPERTIES if p.name == key)
     raw = values.get(key, prop.default)
     return None if raw is None and prop.default is None else prop.parse(raw)
@@ -426,7 +432,8 @@ MAX_STYLIZE_DEPTH = 16
 
 
 class AdaptiveCount(int):
-    """An adaptive inner count `n0:n_max`: an int equal to n0 (what code that wants one count sees), with n_max."""
+    """An adaptive inner count `n0:n_max`: an int equal to n0 (what code that wants one count sees),
+    with n_max."""
 
     def __new__(cls, n0: int, n_max: int):
         out = super().__new__(cls, n0)
@@ -451,7 +458,8 @@ def adaptive(inner: tuple[int, ...]) -> bool:
 
 @dataclass(frozen=True)
 class StyleSlot:
-    """A style with its inner sample counts (one per stylized level, or one for all) and estimator."""
+    """A style with its inner sample counts (one per stylized level, or one for all) and
+    estimator."""
 
     style: Style
     inner: tuple[int, ...]
@@ -463,7 +471,8 @@ class StyleSlot:
 
 @dataclass(frozen=True)
 class Settings:
-    """The parsed properties (`parse` fills every field; the defaults live in the declarations, PROPERTIES)."""
+    """The parsed properties (`parse` fills every field; the defaults live in the declarations,
+    PROPERTIES)."""
     slot: StyleSlot                 # the integrator's own style (identity: physically based)
     stylize: str
     stylize_depth: int
@@ -503,8 +512,9 @@ class Settings:
 
     def describe(self) -> str:
         return (
-            f"style={self.style.describe()}, inner={list(self.inner)}, estimator={self.slot.estimator}, "
-            f"stylize={self.stylize}, stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
+            f"style={self.style.describe()}, inner={list(self.inner)}, "
+            f"estimator={self.slot.estimator}, stylize={self.stylize}, "
+            f"stylize_depth={self.stylize_depth}, max_depth={self.max_depth}"
             + ("" if self.lines is None else f", {self.lines.describe()}")
             + (
                 f", reuse={self.reuse}(r={self.reuse_radius}, k={self.reuse_k}, {self.reuse_mis})"
@@ -538,13 +548,15 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
     tests = parse_names("line_tests", get_("line_tests"))
     for t in tests:
         if t not in LINE_TESTS:
-            raise SettingsError(f"bad value {t!r} in 'line_tests': expected some of {', '.join(LINE_TESTS)}")
+            raise SettingsError(f"bad value {t!r} in 'line_tests': expected some of "
+                                f"{', '.join(LINE_TESTS)}")
     gradient = None
     raw = get_("line_gradient")
     if raw not in ("", None):
         parts = raw.split(";") if isinstance(raw, str) else list(raw)
         if len(parts) not in (2, 4):
-            raise SettingsError(f"bad value {raw!r} for 'line_gradient': expected r,g,b;r,g,b or r,g,b;r,g,b;y0;y1")
+            raise SettingsError(f"bad value {raw!r} for 'line_gradient': expected r,g,b;r,g,b or "
+                                "r,g,b;r,g,b;y0;y1")
         ys = [number("line_gradient", y, -float("inf")) for y in parts[2:]] or [None, None]
         gradient = (rgb("line_gradient", parts[0]), rgb("line_gradient", parts[1]), ys[0], ys[1])
     lines = LineSettings(
@@ -587,8 +599,8 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
 
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
-    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4)); a count `n0:n_max`
-    (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'."""
+    """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4)); a count
+    `n0:n_max` (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'."""
     if raw is None:
         return (default,)
     if isinstance(raw, str):
@@ -598,7 +610,8 @@ def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
     else:
         parts = [raw]
     if not parts:
-        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer in [1, {COUNT_MAX}]")
+        raise SettingsError(f"bad value {raw!r} for 'inner_samples': expected an integer in [1, "
+                            f"{COUNT_MAX}]")
     return tuple(_count(p) for p in parts)
 
 
@@ -619,7 +632,8 @@ def _count(part: Any) -> int:
 
 def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrator",
                extra_keys: tuple[str, ...] = ()) -> StyleSlot:
-    """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are errors."""
+    """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are
+    errors."""
     values = dict(values)
     style_name = str(values.pop("style", DEFAULTS["style"]))
     cls = style_class(style_name)
@@ -641,8 +655,8 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
 
 
 def parse(values: Mapping[str, Any]) -> Settings:
-    """Validated integrator settings from a flat name -> value mapping (property values, CLI strings or
-    Python values); missing names take DEFAULTS."""
+    """Validated integrator settings from a flat name -> value mapping (property values, CLI strings
+    or Python values); missing names take DEFAULTS."""
     if "samples_per_pass" in values:
         raise SettingsError(
             f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
@@ -666,17 +680,20 @@ def parse(values: Mapping[str, Any]) -> Settings:
         )
     if len(slot.inner) not in (1, depth):
         expected = "1 count (one stylized level)" if depth == 1 else f"1 or {depth} counts (one per stylized level)"
-        raise SettingsError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': expected {expected}")
+        raise SettingsError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': "
+                            f"expected {expected}")
     max_depth = integer("max_depth", get_("max_depth"), -1)
     if max_depth == 0:
-        raise SettingsError(f"bad value 0 for 'max_depth': expected -1 (unbounded) or an integer in [1, {COUNT_MAX}]")
+        raise SettingsError("bad value 0 for 'max_depth': expected -1 (unbounded) or an integer in "
+                            f"[1, {COUNT_MAX}]")
     rr_depth, lights = value("rr_depth", values), value("emitter_sampling", values)
     hide = value("hide_emitters", values)
     z, target, aovs = value("adaptive_z", values), value("adaptive_bias", values), value("aovs", values)
     if aovs and slot.estimator != "direct":
         raise SettingsError(
             f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
-            f"(variance, Eq. 21 bias, children) are those of direct application; use estimator=direct"
+            "(variance, Eq. 21 bias, children) are those of direct application; use "
+            "estimator=direct"
         )
     reuse, radius, k, mis = parse_reuse(values, slot, stylize)
     deep, h, k2 = parse_reuse_deep(values, slot, reuse, stylize, depth)
@@ -690,7 +707,8 @@ def parse(values: Mapping[str, Any]) -> Settings:
     expansion = parse_expansion(values, slot)
     firefly = value("firefly", values)
     if firefly is not None and 0.0 < firefly < 1.0:
-        raise SettingsError(f"bad value {firefly!r} for 'firefly': expected 0 (off) or a number >= 1")
+        raise SettingsError(f"bad value {firefly!r} for 'firefly': expected 0 (off) or a number >= "
+                            "1")
     return Settings(
         slot=slot,
         stylize=stylize,
@@ -716,7 +734,8 @@ def parse(values: Mapping[str, Any]) -> Settings:
 
 
 def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
-    """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator only."""
+    """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator
+    only."""
     m = value("expansion_pass", values)
     if m and slot.estimator not in EXPANSION_ESTIMATORS:
         raise SettingsError(
@@ -727,10 +746,12 @@ def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
 
 
 def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
-    """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is implemented."""
+    """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is
+    implemented."""
     mode = str(values.get("reuse", DEFAULTS["reuse"])).strip().lower()
     if mode not in REUSE_MODES:
-        raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of {', '.join(REUSE_MODES)}")
+        raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of "
+                            f"{', '.join(REUSE_MODES)}")
     radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1, MAX_REUSE_RADIUS)
     k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
     mis = str(values.get("reuse_mis", DEFAULTS["reuse_mis"])).strip().lower()
@@ -776,20 +797,22 @@ def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, sty
     return deep, h, k2
 
 
-def check_reusable(slot: StyleSlot, where: str = "the integrator's style", deep: str = "tree") -> None:
-    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of expectation (an
-    adaptive count n0:n_max adds a refinement round at the first hit, docs/reuse.md; not with reuse_deep=world,
-    whose first-level children are drawn all at once)."""
+def check_reusable(slot: StyleSlot, where: str = "the integrator's "
+                                                 "style", deep: str = "tree") -> None:
+    """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of
+    expectation (an adaptive count n0:n_max adds a refinement round at the first hit, docs/reuse.md;
+    not with reuse_deep=world, whose first-level children are drawn all at once)."""
     if deep == "world":
         for level in (0, 1):
             n = slot.n(level)
             if isinstance(n, AdaptiveCount):
-                raise SettingsError(f"bad value '{n!r}' for 'inner_samples' ({where}) with reuse_deep=world: fixed "
-                                    f"counts only there; use reuse_deep=tree for adaptive counts")
+                raise SettingsError(f"bad value '{n!r}' for 'inner_samples' ({where}) with "
+                                    "reuse_deep=world: fixed counts only there; use "
+                                    "reuse_deep=tree for adaptive counts")
     if slot.style.per_sample:
         raise SettingsError(
-            f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g to "
-            f"every child sample, reuse pools samples before g"
+            f"style '{slot.style.name}' ({where}) cannot be used with reuse=pixels: it applies g "
+            "to every child sample, reuse pools samples before g"
         )
     if slot.estimator != "direct":
         raise SettingsError(

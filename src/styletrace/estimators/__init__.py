@@ -1,18 +1,14 @@
 """styletrace.estimators: estimators of g(E[X]) for stylized rendering as a function of expectation.
 
-Reference: "Stylized Rendering as a Function of Expectation", Rex West and Sayan Mukherjee (2024): a
-style g applied to the expectation I = E[X] of radiance. This package estimates g(I) from samples of
-X: pure math, array-generic (numpy or Dr.Jit), no Mitsuba. Guide: docs/estimators.md.
+Reference: West and Mukherjee, "Stylized Rendering as a Function of Expectation" (2024). Pure
+math, array-generic (numpy or Dr.Jit), no Mitsuba. Guide: docs/estimators.md.
 
-Kernel contract (what the integrator calls; `base.Estimator.run`):
+Kernel contract (`base.Estimator.run`):
     value, carry = estimator.run(draw, carry, uniform, active=None, *, like=None)
-with draw(carry[, u]) -> (x, carry) one new unbiased sample of I per lane, uniform(carry) -> (u,
-carry) one uniform number per lane, carry an opaque pytree threaded through the loop, active the
-lanes that take part, like the type of x (required for Dr.Jit). Every estimator has `name`,
-`mean_samples`, `fixed_samples` and `exact(I)`. Public names: `Direct`, `AdaptiveDirect`, `Affine`,
-`Mean`, `PolynomialNaive`, `PolynomialU`, `SeriesEstimator`, `Telescoping`, `Sum`, `Product`,
-`Compose`, `inner_mean`, `Pilot`, `PerLane`, the truncations, series, fits, tie-dye and harness
-helpers. Details and rationale: docs/design/estimator_kernel_contract.md.
+draw(carry[, u]) -> (x, carry) gives one unbiased sample of I per lane, uniform(carry) -> (u,
+carry) one uniform per lane; carry is an opaque pytree, active the lanes that take part, like the
+type of x (required for Dr.Jit). Every estimator has `name`, `mean_samples`, `fixed_samples` and
+`exact(I)`. Rationale: docs/design/estimator_kernel_contract.md.
 """
 from __future__ import annotations
 

@@ -1,15 +1,13 @@
 """Direct application with adaptive stopping: n0 children, more only where the error is large.
 
-Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eqs. 19 and 21; the
-step rule is the sequential rule of Broadie, Du and Moallemi, "Efficient risk estimation via nested
-sequential simulation" (2011). Each lane draws n0 samples, then one more per iteration while n <
-n_max and
+Reference: West & Mukherjee, Eqs. 19 and 21; Broadie, Du, Moallemi (2011). Each lane draws n0
+samples, then one more while n < n_max and
     step:    |m - tau_k| < t_(n-1)(z) s / sqrt(n) for some threshold tau_k, or
     smooth:  max_c |g_c''(<I>_n)| s^2 / (2n) > bias,
-m and s^2 the running mean and variance of the samples' brightness. The estimate is g(<I>_n).
+m and s^2 the running brightness mean and variance. The estimate is g(<I>_n).
 
-`AdaptiveDirect(g, n0, n_max, thresholds=(), curvature=None, z=2, bias=1e-3)`; after `run`, `stats`
-holds per-lane `children`, `variance` and `bias`. Rationale: docs/design/adaptive_stopping.md.
+`AdaptiveDirect(g, n0, n_max, thresholds=(), curvature=None, z=2, bias=1e-3)`; after `run`,
+`stats` holds per-lane `children`, `variance` and `bias` (docs/design/adaptive_stopping.md).
 """
 from __future__ import annotations
 
@@ -26,7 +24,8 @@ class AdaptiveDirect(Estimator):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")
         if curvature is not None and not callable(curvature):
-            raise ValueError(f"curvature must be None or a callable (mean, h) -> g''(mean), got {curvature!r}")
+            raise ValueError("curvature must be None or a callable (mean, h) -> g''(mean), got "
+                             f"{curvature!r}")
         self.n0 = check_count("n0", n0)
         self.n_max = check_count("n_max", n_max, self.n0)
         if not (np.isfinite(z) and z > 0) or not (np.isfinite(bias) and bias > 0):
@@ -77,7 +76,8 @@ class AdaptiveDirect(Estimator):
         return A.select(n > 1.5, A.maximum(state["m2_u"], 0.0) / A.maximum(n - 1.0, 1.0), 0.0 * n)
 
     def predicted_bias(self, state, signed: bool):
-        """g''(<I>_n) s^2 / (2n): per-channel magnitudes' largest (the rule) or the channels' signed mean."""
+        """g''(<I>_n) s^2 / (2n): per-channel magnitudes' largest (the rule) or the channels' signed
+        mean."""
         n = A.maximum(state["count"], 1.0)
         var = self.variance(state)
         if self.curvature is None:
@@ -87,10 +87,10 @@ class AdaptiveDirect(Estimator):
         return per * var / (2.0 * n)
 
     def band_width(self, n):
-        """The band's half-width in standard errors at n children: Student's t quantile with n - 1 degrees of
-        freedom at z's normal confidence (s is estimated from the same few children), by its expansion in 1/v
-        (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3, where the exact quantile is
-        3.307), tending to z as n grows."""
+        """The band's half-width in standard errors at n children: Student's t quantile with n - 1
+        degrees of freedom at z's normal confidence (s is estimated from the same few children), by
+        its expansion in 1/v (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3,
+        where the exact quantile is 3.307), tending to z as n grows."""
         z = self.z
         w = 1.0 / A.maximum(n - 1.0, 1.0)
         terms = [(z ** 3 + z) / 4.0, (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96.0,

@@ -27,7 +27,8 @@ def apply_linear(a1: np.ndarray, x):
     if A.is_drjit(x):
         dr = A.drjit()
         if dr.depth_v(x) < 2 or len(x) != C:
-            raise ValueError(f"a ({C}, {C}) matrix needs {C}-channel values, got {type(x).__name__}")
+            raise ValueError(f"a ({C}, {C}) matrix needs {C}-channel values, got "
+                             f"{type(x).__name__}")
         return type(x)(*[sum(float(a1[i, j]) * x[j] for j in range(C)) for i in range(C)])
     x = np.asarray(x)
     if x.shape[-1] != C:
@@ -36,11 +37,13 @@ def apply_linear(a1: np.ndarray, x):
 
 
 class MeanOfN(Estimator):
-    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish from.
+    """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish
+    from.
 
     `cap` = (k, floor), or None: the firefly control. The brightest draw (by channel mean) is scaled
-    down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1) to at
-    most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how much."""
+    down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1)
+    to at most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how
+    much."""
 
     #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp
     #: of 10 at the exposure that maps the median to middle grey (10 / 0.18)
@@ -113,9 +116,11 @@ class Affine(MeanOfN):
         self.a1 = np.asarray(a1, dtype=np.float64)
         self.a0 = np.asarray(a0, dtype=np.float64)
         if self.a1.ndim > 2 or (self.a1.ndim == 2 and self.a1.shape[0] != self.a1.shape[1]):
-            raise ValueError(f"a1 must be a scalar, a per-channel vector or a square matrix, got shape {self.a1.shape}")
+            raise ValueError("a1 must be a scalar, a per-channel vector or a square matrix, got "
+                             f"shape {self.a1.shape}")
         if self.a0.ndim > 1:
-            raise ValueError(f"a0 must be a scalar or a per-channel vector, got shape {self.a0.shape}")
+            raise ValueError("a0 must be a scalar or a per-channel vector, got shape "
+                             f"{self.a0.shape}")
         if not (np.all(np.isfinite(self.a1)) and np.all(np.isfinite(self.a0))):
             raise ValueError(f"a1 and a0 must be finite, got a1={a1!r}, a0={a0!r}")
         super().__init__(n, comb)

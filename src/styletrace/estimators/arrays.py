@@ -44,7 +44,8 @@ def drjit():
 
 
 def _import_drjit():
-    """drjit, imported through ``styletrace.jit.prepare_drjit`` (a working libLLVM) if nobody did yet."""
+    """drjit, imported through ``styletrace.jit.prepare_drjit`` (a working libLLVM) if nobody did
+    yet."""
     dr = drjit()
     if dr is None:
         from styletrace.jit import prepare_drjit  # stdlib-only module: loads Dr.Jit, never Mitsuba
@@ -59,18 +60,21 @@ def _module_for(dr, backend, diff: bool):
 
 
 def backend_module(like=None):
-    """The Dr.Jit array module to build arrays with (``drjit.llvm``, ``drjit.cuda``, or their ``.ad``).
+    """The Dr.Jit array module to build arrays with (``drjit.llvm``, ``drjit.cuda``, or their
+    ``.ad``).
 
-    ``like`` (a Dr.Jit array type or instance, e.g. ``mitsuba.Color3f``): its own backend and AD-ness.
-    Otherwise the backend of the active Mitsuba variant if Mitsuba is loaded and has one (``.ad`` for
-    ``*_ad_*`` variants), else ``drjit.cuda`` where CUDA works (``jit.prepare_drjit``) and ``drjit.llvm`` otherwise. Imports
-    Dr.Jit if needed (after pointing it at a working libLLVM), never Mitsuba.
+    ``like`` (a Dr.Jit array type or instance, e.g. ``mitsuba.Color3f``): its own backend and
+    AD-ness. Otherwise the backend of the active Mitsuba variant if Mitsuba is loaded and has one
+    (``.ad`` for ``*_ad_*`` variants), else ``drjit.cuda`` where CUDA works (``jit.prepare_drjit``)
+    and ``drjit.llvm`` otherwise. Imports Dr.Jit if needed (after pointing it at a working libLLVM),
+    never Mitsuba.
     """
     dr = _import_drjit()
     if like is not None:
         tp = like if isinstance(like, type) else type(like)
         if not issubclass(tp, dr.ArrayBase) or dr.backend_v(tp) not in (dr.JitBackend.CUDA, dr.JitBackend.LLVM):
-            raise TypeError(f"backend_module: {tp.__name__} is not a JIT (CUDA or LLVM) Dr.Jit array type")
+            raise TypeError(f"backend_module: {tp.__name__} is not a JIT (CUDA or LLVM) Dr.Jit "
+                            "array type")
         return _module_for(dr, dr.backend_v(tp), bool(dr.is_diff_v(tp)))
     mi = sys.modules.get("mitsuba")
     variant = None
@@ -157,8 +161,8 @@ def hmax(v):
 
 
 def channel_mean(v):
-    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value (Dr.Jit Float from
-    Color3f/Array3f, numpy (lanes, 1) from (lanes, C))."""
+    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value (Dr.Jit
+    Float from Color3f/Array3f, numpy (lanes, 1) from (lanes, C))."""
     if is_drjit(v):
         dr = drjit()
         if dr.depth_v(v) > 1:
@@ -183,7 +187,8 @@ def const_like(c, x):
         dr = drjit()
         n = dr.size_v(type(x)) if dr.depth_v(x) > 1 else 1
         if n != c.shape[0]:
-            raise ValueError(f"{c.shape[0]} per-channel constants for a value of type {type(x).__name__} with {n} channel(s)")
+            raise ValueError(f"{c.shape[0]} per-channel constants for a value of type "
+                             f"{type(x).__name__} with {n} channel(s)")
         return type(x)(*[float(v) for v in c])
     x = np.asarray(x)
     if x.ndim == 0 or x.shape[-1] != c.shape[0]:
@@ -225,8 +230,9 @@ def _take(tree, idx, lanes):
 
 
 def _put(old_tree, new_tree, idx, lanes):
-    """Write the body's results for lanes idx back; per-lane leaves are updated in place when they can
-    hold the result exactly (the loop owns them: ``numpy_while_loop`` copies the caller's arrays first)."""
+    """Write the body's results for lanes idx back; per-lane leaves are updated in place when they
+    can hold the result exactly (the loop owns them: ``numpy_while_loop`` copies the caller's arrays
+    first)."""
     def put(old, new):
         if not isinstance(new, np.ndarray) and not isinstance(old, np.ndarray):
             return new  # shared leaf (generator, python constant): the body's version wins

@@ -80,9 +80,9 @@ class Context:
             return cls("drjit", like_t=like_t, uniform=uniform), carry
         if like is not None and not isinstance(like, np.ndarray):
             raise ValueError(
-                f"like must be the type (or an instance) of the samples draw() returns: a Dr.Jit array "
-                f"type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, C); "
-                f"got {like!r}"
+                "like must be the type (or an instance) of the samples draw() returns: a Dr.Jit "
+                "array type such as mitsuba.Color3f, or a numpy array of shape (lanes,) / (lanes, "
+                f"C); got {like!r}"
             )
         if A.is_drjit(active):
             raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>, "
@@ -102,7 +102,8 @@ class Context:
         if lanes is None:  # nothing says how many lanes: ask the random stream
             u, carry = uniform(carry)
             if A.is_drjit(u):
-                raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() returns>")
+                raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() "
+                                 "returns>")
             lanes = np.asarray(u).shape[0]
         return cls("numpy", lanes=lanes, dtype=dtype, channels=channels, ndim=ndim, uniform=uniform), carry
 
@@ -132,12 +133,14 @@ class Context:
         if self.is_drjit or c.ndim != 1:  # scalars, bad shapes and Dr.Jit values: const_like's checks
             return A.const_like(c, self.like_t(0.0) if self.is_drjit else np.zeros(c.shape[-1:] or (1,)))
         if self.channels is not None and self.channels != c.shape[0]:
-            raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} channel(s)")
+            raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} "
+                             "channel(s)")
         self.channels = c.shape[0]
         return c
 
     def value_array(self, c):
-        """A per-lane value holding constant c (state entries must be arrays, never Python floats)."""
+        """A per-lane value holding constant c (state entries must be arrays, never Python
+        floats)."""
         return self.vzero() + self.vconst(c)
 
     # -- randomness and samples -----------------------------------------------------------------
@@ -151,7 +154,8 @@ class Context:
         """A sample from draw() in the estimators' layout, checked against what we expect."""
         if self.is_drjit:
             if not A.is_drjit(x):
-                raise ValueError(f"draw() returned {type(x).__name__}; like={self.like_t.__name__} promised a Dr.Jit array")
+                raise ValueError(f"draw() returned {type(x).__name__}; like={self.like_t.__name__} "
+                                 "promised a Dr.Jit array")
             if type(x) is not self.like_t:
                 x = self.like_t(x)
             return x
@@ -194,7 +198,8 @@ class Context:
     def count_above(self, survival: np.ndarray, u):
         """#{k >= 1 : survival[k] > u} for a non-increasing table with survival[0] = 1 > u.
 
-        A binary search with a fixed number of steps, so the traced kernel has no data-dependent loop.
+        A binary search with a fixed number of steps, so the traced kernel has no data-dependent
+        loop.
         """
         K = len(survival) - 1
         lo = self.lane(0.0)            # survival[lo] > u holds
@@ -212,10 +217,12 @@ class Context:
         return np.floor(x)
 
     def when(self, mask, compute, otherwise):
-        """select(mask, compute(), otherwise), skipping the computation on numpy when no lane needs it.
+        """select(mask, compute(), otherwise), skipping the computation on numpy when no lane needs
+        it.
 
-        (A traced Dr.Jit kernel evaluates both sides anyway; numpy can save expensive per-estimate work,
-        like re-expanding a polynomial about a pilot b, on the iterations where no lane finished.)
+        (A traced Dr.Jit kernel evaluates both sides anyway; numpy can save expensive per-estimate
+        work, like re-expanding a polynomial about a pilot b, on the iterations where no lane
+        finished.)
         """
         if not self.is_drjit and not np.any(mask):
             return otherwise
@@ -275,7 +282,8 @@ class Estimator:
 
     @property
     def mean_samples(self):
-        """Expected draw() calls per estimate; None where it depends on the data (adaptive truncation)."""
+        """Expected draw() calls per estimate; None where it depends on the data (adaptive
+        truncation)."""
         raise NotImplementedError
 
     @property
@@ -309,7 +317,8 @@ class Estimator:
         return self._run(draw, carry, uniform, active, like)
 
     def _run(self, draw, carry, uniform, active, like, observe=None):
-        """``run``'s loop; ``observe(state)`` (optional) sees the final state before the value is taken."""
+        """``run``'s loop; ``observe(state)`` (optional) sees the final state before the value is
+        taken."""
         ctx, carry = Context.for_run(like, active, uniform, carry)
         if ctx.is_drjit:
             act = active if active is not None else ctx.mask(True)

@@ -1,4 +1,5 @@
-"""Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k for a (possibly per-lane) expansion point b.
+"""Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k for a (possibly per-lane) expansion point
+b.
 
 Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3-S2.6
 and Eq. 24: exp (S15, any b), reciprocal a/I (S17, |b - I| < |b|), power I^p (Eq. 24, b > 0), Taylor
@@ -56,7 +57,8 @@ def _finite_real(name, v):
 
 def _check_range(lo, hi):
     if (lo is None) != (hi is None):
-        raise ValueError(f"give both lo and hi of the known range of I, or neither (got lo={lo!r}, hi={hi!r})")
+        raise ValueError(f"give both lo and hi of the known range of I, or neither (got lo={lo!r}, "
+                         f"hi={hi!r})")
     if lo is None:
         return None, None
     lo, hi = _finite_real("lo", lo), _finite_real("hi", hi)
@@ -93,7 +95,8 @@ class Series:
         raise NotImplementedError
 
     def advance_scaled(self, ctx, state, k, b) -> tuple:
-        raise ValueError(f"{self.name}: scaled terms need a series defined by its coefficient ratio")
+        raise ValueError(f"{self.name}: scaled terms need a series defined by its coefficient "
+                         "ratio")
 
     def coefficients(self, b, K: int) -> np.ndarray:
         raise NotImplementedError
@@ -155,8 +158,8 @@ class ReciprocalSeries(_RatioSeries):
         self.lo, self.hi = _check_range(lo, hi)
         if self.lo is not None and self.lo <= 0.0 <= self.hi:
             raise ValueError(
-                f"reciprocal a/I: the range [{self.lo}, {self.hi}] contains 0, where a/I has a pole; "
-                f"no expansion point converges on it"
+                f"reciprocal a/I: the range [{self.lo}, {self.hi}] contains 0, where a/I has a "
+                "pole; no expansion point converges on it"
             )
         self.name = f"reciprocal(a={self.a:g})"
 
@@ -166,7 +169,8 @@ class ReciprocalSeries(_RatioSeries):
     def check_center(self, b):
         for bc in np.atleast_1d(np.asarray(b, dtype=np.float64)):
             if not np.isfinite(bc) or bc == 0.0:
-                raise ValueError(f"reciprocal a/I: expansion point b={bc} must be finite and non-zero")
+                raise ValueError(f"reciprocal a/I: expansion point b={bc} must be finite and "
+                                 "non-zero")
             if self.lo is None:
                 continue
             if bc > 0:
@@ -175,9 +179,9 @@ class ReciprocalSeries(_RatioSeries):
                 ok = 2.0 * bc < self.lo and self.hi < 0.0
             if not ok:
                 raise ValueError(
-                    f"reciprocal a/I: expansion point b={bc} is outside the convergence region for I in "
-                    f"[{self.lo}, {self.hi}]: the series needs |b - I| < |b| for every such I, i.e. lo, hi and b of "
-                    f"one sign and max|I| < 2|b| (here b must be "
+                    f"reciprocal a/I: expansion point b={bc} is outside the convergence region for "
+                    f"I in [{self.lo}, {self.hi}]: the series needs |b - I| < |b| for every such "
+                    "I, i.e. lo, hi and b of one sign and max|I| < 2|b| (here b must be "
                     f"{'> ' + str(self.hi / 2) if self.hi > 0 else '< ' + str(self.lo / 2)})"
                 )
 
@@ -220,15 +224,16 @@ class PowerFunctionSeries(_RatioSeries):
     def check_center(self, b):
         for bc in np.atleast_1d(np.asarray(b, dtype=np.float64)):
             if not (np.isfinite(bc) and bc > 0.0):
-                raise ValueError(f"power I^{self.p:g}: expansion point b={bc} must be > 0 (real powers branch at 0)")
+                raise ValueError(f"power I^{self.p:g}: expansion point b={bc} must be > 0 (real "
+                                 "powers branch at 0)")
             if self.lo is None:
                 continue
             ok = self.hi <= 2.0 * bc if self.p > 0 else self.hi < 2.0 * bc
             if not ok:
                 raise ValueError(
-                    f"power I^{self.p:g}: expansion point b={bc} is outside the convergence region for I in "
-                    f"[{self.lo}, {self.hi}]: the binomial series needs |b - I| <= |b| (strict for p < 0), i.e. "
-                    f"b >= hi/2 = {self.hi / 2}"
+                    f"power I^{self.p:g}: expansion point b={bc} is outside the convergence region "
+                    f"for I in [{self.lo}, {self.hi}]: the binomial series needs |b - I| <= |b| "
+                    f"(strict for p < 0), i.e. b >= hi/2 = {self.hi / 2}"
                 )
 
     def clamp_center(self, b):
@@ -263,17 +268,20 @@ class PolynomialSeries(_TableSeries):
     def __init__(self, coeffs, center=0.0):
         c = np.asarray(coeffs, dtype=np.float64)
         if c.ndim not in (1, 2) or c.shape[0] < 1:
-            raise ValueError(f"polynomial coefficients must have shape (K+1,) or (K+1, C), got {c.shape}")
+            raise ValueError("polynomial coefficients must have shape (K+1,) or (K+1, C), got "
+                             f"{c.shape}")
         if not np.all(np.isfinite(c)):
             raise ValueError("polynomial coefficients must be finite")
         center = np.asarray(center, dtype=np.float64)
         if center.ndim > 1 or not np.all(np.isfinite(center)):
-            raise ValueError(f"center must be a finite scalar or per-channel vector, got {center!r}")
+            raise ValueError("center must be a finite scalar or per-channel vector, got "
+                             f"{center!r}")
         self.coeffs, self.center = c, center
         self.degree = c.shape[0] - 1
         chans = {c.shape[1] if c.ndim == 2 else None, center.shape[0] if center.ndim == 1 else None} - {None}
         if len(chans) > 1:
-            raise ValueError(f"coefficients for {c.shape[1]} channels but a center for {center.shape[0]}")
+            raise ValueError(f"coefficients for {c.shape[1]} channels but a center for "
+                             f"{center.shape[0]}")
         self.channels = chans.pop() if chans else None
         self.name = f"polynomial(degree={self.degree})"
 
@@ -311,11 +319,13 @@ class PolynomialSeries(_TableSeries):
 
 
 class TaylorSeries(_TableSeries):
-    """a_k = derivative(k, b) / k! for k <= order (S10 truncated, i.e. the Taylor fit S25 about b)."""
+    """a_k = derivative(k, b) / k! for k <= order (S10 truncated, i.e. the Taylor fit S25 about
+    b)."""
 
     def __init__(self, derivative, order: int, function=None):
         if not callable(derivative):
-            raise ValueError(f"derivative must be a callable derivative(k, b) -> g^(k)(b), got {derivative!r}")
+            raise ValueError("derivative must be a callable derivative(k, b) -> g^(k)(b), got "
+                             f"{derivative!r}")
         if isinstance(order, bool) or not isinstance(order, (int, np.integer)) or order < 0:
             raise ValueError(f"order must be an integer >= 0, got {order!r}")
         self.derivative, self.degree, self._function = derivative, int(order), function
@@ -323,7 +333,8 @@ class TaylorSeries(_TableSeries):
 
     def function(self, I):
         if self._function is None:
-            raise ValueError("this Taylor series was built without function=g, so its exact value is unknown")
+            raise ValueError("this Taylor series was built without function=g, so its exact value "
+                             "is unknown")
         return self._function(I)
 
     def start(self, ctx, b):

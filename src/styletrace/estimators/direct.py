@@ -1,17 +1,11 @@
 """Direct application: g applied to the mean of n samples (biased, consistent).
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", Eq. 19:
-        <g(I)>_direct = g(<I>_n),   <I>_n = (1/n) sum_i x_i.
-    Its bias is, to first order (delta method, Eq. 21), tr(H_g Cov[x]) / (2n), i.e. g''(I) Var[x] / (2n)
-    per channel; it vanishes as 1/n, so the estimator is consistent but never group-unbiased.
+Reference: West & Mukherjee, Eq. 19:  <g(I)>_direct = g(<I>_n),  <I>_n = (1/n) sum_i x_i.
+Its first-order bias (Eq. 21) is g''(I) Var[x] / (2n) per channel
+(docs/design/adaptive_stopping.md).
 
-Parameters
-    g      callable, array-generic: g(x) -> y with x a value (numpy (lanes, C) or a Dr.Jit array).
-    n      samples per estimate (>= 1).
-    comb   False (default): n independent draws. True: a stratified discrete comb, the i-th draw gets
-           first primary dimension (xi + i)/n with one uniform xi per estimate (see ``affine.Mean``).
-    cap    None (default), or (k, floor): the firefly control of ``affine.MeanOfN`` on the mean (biased).
+`Direct(g, n, comb=False, cap=None)`: g array-generic; n >= 1 samples; comb: a stratified comb
+(docs/design/comb_stratification.md); cap: (k, floor), the firefly control of `affine.MeanOfN`.
 """
 from __future__ import annotations
 

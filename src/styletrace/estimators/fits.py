@@ -178,7 +178,8 @@ class Fit:
         return out
 
     def to_monomial(self, b=None) -> np.ndarray:
-        """c_k with h(x) = sum_k c_k (x - b)^k in the original variable (b defaults to the center)."""
+        """c_k with h(x) = sum_k c_k (x - b)^k in the original variable (b defaults to the
+        center)."""
         b = self.center if b is None else float(b)
         d = self.monomial_in_u()
         ub = self.alpha * b + self.beta
@@ -241,7 +242,8 @@ def chebyshev_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str 
     C = np.full(D + 1, np.pi / 2)
     C[0] = np.pi
     a = (T * w) @ gv / (C if gv.ndim == 1 else C[:, None])
-    return Fit("chebyshev", a, lo, hi, label=f"chebyshev(degree={D}, {nodes} nodes n={n}, [{lo:g}, {hi:g}])")
+    return Fit("chebyshev", a, lo, hi, label=f"chebyshev(degree={D}, {nodes} nodes n={n}, [{lo:g}, "
+                                             f"{hi:g}])")
 
 
 def legendre_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str = "gauss", points=None) -> Fit:
@@ -260,7 +262,8 @@ def legendre_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str =
     P = np.array(legendre_basis(t, D))
     f = (2.0 * np.arange(D + 1) + 1.0) / 2.0
     a = (P * w) @ gv * (f if gv.ndim == 1 else f[:, None])
-    return Fit("legendre", a, lo, hi, label=f"legendre(degree={D}, {nodes} nodes n={n}, [{lo:g}, {hi:g}])")
+    return Fit("legendre", a, lo, hi, label=f"legendre(degree={D}, {nodes} nodes n={n}, [{lo:g}, "
+                                            f"{hi:g}])")
 
 
 def bernstein_fit(g, degree: int, lo: float = 0.0, hi: float = 1.0) -> Fit:
@@ -275,7 +278,8 @@ def taylor_fit(derivative, degree: int, b: float, lo: float = None, hi: float = 
     """Taylor polynomial about b; [lo, hi] (default b +- 1) only sets where max_error looks."""
     D = _check_degree(degree)
     if not callable(derivative):
-        raise ValueError(f"derivative must be a callable derivative(k, b) -> g^(k)(b), got {derivative!r}")
+        raise ValueError("derivative must be a callable derivative(k, b) -> g^(k)(b), got "
+                         f"{derivative!r}")
     b = float(b)
     c = np.array([np.asarray(derivative(k, b), dtype=np.float64) / math.factorial(k) for k in range(D + 1)])
     lo = b - 1.0 if lo is None else lo

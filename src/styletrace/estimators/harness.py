@@ -136,7 +136,8 @@ def estimate_drjit(
 ) -> NumpyEstimate:
     """One estimate per lane inside a Dr.Jit loop whose carry holds a PCG32 and a draw counter."""
     if channels not in (None, 3):
-        raise ValueError(f"estimate_drjit supports channels=None (Float) or 3 (Array3f), got {channels!r}")
+        raise ValueError("estimate_drjit supports channels=None (Float) or 3 (Array3f), got "
+                         f"{channels!r}")
     m = A.backend_module(like)  # like's backend, else the one in use (drjit.llvm, drjit.cuda, .ad)
     dr = A.drjit()
     PCG32, UInt32 = m.PCG32, m.UInt32

@@ -43,7 +43,8 @@ class Pilot:
 
 
 class PerLane:
-    """b per lane, computed by the caller from samples independent of the estimate's own (lo: a floor)."""
+    """b per lane, computed by the caller from samples independent of the estimate's own (lo: a
+    floor)."""
 
     def __init__(self, b, lo=None):
         if lo is not None and not (isinstance(lo, (int, float)) and math.isfinite(lo)):
@@ -69,7 +70,8 @@ class ExpansionPoint:
             b = default if b is None else b
             arr = np.asarray(b, dtype=np.float64)
             if arr.ndim > 1 or not np.all(np.isfinite(arr)):
-                raise ValueError(f"expansion point b must be a finite scalar, a per-channel vector or Pilot(...), got {b!r}")
+                raise ValueError("expansion point b must be a finite scalar, a per-channel vector "
+                                 f"or Pilot(...), got {b!r}")
             if series is not None:
                 series.check_center(arr)
             self.fixed = arr

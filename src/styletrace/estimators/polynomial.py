@@ -23,7 +23,8 @@ __all__ = ["ustat_update", "u_statistic_means", "PolynomialNaive", "PolynomialU"
 def ustat_update(m: list, y, j) -> list:
     """One step of the running-mean recurrence: m = [m_1..m_K] after j-1 samples -> after j.
 
-    j may be a Python int or a per-lane array; terms with k > j stay exactly 0 because their inputs are 0.
+    j may be a Python int or a per-lane array; terms with k > j stay exactly 0 because their inputs
+    are 0.
     """
     inv_j = 1.0 / j
     out = list(m)
@@ -34,7 +35,8 @@ def ustat_update(m: list, y, j) -> list:
 
 
 def u_statistic_means(samples, K: int) -> list:
-    """[m_0, ..., m_K] for samples[0..n-1] (axis 0), with m_k = e_k / C(n, k), in the samples' precision."""
+    """[m_0, ..., m_K] for samples[0..n-1] (axis 0), with m_k = e_k / C(n, k), in the samples'
+    precision."""
     K = check_count("K", K, 0)
     n = len(samples)
     if n < K:
@@ -69,7 +71,8 @@ class _PolynomialBase(Estimator):
         return x - self.point.value(ctx, state)
 
     def _feed_pilot(self, ctx, state, x, mask):
-        """Give x to the pilot on lanes still collecting it; returns (state copy, lanes for the terms)."""
+        """Give x to the pilot on lanes still collecting it; returns (state copy, lanes for the
+        terms)."""
         inp = self.point.in_pilot(state)
         if inp is None:
             return dict(state), mask
@@ -136,7 +139,8 @@ class PolynomialU(_PolynomialBase):
         super().__init__(poly, b)
         self.n = check_count("n", n)
         if self.n < self.K:
-            raise ValueError(f"the U-statistic of a degree-{self.K} polynomial needs n >= {self.K} samples, got n={self.n}")
+            raise ValueError(f"the U-statistic of a degree-{self.K} polynomial needs n >= {self.K} "
+                             f"samples, got n={self.n}")
         self.name = f"poly-U(K={self.K}, n={self.n}, {self.point.describe()})"
 
     def start(self, ctx: Context, carry):

@@ -1,15 +1,12 @@
 """Power-series estimators: sum_k a_k (I - b)^k with randomly selected, reweighted terms.
 
-Reference: West & Mukherjee, supplement S2.3 (S9-S13), after Georgiev, Misso, Hachisuka,
-Nowrouzezahrai, Krivanek, Jarosz, "Integral Formulations of Volumetric Transmittance" (2019): single
-term (S11), iterative prefix sum (S12), recursive Russian roulette (S13); term estimates "naive"
-(products, S6) or "ustat" (U-statistics, S7-S8, Kettunen, d'Eon, Pantaleoni, Novak 2021). Unbiased
-when b is independent of the term samples.
+Reference: West & Mukherjee, supplement S2.3 (S9-S13), after Georgiev et al. (2019): single
+term (S11), iterative prefix sum (S12), recursive Russian roulette (S13); terms "naive" (S6) or
+"ustat" (S7-S8). Unbiased when b is independent of the term samples.
 
 `SeriesEstimator(series, b=Pilot(1), selection="iterative", truncation=None, terms=None,
-max_terms=64, scaled=False)`: truncation defaults per selection (iterative: PoissonCMF(2),
-recursive: Cumulative(), single: Poisson(2)). Cost: pilot + number of terms after the zeroth
-(single: pilot + k). Details: docs/design/power_series.md.
+max_terms=64, scaled=False)`. Cost: pilot + the number of terms after the zeroth. Defaults and
+rationale: docs/design/power_series.md.
 """
 from __future__ import annotations
 
@@ -29,8 +26,9 @@ MAX_USTAT_TERMS = 64
 
 
 def _term(coefficient, estimate):
-    """a_k * <(I - b)^k>, exactly 0 where the term estimate is 0: a_k itself may overflow to inf in float32
-    (e.g. C(p, k) b^(p - k) for small b and large k), and inf * 0 would turn a zero term into NaN."""
+    """a_k * <(I - b)^k>, exactly 0 where the term estimate is 0: a_k itself may overflow to inf in
+    float32 (e.g. C(p, k) b^(p - k) for small b and large k), and inf * 0 would turn a zero term
+    into NaN."""
     return A.select(estimate == 0, estimate * 0.0, coefficient * estimate)
 
 
@@ -62,8 +60,8 @@ class SeriesEstimator(Estimator):
         self.scaled = bool(scaled)
         if self.scaled and not (selection == "iterative" and terms == "ustat" and hasattr(series, "ratio")):
             raise ValueError(
-                f"scaled=True needs selection='iterative', terms='ustat' and a series defined by its "
-                f"coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
+                "scaled=True needs selection='iterative', terms='ustat' and a series defined by "
+                f"its coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
             )
         if self.truncation.adaptive and selection != "recursive":
             raise ValueError(f"{self.truncation.name} truncation adapts to the samples, so only "

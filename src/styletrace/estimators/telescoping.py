@@ -29,7 +29,8 @@ class Telescoping(Estimator):
         self.n0 = check_count("n0", n0)
         self.truncation = resolve_truncation(PowerLaw(1.5) if truncation is None else truncation)
         if self.truncation.adaptive:
-            raise ValueError(f"telescoping needs N drawn before the samples; {self.truncation.name} adapts to them")
+            raise ValueError("telescoping needs N drawn before the samples; "
+                             f"{self.truncation.name} adapts to them")
         self.max_terms = check_count("max_terms", max_terms)
         self.K, self.S, self.invS, _, _ = self.truncation.tables(self.max_terms)
         self.name = f"telescoping(n0={self.n0}, {self.truncation.name}, K={self.K})"

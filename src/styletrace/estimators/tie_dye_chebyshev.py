@@ -1,17 +1,11 @@
-"""The tie-dye style of the paper's Fig. 11 and its degree-20 Chebyshev fit.
+"""The tie-dye style of the paper's Fig. 11 and its degree-20 Chebyshev fit (supplement S5.5).
 
-Reference
-    West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S5.5:
-        r' = (1 - cos(2 pi (r + 1))) / 2
-        g' = (1 - cos(2.15 pi (g + 1.13))) / 2
-        b' = (1 - cos(2.3 pi (b + 1.29))) / 2
-    fitted per channel with a degree-20 Chebyshev basis on [-1, 4]; the paper clamps samples above 4
-    (that clamp belongs to the caller, before the samples reach the estimator, and is a bias).
+    r' = (1 - cos(2 pi (r + 1))) / 2
+    g' = (1 - cos(2.15 pi (g + 1.13))) / 2
+    b' = (1 - cos(2.3 pi (b + 1.29))) / 2
 
-Parameters
-    tie_dye_fit(degree=20, lo=-1, hi=4, nodes="chebyshev"): a 3-channel fits.Fit (interpolation at
-    degree+1 Chebyshev nodes). Its measured maximum error on [lo, hi] is in docs/estimators.md; the
-    blue channel, with the highest frequency, is the worst.
+`tie_dye_fit` fits each channel on [-1, 4]; clamping samples above 4 is the caller's (a bias).
+Measured errors: docs/estimators.md; rationale: docs/design/tie_dye_clamp.md.
 """
 from __future__ import annotations
 

@@ -154,4 +154,5 @@ def resolve_truncation(spec) -> Truncation:
         return spec
     if isinstance(spec, str) and spec in _NAMES:
         return _NAMES[spec]()
-    raise ValueError(f"unknown truncation {spec!r}; allowed: a Truncation instance or one of {sorted(_NAMES)}")
+    raise ValueError(f"unknown truncation {spec!r}; allowed: a Truncation instance or one of "
+                     f"{sorted(_NAMES)}")

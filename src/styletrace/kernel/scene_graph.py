@@ -1,5 +1,4 @@
-"""What a loaded scene holds that the `stylized` integrator must know before it traces: styled BSDFs
-wherever they sit, null-scattering surfaces (masks, `null`), participating media.
+"""What a loaded scene holds that the `stylized` integrator must know before it traces.
 
     graph = SceneGraph(scene)
     # [(StyledBSDF, [pointers an intersection reports for it], [its shapes' emitters])]

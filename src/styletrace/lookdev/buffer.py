@@ -70,7 +70,8 @@ PILOT = "pilot_"
 
 @dataclass
 class Buffer:
-    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module doc)."""
+    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module
+    doc)."""
 
     header: dict[str, Any]
     arrays: dict[str, np.ndarray]
@@ -95,7 +96,8 @@ class Buffer:
 
     @property
     def spp(self) -> int:
-        """Camera samples per pixel: of every pixel, where a tiled film has a round of tiles under way."""
+        """Camera samples per pixel: of every pixel, where a tiled film has a round of tiles under
+        way."""
         per_tile = [0] * int(self.header.get("tiles", 1))
         for p in self.header["passes"]:
             per_tile[int(p.get("tile", 0))] += int(p["spp"])
@@ -132,7 +134,8 @@ class Buffer:
             raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
         kind = unwritable_kind(path)
         if kind is not None:
-            raise UsageError(f"cannot write {path!r}: it is {kind}; expected a regular file or a new name")
+            raise UsageError(f"cannot write {path!r}: it is {kind}; expected a regular file or a "
+                             "new name")
         target = destination(path)  # a symbolic link is written through, as the images are
         folder = os.path.dirname(os.path.abspath(target))
         if not os.path.isdir(folder):
@@ -152,8 +155,8 @@ class Buffer:
         return path
 
     def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int, tile: int | None = None) -> None:
-        """Add one pass's camera samples (in the order the render loop made them); `tile`: the index of the crop
-        window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
+        """Add one pass's camera samples (in the order the render loop made them); `tile`: the index
+        of the crop window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
         for k in fields_for(self.stylize, self.stores, self.filtered):
             a = arrays[k]
             self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
@@ -167,7 +170,8 @@ class Buffer:
 
 
 def load_buffer(path: str) -> Buffer:
-    """Read a buffer written by `Buffer.save`; one-line UsageError for a missing, foreign or newer file."""
+    """Read a buffer written by `Buffer.save`; one-line UsageError for a missing, foreign or newer
+    file."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise UsageError(f"buffer file {path!r} does not exist")
@@ -197,7 +201,8 @@ def load_buffer(path: str) -> Buffer:
         want = (seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (2, n) if k == "pos"
                 else (3, n))
         if a.shape != want:
-            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, "
+                             f"expected {want}")
     if len({a.shape[0] for a in pilot.values()}) > 1:
         raise UsageError(f"cannot read buffer file {path!r}: its pilot arrays differ in length")
     tiles = header.get("tiles", 1)
@@ -209,14 +214,16 @@ def load_buffer(path: str) -> Buffer:
             for p in header["passes"]
         )
     ):
-        raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its {tiles!r} tiles")
+        raise UsageError(f"cannot read buffer file {path!r}: its passes name tiles outside its "
+                         f"{tiles!r} tiles")
     if filtered(header) and sum(int(p.get("samples", -1)) for p in header["passes"]) != n:
         raise UsageError(f"cannot read buffer file {path!r}: its passes do not add up to its {n} "
                          f"camera samples")
     for k, a in denoised.items():
         want = (n,) if k == SPREAD else (3, n)
         if a.shape != want:
-            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, expected {want}")
+            raise UsageError(f"cannot read buffer file {path!r}: array {k!r} has shape {a.shape}, "
+                             f"expected {want}")
     return Buffer(header, {**arrays, **pilot, **denoised})
 
 

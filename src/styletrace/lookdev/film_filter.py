@@ -88,10 +88,11 @@ def rebuild(spec: Any):
 
 
 def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)):
-    """(the sensor's sampler seeded as Mitsuba's render loop seeds it for a pass of `spp` spp and seed `seed`,
-    each lane's film position): lane i is pixel i // spp of the crop window widened by `border` on each side,
-    its corner moved by `offset` (integers, as Mitsuba adds them) plus the sampler's first `next_2d()`. The
-    sampler's next draws are the aperture's and the integrator's."""
+    """(the sensor's sampler seeded as Mitsuba's render loop seeds it for a pass of `spp` spp and
+    seed `seed`, each lane's film position): lane i is pixel i // spp of the crop window widened
+    by `border` on each side, its corner moved by `offset` (integers, as Mitsuba adds them) plus
+    the sampler's first `next_2d()`. The sampler's next draws are the aperture's and the
+    integrator's."""
     w, h = (int(v) + 2 * border for v in sensor.film().crop_size())
     lanes = w * h * spp
     sampler = sensor.sampler().clone()

@@ -106,7 +106,8 @@ def _sigmoid(x):
 
 
 class Smoothed:
-    """A style whose `apply` is a smooth surrogate of temperature `tau` (everything else delegates)."""
+    """A style whose `apply` is a smooth surrogate of temperature `tau` (everything else
+    delegates)."""
 
     def __init__(self, style: Style, tau: mi.Float):
         self.style, self.tau = style, tau
@@ -163,7 +164,8 @@ def read_target(target: Any, width: int, height: int) -> np.ndarray:
             ) from None
         img = np.array(bmp, dtype=np.float32)
     if img.shape != (height, width, 3):
-        raise UsageError(f"bad target image of shape {img.shape}: expected {height}x{width}x3 like the buffer")
+        raise UsageError(f"bad target image of shape {img.shape}: expected {height}x{width}x3 like "
+                         "the buffer")
     return img
 
 
@@ -181,11 +183,13 @@ def fit(
     callback: Callable[[int, float], None] | None = None,
     **initial: Any,
 ) -> FitResult:
-    """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled buffer matches
-    `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB). `initial` gives starting
-    values (the style's defaults otherwise); `fixed` names parameters to keep."""
+    """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled
+    buffer matches `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB).
+    `initial` gives starting values (the style's defaults otherwise); `fixed` names parameters to
+    keep."""
     if not mi.variant().endswith("_ad_rgb") and "_ad_" not in mi.variant():
-        raise BackendError(f"fitting needs an AD variant (llvm_ad_rgb or cuda_ad_rgb), not {mi.variant()}")
+        raise BackendError("fitting needs an AD variant (llvm_ad_rgb or cuda_ad_rgb), not "
+                           f"{mi.variant()}")
     if target is None:
         raise UsageError("fit needs a target image")
     if iterations < 1:
@@ -193,29 +197,32 @@ def fit(
     buf = as_buffer(buffer)
     if buf.stores != "mean":
         raise UsageError(
-            "fit needs a buffer of the children's mean (recorded with the direct or affine estimator); "
-            "this one stores the sequences of an unbiased estimator, which Dr.Jit cannot differentiate "
-            "through"
+            "fit needs a buffer of the children's mean (recorded with the direct or affine "
+            "estimator); this one stores the sequences of an unbiased estimator, which Dr.Jit "
+            "cannot differentiate through"
         )
     # every slot prepared on the recorded camera, 'auto' values pinned from the buffer's pilot (as a
     # render would)
     slots = prepare_slots(buf, slots_for(buf, style, "direct", None, **initial))
     owned = [i for i, r in enumerate(buf.header["slots"]) if r["owner"] == changed_owner(buf)]
     if not owned:
-        raise UsageError("this buffer has no styled object to fit (first_object_hit without styled objects)")
+        raise UsageError("this buffer has no styled object to fit (first_object_hit without styled "
+                         "objects)")
     base = slots[owned[0]].style
     if base.name in NOT_SMOOTHED:
         raise UsageError(
-            f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one of "
-            f"the other styles"
+            f"style '{base.name}' cannot be fitted: its steps have no smoothed surrogate; fit one "
+            "of the other styles"
         )
     for k in fixed:
         if k not in base.values:
-            raise UsageError(f"bad fixed parameter {k!r}: style '{base.name}' has {', '.join(base.values) or 'none'}")
+            raise UsageError(f"bad fixed parameter {k!r}: style '{base.name}' has "
+                             f"{', '.join(base.values) or 'none'}")
     free = [p for p in base.params if p.kind in FITTABLE and p.name not in fixed
             and p.name not in NOT_FITTED.get(base.name, ()) and base.values[p.name] is not None]
     if not free:
-        raise UsageError(f"style '{base.name}' has no parameter to fit (fittable kinds: {', '.join(FITTABLE)})")
+        raise UsageError(f"style '{base.name}' has no parameter to fit (fittable kinds: "
+                         f"{', '.join(FITTABLE)})")
     goal = mi.Float(read_target(target, buf.width, buf.height).ravel())
 
     opt = dr.opt.Adam(lr=lr)

@@ -60,8 +60,8 @@ def check_recordable(settings: S.Settings, slots) -> None:
         )
     if settings.expansion_pass:
         raise SettingsError(
-            f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each camera "
-            f"sample's own children, not a pre-pass's expansion point; use expansion_pass=0"
+            f"bad value {settings.expansion_pass} for 'expansion_pass': a buffer replays each "
+            "camera sample's own children, not a pre-pass's expansion point; use expansion_pass=0"
         )
     if settings.lines is not None:
         raise SettingsError(
@@ -149,7 +149,8 @@ def _window(tile: pass_loop.Tile) -> dict:
 
 
 class RecordingIntegrator(StylizedIntegrator):
-    """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each `sample()`."""
+    """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each
+    `sample()`."""
 
     def __init__(self, base: StylizedIntegrator, sequence: bool = False, per_sample: int = 0):
         super().__init__(mi.Properties(), base.settings, base.values)
@@ -264,7 +265,8 @@ def _any(ptr, bsdfs) -> mi.Bool:
 
 
 def sensor_description(sensor) -> dict:
-    """What a restyle needs to rebuild the camera (`restyle.camera_scene`): its kind, field of view and film."""
+    """What a restyle needs to rebuild the camera (`restyle.camera_scene`): its kind, field of view
+    and film."""
     params = mi.traverse(sensor)
     film = sensor.film()
     return {"kind": "perspective" if "x_fov" in params else "orthographic",
@@ -318,11 +320,12 @@ def record(
     pass_spp: int | None = None,
     recorder: Callable[..., RecordingIntegrator] | None = None,
 ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
-    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`: the scene's
-    `Pilot` if the caller resolved the auto values with it already (`render_with_buffer`), so that the pilot
-    is traced once for both (it is stored in the buffer). `pass_spp`: camera samples per pixel in one pass
-    (`pipeline.passes`); `recorder`: makes the recording integrator from (integrator, sequence, per_sample)
-    (default `RecordingIntegrator`; `denoise.coverage` places its own camera rays)."""
+    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`:
+    the scene's `Pilot` if the caller resolved the auto values with it already
+    (`render_with_buffer`), so that the pilot is traced once for both (it is stored in the buffer).
+    `pass_spp`: camera samples per pixel in one pass (`pipeline.passes`); `recorder`: makes the
+    recording integrator from (integrator, sequence, per_sample) (default `RecordingIntegrator`;
+    `denoise.coverage` places its own camera rays)."""
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = ScenePilot(scene, integrator.settings)

@@ -60,10 +60,11 @@ SPREAD_NODES = ((0.0, 0.53333333), (1.35562618, 0.22207592), (-1.35562618, 0.222
 
 def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.Color3f:
     """The slot's estimate averaged over a relative uncertainty of the mean: E over z ~ N(0, 1) of
-    finish(slot, mean (1 + spread z)) (SPREAD_NODES; the scaled mean is clamped at 0). With spread 0 it is
-    `finish`. Why: a denoised expectation D carries a residual error, and g of it flips a step style's band
-    wherever that error crosses a threshold; the mean of g over the error's spread is the estimate of g(E[L])
-    with the least squared error when the error is Gaussian (docs/denoise.md, step 7)."""
+    finish(slot, mean (1 + spread z)) (SPREAD_NODES; the scaled mean is clamped at 0). With spread 0
+    it is `finish`. Why: a denoised expectation D carries a residual error, and g of it flips a step
+    style's band wherever that error crosses a threshold; the mean of g over the error's spread is
+    the estimate of g(E[L]) with the least squared error when the error is Gaussian
+    (docs/denoise.md, step 7)."""
     out = mi.Color3f(0.0)
     for z, weight in SPREAD_NODES:
         out += weight * finish_slot(slot, dr.maximum(mean * (1.0 + spread * z), 0.0), v)
@@ -100,7 +101,8 @@ def slots_for(
     inner: Any = None,
     **params: Any,
 ) -> list[S.StyleSlot]:
-    """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they name."""
+    """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they
+    name."""
     slots = []
     for rec in buffer.header["slots"]:
         values = {"style": rec["style"], **rec["params"]}
@@ -132,8 +134,8 @@ def slots_for(
             if n == 0 and not new.closed_form:
                 raise UsageError(
                     f"style '{new.name}' cannot restyle this buffer: it was recorded with the "
-                    f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= 1; "
-                    f"record the buffer with a style that traces children"
+                    f"closed-form style '{rec['style']}' (0 children) and '{new.name}' needs n >= "
+                    "1; record the buffer with a style that traces children"
                 )
             if estimator is not None:
                 est = estimator
@@ -194,8 +196,9 @@ def device(buffer: Buffer) -> dict[str, Any]:
 
 
 def camera_scene(buffer: Buffer) -> mi.Scene:
-    """A scene holding only the recorded camera (kind, field of view, film), for styles that read it in
-    `prepare` (hatching and halftone project their spacing through it, gooch and xtoon take its frame)."""
+    """A scene holding only the recorded camera (kind, field of view, film), for styles that read it
+    in `prepare` (hatching and halftone project their spacing through it, gooch and xtoon take its
+    frame)."""
     m = mi.ScalarTransform4f(np.asarray(buffer.header["sensor_to_world"], dtype=np.float64))
     sensor = buffer.header.get("sensor")
     if sensor is None:  # a buffer written before the sensor was kept: its frame alone
@@ -211,8 +214,8 @@ def camera_scene(buffer: Buffer) -> mi.Scene:
 
 
 def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> list[S.StyleSlot]:
-    """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render of the
-    scene pins them (`scene.defaults`); unchanged for a buffer without a pilot."""
+    """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render
+    of the scene pins them (`scene.defaults`); unchanged for a buffer without a pilot."""
     pilot = {k[len(PILOT):]: v for k, v in buffer.arrays.items() if k.startswith(PILOT)}
     if not pilot:
         return slots
@@ -234,8 +237,8 @@ def prepare_slots(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]
 
 
 def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
-    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the styles' θ
-    for "mean" buffers."""
+    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the
+    styles' θ for "mean" buffers."""
     d = device(buffer)
     v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buffer.header["view"]), depth=d["depth"])
     if buffer.stores == "sequence":
@@ -252,7 +255,8 @@ def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
 
 
 def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi.Color3f:
-    """The slots' estimators replayed over the stored sequences; refused where one needs more than is stored."""
+    """The slots' estimators replayed over the stored sequences; refused where one needs more than
+    is stored."""
     total, bad = replay(d, d["slot"], slots, v)
     bad = bad & (d["slot"] >= 0)
     dr.eval(total, bad)
@@ -263,11 +267,13 @@ def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi
         names = sorted({s.estimator for s in slots})
         recorded = sorted({r["estimator"] for r in buffer.header["slots"]})
         raise UsageError(
-            f"estimator {', '.join(repr(n) for n in names)} cannot restyle this buffer: on {missing} of "
-            f"{buffer.samples} camera samples it asks for a child or uniform number beyond the stored ones or in "
-            f"another order than the recorded {', '.join(repr(n) for n in recorded)} (the buffer stores "
-            f"{children / buffer.samples:.1f} children and {(events - children) / buffer.samples:.1f} uniform "
-            f"numbers per camera sample on average); this estimator needs more: record a buffer with it"
+            f"estimator {', '.join(repr(n) for n in names)} cannot restyle this buffer: on "
+            f"{missing} of {buffer.samples} camera samples it asks for a child or uniform number "
+            "beyond the stored ones or in another order than the recorded "
+            f"{', '.join(repr(n) for n in recorded)} (the buffer stores "
+            f"{children / buffer.samples:.1f} children and "
+            f"{(events - children) / buffer.samples:.1f} uniform numbers per camera sample on "
+            "average); this estimator needs more: record a buffer with it"
         )
     return total
 
@@ -280,7 +286,8 @@ def replay_lanes(
     **params: Any,
 ) -> tuple[np.ndarray, np.ndarray]:
     """A sequence buffer's per-camera-sample contributions with a new style, and the samples whose
-    replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and tests)."""
+    replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and
+    tests)."""
     buf = as_buffer(buffer)
     if buf.stores != "sequence":
         raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased estimator)")
@@ -329,12 +336,14 @@ def as_buffer(buffer: Any) -> Buffer:
         return buffer
     if isinstance(buffer, (str, os.PathLike)):
         return load_buffer(buffer)
-    raise UsageError(f"bad buffer {type(buffer).__name__}: expected a styletrace Buffer or a .npz path")
+    raise UsageError(f"bad buffer {type(buffer).__name__}: expected a styletrace Buffer or a .npz "
+                     "path")
 
 
 def restyle(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
             **params: Any) -> np.ndarray:
-    """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32, linear."""
+    """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32,
+    linear."""
     buf = as_buffer(buffer)
     slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
     img = accumulate(buf, sample_values(buf, slots))

@@ -25,8 +25,9 @@ CHILD, UNIFORM = 1, 0
 
 
 def budget(slots) -> int:
-    """Pool entries per camera sample: twice the expected draws of every slot's estimator (each draw may
-    bring a uniform: Russian roulette), plus a margin for the uniforms of the estimators' starts."""
+    """Pool entries per camera sample: twice the expected draws of every slot's estimator (each draw
+    may bring a uniform: Russian roulette), plus a margin for the uniforms of the estimators'
+    starts."""
     total = 0.0
     for slot in slots:
         if slot.style.closed_form:
@@ -40,8 +41,8 @@ def budget(slots) -> int:
 
 
 class Recorder:
-    """The kernel side of one pass: the children's pool, the uniforms' slab and the per-lane counters
-    (threaded through the estimator's carry)."""
+    """The kernel side of one pass: the children's pool, the uniforms' slab and the per-lane
+    counters (threaded through the estimator's carry)."""
 
     def __init__(self, width: int, per_sample: int):
         self.width, self.per_sample = width, per_sample
@@ -62,7 +63,8 @@ class Recorder:
         self.ucount = dr.zeros(mi.UInt32, width)   # uniforms so far per lane
 
     def child(self, count: mi.UInt32, x) -> mi.UInt32:
-        """Note one child of this lane (the symbolic loop masks lanes that do not draw); count + 1."""
+        """Note one child of this lane (the symbolic loop masks lanes that do not draw); count +
+        1."""
         idx = dr.scatter_inc(self.counter, mi.UInt32(0))
         ok = idx < self.capacity
         dr.scatter(self.lane_of, self.lanes, idx, ok)
@@ -115,8 +117,8 @@ def offsets(arrays: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
 
 
 def device_arrays(arrays: dict[str, np.ndarray]) -> dict[str, Any]:
-    """The sequence on the Dr.Jit backend (flat arrays padded by one entry so that gathers never see an
-    empty array; the pad is never read, every gather is masked by the lane's own range)."""
+    """The sequence on the Dr.Jit backend (flat arrays padded by one entry so that gathers never see
+    an empty array; the pad is never read, every gather is masked by the lane's own range)."""
     ev, ch, un = offsets(arrays)
     pad = lambda a: np.concatenate([a, np.zeros(a.shape[:-1] + (1,), a.dtype)], axis=-1)  # noqa: E731
     child = pad(arrays["child"])
@@ -132,8 +134,8 @@ def device_arrays(arrays: dict[str, np.ndarray]) -> dict[str, Any]:
 
 
 def replay(d: dict[str, Any], slot_of: mi.Int32, slots, v) -> tuple[mi.Color3f, mi.Bool]:
-    """Each slot's estimate over the stored sequences, and the lanes whose estimator asked for an event
-    that is not stored (or in another order): (value per lane, bad per lane)."""
+    """Each slot's estimate over the stored sequences, and the lanes whose estimator asked for an
+    event that is not stored (or in another order): (value per lane, bad per lane)."""
 
     def take(carry, kind):
         e, c, u, bad = carry

@@ -3,8 +3,9 @@
     check_render_args(spp=16, seed=0, integrator=None)   # UsageError naming the argument and what is allowed
     check_scene(scene, "scene file 'x.xml'")            # SceneError: no sensor, or a spectrum RGB cannot render
 
-`api.render`, `api.passes` and `api.load_scene` call these first, so a bad argument fails with one line
-instead of a TypeError deep in Mitsuba or a silently different image. Needs Mitsuba (a variant set).
+`api.render`, `api.passes` and `api.load_scene` call these first, so a bad argument fails with one
+line instead of a TypeError deep in Mitsuba or a silently different image. Needs Mitsuba (a variant
+set).
 """
 from __future__ import annotations
 
@@ -69,11 +70,11 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
 
 @functools.cache
 def _collector() -> type:
-    """The traversal callback of `_objects`, one class for the process (made on first use, when a variant is
-    set). A class made per call was a new type object each time, cyclic garbage holding its closure (the
-    whole `seen` dict while the traversal ran); it was suspected of keeping scenes alive, which it did not
-    (`seen` is emptied after use; the abort it was suspected of came from jit.no_collection's cause), but
-    types that pile up until a collection are no use."""
+    """The traversal callback of `_objects`, one class for the process (made on first use, when a
+    variant is set). A class made per call was a new type object each time, cyclic garbage holding
+    its closure (the whole `seen` dict while the traversal ran); it was suspected of keeping scenes
+    alive, which it did not (`seen` is emptied after use; the abort it was suspected of came from
+    jit.no_collection's cause), but types that pile up until a collection are no use."""
 
     class Collect(mi.TraversalCallback):
         def __init__(self, seen: dict[int, mi.Object]):
@@ -97,16 +98,18 @@ def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
 
 
 def scene_problem(scene: Any, origin: str) -> str | None:
-    """Why `scene` (named `origin` in the message) cannot be rendered, or None if it is a renderable mi.Scene.
+    """Why `scene` (named `origin` in the message) cannot be rendered, or None if it is a renderable
+    mi.Scene.
 
-    Returns the message rather than raising it, so that the caller can drop its reference to the scene
-    first: a refused scene kept alive by a traceback would still be part of every later kernel (Dr.Jit
-    traces virtual calls on all live instances), and its blackbody spectrum fails there."""
+    Returns the message rather than raising it, so that the caller can drop its reference to the
+    scene
+    first: a refused scene kept alive by a traceback would still be part of every later kernel
+    (Dr.Jit traces virtual calls on all live instances), and its blackbody spectrum fails there."""
     if not isinstance(scene, mi.Scene):
         kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
         return (
-            f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML <scene>) "
-            f"holding a sensor, shapes and emitters"
+            f"{origin} is a {kind}, not a scene: expected a dict with 'type': 'scene' (or an XML "
+            "<scene>) holding a sensor, shapes and emitters"
         )
     if not scene.sensors():
         return (f"{origin} has no sensor: add one (e.g. 'sensor': {{'type': 'perspective'}} or "
@@ -126,7 +129,8 @@ def scene_problem(scene: Any, origin: str) -> str | None:
 
 
 def check_scene(scene: Any, origin: str) -> mi.Scene:
-    """`scene` if it is renderable (a scene the caller keeps anyway); a SceneError naming `origin` otherwise."""
+    """`scene` if it is renderable (a scene the caller keeps anyway); a SceneError naming `origin`
+    otherwise."""
     problem = scene_problem(scene, origin)
     if problem is not None:
         raise SceneError(problem)

@@ -1,17 +1,12 @@
 """Built-in scenes, as Mitsuba scene dictionaries.
 
 - `cornell-box` (default): Mitsuba's Cornell box.
-- `dragon`: the bundled scanned dragon, normalized to unit height, on a ground plane under two area
-  lights with a dim sky, in the spirit of the paper's result setups (Figs. 7-12).
-- `mixed`: the dragon scene with per-object styles (cel dragon, hatched floor, PBR glass sphere).
-- `lines`: the dragon scene with a mirror behind the dragon and a glass sphere in front, for feature lines
-  seen in reflection and through glass (docs/lines.md).
-- `furnace`: a diffuse sphere of albedo rho under a constant environment E. Every first hit then has
-  exitant radiance exactly rho*E (a convex object sees only the environment), so g(I) is known exactly.
+- `dragon`: the bundled scanned dragon on a ground plane under two area lights and a dim sky.
+- `mixed`: the dragon scene with per-object styles (cel dragon, hatched floor, glass sphere).
+- `lines`: the dragon with a mirror behind and a glass sphere in front (docs/lines.md).
+- `furnace`: a diffuse sphere of albedo rho under a constant environment E (exitant rho*E).
 
-All use the `independent` sampler (nested inner loops draw an unbounded number of dimensions per
-pixel sample, which stratified samplers are not built for) and a box pixel filter (each camera
-sample lands in exactly one pixel, so averaging passes equals one long render).
+All use the `independent` sampler and a box pixel filter (docs/design/builtin_scenes.md).
 """
 from __future__ import annotations
 
@@ -100,8 +95,8 @@ def dragon(width: int = 256, height: int = 256) -> dict[str, Any]:
 
 def mixed(width: int = 256, height: int = 256) -> dict[str, Any]:
     """The dragon scene with per-object styles: a cel-shaded dragon, a cross-hatched floor and a
-    physically based glass sphere in front of the dragon (render with stylize=first_object_hit to see
-    the dragon stylized through the glass too)."""
+    physically based glass sphere in front of the dragon (render with stylize=first_object_hit to
+    see the dragon stylized through the glass too)."""
     scene = dragon(width, height)
     scene["dragon"]["bsdf"] = {
         "type": "styled",
@@ -124,8 +119,9 @@ def mixed(width: int = 256, height: int = 256) -> dict[str, Any]:
 
 
 def lines(width: int = 256, height: int = 256) -> dict[str, Any]:
-    """The dragon scene with a standing mirror behind the dragon and a glass sphere in front of it: feature
-    lines (`--lines --set line_depth=3`) show in the reflection and through the glass (docs/lines.md)."""
+    """The dragon scene with a standing mirror behind the dragon and a glass sphere in front of it:
+    feature lines (`--lines --set line_depth=3`) show in the reflection and through the glass
+    (docs/lines.md)."""
     T = mi.ScalarTransform4f
     scene = dragon(width, height)
     scene["mirror"] = {
@@ -155,11 +151,12 @@ def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO, radiance: 
 
 
 def scaled(scene: dict[str, Any], factor: float, light: float = 1.0) -> dict[str, Any]:
-    """`scene` (a dict) scaled by `factor` about the origin, camera included, with every area emitter's
-    radiance times `light`. Shapes get a scale before their `to_world` (spheres: centre and radius); the
-    perspective sensor keeps its orientation and field of view, moves its position (Mitsuba refuses
-    scale in a camera transform) and scales its clip and focus distances. Radiance is scale-free, so with light = 1 the image is unchanged: only
-    the scene's units differ (the built-in scenes' test of scene-relative style defaults)."""
+    """`scene` (a dict) scaled by `factor` about the origin, camera included, with every area
+    emitter's radiance times `light`. Shapes get a scale before their `to_world` (spheres: centre
+    and radius); the perspective sensor keeps its orientation and field of view, moves its position
+    (Mitsuba refuses scale in a camera transform) and scales its clip and focus distances. Radiance
+    is scale-free, so with light = 1 the image is unchanged: only the scene's units differ (the
+    built-in scenes' test of scene-relative style defaults)."""
     T = mi.ScalarTransform4f
 
     def visit(node):

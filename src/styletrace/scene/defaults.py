@@ -1,4 +1,5 @@
-"""Scene-relative defaults: the styles' 'auto' parameters, resolved on the scene about to be rendered.
+"""Scene-relative defaults: the styles' 'auto' parameters, resolved on the scene about to be
+rendered.
 
     integrator, chosen = resolve(scene, integrator)   # before rendering
 
@@ -38,9 +39,10 @@ PILOT_SEED = 0x5EED
 
 
 def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
-    """Quantiles of the distribution putting mass `weights` on `values`: the inverted CDF, the smallest value
-    whose cumulative weight reaches q (numpy 2's `np.quantile(..., weights=, method="inverted_cdf")`, which
-    numpy 1.x, still allowed by pyproject, lacks; spelled out so both give the same auto values)."""
+    """Quantiles of the distribution putting mass `weights` on `values`: the inverted CDF, the
+    smallest value whose cumulative weight reaches q (numpy 2's `np.quantile(..., weights=,
+    method="inverted_cdf")`, which numpy 1.x, still allowed by pyproject, lacks; spelled out so both
+    give the same auto values)."""
     v = np.asarray(values, dtype=np.float64).ravel()
     w = np.asarray(weights, dtype=np.float64).ravel()
     keep = w > 0  # a value of no weight is never a quantile, not even the 0th
@@ -61,8 +63,9 @@ class ScenePilot:
         self.scene, self.settings = scene, settings
 
     def serves(self, scene: mi.Scene, settings: S.Settings) -> bool:
-        """Whether these samples are the pilot of `scene` under `settings`: the same scene, and the settings
-        the trace reads (the style is not among them: a pinned copy of an integrator shares its pilot)."""
+        """Whether these samples are the pilot of `scene` under `settings`: the same scene, and the
+        settings the trace reads (the style is not among them: a pinned copy of an integrator shares
+        its pilot)."""
         return self.scene is scene and all(getattr(self.settings, k) == getattr(settings, k) for k in PILOT_SETTINGS)
 
     @cached_property
@@ -127,8 +130,8 @@ class ScenePilot:
 
 
 def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pilot's mean colour per cell over the samples in `mask`: (colour (cells, 3), samples per cell,
-    each masked sample's cell index)."""
+    """The pilot's mean colour per cell over the samples in `mask`: (colour (cells, 3), samples per
+    cell, each masked sample's cell index)."""
     cells, inverse, counts = np.unique(samples["cell"][mask], return_inverse=True, return_counts=True)
     colour = np.zeros((len(cells), 3))
     np.add.at(colour, inverse, samples["colour"][mask])
@@ -147,7 +150,8 @@ def median_brightness(pilot: ScenePilot) -> float | None:
 
 
 class Facts:
-    """What a style's auto rule may read about the part of the scene it covers (see the module doc)."""
+    """What a style's auto rule may read about the part of the scene it covers (see the module
+    doc)."""
 
     def __init__(self, scene: mi.Scene, pilot: ScenePilot, owner: int, styles: tuple[Style, ...] = ()):
         self.scene, self.pilot, self.owner, self.styles = scene, pilot, owner, styles
@@ -171,7 +175,8 @@ class Facts:
 
     @cached_property
     def _cells(self) -> tuple[np.ndarray, np.ndarray]:
-        """(brightness per cell, number of samples) over the cells with samples on the covered objects."""
+        """(brightness per cell, number of samples) over the cells with samples on the covered
+        objects."""
         s, mask = self.pilot.samples, self._mine
         colour, counts, inverse = cell_colours(s, mask)
         if self.styles:
@@ -204,14 +209,14 @@ class Facts:
 
 
 class NothingSeen(Exception):
-    """The camera sees no surface: a style's brightness or depth rule has nothing to measure, so its auto
-    values stay unresolved (the style's documented fallbacks; it shows on no pixel anyway)."""
+    """The camera sees no surface: a style's brightness or depth rule has nothing to measure, so its
+    auto values stay unresolved (the style's documented fallbacks; it shows on no pixel anyway)."""
 
 
 def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
-    """The style's auto values that its parameters accept. A rule pushed past a parameter's range by an
-    extreme given value (u_min = 1e6 leaves no u_max above it) pins nothing: the style's unresolved
-    fallback applies, as it does when the camera sees nothing."""
+    """The style's auto values that its parameters accept. A rule pushed past a parameter's range by
+    an extreme given value (u_min = 1e6 leaves no u_max above it) pins nothing: the style's
+    unresolved fallback applies, as it does when the camera sees nothing."""
     try:
         chosen = style.auto_values(facts)
     except NothingSeen:
@@ -232,7 +237,8 @@ def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
 
 
 def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
-    """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups), in a fixed order."""
+    """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups), in a
+    fixed order."""
     return [styled for styled, _, _ in SceneGraph(scene).styled]
 
 
@@ -251,7 +257,8 @@ def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePil
             caller that keeps the pilot's samples (the look-dev recorder) traces it once.
 
     Returns:
-        (integrator, chosen): the integrator with values pinned, and a one-line account ('' if none).
+        (integrator, chosen): the integrator with values pinned, and a one-line account ('' if
+        none).
     """
     if not isinstance(integrator, StylizedIntegrator):
         return integrator, ""
@@ -282,8 +289,8 @@ def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePil
 
 def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: ScenePilot | None, k: float
                 ) -> tuple[StylizedIntegrator, str]:
-    """`integrator` with the firefly control's k and, unless given, its floor (the scene's median brightness,
-    `median_brightness`) pinned, and the note naming what was chosen ('' if nothing)."""
+    """`integrator` with the firefly control's k and, unless given, its floor (the scene's median
+    brightness, `median_brightness`) pinned, and the note naming what was chosen ('' if nothing)."""
     s = integrator.settings
     chosen = {} if s.firefly == k else {"firefly": float(k)}
     if s.firefly_floor is None:

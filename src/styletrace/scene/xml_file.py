@@ -2,14 +2,10 @@
 
     scene, notes = load("cbox.xml", width=64, height=48, defines={"spp": "4"})
 
-- `defines`: the file's `<default>` parameters, as `mitsuba -D name=value`.
-- `width`/`height` resize the film of the first top-level sensor, its `<include>`s expanded as
-  Mitsuba expands them (`expand_includes`); a crop window or a sensor behind a `<ref>` is refused in
-  one line.
-- An unknown top-level integrator type is replaced by `path` keeping `max_depth`, `rr_depth` and
-  `hide_emitters`, with one note.
-A file that needs none of this goes to `mi.load_file` unchanged. Details:
-docs/design/scene_files.md.
+`defines` are the file's `<default>` parameters (as `mitsuba -D`); `width`/`height` resize the
+film of the first top-level sensor, includes expanded as Mitsuba expands them; an unknown
+top-level integrator becomes `path` with one note. A file that needs none of this goes to
+`mi.load_file` unchanged. Details: docs/design/scene_files.md.
 """
 from __future__ import annotations
 
@@ -40,24 +36,26 @@ def known_integrator(kind: str) -> bool:
 
 
 def substitute(text: str, params: Mapping[str, str]) -> str:
-    """`text` with its `$parameters` replaced as Mitsuba 3.9.1's parser does: longest name first ($ab before
-    $a), plain text replacement."""
+    """`text` with its `$parameters` replaced as Mitsuba 3.9.1's parser does: longest name first
+    ($ab before $a), plain text replacement."""
     for key in sorted(params, key=len, reverse=True):
         text = text.replace("$" + key, params[key])
     return text
 
 
 def add_default(params: dict[str, str], node: ET.Element) -> None:
-    """Record a `<default>` as Mitsuba's parser meets it: a name already known (a define, an earlier default)
-    keeps its value; the default's own value has the parameters known so far substituted."""
+    """Record a `<default>` as Mitsuba's parser meets it: a name already known (a define, an
+    earlier default) keeps its value; the default's own value has the parameters known so far
+    substituted."""
     params.setdefault(node.get("name", ""), substitute(node.get("value", ""), params))
 
 
 def replace_integrator(root: ET.Element, origin: str, defines: Mapping[str, str] | None = None) -> str | None:
-    """Swap an unknown top-level integrator for `path` with the shared depths; the note to show, or None.
+    """Swap an unknown top-level integrator for `path` with the shared depths; the note to show, or
+    None.
 
-    The type is read as Mitsuba reads it: `defines`, then the `<default>`s before the integrator in document
-    order, substituted for its `$parameters`."""
+    The type is read as Mitsuba reads it: `defines`, then the `<default>`s before the integrator in
+    document order, substituted for its `$parameters`."""
     params = {str(k): str(v) for k, v in (defines or {}).items()}
     tops = [node for node in root if node.tag == "integrator"]
     for node in root.iter():
@@ -82,8 +80,9 @@ def replace_integrator(root: ET.Element, origin: str, defines: Mapping[str, str]
 
 
 def used_defines(defines: Mapping[str, str], before: str, after: str) -> dict[str, str]:
-    """The defines to hand Mitsuba for the edited text `after` of the file text `before`: all but those the
-    edit removed every use of (Mitsuba refuses an unused define; it was used in the file as written)."""
+    """The defines to hand Mitsuba for the edited text `after` of the file text `before`: all but
+    those the edit removed every use of (Mitsuba refuses an unused define; it was used in the file
+    as written)."""
     return {k: v for k, v in defines.items() if "$" + k in after or "$" + k not in before}
 
 
@@ -101,17 +100,19 @@ def _version(node: ET.Element) -> tuple[int, ...] | None:
 class _Includes:
     """One expansion of a scene file's includes, following Mitsuba 3.9.1's parser (parser.cpp).
 
-    - `params` holds the $parameters known so far, in Mitsuba's order: the defines first (they win), then
-      each `<default>` as the parser meets it, in document order through the included files.
+    - `params` holds the $parameters known so far, in Mitsuba's order: the defines first (they win),
+      then each `<default>` as the parser meets it, in document order through the included files.
     - File lookups: each file is parsed with a resolver, a list of folders searched in order (then
-      Mitsuba's own file resolver). The scene's is its folder. An `<include>` in a file of folder D and
-      resolver R is looked up on [D] + R, and the included file is parsed with that list as its resolver.
-      A `<path value>` is looked up in its file's folder, else on its resolver, and is put first on that
-      resolver: it serves the rest of that file and the files it includes, and is gone when the include
-      ends (Mitsuba restores the resolver), so an included file's `<path>` is used here and dropped from
-      the spliced text. A `<spectrum filename>` is looked up on its file's resolver and made absolute.
-    - `problem` is set when the expansion could not be faithful; the caller refuses a resize then (the
-      unexpanded file still loads through Mitsuba, which reports its own errors)."""
+      Mitsuba's own file resolver). The scene's is its folder. An `<include>` in a file of folder D
+      and resolver R is looked up on [D] + R, and the included file is parsed with that list as its
+      resolver. A `<path value>` is looked up in its file's folder, else on its resolver, and is put
+      first on that
+      resolver: it serves the rest of that file and the files it includes, and is gone when the
+      include ends (Mitsuba restores the resolver), so an included file's `<path>` is used here and
+      dropped from the spliced text. A `<spectrum filename>` is looked up on its file's resolver and
+      made absolute.
+    - `problem` is set when the expansion could not be faithful; the caller refuses a resize then
+      (the unexpanded file still loads through Mitsuba, which reports its own errors)."""
 
     def __init__(self, defines: Mapping[str, str], origin: str, legacy: bool):
         self.params = dict(defines)
@@ -124,7 +125,8 @@ class _Includes:
 
     @staticmethod
     def find(name: str, folders: list[str]) -> str | None:
-        """`name` looked up in `folders`, then on Mitsuba's file resolver; None where it exists nowhere."""
+        """`name` looked up in `folders`, then on Mitsuba's file resolver; None where it exists
+        nowhere."""
         if os.path.isabs(name):
             return name if os.path.exists(name) else None
         for folder in folders:
@@ -135,8 +137,8 @@ class _Includes:
         return os.path.abspath(found) if os.path.exists(found) else None
 
     def expand(self, parent: ET.Element, folder: str, resolver: list[str], depth: int) -> None:
-        """Expand the includes under `parent`, an element of the file in `folder` parsed with `resolver`
-        (mutated by the file's `<path>`s), `depth` includes deep."""
+        """Expand the includes under `parent`, an element of the file in `folder` parsed with
+        `resolver` (mutated by the file's `<path>`s), `depth` includes deep."""
         i = 0
         while i < len(parent) and not self.problem:
             node = parent[i]
@@ -170,8 +172,8 @@ class _Includes:
         name = self.subst(node.get("filename", ""))
         if depth + 1 >= MAX_INCLUDE_DEPTH:
             self.problem = (
-                f"{self.origin}: <include> nests deeper than Mitsuba's limit of {MAX_INCLUDE_DEPTH} "
-                f"levels at '{name}'"
+                f"{self.origin}: <include> nests deeper than Mitsuba's limit of "
+                f"{MAX_INCLUDE_DEPTH} levels at '{name}'"
             )
             return None
         lookup = [folder, *resolver]
@@ -207,9 +209,9 @@ class _Includes:
 
 
 def expand_includes(root: ET.Element, path: str, defines: Mapping[str, str] | None = None) -> str | None:
-    """Replace every `<include>` under `root` (the parsed file `path`) by what Mitsuba splices in, in place
-    (see `_Includes`); None, or the reason the expansion cannot be faithful (root is then partly expanded
-    and must not be used)."""
+    """Replace every `<include>` under `root` (the parsed file `path`) by what Mitsuba splices in,
+    in place (see `_Includes`); None, or the reason the expansion cannot be faithful (root is then
+    partly expanded and must not be used)."""
     version = _version(root)
     inc = _Includes({str(k): str(v) for k, v in (defines or {}).items()}, f"scene file '{path}'",
                     legacy=version is not None and version < (2,))
@@ -261,9 +263,10 @@ def _load_text(text: str, folder: str, defines: Mapping[str, str]) -> mi.Scene:
 
 
 def parse_xml(path: str) -> ET.ElementTree:
-    """The file's element tree. Mitsuba's parser accepts a comment holding "--", which XML forbids (a licence
-    header `<!-- -- SPDX ... -->`); comments are dropped and the file read again where that is what fails.
-    Raises ET.ParseError, OSError or ValueError where it is not XML all the same."""
+    """The file's element tree. Mitsuba's parser accepts a comment holding "--", which XML forbids
+    (a licence header `<!-- -- SPDX ... -->`); comments are dropped and the file read again where
+    that is what fails. Raises ET.ParseError, OSError or ValueError where it is not XML all the
+    same."""
     try:
         return ET.parse(path)
     except ET.ParseError:

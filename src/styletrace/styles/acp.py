@@ -1,18 +1,15 @@
 """acp: the per-sample colour mapping baseline the paper compares against (supplement S5.1, Fig. 7).
 
-Reference: "Global Illumination-Aware Stylised Shading", Kohei Doi, Yuki Morimoto, Reiji Tsuruno
-(2021).
+Reference: Doi, Morimoto, Tsuruno, "Global Illumination-Aware Stylised Shading" (2021).
 
 Parameters
-- gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over brightness, clamped at the
-  ends
-- range (floats lo,hi, default auto): the brightness mapped onto the first and last stop (auto: the
-  5% and 95% first-hit brightness quantiles; unresolved: the first and last stop)
+- gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over brightness, clamped
+- range (floats lo,hi, default auto): the brightness mapped onto the first and last stop (auto:
+  the 5% and 95% first-hit brightness quantiles; unresolved: the first and last stop)
 
-Applied to each path sample L, with Y = (r+g+b)/3 of L and u_0, u_last the first and last stops:
-    Y' = u_0 + (Y - lo) (u_last - u_0) / (hi - lo),   g(L) = max(Y', 0.01) G(clamp(Y', u_0, u_last))
-and the pixel averages g over the samples (`per_sample = True`): biased with respect to the stylized
-rendering equation by design. Rationale: docs/design/acp_baseline.md.
+Per path sample L, Y = (r+g+b)/3 of L: Y' = u_0 + (Y - lo) (u_last - u_0) / (hi - lo),
+g(L) = max(Y', 0.01) G(clamp(Y', u_0, u_last)), averaged over the samples (`per_sample = True`;
+biased by design). Rationale: docs/design/acp_baseline.md.
 """
 from __future__ import annotations
 

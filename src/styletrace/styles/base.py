@@ -3,17 +3,12 @@
 A style declares
 - `name`, `summary`: registry key and one line for `styletrace styles`;
 - `params`: its parameters theta (`Param`), validated on construction;
-- `default_inner`: the inner sample count n it wants per evaluation (0 for closed-form styles,
-  which use only the vertex and theta and never trace a child path);
-- `apply(I, v)`: g_theta(I) for a radiance estimate I (mi.Color3f) at vertex `v` (`Vertex`).
-  It runs inside the render kernel on Dr.Jit arrays, so it must be branch-free (dr.select, no `if`
-  on array values).
-- optionally `form()`: g as an affine map, a power series or a polynomial fit, which the unbiased
-  estimators consume (`forms.py`).
-- what adaptive inner counts (`--inner 4:64`, estimators/adaptive.py) need to know: `step_thresholds(v)`, the
-  brightness values at which g jumps at vertex v (step styles: cel, hatching, halftone), and
-  `curvature(I, v, h)`, g'' along the grey direction (smooth styles; a second difference over +-h by
-  default, 0 for affine styles and step styles).
+- `default_inner`: the inner sample count n it wants per evaluation (0 for closed-form styles);
+- `apply(I, v)`: g_theta(I) for a radiance estimate I (mi.Color3f) at vertex `v` (`Vertex`),
+  branch-free on Dr.Jit arrays (dr.select, no `if` on array values);
+- optionally `form()`: g as an affine map, a power series or a polynomial fit (`forms.py`);
+- for adaptive inner counts: `step_thresholds(v)`, the brightnesses where g jumps, and
+  `curvature(I, v, h)`, g'' along the grey direction (docs/design/adaptive_stopping.md).
 """
 from __future__ import annotations
 
@@ -35,9 +30,10 @@ class Vertex:
 
     p: world position; n: shading normal (world); wo: unit direction towards the viewer or previous
     vertex; view: the camera's forward direction (the same for all lanes); depth: 0 for the first
-    hit seen from the camera. s: the vertex's image coordinate (mi.Point2f, pixels right and up of the image
-    centre) where the integrator computes one (LLaT's canonical lifting, kernel/anchors.py: only while a
-    style of the render has `wants_coordinate`), else None; method: how s was found (kernel/mls.py codes).
+    hit seen from the camera. s: the vertex's image coordinate (mi.Point2f, pixels right and up of
+    the image centre) where the integrator computes one (LLaT's canonical lifting,
+    kernel/anchors.py: only while a style of the render has `wants_coordinate`), else None; method:
+    how s was found (kernel/mls.py codes).
     """
 
     p: mi.Point3f
@@ -63,7 +59,8 @@ class Style:
         for key in values:
             if key not in known:
                 allowed = ", ".join(known) if known else "none"
-                raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are {allowed}")
+                raise StyleError(f"unknown parameter '{key}' for style '{self.name}': allowed are "
+                                 f"{allowed}")
         self.values: dict[str, Any] = {}
         #: the parameters given explicitly (not None/'auto'): `pinned` keeps them when it fills in
         #: auto values
@@ -93,12 +90,13 @@ class Style:
     def auto_values(self, facts) -> dict[str, Any]:
         """Values for the parameters left at 'auto' whose rule needs the scene (`scene.defaults`
         computes them before rendering). `facts` offers `camera` (a `Camera`), `brightness(qs)` and
-        `depth(qs)`: quantiles of the first-hit brightness and camera depth of what this style covers."""
+        `depth(qs)`: quantiles of the first-hit brightness and camera depth of what this style
+        covers."""
         return {}
 
     def pinned(self, values: Mapping[str, Any]) -> "Style":
-        """A new style of the same kind: the given parameters kept, `values` filling in auto ones (named in the
-        new style's `chosen`)."""
+        """A new style of the same kind: the given parameters kept, `values` filling in auto ones
+        (named in the new style's `chosen`)."""
         out = type(self)(**{**self.given, **values})
         out.chosen = tuple(sorted(set(self.chosen) | set(values)))
         return out
@@ -107,14 +105,14 @@ class Style:
         raise NotImplementedError
 
     def form(self):
-        """g as an AffineForm, SeriesForm or PolynomialForm (see `forms`) for the unbiased estimators, or
-        None where only direct application (and nothing unbiased) applies."""
+        """g as an AffineForm, SeriesForm or PolynomialForm (see `forms`) for the unbiased
+        estimators, or None where only direct application (and nothing unbiased) applies."""
         return None
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """Brightness values (numbers or per-lane mi.Float; +inf: none at that lane) at which g jumps at the
-        vertices `v`. The adaptive controller keeps drawing children while the mean's brightness is within a
-        confidence band of one. Default: none (a continuous g)."""
+        """Brightness values (numbers or per-lane mi.Float; +inf: none at that lane) at which g
+        jumps at the vertices `v`. The adaptive controller keeps drawing children while the mean's
+        brightness is within a confidence band of one. Default: none (a continuous g)."""
         return ()
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
@@ -140,7 +138,8 @@ def key_in(values: Mapping[str, Any], key: str) -> bool:
 
 @dataclass(frozen=True)
 class Camera:
-    """World-space frame of a scene's first sensor: position, unit forward (local +z) and up (local +y)."""
+    """World-space frame of a scene's first sensor: position, unit forward (local +z) and up (local
+    +y)."""
 
     position: tuple[float, float, float] = (0.0, 0.0, 0.0)
     forward: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -163,8 +162,8 @@ def camera(scene: mi.Scene) -> Camera:
 @dataclass(frozen=True)
 class Projection:
     """The first sensor's mapping of world points to screen pixels. A point p at camera depth
-    z = (p - position) . forward spans `a z + b` scene units per pixel there (perspective: a = twice the
-    tangent of half a pixel's angle, b = 0; orthographic: a = 0, b = the pixel's width)."""
+    z = (p - position) . forward spans `a z + b` scene units per pixel there (perspective: a = twice
+    the tangent of half a pixel's angle, b = 0; orthographic: a = 0, b = the pixel's width)."""
 
     camera: Camera = Camera()
     right: tuple[float, float, float] = (1.0, 0.0, 0.0)
@@ -186,16 +185,18 @@ class Projection:
 
 
 def lanes(v, n: int):
-    """A Dr.Jit 3-vector as a (3, n) float64 numpy array. A sensor returns a component that is the same for
-    every lane as an array of width 1 (an orthographic sensor's ray direction, a perspective one's origin
-    before the near-clip offset): it is repeated, so that lane k is ray k whatever the sensor type."""
+    """A Dr.Jit 3-vector as a (3, n) float64 numpy array. A sensor returns a component that is the
+    same for every lane as an array of width 1 (an orthographic sensor's ray direction, a
+    perspective one's origin before the near-clip offset): it is repeated, so that lane k is ray k
+    whatever the sensor type."""
     import numpy as np
     a = np.array(v, dtype=np.float64).reshape(3, -1)
     return np.broadcast_to(a, (3, n))
 
 
 def projection(scene: mi.Scene) -> Projection:
-    """Measured on the sensor itself: the rays through the film centre and one pixel to its right."""
+    """Measured on the sensor itself: the rays through the film centre and one pixel to its
+    right."""
     import numpy as np
     sensors = scene.sensors()
     if not sensors:
@@ -227,13 +228,14 @@ def camera_forward(scene: mi.Scene) -> tuple[float, float, float]:
 
 
 def rounded(x: float) -> float:
-    """x to 4 significant digits: auto values are pinned as printed, so the printed line reproduces them."""
+    """x to 4 significant digits: auto values are pinned as printed, so the printed line reproduces
+    them."""
     return float(f"{x:.4g}")
 
 
 def increasing(values) -> tuple[float, ...]:
-    """Quantiles, rounded and made strictly increasing (ties, e.g. a scene of one brightness, are spread by a
-    relative 1e-3, at least 1e-6), so that they are valid thresholds."""
+    """Quantiles, rounded and made strictly increasing (ties, e.g. a scene of one brightness, are
+    spread by a relative 1e-3, at least 1e-6), so that they are valid thresholds."""
     out: list[float] = []
     for x in values:
         x = rounded(x)
@@ -258,7 +260,8 @@ MAX_EXPOSURE = 100.0
 
 
 def exposure_param(what: str = "") -> Param:
-    """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see `auto_exposure`)."""
+    """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see
+    `auto_exposure`)."""
     return Param(
         "exposure",
         "float",
@@ -274,9 +277,9 @@ def exposure_param(what: str = "") -> Param:
 
 
 def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSURE) -> float:
-    """`target` over the median first-hit brightness of what the style covers, at most `high`, rounded as
-    printed; NaN where the median or the target is not positive (a black scene, a pivot <= 0: the value is
-    refused and the unresolved fallback applies)."""
+    """`target` over the median first-hit brightness of what the style covers, at most `high`,
+    rounded as printed; NaN where the median or the target is not positive (a black scene, a pivot
+    <= 0: the value is refused and the unresolved fallback applies)."""
     (median,) = facts.brightness([0.5])
     if not (median > 0 and target > 0):
         return float("nan")
@@ -284,8 +287,9 @@ def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSUR
 
 
 def light_from_camera(cam: Camera) -> tuple[float, float, float]:
-    """The 'auto' light direction of gooch and xtoon: the camera's up vector tilted a little towards the
-    camera, normalize(up - 0.3 forward) (the old fixed default 0,1,0.3 for a y-up camera looking along -z)."""
+    """The 'auto' light direction of gooch and xtoon: the camera's up vector tilted a little towards
+    the camera, normalize(up - 0.3 forward) (the old fixed default 0,1,0.3 for a y-up camera looking
+    along -z)."""
     v = [u - 0.3 * f for u, f in zip(cam.up, cam.forward)]
     n = sum(x * x for x in v) ** 0.5
     return tuple(round(x / n, 4) for x in v)

@@ -1,16 +1,14 @@
 """cel: global-illumination cel shading (supplement S5.2).
 
 Parameters
-- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither thresholds nor levels is
-  given
-- thresholds (floats, default auto): increasing brightness steps t_1 < ... < t_K; auto: the
-  brightness quantiles 1/(K+1), ..., K/(K+1) of the first hits (unresolved: k/(K+1))
+- bands (int, default 3, in [2, 8]): the number of bands K+1 where neither list is given
+- thresholds (floats, default auto): increasing steps t_1 < ... < t_K; auto: the brightness
+  quantiles 1/(K+1), ..., K/(K+1) of the first hits (unresolved: k/(K+1))
 - levels (floats, default auto): K+1 target brightnesses m_0..m_K; auto: `tone.band_levels`
-  (unresolved: evenly spaced in lightness, `FALLBACK_LSTAR`)
 
-With u = (r+g+b)/3 of the inner estimate <I>:
-    u' = m_j, j = number of thresholds t_i <= u;   g(<I>) = <I> u' / u   (grey (u',u',u') if u <= 0)
-Rationale of the auto rules: docs/design/scene_relative_defaults.md.
+With u = (r+g+b)/3 of <I> and j the number of thresholds t_i <= u:
+    g(<I>) = <I> m_j / u   (grey (m_j, m_j, m_j) if u <= 0)
+Auto rules: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 
@@ -41,8 +39,8 @@ class Cel(Style):
             "floats",
             None,
             "brightness steps between levels, increasing",
-            auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels (equal bands; "
-            "unresolved: evenly spaced k/(K+1))",
+            auto="the scene's first-hit brightness quantiles 1/(K+1)..K/(K+1) for K+1 levels "
+                 "(equal bands; unresolved: evenly spaced k/(K+1))",
         ),
         Param(
             "levels",
@@ -50,8 +48,8 @@ class Cel(Style):
             None,
             "target brightness of each band (one more than thresholds)",
             low=0.0,
-            auto="each band's median brightness with the scene's median at middle grey, >= 18 L* apart "
-            "(unresolved: evenly spaced in lightness)",
+            auto="each band's median brightness with the scene's median at middle grey, >= 18 L* "
+                 "apart (unresolved: evenly spaced in lightness)",
         ),
     )
     default_inner = 16
@@ -59,7 +57,8 @@ class Cel(Style):
     def validate(self) -> None:
         t, m = self.thresholds, self.levels
         if t is not None and any(b <= a for a, b in zip(t, t[1:])):
-            raise StyleError(f"bad value {','.join(map(str, t))!r} for parameter 'thresholds': must increase")
+            raise StyleError(f"bad value {','.join(map(str, t))!r} for parameter 'thresholds': "
+                             "must increase")
         if t is not None and m is not None and len(m) != len(t) + 1:
             raise StyleError(f"bad value {','.join(map(str, m))!r} for parameter 'levels': "
                              f"expected {len(t) + 1} levels for {len(t)} thresholds")

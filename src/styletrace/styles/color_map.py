@@ -4,15 +4,11 @@ Parameters
 - gradient (gradient, default preset 'dusk'): stops 'pos:colour;...' over (rescaled) brightness
 - range (floats lo,hi, default auto): the brightness mapped onto the gradient's first and last stop
 
-With u = (r+g+b)/3 of the inner estimate <I>, u_0 and u_last the first and last stop positions:
+With u = (r+g+b)/3 of <I>, u_0 and u_last the first and last stop positions:
     u' = u_0 + (u - lo) (u_last - u_0) / (hi - lo),      g(<I>) = G(clamp(u', u_0, u_last))
-where G interpolates the gradient's stops linearly.
-
-Auto range (scene-relative, `scene.defaults`): lo and hi are the 5% and 95% quantiles of what the
-camera sees of the objects this style covers (pilot of Mitsuba's `path`, brightness averaged per cell of a
-32-cell grid), so the whole gradient shows on a dim or a bright scene alike. `range` set to the first and
-last stop positions maps brightness absolutely, as the stops say (the behaviour before auto ranges, and
-what an unresolved style, rendered by calling mi.render directly, does).
+G interpolates the stops linearly. Auto range: the 5% and 95% brightness quantiles of what the
+camera sees of the covered objects; unresolved: the first and last stop positions
+(docs/design/scene_relative_defaults.md).
 """
 from __future__ import annotations
 

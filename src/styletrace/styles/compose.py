@@ -3,13 +3,12 @@
 `--style contrast+sepia` applies contrast, then sepia:  g(<I>) = g_k( ... g_2(g_1(<I>)) ... ).
 
 Parameters
-- OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name, e.g.
-  `contrast.c`, `sepia.gradient`. A style may appear once.
+- OPERAND.PARAM (default: the operand's own default): each operand's parameters under its name,
+  e.g. `contrast.c`, `sepia.gradient`. A style may appear once.
 
-Estimators: all operands affine -> the composite is affine (`affine`, `combined`); all operands with
-a form (affine, power series, polynomial fit) -> `combined` nests the operands' unbiased estimators
-(Theorem 4.1, composition; Fig. 10's gu-estimator); otherwise `direct` (and `telescoping` where
-every operand has a form). Per-sample baselines (acp) cannot be composed.
+Estimators: all operands affine: `affine`, `combined`; all with a form: `combined` (Theorem 4.1);
+otherwise `direct` (and `telescoping` where every operand has a form). Per-sample baselines (acp)
+cannot be composed (docs/design/estimator_algebra.md).
 """
 from __future__ import annotations
 
@@ -41,7 +40,8 @@ def composite_class(name: str, lookup) -> type[Style]:
     """The Style class of `name` = 'a+b+...'; `lookup(op)` returns an operand's class."""
     ops = [o.strip() for o in name.split(SEPARATOR)]
     if len(ops) < 2 or any(not o for o in ops):
-        raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. contrast+sepia")
+        raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. "
+                         "contrast+sepia")
     if len(set(ops)) != len(ops):
         raise StyleError(
             f"bad style {name!r}: each style may appear once in a composition (its parameters are "
@@ -93,8 +93,8 @@ class Composite(Style):
             op.prepare(scene)
 
     def auto_values(self, facts) -> dict:
-        """Each operand's auto values, under its prefix; an operand's brightness is that of the operands
-        before it applied to the scene (`facts.mapped`), as it sees it in the kernel."""
+        """Each operand's auto values, under its prefix; an operand's brightness is that of the
+        operands before it applied to the scene (`facts.mapped`), as it sees it in the kernel."""
         out = {}
         for op in self.operands:
             own = op.auto_values(facts)

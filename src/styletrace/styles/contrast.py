@@ -3,13 +3,14 @@
 Parameters
 - c (float, default 1.5): contrast factor, >= 0
 - pivot (float, default 0.5): brightness left unchanged
-- exposure (float in (0, 100], default auto): s, the scale of <I> before the contrast; auto: 0.5 / the median
-  first-hit brightness of the scene (`scene.defaults`, at most 100), so the scene's middle tone sits at
-  the default pivot and a dim scene is not pushed below 0 (a fixed target, not the pivot you give: the exposure
-  stays the scene's, and restyling a buffer with another pivot equals a fresh render); unresolved
-  (mi.render directly): 1
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.5 / the median
+  first-hit brightness (at most 100), whatever the pivot; unresolved: 1
 
-    g(<I>) = c (s <I> - p) + p        per channel; affine, so every unbiased estimator of <I> suffices.
+    g(<I>) = c (s <I> - p) + p        per channel.
+
+Affine, so every unbiased estimator of <I> suffices.
+
+Why the auto exposure ignores the pivot: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 

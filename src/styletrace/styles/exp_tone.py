@@ -1,15 +1,13 @@
 """exp_tone: exponential tone curve, per channel (an analytic style with a power-series form).
 
 Parameters
-- exposure (float, default auto): 0 < k <= 87 (e^-k stays a normal float32); auto: 1.5 x 0.18 / the median
-  first-hit brightness of the scene (at most 87) (`scene.defaults`): the fixed default 1.5 applied to radiance
-  exposed as the other tone styles expose it (median -> 0.18), so a dim scene is not dark; unresolved
-  (mi.render directly): 1.5
+- exposure (float, default auto): 0 < k <= 87; auto: 1.5 x 0.18 / the median first-hit
+  brightness (at most 87); unresolved: 1.5
 
     g(<I>) = 1 - exp(-k <I>) = 1 - a^<I>,  a = e^-k          per channel.
 
-Unbiased estimators use the exponential series a^I = sum_k ln(a)^k a^b (I - b)^k / k! about a pilot
-estimate b (supplement S14-S15); it converges for every I, so any pilot b is admissible.
+Unbiased estimators use the exponential series of a^I about a pilot b (supplement S14-S15),
+which converges for every I (docs/design/power_series.md).
 """
 from __future__ import annotations
 
@@ -40,8 +38,8 @@ class ExpTone(Style):
             exposure_param(),
             doc="exposure k",
             high=MAX_EXPOSURE,
-            auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit brightness, at "
-            f"most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})",
+            auto=f"{K_AT_KEY:g} x {EXPOSURE_KEY:g} / the median of the scene's first-hit "
+                 f"brightness, at most {MAX_EXPOSURE:g} (unresolved: {K_AT_KEY:g})",
         ),
     )
     default_inner = 16

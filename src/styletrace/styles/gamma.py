@@ -2,18 +2,14 @@
 
 Parameters
 - gamma (float, default 2.2): gamma >= 0.1 (smaller gammas overflow float32 on bright radiance)
-- exposure (float in (0, 100], default auto): s, the scale of <I> before the power; auto: 0.18 / the median
-  first-hit brightness of the scene (`scene.defaults`), at most 100; unresolved (mi.render directly): 1
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median
+  first-hit brightness (`scene.defaults`), at most 100; unresolved: 1
 
-    g(<I>) = max(s <I>, 0)^(1/gamma) = s^(1/gamma) max(<I>, 0)^(1/gamma)        per channel.
+    g(<I>) = max(s <I>, 0)^(1/gamma)        per channel (negative inputs clamp to 0).
 
-Negative inputs (possible with unbiased inner estimates) are clamped to 0 before the power.
-Unbiased estimators use the binomial series of x^(1/gamma) of the exposed samples x = s X about
-b = max(1.5 <x>_pilot, 0.02) (the floor in exposed units, so it means the same on a dim scene), <x>_pilot the mean of `inner_samples` separate children (a_k = C(1/gamma, k) b^(1/gamma - k)); it converges for
-0 < I < 2b. Radiance with heavy tails (fireflies) makes these estimators' variance unbounded in practice
-(docs/estimators.md, "Gamma and the series estimators": a child far beyond 2b enters every term's products);
-the integrator's `expansion_pass` (estimator series) takes b from a separate pre-pass per pixel instead
-(kernel/expansion.py); the CLI warns when a render's values leave g's range [0, inf) (`styletrace.wild`).
+Unbiased estimators use the binomial series of x^(1/gamma) of the exposed samples about
+b = max(1.5 <x>_pilot, 0.02); it converges for 0 < I < 2b. Heavy tails, `expansion_pass` and the
+wild-value warning: docs/design/power_series.md.
 """
 from __future__ import annotations
 
@@ -53,8 +49,9 @@ class Gamma(Style):
         top = self.scale * MAX_RADIANCE
         if top > 1.0 and math.log(top) / self.gamma > math.log(FLOAT32_MAX):
             raise StyleError(
-                f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) overflows "
-                f"float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or raise gamma"
+                f"bad values exposure={self.scale:g}, gamma={self.gamma:g}: (s I)^(1/gamma) "
+                f"overflows float32 for radiance I up to {MAX_RADIANCE:g}; lower the exposure or "
+                "raise gamma"
             )
 
     def auto_values(self, facts) -> dict:

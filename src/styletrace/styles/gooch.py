@@ -1,20 +1,16 @@
 """gooch: cool-to-warm shading for technical illustration, in closed form (supplement S5.6).
 
-Reference: "A Non-Photorealistic Lighting Model for Automatic Technical Illustration", Amy Gooch,
-Bruce Gooch, Peter Shirley, Elaine Cohen (1998).
+Reference: Gooch, Gooch, Shirley, Cohen, "A Non-Photorealistic Lighting Model for Automatic
+Technical Illustration" (1998).
 
 Parameters
-- light_dir (vector, default auto): direction towards the light, normalised; auto: the camera's up
-  vector tilted towards the camera, normalize(up - 0.3 forward), read in `prepare`
+- light_dir (vector, default auto): direction towards the light; auto: normalize(up - 0.3 forward)
 - k_d (colour, default 0.8,0.8,0.8): the object's diffuse colour
 - blue (colour, default 0,0,0.55), yellow (colour, default 0.3,0.3,0): the cool and warm tones
-- alpha (float, default 0.25, >= 0), beta (float, default 0.5, >= 0): how much of k_d enters each
-  tone
+- alpha (float, default 0.25, >= 0), beta (float, default 0.5, >= 0): k_d's share in each tone
 
-    k_cool = blue + alpha k_d,   k_warm = yellow + beta k_d,   t = (1 + n.l) / 2
-    g = t k_warm + (1 - t) k_cool
-n is the shading normal, flipped where seen from behind. Closed form: g ignores the estimate.
-Rationale: docs/design/closed_form_styles.md.
+g = t (yellow + beta k_d) + (1 - t) (blue + alpha k_d), t = (1 + n.l) / 2, n the shading normal
+facing the viewer; g ignores the estimate. Rationale: docs/design/closed_form_styles.md.
 """
 from __future__ import annotations
 
@@ -42,7 +38,8 @@ FALLBACK_LIGHT = (0.0, 1.0, 0.3)
 
 
 class CameraLight:
-    """Mixin of gooch and xtoon: light_dir 'auto' follows the camera (see gooch's reference block)."""
+    """Mixin of gooch and xtoon: light_dir 'auto' follows the camera (see gooch's reference
+    block)."""
 
     def light(self) -> tuple[float, float, float]:
         if self.light_dir is not None:

@@ -35,7 +35,8 @@ class Gradient:
         # eval divides by the gaps in float32: they must be positive there too (not flushed to 0)
         gaps = np.diff(np.asarray(pos, dtype=np.float32))
         if not all(math.isfinite(p) for p in pos) or not np.all(gaps >= np.finfo(np.float32).tiny):
-            raise ValueError(f"gradient {spec!r}: stop positions must be finite and strictly increase")
+            raise ValueError(f"gradient {spec!r}: stop positions must be finite and strictly "
+                             "increase")
         self.stops = stops
         self.spec = spec
 
@@ -64,9 +65,9 @@ class Gradient:
     def parse(cls, raw: Any) -> "Gradient":
         """From a preset name, a 'pos:colour;...' string, or a sequence of (pos, colour) pairs."""
         allowed = (
-            "expected 'pos:colour;pos:colour;...' with finite positions that strictly increase (in float32 "
-            "too) and colours "
-            "'#rrggbb' or 'r,g,b', or a preset: " + ", ".join(cls.presets())
+            "expected 'pos:colour;pos:colour;...' with finite positions that strictly increase (in "
+            "float32 too) and colours '#rrggbb' or 'r,g,b', or a "
+            "preset: " + ", ".join(cls.presets())
         )
         try:
             if isinstance(raw, str):

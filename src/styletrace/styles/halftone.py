@@ -1,22 +1,19 @@
 """halftone: dots of brightness-dependent radius on a 3D or screen grid (supplement S5.6).
 
-Reference: "Non-photorealistic Rendering by Q-mapping", Peter Hall (1999); the screen grid's
-canonical lifting after West, Mukherjee, Yue, "Lifting Lines and Tone" (2026).
+Reference: Peter Hall, "Non-photorealistic Rendering by Q-mapping" (1999); lifting after West,
+Mukherjee, Yue (2026).
 
 Parameters
 - spacing_px (float, default 8, > 0): grid interval on screen, in pixels
 - spacing (float, default auto, > 0): grid interval d in scene units; given, it replaces spacing_px
-- max_radius_fraction (float, default 0.75, in (0, 1]): the darkest dot's radius over half the cell
-  diagonal (r_max = max_radius_fraction sqrt(3) d / 2; sqrt(2) spacing_px / 2 on the screen)
+- max_radius_fraction (float, default 0.75, in (0, 1]): darkest dot's radius / half the diagonal
 - tones (floats, default auto): the tone curve, as in `hatching`; r = (1 - F(u)) r_max
-- u_min (float), u_max (float, > u_min): a linear ramp instead of the tone curve, as in `hatching`
+- u_min (float), u_max (float, > u_min): a linear ramp instead of the tone curve
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
-  projection)
+- lift (choice, default canonical): canonical (image coordinate s) or position (own projection)
 
-With u = (r+g+b)/3 of <I> and the vertex position p (on the screen grid: its pixel position q):
-    g_p = round(p / d) d,   r = (1 - F(u)) r_max,   g(<I>) = dark if |p - g_p| < r else light
-`halftone_mask` is that predicate. Rationale: docs/design/screen_space_patterns.md.
+g = dark where `halftone_mask` holds (|p - round(p / d) d| < r), light elsewhere. Formulas and
+rationale: docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
 
@@ -49,8 +46,8 @@ def grid_distance(p: mi.Point3f, spacing: float) -> mi.Float:
 
 
 def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float, s: mi.Point2f | None = None) -> mi.Float:
-    """Distance in pixels from p's screen position (the image coordinate `s` where given) to its nearest
-    screen grid point."""
+    """Distance in pixels from p's screen position (the image coordinate `s` where given) to its
+    nearest screen grid point."""
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
@@ -67,8 +64,8 @@ def screen_halftone_mask(
     u_max: float = 0.9,
     s: mi.Point2f | None = None,
 ) -> mi.Bool:
-    """True where p's screen position (the image coordinate `s` where given) is closer than r(u) pixels to its
-    nearest screen grid point."""
+    """True where p's screen position (the image coordinate `s` where given) is closer than r(u)
+    pixels to its nearest screen grid point."""
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
@@ -132,7 +129,8 @@ class Halftone(BrightnessRange, Style):
 
     @property
     def r_max(self) -> float:
-        """Largest dot radius: scene units on the 3D grid (spacing given), pixels on the screen grid."""
+        """Largest dot radius: scene units on the 3D grid (spacing given), pixels on the screen
+        grid."""
         if self.spacing is None:
             return self.max_radius_fraction * 0.5 * math.sqrt(2.0) * self.spacing_px
         return self.max_radius_fraction * 0.5 * math.sqrt(3.0) * self.spacing
@@ -142,14 +140,16 @@ class Halftone(BrightnessRange, Style):
 
     @property
     def wants_coordinate(self) -> bool:
-        """The integrator computes Vertex.s for this style (canonical lifting of the screen grid)."""
+        """The integrator computes Vertex.s for this style (canonical lifting of the screen
+        grid)."""
         return self.spacing is None and self.lift == "canonical"
 
     def _coordinate(self, v: Vertex):
         return v.s if self.wants_coordinate else None
 
     def _distance(self, v: Vertex) -> mi.Float:
-        """v's distance to its nearest grid point: pixels on the screen grid, scene units on the 3D grid."""
+        """v's distance to its nearest grid point: pixels on the screen grid, scene units on the 3D
+        grid."""
         if self.spacing is None:
             return screen_distance(v.p, self.projection, self.spacing_px, self._coordinate(v))
         return grid_distance(v.p, self.spacing)
@@ -159,8 +159,8 @@ class Halftone(BrightnessRange, Style):
         return dr.select(dot, mi.Color3f(*self.dark), mi.Color3f(*self.light))
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """The brightness at which the dot's edge passes v, where r(u) = d; none (+inf) where v is farther
-        than r_max from its grid point (never inside a dot)."""
+        """The brightness at which the dot's edge passes v, where r(u) = d; none (+inf) where v is
+        farther than r_max from its grid point (never inside a dot)."""
         d = self._distance(v)
         if self.uses_tones:
             t = tone_inverse(1.0 - d * (1.0 / self.r_max), self.tones)

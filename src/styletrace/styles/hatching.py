@@ -1,30 +1,21 @@
 """hatching: cross-hatching by slabs around planes through the view direction (supplement S5.6).
 
-Reference: "An Illustration Technique Using Hardware-Based Intersections and Skeletons", Oliver
-Deussen, Joerg Hamel, Andreas Raab, Stefan Schlechtweg, Thomas Strothotte (1999); canonical lifting
-after "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee,
-Yonghao Yue (2026).
+Reference: Deussen, Hamel, Raab, Schlechtweg, Strothotte, "An Illustration Technique Using
+Hardware-Based Intersections and Skeletons" (1999); lifting after West, Mukherjee, Yue (2026).
 
 Parameters
 - sets (int, default 3, in [1, 8]): number of hatching directions n
-- spacing_px (float, default 8, > 0): distance between neighbouring lines of a set on screen, in
-  pixels
+- spacing_px (float, default 8, > 0): line distance on screen, in pixels
 - spacing (float, default auto, > 0): world-space plane distance; given, it replaces spacing_px
 - thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d
 - angle (float, default 45): rotation of the first set around the view direction, in degrees
 - tones (floats, default auto): the tone curve u_0 < ... < u_K (`tone.tone_knots`)
 - u_min (float), u_max (float, > u_min): a linear ramp instead of tones (unresolved: 0.05 and 0.9)
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): canonical (at the image coordinate s) or position (own
-  projection)
+- lift (choice, default canonical): canonical (image coordinate s) or position (own projection)
 - angle_reflected (float, default auto = angle): the first set's angle at path depth > 0
 
-Set j has normal n_j = cos(theta_j) e1 + sin(theta_j) e2, theta_j = angle + j pi / n, (e1, e2) the
-screen's axes. With u = (r+g+b)/3 of <I>, m = min(n, floor((1 - F(u)) (n + 1))) sets are active (the
-ramp: m = floor((1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) n + 1/2)), and p is on a line when
-    dist_j = |frac(p . n_j / spacing + 1/2) - 1/2| spacing < d / 2      for some active j
-(with spacing_px: planes through the camera, or s . (cos, sin) / spacing_px with lift=canonical). g
-= line_color on a line, background elsewhere; `hatch_mask` is that predicate. Rationale:
+g = line_color where `hatch_mask` holds, background elsewhere. Formulas and rationale:
 docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
@@ -84,7 +75,8 @@ def plane_normals(view: Sequence[float], up: Sequence[float], sets: int, angle_d
 
 
 def coverage(u: mi.Float, u_min: float, u_max: float) -> mi.Float:
-    """1 - clamp((u - u_min) / (u_max - u_min), 0, 1): 1 at (or below) u_min, 0 at (or above) u_max."""
+    """1 - clamp((u - u_min) / (u_max - u_min), 0, 1): 1 at (or below) u_min, 0 at (or above)
+    u_max."""
     return 1.0 - dr.clip((u - u_min) * (1.0 / (u_max - u_min)), 0.0, 1.0)
 
 
@@ -96,8 +88,9 @@ def active_sets(u: mi.Float, sets: int, u_min: float, u_max: float) -> mi.Float:
 def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], spacing: float,
                thickness: float, u_min: float = 0.05, u_max: float = 0.9,
                projection: Projection | None = None) -> mi.Bool:
-    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module doc).
-    With `projection`, spacing and thickness are in pixels: the planes form pencils through the camera."""
+    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module
+    doc). With `projection`, spacing and thickness are in pixels: the planes form pencils through
+    the camera."""
     m = active_sets(u, len(normals), u_min, u_max)
     hit = dr.zeros(mi.Bool, dr.width(p))
     for j, on_line in enumerate(line_masks(p, normals, spacing, thickness, projection)):
@@ -130,8 +123,9 @@ def coordinate_line_masks(
     spacing: float,
     thickness: float,
 ) -> list[mi.Bool]:
-    """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its lines, the
-    set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc, canonical lifting)."""
+    """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its
+    lines, the set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc,
+    canonical lifting)."""
     out = []
     for j in range(sets):
         t0 = math.radians(angle) + j * math.pi / sets
@@ -145,7 +139,8 @@ def coordinate_line_masks(
 
 
 def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
-    """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) > j)."""
+    """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) >
+    j)."""
     return [u_max - (j + 0.5) * (u_max - u_min) / sets for j in range(sets)]
 
 
@@ -158,8 +153,8 @@ AUTO_TONES = (
 
 
 def tone_params(full: str, none: str) -> tuple[Param, ...]:
-    """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear ramp, whose
-    docs end with what happens at full tone (`full`) and at none (`none`)."""
+    """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear
+    ramp, whose docs end with what happens at full tone (`full`) and at none (`none`)."""
     return (
         Param(
             "tones",
@@ -186,8 +181,9 @@ def tone_params(full: str, none: str) -> tuple[Param, ...]:
 
 
 class BrightnessRange:
-    """Mixin of hatching and halftone: the tone of a brightness, by the tone curve `tones` (auto: the scene's
-    distribution, `tone.tone_knots`) or by a linear ramp between u_min and u_max where either is given."""
+    """Mixin of hatching and halftone: the tone of a brightness, by the tone curve `tones` (auto:
+    the scene's distribution, `tone.tone_knots`) or by a linear ramp between u_min and u_max where
+    either is given."""
 
     @property
     def uses_tones(self) -> bool:
@@ -212,7 +208,8 @@ class BrightnessRange:
 
     def check_u_range(self) -> None:
         if self.tones is not None and (self.u_min is not None or self.u_max is not None):
-            raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are alternatives; give one")
+            raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are "
+                             "alternatives; give one")
         if self.tones is not None and any(b < a for a, b in zip(self.tones, self.tones[1:])):
             raise StyleError(
                 f"bad value {','.join(map(str, self.tones))!r} for parameter 'tones': must not "
@@ -386,8 +383,9 @@ class Hatching(BrightnessRange, Style):
         return dr.select(line, mi.Color3f(*self.line_color), mi.Color3f(*self.background))
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover v; v turns
-        line-coloured there and stays so below it. +inf where v is on no line (g is constant there)."""
+        """One per vertex: the threshold of the first set (the one drawn longest) whose lines cover
+        v; v turns line-coloured there and stays so below it. +inf where v is on no line (g is
+        constant there)."""
         masks = self._masks(v)
         out = mi.Float(dr.inf)
         for on, t in reversed(list(zip(masks, self.thresholds_of_sets()))):

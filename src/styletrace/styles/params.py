@@ -36,11 +36,11 @@ def _floats(text: str) -> list[float]:
 
 @dataclass(frozen=True, init=False)
 class Param(Declaration):
-    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice. The styles'
-    side of the shared `styletrace.declaration.Declaration`: the common kinds (float, int, bool, color, choice)
-    are parsed there; here the `auto` rule, the vector, floats and gradient kinds, the ±LIMIT bound on reals
-    and the styles' spellings (bool also yes/no/on/off, True/False as numbers, a colour also '#rrggbb' or
-    'r g b', a choice stripped)."""
+    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice.
+    The styles' side of the shared `styletrace.declaration.Declaration`: the common kinds (float,
+    int, bool, color, choice) are parsed there; here the `auto` rule, the vector, floats and
+    gradient kinds, the ±LIMIT bound on reals and the styles' spellings (bool also yes/no/on/off,
+    True/False as numbers, a colour also '#rrggbb' or 'r g b', a choice stripped)."""
 
     #: for a default of None ('auto'): the rule that derives the value (from the scene or other
     #: parameters)
@@ -103,23 +103,68 @@ class Param(Declaration):
         return f" in {'(' if self.low_open else '['}{lo_text}, {hi_text}{')' if hi == math.inf else ']'}"
 
     def fail(self, value: Any) -> StyleError:
-        return StyleError(f"bad value {value!r} for parameter '{self.name}': expected {self.allowed()}")
+        """The error for a bad value of this parameter.
+
+        Args:
+            value: the value refused.
+
+        Returns:
+            A StyleError naming the value and what is allowed (to raise).
+        """
+        return StyleError(f"bad value {value!r} for parameter '{self.name}': expected "
+                          f"{self.allowed()}")
 
     def colour_text(self, text: str) -> list[Any]:
+        """The components of a colour written as text ('#rrggbb', or numbers).
+
+        Args:
+            text: the colour as written.
+
+        Returns:
+            Its components.
+        """
         s = text.strip()
         return Gradient.parse_color(s) if s.startswith("#") else _floats(s)
 
     def is_sequence(self, raw: Any) -> bool:
+        """Whether `raw` is a sequence of values rather than one value.
+
+        Args:
+            raw: a value as given by a front end.
+
+        Returns:
+            True where `raw` holds several values rather than one.
+        """
         return _is_seq(raw)
 
     def parse(self, raw: Any) -> Any:
-        """Turn a string, number, sequence or Mitsuba colour into the validated Python value ('auto': None, for
-        a parameter whose default is derived)."""
+        """Turn a string, number, sequence or Mitsuba colour into the validated Python value.
+
+        Args:
+            raw: the value as given; 'auto' for a parameter whose default is derived.
+
+        Returns:
+            The validated value (None for 'auto').
+
+        Raises:
+            StyleError: a value of the wrong kind or outside the parameter's bounds.
+        """
         if self.default is None and isinstance(raw, str) and raw.strip().lower() == "auto":
             return None
         return super().parse(raw)
 
     def convert(self, raw: Any) -> Any:
+        """Convert a value other than 'auto' to this parameter's kind and check its bounds.
+
+        Args:
+            raw: the value as given.
+
+        Returns:
+            The validated value.
+
+        Raises:
+            StyleError: a value of the wrong kind or outside the parameter's bounds.
+        """
         k = self.kind
         if k == "vector":
             vals = self.triple(raw)
@@ -147,11 +192,19 @@ class Param(Declaration):
         raise AssertionError(f"unknown parameter kind {k}")
 
     def explain(self) -> str:
-        """The doc line with the rule of an 'auto' default, as `styletrace styles` and the docs show it."""
+        """The doc line with the rule of an 'auto' default, as `styletrace styles` and the docs show
+        it."""
         return f"{self.doc}; auto: {self.auto}" if self.auto else self.doc
 
     def show(self, value: Any) -> str:
-        """Format a value the way `parse` reads it back ('auto' for a default the style derives itself)."""
+        """Format a value the way `parse` reads it back.
+
+        Args:
+            value: a validated value, or None for a default the style derives itself.
+
+        Returns:
+            The text ('auto' for None).
+        """
         if value is None:
             return "auto"
         if isinstance(value, Gradient):

@@ -1,16 +1,14 @@
-"""reinhard: the reciprocal tone curve I / (1 + I), per channel (a style with a reciprocal-series form).
+"""reinhard: the reciprocal tone curve I / (1 + I), per channel (a reciprocal-series form).
 
 Parameters
 - white (float, default 1.0): 0 < w <= 1000, the exposed radiance mapped to 1/2
-- exposure (float in (0, 100], default auto): s, the scale of <I> before the curve; auto: 0.18 / the median
-  first-hit brightness of the scene (`scene.defaults`), at most 100; unresolved (mi.render directly): 1
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median
+  first-hit brightness (`scene.defaults`), at most 100; unresolved: 1
 
     g(<I>) = s <I> / (w + s <I>) = 1 - w / (w + s <I>)            per channel.
 
-Unbiased estimators use the reciprocal series of the exposed, shifted samples w + s X (supplement S16-S17):
-w/(w + x) = sum_k w b^(-k-1) (b - (w + x))^k about a pilot estimate b of w + x, x = s I, which converges for
-0 < w + x < 2b; b = max(1.5 <w + s X>_pilot, w) leaves a margin above a pilot that underestimates. Samples of
-w + s X are >= w > 0, so the expansion never straddles 0.
+Unbiased estimators use the reciprocal series of w + s X about b = max(1.5 <w + s X>_pilot, w)
+(supplement S16-S17; docs/design/power_series.md).
 """
 from __future__ import annotations
 

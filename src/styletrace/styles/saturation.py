@@ -20,11 +20,13 @@ from styletrace.styles.registry import register_style
 class Saturation(Style):
     name = "saturation"
     summary = "blend of grey and maximally saturated colour at the same brightness (S5.3)"
-    params = (Param("w", "float", 0.5, "weight of grey (1 = grey, 0 = maximally saturated)", low=0.0, high=1.0),)
+    params = (Param("w", "float", 0.5, "weight of grey (1 = grey, 0 = "
+                                       "maximally saturated)", low=0.0, high=1.0),)
     default_inner = 8
 
     def saturated(self, I: mi.Color3f) -> mi.Color3f:
-        """The maximally saturated colour of brightness u = brightness(I) (I_min where I is grey)."""
+        """The maximally saturated colour of brightness u = brightness(I) (I_min where I is
+        grey)."""
         u = brightness(I)
         c_min = dr.minimum(dr.minimum(I.x, I.y), I.z)
         D = I - c_min                      # >= 0, smallest channel exactly 0

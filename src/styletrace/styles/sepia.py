@@ -3,13 +3,10 @@
 Parameters
 - gradient (gradient, default '0:#000000;1:#c4a27a'): exactly two stops (p0, c0), (p1, c1)
 
-With u = (r+g+b)/3 of the inner estimate <I>, the gradient's end segments are extrapolated
-linearly instead of clamped, so the map covers all u >= 0 (and beyond):
+With u = (r+g+b)/3 of <I>, the segment extrapolated linearly instead of clamped:
     g(<I>) = c0 + (c1 - c0) (u - p0) / (p1 - p0)
-This is affine in <I>: g(<I>) = A <I> + b with A = (c1 - c0) (1/3, 1/3, 1/3)^T / (p1 - p0) (a rank-one
-3x3 matrix) and b = c0 - (c1 - c0) p0 / (p1 - p0); `affine()` returns (A, b). Being affine, any unbiased
-estimate of <I> gives an unbiased estimate of g (the paper's combined gu-estimator, Fig. 10, composes it
-with contrast). A gradient with more stops would be piecewise linear, no longer affine, so it is refused.
+Affine in <I>: `affine()` returns (A, b), A = (c1 - c0) (1/3, 1/3, 1/3)^T / (p1 - p0) and
+b = c0 - (c1 - c0) p0 / (p1 - p0). More stops are refused (docs/design/estimator_algebra.md).
 """
 from __future__ import annotations
 

@@ -1,17 +1,15 @@
 """tie_dye: per-channel cosine waves (supplement S5.5, the polynomial-approximation example).
 
 Parameters
-- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all
-  channels)
+- frequencies (floats, default 2,2.15,2.3): f_r, f_g, f_b > 0, in units of pi (one value: all)
 - phases (floats, default 1,1.13,1.29): phi_r, phi_g, phi_b (one value: all channels)
-- domain_min (float, default -1), domain_max (float, default 4): the fit interval [lo, hi], lo < hi;
-  together pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14
-- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median first-hit
-  brightness (at most 100; unresolved: 1)
+- domain_min (float, default -1), domain_max (float, default 4): the fit interval [lo, hi], lo <
+  hi, with pi max(f) (max(|lo|, |hi|) + max|phi|) <= 2^14
+- exposure (float in (0, 100], default auto): s, the scale of <I>; auto: 0.18 / the median
+  first-hit brightness (at most 100; unresolved: 1)
 
-Per channel c:  g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2.
-`channel_functions()` gives the channel functions of the exposed value (for the fit), `domain()` the
-interval. Where the clamp applies per estimator: docs/design/tie_dye_clamp.md.
+Per channel c:  g_c(x_c) = (1 - cos(pi f_c (clamp(s x_c, lo, hi) + phi_c))) / 2. Where the clamp
+applies: docs/design/tie_dye_clamp.md.
 """
 from __future__ import annotations
 
@@ -79,8 +77,8 @@ class TieDye(Style):
             raise StyleError(
                 f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
                 f"phases={','.join(f'{x:g}' for x in self.phases)}, domain [{self.domain_min:g}, "
-                f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches {largest:.3g}; "
-                f"it must stay below {MAX_ARGUMENT:g} for float32 to resolve it"
+                f"{self.domain_max:g}]: the cosine's argument pi f (x + phi) reaches "
+                f"{largest:.3g}; it must stay below {MAX_ARGUMENT:g} for float32 to resolve it"
             )
 
     def domain(self) -> tuple[float, float]:
@@ -95,8 +93,9 @@ class TieDye(Style):
         return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi, gain=self.scale)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:
-        """g_r, g_g, g_b of the exposed value y = s x as numpy callables (array in, array out), clamp to the
-        domain included (the fit's functions: the estimators expose the samples themselves)."""
+        """g_r, g_g, g_b of the exposed value y = s x as numpy callables (array in, array out),
+        clamp to the domain included (the fit's functions: the estimators expose the samples
+        themselves)."""
         import numpy as np
         lo, hi = self.domain()
 

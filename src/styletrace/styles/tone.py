@@ -1,19 +1,12 @@
 """Tone from the scene's brightness distribution: where step styles put their levels.
 
-Reference
-    "Real-Time Hatching", Emil Praun, Hugues Hoppe, Matthew Webb, Adam Finkelstein (SIGGRAPH 2001): tone is
-    matched to brightness as perceived, not to linear radiance. CIE 1976 L* is the perceived lightness.
+Reference: Praun, Hoppe, Webb, Finkelstein, "Real-Time Hatching" (2001); CIE 1976 L*.
 
-A linear ramp of radiance between two quantiles puts a high-dynamic-range scene (a window, a lamp) almost
-all into the darkest levels. Here the tone of a brightness u is
-
-    F(u) = (1 - PERCEPTUAL) CDF(u) + PERCEPTUAL L*(u / white) / 100,      white = the 98% quantile,
-
-the scene's own cumulative distribution (equal area per level) mixed with its lightness, which keeps
-near-equal brightnesses from being stretched apart on a flat scene. `tone_knots` returns the brightness
-at F = 0, 1/K, ..., 1 (piecewise linear in between); `tone_of` evaluates F from knots inside a kernel.
-`band_levels` places cel's levels at the median brightness of each band, exposed so that the scene's median
-is middle grey, at least MIN_STEP_LSTAR of lightness apart (docs/look.md).
+The tone of a brightness u is
+    F(u) = (1 - PERCEPTUAL) CDF(u) + PERCEPTUAL L*(u / white) / 100,   white = the 98% quantile.
+`tone_knots` returns the brightness at F = 0, 1/K, ..., 1 (piecewise linear in between); `tone_of`
+evaluates F from knots inside a kernel; `band_levels` places cel's levels. Rationale:
+docs/design/tone_curve.md.
 """
 from __future__ import annotations
 
@@ -49,8 +42,8 @@ def luminance_of(lstar) -> np.ndarray:
 def tone_knots(quantile: Callable[[Sequence[float]], list[float]], knots: int = TONE_KNOTS) -> list[float]:
     """The brightnesses u_0 < ... < u_K where F (module doc) is 0, 1/K, ..., 1.
 
-    Parameters: `quantile(qs)`, the scene's brightness quantiles (`scene.defaults.Facts.brightness`);
-    `knots`, K. Returns K + 1 strictly increasing floats."""
+    Parameters: `quantile(qs)`, the scene's brightness quantiles
+    (`scene.defaults.Facts.brightness`); `knots`, K. Returns K + 1 strictly increasing floats."""
     qs = np.linspace(LOW_Q, HIGH_Q, 65)
     u = np.maximum.accumulate(np.asarray(quantile(list(qs)), dtype=np.float64))
     white = max(u[-1], 1e-12)
@@ -65,8 +58,8 @@ def tone_knots(quantile: Callable[[Sequence[float]], list[float]], knots: int = 
 
 def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) -> list[float]:
     """cel's target brightness per band, in display units: each band's median brightness (quantile
-    (j + 1/2) / bands) under the exposure that maps the scene's median to middle grey (0.18), spread to at
-    least MIN_STEP_LSTAR of lightness between neighbours and kept in LSTAR_RANGE.
+    (j + 1/2) / bands) under the exposure that maps the scene's median to middle grey (0.18), spread
+    to at least MIN_STEP_LSTAR of lightness between neighbours and kept in LSTAR_RANGE.
 
     Parameters: `quantile(qs)` as in `tone_knots`; `bands`, the number of levels. Returns `bands`
     increasing floats in (0, 1)."""
@@ -91,8 +84,8 @@ def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) 
 
 
 def tone_of(u, knots: Sequence[float]):
-    """F(u) from `tone_knots`' knots on Dr.Jit (or numpy) arrays: 0 at and below the first knot, 1 at and
-    above the last, linear in between."""
+    """F(u) from `tone_knots`' knots on Dr.Jit (or numpy) arrays: 0 at and below the first knot, 1
+    at and above the last, linear in between."""
     import drjit as dr
     k = len(knots) - 1
     out = 0.0 * u
@@ -106,8 +99,8 @@ def tone_of(u, knots: Sequence[float]):
 
 
 def tone_inverse(f, knots: Sequence[float]):
-    """The brightness u where F(u) = f (the inverse of `tone_of` on the knots' range), f a float or a Dr.Jit
-    array."""
+    """The brightness u where F(u) = f (the inverse of `tone_of` on the knots' range), f a float or
+    a Dr.Jit array."""
     k = len(knots) - 1
     out = knots[0] + 0.0 * f
     for j, (a, b) in enumerate(zip(knots, knots[1:])):

@@ -1,19 +1,17 @@
 """xtoon: X-Toon, a toon shader with a "tone detail" axis, in closed form (supplement S5.6).
 
-Reference: "X-Toon: An Extended Toon Shader", Pascal Barla, Joelle Thollot, Lee Markosian (2006).
-The 2D toon texture is procedural: T(tone, D) = D G(tone) + (1 - D) detail_color, tone = n.l, with
-the detail D = |n.wo|^r (orientation) or 1 - log(z / z_min) / log(z_max / z_min) (depth, z clamped).
+Reference: Barla, Thollot, Markosian, "X-Toon: An Extended Toon Shader" (2006).
 
 Parameters
 - light_dir (vector, default auto): direction towards the light; auto as in `gooch`
 - mode (choice orientation|depth, default orientation): the detail attribute
 - r (float, default 2, >= 0): exponent of the orientation mode (larger: thinner rim)
-- z_min (float, default auto, > 0), z_max (float, default auto, > z_min): depth range of the depth
-  mode; auto: 5% and 95% camera-depth quantiles of the first hits (unresolved: 1 and 10)
+- z_min (float, default auto, > 0), z_max (float, default auto, > z_min): the depth mode's range
 - gradient (gradient, default a 3-band warm ramp over tone in [0, 1]): G, clamped at its end stops
 - detail_color (colour, default 0.95,0.92,0.85): colour at zero detail
 
-n is the shading normal flipped towards the viewer. Closed form: g ignores the estimate (0 samples).
+g = D G(n.l) + (1 - D) detail_color; g ignores the estimate. Formulas and the auto depth range:
+docs/design/closed_form_styles.md.
 """
 from __future__ import annotations
 
@@ -79,8 +77,8 @@ class XToon(CameraLight, Style):
             raise StyleError(f"bad value {hi:g} for parameter 'z_max': must exceed z_min = {lo:g}")
 
     def depth_range(self) -> tuple[float, float]:
-        """(z_min, z_max) in use; an unresolved auto end is 1 or 10 (the other end times or over 10 where
-        only one is given)."""
+        """(z_min, z_max) in use; an unresolved auto end is 1 or 10 (the other end times or over 10
+        where only one is given)."""
         lo, hi = self.z_min, self.z_max
         if lo is None:
             lo = 1.0 if hi is None else min(1.0, hi / 10)
