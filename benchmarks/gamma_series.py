@@ -226,12 +226,12 @@ def main():
             plans.append((f"in-lane pilot m={m}", E.SeriesEstimator(
                 form.series, b=E.Pilot(m, lo=0.02, scale=1.5, spread=1.0), truncation=E.Geometric(0.9, 8),
                 max_terms=64), None))
-        d_mse = d_bias2 = d_var = None
+        d_mse = None
         for label, est, b in plans:
             v, draws = run(est, pool, seed=11, b=b)
             mse, bias2, var, lo, hi = stats(v, truth)
             if d_mse is None:
-                d_mse, d_bias2, d_var = mse, bias2, var
+                d_mse = mse
                 eff, img = 1.0, bias2 + var / SPP
             else:
                 eff, img = d_mse * 16 / (mse * draws), mse * draws / (16 * SPP)

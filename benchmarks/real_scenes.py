@@ -34,7 +34,6 @@ import styletrace  # noqa: E402
 
 styletrace.init()
 
-import mitsuba as mi  # noqa: E402
 from _report import image_grid, machine_description, write_section  # noqa: E402
 
 from styletrace import measures  # noqa: E402

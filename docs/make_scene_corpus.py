@@ -21,9 +21,9 @@ sys.path.insert(0, os.path.join(HERE, "..", "tests"))
 import styletrace  # noqa: E402
 
 styletrace.init()
-import numpy as np  # noqa: E402
 
 from corpus import scenes  # noqa: E402  (the corpus lives with its tests)
+
 from styletrace.frontends import api
 from styletrace.images import srgb8, write_bytes_atomically  # noqa: E402
 

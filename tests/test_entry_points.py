@@ -8,7 +8,6 @@ image to the bit for the same seed and pass split. Where a route cannot be bit-i
 and compares the image means within 4 standard errors, the SE from the per-pixel sample variance (the
 error AOV `variance` of the render: each pixel's estimate's variance, (E[x^2] - mean^2) / (spp - 1)).
 """
-import os
 import re
 import subprocess
 import sys

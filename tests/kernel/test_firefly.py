@@ -1,7 +1,6 @@
 """The firefly control at the stylized vertex (`firefly`, docs/look.md) on a scene with a tiny bright light that
 the floor sees only in a mirror: its light arrives as rare, very bright children (a caustic), which without the
 control become white specks of contrast's amplified tone and of the physically based image."""
-import mitsuba as mi
 import numpy as np
 import pytest
 

@@ -8,7 +8,6 @@ pixels inside the sphere's silhouette are independent draws, which gives standar
 import mitsuba as mi
 import numpy as np
 import pytest
-from helpers import furnace
 from helpers.furnace import I, draws
 
 import styletrace

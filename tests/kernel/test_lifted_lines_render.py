@@ -3,7 +3,6 @@ ball the lines match the image-space reference (the same pair test on the shape 
 specular paths) in coverage, also when the ball is glossy (GGX 0.001, where the auxiliary paths follow the
 base's transported half-vector); two overlapping line types compose by priority (Eq. 34) and the image mean
 matches Eq. 32 within Monte Carlo error."""
-import drjit as dr
 import mitsuba as mi
 import numpy as np
 import pytest

@@ -4,7 +4,6 @@ import numpy as np
 import pytest
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
-import styletrace
 from styletrace.frontends.api import make_integrator, passes
 
 K, RES, SPP = 12, 24, 8

@@ -3,7 +3,6 @@ import mitsuba as mi
 import numpy as np
 import pytest
 
-import styletrace
 from styletrace.frontends.cli import main
 
 

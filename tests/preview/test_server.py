@@ -1,6 +1,5 @@
 """The preview's JSON API: styles from the registry, restyles, saves, bad requests, concurrent clients."""
 import base64
-import io
 import threading
 
 import mitsuba as mi

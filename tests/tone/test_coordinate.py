@@ -8,7 +8,7 @@ import pytest
 from helpers.pattern import peak
 
 from styletrace.kernel import mls
-from styletrace.kernel.anchors import Tone, ToneState, combine, shape_id
+from styletrace.kernel.anchors import Tone, ToneState, combine
 from tone.scenes import T, mirror_scene, render, sensor, styled
 
 RNG = np.random.default_rng(7)

@@ -119,7 +119,7 @@ def positions(sensor, spp: int, seed: int) -> np.ndarray:
 
 def _keep_index(tile: dict, width: int) -> tuple[np.ndarray, np.ndarray]:
     """(pixels of the tile's block, pixels of the film) that a tile keeps, row-major indices."""
-    (tw, th), (ox, oy) = tile["size"], tile["offset"]
+    (tw, _), (ox, oy) = tile["size"], tile["offset"]
     r0, r1, c0, c1 = tile["keep"]
     ys, xs = np.mgrid[r0:r1, c0:c1]
     return ((ys * tw + xs).ravel().astype(np.uint32),
