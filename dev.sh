@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # One entry point for a fresh machine:  bash dev.sh render [ARGS...]  |  bash dev.sh test [PYTEST ARGS...]
-# `bash dev.sh test` without arguments runs ruff, then the whole suite: tests/ in .venv (numpy 2), then
-# tests/blender in
+# `bash dev.sh test` without arguments runs ruff, then the whole suite: tests/ in .venv (numpy 2),
+# then tests/blender in
 # .venv-blender (bpy 5.0 needs numpy < 2: constraints-blender.txt). With arguments it runs pytest in .venv only;
 # `bash dev.sh test-blender [PYTEST ARGS...]` runs the Blender tests alone.
 # The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because

@@ -4,10 +4,10 @@
     # H x W x 3 float32, linear
     img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)
 
-`render` is the render pipeline's (`pipeline.execute.render`): a `Job` resolved once and executed.
-The building blocks live in `pipeline/` and are re-exported here under their established names:
-loading (`pipeline.scene`), the pass loop (`pipeline.passes`), the carried settings
-(`pipeline.carried`).
+`render` is the render pipeline's (`pipeline.execute.render_pipeline`): a `Job` resolved once and
+executed. The building blocks live in `pipeline/` and `scene/` and are re-exported here under
+their established names: loading (`scene.loading`), the pass loop (`pipeline.passes`), the carried
+settings (`pipeline.carried`).
 """
 from __future__ import annotations
 
@@ -58,10 +58,10 @@ def render(
     denoise_uncertainty: float | None = None,
     **kw: Any,
 ):
-    """`styletrace.render`: the render pipeline's (`pipeline.execute.render`, which documents the
-    arguments). `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation, image or off;
-    all but off run the job with a denoiser as its finisher, a post-stage (docs/denoise.md); off is
-    the paper's estimators exactly."""
+    """`styletrace.render`: the render pipeline's (`pipeline.execute.render_pipeline`, which
+    documents the arguments). `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation,
+    image or off; all but off run the job with a denoiser as its finisher, a post-stage
+    (docs/denoise.md); off is the paper's estimators exactly."""
     from styletrace.denoise import check_method, default_method
     method = check_method(denoise if denoise is not None else default_method())
     if method == "off":

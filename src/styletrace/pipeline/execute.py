@@ -5,7 +5,7 @@
     image = render("scene.xml", style="cel", defines={"depth": "3"}, cluster="local")
 
 In process the passes are `passes.passes`; on Ray the same launches, with the same seeds and the
-same float32 merge, are Ray tasks (`distributed.run.Render`), so the image is bit-identical for the
+same float32 merge, are Ray tasks (`pipeline.ray_run.Render`), so the image is bit-identical for the
 same seed and split. Ray workers receive the job's scene source and the resolved integrator's
 property values (auto values pinned), never the loaded objects. A `runner.Runner` drives either (the
 executor of every front end).
@@ -23,8 +23,8 @@ from styletrace.pipeline.resolve import Resolved, resolve
 
 
 def ray_job(resolved: Resolved, camera: Any = None):
-    """What every Ray task of this render receives (`distributed.tasks.Job`); `camera`: the sensor's
-    to_world (4x4) in place of the scene's (a frame of a turntable), or None."""
+    """What every Ray task of this render receives (`pipeline.ray_tasks.RayJob`); `camera`: the
+    sensor's to_world (4x4) in place of the scene's (a frame of a turntable), or None."""
     from styletrace.pipeline.ray_run import job_for
     job = resolved.job
     load = {"defines": dict(job.defines)} if job.defines else {}
@@ -47,7 +47,7 @@ class InProcess:
 class OnRay:
     """The passes as Ray tasks on `cluster` ("local" or an address); `camera`: the sensor's to_world
     (4x4) on the workers in place of the scene's (a frame of a turntable), or None; `options`:
-    output, resume and checkpoint_every of `distributed.run.Render`. The source also has `save()`
+    output, resume and checkpoint_every of `pipeline.ray_run.Render`. The source also has `save()`
     and `finish()`."""
     local = False
 

@@ -10,7 +10,7 @@ values the caller gave laid over (`settings.refine`) the scene's own `stylized` 
 nested in a `moment` or `aov` wrapper, read from the declaration); else over the shared settings of
 the scene's own Mitsuba integrator (`carried`: max_depth, rr_depth, hide_emitters, seen through
 `moment` and `aov`) with the job's default style. Its scene-relative `auto` values are then pinned
-on this scene (`scene_defaults.resolve`), so every route that renders the result draws the
+on this scene (`scene.defaults.resolve_defaults`), so every route that renders the result draws the
 same image.
 """
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""Scene analysis: what a loaded scene holds for the kernel (graph.py: styled BSDFs wherever they
-sit, media, null surfaces) and its scene-relative `auto` style values (defaults.py: a pilot of the
-path kernel)."""
-
+"""Scenes above the kernel: built-in ones (`builtin`), loading a scene source (`loading`) and a
+scene file as its author meant it (`xml_file`), the scene-relative `auto` style values (`defaults`:
+a pilot of the path kernel), the `stylized` plugin as Mitsuba builds it from a file (`standalone`),
+registering the plugins (`plugins`: `styletrace.init`) and the checks of render arguments
+(`arguments`). The scene graph the kernel binds is `kernel.scene_graph`."""

@@ -3,7 +3,7 @@
     scene = mi.load_file("scene.xml")      # <integrator type="stylized"><string name="style" value="cel"/>...
     img = mi.render(scene)                 # cel thresholds from the scene's brightness, as `styletrace render`
 
-The front ends pin a style's scene-relative `auto` values (`scene_defaults.resolve`) before Mitsuba's render
+The front ends pin a style's scene-relative `auto` values (`scene.defaults.resolve_defaults`) before Mitsuba's render
 call. A user who loads a file and calls `mi.render` skips them, and got each style's unresolved fallback (cel
 thresholds 0.5): the same file and seed drew another image. `from_properties`, the factory `runtime.init`
 registers for `stylized`, gives such an integrator a `render` of its own (on the instance only, as the
