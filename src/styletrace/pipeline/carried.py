@@ -1,24 +1,14 @@
 """The settings a scene's own Mitsuba integrator shares with `stylized`: max_depth, rr_depth,
 hide_emitters.
 
-    # {"max_depth": 3, ...}
-    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})
+    carried = carried_settings(scene, source="scene.xml", defines={"depth": "3"})  # {max_depth: 3}
 
-Two sources, because neither alone sees everything in Mitsuba 3.9:
-- the declaration, read with Mitsuba's own scene parser (`mitsuba.parser`, $parameters resolved with
-  the same defines): it sees through wrappers (`moment`, `aov`) to the integrator that renders,
-  whose `hide_emitters` the loaded wrapper does not report (its own `hide_emitters` is False
-  whatever the nested one says);
-- the loaded object: the values Mitsuba resolved, defaults included (prb's max_depth 6), from the
-  attributes of Python integrators (`prb`, `prbvolpath` expose `max_depth` and `rr_depth`), the
-  `hide_emitters` property, and for C++ integrators, whose depths Mitsuba exposes nowhere else,
-  their description (`PathIntegrator[max_depth = 6, rr_depth = 5]`).
-What is declared wins; the object fills in what was left to Mitsuba's defaults. `direct` is emission
-plus direct light: max_depth 2 (also nested in a wrapper, and whatever max_depth it declares). The
-declaration's $parameters are Mitsuba's own: `<integrator type="$integrator">` with `<default
-name="integrator" value="direct"/>` is `direct`, and a define `integrator=path` makes it `path`,
-exactly as if written out. A `stylized` integrator carries nothing here: its own values are the
-base, also when it is nested in a wrapper (`nested_stylized` reads them from the declaration).
+Two sources: the declaration (read with Mitsuba's own parser, $parameters resolved with the same
+defines; it sees through the `moment` and `aov` wrappers) and the loaded object (the values Mitsuba
+resolved, defaults included). What is declared wins; the object fills in the rest. `direct` is
+max_depth 2. A `stylized` integrator carries nothing: its own values are the base
+(`nested_stylized` reads them from the declaration when it is wrapped).
+Design: docs/design/carried_settings.md.
 """
 from __future__ import annotations
 
@@ -42,8 +32,16 @@ def _depth(value: Any) -> int:
 
 
 def rendering_node(state, node):
-    """The integrator node that renders: `node`, or through wrappers the first integrator nested
-    in it."""
+    """The integrator node that renders: `node`, or through wrappers the first one nested in it.
+
+    Args:
+        state: the parser state of `mitsuba.parser` (its `nodes`).
+        node: an integrator node of that state.
+
+    Returns:
+        `node` unless it is a wrapper (`WRAPPERS`); else the first integrator nested in it, followed
+        through further wrappers (a wrapper that nests none: that wrapper).
+    """
     seen = set()
     while node.props.plugin_name() in WRAPPERS and id(node) not in seen:
         seen.add(id(node))
@@ -84,9 +82,17 @@ def _rendering_node(source: Any, defines: Mapping[str, Any] | None):
 
 
 def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
-    """The shared settings the scene source declares for the integrator that renders, plus its
-    `type`; None where the source cannot be read this way (an mi.Scene) or declares no
-    integrator."""
+    """The shared settings the scene source declares for the integrator that renders, plus its type.
+
+    Args:
+        source: a scene dict or the path of an XML file (anything else: None).
+        defines: values of the XML file's `<default>` parameters, as Mitsuba's -D.
+
+    Returns:
+        {"type": its plugin name, and the SHARED keys declared} (a depth -1 for unbounded); None
+        where the source cannot be read this way (an mi.Scene, a broken file) or declares no
+        integrator.
+    """
     nodes = _rendering_node(source, defines)
     if nodes is None:
         return None
@@ -99,9 +105,16 @@ def declared(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str,
 
 
 def nested_stylized(source: Any, defines: Mapping[str, Any] | None = None) -> dict[str, Any] | None:
-    """The property values of a `stylized` integrator nested in a wrapper (`moment`, `aov`) of the
-    scene source, as the declaration gives them; None for none (no wrapper, another integrator, an
-    mi.Scene)."""
+    """The property values of a `stylized` integrator nested in a wrapper (`moment`, `aov`).
+
+    Args:
+        source: a scene dict or the path of an XML file.
+        defines: values of the XML file's `<default>` parameters.
+
+    Returns:
+        Its property values as the declaration gives them; None for none (no wrapper, another
+        integrator, a source that cannot be read this way such as an mi.Scene).
+    """
     nodes = _rendering_node(source, defines)
     if nodes is None or nodes[0] is nodes[1] or nodes[1].props.plugin_name() != "stylized":
         return None
@@ -110,7 +123,15 @@ def nested_stylized(source: Any, defines: Mapping[str, Any] | None = None) -> di
 
 
 def loaded(integrator: mi.Integrator) -> dict[str, Any]:
-    """The shared settings as the loaded integrator object reports them (see the module doc)."""
+    """The shared settings as a loaded Mitsuba integrator reports them (see the module doc).
+
+    Args:
+        integrator: the loaded integrator (not `stylized`).
+
+    Returns:
+        max_depth and rr_depth from its attributes (Python integrators) or its description (C++
+        ones; `direct`: max_depth 2), hide_emitters only where True; the rest left out.
+    """
     out: dict[str, Any] = {}
     text = str(integrator)
     for key in ("max_depth", "rr_depth"):
@@ -132,9 +153,17 @@ def loaded(integrator: mi.Integrator) -> dict[str, Any]:
 def carried_settings(
     scene: mi.Scene, source: Any = None, defines: Mapping[str, Any] | None = None
 ) -> dict[str, Any]:
-    """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator; {} for
-    none or a `stylized` one. `source`/`defines`: what the scene was loaded from, to read its
-    declaration."""
+    """max_depth, rr_depth and hide_emitters of the scene's own (non-`stylized`) integrator.
+
+    Args:
+        scene: the loaded scene.
+        source, defines: what the scene was loaded from, to read its declaration (None: the loaded
+            object alone).
+
+    Returns:
+        The declared values over the loaded object's (`direct`: max_depth 2), hide_emitters only
+        where True; {} for no integrator or a `stylized` one.
+    """
     from styletrace.kernel.integrator import StylizedIntegrator
     own = scene.integrator()
     if own is None or isinstance(own, StylizedIntegrator):

@@ -23,8 +23,19 @@ from styletrace.pipeline.resolve import Resolved, resolve
 
 
 def ray_job(resolved: Resolved, camera: Any = None):
-    """What every Ray task of this render receives (`pipeline.ray_tasks.RayJob`); `camera`: the
-    sensor's to_world (4x4) in place of the scene's (a frame of a turntable), or None."""
+    """What every Ray task of this render receives (`pipeline.ray_tasks.RayJob`).
+
+    Args:
+        resolved: the resolved job; its scene source, defines, size and integrator values travel.
+        camera: the sensor's to_world (4x4) in place of the scene's (a turntable's frame), or None.
+
+
+    Returns:
+        The RayJob.
+
+    Raises:
+        UsageError: a scene or an integrator that cannot travel (`pipeline.ray_run.job_for`).
+    """
     from styletrace.pipeline.ray_run import job_for
     job = resolved.job
     load = {"defines": dict(job.defines)} if job.defines else {}
@@ -37,24 +48,47 @@ class InProcess:
 
     def source(self, resolved: Resolved,
                lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
-        """The render's passes, the running average after each; `lock` is held while the sum
-        changes."""
+        """The render's passes in this process (`passes.passes`, the `auto` values pinned already).
+
+        Args:
+            resolved: the resolved job.
+            lock: a context manager held while the running sum changes.
+
+        Returns:
+            An iterator of `Progress`, the running average after each pass.
+        """
         job = resolved.job
         return passes(resolved.scene, resolved.integrator, resolved.spp, job.seed,
                       lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp, lock=lock, pinned=True)
 
 
 class OnRay:
-    """The passes as Ray tasks on `cluster` ("local" or an address); `camera`: the sensor's to_world
-    (4x4) on the workers in place of the scene's (a frame of a turntable), or None; `options`:
-    output, resume and checkpoint_every of `pipeline.ray_run.Render`. The source also has `save()`
-    and `finish()`."""
+    """The passes as Ray tasks; the source also has `save()` and `finish()`.
+
+    Args:
+        cluster: "local" or a Ray address (None: "local").
+        camera: the sensor's to_world (4x4) on the workers in place of the scene's (a frame of a
+            turntable), or None.
+        **options: output, resume and checkpoint_every of `pipeline.ray_run.Render`.
+    """
     local = False
 
     def __init__(self, cluster: str | None = None, camera: Any = None, **options: Any):
         self.cluster, self.camera, self.options = cluster or "local", camera, options
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()):
+        """The render's passes as Ray tasks (`pipeline.ray_run.Render`).
+
+        Args:
+            resolved: the resolved job. lock: held while the merged sum changes.
+
+        Returns:
+            The Render: an iterable of `Progress`, with `save()` and `finish()`.
+
+        Raises:
+            UsageError: a job that cannot run on Ray (an expansion pass, a scene or integrator that
+                cannot travel, an unfinished checkpoint without resume).
+        """
         from styletrace.pipeline.ray_run import Render
         job = resolved.job
         width, height = resolved.size
@@ -63,7 +97,15 @@ class OnRay:
 
 
 def executor_for(cluster: str | None = None, **ray_options: Any):
-    """InProcess, or OnRay where a cluster is named or a checkpoint is to be resumed."""
+    """The executor of a run: in this process, or on Ray.
+
+    Args:
+        cluster: "local" or a Ray address; None renders in process unless resuming.
+        **ray_options: output, resume and checkpoint_every (`OnRay`).
+
+    Returns:
+        InProcess, or OnRay where a cluster is named or `resume` is set.
+    """
     if cluster is None and not ray_options.get("resume"):
         return InProcess()
     return OnRay(cluster, **ray_options)
@@ -71,15 +113,36 @@ def executor_for(cluster: str | None = None, **ray_options: Any):
 
 def execute(resolved: Resolved, cluster: str | None = None, lock: Any = contextlib.nullcontext(),
             **ray_options: Any) -> Iterator[Progress]:
-    """The render's passes through a plain `runner.Runner` (its checks first): in process, or on Ray
-    with `cluster` (`ray_options` as `OnRay`'s)."""
+    """The render's passes through a plain `runner.Runner` (its checks first).
+
+    Args:
+        resolved: the resolved job. cluster: as `executor_for`'s (None: in process).
+        lock: held while the running sum changes. **ray_options: as `OnRay`'s.
+
+    Returns:
+        An iterator of `Progress`, one after each pass.
+
+    Raises:
+        UsageError: a refusal of the runner's checks (one line).
+    """
     from styletrace.pipeline.runner import Runner
     return Runner(resolved, executor_for(cluster, **ray_options)).passes(lock)
 
 
 def run_resolved(resolved: Resolved, cluster: str | None = None,
         callback: Callable[[Progress], None] | None = None):
-    """The final image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True."""
+    """Render a resolved job to its final result through a plain `runner.Runner`.
+
+    Args:
+        resolved: the resolved job. cluster: "local" or a Ray address (None: in process).
+        callback: called with the `Progress` after each pass, or None.
+
+    Returns:
+        The image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True.
+
+    Raises:
+        UsageError: a refusal of the runner's checks (one line).
+    """
     from styletrace.pipeline.runner import Runner
     return Runner(resolved, executor_for(cluster)).result(callback)
 
@@ -91,17 +154,19 @@ def render_pipeline(scene: Any = None, style: str | None = None, spp: int | None
            callback: Callable[[Progress], None] | None = None, cluster: str | None = None,
            pass_spp: int | None = None, defines: dict[str, Any] | None = None,
            **params: Any) -> np.ndarray:
-    """`styletrace.render`: float32 H x W x C, linear radiance in the film's pixel format (C = 3 for
-    the usual rgb film); with `aovs=True` `(image, aovs)` (`Progress.aovs`).
+    """`styletrace.render`: a Job of the keywords (`job.python_job`), resolved once, run in passes.
 
-    `scene`: built-in name, XML path, scene dict or mi.Scene; `defines`: the XML file's `<default>`
-    parameters. `spp`: camera samples per pixel (default: the scene sampler's sample_count). The
-    style, `inner`, `estimator`, integrator properties and the style's parameters (**params) refine
-    the scene's own `stylized` integrator, else the max_depth, rr_depth and hide_emitters of its
-    Mitsuba integrator (through `moment`/`aov` wrappers) with the identity style; `auto` values are
-    resolved on the scene. `integrator=` renders with a prebuilt one as it is. `cluster` ("local" or
-    a Ray address) renders the passes on Ray, bit-identical to the same split here; `pass_spp` fixes
-    the split (default: by the device's memory)."""
+    Args:
+        scene, spp, seed, width, height, integrator, defines, pass_spp: as `job.Job`'s fields.
+        style, inner, estimator, **params: the integrator values given (`job.Job`'s `given`);
+            `auto` values are resolved on the scene.
+        callback: called with each pass's `Progress`. cluster: "local" or a Ray address: the passes
+            on Ray, bit-identical to the same split in process (None: in process).
+
+    Returns:
+        float32 H x W x C, linear radiance in the film's pixel format (C = 3 for the usual rgb
+        film); with aovs=True, (image, aovs) (`Progress.aovs`).
+    """
     job = python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines,
                      pass_spp, **params)
     return run_resolved(resolve(job), cluster, callback)

@@ -23,7 +23,12 @@ from styletrace.pipeline.runner import Runner, Voice
 
 
 class Manifest:
-    """Which frames of OUT are written, for the render's settings."""
+    """Which frames of OUT are written, for the render's settings (`OUT.frames.json`).
+
+    Args:
+        output: the sequence's output path, OUT.
+        settings: the render's settings (`frame_settings`), which a resume must match.
+    """
 
     def __init__(self, output: str, settings: dict):
         self.path = output + ".frames.json"
@@ -46,6 +51,11 @@ class Manifest:
         return self.done
 
     def add(self, frame: int) -> None:
+        """Record a frame as written and rewrite the manifest (atomically).
+
+        Args:
+            frame: the frame's index.
+        """
         self.done.add(frame)
         body = {"settings": self.settings, "done": sorted(self.done)}
         write_bytes_atomically(json.dumps(body, indent=1, sort_keys=True).encode(), self.path)
@@ -90,6 +100,16 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str,
 
 def frame_settings(kind: str, scenes: list, values: list, spp: int, seed: int, count: int,
                    orbit: float | None, lanes: int, pass_spp: int | None, variant: str) -> dict:
+    """The settings a frames manifest records: what a `--resume` must match.
+
+    Args:
+        kind: "orbit" or "files". scenes: the scenes' descriptions. values: their integrator values.
+        spp, seed, count, orbit: samples per pixel, seed, frames, turn (degrees; None for files).
+        lanes, pass_spp, variant: camera samples per pass, samples per pixel of a pass, the variant.
+
+    Returns:
+        The settings, a dict.
+    """
     return {"kind": kind, "scenes": scenes, "integrators": values, "spp": spp, "seed": seed,
             "frames": count, "orbit": orbit, "lanes_per_pass": lanes, "pass_spp": pass_spp,
             "variant": variant}

@@ -4,13 +4,9 @@ to `execute`.
     job = Job(scene="scene.xml", defines={"depth": "3"}, width=64, height=48,
               given={"style": "cel", "inner_samples": 8}, spp=16, seed=0)
 
-A `Job` holds what the caller said and nothing derived: the scene source (a built-in name, an XML
-path, a scene dict or an mi.Scene), the defines of the file's `<default>` parameters, the film size,
-the integrator values given (they refine the scene's own `stylized` integrator, or the scene's
-carried settings over `default_style`), or a prebuilt integrator used as it is, and the sampling:
-spp (None: the scene sampler's count), seed and the pass split (`pass_spp`, `lanes_per_pass`; None:
-the device's, `sizing`). It is frozen: resolving it twice gives the same scene, integrator
-and passes.
+A `Job` holds what the caller said and nothing derived (its fields: `Job`). It is frozen:
+resolving it twice gives the same scene, integrator and passes.
+Design: docs/design/render_pipeline.md.
 """
 from __future__ import annotations
 
@@ -26,6 +22,17 @@ PYTHON_STYLE = "identity"
 
 @dataclass(frozen=True)
 class Job:
+    """What a caller asked for, nothing derived; frozen: resolving it twice gives the same render.
+
+    Args:
+        scene: a built-in name, an XML path, a scene dict or an mi.Scene (None: the default scene).
+        defines: the XML file's `<default>` parameters. width, height: the film (None: the scene's).
+        given: integrator values, laid over the scene's own `stylized` integrator, else over its
+            carried settings with `default_style` (PYTHON_STYLE by default).
+        integrator: a prebuilt integrator, used as it is (with `given` too: a UsageError).
+        spp: camera samples per pixel (None: the scene sampler's count); seed: the render's seed.
+        pass_spp, lanes_per_pass: the pass split (None: the device's, `sizing`).
+    """
     scene: Any = None
     defines: Mapping[str, Any] = field(default_factory=dict)
     width: int | None = None
@@ -46,13 +53,31 @@ class Job:
             )
 
     def with_(self, **changes: Any) -> "Job":
-        """This job with some fields replaced (a frame of a turntable, another seed)."""
+        """This job with some fields replaced (a frame of a turntable, another seed).
+
+        Args:
+            **changes: field names and their new values.
+
+        Returns:
+            A new Job.
+
+        Raises:
+            UsageError: the new job sets both `integrator` and `given`.
+        """
         return replace(self, **changes)
 
 
 def given_values(style: str | None = None, inner: Any = None, estimator: str | None = None,
                  **params: Any) -> dict[str, Any]:
-    """The integrator values of the Python API's keywords, leaving out what was not given (None)."""
+    """The integrator values of the Python API's keywords, leaving out what was not given (None).
+
+    Args:
+        style: the style's name. inner: `inner_samples` (a count, one per level, or 'n0:n_max').
+        estimator: the estimator's name. **params: other integrator properties, style parameters.
+
+    Returns:
+        {property name: value} of the arguments that are not None.
+    """
     given = {"style": style, "inner_samples": inner, "estimator": estimator, **params}
     return {k: v for k, v in given.items() if v is not None}
 
@@ -71,8 +96,19 @@ def python_job(
     pass_spp: int | None = None,
     **params: Any,
 ) -> "Job":
-    """The Job of a Python API call (`styletrace.render`, `render_buffer`, `render(denoise=...)`):
-    its keywords as the pipeline's description, integrator values given only where not None."""
+    """The Job of a Python API call (`styletrace.render`, `render_buffer`, `render(denoise=...)`).
+
+    Args:
+        scene, spp, seed, width, height, integrator, defines, pass_spp: as `Job`'s fields.
+        style, inner, estimator, **params: the integrator values given (`given_values`: None
+            leaves a value out).
+
+    Returns:
+        The Job; its `given` holds only the values that are not None.
+
+    Raises:
+        UsageError: a prebuilt `integrator` together with values to refine it.
+    """
     return Job(
         scene=scene,
         defines=dict(defines or {}),
@@ -87,8 +123,15 @@ def python_job(
 
 
 def check_counts(*named: tuple[str, Any]) -> None:
-    """A one-line UsageError for the first (name, value) whose value is given (not None) and below
-    1: the sizes and sample counts of the command line's render and preview."""
+    """Refuse the first (name, value) whose value is given (not None) and below 1.
+
+    Args:
+        *named: (flag, value) pairs: the sizes and sample counts of the command line's render and
+            preview.
+
+    Raises:
+        UsageError: one line naming the flag and its value.
+    """
     for name, value in named:
         if value is not None and value < 1:
             raise UsageError(f"bad value {value} for {name}: expected an integer >= 1")

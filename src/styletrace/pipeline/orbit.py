@@ -17,11 +17,27 @@ from styletrace.gate import mi
 
 
 def sensor_to_world(scene) -> np.ndarray:
+    """The to_world of the scene's first sensor.
+
+    Args:
+        scene: the loaded mi.Scene.
+
+    Returns:
+        The 4x4 float64 matrix.
+    """
     m = scene.sensors()[0].world_transform().matrix
     return np.array(m, dtype=np.float64).reshape(4, 4, -1)[..., 0]
 
 
 def camera_target(scene) -> np.ndarray:
+    """The point a turntable turns about: the first hit of the ray through the image centre.
+
+    Args:
+        scene: the loaded mi.Scene (its first sensor looks along its local +Z).
+
+    Returns:
+        That hit (3 float64), or the centre of the scene's bounding box where the ray hits nothing.
+    """
     m = sensor_to_world(scene)
     origin, forward = m[:3, 3], m[:3, 2] / np.linalg.norm(m[:3, 2])
     ray = mi.Ray3f(mi.Point3f(*map(float, origin)), mi.Vector3f(*map(float, forward)))
@@ -33,7 +49,14 @@ def camera_target(scene) -> np.ndarray:
 
 
 def rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
-    """3x3 rotation by `degrees` about unit `axis` (right-handed; Rodrigues' formula)."""
+    """3x3 rotation by `degrees` about `axis` (right-handed; Rodrigues' formula).
+
+    Args:
+        axis: the axis, 3 floats (normalised here). degrees: the angle.
+
+    Returns:
+        The 3x3 float64 matrix.
+    """
     a = axis / np.linalg.norm(axis)
     t = np.radians(degrees)
     k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
@@ -42,7 +65,16 @@ def rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
 
 def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int,
           degrees: float) -> list[np.ndarray]:
-    """The sensor's to_world for each frame: T(target) R(up, angle) T(-target) to_world."""
+    """The sensor's to_world for each frame: T(target) R(up, angle) T(-target) to_world.
+
+    Args:
+        to_world: the sensor's to_world (4x4). target: the point turned about (3).
+        up: the rotation axis (3). frames: how many frames.
+        degrees: the whole turn; frame k turns by degrees * k / frames (360 loops without a repeat).
+
+    Returns:
+        One 4x4 matrix per frame.
+    """
     out = []
     for k in range(frames):
         about = np.eye(4)
@@ -54,6 +86,15 @@ def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int,
 
 
 def turntable(scene, frames: int, degrees: float) -> list[np.ndarray]:
+    """A scene's turntable: its camera turned about its own up vector (local +Y) through
+    `camera_target`.
+
+    Args:
+        scene: the loaded mi.Scene. frames: how many frames. degrees: the whole turn.
+
+    Returns:
+        One 4x4 sensor to_world per frame (`orbit`).
+    """
     m = sensor_to_world(scene)
     return orbit(m, camera_target(scene), m[:3, 1], frames, degrees)
 

@@ -39,22 +39,44 @@ LANE_BYTES = 256
 def pin_auto_values(
     scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePilot | None = None
 ) -> tuple[mi.Integrator, str]:
-    """(`integrator` with its scene-relative `auto` values pinned on `scene`, the line naming them):
-    the pipeline's one pinning (`resolve.resolve`'s, and the pass loop's for a prebuilt integrator).
-    `pilot`: the scene-defaults pilot to draw them from (traced only if a value needs it)."""
+    """Pin an integrator's scene-relative `auto` values: the pipeline's one pinning.
+
+    `resolve.resolve` calls it, and the pass loop for a prebuilt integrator.
+
+    Args:
+        scene: the scene the values are measured on.
+        integrator: the integrator (anything but `stylized` comes back as it is).
+        pilot: the scene-defaults pilot to draw them from (None: a new one; traced only if a value
+            needs it).
+
+    Returns:
+        (the integrator with its values pinned, the line naming them; '' if none).
+    """
     return resolve_defaults(scene, integrator, pilot)
 
 
 def pass_seed(seed: int, index: int) -> int:
-    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated
-    sample streams."""
+    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams.
+
+    Args:
+        seed: the render's seed. index: the launch number (round * tiles + tile).
+
+    Returns:
+        A 32-bit seed.
+    """
     return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
 
 
 def expansion_seed(seed: int, tile: int) -> int:
-    """Seed of the expansion pass of tile `tile` (`StylizedIntegrator.prepare_expansion`):
-    pass_seed's stream at indices from 2^31 on, which no render reaches, so it differs from every
-    pass seed of the same render."""
+    """Seed of the expansion pass of a tile (`StylizedIntegrator.prepare_expansion`).
+
+    Args:
+        seed: the render's seed. tile: the tile's index in the layout.
+
+    Returns:
+        pass_seed's stream at index 2^31 + tile, which no render reaches, so it differs from every
+        pass seed of the same render.
+    """
     return pass_seed(seed, (1 << 31) + tile)
 
 
@@ -79,9 +101,16 @@ def _axis(length: int, tile: int) -> list[tuple[int, slice, slice]]:
 
 
 def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
-    """The film as one tile if it has at most `max_pixels` pixels, else as tiles of TILE_SIDE
-    columns (or the width, if narrower) and as many rows as fit into `max_pixels` (default
-    LANES_PER_PASS)."""
+    """The film as one tile, or as tiles of one size where it has too many pixels.
+
+    Args:
+        width, height: the film's crop size in pixels.
+        max_pixels: the most pixels of one tile (None: LANES_PER_PASS).
+
+    Returns:
+        One Tile where the film has at most `max_pixels` pixels; else tiles of TILE_SIDE columns (or
+        the width, if narrower) and as many rows as fit into `max_pixels`, row by row.
+    """
     max_pixels = max_pixels or LANES_PER_PASS
     if width * height <= max_pixels:
         return [
@@ -94,8 +123,12 @@ def tiles(width: int, height: int, max_pixels: int | None = None) -> list[Tile]:
 
 
 class Crop:
-    """Crop windows of a sensor's film, set one after another (`set`: offset and size relative to
-    the film's own crop window), and the film's own window back when the block ends."""
+    """Crop windows of a sensor's film, set one after another (`set`), and the film's own window
+    back when the block ends (a context manager).
+
+    Args:
+        sensor: the sensor whose film is cropped.
+    """
 
     def __init__(self, sensor: mi.Sensor):
         film = sensor.film()
@@ -104,6 +137,12 @@ class Crop:
         self.full = tuple(int(v) for v in film.crop_size())
 
     def set(self, offset: tuple[int, int], size: tuple[int, int]) -> None:
+        """Set the film's crop window.
+
+        Args:
+            offset: (x, y) of the window relative to the film's own crop offset, in pixels.
+            size: (width, height) of the window, in pixels.
+        """
         if self.params is None:
             self.params = mi.traverse(self.sensor)
         self.params["film.crop_offset"] = mi.ScalarPoint2u(
@@ -124,17 +163,27 @@ class Crop:
 
 
 def memory_needed(width: int, height: int, ext: str = ".exr") -> int:
-    """Bytes of host memory a render of this size needs at its peak, while the file is written: the
-    float32 accumulator, the averaged image, Mitsuba's bitmap of it, and the encoded file (up to
-    twice in the growing memory stream, once more as bytes), plus the lanes of one pass."""
+    """Bytes of host memory a render of this size needs at its peak, while the file is written.
+
+    That is the float32 accumulator, the averaged image, Mitsuba's bitmap of it, and the encoded
+    file (up to twice in the growing memory stream, once more as bytes), plus the lanes of one pass.
+
+    Args:
+        width, height: the image size in pixels.
+        ext: the output's extension (".png": one byte per channel; else four).
+
+    Returns:
+        The estimate, in bytes.
+    """
     image = width * height * 3 * 4
     encoded = width * height * 3 * (1 if ext == ".png" else 4)
     return 3 * image + 3 * encoded + LANE_BYTES * LANES_PER_PASS
 
 
 def memory_available() -> int | None:
-    """MemAvailable of /proc/meminfo, or less if an address-space limit is set; None
-    where unknown."""
+    """MemAvailable of /proc/meminfo, or less if an address-space limit is set; None where
+    unknown.
+    """
     import resource
     limits = []
     try:
@@ -151,7 +200,14 @@ def memory_available() -> int | None:
 
 
 def check_memory(width: int, height: int, ext: str = ".exr") -> None:
-    """Refuse up front (UsageError) an image whose buffers cannot fit into the memory there is."""
+    """Refuse up front an image whose buffers cannot fit into the memory there is.
+
+    Args:
+        width, height: the image size in pixels. ext: the output's extension (`memory_needed`).
+
+    Raises:
+        UsageError: a side of 2^31 pixels or more, or more than `memory_available()` needed.
+    """
     need, have = memory_needed(width, height, ext), memory_available()
     if width >= 1 << 31 or height >= 1 << 31 or (have is not None and need > have):
         have_txt = f"{have / 2**30:.1f} GiB available" if have is not None else "too large"
@@ -162,9 +218,17 @@ def check_memory(width: int, height: int, ext: str = ".exr") -> None:
 
 
 class Progress:
-    """State after a pass: `spp_done` is what every pixel has at least (tiles of a pass under way
-    may have one more pass); `image` is the average of the finished passes, computed when
-    asked for."""
+    """State after a pass; `image` is the average of the finished passes, computed when asked for.
+
+    Args:
+        spp_done: samples per pixel every pixel has at least (a tile may have one pass more).
+        spp_total: the render's samples per pixel.
+        total: the float32 running sum, H x W x (the image's channels + the error AOVs' sums).
+        counts: samples per pixel summed so far, per tile. layout: the tiles.
+        channels: the image's channels in `total` (None: all of them).
+        tile, samples: the pass just done: its tile's index in `layout`, its samples per pixel (a
+            recording maps that pass's lanes to the film's pixels with them: `lookdev.record`).
+    """
 
     def __init__(
         self,
@@ -228,8 +292,18 @@ class Progress:
 
 def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER_PASS,
               pass_spp: int | None = None) -> tuple[list[Tile], int]:
-    """The tiles and the samples per pixel of one pass. A function of the image size and the counts
-    only, never of measured time: the same seed gives the same image on every run."""
+    """The tiles and the samples per pixel of one pass.
+
+    A function of the image size and the counts only, never of measured time: the same seed gives
+    the same image on every run.
+
+    Args:
+        width, height: the film's size. spp: the render's samples per pixel.
+        lanes_per_pass: camera samples per pass. pass_spp: a fixed split (None, 0: from the lanes).
+
+    Returns:
+        (the tiles, the samples per pixel of one pass, within [1, spp]).
+    """
     layout = tiles(width, height)
     tw, th = layout[0].size
     per_pass = pass_spp if pass_spp else max(1, lanes_per_pass // (tw * th))
@@ -239,18 +313,19 @@ def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER
 def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
            lock: Any = contextlib.nullcontext(), pinned: bool = False) -> Iterator[Progress]:
-    """Render `spp` samples per pixel in passes; yield the running average after each pass.
+    """Render `spp` samples per pixel in passes, tile by tile; yield the running average after each.
 
-    An image of more than LANES_PER_PASS pixels is rendered tile by tile (crop windows of the film);
-    a pass is then one tile at a time, and every tile gets its passes in turn. The sum of the passes
-    is kept in float32, one image's worth of memory. `lock` (a context manager) is held while it is
-    updated, so that another thread may read a consistent `Progress.image` meanwhile (the command
-    line's signal watcher). A `stylized` integrator with expansion_pass > 0 renders its expansion
-    pass for each tile before the tile's first pass (`expansion_seed`: another stream than the
-    passes', the same for the same seed). An integrator with `aovs=True` adds its AOV channels
-    (`aov_names`) to the film; they are summed with the image and read as `Progress.aovs`
-    (docs/adaptive.md). A prebuilt integrator gets its scene-relative `auto` values pinned here
-    (`pin`) unless `pinned` says a resolve did it already."""
+    Args:
+        scene, integrator: what to render. spp: samples per pixel. seed: the render's seed.
+        lanes_per_pass, pass_spp: the pass split (`pass_size`). lock: held while the sum changes.
+        pinned: the `auto` values are pinned already (else `pin_auto_values` pins them here).
+
+    Returns:
+        An iterator of `Progress`, one after each pass (with the error AOVs of aovs=True summed).
+
+    Raises:
+        UsageError, SceneError: bad arguments, too little memory, aovs on a film other than rgb(a).
+    """
     check_passes_args(scene, integrator, spp, seed)
     if not pinned:
         integrator = pin_auto_values(scene, integrator)[0]
@@ -301,7 +376,15 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
 def pass_count(
     scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None
 ) -> int:
-    """How many kernel launches `passes` makes (tiles times passes per tile)."""
+    """How many kernel launches `passes` makes: tiles times passes per tile.
+
+    Args:
+        scene: the scene (its film's crop size). spp: samples per pixel.
+        lanes_per_pass, pass_spp: the pass split (`pass_size`).
+
+    Returns:
+        The number of launches.
+    """
     size = scene.sensors()[0].film().crop_size()
     layout, per_pass = pass_size(int(size[0]), int(size[1]), spp, lanes_per_pass, pass_spp)
     return len(layout) * math.ceil(spp / per_pass)

@@ -1,19 +1,14 @@
 """Checkpoints of a render on Ray: the sum of the finished passes as an EXR, and a JSON manifest.
 
-    ck = Checkpoint("out.png", settings)     # OUT.checkpoint.json + OUT.checkpoint-<generation>.exr
-    # atomically; the previous generation's EXR is then removed
-    ck.save(total, rounds_done)
-    total, rounds_done = ck.load()            # for --resume; UsageError if the settings differ
-    ck.remove()                               # once the render is written
+    ck = Checkpoint("out.png", settings)   # OUT.checkpoint.json + OUT.checkpoint-<generation>.exr
+    ck.save(total, rounds_done)            # atomically; the previous generation's EXR removed
+    total, rounds_done = ck.load()         # for --resume; UsageError if the settings differ
+    ck.remove()                            # once the render is written
 
-The EXR holds the float32 running *sum* of the finished passes (not their average), so a resumed
-render adds the remaining passes to exactly the numbers it would have had: the result is
-bit-identical to the undisturbed render. The manifest records the render's settings (scene,
-integrator values, spp, seed, size, the pass split, the variant) and, per tile, how many of its
-passes are summed (`rounds_done`; tiles are summed in pass order, so the done units of a tile are a
-prefix). Both files are written with `images.write_bytes_atomically` (temporary file, fsync,
-rename); the EXR of a new generation is written before the manifest that names it, so a kill at any
-moment leaves a manifest naming a complete EXR.
+The EXR holds the float32 running *sum* of the finished passes, so a resumed render is
+bit-identical to an undisturbed one; the manifest records the render's settings and, per tile, the
+passes summed (`rounds_done`). A new generation's EXR is written before the manifest that names it.
+Design: docs/design/ray_rendering.md.
 """
 from __future__ import annotations
 
@@ -35,6 +30,12 @@ def _plain_settings(value: Any) -> Any:
 
 
 class Checkpoint:
+    """The checkpoint of one render's output (see the module doc).
+
+    Args:
+        output: the render's output path, OUT.
+        settings: the render's settings (`ray_run.settings_of`), compared as JSON reads them back.
+    """
     def __init__(self, output: str, settings: dict[str, Any]):
         self.output = output
         self.manifest = output + ".checkpoint.json"
@@ -49,6 +50,13 @@ class Checkpoint:
         return os.path.isfile(self.manifest)
 
     def save(self, total: np.ndarray, rounds_done: list[int]) -> None:
+        """Write a new generation (its EXR, then the manifest naming it); drop the previous EXR.
+
+        Args:
+            total: the float32 running sum of the finished passes, H x W x 3.
+            rounds_done: per tile, how many of its passes the sum holds; nothing is written when
+                they are those of the last save.
+        """
         if self.saved_rounds == list(rounds_done):
             return  # nothing new since the last one
         generation = self.generation + 1

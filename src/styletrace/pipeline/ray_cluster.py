@@ -27,7 +27,17 @@ def ray_module():
 
 
 def connect(cluster: str):
-    """Ray, connected to `cluster` ("local" or an address such as HOST:6379 or ray://HOST:10001)."""
+    """Ray, connected to a cluster; a process that called `ray.init` already keeps its connection.
+
+    Args:
+        cluster: "local" (start Ray here) or an address such as HOST:6379 or ray://HOST:10001.
+
+    Returns:
+        The `ray` module.
+
+    Raises:
+        UsageError: no `ray` package, a bad address, or a cluster that cannot be joined.
+    """
     ray = ray_module()
     if not isinstance(cluster, str) or not cluster.strip():
         raise UsageError(

@@ -2,15 +2,12 @@
 worker process).
 
     spec = SceneSpec.of("cornell-box", width=256, height=256)   # or an XML path, or a scene dict
-    # in a worker: api.load_scene(...), cached
-    scene = load(spec)
+    scene, integrator = load_on_worker(spec, values, variant)    # in a worker, cached
 
-An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` was given: a built-in
-name, an XML path, or a scene dict, plus the width/height and any further keyword arguments of
-`load_scene` (`load_kwargs`: the defines of an XML file). Scene dicts may hold Mitsuba scalar values
-(`ScalarTransform4f`, `ScalarPoint3f`, ...), which do not pickle either: `SceneSpec.of` replaces
-each by its class name and numbers, and `load` builds it again. A worker keeps the last few scenes
-and integrators it loaded (`CACHE`), so a render's later passes on it load nothing.
+An `mi.Scene` cannot be pickled, so a worker receives what `api.load_scene` takes: a built-in name,
+an XML path or a scene dict (its Mitsuba scalar values encoded as class name and numbers), the size
+and the defines. A worker keeps the last CACHE_SIZE scenes and integrators it loaded (`CACHE`), so a
+render's later passes on it load nothing. Design: docs/design/ray_rendering.md.
 """
 from __future__ import annotations
 
@@ -77,6 +74,19 @@ class SceneSpec:
     def of(
         cls, scene: Any, width: int | None = None, height: int | None = None, **load_kwargs: Any
     ) -> "SceneSpec":
+        """The spec of a scene argument.
+
+        Args:
+            scene: a built-in name, an XML path (made absolute where the file exists), a scene
+                dict or None. width, height: the film (None: the scene's).
+            **load_kwargs: further arguments of the load (the defines of an XML file).
+
+        Returns:
+            The SceneSpec (a scene dict's Mitsuba scalar values encoded).
+
+        Raises:
+            UsageError: an mi.Scene, or a scene dict holding a value that cannot travel.
+        """
         if scene is None or isinstance(scene, dict):
             return cls(_encode(scene, "") if scene else scene, width, height, dict(load_kwargs))
         if isinstance(scene, (str, os.PathLike)):
@@ -105,9 +115,19 @@ class SceneSpec:
 
 
 def load_on_worker(spec: SceneSpec, values: dict, variant: str):
-    """(scene, integrator) for a worker: `init(variant)`, then the render pipeline's `resolve` of
-    the scene source with the driver's integrator values, cached by the scene and the
-    integrator's values."""
+    """(scene, integrator) for a worker, cached by the scene and the integrator's values: after
+    `init(variant)`, the pipeline's `resolve` with the driver's values, so that every worker
+    pins the `auto` values the driver pinned.
+
+    Args:
+        spec: the scene. values: the driver's integrator values. variant: Mitsuba's variant.
+
+    Returns:
+        (the mi.Scene, its `stylized` integrator).
+
+    Raises:
+        UsageError: load arguments other than `defines`.
+    """
     from styletrace.scene import plugins as runtime
     runtime.init(variant)
     key = spec.key() + hashlib.sha256(repr(sorted(values.items())).encode()).digest()

@@ -1,18 +1,14 @@
 """A render as independent (tile, pass) units, and their sum in the single-process order.
 
-    layout, units = plan(width, height, spp, seed, lanes_per_pass, pass_spp)
+    layout, units = plan_units(width, height, spp, seed, lanes_per_pass, pass_spp)
     merge = Merge(width, height, spp, layout)
-    # any order; summed per tile in the order of `pass_loop.passes`
-    merge.add(unit, rendered_tile)
-    merge.progress()                   # a pipeline.passes.Progress: spp_done, image
+    merge.add(unit, rendered_tile)    # any order; summed per tile in the order of pass_loop.passes
+    merge.progress()                  # a pipeline.passes.Progress: spp_done, image
 
-The units are exactly the kernel launches of `pass_loop.passes`: its tiles and pass size
-(`pass_loop.pass_size`) and, for launch number `index` (round r of tile t is index r * tiles + t),
-the seed `pass_loop.pass_seed(seed, index)` and min(per_pass, spp - r * per_pass) samples per pixel.
-So which worker renders a unit changes nothing. Results arrive in any order; `Merge` keeps the early
-ones aside and adds each tile's passes in round order, with the same float32 operations as
-`pass_loop.passes`, so the merged image is bit-identical to the single-process render of the same
-seed and split (not merely equal up to the order of summation).
+The units are exactly the kernel launches of `pass_loop.passes` (its tiles, pass size and seeds),
+so which worker renders a unit changes nothing; `Merge` adds each tile's passes in round order with
+the same float32 operations, so the merged image is bit-identical to the single-process render of
+the same seed and split. Design: docs/design/ray_rendering.md.
 """
 from __future__ import annotations
 
@@ -40,7 +36,16 @@ def plan_units(
     lanes_per_pass: int = pass_loop.LANES_PER_PASS,
     pass_spp: int | None = None,
 ) -> tuple[list[pass_loop.Tile], list[Unit]]:
-    """The tiles of the film and every unit of the render, in launch order."""
+    """The tiles of the film and every unit of the render, in launch order.
+
+    Args:
+        width, height: the film's size. spp: samples per pixel. seed: the render's seed.
+        lanes_per_pass, pass_spp: the pass split (`pass_loop.pass_size`).
+
+    Returns:
+        (tiles, units): round r of tile t is launch index r * tiles + t, seeded with
+        `pass_loop.pass_seed(seed, index)`, of min(per_pass, spp - r * per_pass) samples per pixel.
+    """
     layout, per_pass = pass_loop.pass_size(width, height, spp, lanes_per_pass, pass_spp)
     rounds = -(-spp // per_pass)
     units = [Unit(r * len(layout) + t, t, r, min(per_pass, spp - r * per_pass),
@@ -50,7 +55,12 @@ def plan_units(
 
 
 class Merge:
-    """The running float32 sum of the finished units, added per tile in round order."""
+    """The running float32 sum of the finished units, added per tile in round order.
+
+    Args:
+        width, height: the film's size. spp: samples per pixel. layout: the tiles (`plan_units`).
+        total, rounds_done: a resumed checkpoint's sum (H x W x 3) and rounds per tile (None: none).
+    """
 
     def __init__(self, width: int, height: int, spp: int, layout: list[pass_loop.Tile],
                  total: np.ndarray | None = None, rounds_done: list[int] | None = None):
@@ -61,14 +71,24 @@ class Merge:
         self._pending: dict[tuple[int, int], tuple[Unit, np.ndarray]] = {}
 
     def restore_counts(self, units: list[Unit]) -> None:
-        """Samples per tile of the rounds already done (after a resume)."""
+        """Count the samples per tile of the rounds already done (after a resume).
+
+        Args:
+            units: every unit of the render (`plan_units`).
+        """
         for u in units:
             if u.round < self.rounds_done[u.tile]:
                 self.counts[u.tile] += u.spp
 
     def add(self, unit: Unit, tile_image: np.ndarray) -> int:
-        """Take a unit's rendered crop window (float32 h x w x 3); returns how many units
-        were summed."""
+        """Take a unit's rendered crop window; an early one waits for its tile's earlier rounds.
+
+        Args:
+            unit: the unit rendered. tile_image: its crop window, float32 h x w x 3.
+
+        Returns:
+            How many units this call added to the sum (0 while it waits).
+        """
         self._pending[(unit.tile, unit.round)] = (unit, tile_image)
         added = 0
         t = unit.tile

@@ -1,18 +1,14 @@
 """The driver of a render on Ray: hand out (tile, pass) units, merge them, checkpoint, report
 progress.
 
-    run = Render(job, spp=256, seed=0, width=512, height=512, cluster="local", checkpoint=ck)
-    for prog in run:          # a pipeline.passes.Progress after each finished unit
-        ...
-    image = styletrace.render("cornell-box", style="cel", spp=64, cluster="local")  # the API
+    run = Render(job, spp=256, seed=0, width=512, height=512, cluster="local", output="o.exr")
+    for prog in run: ...   # a pipeline.passes.Progress after each finished unit
 
-Units are submitted in launch order, at most `window` at a time (twice the tasks the cluster can run
-at once), so the driver holds a bounded number of results. A task whose worker dies is run again by
-Ray (`MAX_RETRIES`); one that fails in styletrace (a bad scene) raises its own one-line error here.
-Breaking out of the loop (Ctrl-C in the command line) cancels the units under way and checkpoints
-the finished ones. Checkpoints are written at most every `checkpoint_every` seconds and when the
-loop ends; their timing changes nothing in the image, because the checkpoint holds the exact float32
-sum.
+Units go out in launch order, at most twice as many as the cluster runs at once. A task whose
+worker dies runs again (`MAX_RETRIES`); a styletrace error in a task is raised here as itself.
+Breaking out of the loop cancels the units under way and checkpoints the finished ones; checkpoints
+come at most every `checkpoint_every` seconds and change nothing in the image.
+Design: docs/design/ray_rendering.md.
 """
 from __future__ import annotations
 
@@ -36,7 +32,16 @@ MAX_RETRIES = 3
 
 def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, per_pass: int,
                 tiles: int) -> dict:
-    """What a checkpoint must match to be resumed."""
+    """What a checkpoint must match to be resumed.
+
+    Args:
+        job: the `ray_tasks.RayJob`. spp, seed: the render's. width, height: the film's size.
+        lanes, per_pass, tiles: camera samples per pass, samples per pixel of a pass, tile count.
+
+    Returns:
+        The settings: scene, integrator values, sampling, size, split, variant, and the camera of a
+        turntable's frame.
+    """
     settings = {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
                 "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass,
                 "tiles": tiles, "variant": job.variant}
@@ -46,8 +51,19 @@ def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, p
 
 
 class Render:
-    """Iterating renders; `progress()` after the loop is the final state, `worker_pids` who
-    rendered."""
+    """Iterating renders; `progress()` after the loop: the final state; `worker_pids`: who rendered.
+
+    Args:
+        job: the `ray_tasks.RayJob`. spp, seed: the render's. width, height: the film's size.
+        cluster: "local" or a Ray address. lanes_per_pass, pass_spp: the pass split.
+        output: the image's path, beside which the checkpoint is kept (None: no checkpoint).
+        resume: continue from the checkpoint. checkpoint_every: seconds between checkpoints.
+        cpus_per_task, gpus_per_task: a task's Ray resources. lock: held while the sum changes.
+
+    Raises:
+        UsageError: an expansion pass, an unwritable checkpoint, an unfinished checkpoint without
+            `resume`, or a checkpoint that cannot be resumed.
+    """
 
     def __init__(self, job, spp: int, seed: int, width: int, height: int, cluster: str = "local",
                  lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
@@ -161,8 +177,19 @@ def _result(ray, ref) -> tuple[np.ndarray, int]:
 
 def job_for(scene: Any, integrator: Any, width: int | None = None, height: int | None = None,
             camera: Any = None, **load_kwargs):
-    """The Job of a scene argument and a `stylized` integrator (its property values travel, not the
-    object); `camera`: the sensor's to_world (4x4) in place of the scene's, or None."""
+    """The RayJob of a scene and a `stylized` integrator (its values travel, not the object).
+
+    Args:
+        scene: a built-in name, an XML path or a scene dict. width, height: the film (None: its).
+        integrator: the `stylized` integrator. camera: the sensor's to_world (4x4), or None.
+        **load_kwargs: the load's arguments (defines).
+
+    Returns:
+        The `ray_tasks.RayJob`, in this process's variant.
+
+    Raises:
+        UsageError: an integrator without property values, or a scene that cannot travel.
+    """
     from styletrace.pipeline.ray_tasks import RayJob
     from styletrace.scene.plugins import init
     values = getattr(integrator, "values", None)

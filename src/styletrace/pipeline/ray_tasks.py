@@ -2,11 +2,11 @@
 
     ref = render_unit.options(num_cpus=1, max_retries=3).remote(job, spp, seed, offset, size)
 
-A worker is a long-lived process: `describe.load` keeps the scene and the integrator it built, so
-only a worker's first task loads anything. Each task first sets Dr.Jit's thread count to the CPUs
-Ray assigned to it (`num_cpus` of the task), so several workers on one machine do not oversubscribe
-its cores. A job's `camera` (a frame of a turntable) replaces the sensor's to_world while the unit
-renders.
+A worker is a long-lived process: `ray_describe.load_on_worker` keeps the scene and the integrator
+it built, so only a worker's first task loads anything. Each task first sets Dr.Jit's thread count
+to the CPUs Ray assigned to it (`num_cpus` of the task), so several workers on one machine do not
+oversubscribe its cores. A job's `camera` (a frame of a turntable) replaces the sensor's to_world
+while the unit renders.
 """
 from __future__ import annotations
 
@@ -63,8 +63,15 @@ def _camera(sensor, to_world):
 
 @ray.remote
 def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int]):
-    """Render the crop window (`offset`, `size`, relative to the film's own crop) with `spp` samples
-    and `seed`; returns the float32 window and this worker's process id."""
+    """Render one unit's crop window in a worker.
+
+    Args:
+        job: the render's `RayJob`. spp: samples per pixel. seed: the unit's seed.
+        offset, size: the crop window, relative to the film's own crop, in pixels.
+
+    Returns:
+        (the float32 window, h x w x 3; this worker's process id).
+    """
     scene, integrator = _prepare(job)
     from styletrace.gate import mi  # deliberately here: after `load` chose the driver's variant
     from styletrace.pipeline.passes import Crop

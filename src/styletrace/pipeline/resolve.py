@@ -2,16 +2,13 @@
 values pinned.
 
     r = resolve(Job(scene="scene.xml", given={"style": "cel"}))
-    # what `execute` runs; r.auto names the pinned values
-    r.scene, r.integrator, r.spp, r.lanes, r.auto
+    r.scene, r.integrator, r.spp, r.lanes, r.auto   # what `execute` runs; auto: the values pinned
 
-The integrator of a render is, in this order of precedence: a prebuilt one given as it is; else the
-values the caller gave laid over (`settings.refine`) the scene's own `stylized` integrator (also one
-nested in a `moment` or `aov` wrapper, read from the declaration); else over the shared settings of
-the scene's own Mitsuba integrator (`carried`: max_depth, rr_depth, hide_emitters, seen through
-`moment` and `aov`) with the job's default style. Its scene-relative `auto` values are then pinned
-on this scene (`scene.defaults.resolve_defaults`), so every route that renders the result draws the
-same image.
+The integrator is a prebuilt one as it is; else the given values laid over the scene's own
+`stylized` integrator (also one nested in `moment` or `aov`); else over the scene's carried
+settings (`carried`) with the job's default style. Its `auto` values are then pinned on this scene
+(`scene.defaults.resolve_defaults`), so every route that renders the result draws the same image.
+Design: docs/design/render_pipeline.md.
 """
 from __future__ import annotations
 
@@ -51,8 +48,17 @@ class Resolved:
 
 
 def job_integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
-    """The property values of the job's integrator on this scene; None: the scene's own `stylized`
-    as it is."""
+    """The property values of the job's integrator on this scene (`settings.refine_values`).
+
+    Args:
+        scene: the scene loaded from `job.scene`.
+        job: the job: its given values, its scene source and defines, its default style.
+
+    Returns:
+        The given values laid over the scene's own `stylized` values (also one nested in a
+        wrapper), else over its carried settings with the default style; None where the scene's own
+        `stylized` integrator is used as it is (nothing given).
+    """
     own = scene.integrator()
     given = dict(job.given)
     if isinstance(own, StylizedIntegrator):
@@ -66,7 +72,15 @@ def job_integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
 
 
 def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
-    """The job's integrator before its auto values are pinned (see the module doc)."""
+    """The job's integrator before its `auto` values are pinned (see the module doc).
+
+    Args:
+        scene: the scene loaded from `job.scene`.
+        job: the job: its prebuilt integrator, else its values (`job_integrator_values`).
+
+    Returns:
+        The prebuilt integrator as it is, or a `StylizedIntegrator` built from the values.
+    """
     if job.integrator is not None:
         return job.integrator
     values = job_integrator_values(scene, job)
@@ -77,15 +91,33 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
 
 
 def lanes_for(job: Job) -> tuple[int, str | None]:
-    """Camera samples per pass: the job's, else the device's (`sizing`)."""
+    """Camera samples per pass of a job: the job's, else the device's (`sizing`).
+
+    Args:
+        job: the job; its `lanes_per_pass`, where set, wins.
+
+    Returns:
+        (lanes, note): the note says why the device's size is below its default, else None.
+    """
     if job.lanes_per_pass is not None:
         return int(job.lanes_per_pass), None
     return lanes_per_pass(init())
 
 
 def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
-    """Load (unless `scene`, already loaded from `job.scene`, is given), merge, pin: see the
-    module doc."""
+    """Resolve a job once: load its scene, choose its integrator, pin its `auto` values.
+
+    Args:
+        job: the job to resolve.
+        scene: the scene already loaded from `job.scene` (None: loaded here).
+
+    Returns:
+        The `Resolved` job: scene, integrator (auto values pinned), spp, lanes, the line naming the
+        auto values, the lanes note and the scene-defaults pilot.
+
+    Raises:
+        UsageError: a bad spp, seed or integrator (`scene.arguments.check_render_args`).
+    """
     check_render_args(1 if job.spp is None else job.spp, job.seed, job.integrator)
     if scene is None:
         scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)

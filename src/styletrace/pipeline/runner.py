@@ -5,14 +5,10 @@
     status = runner.write("out.exr", Voice())        # the command line: an exit status
     for prog in runner.passes(): ...                # Blender, the preview: own loop, then finish()
 
-A run is three parts. The resolved job (`resolve.resolve`: the scene loaded, its settings merged,
-`auto` values pinned there, once). An executor that yields a `passes.Progress` after each pass:
-`execute.InProcess` or `execute.OnRay`. A finisher that makes the result of the finished passes:
-`Plain` here, the denoisers' (`denoise.finishers`) and the recorded buffer's
-(`lookdev.record.Recorded`) above. `Runner.check` holds the refusals that depend on the three, one
-copy each, made before anything renders. `write` is the run that ends in files: Ctrl-C or SIGTERM
-stop it after the pass under way (`signals.StopSignals`), a failure after a finished pass keeps it,
-and either way the finished passes are written (atomically, `images`).
+A run is a resolved job (`resolve.resolve`), an executor yielding a `passes.Progress` after each
+pass (`execute.InProcess`, `execute.OnRay`) and a finisher making the result (`Plain` here, the
+denoisers' of `denoise.finishers`, `lookdev.record.Recorded`). `Runner.check` holds the refusals
+that depend on the three. Design: docs/design/render_pipeline.md.
 """
 from __future__ import annotations
 
@@ -55,25 +51,72 @@ class Finisher:
     plain_note = ""
 
     def check(self, resolved: Resolved, executor: Any) -> None:
-        """Refusals of this finisher (one line each), before anything renders."""
+        """Refusals of this finisher (one line each), before anything renders.
+
+        Args:
+            resolved: the resolved job. executor: the run's executor (`local`: whether in process).
+
+        Raises:
+            UsageError: what this finisher cannot finish (the base refuses nothing).
+        """
 
     def source(self, resolved: Resolved, executor: Any, lock: Any) -> Iterator[Progress]:
+        """The run's passes (the base: the executor's, as they are).
+
+        Args:
+            resolved: the resolved job. executor: the run's executor.
+            lock: held while the running sum changes.
+
+        Returns:
+            An iterator of `Progress`.
+        """
         return executor.source(resolved, lock)
 
     def ready(self, prog: Progress | None) -> bool:
-        """Whether the finished passes make a result (some finishers need a pass on every pixel)."""
+        """Whether the finished passes make a result (some finishers need a pass on every pixel).
+
+        Args:
+            prog: the last finished pass's `Progress`, or None before the first.
+
+        Returns:
+            True where a result can be made (the base: after any pass).
+        """
         return prog is not None
 
     def result(self, prog: Progress) -> Any:
-        """The Python API's result of the finished passes: the image, or (image, aovs)."""
+        """The Python API's result of the finished passes.
+
+        Args:
+            prog: the last finished pass's `Progress`.
+
+        Returns:
+            The image, or (image, aovs) where the integrator has error AOVs.
+        """
         return (prog.image, prog.aovs) if prog.aovs is not None else prog.image
 
     def write(self, prog: Progress, output: str, pixel_format: str) -> Written:
+        """Write the result of the finished passes (the base: the image, with its error AOVs).
+
+        Args:
+            prog: the last finished pass's `Progress`. output: the image's path.
+            pixel_format: the film's pixel format (`scene.loading.film_format`).
+
+        Returns:
+            What was written (`Written`: another path where the target could not be replaced).
+        """
         return Written(save_safely(prog.image, output, pixel_format, prog.aovs), image=prog.image)
 
     def write_plain(self, prog: Progress, output: str, pixel_format: str) -> str:
         """The finished passes as they are, written without Mitsuba (its writer waits for a running
-        kernel)."""
+        kernel).
+
+        Args:
+            prog: the last finished pass's `Progress`. output: the image's path.
+            pixel_format: the film's pixel format.
+
+        Returns:
+            The path written.
+        """
         return save_safely(prog.image, output, pixel_format, prog.aovs, plain=True)
 
 
@@ -90,9 +133,16 @@ class Voice:
 
 
 class Runner:
-    """A resolved job run by an executor (`execute.InProcess`, `execute.OnRay`), finished by a
-    finisher (default `Plain`; module doc). Raises the refusals of `check` (UsageError, one line)
-    when made."""
+    """A resolved job run by an executor and finished by a finisher (see the module doc).
+
+    Args:
+        resolved: the resolved job (`resolve.resolve`).
+        executor: `execute.InProcess` or `execute.OnRay`.
+        finisher: what makes the result (None: `Plain`).
+
+    Raises:
+        UsageError: a refusal of `check` (one line), made here.
+    """
 
     def __init__(self, resolved: Resolved, executor: Any, finisher: Finisher | None = None):
         self.resolved, self.executor = resolved, executor
@@ -120,8 +170,17 @@ class Runner:
                              "image only")
 
     def check_output(self, output: str) -> str:
-        """Refusals of the output file (its format, the memory of its write); returns the film's
-        format."""
+        """Refusals of the output file (its format, the memory of its write).
+
+        Args:
+            output: the image's path; its extension decides the format.
+
+        Returns:
+            The film's pixel format.
+
+        Raises:
+            UsageError: a format the film cannot be written in, too little memory, aovs but no .exr.
+        """
         fmt = film_format(self.resolved.scene)
         ext = os.path.splitext(output)[1].lower()
         try:
@@ -135,15 +194,36 @@ class Runner:
         return fmt
 
     def passes(self, lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
-        """The passes, the running state after each (a caller may stop taking them at any time)."""
+        """The passes, the running state after each (a caller may stop taking them at any time).
+
+        Args:
+            lock: held while the running sum changes (default: no lock).
+
+        Returns:
+            An iterator of `Progress`.
+        """
         return self.finisher.source(self.resolved, self.executor, lock)
 
     def finish(self, prog: Progress) -> Any:
-        """The result of the finished passes up to `prog` (the finisher's)."""
+        """The result of the finished passes up to `prog` (the finisher's).
+
+        Args:
+            prog: the last finished pass's `Progress`.
+
+        Returns:
+            The finisher's result: the image, or (image, aovs).
+        """
         return self.finisher.result(prog)
 
     def result(self, callback: Callable[[Progress], None] | None = None) -> Any:
-        """Every pass, then the result (`callback` after each pass)."""
+        """Every pass, then the result.
+
+        Args:
+            callback: called with the `Progress` after each pass, or None.
+
+        Returns:
+            The finisher's result (`finish`).
+        """
         prog = None
         for prog in self.passes():
             if callback is not None:
@@ -151,9 +231,19 @@ class Runner:
         return self.finish(prog)
 
     def write(self, output: str, voice: Voice | None = None) -> int:
-        """Run to files, as the command line does: the exit status (0; 1 where a later pass failed
-        or the image went to another path; 128 + the signal after Ctrl-C or SIGTERM). See the module
-        doc."""
+        """Run to files, as the command line does; Ctrl-C or SIGTERM stop after the pass under way.
+
+        Args:
+            output: the image's path. voice: how the run speaks (None: `Voice()`).
+
+        Returns:
+            The exit status: 0; 1 where a later pass failed or the image went to another path;
+            128 + the signal's number after Ctrl-C or SIGTERM. The finished passes are written.
+
+        Raises:
+            UsageError: a refusal of the output (`check_output`). A pass's own error is raised
+                where no pass that makes a result finished before it.
+        """
         self.written = None
         voice = voice or Voice()
         status = voice.status if voice.status is not None else _Silent()

@@ -13,29 +13,38 @@ import time
 
 
 def one_line(text: str) -> str:
-    """A message as one line: newlines and carriage returns (say, in a file name) escaped."""
+    """A message as one line: newlines and carriage returns (say, in a file name) escaped.
+
+    Args:
+        text: the message (any object: its str).
+
+    Returns:
+        The text with each carriage return and newline written as its escape sequence.
+    """
     return str(text).replace("\r", "\\r").replace("\n", "\\n")
 
 
 def say(message: str) -> None:
+    """Print a message to stderr as one line (`one_line`), flushed.
+
+    Args:
+        message: the message.
+    """
     print(one_line(message), file=sys.stderr, flush=True)
 
 
 class StopSignals:
-    """Ctrl-C (SIGINT) and SIGTERM during a render.
+    """Ctrl-C (SIGINT) and SIGTERM during a render (a context manager that installs the handlers).
 
-    The first signal asks the pass loop to stop after the pass under way. A kernel launch cannot be
-    interrupted, and Python runs signal handlers only between bytecodes, so a watcher thread learns
-    of the signals through `signal.set_wakeup_fd` (Dr.Jit releases the GIL while a kernel runs): if
-    the pass has not finished `GRACE` seconds after the first signal, or a second signal comes, the
-    watcher calls `abandon(signum)`, which writes the finished passes and ends the process
-    (`os._exit`: the kernel is left running). That write must not touch Mitsuba: its EXR writer
-    waits for the kernel (`images.encode_plain`). Exit status: 128 + the signal's number (130 for
-    Ctrl-C, 143 for SIGTERM).
+    The first signal asks the pass loop to stop after the pass under way. If that pass has not
+    finished `GRACE` seconds later, or a second signal comes, a watcher thread calls
+    `abandon(signum)`, which writes the finished passes without Mitsuba and ends the process. Exit
+    status: 128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM).
+    Design: docs/design/stopping_a_render.md.
 
-    A Ctrl-C in the few milliseconds in which Mitsuba's C++ `render` traces a pass goes to Mitsuba's
-    own handler (it logs "Received interrupt signal, winding down") instead; the pass then runs on
-    and a further Ctrl-C counts as the first.
+    Args:
+        abandon: called from the watcher thread with the signal's number, under `lock`; it ends the
+            process (`os._exit`).
     """
 
     GRACE = 1.0
@@ -100,10 +109,16 @@ class StopSignals:
 
 
 class Passes:
-    """The passes of a command-line render as they finish: a tqdm bar over the samples per pixel
-    (where there is more than one pass and the command is not quiet), `latest` (the last finished
-    pass's progress, which an `abandon` of `StopSignals` writes) and `failure` (the error of a later
-    pass, which must not cost the finished ones)."""
+    """The passes of a command-line render as they finish.
+
+    `latest`: the last finished pass's progress (what an `abandon` of `StopSignals` writes);
+    `failure`: the error of a later pass, which must not cost the finished ones; `bar`: a tqdm bar
+    over the samples per pixel, or None.
+
+    Args:
+        spp: the render's samples per pixel (the bar's total).
+        total: the number of passes (no bar for one). quiet: no bar.
+    """
 
     def __init__(self, spp: int, total: int, quiet: bool):
         self.latest = self.failure = None
@@ -119,8 +134,14 @@ class Passes:
             )
 
     def follow(self, source, stop: StopSignals) -> None:
-        """Take the passes of `source` until it ends or `stop` has a signal; a KeyboardInterrupt or
-        RuntimeError after a finished pass is kept in `failure` (before one, it is raised)."""
+        """Take the passes of `source` until it ends or `stop` has a signal.
+
+        Args:
+            source: an iterator of `Progress`. stop: the run's `StopSignals`.
+
+        Raises:
+            KeyboardInterrupt, RuntimeError: before a pass finished (after one, kept in `failure`).
+        """
         try:
             for prog in source:
                 if self.bar is not None:

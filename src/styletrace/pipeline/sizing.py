@@ -26,9 +26,17 @@ MemoryQuery = Callable[[], Optional[tuple]]  # () -> (free bytes, total bytes) o
 
 
 def cuda_memory(ordinal: int = 0) -> tuple[int, int] | None:
-    """(free, total) bytes of CUDA device `ordinal` through the driver API (libcuda), None where
-    unavailable. Dr.Jit uses the device's primary context, so retaining it here creates
-    nothing new."""
+    """(free, total) bytes of a CUDA device through the driver API (libcuda).
+
+    Dr.Jit uses the device's primary context, so retaining it here creates nothing new.
+
+    Args:
+        ordinal: the device's index.
+
+    Returns:
+        (free, total) in bytes; (total, total) where the free memory cannot be read; None where the
+        driver or the device is unavailable.
+    """
     try:
         cuda = ctypes.CDLL("libcuda.so.1")
     except OSError:
