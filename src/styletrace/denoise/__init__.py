@@ -1,20 +1,14 @@
 """Denoising at a budget (issue 21): `styletrace.render(..., denoise="expectation" | "image")`.
 
 - `expectation` (`denoise.expectation`): denoise the per-pixel estimate of E[L] at the first
-  stylized vertex, then apply g. Step styles (cel, hatching) stay free of band flips; works through
-  the expectation buffer, which keeps the denoised expectation for millisecond restyles.
+  stylized vertex, then apply g; step styles (cel, hatching) stay free of band flips, and the
+  expectation buffer keeps the denoised expectation for millisecond restyles.
 - `image` (`denoise.image`): render as usual and denoise the final image; the baseline.
 
-Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with albedo and normal guides (through
-mirrors and glass) (`denoise.guides`), or Mitsuba's OptiX denoiser on CUDA (`denoise.oidn`,
-untested). Method, bias and the supported combinations: docs/denoise.md.
-
-`render` takes the pipeline's job (`styletrace.render` builds it from its keywords) and `denoise`
-(auto, expectation, image or off; the default of every front end is auto, or $STYLETRACE_DENOISE:
-`default_method`), `denoise_quality` ("high"), and for `expectation` `coverage` ("auto": 64 points
-per pixel where the style meets D, `denoise.coverage`) and `denoise_uncertainty` (0.3: the style
-averaged over D's residual error, `expectation.spread`; 0 for g of D). Returns the image, or (image,
-aovs) with `aovs=True`.
+Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with albedo and normal guides through
+mirrors and glass (`denoise.guides`), or Mitsuba's OptiX denoiser on CUDA (`denoise.oidn`,
+untested). `default` chooses the method at defaults, `finishers` runs it as the pipeline's
+finisher. Method, bias and the supported combinations: docs/denoise.md.
 """
 from __future__ import annotations
 
@@ -37,11 +31,19 @@ def render_denoised(
     coverage: int | str = "auto",
     denoise_uncertainty: float | None = None,
 ):
-    """`styletrace.render(..., denoise=...)`: the pipeline's `job` (`pipeline.job.Job`) resolved,
-    planned (`finishers.plan`: auto picks expectation where it applies, else renders as the pipeline
-    does and warns `NotDenoised`), and run by the pipeline's runner with the denoiser as its
-    finisher (docs/denoise.md). `cluster`: the passes on Ray, which no denoiser takes (auto renders
-    them undenoised)."""
+    """`styletrace.render(..., denoise=...)`: the job run with a denoiser as its finisher.
+
+    Args:
+        job: the pipeline's `pipeline.job.Job`. callback: called with each pass's `Progress`.
+        denoise: auto (expectation where it applies, else `finishers.plan_finisher`'s choice, with a
+            `NotDenoised` warning where it does not denoise), expectation, image or off.
+        cluster: the passes on Ray, which no denoiser takes (auto renders them undenoised).
+        denoise_quality: OIDN's "high", "balanced" or "fast". coverage: `coverage.check_k`'s k.
+        denoise_uncertainty: `expectation.spread`'s factor (None: 0.3; 0: g of D itself).
+
+    Returns:
+        The image, or (image, aovs) with aovs=True.
+    """
     check_method(denoise)
     from styletrace.denoise.finishers import plan_finisher
     from styletrace.pipeline.execute import executor_for

@@ -1,25 +1,13 @@
 """Coverage points: where g is evaluated once E[L] is denoised, apart from where E[L] was estimated.
 
-    # a Buffer of k first hits per pixel, no children traced
-    cov = points(scene, integrator, k=16, seed=0)
+    cov = points(scene, integrator, field, k=16, seed=0)   # a Buffer of k first hits per pixel
 
-With the expectation denoised, the value of a pixel is the integral over its footprint of g(D(x)),
-and the camera samples with children are only one way of placing the points x. They are an expensive
-one: each carries n child paths. A coverage point is a camera ray to its first hit and nothing more
-(the stylized vertex, its style slot, the radiance before it: the same kernel as a render,
-`record`), so many can be spent per pixel for the cost of a few children, and they are stratified:
-k = m x m points, one jittered point in each cell of an m x m grid over the pixel.
-
-Why: a step style's pixel near a band boundary, and hatching's screen-space line pattern in every
-pixel, is a fraction of the footprint. At s independent points per pixel that fraction has variance
-p (1 - p) / s; on an m x m jittered grid it falls as s^-3/2 for a boundary that is a smooth curve.
-Measured on the Cornell box (BENCHMARKS.md, denoise): with D nearly noise-free, hatching's error at
-32 camera samples per pixel was mostly this sampling of the pattern.
-
-Parameters: `k` points per pixel, a square (1, 4, 9, 16, ...), or "auto" (the default of `render`:
-`DEFAULT_K`, 64, fewer where the image would not fit the buffer's cap); 0 evaluates g at the camera
-samples instead; `seed` the render's seed (the points' stream is `COVERAGE_PASS` passes away from
-the render's own).
+With the expectation denoised, a pixel's value is the integral over its footprint of g(D(x)); the
+camera samples with children are only one, expensive, way of placing the points x. A coverage
+point is a camera ray to its first hit and nothing more (the same kernel as a render, `record`),
+so many can be spent per pixel for the cost of a few children, stratified: k = m x m points, one
+jittered point in each cell of an m x m grid over the pixel.
+Design: docs/design/coverage_points.md.
 """
 from __future__ import annotations
 
@@ -43,8 +31,17 @@ COVERAGE_PASS = 1 << 30
 
 
 def check_k(k) -> int | str:
-    """k as an int, "auto", or a one-line UsageError: "auto", 0 (g at the camera samples) or a
-    square >= 1."""
+    """A coverage value, checked.
+
+    Args:
+        k: "auto", 0 (g at the camera samples) or a square >= 1 (an int, or its digits as text).
+
+    Returns:
+        "auto", or k as an int.
+
+    Raises:
+        UsageError: anything else (one line).
+    """
     if k == AUTO:
         return AUTO
     value = k if isinstance(k, int) and not isinstance(k, bool) else None
@@ -59,9 +56,19 @@ def check_k(k) -> int | str:
 
 
 def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int:
-    """The points per pixel of a render: "auto" is DEFAULT_K, or the largest square whose points fit
-    the buffer's cap (0 where not even one does); a number given must fit the cap (one-line
-    UsageError)."""
+    """The points per pixel of a render.
+
+    Args:
+        k: as `check_k` takes it. width, height: the film's size.
+        max_samples: the buffer's cap (MAX_SAMPLES).
+
+    Returns:
+        For "auto" DEFAULT_K, or the largest square whose points fit the cap (0 where not even one
+        does); a number given, as it is.
+
+    Raises:
+        UsageError: a bad k, or a k whose points do not fit the cap (one line).
+    """
     k = check_k(k)
     pixels = max(1, width * height)
     if k == AUTO:
@@ -76,13 +83,19 @@ def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int
 
 
 class CoverageIntegrator(RecordingIntegrator):
-    """The recording integrator with no children and camera rays placed on an m x m jittered grid in
-    each pixel (lane i of a pass of k spp is pixel i // k's point i % k; the crop widened by the
-    filter's border where the film samples it), each point's film position kept (`pos`: a restyle
-    splats it with the film's filter). The stylized vertex's mean is D there, looked up in the
-    kernel (`expectation.Field.at`: D interpolated, remodulated by the vertex's own albedo, its own
-    emission added), so the pass's image is the denoised render (box filter) and its buffer holds D
-    at every point."""
+    """The recording integrator with no children, its camera rays on an m x m jittered grid per
+    pixel.
+
+    Lane i of a pass of k spp is pixel i // k's point i % k (the crop widened by the filter's
+    border where the film samples it); each point's film position is kept (`pos`: a restyle splats
+    it with the film's filter). The vertex's mean is D there (`expectation.Field.at`), so the pass's
+    image is the denoised render (box filter) and its buffer holds D at every point.
+
+    Args:
+        base: the render's `stylized` integrator. k: points per pixel, a square. field: D and its
+            guides (`expectation.Field`). origin: the film's crop offset (a tile lies at its crop
+            offset minus this in D). scale: D's pixels per film pixel along each axis.
+    """
 
     def __init__(self, base: StylizedIntegrator, k: int, field, origin=(0, 0), scale: int = 1):
         super().__init__(base)
@@ -173,10 +186,19 @@ def points(
     seed: int = 0,
     scale: int = 1,
 ) -> Buffer:
-    """The denoised render at k stratified points per pixel: a Buffer whose means are D at each
-    point (pixel, slot, vertex, L_before as a render's), `buf.image` its image (the render loop's:
-    with a filter other than a box `expectation.attach` replaces it by the buffer's restyle, which
-    splats each point at its own position). `scale`: D's pixels per film pixel (1)."""
+    """The denoised render at k stratified points per pixel (seeded COVERAGE_PASS passes away).
+
+    Args:
+        scene, integrator, seed: the render's. field: D and its guides (`expectation.Field`).
+        k: points per pixel, a square >= 1. scale: D's pixels per film pixel (1).
+
+    Returns:
+        A Buffer whose means are D at each point (pixel, slot, vertex, L_before as a render's) and
+        whose `image` is the pass's (`expectation.attach` restyles it for filters but a box).
+
+    Raises:
+        ValueError: k is not an int >= 1.
+    """
     if not isinstance(k, int) or k < 1:
         raise ValueError(f"points() needs k >= 1 points per pixel, not {k!r}")
     buf = None

@@ -2,21 +2,13 @@
 sample budget.
 
     plan = choose(resolved, method="auto", local=True)
-    # "expectation" | "image" | "off", the pinned job, why not
-    plan.method, plan.resolved, plan.note
+    plan.method, plan.resolved, plan.note   # expectation | image | off, the pinned job, why not
 
-`auto` (the default of every front end, `denoise.default_method`) is `expectation` for a style of
-more than one child where the expectation denoiser applies (`expectation.check`; the `denoise` extra
-installed; an rgb film; one process); `image` for the rest that the image denoiser takes (an affine
-or closed-form style, where both are the same, a per-sample style, first_n_hits, first_object_hit);
-and `off` elsewhere (feature lines, which an image denoiser blurs; Ray), with a one-line note saying
-why. A render that denoises also gets, unless the caller set them:
-- the firefly control of direct application (`firefly` = FIREFLY_K, its floor the scene's median
-  brightness: `estimators.affine.MeanOfN`);
-- without a given spp, the scene's sample count S spent as camera samples times children:
-  spp = max(MIN_SPP, round(SPEND * S / n)) for n children per stylized vertex, about SPEND times the
-  paths of the physically based render at S spp, and at most what the buffer holds (docs/look.md).
-`off` is the paper's estimators exactly: no denoiser, no firefly control.
+`auto` (every front end's default, `default_method`) is `expectation` where the expectation
+denoiser applies to a style of more than one child, `image` where the image denoiser takes the
+render, else `off` with a one-line note (`method_for`). A render that denoises also gets, unless
+the caller set them, the firefly control (`with_firefly`) and, without a given spp, the scene's
+samples spent on children (`pin_denoise_budget`). Design: docs/design/denoise_defaults.md.
 """
 from __future__ import annotations
 
@@ -39,15 +31,28 @@ MIN_SPP = 2
 
 
 def check_method(method) -> str:
-    """`method` if it is one of METHODS, else a one-line UsageError."""
+    """`method` if it is one of METHODS.
+
+    Args:
+        method: the denoising method asked for.
+
+    Returns:
+        `method`.
+
+    Raises:
+        UsageError: any other value (one line).
+    """
     if method not in METHODS:
         raise UsageError(f"bad value {method!r} for denoise: expected one of {', '.join(METHODS)}")
     return method
 
 
 def default_method() -> str:
-    """The default of `--denoise` / `denoise=` in every front end: $STYLETRACE_DENOISE,
-    else auto."""
+    """The default of `--denoise` / `denoise=` in every front end: $STYLETRACE_DENOISE, else auto.
+
+    Raises:
+        UsageError: $STYLETRACE_DENOISE names no method (one line).
+    """
     value = os.environ.get(ENV, "").strip().lower() or "auto"
     if value not in METHODS:
         raise UsageError(f"bad value {value!r} for ${ENV}: expected one of {', '.join(METHODS)}")
@@ -62,8 +67,16 @@ class Plan:
 
 
 def why_not(scene, integrator, local: bool = True, method: str = "expectation") -> str:
-    """Why `method` (expectation or image) cannot denoise `integrator` on `scene` ('' where it can);
-    `local`: the render runs in one process."""
+    """Why `method` cannot denoise `integrator` on `scene`.
+
+    Args:
+        scene: the loaded scene (its film). integrator: the render's integrator.
+        local: the render runs in one process. method: "expectation" or "image".
+
+    Returns:
+        One line saying why not (Ray or several images, no OIDN, a film other than rgb, and for
+        expectation its refusals: `expectation.check_expectation`), or '' where it can.
+    """
     from styletrace.kernel.integrator import StylizedIntegrator
     from styletrace.scene.loading import film_format
     if not local:
@@ -88,8 +101,15 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
 
 
 def nonlinear(integrator) -> bool:
-    """Whether the first stylized level applies g to a mean of more than one child, so that
-    denoising the expectation before g differs from denoising the image after it."""
+    """Whether denoising the expectation before g differs from denoising the image after it.
+
+    Args:
+        integrator: the render's integrator.
+
+    Returns:
+        True where the first stylized level applies a style that is not per-sample to a mean of
+        more than one child; False for any integrator but `stylized`.
+    """
     from styletrace.kernel.integrator import StylizedIntegrator
     if not isinstance(integrator, StylizedIntegrator):
         return False
@@ -100,11 +120,19 @@ def nonlinear(integrator) -> bool:
 
 def method_for(scene, integrator, method: str | None = None, local: bool = True, samples: int = 0
                ) -> tuple[str, str]:
-    """(expectation | image | off, the one-line note where auto could not denoise, else ''). auto:
-    expectation for a style of more than one child where it applies; else image (an affine or
-    closed-form style, a per-sample style, where the expectation's denoiser refuses); else off.
-    `samples`: the camera samples of a given spp (width x height x spp), which the expectation's
-    buffer must hold; 0 where spp is not given."""
+    """The method a render gets: auto decided (see the module doc), the others as asked.
+
+    Args:
+        scene, integrator: the render's. method: auto, expectation, image, off (None: the default).
+        local: the render runs in one process. samples: the camera samples of a given spp (width x
+            height x spp), which the expectation's buffer must hold; 0 where spp is not given.
+
+    Returns:
+        (expectation | image | off, the one-line note where auto could not denoise, else '').
+
+    Raises:
+        UsageError: an unknown method.
+    """
     method = check_method(method or default_method())
     if method != "auto":
         return method, ""
@@ -123,7 +151,15 @@ def method_for(scene, integrator, method: str | None = None, local: bool = True,
 
 
 def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
-    """The plan of a resolved job (`pipeline.resolve.Resolved`) for `method` (None: the default)."""
+    """The plan of a resolved job: its method, and the job with the values chosen for it pinned.
+
+    Args:
+        resolved: the resolved job (`pipeline.resolve.Resolved`).
+        method: auto, expectation, image or off (None: the default). local: in one process.
+
+    Returns:
+        The `Plan`: the method, the job (`pin_denoise_budget`'s where it denoises), the note.
+    """
     w, h = resolved.size
     given = 0 if resolved.job.spp is None else w * h * int(resolved.spp)
     method, note = method_for(resolved.scene, resolved.integrator, method, local, given)
@@ -133,9 +169,16 @@ def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
 
 
 def with_firefly(scene, integrator, method: str, pilot=None):
-    """(`integrator` with the firefly control a render of `method` gets at its default, the note
-    naming the values chosen): on where the render denoises, unless `firefly` was given or error
-    AOVs (which describe the paper's estimator) are on."""
+    """The firefly control a render of `method` gets at its default: on where it denoises, unless
+    `firefly` was given or error AOVs (which describe the paper's estimator) are on.
+
+    Args:
+        scene: the scene. integrator: the `stylized` integrator. method: the chosen method.
+        pilot: the scene-defaults pilot to measure the control's floor with (None: a new one).
+
+    Returns:
+        (the integrator, with firefly = FIREFLY_K pinned where it applies; the note naming it).
+    """
     from styletrace.scene.defaults import pin_firefly
     s = integrator.settings
     if method == "off" or s.firefly is not None or s.aovs:
@@ -145,7 +188,16 @@ def with_firefly(scene, integrator, method: str, pilot=None):
 
 def pin_denoise_budget(resolved, method: str):
     """`resolved` with the firefly control on and, without a given spp, the budget spent on
-    children."""
+    children.
+
+    Args:
+        resolved: the resolved job. method: "expectation" or "image".
+
+    Returns:
+        A copy with the firefly control (`with_firefly`) and, where spp was not given and n > 1,
+        spp = max(MIN_SPP, round(SPEND * S / n)) for the scene's S (expectation: within the
+        buffer's cap); its `auto` line names the values. Other integrators: as they are.
+    """
     from styletrace.kernel.integrator import StylizedIntegrator
     integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
     if not isinstance(integrator, StylizedIntegrator):

@@ -18,6 +18,7 @@ QUALITY = "balanced"
 
 
 def available() -> bool:
+    """Whether pyoidn (the `denoise` extra) is installed."""
     try:
         import pyoidn  # noqa: F401
     except ImportError:
@@ -26,6 +27,15 @@ def available() -> bool:
 
 
 def draft(buf: Buffer, scene, seed: int, quality: str = QUALITY) -> bool:
+    """Denoise the draft buffer's expectation in place (`expectation.attach`, k = 0).
+
+    Args:
+        buf: the draft buffer (first_hit, a buffer of means). scene: its scene.
+        seed: the render's seed. quality: OIDN's quality (QUALITY: "balanced").
+
+    Returns:
+        True when the buffer now holds D; False without pyoidn or for another kind of buffer.
+    """
     if not available() or buf.stylize != "first_hit" or buf.stores != "mean":
         return False
     from styletrace.denoise.expectation import attach

@@ -1,37 +1,14 @@
 """Denoising the expectation before the style: `--denoise expectation`.
 
-    image, buf = render(scene, integrator, spp=16, seed=0, quality="high")
+    image, buf = render_denoised_expectation(scene, integrator, spp=16, seed=0, quality="high")
 
-Per camera sample the renderer records (as `lookdev.record` does for an expectation buffer) the
-stylized vertex, the radiance before it and the mean of its n children, the estimate of E[L] there.
-Per pixel the means of the camera samples that found a stylized vertex, less each one's own emission
-(`own_surface`), are averaged: the pixel's estimate of the reflected part of the expectation, M. M
-is denoised by OIDN with albedo and normal guides (`guides`, `oidn`), giving D, and every such
-camera sample then takes its own style slot's g of D interpolated at its own film position
-(`at_samples`: guided bilinear, so a threshold crossing is placed within the pixel; remodulated by
-its own albedo; its own emission added back) at its own vertex (hatching's lines and per-object
-styles stay per sample): value = g(D(sample), vertex); pixel = mean of its samples. D at the samples
-is kept in the buffer (`denoised_mean`, 3 x samples, in place of the children's means when
-restyling), so a restyle of the buffer (`lookdev.restyle`) styles D too, at the usual milliseconds.
-
-Why before g: a step style (cel, hatching) turns the noise of M into band flips, which a denoiser of
-the final image sees as edges and keeps; the noise of M itself is the smooth Monte Carlo noise
-denoisers are trained on. The price is the denoiser's bias (docs/denoise.md).
-
-Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `max_samples` the buffer's cap
-(`lookdev.buffer.MAX_SAMPLES`, 4,194,304 camera samples).
-
-Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the `direct`
-and `affine` estimators, fixed counts n. Refused, one line each (`check`): first_object_hit,
-first_n_hits / stylize_depth > 1, lines, reuse, adaptive counts, the unbiased estimators, the
-expansion pass, per-sample styles (acp), Ray (cluster=), films other than rgb (the buffer's own
-conditions).
-
-Films with a reconstruction filter other than a box (`lookdev.film_filter`): M stays the mean of
-each pixel's own camera samples (its guides too: `guides.first_hit(footprint="pixel")`), D is
-looked up at each sample's own film position, and the image is the samples' (or the coverage
-points') values splatted with the film's filter and developed as the film does
-(`lookdev.restyle.accumulate`).
+Per camera sample the renderer records the stylized vertex, the radiance before it and the mean of
+its children (`lookdev.record`). Per pixel M averages those means, less each sample's own emission
+(`expectation`); OIDN denoises M with the guides into D (`attach`), and every camera sample takes
+its own slot's g of D interpolated at its own film position (`at_samples`), or with coverage g is
+evaluated at k stratified points per pixel (`coverage`). D at the samples is kept in the buffer
+(`DENOISED`), so a restyle styles D too. Supported and refused: `check_expectation`.
+Design: docs/design/expectation_denoising.md.
 """
 from __future__ import annotations
 
@@ -61,8 +38,18 @@ DENOISED = "denoised_mean"
 
 
 def check_expectation(integrator) -> None:
-    """Refuse, in one line, what the expectation denoiser does not support (see the module
-    docstring)."""
+    """Refuse what the expectation denoiser does not support.
+
+    Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the
+    `direct` and `affine` estimators, fixed counts n (films other than rgb: the buffer's refusal).
+
+    Args:
+        integrator: the render's `stylized` integrator.
+
+    Raises:
+        UsageError: first_object_hit, first_n_hits or stylize_depth > 1, lines, reuse, the expansion
+            pass, another estimator, adaptive counts, a per-sample style (one line each).
+    """
     s = integrator.settings
     why = None
     if s.stylize == "first_object_hit":
@@ -98,8 +85,15 @@ def check_expectation(integrator) -> None:
 
 def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
     """M: per pixel, the mean of its camera samples' children means where a stylized vertex was
-    found (0 where none was), H x W x 3 float32; with `emission` (N x 3, `own_surface`) each
-    sample's own emitted radiance is taken off first (M is then the reflected part alone)."""
+    found (0 where none was).
+
+    Args:
+        buf: the buffer of means. emission: each sample's own emitted radiance (N x 3,
+            `own_surface`), taken off first (M is then the reflected part alone), or None.
+
+    Returns:
+        M, H x W x 3 float32.
+    """
     return (
         _sample_moments(buf, reflected(buf, emission))[1]
         .reshape(buf.height, buf.width, 3)
@@ -108,7 +102,14 @@ def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
 
 
 def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
-    """Each camera sample's children mean, less its own emission where given (N x 3, float64)."""
+    """Each camera sample's children mean, less its own emission where given.
+
+    Args:
+        buf: the buffer of means. emission: N x 3, or None.
+
+    Returns:
+        N x 3 float64.
+    """
     mean = buf.arrays["mean"].astype(np.float64).T
     return mean if emission is None else mean - emission
 
@@ -141,8 +142,15 @@ def _sample_moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = 
 
 
 def raster(scene, p: np.ndarray) -> np.ndarray:
-    """Each vertex's position on the film in pixels of the crop window (N x 2): where its camera ray
-    left the sensor, found by projecting the vertex (`Sensor.sample_direction`'s uv)."""
+    """Each vertex's position on the film in pixels of the crop window: where its camera ray left
+    the sensor, found by projecting the vertex (`Sensor.sample_direction`'s uv).
+
+    Args:
+        scene: the scene (its first sensor). p: the vertices, 3 x N.
+
+    Returns:
+        N x 2 float64.
+    """
     sensor = scene.sensors()[0]
     it = dr.zeros(mi.Interaction3f, p.shape[1])
     it.p = mi.Point3f(*(mi.Float(np.ascontiguousarray(p[i])) for i in range(3)))
@@ -155,22 +163,19 @@ def raster(scene, p: np.ndarray) -> np.ndarray:
 
 
 def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) -> np.ndarray:
-    """D at each camera sample's own film position (3 x N): bilinear between the four nearest pixel
-    centres, keeping only the pixels that show the sample's own surface (normal within ~18 degrees,
-    the pixel's first hit within ~6 degrees of the sample's tangent plane, albedo within 0.05),
-    renormalised; the sample's own pixel's D where none qualifies or the projection fails (a camera
-    model without one).
+    """D at each camera sample's own film position, remodulated by its albedo, its emission added.
 
-    Why: at a cel threshold the reference's band boundary runs through pixels, and its camera
-    samples fall on either side of it; D constant per pixel puts the whole pixel on one side.
-    Interpolating D at the sample's position places the boundary to a fraction of a pixel
-    (BENCHMARKS.md: ~18% lower MSE on the Cornell box at n = 32; the choice was made there). The
-    guide tests keep the interpolation from mixing surfaces across geometric edges and
-    texture edges.
+    Bilinear between the four nearest pixel centres that show the sample's own surface
+    (`Field.lookup`), renormalised; the own pixel's D where none does or the projection fails.
 
-    `own`: (albedo, emission) at each sample's vertex (`own_surface`). D is the reflected part, M
-    formed without the emission (`attach`): each sample's own emission is added back after the
-    interpolation and the remodulation."""
+    Args:
+        buf: the buffer of means. d: D, H x W x 3 (the reflected part). scene: the scene.
+        g: the pixel-footprint guides. own: (albedo, emission) at each sample's vertex, N x 3 each
+            (`own_surface`).
+
+    Returns:
+        3 x N float32.
+    """
     a = buf.arrays
     own_albedo, emission = own
     w = buf.width
@@ -214,7 +219,12 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
 
 class Field:
     """D and its guides as Dr.Jit arrays, for lookups inside a kernel (`lookup`, `at`): `at_samples`
-    for the camera samples, `coverage.CoverageIntegrator` for its points."""
+    for the camera samples, `coverage.CoverageIntegrator` for its points.
+
+    Args:
+        d: D, H x W x 3. g: the pixel-footprint guides (`guides.Guides`).
+        diag: the scene's bounding-box diagonal (the scale of the same-surface test's tolerance).
+    """
 
     def __init__(self, d: np.ndarray, g: guides.Guides, diag: float):
         #: whether D is the reflected part alone (`EMISSION_APART`): a lookup adds the vertex's own
@@ -240,18 +250,19 @@ class Field:
         return mi.Vector3f(dr.gather(mi.Vector3f, img, idx, mask))
 
     def lookup(self, fx, fy, ps, ns, pix, valid, near=None, albedo=None):
-        """Sums over the four pixel centres around film position (fx, fy) (pixels of the crop
-        window) of a vertex at ps with normal ns in pixel pix: (sum of w D, sum of w albedo, sum of
-        w), w the bilinear weight where the pixel shows the vertex's own surface (normal within ~18
-        degrees, the pixel's first hit within ~6 degrees of the vertex's tangent plane, albedo
-        within 0.05 of the vertex's own `albedo`, or of pix's where that is not given or not
-        finite), 0 elsewhere. `valid` masks the lanes; `near` (default `valid`) those whose film
-        position can be trusted (w = 0 elsewhere).
+        """Sums over the four pixel centres around film position (fx, fy) of w D, w albedo and w;
+        w: the bilinear weight where the pixel shows the vertex's own surface, else 0.
 
-        Why the vertex's own albedo: pix's guide albedo is the mean over its camera samples, so on a
-        silhouette (an orange dragon over a white floor) it matched neither surface; every neighbour
-        failed the test and the vertex took pix's own D, a mix of both surfaces' light (measured:
-        the Cornell box's MSE fell 6-7%, the dragon's cel 13%, BENCHMARKS.md)."""
+        Args:
+            fx, fy: the film position (mi.Float, pixels of the crop window). ps, ns: the vertex's
+                position (mi.Point3f) and normal (mi.Vector3f). pix: its pixel (mi.UInt32).
+            valid: the lanes (mi.Bool). near: those whose position can be trusted (None: `valid`).
+            albedo: the vertex's own albedo (mi.Color3f; None or not finite: pix's guide albedo).
+
+        Returns:
+            (sum of w D, sum of w albedo: mi.Vector3f each; sum of w: mi.Float). Own surface: the
+            normal within ~18 degrees, the hit ~6 degrees of the tangent plane, albedo within 0.05.
+        """
         near = valid if near is None else near
         w, h, get = self.w, self.h, self._get
         fx, fy = fx - 0.5, fy - 0.5
@@ -280,17 +291,19 @@ class Field:
         return acc, acc_a, wsum
 
     def at(self, fx, fy, ps, ns, pix, own_albedo, emission, valid, near=None) -> mi.Color3f:
-        """D for one vertex inside a kernel (`at_samples`, `coverage.CoverageIntegrator`):
-        interpolated (`lookup`; the own pixel's D where no neighbour qualifies), remodulated, its
-        own emission added.
+        """D for one vertex inside a kernel: interpolated (`lookup`), remodulated, emission added.
 
-        Remodulated (`REMODULATE`): D x the vertex's own albedo / the albedo D was formed under (the
-        guide albedo with the same weights), per channel, where both are positive (a NaN albedo:
-        left as it is). Why: a pixel on a texture edge averages two albedos into its M, and so into
-        D (E[L] of a diffuse surface is albedo x irradiance); its samples on the dark side would
-        take the bright side's share and the other way round. The irradiance D / albedo varies
-        slowly across the edge, so each sample takes its own albedo times it. Where the albedos
-        agree (no texture edge in the pixel) the factor is 1."""
+        Remodulated (REMODULATE): D x the vertex's own albedo / the albedo D was formed under (the
+        guide albedo with the same weights), per channel, where both are positive. Design:
+        docs/design/expectation_denoising.md.
+
+        Args:
+            fx, fy, ps, ns, pix, valid, near: as `lookup`'s. own_albedo: the vertex's albedo
+                (mi.Color3f; NaN: left as it is). emission: its own emitted radiance (mi.Color3f).
+
+        Returns:
+            mi.Color3f: D (the own pixel's where no neighbour qualifies), remodulated, + emission.
+        """
         acc, acc_a, wsum = self.lookup(fx, fy, ps, ns, pix, valid, near, own_albedo)
         some = wsum > 1e-6
         inv = dr.rcp(dr.maximum(wsum, 1e-12))
@@ -312,16 +325,18 @@ EMISSION_APART = True
 
 
 def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
-    """(albedo, emission) at each camera sample's own vertex, N x 3 each, at the surface found by a
-    ray from just in front of the vertex (along wo) back onto it.
+    """(albedo, emission) at each camera sample's own vertex, found again by a ray from just in
+    front of the vertex (along wo) back onto it.
 
-    albedo: the albedo guide as `guides.first_hit` forms it (through mirrors and glass,
-    `guides.through_delta`); NaN where the ray does not find the vertex again (`Field.at` then
-    leaves the sample as it is). emission: the radiance the vertex emits towards wo (an area
-    light's, 0 elsewhere and where not found). E[L] at a vertex on a light includes its emission,
-    which no guide tells apart from a coplanar surface of the same albedo (the Cornell box's light
-    in its ceiling): `attach` denoises the reflected part alone and adds each sample's own emission
-    back, so a ceiling sample next to the light does not take the light's."""
+    Args:
+        scene: the scene. a: the buffer's arrays (`p`, `wo`: 3 x N).
+
+    Returns:
+        (albedo, emission), N x 3 float64 each. albedo: as `guides.first_hit` forms it (through
+        mirrors and glass); NaN where the vertex is not found again (`Field.at` then leaves the
+        sample as it is). emission: the radiance the vertex emits towards wo (0 elsewhere and where
+        not found); `attach` denoises the reflected part alone and adds it back per sample.
+    """
     p = np.asarray(a["p"], np.float64)
     wo = np.asarray(a["wo"], np.float64)
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
@@ -353,13 +368,17 @@ RESOLUTION = 1e-3
 
 
 def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """D with the pixels darker than RESOLUTION x the mean brightness of M set to 0.
+    """D with the pixels darker than RESOLUTION x M's mean brightness set to 0, negatives clipped.
 
-    Why: where the expectation is about 0 (a mirror reflecting the empty space behind the camera),
-    OIDN leaks a little of the neighbours' light, with a random hue. Chroma-preserving styles (cel:
-    I level / brightness(I)) amplify that hue into saturated speckle, where the reference, whose I
-    is 0 or neutral there, shows the style's plain level. Below the denoiser's resolution the value
-    carries no information: 0 it is."""
+    Below the denoiser's resolution the value carries no information, only a little of the
+    neighbours' light that OIDN leaks. Design: docs/design/expectation_denoising.md.
+
+    Args:
+        d: D, H x W x 3. m: M, H x W x 3.
+
+    Returns:
+        The new D, H x W x 3.
+    """
     lum = d.mean(-1)
     scale = float(np.mean(m.mean(-1)))
     out = d.copy()
@@ -377,10 +396,19 @@ def attach(
     k: int = 0,
     uncertainty: float = 0.0,
 ):
-    """Denoise the buffer's expectation. k = 0: keep D at each camera sample in the buffer (restyles
-    then style it); returns (D per pixel H x W x 3, None). k > 0: g is evaluated at k stratified
-    points per pixel instead (`coverage.points`, which needs the `integrator`), averaged over D's
-    uncertainty where `uncertainty` > 0 (`spread`); returns (D, the points' buffer)."""
+    """Denoise the buffer's expectation: M formed, denoised into D, g's points placed.
+
+    Args:
+        buf, scene, spp, seed: the recorded buffer of means, its scene, samples per pixel, seed.
+        quality: OIDN's. integrator: the render's (for k > 0). uncertainty: `spread`'s (> 0).
+        k: 0: D kept at each camera sample in the buffer; > 0: g at k points (`coverage.points`).
+
+    Returns:
+        (D per pixel H x W x 3, None) for k = 0; (D, the points' buffer) for k > 0.
+
+    Raises:
+        UsageError: a buffer that does not store means.
+    """
     if buf.stores != "mean":
         raise UsageError(
             "--denoise expectation needs a buffer of children means (direct or affine estimator)"
@@ -420,7 +448,18 @@ UNCERTAINTY = 0.3
 
 
 def check_uncertainty(value) -> float:
-    """`uncertainty` as a float >= 0, or a one-line UsageError naming the value."""
+    """`uncertainty` as a float.
+
+    Args:
+        value: a number from 0 (g of D itself) to 10: D's residual error as a fraction of the noisy
+            estimate's standard error.
+
+    Returns:
+        The float.
+
+    Raises:
+        UsageError: anything else, bools included (one line naming the value).
+    """
     try:
         u = float(value)
     except (TypeError, ValueError):
@@ -435,17 +474,19 @@ def check_uncertainty(value) -> float:
 
 
 def spread(buf: Buffer, emission: np.ndarray, uncertainty: float) -> np.ndarray:
-    """D's relative uncertainty per pixel (H x W float64): `uncertainty` x the relative standard
-    error of M, from the spread of its camera samples' children means (brightness, the emission
-    taken off), its square averaged over the pixel's 3 x 3 neighbourhood (edges repeated), capped at
-    1; a pixel with fewer than 2 samples with a stylized vertex counts 0 in that average.
+    """D's relative uncertainty per pixel: `uncertainty` x the relative standard error of M.
 
-    Why: OIDN leaves part of M's noise, in proportion to it; where D lies within that of a step
-    style's threshold, g(D) is a coin toss between two bands, and the mean of g over the spread
-    (`finish_spread`) is the estimate with the least squared error (docs/denoise.md, step 7). The
-    neighbourhood: a pixel's own few samples give a noisy estimate of its error level, and D at a
-    pixel is formed from its neighbours too (the Cornell box: MSE 2.60e-3 to 2.50e-3 for cel,
-    1.83e-3 to 1.75e-3 for hatching; 5 x 5 gave the same). It goes to 0 as the samples grow."""
+    That error comes from the spread of M's camera samples' children means (brightness,
+    emission taken off), its square averaged over the pixel's 3 x 3 neighbourhood (edges repeated;
+    under 2 samples with a stylized vertex count 0), capped at 1. Design: expectation_denoising.md.
+
+    Args:
+        buf: the buffer of means. emission: each sample's own emission, N x 3.
+        uncertainty: the factor (`check_uncertainty`).
+
+    Returns:
+        H x W float64 in [0, 1]; it goes to 0 as the samples grow.
+    """
     _, mean, var = _sample_moments(buf, reflected(buf, emission).mean(1, keepdims=True))
     mean, var_of_mean = mean[:, 0], np.nan_to_num(var[:, 0])  # below 2 samples: 0
     floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
@@ -464,7 +505,14 @@ def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:
 
 
 def image_of(buf: Buffer) -> np.ndarray:
-    """The buffer's image with its recorded styles (denoised where the buffer holds D)."""
+    """The buffer's image with its recorded styles (denoised where the buffer holds D).
+
+    Args:
+        buf: the buffer.
+
+    Returns:
+        H x W x 3 float32.
+    """
     slots = prepare_slots(buf, slots_for(buf))
     return np.asarray(accumulate(buf, sample_values(buf, slots)), dtype=np.float32).reshape(
         buf.height, buf.width, 3
@@ -472,9 +520,17 @@ def image_of(buf: Buffer) -> np.ndarray:
 
 
 def noisy_variance(buf: Buffer) -> np.ndarray:
-    """The variance of each pixel's *undenoised* estimate from its camera samples' values, (mean of
-    squares - squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines `variance`; NaN
-    below 2 samples."""
+    """The variance of each pixel's *undenoised* estimate from its camera samples' values.
+
+    That is (mean of squares - squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines
+    `variance`; NaN below 2 samples. D, where the buffer holds it, is set aside meanwhile.
+
+    Args:
+        buf: the buffer.
+
+    Returns:
+        H x W x 3 float32.
+    """
     slots = prepare_slots(buf, slots_for(buf))
     held = buf.arrays.pop(DENOISED, None)
     buf.device.clear()
@@ -503,11 +559,19 @@ def render_denoised_expectation(
     lanes_per_pass: int = LANES_PER_PASS,
     pass_spp: int | None = None,
 ) -> tuple[np.ndarray, Buffer]:
-    """The denoised-expectation image (H x W x 3 float32) and its buffer (`buf.image`: the noisy
-    render). `coverage` k > 0: g is evaluated at k stratified first hits per pixel
-    (`coverage.points`), not at the camera samples; the buffer returned is then the coverage points'
-    (`buf.source`: the camera samples'). `lanes_per_pass`, `pass_spp`: the pass split, as
-    `pipeline.passes`."""
+    """The denoised-expectation render: `ExpectationJob`'s passes, then its `finish`.
+
+    Args:
+        scene, integrator, spp, seed, quality, max_samples, label, coverage, uncertainty,
+            lanes_per_pass, pass_spp: as `ExpectationJob`'s. callback: called with each `Progress`.
+
+    Returns:
+        (the image, H x W x 3 float32; its buffer, whose `image` is the noisy render). With coverage
+        k > 0 the buffer is the coverage points' (`buf.source`: the camera samples').
+
+    Raises:
+        UsageError: a refusal of `ExpectationJob` or of its `finish`.
+    """
     job = ExpectationJob(
         scene,
         integrator,
@@ -528,11 +592,19 @@ def render_denoised_expectation(
 
 
 class ExpectationJob:
-    """A denoised-expectation render in two steps, for callers that show and cancel passes (the
-    Blender engine): `passes()` records the noisy buffer pass by pass (`buffer`, whose `image` is
-    the noisy render so far), `finish()` denoises it and applies g, also to the finished passes of a
-    cancelled render. Bad values are refused in one line when the job is made, before
-    anything renders."""
+    """A denoised-expectation render in two steps, for callers that show and cancel passes:
+    `passes()` records the noisy buffer (`buffer`), `finish()` denoises it and applies g.
+
+    Args:
+        scene, integrator: what to render (its error AOVs come from the buffer, `aovs`). spp, seed:
+            the render's. quality: OIDN's. max_samples: the buffer's cap. label: the scene's label.
+        coverage: points per pixel where g meets D (`coverage.resolve_k`). uncertainty: `spread`'s.
+        lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
+
+    Raises:
+        UsageError: no pyoidn, a bad quality, coverage or uncertainty, or an unsupported render
+            (`check_expectation`), refused when the job is made, before anything renders.
+    """
 
     def __init__(
         self,
@@ -613,10 +685,17 @@ class ExpectationJob:
 
 
 def aovs(buf: Buffer, image: np.ndarray) -> dict[str, np.ndarray]:
-    """Honest error AOVs of a denoised-expectation render (docs/denoise.md): the variance of the
-    pixel *before* denoising (not the denoised pixel's error, which no per-pixel statistic here
-    measures), the children per camera sample, and what denoising changed (denoised -
-    noisy image)."""
+    """Honest error AOVs of a denoised-expectation render (docs/denoise.md).
+
+    Args:
+        buf: the render's buffer (for coverage points their `source`, the camera samples, is read).
+        image: the denoised image, H x W x 3.
+
+    Returns:
+        {"noisy_variance": the pixel's variance *before* denoising (not the denoised pixel's error,
+        which no per-pixel statistic here measures), "children": n per camera sample (H x W),
+        "denoise_change": denoised - noisy image}.
+    """
     src = getattr(buf, "source", None) or buf  # coverage points: the camera samples with children
     n = max(int(s["inner"]) for s in src.header["slots"])
     return {

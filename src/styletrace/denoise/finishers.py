@@ -1,13 +1,14 @@
 """The denoisers as a run's finishers, and the run of a resolved job at every front end's default.
 
-    runner, note = plan(resolve(job), method="auto", executor=InProcess(), buffer="b.npz")
+    runner, note = plan_finisher(resolve(job), method="auto", executor=InProcess(), buffer="b.npz")
     image = runner.result()                # or runner.write("out.exr", voice) on the command line
 
 `Expectation` records the expectation buffer pass by pass and, after the last pass or a stop,
-denoises it and applies g (`denoise.expectation.Job`); `Image` denoises the average of the finished
-passes (`denoise.image.finish`). `plan` picks the finisher of a resolved job
-(`denoise.default.choose`: auto, expectation, image or off; off with `buffer` records the buffer,
-`lookdev.record.Recorded`) and returns the one-line note where auto could not denoise.
+denoises it and applies g (`denoise.expectation.ExpectationJob`); `Image` denoises the average of
+the finished passes (`denoise.image.finish_denoised_image`). `plan_finisher` picks the finisher of
+a resolved job (`denoise.default.choose`: auto, expectation, image or off; off with `buffer`
+records the buffer, `lookdev.record.Recorded`) and returns the one-line note where auto could not
+denoise.
 """
 from __future__ import annotations
 
@@ -26,7 +27,12 @@ NOT_DENOISED = ", NOT denoised (the pass under way did not end)"
 
 class Denoised(Finisher):
     """What both denoisers share: OIDN and an rgb film required, a pass on every pixel before a
-    result."""
+    result.
+
+    Args:
+        quality: OIDN's "high", "balanced" or "fast".
+        buffer: the file to keep the denoised expectation buffer in (None; `Image` refuses one).
+    """
     how = ", denoised,"
     local = LOCAL
     plain_note = NOT_DENOISED
@@ -50,11 +56,17 @@ class Denoised(Finisher):
 
 
 class Expectation(Denoised):
-    """The per-pixel expectation denoised before g (`denoise.expectation`); `buffer`: the file that
-    keeps the denoised buffer (the command line's --buffer), `keep`: called with it (Blender's
-    Record buffer), `max_samples`: the buffer's cap. `live`: D also attached after every pass to the
-    buffer so far, at its camera samples (`expectation.attach`, k = 0), so a restyle of it styles D
-    (the preview's)."""
+    """The per-pixel expectation denoised before g (`denoise.expectation`).
+
+    Args:
+        quality: OIDN's quality. buffer: the file to keep the denoised buffer in, or None.
+        label: the buffer's scene label ('': from the scene). coverage: points per pixel where g
+            meets D (`coverage.check_k`). uncertainty: `expectation.spread`'s (None: UNCERTAINTY).
+        keep: called with the denoised buffer (Blender's Record buffer), or None.
+        max_samples: the buffer's cap (None: MAX_SAMPLES).
+        live: attach D after every pass to the buffer so far, at its camera samples
+            (`expectation.attach`, k = 0), so that a restyle of it styles D (the preview's).
+    """
 
     def __init__(self, quality: str = "high", buffer: str | None = None, label: str = "",
                  coverage: int | str = "auto", uncertainty: float | None = None,
@@ -155,11 +167,19 @@ def plan_finisher(resolved, method: str | None = None, executor: Any = None,
                   buffer: str | None = None,
          quality: str = "high", coverage: int | str = "auto", uncertainty: float | None = None,
          label: str = "", keep: Callable[[Any], None] | None = None) -> tuple[Runner, str]:
-    """(the run of `resolved` for `method` (None: the default, `default.default_method`), the
-    note where auto could not denoise). `executor`: the pipeline's (default in process);
-    `buffer`: a file for the expectation buffer; `keep`: called with the buffer kept for
-    restyles; the rest as `Expectation`'s. Raises the refusals of the run (UsageError, one line)
-    before anything renders."""
+    """The run of a resolved job with the finisher of its denoising method.
+
+    Args:
+        resolved: the resolved job. method: auto, expectation, image, off (None: the default).
+        executor: the pipeline's (None: in process). buffer: a file for the buffer, or None.
+        keep: called with the buffer kept. quality, coverage, uncertainty, label: `Expectation`'s.
+
+    Returns:
+        (the `pipeline.runner.Runner`, the one-line note where auto could not denoise, else '').
+
+    Raises:
+        UsageError: a refusal of the run (one line), before anything renders.
+    """
     from styletrace.denoise.default import choose
     from styletrace.pipeline.execute import InProcess
     executor = executor if executor is not None else InProcess()

@@ -1,29 +1,14 @@
 """The denoiser's guides: albedo and shading normal per pixel, seen through mirrors and glass.
 
-    # Guides: albedo, normal, position, surface_normal (H x W x 3 float32)
-    g = first_hit(scene, spp=16, seed=0)
+    g = first_hit(scene, spp=16, seed=0)   # Guides: albedo, normal, position, surface_normal
     g = first_hit(scene, 16, 0, footprint="pixel")   # each pixel the mean inside it, any filter
 
-Parameters: `spp` camera samples per pixel (default 16; the render's own count is passed by the
-callers, so the guides cover the pixel as its camera samples do), `seed` (default 0: the render's
-first pass seed). The guide pass is a sampling integrator of its own (`GuidePass`), so `mi.render`
-gives it the render's camera rays; one ray per camera sample, no path continues, so the guides carry
-none of the children's noise.
-
-- `albedo`: the BSDF's diffuse reflectance (Mitsuba's `albedo` AOV: textures included) at the first
-  surface that is not purely specular, times the specular weights of the mirror and glass bounces
-  before it (`through_delta`). Why through: E[L] at a mirror's vertex is the reflected surface's
-  radiance, whose texture and shadow edges OIDN can only keep if the guide shows them; a constant
-  guide there let it blur the reflected checkerboard (the floor-and-mirror scene of
-  `benchmarks/denoise.py`). OIDN's documentation recommends this for perfect specular surfaces. A
-  surface with no diffuse reflectance (a rough conductor) gets 1 there: 0 would tell OIDN "black,
-  nothing to keep".
-- `normal`: the world-space shading normal of that same surface (OIDN's guide).
-- `position`, `surface_normal`: the first hit's mean position and shading normal, the camera
-  sample's own vertex (`denoise.expectation.at_samples` compares them with a sample's vertex).
-Pixels where the camera ray escapes get 0 everywhere (OIDN's convention for "nothing there"); a
-chain that escapes after a specular bounce keeps its specular weight as albedo and the last
-surface's normal.
+`albedo`: the diffuse reflectance at the first surface that is not purely specular, times the
+specular weights of the mirror and glass bounces before it (`through_delta`; 1 for a surface
+without diffuse reflectance); `normal`: that surface's world-space shading normal; `position`,
+`surface_normal`: the first hit's own. One ray per camera sample, no path continues, so the
+guides carry none of the children's noise; a pixel whose ray escapes gets 0 everywhere.
+Design: docs/design/denoise_guides.md.
 """
 from __future__ import annotations
 
@@ -49,14 +34,19 @@ class Guides(NamedTuple):
 def through_delta(
     scene: mi.Scene, si: mi.SurfaceInteraction3f, active: mi.Bool
 ) -> tuple[mi.Color3f, mi.Vector3f]:
-    """(albedo, shading normal) of the first surface along si's specular chain that is not
-    purely specular.
+    """(albedo, shading normal) of the first not purely specular surface along si's specular chain.
 
-    At a purely specular surface (only delta lobes: a smooth conductor, smooth glass) the chain goes
-    on along its transmission lobe where it has one (what one sees through glass), else its
-    reflection, and the albedo is weighted by that lobe's weight (Fresnel, tint). One lobe is
-    enabled at a time, so the sampled direction is the lobe's own and no random number decides it:
-    the guide stays noise-free."""
+    At a purely specular surface the chain goes on along its transmission lobe where it has one,
+    else its reflection, one lobe at a time (no random number: the guide stays noise-free), and the
+    albedo takes that lobe's weight; DELTA_BOUNCES bounces at most.
+
+    Args:
+        scene: the scene. si: the first hits, mi.SurfaceInteraction3f. active: the lanes, mi.Bool.
+
+    Returns:
+        (albedo: mi.Color3f, normal: mi.Vector3f); a chain that escapes keeps its specular weight as
+        albedo and the last surface's normal, one still specular after DELTA_BOUNCES its weight.
+    """
     throughput = mi.Color3f(1.0)
     albedo = mi.Color3f(0.0)
     normal = mi.Vector3f(si.sh_frame.n)
@@ -90,7 +80,11 @@ def through_delta(
 
 
 class GuidePass(mi.SamplingIntegrator):
-    """Per camera ray: the guides of the module docstring as AOVs (the image itself is 0)."""
+    """Per camera ray: the guides of the module docstring as AOVs (the image itself is 0).
+
+    Args:
+        props: Mitsuba's plugin properties (None: empty).
+    """
 
     NAMES = ("albedo", "normal", "position", "surface_normal")
 
@@ -111,10 +105,19 @@ class GuidePass(mi.SamplingIntegrator):
 
 
 def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "film") -> Guides:
-    """The guides of the film's crop window. `footprint`: "film" forms each pixel as the film does
-    (its reconstruction filter: the guides of a rendered image, `--denoise image`); "pixel" as the
-    mean of camera samples inside the pixel (a box: the guides of a per-pixel mean of samples,
-    `--denoise expectation`'s M). The two are the same for a film with a box filter."""
+    """The guides of the film's crop window, H x W x 3 float32 each.
+
+    Args:
+        scene: the scene. spp: camera samples per pixel (callers pass the render's, so the guides
+            cover the pixel as its samples do). seed: the seed (callers: the render's first pass's).
+        footprint: "film" forms each pixel as the film does (its reconstruction filter: the guides
+            of a rendered image, `--denoise image`); "pixel" as the mean of camera samples inside
+            the pixel (a box: the guides of a per-pixel mean, `--denoise expectation`'s M). The two
+            are the same for a film with a box filter.
+
+    Returns:
+        The `Guides`.
+    """
     if footprint == "pixel" and not scene.sensors()[0].film().rfilter().is_box_filter():
         img = _in_pixels(scene, int(spp), int(seed))
     else:
@@ -140,7 +143,14 @@ def _in_pixels(scene: mi.Scene, spp: int, seed: int) -> np.ndarray:
 
 
 def to_sensor(scene: mi.Scene):
-    """The world-to-camera transform (OptiX wants the normals in the sensor's frame)."""
+    """The world-to-camera transform (OptiX wants the normals in the sensor's frame).
+
+    Args:
+        scene: the scene (its first sensor).
+
+    Returns:
+        The inverse of the sensor's world transform.
+    """
     return scene.sensors()[0].world_transform().inverse()
 
 

@@ -1,16 +1,11 @@
 """Denoising the final image: `--denoise image`, the baseline.
 
-    image, noisy, aovs = render(scene, integrator, spp=16, seed=0, quality="high")
+    image, noisy, aovs = render_denoised_image(scene, integrator, spp=16, seed=0, quality="high")
 
 The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same
 albedo and normal guides as `--denoise expectation`. Every mode of the renderer works (it is a
 post-process), but a step style's band flips are edges to the denoiser, which keeps them
 (docs/denoise.md, BENCHMARKS.md).
-
-Parameters: `quality` OIDN's "high" (default), "balanced" or "fast"; `lanes_per_pass`/`pass_spp` as
-`pipeline.passes`. With `aovs=True` on the integrator the error AOVs are those of the noisy render,
-renamed (`noisy_variance`, `noisy_bias`, `children`) and joined by `denoise_change` (denoised -
-noisy).
 """
 from __future__ import annotations
 
@@ -25,7 +20,19 @@ from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed, pass
 def render_denoised_image(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
            callback: Callable[[Progress], None] | None = None, lanes_per_pass: int = LANES_PER_PASS,
            pass_spp: int | None = None) -> tuple[np.ndarray, np.ndarray, dict | None]:
-    """(denoised image, noisy image, honest AOVs or None), H x W x 3 float32."""
+    """Render in passes (`pipeline.passes.passes`), then denoise the final image.
+
+    Args:
+        scene, integrator: what to render. spp: samples per pixel. seed: the render's seed.
+        quality: OIDN's "high", "balanced" or "fast". callback: called with each pass's `Progress`.
+        lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
+
+    Returns:
+        (denoised image, noisy image, AOVs or None: `finish_denoised_image`), H x W x 3 float32.
+
+    Raises:
+        UsageError: no pyoidn, a bad quality, or a refusal of the pass loop.
+    """
     oidn.require()
     oidn.check_quality(quality)
     prog = None
@@ -40,8 +47,18 @@ def render_denoised_image(scene, integrator, spp: int, seed: int = 0, quality: s
 def finish_denoised_image(
     scene, prog: Progress, seed: int = 0, quality: str = "high"
 ) -> tuple[np.ndarray, np.ndarray, dict | None]:
-    """`render`'s result from the passes' last progress (the finished passes of a stopped render
-    too; the guides take as many camera samples per pixel as they did)."""
+    """The denoised result of the passes' last progress (also the finished passes of a stopped
+    render: the guides take as many camera samples per pixel as they did).
+
+    Args:
+        scene: the scene rendered. prog: the last finished pass's `Progress`.
+        seed: the render's seed (the guides use its first pass's). quality: OIDN's quality.
+
+    Returns:
+        (denoised, noisy, aovs), H x W x 3 float32 images; aovs None, or with aovs=True the noisy
+        render's renamed (`noisy_variance`, `noisy_bias`, `children`) and `denoise_change`
+        (denoised - noisy).
+    """
     noisy = np.asarray(prog.image, dtype=np.float32)
     g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0))
     out = oidn.denoise_oidn(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))

@@ -1,15 +1,12 @@
 """The denoiser itself: Intel Open Image Denoise (`pyoidn`) on the CPU, Mitsuba's OptiX denoiser
 on CUDA.
 
-    out = run(color, albedo, normal, quality="high")     # H x W x 3 float32 each, linear HDR
+    out = denoise_oidn(color, albedo, normal, quality="high")   # H x W x 3 float32, linear HDR
 
-Parameters: `quality` "high" (default), "balanced" or "fast" (OIDN's filter qualities; OptiX has
-none). The colour is treated as HDR (`hdr=True`: linear radiance, not display values) and the guides
-as clean (`cleanAux=True`): they come from the same camera rays as the colour and carry no Monte
-Carlo noise of the children, whose noise is the one removed here (docs/denoise.md).
-
-`pyoidn` (and `cffi`) are the `styletrace[denoise]` extra; `require()` refuses in one line
-without it.
+The colour is treated as HDR (`hdr=True`: linear radiance, not display values) and the guides as
+clean (`cleanAux=True`): they come from the same camera rays as the colour and carry no Monte
+Carlo noise of the children, whose noise is the one removed here (docs/denoise.md). `pyoidn` (and
+`cffi`) are the `styletrace[denoise]` extra; `require()` refuses in one line without it.
 """
 from __future__ import annotations
 
@@ -22,7 +19,11 @@ EXTRA = "pip install 'styletrace[denoise]'"
 
 
 def require():
-    """The pyoidn module, or a one-line UsageError naming the extra."""
+    """The pyoidn module.
+
+    Raises:
+        UsageError: pyoidn is not installed (one line naming the extra).
+    """
     try:
         import pyoidn
     except ImportError:
@@ -33,6 +34,17 @@ def require():
 
 
 def check_quality(quality: str) -> str:
+    """`quality` if it is one of OIDN's filter qualities (QUALITIES).
+
+    Args:
+        quality: "high", "balanced" or "fast".
+
+    Returns:
+        `quality`.
+
+    Raises:
+        UsageError: any other value (one line).
+    """
     if quality not in QUALITIES:
         raise UsageError(
             f"bad value {quality!r} for denoise quality: expected one of {', '.join(QUALITIES)}"
@@ -46,7 +58,19 @@ def _as_rgb(a) -> np.ndarray:
 
 
 def denoise_oidn(color, albedo, normal, quality: str = "high", to_sensor=None) -> np.ndarray:
-    """Denoise `color` (H x W x 3 linear radiance) guided by `albedo` and `normal` (H x W x 3)."""
+    """Denoise a colour image with its guides (OptiX on CUDA, where Mitsuba has it; else OIDN).
+
+    Args:
+        color: H x W x 3 linear radiance (NaN, inf as 0). albedo, normal: the guides, H x W x 3.
+        quality: OIDN's "high", "balanced" or "fast" (OptiX has none).
+        to_sensor: the sensor's world-to-camera transform, for OptiX's normals (None: world space).
+
+    Returns:
+        The denoised image, H x W x 3 float32.
+
+    Raises:
+        UsageError: a bad quality, or no pyoidn where OIDN is needed.
+    """
     check_quality(quality)
     color, albedo, normal = _as_rgb(color), _as_rgb(albedo), _as_rgb(normal)
     import mitsuba as mi
