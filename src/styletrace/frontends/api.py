@@ -58,10 +58,19 @@ def render(
     denoise_uncertainty: float | None = None,
     **kw: Any,
 ):
-    """`styletrace.render`: the render pipeline's (`pipeline.execute.render_pipeline`, which
-    documents the arguments). `denoise`: auto (the default, or $STYLETRACE_DENOISE), expectation,
-    image or off; all but off run the job with a denoiser as its finisher, a post-stage
-    (docs/denoise.md); off is the paper's estimators exactly."""
+    """`styletrace.render`: the render pipeline's; a denoiser finishes it unless denoise is off.
+
+    Args:
+        *args, **kw, callback, cluster: as `pipeline.execute.render_pipeline`'s (scene, style, ...).
+        denoise: auto, expectation, image or off (None: $STYLETRACE_DENOISE, else auto).
+        denoise_quality, coverage, denoise_uncertainty: as `denoise.render_denoised`'s.
+
+    Returns:
+        The image, float32 H x W x C, or (image, aovs) with aovs=True.
+
+    Raises:
+        UsageError: an unknown denoise method; a refusal of the run (one line).
+    """
     from styletrace.denoise import check_method, default_method
     method = check_method(denoise if denoise is not None else default_method())
     if method == "off":
@@ -74,15 +83,34 @@ def render(
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,
                     **params: Any) -> StylizedIntegrator:
-    """A `stylized` integrator. Integrator properties (stylize, stylize_depth, max_depth, rr_depth)
-    and the style's parameters go in **params under their names; what is not given takes the default
-    of `config.settings` (`inner`: the style's own count, or one per level: (8, 4))."""
+    """A `stylized` integrator; what is not given takes its default (`config.settings`).
+
+    Args:
+        style, estimator: their names. inner: `inner_samples` (None: the style's; per level (8, 4)).
+        **params: integrator properties (stylize, stylize_depth, max_depth, rr_depth, ...) and the
+            style's parameters, under their names.
+
+    Returns:
+        The StylizedIntegrator.
+
+    Raises:
+        StyletraceError: an unknown name or a bad value (one line).
+    """
     return make_integrator_from(given_values(style, inner, estimator, **params))
 
 
 def make_integrator_from(values: dict[str, Any]) -> StylizedIntegrator:
-    """A `stylized` integrator from its property values (style, style parameters,
-    inner_samples, ...)."""
+    """A `stylized` integrator from its property values (the backend chosen first, `init`).
+
+    Args:
+        values: {name: value} of the style, its parameters, inner_samples and other properties.
+
+    Returns:
+        The StylizedIntegrator.
+
+    Raises:
+        StyletraceError: an unknown name or a bad value (one line).
+    """
     init()
     return StylizedIntegrator.from_values(values)
 

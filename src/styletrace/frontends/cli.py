@@ -52,8 +52,16 @@ def _parse_set(items: Sequence[str]) -> dict[str, str]:
 
 
 def check_output(path: str, scene: str | None = None) -> None:
-    """Fail before rendering, not after, if the image could not be written or would overwrite
-    the scene."""
+    """Fail before rendering, not after, if the image could not be written or would overwrite the
+    scene.
+
+    Args:
+        path: the output image. scene: the scene argument (None: none to compare with).
+
+    Raises:
+        UsageError: the scene's own file, an extension not in IMAGE_TYPES, or a target that
+            cannot be written (`images.check_target`).
+    """
     if (
         scene is not None
         and os.path.exists(scene)
@@ -73,6 +81,14 @@ def check_output(path: str, scene: str | None = None) -> None:
 
 
 def cmd_styles(args) -> int:
+    """`styletrace styles`: every style, its parameters and estimators, on stdout.
+
+    Args:
+        args: the parsed arguments (none used).
+
+    Returns:
+        The exit status, 0.
+    """
     from styletrace.scene.plugins import init
     init()
     from styletrace.config.estimator_registry import applicable
@@ -100,6 +116,14 @@ def cmd_styles(args) -> int:
 
 
 def cmd_lines(args) -> int:
+    """`styletrace lines`: the feature line settings, on stdout.
+
+    Args:
+        args: the parsed arguments (none used).
+
+    Returns:
+        The exit status, 0.
+    """
     from styletrace.scene.plugins import init
     init()
     from styletrace.config import settings
@@ -116,6 +140,14 @@ def cmd_lines(args) -> int:
 
 
 def cmd_estimators(args) -> int:
+    """`styletrace estimators`: every estimator, its forms and parameters, on stdout.
+
+    Args:
+        args: the parsed arguments (none used).
+
+    Returns:
+        The exit status, 0.
+    """
     from styletrace.scene.plugins import init
     init()
     from styletrace.config.estimator_registry import kinds
@@ -129,8 +161,19 @@ def cmd_estimators(args) -> int:
 
 
 def cmd_render(args) -> int:
-    """`styletrace render`: the flags as a job, an executor and a finisher; `pipeline.runner`
-    runs them."""
+    """`styletrace render`: the flags as a job, an executor and a finisher that a runner runs.
+
+    Args:
+        args: the parsed arguments of `styletrace render`.
+
+    Returns:
+        The exit status (`pipeline.runner.Runner.write`; several scenes or frames:
+        `ray_command.frames_command`).
+
+    Raises:
+        UsageError: flags that do not go together (--coverage or --denoise-uncertainty without
+            expectation, --denoise with frames), bad values, or a refusal of the run (one line).
+    """
     from styletrace.denoise import check_method, default_method
     method = check_method(args.denoise or default_method())
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
@@ -183,8 +226,14 @@ def cmd_render(args) -> int:
 
 
 def resolve_with_status(job, status):
-    """The job resolved (`pipeline.resolve`), its long phases named on the status line, the scene's
-    warnings as one line each."""
+    """The job resolved (`pipeline.resolve`), its long phases named on the status line.
+
+    Args:
+        job: the `pipeline.job.Job`. status: the `status.Status` line.
+
+    Returns:
+        The `Resolved` job; the scene's warnings have been said, one line each.
+    """
     from styletrace.jit import backend
     # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
     backend()
@@ -207,15 +256,34 @@ def resolve_with_status(job, status):
 
 def cli_integrator(scene, args, params):
     """The scene's own `stylized` integrator with the flags and --set values the user gave applied
-    on top (a scene without one starts from the command line's default style and keeps the
-    max_depth, rr_depth and hide_emitters of its own Mitsuba integrator, unless a flag says
-    otherwise): `pipeline.resolve`'s."""
+    on top: `pipeline.resolve.choose_integrator`'s.
+
+    A scene without one starts from the command line's default style and keeps the max_depth,
+    rr_depth and hide_emitters of its own Mitsuba integrator, unless a flag says otherwise.
+
+    Args:
+        scene: the loaded scene. args: the parsed arguments (flags, -D). params: the --set values.
+
+    Returns:
+        The integrator, its `auto` values not yet pinned.
+    """
     from styletrace.frontends.command_job import job_of
     from styletrace.pipeline.resolve import choose_integrator as choose
     return choose(scene, job_of(args, params, _parse_defines(getattr(args, "define", []) or [])))
 
 
 def cmd_gallery(args) -> int:
+    """`styletrace gallery`: the paper's result setups and the equal-time section, into a folder.
+
+    Args:
+        args: the parsed arguments (output, quick, size, only, skip).
+
+    Returns:
+        The exit status, 0.
+
+    Raises:
+        UsageError: an unknown setup key, an unusable folder, or a refused setting.
+    """
     from styletrace.frontends import gallery
 
     opts = gallery.QUICK if args.quick else gallery.Options()
@@ -238,8 +306,15 @@ def cmd_gallery(args) -> int:
 
 
 def check_gallery_folder(path: str) -> None:
-    """The gallery's folder may be new, but like `render`'s output its parent folder must exist:
-    fail (or create it) before rendering, not after."""
+    """The gallery's folder: existing and writable, or created now (its parent must exist, as for
+    `render`'s output): a failure comes before rendering, not after.
+
+    Args:
+        path: the folder.
+
+    Raises:
+        UsageError: not a folder, not writable, or it cannot be created.
+    """
     if os.path.exists(path):
         if not os.path.isdir(path):
             raise UsageError(f"bad output {path!r}: expected a folder")
@@ -259,6 +334,11 @@ class Parser(argparse.ArgumentParser):
     """argparse with the project's error format: one line, exit status 2 (no usage dump)."""
 
     def error(self, message):
+        """Exit with the project's one-line error (status 2, no usage dump).
+
+        Args:
+            message: argparse's message.
+        """
         self.exit(2, one_line(f"styletrace: error: {message} (see '{self.prog} --help')") + "\n")
 
 
@@ -386,8 +466,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def add_ray_flags(parser) -> None:
-    """Rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks,
-    checkpoints, resume."""
+    """Add the flags of rendering on Ray (styletrace.pipeline.ray_run): passes and frames as tasks,
+    checkpoints, resume.
+
+    Args:
+        parser: the `render` subcommand's parser.
+    """
     parser.add_argument(
         "--ray",
         nargs="?",
@@ -421,8 +505,12 @@ def add_ray_flags(parser) -> None:
 
 
 def add_setting_flags(parser) -> None:
-    """One flag per integrator property that has one; help and defaults come from the
-    settings table."""
+    """Add one flag per integrator property that has one; help and defaults come from the
+    settings table.
+
+    Args:
+        parser: the `render` subcommand's parser.
+    """
     from styletrace.config import settings
     for p in settings.PROPERTIES:
         if not p.flag:
@@ -455,6 +543,15 @@ def add_setting_flags(parser) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The `styletrace` command.
+
+    Args:
+        argv: the arguments (None: sys.argv[1:]).
+
+    Returns:
+        The exit status: the command's; 2 after a one-line error (a StyletraceError, bad usage);
+        130 after Ctrl-C.
+    """
     try:
         # the flags' help comes from the settings table, which needs the backend: errors there are
         # one line too

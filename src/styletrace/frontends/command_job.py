@@ -16,7 +16,15 @@ from styletrace.pipeline.job import Job
 
 
 def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
-    """The integrator values the user gave: flags that were used, then `--set` values."""
+    """The integrator values the user gave: the setting flags that were used, then `--set` values.
+
+    Args:
+        args: the parsed arguments of `styletrace render`.
+        params: the `--set` values, {name: text}.
+
+    Returns:
+        {property name: value}.
+    """
     from styletrace.config import settings
     given = {p.name: getattr(args, p.name, None) for p in settings.PROPERTIES
              # (properties without a flag come by --set)
@@ -28,8 +36,17 @@ def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
 def job_of(
     args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None
 ) -> Job:
-    """The job of `styletrace render` (`scene`: one of several scene arguments, else
-    `args.scene`)."""
+    """The job of `styletrace render`.
+
+    Args:
+        args: its parsed arguments (size, spp, seed, pass split, setting flags).
+        params: the `--set` values. defines: the `-D` values, or None.
+        scene: one of several scene arguments (None: `args.scene`, its first where a list).
+
+    Returns:
+        The `pipeline.job.Job`; a scene without a `stylized` integrator starts from
+        `settings.COMMAND_LINE_STYLE`.
+    """
     from styletrace.config import settings
     if scene is None:  # `render` takes several scene arguments (frames); a single render the first
         scene = args.scene[0] if isinstance(args.scene, list) and args.scene else args.scene

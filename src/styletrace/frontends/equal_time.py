@@ -1,32 +1,14 @@
 """The gallery's equal-time section: one method against the tree sampler's fixed counts at the
 same time.
 
-    # integrators checked, none rendered
-    for c in equal_time.prepare(gallery.EQUAL_TIME, quick_mode=False):
-        # writes gallery/KEY.png
-        entry, images = equal_time.compare(c, "gallery", size=128, repeats=3)
-    # -> 1: the largest fixed count not slower than the method
-    equal_time.pick([0.10, 0.14, 0.22], 0.18)
-    # -> "loss": a lower error at equal time is the only win
-    equal_time.verdict(0.8)
-
-Protocol, per comparison (that of benchmarks/equal_time.py, on one seed):
-- Every render is 1 camera sample per pixel with seed 0, and so is the reference (direct application
-  with a large inner count): the same seed places the same camera rays, so the error measured is the
-  stylized estimate's, not the pixel noise all renders share. The reference's own error is part of
-  every MSE.
-- Time: wall-clock seconds of `styletrace.render` after one untimed render that compiles the
-  kernels; the median of `repeats` renders (1 in quick mode).
-- The method is timed first. Then the fixed counts n (n doubling) render in increasing order until
-  one takes longer than the method; the count at equal time is the largest n whose time does not
-  exceed the method's, or the smallest n if even that one is slower (then the fixed count gets more
-  time than the method: a comparison in the method's favour, marked in the entry).
-- ratio = MSE(fixed n at equal time) / MSE(method). The verdict is "win" only when ratio > 1: a
-  method that wins at equal inner counts but loses at equal time is reported as a loss.
-
-Each comparison writes `KEY.png` (reference | fixed n at equal time | method, labelled with times
-and errors) and an entry of `gallery.json`; `sheet_md` / `sheet_html` give its part of the
-contact sheet.
+Protocol, per comparison (benchmarks/equal_time.py's, one seed): every render, the reference
+(direct application, a large inner count) included, is 1 camera sample per pixel with seed 0, so
+the error is the stylized estimate's. Time: the median wall-clock seconds of `repeats` renders (1
+in quick mode) after one untimed render that compiles the kernels. The method is timed first, then
+the fixed counts n in increasing order until one is slower; the count at equal time is the largest
+n not slower than the method (else the smallest, marked). ratio = MSE(fixed n) / MSE(method); the
+verdict is "win" only when ratio > 1. Each comparison writes KEY.png and a `gallery.json` entry
+(`compare`). Design: docs/design/equal_time.md.
 """
 from __future__ import annotations
 
@@ -69,17 +51,42 @@ class Comparison:
 
 
 def levels(inner: int | tuple[int, ...]) -> tuple[int, ...]:
+    """A count as the tuple of its levels' counts.
+
+    Args:
+        inner: an inner count, or one per level.
+
+    Returns:
+        The counts, a tuple (of one for a single count).
+    """
     return tuple(inner) if isinstance(inner, (tuple, list)) else (inner,)
 
 
 def fixed_inner(c: Comparison, n: int) -> int | tuple[int, ...]:
+    """The inner count of the fixed render at first-level count n.
+
+    Args:
+        c: the comparison. n: the first-level count.
+
+    Returns:
+        n, or (n, *c.below) where the deeper levels' counts are held constant.
+    """
     return (n, *c.below) if c.below else n
 
 
 def quick(c: Comparison) -> Comparison:
-    """A small reference (QUICK_REFERENCE children per pixel at most) and at most QUICK_COUNTS fixed
+    """The comparison in quick mode.
+
+    A small reference (QUICK_REFERENCE children per pixel at most) and at most QUICK_COUNTS fixed
     counts, all below the reference's: a fixed count equal to the reference's would share its
-    children (same seed) and measure no error at all."""
+    children (same seed) and measure no error at all.
+
+    Args:
+        c: the comparison.
+
+    Returns:
+        The quick Comparison.
+    """
     ref = levels(c.reference)
     cap = max(1, int(round(QUICK_REFERENCE ** (1 / len(ref)))))
     small = tuple(min(n, cap) for n in ref)
@@ -91,36 +98,79 @@ def quick(c: Comparison) -> Comparison:
 
 def pick(fixed_seconds: list[float], method_seconds: float) -> int:
     """Index (in increasing n) of the fixed count at equal time: the largest n whose time does not
-    exceed the method's; 0, the smallest, when every one is slower."""
+    exceed the method's; 0, the smallest, when every one is slower.
+
+    Args:
+        fixed_seconds: the fixed counts' times, in increasing n. method_seconds: the method's.
+
+    Returns:
+        The index.
+    """
     within = [i for i, t in enumerate(fixed_seconds) if t <= method_seconds]
     return max(within) if within else 0
 
 
 def verdict(ratio: float) -> str:
     """'win' when the method's MSE is strictly below the fixed count's at equal time, else 'loss' (a
-    tie at the method's own cost is no win)."""
+    tie at the method's own cost is no win).
+
+    Args:
+        ratio: MSE(fixed n at equal time) / MSE(method).
+
+    Returns:
+        'win' or 'loss'.
+    """
     return "win" if ratio > 1 else "loss"
 
 
 def ratio_of(fixed_mse: float, method_mse: float) -> float:
+    """MSE(fixed) / MSE(method); 1 where both are 0, inf where only the method's is.
+
+    Args:
+        fixed_mse: the fixed count's MSE. method_mse: the method's.
+
+    Returns:
+        The ratio.
+    """
     if method_mse == 0:
         return 1.0 if fixed_mse == 0 else float("inf")
     return fixed_mse / method_mse
 
 
 def describe_comparison(config: dict[str, Any]) -> str:
+    """Integrator keywords as text, "inner=2:16, reuse=pixels, ...".
+
+    Args:
+        config: {keyword: value}; counts are written as `show` writes them.
+
+    Returns:
+        The text.
+    """
     return ", ".join(f"{k}={show(v)}" for k, v in config.items())
 
 
 def show(inner: Any) -> str:
     """A count as the command line writes it: 8, '8:64,4', (64, 64) and gallery.json's [64, 64]
-    as 64,64."""
+    as 64,64.
+
+    Args:
+        inner: a count, a count's text, or one count per level (a tuple or list).
+
+    Returns:
+        The text.
+    """
     return ",".join(str(n) for n in inner) if isinstance(inner, (tuple, list)) else str(inner)
 
 
 def check_comparisons(comparisons: list[Comparison]) -> None:
-    """Build every integrator of the section (refused settings raise StyletraceError) before
-    any renders."""
+    """Build every integrator of the section before any renders.
+
+    Args:
+        comparisons: the comparisons.
+
+    Raises:
+        StyletraceError: a refused setting.
+    """
     from styletrace.frontends import api
     for c in comparisons:
         for inner in (c.reference, fixed_inner(c, c.counts[0])):
@@ -132,7 +182,15 @@ def timed(
     scene: Any, c: Comparison, config: dict[str, Any], repeats: int
 ) -> tuple[np.ndarray, list[float]]:
     """The image and the seconds of `repeats` renders, after one untimed render that compiles
-    the kernels."""
+    the kernels.
+
+    Args:
+        scene: the loaded scene. c: the comparison. config: the render's integrator keywords.
+        repeats: how many renders are timed.
+
+    Returns:
+        (the last render's image, the seconds of each timed render).
+    """
     from styletrace.pipeline.execute import render_pipeline
 
     def once() -> tuple[np.ndarray, float]:
@@ -149,7 +207,15 @@ def timed(
 
 def compare(c: Comparison, out_dir: str, size: int, repeats: int,
             log: Callable[[str], None] = print) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """Render one comparison (module docstring); its gallery.json entry and its three images."""
+    """Render one comparison (see the module doc) and write its figure, `KEY.png`.
+
+    Args:
+        c: the comparison. out_dir: the gallery's folder. size: the image's side in pixels.
+        repeats: timed renders per configuration. log: called with each progress line.
+
+    Returns:
+        (its gallery.json entry, its images: "reference", "fixed" (at equal time), "method").
+    """
     from styletrace.pipeline.execute import render_pipeline
     from styletrace.scene.loading import load_scene
 
@@ -215,14 +281,32 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
 def prepare_comparisons(
     comparisons: list[Comparison], quick_mode: bool = False
 ) -> list[Comparison]:
-    """The comparisons as they will render (`quick` ones in quick mode), every integrator built once
-    so that refused settings raise StyletraceError before anything renders."""
+    """The comparisons as they will render, every integrator built once so that refused settings
+    fail before anything renders.
+
+    Args:
+        comparisons: the section's comparisons. quick_mode: make them `quick`.
+
+    Returns:
+        The comparisons to render.
+
+    Raises:
+        StyletraceError: a refused setting.
+    """
     comparisons = [quick(c) for c in comparisons] if quick_mode else list(comparisons)
     check_comparisons(comparisons)
     return comparisons
 
 
 def headline(e: dict[str, Any]) -> str:
+    """The verdict line of an entry: "win: ..." or "LOSS: ...", with the ratio and the fixed n.
+
+    Args:
+        e: a comparison's gallery.json entry.
+
+    Returns:
+        The line.
+    """
     f = e["fixed"][e["equal_time"]]
     if e["verdict"] == "win":
         return f"win: {e['ratio']:.2f}x lower MSE than fixed n={f['n']} at equal time"
@@ -230,7 +314,14 @@ def headline(e: dict[str, Any]) -> str:
 
 
 def labels(e: dict[str, Any]) -> list[tuple[str, str]]:
-    """(what, numbers) of the three panels: reference, fixed n at equal time, method."""
+    """(what, numbers) of the three panels: reference, fixed n at equal time, method.
+
+    Args:
+        e: a comparison's gallery.json entry.
+
+    Returns:
+        Three (title, times and errors) pairs.
+    """
     f, m = e["fixed"][e["equal_time"]], e["method"]
     note = " (slower than the method: no fixed count is faster)" if e["fixed_slower"] else ""
     return [
@@ -246,7 +337,12 @@ def labels(e: dict[str, Any]) -> list[tuple[str, str]]:
 
 def figure(e: dict[str, Any], images: dict[str, np.ndarray], path: str) -> None:
     """reference | fixed n at equal time | method, tone-mapped as the gallery's PNGs, written
-    atomically."""
+    atomically.
+
+    Args:
+        e: the comparison's entry. images: its "reference", "fixed" and "method" images.
+        path: the PNG's path.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -280,6 +376,14 @@ INTRO = (
 
 
 def rows(e: dict[str, Any]) -> list[tuple[str, str, str, str]]:
+    """The rows of an entry's table, (render, inner, seconds, MSE): reference, fixed n, method.
+
+    Args:
+        e: a comparison's gallery.json entry.
+
+    Returns:
+        Three rows of text cells.
+    """
     f, m = e["fixed"][e["equal_time"]], e["method"]
     return [
         ("reference", show(e["reference"]["inner"]), f"{e['reference']['seconds']:.1f}", ""),
@@ -294,6 +398,14 @@ def rows(e: dict[str, Any]) -> list[tuple[str, str, str, str]]:
 
 
 def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
+    """The section's part of the Markdown contact sheet.
+
+    Args:
+        entries: the comparisons' gallery.json entries.
+
+    Returns:
+        Its lines ([] for no entries).
+    """
     if not entries:
         return []
     e0 = entries[0]
@@ -324,6 +436,14 @@ def sheet_md(entries: list[dict[str, Any]]) -> list[str]:
 
 
 def sheet_html(entries: list[dict[str, Any]]) -> list[str]:
+    """The section's part of the HTML contact sheet.
+
+    Args:
+        entries: the comparisons' gallery.json entries.
+
+    Returns:
+        Its lines ([] for no entries).
+    """
     if not entries:
         return []
     esc = html.escape

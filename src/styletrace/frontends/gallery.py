@@ -1,20 +1,13 @@
 """`styletrace gallery`: the paper's result setups (supplement S5, Figs. 7-12) on the
 built-in dragon.
 
-Each setup renders the dragon scene with one style at several inner sample counts n. Setups with a
-brute-force reference (the colour map at 1024 samples per style evaluation and cel at 4096, as in
-the supplement) also get the mean squared error of every render against it, plotted against n. The
-results land in one folder: PNGs, `mse.png`, `gallery.json` (settings, timings, errors) and a
-contact sheet `index.html` / `index.md`.
-
-The equal-time section (`EQUAL_TIME`, rendered by `equal_time.py`) puts one method of each
-comparison side by side with the fixed count n that renders in the same time, both against a
-brute-force reference on the Cornell box, and says "win" or "LOSS": a method that wins at equal
-inner counts but loses at equal time is a loss. `--only equal_time` runs that section alone, `--skip
-equal_time` leaves it out.
-
-Quick mode (`--quick`) shrinks image size, counts and references so that it finishes in well under a
-minute; CI runs it.
+Each setup renders the dragon with one style at several inner sample counts n; setups with a
+brute-force reference (the colour map at 1024 samples per style evaluation, cel at 4096, as in
+the supplement) also get each render's mean squared error against it, plotted against n. The
+results land in one folder: PNGs, `mse.png`, `gallery.json` and the contact sheet `index.html` /
+`index.md`. The equal-time section (`EQUAL_TIME`, `equal_time.py`) follows; `--only equal_time`
+runs it alone, `--skip equal_time` leaves it out. Quick mode (`--quick`) finishes in well under
+a minute; CI runs it. Design: docs/design/equal_time.md.
 """
 from __future__ import annotations
 
@@ -252,8 +245,18 @@ def keys() -> list[str]:
 
 def select_setups(only: list[str] | None = None,
            skip: list[str] | None = None) -> tuple[list[Setup], list[Comparison]]:
-    """The setups and comparisons to run: those `only` names (all when None) less those `skip`
-    names; `equal_time` names every comparison. ValueError names an unknown key."""
+    """The setups and comparisons to run.
+
+    Args:
+        only: the keys to run (None: all); `equal_time` names every comparison.
+        skip: the keys to leave out (None: none).
+
+    Returns:
+        (setups, comparisons).
+
+    Raises:
+        ValueError: an unknown key (the message names the keys there are).
+    """
     unknown = sorted(set(only or ()).union(skip or ()) - set(keys()))
     if unknown:
         raise ValueError(
@@ -274,12 +277,29 @@ def _quick(setup: Setup) -> Setup:
 
 
 def write_png(image: np.ndarray, path: str) -> None:
+    """Write an image (`images.write_image`, atomically; a .png is sRGB).
+
+    Args:
+        image: H x W x 3, linear. path: the file.
+    """
     from styletrace.images import write_image
     write_image(image, path)
 
 
 def run_gallery(out_dir: str, options: Options = Options(), only: list[str] | None = None,
         log: Callable[[str], None] = print, skip: list[str] | None = None) -> dict[str, Any]:
+    """Render the chosen setups and comparisons into `out_dir`, saving after each comparison.
+
+    Args:
+        out_dir: the folder (made here). options: sizes and counts (`Options`, `QUICK`).
+        only, skip: as `select_setups`'s. log: called with each progress line.
+
+    Returns:
+        The results as gallery.json holds them: options, setups, equal_time, seconds.
+
+    Raises:
+        ValueError: an unknown key. StyletraceError: a refused setting, before any render.
+    """
     from styletrace.pipeline.execute import render_pipeline
     from styletrace.scene.loading import load_scene
 
@@ -363,13 +383,22 @@ def run_gallery(out_dir: str, options: Options = Options(), only: list[str] | No
 
 
 def save(results: dict[str, Any], out_dir: str, started: float) -> None:
-    """gallery.json and the contact sheets of what has rendered so far."""
+    """gallery.json and the contact sheets of what has rendered so far.
+
+    Args:
+        results: the results so far. out_dir: the folder. started: `time.perf_counter()` at start.
+    """
     results["seconds"] = time.perf_counter() - started
     write_text(os.path.join(out_dir, "gallery.json"), json.dumps(results, indent=1))
     write_sheets(results, out_dir)
 
 
 def plot_mse(results: dict[str, Any], path: str) -> None:
+    """Plot each setup's MSE against n (log-log) into a PNG, written atomically.
+
+    Args:
+        results: the results (the setups with a reference are plotted). path: the PNG's path.
+    """
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -395,6 +424,11 @@ def plot_mse(results: dict[str, Any], path: str) -> None:
 
 
 def write_sheets(results: dict[str, Any], out_dir: str) -> None:
+    """Write the contact sheets index.md and index.html.
+
+    Args:
+        results: the results so far. out_dir: the folder.
+    """
     o = results["options"]
     md = [
         "# styletrace gallery",
@@ -453,5 +487,10 @@ def write_sheets(results: dict[str, Any], out_dir: str) -> None:
 
 
 def write_text(path: str, text: str) -> None:
+    """Write a text file atomically (UTF-8).
+
+    Args:
+        path: the file. text: its content.
+    """
     from styletrace.images import write_bytes_atomically
     write_bytes_atomically(text.encode(), path)

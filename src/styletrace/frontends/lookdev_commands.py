@@ -6,8 +6,9 @@
     styletrace preview dragon --port 8765
 
 `render --buffer` runs through the pipeline's runner with `lookdev.record.Recorded`
-(`denoise.finishers.plan`). `cli.build_parser` calls `add_parsers`, handing over its own helpers (so
-this module never imports `cli`); nothing here loads Dr.Jit or Mitsuba before a command runs.
+(`denoise.finishers.plan_finisher`). `cli.build_parser` calls `add_parsers`, handing over its own
+helpers (so this module never imports `cli`); nothing here loads Dr.Jit or Mitsuba before a
+command runs.
 """
 from __future__ import annotations
 
@@ -26,6 +27,15 @@ BUFFER_HELP = (
 
 
 def cmd_restyle(args, parse_set, check_output) -> int:
+    """`styletrace restyle`: a buffer restyled without tracing, written to the output.
+
+    Args:
+        args: the parsed arguments (buffer, style, estimator, set, output).
+        parse_set, check_output: the command line's --set parser and output check.
+
+    Returns:
+        The exit status, 0.
+    """
     check_output(args.output)
     params = parse_set(args.set)
     from styletrace.images import write_image
@@ -40,11 +50,26 @@ def cmd_restyle(args, parse_set, check_output) -> int:
 
 def write_atomically(img, path: str, write_image) -> None:
     """Write an image: `images.write_image` is atomic itself (temporary file beside the target,
-    fsync, rename) and writes through a symbolic link instead of replacing it."""
+    fsync, rename) and writes through a symbolic link instead of replacing it.
+
+    Args:
+        img: the image. path: the target. write_image: the writer (`images.write_image`).
+    """
     write_image(img, path)
 
 
 def cmd_fit(args, parse_set, check_output) -> int:
+    """`styletrace fit`: a style's parameters fitted so that the restyled buffer matches a target.
+
+    Prints the fit's numbers and the `styletrace restyle` command of the fitted values.
+
+    Args:
+        args: the parsed arguments (buffer, style, target, set, fix, iterations, lr, output).
+        parse_set, check_output: the command line's --set parser and output check.
+
+    Returns:
+        The exit status, 0.
+    """
     if args.output:
         check_output(args.output)
     initial = parse_set(args.set)
@@ -82,6 +107,18 @@ def cmd_fit(args, parse_set, check_output) -> int:
 
 
 def cmd_preview(args, parse_set) -> int:
+    """`styletrace preview`: serve the preview page until Ctrl-C.
+
+    Args:
+        args: the parsed arguments (scene, port, style, set, inner, spp, width, height).
+        parse_set: the command line's --set parser.
+
+    Returns:
+        The exit status, 0.
+
+    Raises:
+        UsageError: a port outside 0..65535, or a size or count below 1.
+    """
     params = parse_set(args.set)
     if not 0 <= args.port < 65536:
         raise UsageError(f"bad value {args.port} for --port: expected 0..65535")
@@ -93,6 +130,12 @@ def cmd_preview(args, parse_set) -> int:
 
 
 def add_parsers(sub, parse_set, check_output) -> None:
+    """Add the `restyle`, `fit` and `preview` subcommands.
+
+    Args:
+        sub: the command line's subparsers. parse_set, check_output: its --set parser and output
+            check, handed over so that this module never imports `cli`.
+    """
     r = sub.add_parser(
         "restyle", help="restyle an expectation buffer (from render --buffer) without tracing"
     )

@@ -21,7 +21,17 @@ _ADDRESS = re.compile(r"^(auto|ray://.+|[^\s:/]+:\d+)$")
 
 
 def cluster_of(args) -> str:
-    """The cluster of `--ray [ADDRESS]` (and of `--resume` alone: a local one)."""
+    """The cluster of `--ray [ADDRESS]` (and of `--resume` alone: a local one).
+
+    Args:
+        args: the parsed arguments of `styletrace render`.
+
+    Returns:
+        "local" or the address.
+
+    Raises:
+        UsageError: an address that is not HOST:PORT, ray://HOST:PORT or auto.
+    """
     address = args.ray if args.ray is not None else LOCAL
     if address != LOCAL and not _ADDRESS.match(address):
         raise UsageError(f"bad --ray address {address!r}: expected HOST:PORT, ray://HOST:PORT or "
@@ -30,8 +40,18 @@ def cluster_of(args) -> str:
 
 
 def executor_of(args):
-    """Where the command's passes run: in process (`pipeline.execute.InProcess`), or with `--ray
-    [ADDRESS]` / `--resume` on the cluster (`OnRay`), checkpointed next to the output."""
+    """Where the command's passes run.
+
+    Args:
+        args: the parsed arguments (`ray`, `resume`, `output`, `checkpoint_every`).
+
+    Returns:
+        `pipeline.execute.InProcess`, or with `--ray [ADDRESS]` / `--resume` an `OnRay` on the
+        cluster, checkpointed next to the output (every 10 s unless `--checkpoint-every`).
+
+    Raises:
+        UsageError: a negative `--checkpoint-every`, or a bad address.
+    """
     from styletrace.pipeline.execute import InProcess, OnRay
     if args.ray is None and not args.resume:
         return InProcess()
@@ -43,15 +63,32 @@ def executor_of(args):
 
 
 def frame_paths(output: str, count: int) -> list[str]:
-    """out.png -> out_0000.png, out_0001.png, ..."""
+    """The numbered images of a sequence: out.png -> out_0000.png, out_0001.png, ...
+
+    Args:
+        output: the sequence's output path. count: how many frames.
+
+    Returns:
+        The paths, in frame order.
+    """
     stem, ext = os.path.splitext(output)
     return [f"{stem}_{i:04d}{ext}" for i in range(count)]
 
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
-    """`styletrace render SCENE --frames N [--orbit DEGREES]` or `styletrace render A.xml B.xml
-    ...`: each scene resolved by the render pipeline (`pipeline.resolve`), its frames rendered as
-    Ray tasks."""
+    """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`, on Ray.
+
+    Args:
+        args: the parsed arguments. parse_set, parse_defines: the parsers of --set and -D.
+        check_output: the check of an output path. say: the one-line messages.
+
+    Returns:
+        The exit status: 0, or that of the frame that stopped or failed (130: Ctrl-C between two).
+
+    Raises:
+        UsageError: bad flags or counts, a bad output or scene, or a refusal of the frames' runs,
+            before any frame renders (each scene is resolved first, `pipeline.resolve`).
+    """
     from styletrace.frontends.command_job import job_of
     from styletrace.pipeline.execute import OnRay, ray_job
     from styletrace.pipeline.frames import Manifest, frame_settings, render_frames

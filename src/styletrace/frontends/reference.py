@@ -1,17 +1,12 @@
 """Reference tables for the README and docs/, generated from the registries so they cannot drift.
 
-Markdown files hold blocks between `<!-- reference:NAME -->` and `<!-- /reference -->`; this module
-rewrites each block from the code:
-
-| block | source |
-|---|---|
-| `integrator` | the integrator's properties (`config.settings.PROPERTIES`) |
-| `estimators` | the estimator registry (`config.estimator_registry`) |
-| `style:NAME` | a style's parameters (`styles` registry) |
+Markdown files hold blocks between `<!-- reference:NAME -->` and `<!-- /reference -->`, rewritten
+from the code: `integrator` (the integrator's properties, `config.settings.PROPERTIES`),
+`estimators` (the estimator registry, `config.estimator_registry`) and `style:NAME` (a style's
+parameters, the `styles` registry).
 
     python -m styletrace.frontends.reference            # rewrite README.md and docs/*.md in place
-    # exit 1 if a block is stale (the tests check this too)
-    python -m styletrace.frontends.reference --check
+    python -m styletrace.frontends.reference --check    # exit 1 if a block is stale (tested too)
 """
 from __future__ import annotations
 
@@ -69,6 +64,14 @@ def estimator_table() -> str:
 
 
 def style_table(name: str) -> str:
+    """The parameter table of one style.
+
+    Args:
+        name: the style's registry name.
+
+    Returns:
+        A Markdown table (parameter, type, default, meaning, allowed), or "No parameters.".
+    """
     from styletrace.styles import style_class
     cls = style_class(name)
     if not cls.params:
@@ -80,6 +83,17 @@ def style_table(name: str) -> str:
 
 
 def block(name: str) -> str:
+    """The generated body of a reference block.
+
+    Args:
+        name: "integrator", "estimators" or "style:NAME".
+
+    Returns:
+        Its Markdown table.
+
+    Raises:
+        KeyError: an unknown block name.
+    """
     if name == "integrator":
         return integrator_table()
     if name == "estimators":
@@ -90,15 +104,42 @@ def block(name: str) -> str:
 
 
 def render_file(text: str) -> str:
-    """`text` with every reference block regenerated."""
+    """`text` with every reference block regenerated.
+
+    Args:
+        text: a Markdown file's text.
+
+    Returns:
+        The new text.
+
+    Raises:
+        KeyError: a block of an unknown name.
+    """
     return BLOCK.sub(lambda m: m.group(1) + block(m.group("name")) + m.group(4), text)
 
 
 def files(root: str) -> list[str]:
+    """The files whose blocks are kept: README.md and docs/*.md.
+
+    Args:
+        root: the checkout's root.
+
+    Returns:
+        Their paths.
+    """
     return [os.path.join(root, "README.md")] + sorted(glob.glob(os.path.join(root, "docs", "*.md")))
 
 
 def reference_main(argv=None) -> int:
+    """Rewrite the stale blocks in place, or with --check only name them (on stderr).
+
+    Args:
+        argv: the arguments (None: sys.argv[1:]): --check, and the checkout's root (default: the
+            current folder).
+
+    Returns:
+        The exit status: 1 with --check where a block is stale, else 0.
+    """
     from styletrace.scene.plugins import init
     init()
     args = sys.argv[1:] if argv is None else argv

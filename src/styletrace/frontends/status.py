@@ -4,19 +4,11 @@
     with status.phase("loading scene dragon"):
         scene = load_scene("dragon")
 
-A phase that ends within `delay` seconds (2 by default; `STYLETRACE_STATUS_DELAY` sets it) shows
-nothing, so quick renders stay quiet. A longer one gets a tqdm line, `styletrace: loading scene
-dragon (3 s)`, from a timer thread: the wait itself is in C++ (Mitsuba's loader, Dr.Jit's compiler
-and kernels), which releases the GIL, so the thread runs meanwhile. On a terminal the line is
-redrawn every second; written to a file or pipe it is drawn when it appears and once more, with the
-final time, when the phase ends (no stream of carriage returns in a log). The line goes to stderr
-only, never into the image.
-
-The phases are named by what the command does, honestly: a kernel's first launch includes its JIT
-compilation (or the load of Dr.Jit's cached kernel), and nothing cheaper than Dr.Jit's kernel
-history could tell the two apart, so the first pass is "compiling and rendering". A render of
-several passes has its tqdm bar from the start; `follow` keeps it redrawn, its description saying
-"compiling and rendering pass 1 of N" until the first pass is done, "rendering" after.
+A phase that ends within `delay` seconds (DELAY; $STYLETRACE_STATUS_DELAY sets it) shows nothing;
+a longer one gets a tqdm line, `styletrace: loading scene dragon (3 s)`, from a timer thread,
+redrawn every second on a terminal (drawn once more, with the final time, in a file or pipe).
+The first pass is "compiling and rendering": its time includes the JIT compilation.
+Design: docs/design/status_line.md.
 """
 from __future__ import annotations
 
@@ -36,7 +28,11 @@ DELAY_ENV = "STYLETRACE_STATUS_DELAY"
 
 
 def delay_from_env() -> float:
-    """DELAY, or the value of STYLETRACE_STATUS_DELAY (seconds, finite, >= 0)."""
+    """DELAY, or the value of STYLETRACE_STATUS_DELAY (seconds, finite, >= 0).
+
+    Raises:
+        UsageError: a value that is not such a number.
+    """
     text = os.environ.get(DELAY_ENV)
     if text is None or not text.strip():
         return DELAY
@@ -57,7 +53,13 @@ def _isatty(stream) -> bool:
 
 
 class Status:
-    """At most one phase at a time; `start` ends the phase under way before it begins the next."""
+    """At most one phase at a time; `start` ends the phase under way before it begins the next.
+
+    Args:
+        enabled: show anything at all (False under -q).
+        delay: seconds a phase runs before its line appears (None: `delay_from_env()`).
+        stream: where the line goes (None: stderr).
+    """
 
     def __init__(
         self, enabled: bool = True, delay: float | None = None, stream: IO[str] | None = None
@@ -69,6 +71,11 @@ class Status:
         self._thread: threading.Thread | None = None
 
     def start(self, text: str) -> None:
+        """Begin a phase, ending the one under way; its line appears after `delay` seconds.
+
+        Args:
+            text: what the phase does, e.g. "loading scene dragon".
+        """
         self.stop()
         if not self.enabled:
             return
@@ -80,7 +87,11 @@ class Status:
 
     def follow(self, bar) -> None:
         """A phase shown by a tqdm bar already on screen (the passes' bar): redrawn every second on
-        a terminal, so that its time runs on while a long pass holds its count still."""
+        a terminal, so that its time runs on while a long pass holds its count still.
+
+        Args:
+            bar: the tqdm bar.
+        """
         self.stop()
         if not self.enabled or not _isatty(self.stream):
             return
@@ -103,6 +114,11 @@ class Status:
 
     @contextlib.contextmanager
     def phase(self, text: str) -> Iterator[None]:
+        """The phase `text` for the duration of a `with` block (`start`, then `stop`).
+
+        Args:
+            text: what the phase does.
+        """
         self.start(text)
         try:
             yield
