@@ -1,16 +1,15 @@
-"""styletrace in Blender: a render engine, style panels generated from the registries, an in-process
-exporter from the evaluated depsgraph to a Mitsuba scene, restyling from a recorded buffer, and
-File -> Export -> Mitsuba XML. See docs/blender.md.
+"""styletrace in Blender: a render engine, style panels generated from the registries, an
+in-process exporter from the evaluated depsgraph to a Mitsuba scene, restyling from a recorded
+buffer, and File -> Export -> Mitsuba XML. See docs/blender.md.
 
     import bpy, styletrace.blender
     styletrace.blender.register()
     bpy.context.scene.render.engine = "STYLETRACE"
 
-Modules: `mesh`, `camera`, `lights`, `world`, `materials` convert one kind of datablock each;
-`exporter` walks the depsgraph; `build` makes the Mitsuba objects in process; `xml` writes the same
-description as a file; `properties`/`panels` are the UI; `engine` renders; `restyle` keeps the
-buffer; `operators` export; `extension` builds the Blender extension zip. `units` holds the
-light-unit conversions.
+Modules: `mesh`, `camera`, `lights`, `world`, `materials` convert one kind of datablock each
+(`units`: the light units); `exporter` walks the depsgraph; `build` makes the Mitsuba objects,
+`xml` the file; `properties`, `panels` the UI; `engine`, `f12` render; `restyle`, `operators`,
+`extension`. Design: docs/design/blender_export.md.
 """
 from __future__ import annotations
 

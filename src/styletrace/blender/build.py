@@ -18,7 +18,16 @@ def _value(value: Any) -> Any:
 
 
 def node(d: dict) -> Any:
-    """One description node -> what `mi.load_dict` accepts (a dict, or an object made here)."""
+    """One description node as what `mi.load_dict` accepts: a dict, or an object made here.
+
+    Args:
+        d: a description node. A "blender_mesh" becomes an `mi.Mesh` with its BSDF and emitter,
+            "data" a `mi.Bitmap` (as "bitmap"), a 4x4 array a `mi.ScalarTransform4f`; nested
+            nodes likewise.
+
+    Returns:
+        The dict, or the mesh.
+    """
     import mitsuba as mi
 
     from styletrace.blender.mesh import to_mitsuba
@@ -38,5 +47,12 @@ def node(d: dict) -> Any:
 
 def description_scene_dict(desc: dict) -> dict:
     """The Mitsuba scene dict of a description, for `styletrace.frontends.api.load_scene` or
-    `mi.load_dict`."""
+    `mi.load_dict`.
+
+    Args:
+        desc: the scene description (`exporter.export`).
+
+    Returns:
+        The scene dict, its meshes, images and matrices made in process.
+    """
     return node(desc)

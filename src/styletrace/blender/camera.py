@@ -19,6 +19,14 @@ FLIP = np.diag([-1.0, 1.0, -1.0, 1.0])
 
 
 def resolution(scene) -> tuple[int, int]:
+    """The render's size in pixels: Blender's resolution times its percentage.
+
+    Args:
+        scene: the `bpy.types.Scene`.
+
+    Returns:
+        (width, height), each at least 1.
+    """
     r = scene.render
     pct = r.resolution_percentage / 100.0
     return max(1, int(r.resolution_x * pct)), max(1, int(r.resolution_y * pct))
@@ -38,7 +46,19 @@ def _fit_x(cam, width: int, height: int) -> bool:
 
 
 def sensor(scene, spp: int, obj=None, warn=print) -> dict:
-    """The Mitsuba sensor (with its film and sampler) of the scene's active camera."""
+    """The Mitsuba sensor (with its film and sampler) of the scene's active camera.
+
+    Args:
+        scene: the `bpy.types.Scene` (its render settings). spp: the sampler's sample count.
+        obj: the camera object (None: the scene's active camera). warn: called with a warning
+            line (a shift ignored under depth of field).
+
+    Returns:
+        The sensor description (perspective, thinlens or orthographic; rgb hdrfilm, box filter).
+
+    Raises:
+        ValueError: the scene has no active camera.
+    """
     obj = obj or scene.camera
     if obj is None:
         raise ValueError("the scene has no active camera")

@@ -57,7 +57,11 @@ class StyletraceEngine(bpy.types.RenderEngine):
 
     def progress(self, fraction: float, status: str) -> None:
         """Blender's progress bar and status line; a method of our own, so that a test can read them
-        (Blender's own `update_progress` cannot be replaced on a registered engine)."""
+        (Blender's own `update_progress` cannot be replaced on a registered engine).
+
+        Args:
+            fraction: the progress, in [0, 1]. status: the status line's text.
+        """
         self.update_progress(fraction)
         self.update_stats("", status)
 

@@ -1,7 +1,7 @@
 """The evaluated depsgraph -> a scene description: a Mitsuba scene dict whose meshes are
-`mesh.Part`s and whose images are numpy arrays. `build.scene` turns it into Mitsuba objects in
-process; `xml.write` into a Mitsuba XML file with PLY meshes and EXR images. Both start from this
-one description, so F12 and the exported file render the same scene.
+`mesh.Part`s and whose images are numpy arrays. `build.description_scene_dict` turns it into
+Mitsuba objects in process; `xml.write` into a Mitsuba XML file with PLY meshes and EXR images.
+Both start from this one description, so F12 and the exported file render the same scene.
 
 Objects are visited through `depsgraph.object_instances`. A mesh placed once is written in world
 space, one shape per material slot. A mesh that is drawn as an instance (collection instances,
@@ -26,6 +26,12 @@ def _material_style(material) -> dict | None:
 
 
 class Exporter:
+    """The exporter of one evaluated depsgraph (`export`); each material is converted once.
+
+    Args:
+        depsgraph: the evaluated depsgraph. spp: the sensor's sample count.
+        warn: called with each warning line (an unsupported light, node or camera setting).
+    """
     def __init__(self, depsgraph, spp: int = 16, warn: Callable[[str], None] = print):
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
@@ -117,5 +123,13 @@ class Exporter:
 
 
 def export(depsgraph, spp: int = 16, warn: Callable[[str], None] = print) -> dict:
-    """The scene description of an evaluated depsgraph (see the module docstring)."""
+    """The scene description of an evaluated depsgraph (see the module docstring).
+
+    Args:
+        depsgraph: the evaluated depsgraph. spp: the sensor's sample count.
+        warn: called with each warning line.
+
+    Returns:
+        The description: a Mitsuba scene dict with `mesh.Part`s and numpy images.
+    """
     return Exporter(depsgraph, spp, warn).export()

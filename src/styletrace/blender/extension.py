@@ -58,6 +58,15 @@ def unregister():
 
 
 def manifest(wheels: list[str], platform: str) -> str:
+    """The extension's `blender_manifest.toml`.
+
+    Args:
+        wheels: the wheel files' names (listed sorted, under ./wheels/).
+        platform: Blender's platform name (a key of PLATFORMS).
+
+    Returns:
+        The TOML text.
+    """
     listed = ",\n".join(f'  "./wheels/{w}"' for w in sorted(wheels))
     return f'''schema_version = "1.0.0"
 id = "{ADDON_ID}"
@@ -110,7 +119,19 @@ def _source_copy(tmp: str) -> str:
 
 
 def build_extension(out_dir: str, platform: str = "linux-x64", python: str = "3.11") -> str:
-    """Write `styletrace-VERSION-PLATFORM.zip` into `out_dir`; returns its path."""
+    """Write `styletrace-VERSION-PLATFORM.zip` into `out_dir`: the manifest, the entry module and
+    the wheels (styletrace built from this checkout, REQUIREMENTS downloaded with pip).
+
+    Args:
+        out_dir: the folder (made if missing). platform: a key of PLATFORMS.
+        python: Blender's Python version (3.11 for Blender 4.2 to 5.0).
+
+    Returns:
+        The zip's path.
+
+    Raises:
+        SystemExit: an unknown platform, no source checkout, or a failing pip (one line).
+    """
     if platform not in PLATFORMS:
         raise SystemExit(
             f"styletrace extension: unknown platform '{platform}': one of {', '.join(PLATFORMS)}"
@@ -149,6 +170,14 @@ def build_extension(out_dir: str, platform: str = "linux-x64", python: str = "3.
 
 
 def extension_main(argv: list[str] | None = None) -> int:
+    """`python -m styletrace.blender.extension`: build the extension zip and print its path.
+
+    Args:
+        argv: the arguments (None: sys.argv[1:]): -o DIR, --platform, --python.
+
+    Returns:
+        The exit status, 0.
+    """
     parser = argparse.ArgumentParser(
         prog="python -m styletrace.blender.extension", description=__doc__.split("\n")[0]
     )

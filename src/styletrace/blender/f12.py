@@ -3,10 +3,10 @@ F12.
 
 The engine (F12), the restyle operator and the XML export all go through here, so that they agree on
 the scene, the style and the pass split: `styletrace render FILE.xml --seed K --pass-spp N` renders
-the image F12 renders with seed K and N samples per pass. F12 is a pipeline run (`run`): a Job of
-the exported scene and the settings' integrator, resolved (auto values pinned), with the finisher of
-its Denoise and Record buffer settings (`denoise.finishers.plan`: plain, expectation or image
-denoising, the recorded buffer).
+the image F12 renders with seed K and N samples per pass. F12 is a pipeline run (`run_f12`): a Job
+of the exported scene and the settings' integrator, resolved (auto values pinned), with the finisher
+of its Denoise and Record buffer settings (`denoise.finishers.plan_finisher`: plain, expectation or
+image denoising, the recorded buffer).
 """
 from __future__ import annotations
 
@@ -29,21 +29,57 @@ AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"),
 def error_passes(settings) -> bool:
     """Whether F12 adds the error AOVs: not for a recorded render (it keeps the image only), nor a
     denoised one (the variance of the noisy pixel is not the error of the denoised one:
-    docs/denoise.md)."""
+    docs/denoise.md).
+
+    Args:
+        settings: the scene's styletrace settings (`properties.SceneSettings`).
+
+    Returns:
+        True where `aovs` is on, Record buffer off and Denoise off.
+    """
     return bool(settings.aovs and not settings.record_buffer and settings.denoise == "off")
 
 
 def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dict:
+    """The scene description of the depsgraph (`exporter.export`) at the settings' sample count.
+
+    Args:
+        depsgraph: the evaluated depsgraph. settings: the scene's styletrace settings.
+        warn: called with each warning line.
+
+    Returns:
+        The description.
+    """
     return exporter.export(depsgraph, spp=settings.spp, warn=warn)
 
 
 def scene(depsgraph, settings, warn: Callable[[str], None] = print):
     """The loaded `mi.Scene` of the depsgraph (`api.load_scene` checks it as it checks every
-    scene)."""
+    scene).
+
+    Args:
+        depsgraph: the evaluated depsgraph. settings: the scene's styletrace settings.
+        warn: called with each warning line of the export.
+
+    Returns:
+        The mi.Scene.
+    """
     return api.load_scene(build.description_scene_dict(description(depsgraph, settings, warn)))
 
 
 def integrator(settings, aovs: bool | None = None, **override):
+    """The `stylized` integrator of the render settings.
+
+    Args:
+        settings: the scene's styletrace settings. aovs: the error AOVs (None: the settings').
+        **override: property values that replace the settings' (the line mask's colours).
+
+    Returns:
+        The StylizedIntegrator.
+
+    Raises:
+        StyletraceError: a refused value (one line).
+    """
     values = settings_integrator_values(settings)
     values["aovs"] = settings.aovs if aovs is None else aovs
     values.update(override)
@@ -52,16 +88,33 @@ def integrator(settings, aovs: bool | None = None, **override):
 
 def job(sc, integ, settings):
     """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their
-    sampling (the pass split of `pass_spp`, tiles of the pass loop's own size)."""
+    sampling (the pass split of `pass_spp`, tiles of the pass loop's own size).
+
+    Args:
+        sc: the loaded scene. integ: the integrator. settings: the scene's styletrace settings.
+
+    Returns:
+        The `pipeline.job.Job`.
+    """
     from styletrace.pipeline.job import Job
     return Job(scene=sc, integrator=integ, spp=settings.spp, seed=settings.seed,
                pass_spp=settings.pass_spp, lanes_per_pass=api.LANES_PER_PASS)
 
 
 def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
-    """(F12's `pipeline.runner.Runner`, the one-line note where Denoise auto could not denoise): the
-    Denoise setting's finisher (`denoise.finishers.plan`); `keep`: called with the buffer to restyle
-    (Record buffer). Raises the refusals (one line each) before anything renders."""
+    """F12's run: a `pipeline.runner.Runner` with the Denoise setting's finisher (`plan_finisher`).
+
+    Args:
+        sc: the loaded scene. settings: the scene's styletrace settings. aovs: the error AOVs.
+        keep: called with the buffer to restyle (Record buffer), or None.
+
+    Returns:
+        (the runner, the one-line note where Denoise auto could not denoise, else '').
+
+    Raises:
+        UsageError: the refusals (one line each; Record buffer with Denoise 'image'), before
+            anything renders.
+    """
     from styletrace.denoise.finishers import Image, plan_finisher
     from styletrace.errors import UsageError
     from styletrace.pipeline.resolve import resolve
@@ -76,7 +129,14 @@ def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
 
 
 def f12_passes(sc, integ, settings) -> Iterator[api.Progress]:
-    """The plain passes of `integ` with F12's sampling (a pipeline run, auto values pinned)."""
+    """The plain passes of `integ` with F12's sampling (a pipeline run, auto values pinned).
+
+    Args:
+        sc: the loaded scene. integ: the integrator. settings: the scene's styletrace settings.
+
+    Returns:
+        An iterator of `Progress`.
+    """
     from styletrace.pipeline.execute import InProcess
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
@@ -86,8 +146,15 @@ def f12_passes(sc, integ, settings) -> Iterator[api.Progress]:
 def line_mask(sc, settings, should_stop: Callable[[], bool] = lambda: False) -> np.ndarray | None:
     """Where lines are drawn, in [0, 1]: the image with white lines minus the image with black
     lines, with the same seed. Line decisions do not depend on the line colour, so everything but
-    the lines cancels exactly; this costs a second render of the lines' settings (documented in
-    docs/blender.md)."""
+    the lines cancels exactly; this costs a second render of the lines' settings (docs/blender.md).
+
+    Args:
+        sc: the loaded scene. settings: the scene's styletrace settings.
+        should_stop: asked after each pass; True abandons the mask.
+
+    Returns:
+        The mask, H x W float, or None where stopped.
+    """
     images = []
     # a line type's own colour= would not follow the override: every type takes line_color for the
     # mask

@@ -46,10 +46,18 @@ def _power(profile, half: float, steps: int = 400) -> float:
 
 
 def spot_beam(half: float, blend: float) -> float:
-    """Mitsuba's beam_width (radians) for a Blender spot of half angle `half` and `blend`: Cycles'
-    attenuation is a smoothstep over the cosine, from the cone's edge to cos(half) + (1 - cos(half))
-    blend; Mitsuba's is linear in angle from beam_width to the edge. The beam width is chosen so
-    that both emit the same power (bisection)."""
+    """Mitsuba's beam_width (radians) for a Blender spot: the width at which Mitsuba's ramp emits
+    the same power as Cycles' smoothstep blend (bisection).
+
+    Cycles' attenuation is a smoothstep over the cosine, from the cone's edge to cos(half) +
+    (1 - cos(half)) blend; Mitsuba's is linear in angle from beam_width to the edge.
+
+    Args:
+        half: the cone's half angle (radians). blend: Blender's spot blend, in [0, 1].
+
+    Returns:
+        The beam width, in radians (`half` where blend is 0).
+    """
     if blend <= 0:
         return half
     c = math.cos(half)
@@ -63,8 +71,15 @@ def spot_beam(half: float, blend: float) -> float:
 
 
 def convert_light(light, matrix, warn) -> dict | None:
-    """The emitter (or emitting shape) description of a `bpy.types.Light` placed by
-    `matrix` (4x4)."""
+    """The emitter (or emitting shape) description of a `bpy.types.Light` (see the module doc).
+
+    Args:
+        light: the light's data. matrix: its placement, 4x4.
+        warn: called with a warning line (an ellipse rendered as a disk, an unsupported type).
+
+    Returns:
+        The description, or None for an unsupported light type (left out, with a warning).
+    """
     m = np.array(matrix, dtype=np.float64)
     kind = light.type
     if kind == "POINT":

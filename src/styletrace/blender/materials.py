@@ -1,22 +1,12 @@
 """Blender materials -> Mitsuba BSDF descriptions (plain dicts, numpy images).
 
-Supported: Principled BSDF (base colour from a value or an Image Texture, roughness, metallic,
-transmission and IOR, emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes behind
-the active Material Output. The mapping (docs/blender.md, "Materials"):
-
-- Principled: a dielectric base (`diffuse` when Specular IOR Level is 0, else `roughplastic` with
-  the IOR), blended with a `roughdielectric` by Transmission Weight and with a `roughconductor`
-  (Fresnel of the base colour taken as 1, as Cycles' F82 at normal incidence) by Metallic. Mitsuba's
-  microfacet alpha is Blender's roughness squared, as in Cycles.
-- Glossy: `roughconductor` without Fresnel (`material = none`), tinted by its colour, as
-  Cycles' Glossy.
-- Glass: `roughdielectric` with the IOR, both lobes tinted by its colour.
-- Emission (and Principled emission): an `area` emitter whose radiance is colour x strength (Cycles'
-  strength on a mesh is radiance).
-
-Every other node behind the output is named in one warning per export and rendered as grey diffuse.
-Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a styletrace
-style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF.
+Supported behind the active Material Output: Principled BSDF (base colour from a value or an
+Image Texture, roughness, metallic, transmission and IOR, emission, alpha as a mask), Diffuse,
+Glossy, Glass and Emission nodes; each node's mapping: `principled`, `convert_node`,
+docs/blender.md ("Materials"). Every other node is named in one warning per export and rendered
+as grey diffuse. Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A
+material with a styletrace style (`properties.MaterialSettings`) wraps its BSDF in a `styled`
+BSDF. Design: docs/design/blender_export.md.
 """
 from __future__ import annotations
 
@@ -31,7 +21,11 @@ SMOOTH = 1e-4
 
 class MaterialContext:
     """What the exporter collects while converting materials: warnings (one per unsupported node
-    type) and image textures (converted once per image)."""
+    type) and image textures (converted once per image).
+
+    Args:
+        warn: called with each warning line, at `flush`.
+    """
 
     def __init__(self, warn: Callable[[str], None]):
         self.warn = warn
@@ -39,6 +33,11 @@ class MaterialContext:
         self.images: dict[tuple[str, str], np.ndarray] = {}
 
     def unknown(self, node, material) -> None:
+        """Note an unsupported node, named at `flush` once per node type.
+
+        Args:
+            node: the node. material: the material it is in.
+        """
         self.unsupported.setdefault(node.bl_idname, []).append(material.name)
 
     def flush(self) -> None:
@@ -51,12 +50,28 @@ class MaterialContext:
 
 
 def srgb_to_linear(x: np.ndarray) -> np.ndarray:
+    """The sRGB transfer function undone.
+
+    Args:
+        x: sRGB values in [0, 1], a numpy array.
+
+    Returns:
+        Linear values, float32.
+    """
     return np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
 def image_array(image, ctx: MaterialContext, channel: str = "rgb") -> np.ndarray:
-    """The image's pixels, top row first, linear (sRGB images decoded); `channel` 'rgb' (H x W x 3)
-    or 'alpha' (H x W x 1)."""
+    """The image's pixels, top row first, linear (sRGB images decoded), converted once per image
+    and channel.
+
+    Args:
+        image: the `bpy.types.Image`. ctx: the export's MaterialContext (its cache).
+        channel: 'rgb' (H x W x 3) or 'alpha' (H x W x 1; 1 where the image has none).
+
+    Returns:
+        The float32 array.
+    """
     key = (image.name, channel)
     if key not in ctx.images:
         w, h = image.size
@@ -76,7 +91,14 @@ def image_array(image, ctx: MaterialContext, channel: str = "rgb") -> np.ndarray
 
 def texture(data: np.ndarray) -> dict:
     """A bitmap texture description; `data` stays a numpy array until the scene is built
-    or written."""
+    or written.
+
+    Args:
+        data: H x W x C float32, linear.
+
+    Returns:
+        The `bitmap` description (bilinear, repeat, raw).
+    """
     return {
         "type": "bitmap",
         "data": data,
@@ -94,7 +116,14 @@ def _source(socket):
 
 
 def colour(socket, ctx: MaterialContext, material) -> Any:
-    """An RGB input: a constant, or an Image Texture node's colour; other nodes are reported."""
+    """An RGB input: a constant, or an Image Texture node's colour; other nodes are reported.
+
+    Args:
+        socket: the input socket. ctx: the export's MaterialContext. material: the material.
+
+    Returns:
+        An `rgb` description, a `bitmap` texture, or grey for an unsupported node.
+    """
     src = _source(socket)
     if src is None:
         return {"type": "rgb", "value": tuple(float(c) for c in socket.default_value[:3])}
@@ -106,6 +135,14 @@ def colour(socket, ctx: MaterialContext, material) -> Any:
 
 
 def scalar(socket, ctx: MaterialContext, material) -> float:
+    """A scalar input's value; a linked node is reported, and the socket's own value used.
+
+    Args:
+        socket: the input socket. ctx: the export's MaterialContext. material: the material.
+
+    Returns:
+        The float.
+    """
     src = _source(socket)
     if src is not None:
         ctx.unknown(src[0], material)
@@ -113,6 +150,14 @@ def scalar(socket, ctx: MaterialContext, material) -> float:
 
 
 def alpha(roughness: float) -> float:
+    """Mitsuba's microfacet alpha of a Blender roughness: its square, as in Cycles, at least SMOOTH.
+
+    Args:
+        roughness: Blender's roughness, in [0, 1].
+
+    Returns:
+        The alpha.
+    """
     return max(roughness * roughness, SMOOTH)
 
 
@@ -136,6 +181,18 @@ def _blend(weight: float, a: dict, b: dict) -> dict:
 
 
 def principled(node, ctx: MaterialContext, material) -> tuple[dict, dict | None, Any]:
+    """(bsdf, emitter or None, opacity) of a Principled BSDF node.
+
+    A dielectric base (`diffuse` at Specular IOR Level 0, else `roughplastic` with the IOR), blended
+    with a `roughdielectric` by Transmission Weight and a `roughconductor` (Fresnel taken as 1, as
+    Cycles' F82 at normal incidence) by Metallic; emission colour x strength as an `area` emitter.
+
+    Args:
+        node: the node. ctx: the export's MaterialContext. material: the material.
+
+    Returns:
+        The BSDF, the emitter or None, and the opacity (a float, or a texture of the Alpha input).
+    """
     inp = node.inputs
     base = colour(inp["Base Color"], ctx, material)
     rough = scalar(inp["Roughness"], ctx, material)
@@ -171,7 +228,17 @@ def principled(node, ctx: MaterialContext, material) -> tuple[dict, dict | None,
 
 
 def convert_node(node, ctx: MaterialContext, material) -> tuple[dict, dict | None, Any]:
-    """(bsdf, emitter or None, opacity) of the shader node feeding a Material Output."""
+    """(bsdf, emitter or None, opacity) of the shader node feeding a Material Output.
+
+    Glossy: `roughconductor` without Fresnel, tinted by its colour; Glass: `roughdielectric` with
+    the IOR, both lobes tinted; Emission: an `area` emitter of colour x strength, a black surface.
+
+    Args:
+        node: the shader node. ctx: the export's MaterialContext. material: the material.
+
+    Returns:
+        The descriptions; an unsupported node is reported and gives grey diffuse.
+    """
     kind = node.bl_idname
     inp = node.inputs
     if kind == "ShaderNodeBsdfPrincipled":
@@ -221,6 +288,14 @@ def _transmits(bsdf: dict) -> bool:
 
 
 def output_node(material):
+    """The material's Material Output: the active one for all renderers or Cycles, else the first.
+
+    Args:
+        material: the `bpy.types.Material`.
+
+    Returns:
+        The node, or None without a node tree or an output.
+    """
     tree = material.node_tree
     if tree is None:
         return None
@@ -234,8 +309,16 @@ def output_node(material):
 def convert_material(
     material, ctx: MaterialContext, style: dict | None = None
 ) -> tuple[dict, dict | None]:
-    """(bsdf, emitter or None) of a Blender material; `style` (the material's styletrace settings as
-    `styled` properties) wraps the BSDF in a `styled` BSDF."""
+    """(bsdf, emitter or None) of a Blender material.
+
+    Args:
+        material: the material (None: grey diffuse). ctx: the export's MaterialContext.
+        style: the material's styletrace settings as `styled` properties (None: no style).
+
+    Returns:
+        The BSDF (twosided unless it transmits, in a `styled` BSDF with a style, in a `mask` where
+        the opacity is below 1 or textured) and the `area` emitter or None.
+    """
     if material is None:
         bsdf, emitter, opacity = grey(), None, 1.0
     else:

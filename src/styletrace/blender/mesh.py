@@ -34,8 +34,14 @@ def _get(collection, attr: str, width: int, dtype) -> np.ndarray:
 
 
 def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
-    """The parts of an evaluated `bpy.types.Mesh`; `matrix` (4x4) moves them to world space (None:
-    keep local)."""
+    """The parts of an evaluated `bpy.types.Mesh`, one per material slot.
+
+    Args:
+        mesh: the evaluated mesh (modifiers applied). matrix: 4x4 to world space (None: keep local).
+
+    Returns:
+        The `Part`s ([] for a mesh without triangles).
+    """
     mesh.calc_loop_triangles()
     tris = mesh.loop_triangles
     if len(tris) == 0:
@@ -75,7 +81,15 @@ def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
 
 
 def to_mitsuba(part: Part, name: str, bsdf=None, emitter=None):
-    """An `mi.Mesh` holding `part`, with its BSDF (and area emitter) objects attached."""
+    """An `mi.Mesh` holding `part`, with its BSDF (and area emitter) objects attached.
+
+    Args:
+        part: the part. name: the mesh's name. bsdf: the BSDF object, or None.
+        emitter: the area emitter object, or None.
+
+    Returns:
+        The mi.Mesh.
+    """
     import mitsuba as mi
     props = mi.Properties()
     if bsdf is not None:

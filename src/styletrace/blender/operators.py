@@ -12,6 +12,15 @@ from styletrace.errors import StyletraceError
 
 
 def command_line(path: str, settings) -> str:
+    """The `styletrace render` command that renders the F12 image of the exported file.
+
+    Args:
+        path: the exported XML file. settings: the scene's styletrace settings (spp, seed, pass
+            split, denoising).
+
+    Returns:
+        The command line.
+    """
     denoise = f" --denoise {settings.denoise}" + (
         "" if settings.denoise == "off" or settings.denoise_quality == "high"
         else f" --denoise-quality {settings.denoise_quality}")
@@ -49,6 +58,11 @@ class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
 
 
 def menu(self, context):
+    """File -> Export's entry (a menu draw function).
+
+    Args:
+        self: the menu. context: Blender's context.
+    """
     self.layout.operator(STYLETRACE_OT_export_xml.bl_idname, text="Mitsuba XML (styletrace)")
 
 

@@ -31,7 +31,14 @@ RENDER_ROWS = (
 
 
 def style_rows(settings) -> list[tuple[object, str]]:
-    """(owner, property name) of the style selector and the chosen style's parameters."""
+    """(owner, property name) of the style selector and the chosen style's parameters.
+
+    Args:
+        settings: a SceneSettings or MaterialSettings.
+
+    Returns:
+        The rows, in drawing order.
+    """
     rows = [(settings, "style")]
     rows += [
         (settings.params, key(settings.style, p.name))
@@ -41,6 +48,15 @@ def style_rows(settings) -> list[tuple[object, str]]:
 
 
 def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
+    """What a panel shows, in order (the same walk as `draw`).
+
+    Args:
+        settings: the scene's or a material's styletrace settings.
+        material: the material panel (its Style this material switch, inner samples, estimator).
+
+    Returns:
+        (owner, property name) per row.
+    """
     if material:
         rows = [(settings, "use_style")]
         return rows + (style_rows(settings) + [(settings, "inner_samples"), (settings, "estimator")]
@@ -50,7 +66,14 @@ def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
 
 def dump(settings, material: bool = False) -> list[str]:
     """The panel as text, one row each: label, value and Blender property type (docs/blender.md
-    shows it next to a screenshot: `bpy` as a module draws no UI)."""
+    shows it next to a screenshot: `bpy` as a module draws no UI).
+
+    Args:
+        settings, material: as `layout_rows`'s.
+
+    Returns:
+        The lines.
+    """
     lines = []
     for owner, name in layout_rows(settings, material):
         prop = owner.bl_rna.properties[name]

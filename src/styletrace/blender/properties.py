@@ -29,6 +29,14 @@ SEP = "__"
 
 
 def key(style: str, param: str) -> str:
+    """The StyleParams property name of a style's parameter, `<style>__<parameter>`.
+
+    Args:
+        style: the style's name. param: the parameter's name.
+
+    Returns:
+        The name.
+    """
     return f"{style}{SEP}{param}"
 
 
@@ -37,7 +45,18 @@ def _finite(x):
 
 
 def blender_property(p):
-    """The bpy property declaring style parameter `p` (a `styles.params.Param`)."""
+    """The bpy property declaring style parameter `p`; its update calls `changed`.
+
+    Args:
+        p: a `styles.params.Param`.
+
+    Returns:
+        A Float, Int, Bool, FloatVector (colour) or Enum property, or a String property for lists,
+        gradients, vectors and 'auto' defaults.
+
+    Raises:
+        AssertionError: a parameter kind without a Blender property.
+    """
     text = p.explain()[:400]
     if p.default is None or p.kind in ("floats", "gradient", "vector"):
         return bpy.props.StringProperty(name=p.name, description=text + f" ({p.allowed()})",
@@ -90,7 +109,11 @@ ON_CHANGE: list = []
 
 def changed(self, context):
     """A style setting changed: tell the listeners (restyling from the recorded buffer, if there
-    is one)."""
+    is one).
+
+    Args:
+        self: the property group. context: Blender's context, passed to each of ON_CHANGE.
+    """
     for listener in ON_CHANGE:
         listener(context)
 
@@ -112,7 +135,14 @@ StyleParams = type(
 
 def params_of(style: str, params) -> dict:
     """{parameter: value} of `style` from a StyleParams, in forms `Param.parse` and Mitsuba
-    properties take."""
+    properties take (colours as "r,g,b").
+
+    Args:
+        style: the style's name. params: the StyleParams.
+
+    Returns:
+        The values.
+    """
     out = {}
     for p in registry.style_class(style).params:
         v = getattr(params, key(style, p.name))
@@ -242,7 +272,14 @@ class MaterialSettings(bpy.types.PropertyGroup):
 
 
 def style_values(settings) -> dict:
-    """The `styled` BSDF's (or integrator's style slot's) properties of a settings group."""
+    """The `styled` BSDF's (or integrator's style slot's) properties of a settings group.
+
+    Args:
+        settings: a SceneSettings or MaterialSettings.
+
+    Returns:
+        style, its parameters, and inner_samples and estimator where they are not the defaults.
+    """
     out = {"style": settings.style, **params_of(settings.style, settings.params)}
     if settings.inner_samples.strip():
         out["inner_samples"] = settings.inner_samples.strip()
@@ -252,7 +289,15 @@ def style_values(settings) -> dict:
 
 
 def settings_integrator_values(settings) -> dict:
-    """The `stylized` integrator's properties from the render settings."""
+    """The `stylized` integrator's properties from the render settings.
+
+    Args:
+        settings: the scene's SceneSettings.
+
+    Returns:
+        The style values, stylize, stylize_depth, lines, reuse and max_depth, and where set
+        firefly, line_mode and line_types.
+    """
     out = style_values(settings)
     out.update(stylize=settings.stylize, stylize_depth=settings.stylize_depth, lines=settings.lines,
                reuse=settings.reuse, max_depth=settings.max_depth)

@@ -29,7 +29,11 @@ def forget():
 
 def keep(buf):
     """Keep `buf` for restyles (F12 with Record buffer: its recorded buffer, the denoised one with
-    Denoise 'expectation')."""
+    Denoise 'expectation').
+
+    Args:
+        buf: the buffer.
+    """
     _state["buffer"] = buf
 
 
@@ -42,8 +46,17 @@ def last_seconds():
 
 
 def restyle_recorded(settings) -> np.ndarray:
-    """Restyle the recorded buffer with the render settings' style; writes and returns the image (H
-    x W x 3)."""
+    """Restyle the recorded buffer with the render settings' style into the image datablock `IMAGE`.
+
+    Args:
+        settings: the scene's styletrace settings.
+
+    Returns:
+        The image, H x W x 3.
+
+    Raises:
+        StyletraceError: no recorded buffer, or a refused value (one line).
+    """
     from styletrace.lookdev.restyle import restyle as lookdev_restyle
     buf = _state["buffer"]
     if buf is None:
@@ -73,8 +86,12 @@ def _write(img: np.ndarray) -> None:
 
 
 def on_change(context) -> None:
-    """A style setting changed: restyle if a buffer is kept (errors are reported by the
-    operator)."""
+    """A style setting changed: restyle if a buffer is kept; a refusal is printed as one line and
+    the previous image kept (the operator reports errors).
+
+    Args:
+        context: Blender's context.
+    """
     scene = getattr(context, "scene", None)
     if _state["buffer"] is None or scene is None or not scene.styletrace.record_buffer:
         return

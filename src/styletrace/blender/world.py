@@ -20,10 +20,18 @@ ENV_TO_WORLD = np.array(
 
 
 def latitudes(rows: np.ndarray) -> np.ndarray:
-    """The map's rows resampled for Mitsuba: Cycles puts row i (of h, top first) at v = (i + 1/2) /
-    h and interpolates linearly between rows; Mitsuba's envmap puts row k (of h') at v = k / (h' -
-    1). Rows at v = j / 2h, j = 0 .. 2h (the rows themselves and the midpoints between them, the
-    poles clamped) give Mitsuba's linear interpolation Cycles' curve exactly."""
+    """The map's rows resampled for Mitsuba, so that its linear interpolation gives Cycles' curve.
+
+    Cycles puts row i (of h, top first) at v = (i + 1/2) / h and interpolates linearly between rows;
+    Mitsuba's envmap puts row k (of h') at v = k / (h' - 1). Rows at v = j / 2h, j = 0 .. 2h (the
+    rows themselves and the midpoints between them, the poles clamped) match it exactly.
+
+    Args:
+        rows: the equirectangular image, H x W x C, top row first.
+
+    Returns:
+        2H + 1 rows, float32.
+    """
     h = rows.shape[0]
     out = np.empty((2 * h + 1, *rows.shape[1:]), dtype=np.float32)
     out[1::2] = rows
@@ -33,6 +41,16 @@ def latitudes(rows: np.ndarray) -> np.ndarray:
 
 
 def convert_world(world, ctx: MaterialContext) -> dict | None:
+    """The environment emitter of the Blender world (see the module doc).
+
+    Args:
+        world: the `bpy.types.World`, or None. ctx: the export's MaterialContext (images, and the
+            unsupported nodes it reports).
+
+    Returns:
+        A `constant` or `envmap` description, or None: no world, a black one, or an unsupported
+        node (reported).
+    """
     if world is None:
         return None
     tree = world.node_tree

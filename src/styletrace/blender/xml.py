@@ -39,6 +39,11 @@ VECTORS = {"direction"}
 
 
 class Writer:
+    """Writes one description as a Mitsuba XML file, its meshes and images in `<name>_files/`.
+
+    Args:
+        path: the XML file's path.
+    """
     def __init__(self, path: str):
         self.path = os.path.abspath(path)
         base = os.path.splitext(os.path.basename(path))[0]
@@ -115,6 +120,15 @@ class Writer:
         mi.Bitmap(np.ascontiguousarray(data, dtype=np.float32)).write(path)
 
     def write(self, desc: dict, integrator: dict | None) -> str:
+        """Write the file (atomically: a temporary file, then a rename) and its meshes and images.
+
+        Args:
+            desc: the scene description (`exporter.export`).
+            integrator: the `stylized` integrator's properties, or None for none.
+
+        Returns:
+            The file's absolute path.
+        """
         self.lines = [
             '<?xml version="1.0" encoding="utf-8"?>',
             "<!-- written by styletrace.blender (the Blender add-on); render with `styletrace "
@@ -136,6 +150,13 @@ class Writer:
 
 
 def write(desc: dict, path: str, integrator: dict | None = None) -> str:
-    """Write `desc` (with the `stylized` integrator's properties `integrator`) to the XML
-    file `path`."""
+    """Write `desc`, with the `stylized` integrator's properties `integrator`, to XML file `path`.
+
+    Args:
+        desc: the scene description. path: the XML file.
+        integrator: the integrator's properties (None: no integrator element).
+
+    Returns:
+        The file's absolute path.
+    """
     return Writer(path).write(desc, integrator)
