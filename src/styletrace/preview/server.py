@@ -60,8 +60,15 @@ def styles_table() -> list[dict[str, Any]]:
 
 
 def encode_image_file(image, fmt: str) -> bytes:
-    """The image as a .png (sRGB 8-bit) or .exr (linear float32) file, written by
-    `images.write_image`."""
+    """The image as the bytes of a .png (sRGB 8-bit) or .exr (linear float32) file, written by
+    `images.write_image` through a temporary file.
+
+    Args:
+        image: H x W x 3, linear. fmt: "png" or "exr".
+
+    Returns:
+        The file's bytes.
+    """
     from styletrace.images import write_image
     fd, tmp = tempfile.mkstemp(suffix="." + fmt)
     os.close(fd)
@@ -74,6 +81,15 @@ def encode_image_file(image, fmt: str) -> bytes:
 
 
 def make_app(session):
+    """The Starlette app of a session: the routes of the module doc.
+
+    Args:
+        session: the `preview.session.Session` to serve.
+
+    Returns:
+        The app; a bad request gets a 4xx with {"error": one line}, a restyle or save before the
+        first image a 409.
+    """
     from starlette.applications import Starlette
     from starlette.concurrency import run_in_threadpool
     from starlette.requests import Request
@@ -185,7 +201,19 @@ def serve(
     params: dict | None = None,
     open_browser: bool = False,
 ) -> int:
-    """Run the preview server until Ctrl-C; prints the page's URL once it listens."""
+    """Run the preview server on 127.0.0.1 until Ctrl-C; prints the page's URL once it listens.
+
+    Args:
+        scene, inner, spp, width, height: the session's (`preview.session.Session`).
+        style, params: what the page starts with. port: the port (0: a free one).
+        open_browser: not used (the URL is printed).
+
+    Returns:
+        The exit status, 0.
+
+    Raises:
+        StyletraceError: a bad style or parameter, a per-sample style, a refusal of the session.
+    """
     import uvicorn
 
     from styletrace.config.settings import parse_slot

@@ -4,16 +4,11 @@ of it.
     s = Session("cornell-box", inner=8, spp=16).start()     # the background thread records
     image, spp, n = s.restyle("cel", None, {})               # the buffer so far, restyled
 
-The background thread runs two pipeline runs (`pipeline.runner.Runner`, in process, one pass = the
-whole film at 1 spp), taking their passes itself. First the **draft**: 1 spp with one child per
-camera sample (n = 1, a fraction of a full pass's work), recorded (`lookdev.record.Recorded`) and,
-with the `denoise` extra, its expectation denoised before the style (`denoise.draft`); restyles use
-it until the first full pass is done. Then the full passes, with the `identity` style and n children
-per camera sample, so every style that needs children can restyle the buffer; recorded, or where
-every front end's default denoises (`denoise.default`: auto, expectation or off) recorded with D
-attached after each pass (`denoise.finishers.Expectation`, live). Dr.Jit work of both threads (a
-pass, a restyle) runs under one lock, `jit`: requests are served one at a time and never see a
-buffer half appended. The buffer is capped (`MAX_SAMPLES` camera samples; the page says so).
+A background thread takes the passes of two pipeline runs (`pipeline.runner.Runner`, in process,
+one pass = the whole film at 1 spp): first the **draft** (1 spp, one child per camera sample,
+denoised where it can: `denoise.draft`), shown until the first full pass is done; then the full
+passes (the `identity` style, n children; recorded, with D attached where the default denoises).
+Dr.Jit work of both threads runs under one lock, `jit`. Design: docs/design/preview_session.md.
 """
 from __future__ import annotations
 
@@ -166,8 +161,18 @@ class Session:
 
     def restyle(self, style: str, estimator: str | None,
                 params: dict[str, Any]) -> tuple[np.ndarray, int, int]:
-        """The current buffer (or the draft before the first full pass) restyled, its spp and n;
-        None image before the draft finished."""
+        """The current buffer (or the draft before the first full pass) restyled.
+
+        Args:
+            style: the style's name. params: its parameters, {name: value}.
+            estimator: the estimator's name (None: the recorded one where it applies).
+
+        Returns:
+            (the image, H x W x 3, or None before the draft finished; its spp; its n children).
+
+        Raises:
+            StyletraceError: a refused style, estimator or value (one line).
+        """
         with self._count:
             self._waiting += 1
         try:
@@ -204,8 +209,16 @@ class Session:
 
     def command(self, style: str, estimator: str | None, params: dict[str, Any],
                 spp: int | None = None, inner: int | None = None) -> str:
-        """The `styletrace render` command line that renders what the page shows (spp and n: the
-        session's, or those of the image shown, e.g. the draft's)."""
+        """The `styletrace render` command line that renders what the page shows.
+
+        Args:
+            style, estimator, params: what the page shows.
+            spp, inner: those of the image shown (the draft's: 1 and DRAFT_INNER), or None: the
+                session's.
+
+        Returns:
+            The command line, quoted for a shell.
+        """
         import shlex
         words = ["styletrace", "render", self.label, "--style", style,
                  "--inner", str(inner or self.inner), "--spp", str(spp or self.spp),
