@@ -31,7 +31,7 @@ class Denoised(Finisher):
 
     Args:
         quality: OIDN's "high", "balanced" or "fast".
-        buffer: the file to keep the denoised expectation buffer in (None; `Image` refuses one).
+        buffer: the file to keep the denoised expectation buffer in (or None; `Image` refuses one).
     """
     how = ", denoised,"
     local = LOCAL

@@ -282,7 +282,7 @@ def cmd_gallery(args) -> int:
         The exit status, 0.
 
     Raises:
-        UsageError: an unknown setup key, an unusable folder, or a refused setting.
+        UsageError: an unknown setup key or an unusable folder. StyletraceError: a refused setting.
     """
     from styletrace.frontends import gallery
 
