@@ -63,4 +63,4 @@ def render_denoised(
     return runner.result(callback)
 
 
-__all__ = ["render", "METHODS", "ENV", "NotDenoised", "check_method", "default_method"]
+__all__ = ["render_denoised", "METHODS", "ENV", "NotDenoised", "check_method", "default_method"]
