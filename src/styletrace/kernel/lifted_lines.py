@@ -218,7 +218,7 @@ class Lifted:
                          float(dr.ravel(sensor.focus_distance())[0]))
 
     def conditioning(self, ray: mi.Ray3f) -> tuple[mi.Point2f, mi.Point2f]:
-        """(s, aperture sample) of a camera ray: its film point (pixels right and up of the centre)
+        """(s, aperture sample) of a camera ray: its film point (screen pixels, `Projection.pixels`)
         and the lens sample it left the lens with ((0.5, 0.5) without an aperture), so that `_ray(s,
         aperture)` gives the ray back.
 
@@ -273,7 +273,7 @@ class Lifted:
         """Per type (priority order): whether any of its pairs fired, for camera samples at s.
 
         Args:
-            s: the film points (mi.Point2f, pixels right and up of the centre).
+            s: the film points (mi.Point2f, screen pixels from the centre, `Projection.pixels`).
             sampler: the lanes' random stream. active: the camera lanes (mi.Bool).
             aperture: the lens samples the rays leave with (mi.Point2f); None: the lens centre.
 
