@@ -182,18 +182,17 @@ def exitant(cfg: WalkConfig, sampler, start: Start, active: mi.Bool) -> mi.Spect
 
 
 def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
-    """The path loop (module docstring) from `start` on the `active` lanes.
+    """The path loop (module docstring) from `start`: returns the Walk (radiance, and throughput,
+    vertex, depth, line and tone state where it halted); non-finite samples are dropped.
 
     With `cfg.nulls` halting lanes pass their null part first (`null_split`); with `start.opaque`
-    the start vertex scatters by its opaque part only. Non-finite samples are dropped (`finished`).
+    the start vertex scatters by its opaque part only.
 
     Args:
         cfg, sampler: the render's WalkConfig and the lane's random stream.
         start, active: where the walk starts, and the lanes that walk (mi.Bool).
-        hooks: the caller's stop, skip_emitter, lines (a line absorbs the path) and tone (`Hooks`).
-
-    Returns:
-        The Walk: radiance, and throughput, vertex, depth, line and tone state where it halted.
+        hooks: stop, skip_emitter, lines (a line on an edge absorbs the path: throughput x line
+            colour) and tone (advanced at every scattering).
     """
     scene, emitters, nulls = cfg.scene, cfg.emitters, cfg.nulls
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
