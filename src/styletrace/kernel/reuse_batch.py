@@ -4,10 +4,9 @@ then g.
 Every camera sample i traces its ray to the first hit v_i and draws m children there (m = its style
 slot's inner_samples, reuse_children.py); the pool of v_i (reuse_pool.py; its world-space second
 level with reuse_deep=world, reuse_world.py; the refinement round of an adaptive count,
-reuse_refine.py) gives L(v) =
-g(L_e(v) + direct + indirect). Lanes whose BSDF has a delta or null component, closed-form styles
-and escaped rays use their own children only (the ordinary estimate, with MIS); a pool of v alone is
-the ordinary estimate too.
+reuse_refine.py) gives L(v) = g(L_e(v) + direct + indirect). Lanes whose BSDF has a delta or null
+component, closed-form styles and escaped rays use their own children only (the ordinary estimate,
+with MIS); a pool of v alone is the ordinary estimate too.
 """
 from __future__ import annotations
 
