@@ -3,7 +3,7 @@ neighbour grids.
 
 A candidate in slot q (slot 0: the vertex itself) is accepted when it exists, both may pool, and it
 has the same style target, the same BSDF object and a shading normal within `normal_min` (n.n'); the
-grid adds its own geometric test (`near`): camera distances for the pixel window (reuse.pool.Grid),
+grid adds its own geometric test (`near`): camera distances for the pixel window (reuse_pool.Grid),
 world distance for the world grid (world_grid.WorldGrid). The result is one bit per slot, K + 1
 slots in a UInt64 (K <= 63).
 """
@@ -15,9 +15,19 @@ from styletrace.gate import dr, mi
 def accepted(
     neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str
 ) -> mi.UInt64:
-    """Bit q set where slot q's vertex may be pooled with the vertex's own. `neighbour(q)` gives
-    (index, exists) of slot q; `near(at, ok)` the grid's geometric test of the candidates
-    at `at`."""
+    """Bit q set where slot q's vertex may be pooled with the vertex's own.
+
+    Args:
+        neighbour: neighbour(q) -> (index mi.UInt32, exists mi.Bool) of slot q (0: the vertex).
+        K, normal_min: the candidate slots 1 .. K (K <= 63); the least n.n' accepted.
+        target, bsdf, pool, n: per vertex its style target (mi.Int32), BSDF (mi.BSDFPtr),
+            whether it may pool (mi.Bool) and shading normal (mi.Vector3f).
+        near: near(at, ok) -> mi.Bool, the grid's geometric test of the candidates at `at`.
+        label: the traced loop's name.
+
+    Returns:
+        mi.UInt64, one bit per slot 0 .. K.
+    """
     def body(q, mask):
         at, found = neighbour(q)
         ok = found & pool & dr.gather(mi.Bool, pool, at, found)

@@ -1,43 +1,14 @@
-"""Image coordinates of stylized vertices: LLaT's canonical lifting of tone (the mirror-anchor map).
+"""Image coordinates of stylized vertices: LLaT's canonical lifting of tone (the mirror-anchor map;
+"Lifting Lines and Tone", West, Mukherjee and Yue, ACM TOG 2026, Sections 5 and S2).
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
-Mukherjee and Yonghao Yue (ACM TOG 45(4), 2026), Sections 5 (canonical lifting) and S2 (its inverse,
-the anchor cache).
-
-Every stylized vertex x at path depth k gets an image coordinate s (pixels right and up of the image
-centre, the units of `styles.base.Projection.pixels`), which styles read from `Vertex.s`:
-    k = 0                       s = the pinhole projection of x: the pixel x is seen in
-                                (method "pixel");
-    every vertex before x delta s = s0, the first-edge coordinate: the projection of the camera
-    (pinhole cameras)           ray's first hit (method "all-delta"): a perfect mirror or glass
-                                carries the pixel along;
-                                through a lens (depth of field) the MLS inverse below, so that
-                                what a mirror shows out of focus gets a lens-dependent coordinate
-                                and its tone blurs;
-    otherwise                   s = phi_k^-1(x) by linear MLS over anchor vertices (mls.py), with
-                                its fallbacks.
-The anchor map phi_k sends an image coordinate s to the depth-k vertex of the *anchor path* from s:
-a ray from the lens centre through s that reflects perfectly about the **geometric** normal at every
-vertex, whatever the material, or refracts through it where the query path transmitted there (the
-relative index of refraction is the material's own: its transmission lobe is sampled once for
-bs.eta). So phi depends on geometry and on the query's reflect/refract choices only, never on
-roughness: a glossy reflection is styled with the coordinate its mirror-like counterpart would have,
-and the lobe then blurs the pattern ("tone blurs because transport blurs").
-
-Anchor cache: streamed per camera sample. At a query, ANCHORS anchor paths start at s0 + the offsets
-`RING_OFFSETS` (a centre and rings of 4 at 2, 6, 18 and 54 px, each ring turned 22.5 degrees from
-the last) and are traced to depth k following the query's own branch bits. A candidate is an anchor
-whose depth-k vertex lies on the query's shape and whose path crossed the same shapes (the prefix
-key: a hash of the shape ids at depths 0..k-1). Why streamed and not a pre-pass per image (the
-paper's prefix tree with an image-space hash): a pre-pass must trace both branches at every
-dielectric (2^k anchors per pixel) and search a spatial structure per query, where the streamed
-anchors follow the one branch sequence the query took and need no gather; their cost is measured in
-BENCHMARKS.md (benchmarks/llat_cost.py) against plain hatching. The price: the anchors reach only 54
-px from s0, so a vertex whose mirror image lies farther from the sample's own pixel (very rough
-reflections) falls back to nearest / first edge (docs/llat.md).
-
-`ToneState` is what a path carries from the camera to its stylized vertex to make this possible: the
-prefix key, the transmission bits, whether every scattering so far was delta, and s0.
+A vertex x at path depth k gets s (screen pixels from the image centre, as `Projection.pixels`):
+    k = 0                          the pixel x is seen in (method "pixel");
+    all-delta before x, pinhole    s0, the pixel of the camera ray's first hit ("all-delta");
+    otherwise                      phi_k^-1(x) by linear MLS over anchor vertices (mls.py).
+phi_k sends s to the depth-k vertex of the anchor path from s: from the lens centre, reflecting
+about the geometric normal or refracting where the query transmitted. ANCHORS anchor paths start
+at s0 + RING_OFFSETS per query; `ToneState` is what a path carries for them.
+Design: docs/design/mirror_anchors.md.
 """
 from __future__ import annotations
 
@@ -71,7 +42,14 @@ class ToneState:
 
 def has_aperture(sensor) -> bool:
     """Whether rays through one film point leave from different points for different
-    lens samples."""
+    lens samples.
+
+    Args:
+        sensor: the scene's sensor.
+
+    Returns:
+        bool.
+    """
     import numpy as np
 
     ray, _ = sensor.sample_ray(
@@ -87,18 +65,36 @@ def has_aperture(sensor) -> bool:
 
 
 def shape_id(si) -> mi.UInt32:
-    """The shape's registry index (a stable integer per shape within one scene)."""
+    """The shape's registry index (a stable integer per shape within one scene).
+
+    Args:
+        si: the hits (an interaction with a `shape`).
+
+    Returns:
+        mi.UInt32.
+    """
     return dr.reinterpret_array(mi.UInt32, si.shape)
 
 
 def combine(key: mi.UInt32, sid: mi.UInt32) -> mi.UInt32:
-    """Extend a prefix key by one shape (FNV-1a's multiply-xor step on the shape index)."""
+    """Extend a prefix key by one shape (FNV-1a's multiply-xor step on the shape index).
+
+    Args:
+        key: the prefix key (mi.UInt32). sid: the shape index (`shape_id`).
+
+    Returns:
+        mi.UInt32.
+    """
     return (key * mi.UInt32(16777619)) ^ (sid + 1)
 
 
 class Tone:
     """Image coordinates for one scene's stylized vertices (built per traced kernel, like
-    lines.Lines)."""
+    lines.Lines), through its first sensor.
+
+    Args:
+        scene: the scene, with a sensor.
+    """
 
     def __init__(self, scene: mi.Scene):
         self.projection = projection(scene)
@@ -109,8 +105,16 @@ class Tone:
         self.lens = has_aperture(sensor)
 
     def start(self, ray: mi.Ray3f, pi, active) -> ToneState:
-        """The state of a camera ray reaching its first vertex `pi`: empty prefix, s0 = that
-        vertex's pixel."""
+        """The state of a camera ray reaching its first vertex: empty prefix, s0 = that
+        vertex's pixel.
+
+        Args:
+            ray: the camera ray. pi: its first intersection (preliminary).
+            active: the camera lanes (mi.Bool).
+
+        Returns:
+            ToneState.
+        """
         x, y = self.projection.pixels(
             mi.Point3f(ray.o + ray.d * dr.select(active & pi.is_valid(), pi.t, 1.0))
         )
@@ -119,8 +123,17 @@ class Tone:
         )
 
     def coordinate(self, scene: mi.Scene, si, ray: mi.Ray3f, depth, tone: ToneState | None, active):
-        """(s, method) of the vertex `si` reached along `ray` at path depth `depth` with `tone`
-        (module doc)."""
+        """(s, method) of the vertex `si`: its image coordinate and how it was found (module doc).
+
+        Args:
+            scene: the scene. si, ray: the vertex and the ray that reached it.
+            depth: its path depth. tone: the ToneState the path carried there (None: a walk
+                without one, whose s is the position's projection).
+            active: the lanes at a stylized vertex (mi.Bool).
+
+        Returns:
+            (mi.Point2f, method code of mls, mi.UInt32).
+        """
         px, py = self.projection.pixels(si.p)
         direct = mi.Point2f(px, py)
         # a walk that carries no tone state (participating media): the position's projection
@@ -140,14 +153,28 @@ class Tone:
         return dr.select(need, s_inv, s), dr.select(need, m_inv, method)
 
     def film_uv(self, x, y):
-        """Film position (Mitsuba's [0,1]^2, x right, y down) of screen pixels (x right, y up of
-        the centre)."""
+        """Film position (Mitsuba's [0,1]^2, x right, y down) of screen pixels from the centre, as
+        `Projection.pixels` gives them (x towards the image's left, y up).
+
+        Args:
+            x, y: screen pixels (mi.Float or float).
+
+        Returns:
+            mi.Point2f.
+        """
         return mi.Point2f(0.5 - x * (1.0 / self.width), 0.5 - y * (1.0 / self.height))
 
     def trace(self, scene: mi.Scene, si, depth: mi.UInt32, tone: ToneState, active):
-        """The anchor paths from s0 + RING_OFFSETS to depth `depth`: (their depth-k points, their
-        image coordinates, whether each is a candidate: same shapes along the way and at
-        depth k)."""
+        """The anchor paths from s0 + RING_OFFSETS to depth `depth`.
+
+        Args:
+            scene: the scene. si: the query vertex. depth: its path depth k (mi.UInt32).
+            tone: the query's ToneState (s0, prefix key, branch bits). active: the lanes asked.
+
+        Returns:
+            (their depth-k points, their image coordinates, whether each is a candidate: same
+            shapes along the way and at depth k), one entry per anchor.
+        """
         coords = [(tone.s0.x + dx, tone.s0.y + dy) for dx, dy in RING_OFFSETS]
         rays = []
         for cx, cy in coords:

@@ -28,17 +28,18 @@ class Bounce:
 
 def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
            hooks: Hooks = NO_HOOKS) -> Bounce:
-    """One step from the vertex `site.si` (reached along `site.ray`) to the next vertex, for
-    recursive stylization. Returns the Bounce.
+    """One step from the stylized vertex x = `site.si` to the next, itself stylized: emission at x,
+    next-event estimation to delta lights only (no BSDF sample reaches them), one BSDF sample.
 
-    The next vertex is stylized too, and its whole exitant radiance, emission included, goes through
-    g: surface lights cannot be split off by next-event estimation, the BSDF sample reaches them.
-    Point, spot and directional lights are no vertex (never stylized) and no BSDF sample can hit
-    them, so they alone get next-event estimation here, with weight 1.
+    Args:
+        cfg: the render's WalkConfig; with `cfg.nulls` x scatters by its opaque part only and the
+            next vertex is the first scattering one past null interactions.
+        sampler, site, active: the lane's random stream; the vertex x (its si, ray and depth); the
+            lanes that take the step (mi.Bool).
+        hooks: only `lines` (a line on the edge ends the step; weight x colour joins L) and `tone`.
 
-    With `cfg.nulls` x scatters by its opaque part only and the next vertex is the first scattering
-    one past null interactions (`first_scattering`). Of the `hooks` only `lines` (a line on the
-    bounce's edge ends it: weight x line colour joins L) and `tone` (advanced past x) apply.
+    Returns:
+        The Bounce: L at x, the BSDF sample's weight, the next vertex and ray, line and tone state.
     """
     scene, si, ray, depth, nulls = cfg.scene, site.si, site.ray, site.depth, cfg.nulls
     lines, tone = hooks.lines, hooks.tone

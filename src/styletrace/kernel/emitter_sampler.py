@@ -1,29 +1,13 @@
 """Emitter selection for next-event estimation, independent of the order Mitsuba lists the
-emitters in.
+emitters in (it changes from one load to the next): ordered by `stable_key`, what each emitter is.
 
-Mitsuba 3.9.1 loads a scene's objects in parallel, so `scene.emitters()` comes back in a different
-order from one process to the next (measured on the built-in `mixed` scene: the two area lights swap
-in about one load in six). `scene.sample_emitter_direction` picks an emitter by its index in that
-list, so the same seed gave different images (Mitsuba's own `path` too). `EmitterSampler` orders the
-emitters by a key built from what they are, not from when they were loaded: the emitter's
-description (`str`: type, radiance, position, ...) and, for area lights, its shape's description and
-bounding box. Emitters with equal keys are interchangeable, so their relative order cannot change
-an image.
-
-Selection (`mode`):
-- `uniform`: probability proportional to each emitter's `sampling_weight` (1 by default),
-  as Mitsuba.
-- `power`: proportional to `sampling_weight` times an estimate of the emitted power Phi, the mean
-  weight of `Emitter.sample_ray` over a fixed set of samples (its expectation is Phi for every
-  emitter type; for environment and directional lights it is the power through the scene's bounding
-  disk). An emitter with no estimated power is never chosen by next-event estimation; BSDF sampling
-  still reaches it and the MIS densities below stay consistent, so the estimate stays unbiased.
-
-`sample_direction` matches `Scene.sample_emitter_direction` (one 2D sample: its x picks the emitter
-and is reused for the direction; the weight is divided and the density multiplied by the selection
-probability; occluded samples get weight 0). `pdf_direction` is the matching solid-angle density of
-a direction that reached an emitter: the emitter's own density times its selection probability,
-looked up by the emitter's registry id (one gather, whatever the number of emitters).
+Selection (`mode`): `uniform`, proportional to each emitter's `sampling_weight` (1 by default), as
+Mitsuba; `power`, proportional to `sampling_weight` times the emitted power Phi estimated as the
+mean weight of `Emitter.sample_ray` (no estimated power: never chosen by next-event estimation,
+still reached by BSDF samples; unbiased). `sample_direction` matches
+`Scene.sample_emitter_direction`; `pdf_direction` is its solid-angle density of a direction that
+reached an emitter (the emitter's own density times its selection probability, one gather).
+Design: docs/design/emitter_order.md.
 """
 from __future__ import annotations
 
@@ -39,12 +23,27 @@ POWER_SAMPLES = 1 << 12
 
 def emitter_id(ptr) -> mi.UInt32:
     """The registry id of each lane's emitter (0 for none): a dense small integer per
-    live emitter."""
+    live emitter.
+
+    Args:
+        ptr: the lanes' emitters (mi.EmitterPtr).
+
+    Returns:
+        mi.UInt32.
+    """
     return dr.reinterpret_array(mi.UInt32, ptr)
 
 
 def stable_key(emitter: mi.Emitter) -> tuple:
-    """What an emitter is, independent of the order it was loaded in (see the module docstring)."""
+    """What an emitter is, independent of the order it was loaded in: its description, and for an
+    area light its shape's description and bounding box.
+
+    Args:
+        emitter: an emitter of the scene.
+
+    Returns:
+        A tuple of three strings.
+    """
     shape = emitter.get_shape()
     if shape is None:
         return (str(emitter), "", "")
@@ -53,7 +52,14 @@ def stable_key(emitter: mi.Emitter) -> tuple:
 
 def estimated_power(emitter: mi.Emitter) -> float:
     """Phi estimated as the mean weight of `sample_ray` (averaged over the channels) over
-    fixed samples."""
+    POWER_SAMPLES fixed samples; non-finite weights count 0.
+
+    Args:
+        emitter: an emitter of the scene.
+
+    Returns:
+        float, >= 0.
+    """
     n = POWER_SAMPLES
     rng = mi.PCG32(n, initseq=dr.arange(mi.UInt64, n))
     u = [rng.next_float32() for _ in range(5)]
@@ -64,11 +70,27 @@ def estimated_power(emitter: mi.Emitter) -> float:
 
 
 def selection_order(emitters) -> list:
-    """The emitters in the order selection uses: by `stable_key`, whatever order they came in."""
+    """The emitters in the order selection uses: by `stable_key`, whatever order they came in.
+
+    Args:
+        emitters: the scene's emitters.
+
+    Returns:
+        list[mi.Emitter].
+    """
     return sorted(emitters, key=stable_key)
 
 
 class EmitterSampler:
+    """Next-event estimation's choice of emitter in one scene (module docstring).
+
+    Args:
+        scene: the scene whose emitters are chosen from.
+        mode: 'uniform' or 'power' (`emitter_sampling`); None: the default.
+
+    Raises:
+        SettingsError: an unknown mode.
+    """
     def __init__(self, scene: mi.Scene, mode: str | None = None):
         mode = DEFAULT_MODE if mode is None else mode
         if mode not in MODES:
@@ -99,8 +121,17 @@ class EmitterSampler:
     def sample_direction(
         self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True
     ):
-        """(ds, weight): a direction towards an emitter and L_e / pdf, 0 where occluded (with
-        `visible`; without, the caller estimates the transmittance: volume.py) or none."""
+        """A direction towards an emitter and its weight, as `Scene.sample_emitter_direction`.
+
+        Args:
+            si: the shading point. sample: a 2D uniform sample (its x picks the emitter, reused).
+            active: the lanes that sample (mi.Bool).
+            visible: test visibility (weight 0 where occluded); False: the caller estimates the
+                transmittance (volume.py).
+
+        Returns:
+            (ds mi.DirectionSample3f, weight L_e / pdf mi.Spectrum), weight 0 where none.
+        """
         if self.count == 0:
             return dr.zeros(mi.DirectionSample3f), mi.Spectrum(0.0)
         index, x, pmf = self.distr.sample_reuse_pmf(sample.x, active)
@@ -116,6 +147,14 @@ class EmitterSampler:
         return ds, dr.select(occluded, 0.0, weight)
 
     def selection_probability(self, emitter, active: mi.Bool) -> mi.Float:
+        """The probability with which each lane's emitter is chosen.
+
+        Args:
+            emitter: the lanes' emitters (mi.EmitterPtr; None: 0). active: the lanes asked.
+
+        Returns:
+            mi.Float.
+        """
         if self.count == 0:
             return mi.Float(0.0)
         return dr.gather(mi.Float, self.prob_by_id, emitter_id(emitter), active & (emitter != None))  # noqa: E711
@@ -124,7 +163,15 @@ class EmitterSampler:
         self, ref: mi.Interaction3f, ds: mi.DirectionSample3f, active: mi.Bool
     ) -> mi.Float:
         """Solid-angle density with which `sample_direction` from `ref` produces the direction
-        of `ds`."""
+        of `ds`.
+
+        Args:
+            ref: the shading point. ds: a direction sample that reached an emitter.
+            active: the lanes asked (mi.Bool).
+
+        Returns:
+            mi.Float.
+        """
         if self.count == 0:
             return mi.Float(0.0)
         return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(

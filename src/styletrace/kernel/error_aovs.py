@@ -12,9 +12,16 @@ AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
 
 def error_aovs(value, stats: list) -> list:
     """One camera sample's AOVs in AOV_NAMES' order: its value squared per channel (the film's
-    average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21 bias
-    prediction and the number of children, from `stats`, the (lanes, AdaptiveDirect.stats) of each
-    style slot there."""
+    average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21
+    bias prediction and the number of children.
+
+    Args:
+        value: the camera sample's value (mi.Color3f).
+        stats: the (lanes, AdaptiveDirect.stats) of each style slot at the first stylized vertex.
+
+    Returns:
+        Five mi.Float: sq.R, sq.G, sq.B, bias, children.
+    """
     bias, children = mi.Float(0.0), mi.Float(0.0)
     for lanes, st in stats:
         bias = dr.select(lanes, st["bias"], bias)

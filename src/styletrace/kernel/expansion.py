@@ -1,36 +1,15 @@
 """The expansion pass: every pixel's E[X] and E[X^2] at its first stylized vertex, for the
-series' b*.
+series' b* = E[X^2] / E[X].
 
-Why (docs/estimators.md, "Gamma and the series estimators"): a series estimate is a sum of products
-of (x - b) / b over children, whose second moments grow like rho^k with rho = E[(X - b)^2] / b^2;
-rho is smallest at b* = E[X^2] / E[X] (rho = cv^2 / (1 + cv^2) < 1). b* is a ratio of moments that
-the rare bright children dominate, so it needs many children (64 per pixel measured on three firefly
-scenes; 16 fail): too many to draw per estimate, cheap once per pixel. This module draws them once
-per pixel, before the render.
+A render of PASS_SPP camera samples per pixel (seed: `pipeline.passes.expansion_seed`) in which
+each lane's first stylized vertex draws ceil(m / PASS_SPP) children and sums r and r^2 per channel,
+r = x - e (e: the vertex's emission), summed per pixel on the host. A render lane then reads its
+pixel's means (`lane_pixels`) and `estimator_registry.series_with_pass` expands about b from them.
 
-How
-    The pass is Mitsuba's own render loop at PASS_SPP camera samples per pixel (another seed than
-    the render's passes: `api.expansion_seed`), with the integrator in collecting mode: at the first
-    stylized vertex each lane draws ceil(m / PASS_SPP) children and keeps the sums of r and r^2 per
-    channel, r = x - e, e the vertex's own emission (part of every child, known per lane: it is
-    added back per lane, so a render lane on a light in a pixel whose pass saw the wall beside it
-    still gets a b above its emission); nothing else is estimated there. The sums are taken per
-    pixel on the host. Mitsuba lays a wavefront out pixel by pixel, each pixel's spp samples next to
-    each other (lane i is pixel i // spp of the film's crop, border included;
-    SamplingIntegrator::render in Mitsuba's integrator.cpp), so `lane_pixels` is a render lane's
-    pixel. A render lane then reads its pixel's moments (`Moments.lookup`), a function of its lane
-    only, never of its own children, and `estimator_registry.series_with_pass` expands about b =
-    PASS_B_SCALE x the larger of E[(e + R)^2] / E[e + R] over the pixel's own children and over its
-    3 x 3 window's (9x the children: a bright child that one pixel's m missed is often seen by its
-    neighbours'), with its own e: the series estimate stays unbiased. A pixel whose pass samples
-    reached no stylized vertex (they saw the environment) takes its window's moments, else none (b
-    falls to the style's floor).
-
-    maps = Expansion()                            # the integrator's
-    # per film crop, before its passes (api.passes does it)
-    maps.prepare(integrator, scene, m, seed)
-    # in sample(): the lane's pixel's mean r and r^2 (Color3f)
-    m1, m2 = maps.lookup(scene, width, m)
+    maps = Expansion()                         # the integrator's
+    maps.prepare(integrator, scene, m, seed)   # per film crop, before its passes (pipeline.passes)
+    sets = maps.lookup(scene, width, m)        # in sample(): per set, the pixel's mean r and r^2
+Design: docs/design/expansion_pass.md.
 """
 from __future__ import annotations
 
@@ -42,13 +21,20 @@ from styletrace.jit import no_collection
 
 #: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's
 #: footprint, not one point of it (a lane whose children are far brighter than its pixel's b
-#: diverges: see the docstring).
+#: diverges: docs/design/expansion_pass.md).
 PASS_SPP = 4
 
 
 def crop_key(scene: mi.Scene) -> tuple:
     """What fixes the lane -> pixel layout of a render of the scene's first sensor: its film's crop
-    and border."""
+    and border.
+
+    Args:
+        scene: the scene.
+
+    Returns:
+        ((offset x, y), (width, height), border in pixels, 0 without sample_border).
+    """
     film = scene.sensors()[0].film()
     border = int(film.rfilter().border_size()) if film.sample_border() else 0
     return (
@@ -59,12 +45,31 @@ def crop_key(scene: mi.Scene) -> tuple:
 
 
 def pixel_count(key: tuple) -> int:
+    """The film pixels of a crop, its border included.
+
+    Args:
+        key: a `crop_key`.
+
+    Returns:
+        int.
+    """
     (_, (w, h), border) = key
     return (w + 2 * border) * (h + 2 * border)
 
 
 def lane_pixels(width: int, pixels: int) -> mi.UInt32:
-    """The film pixel of every lane of a wavefront of `width` lanes over `pixels` pixels."""
+    """The film pixel of every lane of a wavefront of `width` lanes over `pixels` pixels
+    (Mitsuba's pixel-major layout: each pixel's samples side by side).
+
+    Args:
+        width: the wavefront's lanes. pixels: the film's pixels (`pixel_count`).
+
+    Returns:
+        mi.UInt32.
+
+    Raises:
+        SettingsError: `width` is no multiple of `pixels`.
+    """
     if width % pixels:
         raise SettingsError(
             f"bad wavefront of {width} lanes for a film of {pixels} pixels with expansion_pass: "
@@ -74,8 +79,17 @@ def lane_pixels(width: int, pixels: int) -> mi.UInt32:
 
 
 def moments(draw, sampler, active, m: int, known):
-    """(sum of r, sum of r^2) over m draws x = `draw(sampler)` per active lane, r = x - known (the
-    part of x that is the same in every child: the vertex's own emission), in one symbolic loop."""
+    """(sum of r, sum of r^2) over m draws x = `draw(sampler)` per active lane, r = x - known, in
+    one symbolic loop.
+
+    Args:
+        draw: draw(sampler) -> one child x (mi.Color3f). sampler: the lane's random stream.
+        active: the lanes that draw (mi.Bool). m: the draws per lane.
+        known: the part of x that is the same in every child (the vertex's own emission).
+
+    Returns:
+        (mi.Color3f, mi.Color3f).
+    """
     def cond(i, s1, s2, smp):
         return active & (i < m)
 
@@ -92,7 +106,12 @@ def moments(draw, sampler, active, m: int, known):
 class Collector:
     """The pass's sums per lane (PASS_SPP lanes per pixel): r and r^2 per channel, and whether the
     lane reached a stylized vertex; summed per pixel on the host in a fixed order (float atomics
-    would not be)."""
+    would not be).
+
+    Args:
+        pixels: the film's pixels (`pixel_count`).
+        m: the children per pixel (each lane draws ceil(m / PASS_SPP)).
+    """
 
     def __init__(self, pixels: int, m: int):
         self.pixels, self.m = pixels, m
@@ -102,6 +121,15 @@ class Collector:
         self.hit = dr.zeros(mi.Float, lanes)
 
     def add(self, width: int, active, s1: mi.Color3f, s2: mi.Color3f) -> None:
+        """Record the sums of the lanes that reached a stylized vertex.
+
+        Args:
+            width: the wavefront's lanes (PASS_SPP per pixel).
+            active: the lanes that reached one (mi.Bool). s1, s2: their sums of r and r^2.
+
+        Raises:
+            SettingsError: the wavefront has not PASS_SPP lanes per pixel.
+        """
         if width != self.pixels * PASS_SPP:
             raise SettingsError(
                 f"bad wavefront of {width} lanes in the expansion pass: expected {PASS_SPP} per "
@@ -115,7 +143,14 @@ class Collector:
 
     def means(self, key: tuple) -> list[tuple[np.ndarray, np.ndarray]]:
         """[(mean r, mean r^2) of each pixel's own children, the same over its 3 x 3 window], each
-        (rows, columns, 3); a pixel without children of its own takes its window's."""
+        (rows, columns, 3); a pixel without children of its own takes its window's.
+
+        Args:
+            key: the crop's `crop_key`.
+
+        Returns:
+            Two (mean r, mean r^2) pairs of float64 arrays.
+        """
         (_, (w, h), border) = key
         rows, cols = h + 2 * border, w + 2 * border
         n = (
@@ -143,7 +178,12 @@ class Collector:
 
 class Moments:
     """One crop's per-pixel means of r and r^2 on the device (one or more sets), and its key
-    and seed."""
+    and seed.
+
+    Args:
+        key: the crop's `crop_key`. seed: the pass's seed.
+        sets: (mean r, mean r^2) arrays of shape (rows, columns, 3) per set (`Collector.means`).
+    """
 
     def __init__(self, key: tuple, seed: int, sets):
         self.key, self.seed = key, seed
@@ -157,7 +197,14 @@ class Moments:
 
     def b_star(self, known=0.0) -> np.ndarray:
         """b* = E[x^2] / E[x] per pixel and channel for x = known + r (0 where E[x] is 0), before
-        any clamp (the largest over the sets)."""
+        any clamp (the largest over the sets).
+
+        Args:
+            known: the part of x every child shares (a float, or an array that broadcasts).
+
+        Returns:
+            float64 array (rows, columns, 3).
+        """
         out = None
         for m1, m2 in self.host:
             m1, m2 = m1.astype(np.float64), m2.astype(np.float64)
@@ -167,13 +214,24 @@ class Moments:
         return out
 
     def lookup(self, width: int) -> list[tuple[mi.Color3f, mi.Color3f]]:
+        """Each render lane's pixel's means.
+
+        Args:
+            width: the wavefront's lanes (a multiple of the crop's pixels).
+
+        Returns:
+            Per set, (mean r, mean r^2) as mi.Color3f.
+
+        Raises:
+            SettingsError: `width` is no multiple of the crop's pixels.
+        """
         pix = lane_pixels(width, self.pixels)
         get = lambda a: mi.Color3f(*(dr.gather(mi.Float, a, 3 * pix + c) for c in range(3)))  # noqa: E731
         return [(get(m1), get(m2)) for m1, m2 in self.device]
 
 
 class Expansion:
-    """The pass results of the render under way, one per film crop (api.passes renders tiles
+    """The pass results of the render under way, one per film crop (pipeline.passes renders tiles
     as crops)."""
 
     def __init__(self):
@@ -185,14 +243,23 @@ class Expansion:
 
     def prepare(self, integrator, scene: mi.Scene, m: int, seed: int) -> Moments:
         """The moments of the scene's current film crop, from a pass with `seed` (rendered once
-        per crop)."""
+        per crop and seed).
+
+        Args:
+            integrator: the `stylized` integrator whose pass it is. scene: the scene.
+            m: the children per pixel (`expansion_pass`). seed: the pass's seed.
+
+        Returns:
+            Moments.
+        """
         key = crop_key(scene)
         done = self.maps.get(key)
         if done is not None and done.seed == seed:
             return done
         self.collector = Collector(pixel_count(key), m)
         try:
-            with no_collection():  # as api.passes: no scene finalised while the pass is recorded
+            # as pipeline.passes: no scene finalised while the pass is recorded
+            with no_collection():
                 mi.render(scene, integrator=integrator, spp=PASS_SPP, seed=seed)
                 sets = self.collector.means(key)
         finally:
@@ -201,6 +268,18 @@ class Expansion:
         return self.maps[key]
 
     def lookup(self, scene: mi.Scene, width: int, m: int) -> list[tuple[mi.Color3f, mi.Color3f]]:
+        """Each render lane's pixel's means, for the scene's current film crop.
+
+        Args:
+            scene: the scene. width: the wavefront's lanes.
+            m: `expansion_pass` (for the message).
+
+        Returns:
+            Per set, (mean r, mean r^2) as mi.Color3f.
+
+        Raises:
+            SettingsError: no pass was prepared for the crop (a bare mi.render), or a bad width.
+        """
         found = self.maps.get(crop_key(scene))
         if found is None:
             raise SettingsError(

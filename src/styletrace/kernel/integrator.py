@@ -1,52 +1,14 @@
 """`stylized`: Mitsuba integrator for the stylized rendering equation (depth-first tree sampling).
 
-Properties (XML, Python dict, or the CLI's --set): `style`, the style's own parameters under their
-registry names, `inner_samples`, `estimator`, `stylize`, `stylize_depth`, `max_depth`, `rr_depth`,
-`hide_emitters`, `lines` and the `line_*` settings.
-Their defaults, parsing and docs live in `settings` (the table in the README is generated from it).
-
-The radiance leaving a stylized vertex x towards the viewer is
     L(x, wo) = g_theta( L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi )
-(the stylized rendering equation, emission inside g). At a stylized vertex the integrator draws n
-child estimates of the argument of g in a nested symbolic loop in the same SIMD lane (no lane
-replication, so memory does not grow with n) and hands them to the estimator.
 
-Where styles apply (`stylize`):
-- first_hit: the camera ray's first hit. Objects whose BSDF is a `styled` wrapper use their own
-  style there; all other objects use the integrator's style.
-- first_n_hits: the first N = stylize_depth vertices of every path, recursively (a child of a
-  level-l vertex takes one BSDF-sampled bounce to the level-(l+1) vertex; children of the last level
-  are ordinary path-traced samples). Cost per camera sample is the product of the per-level counts.
-- first_object_hit: the first vertex *on a styled object* along each path, at any depth: a stylized
-  object seen through a mirror or a glass is still stylized. Paths are ordinary path-traced walks
-  that halt on styled objects; with N > 1 the children halt again on the next styled object, N
-  levels deep. The integrator's own style must be identity here.
-
-Feature lines (`lines`, `line_mode lifted`; line_hooks.py, docs/lines.md): walks and bounces carry
-the line state of the vertex they leave (`line_states`, one per stylized level); line_hooks.py
-decides the camera sample's own lines before anything else is traced.
-
-Every walk takes the render's `walk_config` (path.WalkConfig: depths, emitter sampler, null and
-media switches) and its own hooks (path.Hooks: where to halt, lights to skip, lines, tone); the
-surface and volume walks share both, so lines and LLaT's image coordinate reach every stylized level
-with media too.
-
-Participating media (volume.py; the switch `WalkConfig.media` is taken at trace time, so scenes
-without media trace path.py's kernel unchanged): a stylized vertex is a surface scattering vertex.
-Along a ray that leads to one (the camera ray, the bounce between first_n_hits levels, a
-first_object_hit walk) a lane whose free flight ends in a real medium collision first goes on as an
-ordinary volumetric path, unstylized; the others reach the surface with the transmittance weight and
-are stylized there. Children are full volumetric paths, so with the identity style the image is
-Mitsuba's `volpath`.
-
-The expansion pass (`expansion_pass` m > 0, estimator series; expansion.py): before a render's
-passes the front end calls `prepare_expansion`, a render of a few camera samples per pixel in which
-the first stylized vertex only collects the moments of m children per pixel (less its emission); the
-render's series estimators at the first stylized level then expand about a b from their pixel's
-moments (`estimator_registry.series_with_pass`). Deeper levels keep their in-lane pilot.
-
-Rays that escape see the environment unstylized. With `hide_emitters` camera rays (only they) pass
-through area lights and see black where they escape, as in Mitsuba's `path`.
+At a stylized vertex n children of g's argument are drawn in a nested loop in the same SIMD lane
+and handed to the style's estimator. `stylize` chooses the vertices: first_hit, first_n_hits (the
+first `stylize_depth` vertices of every path, recursively) or first_object_hit (the first vertex
+on a styled object, at any depth). Properties (XML, dict, the CLI's --set) are parsed by
+`config.settings`. Escaped rays see the environment unstylized; with `hide_emitters` camera rays
+pass through area lights. Media: volume.py; lines: line_hooks.py; expansion pass: expansion.py.
+Design: docs/design/stylized_integrator.md.
 """
 from __future__ import annotations
 
@@ -83,26 +45,45 @@ OPTIMIZE_LOOPS = False
 
 
 def tracing():
-    """The Dr.Jit flags under which styletrace traces its kernels (scoped: a user's own Dr.Jit code
-    keeps its settings). OptimizeLoops off: with it, Dr.Jit traces every symbolic loop's body twice
-    (a second pass drops the state that the first found loop-invariant), and a stylized level's loop
-    body holds the next level's loop, so the trace time doubled per level (identity, inner 1: 10 s
-    at 12 levels and 107 s at 14 with the flag, below 0.06 s at any depth up to 16 without;
-    BENCHMARKS.md, recursion depth). The images are bit-identical either way
-    (tests/kernel/test_recursion_depth.py), and the kernels' run time shows no consistent
-    difference."""
+    """The Dr.Jit flags under which styletrace traces its kernels, scoped (a user's own Dr.Jit code
+    keeps its settings): OptimizeLoops as OPTIMIZE_LOOPS, off (with it the trace time doubled per
+    stylized level; the images are bit-identical either way).
+    Design: docs/design/stylized_integrator.md.
+
+    Returns:
+        A context manager.
+    """
     return dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, OPTIMIZE_LOOPS)
 
 
 class Target:
     """Where one style slot applies: everywhere else (`bsdfs` empty) or on objects with
-    these BSDFs."""
+    these BSDFs.
+
+    Args:
+        slot: the style slot (style, inner count, estimator).
+        bsdfs: the styled BSDF first, then the wrappers an intersection reports for it; empty:
+            every object no other target claims.
+        emitters: the emitters of its shapes, which first_object_hit's walks leave to g.
+    """
 
     def __init__(self, slot: S.StyleSlot, bsdfs=(), emitters=()):
         self.slot, self.bsdfs, self.emitters = slot, list(bsdfs), list(emitters)
 
 
 class StylizedIntegrator(mi.SamplingIntegrator):
+    """The `stylized` integrator (module docstring).
+
+    Args:
+        props: Mitsuba properties (XML, dicts), parsed by `settings.parse` unless `settings` is
+            given.
+        settings: settings already parsed from `values` (the Python API and the CLI parse once).
+        values: the property values as given (default: those of `props`), kept so front ends can
+            refine the integrator (`settings.refine`).
+
+    Raises:
+        SettingsError: a property is unknown or has a bad value.
+    """
     # per-render state, set and cleared by `render_context.RenderContext` only (its module doc
     # says why)
     targets = ()         # the style targets of the scene being traced
@@ -127,8 +108,6 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     def __init__(
         self, props: mi.Properties, settings: S.Settings | None = None, values: dict | None = None
     ):
-        """From Mitsuba properties (XML, dicts), or from `settings` already parsed from `values`
-        (`S.parse(values)`; the Python API and the CLI build it this way, parsing once)."""
         super().__init__(props)
         # the values as given, so front ends can refine this integrator (`settings.refine`)
         self.values = S.properties_of(props) if values is None else dict(values)
@@ -141,22 +120,49 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     @classmethod
     def from_values(cls, values: dict) -> "StylizedIntegrator":
         """A `stylized` integrator from property values (style, style parameters,
-        inner_samples, ...)."""
+        inner_samples, ...).
+
+        Args:
+            values: property values by name; a "type" entry is ignored.
+
+        Returns:
+            StylizedIntegrator.
+
+        Raises:
+            SettingsError: a value is unknown or bad.
+        """
         values = {k: v for k, v in values.items() if k != "type"}
         return cls(mi.Properties(), S.parse(values), values)
 
     def prepare_expansion(self, scene: mi.Scene, seed: int):
-        """Run the expansion pass for the scene's current film crop with `seed` (once per crop and
-        seed; a no-op with expansion_pass 0); returns its `expansion.Moments` or None."""
+        """Run the expansion pass for the scene's current film crop (once per crop and seed; a no-op
+        with expansion_pass 0).
+
+        Args:
+            scene: the scene about to be rendered, its film cropped to the tile.
+            seed: the expansion pass's seed (`pipeline.passes.expansion_seed`).
+
+        Returns:
+            Its `expansion.Moments`, or None with expansion_pass 0.
+        """
         m = self.settings.expansion_pass
         return self.expansion.prepare(self, scene, m, int(seed)) if m else None
 
     # ---- which styles apply where --------------------------------------------------------------
     def targets_for(self, scene: mi.Scene, graph: SceneGraph | None = None) -> list[Target]:
-        """Which style applies where in `scene`: its styled BSDFs wherever they sit (on shapes,
-        inside wrappers such as twosided, mask, blendbsdf, and in shapegroups seen through
-        instances: scene_graph.py; `bsdfs[0]` is the styled BSDF itself), then the integrator's own
-        style for all other objects."""
+        """Which style applies where in `scene`: its styled BSDFs wherever they sit (in wrappers,
+        in shapegroups: scene_graph.py; `bsdfs[0]` is the styled BSDF itself), then the
+        integrator's own style for all other objects (not with first_object_hit).
+
+        Args:
+            scene: the scene. graph: its SceneGraph, if built already.
+
+        Returns:
+            list[Target].
+
+        Raises:
+            SceneError: the scene graph refuses the scene's styling (SceneGraph).
+        """
         graph = SceneGraph(scene) if graph is None else graph
         targets = [
             Target(styled.slot, pointers, emitters) for styled, pointers, emitters in graph.styled
@@ -166,7 +172,14 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return targets
 
     def styled_mask(self, si) -> mi.Bool:
-        """Lanes whose surface has a styled BSDF (any target's)."""
+        """Lanes whose surface has a styled BSDF (any target's).
+
+        Args:
+            si: the lanes' surface interactions.
+
+        Returns:
+            mi.Bool.
+        """
         return _any_ptr(si.bsdf(), [b for t in self.targets for b in t.bsdfs], mi.BSDFPtr)
 
     def _skip_emitter(self, ds) -> mi.Bool:
@@ -180,7 +193,17 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return (volume_walk if cfg.media else walk)(cfg, sampler, start, active, hooks)
 
     def child(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
-        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x = `site`."""
+        """One sample of L_e(x) + \\int f L_i at the level-`level` vertex x = `site`: an ordinary
+        walk below the last level, else a step to the next level's vertex, stylized in turn.
+
+        Args:
+            level: the stylized level of x (0: the first).
+            sampler: the lane's random stream. site: the vertex x.
+            active: the lanes that draw (mi.Bool).
+
+        Returns:
+            mi.Spectrum.
+        """
         s = self.settings
         if level + 1 >= s.stylize_depth:
             start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium)
@@ -222,9 +245,17 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         )
 
     def walk(self, level: int, sampler, start: Start, active, halt_at_start: bool) -> mi.Spectrum:
-        """A path-traced walk from `start` that halts on styled objects and stylizes them at `level`
-        (with `halt_at_start`, at the start vertex too; else that vertex scatters by its
-        opaque part)."""
+        """A path-traced walk from `start` that halts on styled objects, stylized at `level`.
+
+        Args:
+            level: the stylized level of the vertices it halts at.
+            sampler: the lane's random stream. start: where the walk starts.
+            active: the lanes that walk (mi.Bool).
+            halt_at_start: halt at the start vertex too; else it scatters by its opaque part.
+
+        Returns:
+            The walk's radiance (mi.Spectrum), the stylized values included.
+        """
         first = mi.UInt32(start.depth)
 
         def stop(si, d):
@@ -244,11 +275,27 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     def through(self, w, value) -> mi.Spectrum:
         """The walk's radiance: what it gathered before halting plus its throughput times the
         stylized value where it halted (a seam for `lookdev.record`, which keeps both per
-        camera sample)."""
+        camera sample).
+
+        Args:
+            w: a finished path.Walk. value: the stylized value where it halted (mi.Spectrum).
+
+        Returns:
+            mi.Spectrum.
+        """
         return w.L + dr.select(w.halted, w.beta * value, 0.0)
 
     def stylized(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
-        """g(E[L_o]) at the level-`level` vertex `site`, each object with its own style."""
+        """g(E[L_o]) at the level-`level` vertex `site`, each object with its own style.
+
+        Args:
+            level: the stylized level (0: the first).
+            sampler: the lane's random stream. site: the vertex.
+            active: the lanes at a vertex to stylize (mi.Bool).
+
+        Returns:
+            mi.Spectrum, 0 where not active or where no target applies.
+        """
         si, ray, depth = site.si, site.ray, site.depth
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
@@ -268,8 +315,17 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         return total
 
     def estimate(self, slot: S.StyleSlot, level, sampler, site: Site, active, v) -> mi.Spectrum:
-        """The slot's estimate of g(E[L_o]) at `site` on the `active` lanes (v: the
-        style's Vertex)."""
+        """The slot's estimate of g(E[L_o]) at `site` on the `active` lanes. In the expansion pass
+        series slots at level 0 only collect their children's moments, and every slot gives 0 there.
+
+        Args:
+            slot: the style slot. level: the stylized level.
+            sampler: the lane's random stream. site: the vertex.
+            active: the lanes where the slot applies (mi.Bool). v: the style's Vertex.
+
+        Returns:
+            mi.Spectrum.
+        """
         scene, si = self.walk_config.scene, site.si
         style = slot.style
         if style.closed_form:  # no children: the AOVs keep 0 here
@@ -314,10 +370,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
     def _render_reuse(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
         """`render` with reuse=pixels: a pass is rendered by `reuse.render_reuse`, which needs every
-        camera sample's neighbours at once (Mitsuba's loop calls `sample` per pass, lanes cannot see
-        each other). It is set on the instance only then: a Python `render` on the class, even one
-        calling Mitsuba's, changed how a render in progress takes Ctrl-C (Mitsuba's own handler took
-        the signal and the pass ran on)."""
+        camera sample's neighbours at once (Mitsuba's loop calls `sample`, whose lanes cannot see
+        each other). Set on the instance only then (docs/design/stylized_integrator.md)."""
         from styletrace.kernel import reuse
         sensor = scene.sensors()[sensor] if isinstance(sensor, int) else sensor
         with tracing():

@@ -1,35 +1,14 @@
-"""Building blocks of LLaT's conditional lifting for feature lines (not yet wired into the
-integrator).
+"""LLaT's conditional lifting of feature lines ("Lifting Lines and Tone", West, Mukherjee and Yue,
+ACM TOG 2026, Section 4, S1.4): the transport of a base path's conditioning to auxiliary paths,
+the slope metric, the composition of line types, and `Lifted`, used by `line_mode lifted`.
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
-Mukherjee and Yonghao Yue (ACM TOG 45(4), 2026), Section 4 (Eqs. 13-20, 23, 31-34) and
-supplement S1.4.
+    h2 = c n2 + s u2                (Eqs. 13-18: the half-vector's tilt c = h.n and azimuth kept)
+    d = v - 2 (v.h) h               (Eq. 19, reflection; Eq. 20 refracts)
+    a pair fires where |f(v) - f(u)| / |s_v - s_u| >= t                  (Eq. 23)
+    sum_i prod_{j<i} w_j (1 - w_i) c_i + prod_i w_i L                    (Eq. 32, sampled by Eq. 34)
 
-An auxiliary path keeps the base path's conditioning xi (the lens sample, each half-vector's tilt,
-each reflect/refract choice) while its image coordinate moves. At a glossy or specular vertex the
-base path's half-vector h (unit, in the hemisphere of the shading normal n) is carried to the
-auxiliary vertex, whose normal is n2 and incoming direction v2:
-    c = h . n,  s = sqrt(1 - c^2),  u = (h - c n) / s                   (Eq. 14: tilt and azimuth)
-    t1 = normalize(n x v),  t2 = t1 x n,  alpha = atan2(u . t2, u . t1) (Eqs. 17-18: chart of v)
-    u2 = cos(alpha) t1' + sin(alpha) t2',  t1' = normalize(n2 x v2), t2' = t1' x n2
-    h2 = c n2 + s u2                                                     (Eq. 16: tilt kept)
-then the auxiliary direction leaves by reflection d = v - 2 (v . h) h (Eq. 19) or refraction
-d = eta v - (eta (v . h) + sqrt(1 - eta^2 (1 - (v . h)^2))) h with h facing v (Eq. 20). At a diffuse
-vertex the base direction is turned by the minimal rotation taking n to n2 (supplement S1.4).
-
-Lines are detected by the slope metric m(u, v) = [|f(v) - f(u)| / |s_v - s_u| < t] (Eq. 23), in
-pixels, per line type (its measurement f, threshold t). Types compose in priority order (Eqs.
-31-34): with w_i the probability that type i draws no line, the expected result is
-    sum_i prod_{j<i} w_j (1 - w_i) c_i + prod_i w_i L                      (Eq. 32)
-and its binary-metric estimator returns the colour of the first type that fires, L where none does
-(Eq. 34).
-
-What is here: the transport, the two scattering rules, minimal rotation, the slope metric, the
-composition (functions on Dr.Jit arrays, and `compose_expected` / `compose_sample` on numpy or
-Dr.Jit), and `Lifted`, which traces the auxiliary paths of a line dictionary for camera samples. The
-integrator uses it with `line_mode lifted` (`line_types`, config/line_types.py): per camera sample
-the types are tested first and L is traced only where none fired (Eq. 34). West 2021's cone
-(kernel/lines.py) stays the `absorb` mode.
+At a diffuse vertex the base direction turns by the minimal rotation taking n to n2 (S1.4).
+Design: docs/design/lifted_lines.md.
 """
 from __future__ import annotations
 
@@ -41,7 +20,14 @@ from styletrace.kernel.lines import object_shapes, on_shapes
 
 def tangent_chart(n: mi.Vector3f, v: mi.Vector3f):
     """(t1, t2): t1 = normalize(n x v), t2 = t1 x n (Eq. 17); where v is parallel to n any
-    tangent frame."""
+    tangent frame.
+
+    Args:
+        n: the unit normal (mi.Vector3f). v: the incoming direction (mi.Vector3f).
+
+    Returns:
+        (t1, t2), mi.Vector3f each.
+    """
     t1 = dr.cross(n, v)
     len2 = dr.squared_norm(t1)
     fallback, _ = mi.coordinate_system(n)
@@ -51,8 +37,16 @@ def tangent_chart(n: mi.Vector3f, v: mi.Vector3f):
 
 def transport_half_vector(h: mi.Vector3f, n: mi.Vector3f, v: mi.Vector3f, n2: mi.Vector3f,
                           v2: mi.Vector3f) -> mi.Vector3f:
-    """The half-vector at the auxiliary vertex (normal n2, incoming v2) that keeps h's tilt c = h .
-    n and its azimuth alpha in the chart of the incoming direction (Eqs. 13-18)."""
+    """The half-vector at the auxiliary vertex that keeps h's tilt c = h . n and its azimuth alpha
+    in the chart of the incoming direction (Eqs. 13-18).
+
+    Args:
+        h, n, v: the base vertex's unit half-vector, shading normal and incoming direction.
+        n2, v2: the auxiliary vertex's shading normal and incoming direction.
+
+    Returns:
+        h2 (mi.Vector3f, unit).
+    """
     c = dr.clip(dr.dot(h, n), -1.0, 1.0)
     s = dr.sqrt(dr.maximum(1.0 - c * c, 0.0))
     t1, t2 = tangent_chart(n, v)
@@ -70,13 +64,27 @@ def transport_half_vector(h: mi.Vector3f, n: mi.Vector3f, v: mi.Vector3f, n2: mi
 
 
 def reflect(v: mi.Vector3f, h: mi.Vector3f) -> mi.Vector3f:
-    """Eq. 19: the incoming direction v (towards the surface) reflected about h."""
+    """Eq. 19: the incoming direction v (towards the surface) reflected about h.
+
+    Args:
+        v: the incoming direction. h: the unit half-vector (mi.Vector3f each).
+
+    Returns:
+        mi.Vector3f.
+    """
     return v - 2.0 * dr.dot(v, h) * h
 
 
 def refract(v: mi.Vector3f, h: mi.Vector3f, eta: mi.Float):
-    """Eq. 20 with eta = eta_i / eta_t and h turned to face v (v . h < 0); (direction, valid: no
-    total internal reflection)."""
+    """Eq. 20: v refracted about h, h turned to face v (v . h < 0).
+
+    Args:
+        v: the incoming direction. h: the unit half-vector (mi.Vector3f each).
+        eta: eta_i / eta_t (mi.Float).
+
+    Returns:
+        (direction mi.Vector3f, valid mi.Bool: no total internal reflection).
+    """
     h = dr.select(dr.dot(v, h) > 0, -h, h)
     vh = dr.dot(v, h)
     k = 1.0 - eta * eta * (1.0 - vh * vh)
@@ -86,7 +94,14 @@ def refract(v: mi.Vector3f, h: mi.Vector3f, eta: mi.Float):
 
 def minimal_rotation(n: mi.Vector3f, n2: mi.Vector3f, w: mi.Vector3f) -> mi.Vector3f:
     """w turned by the smallest rotation taking unit n to unit n2 (Rodrigues; the diffuse rule
-    of S1.4)."""
+    of S1.4); w unchanged where n2 = -n.
+
+    Args:
+        n, n2: unit normals (mi.Vector3f). w: the direction to turn.
+
+    Returns:
+        mi.Vector3f.
+    """
     axis = dr.cross(n, n2)
     c = dr.dot(n, n2)
     # R w = c w + axis x w + axis (axis . w) / (1 + c); exact for unit n, n2 (n2 = -n has no minimal
@@ -97,20 +112,42 @@ def minimal_rotation(n: mi.Vector3f, n2: mi.Vector3f, w: mi.Vector3f) -> mi.Vect
 
 
 def slope(f_u, f_v, s_u: mi.Point2f, s_v: mi.Point2f) -> mi.Float:
-    """|f(v) - f(u)| / |s_v - s_u| (pixels); f scalar or a vector (its difference's norm)."""
+    """|f(v) - f(u)| / |s_v - s_u|, per pixel; f scalar or a vector (its difference's norm).
+
+    Args:
+        f_u, f_v: the measurement at the two hits (mi.Float or mi.Vector3f).
+        s_u, s_v: their image coordinates (mi.Point2f, pixels).
+
+    Returns:
+        mi.Float.
+    """
     df = f_v - f_u
     num = dr.norm(df) if dr.size_v(df) == 3 else dr.abs(df)
     return num / dr.maximum(dr.norm(s_v - s_u), 1e-12)
 
 
 def fires(f_u, f_v, s_u: mi.Point2f, s_v: mi.Point2f, threshold: float) -> mi.Bool:
-    """1 - m(u, v) of Eq. 23: the pair's slope reaches the type's threshold."""
+    """1 - m(u, v) of Eq. 23: the pair's slope reaches the type's threshold.
+
+    Args:
+        f_u, f_v, s_u, s_v: as `slope`'s. threshold: t, in units of f per pixel.
+
+    Returns:
+        mi.Bool.
+    """
     return slope(f_u, f_v, s_u, s_v) >= threshold
 
 
 def compose_expected(w, colors, L):
-    """Eq. 32: sum_i prod_{j<i} w_j (1 - w_i) c_i + prod_i w_i L; `w` and `colors` in
-    priority order."""
+    """Eq. 32: sum_i prod_{j<i} w_j (1 - w_i) c_i + prod_i w_i L.
+
+    Args:
+        w: per type in priority order, the probability that it draws no line.
+        colors: per type its colour. L: the radiance where no type draws.
+
+    Returns:
+        The expected colour (numpy or Dr.Jit, as the inputs).
+    """
     out = 0.0
     keep = 1.0
     for wi, ci in zip(w, colors):
@@ -121,7 +158,15 @@ def compose_expected(w, colors, L):
 
 def compose_sample(fired, colors, L):
     """Eq. 34 with binary metrics: the colour of the first type (in priority order) whose sample
-    fired, L where none did. `fired`: one boolean array per type (numpy or Dr.Jit)."""
+    fired, L where none did.
+
+    Args:
+        fired: one boolean array per type (numpy or Dr.Jit). colors: per type its colour.
+        L: the value where none fired.
+
+    Returns:
+        The colour per sample (numpy or Dr.Jit, as `fired`).
+    """
     import numpy as np
     out = L
     for f, c in reversed(list(zip(fired, colors))):
@@ -133,30 +178,18 @@ def compose_sample(fired, colors, L):
 
 class Lifted:
     """Feature lines by conditional lifting in one scene (first sensor), for a dictionary of
-    `LineType`s.
+    `LineType`s: per camera sample a base path, and per type `count` pairs of stencil points whose
+    auxiliary paths keep its conditioning; a type fires where any pair does.
 
-    Per camera sample at image coordinate s (pixels right and up of the centre, as
-    styles.base.Projection) the base path is traced from the lens point `aperture` (the lens centre
-    where none is given) through s, sampling each non-diffuse vertex's BSDF (that choice and its
-    half-vector are the conditioning xi). For each type, `count` pairs of stencil points (u, v)
-    around s give two auxiliary paths each, traced vertex by vertex with xi kept: at a glossy or
-    specular base vertex the auxiliary reflects about the base's half-vector transported to it
-    (`transport_half_vector`), at a diffuse one it turns the base's direction by `minimal_rotation`
-    (only with `through_diffuse`; otherwise the paths stop there, as West 2021's lines do). At every
-    depth up to `depth` the pair fires when exactly one of its paths hits, when the two hit
-    different shapes and the type measures shape or material ids, or when the slope |f(v) - f(u)| /
-    |v - u| reaches the type's threshold; with `objects` (shape ids, `line_objects`) only where one
-    of the pair's hits there is on one of those shapes. A type fires if any of its pairs fires; the
-    first type in priority order that fires gives the sample's colour (Eq. 34), `background` where
-    none. At a transmitting base vertex the auxiliary refracts (Eq. 20) about the transported
-    generalised half-vector h = normalize(v - eta d) (eta: the base's sampled relative index),
-    keeping the base's reflect-or-refract choice; where it cannot (total internal reflection) its
-    pair stops.
+    Args:
+        scene: the scene. types: its `LineType`s (ordered here by priority).
+        depth: the vertices tested per path (`line_depth`).
+        through_diffuse: carry the paths past diffuse vertices (minimal rotation); else stop there.
+        objects: the shape ids that draw lines (`line_objects`; empty: all).
 
-    A camera ray is turned into its film coordinate and lens sample by `conditioning` (pinhole: the
-    pixel it passes through; thin lens: the lens point it leaves from and the film point of its
-    focus), so the base and auxiliary paths of a depth-of-field render leave from the sample's own
-    lens point."""
+    Raises:
+        SceneError: the sensor's lens model is not known here, or an id names no shape.
+    """
 
     def __init__(
         self, scene: mi.Scene, types, depth: int = 2, through_diffuse: bool = False, objects=()
@@ -185,9 +218,16 @@ class Lifted:
                          float(dr.ravel(sensor.focus_distance())[0]))
 
     def conditioning(self, ray: mi.Ray3f) -> tuple[mi.Point2f, mi.Point2f]:
-        """(s, aperture sample) of a camera ray: its film point (pixels right and up of the centre)
+        """(s, aperture sample) of a camera ray: its film point (screen pixels, `Projection.pixels`)
         and the lens sample it left the lens with ((0.5, 0.5) without an aperture), so that `_ray(s,
-        aperture)` gives the ray back."""
+        aperture)` gives the ray back.
+
+        Args:
+            ray: the camera rays (mi.Ray3f).
+
+        Returns:
+            (mi.Point2f, mi.Point2f).
+        """
         o, d = mi.Point3f(ray.o), mi.Vector3f(ray.d)
         if self.lens is None:
             x, y = self.tone.projection.pixels(o + d)
@@ -230,8 +270,16 @@ class Lifted:
         return mi.Point2f(d.x * t.radius, d.y * t.radius)
 
     def fired(self, s: mi.Point2f, sampler, active, aperture=None) -> list:
-        """Per type (priority order): whether any of its pairs fired, for camera samples at s
-        (leaving the lens at `aperture`, a lens sample; None: the lens centre)."""
+        """Per type (priority order): whether any of its pairs fired, for camera samples at s.
+
+        Args:
+            s: the film points (mi.Point2f, screen pixels from the centre, `Projection.pixels`).
+            sampler: the lanes' random stream. active: the camera lanes (mi.Bool).
+            aperture: the lens samples the rays leave with (mi.Point2f); None: the lens centre.
+
+        Returns:
+            list[mi.Bool], one per type.
+        """
         scene = self.scene
         ctx = mi.BSDFContext()
         # the base path: xi (each vertex's sampled direction, half-vector, and the vertex's frame)
@@ -317,8 +365,17 @@ class Lifted:
         return out
 
     def render(self, spp: int, seed: int = 0, background=(1.0, 1.0, 1.0), jitter: bool = True):
-        """(image [h, w, 3] of Eq. 34's estimator over `spp` samples per pixel, per type the
-        fraction of samples it fired [h, w]). jitter=False puts every sample at the pixel centre."""
+        """Eq. 34's estimator over the whole image, with `background` for L (tests, figures); the
+        per-sample results are kept in `samples`.
+
+        Args:
+            spp: samples per pixel. seed: the independent sampler's seed.
+            background: the colour where no type fires (RGB).
+            jitter: jitter the samples within their pixel; False: every one at the pixel centre.
+
+        Returns:
+            (image [h, w, 3], per type the fraction of samples it fired [h, w]), numpy arrays.
+        """
         import numpy as np
         w, h = int(self.tone.width), int(self.tone.height)
         n = w * h * spp

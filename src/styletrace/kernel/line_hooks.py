@@ -2,19 +2,11 @@
 before anything else is traced for it (edge 0, LLaT's lifted lines), and the hook each walk or
 bounce carries.
 
-Feature lines (`lines`, kernel/lines.py, docs/lines.md): a line on the camera ray replaces the
-camera sample (nothing else is traced for it); walks and bounces carry the line state of the vertex
-they leave (`line_states`, one per stylized level) and end where a line absorbs them, so lines on
-later edges enter the expectation before g. With `lines` off no line code is traced. The volume walk
-carries the same hook as the surface walk: in scenes with participating media a scattering in a
-medium ends line detection, as a diffuse vertex does. `line_mode lifted` (LLaT's conditional
-lifting, lifted_lines.py) instead tests its line types once per camera sample, along auxiliary paths
-that follow the camera sample's own base path to `line_depth` vertices, before anything else is
-traced; those paths know no media, so with media it draws the camera ray's lines only
-(`line_problem`).
-
-Each function takes the integrator (kernel/integrator.py) bound to a scene and `stylize`, its trace
-of the camera ray, which it calls for the lanes where no line fired.
+A line on the camera ray replaces the camera sample; walks and bounces carry the line state of the
+vertex they leave (`line_states`, one per stylized level) and end where a line absorbs them. With
+`lines` off no line code is traced. Each function takes the integrator (kernel/integrator.py) bound
+to a scene and `stylize`, its trace of the camera ray, called for the lanes where no line fired.
+Design: docs/design/feature_lines.md.
 """
 from __future__ import annotations
 
@@ -24,8 +16,15 @@ from styletrace.kernel.lifted_lines import compose_sample
 
 
 def line_problem(settings: S.Settings, media: bool) -> str | None:
-    """Why `settings`' lines cannot be drawn in a scene (with participating media when `media`),
-    or None."""
+    """Why `settings`' lines cannot be drawn in a scene: line_mode lifted with line_depth > 1 where
+    there are participating media (its auxiliary paths know no media).
+
+    Args:
+        settings: the integrator's settings. media: the scene has participating media.
+
+    Returns:
+        The message, or None.
+    """
     lines = settings.lines
     if media and lines is not None and lines.mode == "lifted" and lines.depth > 1:
         return (f"bad value {lines.depth} for 'line_depth' in a scene with participating media: "
@@ -34,9 +33,16 @@ def line_problem(settings: S.Settings, media: bool) -> str | None:
 
 
 def walk_lines(integ, level: int):
-    """The lines hook of a walk or bounce that leaves the level-`level` vertex (-1: the camera's
-    first vertex, where first_object_hit's camera walk starts): the line settings and that
-    vertex's state."""
+    """The lines hook of a walk or bounce that leaves the level-`level` vertex.
+
+    Args:
+        integ: the integrator, bound to a scene.
+        level: the stylized level (-1: the camera's first vertex, where first_object_hit's camera
+            walk starts).
+
+    Returns:
+        (the integrator's Lines, that vertex's LineState), or None with lines off.
+    """
     if integ.lines is None:
         return None
     return integ.lines, integ.line_states[level]
@@ -44,7 +50,17 @@ def walk_lines(integ, level: int):
 
 def camera_edge(integ, stylize, scene, sampler, camera_ray, ray, active, medium, spp):
     """Edge 0: a feature line on the camera ray replaces the pixel sample (lines.py); the other
-    lanes are stylized, their walks starting from the camera's line state."""
+    lanes are stylized, their walks starting from the camera's line state.
+
+    Args:
+        integ, stylize: the bound integrator and its trace of the camera ray.
+        scene, sampler: the scene and the lanes' random streams.
+        camera_ray, ray: the camera ray with its differentials, and as mi.Ray3f.
+        active, medium, spp: the camera lanes, the camera's medium, the samples per pixel.
+
+    Returns:
+        (value, valid, AOVs) of the camera sample.
+    """
     seen, camera = integ.lines.camera(scene, sampler, camera_ray, spp, active)
     # the camera ray's first hit: where first_object_hit's walk starts and the
     # first_hit/first_n_hits vertex
@@ -57,7 +73,17 @@ def camera_edge(integ, stylize, scene, sampler, camera_ray, ray, active, medium,
 def lifted(integ, stylize, scene, sampler, camera_ray, ray, active, medium):
     """line_mode lifted (LLaT Eq. 34): each line type's auxiliary pairs are tested for the camera
     sample (its film point and lens sample kept); the first type in priority order that fires gives
-    the sample its colour, and L is traced only where none fired."""
+    the sample its colour, and L is traced only where none fired.
+
+    Args:
+        integ, stylize: the bound integrator and its trace of the camera ray.
+        scene, sampler: the scene and the lanes' random streams.
+        camera_ray, ray: the camera ray with its differentials, and as mi.Ray3f.
+        active, medium: the camera lanes and the camera's medium.
+
+    Returns:
+        (value, valid, AOVs) of the camera sample.
+    """
     bound = integ.lifted
     s, aperture = bound.conditioning(camera_ray)
     fired = bound.fired(s, sampler, active, aperture)

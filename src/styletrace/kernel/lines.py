@@ -1,49 +1,14 @@
 """Physically based feature lines on path edges (West 2021, "Physically-Based Feature Line
-Rendering", ACM TOG 40(6) 246; as described in West, Mukherjee and Yue 2026, "Lifting Lines
-and Tone").
+Rendering", ACM TOG 40(6) 246), detected on edges 0 .. `depth` - 1 of a camera path while every
+vertex before the edge scattered non-diffusely; a line found absorbs the path (throughput x line
+colour).
 
-A line is detected on an *edge* of a camera path (the camera ray is edge 0, the ray leaving the
-first hit edge 1, ...) for edges 0 .. `depth` - 1, and only while every vertex before the edge
-scattered non-diffusely (a line is seen in a mirror, through glass, out of focus; not in diffuse
-reflection). Where a line is found the path absorbs: it returns throughput x line colour and ends.
-
-Detection: N auxiliary rays in a cone around the base edge, one stencil point (a, b) per ray,
-uniform and independent in a disc of radius `width` / 2 pixels (so a line is `width` pixels wide,
-and a line is found by each ray with the same probability q: coverage 1 - (1 - q)^N).
-- Camera edge: o_j = o + a (o_x - o) + b (o_y - o), d_j = normalize(d + a (d_x - d) + b (d_y - d))
-  from the camera ray's own differentials (one-pixel ones: Mitsuba scales them by 1/sqrt(spp)), so
-  depth of field is shared.
-- Later edges: the beam of one pixel, its width at the camera (`spread`, |o_x - o|: 0 for a pinhole,
-  whose differentials share the origin, about 0 for a thin lens (Mitsuba's near-clip offset); the
-  pixel's width for an orthographic sensor, whose rays are parallel) and its angle (`angle`, |d_x -
-  d|), with the accumulated path length D from the camera set the stencil: origins on the vertex's
-  tangent plane at lateral offset (spread + angle * D) * (a, b), directions d + angle * (a, b).
-  After a flat mirror this is exactly the beam of the mirrored camera, so a reflected line keeps its
-  screen width.
-Tests between the base hit q and an auxiliary hit s (any one fires; each can be switched off):
-- silhouette: one of the two hits a surface, the other escapes;
-- boundary: both hit, on different shapes (as the loaded scene holds them: Mitsuba merges meshes
-  that share a BSDF into one shape when it loads a scene, so their seams draw nothing here);
-- crease: 1 - |n_q . n_s| > `crease` (geometric normals; |.| so flipped normals do not fire);
-- albedo: |lum(albedo_q) - lum(albedo_s)| > `albedo`;
-- depth: the distance of either point from the other's tangent plane exceeds `slope` times the
-  beam's radius at q, spread + angle * t per pixel (slope-aware: any plane, however slanted, gives
-  0). The beam of an orthographic sensor has angle 0 and a constant width: with a radius of angle *
-  t alone, every rounding error of a flat floor fired and an orthographic image was all line.
-Every ray of the stencil (the base ray too) passes surfaces with a pure `null` BSDF, which nothing
-sees (the boundary of a participating medium): outlining them drew the box of a medium. Masks,
-partly opaque, stay surfaces. The line point is the nearest (along its ray) of the points of the
-pairs that fire; its world y picks the colour of a `gradient`. `objects`: ids of the shapes that
-draw lines (empty: all); a pair draws where either of its hits is on one of them.
-
-`mode` expectation (LLaT, West, Mukherjee and Yue 2026): lines as a style of expectation,
-    g = (1 - w) c + w L,  w = E[m]^k,
-m(u, v) = "no line between the stencil points u and v" for a random pair of auxiliary rays (the same
-tests between their two hits). The product of k independent metric samples estimates E[m]^k without
-bias, and, m being binary, it is 0 as soon as one pair fires: the sample is then c and L is never
-traced (the integrator masks those lanes off). k is the opacity control. The absorbing mode is the
-same composition with N rays tested against the base ray, so both share `Seen` and the integrator's
-and walk's hooks.
+Detection: N auxiliary rays in a cone around the edge (camera edge: from the ray's differentials;
+later edges: one pixel's beam), stencil points uniform in a disc of radius `width` / 2 pixels, each
+tested against the base hit: silhouette, boundary, crease, albedo, depth (slope-aware). Stencil
+rays pass pure `null` surfaces. `mode` expectation (LLaT): g = (1 - w) c + w L, w = E[m]^k,
+estimated by k random pairs tested against each other. `objects`: the shapes that draw lines.
+Design: docs/design/feature_lines.md.
 """
 from __future__ import annotations
 
@@ -60,7 +25,14 @@ MAX_NULL_PASSES = 16
 class LineState:
     """What a path carries for lines: accumulated length from the camera, whether no diffuse vertex
     was met yet, and one pixel's beam (from the camera ray's differentials): its angle and its width
-    at the camera."""
+    at the camera. A Dr.Jit struct.
+
+    Args:
+        D: the path length from the camera to the state's vertex (mi.Float; None: 0).
+        alive: no diffuse vertex met yet (mi.Bool; None: True).
+        angle, spread: the beam's angle per pixel (|d_x - d|) and its width at the camera (world
+            units); mi.Float, None: 0.
+    """
     DRJIT_STRUCT = {"D": mi.Float, "alive": mi.Bool, "angle": mi.Float, "spread": mi.Float}
 
     def __init__(self, D=None, alive=None, angle=None, spread=None):
@@ -70,7 +42,14 @@ class LineState:
         self.spread = mi.Float(0.0) if spread is None else spread
 
     def width(self, t) -> mi.Float:
-        """The beam's width per pixel at distance t past the state's vertex."""
+        """The beam's width per pixel at distance t past the state's vertex.
+
+        Args:
+            t: the distance along the next edge (mi.Float, world units).
+
+        Returns:
+            mi.Float, world units.
+        """
         return self.spread + self.angle * (self.D + t)
 
 
@@ -81,8 +60,17 @@ class Seen:
 
 
 def object_shapes(scene: mi.Scene, objects) -> list:
-    """The shapes named by `line_objects` (empty: all draw lines); an unknown id is refused in
-    one line."""
+    """The shapes named by `line_objects` (empty: all draw lines).
+
+    Args:
+        scene: the scene. objects: shape ids.
+
+    Returns:
+        list[mi.ShapePtr]; empty where `objects` is.
+
+    Raises:
+        SceneError: an id names no shape of the scene (in one line).
+    """
     if not objects:
         return []
     by_id = {shape.id(): shape for shape in scene.shapes()}
@@ -94,7 +82,14 @@ def object_shapes(scene: mi.Scene, objects) -> list:
 
 
 def on_shapes(si, shapes: list) -> mi.Bool:
-    """Whether a hit is on one of `shapes` (every hit where `shapes` is empty)."""
+    """Whether a hit is on one of `shapes` (every hit where `shapes` is empty).
+
+    Args:
+        si: the hits. shapes: `object_shapes`' pointers.
+
+    Returns:
+        mi.Bool.
+    """
     if not shapes:
         return si.is_valid()
     mask = mi.Bool(False)
@@ -105,12 +100,19 @@ def on_shapes(si, shapes: list) -> mi.Bool:
 
 class Lines:
     """The line settings bound to one scene for one trace (shape pointers, the gradient's
-    y range)."""
+    y range).
+
+    Args:
+        settings: the line settings (`lines` and the `line_*` settings). scene: the scene traced.
+        see_through: the scene has a surface with a pure `null` BSDF
+            (`SceneGraph.has_see_through`), so the stencil's rays must pass such surfaces (a loop
+            per ray that other scenes do without).
+
+    Raises:
+        SceneError: `line_objects` names a shape the scene lacks.
+    """
 
     def __init__(self, settings: LineSettings, scene: mi.Scene, see_through: bool = False):
-        """`see_through`: the scene has a surface with a pure `null` BSDF
-        (`SceneGraph.has_see_through`), so the stencil's rays must pass such surfaces (a loop per
-        ray that other scenes do without)."""
         self.s = settings
         # positions, geometric normals and shapes are all the tests need; the albedo test
         # evaluates textures
@@ -125,6 +127,14 @@ class Lines:
 
     # ---- what a line looks like ---------------------------------------------------------------
     def color(self, p: mi.Point3f) -> mi.Color3f:
+        """The line colour at p: `line_color`, or the gradient's colour at p's world y.
+
+        Args:
+            p: the line point (mi.Point3f).
+
+        Returns:
+            mi.Color3f.
+        """
         if self.s.gradient is None:
             return mi.Color3f(*self.s.color)
         c0, c1 = mi.Color3f(*self.s.gradient[0]), mi.Color3f(*self.s.gradient[1])
@@ -138,7 +148,15 @@ class Lines:
         self, scene, ray: mi.Ray3f, active: mi.Bool, coherent: bool = False
     ) -> mi.SurfaceInteraction3f:
         """The first hit along `ray` that is not a pure `null` surface; its `t` is measured
-        from ray.o."""
+        from ray.o.
+
+        Args:
+            scene: the scene. ray: the ray. active: the lanes that trace (mi.Bool).
+            coherent: a hint to the intersection (camera rays are).
+
+        Returns:
+            mi.SurfaceInteraction3f.
+        """
         if not self.see_through:
             return scene.ray_intersect(ray, ray_flags=self.flags, coherent=coherent, active=active)
         minimal = mi.RayFlags.Minimal
@@ -175,7 +193,17 @@ class Lines:
 
     # ---- the edges -------------------------------------------------------------------------------
     def camera(self, scene, sampler, ray: mi.RayDifferential3f, spp: int, active: mi.Bool):
-        """Edge 0, from the camera ray's differentials: (Seen, LineState for the edges below)."""
+        """Edge 0, from the camera ray's differentials.
+
+        Args:
+            scene, sampler: the scene and the lanes' random stream.
+            ray: the camera ray (mi.RayDifferential3f, its differentials scaled by Mitsuba).
+            spp: the samples per pixel they were scaled for (undone: one-pixel differentials).
+            active: the camera lanes (mi.Bool).
+
+        Returns:
+            (Seen, LineState for the edges below).
+        """
         scale = float(spp) ** 0.5   # undo Mitsuba's 1/sqrt(spp) scaling: one-pixel differentials
         o, d = mi.Point3f(ray.o), mi.Vector3f(ray.d)
         ox, oy = (ray.o_x - o) * scale, (ray.o_y - o) * scale
@@ -204,8 +232,17 @@ class Lines:
         index,
         active: mi.Bool,
     ):
-        """The edge `ray` (leaving vertex si by the sample bs, reaching pi) with index `index`:
-        (Seen, LineState after it)."""
+        """Lines on the edge `ray`, which leaves vertex si by the sample bs and reaches pi.
+
+        Args:
+            scene, sampler: the scene and the lanes' random stream.
+            state: the LineState at si. si, bs: the vertex and its BSDF sample.
+            ray, pi: the edge and its preliminary intersection. index: the edge's index (0: camera).
+            active: the lanes that take the edge (mi.Bool); the others keep their state.
+
+        Returns:
+            (Seen, LineState after the edge).
+        """
         alive = state.alive & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Diffuse)
         go = active & alive & (index < self.s.depth)
         D0 = state.D
@@ -299,7 +336,14 @@ class Lines:
 def pure_null(flags) -> Any:
     """BSDF flags of a surface that lets every ray through unchanged (a `null` BSDF): of the lobe
     flags (`BSDFFlags.All`) only Null, whatever the side flags; a mask or a BSDF with a null lobe
-    besides others is not. Works on a Python int and on a Dr.Jit UInt32."""
+    besides others is not.
+
+    Args:
+        flags: BSDF flags, a Python int or a Dr.Jit UInt32.
+
+    Returns:
+        bool, or mi.Bool for an array.
+    """
     null, lobes = int(mi.BSDFFlags.Null), int(mi.BSDFFlags.All)
     if isinstance(flags, int):
         return flags & lobes == null

@@ -1,27 +1,13 @@
-"""The local inverse of the mirror-anchor map: linear moving least squares (LLaT, Eq. 35,
-supplement S2.5).
+"""Linear moving least squares: the local inverse of LLaT's mirror-anchor map (LLaT Eq. 35, S2.5).
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
-Mukherjee and Yonghao Yue (ACM TOG 45(4), 2026); linear MLS after "Image Deformation Using Moving
-Least Squares", Scott Schaefer, Travis McPhail and Joe Warren (2006).
-
-Given candidate anchor vertices p_i (world points) with their image coordinates s_i and a query
-point x reached along the incoming direction d:
-    chart:  the plane through x with normal n = -d/|d|; e1, e2 an orthonormal basis of it;
-            q_i = ((p_i - x) . e1, (p_i - x) . e2) / sigma,  sigma = mean_i |q_i| (before scaling)
-    weights w_i = exp(-|q_i|^2)            (Gaussian, sigma = mean candidate distance)
-    fit     min_{A,b} sum_i w_i |A q_i + b - s_i|^2,   s(x) = b   (x is the chart's origin)
-The two 3x3 normal equations share one matrix M = sum_i w_i (1, q_i)(1, q_i)^T; b = first row of
-M^-1 (sum_i w_i s_i (1, q_i)). Working in sigma units keeps M's scale independent of the scene's.
-
-Fallbacks (supplement S2.5's chain), each taken where the one before it is not trusted:
-    MLS      M well conditioned (det M / (sum w)^3 > COND) and the weighted centroid of the q_i
-             within CENTRE sigma of the query: the fit interpolates rather than extrapolates;
-    affine   the same fit with w_i = 1 (all candidates count equally), M well conditioned;
-    nearest  the s_i of the candidate closest in the chart;
-    first    the caller's first-edge coordinate.
-All functions here run on Dr.Jit arrays over lanes, the candidates unrolled as Python lists (their
-count is small and fixed), so no gather and no loop is traced.
+For candidate anchors p_i (world) with image coordinates s_i and a query x reached along d:
+    chart  e1, e2 a basis of the plane through x normal to d; q_i = ((p_i - x).e1, (p_i - x).e2)
+           / sigma, sigma = the candidates' mean distance from x in the chart
+    fit    min_{A,b} sum_i w_i |A q_i + b - s_i|^2 with w_i = exp(-|q_i|^2); s(x) = b
+Fallbacks, each where the one before is not trusted: MLS (M well conditioned, weighted centroid
+within CENTRE sigma) -> affine (w_i = 1) -> nearest candidate -> the caller's first-edge
+coordinate. Dr.Jit arrays over lanes, candidates unrolled as Python lists: no gather, no loop.
+Design: docs/design/mirror_anchors.md.
 """
 from __future__ import annotations
 
@@ -68,14 +54,30 @@ def _sums(q, s, w, valid):
 
 def plane_chart(x: mi.Point3f, d: mi.Vector3f):
     """An orthonormal basis (e1, e2) of the plane through x normal to -d (the incoming
-    direction's chart)."""
+    direction's chart).
+
+    Args:
+        x: the query point (the basis does not depend on it). d: the incoming direction.
+
+    Returns:
+        (e1, e2), mi.Vector3f each.
+    """
     e1, e2 = mi.coordinate_system(dr.normalize(-d))
     return e1, e2
 
 
 def invert(x: mi.Point3f, d: mi.Vector3f, points, coords, valid, first: mi.Point2f):
-    """s(x) from the candidates (world `points`, image `coords` as (Float, Float), `valid` masks) by
-    the chain MLS -> affine -> nearest -> `first`; returns (Point2f, method code UInt32)."""
+    """s(x) from the candidates by the chain MLS -> affine -> nearest -> `first`.
+
+    Args:
+        x, d: the query point (mi.Point3f) and its incoming direction (mi.Vector3f).
+        points, coords, valid: per candidate its world point, image coordinate (Float, Float)
+            and whether it counts (mi.Bool); Python lists of equal length.
+        first: the caller's first-edge coordinate (mi.Point2f).
+
+    Returns:
+        (s mi.Point2f, method code mi.UInt32: MLS, AFFINE, NEAREST or FIRST).
+    """
     e1, e2 = plane_chart(x, d)
     raw = []
     for p in points:

@@ -3,42 +3,12 @@
     cfg = WalkConfig(scene, emitters, max_depth, rr_depth, nulls, media)   # once per render
     w = walk(cfg, sampler, Start(pi, ray, depth), active, Hooks(stop=...))  # a Walk
 
-`exitant(cfg, sampler, start, active)` returns one unbiased sample of
-    L_o(x, wo) = L_e(x, wo) + \\int f(x, wi, wo) L_i(x, wi) cos dwi
-at the vertex x that `start.ray` reaches (`start.pi`, its preliminary intersection; wo = -ray.d).
-Emission at x is counted in full: in the stylized rendering equation it sits inside g. Below x the
-estimator is an ordinary unidirectional path tracer with next-event estimation, multiple importance
-sampling (power heuristic on solid-angle densities, as Mitsuba's `path`) and Russian roulette from
-`rr_depth` on. An invalid `pi` means the ray escaped: the sample is then the environment's radiance.
-
-Next-event estimation picks its emitter with an `EmitterSampler` (emitter_sampler.py) rather than
-`scene.sample_emitter_direction`: Mitsuba's emitter list changes order between processes, ours does
-not, so a seed gives the same image in every run. The MIS density at emitters hit by BSDF samples
-uses the same selection probabilities. Samples that are not finite are dropped at the end of a walk
-(see there).
-
-Depth follows Mitsuba's convention: x is at depth `start.depth` (0 for a camera ray's first hit), so
-`max_depth` = 1 returns emission only, and the tree camera ray -> x -> this path has the same
-longest path as Mitsuba's `path` with the same `max_depth` (-1 = unbounded).
-
-The hooks (`Hooks`): `stop(si, depth)` marks vertices where the walk must halt because a style
-applies there (per-object stylization): their radiance is g(...), not emission plus reflection, so
-the walk neither adds their emission nor reflects there, and next-event estimation skips the
-emitters `skip_emitter(ds)` marks (their light reaches the path through g instead). The caller gets
-the halted lanes back with their throughput, intersection and ray. `lines` detects feature lines on
-the walk's edges, `tone` carries LLaT's image-coordinate state (anchors.py) to the halting vertex.
-
-`bounce.bounce` is the single step that the recursive `first_n_hits` parametrization takes between
-two stylized vertices (bounce.py); vertex.py holds what both share at one vertex (emission,
-environment, the power heuristic, the depth limit, null parts).
-
-Scenes with participating media use volume.py's walk instead: the same signature, the same hooks and
-a `Walk` with the medium; the integrator chooses by `WalkConfig.media` at trace time, so this kernel
-has no medium code at all.
-
-The loop carries the small preliminary intersection and rebuilds the full surface interaction at the
-top of each iteration, as Mitsuba's own path tracer does; the sampler is part of the loop state (a
-loop drawing random numbers without it would replay the same numbers in every iteration).
+`exitant` samples L_o(x, wo) = L_e(x, wo) + \\int f L_i cos dwi at the vertex x that `start.ray`
+reaches (emission in full: it sits inside g), the environment where the ray escaped. Below x:
+next-event estimation (emitters by `EmitterSampler`), power-heuristic MIS and Russian roulette, as
+Mitsuba's `path`, with its depth convention (x at `start.depth`; max_depth -1: unbounded). `Hooks`
+halt the walk on styled vertices, skip emitters, detect lines and carry tone; volume.py's walk
+serves scenes with media. Design: docs/design/path_kernel.md.
 """
 from __future__ import annotations
 
@@ -127,17 +97,18 @@ class FrontState:
 
 def first_scattering(scene: mi.Scene, sampler, pi: mi.PreliminaryIntersection3f, ray: mi.Ray3f,
                      active: mi.Bool) -> Front:
-    """Follow `ray` through null interactions (masks, `null` BSDFs) to the first vertex
-    that scatters.
+    """Follow `ray` through null interactions (masks, `null` BSDFs) to the first vertex that
+    scatters: a mask passes the ray with probability T (its null transmission), else it is an
+    opaque surface there and the lane's weight is (1 - T)/(1 - p) (1 for grey T). Null
+    interactions add no depth. Emitters on see-through surfaces must be refused beforehand
+    (scene_graph.py; docs/design/path_kernel.md).
 
-    A stylized vertex is a scattering vertex: a ray that meets a mask passes it with probability T
-    (its null transmission) and goes on; otherwise the mask is an opaque surface there, and the
-    lane's weight is (1 - T)/(1 - p) (1 for grey T). The stylized value at that vertex is the
-    radiance of the opaque part (`opaque_part`), so for the identity style the mixture is exactly
-    the physically based one. Null interactions add no depth. Emitters on see-through surfaces are
-    refused with the scene (scene_graph.py): evaluating emission in this loop as well made Dr.Jit
-    1.5's LLVM backend emit one emitter callable twice into a kernel ("invalid redefinition of
-    function"), a crash.
+    Args:
+        scene, sampler: the scene and the lane's random stream.
+        pi, ray: the ray's first intersection (preliminary) and the ray. active: lanes to follow.
+
+    Returns:
+        The Front: the scattering vertex, the ray that reaches it, the passes' weight beta.
     """
     state = FrontState(sampler=sampler, pi=mi.PreliminaryIntersection3f(pi), ray=mi.Ray3f(ray),
                        beta=mi.Spectrum(1.0), active=mi.Bool(active))
@@ -198,19 +169,30 @@ class Walk:
 
 
 def exitant(cfg: WalkConfig, sampler, start: Start, active: mi.Bool) -> mi.Spectrum:
-    """One sample of L_o at the vertex `start.ray` reaches (see the module docstring)."""
+    """One sample of L_o at the vertex `start.ray` reaches (see the module docstring).
+
+    Args:
+        cfg: the render's WalkConfig. sampler: the lane's random stream.
+        start: where the walk starts. active: the lanes that walk (mi.Bool).
+
+    Returns:
+        mi.Spectrum.
+    """
     return walk(cfg, sampler, start, active).L
 
 
 def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS) -> Walk:
-    """The path loop (module docstring) from `start` on the `active` lanes, with the caller's
-    `hooks`.
+    """The path loop (module docstring) from `start`: returns the Walk (radiance, and throughput,
+    vertex, depth, line and tone state where it halted); non-finite samples are dropped.
 
-    With `cfg.nulls`, halts at `stop` vertices pass through their null part (`null_split`), and with
-    `start.opaque` the start vertex, a stylized one, scatters by its opaque part only
-    (`opaque_part`). A line found on an edge absorbs the path (throughput x line colour); the tone
-    state is advanced at every scattering. Returns the Walk: radiance, and throughput, vertex,
-    depth, line and tone state where it halted.
+    With `cfg.nulls` halting lanes pass their null part first (`null_split`); with `start.opaque`
+    the start vertex scatters by its opaque part only.
+
+    Args:
+        cfg, sampler: the render's WalkConfig and the lane's random stream.
+        start, active: where the walk starts, and the lanes that walk (mi.Bool).
+        hooks: stop, skip_emitter, lines (a line on an edge absorbs the path: throughput x line
+            colour) and tone (advanced at every scattering).
     """
     scene, emitters, nulls = cfg.scene, cfg.emitters, cfg.nulls
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
@@ -340,7 +322,15 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
 def finished(out, **extra) -> Walk:
     """The Walk of a finished loop state `out`, its sample dropped where it is not finite (see
     `walk`). The throughput counts only where the walk halted (lanes that Russian roulette ended may
-    hold inf * 0)."""
+    hold inf * 0).
+
+    Args:
+        out: the loop's final state (PathState or volume.VolumeState).
+        extra: further Walk fields (lines, tone, medium).
+
+    Returns:
+        Walk.
+    """
     finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
     return Walk(
         L=dr.select(finite, out.L, 0.0),
@@ -356,11 +346,18 @@ def finished(out, **extra) -> Walk:
 def halt_at(
     s, si: mi.SurfaceInteraction3f, bsdf, reached: mi.Bool, stop: Optional[Callable], nulls: bool
 ):
-    """Where a walk's `stop` halts it at si among the lanes that `reached` it: (lanes that shade si,
-    lanes that pass straight on through a null part, their pass weight). A stylized vertex is a
-    scattering one, so with `nulls` a halting lane first passes through the null part (`null_split`)
-    and the stay weight goes into the throughput; `s.halted` gains the halted lanes. `s`: the loop
-    state (sampler, beta, depth, halted)."""
+    """Where a walk's `stop` halts it at si. A stylized vertex is a scattering one, so with `nulls`
+    a halting lane first passes through the null part (`null_split`) and the stay weight goes into
+    the throughput; `s.halted` gains the halted lanes.
+
+    Args:
+        s: the loop state (sampler, beta, depth, halted), updated in place.
+        si, bsdf, reached: the vertex, its BSDF and the lanes that reached it (mi.Bool).
+        stop, nulls: the walk's stop hook (None: never halt); the scene has null parts.
+
+    Returns:
+        (lanes that shade si, lanes that pass straight on through a null part, their pass weight).
+    """
     here, passes, w_pass = mi.Bool(reached), mi.Bool(False), mi.Spectrum(1.0)
     if stop is not None:
         halt = reached & si.is_valid() & stop(si, s.depth)
@@ -377,8 +374,16 @@ def halt_at(
 def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInteraction3f,
                  hit: mi.Bool) -> mi.Spectrum:
     """Emission at si (the environment where the ray escaped) on the lanes `hit`, times the
-    throughput and MIS-weighted against the light sampling done at the previous vertex (`s`: the
-    loop state's beta, si_prev, pdf_prev, delta_prev)."""
+    throughput and MIS-weighted against the light sampling done at the previous vertex.
+
+    Args:
+        scene, emitters: the scene and its EmitterSampler.
+        s: the loop state (its beta, si_prev, pdf_prev, delta_prev).
+        si, hit: the vertex and the lanes whose emission counts (mi.Bool).
+
+    Returns:
+        mi.Spectrum.
+    """
     emitter = si.emitter(scene)
     hit_em = hit & (emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
     ds = mi.DirectionSample3f(scene, si=si, ref=s.si_prev)
@@ -388,9 +393,16 @@ def mis_emission(scene: mi.Scene, emitters: EmitterSampler, s, si: mi.SurfaceInt
 
 
 def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):
-    """The anchors.ToneState past the vertex `si` at `depth`, scattered by `bs` on the `active`
-    lanes: its shape joins the prefix key, a transmission sets the depth's bit, a non-delta event
-    ends the all-delta prefix."""
+    """The anchors.ToneState past the vertex `si`: its shape joins the prefix key, a transmission
+    sets the depth's bit, a non-delta event ends the all-delta prefix.
+
+    Args:
+        tone: the state before si. si, bs: the vertex and the BSDF sample taken there.
+        depth: si's path depth. active: the lanes that scattered at si (the others keep `tone`).
+
+    Returns:
+        ToneState.
+    """
     depth = mi.UInt32(depth)
     through = mi.has_flag(bs.sampled_type, mi.BSDFFlags.Transmission) & (depth < MAX_BITS)
     bit = mi.UInt32(1) << dr.minimum(depth, MAX_BITS - 1)
@@ -407,7 +419,15 @@ def advance(tone, si: mi.SurfaceInteraction3f, bs, depth, active):
 def past_area_emitters(scene, ray, pi, active):
     """`hide_emitters` on a camera ray: its first intersection that is not an area light, and the
     ray spawned from the last light it passed (Mitsuba's `skip_area_emitters` returns a distance
-    measured from a ray it does not hand back, so the lights are stepped through here)."""
+    measured from a ray it does not hand back, so the lights are stepped through here).
+
+    Args:
+        scene: the scene. ray, pi: the camera ray and its first intersection (preliminary).
+        active: the camera lanes (mi.Bool).
+
+    Returns:
+        (ray, pi): the ray from the last light passed, and its first intersection.
+    """
     def through(ray, pi, skip):
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.Minimal, active=skip)
         ray = dr.select(skip, si.spawn_ray(ray.d), ray)

@@ -6,17 +6,10 @@ always released.
         # integrator.targets, .emitters, .lines, .view, ... are set
         ... trace ...
 
-While a kernel is traced the integrator's methods read what the scene decides: the style targets
-(which BSDFs are styled, `targets_for`), whether the scene has media or null surfaces, the emitter
-sampler, the feature-line detector (West 2021's cone, or LLaT's lifted line types) and the line
-state per stylized level, LLaT's image-coordinate tracer and its state per level (only where a style
-reads the coordinate: anchors.py), the camera's forward vector, the expansion pass's lane moments
-and the adaptive statistics, and the configuration every walk of the render shares
-(path.WalkConfig). This is the one place that sets them and the one place that clears them: Dr.Jit
-traces calls on every live instance of a class, and a BSDF or emitter of a scene the garbage
-collector is tearing down, still held by an integrator after its render, crashed a later trace
-(measured: a segfault in pdf_emitter_direction). No reference to the scene's objects outlives the
-context.
+It sets what the integrator's methods read while a kernel is traced (style targets, media and null
+flags, emitter sampler, line and tone tracers and their states, walk configuration, camera vector,
+expansion moments, adaptive statistics), and it alone clears them: no reference to the scene's
+objects outlives it. Design: docs/design/render_state.md.
 """
 from __future__ import annotations
 
@@ -32,8 +25,15 @@ from styletrace.styles.base import camera_forward
 
 
 class RenderContext:
-    """Binds `scene` to one render of `integrator` (see the module doc); re-entering it is
-    an error."""
+    """Binds `scene` to one render of `integrator` (see the module doc).
+
+    Args:
+        integrator: the `stylized` integrator. scene: the scene it renders.
+
+    Raises:
+        RuntimeError: on entering, where the integrator's render context is taken already.
+        SceneError: on entering, where the scene cannot be rendered (its styling, lines, media).
+    """
 
     def __init__(self, integrator, scene: mi.Scene):
         self.integrator, self.scene = integrator, scene

@@ -2,11 +2,11 @@
 then g.
 
 Every camera sample i traces its ray to the first hit v_i and draws m children there (m = its style
-slot's inner_samples, children.py); the pool of v_i (pool.py; its world-space second level with
-reuse_deep=world, world.py; the refinement round of an adaptive count, refine.py) gives L(v) =
-g(L_e(v) + direct + indirect). Lanes whose BSDF has a delta or null component, closed-form styles
-and escaped rays use their own children only (the ordinary estimate, with MIS); a pool of v alone is
-the ordinary estimate too.
+slot's inner_samples, reuse_children.py); the pool of v_i (reuse_pool.py; its world-space second
+level with reuse_deep=world, reuse_world.py; the refinement round of an adaptive count,
+reuse_refine.py) gives L(v) = g(L_e(v) + direct + indirect). Lanes whose BSDF has a delta or null
+component, closed-form styles and escaped rays use their own children only (the ordinary estimate,
+with MIS); a pool of v alone is the ordinary estimate too.
 """
 from __future__ import annotations
 
@@ -44,7 +44,16 @@ class Samples:
 
 def camera_rays(sensor, sampler, frame: Frame, spp_total: int):
     """Camera rays as Mitsuba's SamplingIntegrator::render makes them: lane = pixel * spp +
-    sample index."""
+    sample index, over the film's crop (border included).
+
+    Args:
+        sensor, sampler: the scene's sensor and the batch's seeded sampler.
+        frame: the batch's pixels and samples per pixel.
+        spp_total: the pass's samples per pixel (the ray differentials are scaled by 1/sqrt of it).
+
+    Returns:
+        (mi.RayDifferential3f, its weight mi.Spectrum, film position mi.Vector2f) per lane.
+    """
     film = sensor.film()
     width, spp = frame.width, frame.spp
     N = width * frame.height * spp
@@ -68,8 +77,18 @@ def camera_rays(sensor, sampler, frame: Frame, spp_total: int):
 
 
 def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
-    """The `Samples` of one batch: frame.spp samples per pixel of a pass of spp_total, sampler
-    seed `seed`."""
+    """One batch of a reuse pass: camera rays, first hits, children, pools, then g.
+
+    Args:
+        scope: the render's Scope (its `keep`, if any, receives this batch's pools).
+        sensor: the scene's sensor.
+        frame: the batch's pixels and its samples per pixel (frame.spp of the pass's spp_total).
+        seed: the batch's sampler seed.
+        spp_total: the pass's samples per pixel.
+
+    Returns:
+        The batch's `Samples`.
+    """
     s, scene, keep, targets = scope.settings, scope.scene, scope.keep, scope.targets
     width, height, spp = frame.width, frame.height, frame.spp
     N = width * height * spp

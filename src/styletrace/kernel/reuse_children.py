@@ -19,7 +19,11 @@ class Children:
     """The stored children (see the module docstring), 16 floats each, side by side in one flat
     array: a child is read with four 4-float loads instead of 16 scattered gathers (the pool reads
     every child K + 1 times). Layout: wl, E, wb, pdf, Li, and fLi = f_i(wb) Li at the child's own
-    vertex (pairwise's own samples)."""
+    vertex (pairwise's own samples).
+
+    Args:
+        size: the number of children stored.
+    """
     DRJIT_STRUCT = {"data": mi.Float}
     SIZE = 16
 
@@ -27,8 +31,14 @@ class Children:
         self.data = dr.zeros(mi.Float, size * self.SIZE)
 
     def store(self, c, sample, Li, fLi, active):
-        """Store at flat indices c the child whose samples are `sample` (wl, E, wb, pdf) with its Li
-        and fLi."""
+        """Store children at flat indices c.
+
+        Args:
+            c: the flat child indices (mi.UInt32).
+            sample: (wl mi.Vector3f, E mi.Spectrum, wb mi.Vector3f, pdf mi.Float).
+            Li, fLi: the radiance along wb, and f(wb) Li at the child's own vertex (mi.Spectrum).
+            active: the lanes that store (mi.Bool).
+        """
         wl, E, wb, pdf = sample
         packets = (mi.Vector4f(wl.x, wl.y, wl.z, E[0]), mi.Vector4f(E[1], E[2], wb.x, wb.y),
                    mi.Vector4f(wb.z, pdf, Li[0], Li[1]), mi.Vector4f(Li[2], fLi[0], fLi[1], fLi[2]))
@@ -36,7 +46,15 @@ class Children:
             dr.scatter(self.data, value, c * 4 + t, active)
 
     def load(self, c, active):
-        """(wl, E, wb, pdf, Li, fLi) of the children at flat indices c."""
+        """The children at flat indices c.
+
+        Args:
+            c: the flat child indices (mi.UInt32).
+            active: the lanes that read (mi.Bool).
+
+        Returns:
+            (wl, E, wb, pdf, Li, fLi) as `store` took them.
+        """
         a, b, d, e = (dr.gather(mi.Vector4f, self.data, c * 4 + t, active) for t in range(4))
         return (
             mi.Vector3f(a.x, a.y, a.z),
@@ -86,7 +104,14 @@ class Draw:
     (direction ds.d, E) and a BSDF sample (direction wb, density bs.pdf, weight w_b) with the ray to
     what it reaches (ray2, pi2). At a non-last level of first_n_hits (`nested`) next-event
     estimation samples delta lights only, as `bounce.bounce`: the BSDF sample reaches every other
-    emitter, which the next level stylizes."""
+    emitter, which the next level stylizes.
+
+    Args:
+        scope, smp: the render's Scope and the lanes' random streams (LaneSampler).
+        parents: the vertices drawn at. on: the lanes that draw this child (mi.Bool).
+        depth: the parents' path depth (0: the first hit).
+        nested: the parents are a non-last first_n_hits level.
+    """
 
     def __init__(self, scope, smp, parents: Parents, on, depth: int, nested: bool):
         si, bsdf = parents.si, parents.bsdf
@@ -121,12 +146,27 @@ class Draw:
 
     def seen(self, scene, si2, hit2, value):
         """The radiance Li along the BSDF sample: `value` where it hit a surface, else the
-        environment."""
+        environment; 0 where the sample was not taken.
+
+        Args:
+            scene: the scene. si2, hit2: `next_vertex`'s interaction and hit mask.
+            value: the radiance leaving si2 towards the parent (mi.Spectrum).
+
+        Returns:
+            mi.Spectrum.
+        """
         return dr.select(self.go, dr.select(hit2, value, environment(scene, si2, self.go)), 0.0)
 
     def store(self, kids, at, Li, on):
-        """Store the child at flat index `at` with its Li; its ordinary estimate x (0 where not `on`
-        or not finite)."""
+        """Store the child at flat index `at` with its Li (where `on` and its estimate is finite).
+
+        Args:
+            kids: the Children. at: the flat index (mi.UInt32).
+            Li: the radiance along the BSDF sample (mi.Spectrum). on: the lanes that store.
+
+        Returns:
+            The child's ordinary estimate x (mi.Spectrum), 0 where not `on` or not finite.
+        """
         go, bs = self.go, self.bs
         x = dr.select(self.to_light, self.val * self.E, 0.0) + dr.select(go, self.w_b * Li, 0.0)
         ok = on & dr.all(dr.isfinite(x))
@@ -136,9 +176,18 @@ class Draw:
 
 
 def draw(scope, lanes, parents: Parents, span: Span, depth: int = 0):
-    """Draw the children `span` names at the `parents` (the first hit, or with `depth` 1 a
-    second-level vertex whose children are ordinary paths), store them, and return each lane's sum
-    of their ordinary estimates (next-event plus BSDF-sampled radiance, emission at v left out)."""
+    """Draw the children `span` names at the `parents` and store them.
+
+    Args:
+        scope, lanes: the render's Scope and the lanes' random streams (advanced in place).
+        parents: the first hits, or with `depth` 1 second-level vertices whose children are
+            ordinary paths. span: which children, and where they are stored.
+        depth: the parents' stylized level and path depth (0 or 1).
+
+    Returns:
+        Per lane, the sum of its children's ordinary estimates (next-event plus BSDF-sampled
+        radiance, emission at v left out; mi.Spectrum).
+    """
     s, scene, integ = scope.settings, scope.scene, scope.integ
     nested = s.stylize == "first_n_hits" and s.stylize_depth > depth + 1
     si, pool, M = parents.si, parents.pool, span.slab.M

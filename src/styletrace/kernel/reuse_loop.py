@@ -3,8 +3,8 @@ one block.
 
 The children of a pass are stored (16 floats each, side by side), so a pass is split into batches of
 samples per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one batch of
-one crop window (`api.passes` tiles images above a million pixels; a window is clipped at a
-tile's edge).
+one crop window (`pipeline.passes` tiles images above a million pixels; a window is clipped at
+a tile's edge).
 """
 from __future__ import annotations
 
@@ -24,6 +24,14 @@ BATCH_CHILDREN = 1 << 20
 
 
 def batch_seed(seed: int, batch: int) -> int:
+    """The sampler seed of a batch of a pass: the pass's own seed for batch 0, else a hash of both.
+
+    Args:
+        seed: the pass's seed. batch: the batch's index in the pass.
+
+    Returns:
+        A seed below 2^32.
+    """
     return (
         seed if batch == 0 else (seed * 0x9E3779B1 + batch * 0x85EBCA6B + 0x165667B1) & 0xFFFFFFFF
     )
@@ -38,12 +46,21 @@ def render_reuse(
     weights: str | None = None,
     keep: dict | None = None,
 ) -> mi.TensorXf:
-    """The developed film of `spp` samples per pixel rendered with reuse=pixels (what `mi.render`
-    returns). `weights` overrides the setting `reuse_mis` ('balance', 'pairwise'); 'own' divides
-    each pooled BSDF sample by its own density (wrong: the tests' negative control); `keep`, a dict,
-    receives the first batch's pools as numpy arrays (`pool_pixels`)."""
-    # no scene may be finalised while a pass is recorded (jit.no_collection), and none needs
-    # collecting first targets, emitters, view bound to this scene, released after
+    """The developed film (mi.TensorXf) of one pass rendered with reuse=pixels, as `mi.render`.
+
+    Args:
+        integ, scene, sensor: the `stylized` integrator (bound to scene here), scene, its sensor.
+        seed, spp: the pass's seed and samples per pixel.
+        weights: overrides `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF
+            sample by its own density (wrong: the tests' negative control).
+        keep: a dict that receives the first batch's pools as numpy arrays (`pool_pixels`).
+
+    Raises:
+        SceneError: the scene has media or null-scattering surfaces, or its styling is refused.
+        SettingsError: a styled BSDF's style cannot take reuse (`settings.check_reusable`).
+    """
+    # no scene may be finalised while a pass is recorded (jit.no_collection); the render context
+    # binds targets, emitters and view to this scene and releases them after
     with no_collection(), RenderContext(integ, scene):
         if integ.nulls or integ.media:
             what = (

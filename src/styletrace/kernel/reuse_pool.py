@@ -2,17 +2,14 @@
 members' children.
 
 The pool P(v) is v and its accepted neighbours among K drawn from the (2r+1)^2 pixel window (same
-sample index of the pass): same style target, same BSDF object, shading normals with n.n' >
-NORMAL_MIN and camera distances within DEPTH_TOL (the world grid, world_grid.py, serves the same
-`neighbour`/`accepted` for the second level). With v's own BSDF f_v (cosine included),
+sample index): same style target and BSDF object, n.n' > NORMAL_MIN, camera distances within
+DEPTH_TOL. With v's own BSDF f_v (cosine included), over the C = sum_P c_k children of the pool,
 
     direct(v)   = 1/C sum_{k in P} sum_j f_v(wl_kj) E_kj      (neighbours' visibility reused)
     indirect(v) = sum_{k in P} sum_j f_v(wb_kj) Li_kj w_k(wb_kj)
 
-over the C = sum_P c_k children of the members, with multi-sample MIS weights w_k over the pool's
-BSDF-sampling techniques (`reuse_mis`; the package docstring): balance, 1 / sum_k c_k p_k; pairwise,
-each neighbour's technique against v's only (`pairwise`, by layers where the counts differ); 'own',
-1 / (C p_k), the tests' negative control.
+w_k: balance, 1 / sum_k c_k p_k; pairwise (`_pairwise`); 'own', 1 / (C p_k), the negative control.
+Design: docs/design/sample_reuse.md.
 """
 from __future__ import annotations
 
@@ -33,7 +30,14 @@ DEPTH_TOL = 0.05
 def window(radius: int) -> np.ndarray:
     """The (2r+1)^2 - 1 pixel offsets around a pixel (itself excluded) in a fixed shuffled order: a
     lane takes K consecutive ones from a random start, so each offset is pooled with probability K
-    / len."""
+    / len.
+
+    Args:
+        radius: r, in pixels.
+
+    Returns:
+        int32 array of shape (W, 2): (dx, dy) per offset.
+    """
     offsets = [
         (dx, dy)
         for dy in range(-radius, radius + 1)
@@ -55,8 +59,15 @@ class Frame:
 
 class Grid:
     """The neighbour slots of each lane: slot 0 is the lane itself, slot q >= 1 the pixel at window
-    offset order[(start + q - 1) mod W], same sample index. `lane`: the lanes (indices into the
-    pass) this grid serves, all of them by default, with `start` given per served lane."""
+    offset order[(start + q - 1) mod W], same sample index.
+
+    Args:
+        frame: the pass's lanes (width x height pixels of spp samples each).
+        radius: the window's radius r in pixels (W = (2r+1)^2 - 1 offsets, `window`).
+        K: candidate slots per lane (at most W and 63).
+        start: per served lane, its first window offset (mi.UInt32 in [0, W)).
+        lane: the lanes (indices into the pass) this grid serves (mi.UInt32); None: all of them.
+    """
 
     def __init__(self, frame: Frame, radius, K, start, lane=None):
         width, height, spp = frame.width, frame.height, frame.spp
@@ -73,7 +84,14 @@ class Grid:
         self.x = mi.Int32(pix) - self.y * width
 
     def neighbour(self, q):
-        """(lane index, inside the image) of slot q (a UInt32 array)."""
+        """(lane index, inside the image) of slot q.
+
+        Args:
+            q: the slot (mi.UInt32), 0 .. K.
+
+        Returns:
+            (mi.UInt32 lane index in the pass, the lane itself where outside; mi.Bool).
+        """
         o = (self.start + q - 1) % self.W
         first = q == 0
         x = self.x + dr.select(first, 0, dr.gather(mi.Int32, self.dx, o, ~first))
@@ -85,8 +103,17 @@ class Grid:
         return dr.select(inside, at, self.lane), inside
 
     def accepted(self, target, bsdf, pool, n, depth) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the lane's own (acceptance.py; camera
-        distances within DEPTH_TOL)."""
+        """Bit q set where slot q's vertex may be pooled with the lane's own (acceptance.py), camera
+        distances within DEPTH_TOL.
+
+        Args:
+            target, bsdf, pool, n: per lane of the pass its style target (mi.Int32), BSDF
+                (mi.BSDFPtr), whether it may pool (mi.Bool) and shading normal (mi.Vector3f).
+            depth: per lane of the pass its camera distance (mi.Float, world units).
+
+        Returns:
+            mi.UInt64, one bit per slot 0 .. K.
+        """
         def near(at, ok):
             return dr.abs(dr.gather(mi.Float, depth, at, ok) - depth) <= DEPTH_TOL * depth
 
@@ -159,10 +186,18 @@ def _counts(pools: Pools):
 
 def pooled(pools: Pools, slab, J: int, weights: str, moments: bool = False):
     """(direct + indirect)(v) of the module docstring for every lane the grid serves (meaningful
-    where the lane pools), from the children stored in `slab` (member k contributes its first c_k =
-    count_k children, at most J). With `moments`, also the first two moments of the per-child
-    estimates' brightness, sum_i u_i and sum_i u_i^2, u_i = C x_i (x_i child i's terms of the sums,
-    C = sum_P c_k), which give the pooled mean's sample variance, and C."""
+    where the lane pools); member k contributes its first c_k = count_k children, at most J.
+
+    Args:
+        pools, slab: the lanes' pools and the children stored per lane (reuse_children.Slab).
+        J: the most children a member contributes.
+        weights: 'balance', 'pairwise' or 'own' (the tests' negative control).
+        moments: also return s1 = sum_i u_i, s2 = sum_i u_i^2 and C = sum_P c_k, u_i = C x_i the
+            brightness of child i's terms x_i (they give the pooled mean's sample variance).
+
+    Returns:
+        The pooled mean (mi.Spectrum), or (mean, s1, s2, C) with `moments`.
+    """
     if weights == "pairwise":
         return _pairwise(pools, slab, J, moments)
     grid, mask, si, bsdf = pools.grid, pools.mask, pools.si, pools.bsdf
@@ -237,22 +272,14 @@ def _layer(grid, mask, count, j, active):
 
 
 def _pairwise(pools: Pools, slab, J: int, moments: bool):
-    """`pooled` with pairwise weights, n = |P| - 1 (counts c_k: Veach's multi-sample form of
-    each pair):
+    """`pooled` with pairwise weights, n = |P| - 1 (Veach's multi-sample form of each pair):
         a member k's sample:  f_v Li / (n c_k p_k + c_v p_v)
         v's own sample:       f_v Li (1/n) sum_{k != v} 1 / (n c_k p_k + c_v p_v)
-    (for equal counts m: w_k = p_k / (n p_k + p_v) and w_v = (1/n) sum_k p_v / (n p_k + p_v), over m
-    samples). Per child index j, one loop over the members k != v gives both v's terms for k's child
-    j and k's term of the canonical sum of v's own child j; v's own child's f_v Li was stored when
-    it was drawn.
-
-    Unequal counts (the refinement round's pools): child index j is a layer, P_j the members with
-    c_k > j, each layer pooled with pairwise weights over its own members (n_j = |P_j| - 1, one
-    sample per technique) and the layers averaged with weights |P_j| / C (each layer is unbiased
-    where the pool's is, and the weights sum to one). With equal counts this is the formula above;
-    with unequal ones a layer beyond the first round's n0 holds only the refined members, so its
-    loop visits those alone (the set bits of P_j), where the counts' weights would need every
-    member's density for each of v's n_max children."""
+    Per child index j, one loop over the members k != v gives both v's terms for k's child j and
+    k's term of the canonical sum of v's own child j (v's own f_v Li was stored when drawn).
+    Unequal counts (the refinement round): layer j holds the members with c_k > j, pooled with
+    pairwise weights over its own members (n_j = |P_j| - 1), the layers averaged with weights
+    |P_j| / C. Design: docs/design/sample_reuse.md."""
     grid, mask, si, bsdf, count, equal = (
         pools.grid,
         pools.mask,
@@ -342,8 +369,14 @@ def _pairwise(pools: Pools, slab, J: int, moments: bool):
 
 
 def pool_pixels(keep: dict) -> list[list[tuple[int, int]]]:
-    """From `render(..., keep=d)`: per lane, the (x, y) pixels of its pool, itself first
-    (tests, docs)."""
+    """Per lane, the (x, y) pixels of its pool, itself first (tests, docs).
+
+    Args:
+        keep: the dict `render_reuse(..., keep=keep)` filled (mask, start, radius, spp, width, K).
+
+    Returns:
+        One list of (x, y) per lane of the first batch.
+    """
     offsets = window(keep["radius"])
     W, spp, width = len(offsets), keep["spp"], keep["width"]
     out = []

@@ -5,7 +5,7 @@ close to a style threshold (or too curved), told the pool's C = sum_P c_k sample
 moment, draw n_max - n0 more and recompute their pools with every member's children: direct / C;
 balance with Veach's multi-sample weights with per-member counts c_k, 1 / sum_k c_k p_k; pairwise by
 layers, one per child index j over the members with c_k > j, averaged with weights |P_j| /
-C (pool.py).
+C (reuse_pool.py).
 """
 from __future__ import annotations
 
@@ -35,11 +35,18 @@ class Round:
 
 
 def refine_pools(scope, lanes, first: Pools, slots: Slots, slab: Slab, v, done: Round):
-    """The pooling lanes whose first-round pooled mean (`done`; pools `first`) the style's rule
-    (estimators.AdaptiveDirect.needs_more, told the pool's |P| n0 samples and their moments) finds
-    too close to a threshold, or too curved, draw n_max - n0 more children (those lanes alone,
-    compacted), and recompute their pools with every member's children. Returns (pooled mean,
-    children per lane)."""
+    """The pooling lanes whose first-round pooled mean the style's rule (AdaptiveDirect.needs_more,
+    told the pool's C samples and their moments) finds too close to a threshold, or too curved,
+    draw n_max - n0 more children (those lanes alone, compacted) and recompute their pools.
+
+    Args:
+        scope, lanes: the render's Scope and the lanes' random streams.
+        first, slots, slab: the first round's pools, the lanes' Slots and the stored children.
+        v: the lanes' style Vertex. done: the first round's pooled result.
+
+    Returns:
+        (pooled mean mi.Spectrum, children per lane mi.UInt32).
+    """
     s, keep, targets = scope.settings, scope.keep, scope.targets
     target, m, pool = slots.target, slots.m, slots.pool
     mean, s1, s2, C = done.mean, done.s1, done.s2, done.C

@@ -30,6 +30,16 @@ class Scope:
 
     @classmethod
     def of(cls, integ, scene: mi.Scene, weights: str, keep: dict | None) -> "Scope":
+        """The Scope of a render of `scene` by `integ`, inside its RenderContext.
+
+        Args:
+            integ: the `stylized` integrator, bound to the scene. scene: the scene rendered.
+            weights: the pooled samples' weights ('balance', 'pairwise', 'own').
+            keep: a dict receiving the first batch's pools, or None.
+
+        Returns:
+            The Scope.
+        """
         return cls(
             integ,
             scene,
@@ -53,31 +63,67 @@ class Slots:
 
 
 def most(n) -> int:
-    """The most children a count draws: n_max of an adaptive n0:n_max, else n."""
+    """The most children a count draws: n_max of an adaptive n0:n_max, else n.
+
+    Args:
+        n: a children count: an int, or an adaptive count (with `n_max`).
+
+    Returns:
+        int.
+    """
     return int(getattr(n, "n_max", n))
 
 
 def children_per_lane(targets, level: int = 0) -> int:
     """M, the children stored per vertex of `level`: the largest count of a style slot that draws
-    children (n_max for an adaptive count n0:n_max)."""
+    children (n_max for an adaptive count n0:n_max); 1 where none draws.
+
+    Args:
+        targets: the render's style targets. level: the stylized level (0: the first hit).
+
+    Returns:
+        int.
+    """
     return max([most(t.slot.n(level)) for t in targets if not t.slot.style.closed_form] or [1])
 
 
 def first_round(targets, level: int = 0) -> int:
     """The most children any vertex of `level` draws before the refinement round (n0 of an
-    adaptive count)."""
+    adaptive count); 1 where none draws.
+
+    Args:
+        targets: the render's style targets. level: the stylized level (0: the first hit).
+
+    Returns:
+        int.
+    """
     return max([int(t.slot.n(level)) for t in targets if not t.slot.style.closed_form] or [1])
 
 
 def refined(targets) -> list[int]:
     """The targets whose first-level count is adaptive (n0:n_max): those the refinement
-    round serves."""
+    round serves.
+
+    Args:
+        targets: the render's style targets.
+
+    Returns:
+        Their indices in `targets`.
+    """
     return [i for i, t in enumerate(targets) if most(t.slot.n(0)) > int(t.slot.n(0))]
 
 
 def slots(scope: Scope, si, hit, bsdf, level: int) -> Slots:
-    """The `Slots` of the lanes at vertices `si` (`hit`: a surface) with BSDFs `bsdf`, at
-    stylized `level`."""
+    """The `Slots` of the lanes at vertices `si` at a stylized level.
+
+    Args:
+        scope: the render's Scope. si: the vertices (mi.SurfaceInteraction3f).
+        hit: the lanes at a surface (mi.Bool). bsdf: their BSDFs (mi.BSDFPtr).
+        level: the stylized level whose counts apply.
+
+    Returns:
+        Slots: target index (-1: none), children count m (n0 of an adaptive count), may pool.
+    """
     styled = scope.integ.styled_mask(si) if len(scope.targets) > 1 else mi.Bool(False)
     target, m = mi.Int32(-1), mi.UInt32(0)
     for i, t in enumerate(scope.targets):
@@ -93,7 +139,16 @@ def slots(scope: Scope, si, hit, bsdf, level: int) -> Slots:
 
 def styled_value(scope: Scope, target, x, v, fallback):
     """g of each lane's target applied to x (closed-form styles to nothing), `fallback` where
-    no target."""
+    no target.
+
+    Args:
+        scope: the render's Scope. target: each lane's target index (mi.Int32, -1: none).
+        x: the argument of g (mi.Spectrum). v: the lanes' style Vertex.
+        fallback: the value where no target applies (mi.Spectrum or a float).
+
+    Returns:
+        mi.Spectrum.
+    """
     value = mi.Spectrum(fallback)
     for i, t in enumerate(scope.targets):
         style = t.slot.style

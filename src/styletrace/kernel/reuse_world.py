@@ -3,10 +3,10 @@ Hachisuka's path filtering; first_n_hits with N = 2 only).
 
 All children of a batch are drawn at once, one lane each (child j of lane i at i * M + j): a
 delta-light sample and a BSDF sample from the first hit, as `bounce.bounce`. The level-1 vertices
-they reach (one per child) draw m2 children each (children.draw: ordinary paths beyond the last
-level), and each pools with the accepted ones of K2 candidates from its jittered cell of a
+they reach (one per child) draw m2 children each (reuse_children.draw: ordinary paths beyond the
+last level), and each pools with the accepted ones of K2 candidates from its jittered cell of a
 world-space grid (world_grid.py: same target, BSDF and normal, within distance h), with the weights
-of pool.py; g of that pooled value is the child's Li.
+of reuse_pool.py; g of that pooled value is the child's Li.
 """
 from __future__ import annotations
 
@@ -24,10 +24,18 @@ from styletrace.styles.base import Vertex
 
 
 def level1(scope, lanes, parents: Parents, m, slab: Slab):
-    """`children.draw` for first_n_hits at depth 2 with the second level pooled too: the children of
-    every lane of `parents` that draws (m of them each) at once, their second-level vertices shaded
-    together by `level2`, whose value is the child's Li. Stores the children in `slab`; returns each
-    lane's sum of their ordinary estimates."""
+    """`reuse_children.draw` for first_n_hits at depth 2 with the second level pooled too: every
+    drawing lane's m children at once, one lane each, their second-level vertices shaded together
+    by `level2`, whose value is the child's Li.
+
+    Args:
+        scope, lanes: the render's Scope and the lanes' random streams.
+        parents: the first hits (its `active` lanes draw). m: each lane's count (mi.UInt32).
+        slab: where the children are stored (child j of lane i at i * M + j).
+
+    Returns:
+        Per lane, the sum of its children's ordinary estimates (mi.Spectrum).
+    """
     scene, M, kids = scope.scene, slab.M, slab.kids
     si, bsdf = parents.si, parents.bsdf
     N = dr.width(si.p)
@@ -62,10 +70,17 @@ def level1(scope, lanes, parents: Parents, m, slab: Slab):
 
 
 def level2(scope, smp, si, ray, hit):
-    """The stylized value of second-level vertices `si` (reached along `ray`; `hit`: a surface) that
-    pool the children of their world-space neighbours (world_grid.py): m2 children each by
-    `children.draw` (ordinary paths beyond the last stylized level), pooled exactly as at the first
-    hit, then g of the vertex's slot."""
+    """The stylized value of second-level vertices that pool the children of their world-space
+    neighbours (world_grid.py): m2 children each by `reuse_children.draw` (ordinary paths beyond
+    the last stylized level), pooled exactly as at the first hit, then g of the vertex's slot.
+
+    Args:
+        scope, smp: the render's Scope and the children's random streams (one per lane).
+        si, ray: the vertices and the rays that reached them. hit: the lanes at a surface.
+
+    Returns:
+        mi.Spectrum, 0 where no target applies.
+    """
     s, scene, keep = scope.settings, scope.scene, scope.keep
     bsdf = si.bsdf(ray)
     lanes = slots(scope, si, hit, bsdf, 1)

@@ -8,16 +8,8 @@
     graph.has_see_through
     graph.has_media     # some shape bounds a medium, or the sensor sits in one
 
-Mitsuba reports at an intersection the BSDF *attached to the shape* (`si.bsdf()`): for a `styled`
-BSDF wrapped in `twosided`, `mask` or `blendbsdf` that is the wrapper, so each styled BSDF is
-registered with the pointers of the wrappers that hold it. Shapes of a `shapegroup` are not in
-`scene.shapes()`, but an intersection with an `instance` of the group reports the group shape's own
-BSDF; the graph reaches those shapes through the scene's traversal (`Object.traverse` with a
-`TraversalCallback`, which hands every child object to `put`). A surface whose BSDF holds two
-different styled BSDFs (a `blendbsdf` of two styles, a `twosided` with a different style on each
-side) cannot take both styles: it is refused with a `SceneError`, as is a styled BSDF inside another
-one (the inner style would never apply), and an emitter on a see-through surface
-(path.first_scattering says why).
+Styled BSDFs are found inside wrappers and in shapegroups; ambiguous styling is refused.
+Design: docs/design/scene_graph.md.
 """
 from __future__ import annotations
 
@@ -29,9 +21,7 @@ from styletrace.kernel.styled_bsdf import StyledBSDF
 
 class _Collect(mi.TraversalCallback):
     """Gathers the child objects a traversal hands over. One class for the module: a class made per
-    call (a closure over the list) sits in a reference cycle, so the objects it reached lived on
-    until the cyclic garbage collector ran, possibly in the middle of a later scene's trace, where
-    Dr.Jit traces calls on every live instance (measured: a segfault in the next test's render)."""
+    call kept the objects it reached alive (docs/design/render_state.md)."""
 
     def __init__(self):
         super().__init__()
@@ -43,7 +33,14 @@ class _Collect(mi.TraversalCallback):
 
 
 def children(obj: mi.Object) -> list[mi.Object]:
-    """The Mitsuba objects `obj` hands to its traversal callback (one level down)."""
+    """The Mitsuba objects `obj` hands to its traversal callback (one level down).
+
+    Args:
+        obj: a Mitsuba object (a Python plugin without a traversal of its own hands none).
+
+    Returns:
+        list[mi.Object].
+    """
     collect = _Collect()
     try:
         obj.traverse(collect)
@@ -54,7 +51,17 @@ def children(obj: mi.Object) -> list[mi.Object]:
 
 
 def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
-    """The distinct styled BSDFs in `bsdf` itself or nested at any depth inside its wrappers."""
+    """The distinct styled BSDFs in `bsdf` itself or nested at any depth inside its wrappers.
+
+    Args:
+        bsdf: a shape's BSDF.
+
+    Returns:
+        list[StyledBSDF].
+
+    Raises:
+        SceneError: a styled BSDF holds another one (whose style would never apply).
+    """
     found: dict[int, StyledBSDF] = {}
     stack, seen = [bsdf], set()
     while stack:
@@ -76,7 +83,14 @@ def styled_inside(bsdf: mi.BSDF) -> list[StyledBSDF]:
 
 def all_shapes(scene: mi.Scene) -> list[mi.Shape]:
     """Every shape of the scene with a surface, those inside shapegroups (seen through
-    instances) too."""
+    instances) too.
+
+    Args:
+        scene: a loaded scene.
+
+    Returns:
+        list[mi.Shape], each with a BSDF.
+    """
     shapes: dict[int, mi.Shape] = {id(s): s for s in scene.shapes()}
     stack, seen = list(children(scene)), set()
     while stack:
@@ -94,6 +108,15 @@ def _name(shape: mi.Shape) -> str:
 
 
 class SceneGraph:
+    """What a loaded scene holds for the `stylized` integrator (module docstring).
+
+    Args:
+        scene: a loaded scene.
+
+    Raises:
+        SceneError: a shape emits light through a see-through BSDF, a surface holds two styled
+            BSDFs, or a styled BSDF holds another.
+    """
     def __init__(self, scene: mi.Scene):
         groups: dict[int, tuple] = {}
         self.has_null = False
@@ -132,7 +155,15 @@ class SceneGraph:
 
 
 def any_ptr(ptr, objects, ptr_type) -> mi.Bool:
-    """Lanes whose pointer (BSDF, emitter, ...) is one of `objects`."""
+    """Lanes whose pointer (BSDF, emitter, ...) is one of `objects`.
+
+    Args:
+        ptr: the lanes' pointers (mi.BSDFPtr, mi.EmitterPtr, ...).
+        objects: Mitsuba objects. ptr_type: the pointer type they are compared as.
+
+    Returns:
+        mi.Bool.
+    """
     mask = mi.Bool(False)
     for obj in objects:
         mask |= ptr == ptr_type(obj)

@@ -1,19 +1,15 @@
 """`styled`: a BSDF wrapper that assigns a style to the objects using it.
 
-    <shape type="ply" id="dragon">
-        <bsdf type="styled">
-            <string name="style" value="cel"/>
-            <string name="levels" value="0.3,0.9"/>
-            <integer name="inner_samples" value="16"/>
-            <bsdf type="diffuse"/>
-        </bsdf>
-    </shape>
+    <bsdf type="styled">
+        <string name="style" value="cel"/>
+        <string name="levels" value="0.3,0.9"/>
+        <bsdf type="diffuse"/>
+    </bsdf>
 
 Properties: `style` (required), the style's parameters, `inner_samples` and `estimator` (as on the
-`stylized` integrator), and exactly one nested BSDF. For light transport the wrapper *is* the nested
-BSDF: every query is forwarded. The `stylized` integrator finds the wrappers in the scene and
-applies their styles where paths meet these objects (see its `stylize` property); other integrators
-render the objects physically based.
+`stylized` integrator), and exactly one nested BSDF, to which every light-transport query is
+forwarded. The `stylized` integrator applies the style where paths meet these objects (its
+`stylize` property); other integrators render them physically based.
 """
 from __future__ import annotations
 
@@ -23,6 +19,14 @@ from styletrace.gate import mi
 
 
 class StyledBSDF(mi.BSDF):
+    """The `styled` BSDF (module docstring): every query goes to the nested BSDF.
+
+    Args:
+        props: `style`, the style's parameters, `inner_samples`, `estimator`, one nested BSDF.
+
+    Raises:
+        SettingsError: not exactly one nested BSDF, no `style`, or a bad style setting.
+    """
     def __init__(self, props: mi.Properties):
         super().__init__(props)
         nested, values = [], {}

@@ -1,38 +1,15 @@
 """The path kernel in scenes with participating media: `walk` of path.py, but along rays
 through media.
 
-    # a Walk
     w = volume_walk(cfg, sampler, Start(pi, ray, medium=medium, flight=True), active, hooks)
-    # towards a sampled light
-    tr = transmittance(scene, sampler, it, ds, medium, channel, active)
+    tr = transmittance(scene, sampler, it, ds, medium, channel, active)   # towards a light
 
-The estimator is that of Mitsuba's `volpath` (null-scattering media, "delta tracking"): along a ray
-in a medium a free-flight distance is drawn from the medium's majorant
-(`Medium.sample_interaction`); a collision before the next surface is real (scattering, probability
-sigma_t / majorant) or null (the ray goes on from there, nothing added). A real collision scatters
-by the medium's phase function: next-event estimation (power heuristic against phase sampling), then
-a phase-sampled direction. Surfaces scatter as in path.py (next-event estimation, MIS against BSDF
-sampling, roulette). A transmission through a surface that bounds a medium
-(`si.is_medium_transition()`) moves the path into `si.target_medium(d)`. Null-scattering surfaces
-(`null`, masks) add no depth and keep the last real vertex for MIS, as in `volpath`. Light reaches a
-vertex through media and null surfaces: the shadow ray's transmittance is estimated by ratio
-tracking (`transmittance`), so a `null` shape bounding a medium does not block it.
-
-In RGB the free-flight distance is drawn in one colour channel per path (chosen uniformly), and the
-throughput is weighted by transmittance over that channel's density (`volpath`'s hero channel);
-media with grey extinction get weight 1 from the same formulas. Depth counts real scattering events
-at surfaces and in media (x at `Start.depth`), and roulette acts on the throughput after every
-scattering from depth `rr_depth` + 1 on, as `volpath`'s.
-
-`volume_walk` has path.walk's signature (path.WalkConfig, path.Start, path.Hooks). Stylization
-(integrator.py) uses the hook `stop` to halt at surface scattering vertices: a stylized vertex is
-always a surface one. `Start.flight` says whether the medium along the first ray is still to be
-sampled (a ray from the camera, or from a stylized vertex towards the next one) or the lane already
-stands at the surface `pi` (a child walk starting at a stylized vertex: its flight was taken by the
-parent). `Start.delta`: the start vertex samples delta lights only (its other light is reached by
-the BSDF sample, through g at the next stylized vertex; see bounce.bounce), so emitters found past
-it get full weight. `Start.hide`: no emission is counted before the first scattering
-(`hide_emitters` on a camera ray).
+Mitsuba's `volpath` estimator: delta tracking from the medium's majorant in one hero colour
+channel per path, next-event estimation with ratio-tracked transmittance through media and null
+surfaces, MIS against phase and BSDF sampling; depth counts real scatterings. `volume_walk` has
+path.walk's signature; a stylized vertex is always a surface one. `Start.flight`: sample the
+medium along the first ray; `Start.delta`: the start vertex samples delta lights only;
+`Start.hide`: no emission before the first scattering. Design: docs/design/participating_media.md.
 """
 from __future__ import annotations
 
@@ -57,12 +34,28 @@ from styletrace.kernel.vertex import depth_limit, mis_power, opaque_part, opaque
 
 
 def channel_of(c: mi.Spectrum, channel: mi.UInt32) -> mi.Float:
-    """The value of colour c in the path's free-flight channel."""
+    """The value of colour c in the path's free-flight channel.
+
+    Args:
+        c: a colour (mi.Spectrum). channel: the channel per lane (mi.UInt32: 0, 1 or 2).
+
+    Returns:
+        mi.Float.
+    """
     return dr.select(channel == 0, c[0], dr.select(channel == 1, c[1], c[2]))
 
 
 def free_flight_weight(medium, mei, t_surface, channel, active) -> mi.Spectrum:
-    """Transmittance over the channel's free-flight density up to the collision or the surface."""
+    """Transmittance over the channel's free-flight density up to the collision or the surface.
+
+    Args:
+        medium: the medium per lane (mi.MediumPtr). mei: the sampled medium interaction.
+        t_surface: the distance to the next surface (mi.Float; inf: none).
+        channel: the free-flight channel (mi.UInt32). active: the lanes in a medium (mi.Bool).
+
+    Returns:
+        mi.Spectrum: 1 where not active, 0 where the channel's density is 0.
+    """
     st = dr.zeros(mi.SurfaceInteraction3f)
     st.t = t_surface
     tr, pdf = medium.transmittance_eval_pdf(mei, st, active)
@@ -71,7 +64,14 @@ def free_flight_weight(medium, mei, t_surface, channel, active) -> mi.Spectrum:
 
 
 def medium_vertex(mei: mi.MediumInteraction3f) -> mi.Interaction3f:
-    """A medium collision as a plain interaction (no normal), for emitter sampling and densities."""
+    """A medium collision as a plain interaction (no normal), for emitter sampling and densities.
+
+    Args:
+        mei: the collision (mi.MediumInteraction3f).
+
+    Returns:
+        mi.Interaction3f.
+    """
     return mi.Interaction3f(t=mei.t, time=mei.time, wavelengths=mei.wavelengths, p=mei.p)
 
 
@@ -88,8 +88,17 @@ def transmittance(scene: mi.Scene, sampler, it: mi.Interaction3f, ds: mi.Directi
                   channel: mi.UInt32, active: mi.Bool) -> mi.Spectrum:
     """Ratio-tracking estimate of the transmittance from `it` to the light point ds.p: through media
     (null collisions weigh sigma_n over the channel's density) and through surfaces by their null
-    transmission (0 at opaque ones: an occlusion test). `medium`: the medium the shadow ray
-    starts in."""
+    transmission (0 at opaque ones: an occlusion test).
+
+    Args:
+        scene, sampler: the scene and the lane's random stream.
+        it, ds: the shading point and the light sample (mi.DirectionSample3f).
+        medium: the medium the shadow ray starts in (mi.MediumPtr).
+        channel: the free-flight channel (mi.UInt32). active: the lanes that test (mi.Bool).
+
+    Returns:
+        mi.Spectrum, 0 where not active.
+    """
     state = ShadowState(sampler=sampler, ray=it.spawn_ray_to(ds.p), medium=mi.MediumPtr(medium),
                         tr=mi.Spectrum(1.0), active=mi.Bool(active))
 
@@ -145,8 +154,16 @@ class VolumeState:
 def volume_walk(
     cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks = NO_HOOKS
 ) -> Walk:
-    """path.walk through participating media (module docstring): the same parameters and hooks;
-    returns a path.Walk with the medium each lane stands in."""
+    """path.walk through participating media (module docstring).
+
+    Args:
+        cfg, sampler: the render's WalkConfig and the lane's random stream.
+        start: where the walk starts (its medium, flight, delta and hide apply here).
+        active: the lanes that walk (mi.Bool). hooks: as path.walk's.
+
+    Returns:
+        A path.Walk, with the medium each lane stands in.
+    """
     scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
     opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
@@ -209,7 +226,7 @@ def volume_walk(
         sample_s = here & ~passes & si.is_valid()
         active_s = sample_s & (s.depth + 1 < limit)
 
-        # ---- next-event estimation from the medium collision or the surface vertex, one light samp
+        # ---- next-event estimation: one light sample at the medium collision or the surface
         sample_m = scat & mei.medium.use_emitter_sampling()
         em_on = sample_m | (active_s & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth))
         it = dr.select(scat, it_m, mi.Interaction3f(si))
@@ -318,10 +335,16 @@ def volume_walk(
 
 
 def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
-    """The anchors.ToneState past a scattering in a medium on the `active` lanes. The anchor paths
-    reflect or refract at surfaces only and cannot follow it: it ends the all-delta prefix and joins
-    the prefix key as no shape does, so no anchor matches and the coordinate takes its fallbacks
-    (anchors.py)."""
+    """The anchors.ToneState past a scattering in a medium. The anchor paths reflect or refract at
+    surfaces only and cannot follow it: it ends the all-delta prefix and joins the prefix key as no
+    shape does, so no anchor matches and the coordinate takes its fallbacks (anchors.py).
+
+    Args:
+        tone: the state before. active: the lanes that scattered in a medium (mi.Bool).
+
+    Returns:
+        ToneState.
+    """
     key = combine(tone.key, mi.UInt32(0xFFFFFFFF))  # a shape id + 1 that no shape has: 0
     return ToneState(
         key=dr.select(active, key, tone.key), bits=tone.bits, delta=tone.delta & ~active, s0=tone.s0
@@ -330,9 +353,17 @@ def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
 
 def lines_past(state: LineState, pi: mi.PreliminaryIntersection3f, passed: mi.Bool,
                scattered: mi.Bool) -> LineState:
-    """The lines.LineState past a null surface or a scattering in a medium. `passed`: the edge goes
-    on through the surface (its lines were tested through it), its length grows by the next
-    segment's. `scattered`: a phase function is no mirror, so, as after a diffuse vertex, no later
-    edge is tested."""
+    """The lines.LineState past a null surface or a scattering in a medium.
+
+    Args:
+        state: the state after the edge's test. pi: the next surface along the edge.
+        passed: the edge goes on through the surface (its lines were tested through it), so its
+            length grows by the next segment's.
+        scattered: a phase function is no mirror, so, as after a diffuse vertex, no later edge is
+            tested.
+
+    Returns:
+        LineState.
+    """
     D = dr.select(passed, state.D + dr.select(pi.is_valid(), pi.t, dr.inf), state.D)
     return LineState(D=D, alive=state.alive & ~scattered, angle=state.angle, spread=state.spread)

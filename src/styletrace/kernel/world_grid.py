@@ -1,22 +1,12 @@
 """World-space neighbours of stored path vertices for reuse=pixels at the second stylized level.
 
-Reference
-    Tong and Hachisuka, "Practical Stylized Nonlinear Monte Carlo Rendering", SIGGRAPH 2025: path
-    filtering takes the neighbours of a deeper vertex within a radius h in world space (their
-    hash grid).
-
-The second-level vertices of neighbouring pixels are not neighbours in space (their first bounces go
-in independent directions), so they are found in a uniform grid of cell size h over the scene's
-bounding box. The grid is built on the host with numpy: each vertex's cell is packed into one
-integer key, the keys are sorted with a stable argsort and each lookup is a binary search, so the
-same vertices give the same neighbours on any thread count (a hash table filled with atomics would
-not: its order depends on the threads' timing).
-
-A vertex looks up the cell of its position jittered by up to h/2 on each axis (so cell borders do
-not decide who is a neighbour), takes K consecutive candidates of that cell from a random start,
-itself excluded, and accepts those within distance h with the same style target, the same BSDF
-object and shading normals with n.n' > normal_min. `neighbour(q)` and `accepted` have the meaning of
-`reuse.pool.Grid`'s, so `reuse.pool.pooled` pools over either.
+A uniform grid of cell size h over the scene's bounding box, built on the host with numpy (packed
+cell keys, a stable argsort, a binary search per lookup: the same neighbours on any thread count).
+A vertex looks up the cell of its position jittered by up to h/2 on each axis, takes K consecutive
+candidates of that cell from a random start, itself excluded, and accepts those within distance h
+with the same style target and BSDF object and n.n' > normal_min. `neighbour(q)` and `accepted`
+mean what `reuse_pool.Grid`'s do, so `reuse_pool.pooled` pools over either.
+Design: docs/design/world_grid.md.
 """
 from __future__ import annotations
 
@@ -32,7 +22,14 @@ AXIS_BITS = 21
 def uint32(a: np.ndarray) -> mi.UInt32:
     """A numpy array as a Dr.Jit array in Dr.Jit's own (aligned) memory: a kernel reading numpy's
     memory directly is compiled for its alignment, so the large kernels that read these would be
-    compiled anew (about a second) whenever numpy's allocation is aligned otherwise."""
+    compiled anew (about a second) whenever numpy's allocation is aligned otherwise.
+
+    Args:
+        a: integers that fit 32 bits.
+
+    Returns:
+        mi.UInt32, evaluated.
+    """
     # a tiny kernel's output, in Dr.Jit's memory
     out = mi.UInt32(a.astype(np.uint32)) + dr.opaque(mi.UInt32, 0)
     dr.eval(out)
@@ -40,7 +37,14 @@ def uint32(a: np.ndarray) -> mi.UInt32:
 
 
 def cell_keys(P: np.ndarray, corner: np.ndarray, h: float) -> np.ndarray:
-    """One int64 per column of P (3 x n): its cell of size h above `corner`, packed."""
+    """One int64 per column of P: its cell of size h above `corner`, packed (AXIS_BITS per axis).
+
+    Args:
+        P: points, shape (3, n). corner: shape (3, 1), below every point. h: the cell size.
+
+    Returns:
+        int64 array of shape (n,).
+    """
     cell = np.clip(np.floor((P - corner) / h), 0, (1 << AXIS_BITS) - 1).astype(np.int64)
     return (cell[0] << (2 * AXIS_BITS)) | (cell[1] << AXIS_BITS) | cell[2]
 
@@ -49,9 +53,18 @@ def density_h(
     p: mi.Point3f, valid: mi.Bool, K: int, corner, low: float, high: float, rounds: int = 4
 ) -> float:
     """The cell size at which a vertex's own cell holds about K + 1 of the `valid` vertices (itself
-    included), averaged over them. Path vertices lie on surfaces, so a cell's count grows as h^2:
-    each round rescales h by sqrt((K + 1) / count), starting from the bounding box `high` (its
-    diagonal) split evenly; kept in [low, high]."""
+    included), averaged over them; each round rescales h by sqrt((K + 1) / count) (path vertices
+    lie on surfaces: a cell's count grows as h^2), starting from `high` split evenly.
+
+    Args:
+        p, valid: the vertices (mi.Point3f) and those that count (mi.Bool).
+        K: the candidates wanted per vertex. corner: a corner below every vertex.
+        low, high: the bounds of h; `high` is the bounding box's diagonal.
+        rounds: rescaling rounds.
+
+    Returns:
+        h (world units); `high` where fewer than 2 vertices count.
+    """
     P = np.asarray(p, dtype=np.float64).reshape(3, -1)[:, np.asarray(valid, dtype=bool)]
     if P.shape[1] < 2:
         return high
@@ -67,7 +80,16 @@ def density_h(
 
 class WorldGrid:
     """Slot 0 is the vertex itself, slot q >= 1 the q-th candidate of its jittered cell (module
-    docstring)."""
+    docstring).
+
+    Args:
+        p: the vertices (mi.Point3f). valid: those that may be found (mi.Bool).
+        h: the cell size and the acceptance radius (world units).
+        K: candidate slots per vertex.
+        jitter: per vertex its lookup's offset, in [0, 1)^3 of a cell (mi.Point3f).
+        start: per vertex its first candidate, in [0, 1) of its cell's count (mi.Float).
+        origin: a corner below every vertex (the scene's bounding box's minimum).
+    """
 
     def __init__(
         self,
@@ -79,9 +101,6 @@ class WorldGrid:
         start: mi.Float,
         origin,
     ):
-        """`p`: the vertices; `valid`: those that may be found; `h`: cell size and radius (world
-        units); `jitter` in [0, 1)^3 and `start` in [0, 1): per vertex, its lookup's offset and
-        first candidate; `origin`: a corner below every vertex (the scene's bounding box)."""
         self.h, self.K = float(h), K
         self.p = p
         width = dr.width(p)
@@ -105,10 +124,25 @@ class WorldGrid:
         )
 
     def keys(self, P: np.ndarray, corner: np.ndarray) -> np.ndarray:
+        """`cell_keys` with this grid's h.
+
+        Args:
+            P: points, shape (3, n). corner: shape (3, 1), below every point.
+
+        Returns:
+            int64 array of shape (n,).
+        """
         return cell_keys(P, corner, self.h)
 
     def neighbour(self, q):
-        """(vertex index, a candidate exists) of slot q (a UInt32 array)."""
+        """(vertex index, a candidate exists) of slot q.
+
+        Args:
+            q: the slot (mi.UInt32), 0 .. K.
+
+        Returns:
+            (mi.UInt32 index, the vertex itself where none; mi.Bool).
+        """
         first = q == 0
         k = q - 1
         ok = ~first & (k < self.count)
@@ -119,8 +153,17 @@ class WorldGrid:
         return dr.select(ok, at, self.lane), first | ok
 
     def accepted(self, target, bsdf, pool, n, normal_min) -> mi.UInt64:
-        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py;
-        within h)."""
+        """Bit q set where slot q's vertex may be pooled with the vertex's own (acceptance.py),
+        within distance h.
+
+        Args:
+            target, bsdf, pool, n: per vertex its style target (mi.Int32), BSDF (mi.BSDFPtr),
+                whether it may pool (mi.Bool) and shading normal (mi.Vector3f).
+            normal_min: the least n.n' accepted.
+
+        Returns:
+            mi.UInt64, one bit per slot 0 .. K.
+        """
         # not a literal: h changes from pass to pass, the kernel not
         h2 = dr.opaque(mi.Float, self.h * self.h)
 
