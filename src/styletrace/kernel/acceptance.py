@@ -9,25 +9,44 @@ slots in a UInt64 (K <= 63).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 from styletrace.gate import dr, mi
 
 
+@dataclass
+class Candidates:
+    """Per vertex what acceptance compares.
+
+    Args:
+        target: the style target (mi.Int32). bsdf: the BSDF (mi.BSDFPtr).
+        pool: whether it may pool (mi.Bool). n: the shading normal (mi.Vector3f).
+    """
+
+    target: Any
+    bsdf: Any
+    pool: Any
+    n: Any
+
+
 def accepted(
-    neighbour, K: int, target, bsdf, pool, n, normal_min: float, near, label: str
+    neighbour, K: int, c: Candidates, normal_min: float, near, label: str
 ) -> mi.UInt64:
     """Bit q set where slot q's vertex may be pooled with the vertex's own.
 
     Args:
         neighbour: neighbour(q) -> (index mi.UInt32, exists mi.Bool) of slot q (0: the vertex).
         K, normal_min: the candidate slots 1 .. K (K <= 63); the least n.n' accepted.
-        target, bsdf, pool, n: per vertex its style target (mi.Int32), BSDF (mi.BSDFPtr),
-            whether it may pool (mi.Bool) and shading normal (mi.Vector3f).
+        c: the vertices' `Candidates`, indexed by `neighbour`'s indices.
         near: near(at, ok) -> mi.Bool, the grid's geometric test of the candidates at `at`.
         label: the traced loop's name.
 
     Returns:
         mi.UInt64, one bit per slot 0 .. K.
     """
+    target, bsdf, pool, n = c.target, c.bsdf, c.pool, c.n
+
     def body(q, mask):
         at, found = neighbour(q)
         ok = found & pool & dr.gather(mi.Bool, pool, at, found)

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Any, Optional
 
 from styletrace.gate import dr, mi
+from styletrace.kernel.lines import Edge
 from styletrace.kernel.path import NO_HOOKS, Hooks, WalkConfig, advance, first_scattering
 from styletrace.kernel.vertex import Site, depth_limit, emission, opaque_part, opaque_share
 
@@ -68,7 +69,9 @@ def bounce(cfg: WalkConfig, sampler, site: Site, active: mi.Bool,
     pi2 = scene.ray_intersect_preliminary(ray2, coherent=False, active=go)
     line_state = None
     if lines is not None:  # a feature line on this edge absorbs the path (lines.py)
-        seen, line_state = lines[0].edge(scene, sampler, lines[1], si, bs, ray2, pi2, depth + 1, go)
+        seen, line_state = lines[0].edge(
+            scene, sampler, lines[1], si, bs, Edge(ray2, pi2, depth + 1), go
+        )
         L += dr.select(seen.fired, weight * seen.color, 0.0)
         go &= ~seen.fired
     if nulls:

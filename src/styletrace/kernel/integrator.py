@@ -22,7 +22,7 @@ from styletrace.kernel.error_aovs import AOV_NAMES, error_aovs
 from styletrace.kernel.expansion import Expansion
 from styletrace.kernel.expansion import moments as pass_moments
 from styletrace.kernel.lane_sampler import LaneSampler
-from styletrace.kernel.line_hooks import camera_edge, line_problem, walk_lines
+from styletrace.kernel.line_hooks import CameraSample, camera_edge, line_problem, walk_lines
 from styletrace.kernel.line_hooks import lifted as lifted_lines
 from styletrace.kernel.path import (
     NO_HOOKS,
@@ -414,15 +414,11 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         # is rendered)
         self._lane_moments = (self.expansion.lookup(scene, dr.width(ray.d), m)
                               if m and self.expansion.collector is None else None)
-        if self.lifted is not None:
-            return lifted_lines(
-                self, self._stylize, scene, sampler, camera_ray, ray, active, medium
-            )
-        if self.lines is None:
+        if self.lines is None and self.lifted is None:
             return self._stylize(scene, sampler, ray, active, medium)
-        return camera_edge(
-            self, self._stylize, scene, sampler, camera_ray, ray, active, medium, spp
-        )
+        camera = CameraSample(camera_ray, spp, medium)
+        hook = lifted_lines if self.lifted is not None else camera_edge
+        return hook(self, self._stylize, scene, sampler, camera, ray, active)
 
     def _stylize(self, scene, sampler, ray, active, medium=None):
         pi = scene.ray_intersect_preliminary(ray, coherent=True, active=active)

@@ -10,6 +10,9 @@ Design: docs/design/feature_lines.md.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 from styletrace.config import settings as S
 from styletrace.gate import dr, mi
 from styletrace.kernel.lifted_lines import compose_sample
@@ -48,29 +51,44 @@ def walk_lines(integ, level: int):
     return integ.lines, integ.line_states[level]
 
 
-def camera_edge(integ, stylize, scene, sampler, camera_ray, ray, active, medium, spp):
+@dataclass
+class CameraSample:
+    """What a line hook needs of the camera sample beyond its traced ray.
+
+    Args:
+        ray: the camera ray with its differentials (mi.RayDifferential3f, scaled by Mitsuba).
+        spp: the samples per pixel those differentials were scaled for.
+        medium: the camera's medium (mi.MediumPtr or None).
+    """
+
+    ray: Any
+    spp: int
+    medium: Any
+
+
+def camera_edge(integ, stylize, scene, sampler, camera: CameraSample, ray, active):
     """Edge 0: a feature line on the camera ray replaces the pixel sample (lines.py); the other
     lanes are stylized, their walks starting from the camera's line state.
 
     Args:
         integ, stylize: the bound integrator and its trace of the camera ray.
         scene, sampler: the scene and the lanes' random streams.
-        camera_ray, ray: the camera ray with its differentials, and as mi.Ray3f.
-        active, medium, spp: the camera lanes, the camera's medium, the samples per pixel.
+        camera, ray: the camera sample, and its ray as mi.Ray3f.
+        active: the camera lanes (mi.Bool).
 
     Returns:
         (value, valid, AOVs) of the camera sample.
     """
-    seen, camera = integ.lines.camera(scene, sampler, camera_ray, spp, active)
+    seen, state = integ.lines.camera(scene, sampler, camera.ray, camera.spp, active)
     # the camera ray's first hit: where first_object_hit's walk starts and the
     # first_hit/first_n_hits vertex
-    integ.line_states = {-1: camera, 0: camera}
+    integ.line_states = {-1: state, 0: state}
     live = active & ~seen.fired if integ.line_short_circuit else active
-    value, valid, aovs = stylize(scene, sampler, ray, live, medium)
+    value, valid, aovs = stylize(scene, sampler, ray, live, camera.medium)
     return dr.select(seen.fired, seen.color, value), valid | seen.fired, aovs
 
 
-def lifted(integ, stylize, scene, sampler, camera_ray, ray, active, medium):
+def lifted(integ, stylize, scene, sampler, camera: CameraSample, ray, active):
     """line_mode lifted (LLaT Eq. 34): each line type's auxiliary pairs are tested for the camera
     sample (its film point and lens sample kept); the first type in priority order that fires gives
     the sample its colour, and L is traced only where none fired.
@@ -78,18 +96,18 @@ def lifted(integ, stylize, scene, sampler, camera_ray, ray, active, medium):
     Args:
         integ, stylize: the bound integrator and its trace of the camera ray.
         scene, sampler: the scene and the lanes' random streams.
-        camera_ray, ray: the camera ray with its differentials, and as mi.Ray3f.
-        active, medium: the camera lanes and the camera's medium.
+        camera, ray: the camera sample, and its ray as mi.Ray3f.
+        active: the camera lanes (mi.Bool).
 
     Returns:
         (value, valid, AOVs) of the camera sample.
     """
     bound = integ.lifted
-    s, aperture = bound.conditioning(camera_ray)
+    s, aperture = bound.conditioning(camera.ray)
     fired = bound.fired(s, sampler, active, aperture)
     any_fired = mi.Bool(False)
     for f in fired:
         any_fired |= f
-    value, valid, aovs = stylize(scene, sampler, ray, active & ~any_fired, medium)
+    value, valid, aovs = stylize(scene, sampler, ray, active & ~any_fired, camera.medium)
     value = compose_sample(fired, [mi.Color3f(*t.color) for t in bound.types], value)
     return value, valid | any_fired, aovs

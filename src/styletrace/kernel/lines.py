@@ -54,6 +54,21 @@ class LineState:
 
 
 @dataclass
+class Edge:
+    """A path edge that `Lines.edge` tests.
+
+    Args:
+        ray: the edge (mi.Ray3f), leaving its vertex.
+        pi: where it reaches (mi.PreliminaryIntersection3f).
+        index: the edge's index along the path (0: the camera ray; int or mi.UInt32).
+    """
+
+    ray: Any
+    pi: Any
+    index: Any
+
+
+@dataclass
 class Seen:
     fired: mi.Bool
     color: mi.Color3f
@@ -227,9 +242,7 @@ class Lines:
         state: LineState,
         si,
         bs,
-        ray: mi.Ray3f,
-        pi: mi.PreliminaryIntersection3f,
-        index,
+        edge: Edge,
         active: mi.Bool,
     ):
         """Lines on the edge `ray`, which leaves vertex si by the sample bs and reaches pi.
@@ -237,14 +250,15 @@ class Lines:
         Args:
             scene, sampler: the scene and the lanes' random stream.
             state: the LineState at si. si, bs: the vertex and its BSDF sample.
-            ray, pi: the edge and its preliminary intersection. index: the edge's index (0: camera).
+            edge: the edge's ray, its preliminary intersection and its index (0: camera).
             active: the lanes that take the edge (mi.Bool); the others keep their state.
 
         Returns:
             (Seen, LineState after the edge).
         """
+        ray, pi = edge.ray, edge.pi
         alive = state.alive & ~mi.has_flag(bs.sampled_type, mi.BSDFFlags.Diffuse)
-        go = active & alive & (index < self.s.depth)
+        go = active & alive & (edge.index < self.s.depth)
         D0 = state.D
         # the path's next vertex, unless it is a null surface, which the path passes after this test
         q = self.trace(scene, ray, go) if self.see_through else \

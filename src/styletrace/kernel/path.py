@@ -18,6 +18,7 @@ from typing import Any, Callable, Optional
 from styletrace.gate import dr, mi
 from styletrace.kernel.anchors import MAX_BITS, ToneState, combine, shape_id
 from styletrace.kernel.emitter_sampler import EmitterSampler
+from styletrace.kernel.lines import Edge
 from styletrace.kernel.vertex import depth_limit, mis_power, null_split, opaque_part, opaque_share
 
 
@@ -295,7 +296,7 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
         pi_next = scene.ray_intersect_preliminary(ray_next, coherent=False, active=active_next)
         if lines is not None:  # a feature line on the new edge absorbs the path (lines.py)
             seen, s.lines = lines[0].edge(
-                scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next, active_next
+                scene, s.sampler, s.lines, si, bs, Edge(ray_next, pi_next, depth_next), active_next
             )
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
             active_next &= ~seen.fired

@@ -19,7 +19,7 @@ import numpy as np
 
 from styletrace.estimators import channel_mean
 from styletrace.gate import dr, mi
-from styletrace.kernel.acceptance import accepted
+from styletrace.kernel.acceptance import Candidates, accepted
 
 #: acceptance of a neighbour: shading normals within about 25 degrees, camera distances within
 #: 5 percent
@@ -120,10 +120,7 @@ class Grid:
         return accepted(
             self.neighbour,
             self.K,
-            target,
-            bsdf,
-            pool,
-            n,
+            Candidates(target, bsdf, pool, n),
             NORMAL_MIN,
             near,
             "styletrace reuse accept",

@@ -18,7 +18,7 @@ from typing import Any, Optional
 
 from styletrace.gate import dr, mi
 from styletrace.kernel.anchors import ToneState, combine
-from styletrace.kernel.lines import LineState
+from styletrace.kernel.lines import Edge, LineState
 from styletrace.kernel.path import (
     NO_HOOKS,
     Hooks,
@@ -310,7 +310,7 @@ def volume_walk(
         # a line on the edge a surface scattering starts absorbs the path (lines.py)
         if lines is not None:
             seen, after = lines[0].edge(
-                scene, s.sampler, s.lines, si, bs, ray_next, pi_next, depth_next, go & real_s
+                scene, s.sampler, s.lines, si, bs, Edge(ray_next, pi_next, depth_next), go & real_s
             )
             s.L += dr.select(seen.fired, beta_next * seen.color, 0.0)
             go &= ~seen.fired

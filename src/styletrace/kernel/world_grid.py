@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from styletrace.gate import dr, mi
-from styletrace.kernel.acceptance import accepted
+from styletrace.kernel.acceptance import Candidates, accepted
 
 #: bits per axis in a packed cell key (cells per axis are bounded by settings.MIN_REUSE_H)
 AXIS_BITS = 21
@@ -169,5 +169,5 @@ class WorldGrid:
 
         def near(at, ok):
             return dr.squared_norm(dr.gather(mi.Point3f, self.p, at, ok) - self.p) <= h2
-        return accepted(self.neighbour, self.K, target, bsdf, pool, n, normal_min, near,
+        return accepted(self.neighbour, self.K, Candidates(target, bsdf, pool, n), normal_min, near,
                         "styletrace reuse world accept")
