@@ -88,6 +88,6 @@ def test_preview_shows_the_materials_style_and_keeps_the_last_render(tmp_path):
     # the user's last render is untouched: the recorded buffer, LAST, the Render Result
     assert restyle.buffer() is recorded and engine.LAST == last
     bpy.data.images["Render Result"].save_render(str(tmp_path / "after.exr"))
-    before, after = (S.read_exr(str(tmp_path / f"{k}.exr"))["Combined"] for k in ("before",
-                                                                                 "after"))
+    files = [str(tmp_path / f"{k}.exr") for k in ("before", "after")]
+    before, after = (S.read_exr(f)["Combined"] for f in files)
     np.testing.assert_array_equal(before, after)
