@@ -8,7 +8,9 @@ changes restyle it in milliseconds. F12 is one pipeline run (`f12.run_f12`: a Jo
 runner of `pipeline.runner`); with Denoise on its finisher denoises the finished passes after the
 last one (or after a cancel), a Noisy pass keeps the image before denoising, and the error passes
 are off (they would not be the denoised pixel's). Errors the user can cause (a bad style value, an
-unsupported scene) are one-line Blender error reports.
+unsupported scene) are one-line Blender error reports. Every render uses the seed of its frame
+(`animation.frame_seed`); a cancel during Render Animation ends the sequence (`animation`). Material
+previews render Blender's preview scene with the preview's budget (`preview`).
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ import traceback
 import bpy
 import numpy as np
 
-from styletrace.blender import f12, restyle
+from styletrace.blender import animation, f12, preview, restyle
 from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
@@ -26,6 +28,8 @@ COMBINED = "Combined"
 #: what the last render did: samples per pixel finished and asked for, whether it was
 #: cancelled, seconds
 LAST: dict = {}
+#: the same for the last material preview
+PREVIEW: dict = {}
 
 
 def _rows(image: np.ndarray, channels: int) -> np.ndarray:
@@ -47,7 +51,7 @@ def _message(exc: BaseException) -> str:
 class StyletraceEngine(bpy.types.RenderEngine):
     bl_idname = "STYLETRACE"
     bl_label = "styletrace"
-    bl_use_preview = False
+    bl_use_preview = True
     bl_use_postprocess = True
 
     def stop_requested(self) -> bool:
@@ -82,23 +86,36 @@ class StyletraceEngine(bpy.types.RenderEngine):
         try:
             self._render(depsgraph)
         except StyletraceError as exc:
-            self.report({"ERROR"}, _message(exc))
+            self._report({"ERROR"}, _message(exc))
         # Mitsuba's refusals of the exported scene, or a bug: one line, the trace on stderr
         except Exception as exc:
             traceback.print_exc()
-            self.report({"ERROR"}, f"styletrace: {type(exc).__name__}: {_message(exc)}")
+            self._report({"ERROR"}, f"styletrace: {type(exc).__name__}: {_message(exc)}")
+
+    def _report(self, kinds: set, message: str) -> None:
+        """Blender's `report`; a material preview's go to `preview.report` instead."""
+        (preview.report if self.is_preview else self.report)(kinds, message)
+
+    def _settings(self, depsgraph):
+        """The settings this render uses: a preview's budget (`preview.settings`), else the
+        scene's with the seed of the frame (`animation.at_frame`)."""
+        st = depsgraph.scene.styletrace
+        if self.is_preview:
+            return preview.settings(st)
+        return animation.at_frame(st, depsgraph.scene.frame_current)
 
     def _render(self, depsgraph):
-        st = depsgraph.scene.styletrace
+        st = self._settings(depsgraph)
         self.update_stats("", "styletrace: exporting the scene")
-        sc = f12.scene(depsgraph, st, warn=lambda m: self.report({"WARNING"}, m))
+        sc = f12.scene(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m))
         size = sc.sensors()[0].film().crop_size()
         w, h = int(size[0]), int(size[1])
         aovs = f12.error_passes(st)
-        restyle.forget()
+        if not self.is_preview:  # a preview keeps the user's recorded buffer
+            restyle.forget()
         runner, note = f12.run_f12(sc, st, aovs, restyle.keep if st.record_buffer else None)
         if note:
-            self.report({"WARNING"}, f"styletrace: {note}")
+            self._report({"WARNING"}, f"styletrace: {note}")
         denoised = isinstance(runner.finisher, Denoised)
         if aovs:
             for name, channels, ids in f12.AOV_PASSES.values():
@@ -120,12 +137,13 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self._show(prog.image, w, h)
             if self.stop_requested():
                 break
-        LAST.update(
-            spp_done=prog.spp_done if prog else 0,
-            spp_total=st.spp,
-            cancelled=self.stop_requested(),
-            seconds=time.perf_counter() - start,
-        )
+        done = dict(spp_done=prog.spp_done if prog else 0, spp_total=st.spp,
+                    cancelled=self.stop_requested(), seconds=time.perf_counter() - start)
+        (PREVIEW if self.is_preview else LAST).update(done)
+        # ends Render Animation after this frame (Blender sets its break flag on an error report)
+        if self.is_animation and done["cancelled"]:
+            self._report({"ERROR"}, animation.stop_message(
+                depsgraph.scene.frame_current, done["spp_done"], st.spp))
         if prog is None:
             return
         mask = None

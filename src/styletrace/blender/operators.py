@@ -6,7 +6,7 @@ from __future__ import annotations
 import bpy
 from bpy_extras.io_utils import ExportHelper
 
-from styletrace.blender import exporter, xml
+from styletrace.blender import animation, exporter, xml
 from styletrace.blender.properties import settings_integrator_values
 from styletrace.errors import StyletraceError
 
@@ -52,7 +52,8 @@ class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
             self.report({"ERROR"}, str(exc).strip().splitlines()[-1])
             return {"CANCELLED"}
         self.report(
-            {"INFO"}, f"wrote {self.filepath}; the F12 image: {command_line(self.filepath, st)}"
+            {"INFO"}, f"wrote {self.filepath}; the F12 image: "
+            f"{command_line(self.filepath, animation.at_frame(st, context.scene.frame_current))}"
         )
         return {"FINISHED"}
 

@@ -1,0 +1,48 @@
+"""Render Animation with the styletrace engine: the seed of a frame, and how a cancel ends the
+sequence.
+
+Blender owns the animation loop (frame range, output paths, file formats): it sets each frame,
+evaluates the depsgraph and calls the engine's `render`, then writes the frame. The engine renders
+every frame, and F12 too, with `frame_seed`, so the noise changes from frame to frame and an F12 of
+frame f gives the file Render Animation writes for f. A cancelled frame ends the sequence
+(`stop_message`): docs/blender.md, Animation.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from styletrace.blender.overridden import Overridden
+
+#: seeds are 32-bit (`scene.arguments.SEED_MAX`)
+SEEDS = 1 << 32
+
+
+def frame_seed(seed: int, frame: int) -> int:
+    """The seed a render of `frame` uses: `seed + frame - 1` modulo 2^32 (frame 1 keeps `seed`).
+
+    Args:
+        seed: the Seed render setting (>= 0).
+        frame: Blender's frame number (any integer; Blender allows frames below 1).
+    Returns:
+        The seed in [0, 2^32).
+    """
+    return (int(seed) + int(frame) - 1) % SEEDS
+
+
+def at_frame(settings: Any, frame: int) -> Overridden:
+    """`settings` with the seed of `frame` (`frame_seed`); everything else is the settings' own."""
+    return Overridden(settings, seed=frame_seed(settings.seed, frame))
+
+
+def stop_message(frame: int, spp_done: int, spp_total: int) -> str:
+    """The error line that ends Render Animation after a cancel during `frame`.
+
+    An error report is the one way a Python engine stops Blender's animation loop (Blender sets its
+    break flag when a render reports an error); the frame's finished passes stay in the Render
+    Result, and Blender writes no file for it, as for any cancelled frame.
+    """
+    return (
+        f"styletrace: cancelled during frame {frame} after {spp_done} of {spp_total} spp: "
+        f"Render Animation stops here; this frame is not written (its finished passes are in "
+        f"the Render Result), the frames before it are"
+    )
