@@ -16,14 +16,13 @@ import math
 import bpy
 
 from styletrace import init
+from styletrace.config import estimator_registry
+from styletrace.config import settings as S
+from styletrace.denoise import default_method
+from styletrace.denoise.oidn import QUALITIES
+from styletrace.styles import registry
 
-init()  # the registries below import Dr.Jit and Mitsuba
-
-from styletrace.config import estimator_registry  # noqa: E402
-from styletrace.config import settings as S  # noqa: E402
-from styletrace.denoise import default_method  # noqa: E402
-from styletrace.denoise.oidn import QUALITIES  # noqa: E402
-from styletrace.styles import registry  # noqa: E402
+init()  # the plugins that F12 renders with (the registries above load through styletrace.gate)
 
 SEP = "__"
 
