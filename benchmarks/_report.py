@@ -89,6 +89,7 @@ def image_grid(panels, path: str, row_height: float = 3.1, fontsize: int = 8, wi
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     from styletrace.images import srgb8, write_bytes_atomically
     columns = max(len(cells) for _, cells in panels)
     fig, axes = plt.subplots(len(panels), columns, figsize=(width or 3 * columns, row_height * len(panels)),

@@ -1,7 +1,7 @@
 """Bit-identity of renders across a refactoring: sha256 of tiny images, one per kernel configuration.
 
-    python benchmarks/bit_identity.py                  # print NAME SHA256 per configuration
-    python benchmarks/bit_identity.py --check FILE     # compare with a recorded run; exit 1 on a difference
+    .venv/bin/python benchmarks/bit_identity.py                  # print NAME SHA256 per configuration
+    .venv/bin/python benchmarks/bit_identity.py --check FILE     # compare with a recorded run; exit 1 on a difference
 
 Every configuration goes through `styletrace.frontends.api.passes` with a prebuilt integrator (the lowest public
 seam, present before and after the render pipeline existed), so the hashes say whether the kernel and
@@ -14,15 +14,12 @@ import hashlib
 import os
 import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "src"))
+import numpy as np
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends import api
 
 styletrace.init()
-
-import numpy as np  # noqa: E402
-
-from styletrace.frontends import api
 
 RES = 12
 #: cel's levels when the digests were recorded (its default then; now the levels follow the scene)

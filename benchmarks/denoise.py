@@ -46,10 +46,10 @@ judged on, BENCHMARKS.md says why): against the pixel-integrated reference.
   8x n, against R. The ratio it would have at its own time if its MSE were that floor bounds what a less noisy D
   alone could bring; below the goal, the goal needs a change to what D is, not more samples or a better OIDN.
 
-    python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror]
+    .venv/bin/python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror]
                                  [--protocol same-ray|pixel|both] [--report]
-    python benchmarks/denoise.py --bias-check --scenes cornell-box   # R's bias from its n, estimated (bias_check)
-    python benchmarks/denoise.py --floor                              # the chosen setting's floor (method_floor)
+    .venv/bin/python benchmarks/denoise.py --bias-check --scenes cornell-box   # R's bias from its n, estimated (bias_check)
+    .venv/bin/python benchmarks/denoise.py --floor                              # the chosen setting's floor (method_floor)
 
 Results are cached in benchmarks/.cache/denoise_*.npz/json per scene (delete to recompute); `--report` only
 writes the BENCHMARKS.md section and docs/denoise.png from the cache.
@@ -61,22 +61,19 @@ import json
 import os
 import re
 import statistics
-import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import numpy as np
+from _report import image_grid, machine_description, median_time, write_section
+from equal_time import envelope, fixed_mse_at
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.denoise import render as denoised_render
+from styletrace.frontends import api
+from styletrace.gate import mi
+from styletrace.lookdev.record import render_buffer
 
 styletrace.init()
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-from _report import image_grid, machine_description, median_time, write_section  # noqa: E402
-from equal_time import envelope, fixed_mse_at  # noqa: E402
-from styletrace.frontends import api
-from styletrace.denoise import render as denoised_render  # noqa: E402
-from styletrace.lookdev.record import render_buffer  # noqa: E402
 
 CACHE = os.path.join(os.path.dirname(__file__), ".cache")
 REF = 4096

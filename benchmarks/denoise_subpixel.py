@@ -10,27 +10,24 @@ usual D from the same buffer. MSE against the pixel protocol's cached R (run `be
 pixel` first), mean over seeds 0 and 1, at the chosen budget (8 spp, n = 8) and at 64x the children (64, 64).
 Not timed: OIDN on S^2 x the pixels costs about S^2 x as much (BENCHMARKS.md's 512x512 timing).
 
-    python benchmarks/denoise_subpixel.py [--scenes cornell-box dragon] [--scale 2] [--report]
+    .venv/bin/python benchmarks/denoise_subpixel.py [--scenes cornell-box dragon] [--scale 2] [--report]
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
-import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import denoise as bench  # the scenes, R's cache, the method's setting
+import numpy as np
+from _report import machine_description, write_section
 
-import numpy as np  # noqa: E402
-
-import denoise as bench  # noqa: E402  (the scenes, R's cache, the method's setting)
-from _report import machine_description, write_section  # noqa: E402
+from styletrace.denoise import coverage, guides, oidn
+from styletrace.denoise import expectation as X
 from styletrace.frontends import api
-from styletrace.denoise import coverage, expectation as X, guides, oidn  # noqa: E402
-from styletrace.lookdev.record import render_buffer  # noqa: E402
-from styletrace.pipeline.passes import pass_seed  # noqa: E402
-
-import mitsuba as mi  # noqa: E402
+from styletrace.gate import mi
+from styletrace.lookdev.record import render_buffer
+from styletrace.pipeline.passes import pass_seed
 
 SIZE = 128  # the pixel protocol's
 BUDGETS = ((8, 8), (64, 64))

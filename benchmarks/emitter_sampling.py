@@ -4,7 +4,7 @@ For each scene, the identity style (one path per camera sample, inner=1) renders
 mode at SPP; the error is the mean squared error against Mitsuba's `path` at REF_SPP (seeded). Both modes
 are unbiased, so MSE falls as 1/time: MSE x seconds (lower is better) compares them at equal time.
 
-    python benchmarks/emitter_sampling.py
+    .venv/bin/python benchmarks/emitter_sampling.py
 """
 from __future__ import annotations
 
@@ -13,19 +13,15 @@ import statistics
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
-sys.path.insert(0, os.path.dirname(__file__))
+import numpy as np
+from _report import machine_description, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends.api import load_scene, make_integrator
+from styletrace.gate import mi
+from styletrace.kernel import emitter_sampler
 
 styletrace.init()
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-from styletrace.frontends.api import load_scene, make_integrator  # noqa: E402
-from styletrace.kernel import emitter_sampler  # noqa: E402
-from kernel.test_identity import two_lights  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
 
 RES, SPP, RUNS, REF_SPP = 64, 64, 6, 16384
 
@@ -52,6 +48,8 @@ def measure(scene, ref, mode):
 
 
 def main():
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+    from kernel.test_identity import two_lights
     scenes = {"two lights (400x power ratio)": mi.load_dict(two_lights(RES)),
               "dragon (two area lights, sky)": load_scene("dragon", RES, RES),
               "cornell-box (one light)": load_scene("cornell-box", RES, RES)}

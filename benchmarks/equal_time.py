@@ -17,7 +17,7 @@ Protocol (Cornell box, first stylized hit unless the setup says otherwise):
   cheapest fixed count is compared with that count (its time or less: a conservative ratio); one slower than
   the dearest is compared with the dearest (no extrapolation, so its ratio is an upper bound and is marked).
 
-    python benchmarks/equal_time.py [--size 128] [--seeds 3] [--only cel hatching ...]
+    .venv/bin/python benchmarks/equal_time.py [--size 128] [--seeds 3] [--only cel hatching ...]
 
 It also draws docs/equal_time.png: per setup, seed 0's reference, the fixed count nearest in time to the best
 other method, and that method, side by side (tone-mapped like the gallery's PNGs: clipped to [0, 1], sRGB).
@@ -29,19 +29,16 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import numpy as np
+from _report import image_grid, machine_description, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.errors import StyletraceError
+from styletrace.frontends import api
 
 styletrace.init()
-import numpy as np  # noqa: E402
-from _report import image_grid, machine_description, write_section  # noqa: E402
-from styletrace.frontends import api
-from styletrace.errors import StyletraceError  # noqa: E402
 
 CACHE = os.path.join(os.path.dirname(__file__), ".cache")
 FIXED = (4, 8, 16, 32, 64, 128)

@@ -7,24 +7,20 @@ efficiency 1 / (MSE x samples) relative to a named baseline (naive products wher
 also checks U-statistic <= naive variance at equal sample counts, measures float32 (Dr.Jit kernel)
 against float64 (numpy), and plots error versus samples to docs/estimators_error.png.
 
-Run: python benchmarks/estimators_table.py   (about a minute on 2 cores)
+Run: .venv/bin/python benchmarks/estimators_table.py   (about a minute on 2 cores)
 """
 from __future__ import annotations
 
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from _report import machine_description, write_section
+
+import styletrace.estimators as E
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-from _report import machine_description, write_section  # noqa: E402
-
-import styletrace.estimators as E  # noqa: E402
 
 LANES = 100_000
 DIST = E.Uniform(0.2, 1.0)  # X ~ U(0.2, 1.0): I = 0.6, Var X = 0.0533

@@ -29,28 +29,23 @@ The pool analysis above is optimistic for the pass: its children are a finite po
 which holds none of the rarest, brightest children, and a pass drawing m of them sees a bright one with
 probability m/CHILDREN; in the renderer, children come from the whole distribution.
 
-    python benchmarks/gamma_series.py
+    .venv/bin/python benchmarks/gamma_series.py
 """
 from __future__ import annotations
 
-import os
-import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import numpy as np
+from _report import machine_description, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace import estimators as E
+from styletrace.config.estimator_registry import SERIES_MAX_TERMS
+from styletrace.gate import dr, mi
+from styletrace.scene import builtin as scenes
+from styletrace.styles import registry
 
 styletrace.init()
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-import numpy as np  # noqa: E402
-from styletrace import estimators as E  # noqa: E402
-from styletrace.scene import builtin as scenes
-from styletrace.config.estimator_registry import SERIES_MAX_TERMS  # noqa: E402
-from styletrace.styles import registry  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
 
 RES, CHILDREN, REPS, GAMMA, SPP = 32, 1024, 32, 2.2, 64
 PASS_M, SEEDS = 64, (3, 4, 5)
@@ -225,12 +220,12 @@ def main():
             plans.append((f"in-lane pilot m={m}", E.SeriesEstimator(
                 form.series, b=E.Pilot(m, lo=0.02, scale=1.5, spread=1.0), truncation=E.Geometric(0.9, 8),
                 max_terms=64), None))
-        d_mse = d_bias2 = d_var = None
+        d_mse = None
         for label, est, b in plans:
             v, draws = run(est, pool, seed=11, b=b)
             mse, bias2, var, lo, hi = stats(v, truth)
             if d_mse is None:
-                d_mse, d_bias2, d_var = mse, bias2, var
+                d_mse = mse
                 eff, img = 1.0, bias2 + var / SPP
             else:
                 eff, img = d_mse * 16 / (mse * draws), mse * draws / (16 * SPP)

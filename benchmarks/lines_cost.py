@@ -8,7 +8,7 @@ short-circuit saves. Each configuration renders once to compile, then the median
 taken, the configurations of a scene timed in turn in each round (one process per scene) so that a change
 of the machine's load falls on all of them alike.
 
-    python benchmarks/lines_cost.py
+    .venv/bin/python benchmarks/lines_cost.py
 """
 from __future__ import annotations
 
@@ -17,8 +17,7 @@ import os
 import subprocess
 import sys
 
-sys.path.insert(0, os.path.dirname(__file__))
-from _report import machine_description, write_section  # noqa: E402
+from _report import machine_description, write_section
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 RES, SPP, INNER, RUNS = 128, 4, 8, 7

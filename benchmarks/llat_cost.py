@@ -12,7 +12,7 @@ renders is taken, the configurations timed in turn in each round (one process) s
 machine's load falls on all of them alike. The anchor share is the fraction of camera samples that made an
 MLS query (from the `coordinate` style's method channel).
 
-    python benchmarks/llat_cost.py
+    .venv/bin/python benchmarks/llat_cost.py
 """
 from __future__ import annotations
 
@@ -21,8 +21,7 @@ import os
 import subprocess
 import sys
 
-sys.path.insert(0, os.path.dirname(__file__))
-from _report import machine_description, write_section  # noqa: E402
+from _report import machine_description, write_section
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 RES, SPP, RUNS = 128, 32, 3

@@ -12,7 +12,7 @@
 - Fit: a 128x128, 4 spp, n = 4 buffer; targets restyled with known θ; iterations and seconds until the
   loss reaches 1e-9 (or the 300 iterations end), and the error of the recovered θ.
 
-    python benchmarks/lookdev.py [--runs 5]
+    .venv/bin/python benchmarks/lookdev.py [--runs 5]
 """
 from __future__ import annotations
 
@@ -22,17 +22,15 @@ import sys
 import threading
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import numpy as np
+from _report import machine_description, median_time, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.lookdev.fit import fit
+from styletrace.lookdev.record import render_buffer
+from styletrace.lookdev.restyle import device, restyle
 
 styletrace.init()
-import numpy as np  # noqa: E402
-from _report import machine_description, median_time, write_section  # noqa: E402
-from styletrace.lookdev.fit import fit  # noqa: E402
-from styletrace.lookdev.record import render_buffer  # noqa: E402
-from styletrace.lookdev.restyle import device, restyle  # noqa: E402
 
 GREY5 = "0:0.5,0.5,0.5;0.3:0.5,0.5,0.5;0.6:0.5,0.5,0.5;0.9:0.5,0.5,0.5;1.2:0.5,0.5,0.5"
 

@@ -6,26 +6,21 @@ and cel) at S camera samples with n inner samples per stylized vertex is timed a
 S*n samples per pixel (the same number of light paths). Each configuration is warmed up once (kernel
 compilation), then timed `--runs` times; the table gives medians.
 
-    python benchmarks/media_speed.py [--runs 3]
+    .venv/bin/python benchmarks/media_speed.py [--runs 3]
 """
 from __future__ import annotations
 
 import argparse
-import os
-import sys
 
 import numpy as np
+from _report import machine_description, write_section
+from render_speed import timed
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
-
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends.api import make_integrator
+from styletrace.gate import mi
 
 styletrace.init()  # first: it points Dr.Jit at a working libLLVM
-import mitsuba as mi  # noqa: E402
-from styletrace.frontends.api import make_integrator  # noqa: E402
-from _report import machine_description, write_section  # noqa: E402
-from render_speed import timed  # noqa: E402
 
 RES = 128
 S, N = 8, 8

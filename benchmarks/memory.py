@@ -6,7 +6,7 @@ spp 4, is 64 tiles of 1024 x 1024; before tiling it was one pass of 67 M lanes a
 The estimate is `api.memory_needed`, what the command line checks against the available memory
 before it loads anything heavy.
 
-    python benchmarks/memory.py [--sizes 256,1024,2048,8192] [--spp 4]
+    .venv/bin/python benchmarks/memory.py [--sizes 256,1024,2048,8192] [--spp 4]
 """
 from __future__ import annotations
 
@@ -17,12 +17,10 @@ import sys
 import tempfile
 import time
 
+from _report import machine_description, write_section
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 SRC = os.path.join(HERE, "..", "src")
-sys.path.insert(0, SRC)
-sys.path.insert(0, HERE)
-
-from _report import machine_description, write_section  # noqa: E402
 
 CHILD = """
 import resource, subprocess, sys, time

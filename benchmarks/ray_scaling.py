@@ -8,28 +8,25 @@
 3. Resume: the same 256x256 render stopped after half its passes, then resumed: the time to read the
    checkpoint and the time to finish, against the whole render.
 
-    python benchmarks/ray_scaling.py [--runs 3]
+    .venv/bin/python benchmarks/ray_scaling.py [--runs 3]
 """
 from __future__ import annotations
 
 import argparse
 import os
 import statistics
-import sys
 import tempfile
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import ray
+from _report import machine_description, median_time, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends import api
+from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.ray_run import Render, job_for
 
 styletrace.init()
-import ray  # noqa: E402
-from styletrace.frontends import api
-from styletrace.pipeline.ray_checkpoint import Checkpoint  # noqa: E402
-from styletrace.pipeline.ray_run import Render, job_for  # noqa: E402
-from _report import machine_description, median_time, write_section  # noqa: E402
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 

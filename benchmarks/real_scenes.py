@@ -1,7 +1,7 @@
 """Every style at its defaults on a panel of public scenes: the BENCHMARKS.md section "Real scenes at defaults"
 and docs/real_scenes.png.
 
-    python benchmarks/real_scenes.py [--panel DIR] [--size 512] [--scenes a,b] [--styles a,b] [--no-write]
+    .venv/bin/python benchmarks/real_scenes.py [--panel DIR] [--size 512] [--scenes a,b] [--styles a,b] [--no-write]
 
 The panel (benchmarks/panel.json: each scene's source, licence, category and split) is read from DIR (default
 $STYLETRACE_PANEL, else benchmarks/.cache/panel): DIR/NAME/scene.xml with its assets. Each scene keeps its own
@@ -25,21 +25,16 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
+import numpy as np
+from _report import image_grid, machine_description, write_section
+
+import styletrace
+from styletrace import measures
+from styletrace.scene.loading import load_scene, scene_spp
+from styletrace.styles import names
+
 os.environ.setdefault("STYLETRACE_DENOISE", "auto")
-
-import numpy as np  # noqa: E402
-
-import styletrace  # noqa: E402
-
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from _report import image_grid, machine_description, write_section  # noqa: E402
-from styletrace import measures  # noqa: E402
-from styletrace.scene.loading import load_scene, scene_spp  # noqa: E402
-from styletrace.styles import names  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 MANIFEST = HERE / "panel.json"

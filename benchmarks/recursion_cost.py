@@ -5,7 +5,7 @@ grow as that product, while memory should not grow at all: the tree is sampled d
 loops inside one SIMD lane, and no wavefront is widened by the counts. Each configuration runs in a fresh
 process (so its peak resident memory is its own), renders once to compile, then is timed.
 
-    python benchmarks/recursion_cost.py
+    .venv/bin/python benchmarks/recursion_cost.py
 """
 from __future__ import annotations
 
@@ -15,8 +15,7 @@ import os
 import subprocess
 import sys
 
-sys.path.insert(0, os.path.dirname(__file__))
-from _report import machine_description, write_section  # noqa: E402
+from _report import machine_description, write_section
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 RES, SPP = 256, 8

@@ -16,8 +16,8 @@ kernel cache (~/.drjit) is empty and every kernel of a depth is compiled in that
   in-memory cache), and run: the kernel history's execution time of that render.
 Flag-on runs stop after the first depth whose trace exceeds 60 s (the next would take about twice as long).
 
-    python benchmarks/recursion_depth.py                    # measure (about 20 minutes on 2 cores), write the section
-    python benchmarks/recursion_depth.py --from-log run.txt  # write the section from a run's printed rows
+    .venv/bin/python benchmarks/recursion_depth.py                    # measure (about 20 minutes on 2 cores), write the section
+    .venv/bin/python benchmarks/recursion_depth.py --from-log run.txt  # write the section from a run's printed rows
 """
 from __future__ import annotations
 
@@ -28,8 +28,7 @@ import subprocess
 import sys
 import tempfile
 
-sys.path.insert(0, os.path.dirname(__file__))
-from _report import machine_description, write_section  # noqa: E402
+from _report import machine_description, write_section
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 RES, SPP, DEPTHS, STOP_S = 64, 16, range(1, 17), 60.0

@@ -20,9 +20,9 @@ cache hit) and kernel execution, and the IR operation count of the largest kerne
 Peak memory is the maximum resident set size of a separate process rendering 512x512 at S=64, n=64
 (683 s on 2 cores): it runs only with `--memory`; otherwise the section keeps the previous line.
 
-    python benchmarks/render_speed.py              # 5 rounds, memory line kept (about 5 min on 2 idle cores)
-    python benchmarks/render_speed.py --quick      # the same (explicit: no memory run)
-    python benchmarks/render_speed.py --memory     # also re-measures peak memory (+ about 12 min)
+    .venv/bin/python benchmarks/render_speed.py              # 5 rounds, memory line kept (about 5 min on 2 idle cores)
+    .venv/bin/python benchmarks/render_speed.py --quick      # the same (explicit: no memory run)
+    .venv/bin/python benchmarks/render_speed.py --memory     # also re-measures peak memory (+ about 12 min)
 """
 from __future__ import annotations
 
@@ -35,16 +35,13 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+from _report import REPORT, machine_description, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends.api import load_scene, make_integrator, passes, resolve_defaults
+from styletrace.gate import dr, mi
 
 styletrace.init()  # first: it points Dr.Jit at a working libLLVM
-import drjit as dr  # noqa: E402
-import mitsuba as mi  # noqa: E402
-from styletrace.frontends.api import load_scene, make_integrator, passes, resolve_defaults  # noqa: E402
-from _report import REPORT, machine_description, write_section  # noqa: E402
 
 RES = 256
 S, N = 16, 8

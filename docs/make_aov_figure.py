@@ -1,4 +1,4 @@
-"""The error AOVs on the Cornell box: `python docs/make_aov_figure.py` writes docs/aovs.png (shown in
+"""The error AOVs on the Cornell box: `.venv/bin/python docs/make_aov_figure.py` writes docs/aovs.png (shown in
 docs/adaptive.md). Needs the `plots` extra (matplotlib).
 
 Two styles at the first hit with adaptive inner counts 16:64, 16 camera samples per pixel: cel (a step
@@ -8,20 +8,16 @@ the image, the variance of each pixel's estimate (RGB mean, log scale), the pred
 children used at the first hit.
 """
 import os
-import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
+import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.images import srgb8
 
 styletrace.init()
-import matplotlib  # noqa: E402
-
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from styletrace.images import srgb8  # noqa: E402
 
 SIZE, SPP, INNER = 128, 16, "16:64"
 STYLES = ("cel", "color_map")

@@ -18,6 +18,9 @@ import os
 import shutil
 import sys
 import tempfile
+from importlib import import_module
+
+import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -32,11 +35,9 @@ for name in NEEDED:
         os.symlink(os.path.join(SITE, name), os.path.join(links, name))
 sys.path[:0] = [links, os.path.join(ROOT, "src")]
 
-import bpy  # noqa: E402
-
-import styletrace.blender  # noqa: E402
-
-styletrace.blender.register()
+# styletrace and its dependencies are importable only now: loaded by name
+blender = import_module("styletrace.blender")
+blender.register()
 scene = bpy.context.scene
 scene.render.engine = "STYLETRACE"
 scene.styletrace.style = "hatching"

@@ -10,8 +10,7 @@ import sys
 import numpy as np
 
 import styletrace
-from styletrace.frontends import api
-from styletrace.frontends import gallery
+from styletrace.frontends import api, gallery
 
 
 def main(size: int = 192, spp: int = 16) -> None:

@@ -91,6 +91,7 @@ LINES = {"canonical": dict(lines=True, line_mode="lifted", line_depth=3,
 def main(size: int = 160, spp: int = 32) -> None:
     styletrace.init()
     import mitsuba as mi
+
     from styletrace.frontends import api
     rows = []
     for kind in ("direct", "flat", "ball", "dof", "fig14"):

@@ -1,4 +1,4 @@
-"""Contact sheet of the scene-feature corpus (issue 18): `python docs/make_scene_corpus.py` writes
+"""Contact sheet of the scene-feature corpus (issue 18): `.venv/bin/python docs/make_scene_corpus.py` writes
 docs/scene_corpus.png (shown in docs/scenes.md).
 
 One row per scene of `tests/corpus/scenes.py` (written into a temporary folder, assets included), labelled
@@ -14,18 +14,12 @@ import tempfile
 import textwrap
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "src"))
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
-
-import styletrace  # noqa: E402
-
-styletrace.init()
-import numpy as np  # noqa: E402
-
-from corpus import scenes  # noqa: E402  (the corpus lives with its tests)
+import styletrace
 from styletrace.frontends import api
-from styletrace.images import srgb8, write_bytes_atomically  # noqa: E402
+from styletrace.images import srgb8, write_bytes_atomically
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+styletrace.init()
 
 SIZE, SPP, INNER, SEED = 128, 16, 8, 1
 #: (column title, render keywords)
@@ -38,7 +32,15 @@ COLUMNS = [
 ]
 
 
+def corpus_scenes():
+    """`tests/corpus/scenes.py`: the corpus lives with its tests."""
+    sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+    from corpus import scenes
+    return scenes
+
+
 def render_all(folder):
+    scenes = corpus_scenes()
     images = {}
     for name in scenes.SCENES:
         xml = str(scenes.write_scene(name, os.path.join(folder, name)))
@@ -57,6 +59,7 @@ def figure(images, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    scenes = corpus_scenes()
     rows, cols = len(scenes.SCENES), len(COLUMNS)
     label_w, cell = 2.2, 1.75  # inches: the label column, one image
     fig, axes = plt.subplots(rows, cols + 1, figsize=(label_w + cols * cell, rows * cell + 0.4),

@@ -1,12 +1,12 @@
 """The error AOVs at the front ends: `--aovs` into a multi-channel EXR, `aovs=True` in Python, refusals."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
+from styletrace.errors import UsageError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import UsageError
+from styletrace.gate import mi
 from styletrace.images import AOV_CHANNELS
 
 styletrace.init()

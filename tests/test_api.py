@@ -1,11 +1,11 @@
 """The Python API: scene loading, integrator construction, rendering in passes."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SettingsError, StyleError, UsageError
+from styletrace.frontends import api
+from styletrace.gate import mi
 
 
 def test_render_returns_linear_float32_hwc():

@@ -7,16 +7,14 @@ their nested integrator's hide_emitters nor (for the Python integrators) its dep
 import pytest
 
 import styletrace
+from styletrace.errors import SceneError
+from styletrace.gate import mi
+from styletrace.pipeline.carried import carried_settings, declared, loaded
+from styletrace.pipeline.job import Job
+from styletrace.pipeline.resolve import resolve
+from styletrace.scene.loading import SceneWarning, load_scene
 
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from styletrace.pipeline.carried import carried_settings, declared, loaded  # noqa: E402
-from styletrace.pipeline.job import Job  # noqa: E402
-from styletrace.pipeline.resolve import resolve  # noqa: E402
-from styletrace.errors import SceneError  # noqa: E402
-from styletrace.scene.loading import SceneWarning, load_scene  # noqa: E402
 
 SCENE = """<scene version="3.0.0">
   <default name="depth" value="7"/>

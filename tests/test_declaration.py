@@ -4,12 +4,12 @@ implementation of the common kinds, and each gives its type, default, bounds, ch
 command-line / docs row."""
 import pytest
 
-from styletrace.frontends.cli import build_parser, main
-from styletrace.frontends.command_job import given_flags
 from styletrace.config import settings
 from styletrace.config.declare import Property
 from styletrace.declaration import Declaration
 from styletrace.errors import SettingsError, StyleError
+from styletrace.frontends.cli import build_parser, main
+from styletrace.frontends.command_job import given_flags
 from styletrace.frontends.reference import integrator_table, style_table
 from styletrace.styles import get
 from styletrace.styles.params import Param

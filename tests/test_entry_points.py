@@ -8,23 +8,19 @@ image to the bit for the same seed and pass split. Where a route cannot be bit-i
 and compares the image means within 4 standard errors, the SE from the per-pixel sample variance (the
 error AOV `variance` of the render: each pixel's estimate's variance, (E[x^2] - mean^2) / (spp - 1)).
 """
-import os
 import re
 import subprocess
 import sys
 
 import numpy as np
 import pytest
-
 from conftest import child_env
 
 import styletrace
+from styletrace.gate import mi
+from styletrace.pipeline.passes import pass_seed
 
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from styletrace.pipeline.passes import pass_seed  # noqa: E402
 
 SEED, SPP, INNER = 5, 4, 2
 SCENE = """<scene version="3.0.0">

@@ -7,15 +7,14 @@ import sys
 import threading
 import time
 
-import mitsuba as mi
 import numpy as np
 import pytest
+from conftest import child_env
 
 import styletrace
 from styletrace import images
+from styletrace.gate import mi
 from styletrace.images import save_safely, write_image
-
-from conftest import child_env
 
 styletrace.init()
 

@@ -4,10 +4,9 @@ import subprocess
 import sys
 
 import pytest
+from conftest import child_env
 
 from styletrace import jit
-
-from conftest import child_env
 
 
 @pytest.mark.parametrize("name,major", [("libLLVM-19.so", 19), ("libLLVM.so.19.1", 19), ("libLLVM-15.so.1", 15),

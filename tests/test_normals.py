@@ -3,13 +3,11 @@ own normals are never touched."""
 import numpy as np
 
 import styletrace
+from styletrace.frontends.api import scene_dict
+from styletrace.gate import mi
+from styletrace.normals import TOLERANCE, angle_weighted, canonical_normals
 
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from styletrace.frontends.api import scene_dict  # noqa: E402
-from styletrace.normals import TOLERANCE, angle_weighted, canonical_normals  # noqa: E402
 
 
 def _dragon():

@@ -2,14 +2,14 @@
 -D parameters, resizing any film, the spp default, unknown integrators replaced, and every film format."""
 import os
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
+from styletrace.errors import SceneError
 from styletrace.frontends import api
 from styletrace.frontends.cli import build_parser, choose_integrator, main
-from styletrace.errors import SceneError
+from styletrace.gate import mi
 from styletrace.images import save_safely
 
 styletrace.init()

@@ -1,6 +1,5 @@
 """The statistics of tests/helpers/stats.py on known distributions (numpy only, no rendering)."""
 import numpy as np
-
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 K = 16

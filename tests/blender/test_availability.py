@@ -1,6 +1,5 @@
 """Whether the Blender tests can run here: skipped with the reason when they cannot (conftest.UNAVAILABLE)."""
 import pytest
-
 from conftest import UNAVAILABLE
 
 

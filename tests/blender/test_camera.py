@@ -5,7 +5,6 @@ z-test as in test_cycles, with Cycles references cached the same way."""
 import bpy
 import numpy as np
 import pytest
-
 import scenes as S
 from test_cycles import Z
 

@@ -3,8 +3,8 @@ finished passes in the render result: the image equals a render of just those pa
 import time
 
 import numpy as np
-
 import scenes as S
+
 from styletrace.blender import engine
 
 PRESS_AT_POLL = 3  # the engine polls once a pass; the user presses Esc while the third pass is shown

@@ -16,8 +16,8 @@ import os
 
 import numpy as np
 import pytest
-
 import scenes as S
+
 from styletrace.blender import units
 
 SIZE, CYCLES_SPP, STYLETRACE_SPP = 64, 512, 128

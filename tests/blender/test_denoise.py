@@ -14,11 +14,11 @@ import sys
 import bpy
 import numpy as np
 import pytest
-
 import scenes as S
-from styletrace.blender import engine, operators, restyle
 from test_restyle import pixels
 from test_xml import child_env
+
+from styletrace.blender import engine, operators, restyle
 
 
 @pytest.fixture(autouse=True)

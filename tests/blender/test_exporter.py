@@ -2,8 +2,8 @@
 material slot, the material mapping, and one warning per unsupported node."""
 import bpy
 import numpy as np
-
 import scenes as S
+
 from styletrace.blender import build, exporter
 
 

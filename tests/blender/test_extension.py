@@ -3,10 +3,10 @@ extension validator (bl_pkg's blender_ext.py, shipped with bpy), and the wheels 
 import os
 import subprocess
 import sys
-import tomllib
 import zipfile
 
 import bpy
+import tomllib
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "src"))
 

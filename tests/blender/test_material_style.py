@@ -5,7 +5,6 @@ import os
 
 import bpy
 import numpy as np
-
 import scenes as S
 
 LEVELS = (0.2, 0.9)

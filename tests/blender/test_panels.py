@@ -2,8 +2,8 @@
 Blender error reports (never a traceback)."""
 import bpy
 import pytest
-
 import scenes as S
+
 from styletrace.blender import panels, properties
 from styletrace.styles import registry
 

@@ -1,7 +1,6 @@
 """F12's render passes: the error AOVs (variance, bias, children) and, with lines, a line mask."""
 import numpy as np
 import pytest
-
 import scenes as S
 
 

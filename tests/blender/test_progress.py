@@ -1,6 +1,7 @@
 """The engine reports progress after every pass (`RenderEngine.update_progress`, Blender's progress bar): the
 fraction of samples done, pass by pass, up to 1; and a status line naming the pass (`update_stats`)."""
 import scenes as S
+
 from styletrace.blender import engine
 
 

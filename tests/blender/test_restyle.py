@@ -6,8 +6,8 @@ import time
 import bpy
 import numpy as np
 import pytest
-
 import scenes as S
+
 from styletrace.blender import restyle
 
 

@@ -8,7 +8,6 @@ import math
 import os
 
 import pytest
-
 import scenes as S
 
 LIGHTS = {
@@ -57,7 +56,7 @@ def test_spot_blend_matches_cycles(blend, tmp_path):
     """A 60-degree spot with a soft edge, its whole cone in view: the light reaching the plane (the image mean)
     within 1.5%. Mitsuba's linear ramp differs in shape from Cycles' smoothstep, not in power (`lights.spot_beam`);
     a ramp that starts where the smoothstep reaches 1 was 8% short at blend 0.8."""
-    s = S.reset(32)
+    S.reset(32)
     white, _ = S.material("white", Color=(1.0, 1.0, 1.0))
     S.plane(50, mat=white)
     S.camera((0, 0, 1), (0, 0, 0), type="ORTHO", ortho_scale=3.0)

@@ -8,7 +8,6 @@ import sys
 import bpy
 import numpy as np
 import pytest
-
 import scenes as S
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "src"))

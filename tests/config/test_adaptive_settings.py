@@ -2,10 +2,10 @@
 import pytest
 
 import styletrace
-from styletrace.frontends.cli import main
-from styletrace.errors import SettingsError
 from styletrace.config import estimator_registry, settings
 from styletrace.config.settings import AdaptiveCount
+from styletrace.errors import SettingsError
+from styletrace.frontends.cli import main
 
 styletrace.init()
 
@@ -36,7 +36,7 @@ def test_bad_adaptive_counts(raw, why):
 @pytest.mark.parametrize("style,name", [("gamma", "series"), ("gamma", "series_single"), ("tie_dye", "ustat"),
                                         ("tie_dye", "naive"), ("gamma", "telescoping"), ("contrast", "affine")])
 def test_unbiased_estimators_refuse_adaptive_counts(style, name):
-    with pytest.raises(SettingsError, match=f"adaptive counts n0:n_max stop on the data.*estimator direct") as e:
+    with pytest.raises(SettingsError, match="adaptive counts n0:n_max stop on the data.*estimator direct") as e:
         settings.parse({"style": style, "estimator": name, "inner_samples": "4:64"})
     assert "\n" not in str(e.value)
     settings.parse({"style": style, "estimator": name, "inner_samples": "4"})  # a fixed count is fine

@@ -1,16 +1,16 @@
 """A property is declared once (config/declare.py): one `settings.declare(Property(...))` gives its command-line
 flag, its row in the docs table, its parsing (type, bounds, choices, one-line errors) from every front end
 (the CLI, Python values, Mitsuba properties), and its value on the parsed `Settings`."""
-import mitsuba as mi
 import pytest
 
-from styletrace.frontends.cli import build_parser
-from styletrace.frontends.command_job import given_flags
-from styletrace.errors import SettingsError
 from styletrace.config import settings
 from styletrace.config.declare import Property
-from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.errors import SettingsError
+from styletrace.frontends.cli import build_parser
+from styletrace.frontends.command_job import given_flags
 from styletrace.frontends.reference import integrator_table
+from styletrace.gate import mi
+from styletrace.kernel.integrator import StylizedIntegrator
 
 KNOB = Property("test_knob", 3, "int", "a knob only this test has", "--test-knob", "K", low=1, high=9)
 MODE = Property("test_mode", "soft", "string", "a choice only this test has", choices=("soft", "hard"))

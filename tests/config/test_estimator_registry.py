@@ -5,12 +5,12 @@ value (spp = 1) is one independent estimate, which gives the standard error dire
 """
 import numpy as np
 import pytest
-
-import styletrace
 from helpers import furnace
 from helpers.furnace import I, z_score
-from styletrace.frontends.api import make_integrator
+
+import styletrace
 from styletrace.errors import SettingsError
+from styletrace.frontends.api import make_integrator
 from styletrace.styles import create
 
 RES = 96

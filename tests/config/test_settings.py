@@ -4,10 +4,10 @@ import re
 import pytest
 
 import styletrace
+from styletrace.config import estimator_registry, settings
+from styletrace.errors import SettingsError, StyleError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import SettingsError, StyleError
-from styletrace.config import estimator_registry, settings
 from styletrace.styles import get, names
 
 styletrace.init()
@@ -144,7 +144,9 @@ def test_emitter_sampling_is_a_setting():
 
 def test_the_integrator_samples_emitters_the_way_it_is_told(monkeypatch):
     """The setting reaches the kernel's emitter sampler (power selection renders a different image)."""
-    from styletrace.kernel import render_context as module  # where a render binds its emitter sampler
+    from styletrace.kernel import (
+        render_context as module,  # where a render binds its emitter sampler
+    )
     modes = []
     real = module.EmitterSampler
     monkeypatch.setattr(module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode))

@@ -47,11 +47,11 @@ import math
 import os
 import pathlib
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
 from styletrace.frontends import api
+from styletrace.gate import mi
 
 from . import scenes
 

@@ -8,11 +8,11 @@ successfully and with a finite image, within LIMIT seconds; the renders themselv
 import subprocess
 import sys
 
-import mitsuba as mi
 import numpy as np
 import pytest
-
 from conftest import child_env
+
+from styletrace.gate import mi
 
 from . import scenes
 

@@ -11,11 +11,11 @@ boundary moved by at most one pixel. REF = 4096: the reference's own flips are t
 expectation lies within about 4 / sqrt(4096) of the children's relative spread of a threshold, i.e. on the
 boundary itself.
 """
-import mitsuba as mi
 import numpy as np
 
 import styletrace
 from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES, N, REF = 48, 4, 4096
 LEVELS = (0.1, 0.4, 0.7, 1.0)

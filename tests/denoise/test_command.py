@@ -13,13 +13,11 @@ import sys
 import time
 
 import numpy as np
+from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
+from helpers.filtered_scene import GAUSSIAN_SCENE
 
 import styletrace
 from styletrace.lookdev.buffer import load_buffer
-
-from helpers.filtered_scene import GAUSSIAN_SCENE
-
-from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
 
 ENV = child_env()
 

@@ -15,13 +15,12 @@ import math
 import numpy as np
 import pytest
 
-import mitsuba as mi
-
 import styletrace
-from styletrace.frontends import api
 from styletrace.denoise import coverage as C
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError
+from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES = 12
 

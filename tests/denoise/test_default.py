@@ -8,14 +8,13 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
 
 import styletrace
 from styletrace.denoise import NotDenoised
 from styletrace.denoise.default import FIREFLY_K, MIN_SPP, SPEND, choose
 from styletrace.pipeline.job import python_job
 from styletrace.pipeline.resolve import resolve
-
-from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
 
 ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
 SMALL = dict(width=24, height=24, seed=3)

@@ -1,12 +1,11 @@
 """The preview's draft pass is denoised (the expectation, before the style): the state says so, the command
 line it shows reproduces it, and its cel image is closer to a converged render than the undenoised draft's."""
 import numpy as np
+from preview.conftest import wait_until
 
 import styletrace
 from styletrace.denoise import expectation as X
 from styletrace.preview import session as module
-
-from preview.conftest import wait_until
 
 
 def test_the_draft_is_denoised(monkeypatch):

@@ -8,12 +8,11 @@ edge crosses, M mixes Le into the plane's samples. With the emission apart the p
 again; without it they take a share of Le. Both at the camera samples (coverage 0) and at coverage points."""
 import numpy as np
 import pytest
-
-import mitsuba as mi
-
-from styletrace.frontends import api
 from helpers.denoise_edges import denoised_identity
+
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES, SKY, ALBEDO, LE = 48, 0.7, 0.5, 6.0
 

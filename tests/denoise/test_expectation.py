@@ -11,8 +11,8 @@ found by its own albedo (not the pixel's mean albedo, which matches neither surf
 import numpy as np
 import pytest
 
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 from styletrace.lookdev.record import record
 
 from .test_coverage import plane
@@ -34,6 +34,7 @@ def test_a_vertex_on_a_silhouette_takes_its_own_surface_s_neighbour():
     must take the pure neighbour of its own surface (E = 0.8), not the mixed pixel's D rescaled by the albedo ratio
     (0.716: 10% off), which it took while the neighbours were compared with the pixel's mean albedo."""
     import mitsuba as mi
+
     from styletrace.denoise.guides import Guides
     a_bright, a_dark = 0.8, 0.1
     e_bright, e_dark = a_bright * 1.0, a_dark * 0.05  # albedo x irradiance: the dark surface is also in shadow

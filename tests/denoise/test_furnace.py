@@ -13,8 +13,8 @@ kernel at 16 stratified points per pixel), with the same tolerances, over the po
 """
 import numpy as np
 
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 from styletrace.scene.builtin import FURNACE_ALBEDO, FURNACE_RADIANCE
 
 RES, Z = 64, 4.0

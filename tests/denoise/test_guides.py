@@ -6,11 +6,11 @@ checkerboard wall behind the camera is what the mirror shows. The same wall seen
 (the camera reflected in the mirror's plane, no mirror in the scene) is the same picture flipped left to right,
 and Mitsuba's `albedo` AOV of that picture is the truth. Pixels on a checker edge are left out (the two
 renders' sub-pixel samples differ there)."""
-import mitsuba as mi
 import numpy as np
 
-from styletrace.frontends import api
 from styletrace.denoise import guides
+from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES = 32
 WALL = {"type": "rectangle", "to_world": mi.ScalarTransform4f().translate([0, 0, 6]).rotate([0, 1, 0], 180).scale(8),

@@ -3,12 +3,12 @@ level there (neutral grey), not the hue of light the denoiser leaked in from the
 I * level / brightness(I) blows up into saturated speckle (`expectation.below_resolution`; the mirror's albedo
 guide is its specular weight where it sees nothing, `guides.first_hit`). The rule removes the leak where it is below the denoiser's resolution;
 next to the mirror's reflection of the light the hue is the denoiser's blur, which it does not touch."""
-import mitsuba as mi
 import numpy as np
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES = 48
 

@@ -4,11 +4,10 @@ import subprocess
 import sys
 
 import pytest
+from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
 
 import styletrace
 from styletrace.errors import UsageError
-
-from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tree first on PYTHONPATH)
 
 SMALL = ["--width", "16", "--height", "16", "--spp", "2", "--inner", "2", "-q"]
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 
 KW = dict(spp=2, inner=2, seed=11)
 
@@ -59,7 +59,6 @@ def test_command_line_buffer_restyles_denoised(tmp_path):
     import sys
 
     import mitsuba as mi
-
     from conftest import child_env
     small = ["--width", "24", "--height", "24", "--spp", "2", "--inner", "2", "--seed", "4", "-q"]
 

@@ -9,12 +9,11 @@ contrast (dark 0.15 against bright 0.8). Both where the style is applied: at the
 `at_samples`) and at coverage points (`coverage.CoverageIntegrator`, the lookup in the kernel)."""
 import numpy as np
 import pytest
-
-import mitsuba as mi
-
-from styletrace.frontends import api
 from helpers.denoise_edges import denoised_identity
+
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES, SKY = 48, 0.7
 DARK, BRIGHT = 0.15, 0.8

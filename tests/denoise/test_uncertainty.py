@@ -10,12 +10,11 @@
 import numpy as np
 import pytest
 
-import mitsuba as mi
-
-from styletrace.frontends import api
 from styletrace.config import settings as S
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError
+from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.lookdev.buffer import SPREAD, Buffer
 from styletrace.lookdev.restyle import SPREAD_NODES, finish, finish_spread
 from styletrace.styles.base import Vertex

@@ -1,9 +1,9 @@
 import os
 
 import pytest
+from conftest import SRC
 
 import styletrace
-from conftest import SRC
 
 styletrace.init()
 

@@ -6,16 +6,15 @@ import subprocess
 import sys
 import time
 
-import mitsuba as mi
 import numpy as np
 import pytest
+from conftest import child_env
 
+from styletrace.errors import UsageError
 from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.pipeline.ray_checkpoint import Checkpoint
 from styletrace.pipeline.ray_run import Render, job_for
-from styletrace.errors import UsageError
-
-from conftest import child_env
 
 STYLE = {"style": "cel", "inner": 2, "max_depth": 3}
 

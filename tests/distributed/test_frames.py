@@ -4,14 +4,13 @@ import pickle
 import subprocess
 import sys
 
-import mitsuba as mi
 import numpy as np
+from conftest import child_env
 
 from styletrace.frontends import api
-from styletrace.pipeline.ray_describe import SceneSpec, _decode
+from styletrace.gate import mi
 from styletrace.pipeline.orbit import camera_target, orbit, rotation, sensor_to_world
-
-from conftest import child_env
+from styletrace.pipeline.ray_describe import SceneSpec, _decode
 
 
 def test_target_is_where_the_central_ray_hits_and_the_orbit_turns_about_it():

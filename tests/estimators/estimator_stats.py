@@ -7,10 +7,10 @@ per check (normal approximation; the seeds are fixed, so the suite is determinis
 """
 import numpy as np
 
-Z = 4.0
-
 #: The test distributions of I (all with known mean): bounded, heavy-ish tailed, discrete.
-from styletrace.estimators import Exponential, TwoPoint, Uniform  # noqa: E402
+from styletrace.estimators import Exponential, TwoPoint, Uniform
+
+Z = 4.0
 
 DISTS = {
     "uniform": Uniform(0.2, 1.0),

@@ -3,8 +3,9 @@ that at the same mean number of children it beats a fixed count on a step functi
 import numpy as np
 import pytest
 
-from estimator_stats import Z
 from styletrace.estimators import AdaptiveDirect, Direct, channel_mean
+
+from .estimator_stats import Z
 
 
 def lanes_with_means(mu, half_width, seed):

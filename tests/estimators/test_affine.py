@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-from estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates, variance_and_se
 from styletrace.estimators import Affine, Mean, TwoPoint, Uniform, channel_means
+
+from .estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates, variance_and_se
 
 SEPIA = np.array([[0.393, 0.769, 0.189], [0.349, 0.686, 0.168], [0.272, 0.534, 0.131]])
 

@@ -2,9 +2,23 @@
 import numpy as np
 import pytest
 
-from estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates
-from styletrace.estimators import (Affine, Compose, Direct, Mean, Poisson, PolynomialNaive, PolynomialU, Product,
-                                   SeriesEstimator, Sum, channel_means, exp_series, inner_mean)
+from styletrace.estimators import (
+    Affine,
+    Compose,
+    Direct,
+    Mean,
+    Poisson,
+    PolynomialNaive,
+    PolynomialU,
+    Product,
+    SeriesEstimator,
+    Sum,
+    channel_means,
+    exp_series,
+    inner_mean,
+)
+
+from .estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates
 
 SEPIA = np.array([[0.393, 0.769, 0.189], [0.349, 0.686, 0.168], [0.272, 0.534, 0.131]])
 

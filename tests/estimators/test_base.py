@@ -2,9 +2,27 @@
 import numpy as np
 import pytest
 
-from estimator_stats import DISTS, Z, assert_unbiased, drjit_backend, run_estimates, variance_and_se
-from styletrace.estimators import (Cumulative, Mean, Pilot, PolynomialU, SeriesEstimator, Uniform,
-                                   channel_means, estimate_drjit, estimate_numpy, gamma_series)
+from styletrace.estimators import (
+    Cumulative,
+    Mean,
+    Pilot,
+    PolynomialU,
+    SeriesEstimator,
+    Uniform,
+    channel_means,
+    estimate_drjit,
+    estimate_numpy,
+    gamma_series,
+)
+
+from .estimator_stats import (
+    DISTS,
+    Z,
+    assert_unbiased,
+    drjit_backend,
+    run_estimates,
+    variance_and_se,
+)
 
 
 def hash_uniform(seed, index):

@@ -4,8 +4,15 @@ import math
 import numpy as np
 import pytest
 
-from styletrace.estimators import (exp_series, gamma_series, polynomial_series, power_series, reciprocal_series,
-                                   taylor_series, taylor_shift)
+from styletrace.estimators import (
+    exp_series,
+    gamma_series,
+    polynomial_series,
+    power_series,
+    reciprocal_series,
+    taylor_series,
+    taylor_shift,
+)
 
 
 def gen_binom(p, k):

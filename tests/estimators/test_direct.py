@@ -4,8 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from estimator_stats import DISTS, Z, assert_detectably_biased, run_estimates, variance_and_se
 from styletrace.estimators import Direct, Exponential, Uniform
+
+from .estimator_stats import DISTS, Z, assert_detectably_biased, run_estimates, variance_and_se
 
 
 def test_bias_matches_the_delta_method():

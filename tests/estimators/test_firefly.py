@@ -3,8 +3,9 @@ fixed children, on numpy and on Dr.Jit, and the switch that turns it off."""
 import numpy as np
 import pytest
 
-from estimator_stats import drjit_backend
 from styletrace.estimators import Direct
+
+from .estimator_stats import drjit_backend
 
 #: per lane, the children in draw order (RGB); lane 0 holds a firefly, lane 1 none, lane 2 a firefly in a
 #: shadow (the others are 0: the floor decides), lane 3 two equal bright children

@@ -7,9 +7,20 @@ import pytest
 from numpy.polynomial import chebyshev as npcheb
 from numpy.polynomial import legendre as npleg
 
-from estimator_stats import BACKENDS, assert_unbiased, run_estimates
-from styletrace.estimators import (Pilot, PolynomialU, SeriesEstimator, Uniform, bernstein_fit, chebyshev_fit,
-                                   from_unit, legendre_fit, taylor_fit, to_unit)
+from styletrace.estimators import (
+    Pilot,
+    PolynomialU,
+    SeriesEstimator,
+    Uniform,
+    bernstein_fit,
+    chebyshev_fit,
+    from_unit,
+    legendre_fit,
+    taylor_fit,
+    to_unit,
+)
+
+from .estimator_stats import BACKENDS, assert_unbiased, run_estimates
 
 EPS = np.finfo(np.float64).eps
 FUNCS = {

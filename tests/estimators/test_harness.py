@@ -2,7 +2,14 @@
 import numpy as np
 import pytest
 
-from styletrace.estimators import Exponential, Mean, TwoPoint, Uniform, channel_means, estimate_numpy
+from styletrace.estimators import (
+    Exponential,
+    Mean,
+    TwoPoint,
+    Uniform,
+    channel_means,
+    estimate_numpy,
+)
 
 
 @pytest.mark.parametrize("dist", [Uniform(0.2, 1.0), Exponential(0.3, 0.2), TwoPoint(0.25, 1.0, 0.3)])

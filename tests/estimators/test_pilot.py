@@ -2,9 +2,10 @@
 import numpy as np
 import pytest
 
-from estimator_stats import DISTS, assert_unbiased, run_estimates
 from styletrace.estimators import Pilot, PolynomialU, SeriesEstimator, gamma_series
 from styletrace.estimators.pilot import ExpansionPoint
+
+from .estimator_stats import DISTS, assert_unbiased, run_estimates
 
 
 def test_pilot_samples_are_counted_and_separate():

@@ -5,10 +5,25 @@ import math
 import numpy as np
 import pytest
 
-from estimator_stats import (BACKENDS, DISTS, Z, assert_detectably_biased, assert_unbiased, run_estimates,
-                             variance_and_se)
-from styletrace.estimators import (Direct, Pilot, PolynomialNaive, PolynomialU, Uniform, polynomial_series,
-                                   u_statistic_means)
+from styletrace.estimators import (
+    Direct,
+    Pilot,
+    PolynomialNaive,
+    PolynomialU,
+    Uniform,
+    polynomial_series,
+    u_statistic_means,
+)
+
+from .estimator_stats import (
+    BACKENDS,
+    DISTS,
+    Z,
+    assert_detectably_biased,
+    assert_unbiased,
+    run_estimates,
+    variance_and_se,
+)
 
 
 def brute_force_means(x, K):

@@ -2,10 +2,23 @@
 import numpy as np
 import pytest
 
-from estimator_stats import BOUNDED, DISTS, Z, assert_unbiased, run_estimates
-from styletrace.estimators import (Cumulative, Geometric, Pilot, Poisson, PoissonCMF, SeriesEstimator, Uniform,
-                                   channel_means, exp_series, gamma_series, polynomial_series, power_series,
-                                   reciprocal_series)
+from styletrace.estimators import (
+    Cumulative,
+    Geometric,
+    Pilot,
+    Poisson,
+    PoissonCMF,
+    SeriesEstimator,
+    Uniform,
+    channel_means,
+    exp_series,
+    gamma_series,
+    polynomial_series,
+    power_series,
+    reciprocal_series,
+)
+
+from .estimator_stats import BOUNDED, DISTS, Z, assert_unbiased, run_estimates
 
 #: (selection, truncation, terms): every supported combination
 PLANS = [

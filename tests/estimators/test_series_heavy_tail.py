@@ -10,9 +10,10 @@ sample variance, sqrt((m4 / var^2 - 1) / n) (m4 the fourth central moment).
 """
 import numpy as np
 
-from estimator_stats import Z, assert_unbiased
 from styletrace.estimators import Direct, Geometric, Pilot, SeriesEstimator, TwoPoint, gamma_series
 from styletrace.estimators.harness import estimate_numpy
+
+from .estimator_stats import Z, assert_unbiased
 
 DIST = TwoPoint(0.2, 5.0, 0.05)
 P = 1 / 2.2

@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-from estimator_stats import DISTS, Z, assert_unbiased, run_estimates
 from styletrace.estimators import Direct, Geometric, PowerLaw, Telescoping, TwoPoint
+
+from .estimator_stats import DISTS, Z, assert_unbiased, run_estimates
 
 
 @pytest.mark.parametrize("name", list(DISTS))

@@ -4,9 +4,20 @@ import math
 import numpy as np
 import pytest
 
-from estimator_stats import assert_unbiased, run_estimates
-from styletrace.estimators import (TIE_DYE, Pilot, PolynomialU, Uniform, channel_means, tie_dye, tie_dye_b,
-                                   tie_dye_fit, tie_dye_g, tie_dye_r)
+from styletrace.estimators import (
+    TIE_DYE,
+    Pilot,
+    PolynomialU,
+    Uniform,
+    channel_means,
+    tie_dye,
+    tie_dye_b,
+    tie_dye_fit,
+    tie_dye_g,
+    tie_dye_r,
+)
+
+from .estimator_stats import assert_unbiased, run_estimates
 
 #: Stated maximum error of tie_dye_fit() (degree 20, Chebyshev nodes) on [-1, 4], per channel r, g, b,
 #: measured on a 20001-point grid (4.4e-3, 2.3e-2, 6.0e-2) and rounded up. The blue channel has the

@@ -4,8 +4,17 @@ import math
 import numpy as np
 import pytest
 
-from estimator_stats import Z, drjit_backend
-from styletrace.estimators import Context, Cumulative, Geometric, Poisson, PoissonCMF, PowerLaw, resolve_truncation
+from styletrace.estimators import (
+    Context,
+    Cumulative,
+    Geometric,
+    Poisson,
+    PoissonCMF,
+    PowerLaw,
+    resolve_truncation,
+)
+
+from .estimator_stats import Z, drjit_backend
 
 
 def test_poisson_cmf_evaluates_until_the_cmf_reaches_the_threshold():

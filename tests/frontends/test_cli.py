@@ -6,15 +6,14 @@ import subprocess
 import sys
 import time
 
-import mitsuba as mi
 import numpy as np
 import pytest
+from conftest import child_env
 
 import styletrace
 from styletrace.frontends.cli import StopSignals, main
+from styletrace.gate import mi
 from styletrace.styles import get, names
-
-from conftest import child_env
 
 ENV = child_env()
 SMALL = ["--width", "24", "--height", "16", "--spp", "4", "--inner", "2", "-q"]
@@ -436,6 +435,7 @@ def test_a_slow_first_pass_is_named_at_the_default_delay(tmp_path):
 
 def test_status_shows_only_phases_longer_than_its_delay():
     import io
+
     from styletrace.errors import UsageError
     from styletrace.frontends.status import Status, delay_from_env
     out = io.StringIO()

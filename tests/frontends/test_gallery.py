@@ -1,7 +1,6 @@
 """`styletrace gallery --quick`: every setup renders, references and the contact sheet are written; the
 equal-time section's numbers agree with renders redone here and its verdicts follow its ratios."""
 import json
-import os
 
 import numpy as np
 import pytest

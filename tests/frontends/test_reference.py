@@ -6,8 +6,8 @@ import sys
 import pytest
 
 import styletrace
-from styletrace.frontends import reference
 from styletrace.config.settings import PROPERTIES
+from styletrace.frontends import reference
 from styletrace.styles import get, names
 
 styletrace.init()

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 
 
 @dataclass

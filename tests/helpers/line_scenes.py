@@ -1,8 +1,8 @@
 """The scene of the lifted-lines tests (tests/kernel): a box seen directly (left) and, with a plane behind the
 camera, in a mirror ball (right; `flat`: a flat mirror facing the camera, turned 8 degrees, instead)."""
-import drjit as dr
-import mitsuba as mi
 import numpy as np
+
+from styletrace.gate import dr, mi
 
 RES = 64
 

@@ -1,6 +1,6 @@
 """Scenes for the look at defaults (docs/look.md): a caustic seen only through rare children, and a room whose
 brightness range a window sets. Mitsuba scene dicts; import after `styletrace.init()`."""
-import mitsuba as mi
+from styletrace.gate import mi
 
 RES = 48
 

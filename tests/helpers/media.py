@@ -1,11 +1,11 @@
 """Small scenes with participating media and the comparison with Mitsuba's `volpath` that tests/kernel/test_media*.py
 share: K independent renders per side at the same number of light paths, the difference of the image means
 tested against its standard error (`mean_z`) and each 4 x 4 pixel block (`pixel_t_test`)."""
-import mitsuba as mi
 import numpy as np
 
-from styletrace.frontends.api import passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
+from styletrace.frontends.api import passes
+from styletrace.gate import mi
 
 K, RES = 10, 24
 SPP, INNER = 4, 4

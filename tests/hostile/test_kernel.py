@@ -6,15 +6,13 @@ import sys
 
 import numpy as np
 import pytest
-
-import styletrace
 from conftest import child_env
 
+import styletrace
+from styletrace.frontends.api import make_integrator
+from styletrace.gate import mi
+
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from styletrace.frontends.api import make_integrator  # noqa: E402
 
 LOADS = 6
 

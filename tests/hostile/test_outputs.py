@@ -7,12 +7,12 @@ import os
 import stat
 import tempfile
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
 from styletrace.frontends.cli import main
+from styletrace.gate import mi
 
 styletrace.init()
 

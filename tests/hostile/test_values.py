@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import styletrace
+from styletrace.config import estimator_registry as estimation
+from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
-from styletrace.config import estimator_registry as estimation
 from styletrace.styles import get, names
 
 BLACKBODY_XML = """<scene version="3.0.0">

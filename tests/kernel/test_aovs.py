@@ -2,8 +2,8 @@
 sphere pixel an independent draw of one estimator) against independent renders and analytic derivatives."""
 import numpy as np
 import pytest
-
 from helpers.furnace import I, draws
+
 from styletrace.frontends import api
 
 RES = 32

@@ -3,12 +3,11 @@ density at a hit emitter equal to the density with which next-event estimation p
 import itertools
 import math
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 from styletrace.errors import SettingsError
+from styletrace.gate import dr, mi
 from styletrace.kernel.emitter_sampler import EmitterSampler, selection_order, stable_key
 
 RATIO = 20.0  # radiance of the bright light over the dim one (same area)

@@ -5,17 +5,18 @@ spp 1); the render's first level uses the pass's b (per lane, not a pilot), comp
 window's moments with the lane's emission added back; the pass has its own seed stream; the same seed gives
 the same image bit for bit; tiles get a pass each; bad values are refused with one line.
 """
-import mitsuba as mi
 import numpy as np
 import pytest
-
 from helpers import furnace
 from helpers.furnace import I, z_score
+
 from styletrace import wild
-from styletrace.frontends import api
+from styletrace.config import estimator_registry as estimation
+from styletrace.config import settings as S
 from styletrace.errors import SettingsError
 from styletrace.estimators.base import Context
-from styletrace.config import estimator_registry as estimation, settings as S
+from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.styles import create
 from styletrace.styles.base import Vertex
 
@@ -155,8 +156,9 @@ def test_cluster_renders_refuse_the_pass():
     """A cluster render's units are bare renders of one (tile, pass) on the workers: refused up front."""
     pytest.importorskip("ray")
     from types import SimpleNamespace
-    from styletrace.pipeline.ray_run import Render
+
     from styletrace.errors import UsageError
+    from styletrace.pipeline.ray_run import Render
     job = SimpleNamespace(values={"style": "gamma", "estimator": "series", "expansion_pass": "16"})
     with pytest.raises(UsageError) as err:
         Render(job, 4, 0, 16, 16)

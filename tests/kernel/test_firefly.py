@@ -1,16 +1,14 @@
 """The firefly control at the stylized vertex (`firefly`, docs/look.md) on a scene with a tiny bright light that
 the floor sees only in a mirror: its light arrives as rare, very bright children (a caustic), which without the
 control become white specks of contrast's amplified tone and of the physically based image."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.look_scenes import caustic_scene
 
 import styletrace
 from styletrace.measures import firefly_share
 
 styletrace.init()
-
-from helpers.look_scenes import caustic_scene
 
 
 @pytest.mark.parametrize("style", ["contrast", "identity"])

@@ -5,13 +5,12 @@ point (it is convex: each point sees only the environment). Each inner sample X 
 estimate of I; by symmetry every visible point of the sphere has the same distribution of X, so the
 pixels inside the sphere's silhouette are independent draws, which gives standard errors directly.
 """
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.furnace import I, draws
 
 import styletrace
-from helpers import furnace
-from helpers.furnace import I, draws
+from styletrace.gate import mi
 
 RES = 128
 GAMMA = 2.2

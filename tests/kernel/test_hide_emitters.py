@@ -1,12 +1,12 @@
 """`hide_emitters` (issue 8, point 4): camera rays do not see emitters, as in Mitsuba's own `path`; and a
 scene's own max_depth, carried over to `stylized`, changes the image as it changes `path`'s."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 from styletrace.frontends.api import carried_settings, load_scene, make_integrator, passes
 from styletrace.frontends.api import scene_dict as scene_dict_of
-from helpers.stats import mean_threshold, mean_z, pixel_t_test
+from styletrace.gate import mi
 
 K = 16                 # independent renders per side
 SPP, INNER = 4, 4

@@ -1,11 +1,11 @@
 """The identity style reproduces physically based rendering (Mitsuba's own `path` integrator)."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import load_scene, make_integrator, passes
-from helpers.stats import mean_threshold, mean_z, pixel_t_test
+from styletrace.gate import mi
 
 K = 16          # independent renders per side
 SPP, INNER = 8, 8

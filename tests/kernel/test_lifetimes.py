@@ -12,17 +12,17 @@ import subprocess
 import sys
 from pathlib import Path
 
-import mitsuba as mi
 import numpy as np
 import pytest
+from conftest import child_env
 
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.lookdev.record import record
+from styletrace.gate import mi
 from styletrace.kernel import reuse
+from styletrace.lookdev.record import record
 from styletrace.scene import defaults as scene_defaults
 
-from conftest import child_env
 from .test_reuse import plane_scene
 
 TESTS = Path(__file__).resolve().parents[1]

@@ -2,10 +2,9 @@
 tilt h . n to 1e-6, reduces to the identity where nothing moves, and makes a reflected auxiliary ray after a
 flat mirror the mirror image of the camera's; minimal rotation; the slope metric; the priority composition
 of two overlapping line types (Eqs. 32 and 34) against Monte Carlo."""
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
+from styletrace.gate import dr, mi
 from styletrace.kernel import lifted_lines as ll
 
 RNG = np.random.default_rng(11)

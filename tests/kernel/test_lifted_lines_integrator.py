@@ -3,19 +3,18 @@ film point and lens sample are recovered exactly; the integrator draws the lines
 (kernel/lifted_lines.Lifted, tested against image-space references in test_lifted_lines_render.py) with the
 priority of Eq. 34 and traces no children where a type fired; through a glass slab the auxiliary paths refract
 and the lines keep their coverage."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.line_scenes import ball_mask, line_scene, reference
 
 import styletrace
+from styletrace.config.line_types import LineType
+from styletrace.errors import SceneError
+from styletrace.frontends import api
+from styletrace.gate import mi
+from styletrace.kernel.lifted_lines import Lifted
 
 styletrace.init()
-
-from helpers.line_scenes import ball_mask, line_scene, reference  # noqa: E402
-from styletrace.frontends import api
-from styletrace.config.line_types import LineType  # noqa: E402
-from styletrace.errors import SceneError  # noqa: E402
-from styletrace.kernel.lifted_lines import Lifted  # noqa: E402
 
 T = mi.ScalarTransform4f
 RED = LineType("shape_id", 0.5, "disk", 1.5, 8, (1.0, 0.0, 0.0), 0)

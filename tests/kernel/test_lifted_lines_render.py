@@ -3,18 +3,15 @@ ball the lines match the image-space reference (the same pair test on the shape 
 specular paths) in coverage, also when the ball is glossy (GGX 0.001, where the auxiliary paths follow the
 base's transported half-vector); two overlapping line types compose by priority (Eq. 34) and the image mean
 matches Eq. 32 within Monte Carlo error."""
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.line_scenes import RES, ball_mask, line_scene, reference
 
 import styletrace
+from styletrace.gate import mi
+from styletrace.kernel.lifted_lines import Lifted, LineType
 
 styletrace.init()
-
-from styletrace.kernel.lifted_lines import Lifted, LineType  # noqa: E402
-
-from helpers.line_scenes import RES, ball_mask, line_scene, reference  # noqa: E402
 
 
 def scene(alpha=0.0, flat=False):

@@ -6,17 +6,16 @@ geometry is exact and no sample can fire there unless detection is wrong (there 
 """
 import math
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
-from styletrace.errors import SettingsError
 from styletrace.config import settings
+from styletrace.config.settings import parse_lines
+from styletrace.errors import SettingsError
+from styletrace.gate import dr, mi
 from styletrace.kernel.lane_sampler import LaneSampler
 from styletrace.kernel.lines import Lines
-from styletrace.config.settings import parse_lines
 
 T = mi.ScalarTransform4f
 FOV = 40.0

@@ -1,12 +1,21 @@
 """Participating media: with the identity style `stylized` equals Mitsuba's `volpath` (kernel/volume.py)."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.media import (
+    INNER,
+    SCENES,
+    SPP,
+    Z_MAX,
+    assert_matches_volpath,
+    fog_ball,
+    foggy_room,
+    renders,
+)
+from helpers.stats import mean_z
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator
-from helpers.media import INNER, SCENES, SPP, Z_MAX, assert_matches_volpath, fog_ball, foggy_room, renders
-from helpers.stats import mean_z
+from styletrace.gate import mi
 
 
 @pytest.mark.parametrize("name", list(SCENES))

@@ -12,13 +12,13 @@ samples died, bound the difference to the image without the medium.
 """
 import math
 
-import mitsuba as mi
 import numpy as np
 import pytest
+from tone.scenes import HATCH, first_hit_mask, mirror_scene
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator, passes
-from tone.scenes import HATCH, first_hit_mask, mirror_scene
+from styletrace.gate import mi
 
 T = mi.ScalarTransform4f
 BLACK = {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 0.0, 0.0]}}

@@ -1,11 +1,11 @@
 """Stylization in scenes with participating media: the identity style at recursive and per-object vertices
 equals `volpath`; other styles render (kernel/integrator.py, kernel/volume.py)."""
-import mitsuba as mi
 import numpy as np
+from helpers.media import INNER, SPP, T, assert_matches_volpath, fog_ball
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator, passes
-from helpers.media import INNER, SPP, T, assert_matches_volpath, fog_ball
+from styletrace.gate import mi
 
 
 def test_first_n_hits_through_media_matches_volpath():
@@ -45,6 +45,7 @@ def test_lines_in_a_scene_with_media():
     measures those lines). line_mode lifted, whose auxiliary paths know no media, refuses a deeper
     line_depth in one line rather than silently cutting it to 1."""
     import pytest
+
     from styletrace.errors import SceneError
     scene = mi.load_dict(fog_ball())
     red = make_integrator("identity", inner=1, lines=True, line_color="1,0,0", line_depth=1)

@@ -4,12 +4,12 @@ A ray passes a mask's transparent part unstylized and stylizes what it scatters 
 invisible. Truth: the constant sky (exact), Mitsuba's `path` (identity), and renders of the same scene
 with the mask made opaque (the mixture of a stylized surface and what lies behind it).
 """
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 from styletrace.frontends.api import make_integrator, passes
-from helpers.stats import mean_threshold, mean_z, pixel_t_test
+from styletrace.gate import mi
 
 T = mi.ScalarTransform4f
 RES = 24

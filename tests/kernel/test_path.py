@@ -1,7 +1,7 @@
 """The path kernel's MIS weight: finite for every pair of densities, with the power heuristic's limits."""
-import mitsuba as mi
 import numpy as np
 
+from styletrace.gate import mi
 from styletrace.kernel.vertex import mis_power
 
 BIG = [0.0, 1e-30, 1.0, 3.0, 1e19, 2.6e19, 1e30, 3.0e38, float("inf")]

@@ -1,11 +1,11 @@
 """Per-object styles: PBR objects stay PBR, styled objects are stylized, also in mirrors."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator, passes
-from helpers.stats import mean_threshold, mean_z, pixel_t_test
+from styletrace.gate import mi
 
 T = mi.ScalarTransform4f
 RES = 32
@@ -48,9 +48,15 @@ def reflection():
     b = render(mirror_scene(None), path, 64, 1)
     seen = np.abs(a - b).mean(axis=2) > 0.25
     core = seen.copy()  # drop the silhouette: its pixels mix sphere and sky
-    core[1:] &= seen[:-1]; core[:-1] &= seen[1:]; core[:, 1:] &= seen[:, :-1]; core[:, :-1] &= seen[:, 1:]
+    core[1:] &= seen[:-1]
+    core[:-1] &= seen[1:]
+    core[:, 1:] &= seen[:, :-1]
+    core[:, :-1] &= seen[:, 1:]
     grown = seen.copy()
-    grown[1:] |= seen[:-1]; grown[:-1] |= seen[1:]; grown[:, 1:] |= seen[:, :-1]; grown[:, :-1] |= seen[:, 1:]
+    grown[1:] |= seen[:-1]
+    grown[:-1] |= seen[1:]
+    grown[:, 1:] |= seen[:, :-1]
+    grown[:, :-1] |= seen[:, 1:]
     assert core.sum() >= 20
     return core, grown
 

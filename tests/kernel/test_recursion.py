@@ -1,11 +1,10 @@
 """Recursive stylization: with identity at every level, every parametrization equals PBR."""
-import mitsuba as mi
 import numpy as np
 import pytest
-
-import styletrace
-from styletrace.frontends.api import make_integrator, passes
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
+
+from styletrace.frontends.api import make_integrator, passes
+from styletrace.gate import mi
 
 K, RES, SPP = 12, 24, 8
 
@@ -92,7 +91,10 @@ def test_first_n_hits_depth_2_under_a_small_light_per_pixel():
     grow as their square root, the image means agreed, and an exactly unbiased toy estimator of the same
     rare samples fails the same way (tests/test_stats_helpers.py). At 128 spp every render holds several per
     pixel, the test's precondition (helpers/stats.pixel_t_test)."""
-    from .test_null_surfaces import DEEP_SPP, K as KR, renders as renders16, scene as card_scene
+    from .test_null_surfaces import DEEP_SPP
+    from .test_null_surfaces import K as KR
+    from .test_null_surfaces import renders as renders16
+    from .test_null_surfaces import scene as card_scene
     d = card_scene({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.2, 0.8, 0.3]}})
     integ = make_integrator("identity", inner=4, stylize="first_n_hits", stylize_depth=2)
     ours = renders16(d, integ, DEEP_SPP, 100)

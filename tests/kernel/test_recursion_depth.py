@@ -3,14 +3,12 @@
 linearly with the stylized levels instead of doubling per level (issue 23, point 3)."""
 import time
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 from styletrace.frontends import api
+from styletrace.gate import dr, mi
 from styletrace.kernel import integrator as I
-
 
 #: traces per measurement; the least counts
 REPEATS = 7

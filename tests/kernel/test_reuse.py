@@ -4,14 +4,14 @@ Truth from outside the pooling code: an analytic plane under a uniform sky, Mits
 sampler at a large n on the same camera rays, and the pools checked against the scene's geometry.
 Pooled pixels are correlated, so standard errors come from independent seeds (one image mean each).
 """
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
+from styletrace.errors import SceneError, SettingsError
 from styletrace.frontends import api
 from styletrace.frontends.cli import main
-from styletrace.errors import SceneError, SettingsError
+from styletrace.gate import mi
 from styletrace.kernel import reuse
 
 T = mi.ScalarTransform4f

@@ -6,13 +6,13 @@ a mirror ball inside it), Mitsuba's `path` on the Cornell box and on a room scen
 fast, and the tree sampler at a large n on the same camera rays. Pooled pixels are correlated, so standard
 errors come from independent seeds (one image mean each).
 """
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SettingsError
+from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.kernel import reuse
 
 from .test_reuse import Z, film, room_scene, seed_means

@@ -6,14 +6,13 @@ children actually stored per lane.
 """
 import math
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.frontends import api
 from styletrace.errors import SettingsError
 from styletrace.estimators import AdaptiveDirect
+from styletrace.frontends import api
+from styletrace.gate import dr, mi
 from styletrace.kernel import reuse
 
 from .test_reuse import T, film

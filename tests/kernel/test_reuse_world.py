@@ -4,13 +4,13 @@ second-level vertices pool their world-space neighbours' children too, then the 
 Truth from outside the pooling code: the analytic glowing shell, Mitsuba's `path` on the Cornell box, and the
 pools a render used checked against the stored positions with numpy.
 """
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SettingsError
+from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.kernel import reuse
 
 from .test_reuse import Z, seed_means

@@ -1,9 +1,9 @@
 """`stylized` as Mitsuba builds it (scene/standalone.py): `mi.render` resolves the style's auto values on the
 scene once, caches them per scene, and renders what the pipeline renders."""
-import mitsuba as mi
 import numpy as np
 
 import styletrace
+from styletrace.gate import mi
 from styletrace.pipeline.passes import pass_seed
 from styletrace.scene import standalone
 from styletrace.scene.builtin import BUILTIN

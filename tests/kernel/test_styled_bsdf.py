@@ -1,10 +1,9 @@
 """The `styled` BSDF: forwards light transport to the BSDF it wraps; bad properties are one-line errors."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
-import styletrace
 from styletrace.frontends.cli import main
+from styletrace.gate import mi
 
 
 def sphere_scene(bsdf):

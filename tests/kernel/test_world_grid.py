@@ -1,14 +1,12 @@
 """kernel/world_grid.py: world-space neighbours, checked against numpy brute force."""
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
+from styletrace.gate import dr, mi
+from styletrace.kernel.world_grid import WorldGrid, cell_keys, density_h
 
 styletrace.init()
-
-from styletrace.kernel.world_grid import WorldGrid, cell_keys, density_h  # noqa: E402
 
 K = 8
 

@@ -1,8 +1,8 @@
 """`styletrace render --buffer`, `restyle`, `fit` on the command line."""
-import mitsuba as mi
 import numpy as np
 
 from styletrace.frontends import cli
+from styletrace.gate import mi
 from styletrace.lookdev.buffer import load_buffer
 from styletrace.lookdev.restyle import restyle
 

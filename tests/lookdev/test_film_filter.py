@@ -9,20 +9,19 @@ sample_border, over several passes, and on a film rendered in tiles (each pass d
 window, as the render);
 - the filter survives the file, and buffers of a box filter keep their format (no positions).
 """
-import mitsuba as mi
-import drjit as dr
 import numpy as np
 import pytest
 
 import styletrace
 from styletrace.frontends import api
-from styletrace.scene.builtin import cornell_box
+from styletrace.gate import dr, mi
 from styletrace.lookdev import film_filter
 from styletrace.lookdev.buffer import bytes_per_sample, load_buffer
 from styletrace.lookdev.fit import fit
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
 from styletrace.pipeline import passes as pass_loop
+from styletrace.scene.builtin import cornell_box
 
 W, H, SPP, INNER, SEED = 20, 14, 5, 2, 7
 #: both images are float32 sums of the same float32 sample values and filter weights, in another

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.denoise import expectation as X
+from styletrace.frontends import api
 from styletrace.lookdev.buffer import load_buffer
 from styletrace.lookdev.record import record
 from styletrace.pipeline import passes as pass_loop

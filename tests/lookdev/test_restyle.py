@@ -1,12 +1,11 @@
 """Restyling a buffer equals a fresh render with the new style (same seed, same n), for every style."""
 import numpy as np
 import pytest
-
 from helpers.same_render import assert_same_render
 
 import styletrace
-from styletrace.frontends import api
 from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
+from styletrace.frontends import api
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
 from styletrace.scene.builtin import cornell_box

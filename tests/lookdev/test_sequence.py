@@ -2,7 +2,6 @@
 equal a fresh render with the same seed; where the replay needs more than is stored it is refused."""
 import numpy as np
 import pytest
-
 from helpers.same_render import assert_same_render
 
 import styletrace
@@ -155,8 +154,8 @@ def test_replay_reads_each_sample_s_own_events_and_nothing_past_them(monkeypatch
     import drjit as dr
     import mitsuba as mi
 
-    from styletrace.lookdev import sequence
     from styletrace.config.settings import parse_slot
+    from styletrace.lookdev import sequence
     arrays = {"seq_count": np.array([0, 1, 1, 2], np.uint32), "seq_kind": np.array([0, 1, 1, 1], np.uint8),
               "child": np.array([[1.0, 2.0, 3.0]] * 3, np.float32), "uniform": np.array([0.25], np.float32)}
     monkeypatch.setattr(sequence, "make_estimator", lambda slot, level, v: estimator)

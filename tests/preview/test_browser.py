@@ -6,10 +6,10 @@ clicks "save EXR" and checks the file is exactly what `styletrace.restyle` retur
 """
 import os
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
+from styletrace.gate import mi
 from styletrace.lookdev.restyle import restyle
 
 CHROMIUM = "/usr/bin/chromium"

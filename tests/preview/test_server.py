@@ -1,13 +1,12 @@
 """The preview's JSON API: styles from the registry, restyles, saves, bad requests, concurrent clients."""
 import base64
-import io
 import threading
 
-import mitsuba as mi
 import numpy as np
 import pytest
 from starlette.testclient import TestClient
 
+from styletrace.gate import mi
 from styletrace.lookdev.restyle import restyle
 from styletrace.preview.server import make_app
 from styletrace.styles import get, names

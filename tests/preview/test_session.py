@@ -10,7 +10,10 @@ from .conftest import wait_until
 def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkeypatch):
     from styletrace.preview import session as module
     monkeypatch.setattr(module, "DRAFT_GRACE_S", 120.0)  # the render thread waits for the draft to be shown
-    from styletrace.denoise.draft import QUALITY, available  # with the denoise extra the draft is denoised
+    from styletrace.denoise.draft import (  # with the denoise extra the draft is denoised
+        QUALITY,
+        available,
+    )
     # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page restyles); rendered
     # before the session starts: the page's Dr.Jit work runs under the session's lock, a render of the test's own
     # beside the session's render thread would not (a CI run once failed there with an empty-array gather)
@@ -38,6 +41,7 @@ def test_a_film_with_a_gaussian_filter(tmp_path):
     """The session records and restyles a film with Mitsuba's default filter (no rfilter: a
     gaussian): the restyle is the render of the page's command line (1 spp per pass)."""
     from helpers.filtered_scene import GAUSSIAN_SCENE
+
     from styletrace.preview import session as module
     scene = tmp_path / "g.xml"
     scene.write_text(GAUSSIAN_SCENE)

@@ -1,10 +1,10 @@
 """Scene-relative defaults (scene/defaults.py): auto values resolved per scene before rendering."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import load_scene, make_integrator, passes, resolve_defaults
+from styletrace.gate import mi
 from styletrace.scene.builtin import cornell_box, scaled
 
 T = mi.ScalarTransform4f
@@ -221,6 +221,7 @@ def test_acp_takes_the_colour_maps_auto_range_and_colours():
     certain (no variance, so per-sample and of-the-mean application agree) it is the colour map's colour times
     the shading factor max(Y', 0.01), Y' the position in the gradient."""
     import mitsuba as mi
+
     from styletrace.styles.base import Vertex
     scene = dimmed_box(1.0)
     acp = resolve_defaults(scene, make_integrator(style="acp"))[0].settings.slot.style

@@ -1,11 +1,11 @@
 """Styled BSDFs inside wrappers (twosided, mask, blendbsdf) and inside shapegroups used by instances are
 found and stylized (kernel/scene_graph.py); surfaces where a style cannot apply are refused in one line."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
-from styletrace.frontends.api import make_integrator, passes
 from styletrace.errors import SceneError
+from styletrace.frontends.api import make_integrator, passes
+from styletrace.gate import mi
 from styletrace.kernel.scene_graph import SceneGraph
 
 T = mi.ScalarTransform4f

@@ -1,16 +1,15 @@
 """Tone-level coverage on a scene whose brightness range is set by a window (docs/look.md): at defaults every
 hatching level and every cel band covers a fair share of the image, where a linear ramp between the 5% and 95%
 brightness quantiles (the default before) put most of the room into one level."""
-import mitsuba as mi
 import numpy as np
 import pytest
+from helpers.look_scenes import window_room
 
 import styletrace
 from styletrace.frontends.api import load_scene, make_integrator, resolve_defaults
+from styletrace.gate import mi
 
 styletrace.init()
-
-from helpers.look_scenes import window_room
 
 
 @pytest.fixture(scope="module")

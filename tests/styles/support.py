@@ -34,6 +34,7 @@ def tonp(x) -> np.ndarray:
 def vertex(p=None, n=None, wo=None, view=(0.0, 0.0, 1.0), N=None):
     """A Vertex of N lanes; missing fields are filled with p = 0, n = wo = +z."""
     import mitsuba as mi
+
     from styletrace.styles import Vertex
     arrays = [a for a in (p, n, wo) if a is not None]
     if N is None:

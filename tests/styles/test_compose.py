@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
+from styletrace.config import estimator_registry as estimation
+from styletrace.config import settings
 from styletrace.errors import StyleError
-from styletrace.config import estimator_registry as estimation, settings
 from styletrace.styles import create, get, names
 from styletrace.styles.forms import AffineForm, CompositeForm
 

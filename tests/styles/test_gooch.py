@@ -1,7 +1,7 @@
-import mitsuba as mi
 import numpy as np
 import pytest
 
+from styletrace.gate import mi
 from styletrace.styles import create
 
 from .support import rejects, rejects_unknown, run, vertex

@@ -1,9 +1,9 @@
 import itertools
 import math
 
-import mitsuba as mi
 import numpy as np
 
+from styletrace.gate import mi
 from styletrace.styles import create
 from styletrace.styles.halftone import dot_radius, halftone_mask
 

@@ -1,9 +1,9 @@
 import itertools
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
+from styletrace.gate import mi
 from styletrace.styles import create
 from styletrace.styles.hatching import active_sets, hatch_mask, plane_normals
 

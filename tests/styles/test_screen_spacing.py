@@ -1,10 +1,10 @@
 """Screen-space spacing of hatching and halftone (spacing_px, the default): lines and dots are evenly
 spaced in pixels at every depth. Truth: points placed on the sensor's own rays through known film positions
 (`sample_ray`), at depths 100x apart, and the pixel grid computed in numpy."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
+from styletrace.gate import mi
 from styletrace.styles import create
 
 from .support import run, vertex

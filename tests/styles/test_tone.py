@@ -3,8 +3,15 @@ import numpy as np
 import pytest
 
 from styletrace.styles import create
-from styletrace.styles.tone import (LSTAR_RANGE, MIN_STEP_LSTAR, band_levels, lightness, luminance_of, tone_inverse,
-                                    tone_knots)
+from styletrace.styles.tone import (
+    LSTAR_RANGE,
+    MIN_STEP_LSTAR,
+    band_levels,
+    lightness,
+    luminance_of,
+    tone_inverse,
+    tone_knots,
+)
 
 
 def quantile_of(values):
@@ -27,6 +34,7 @@ def test_knots_give_every_level_a_fair_share_where_a_linear_ramp_does_not():
     assert all(b > a for a, b in zip(knots, knots[1:]))
     h = create("hatching", tones=",".join(f"{k:.6g}" for k in knots))
     import mitsuba as mi
+
     import styletrace
     styletrace.init()
     u = mi.Float(ROOM.astype(np.float32))

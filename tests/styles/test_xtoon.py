@@ -1,8 +1,8 @@
 import math
 
-import mitsuba as mi
 import numpy as np
 
+from styletrace.gate import mi
 from styletrace.styles import create
 
 from .support import rejects, rejects_unknown, run, vertex

@@ -2,10 +2,10 @@
 planes seen directly (left of the image) and in a reflector or behind glass (right)."""
 from __future__ import annotations
 
-import mitsuba as mi
 import numpy as np
 
 from styletrace.frontends.api import make_integrator, passes
+from styletrace.gate import mi
 
 T = mi.ScalarTransform4f
 RES = 128
@@ -75,7 +75,6 @@ def first_hit_mask(scene, name: str, erode: int = 2) -> np.ndarray:
     uv = mi.Point2f(((col + 0.5) / w).ravel().astype(np.float32), ((row + 0.5) / h).ravel().astype(np.float32))
     ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), uv, mi.Point2f(0.5, 0.5))
     si = scene.ray_intersect(ray)
-    ids = {s.id(): i for i, s in enumerate(scene.shapes())}
     import drjit as dr
     target = [s for s in scene.shapes() if s.id() == name][0]
     hit = np.array(si.is_valid()) & (np.array(dr.reinterpret_array(mi.UInt32, si.shape)) ==

@@ -1,14 +1,13 @@
 """The image coordinate itself: the MLS inverse and its fallback chain on known data, the coordinate at a
 fixed world point seen in a glossy mirror (independent of roughness, and where the point is seen in the
 perfect mirror), and halftone dots on a point behind the camera that only a mirror shows."""
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
-
 from helpers.pattern import peak
+
+from styletrace.gate import dr, mi
 from styletrace.kernel import mls
-from styletrace.kernel.anchors import Tone, ToneState, combine, shape_id
+from styletrace.kernel.anchors import Tone, ToneState, combine
 from tone.scenes import T, mirror_scene, render, sensor, styled
 
 RNG = np.random.default_rng(7)

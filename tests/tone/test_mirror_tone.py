@@ -5,8 +5,8 @@ not. Spacing and angle come from the peak of the 2D spectrum of the hatched regi
 tolerances are the issue's (10% spacing, 5 degrees; 15% on the ball)."""
 import numpy as np
 import pytest
-
 from helpers.pattern import amplitude, angle_diff, peak
+
 from tone.scenes import HATCH, RES, first_hit_mask, mirror_scene, render
 
 LEFT = np.arange(RES)[None, :] < RES // 2

@@ -3,10 +3,10 @@ with hatching applied as an image-space post-process to the identity render (LLa
 purely specular pinhole scene every method matches the post-process). Every styled vertex's coordinate is
 then the camera sample's own pixel (depth 0 or an all-delta prefix) and its expected radiance the pixel's
 (mirrors lose nothing), so only Monte Carlo noise near the brightness thresholds can disagree."""
-import mitsuba as mi
 import numpy as np
 
 from styletrace.frontends.api import passes
+from styletrace.gate import mi
 from tone.scenes import T, first_hit_mask, render, sensor, styled
 
 RES = 96
