@@ -1,14 +1,16 @@
 """Experiment: the denoised expectation D below the pixel (issue 21's floor).
 
-`benchmarks/denoise.py --floor` found that expectation denoising keeps most of its error against the reference R
-when its children grow 64-fold: the error is not the noise of M. One candidate is D's resolution: one value per
-pixel, while E[L] varies inside pixels. This script forms M at S x the film's resolution from the same camera
-samples (each binned by its own film position, `expectation.raster`; an empty sub-pixel takes its pixel's M),
-takes the guides from a guide pass at S x the resolution, denoises with OIDN `high`, and evaluates the style at
-the same 64 coverage points (`coverage.points(scale=S)`, u = 0.3 with the spread per film pixel), against the
-usual D from the same buffer. MSE against the pixel protocol's cached R (run `benchmarks/denoise.py --protocol
-pixel` first), mean over seeds 0 and 1, at the chosen budget (8 spp, n = 8) and at 64x the children (64, 64).
-Not timed: OIDN on S^2 x the pixels costs about S^2 x as much (BENCHMARKS.md's 512x512 timing).
+`benchmarks/denoise.py --floor` found that expectation denoising keeps most of its error against the
+reference R when its children grow 64-fold: the error is not the noise of M. One candidate is D's
+resolution: one value per pixel, while E[L] varies inside pixels. This script forms M at S x the
+film's resolution from the same camera samples (each binned by its own film position,
+`expectation.raster`; an empty sub-pixel takes its pixel's M), takes the guides from a guide pass at
+S x the resolution, denoises with OIDN `high`, and evaluates the style at the same 64 coverage
+points (`coverage.points(scale=S)`, u = 0.3 with the spread per film pixel), against the usual D
+from the same buffer. MSE against the pixel protocol's cached R (run `benchmarks/denoise.py
+--protocol pixel` first), mean over seeds 0 and 1, at the chosen budget (8 spp, n = 8) and at 64x
+the children (64, 64). Not timed: OIDN on S^2 x the pixels costs about S^2 x as much
+(BENCHMARKS.md's 512x512 timing).
 
     .venv/bin/python benchmarks/denoise_subpixel.py [--scenes cornell-box dragon] [--scale 2] [--report]
 """
@@ -36,7 +38,8 @@ K, U = 64, 0.3
 
 
 def finer_m(scene, buf, m: np.ndarray, emission: np.ndarray, scale: int) -> np.ndarray:
-    """M at scale x the resolution: each camera sample's reflected children mean binned by its film position."""
+    """M at scale x the resolution: each camera sample's reflected children mean binned by its
+    film position."""
     a = buf.arrays
     found = a["slot"] >= 0
     h, w = m.shape[:2]
@@ -68,21 +71,34 @@ def image(name, style, spp, n, seed, scale) -> np.ndarray:
         fine = finer_m(scene, buf, m, emission, scale)
     d = X.below_resolution(oidn.run(fine, g.albedo, g.normal, "high", guides.to_sensor(at)), fine)
     field = X.Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
-    field.spread = mi.Float(np.ascontiguousarray(X.spread(buf, emission, U).ravel(), dtype=np.float32))
-    return np.asarray(coverage.points(scene, integ, field, K, seed, scale).image, dtype=np.float64)[..., :3]
+    field.spread = mi.Float(
+        np.ascontiguousarray(X.spread(buf, emission, U).ravel(), dtype=np.float32)
+    )
+    return np.asarray(coverage.points(scene, integ, field, K, seed, scale).image, dtype=np.float64)[
+        ..., :3
+    ]
 
 
 READING = (
-    "Reading: at 64x the children, D at twice the resolution lowers the floor on every pair, most on the dragon "
-    "(64% and 60% less), whose relief varies inside pixels at 128x128: D's one value per pixel is the largest part "
-    "of the floor there. At the chosen budget (8 spp, n = 8) it lowers the dragon's MSE by 31% and 32% and the "
-    "Cornell box's cel by 23%, but raises the Cornell box's hatching by 15%: a quarter of the samples per bin make "
-    "the sub-pixel M noisier, and hatching's line density follows D below the pixel. Not adopted: on the Cornell "
-    "box, where settings are chosen, the mean of the two styles' ratios would gain about 7% before OIDN's cost on "
-    "4x the pixels (about +0.1 s on the setting's 0.43 s at 128x128, from the 512x512 timing's 2 us a pixel: "
-    "+23% time, and the fixed counts' envelope falls about as time^-0.64 there, so about -12% on a ratio). What "
+    "Reading: at 64x the children, D at twice the resolution lowers the floor on every pair, most "
+    "on the dragon "
+    "(64% and 60% less), whose relief varies inside pixels at 128x128: D's one value per pixel is "
+    "the largest part "
+    "of the floor there. At the chosen budget (8 spp, n = 8) it lowers the dragon's MSE by 31% "
+    "and 32% and the "
+    "Cornell box's cel by 23%, but raises the Cornell box's hatching by 15%: a quarter of the "
+    "samples per bin make "
+    "the sub-pixel M noisier, and hatching's line density follows D below the pixel. Not adopted: "
+    "on the Cornell "
+    "box, where settings are chosen, the mean of the two styles' ratios would gain about 7% "
+    "before OIDN's cost on "
+    "4x the pixels (about +0.1 s on the setting's 0.43 s at 128x128, from the 512x512 timing's 2 "
+    "us a pixel: "
+    "+23% time, and the fixed counts' envelope falls about as time^-0.64 there, so about -12% on "
+    "a ratio). What "
     "it shows is where the floor is and what would lower it: a D "
-    "that resolves E[L] below the pixel at low sample counts.")
+    "that resolves E[L] below the pixel at low sample counts."
+)
 
 
 def main():
@@ -102,10 +118,22 @@ def main():
             for style in bench.PIXEL_STYLES:
                 r = ref[f"{style}|reference"].astype(np.float64)
                 for spp, n in BUDGETS:
-                    mse = [float(np.mean([np.mean((image(name, style, spp, n, seed, s) - r) ** 2) for seed in SEEDS]))
-                           for s in (1, args.scale)]
-                    print(f"{name} {style} spp={spp} n={n}: D per pixel {mse[0]:.3e}, D at {args.scale}x {mse[1]:.3e}",
-                          flush=True)
+                    mse = [
+                        float(
+                            np.mean(
+                                [
+                                    np.mean((image(name, style, spp, n, seed, s) - r) ** 2)
+                                    for seed in SEEDS
+                                ]
+                            )
+                        )
+                        for s in (1, args.scale)
+                    ]
+                    print(
+                        f"{name} {style} spp={spp} n={n}: D per pixel {mse[0]:.3e}, D at "
+                        f"{args.scale}x {mse[1]:.3e}",
+                        flush=True,
+                    )
                     results.append([name, style, spp, n, *mse])
         os.makedirs(bench.CACHE, exist_ok=True)
         with open(cache, "w") as f:

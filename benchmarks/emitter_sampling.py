@@ -1,8 +1,9 @@
 """Emitter selection for next-event estimation: uniform against power-proportional, at equal time.
 
-For each scene, the identity style (one path per camera sample, inner=1) renders RUNS seeded images per
-mode at SPP; the error is the mean squared error against Mitsuba's `path` at REF_SPP (seeded). Both modes
-are unbiased, so MSE falls as 1/time: MSE x seconds (lower is better) compares them at equal time.
+For each scene, the identity style (one path per camera sample, inner=1) renders RUNS seeded images
+per mode at SPP; the error is the mean squared error against Mitsuba's `path` at REF_SPP (seeded).
+Both modes are unbiased, so MSE falls as 1/time: MSE x seconds (lower is better) compares them at
+equal time.
 
     .venv/bin/python benchmarks/emitter_sampling.py
 """
@@ -58,20 +59,26 @@ def main():
         ref = reference(scene)
         res = {mode: measure(scene, ref, mode) for mode in emitter_sampler.MODES}
         (mu, tu), (mp, tp) = res["uniform"], res["power"]
-        rows.append(f"| {name} | {mu:.3e} | {tu:.2f} | {mp:.3e} | {tp:.2f} | {(mp * tp) / (mu * tu):.2f} |")
+        rows.append(
+            f"| {name} | {mu:.3e} | {tu:.2f} | {mp:.3e} | {tp:.2f} | {(mp * tp) / (mu * tu):.2f} |"
+        )
         print(rows[-1], flush=True)
-    body = "\n".join([
-        "## Emitter selection: uniform vs power (`benchmarks/emitter_sampling.py`)",
-        "",
-        f"Identity style, inner=1, {RES}x{RES}, {SPP} spp, mean over {RUNS} seeds; reference: Mitsuba `path` "
-        f"at {REF_SPP} spp. Last column: equal-time error of power over uniform (below 1: power wins).",
-        "",
-        "| scene | MSE uniform | s | MSE power | s | (MSE x s) power / uniform |",
-        "|---|---|---|---|---|---|",
-        *rows,
-        "",
-        machine_description(),
-    ])
+    body = "\n".join(
+        [
+            "## Emitter selection: uniform vs power (`benchmarks/emitter_sampling.py`)",
+            "",
+            f"Identity style, inner=1, {RES}x{RES}, {SPP} spp, mean over {RUNS} seeds; reference: "
+            f"Mitsuba `path` "
+            f"at {REF_SPP} spp. Last column: equal-time error of power over uniform (below 1: "
+            f"power wins).",
+            "",
+            "| scene | MSE uniform | s | MSE power | s | (MSE x s) power / uniform |",
+            "|---|---|---|---|---|---|",
+            *rows,
+            "",
+            machine_description(),
+        ]
+    )
     write_section("emitter_sampling", body)
 
 

@@ -1,8 +1,8 @@
 """Rendering on Ray (`--ray`) against the local path, scaling with workers, and the time to resume.
 
-1. Overhead: cornell-box 256x256, cel, S=64, n=16, as `api.passes` in this process (Dr.Jit on all cores)
-   and as Ray tasks on a local instance (one task per core, one Dr.Jit thread each), both warm (kernels
-   compiled, workers' scenes loaded), median of `--runs`.
+1. Overhead: cornell-box 256x256, cel, S=64, n=16, as `api.passes` in this process (Dr.Jit on all
+   cores) and as Ray tasks on a local instance (one task per core, one Dr.Jit thread each), both
+   warm (kernels compiled, workers' scenes loaded), median of `--runs`.
 2. Scaling: a local Ray instance of 1, 2 and 4 CPUs, each worker one thread, images per minute of
    cornell-box 128x128, cel, S=16, n=8 split into 8 passes (warm, median of `--runs`).
 3. Resume: the same 256x256 render stopped after half its passes, then resumed: the time to read the
@@ -100,7 +100,10 @@ def main():
     rows = []
     for workers in (1, 2, 4):
         start(workers)
-        secs = median_time(lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)], args.runs)
+        secs = median_time(
+            lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)],
+            args.runs,
+        )
         rows.append((workers, secs, 60.0 / secs))
     ray.shutdown()
 

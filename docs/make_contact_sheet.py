@@ -1,10 +1,12 @@
 """Contact sheet of every style at its defaults on three scenes of very different scale:
-`.venv/bin/python docs/make_contact_sheet.py` writes docs/defaults_contact_sheet.png (shown in docs/styles.md).
+`.venv/bin/python docs/make_contact_sheet.py` writes docs/defaults_contact_sheet.png (shown in
+docs/styles.md).
 
-Scenes: the built-in cornell-box (about 2 units across), the built-in dragon (unit height) and the Cornell
-box scaled x100 with its light x0.1 (`assets.scenes.scaled`: 200 units across and a tenth as bright), so
-the scales differ by 200x and the brightness by 10x. Every style is rendered with no parameter given: its
-scene-relative 'auto' values are resolved per scene (`scene.defaults`) and printed here.
+Scenes: the built-in cornell-box (about 2 units across), the built-in dragon (unit height) and the
+Cornell box scaled x100 with its light x0.1 (`assets.scenes.scaled`: 200 units across and a tenth as
+bright), so the scales differ by 200x and the brightness by 10x. Every style is rendered with no
+parameter given: its scene-relative 'auto' values are resolved per scene (`scene.defaults`) and
+printed here.
 """
 import os
 
@@ -33,7 +35,9 @@ def main():
         for name in names():
             inner = max(get(name).default_inner, 8)
             scene = api.load_scene(make())
-            integrator, chosen = api.resolve_defaults(scene, api.make_integrator(style=name, inner=inner))
+            integrator, chosen = api.resolve_defaults(
+                scene, api.make_integrator(style=name, inner=inner)
+            )
             print(f"{scene_name:>28} {name:>10}: {chosen or '-'}", flush=True)
             img = None
             for prog in api.passes(scene, integrator, SPP, seed=1):

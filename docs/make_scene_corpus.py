@@ -1,12 +1,13 @@
-"""Contact sheet of the scene-feature corpus (issue 18): `.venv/bin/python docs/make_scene_corpus.py` writes
-docs/scene_corpus.png (shown in docs/scenes.md).
+"""Contact sheet of the scene-feature corpus (issue 18): `.venv/bin/python
+docs/make_scene_corpus.py` writes docs/scene_corpus.png (shown in docs/scenes.md).
 
-One row per scene of `tests/corpus/scenes.py` (written into a temporary folder, assets included), labelled
-with its name and the features it covers; columns: physically based (`identity`), GI cel shading, hatching,
-colour map, and cel with feature lines (`--lines`). Every style is at its defaults, so the scene-relative
-'auto' values (cel thresholds, the hatching and colour-map brightness ranges, hatching's screen spacing on
-the orthographic and thin-lens sensors) are resolved per scene as `styletrace render` resolves them, and
-each scene keeps its own integrator's max_depth / hide_emitters (`api.render`). Images are sRGB, clamped.
+One row per scene of `tests/corpus/scenes.py` (written into a temporary folder, assets included),
+labelled with its name and the features it covers; columns: physically based (`identity`), GI cel
+shading, hatching, colour map, and cel with feature lines (`--lines`). Every style is at its
+defaults, so the scene-relative 'auto' values (cel thresholds, the hatching and colour-map
+brightness ranges, hatching's screen spacing on the orthographic and thin-lens sensors) are resolved
+per scene as `styletrace render` resolves them, and each scene keeps its own integrator's max_depth
+/ hide_emitters (`api.render`). Images are sRGB, clamped.
 """
 import os
 import sys
@@ -47,7 +48,9 @@ def render_all(folder):
         for title, kwargs in COLUMNS:
             t = time.time()
             kwargs = {"inner": INNER, **kwargs}
-            images[name, title] = api.render(xml, spp=SPP, seed=SEED, width=SIZE, height=SIZE, **kwargs)
+            images[name, title] = api.render(
+                xml, spp=SPP, seed=SEED, width=SIZE, height=SIZE, **kwargs
+            )
             print(f"{name:>13} {title:>28}: {time.time() - t:5.1f} s", flush=True)
     return images
 
@@ -67,9 +70,18 @@ def figure(images, path):
     for r, name in enumerate(scenes.SCENES):
         label = axes[r, 0]
         label.axis("off")
-        label.text(0.0, 0.62, name, fontsize=10, fontweight="bold", va="center", transform=label.transAxes)
-        label.text(0.0, 0.5, textwrap.fill(scenes.FEATURES.get(name, ""), 32), fontsize=7.2, va="top",
-                   color="#333333", transform=label.transAxes)
+        label.text(
+            0.0, 0.62, name, fontsize=10, fontweight="bold", va="center", transform=label.transAxes
+        )
+        label.text(
+            0.0,
+            0.5,
+            textwrap.fill(scenes.FEATURES.get(name, ""), 32),
+            fontsize=7.2,
+            va="top",
+            color="#333333",
+            transform=label.transAxes,
+        )
         for c, (title, _) in enumerate(COLUMNS):
             ax = axes[r, c + 1]
             ax.imshow(srgb8(images[name, title][..., :3]), interpolation="nearest")

@@ -5,4 +5,6 @@ import styletrace
 #: pytest finds fixtures by name here
 __all__ = ["mask", "scene"]
 
-styletrace.init()  # the configuration tests render (the estimator registry on the furnace): pick the backend and register the plugins first
+# the configuration tests render (the estimator registry on the furnace): pick the backend and
+# register the plugins first
+styletrace.init()

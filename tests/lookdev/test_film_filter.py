@@ -139,7 +139,8 @@ def test_fit_differentiates_through_the_filter():
 
 
 def test_a_version_2_file_of_a_box_filter_still_restyles(tmp_path):
-    """Files written before filters were recorded (version 2: no positions, "filter": "box") read as before."""
+    """Files written before filters were recorded (version 2: no positions, "filter": "box") read
+    as before."""
     import json
     box = render_buffer(scene_dict({"type": "box"}, w=8, h=6), style="cel", spp=2, inner=1)
     old = dict(box.header, version=2)

@@ -6,8 +6,21 @@ from styletrace.styles import Style, StyleError, create, get, names
 
 from .support import run, vertex
 
-EXPECTED = ["acp", "cel", "color_map", "contrast", "gamma", "gooch", "halftone", "hatching", "identity",
-       "saturation", "sepia", "tie_dye", "xtoon"]
+EXPECTED = [
+    "acp",
+    "cel",
+    "color_map",
+    "contrast",
+    "gamma",
+    "gooch",
+    "halftone",
+    "hatching",
+    "identity",
+    "saturation",
+    "sepia",
+    "tie_dye",
+    "xtoon",
+]
 
 
 ALL = names()
