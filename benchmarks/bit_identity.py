@@ -1,8 +1,10 @@
 """Bit-identity of renders across a refactoring: sha256 of tiny images, one per kernel
 configuration.
 
-    .venv/bin/python benchmarks/bit_identity.py                  # print NAME SHA256 per configuration
-    .venv/bin/python benchmarks/bit_identity.py --check FILE     # compare with a recorded run; exit 1 on a difference
+    # print NAME SHA256 per configuration
+    .venv/bin/python benchmarks/bit_identity.py
+    # compare with a recorded run; exit 1 on a difference
+    .venv/bin/python benchmarks/bit_identity.py --check FILE
 
 Every configuration goes through `styletrace.frontends.api.passes` with a prebuilt integrator (the
 lowest public seam, present before and after the render pipeline existed), so the hashes say whether

@@ -56,10 +56,12 @@ issue's goal is judged on, BENCHMARKS.md says why): against the pixel-integrated
   floor bounds what a less noisy D alone could bring; below the goal, the goal needs a change to
   what D is, not more samples or a better OIDN.
 
-    .venv/bin/python benchmarks/denoise.py [--size 128] [--seeds 3] [--scenes cornell-box dragon floor-mirror]
-                                 [--protocol same-ray|pixel|both] [--report]
-    .venv/bin/python benchmarks/denoise.py --bias-check --scenes cornell-box   # R's bias from its n, estimated (bias_check)
-    .venv/bin/python benchmarks/denoise.py --floor                              # the chosen setting's floor (method_floor)
+    .venv/bin/python benchmarks/denoise.py [--size 128] [--seeds 3]
+        [--scenes cornell-box dragon floor-mirror] [--protocol same-ray|pixel|both] [--report]
+    # R's bias from its n, estimated (bias_check)
+    .venv/bin/python benchmarks/denoise.py --bias-check --scenes cornell-box
+    # the chosen setting's floor (method_floor)
+    .venv/bin/python benchmarks/denoise.py --floor
 
 Results are cached in benchmarks/.cache/denoise_*.npz/json per scene (delete to recompute);
 `--report` only writes the BENCHMARKS.md section and docs/denoise.png from the cache.

@@ -12,7 +12,8 @@ from the same buffer. MSE against the pixel protocol's cached R (run `benchmarks
 the children (64, 64). Not timed: OIDN on S^2 x the pixels costs about S^2 x as much
 (BENCHMARKS.md's 512x512 timing).
 
-    .venv/bin/python benchmarks/denoise_subpixel.py [--scenes cornell-box dragon] [--scale 2] [--report]
+    .venv/bin/python benchmarks/denoise_subpixel.py [--scenes cornell-box dragon]
+        [--scale 2] [--report]
 """
 from __future__ import annotations
 

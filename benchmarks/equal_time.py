@@ -10,7 +10,8 @@ Protocol (Cornell box, first stylized hit unless the setup says otherwise):
   MSE between the two (the order of the smaller one's own error): what a reference of the smaller
   count would add to every MSE.
 - MSE = bias^2 + variance over the seeds: with e_s = render_s - reference_s per pixel,
-      variance = mean over pixels of var_s(e_s) (ddof 1),  bias^2 = mean over pixels of mean_s(e_s)^2 - variance/S,
+      variance = mean over pixels of var_s(e_s) (ddof 1),
+      bias^2 = mean over pixels of mean_s(e_s)^2 - variance/S,
   an unbiased estimate of the squared bias (it can dip below 0). MSE is the median over the seeds.
 - Time: the median wall-clock seconds of the S renders (`styletrace.render`, kernels compiled
   beforehand).

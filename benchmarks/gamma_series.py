@@ -7,12 +7,12 @@ lane's pool, so E[X] is the pool mean and g(E[X]) = mean^(1/2.2) is exact. Per s
 per lane of:
 
   direct n=16        Direct(g, 16)
-  series (renderer)  what `--style gamma --estimator series --inner 16` builds: b = max(1.5 x mean of a
-                     16-child pilot, 0.02), Poisson-CMF(2), U-statistic terms, at most 24 terms
-  b* oracle          b = E[X^2]/E[X] of the whole pool (a fixed number per lane), Geometric(0.9, 8 terms
-                     always), at most 64 terms
-  b* from m          b = mean(x^2)/mean(x) over m children drawn apart from the estimate's own (a separate
-                     pass: independent, so still unbiased), same truncation
+  series (renderer)  what `--style gamma --estimator series --inner 16` builds: b = max(1.5 x mean
+                     of a 16-child pilot, 0.02), Poisson-CMF(2), U-statistic terms, at most 24 terms
+  b* oracle          b = E[X^2]/E[X] of the whole pool (a fixed number per lane), Geometric(0.9, 8
+                     terms always), at most 64 terms
+  b* from m          b = mean(x^2)/mean(x) over m children drawn apart from the estimate's own (a
+                     separate pass: independent, so still unbiased), same truncation
   in-lane pilot m    the same b from the estimate's own pilot: Pilot(m, scale=1.5, spread=1), the m
                      children counted in draws
 

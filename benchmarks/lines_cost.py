@@ -49,7 +49,8 @@ for name, values in configs:
     integ.line_short_circuit = not slow
     render(scene, integrator=integ, spp={spp}, seed=1)   # compile
     integs.append(integ)
-# rounds that time every configuration once each, so that a change of the machine's load hits all alike
+# rounds that time every configuration once each, so that a change of the machine's load hits all \
+alike
 times, cpu = [[] for _ in configs], [[] for _ in configs]
 for r in range({runs}):
     for i, integ in enumerate(integs):
@@ -62,8 +63,10 @@ for (name, values), ts, cs in zip(configs, times, cpu):
     row = {{'name': name, 'seconds': statistics.median(ts), 'cpu': statistics.median(cs)}}
     if values.get('lines'):  # the share of camera samples a line took: two line colours, one seed
         v = {{k: x for k, x in values.items() if k not in ('line_color', '_no_short_circuit')}}
-        a = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,0,0'), spp={spp}, seed=1)
-        b = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, line_color='0,1000,0'), spp={spp}, seed=1)
+        a = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, \
+line_color='0,0,0'), spp={spp}, seed=1)
+        b = render(scene, integrator=make_integrator('color_map', inner={inner}, **v, \
+line_color='0,1000,0'), spp={spp}, seed=1)
         row['line_share'] = float((b[..., 1] - a[..., 1]).mean() / 1000.0)
     out.append(row)
 print(json.dumps(out))

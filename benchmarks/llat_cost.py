@@ -57,12 +57,18 @@ def scene(style, refl):
     r = {{"type": "conductor", "material": "none"}} if refl == "mirror" else \\
         {{"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": 0.05}}
     return mi.load_dict({{"type": "scene",
-        "sensor": {{"type": "perspective", "fov": 40, "to_world": T().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
-                   "sampler": {{"type": "independent"}}, "film": {{"type": "hdrfilm", "width": {res}, "height": {res}, "rfilter": {{"type": "box"}}}}}},
-        "direct": {{"type": "rectangle", "bsdf": bsdf, "to_world": T().translate([-1.6, 0, 0]) @ T().scale([1.3, 1.6, 1])}},
-        "far": {{"type": "rectangle", "bsdf": bsdf, "to_world": T().translate([4.5, 0, 0]) @ T().rotate([0, 1, 0], -90) @ T().scale([6, 6, 1])}},
-        "reflector": {{"type": "rectangle", "bsdf": r, "to_world": T().translate([1.5, 0, 0]) @ T().rotate([0, 1, 0], 45) @ T().scale([1.2, 1.6, 1])}},
-        "lamp": {{"type": "point", "position": [0, 3, 5], "intensity": {{"type": "rgb", "value": [20, 20, 20]}}}}}})
+        "sensor": {{"type": "perspective", "fov": 40, "to_world": T().look_at(origin=[0, 0, 6], \
+target=[0, 0, 0], up=[0, 1, 0]),
+                   "sampler": {{"type": "independent"}}, "film": {{"type": "hdrfilm", "width": \
+{res}, "height": {res}, "rfilter": {{"type": "box"}}}}}},
+        "direct": {{"type": "rectangle", "bsdf": bsdf, "to_world": T().translate([-1.6, 0, 0]) @ \
+T().scale([1.3, 1.6, 1])}},
+        "far": {{"type": "rectangle", "bsdf": bsdf, "to_world": T().translate([4.5, 0, 0]) @ \
+T().rotate([0, 1, 0], -90) @ T().scale([6, 6, 1])}},
+        "reflector": {{"type": "rectangle", "bsdf": r, "to_world": T().translate([1.5, 0, 0]) @ \
+T().rotate([0, 1, 0], 45) @ T().scale([1.2, 1.6, 1])}},
+        "lamp": {{"type": "point", "position": [0, 3, 5], "intensity": {{"type": "rgb", "value": \
+[20, 20, 20]}}}}}})
 
 configs = {configs!r}
 LINES = {lines!r}
@@ -82,11 +88,13 @@ for r in range({runs}):
         cpu[i].append(time.process_time() - c)
 share = {{}}
 for refl in ("mirror", "glossy 0.05"):
-    img = render(scene(dict(style="coordinate"), refl), integrator=make_integrator("identity", stylize="first_object_hit"),
+    img = render(scene(dict(style="coordinate"), refl), integrator=make_integrator("identity", \
+stylize="first_object_hit"),
                  spp=1, seed=1)
     m = np.round(np.asarray(img)[..., 2])
     share[refl] = float((m >= 2).mean())
-out = [dict(refl=refl, inner=inner, lift=lift, lines=lines, seconds=statistics.median(ts), cpu=statistics.median(cs),
+out = [dict(refl=refl, inner=inner, lift=lift, lines=lines, seconds=statistics.median(ts), \
+cpu=statistics.median(cs),
             anchors=share[refl]) for (refl, inner, lift, lines), ts, cs in zip(configs, times, cpu)]
 print(json.dumps(out))
 """

@@ -111,32 +111,45 @@ def main():
     table = "\n".join(f"| {wk} | {s:.2f} | {ipm:.1f} | {ipm / base:.2f} |" for wk, s, ipm in rows)
     body = f"""## Rendering on Ray (`benchmarks/ray_scaling.py`)
 
-Machine: {machine_description()}. This machine has **{cores} cores**, shared with other work while this ran:
+Machine: {machine_description()}. This machine has **{cores} cores**, shared with other work while \
+this ran:
 the scaling rows above {cores} workers measure oversubscription, not a cluster.
 
-**Overhead of `--ray` on one machine**, cornell-box 256x256, cel, S=64 camera samples, n=16 inner samples
-({units} passes of 2^20 samples), warm, median of {args.runs} runs alternating local and Ray (1-minute load
-average {min(loads):.1f} to {max(loads):.1f} meanwhile): local path (`api.passes`, Dr.Jit on {cores} threads)
-**{t_local:.2f} s**; Ray tasks on a local instance ({cores} workers of one thread) **{t_ray:.2f} s**, ratio
-**{t_ray / t_local:.3f}** (goal <= 1.10). Starting the local Ray instance took {t_init:.1f} s more, once per
-process (not in the ratio); a worker's first task also loads the scene and compiles the kernel (Dr.Jit's
+**Overhead of `--ray` on one machine**, cornell-box 256x256, cel, S=64 camera samples, n=16 inner \
+samples
+({units} passes of 2^20 samples), warm, median of {args.runs} runs alternating local and Ray \
+(1-minute load
+average {min(loads):.1f} to {max(loads):.1f} meanwhile): local path (`api.passes`, Dr.Jit on \
+{cores} threads)
+**{t_local:.2f} s**; Ray tasks on a local instance ({cores} workers of one thread) **{t_ray:.2f} \
+s**, ratio
+**{t_ray / t_local:.3f}** (goal <= 1.10). Starting the local Ray instance took {t_init:.1f} s \
+more, once per
+process (not in the ratio); a worker's first task also loads the scene and compiles the kernel \
+(Dr.Jit's
 kernel cache on disk serves the later workers).
 
-**Scaling**, cornell-box 128x128, cel, S=16, n=8, 8 passes, a local Ray instance of W CPUs, workers of one
+**Scaling**, cornell-box 128x128, cel, S=16, n=8, 8 passes, a local Ray instance of W CPUs, \
+workers of one
 thread each, warm, median of {args.runs}:
 
 | workers | s per image | images per minute | speed-up |
 |---|---|---|---|
 {table}
 
-**Resume**, the 256x256 render split into {n_units} passes of 4 spp, stopped after {n_units // 2}: reading the
-checkpoint (EXR of the running sum + JSON manifest) took {t_read * 1000:.0f} ms; finishing the rest took
+**Resume**, the 256x256 render split into {n_units} passes of 4 spp, stopped after {n_units // 2}: \
+reading the
+checkpoint (EXR of the running sum + JSON manifest) took {t_read * 1000:.0f} ms; finishing the \
+rest took
 {t_rest:.2f} s against {t_whole:.2f} s for the whole render from scratch.
 
-**On a real cluster**: on one machine run `ray start --head` (it prints the address, HOST:6379), on every
+**On a real cluster**: on one machine run `ray start --head` (it prints the address, HOST:6379), \
+on every
 other `ray start --address HOST:6379`; each needs the same styletrace, Mitsuba and Dr.Jit installed
-(`pip install 'styletrace[ray]'`) and the scene files at the same absolute paths (or use built-in scenes).
-Then, anywhere on the cluster: `styletrace render scene.xml --spp 4096 -o out.exr --ray HOST:6379`. Each
+(`pip install 'styletrace[ray]'`) and the scene files at the same absolute paths (or use built-in \
+scenes).
+Then, anywhere on the cluster: `styletrace render scene.xml --spp 4096 -o out.exr --ray \
+HOST:6379`. Each
 task asks Ray for one CPU and runs Dr.Jit on one thread; a node of C cores runs C tasks at once.
 """
     write_section("ray_scaling", body)

@@ -1,7 +1,8 @@
 """Every style at its defaults on a panel of public scenes: the BENCHMARKS.md section "Real scenes
 at defaults" and docs/real_scenes.png.
 
-    .venv/bin/python benchmarks/real_scenes.py [--panel DIR] [--size 512] [--scenes a,b] [--styles a,b] [--no-write]
+    .venv/bin/python benchmarks/real_scenes.py [--panel DIR] [--size 512] [--scenes a,b]
+        [--styles a,b] [--no-write]
 
 The panel (benchmarks/panel.json: each scene's source, licence, category and split) is read from DIR
 (default $STYLETRACE_PANEL, else benchmarks/.cache/panel): DIR/NAME/scene.xml with its assets. Each
@@ -238,14 +239,22 @@ def main(argv: list[str]) -> int:
 
 Written by `python benchmarks/real_scenes.py --size {args.size}` on {machine_description()}.
 
-Every style with nothing but `--style` (denoise auto, the firefly control, the scene's sample count spent on
-children: docs/look.md), on the public scenes of benchmarks/panel.json at the longer side {args.size}, each with its
-own filter, integrator, sensor and sample count: {scenes_line}. Cost is the style's wall time over the identity
-style's at its defaults, the same scene and size. Tone is the rank correlation with the identity render's blurred
-luminance. Goals (issue 29), on the held-out half: PSNR >= {GOALS['psnr']:g} dB, tone >= {GOALS['tone']:g},
-clipped and crushed <= {100 * GOALS['clipped']:g}%, fireflies <= {100 * GOALS['fireflies']:g}% (styles without a
-screen pattern), cost <= {GOALS['cost']:g}x. The defaults were chosen on the built-in scenes and the tuning half;
-the held-out half was rendered for the first time here. Held out: {rows_held - misses_held} of {rows_held} rows meet
+Every style with nothing but `--style` (denoise auto, the firefly control, the scene's sample \
+count spent on
+children: docs/look.md), on the public scenes of benchmarks/panel.json at the longer side \
+{args.size}, each with its
+own filter, integrator, sensor and sample count: {scenes_line}. Cost is the style's wall time over \
+the identity
+style's at its defaults, the same scene and size. Tone is the rank correlation with the identity \
+render's blurred
+luminance. Goals (issue 29), on the held-out half: PSNR >= {GOALS['psnr']:g} dB, tone >= \
+{GOALS['tone']:g},
+clipped and crushed <= {100 * GOALS['clipped']:g}%, fireflies <= {100 * GOALS['fireflies']:g}% \
+(styles without a
+screen pattern), cost <= {GOALS['cost']:g}x. The defaults were chosen on the built-in scenes and \
+the tuning half;
+the held-out half was rendered for the first time here. Held out: {rows_held - misses_held} of \
+{rows_held} rows meet
 every goal.
 
 ### Held out

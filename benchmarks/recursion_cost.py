@@ -30,7 +30,8 @@ from styletrace.frontends.api import load_scene, make_integrator, passes
 counts = {counts!r}
 scene = load_scene('dragon', {res}, {res})
 integ = make_integrator('saturation', inner=counts, w=0.5,
-                        stylize='first_n_hits' if len(counts) > 1 else 'first_hit', stylize_depth=len(counts))
+                        stylize='first_n_hits' if len(counts) > 1 else 'first_hit', \
+stylize_depth=len(counts))
 for _ in passes(scene, integ, {spp}, seed=1): pass
 t = time.perf_counter()
 for _ in passes(scene, integ, {spp}, seed=2): pass

@@ -19,8 +19,10 @@ depth:
 Flag-on runs stop after the first depth whose trace exceeds 60 s (the next would take about twice as
 long).
 
-    .venv/bin/python benchmarks/recursion_depth.py                    # measure (about 20 minutes on 2 cores), write the section
-    .venv/bin/python benchmarks/recursion_depth.py --from-log run.txt  # write the section from a run's printed rows
+    # measure (about 20 minutes on 2 cores), write the section
+    .venv/bin/python benchmarks/recursion_depth.py
+    # write the section from a run's printed rows
+    .venv/bin/python benchmarks/recursion_depth.py --from-log run.txt
 """
 from __future__ import annotations
 
@@ -71,7 +73,8 @@ for depth in {depths!r}:
     integ = api.make_integrator({style!r}, inner=1, **mode)
     first, trace, compile_s, _ = render(scene, integ)
     warm, trace2, _, run = render(scene, integ)
-    print(json.dumps(dict(depth=depth, trace=trace, compile=compile_s, first=first, warm=warm, run=run)), flush=True)
+    print(json.dumps(dict(depth=depth, trace=trace, compile=compile_s, first=first, warm=warm, \
+run=run)), flush=True)
     if trace > {stop!r}:
         break
 """
@@ -116,7 +119,8 @@ for style in {styles!r}:
                 if rep:  # the first render of each compiles
                     times[on].append(sum(k['execution_time'] for k in dr.kernel_history()
                                          if k['type'] == dr.KernelType.JIT) / 1e3)
-        out[f'{{style}} {{depth}}'] = [statistics.median(times[False]), statistics.median(times[True])]
+        out[f'{{style}} {{depth}}'] = [statistics.median(times[False]), \
+statistics.median(times[True])]
 print(json.dumps(out))
 """
 RUN_RES, RUN_SPP, RUN_DEPTHS, RUN_REPS = 128, 16, (2, 4, 8), 9

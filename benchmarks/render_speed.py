@@ -22,9 +22,12 @@ megakernel).
 Peak memory is the maximum resident set size of a separate process rendering 512x512 at S=64, n=64
 (683 s on 2 cores): it runs only with `--memory`; otherwise the section keeps the previous line.
 
-    .venv/bin/python benchmarks/render_speed.py              # 5 rounds, memory line kept (about 5 min on 2 idle cores)
-    .venv/bin/python benchmarks/render_speed.py --quick      # the same (explicit: no memory run)
-    .venv/bin/python benchmarks/render_speed.py --memory     # also re-measures peak memory (+ about 12 min)
+    # 5 rounds, memory line kept (about 5 min on 2 idle cores)
+    .venv/bin/python benchmarks/render_speed.py
+    # the same (explicit: no memory run)
+    .venv/bin/python benchmarks/render_speed.py --quick
+    # also re-measures peak memory (+ about 12 min)
+    .venv/bin/python benchmarks/render_speed.py --memory
 """
 from __future__ import annotations
 

@@ -5,7 +5,8 @@ Run by Blender itself (a GUI, not `bpy` as a module, which draws nothing), e.g. 
 under Xvfb:
 
     STYLETRACE_SITE=/path/to/.venv/lib/python3.11/site-packages \\
-    xvfb-run -a -s "-screen 0 1600x1000x24" blender --factory-startup --python docs/make_blender_screenshot.py
+    xvfb-run -a -s "-screen 0 1600x1000x24" blender --factory-startup \\
+        --python docs/make_blender_screenshot.py
 
 STYLETRACE_SITE defaults to the repository's .venv; Blender's Python must be its minor version (3.11
 for Debian bookworm's Blender). Only styletrace's dependencies (mitsuba, drjit, numpy, tqdm) and PIL

@@ -39,7 +39,8 @@ SCENE = """<scene version="3.0.0">
   <shape type="sphere"><point name="center" x="1.2" y="0" z="0"/><float name="radius" value="0.8"/>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf></shape>
   <shape type="rectangle">
-    <transform name="to_world"><scale value="5"/><rotate x="1" angle="-90"/><translate y="-0.8"/></transform>
+    <transform name="to_world"><scale value="5"/><rotate x="1" angle="-90"/><translate \
+y="-0.8"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>
   <shape type="rectangle">
     <transform name="to_world"><rotate x="1" angle="90"/><translate y="3"/></transform>

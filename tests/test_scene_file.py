@@ -28,11 +28,14 @@ def xml(
     head='<default name="spp" value="3"/>',
 ):
     return f"""<scene version="3.0.0">{head}{integrator}
-      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" \
+up="0,1,0"/></transform>
         <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
-        <film type="hdrfilm">{film}<string name="pixel_format" value="{pixel_format}"/><rfilter type="box"/></film>
+        <film type="hdrfilm">{film}<string name="pixel_format" value="{pixel_format}"/><rfilter \
+type="box"/></film>
       </sensor>
-      <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0.8,0.4,0.2"/></bsdf></shape>
+      <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" \
+value="0.8,0.4,0.2"/></bsdf></shape>
       <shape type="rectangle"><transform name="to_world"><translate value="0,0,-3"/></transform>
         <emitter type="area"><rgb name="radiance" value="1,2,3"/></emitter></shape>
       <emitter type="constant"><rgb name="radiance" value="0.3,0.5,0.7"/></emitter></scene>"""
@@ -407,7 +410,8 @@ FLOATING_SPHERE = """<scene version="3.0.0">
   </sensor>
   <shape type="sphere"><point name="center" x="0" y="2.5" z="0"/><float name="radius" value="1"/>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.5,0.5,0.5"/></bsdf></shape>
-  <shape type="rectangle"><transform name="to_world"><scale value="10"/><rotate x="1" angle="-90"/></transform>
+  <shape type="rectangle"><transform name="to_world"><scale value="10"/><rotate x="1" \
+angle="-90"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.5,0.5,0.5"/></bsdf></shape>
   <emitter type="directional"><vector name="direction" x="0" y="-1" z="0"/>
     <rgb name="irradiance" value="1,1,1"/></emitter>

@@ -199,7 +199,8 @@ def _sensor(kind="perspective", origin="0, 1.6, 4.5", target="0, 0.5, 0", extra=
     return f"""
     <sensor type="{kind}">
         {extra}
-        <transform name="to_world">{scale}<lookat origin="{origin}" target="{target}" up="0, 1, 0"/></transform>
+        <transform name="to_world">{scale}<lookat origin="{origin}" target="{target}" up="0, 1, \
+0"/></transform>
         <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
         <film type="hdrfilm">
             <integer name="width" value="{RES}"/><integer name="height" value="{RES}"/>
@@ -222,7 +223,8 @@ def _floor(
 def _area_light(pos="0.6, 2.6, 0.8", scale=0.5, radiance="6, 5.5, 5"):
     return f"""
     <shape type="rectangle">
-        <transform name="to_world"><scale value="{scale}"/><rotate x="1" angle="90"/><translate value="{pos}"/></transform>
+        <transform name="to_world"><scale value="{scale}"/><rotate x="1" angle="90"/><translate \
+value="{pos}"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>
         <emitter type="area"><rgb name="radiance" value="{radiance}"/></emitter>
     </shape>"""
@@ -248,7 +250,8 @@ def _textured(folder: pathlib.Path) -> str:
     verts, faces, uv = _hill()
     hill = _ply(folder / "hill.ply", verts * np.array([0.8, 1.0, 0.8]), faces, uv=uv)
     return _sensor() + _floor(f"""<bsdf type="diffuse">
-            <texture name="reflectance" type="bitmap"><string name="filename" value="{checker}"/></texture>
+            <texture name="reflectance" type="bitmap"><string name="filename" \
+value="{checker}"/></texture>
         </bsdf>""") + f"""
     <shape type="sphere">
         <point name="center" x="-1.0" y="0.55" z="0.3"/><float name="radius" value="0.55"/>
@@ -262,7 +265,8 @@ def _textured(folder: pathlib.Path) -> str:
         <string name="filename" value="{hill}"/>
         <transform name="to_world"><translate x="0.7" y="0.0" z="0.2"/></transform>
         <bsdf type="principled">
-            <texture name="base_color" type="bitmap"><string name="filename" value="{checker}"/></texture>
+            <texture name="base_color" type="bitmap"><string name="filename" \
+value="{checker}"/></texture>
             <texture name="roughness" type="bitmap"><boolean name="raw" value="true"/>
                 <string name="filename" value="{rough}"/></texture>
             <float name="metallic" value="0.2"/>
@@ -281,10 +285,12 @@ def _envmap(folder):
         ((((i // 8 + j // 8) % 2) * 0.8 + 0.1) * 255).astype(np.uint8)[..., None],
     )
     return _sensor(origin="0, 1.8, 5") + _floor() + f"""
-    <emitter type="envmap"><string name="filename" value="{sky}"/><float name="scale" value="1.0"/></emitter>
+    <emitter type="envmap"><string name="filename" value="{sky}"/><float name="scale" \
+value="1.0"/></emitter>
     <shape type="sphere">
         <point name="center" x="-1.2" y="0.5" z="0"/><float name="radius" value="0.5"/>
-        <bsdf type="roughdielectric"><float name="alpha" value="0.15"/><float name="int_ior" value="1.5"/></bsdf>
+        <bsdf type="roughdielectric"><float name="alpha" value="0.15"/><float name="int_ior" \
+value="1.5"/></bsdf>
     </shape>
     <shape type="sphere">
         <point name="center" x="0" y="0.5" z="-0.6"/><float name="radius" value="0.5"/>
@@ -301,11 +307,13 @@ def _envmap(folder):
         </bsdf>
     </shape>
     <shape type="rectangle">
-        <transform name="to_world"><scale x="0.45" y="0.35"/><rotate y="1" angle="20"/><translate value="-0.4, 0.45, 1.3"/></transform>
+        <transform name="to_world"><scale x="0.45" y="0.35"/><rotate y="1" angle="20"/><translate \
+value="-0.4, 0.45, 1.3"/></transform>
         <bsdf type="thindielectric"><float name="int_ior" value="1.5"/></bsdf>
     </shape>
     <shape type="rectangle">
-        <transform name="to_world"><scale x="0.4" y="0.35"/><rotate y="1" angle="-70"/><translate value="0.6, 0.4, 1.0"/></transform>
+        <transform name="to_world"><scale x="0.4" y="0.35"/><rotate y="1" angle="-70"/><translate \
+value="0.6, 0.4, 1.0"/></transform>
         <bsdf type="twosided">
             <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.8, 0.1"/></bsdf>
             <bsdf type="diffuse"><rgb name="reflectance" value="0.1, 0.2, 0.8"/></bsdf>
@@ -344,11 +352,14 @@ def _normal_bump(folder):
         </bsdf>
     </shape>
     <emitter type="spot">
-        <transform name="to_world"><lookat origin="1.5, 3.0, 1.5" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-        <rgb name="intensity" value="20, 18, 15"/><float name="cutoff_angle" value="25"/><float name="beam_width" value="18"/>
+        <transform name="to_world"><lookat origin="1.5, 3.0, 1.5" target="0, 0.3, 0" up="0, 1, \
+0"/></transform>
+        <rgb name="intensity" value="20, 18, 15"/><float name="cutoff_angle" value="25"/><float \
+name="beam_width" value="18"/>
     </emitter>
     <emitter type="directional">
-        <vector name="direction" x="0.5" y="-1" z="-0.4"/><rgb name="irradiance" value="0.6, 0.7, 0.9"/>
+        <vector name="direction" x="0.5" y="-1" z="-0.4"/><rgb name="irradiance" value="0.6, 0.7, \
+0.9"/>
     </emitter>"""
 
 
@@ -359,7 +370,8 @@ def _instances(folder):
     placements = "".join(
         f"""
     <shape type="instance"><ref id="{group}"/>
-        <transform name="to_world"><rotate y="1" angle="{angle}"/><translate value="{pos}"/></transform>
+        <transform name="to_world"><rotate y="1" angle="{angle}"/><translate \
+value="{pos}"/></transform>
     </shape>"""
         for group, angle, pos in [
             ("plain", 0, "-1.1, 0, -0.4"),
@@ -369,7 +381,9 @@ def _instances(folder):
         ]
     )
     scale = '<scale x="2.2" y="2.2" z="1"/>'  # the orthographic view covers 4.4 x 4.4 scene units
-    return _sensor("orthographic", origin="2.5, 4.0, 5.0", target="0, 0.3, 0", scale=scale) + _floor() + f"""
+    return _sensor(
+        "orthographic", origin="2.5, 4.0, 5.0", target="0, 0.3, 0", scale=scale
+    ) + _floor() + f"""
     <shape type="shapegroup" id="plain">
         <shape type="cube">
             <transform name="to_world"><scale value="0.3"/><translate y="0.3"/></transform>
@@ -382,7 +396,8 @@ def _instances(folder):
     </shape>
     <shape type="shapegroup" id="styled_group">
         <shape type="cylinder">
-            <point name="p0" x="0" y="0" z="0"/><point name="p1" x="0" y="0.7" z="0"/><float name="radius" value="0.3"/>
+            <point name="p0" x="0" y="0" z="0"/><point name="p1" x="0" y="0.7" z="0"/><float \
+name="radius" value="0.3"/>
             <bsdf type="styled">
                 <string name="style" value="identity"/><integer name="inner_samples" value="2"/>
                 <bsdf type="diffuse"><rgb name="reflectance" value="0.3, 0.7, 0.3"/></bsdf>
@@ -390,8 +405,10 @@ def _instances(folder):
         </shape>
     </shape>{placements}
     <emitter type="projector">
-        <transform name="to_world"><lookat origin="-2.0, 3.5, 2.0" target="0, 0.3, 0" up="0, 1, 0"/></transform>
-        <texture name="irradiance" type="bitmap"><string name="filename" value="{slide_name}"/></texture>
+        <transform name="to_world"><lookat origin="-2.0, 3.5, 2.0" target="0, 0.3, 0" up="0, 1, \
+0"/></transform>
+        <texture name="irradiance" type="bitmap"><string name="filename" \
+value="{slide_name}"/></texture>
         <float name="fov" value="50"/><float name="scale" value="8"/>
     </emitter>
     <emitter type="constant"><rgb name="radiance" value="0.15, 0.15, 0.2"/></emitter>"""
@@ -415,12 +432,14 @@ def _colours(folder):
     <shape type="ply">
         <string name="filename" value="{a}"/>
         <transform name="to_world"><translate x="-1.0" z="0.0"/></transform>
-        <bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute"><string name="name" value="vertex_color"/></texture></bsdf>
+        <bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute"><string name="name" \
+value="vertex_color"/></texture></bsdf>
     </shape>
     <shape type="ply">
         <string name="filename" value="{b}"/>
         <transform name="to_world"><translate x="1.0" z="-0.8"/></transform>
-        <bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute"><string name="name" value="face_color"/></texture></bsdf>
+        <bsdf type="diffuse"><texture name="reflectance" type="mesh_attribute"><string name="name" \
+value="face_color"/></texture></bsdf>
     </shape>""" + _area_light(scale=0.7) + """
     <emitter type="constant"><rgb name="radiance" value="0.2, 0.2, 0.2"/></emitter>"""
 
@@ -428,11 +447,13 @@ def _colours(folder):
 def _direct(folder):
     checker = _checker(folder / "checker.png", n=4)
     return _sensor() + _floor(f"""<bsdf type="diffuse">
-            <texture name="reflectance" type="bitmap"><string name="filename" value="{checker}"/></texture>
+            <texture name="reflectance" type="bitmap"><string name="filename" \
+value="{checker}"/></texture>
         </bsdf>""") + """
     <shape type="sphere">
         <point name="center" x="0" y="0.6" z="0"/><float name="radius" value="0.6"/>
-        <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.5, 0.3, 0.6"/><float name="alpha" value="0.15"/></bsdf>
+        <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.5, 0.3, 0.6"/><float \
+name="alpha" value="0.15"/></bsdf>
     </shape>""" + _area_light(pos="-0.5, 2.0, 1.2", scale=0.6) + """
     <emitter type="constant"><rgb name="radiance" value="0.4, 0.45, 0.5"/></emitter>"""
 
@@ -454,7 +475,8 @@ def _ptracer(folder):
     # all diffuse: a light tracer cannot connect specular vertices to the camera
     return _sensor() + _floor() + """
     <shape type="cube">
-        <transform name="to_world"><scale value="0.45"/><rotate y="1" angle="30"/><translate value="-0.7, 0.45, 0"/></transform>
+        <transform name="to_world"><scale value="0.45"/><rotate y="1" angle="30"/><translate \
+value="-0.7, 0.45, 0"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.4, 0.2"/></bsdf>
     </shape>
     <shape type="sphere">
@@ -472,7 +494,8 @@ def _medium_light(folder):
     # both with the fog as their exterior medium; the camera sits outside
     return _sensor(origin="0, 1.4, 4.8", target="0, 0.7, 0") + _floor() + """
     <medium type="homogeneous" id="fog">
-        <rgb name="sigma_t" value="0.6, 0.8, 1.0"/><rgb name="albedo" value="0.9, 0.8, 0.7"/><float name="scale" value="0.8"/>
+        <rgb name="sigma_t" value="0.6, 0.8, 1.0"/><rgb name="albedo" value="0.9, 0.8, \
+0.7"/><float name="scale" value="0.8"/>
     </medium>
     <shape type="cube">
         <transform name="to_world"><scale x="1.4" y="0.9" z="1.0"/><translate y="0.95"/></transform>

@@ -123,7 +123,8 @@ SPHERE_XML = """<scene version="3.0.0">
             <rfilter type="box"/></film>
     </sensor>
     <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
-    <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="{colour}"/></bsdf></shape>
+    <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" \
+value="{colour}"/></bsdf></shape>
 </scene>
 """
 

@@ -175,10 +175,14 @@ def test_xml_scene_with_stylized_integrator(tmp_path):
     path = tmp_path / "s.xml"
     path.write_text("""<scene version="3.0.0">
       <default name="resx" value="20"/><default name="resy" value="12"/>
-      <integrator type="stylized"><string name="style" value="cel"/><string name="levels" value="0.2,0.9"/>
-        <string name="thresholds" value="0.75"/><integer name="inner_samples" value="2"/></integrator>
-      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
+      <integrator type="stylized"><string name="style" value="cel"/><string name="levels" \
+value="0.2,0.9"/>
+        <string name="thresholds" value="0.75"/><integer name="inner_samples" \
+value="2"/></integrator>
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" \
+up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" \
+value="$resy"/>
         <rfilter type="box"/></film></sensor>
       <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>""")
     out = tmp_path / "o.exr"
@@ -398,8 +402,10 @@ def test_output_that_is_the_scene_is_refused_before_loading(tmp_path, capsys):
 GAMMA_XML = """<scene version="3.0.0">
   <integrator type="stylized"><string name="style" value="gamma"/><float name="gamma" value="4"/>
     <float name="exposure" value="1"/><integer name="inner_samples" value="2"/></integrator>
-  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" \
+up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" \
+value="8"/><rfilter type="box"/></film></sensor>
   <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>"""
 
 

@@ -70,7 +70,8 @@ def test_same_seed_same_image_in_separate_processes():
 NAN_SCENE = """<scene version="3.0.0">
   <sensor type="perspective">
     <float name="fov" value="45"/>
-    <transform name="to_world"><lookat origin="0, 2, 4" target="0, 0.5, 0" up="0, 1, 0"/></transform>
+    <transform name="to_world"><lookat origin="0, 2, 4" target="0, 0.5, 0" up="0, 1, \
+0"/></transform>
     <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
     <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="64"/>
       <rfilter type="box"/></film>

@@ -17,8 +17,10 @@ from styletrace.gate import mi
 
 styletrace.init()
 
-SCENE = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
-<integer name="height" value="4"/></film></sensor><shape type="sphere"/><emitter type="constant"/></scene>"""
+SCENE = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer \
+name="width" value="4"/>
+<integer name="height" value="4"/></film></sensor><shape type="sphere"/><emitter \
+type="constant"/></scene>"""
 
 
 def scene_file(tmp):

@@ -21,7 +21,8 @@ from styletrace.styles import get, names
 BLACKBODY_XML = """<scene version="3.0.0">
   <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
     <integer name="height" value="4"/></film></sensor>
-  <emitter type="constant"><spectrum type="blackbody" name="radiance"><float name="temperature" value="5000"/>
+  <emitter type="constant"><spectrum type="blackbody" name="radiance"><float name="temperature" \
+value="5000"/>
   </spectrum></emitter>
   <shape type="sphere"><transform name="to_world"><translate z="5"/></transform></shape>
 </scene>"""

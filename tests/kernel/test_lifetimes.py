@@ -50,8 +50,8 @@ d["plane"]["bsdf"] = {"type": "mask", "opacity": 0.5, "material": d["plane"]["bs
 holder = [mi.load_dict(d)]
 shell = mi.load_dict(shell_scene())
 if mode == "reuse":
-    integ = api.make_integrator("identity", inner=2, stylize="first_n_hits", stylize_depth=2, reuse="pixels",
-                                reuse_k=12)
+    integ = api.make_integrator("identity", inner=2, stylize="first_n_hits", stylize_depth=2,
+                                reuse="pixels", reuse_k=12)
     render = lambda seed: reuse.render(integ, shell, shell.sensors()[0], seed, 8)
 else:
     integ = api.make_integrator("identity", inner=2, stylize="first_n_hits", stylize_depth=2)
@@ -135,8 +135,10 @@ def counted_pilot(monkeypatch):
     return traces
 
 
-SCENE = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="6"/>
-<integer name="height" value="4"/><rfilter type="box"/></film></sensor><shape type="sphere"/><emitter type="constant"/></scene>"""
+SCENE = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer \
+name="width" value="6"/>
+<integer name="height" value="4"/><rfilter type="box"/></film></sensor><shape \
+type="sphere"/><emitter type="constant"/></scene>"""
 
 
 def test_recording_a_buffer_from_the_command_line_traces_the_pilot_once(

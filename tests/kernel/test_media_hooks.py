@@ -86,12 +86,13 @@ def reflected_sphere(res: int, medium: bool) -> mi.Scene:
     ids=["first_hit", "first_n_hits", "first_object_hit"],
 )
 def test_lines_past_a_mirror_are_drawn_in_a_thin_medium(mode):
-    """White lines on a black, unlit scene: each camera sample is 1 where a line fired, else 0, so the
-    image's sum times spp counts the samples that drew a line, S (a sum of Bernoulli variables, variance
-    at most its mean). Without the medium its mean is S0; in the medium each sample's chance is scaled by
-    its transmittance to the line's edge, so E[S_med] lies in [T_min E[S0], E[S0]]. With both counts'
-    variance bounded by their sum V = S_med + S0:  S0 - S_med >= -Z sqrt(V)  and
-    T_min S0 - S_med <= Z sqrt(V). Lines absent in the medium (the walk dropping its hook) give S_med = 0."""
+    """White lines on a black, unlit scene: each camera sample is 1 where a line fired, else 0, so
+    the image's sum times spp counts the samples that drew a line, S (a sum of Bernoulli variables,
+    variance at most its mean). Without the medium its mean is S0; in the medium each sample's
+    chance is scaled by its transmittance to the line's edge, so E[S_med] lies in
+    [T_min E[S0], E[S0]]. With both counts' variance bounded by their sum V = S_med + S0:
+    S0 - S_med >= -Z sqrt(V)  and  T_min S0 - S_med <= Z sqrt(V). Lines absent in the medium (the
+    walk dropping its hook) give S_med = 0."""
     res, spp = 64, 32
     values = {
         "style": "identity",

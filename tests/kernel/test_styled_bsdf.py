@@ -35,7 +35,8 @@ def test_path_sees_the_wrapped_bsdf():
 
 
 XML = """<scene version="3.0.0">
-  <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+  <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer \
+name="height" value="8"/></film></sensor>
   <shape type="sphere"><bsdf type="styled">{inside}</bsdf></shape>
 </scene>"""
 
