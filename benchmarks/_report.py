@@ -12,7 +12,10 @@ import subprocess
 from pathlib import Path
 
 REPORT = Path(__file__).resolve().parent.parent / "BENCHMARKS.md"
-HEADER = "# styletrace benchmarks\n\nEach section is written by the script named in it; re-run that script to refresh it.\n"
+HEADER = (
+    "# styletrace benchmarks\n\nEach section is written by the script named in it; re-run "
+    "that script to refresh it.\n"
+)
 
 
 def machine_description() -> str:
@@ -49,8 +52,13 @@ def machine_description() -> str:
     if llvm:
         versions.append(f"libLLVM {Path(llvm).name}")
     try:
-        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                             cwd=REPORT.parent, check=False).stdout.strip()
+        rev = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            cwd=REPORT.parent,
+            check=False,
+        ).stdout.strip()
         if rev:
             versions.append(f"commit {rev}")
     except OSError:
@@ -64,12 +72,17 @@ def write_section(name: str, body: str) -> None:
     text = REPORT.read_text() if REPORT.exists() else HEADER
     block = f"{start}\n{body.rstrip()}\n{end}"
     pattern = re.compile(re.escape(start) + ".*?" + re.escape(end), re.S)
-    text = pattern.sub(lambda _: block, text) if pattern.search(text) else text.rstrip() + "\n\n" + block + "\n"
+    text = (
+        pattern.sub(lambda _: block, text)
+        if pattern.search(text)
+        else text.rstrip() + "\n\n" + block + "\n"
+    )
     REPORT.write_text(text)
 
 
 def median_time(fn, runs: int) -> float:
-    """Median wall time of `runs` calls of `fn` after one warm-up call (kernels compiled, caches filled)."""
+    """Median wall time of `runs` calls of `fn` after one warm-up call (kernels compiled, caches
+    filled)."""
     import statistics
     import time
     fn()
@@ -81,9 +94,12 @@ def median_time(fn, runs: int) -> float:
     return statistics.median(out)
 
 
-def image_grid(panels, path: str, row_height: float = 3.1, fontsize: int = 8, width: float | None = None) -> None:
-    """A figure of images side by side, one row per (title, [(label, linear image), ...]) in `panels`, shown in
-    sRGB, the row's title above its first ("reference") image; written atomically as every image of the project."""
+def image_grid(
+    panels, path: str, row_height: float = 3.1, fontsize: int = 8, width: float | None = None
+) -> None:
+    """A figure of images side by side, one row per (title, [(label, linear image), ...]) in
+    `panels`, shown in sRGB, the row's title above its first ("reference") image; written
+    atomically as every image of the project."""
     import io
 
     import matplotlib
@@ -92,8 +108,12 @@ def image_grid(panels, path: str, row_height: float = 3.1, fontsize: int = 8, wi
 
     from styletrace.images import srgb8, write_bytes_atomically
     columns = max(len(cells) for _, cells in panels)
-    fig, axes = plt.subplots(len(panels), columns, figsize=(width or 3 * columns, row_height * len(panels)),
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        len(panels),
+        columns,
+        figsize=(width or 3 * columns, row_height * len(panels)),
+        squeeze=False,
+    )
     for row, (title, cells) in zip(axes, panels):
         for ax, (label, img) in zip(row, cells):
             ax.imshow(srgb8(img))

@@ -1,4 +1,5 @@
-"""Variance, cost and efficiency of the g(E[X]) estimators; writes the "estimators" section of BENCHMARKS.md.
+"""Variance, cost and efficiency of the g(E[X]) estimators; writes the "estimators" section of
+BENCHMARKS.md.
 
 For each target g (I^k for k = 2..8, gamma I^(1/2.2), exp(I), 1/I, tie-dye) and each applicable
 estimator, many independent estimates are drawn from one known distribution of X, and we report:
@@ -7,24 +8,20 @@ efficiency 1 / (MSE x samples) relative to a named baseline (naive products wher
 also checks U-statistic <= naive variance at equal sample counts, measures float32 (Dr.Jit kernel)
 against float64 (numpy), and plots error versus samples to docs/estimators_error.png.
 
-Run: python benchmarks/estimators_table.py   (about a minute on 2 cores)
+Run: .venv/bin/python benchmarks/estimators_table.py   (about a minute on 2 cores)
 """
 from __future__ import annotations
 
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from _report import machine_description, write_section
+
+import styletrace.estimators as E
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "src"))
-sys.path.insert(0, str(ROOT / "benchmarks"))
-
-from _report import machine_description, write_section  # noqa: E402
-
-import styletrace.estimators as E  # noqa: E402
 
 LANES = 100_000
 DIST = E.Uniform(0.2, 1.0)  # X ~ U(0.2, 1.0): I = 0.6, Var X = 0.0533
@@ -43,7 +40,8 @@ def measure(est, exact, seed, dist=DIST, channels=None, lanes=LANES):
 
 
 def efficiency(row, base):
-    """1 / (MSE x samples), MSE = var + bias^2 for biased rows (bias counted only when resolvable)."""
+    """1 / (MSE x samples), MSE = var + bias^2 for biased rows (bias counted only when
+    resolvable)."""
     def cost(r):
         b2 = r["bias"] ** 2 if abs(r["bias"]) > 4 * r["se"] else 0.0
         return (r["var"] + b2) * r["samples"]
@@ -63,28 +61,55 @@ HEADER = ("| estimator | samples / estimate | variance | bias ± s.e. | efficien
 
 def series_plans(series, b):
     return [
-        ("series single-term, Poisson(2)", E.SeriesEstimator(series, b=b, selection="single", truncation=E.Poisson(2.0))),
-        ("series iterative, Poisson-CMF(2), U-stat terms",
-         E.SeriesEstimator(series, b=b, selection="iterative", truncation=E.PoissonCMF(2.0), terms="ustat")),
-        ("series iterative, Poisson-CMF(2), naive terms",
-         E.SeriesEstimator(series, b=b, selection="iterative", truncation=E.PoissonCMF(2.0), terms="naive")),
-        ("series recursive (roulette), cumulative",
-         E.SeriesEstimator(series, b=b, selection="recursive", truncation=E.Cumulative())),
-        ("series recursive (roulette), Poisson-CMF(2)",
-         E.SeriesEstimator(series, b=b, selection="recursive", truncation=E.PoissonCMF(2.0))),
-        ("series iterative, Poisson-CMF(1), U-stat terms",
-         E.SeriesEstimator(series, b=b, selection="iterative", truncation=E.PoissonCMF(1.0), terms="ustat")),
+        (
+            "series single-term, Poisson(2)",
+            E.SeriesEstimator(series, b=b, selection="single", truncation=E.Poisson(2.0)),
+        ),
+        (
+            "series iterative, Poisson-CMF(2), U-stat terms",
+            E.SeriesEstimator(
+                series, b=b, selection="iterative", truncation=E.PoissonCMF(2.0), terms="ustat"
+            ),
+        ),
+        (
+            "series iterative, Poisson-CMF(2), naive terms",
+            E.SeriesEstimator(
+                series, b=b, selection="iterative", truncation=E.PoissonCMF(2.0), terms="naive"
+            ),
+        ),
+        (
+            "series recursive (roulette), cumulative",
+            E.SeriesEstimator(series, b=b, selection="recursive", truncation=E.Cumulative()),
+        ),
+        (
+            "series recursive (roulette), Poisson-CMF(2)",
+            E.SeriesEstimator(series, b=b, selection="recursive", truncation=E.PoissonCMF(2.0)),
+        ),
+        (
+            "series iterative, Poisson-CMF(1), U-stat terms",
+            E.SeriesEstimator(
+                series, b=b, selection="iterative", truncation=E.PoissonCMF(1.0), terms="ustat"
+            ),
+        ),
     ]
 
 
 def powers_section(seed):
-    lines = ["### I^k (k = 2..8)", "",
-             "Baseline: the naive product of k samples (S6). U-stat(n) averages all k-subsets of n samples; "
-             "\"naive x2\" is the mean of two independent naive products (2k samples, the U-statistic's "
-             "equal-count competitor); direct(n) = g(mean of n) is biased, so its efficiency uses MSE.", "",
-             "| k | estimator | samples / estimate | variance | bias ± s.e. | efficiency |", "|---|---|---:|---:|---:|---:|"]
-    ustat_check = ["| k | n | U-stat variance | naive (n/k products) variance | difference / s.e. |",
-                   "|---|---:|---:|---:|---:|"]
+    lines = [
+        "### I^k (k = 2..8)",
+        "",
+        "Baseline: the naive product of k samples (S6). U-stat(n) averages all k-subsets of n "
+        "samples; "
+        "\"naive x2\" is the mean of two independent naive products (2k samples, the U-statistic's "
+        "equal-count competitor); direct(n) = g(mean of n) is biased, so its efficiency uses MSE.",
+        "",
+        "| k | estimator | samples / estimate | variance | bias ± s.e. | efficiency |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
+    ustat_check = [
+        "| k | n | U-stat variance | naive (n/k products) variance | difference / s.e. |",
+        "|---|---:|---:|---:|---:|",
+    ]
     for k in range(2, 9):
         coeffs = [0.0] * k + [1.0]
         exact = I ** k
@@ -92,30 +117,60 @@ def powers_section(seed):
         rows = [("naive (S6)", base, False)]
         u2 = measure(E.PolynomialU(coeffs, n=2 * k), exact, seed + 100 + k)
         rows.append((f"U-stat n={2 * k}", u2, False))
-        rows.append((f"U-stat n={4 * k}", measure(E.PolynomialU(coeffs, n=4 * k), exact, seed + 200 + k), False))
-        n1 = E.estimate_numpy(E.PolynomialNaive(coeffs), DIST, LANES, np.random.default_rng(seed + 300 + k)).values
-        n2 = E.estimate_numpy(E.PolynomialNaive(coeffs), DIST, LANES, np.random.default_rng(seed + 400 + k)).values
+        rows.append(
+            (
+                f"U-stat n={4 * k}",
+                measure(E.PolynomialU(coeffs, n=4 * k), exact, seed + 200 + k),
+                False,
+            )
+        )
+        n1 = E.estimate_numpy(
+            E.PolynomialNaive(coeffs), DIST, LANES, np.random.default_rng(seed + 300 + k)
+        ).values
+        n2 = E.estimate_numpy(
+            E.PolynomialNaive(coeffs), DIST, LANES, np.random.default_rng(seed + 400 + k)
+        ).values
         nx2 = (n1 + n2) / 2
-        naive2 = {"samples": 2.0 * k, "var": float(nx2.var(ddof=1)), "bias": float(nx2.mean() - exact),
-                  "se": float(nx2.std(ddof=1) / math.sqrt(LANES))}
+        naive2 = {
+            "samples": 2.0 * k,
+            "var": float(nx2.var(ddof=1)),
+            "bias": float(nx2.mean() - exact),
+            "se": float(nx2.std(ddof=1) / math.sqrt(LANES)),
+        }
         rows.append(("naive x2 (mean of 2)", naive2, False))
-        rows.append((f"direct n={k}", measure(E.Direct(lambda x, k=k: x ** k, k), exact, seed + 500 + k), True))
+        rows.append(
+            (
+                f"direct n={k}",
+                measure(E.Direct(lambda x, k=k: x**k, k), exact, seed + 500 + k),
+                True,
+            )
+        )
         for label, row, biased in rows:
             lines.append(f"| {k} " + fmt_row(label, row, base, biased))
         # U <= naive at equal sample count (2k), with the standard error of the variance difference
-        u = E.estimate_numpy(E.PolynomialU(coeffs, n=2 * k), DIST, LANES, np.random.default_rng(seed + 600 + k)).values
+        u = E.estimate_numpy(
+            E.PolynomialU(coeffs, n=2 * k), DIST, LANES, np.random.default_rng(seed + 600 + k)
+        ).values
         se_u = math.sqrt(np.var((u - u.mean()) ** 2) / LANES)
         se_n = math.sqrt(np.var((nx2 - nx2.mean()) ** 2) / LANES)
         d = (naive2["var"] - u.var(ddof=1)) / math.hypot(se_u, se_n)
-        ustat_check.append(f"| {k} | {2 * k} | {u.var(ddof=1):.3e} | {naive2['var']:.3e} | {d:+.1f} |")
+        ustat_check.append(
+            f"| {k} | {2 * k} | {u.var(ddof=1):.3e} | {naive2['var']:.3e} | {d:+.1f} |"
+        )
     return lines, ustat_check
 
 
 def series_section(title, series, exact, b, seed, direct_g, extra=()):
-    lines = [f"### {title}", "",
-             "Baseline: iterative prefix-sum with Poisson-CMF(2) and naive term estimates (products of "
-             "samples, S6): the naive estimator of a truncated infinite series (there is no fixed-cost naive "
-             f"estimator of an infinite series). Expansion point: {b!r}.", "", HEADER]
+    lines = [
+        f"### {title}",
+        "",
+        "Baseline: iterative prefix-sum with Poisson-CMF(2) and naive term estimates (products of "
+        "samples, S6): the naive estimator of a truncated infinite series (there is no fixed-cost "
+        "naive "
+        f"estimator of an infinite series). Expansion point: {b!r}.",
+        "",
+        HEADER,
+    ]
     rows = []
     for i, (label, est) in enumerate(series_plans(series, b)):
         rows.append((label, measure(est, exact, seed + i), False))
@@ -137,28 +192,55 @@ def tie_dye_section(seed):
     Ic = E.channel_means(dist, 3)
     exact = fit(Ic)
     true = E.tie_dye(Ic)
-    lines = ["### Tie-dye (degree-20 Chebyshev fit on [-1, 4], per channel)", "",
-             "X ~ U(0.2, 1.0) scaled per channel by (1, 2, 3), so I = (0.6, 1.2, 1.8). Unbiased rows are "
-             "measured against the fit h(I); the fit itself differs from tie-dye(I) by "
-             f"{np.array2string(exact - true, precision=4)} here (max fit error on [-1, 4]: "
-             f"{np.array2string(fit.max_error(list(E.TIE_DYE)), precision=4)}). Variance is the mean over channels. "
-             "Baseline: naive products about the interval center b = 1.5 (20 samples).", "", HEADER]
+    lines = [
+        "### Tie-dye (degree-20 Chebyshev fit on [-1, 4], per channel)",
+        "",
+        "X ~ U(0.2, 1.0) scaled per channel by (1, 2, 3), so I = (0.6, 1.2, 1.8). Unbiased rows "
+        "are "
+        "measured against the fit h(I); the fit itself differs from tie-dye(I) by "
+        f"{np.array2string(exact - true, precision=4)} here (max fit error on [-1, 4]: "
+        f"{np.array2string(fit.max_error(list(E.TIE_DYE)), precision=4)}). Variance is the mean "
+        f"over channels. "
+        "Baseline: naive products about the interval center b = 1.5 (20 samples).",
+        "",
+        HEADER,
+    ]
     ests = [
         ("naive (S6), b = 1.5", E.PolynomialNaive(fit)),
         ("naive, b = pilot(1)", E.PolynomialNaive(fit, b=E.Pilot(1))),
         ("U-stat n=20, b = 1.5", E.PolynomialU(fit, n=20)),
         ("U-stat n=20, b = pilot(1)", E.PolynomialU(fit, n=20, b=E.Pilot(1))),
         ("U-stat n=40, b = pilot(1)", E.PolynomialU(fit, n=40, b=E.Pilot(1))),
-        ("series iterative, Poisson-CMF(2), U-stat, b = pilot(1)",
-         E.SeriesEstimator(fit, b=E.Pilot(1), selection="iterative", truncation=E.PoissonCMF(2.0))),
-        ("series recursive, cumulative(min 0.01), b = pilot(1)",
-         E.SeriesEstimator(fit, b=E.Pilot(1), selection="recursive", truncation=E.Cumulative(0.01))),
+        (
+            "series iterative, Poisson-CMF(2), U-stat, b = pilot(1)",
+            E.SeriesEstimator(
+                fit, b=E.Pilot(1), selection="iterative", truncation=E.PoissonCMF(2.0)
+            ),
+        ),
+        (
+            "series recursive, cumulative(min 0.01), b = pilot(1)",
+            E.SeriesEstimator(
+                fit, b=E.Pilot(1), selection="recursive", truncation=E.Cumulative(0.01)
+            ),
+        ),
     ]
     rows = [(label, measure(est, exact, seed + i, dist=dist, channels=3, lanes=50_000), False)
             for i, (label, est) in enumerate(ests)]
     for n in (8, 20):
-        rows.append((f"direct n={n} (vs h(I))", measure(E.Direct(E.tie_dye, n), exact, seed + 70 + n, dist=dist,
-                                                         channels=3, lanes=50_000), True))
+        rows.append(
+            (
+                f"direct n={n} (vs h(I))",
+                measure(
+                    E.Direct(E.tie_dye, n),
+                    exact,
+                    seed + 70 + n,
+                    dist=dist,
+                    channels=3,
+                    lanes=50_000,
+                ),
+                True,
+            )
+        )
     base = rows[0][1]
     lines += [fmt_row(label, row, base, biased) for label, row, biased in rows]
     return lines
@@ -173,11 +255,24 @@ def float32_section(seed):
         return [f"(Dr.Jit unavailable: {exc})"]
     fit = E.tie_dye_fit()
     cases = [
-        ("gamma 1/2.2, iterative U-stat, pilot b", E.SeriesEstimator(E.gamma_series(2.2, lo=0.2, hi=3.0), b=E.Pilot(1)),
-         lambda I: I ** (1 / 2.2), E.Uniform(0.2, 1.0)),
-        ("tie-dye fit, U-stat n=20, pilot b", E.PolynomialU(fit, n=20, b=E.Pilot(1)), fit, E.Uniform(0.2, 1.0)),
-        ("tie-dye fit, U-stat n=20, pilot b, narrow X", E.PolynomialU(fit, n=20, b=E.Pilot(1)), fit,
-         E.Uniform(0.5, 0.7)),
+        (
+            "gamma 1/2.2, iterative U-stat, pilot b",
+            E.SeriesEstimator(E.gamma_series(2.2, lo=0.2, hi=3.0), b=E.Pilot(1)),
+            lambda I: I ** (1 / 2.2),
+            E.Uniform(0.2, 1.0),
+        ),
+        (
+            "tie-dye fit, U-stat n=20, pilot b",
+            E.PolynomialU(fit, n=20, b=E.Pilot(1)),
+            fit,
+            E.Uniform(0.2, 1.0),
+        ),
+        (
+            "tie-dye fit, U-stat n=20, pilot b, narrow X",
+            E.PolynomialU(fit, n=20, b=E.Pilot(1)),
+            fit,
+            E.Uniform(0.5, 0.7),
+        ),
     ]
     lines = ["| case | float32 kernel bias ± s.e. | float64 numpy bias ± s.e. |", "|---|---:|---:|"]
     for i, (label, est, g, dist) in enumerate(cases):
@@ -187,7 +282,9 @@ def float32_section(seed):
             if backend == "drjit":
                 r = E.estimate_drjit(est, dist, 200_000, seed=seed + i, channels=3)
             else:
-                r = E.estimate_numpy(est, dist, 200_000, np.random.default_rng(seed + i), channels=3)
+                r = E.estimate_numpy(
+                    est, dist, 200_000, np.random.default_rng(seed + i), channels=3
+                )
             d = r.values.mean(axis=0) - exact
             se = r.values.std(axis=0, ddof=1) / math.sqrt(len(r.values))
             k = int(np.argmax(np.abs(d) / se))
@@ -198,10 +295,15 @@ def float32_section(seed):
     X = np.stack([x, x, x], -1)
     s = fit.series()
     err = np.max(np.abs(s(X.astype(np.float32)) - s(X)), axis=0)
-    lines += ["", "Evaluating the degree-20 tie-dye fit in its monomial form sum c_k (x - 1.5)^k with float32 "
-              f"arithmetic on [-1, 4] (no sampling): max error {np.array2string(err, precision=3)} per channel; "
-              f"the Chebyshev recurrence fit(x) in float32: "
-              f"{np.array2string(np.max(np.abs(fit(X.astype(np.float32)) - fit(X)), axis=0), precision=3)}."]
+    cheb = np.max(np.abs(fit(X.astype(np.float32)) - fit(X)), axis=0)
+    lines += [
+        "",
+        "Evaluating the degree-20 tie-dye fit in its monomial form sum c_k (x - 1.5)^k with "
+        "float32 arithmetic on [-1, 4] (no sampling): max error "
+        f"{np.array2string(err, precision=3)} per channel; "
+        "the Chebyshev recurrence fit(x) in float32: "
+        f"{np.array2string(cheb, precision=3)}.",
+    ]
     return lines
 
 
@@ -214,25 +316,43 @@ def error_plot(path, seed):
     budgets = np.array([4, 8, 16, 32, 64, 128, 256, 512, 1024])
     fig, axes = plt.subplots(1, 2, figsize=(11.5, 4.4))
     targets = [
-        ("gamma $I^{1/2.2}$", lambda x: np.maximum(x, 0) ** (1 / 2.2), E.gamma_series(2.2, lo=0.2, hi=1.0), None),
-        ("$I^4$", lambda x: x ** 4, None, [0.0] * 4 + [1.0]),
+        (
+            "gamma $I^{1/2.2}$",
+            lambda x: np.maximum(x, 0) ** (1 / 2.2),
+            E.gamma_series(2.2, lo=0.2, hi=1.0),
+            None,
+        ),
+        ("$I^4$", lambda x: x**4, None, [0.0] * 4 + [1.0]),
     ]
     for ax, (title, g, series, coeffs) in zip(axes, targets):
         exact = g(I)
         for n, style in ((4, "o-"), (16, "o-")):
-            v = E.estimate_numpy(E.Direct(g, n), DIST, 100_000, np.random.default_rng(seed + n)).values
+            v = E.estimate_numpy(
+                E.Direct(g, n), DIST, 100_000, np.random.default_rng(seed + n)
+            ).values
             bias, var = float(v.mean() - exact), float(v.var(ddof=1))
             N = budgets[budgets >= n]
-            ax.loglog(N, np.sqrt(bias ** 2 + var * n / N), style, label=f"direct, n={n} per estimate, averaged")
+            ax.loglog(
+                N,
+                np.sqrt(bias**2 + var * n / N),
+                style,
+                label=f"direct, n={n} per estimate, averaged",
+            )
         one = []
         for n in budgets:
-            v = E.estimate_numpy(E.Direct(g, int(n)), DIST, 20_000, np.random.default_rng(seed + 100 + int(n))).values
+            v = E.estimate_numpy(
+                E.Direct(g, int(n)), DIST, 20_000, np.random.default_rng(seed + 100 + int(n))
+            ).values
             one.append(math.sqrt(np.mean((v - exact) ** 2)))
         ax.loglog(budgets, one, "k:", label="direct, all N samples in one estimate")
         if series is not None:
             plans = series_plans(series, E.Pilot(1))
-            unbiased = [("single-term Poisson(2)", plans[0][1]), ("iterative U-stat Poisson-CMF(2)", plans[1][1]),
-                        ("iterative naive Poisson-CMF(2)", plans[2][1]), ("recursive cumulative", plans[3][1])]
+            unbiased = [
+                ("single-term Poisson(2)", plans[0][1]),
+                ("iterative U-stat Poisson-CMF(2)", plans[1][1]),
+                ("iterative naive Poisson-CMF(2)", plans[2][1]),
+                ("recursive cumulative", plans[3][1]),
+            ]
         else:
             unbiased = [("naive products (S6)", E.PolynomialNaive(coeffs)),
                         ("U-stat n=8", E.PolynomialU(coeffs, n=8)),
@@ -256,50 +376,86 @@ def main():
     t0 = time.time()
     seed = RNG_SEED
     powers, ustat_check = powers_section(seed)
-    gamma, _ = series_section("Gamma I^(1/2.2) (power series, Eq. 24)", E.gamma_series(2.2, lo=0.2, hi=1.0),
-                              I ** (1 / 2.2), E.Pilot(1), seed + 1000, lambda x: x ** (1 / 2.2))
-    expo, _ = series_section("exp(I) (S15)", E.exp_series(), math.exp(I), E.Pilot(1), seed + 2000, np.exp,
-                             extra=[("series iterative, Poisson-CMF(2), U-stat, fixed b = 0.5",
-                                     E.SeriesEstimator(E.exp_series(), b=0.5))])
-    recip, _ = series_section("Reciprocal 1/I (S17), known range [0.2, 1.0]", E.reciprocal_series(1.0, lo=0.2, hi=1.0),
-                              1 / I, E.Pilot(1), seed + 3000, lambda x: 1.0 / x)
+    gamma, _ = series_section(
+        "Gamma I^(1/2.2) (power series, Eq. 24)",
+        E.gamma_series(2.2, lo=0.2, hi=1.0),
+        I ** (1 / 2.2),
+        E.Pilot(1),
+        seed + 1000,
+        lambda x: x ** (1 / 2.2),
+    )
+    expo, _ = series_section(
+        "exp(I) (S15)",
+        E.exp_series(),
+        math.exp(I),
+        E.Pilot(1),
+        seed + 2000,
+        np.exp,
+        extra=[
+            (
+                "series iterative, Poisson-CMF(2), U-stat, fixed b = 0.5",
+                E.SeriesEstimator(E.exp_series(), b=0.5),
+            )
+        ],
+    )
+    recip, _ = series_section(
+        "Reciprocal 1/I (S17), known range [0.2, 1.0]",
+        E.reciprocal_series(1.0, lo=0.2, hi=1.0),
+        1 / I,
+        E.Pilot(1),
+        seed + 3000,
+        lambda x: 1.0 / x,
+    )
     tie = tie_dye_section(seed + 4000)
     f32 = float32_section(seed + 5000)
     error_plot(ROOT / "docs" / "estimators_error.png", seed + 6000)
     elapsed = time.time() - t0
 
-    body = "\n".join([
-        "## Estimators of g(E[X])",
-        "",
-        "Written by `benchmarks/estimators_table.py`. " + machine_description() + ".",
-        "",
-        f"Test distribution: X ~ Uniform(0.2, 1.0), so I = {I} and Var X = {DIST.var:.4f} (tie-dye: per-channel "
-        f"scaling, see below). {LANES:,} independent estimates per row (tie-dye 50,000), numpy float64. "
-        "Samples = measured mean draw() calls per estimate. Efficiency = 1 / (MSE x samples) relative to the "
-        "row named as baseline (MSE = variance + bias^2, the bias counted only when it exceeds 4 standard "
-        "errors; unbiased rows use their variance). Pilot = expansion point from one separate sample.",
-        "",
-        *powers,
-        "",
-        "U-statistic versus naive at equal sample count (2k samples each; positive = naive variance larger, in "
-        "standard errors of the difference):",
-        "",
-        *ustat_check,
-        "",
-        *gamma, "",
-        *expo, "",
-        *recip, "",
-        *tie, "",
-        "### float32 kernel (Dr.Jit LLVM) versus float64 (numpy)",
-        "",
-        "Largest per-channel bias of 200,000 estimates; X ~ U(0.2, 1.0) unless said, channels x (1, 2, 3).",
-        "",
-        *f32,
-        "",
-        "Error versus samples: `docs/estimators_error.png`.",
-        "",
-        f"Script runtime: {elapsed:.0f} s.",
-    ])
+    body = "\n".join(
+        [
+            "## Estimators of g(E[X])",
+            "",
+            "Written by `benchmarks/estimators_table.py`. " + machine_description() + ".",
+            "",
+            f"Test distribution: X ~ Uniform(0.2, 1.0), so I = {I} and Var X = {DIST.var:.4f} "
+            f"(tie-dye: per-channel "
+            f"scaling, see below). {LANES:,} independent estimates per row (tie-dye 50,000), "
+            f"numpy float64. "
+            "Samples = measured mean draw() calls per estimate. Efficiency = 1 / (MSE x samples) "
+            "relative to the "
+            "row named as baseline (MSE = variance + bias^2, the bias counted only when it "
+            "exceeds 4 standard "
+            "errors; unbiased rows use their variance). Pilot = expansion point from one separate "
+            "sample.",
+            "",
+            *powers,
+            "",
+            "U-statistic versus naive at equal sample count (2k samples each; positive = naive "
+            "variance larger, in "
+            "standard errors of the difference):",
+            "",
+            *ustat_check,
+            "",
+            *gamma,
+            "",
+            *expo,
+            "",
+            *recip,
+            "",
+            *tie,
+            "",
+            "### float32 kernel (Dr.Jit LLVM) versus float64 (numpy)",
+            "",
+            "Largest per-channel bias of 200,000 estimates; X ~ U(0.2, 1.0) unless said, channels "
+            "x (1, 2, 3).",
+            "",
+            *f32,
+            "",
+            "Error versus samples: `docs/estimators_error.png`.",
+            "",
+            f"Script runtime: {elapsed:.0f} s.",
+        ]
+    )
     write_section("estimators", body)
     print(body)
 

@@ -1,18 +1,19 @@
-"""Look development: restyle against a fresh render, preview time to first image, buffer memory, fitting.
+"""Look development: restyle against a fresh render, preview time to first image, buffer memory,
+fitting.
 
 - Restyle: the Cornell box at 512x512, 16 camera samples per pixel, n = 16 children, recorded once
-  (`render_buffer`); each restyle (cel, colour map, gamma) is warmed up once (kernel compilation), then
-  timed `--runs` times (median, end to end: the H x W x 3 numpy image). The fresh render is
+  (`render_buffer`); each restyle (cel, colour map, gamma) is warmed up once (kernel compilation),
+  then timed `--runs` times (median, end to end: the H x W x 3 numpy image). The fresh render is
   `styletrace.render` with the same settings (one timed run after a warm-up at 64x64).
-- Preview: a `Session` of the Cornell box at 256x256 (16 spp, n = 8) and its server, in a fresh process;
-  the time from the server listening to the first 200 of /api/restyle (polled every 20 ms: the draft,
-  1 spp with n = 1) and to the first restyle of the first full pass. Twice: with a cold Dr.Jit kernel
-  cache (HOME pointed at an empty folder, so ~/.drjit is empty) and with a warm one.
+- Preview: a `Session` of the Cornell box at 256x256 (16 spp, n = 8) and its server, in a fresh
+  process; the time from the server listening to the first 200 of /api/restyle (polled every 20 ms:
+  the draft, 1 spp with n = 1) and to the first restyle of the first full pass. Twice: with a cold
+  Dr.Jit kernel cache (HOME pointed at an empty folder, so ~/.drjit is empty) and with a warm one.
 - Memory: bytes per camera sample of the buffer (numpy) and of its Dr.Jit copy used by restyles.
-- Fit: a 128x128, 4 spp, n = 4 buffer; targets restyled with known θ; iterations and seconds until the
-  loss reaches 1e-9 (or the 300 iterations end), and the error of the recovered θ.
+- Fit: a 128x128, 4 spp, n = 4 buffer; targets restyled with known θ; iterations and seconds until
+  the loss reaches 1e-9 (or the 300 iterations end), and the error of the recovered θ.
 
-    python benchmarks/lookdev.py [--runs 5]
+    .venv/bin/python benchmarks/lookdev.py [--runs 5]
 """
 from __future__ import annotations
 
@@ -22,18 +23,15 @@ import sys
 import threading
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import numpy as np
+from _report import machine_description, median_time, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.lookdev.fit import fit
+from styletrace.lookdev.record import render_buffer
+from styletrace.lookdev.restyle import device, restyle
 
 styletrace.init()
-import numpy as np  # noqa: E402
-from _report import machine_description, median_time, write_section  # noqa: E402
-
-from styletrace.lookdev.fit import fit  # noqa: E402
-from styletrace.lookdev.record import render_buffer  # noqa: E402
-from styletrace.lookdev.restyle import device, restyle  # noqa: E402
 
 GREY5 = "0:0.5,0.5,0.5;0.3:0.5,0.5,0.5;0.6:0.5,0.5,0.5;0.9:0.5,0.5,0.5;1.2:0.5,0.5,0.5"
 
@@ -45,7 +43,9 @@ def preview_first_image() -> tuple[float, float]:
     from styletrace.preview.server import make_app
     from styletrace.preview.session import Session
     session = Session("cornell-box", inner=8, spp=16, width=256, height=256)
-    srv = uvicorn.Server(uvicorn.Config(make_app(session), host="127.0.0.1", port=0, log_level="warning"))
+    srv = uvicorn.Server(
+        uvicorn.Config(make_app(session), host="127.0.0.1", port=0, log_level="warning")
+    )
     thread = threading.Thread(target=srv.run, daemon=True)
     thread.start()
     while not srv.started:
@@ -84,7 +84,9 @@ def preview_in_a_fresh_process(cold: bool) -> tuple[float, float]:
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=5)
-    ap.add_argument("--preview-only", action="store_true", help="print the preview's times as JSON and stop")
+    ap.add_argument(
+        "--preview-only", action="store_true", help="print the preview's times as JSON and stop"
+    )
     args = ap.parse_args()
     if args.preview_only:
         import json
@@ -102,20 +104,35 @@ def main():
     styletrace.render("cornell-box", style="cel", **kw)
     fresh_s = time.perf_counter() - t
     rows = []
-    for style, params in (("cel", {}), ("color_map", {"gradient": "heat"}), ("gamma", {"gamma": 2.2})):
+    for style, params in (
+        ("cel", {}),
+        ("color_map", {"gradient": "heat"}),
+        ("gamma", {"gamma": 2.2}),
+    ):
         s = median_time(lambda: restyle(buf, style=style, **params), args.runs)
         rows.append(f"| {style} | {s * 1e3:.0f} ms | {fresh_s / s:.0f}x |")
     d = device(buf)
     dev_bytes = sum(int(np.asarray(x).nbytes) for k, x in d.items() if k != "inv_weight")
 
     seq_rows = []
-    for style, est in (("gamma", "series"), ("gamma", "series_recursive"), ("gamma", "series_single"),
-                       ("gamma", "telescoping"), ("tie_dye", "ustat"), ("tie_dye", "naive"),
-                       ("gamma+sepia", "combined")):
-        sb = render_buffer("cornell-box", style=style, estimator=est, spp=4, inner=8, seed=1, width=64, height=64)
+    for style, est in (
+        ("gamma", "series"),
+        ("gamma", "series_recursive"),
+        ("gamma", "series_single"),
+        ("gamma", "telescoping"),
+        ("tie_dye", "ustat"),
+        ("tie_dye", "naive"),
+        ("gamma+sepia", "combined"),
+    ):
+        sb = render_buffer(
+            "cornell-box", style=style, estimator=est, spp=4, inner=8, seed=1, width=64, height=64
+        )
         kinds = sb.arrays["seq_kind"]
-        seq_rows.append(f"| {style} | {est} | {kinds.sum() / sb.samples:.1f} | {(kinds.size - kinds.sum()) / sb.samples:.1f} "
-                        f"| {sb.nbytes / sb.samples:.0f} |")
+        seq_rows.append(
+            f"| {style} | {est} | {kinds.sum() / sb.samples:.1f} | "
+            f"{(kinds.size - kinds.sum()) / sb.samples:.1f} "
+            f"| {sb.nbytes / sb.samples:.0f} |"
+        )
 
     small = render_buffer("cornell-box", style="cel", spp=4, inner=4, seed=3, width=128, height=128)
     fits = []
@@ -127,7 +144,9 @@ def main():
         if style == "color_map":
             err = "stop colours: see tests/lookdev/test_fit.py"
         else:
-            err = ", ".join(f"{k} {np.max(np.abs(np.subtract(r.params[k], v))):.1e}" for k, v in truth.items())
+            err = ", ".join(
+                f"{k} {np.max(np.abs(np.subtract(r.params[k], v))):.1e}" for k, v in truth.items()
+            )
         fits.append(f"| {style} | {r.iterations} | {r.seconds:.2f} s | {r.loss:.1e} | {err} |")
 
     lines = [
@@ -135,32 +154,42 @@ def main():
         "",
         machine_description(),
         "",
-        f"Cornell box 512x512, 16 camera samples per pixel, n = 16 children ({buf.samples} camera samples). "
-        f"Fresh render (`styletrace.render`, cel): {fresh_s:.1f} s; the same render recording the buffer: "
-        f"{record_s:.1f} s. Restyle, median of {args.runs} after a warm-up (goal: >= 500x faster than the "
+        f"Cornell box 512x512, 16 camera samples per pixel, n = 16 children ({buf.samples} camera "
+        f"samples). "
+        f"Fresh render (`styletrace.render`, cel): {fresh_s:.1f} s; the same render recording the "
+        f"buffer: "
+        f"{record_s:.1f} s. Restyle, median of {args.runs} after a warm-up (goal: >= 500x faster "
+        f"than the "
         f"render, <= 100 ms for cel and colour map):",
         "",
         "| style | restyle | faster than the fresh render |",
         "|---|---|---|",
         *rows,
         "",
-        f"Buffer memory: {buf.nbytes / buf.samples:.0f} bytes per camera sample in the file and in numpy "
-        f"({buf.nbytes / 2**20:.0f} MiB here), plus {dev_bytes / buf.samples:.0f} bytes per sample for the Dr.Jit "
+        f"Buffer memory: {buf.nbytes / buf.samples:.0f} bytes per camera sample in the file and "
+        f"in numpy "
+        f"({buf.nbytes / 2**20:.0f} MiB here), plus {dev_bytes / buf.samples:.0f} bytes per "
+        f"sample for the Dr.Jit "
         f"copy restyles work on; the default cap of 4194304 camera samples bounds both.",
         "",
-        f"Preview, Cornell box 256x256 (n = 8), each in a fresh process, time after the server listens (goal: "
-        f"first image <= 3 s). Warm kernel cache (~/.drjit filled by an earlier run): first image {warm[0]:.2f} s "
-        f"(the draft: 1 spp, n = 1), first full pass (1 spp, n = 8) {warm[1]:.2f} s. Cold cache (empty ~/.drjit, "
+        f"Preview, Cornell box 256x256 (n = 8), each in a fresh process, time after the server "
+        f"listens (goal: "
+        f"first image <= 3 s). Warm kernel cache (~/.drjit filled by an earlier run): first image "
+        f"{warm[0]:.2f} s "
+        f"(the draft: 1 spp, n = 1), first full pass (1 spp, n = 8) {warm[1]:.2f} s. Cold cache "
+        f"(empty ~/.drjit, "
         f"every kernel compiled): first image {cold[0]:.2f} s, first full pass {cold[1]:.2f} s.",
         "",
-        "Sequence buffers (the unbiased estimators; docs/lookdev.md): Cornell box 64x64, 4 spp, n = 8, bytes per "
+        "Sequence buffers (the unbiased estimators; docs/lookdev.md): Cornell box 64x64, 4 spp, n "
+        "= 8, bytes per "
         "camera sample = 57 + 13 per child + 5 per uniform:",
         "",
         "| style | estimator | children per sample | uniforms per sample | bytes per sample |",
         "|---|---|---|---|---|",
         *seq_rows,
         "",
-        "Fit on a 128x128, 4 spp, n = 4 buffer to targets restyled with known θ (Adam, 300 iterations at most, "
+        "Fit on a 128x128, 4 spp, n = 4 buffer to targets restyled with known θ (Adam, 300 "
+        "iterations at most, "
         "stopping at a loss of 1e-9):",
         "",
         "| style | iterations | time | final MSE | largest θ error |",

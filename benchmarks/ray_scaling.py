@@ -1,36 +1,32 @@
 """Rendering on Ray (`--ray`) against the local path, scaling with workers, and the time to resume.
 
-1. Overhead: cornell-box 256x256, cel, S=64, n=16, as `api.passes` in this process (Dr.Jit on all cores)
-   and as Ray tasks on a local instance (one task per core, one Dr.Jit thread each), both warm (kernels
-   compiled, workers' scenes loaded), median of `--runs`.
+1. Overhead: cornell-box 256x256, cel, S=64, n=16, as `api.passes` in this process (Dr.Jit on all
+   cores) and as Ray tasks on a local instance (one task per core, one Dr.Jit thread each), both
+   warm (kernels compiled, workers' scenes loaded), median of `--runs`.
 2. Scaling: a local Ray instance of 1, 2 and 4 CPUs, each worker one thread, images per minute of
    cornell-box 128x128, cel, S=16, n=8 split into 8 passes (warm, median of `--runs`).
 3. Resume: the same 256x256 render stopped after half its passes, then resumed: the time to read the
    checkpoint and the time to finish, against the whole render.
 
-    python benchmarks/ray_scaling.py [--runs 3]
+    .venv/bin/python benchmarks/ray_scaling.py [--runs 3]
 """
 from __future__ import annotations
 
 import argparse
 import os
 import statistics
-import sys
 import tempfile
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-sys.path.insert(0, os.path.dirname(__file__))
+import ray
+from _report import machine_description, median_time, write_section
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends import api
+from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.ray_run import Render, job_for
 
 styletrace.init()
-import ray  # noqa: E402
-from _report import machine_description, median_time, write_section  # noqa: E402
-
-from styletrace.frontends import api
-from styletrace.pipeline.ray_checkpoint import Checkpoint  # noqa: E402
-from styletrace.pipeline.ray_run import Render, job_for  # noqa: E402
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "src"))
 
@@ -104,7 +100,10 @@ def main():
     rows = []
     for workers in (1, 2, 4):
         start(workers)
-        secs = median_time(lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)], args.runs)
+        secs = median_time(
+            lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)],
+            args.runs,
+        )
         rows.append((workers, secs, 60.0 / secs))
     ray.shutdown()
 
@@ -112,32 +111,45 @@ def main():
     table = "\n".join(f"| {wk} | {s:.2f} | {ipm:.1f} | {ipm / base:.2f} |" for wk, s, ipm in rows)
     body = f"""## Rendering on Ray (`benchmarks/ray_scaling.py`)
 
-Machine: {machine_description()}. This machine has **{cores} cores**, shared with other work while this ran:
+Machine: {machine_description()}. This machine has **{cores} cores**, shared with other work while \
+this ran:
 the scaling rows above {cores} workers measure oversubscription, not a cluster.
 
-**Overhead of `--ray` on one machine**, cornell-box 256x256, cel, S=64 camera samples, n=16 inner samples
-({units} passes of 2^20 samples), warm, median of {args.runs} runs alternating local and Ray (1-minute load
-average {min(loads):.1f} to {max(loads):.1f} meanwhile): local path (`api.passes`, Dr.Jit on {cores} threads)
-**{t_local:.2f} s**; Ray tasks on a local instance ({cores} workers of one thread) **{t_ray:.2f} s**, ratio
-**{t_ray / t_local:.3f}** (goal <= 1.10). Starting the local Ray instance took {t_init:.1f} s more, once per
-process (not in the ratio); a worker's first task also loads the scene and compiles the kernel (Dr.Jit's
+**Overhead of `--ray` on one machine**, cornell-box 256x256, cel, S=64 camera samples, n=16 inner \
+samples
+({units} passes of 2^20 samples), warm, median of {args.runs} runs alternating local and Ray \
+(1-minute load
+average {min(loads):.1f} to {max(loads):.1f} meanwhile): local path (`api.passes`, Dr.Jit on \
+{cores} threads)
+**{t_local:.2f} s**; Ray tasks on a local instance ({cores} workers of one thread) **{t_ray:.2f} \
+s**, ratio
+**{t_ray / t_local:.3f}** (goal <= 1.10). Starting the local Ray instance took {t_init:.1f} s \
+more, once per
+process (not in the ratio); a worker's first task also loads the scene and compiles the kernel \
+(Dr.Jit's
 kernel cache on disk serves the later workers).
 
-**Scaling**, cornell-box 128x128, cel, S=16, n=8, 8 passes, a local Ray instance of W CPUs, workers of one
+**Scaling**, cornell-box 128x128, cel, S=16, n=8, 8 passes, a local Ray instance of W CPUs, \
+workers of one
 thread each, warm, median of {args.runs}:
 
 | workers | s per image | images per minute | speed-up |
 |---|---|---|---|
 {table}
 
-**Resume**, the 256x256 render split into {n_units} passes of 4 spp, stopped after {n_units // 2}: reading the
-checkpoint (EXR of the running sum + JSON manifest) took {t_read * 1000:.0f} ms; finishing the rest took
+**Resume**, the 256x256 render split into {n_units} passes of 4 spp, stopped after {n_units // 2}: \
+reading the
+checkpoint (EXR of the running sum + JSON manifest) took {t_read * 1000:.0f} ms; finishing the \
+rest took
 {t_rest:.2f} s against {t_whole:.2f} s for the whole render from scratch.
 
-**On a real cluster**: on one machine run `ray start --head` (it prints the address, HOST:6379), on every
+**On a real cluster**: on one machine run `ray start --head` (it prints the address, HOST:6379), \
+on every
 other `ray start --address HOST:6379`; each needs the same styletrace, Mitsuba and Dr.Jit installed
-(`pip install 'styletrace[ray]'`) and the scene files at the same absolute paths (or use built-in scenes).
-Then, anywhere on the cluster: `styletrace render scene.xml --spp 4096 -o out.exr --ray HOST:6379`. Each
+(`pip install 'styletrace[ray]'`) and the scene files at the same absolute paths (or use built-in \
+scenes).
+Then, anywhere on the cluster: `styletrace render scene.xml --spp 4096 -o out.exr --ray \
+HOST:6379`. Each
 task asks Ray for one CPU and runs Dr.Jit on one thread; a node of C cores runs C tasks at once.
 """
     write_section("ray_scaling", body)

@@ -1,23 +1,31 @@
-"""Remake docs/blender_panel.png: a screenshot of Blender's GUI with styletrace's panels (docs/blender.md).
+"""Remake docs/blender_panel.png: a screenshot of Blender's GUI with styletrace's panels
+(docs/blender.md).
 
-Run by Blender itself (a GUI, not `bpy` as a module, which draws nothing), e.g. Debian's Blender 3.4 under Xvfb:
+Run by Blender itself (a GUI, not `bpy` as a module, which draws nothing), e.g. Debian's Blender 3.4
+under Xvfb:
 
     STYLETRACE_SITE=/path/to/.venv/lib/python3.11/site-packages \\
-    xvfb-run -a -s "-screen 0 1600x1000x24" blender --factory-startup --python docs/make_blender_screenshot.py
+    xvfb-run -a -s "-screen 0 1600x1000x24" blender --factory-startup \\
+        --python docs/make_blender_screenshot.py
 
-STYLETRACE_SITE defaults to the repository's .venv; Blender's Python must be its minor version (3.11 for Debian
-bookworm's Blender). Only styletrace's dependencies (mitsuba, drjit, numpy, tqdm) and PIL are taken from it,
-through a folder of links, so nothing else of the venv (e.g. its `bpy` wheel) shadows Blender's own modules.
+STYLETRACE_SITE defaults to the repository's .venv; Blender's Python must be its minor version (3.11
+for Debian bookworm's Blender). Only styletrace's dependencies (mitsuba, drjit, numpy, tqdm) and PIL
+are taken from it, through a folder of links, so nothing else of the venv (e.g. its `bpy` wheel)
+shadows Blender's own modules.
 
-The script registers `styletrace.blender`, sets the render engine to styletrace, splits the 3D viewport into two
-Properties editors (Render with the `hatching` style, Material with a per-material `color_map` style), takes
-Blender's own screenshot of the window (`screen.screenshot`), crops it to the two editors with numpy + PIL and
-quits. STYLETRACE_SHOT_FULL=PATH also keeps the uncropped window.
+The script registers `styletrace.blender`, sets the render engine to styletrace, splits the 3D
+viewport into two Properties editors (Render with the `hatching` style, Material with a per-material
+`color_map` style), takes Blender's own screenshot of the window (`screen.screenshot`), crops it to
+the two editors with numpy + PIL and quits. STYLETRACE_SHOT_FULL=PATH also keeps the uncropped
+window.
 """
 import os
 import shutil
 import sys
 import tempfile
+from importlib import import_module
+
+import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -32,11 +40,9 @@ for name in NEEDED:
         os.symlink(os.path.join(SITE, name), os.path.join(links, name))
 sys.path[:0] = [links, os.path.join(ROOT, "src")]
 
-import bpy  # noqa: E402
-
-import styletrace.blender  # noqa: E402
-
-styletrace.blender.register()
+# styletrace and its dependencies are importable only now: loaded by name
+blender = import_module("styletrace.blender")
+blender.register()
 scene = bpy.context.scene
 scene.render.engine = "STYLETRACE"
 scene.styletrace.style = "hatching"
@@ -49,7 +55,9 @@ window = bpy.context.window_manager.windows[0]
 view3d = next(a for a in window.screen.areas if a.type == "VIEW_3D")
 with bpy.context.temp_override(window=window, screen=window.screen, area=view3d):
     bpy.ops.screen.area_split(direction="VERTICAL", factor=0.6)
-render_area, material_area = sorted((a for a in window.screen.areas if a.type == "VIEW_3D"), key=lambda a: a.x)
+render_area, material_area = sorted(
+    (a for a in window.screen.areas if a.type == "VIEW_3D"), key=lambda a: a.x
+)
 for area in (render_area, material_area):
     area.type = "PROPERTIES"
 
@@ -60,7 +68,8 @@ def tabs():
         area.spaces.active.context = tab
         area.tag_redraw()
     outliner = next(a for a in window.screen.areas if a.type == "OUTLINER")
-    window.cursor_warp(outliner.x + outliner.width // 2, outliner.y + 10)  # no tooltip over the panels
+    # no tooltip over the panels
+    window.cursor_warp(outliner.x + outliner.width // 2, outliner.y + 10)
 
 
 def shoot():
@@ -70,7 +79,15 @@ def shoot():
     boxes = [(a.x, a.y, a.width, a.height) for a in (render_area, material_area)]
     if os.environ.get("STYLETRACE_SHOT_FULL"):
         shutil.copy(full, os.environ["STYLETRACE_SHOT_FULL"])
-    print("styletrace screenshot:", bpy.app.version_string, "window", window.width, window.height, "areas", boxes)
+    print(
+        "styletrace screenshot:",
+        bpy.app.version_string,
+        "window",
+        window.width,
+        window.height,
+        "areas",
+        boxes,
+    )
     try:
         import numpy as np
         from PIL import Image

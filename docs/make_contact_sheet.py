@@ -1,25 +1,24 @@
 """Contact sheet of every style at its defaults on three scenes of very different scale:
-`python docs/make_contact_sheet.py` writes docs/defaults_contact_sheet.png (shown in docs/styles.md).
+`.venv/bin/python docs/make_contact_sheet.py` writes docs/defaults_contact_sheet.png (shown in
+docs/styles.md).
 
-Scenes: the built-in cornell-box (about 2 units across), the built-in dragon (unit height) and the Cornell
-box scaled x100 with its light x0.1 (`assets.scenes.scaled`: 200 units across and a tenth as bright), so
-the scales differ by 200x and the brightness by 10x. Every style is rendered with no parameter given: its
-scene-relative 'auto' values are resolved per scene (`scene.defaults`) and printed here.
+Scenes: the built-in cornell-box (about 2 units across), the built-in dragon (unit height) and the
+Cornell box scaled x100 with its light x0.1 (`assets.scenes.scaled`: 200 units across and a tenth as
+bright), so the scales differ by 200x and the brightness by 10x. Every style is rendered with no
+parameter given: its scene-relative 'auto' values are resolved per scene (`scene.defaults`) and
+printed here.
 """
 import os
-import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
+import numpy as np
 
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.frontends import api
+from styletrace.images import write_image
+from styletrace.scene.builtin import cornell_box, dragon, scaled
+from styletrace.styles import get, names
 
 styletrace.init()
-import numpy as np  # noqa: E402
-
-from styletrace.frontends import api
-from styletrace.images import write_image  # noqa: E402
-from styletrace.scene.builtin import cornell_box, dragon, scaled  # noqa: E402
-from styletrace.styles import get, names  # noqa: E402
 
 SIZE, SPP, GAP = 96, 16, 4
 SCENES = {
@@ -36,7 +35,9 @@ def main():
         for name in names():
             inner = max(get(name).default_inner, 8)
             scene = api.load_scene(make())
-            integrator, chosen = api.resolve_defaults(scene, api.make_integrator(style=name, inner=inner))
+            integrator, chosen = api.resolve_defaults(
+                scene, api.make_integrator(style=name, inner=inner)
+            )
             print(f"{scene_name:>28} {name:>10}: {chosen or '-'}", flush=True)
             img = None
             for prog in api.passes(scene, integrator, SPP, seed=1):

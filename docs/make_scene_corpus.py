@@ -1,12 +1,13 @@
-"""Contact sheet of the scene-feature corpus (issue 18): `python docs/make_scene_corpus.py` writes
-docs/scene_corpus.png (shown in docs/scenes.md).
+"""Contact sheet of the scene-feature corpus (issue 18): `.venv/bin/python
+docs/make_scene_corpus.py` writes docs/scene_corpus.png (shown in docs/scenes.md).
 
-One row per scene of `tests/corpus/scenes.py` (written into a temporary folder, assets included), labelled
-with its name and the features it covers; columns: physically based (`identity`), GI cel shading, hatching,
-colour map, and cel with feature lines (`--lines`). Every style is at its defaults, so the scene-relative
-'auto' values (cel thresholds, the hatching and colour-map brightness ranges, hatching's screen spacing on
-the orthographic and thin-lens sensors) are resolved per scene as `styletrace render` resolves them, and
-each scene keeps its own integrator's max_depth / hide_emitters (`api.render`). Images are sRGB, clamped.
+One row per scene of `tests/corpus/scenes.py` (written into a temporary folder, assets included),
+labelled with its name and the features it covers; columns: physically based (`identity`), GI cel
+shading, hatching, colour map, and cel with feature lines (`--lines`). Every style is at its
+defaults, so the scene-relative 'auto' values (cel thresholds, the hatching and colour-map
+brightness ranges, hatching's screen spacing on the orthographic and thin-lens sensors) are resolved
+per scene as `styletrace render` resolves them, and each scene keeps its own integrator's max_depth
+/ hide_emitters (`api.render`). Images are sRGB, clamped.
 """
 import os
 import sys
@@ -14,18 +15,12 @@ import tempfile
 import textwrap
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "src"))
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
-
-import styletrace  # noqa: E402
-
-styletrace.init()
-
-from corpus import scenes  # noqa: E402  (the corpus lives with its tests)
-
+import styletrace
 from styletrace.frontends import api
-from styletrace.images import srgb8, write_bytes_atomically  # noqa: E402
+from styletrace.images import srgb8, write_bytes_atomically
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+styletrace.init()
 
 SIZE, SPP, INNER, SEED = 128, 16, 8, 1
 #: (column title, render keywords)
@@ -38,14 +33,24 @@ COLUMNS = [
 ]
 
 
+def corpus_scenes():
+    """`tests/corpus/scenes.py`: the corpus lives with its tests."""
+    sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+    from corpus import scenes
+    return scenes
+
+
 def render_all(folder):
+    scenes = corpus_scenes()
     images = {}
     for name in scenes.SCENES:
         xml = str(scenes.write_scene(name, os.path.join(folder, name)))
         for title, kwargs in COLUMNS:
             t = time.time()
             kwargs = {"inner": INNER, **kwargs}
-            images[name, title] = api.render(xml, spp=SPP, seed=SEED, width=SIZE, height=SIZE, **kwargs)
+            images[name, title] = api.render(
+                xml, spp=SPP, seed=SEED, width=SIZE, height=SIZE, **kwargs
+            )
             print(f"{name:>13} {title:>28}: {time.time() - t:5.1f} s", flush=True)
     return images
 
@@ -57,6 +62,7 @@ def figure(images, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    scenes = corpus_scenes()
     rows, cols = len(scenes.SCENES), len(COLUMNS)
     label_w, cell = 2.2, 1.75  # inches: the label column, one image
     fig, axes = plt.subplots(rows, cols + 1, figsize=(label_w + cols * cell, rows * cell + 0.4),
@@ -64,9 +70,18 @@ def figure(images, path):
     for r, name in enumerate(scenes.SCENES):
         label = axes[r, 0]
         label.axis("off")
-        label.text(0.0, 0.62, name, fontsize=10, fontweight="bold", va="center", transform=label.transAxes)
-        label.text(0.0, 0.5, textwrap.fill(scenes.FEATURES.get(name, ""), 32), fontsize=7.2, va="top",
-                   color="#333333", transform=label.transAxes)
+        label.text(
+            0.0, 0.62, name, fontsize=10, fontweight="bold", va="center", transform=label.transAxes
+        )
+        label.text(
+            0.0,
+            0.5,
+            textwrap.fill(scenes.FEATURES.get(name, ""), 32),
+            fontsize=7.2,
+            va="top",
+            color="#333333",
+            transform=label.transAxes,
+        )
         for c, (title, _) in enumerate(COLUMNS):
             ax = axes[r, c + 1]
             ax.imshow(srgb8(images[name, title][..., :3]), interpolation="nearest")

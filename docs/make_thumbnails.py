@@ -1,22 +1,21 @@
-"""Render the thumbnail of every style for docs/styles.md: `python docs/make_thumbnails.py`.
+"""Render the thumbnail of every style for docs/styles.md: `.venv/bin/python
+docs/make_thumbnails.py`.
 
-Each style is rendered on the built-in dragon scene at 160x160 with its default parameters except those in
-OVERRIDES, and its default inner sample count (at least 8, so affine styles are not shown at 1).
+Each style is rendered on the built-in dragon scene at 160x160 with its default parameters except
+those in OVERRIDES, and its default inner sample count (at least 8, so affine styles are not shown
+at 1).
 """
 import os
-import sys
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "src"))
-
-import styletrace  # noqa: E402
+import styletrace
+from styletrace.images import write_image
+from styletrace.styles import get, names
 
 styletrace.init()
-from styletrace.images import write_image  # noqa: E402
-from styletrace.styles import get, names  # noqa: E402
 
 SIZE, SPP = 160, 32
-# spacings in the dragon's units (1 = its height) and brightness ranges of the dragon scene, so that lit and
-# shaded parts differ; cel gets three bands for the same reason
+# spacings in the dragon's units (1 = its height) and brightness ranges of the dragon scene, so that
+# lit and shaded parts differ; cel gets three bands for the same reason
 OVERRIDES = {
     "hatching": {"spacing": 0.05, "u_min": 0.05, "u_max": 0.45},
     "halftone": {"spacing": 0.05, "u_min": 0.05, "u_max": 0.6},
@@ -41,7 +40,10 @@ def main():
         write_image(img, os.path.join(out, f"{name}.png"))
         images[name] = img
         print(name, flush=True)
-    write_image(np.concatenate([images[n] for n in TEASER], axis=1), os.path.join(os.path.dirname(__file__), "teaser.png"))
+    write_image(
+        np.concatenate([images[n] for n in TEASER], axis=1),
+        os.path.join(os.path.dirname(__file__), "teaser.png"),
+    )
 
 
 if __name__ == "__main__":

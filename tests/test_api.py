@@ -1,27 +1,36 @@
 """The Python API: scene loading, integrator construction, rendering in passes."""
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
 from styletrace.errors import SettingsError, StyleError, UsageError
 from styletrace.frontends import api
+from styletrace.gate import mi
 
 
 def test_render_returns_linear_float32_hwc():
-    img = styletrace.render("cornell-box", style="cel", spp=2, inner=2, width=20, height=12, levels=(0.3, 0.9))
+    img = styletrace.render(
+        "cornell-box", style="cel", spp=2, inner=2, width=20, height=12, levels=(0.3, 0.9)
+    )
     assert img.dtype == np.float32 and img.shape == (12, 20, 3) and np.isfinite(img).all()
 
 
 def test_passes_average_is_weighted_by_samples():
-    """Unequal passes (4 + 2 spp) combine as (4 a + 2 b) / 6, each pass with its own derived seed."""
+    """Unequal passes (4 + 2 spp) combine as (4 a + 2 b) / 6, each pass with its own derived
+    seed."""
     scene = api.load_scene("cornell-box", 8, 8)
     integ = api.make_integrator("identity", inner=1)
     progress = list(api.passes(scene, integ, 6, seed=5, lanes_per_pass=4 * 64))
     assert [p.spp_done for p in progress] == [4, 6]
-    a = np.array(mi.render(scene, integrator=integ, spp=4, seed=api.pass_seed(5, 0)), dtype=np.float64)
-    b = np.array(mi.render(scene, integrator=integ, spp=2, seed=api.pass_seed(5, 1)), dtype=np.float64)
-    np.testing.assert_allclose(progress[-1].image, ((4 * a + 2 * b) / 6).astype(np.float32), rtol=1e-6)
+    a = np.array(
+        mi.render(scene, integrator=integ, spp=4, seed=api.pass_seed(5, 0)), dtype=np.float64
+    )
+    b = np.array(
+        mi.render(scene, integrator=integ, spp=2, seed=api.pass_seed(5, 1)), dtype=np.float64
+    )
+    np.testing.assert_allclose(
+        progress[-1].image, ((4 * a + 2 * b) / 6).astype(np.float32), rtol=1e-6
+    )
     assert api.pass_count(scene, 6, 4 * 64) == 2
 
 
@@ -64,16 +73,35 @@ def test_gradient_given_as_stops():
     assert "0:0,0,0;1:1,0.5,0" in integ.settings.style.describe()
 
 
-@pytest.mark.parametrize("kwargs,error,message", [
-    (dict(spp="16"), styletrace.UsageError, r"bad value '16' for spp: expected an integer in \[1, 4294967295\]"),
-    (dict(spp=1.5), styletrace.UsageError, "bad value 1.5 for spp"),
-    (dict(seed=None), styletrace.UsageError, r"bad value None for seed: expected an integer in \[0, 4294967295\]"),
-    (dict(seed=2 ** 32), styletrace.UsageError, "bad value 4294967296 for seed"),
-    (dict(integrator="path"), styletrace.UsageError, "bad value 'path' for integrator"),
-    (dict(inner=[2.7]), SettingsError, "bad value 2.7 for 'inner_samples'"),
-    (dict(scene={"type": "scene", "s": {"type": "sphere"}}), styletrace.SceneError, "the scene dict has no sensor"),
-    (dict(scene={"type": "sphere"}), styletrace.SceneError, "the scene dict is a Sphere, not a scene"),
-])
+@pytest.mark.parametrize(
+    "kwargs,error,message",
+    [
+        (
+            dict(spp="16"),
+            styletrace.UsageError,
+            r"bad value '16' for spp: expected an integer in \[1, 4294967295\]",
+        ),
+        (dict(spp=1.5), styletrace.UsageError, "bad value 1.5 for spp"),
+        (
+            dict(seed=None),
+            styletrace.UsageError,
+            r"bad value None for seed: expected an integer in \[0, 4294967295\]",
+        ),
+        (dict(seed=2**32), styletrace.UsageError, "bad value 4294967296 for seed"),
+        (dict(integrator="path"), styletrace.UsageError, "bad value 'path' for integrator"),
+        (dict(inner=[2.7]), SettingsError, "bad value 2.7 for 'inner_samples'"),
+        (
+            dict(scene={"type": "scene", "s": {"type": "sphere"}}),
+            styletrace.SceneError,
+            "the scene dict has no sensor",
+        ),
+        (
+            dict(scene={"type": "sphere"}),
+            styletrace.SceneError,
+            "the scene dict is a Sphere, not a scene",
+        ),
+    ],
+)
 def test_render_arguments_are_checked(kwargs, error, message):
     call = {"scene": "furnace", "width": 4, "height": 4, "spp": 1, **kwargs}
     if isinstance(call["scene"], dict):
@@ -83,7 +111,8 @@ def test_render_arguments_are_checked(kwargs, error, message):
 
 
 def test_the_largest_seed_is_its_own_image():
-    """Seeds are 32-bit: 2^32 - 1 renders and differs from seed 0 (2^32 would alias 0 and is refused)."""
+    """Seeds are 32-bit: 2^32 - 1 renders and differs from seed 0 (2^32 would alias 0 and is
+    refused)."""
     a = styletrace.render("cornell-box", width=8, height=8, spp=1, seed=0)
     b = styletrace.render("cornell-box", width=8, height=8, spp=1, seed=2 ** 32 - 1)
     assert not np.array_equal(a, b)
@@ -111,12 +140,14 @@ def test_tiles_cover_the_image_once_with_one_size():
 
 def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
     """Tiles are crop windows: each must equal Mitsuba rendering that window of the film (its own
-    crop_offset/crop_width properties) with the tile's seed; shifted edge tiles keep only their new pixels."""
+    crop_offset/crop_width properties) with the tile's seed; shifted edge tiles keep only their
+    new pixels."""
     from styletrace.pipeline import passes as pass_loop  # the pass loop reads its own constants
     monkeypatch.setattr(pass_loop, "LANES_PER_PASS", 120)
     monkeypatch.setattr(pass_loop, "TILE_SIDE", 10)
     scene = api.load_scene("cornell-box", 24, 16)
-    integ = api.make_integrator("cel", inner=2, thresholds=(0.5,), levels=(0.4, 0.95))  # explicit: no pilot
+    # explicit: no pilot
+    integ = api.make_integrator("cel", inner=2, thresholds=(0.5,), levels=(0.4, 0.95))
     layout = api.tiles(24, 16)
     assert len(layout) == 6 and layout[0].size == (10, 12)
     progress = list(api.passes(scene, integ, 2, seed=3, lanes_per_pass=1 << 20))
@@ -126,7 +157,9 @@ def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
         d = api.scene_dict("cornell-box", 24, 16)
         d["sensor"]["film"].update(crop_offset_x=tile.offset[0], crop_offset_y=tile.offset[1],
                                    crop_width=tile.size[0], crop_height=tile.size[1])
-        img = np.array(mi.render(mi.load_dict(d), integrator=integ, spp=2, seed=api.pass_seed(3, index)))
+        img = np.array(
+            mi.render(mi.load_dict(d), integrator=integ, spp=2, seed=api.pass_seed(3, index))
+        )
         expect[tile.dest] = img[..., :3][tile.keep]
     np.testing.assert_allclose(progress[-1].image, expect, rtol=1e-6, atol=0)
     assert tuple(scene.sensors()[0].film().crop_size()) == (24, 16)  # the film is left as it was
@@ -136,7 +169,9 @@ def test_memory_is_checked_up_front(monkeypatch):
     from styletrace.pipeline import passes as pass_loop
     monkeypatch.setattr(pass_loop, "memory_available", lambda: 1 << 30)
     api.check_memory(1024, 1024)
-    with pytest.raises(UsageError, match=r"image 8192x8192 is too large: it needs about \d+\.\d GiB"):
+    with pytest.raises(
+        UsageError, match=r"image 8192x8192 is too large: it needs about \d+\.\d GiB"
+    ):
         api.check_memory(8192, 8192)
     scene = api.load_scene("furnace", 8, 8)
     monkeypatch.setattr(pass_loop, "memory_available", lambda: 1000)

@@ -2,8 +2,8 @@
 
 Read from the code, not from a table: every import of a styletrace module, at load time or inside a
 function, is an arrow from the importer's folder to the imported module's folder. The folders must
-form no cycle, and no function-local import may point up (to a folder that reaches the importer's own
-folder through load-time imports). The package's entry files (`styletrace/__init__.py`,
+form no cycle, and no function-local import may point up (to a folder that reaches the importer's
+own folder through load-time imports). The package's entry files (`styletrace/__init__.py`,
 `styletrace/__main__.py`) are its facade and may load anything on first use.
 """
 import ast
@@ -58,8 +58,8 @@ class Imports(ast.NodeVisitor):
 
 
 def arrows(package: str) -> list[tuple[str, str, bool, str]]:
-    """(importer folder, imported folder, function-local, 'module:line -> module') for each import of a
-    module in another folder of `package`; the facade's imports are left out."""
+    """(importer folder, imported folder, function-local, 'module:line -> module') for each
+    import of a module in another folder of `package`; the facade's imports are left out."""
     files = module_files(package)
     out = []
     for name, path in files.items():
@@ -146,7 +146,9 @@ def upward_local_imports(edges) -> list[str]:
 def folder_layers(edges, package: str = PACKAGE) -> dict[str, int]:
     """Each folder's layer: 0 for one that imports no other folder, else one above the highest it
     imports. Needs an acyclic graph."""
-    graph: dict[str, set[str]] = {folder_of(p, package): set() for p in module_files(package).values()}
+    graph: dict[str, set[str]] = {
+        folder_of(p, package): set() for p in module_files(package).values()
+    }
     for a, b, _, _ in edges:
         graph.setdefault(a, set()).add(b)
         graph.setdefault(b, set())

@@ -1,7 +1,7 @@
-"""One class declares every setting (styletrace/declaration.py): an integrator property (config/declare.py's
-`Property`) and a style parameter (styles/params.py's `Param`) are both a `Declaration`, parsed by its one
-implementation of the common kinds, and each gives its type, default, bounds, choices, doc line and its
-command-line / docs row."""
+"""One class declares every setting (styletrace/declaration.py): an integrator property
+(config/declare.py's `Property`) and a style parameter (styles/params.py's `Param`) are both a
+`Declaration`, parsed by its one implementation of the common kinds, and each gives its type,
+default, bounds, choices, doc line and its command-line / docs row."""
 import pytest
 
 from styletrace.config import settings
@@ -14,8 +14,12 @@ from styletrace.frontends.reference import integrator_table, style_table
 from styletrace.styles import style_class
 from styletrace.styles.params import Param
 
-KNOB = Property("test_knob", 3, "int", "a knob only this test has", "--test-knob", "K", low=1, high=9)
-AMOUNT = Param("test_amount", "float", 0.5, "an amount only this test has", low=0.0, high=1.0, low_open=True)
+KNOB = Property(
+    "test_knob", 3, "int", "a knob only this test has", "--test-knob", "K", low=1, high=9
+)
+AMOUNT = Param(
+    "test_amount", "float", 0.5, "an amount only this test has", low=0.0, high=1.0, low_open=True
+)
 MODE = Param("test_mode", "choice", "soft", "a choice only this test has", choices=("soft", "hard"))
 
 
@@ -31,7 +35,8 @@ def declared(monkeypatch):
 def test_one_class_declares_both():
     for d in (KNOB, AMOUNT, MODE):
         assert isinstance(d, Declaration)
-    assert "parse" not in vars(Property)            # Param.parse only adds 'auto' before Declaration.parse
+    # Param.parse only adds 'auto' before Declaration.parse
+    assert "parse" not in vars(Property)
     # type, default, bounds, choices and doc line, read the same way on both sides
     assert (KNOB.kind, KNOB.default, KNOB.bounds(), KNOB.choices, KNOB.doc) == \
         ("int", 3, (1, 9), (), "a knob only this test has")
@@ -41,14 +46,24 @@ def test_one_class_declares_both():
 
 
 def test_the_common_kinds_parse_once_with_each_sides_message():
-    assert KNOB.parse(" 7 ") == 7 and AMOUNT.parse("0.25") == 0.25 and MODE.parse(" hard ") == "hard"
-    with pytest.raises(SettingsError, match=r"^bad value '0' for 'test_knob': expected an integer in \[1, 9\]$"):
+    assert (
+        KNOB.parse(" 7 ") == 7 and AMOUNT.parse("0.25") == 0.25 and MODE.parse(" hard ") == "hard"
+    )
+    with pytest.raises(
+        SettingsError, match=r"^bad value '0' for 'test_knob': expected an integer in \[1, 9\]$"
+    ):
         KNOB.parse("0")
-    with pytest.raises(StyleError, match=r"^bad value 0 for parameter 'test_amount': expected a number in "
-                                         r"\(0, 1\]$"):
+    with pytest.raises(
+        StyleError,
+        match=r"^bad value 0 for parameter 'test_amount': expected a number in "
+        r"\(0, 1\]$",
+    ):
         AMOUNT.parse(0)
-    with pytest.raises(StyleError, match=r"^bad value 'odd' for parameter 'test_mode': expected one of soft, "
-                                         r"hard$"):
+    with pytest.raises(
+        StyleError,
+        match=r"^bad value 'odd' for parameter 'test_mode': expected one of soft, "
+        r"hard$",
+    ):
         MODE.parse("odd")
     # the sides' spellings are declared options of one parser, kept as they were
     flag = Property("test_flag", False, "bool", "")
@@ -68,10 +83,18 @@ def test_the_common_kinds_parse_once_with_each_sides_message():
 def test_each_gives_its_cli_and_docs_row(declared, capsys):
     args = build_parser().parse_args(["render", "cornell-box", "--test-knob", "5"])
     assert given_flags(args, {}) == {"test_knob": 5}
-    assert "| `test_knob` | int | `3` | `--test-knob` | a knob only this test has |" in integrator_table().splitlines()
+    assert (
+        "| `test_knob` | int | `3` | `--test-knob` | a knob only this test has |"
+        in integrator_table().splitlines()
+    )
     rows = style_table("sepia").splitlines()
-    assert "| test_amount | float | `0.5` | an amount only this test has | a number in (0, 1] |" in rows
-    assert "| test_mode | choice | `soft` | a choice only this test has | one of soft, hard |" in rows
+    assert (
+        "| test_amount | float | `0.5` | an amount only this test has | a number in (0, 1] |"
+        in rows
+    )
+    assert (
+        "| test_mode | choice | `soft` | a choice only this test has | one of soft, hard |" in rows
+    )
     assert main(["styles"]) == 0
     out = capsys.readouterr().out
     assert "    test_amount = 0.5    an amount only this test has; a number in (0, 1]" in out

@@ -1,12 +1,13 @@
 """One scene, every entry point, one image (issue 19).
 
-The scene: a `moment`-wrapped `path` with max_depth $depth (set to 3 through defines) and hide_emitters, an
-area light and a constant sky (which hide_emitters hides from the camera), rendered with cel at its `auto`
-thresholds. Every route builds the same `pipeline.Job`, so the command line, `styletrace.render`, the Ray
-path, `render_buffer` and `mi.render` on the same file written with a `stylized` integrator draw the same
-image to the bit for the same seed and pass split. Where a route cannot be bit-identical the test says why
-and compares the image means within 4 standard errors, the SE from the per-pixel sample variance (the
-error AOV `variance` of the render: each pixel's estimate's variance, (E[x^2] - mean^2) / (spp - 1)).
+The scene: a `moment`-wrapped `path` with max_depth $depth (set to 3 through defines) and
+hide_emitters, an area light and a constant sky (which hide_emitters hides from the camera),
+rendered with cel at its `auto` thresholds. Every route builds the same `pipeline.Job`, so the
+command line, `styletrace.render`, the Ray path, `render_buffer` and `mi.render` on the same file
+written with a `stylized` integrator draw the same image to the bit for the same seed and pass
+split. Where a route cannot be bit-identical the test says why and compares the image means within 4
+standard errors, the SE from the per-pixel sample variance (the error AOV `variance` of the render:
+each pixel's estimate's variance, (E[x^2] - mean^2) / (spp - 1)).
 """
 import re
 import subprocess
@@ -17,12 +18,10 @@ import pytest
 from conftest import child_env
 
 import styletrace
+from styletrace.gate import mi
+from styletrace.pipeline.passes import pass_seed
 
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from styletrace.pipeline.passes import pass_seed  # noqa: E402
 
 SEED, SPP, INNER = 5, 4, 2
 SCENE = """<scene version="3.0.0">
@@ -40,7 +39,8 @@ SCENE = """<scene version="3.0.0">
   <shape type="sphere"><point name="center" x="1.2" y="0" z="0"/><float name="radius" value="0.8"/>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.7"/></bsdf></shape>
   <shape type="rectangle">
-    <transform name="to_world"><scale value="5"/><rotate x="1" angle="-90"/><translate y="-0.8"/></transform>
+    <transform name="to_world"><scale value="5"/><rotate x="1" angle="-90"/><translate \
+y="-0.8"/></transform>
     <bsdf type="diffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/></bsdf></shape>
   <shape type="rectangle">
     <transform name="to_world"><rotate x="1" angle="90"/><translate y="3"/></transform>
@@ -48,11 +48,18 @@ SCENE = """<scene version="3.0.0">
   <emitter type="constant"><rgb name="radiance" value="0.3, 0.3, 0.35"/></emitter>
 </scene>
 """
-MOMENT = ('<integrator type="moment"><integrator type="path"><integer name="max_depth" value="$depth"/>'
-          '<boolean name="hide_emitters" value="true"/></integrator></integrator>')
-#: the same render written for Mitsuba alone: its `stylized` integrator with what the pipeline carries over
-STYLIZED = ('<integrator type="stylized"><string name="style" value="cel"/><integer name="inner_samples" value="2"/>'
-            '<integer name="max_depth" value="$depth"/><boolean name="hide_emitters" value="true"/></integrator>')
+MOMENT = (
+    '<integrator type="moment"><integrator type="path"><integer name="max_depth" value="$depth"/>'
+    '<boolean name="hide_emitters" value="true"/></integrator></integrator>'
+)
+#: the same render written for Mitsuba alone: its `stylized` integrator with what the pipeline
+#: carries over
+STYLIZED = (
+    '<integrator type="stylized"><string name="style" value="cel"/><integer name="inner_samples" '
+    'value="2"/>'
+    '<integer name="max_depth" value="$depth"/><boolean name="hide_emitters" '
+    'value="true"/></integrator>'
+)
 ARGS = dict(style="cel", inner=INNER, spp=SPP, seed=SEED, defines={"depth": "3"})
 
 
@@ -67,8 +74,9 @@ def files(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def reference(files):
-    """`styletrace.render`'s image, and each pixel's estimate's variance from the same render with the error
-    AOVs (a kernel with more outputs: its image may differ in the last bit, its statistics do not)."""
+    """`styletrace.render`'s image, and each pixel's estimate's variance from the same render
+    with the error AOVs (a kernel with more outputs: its image may differ in the last bit, its
+    statistics do not)."""
     image = styletrace.render(files[0], **ARGS)
     with_aovs, aovs = styletrace.render(files[0], aovs=True, **ARGS)
     within_4_se(with_aovs, image, aovs["variance"])
@@ -76,8 +84,9 @@ def reference(files):
 
 
 def within_4_se(image, other, variance):
-    """|mean(image) - mean(other)| < 4 SE per channel, both images of independent or equal estimates of the
-    same expectation, each with per-pixel estimate variance `variance` (so the difference has twice it)."""
+    """|mean(image) - mean(other)| < 4 SE per channel, both images of independent or equal
+    estimates of the same expectation, each with per-pixel estimate variance `variance` (so the
+    difference has twice it)."""
     n = variance.shape[0] * variance.shape[1]
     se = np.sqrt(2 * variance.reshape(-1, 3).sum(axis=0)) / n
     diff = np.abs(image.reshape(-1, 3).mean(axis=0) - other.reshape(-1, 3).mean(axis=0))
@@ -86,8 +95,8 @@ def within_4_se(image, other, variance):
 
 
 def test_the_python_call_keeps_the_files_settings(files, reference):
-    """The same call again is the same image; without the carried settings (the depth, the hidden sky) it is
-    another, and api.render is the same function."""
+    """The same call again is the same image; without the carried settings (the depth, the hidden
+    sky) it is another, and api.render is the same function."""
     assert np.array_equal(styletrace.render(files[0], **ARGS), reference[0])
     from styletrace.frontends import api
     assert api.render is styletrace.render  # the one-line alias
@@ -98,11 +107,34 @@ def test_the_python_call_keeps_the_files_settings(files, reference):
 
 def test_command_line(files, reference, tmp_path):
     out = tmp_path / "cli.exr"
-    r = subprocess.run([sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3", "--style", "cel",
-                        "--inner", str(INNER), "--spp", str(SPP), "--seed", str(SEED), "-o", str(out)],
-                       capture_output=True, text=True, env=child_env(), timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            files[0],
+            "-D",
+            "depth=3",
+            "--style",
+            "cel",
+            "--inner",
+            str(INNER),
+            "--spp",
+            str(SPP),
+            "--seed",
+            str(SEED),
+            "-o",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        env=child_env(),
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
-    assert re.search(r"auto values: cel thresholds=0\.\d+", r.stderr), r.stderr  # resolved, not the 0.5 fallback
+    # resolved, not the 0.5 fallback
+    assert re.search(r"auto values: cel thresholds=0\.\d+", r.stderr), r.stderr
     assert np.array_equal(np.array(mi.Bitmap(str(out)))[..., :3], reference[0])
 
 
@@ -111,9 +143,9 @@ def test_ray_on_a_local_cluster(files, reference):
 
 
 def test_render_buffer_then_restyle_to_the_same_style(files, reference):
-    """The buffer's image is the render's bit for bit. The restyle applies g again, in numpy, to the stored
-    float32 children's means (not in the kernel's order of operations): last-bit differences, so it is held
-    to 4 SE of the mean and to float32 rounding per pixel."""
+    """The buffer's image is the render's bit for bit. The restyle applies g again, in numpy, to
+    the stored float32 children's means (not in the kernel's order of operations): last-bit
+    differences, so it is held to 4 SE of the mean and to float32 rounding per pixel."""
     buf = styletrace.render_buffer(files[0], **ARGS)
     assert np.array_equal(buf.image, reference[0])
     again = styletrace.restyle(buf, style="cel")
@@ -122,20 +154,30 @@ def test_render_buffer_then_restyle_to_the_same_style(files, reference):
 
 
 def test_mi_render_on_the_file_resolves_the_auto_thresholds(files, reference):
-    """Mitsuba's own render of the file written with `stylized`: one pass of SPP samples with seed s is the
-    pipeline's first (and here only) pass, whose seed is pass_seed(s, 0), so the image is the same to the bit."""
+    """Mitsuba's own render of the file written with `stylized`: one pass of SPP samples with
+    seed s is the pipeline's first (and here only) pass, whose seed is pass_seed(s, 0), so the
+    image is the same to the bit."""
     scene = mi.load_file(files[1], depth="3")
     image = np.array(mi.render(scene, spp=SPP, seed=pass_seed(SEED, 0)))[..., :3]
     assert np.array_equal(image, reference[0])
-    fallback = mi.load_dict({"type": "stylized", "style": "cel", "inner_samples": INNER, "max_depth": 3,
-                             "hide_emitters": True, "thresholds": "0.5"})
-    assert not np.array_equal(np.array(mi.render(scene, integrator=fallback, spp=SPP, seed=pass_seed(SEED, 0))),
-                              image)  # the unresolved fallback is another image: the thresholds were resolved
+    fallback = mi.load_dict(
+        {
+            "type": "stylized",
+            "style": "cel",
+            "inner_samples": INNER,
+            "max_depth": 3,
+            "hide_emitters": True,
+            "thresholds": "0.5",
+        }
+    )
+    assert not np.array_equal(
+        np.array(mi.render(scene, integrator=fallback, spp=SPP, seed=pass_seed(SEED, 0))), image
+    )  # the unresolved fallback is another image: the thresholds were resolved
 
 
 def test_mi_render_against_another_pass_split(files, reference):
-    """Two passes of 2 spp (pipeline) against Mitsuba's one pass of 4: other seeds, other samples, so only the
-    expectation agrees: the image means within 4 SE."""
+    """Two passes of 2 spp (pipeline) against Mitsuba's one pass of 4: other seeds, other
+    samples, so only the expectation agrees: the image means within 4 SE."""
     split = styletrace.render(files[0], pass_spp=2, **ARGS)
     assert not np.array_equal(split, reference[0])
     scene = mi.load_file(files[1], depth="3")
@@ -144,10 +186,10 @@ def test_mi_render_against_another_pass_split(files, reference):
 
 
 def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
-    """The default of `denoise` is one (`denoise.default_method`: auto, unless $STYLETRACE_DENOISE, which the
-    suite sets to off and this test clears): `styletrace.render`, the command line, the preview and Blender's
-    Denoise property (tests/blender/test_denoise.py) all take it, and the Python call and the command line draw
-    the same denoised image."""
+    """The default of `denoise` is one (`denoise.default_method`: auto, unless
+    $STYLETRACE_DENOISE, which the suite sets to off and this test clears): `styletrace.render`,
+    the command line, the preview and Blender's Denoise property (tests/blender/test_denoise.py)
+    all take it, and the Python call and the command line draw the same denoised image."""
     monkeypatch.delenv("STYLETRACE_DENOISE", raising=False)
     from styletrace.denoise import default_method
     assert default_method() == "auto"
@@ -157,9 +199,29 @@ def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
     assert not np.array_equal(image, styletrace.render(files[0], denoise="off", **args))
     env = {k: v for k, v in child_env().items() if k != "STYLETRACE_DENOISE"}
     out = tmp_path / "default.exr"
-    r = subprocess.run([sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3", "--style", "cel",
-                        "--inner", str(INNER), "--seed", str(SEED), "-o", str(out)],
-                       capture_output=True, text=True, env=env, timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            files[0],
+            "-D",
+            "depth=3",
+            "--style",
+            "cel",
+            "--inner",
+            str(INNER),
+            "--seed",
+            str(SEED),
+            "-o",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     assert "denoised: expectation" in r.stderr, r.stderr
     assert np.array_equal(np.array(mi.Bitmap(str(out)))[..., :3], image)

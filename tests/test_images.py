@@ -1,4 +1,5 @@
-"""Writing images: EXR linear, PNG sRGB and clamped, atomic and checked, and a render is never lost."""
+"""Writing images: EXR linear, PNG sRGB and clamped, atomic and checked, and a render is never
+lost."""
 import errno
 import os
 import signal
@@ -7,13 +8,13 @@ import sys
 import threading
 import time
 
-import mitsuba as mi
 import numpy as np
 import pytest
 from conftest import child_env
 
 import styletrace
 from styletrace import images
+from styletrace.gate import mi
 from styletrace.images import save_safely, write_image
 
 styletrace.init()
@@ -31,7 +32,8 @@ def srgb(x):
 
 
 def test_a_failed_write_keeps_the_render(tmp_path, capsys):
-    """If writing fails after rendering (e.g. the folder vanished), the image goes to a temporary EXR."""
+    """If writing fails after rendering (e.g. the folder vanished), the image goes to a temporary
+    EXR."""
     img = np.full((4, 6, 3), 0.25, dtype=np.float32)
     out = save_safely(img, str(tmp_path / "gone" / "x.png"))
     assert out != str(tmp_path / "gone" / "x.png") and out.endswith(".exr")
@@ -41,9 +43,12 @@ def test_a_failed_write_keeps_the_render(tmp_path, capsys):
 
 
 def test_png_clamps_instead_of_wrapping(tmp_path):
-    """Above 1 is white however bright (Mitsuba's own 8-bit conversion wraps past ~2410 to black), below 0
-    and NaN are black, +inf white; in-range values are the sRGB code within rounding."""
-    values = np.array([1e4, 3000, 2410.5, -1, np.nan, np.inf, -np.inf, 0.5, 0.002, 1.0], dtype=np.float32)
+    """Above 1 is white however bright (Mitsuba's own 8-bit conversion wraps past ~2410 to
+    black), below 0 and NaN are black, +inf white; in-range values are the sRGB code within
+    rounding."""
+    values = np.array(
+        [1e4, 3000, 2410.5, -1, np.nan, np.inf, -np.inf, 0.5, 0.002, 1.0], dtype=np.float32
+    )
     expect = np.array([1, 1, 1, 0, 0, 1, 0, srgb(0.5), srgb(0.002), 1.0])
     img = np.repeat(values[None, :, None], 3, axis=2)
     write_image(img, str(tmp_path / "c.png"))
@@ -74,7 +79,8 @@ def redirect_temp_files(monkeypatch, folder, device):
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
 def test_full_disk_raises_and_keeps_the_old_file(tmp_path, monkeypatch):
-    """Writes to /dev/full fail with ENOSPC: the write raises, the old file and folder are untouched."""
+    """Writes to /dev/full fail with ENOSPC: the write raises, the old file and folder are
+    untouched."""
     dest = tmp_path / "x.exr"
     old = np.full((2, 3, 3), 0.75, dtype=np.float32)
     write_image(old, str(dest))
@@ -98,7 +104,8 @@ def test_full_disk_falls_back_to_a_temporary_exr(tmp_path, monkeypatch, capsys):
 
 
 def test_a_short_write_is_detected(tmp_path, monkeypatch):
-    """A writer that drops bytes but reports success (as Mitsuba's Bitmap.write does on a full disk)."""
+    """A writer that drops bytes but reports success (as Mitsuba's Bitmap.write does on a full
+    disk)."""
     real = os.fdopen
 
     class Lossy:
@@ -181,12 +188,16 @@ while True:
 
 
 def test_kill_9_during_writes_never_leaves_a_broken_file(tmp_path):
-    """A process rewriting a 12 MB EXR in a loop is killed at several moments; the file always reads."""
+    """A process rewriting a 12 MB EXR in a loop is killed at several moments; the file always
+    reads."""
     dest = tmp_path / "x.exr"
     write_image(np.zeros((1024, 1024, 3), np.float32), str(dest))
     for delay in (0.05, 0.13, 0.31, 0.52):
-        proc = subprocess.Popen([sys.executable, "-c", KILLED_WRITER, str(dest)], stdout=subprocess.PIPE,
-                                env=child_env())
+        proc = subprocess.Popen(
+            [sys.executable, "-c", KILLED_WRITER, str(dest)],
+            stdout=subprocess.PIPE,
+            env=child_env(),
+        )
         assert proc.stdout.readline().strip() == b"ready"
         time.sleep(delay)
         proc.send_signal(signal.SIGKILL)
@@ -195,8 +206,8 @@ def test_kill_9_during_writes_never_leaves_a_broken_file(tmp_path):
 
 
 def test_a_written_file_gets_ordinary_permissions(tmp_path):
-    """The temporary file is private (0o600); the image must not stay so: a new file gets 0o666 less the
-    umask, a replaced one keeps its own bits."""
+    """The temporary file is private (0o600); the image must not stay so: a new file gets 0o666
+    less the umask, a replaced one keeps its own bits."""
     from styletrace.images import write_image
     img = np.full((4, 6, 3), 0.25, dtype=np.float32)
     umask = os.umask(0o022)
@@ -213,12 +224,24 @@ def test_a_written_file_gets_ordinary_permissions(tmp_path):
         os.umask(umask)
 
 
-@pytest.mark.parametrize("pixel_format,channels,ext", [
-    ("rgb", 3, ".exr"), ("rgb", 3, ".png"), ("rgba", 4, ".exr"), ("rgba", 4, ".png"), ("luminance", 1, ".exr"),
-    ("luminance", 1, ".png"), ("luminance_alpha", 2, ".exr"), ("luminance_alpha", 2, ".png"), ("xyz", 3, ".exr")])
+@pytest.mark.parametrize(
+    "pixel_format,channels,ext",
+    [
+        ("rgb", 3, ".exr"),
+        ("rgb", 3, ".png"),
+        ("rgba", 4, ".exr"),
+        ("rgba", 4, ".png"),
+        ("luminance", 1, ".exr"),
+        ("luminance", 1, ".png"),
+        ("luminance_alpha", 2, ".exr"),
+        ("luminance_alpha", 2, ".png"),
+        ("xyz", 3, ".exr"),
+    ],
+)
 def test_the_plain_encoder_writes_what_mitsuba_writes(tmp_path, pixel_format, channels, ext):
-    """`encode_plain` (the interrupted render's writer, which must not wait for a running kernel) gives the
-    file Mitsuba reads back as the same pixels, in the same pixel format, as Mitsuba's own encoding."""
+    """`encode_plain` (the interrupted render's writer, which must not wait for a running kernel)
+    gives the file Mitsuba reads back as the same pixels, in the same pixel format, as Mitsuba's
+    own encoding."""
     img = (np.random.default_rng(3).random((5, 7, channels)) * 3).astype(np.float32)
     img[0, 0, 0], img[1, 1, -1] = np.nan, np.inf
     write_image(img, str(tmp_path / f"plain{ext}"), pixel_format, plain=True)
@@ -231,7 +254,11 @@ def test_the_plain_encoder_writes_what_mitsuba_writes(tmp_path, pixel_format, ch
 def test_the_plain_encoder_keeps_the_aov_channels(tmp_path):
     rng = np.random.default_rng(4)
     img = rng.random((4, 6, 3)).astype(np.float32)
-    aovs = {"variance": rng.random((4, 6, 3)), "bias": rng.random((4, 6)), "children": rng.random((4, 6))}
+    aovs = {
+        "variance": rng.random((4, 6, 3)),
+        "bias": rng.random((4, 6)),
+        "children": rng.random((4, 6)),
+    }
     write_image(img, str(tmp_path / "plain.exr"), "rgb", aovs, plain=True)
     write_image(img, str(tmp_path / "mitsuba.exr"), "rgb", aovs)
     a, b = mi.Bitmap(str(tmp_path / "plain.exr")), mi.Bitmap(str(tmp_path / "mitsuba.exr"))

@@ -10,27 +10,37 @@ PACKAGE = os.path.join(SRC, "styletrace")
 
 
 def run_child(code):
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=child_env(), timeout=300)
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=child_env(), timeout=300
+    )
 
 
 def test_import_styletrace_loads_neither_drjit_nor_mitsuba():
-    r = run_child("import sys, styletrace, styletrace.estimators, styletrace.errors, styletrace.frontends.cli; "
-                  "print(sorted(m for m in ('drjit', 'mitsuba') if m in sys.modules))")
+    r = run_child(
+        "import sys, styletrace, styletrace.estimators, styletrace.errors, "
+        "styletrace.frontends.cli; "
+        "print(sorted(m for m in ('drjit', 'mitsuba') if m in sys.modules))"
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "[]"
 
 
 def test_first_use_of_the_api_initialises_the_backend():
-    r = run_child("import styletrace, mitsuba as mi; f = styletrace.render; print(callable(f), mi.variant(), "
-                  "styletrace.variant == mi.variant()); mi.load_dict({'type': 'stylized', 'style': 'cel'})")
+    r = run_child(
+        "import styletrace, mitsuba as mi; f = styletrace.render; print(callable(f), mi.variant(), "
+        "styletrace.variant == mi.variant()); mi.load_dict({'type': 'stylized', 'style': 'cel'})"
+    )
     assert r.returncode == 0, r.stderr
     words = r.stdout.split()
     assert words[0] == "True" and words[1].endswith("_rgb") and words[2] == "True"
 
 
 def test_the_plugin_modules_import_on_their_own():
-    """`styletrace.render` was both a function and a subpackage; the plugins now live in `styletrace.kernel`."""
-    r = run_child("import styletrace.kernel.integrator as m, styletrace; print(m.StylizedIntegrator.__name__)")
+    """`styletrace.render` was both a function and a subpackage; the plugins now live in
+    `styletrace.kernel`."""
+    r = run_child(
+        "import styletrace.kernel.integrator as m, styletrace; print(m.StylizedIntegrator.__name__)"
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "StylizedIntegrator"
 
@@ -115,7 +125,9 @@ def test_no_import_cycles():
     graph = import_graph()
     # a package importing its own submodules to register them is not a cycle of the code's layers
     for name in graph:
-        graph[name] = {d for d in graph[name] if not (d.startswith(name + ".") and name in ("styletrace",))}
+        graph[name] = {
+            d for d in graph[name] if not (d.startswith(name + ".") and name in ("styletrace",))
+        }
     assert cycles(graph) == []
 
 
@@ -124,8 +136,9 @@ def test_the_cycle_check_finds_a_cycle():
 
 
 def test_only_the_engine_layers_import_drjit_or_mitsuba():
-    """Dr.Jit picks its libLLVM when first imported: modules that import it at load time sit below a guard
-    (`jit.backend()` in `styles`, `kernel`, `scene`, `api`), and the estimators and front ends import it nowhere."""
+    """Dr.Jit picks its libLLVM when first imported: modules that import it at load time sit
+    below a guard (`jit.backend()` in `styles`, `kernel`, `scene`, `api`), and the estimators and
+    front ends import it nowhere."""
     graph_free = ("styletrace", "styletrace.errors", "styletrace.jit", "styletrace.scene.plugins",
                   "styletrace.frontends.cli", "styletrace.frontends.gallery")
     for name in graph_free:

@@ -9,8 +9,17 @@ from conftest import child_env
 from styletrace import jit
 
 
-@pytest.mark.parametrize("name,major", [("libLLVM-19.so", 19), ("libLLVM.so.19.1", 19), ("libLLVM-15.so.1", 15),
-                                        ("libLLVM-14.0.6.so.1", 14), ("libLLVM.so.22.1", 22), ("libfoo.so", None)])
+@pytest.mark.parametrize(
+    "name,major",
+    [
+        ("libLLVM-19.so", 19),
+        ("libLLVM.so.19.1", 19),
+        ("libLLVM-15.so.1", 15),
+        ("libLLVM-14.0.6.so.1", 14),
+        ("libLLVM.so.22.1", 22),
+        ("libfoo.so", None),
+    ],
+)
 def test_llvm_major(name, major):
     assert jit.llvm_major("/x/" + name) == major
 
@@ -28,8 +37,14 @@ def test_only_old_llvm_finds_nothing(tmp_path):
 
 
 def _import_in_child(env_extra, code="import styletrace; print(styletrace.variant)"):
-    env = {k: v for k, v in child_env(**env_extra).items() if k != "DRJIT_LIBLLVM_PATH" or k in env_extra}
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    env = {
+        k: v
+        for k, v in child_env(**env_extra).items()
+        if k != "DRJIT_LIBLLVM_PATH" or k in env_extra
+    }
+    return subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120
+    )
 
 
 def test_import_selects_llvm_variant():
@@ -48,11 +63,17 @@ def test_user_variant_is_kept():
 
 @pytest.mark.parametrize("variant", ["llvm_ad_mono", "llvm_ad_spectral", "scalar_rgb"])
 def test_a_user_variant_styles_cannot_run_on_is_a_clear_error(variant):
-    """Not silently replaced, not an obscure failure at render time: one error naming the variant."""
-    r = _import_in_child({"DRJIT_LIBLLVM_PATH": jit.find_libllvm()},
-                         f"import mitsuba as mi; mi.set_variant('{variant}'); import styletrace; styletrace.init()")
+    """Not silently replaced, not an obscure failure at render time: one error naming the
+    variant."""
+    r = _import_in_child(
+        {"DRJIT_LIBLLVM_PATH": jit.find_libllvm()},
+        f"import mitsuba as mi; mi.set_variant('{variant}'); import styletrace; styletrace.init()",
+    )
     assert r.returncode != 0
-    assert f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active variant is {variant}" in r.stderr
+    assert (
+        f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active variant is "
+        f"{variant}" in r.stderr
+    )
 
 
 def test_llvm15_is_refused_with_a_clear_error(tmp_path):
@@ -87,29 +108,41 @@ def test_command_without_llvm_is_one_line_and_exit_2(tmp_path):
     """The command line turns a backend failure (no usable libLLVM) into its one-line error."""
     fake = tmp_path / "libLLVM-15.so"
     fake.write_bytes(b"")
-    r = _import_in_child({"DRJIT_LIBLLVM_PATH": str(fake), "STYLETRACE_NO_CUDA": "1"},
-                         "import sys; from styletrace.frontends.cli import main; sys.exit(main(['render']))")
+    r = _import_in_child(
+        {"DRJIT_LIBLLVM_PATH": str(fake), "STYLETRACE_NO_CUDA": "1"},
+        "import sys; from styletrace.frontends.cli import main; sys.exit(main(['render']))",
+    )
     assert r.returncode == 2, r.stderr
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("styletrace: error: ") and "apt-get install libllvm19" in lines[0]
+    assert (
+        len(lines) == 1
+        and lines[0].startswith("styletrace: error: ")
+        and "apt-get install libllvm19" in lines[0]
+    )
 
 
 LIBDIR = "/usr/lib/x86_64-linux-gnu"
 
 
-@pytest.mark.skipif(not os.path.exists(f"{LIBDIR}/libLLVM-15.so.1"), reason="needs the system's libLLVM 15")
+@pytest.mark.skipif(
+    not os.path.exists(f"{LIBDIR}/libLLVM-15.so.1"), reason="needs the system's libLLVM 15"
+)
 def test_an_unversioned_libllvm_15_is_refused_by_its_contents(tmp_path):
-    """A copy of libLLVM 15 named plain libLLVM.so: its ELF symbol version LLVM_15 gives it away, so the
-    process ends with the one-line error instead of Dr.Jit aborting it (status 134)."""
+    """A copy of libLLVM 15 named plain libLLVM.so: its ELF symbol version LLVM_15 gives it away,
+    so the process ends with the one-line error instead of Dr.Jit aborting it (status 134)."""
     copy = tmp_path / "libLLVM.so"
     copy.write_bytes(open(f"{LIBDIR}/libLLVM-15.so.1", "rb").read())
     assert jit.llvm_major(str(copy)) is None and jit.llvm_major_of_file(str(copy)) == 15
     r = _import_in_child({"STYLETRACE_NO_CUDA": "1", "DRJIT_LIBLLVM_PATH": str(copy)})
     assert r.returncode == 1, (r.returncode, r.stderr)
-    assert f"BackendError: DRJIT_LIBLLVM_PATH={copy} is LLVM 15, which crashes Dr.Jit 1.5" in r.stderr
+    assert (
+        f"BackendError: DRJIT_LIBLLVM_PATH={copy} is LLVM 15, which crashes Dr.Jit 1.5" in r.stderr
+    )
 
 
-@pytest.mark.skipif(not os.path.exists(f"{LIBDIR}/libLLVM.so.19.1"), reason="needs the system's libLLVM 19")
+@pytest.mark.skipif(
+    not os.path.exists(f"{LIBDIR}/libLLVM.so.19.1"), reason="needs the system's libLLVM 19"
+)
 def test_an_unversioned_libllvm_19_is_accepted(tmp_path):
     copy = tmp_path / "libLLVM.so"
     copy.write_bytes(open(f"{LIBDIR}/libLLVM.so.19.1", "rb").read())

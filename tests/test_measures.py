@@ -1,4 +1,5 @@
-"""The reference-free measures of benchmarks/real_scenes.py (`styletrace.measures`), on images with known answers."""
+"""The reference-free measures of benchmarks/real_scenes.py (`styletrace.measures`), on images
+with known answers."""
 import numpy as np
 import pytest
 

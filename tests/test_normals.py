@@ -1,15 +1,13 @@
-"""Deterministic vertex normals (`styletrace.normals`): Mitsuba's own computed normals are the truth, a file's
-own normals are never touched."""
+"""Deterministic vertex normals (`styletrace.normals`): Mitsuba's own computed normals are the
+truth, a file's own normals are never touched."""
 import numpy as np
 
 import styletrace
+from styletrace.frontends.api import scene_dict
+from styletrace.gate import mi
+from styletrace.normals import TOLERANCE, angle_weighted, canonical_normals
 
 styletrace.init()
-
-import mitsuba as mi  # noqa: E402
-
-from styletrace.frontends.api import scene_dict  # noqa: E402
-from styletrace.normals import TOLERANCE, angle_weighted, canonical_normals  # noqa: E402
 
 
 def _dragon():
@@ -35,7 +33,8 @@ def test_computed_normals_are_replaced_and_the_same_on_every_load():
 
 
 def test_a_files_own_normals_stay():
-    """A mesh whose normals were given (here: all tilted, not the angle-weighted ones) is left alone."""
+    """A mesh whose normals were given (here: all tilted, not the angle-weighted ones) is left
+    alone."""
     positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=np.float32)
     faces = np.array([[0, 1, 2], [1, 3, 2]], dtype=np.uint32)
     given = np.tile(np.array([0.6, 0.0, 0.8], dtype=np.float32), (4, 1))

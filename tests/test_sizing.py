@@ -1,4 +1,5 @@
-"""Pass sizes for the device: flat on the CPU, from the GPU's total memory on CUDA (a fake device here)."""
+"""Pass sizes for the device: flat on the CPU, from the GPU's total memory on CUDA (a fake device
+here)."""
 from styletrace.frontends import api
 from styletrace.pipeline.sizing import CUDA_LANE_BYTES, CUDA_LANES_MAX, lanes_per_pass
 
@@ -6,7 +7,10 @@ GiB = 1 << 30
 
 
 def test_cpu_keeps_the_flat_pass_size_whatever_memory_there_is():
-    assert lanes_per_pass("llvm_ad_rgb", query=lambda: (1000 * GiB, 1000 * GiB)) == (api.LANES_PER_PASS, None)
+    assert lanes_per_pass("llvm_ad_rgb", query=lambda: (1000 * GiB, 1000 * GiB)) == (
+        api.LANES_PER_PASS,
+        None,
+    )
 
 
 def test_cuda_takes_half_the_total_memory_as_a_power_of_two():
@@ -31,4 +35,6 @@ def test_cuda_halves_when_free_memory_is_short_and_says_so():
 def test_cuda_bounds():
     assert lanes_per_pass("cuda_ad_rgb", query=lambda: None) == (api.LANES_PER_PASS, None)
     assert lanes_per_pass("cuda_ad_rgb", query=lambda: (1 << 50, 1 << 50))[0] == CUDA_LANES_MAX
-    assert lanes_per_pass("cuda_ad_rgb", query=lambda: (GiB // 4, GiB // 2))[0] == api.LANES_PER_PASS
+    assert (
+        lanes_per_pass("cuda_ad_rgb", query=lambda: (GiB // 4, GiB // 2))[0] == api.LANES_PER_PASS
+    )

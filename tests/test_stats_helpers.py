@@ -6,11 +6,11 @@ K = 16
 
 
 def rare_light_renders(rng, n, p=1 / 256, big=16.0, base=0.4):
-    """K renders of 24 x 24 pixels of an exactly unbiased estimator whose samples are `base` except, with
-    probability p, `base + big`: a pixel's value is the mean of n such samples. The numbers are those of
-    first_n_hits at stylize_depth 2 on tests/kernel/test_null_surfaces.py's diffuse card (sky: 0.8 x 0.5;
-    the lamp, 20 x 0.8, found by a cosine-sampled bounce about once in 256), and the reference is path's
-    render: normal, of the same mean."""
+    """K renders of 24 x 24 pixels of an exactly unbiased estimator whose samples are `base`
+    except, with probability p, `base + big`: a pixel's value is the mean of n such samples. The
+    numbers are those of first_n_hits at stylize_depth 2 on tests/kernel/test_null_surfaces.py's
+    diffuse card (sky: 0.8 x 0.5; the lamp, 20 x 0.8, found by a cosine-sampled bounce about once
+    in 256), and the reference is path's render: normal, of the same mean."""
     ours = base + big * rng.binomial(n, p, size=(K, 24, 24, 1)) / n
     ref = rng.normal(base + big * p, 0.02, size=(K, 24, 24, 1))
     return ours, ref
@@ -18,11 +18,11 @@ def rare_light_renders(rng, n, p=1 / 256, big=16.0, base=0.4):
 
 def test_pixel_t_test_rejects_an_unbiased_estimator_of_rare_large_samples_at_few_samples():
     """The artefact behind the 'max |t| 47' of first_n_hits at depth 2 (test_recursion.py,
-    test_first_n_hits_depth_2_under_a_small_light_per_pixel): with n = 16 samples per pixel and render most
-    renders hold no bright sample, the per-pixel t-test rejects a third of the pixels while the image means
-    agree; with n = 2048 every render holds several and the test passes. Measured on the renderer itself:
-    max |t| 28, 32, 8.8, 5.2 at 4, 16, 64, 256 spp (x inner 4), falling as the spp grow, where a bias would
-    make it grow."""
+    test_first_n_hits_depth_2_under_a_small_light_per_pixel): with n = 16 samples per pixel and
+    render most renders hold no bright sample, the per-pixel t-test rejects a third of the pixels
+    while the image means agree; with n = 2048 every render holds several and the test passes.
+    Measured on the renderer itself: max |t| 28, 32, 8.8, 5.2 at 4, 16, 64, 256 spp (x inner 4),
+    falling as the spp grow, where a bias would make it grow."""
     rng = np.random.default_rng(1)
     ours, ref = rare_light_renders(rng, 16)
     tmax, thr, frac = pixel_t_test(ours, ref)
@@ -34,8 +34,9 @@ def test_pixel_t_test_rejects_an_unbiased_estimator_of_rare_large_samples_at_few
 
 
 def test_pixel_t_test_finds_one_biased_pixel_of_a_normal_estimator():
-    """The same test is not blind where its precondition holds: two normal estimators of the same mean (sd 0.01
-    per render) pass, and one pixel made 10% brighter in one of them (t about 14) is found."""
+    """The same test is not blind where its precondition holds: two normal estimators of the same
+    mean (sd 0.01 per render) pass, and one pixel made 10% brighter in one of them (t about 14)
+    is found."""
     rng = np.random.default_rng(2)
     a = rng.normal(0.5, 0.01, size=(K, 24, 24, 1))
     b = rng.normal(0.5, 0.01, size=(K, 24, 24, 1))

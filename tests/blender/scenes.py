@@ -1,6 +1,6 @@
-"""Scenes built with bpy for the add-on's tests, and the two renderers run on them: Cycles (the reference) and
-styletrace's engine (F12). Images are read back from EXR files written by Blender itself (single-part EXR,
-so every pass is a channel Mitsuba's reader sees)."""
+"""Scenes built with bpy for the add-on's tests, and the two renderers run on them: Cycles (the
+reference) and styletrace's engine (F12). Images are read back from EXR files written by Blender
+itself (single-part EXR, so every pass is a channel Mitsuba's reader sees)."""
 from __future__ import annotations
 
 import math
@@ -43,7 +43,9 @@ def material(name, kind="ShaderNodeBsdfDiffuse", **inputs):
     node = nt.nodes.new(kind)
     for key, value in inputs.items():
         sock = node.inputs[key]
-        sock.default_value = (*value, 1.0) if isinstance(value, tuple) and len(value) == 3 else value
+        sock.default_value = (
+            (*value, 1.0) if isinstance(value, tuple) and len(value) == 3 else value
+        )
     nt.links.new(node.outputs[0], nt.nodes["Material Output"].inputs["Surface"])
     return mat, node
 
@@ -65,7 +67,9 @@ def cube(size, location, mat=None):
 
 
 def sphere(radius, location, mat=None, smooth=True):
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=radius, location=location, segments=48, ring_count=24)
+    bpy.ops.mesh.primitive_uv_sphere_add(
+        radius=radius, location=location, segments=48, ring_count=24
+    )
     obj = bpy.context.object
     if smooth:
         bpy.ops.object.shade_smooth()
@@ -101,32 +105,38 @@ def look(location, target):
     return d.to_track_quat("-Z", "Y").to_euler()
 
 
-# ---- the comparison scenes -----------------------------------------------------------------------------------
+# ---- the comparison scenes -----------------------------------------------------------------------
 
 def room(size: int = 64):
-    """A diffuse room open to the sky: floor and three walls, an area light under the open top and a sun."""
+    """A diffuse room open to the sky: floor and three walls, an area light under the open top
+    and a sun."""
     s = reset(size)
     white, _ = material("white", Color=(0.8, 0.8, 0.8))
     red, _ = material("red", Color=(0.8, 0.15, 0.1))
-    green, _ = material("green", "ShaderNodeBsdfPrincipled", **{"Base Color": (0.15, 0.7, 0.2),
-                                                                "Specular IOR Level": 0.0, "Roughness": 1.0})
+    green, _ = material(
+        "green",
+        "ShaderNodeBsdfPrincipled",
+        **{"Base Color": (0.15, 0.7, 0.2), "Specular IOR Level": 0.0, "Roughness": 1.0},
+    )
     plane(4, (0, 0, 0), mat=white)
     plane(4, (0, 2, 2), (math.pi / 2, 0, 0), mat=white)
     plane(4, (-2, 0, 2), (0, math.pi / 2, 0), mat=red)
     plane(4, (2, 0, 2), (0, math.pi / 2, 0), mat=green)
     cube(1.0, (0.5, 0.6, 0.5), mat=white)
-    light("AREA", (0, -0.5, 4.5), energy=150.0, size=1.0)  # out of view: Blender 5 hides lights from the camera
-    # the sun shines towards the camera: the area light's shadow (Cycles' lights cast none; styletrace's do,
-    # docs/blender.md) falls outside the room
+    # out of view: Blender 5 hides lights from the camera
+    light("AREA", (0, -0.5, 4.5), energy=150.0, size=1.0)
+    # the sun shines towards the camera: the area light's shadow (Cycles' lights cast none;
+    # styletrace's do, docs/blender.md) falls outside the room
     light("SUN", (0, 0, 10), (math.radians(35), 0, math.radians(210)), energy=2.0, angle=0.0)
     camera((0, -7, 2.0), look((0, -7, 2.0), (0, 0, 1.4)), lens=40)
     return s
 
 
 def checker_image(name="checker", size=32):
-    """An 8-bit sRGB texture, asymmetric in v (blue rising, red-green falling) and periodic in u (red and green
-    alternating), so that it tiles without a seam. Smooth: Cycles interpolates 8-bit sRGB texels before decoding them, styletrace after (docs/blender.md), which
-    differs by a few percent across hard texel edges."""
+    """An 8-bit sRGB texture, asymmetric in v (blue rising, red-green falling) and periodic in u
+    (red and green alternating), so that it tiles without a seam. Smooth: Cycles interpolates
+    8-bit sRGB texels before decoding them, styletrace after (docs/blender.md), which differs by
+    a few percent across hard texel edges."""
     img = bpy.data.images.new(name, size, size, alpha=True)
     u = (np.arange(size) + 0.5) / size
     px = np.ones((size, size, 4), np.float32)
@@ -141,7 +151,8 @@ def checker_image(name="checker", size=32):
 
 
 def sky_image(name="sky", w=64, h=32):
-    """A float equirectangular map: a blue-white gradient and a warm bright patch off to one side."""
+    """A float equirectangular map: a blue-white gradient and a warm bright patch off to one
+    side."""
     img = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
     y = (np.arange(h) + 0.5) / h  # bottom row first: y = 0 looks down
     px = np.ones((h, w, 4), np.float32)
@@ -165,9 +176,12 @@ def world_texture(strength=1.0):
 
 
 def textured_plane(size: int = 64):
-    """A plane with an image-textured Principled BSDF under an HDR world, seen at an angle with sky in view."""
+    """A plane with an image-textured Principled BSDF under an HDR world, seen at an angle with
+    sky in view."""
     s = reset(size)
-    mat, node = material("tex", "ShaderNodeBsdfPrincipled", **{"Specular IOR Level": 0.0, "Roughness": 1.0})
+    mat, node = material(
+        "tex", "ShaderNodeBsdfPrincipled", **{"Specular IOR Level": 0.0, "Roughness": 1.0}
+    )
     tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
     tex.image = checker_image()
     mat.node_tree.links.new(tex.outputs["Color"], node.inputs["Base Color"])
@@ -178,15 +192,17 @@ def textured_plane(size: int = 64):
 
 
 def sphere_scene(kind: str, size: int = 64):
-    """A glossy metal ('glossy') or glass ('glass') sphere on a diffuse floor, under the HDR world and a point
-    light."""
+    """A glossy metal ('glossy') or glass ('glass') sphere on a diffuse floor, under the HDR
+    world and a point light."""
     s = reset(size)
     floor, _ = material("floor", Color=(0.6, 0.6, 0.6))
     plane(20, (0, 0, 0), mat=floor)
     if kind == "glossy":
         mat, _ = material("metal", "ShaderNodeBsdfGlossy", Color=(0.95, 0.64, 0.54), Roughness=0.35)
     else:
-        mat, _ = material("glass", "ShaderNodeBsdfGlass", Color=(1.0, 1.0, 1.0), Roughness=0.0, IOR=1.5)
+        mat, _ = material(
+            "glass", "ShaderNodeBsdfGlass", Color=(1.0, 1.0, 1.0), Roughness=0.0, IOR=1.5
+        )
     sphere(1.0, (0, 0, 1.0), mat=mat)
     world_texture(0.8)
     light("POINT", (2.5, -2.0, 4.0), energy=800.0, shadow_soft_size=0.0)
@@ -195,7 +211,8 @@ def sphere_scene(kind: str, size: int = 64):
 
 
 def instanced(size: int = 64):
-    """A collection (cube and sphere) instanced three times by empties, on a floor under an area light and sun."""
+    """A collection (cube and sphere) instanced three times by empties, on a floor under an area
+    light and sun."""
     s = reset(size)
     white, _ = material("white", Color=(0.8, 0.8, 0.8))
     blue, _ = material("blue", Color=(0.2, 0.3, 0.8))
@@ -223,11 +240,16 @@ def instanced(size: int = 64):
     return s
 
 
-SCENES = {"room": room, "textured_plane": textured_plane, "glossy": lambda size=64: sphere_scene("glossy", size),
-          "glass": lambda size=64: sphere_scene("glass", size), "instanced": instanced}
+SCENES = {
+    "room": room,
+    "textured_plane": textured_plane,
+    "glossy": lambda size=64: sphere_scene("glossy", size),
+    "glass": lambda size=64: sphere_scene("glass", size),
+    "instanced": instanced,
+}
 
 
-# ---- rendering ------------------------------------------------------------------------------------------------
+# ---- rendering -----------------------------------------------------------------------------------
 
 def read_exr(path: str) -> dict[str, np.ndarray]:
     """{pass name: H x W x C float32} of a single-part EXR Blender wrote."""
@@ -241,11 +263,15 @@ def read_exr(path: str) -> dict[str, np.ndarray]:
         layer_pass = parts[-2] if len(parts) >= 2 else "Combined"
         out.setdefault(layer_pass, []).append((parts[-1], arr[..., i]))
     order = "RGBAXYZ"
-    return {k: np.stack([a for _, a in sorted(v, key=lambda t: order.find(t[0]))], axis=-1) for k, v in out.items()}
+    return {
+        k: np.stack([a for _, a in sorted(v, key=lambda t: order.find(t[0]))], axis=-1)
+        for k, v in out.items()
+    }
 
 
 def f12(path: str) -> dict[str, np.ndarray]:
-    """Render the current scene with its engine (bpy.ops.render.render, as F12) and read every pass back."""
+    """Render the current scene with its engine (bpy.ops.render.render, as F12) and read every
+    pass back."""
     s = bpy.context.scene
     s.render.filepath = path
     bpy.ops.render.render(write_still=True)
@@ -253,8 +279,8 @@ def f12(path: str) -> dict[str, np.ndarray]:
 
 
 def cycles(path: str, spp: int, seed: int = 0) -> np.ndarray:
-    """The current scene rendered by Cycles on the CPU: no denoising, adaptive sampling, clamping or caustics
-    filter, a one-pixel box filter (as styletrace's film); returns H x W x 3."""
+    """The current scene rendered by Cycles on the CPU: no denoising, adaptive sampling, clamping
+    or caustics filter, a one-pixel box filter (as styletrace's film); returns H x W x 3."""
     s = bpy.context.scene
     s.render.engine = "CYCLES"
     c = s.cycles
@@ -274,9 +300,10 @@ def cycles(path: str, spp: int, seed: int = 0) -> np.ndarray:
 
 
 def cycles_reference(name: str, spp: int, builder=None) -> tuple[np.ndarray, np.ndarray]:
-    """(mean image, its per-pixel variance) of scene `name` from two Cycles renders with different seeds, cached
-    under tests/blender/.cache (ignored by git). The variance of the mean of two renders is estimated per pixel
-    as ((a - b) / 2)^2; a block's variance is the mean of its pixels' over the block's pixel count."""
+    """(mean image, its per-pixel variance) of scene `name` from two Cycles renders with
+    different seeds, cached under tests/blender/.cache (ignored by git). The variance of the mean
+    of two renders is estimated per pixel as ((a - b) / 2)^2; a block's variance is the mean of
+    its pixels' over the block's pixel count."""
     os.makedirs(CACHE, exist_ok=True)
     cached = os.path.join(CACHE, f"{name}-{spp}-{bpy.app.version_string}.npz")
     if os.path.exists(cached):
@@ -305,23 +332,30 @@ def styletrace(path: str, spp: int, seed: int = 0, pass_spp: int | None = None, 
 
 def blocks(img: np.ndarray, b: int = 8) -> np.ndarray:
     h, w = img.shape[:2]
-    return img[:h - h % b, :w - w % b].reshape(h // b, b, w // b, b, *img.shape[2:]).mean(axis=(1, 3))
+    return (
+        img[: h - h % b, : w - w % b]
+        .reshape(h // b, b, w // b, b, *img.shape[2:])
+        .mean(axis=(1, 3))
+    )
 
 
-#: relative allowance for deterministic differences: pixels that see an environment map directly have no noise
-#: at all, and the renderers filter the map differently (0.1% seen on the textured plane's sky)
+#: relative allowance for deterministic differences: pixels that see an environment map directly
+#: have no noise at all, and the renderers filter the map differently (0.1% seen on the textured
+#: plane's sky)
 ALLOWANCE = 0.005
 
 
 def block_z(st_mean, st_var, cy_mean, cy_var, b: int = 8) -> np.ndarray:
-    """Per-block z scores of the brightness (mean of RGB): difference of the block means over the standard error
-    of that difference (the pixels' variances add; a block mean divides them by its b*b pixels), with `ALLOWANCE`
-    of the block's brightness added in quadrature."""
+    """Per-block z scores of the brightness (mean of RGB): difference of the block means over the
+    standard error of that difference (the pixels' variances add; a block mean divides them by
+    its b*b pixels), with `ALLOWANCE` of the block's brightness added in quadrature."""
     u = lambda a: a.mean(axis=-1)  # noqa: E731
     diff = blocks(u(st_mean), b) - blocks(u(cy_mean), b)
-    # per-pixel variance of the brightness: the RGB channels are correlated, so the variance of their mean is
-    # bounded by the mean of their standard deviations, squared
+    # per-pixel variance of the brightness: the RGB channels are correlated, so the variance of
+    # their mean is bounded by the mean of their standard deviations, squared
     sv = np.sqrt(np.maximum(st_var, 0)).mean(axis=-1) ** 2
     cv = np.sqrt(np.maximum(cy_var, 0)).mean(axis=-1) ** 2
-    se = np.sqrt((blocks(sv, b) + blocks(cv, b)) / (b * b) + (ALLOWANCE * blocks(u(cy_mean), b)) ** 2)
+    se = np.sqrt(
+        (blocks(sv, b) + blocks(cv, b)) / (b * b) + (ALLOWANCE * blocks(u(cy_mean), b)) ** 2
+    )
     return diff / np.maximum(se, 1e-12)

@@ -1,4 +1,5 @@
-"""Whether the Blender tests can run here: skipped with the reason when they cannot (conftest.UNAVAILABLE)."""
+"""Whether the Blender tests can run here: skipped with the reason when they cannot
+(conftest.UNAVAILABLE)."""
 import pytest
 from conftest import UNAVAILABLE
 
@@ -8,5 +9,6 @@ def test_bpy_is_usable():
         pytest.skip(UNAVAILABLE)
     import bpy
     assert bpy.app.version >= (4, 2, 0)
-    bpy.context.scene.render.engine = "STYLETRACE"  # a TypeError unless the add-on registered its engine
+    # a TypeError unless the add-on registered its engine
+    bpy.context.scene.render.engine = "STYLETRACE"
     assert bpy.context.scene.render.engine == "STYLETRACE"

@@ -1,6 +1,7 @@
-"""Cameras against Cycles: shift, sensor fit on a non-square image, orthographic, depth of field, the resolution
-percentage. The room (test_cycles) seen through each camera variant; the image mean within 2% and the 8x8 blocks'
-z-test as in test_cycles, with Cycles references cached the same way."""
+"""Cameras against Cycles: shift, sensor fit on a non-square image, orthographic, depth of field,
+the resolution percentage. The room (test_cycles) seen through each camera variant; the image
+mean within 2% and the 8x8 blocks' z-test as in test_cycles, with Cycles references cached the
+same way."""
 
 import bpy
 import numpy as np
@@ -20,7 +21,8 @@ VARIANTS = {
 def build(variant):
     S.room(64)
     s = bpy.context.scene
-    s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 96, 64, 50  # 48 x 32 pixels
+    # 48 x 32 pixels
+    s.render.resolution_x, s.render.resolution_y, s.render.resolution_percentage = 96, 64, 50
     cam = s.camera.data
     for key, value in VARIANTS[variant].items():
         if key == "dof":
@@ -34,10 +36,15 @@ def build(variant):
 def test_camera_matches_cycles(variant, tmp_path):
     ref, ref_var = S.cycles_reference(f"camera_{variant}", 512, lambda: build(variant))
     build(variant)
-    out = S.styletrace(str(tmp_path / "st.exr"), 128, seed=4, pass_spp=128, style="identity", aovs=True)
+    out = S.styletrace(
+        str(tmp_path / "st.exr"), 128, seed=4, pass_spp=128, style="identity", aovs=True
+    )
     img = out["Combined"][..., :3]
     assert img.shape == ref.shape == (32, 48, 3)
     z = S.block_z(img, out["Variance"], ref, ref_var)
     ratio = img.mean(axis=(0, 1)) / ref.mean(axis=(0, 1))
-    print(f"{variant}: ratio {ratio}, blocks passing {np.mean(np.abs(z) < Z):.3f}, max |z| {np.abs(z).max():.2f}")
+    print(
+        f"{variant}: ratio {ratio}, blocks passing {np.mean(np.abs(z) < Z):.3f}, max |z| "
+        f"{np.abs(z).max():.2f}"
+    )
     assert np.all(np.abs(ratio - 1) < 0.02) and np.mean(np.abs(z) < Z) >= 0.99

@@ -1,12 +1,15 @@
 """F12 with Denoise on (render settings -> styletrace -> Denoise, `blender/denoising.py`).
 
-- Expectation and image denoising give the command line's image: the scene exported to Mitsuba XML and rendered
-  by `styletrace render FILE.xml --denoise ... --seed K --pass-spp N` (a textured floor: the guides' albedo
-  carries the texture). The Noisy pass is the plain F12 render (Denoise off) with the same seed.
-- With Record buffer on, Denoise expectation keeps the denoised buffer: a style change restyles it to what a
-  fresh denoised F12 with the new value gives.
-- Cancel keeps the finished passes, denoised: the image equals a denoised render of just those passes.
-- Record buffer with Denoise image is refused in one line; error passes are off while denoising is on.
+- Expectation and image denoising give the command line's image: the scene exported to Mitsuba XML
+  and rendered by `styletrace render FILE.xml --denoise ... --seed K --pass-spp N` (a textured
+  floor: the guides' albedo carries the texture). The Noisy pass is the plain F12 render (Denoise
+  off) with the same seed.
+- With Record buffer on, Denoise expectation keeps the denoised buffer: a style change restyles it
+  to what a fresh denoised F12 with the new value gives.
+- Cancel keeps the finished passes, denoised: the image equals a denoised render of just those
+  passes.
+- Record buffer with Denoise image is refused in one line; error passes are off while denoising is
+  on.
 """
 import subprocess
 import sys
@@ -31,14 +34,32 @@ def denoise_off():
 @pytest.mark.parametrize("method", ["expectation", "image"])
 def test_f12_denoises_as_the_command_line(method, tmp_path):
     S.textured_plane(32)
-    out = S.styletrace(str(tmp_path / "f12.exr"), 8, seed=11, pass_spp=4, style="cel", inner_samples="4",
-                       denoise=method, aovs=True)
-    assert "Noisy" in out and "Variance" not in out  # no error pass: it would not be the denoised pixel's
+    out = S.styletrace(
+        str(tmp_path / "f12.exr"),
+        8,
+        seed=11,
+        pass_spp=4,
+        style="cel",
+        inner_samples="4",
+        denoise=method,
+        aovs=True,
+    )
+    # no error pass: it would not be the denoised pixel's
+    assert "Noisy" in out and "Variance" not in out
     f12, noisy = out["Combined"][..., :3], out["Noisy"][..., :3]
-    # the plain F12 with the firefly control a denoised render gets at its default (docs/look.md; error passes
-    # would turn it off: they describe the paper's estimator)
-    plain = S.styletrace(str(tmp_path / "plain.exr"), 8, seed=11, pass_spp=4, style="cel", inner_samples="4",
-                         denoise="off", firefly="on", aovs=False)["Combined"][..., :3]
+    # the plain F12 with the firefly control a denoised render gets at its default (docs/look.md;
+    # error passes would turn it off: they describe the paper's estimator)
+    plain = S.styletrace(
+        str(tmp_path / "plain.exr"),
+        8,
+        seed=11,
+        pass_spp=4,
+        style="cel",
+        inner_samples="4",
+        denoise="off",
+        firefly="on",
+        aovs=False,
+    )["Combined"][..., :3]
     np.testing.assert_allclose(noisy, plain, rtol=1e-5, atol=1e-6)
     assert np.abs(f12 - noisy).mean() > 1e-3  # denoising changed it
     xml = str(tmp_path / "scene.xml")
@@ -47,17 +68,42 @@ def test_f12_denoises_as_the_command_line(method, tmp_path):
     line = operators.command_line(xml, bpy.context.scene.styletrace)  # what the export reports
     assert line.endswith(f"--spp 8 --seed 11 --pass-spp 4 --denoise {method}"), line
     cli = str(tmp_path / "cli.exr")
-    run = subprocess.run([sys.executable, "-m", "styletrace", "render", xml, "--spp", "8", "--seed", "11",
-                          "--pass-spp", "4", "--denoise", method, "-q", "-o", cli], capture_output=True, text=True,
-                         env=child_env(), timeout=300)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            xml,
+            "--spp",
+            "8",
+            "--seed",
+            "11",
+            "--pass-spp",
+            "4",
+            "--denoise",
+            method,
+            "-q",
+            "-o",
+            cli,
+        ],
+        capture_output=True,
+        text=True,
+        env=child_env(),
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr
     import mitsuba as mi
-    np.testing.assert_allclose(np.array(mi.Bitmap(cli), dtype=np.float32)[..., :3], f12, rtol=1e-5, atol=1e-5)
+
+    np.testing.assert_allclose(
+        np.array(mi.Bitmap(cli), dtype=np.float32)[..., :3], f12, rtol=1e-5, atol=1e-5
+    )
 
 
 def test_the_denoise_default_is_every_front_ends():
-    """Blender's Denoise starts at `denoise.default_method()`, the default of the command line, the Python API
-    and the preview (auto; the suite sets $STYLETRACE_DENOISE=off for its own renders: tests/conftest.py)."""
+    """Blender's Denoise starts at `denoise.default_method()`, the default of the command line,
+    the Python API and the preview (auto; the suite sets $STYLETRACE_DENOISE=off for its own
+    renders: tests/conftest.py)."""
     from styletrace.denoise import default_method
     prop = type(bpy.context.scene.styletrace).bl_rna.properties["denoise"]
     assert prop.default == default_method()
@@ -67,13 +113,32 @@ def test_the_denoise_default_is_every_front_ends():
 def test_a_recorded_denoised_render_restyles_to_a_fresh_one(tmp_path):
     S.room(32)
     st = bpy.context.scene.styletrace
-    S.styletrace(str(tmp_path / "recorded.exr"), 8, seed=9, pass_spp=4, style="cel", inner_samples="4",
-                 record_buffer=True, denoise="expectation")
-    assert restyle.buffer() is not None and restyle.buffer().header["denoise"]["method"] == "expectation"
+    S.styletrace(
+        str(tmp_path / "recorded.exr"),
+        8,
+        seed=9,
+        pass_spp=4,
+        style="cel",
+        inner_samples="4",
+        record_buffer=True,
+        denoise="expectation",
+    )
+    assert (
+        restyle.buffer() is not None
+        and restyle.buffer().header["denoise"]["method"] == "expectation"
+    )
     st.params.cel__levels = "0.1,0.5"  # the update callback restyles
     restyled = pixels(bpy.data.images[restyle.IMAGE])
-    fresh = S.styletrace(str(tmp_path / "fresh.exr"), 8, seed=9, pass_spp=4, style="cel", inner_samples="4",
-                         record_buffer=False, denoise="expectation")["Combined"][..., :3]
+    fresh = S.styletrace(
+        str(tmp_path / "fresh.exr"),
+        8,
+        seed=9,
+        pass_spp=4,
+        style="cel",
+        inner_samples="4",
+        record_buffer=False,
+        denoise="expectation",
+    )["Combined"][..., :3]
     np.testing.assert_allclose(restyled, fresh, rtol=1e-4, atol=1e-5)
     st.params.cel__levels = "0.4,0.95"
 
@@ -87,14 +152,30 @@ def test_cancel_denoises_the_finished_passes(tmp_path, monkeypatch):
         return polls["n"] >= 2  # Esc while the second pass is shown
 
     monkeypatch.setattr(engine.StyletraceEngine, "stop_requested", test_break)
-    out = S.styletrace(str(tmp_path / "cancelled.exr"), 64, seed=5, pass_spp=4, style="cel", inner_samples="4",
-                       denoise="expectation")
+    out = S.styletrace(
+        str(tmp_path / "cancelled.exr"),
+        64,
+        seed=5,
+        pass_spp=4,
+        style="cel",
+        inner_samples="4",
+        denoise="expectation",
+    )
     done = engine.LAST["spp_done"]
     assert engine.LAST["cancelled"] and done == 8
     monkeypatch.undo()
-    again = S.styletrace(str(tmp_path / "short.exr"), done, seed=5, pass_spp=4, style="cel", inner_samples="4",
-                         denoise="expectation")
-    np.testing.assert_allclose(out["Combined"][..., :3], again["Combined"][..., :3], rtol=1e-5, atol=1e-6)
+    again = S.styletrace(
+        str(tmp_path / "short.exr"),
+        done,
+        seed=5,
+        pass_spp=4,
+        style="cel",
+        inner_samples="4",
+        denoise="expectation",
+    )
+    np.testing.assert_allclose(
+        out["Combined"][..., :3], again["Combined"][..., :3], rtol=1e-5, atol=1e-6
+    )
     np.testing.assert_allclose(out["Noisy"][..., :3], again["Noisy"][..., :3], rtol=1e-5, atol=1e-6)
 
 
@@ -103,4 +184,8 @@ def test_record_buffer_with_image_denoising_is_refused_in_one_line(tmp_path):
     with pytest.raises(RuntimeError) as info:
         S.styletrace(str(tmp_path / "x.exr"), 2, style="cel", record_buffer=True, denoise="image")
     message = str(info.value).strip()
-    assert message.startswith("Error:") and "Record buffer with Denoise 'image'" in message and "\n" not in message
+    assert (
+        message.startswith("Error:")
+        and "Record buffer with Denoise 'image'" in message
+        and "\n" not in message
+    )

@@ -1,5 +1,5 @@
-"""The depsgraph exporter on its own: modifiers applied, loop normals (smooth and flat), UVs, one shape per
-material slot, the material mapping, and one warning per unsupported node."""
+"""The depsgraph exporter on its own: modifiers applied, loop normals (smooth and flat), UVs, one
+shape per material slot, the material mapping, and one warning per unsupported node."""
 import bpy
 import numpy as np
 import scenes as S
@@ -62,12 +62,15 @@ def test_material_mapping_and_unsupported_nodes():
     warnings = []
     desc = export(warnings)
     bsdfs = {s["name"]: s for s in shapes(desc)}
-    assert bsdfs["Plane.0"]["bsdf"]["type"] == "roughdielectric" and np.isclose(bsdfs["Plane.0"]["bsdf"]["int_ior"], 1.33)
+    assert bsdfs["Plane.0"]["bsdf"]["type"] == "roughdielectric" and np.isclose(
+        bsdfs["Plane.0"]["bsdf"]["int_ior"], 1.33
+    )
     assert bsdfs["Plane.001.0"]["bsdf"]["nested"]["type"] == "roughconductor"  # twosided(metal)
     assert np.isclose(bsdfs["Plane.001.0"]["bsdf"]["nested"]["alpha"], 0.25)  # roughness squared
     assert np.allclose(bsdfs["Plane.002.0"]["emitter"]["radiance"]["value"], (4.0, 2.0, 1.0))
     assert bsdfs["Plane.003.0"]["bsdf"]["type"] == "mask"
-    assert bsdfs["Plane.004.0"]["bsdf"]["nested"]["reflectance"]["value"] == (0.5, 0.5, 0.5)  # grey diffuse
+    # grey diffuse
+    assert bsdfs["Plane.004.0"]["bsdf"]["nested"]["reflectance"]["value"] == (0.5, 0.5, 0.5)
     # one warning per unsupported node type, naming it and its materials
     assert len(warnings) == 2, warnings
     toon = next(w for w in warnings if "ShaderNodeBsdfToon" in w)

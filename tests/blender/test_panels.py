@@ -1,5 +1,5 @@
-"""The panels are generated from the style registry, and values the registry refuses come back as one-line
-Blender error reports (never a traceback)."""
+"""The panels are generated from the style registry, and values the registry refuses come back as
+one-line Blender error reports (never a traceback)."""
 import bpy
 import pytest
 import scenes as S
@@ -17,7 +17,8 @@ def test_every_style_parameter_has_a_property_and_a_row():
         st.style = name
         rows = [prop for owner, prop in panels.layout_rows(st) if owner == st.params]
         assert rows == [properties.key(name, p.name) for p in registry.style_class(name).params]
-        for p in registry.style_class(name).params:  # the default shown is the registry's, in --set spelling
+        # the default shown is the registry's, in --set spelling
+        for p in registry.style_class(name).params:
             value = getattr(st.params, properties.key(name, p.name))
             if isinstance(value, str):
                 assert value == p.show(p.default)

@@ -1,5 +1,6 @@
-"""The engine reports progress after every pass (`RenderEngine.update_progress`, Blender's progress bar): the
-fraction of samples done, pass by pass, up to 1; and a status line naming the pass (`update_stats`)."""
+"""The engine reports progress after every pass (`RenderEngine.update_progress`, Blender's
+progress bar): the fraction of samples done, pass by pass, up to 1; and a status line naming the
+pass (`update_stats`)."""
 import scenes as S
 
 from styletrace.blender import engine
@@ -17,4 +18,6 @@ def test_progress_rises_pass_by_pass_to_one(tmp_path, monkeypatch):
     monkeypatch.setattr(engine.StyletraceEngine, "progress", progress)
     S.styletrace(str(tmp_path / "p.exr"), 16, seed=1, pass_spp=4, style="identity")
     assert [f for f, _ in seen] == [0.25, 0.5, 0.75, 1.0]
-    assert [s.split(",")[:2] for _, s in seen] == [[f"styletrace: pass {k}/4", f" {4 * k}/16 spp"] for k in range(1, 5)]
+    assert [s.split(",")[:2] for _, s in seen] == [
+        [f"styletrace: pass {k}/4", f" {4 * k}/16 spp"] for k in range(1, 5)
+    ]

@@ -1,5 +1,10 @@
+from helpers.furnace_fixtures import mask, scene
+
 import styletrace
 
-styletrace.init()  # the configuration tests render (the estimator registry on the furnace): pick the backend and register the plugins first
+#: pytest finds fixtures by name here
+__all__ = ["mask", "scene"]
 
-from helpers.furnace_fixtures import mask, scene  # noqa: E402,F401  (pytest finds fixtures by name here)
+# the configuration tests render (the estimator registry on the furnace): pick the backend and
+# register the plugins first
+styletrace.init()

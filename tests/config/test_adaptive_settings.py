@@ -1,4 +1,5 @@
-"""Adaptive inner counts in the settings: `n0:n_max` parsed once, refused where a guarantee would be lost."""
+"""Adaptive inner counts in the settings: `n0:n_max` parsed once, refused where a guarantee would
+be lost."""
 import pytest
 
 import styletrace
@@ -33,13 +34,25 @@ def test_bad_adaptive_counts(raw, why):
     assert "\n" not in str(e.value)
 
 
-@pytest.mark.parametrize("style,name", [("gamma", "series"), ("gamma", "series_single"), ("tie_dye", "ustat"),
-                                        ("tie_dye", "naive"), ("gamma", "telescoping"), ("contrast", "affine")])
+@pytest.mark.parametrize(
+    "style,name",
+    [
+        ("gamma", "series"),
+        ("gamma", "series_single"),
+        ("tie_dye", "ustat"),
+        ("tie_dye", "naive"),
+        ("gamma", "telescoping"),
+        ("contrast", "affine"),
+    ],
+)
 def test_unbiased_estimators_refuse_adaptive_counts(style, name):
-    with pytest.raises(SettingsError, match="adaptive counts n0:n_max stop on the data.*estimator direct") as e:
+    with pytest.raises(
+        SettingsError, match="adaptive counts n0:n_max stop on the data.*estimator direct"
+    ) as e:
         settings.parse({"style": style, "estimator": name, "inner_samples": "4:64"})
     assert "\n" not in str(e.value)
-    settings.parse({"style": style, "estimator": name, "inner_samples": "4"})  # a fixed count is fine
+    # a fixed count is fine
+    settings.parse({"style": style, "estimator": name, "inner_samples": "4"})
 
 
 def test_per_sample_baselines_refuse_adaptive_counts():
@@ -50,10 +63,22 @@ def test_per_sample_baselines_refuse_adaptive_counts():
 def test_adaptive_properties():
     s = settings.parse({"style": "cel", "inner_samples": "4:64"})
     assert (s.adaptive_z, s.adaptive_bias, s.aovs) == (2.0, 2e-3, False)
-    s = settings.parse({"style": "cel", "inner_samples": "4:64", "adaptive_z": "3", "adaptive_bias": 1e-4,
-                        "aovs": "true"})
+    s = settings.parse(
+        {
+            "style": "cel",
+            "inner_samples": "4:64",
+            "adaptive_z": "3",
+            "adaptive_bias": 1e-4,
+            "aovs": "true",
+        }
+    )
     assert (s.adaptive_z, s.adaptive_bias, s.aovs) == (3.0, 1e-4, True)
-    for key, bad in (("adaptive_z", 0), ("adaptive_z", "nan"), ("adaptive_bias", -1), ("aovs", "maybe")):
+    for key, bad in (
+        ("adaptive_z", 0),
+        ("adaptive_z", "nan"),
+        ("adaptive_bias", -1),
+        ("aovs", "maybe"),
+    ):
         with pytest.raises(SettingsError, match=f"bad value .* for '{key}'"):
             settings.parse({"style": "cel", key: bad})
 
@@ -70,7 +95,11 @@ def test_the_builder_picks_adaptive_direct_only_where_asked():
     assert type(est.inner) is Direct
     ad = settings.parse({"style": "color_map", "inner_samples": "4:64", "adaptive_z": 3})
     est = estimator_registry.make_estimator(ad.slot, 0, None, ad)
-    assert type(est.inner) is AdaptiveDirect and (est.inner.n0, est.inner.n_max, est.inner.z) == (4, 64, 3.0)
+    assert type(est.inner) is AdaptiveDirect and (est.inner.n0, est.inner.n_max, est.inner.z) == (
+        4,
+        64,
+        3.0,
+    )
     # a per-level count: the second level is fixed
     deep = settings.parse({"style": "cel", "inner_samples": "4:64,2", "stylize": "first_n_hits",
                            "stylize_depth": 2})
@@ -78,6 +107,21 @@ def test_the_builder_picks_adaptive_direct_only_where_asked():
 
 
 def test_command_line_refusal_is_one_line(capsys):
-    assert main(["render", "--style", "gamma", "--estimator", "series", "--inner", "4:64", "-o", "x.exr"]) == 2
+    assert (
+        main(
+            [
+                "render",
+                "--style",
+                "gamma",
+                "--estimator",
+                "series",
+                "--inner",
+                "4:64",
+                "-o",
+                "x.exr",
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "adaptive counts n0:n_max" in err

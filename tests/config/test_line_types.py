@@ -1,5 +1,5 @@
-"""`line_types` (config/line_types.py): the line dictionary of line_mode lifted, parsed with its defaults and
-refused in one line where it is wrong or where another mode would ignore it."""
+"""`line_types` (config/line_types.py): the line dictionary of line_mode lifted, parsed with its
+defaults and refused in one line where it is wrong or where another mode would ignore it."""
 import pytest
 
 from styletrace.config.line_types import LineType, parse_line_types, without_colours
@@ -12,8 +12,12 @@ def lifted(**kw):
 
 
 def test_entries_in_priority_order_with_the_line_groups_defaults():
-    got = lifted(line_types="shape_id color=1,0,0; depth threshold=0.05 stencil=square radius=1.5 count=4",
-                 line_width=3.0, line_samples=6, line_color="0.1,0.2,0.3")
+    got = lifted(
+        line_types="shape_id color=1,0,0; depth threshold=0.05 stencil=square radius=1.5 count=4",
+        line_width=3.0,
+        line_samples=6,
+        line_color="0.1,0.2,0.3",
+    )
     assert got.types == (LineType("shape_id", 0.5, "disk", 1.5, 6, (1.0, 0.0, 0.0), 0),
                          LineType("depth", 0.05, "square", 1.5, 4, (0.1, 0.2, 0.3), 1))
     assert got.describe() == "lines(lifted, depth=1, types=shape_id,depth)"
@@ -24,16 +28,33 @@ def test_empty_is_one_shape_id_type():
     assert parse_line_types(" ; ", 2.0, 8, (0, 0, 0)) == parse_line_types("", 2.0, 8, (0, 0, 0))
 
 
-@pytest.mark.parametrize("raw,message", [
-    ("ridges", "bad measurement 'ridges' in 'line_types' entry 'ridges': expected one of shape_id, material_id, "
-               "depth, normal"),
-    ("depth threshold=0", "bad value '0' for 'line_types depth threshold'"),
-    ("normal count=300", "bad value '300' for 'line_types normal count'"),
-    ("depth radius=1 radius=2", "field 'radius' given twice in 'line_types' entry 'depth radius=1 radius=2'"),
-    ("depth width=2", "bad field 'width=2' in 'line_types' entry 'depth width=2': expected key=value"),
-    ("depth stencil=ring", "bad stencil 'ring' in 'line_types' entry 'depth stencil=ring': expected disk or square"),
-    ("shape_id color=red", "bad value 'red' for 'line_types shape_id color'"),
-])
+@pytest.mark.parametrize(
+    "raw,message",
+    [
+        (
+            "ridges",
+            "bad measurement 'ridges' in 'line_types' entry 'ridges': expected one of shape_id, "
+            "material_id, "
+            "depth, normal",
+        ),
+        ("depth threshold=0", "bad value '0' for 'line_types depth threshold'"),
+        ("normal count=300", "bad value '300' for 'line_types normal count'"),
+        (
+            "depth radius=1 radius=2",
+            "field 'radius' given twice in 'line_types' entry 'depth radius=1 radius=2'",
+        ),
+        (
+            "depth width=2",
+            "bad field 'width=2' in 'line_types' entry 'depth width=2': expected key=value",
+        ),
+        (
+            "depth stencil=ring",
+            "bad stencil 'ring' in 'line_types' entry 'depth stencil=ring': expected disk or "
+            "square",
+        ),
+        ("shape_id color=red", "bad value 'red' for 'line_types shape_id color'"),
+    ],
+)
 def test_bad_entries_are_refused_in_one_line(raw, message):
     with pytest.raises(SettingsError) as e:
         lifted(line_types=raw)

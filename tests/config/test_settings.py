@@ -22,15 +22,20 @@ def test_defaults_come_from_the_table():
     assert settings.parse({"style": "cel"}).inner == (style_class("cel").default_inner,)
 
 
-@pytest.mark.parametrize("raw,expected", [(3, (3,)), ("8,4", (8, 4)), ((8, 4), (8, 4)), ([2, 3], (2, 3)),
-                                          ("5", (5,)), (4.0, (4,))])
+@pytest.mark.parametrize(
+    "raw,expected",
+    [(3, (3,)), ("8,4", (8, 4)), ((8, 4), (8, 4)), ([2, 3], (2, 3)), ("5", (5,)), (4.0, (4,))],
+)
 def test_inner_samples_spellings(raw, expected):
     assert settings.parse_inner(raw, 1) == expected
 
 
 @pytest.mark.parametrize("raw", [0, "0", 2.7, "2.7", [2.7], "x", "", True])
 def test_bad_inner_samples_are_refused_not_truncated(raw):
-    with pytest.raises(SettingsError, match=r"bad value .* for 'inner_samples': expected an integer in \[1, 4294967294\]"):
+    with pytest.raises(
+        SettingsError,
+        match=r"bad value .* for 'inner_samples': expected an integer in \[1, 4294967294\]",
+    ):
         settings.parse_inner(raw, 1)
 
 
@@ -49,7 +54,25 @@ def test_inner_samples_are_parsed_once_from_flag_to_kernel(monkeypatch, tmp_path
 
     monkeypatch.setattr(settings, "parse_inner", counting)
     out = tmp_path / "x.exr"
-    assert main(["render", "--inner", "3", "--spp", "1", "--width", "8", "--height", "8", "-q", "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "--inner",
+                "3",
+                "--spp",
+                "1",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "-q",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert calls == ["3"]
 
 
@@ -87,9 +110,13 @@ def test_the_estimator_registry_mirrors_the_forms():
             if kind.name in ok:
                 assert estimator_registry.check_estimator(kind.name, style) == kind.name
             else:
-                with pytest.raises(SettingsError, match=f"estimator '{kind.name}' does not apply to style '{name}'"):
+                with pytest.raises(
+                    SettingsError, match=f"estimator '{kind.name}' does not apply to style '{name}'"
+                ):
                     estimator_registry.check_estimator(kind.name, style)
-    with pytest.raises(SettingsError, match="unknown estimator 'magic': available are direct, affine"):
+    with pytest.raises(
+        SettingsError, match="unknown estimator 'magic': available are direct, affine"
+    ):
         estimator_registry.estimator_entry("magic")
 
 
@@ -115,14 +142,25 @@ def test_estimators_command_lists_the_registry(capsys):
     ("inner_samples", 2 ** 32 - 1, "[1, 4294967294]"),
 ])
 def test_integer_settings_fit_the_kernels_uint32_depth(key, value, allowed):
-    with pytest.raises(SettingsError, match=f"for '{key}': expected an integer in {re.escape(allowed)}"):
+    with pytest.raises(
+        SettingsError, match=f"for '{key}': expected an integer in {re.escape(allowed)}"
+    ):
         settings.parse({key: value})
-    assert settings.parse({key: 2 ** 32 - 2}).__getattribute__(key if key != "inner_samples" else "inner")
+    assert settings.parse({key: 2**32 - 2}).__getattribute__(
+        key if key != "inner_samples" else "inner"
+    )
 
 
 def test_stylize_depth_is_capped():
-    assert settings.parse({"stylize": "first_n_hits", "stylize_depth": settings.MAX_STYLIZE_DEPTH}).stylize_depth == 16
-    with pytest.raises(SettingsError, match=r"for 'stylize_depth': expected an integer in \[1, 16\]"):
+    assert (
+        settings.parse(
+            {"stylize": "first_n_hits", "stylize_depth": settings.MAX_STYLIZE_DEPTH}
+        ).stylize_depth
+        == 16
+    )
+    with pytest.raises(
+        SettingsError, match=r"for 'stylize_depth': expected an integer in \[1, 16\]"
+    ):
         settings.parse({"stylize": "first_n_hits", "stylize_depth": 17})
     row = next(p for p in settings.PROPERTIES if p.name == "stylize_depth")
     assert "at most 16" in row.doc  # the generated settings table documents the cap
@@ -130,7 +168,8 @@ def test_stylize_depth_is_capped():
 
 @pytest.mark.parametrize("value", [0, 1, "4"])
 def test_samples_per_pass_is_refused(value):
-    """Mitsuba would split each of styletrace's passes again and throw when they do not divide evenly."""
+    """Mitsuba would split each of styletrace's passes again and throw when they do not divide
+    evenly."""
     with pytest.raises(SettingsError, match="for 'samples_per_pass': .*--pass-spp"):
         settings.parse({"samples_per_pass": value})
 
@@ -138,18 +177,24 @@ def test_samples_per_pass_is_refused(value):
 def test_emitter_sampling_is_a_setting():
     assert settings.parse({}).emitter_sampling == "uniform"
     assert settings.parse({"emitter_sampling": "power"}).emitter_sampling == "power"
-    with pytest.raises(SettingsError, match="bad value 'loud' for 'emitter_sampling': expected one of uniform, power"):
+    with pytest.raises(
+        SettingsError,
+        match="bad value 'loud' for 'emitter_sampling': expected one of uniform, power",
+    ):
         settings.parse({"emitter_sampling": "loud"})
 
 
 def test_the_integrator_samples_emitters_the_way_it_is_told(monkeypatch):
-    """The setting reaches the kernel's emitter sampler (power selection renders a different image)."""
+    """The setting reaches the kernel's emitter sampler (power selection renders a different
+    image)."""
     from styletrace.kernel import (
         render_context as module,  # where a render binds its emitter sampler
     )
     modes = []
     real = module.EmitterSampler
-    monkeypatch.setattr(module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode))
+    monkeypatch.setattr(
+        module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode)
+    )
     for mode in ("uniform", "power"):
         styletrace.render("mixed", width=8, height=8, spp=1, inner=1, emitter_sampling=mode)
     assert modes == ["uniform", "power"]

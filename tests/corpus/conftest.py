@@ -1,4 +1,5 @@
-"""The corpus tests render: pick the backend and register styletrace's plugins (`styled`) before any scene loads."""
+"""The corpus tests render: pick the backend and register styletrace's plugins (`styled`) before
+any scene loads."""
 import styletrace
 
 styletrace.init()

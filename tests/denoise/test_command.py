@@ -1,9 +1,12 @@
-"""`styletrace render --denoise expectation|image` on the command line: the pass split, and a stop that keeps the work.
+"""`styletrace render --denoise expectation|image` on the command line: the pass split, and a stop
+that keeps the work.
 
-- `--pass-spp` splits the recorded passes as it does a plain render (it was ignored: one pass of all samples).
-- Ctrl-C (SIGINT) after some passes ends the render after the pass under way; the finished passes are denoised
-  and written, with the buffer, and the exit status is 130. With `expectation` the written image is the buffer's
-  restyle; with `image` it is the denoised render of exactly that many passes.
+- `--pass-spp` splits the recorded passes as it does a plain render (it was ignored: one pass of all
+  samples).
+- Ctrl-C (SIGINT) after some passes ends the render after the pass under way; the finished passes
+  are denoised and written, with the buffer, and the exit status is 130. With `expectation` the
+  written image is the buffer's restyle; with `image` it is the denoised render of exactly that many
+  passes.
 """
 import os
 import re
@@ -28,28 +31,95 @@ def _exr(path):
 
 
 def test_pass_spp_splits_the_recorded_passes(tmp_path):
-    res = subprocess.run([sys.executable, "-m", "styletrace", "render", "--denoise", "expectation", "--width", "16",
-                          "--height", "16", "--spp", "4", "--inner", "2", "--pass-spp", "2", "--coverage", "4", "-q",
-                          "-o", str(tmp_path / "o.exr"), "--buffer", str(tmp_path / "b.npz")],
-                         capture_output=True, text=True, env=ENV, timeout=300)
+    res = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            "--denoise",
+            "expectation",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "4",
+            "--inner",
+            "2",
+            "--pass-spp",
+            "2",
+            "--coverage",
+            "4",
+            "-q",
+            "-o",
+            str(tmp_path / "o.exr"),
+            "--buffer",
+            str(tmp_path / "b.npz"),
+        ],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=300,
+    )
     assert res.returncode == 0, res.stderr
     source = load_buffer(str(tmp_path / "b.npz"))
     assert source.header["denoise"]["coverage"] == 4
     # the points' buffer is one pass of 4 points; the camera samples' passes are those of the render
-    py = styletrace.render("cornell-box", style="cel", spp=4, inner=2, width=16, height=16, pass_spp=2,
-                                denoise="expectation", coverage=4)
+    py = styletrace.render(
+        "cornell-box",
+        style="cel",
+        spp=4,
+        inner=2,
+        width=16,
+        height=16,
+        pass_spp=2,
+        denoise="expectation",
+        coverage=4,
+    )
     np.testing.assert_allclose(_exr(tmp_path / "o.exr"), py, atol=1e-5)
-    whole = styletrace.render("cornell-box", style="cel", spp=4, inner=2, width=16, height=16, pass_spp=4,
-                              denoise="expectation", coverage=4)
+    whole = styletrace.render(
+        "cornell-box",
+        style="cel",
+        spp=4,
+        inner=2,
+        width=16,
+        height=16,
+        pass_spp=4,
+        denoise="expectation",
+        coverage=4,
+    )
     assert not np.allclose(whole, py, atol=1e-5)  # another split draws other samples
 
 
 def interrupted(method, out, *extra):
-    """`render --denoise METHOD` of 4000 passes, Ctrl-C once 3 are done: (exit status, stderr after the signal,
-    the spp the render says it wrote)."""
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--denoise", method, "--width", "32",
-                             "--height", "32", "--spp", "4000", "--inner", "4", "--pass-spp", "1", "-o", str(out),
-                             *extra], stderr=subprocess.PIPE, env=ENV)
+    """`render --denoise METHOD` of 4000 passes, Ctrl-C once 3 are done: (exit status, stderr
+    after the signal, the spp the render says it wrote)."""
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            "--denoise",
+            method,
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "4000",
+            "--inner",
+            "4",
+            "--pass-spp",
+            "1",
+            "-o",
+            str(out),
+            *extra,
+        ],
+        stderr=subprocess.PIPE,
+        env=ENV,
+    )
     seen, deadline = b"", time.time() + 120
     while b"3/4000" not in seen and time.time() < deadline:
         chunk = os.read(proc.stderr.fileno(), 4096)
@@ -73,13 +143,21 @@ def test_ctrl_c_denoises_and_writes_the_finished_passes(tmp_path):
 
 
 def test_ctrl_c_with_image_denoising_denoises_the_finished_passes(tmp_path):
-    """The image written is OIDN's output on the finished passes: the same as denoising a render of that many
-    passes with the same seed and split."""
+    """The image written is OIDN's output on the finished passes: the same as denoising a render
+    of that many passes with the same seed and split."""
     out = tmp_path / "partial.exr"
     code, rest, done = interrupted("image", out)
     assert code == 130 and 3 <= done < 4000, rest.decode()
-    again = styletrace.render("cornell-box", style="cel", spp=done, inner=4, width=32, height=32, pass_spp=1,
-                              denoise="image")
+    again = styletrace.render(
+        "cornell-box",
+        style="cel",
+        spp=done,
+        inner=4,
+        width=32,
+        height=32,
+        pass_spp=1,
+        denoise="image",
+    )
     np.testing.assert_allclose(_exr(out), again, rtol=1e-4, atol=1e-5)
 
 

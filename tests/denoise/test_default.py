@@ -1,6 +1,7 @@
-"""What a render does at defaults (`denoise.default`): auto denoises the expectation where it applies, with the
-firefly control and the scene's sample count spent on children; where it cannot, it says why in one line and
-renders as `denoise="off"` does; `off` is the pipeline's render of the paper's estimators, bit for bit."""
+"""What a render does at defaults (`denoise.default`): auto denoises the expectation where it
+applies, with the firefly control and the scene's sample count spent on children; where it
+cannot, it says why in one line and renders as `denoise="off"` does; `off` is the pipeline's
+render of the paper's estimators, bit for bit."""
 import os
 import subprocess
 import sys
@@ -42,8 +43,15 @@ def test_the_default_is_auto_and_equals_expectation_with_the_values_it_pins(auto
     image = styletrace.render("cornell-box", style="cel", **SMALL)
     plan = choose(resolve(python_job("cornell-box", style="cel", **SMALL)))
     s = plan.resolved.integrator.settings
-    explicit = styletrace.render("cornell-box", style="cel", denoise="expectation", spp=plan.resolved.spp,
-                                 firefly=s.firefly, firefly_floor=s.firefly_floor, **SMALL)
+    explicit = styletrace.render(
+        "cornell-box",
+        style="cel",
+        denoise="expectation",
+        spp=plan.resolved.spp,
+        firefly=s.firefly,
+        firefly_floor=s.firefly_floor,
+        **SMALL,
+    )
     assert np.array_equal(image, explicit)
     off = styletrace.render("cornell-box", style="cel", denoise="off", **SMALL)
     assert not np.array_equal(image, off)
@@ -56,38 +64,71 @@ def test_what_auto_cannot_denoise_is_said_in_one_line_and_rendered_as_off(auto):
     notes = [w for w in caught if issubclass(w.category, NotDenoised)]
     assert len(notes) == 1 and "\n" not in str(notes[0].message), [str(w.message) for w in caught]
     assert str(notes[0].message).startswith("not denoised: feature lines")
-    off = styletrace.render("cornell-box", style="cel", lines=True, inner=2, spp=2, denoise="off", **SMALL)
+    off = styletrace.render(
+        "cornell-box", style="cel", lines=True, inner=2, spp=2, denoise="off", **SMALL
+    )
     assert np.array_equal(image, off)
 
 
 def test_the_command_line_says_why_it_did_not_denoise(tmp_path):
     env = {k: v for k, v in child_env().items() if k != "STYLETRACE_DENOISE"}
     out = tmp_path / "lines.exr"
-    r = subprocess.run([sys.executable, "-m", "styletrace", "render", "--lines", "--width", "16", "--height", "16",
-                        "--spp", "2", "--inner", "2", "-o", str(out)], capture_output=True, text=True, env=env,
-                       timeout=300)
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            "--lines",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--inner",
+            "2",
+            "-o",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
     assert r.returncode == 0, r.stderr
     notes = [line for line in r.stderr.splitlines() if "not denoised" in line]
-    assert notes == ["styletrace: not denoised: feature lines: lines replace radiance inside the estimate; use "
-                     "--denoise image"], r.stderr
+    assert notes == [
+        "styletrace: not denoised: feature lines: lines replace radiance inside the estimate; use "
+        "--denoise image"
+    ], r.stderr
 
 
 def test_a_bad_default_in_the_environment_is_refused_in_one_line(monkeypatch):
     monkeypatch.setenv("STYLETRACE_DENOISE", "always")
-    with pytest.raises(styletrace.errors.UsageError, match=r"bad value 'always' for \$STYLETRACE_DENOISE"):
+    with pytest.raises(
+        styletrace.errors.UsageError, match=r"bad value 'always' for \$STYLETRACE_DENOISE"
+    ):
         styletrace.render("cornell-box", style="cel", **SMALL)
 
 
 #: configurations of benchmarks/bit_identity.py rendered through `styletrace.render(denoise="off")`
-OFF_CONFIGS = ["first_hit_cel", "affine_contrast", "series_gamma", "naive_tie_dye", "hide_emitters_depth3"]
+OFF_CONFIGS = [
+    "first_hit_cel",
+    "affine_contrast",
+    "series_gamma",
+    "naive_tie_dye",
+    "hide_emitters_depth3",
+]
 
 
 @pytest.mark.parametrize("name", OFF_CONFIGS)
 def test_off_is_the_pass_loop_of_the_papers_estimators_bit_for_bit(name):
-    """`denoise="off"` draws exactly what the pass loop draws with a prebuilt integrator of the same values: the
-    seam benchmarks/bit_identity.py hashes across refactorings (its digests depend on the CPU's instruction set,
-    so they are compared there, on one machine, not here). Its cel configurations pin the levels cel had by
-    default before the look defaults; the firefly control is off unless asked for."""
+    """`denoise="off"` draws exactly what the pass loop draws with a prebuilt integrator of the
+    same values: the seam benchmarks/bit_identity.py hashes across refactorings (its digests
+    depend on the CPU's instruction set, so they are compared there, on one machine, not here).
+    Its cel configurations pin the levels cel had by default before the look defaults; the
+    firefly control is off unless asked for."""
     sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     try:
         import bit_identity
@@ -95,8 +136,15 @@ def test_off_is_the_pass_loop_of_the_papers_estimators_bit_for_bit(name):
         sys.path.pop(0)
     from styletrace.frontends import api
     scene, spp, values = bit_identity.CONFIGS[name]
-    image = styletrace.render(scene, spp=spp, seed=7, width=bit_identity.RES, height=bit_identity.RES,
-                              denoise="off", **values)
+    image = styletrace.render(
+        scene,
+        spp=spp,
+        seed=7,
+        width=bit_identity.RES,
+        height=bit_identity.RES,
+        denoise="off",
+        **values,
+    )
     seam = list(api.passes(api.load_scene(scene, bit_identity.RES, bit_identity.RES),
                            api.make_integrator_from(values), spp, seed=7))[-1].image
     assert bit_identity.digest(image) == bit_identity.digest(seam)
@@ -104,13 +152,18 @@ def test_off_is_the_pass_loop_of_the_papers_estimators_bit_for_bit(name):
 
 
 @pytest.mark.parametrize("style,inner", [("identity", None), ("gooch", None), ("acp", 4)])
-def test_auto_denoises_the_image_where_the_expectation_adds_nothing_or_is_refused(auto, style, inner):
-    """One child or none (identity, gooch: g of the denoised mean is the denoised image), or g applied to every
-    child (acp, which the expectation's denoiser refuses): auto denoises the image."""
+def test_auto_denoises_the_image_where_the_expectation_adds_nothing_or_is_refused(
+    auto, style, inner
+):
+    """One child or none (identity, gooch: g of the denoised mean is the denoised image), or g
+    applied to every child (acp, which the expectation's denoiser refuses): auto denoises the
+    image."""
     plan = choose(resolve(python_job("cornell-box", style=style, inner=inner, **SMALL)))
     assert plan.method == "image" and plan.note == ""
     image = styletrace.render("cornell-box", style=style, inner=inner, **SMALL)
-    assert np.array_equal(image, styletrace.render("cornell-box", style=style, inner=inner, denoise="image", **SMALL))
+    assert np.array_equal(
+        image, styletrace.render("cornell-box", style=style, inner=inner, denoise="image", **SMALL)
+    )
 
 
 def test_a_given_spp_over_the_buffers_cap_denoises_the_image(auto, monkeypatch):

@@ -1,5 +1,6 @@
-"""The preview's draft pass is denoised (the expectation, before the style): the state says so, the command
-line it shows reproduces it, and its cel image is closer to a converged render than the undenoised draft's."""
+"""The preview's draft pass is denoised (the expectation, before the style): the state says so,
+the command line it shows reproduces it, and its cel image is closer to a converged render than
+the undenoised draft's."""
 import numpy as np
 from preview.conftest import wait_until
 
@@ -23,5 +24,6 @@ def test_the_draft_is_denoised(monkeypatch):
     kw = dict(style="cel", spp=1, seed=0, width=size, height=size)
     ref = styletrace.render("cornell-box", inner=256, **kw)
     noisy = styletrace.render("cornell-box", inner=module.DRAFT_INNER, **kw)
-    # the undenoised n = 1 draft flips bands everywhere; the denoised one must at least halve its MSE
+    # the undenoised n = 1 draft flips bands everywhere; the denoised one must at least halve its
+    # MSE
     assert np.mean((img - ref) ** 2) < 0.5 * np.mean((noisy - ref) ** 2)

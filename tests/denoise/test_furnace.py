@@ -1,15 +1,18 @@
 """The denoised expectation of a constant-radiance furnace is the constant.
 
-A diffuse sphere of albedo rho under a constant environment E has exitant radiance rho*E at every point
-(scene/builtin.py), so the per-pixel expectation M inside the silhouette is rho*E plus the children's noise,
-and a correct denoiser must return the constant. Tolerances, from the noisy M itself (sigma: its per-pixel
-standard deviation over the N interior pixels, per channel):
-- the mean of D over the interior lies within Z = 4 standard errors sigma/sqrt(N) of rho*E (a filter that keeps
-  a constant and averages noise keeps the noisy mean, whose standard error that is; 4: a two-sided 6e-5 test);
-- the RMS of D - rho*E over the interior is below sigma/4: the denoiser removed at least three quarters of the
-  noise's standard deviation (a no-op, or a denoiser fed the wrong image, leaves sigma).
-The same holds for D where the style meets it at coverage points (`denoise.coverage`: D looked up in the
-kernel at 16 stratified points per pixel), with the same tolerances, over the points of the interior pixels.
+A diffuse sphere of albedo rho under a constant environment E has exitant radiance rho*E at every
+point (scene/builtin.py), so the per-pixel expectation M inside the silhouette is rho*E plus the
+children's noise, and a correct denoiser must return the constant. Tolerances, from the noisy M
+itself (sigma: its per-pixel standard deviation over the N interior pixels, per channel):
+- the mean of D over the interior lies within Z = 4 standard errors sigma/sqrt(N) of rho*E (a filter
+  that keeps a constant and averages noise keeps the noisy mean, whose standard error that is; 4: a
+  two-sided 6e-5 test);
+- the RMS of D - rho*E over the interior is below sigma/4: the denoiser removed at least three
+  quarters of the noise's standard deviation (a no-op, or a denoiser fed the wrong image, leaves
+  sigma).
+The same holds for D where the style meets it at coverage points (`denoise.coverage`: D looked up in
+the kernel at 16 stratified points per pixel), with the same tolerances, over the points of the
+interior pixels.
 """
 import numpy as np
 
@@ -21,7 +24,8 @@ RES, Z = 64, 4.0
 
 
 def interior(buf):
-    """Pixels whose every camera sample hit the sphere, and whose 8 neighbours' did too (no silhouette)."""
+    """Pixels whose every camera sample hit the sphere, and whose 8 neighbours' did too (no
+    silhouette)."""
     a = buf.arrays
     hit = np.bincount(a["pixel"][a["slot"] >= 0], minlength=RES * RES).reshape(RES, RES) == buf.spp
     inner = hit.copy()
@@ -33,7 +37,9 @@ def interior(buf):
 
 def test_denoised_furnace_is_the_constant():
     scene = api.load_scene("furnace", RES, RES)
-    _, buf = X.render_denoised_expectation(scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3, coverage=0)
+    _, buf = X.render_denoised_expectation(
+        scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3, coverage=0
+    )
     exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
     mask = interior(buf)
     assert mask.sum() > 500
@@ -59,7 +65,8 @@ def test_denoised_furnace_is_the_constant_at_coverage_points():
     a = cover.arrays
     pick = mask[a["pixel"]] & (a["slot"] >= 0)
     d = a["mean"][:, pick].T.astype(np.float64)  # D at each point
-    se = sigma / np.sqrt(mask.sum())  # the points of a pixel share its D: the pixels are the independent units
+    # the points of a pixel share its D: the pixels are the independent units
+    se = sigma / np.sqrt(mask.sum())
     assert np.all(np.abs(d.mean(0) - exact) < Z * se), f"mean {d.mean(0)} vs {exact}, se {se}"
     rms = np.sqrt(((d - exact) ** 2).mean(0))
     assert np.all(rms < sigma / 4), f"RMS {rms} vs noise sigma {sigma}"

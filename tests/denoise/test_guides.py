@@ -1,36 +1,58 @@
-"""The guides see through mirrors (`denoise.guides.through_delta`): at a mirror's pixels the albedo guide is the
-albedo of the surface the mirror shows, and the normal guide that surface's normal.
+"""The guides see through mirrors (`denoise.guides.through_delta`): at a mirror's pixels the albedo
+guide is the albedo of the surface the mirror shows, and the normal guide that surface's normal.
 
-Truth from Mitsuba's own `aov` integrator: a camera looks straight at a mirror that fills its view, and the
-checkerboard wall behind the camera is what the mirror shows. The same wall seen by the camera's mirror image
-(the camera reflected in the mirror's plane, no mirror in the scene) is the same picture flipped left to right,
-and Mitsuba's `albedo` AOV of that picture is the truth. Pixels on a checker edge are left out (the two
-renders' sub-pixel samples differ there)."""
-import mitsuba as mi
+Truth from Mitsuba's own `aov` integrator: a camera looks straight at a mirror that fills its
+view, and the checkerboard wall behind the camera is what the mirror shows. The same wall seen by
+the camera's mirror image (the camera reflected in the mirror's plane, no mirror in the scene) is
+the same picture flipped left to right, and Mitsuba's `albedo` AOV of that picture is the truth.
+Pixels on a checker edge are left out (the two renders' sub-pixel samples differ there)."""
 import numpy as np
 
 from styletrace.denoise import guides
 from styletrace.frontends import api
+from styletrace.gate import mi
 
 RES = 32
-WALL = {"type": "rectangle", "to_world": mi.ScalarTransform4f().translate([0, 0, 6]).rotate([0, 1, 0], 180).scale(8),
-        "bsdf": {"type": "diffuse", "reflectance": {
-            "type": "checkerboard", "color0": {"type": "rgb", "value": [0.1, 0.2, 0.3]},
+WALL = {
+    "type": "rectangle",
+    "to_world": mi.ScalarTransform4f().translate([0, 0, 6]).rotate([0, 1, 0], 180).scale(8),
+    "bsdf": {
+        "type": "diffuse",
+        "reflectance": {
+            "type": "checkerboard",
+            "color0": {"type": "rgb", "value": [0.1, 0.2, 0.3]},
             "color1": {"type": "rgb", "value": [0.8, 0.7, 0.5]},
-            "to_uv": mi.ScalarTransform4f().rotate([0, 0, 1], 20).scale([3, 3, 1])}}}
+            "to_uv": mi.ScalarTransform4f().rotate([0, 0, 1], 20).scale([3, 3, 1]),
+        },
+    },
+}
 
 
 def camera(z, target_z):
-    return {"type": "perspective", "fov": 30,
-            "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, z], target=[0, 0, target_z], up=[0, 1, 0]),
-            "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}},
-            "sampler": {"type": "independent", "sample_count": 16}}
+    return {
+        "type": "perspective",
+        "fov": 30,
+        "to_world": mi.ScalarTransform4f().look_at(
+            origin=[0, 0, z], target=[0, 0, target_z], up=[0, 1, 0]
+        ),
+        "film": {"type": "hdrfilm", "width": RES, "height": RES, "rfilter": {"type": "box"}},
+        "sampler": {"type": "independent", "sample_count": 16},
+    }
 
 
 def test_mirror_pixels_show_the_reflected_surfaces_albedo_and_normal():
-    sc = api.load_scene({"type": "scene", "sensor": camera(4, 0), "wall": WALL,
-                         "mirror": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(20),
-                                    "bsdf": {"type": "conductor"}}})
+    sc = api.load_scene(
+        {
+            "type": "scene",
+            "sensor": camera(4, 0),
+            "wall": WALL,
+            "mirror": {
+                "type": "rectangle",
+                "to_world": mi.ScalarTransform4f().scale(20),
+                "bsdf": {"type": "conductor"},
+            },
+        }
+    )
     got = guides.first_hit(sc, 16, 3)
     virtual = mi.load_dict({"type": "scene", "sensor": camera(-4, 1), "wall": WALL})
     aov = mi.load_dict({"type": "aov", "aovs": "albedo:albedo"})
@@ -42,20 +64,35 @@ def test_mirror_pixels_show_the_reflected_surfaces_albedo_and_normal():
     flat[[0, -1], :] = flat[:, [0, -1]] = False
     assert flat.sum() > 0.3 * RES * RES, "too few flat pixels: the test would test nothing"
     np.testing.assert_allclose(got.albedo[flat], truth[flat], atol=1e-4)
-    assert np.unique(np.round(got.albedo[flat], 3), axis=0).shape[0] == 2  # both checker colours are seen
+    # both checker colours are seen
+    assert np.unique(np.round(got.albedo[flat], 3), axis=0).shape[0] == 2
     # the wall faces the mirror (-z); the first hit is the mirror itself (+z)
     np.testing.assert_allclose(got.normal.reshape(-1, 3), [[0, 0, -1]] * RES * RES, atol=1e-5)
-    np.testing.assert_allclose(got.surface_normal.reshape(-1, 3), [[0, 0, 1]] * RES * RES, atol=1e-5)
+    np.testing.assert_allclose(
+        got.surface_normal.reshape(-1, 3), [[0, 0, 1]] * RES * RES, atol=1e-5
+    )
     assert np.allclose(got.position[..., 2], 0.0, atol=1e-5)
 
 
 def test_a_mirror_that_sees_nothing_keeps_its_specular_weight():
-    """No surface behind the chain: the albedo guide is the mirror's reflectance (1 for the default conductor,
-    0.5 for a half-tinted one), not 0 (OIDN's 'nothing to keep') nor the diffuse 0 of Mitsuba's AOV."""
-    tinted = {"type": "conductor", "specular_reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}}
+    """No surface behind the chain: the albedo guide is the mirror's reflectance (1 for the
+    default conductor, 0.5 for a half-tinted one), not 0 (OIDN's 'nothing to keep') nor the
+    diffuse 0 of Mitsuba's AOV."""
+    tinted = {
+        "type": "conductor",
+        "specular_reflectance": {"type": "rgb", "value": [0.5, 0.5, 0.5]},
+    }
     for bsdf, want in (({"type": "conductor"}, 1.0), (tinted, 0.5)):
-        sc = api.load_scene({"type": "scene", "sensor": camera(4, 0),
-                             "mirror": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(20),
-                                        "bsdf": bsdf}})
+        sc = api.load_scene(
+            {
+                "type": "scene",
+                "sensor": camera(4, 0),
+                "mirror": {
+                    "type": "rectangle",
+                    "to_world": mi.ScalarTransform4f().scale(20),
+                    "bsdf": bsdf,
+                },
+            }
+        )
         got = guides.first_hit(sc, 1, 0)
         np.testing.assert_allclose(got.albedo, want, rtol=1e-5)

@@ -1,5 +1,5 @@
-"""Every combination `--denoise` does not support is refused in one line with exit status 2, before rendering;
-so is a missing `denoise` extra (the message names it)."""
+"""Every combination `--denoise` does not support is refused in one line with exit status 2,
+before rendering; so is a missing `denoise` extra (the message names it)."""
 import subprocess
 import sys
 
@@ -13,18 +13,49 @@ SMALL = ["--width", "16", "--height", "16", "--spp", "2", "--inner", "2", "-q"]
 
 
 def run_cli(*args, env=None):
-    return subprocess.run([sys.executable, "-m", "styletrace", "render", *args], capture_output=True, text=True,
-                          env=env or child_env(), timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "styletrace", "render", *args],
+        capture_output=True,
+        text=True,
+        env=env or child_env(),
+        timeout=300,
+    )
 
 
 REFUSED = [
     (["--denoise", "expectation", "--lines"], "feature lines"),
     (["--denoise", "expectation", "--reuse", "pixels"], "reuse=pixels"),
-    (["--denoise", "expectation", "--style", "saturation", "--stylize", "first_n_hits", "--stylize-depth", "2",
-      "--inner", "2,2"], "first_n_hits"),
-    (["--denoise", "expectation", "mixed", "--style", "identity", "--stylize", "first_object_hit"],
-     "first_object_hit"),
-    (["--denoise", "expectation", "--style", "gamma", "--estimator", "series"], "estimator 'series'"),
+    (
+        [
+            "--denoise",
+            "expectation",
+            "--style",
+            "saturation",
+            "--stylize",
+            "first_n_hits",
+            "--stylize-depth",
+            "2",
+            "--inner",
+            "2,2",
+        ],
+        "first_n_hits",
+    ),
+    (
+        [
+            "--denoise",
+            "expectation",
+            "mixed",
+            "--style",
+            "identity",
+            "--stylize",
+            "first_object_hit",
+        ],
+        "first_object_hit",
+    ),
+    (
+        ["--denoise", "expectation", "--style", "gamma", "--estimator", "series"],
+        "estimator 'series'",
+    ),
     (["--denoise", "expectation", "--inner", "2:8"], "adaptive counts"),
     (["--denoise", "expectation", "--style", "acp"], "style 'acp'"),
     (["--denoise", "image", "--ray"], "renders locally"),
@@ -36,9 +67,18 @@ REFUSED = [
     (["--denoise", "expectation", "--coverage", "lots"], "bad value 'lots' for coverage"),
     (["--denoise", "image", "--coverage", "16"], "applies to --denoise expectation only"),
     (["--coverage", "16"], "applies to --denoise expectation only"),
-    (["--denoise", "expectation", "--denoise-uncertainty", "-1"], "bad value '-1' for denoise uncertainty"),
-    (["--denoise", "expectation", "--denoise-uncertainty", "nan"], "bad value 'nan' for denoise uncertainty"),
-    (["--denoise", "image", "--denoise-uncertainty", "0.3"], "applies to --denoise expectation only"),
+    (
+        ["--denoise", "expectation", "--denoise-uncertainty", "-1"],
+        "bad value '-1' for denoise uncertainty",
+    ),
+    (
+        ["--denoise", "expectation", "--denoise-uncertainty", "nan"],
+        "bad value 'nan' for denoise uncertainty",
+    ),
+    (
+        ["--denoise", "image", "--denoise-uncertainty", "0.3"],
+        "applies to --denoise expectation only",
+    ),
 ]
 
 
@@ -53,8 +93,8 @@ def test_refused_in_one_line(tmp_path, args, words):
 
 
 def test_without_the_extra_the_command_names_it(tmp_path):
-    """A `pyoidn` that cannot be imported (a package first on the path that raises ImportError) stands in
-    for an install without the extra."""
+    """A `pyoidn` that cannot be imported (a package first on the path that raises ImportError)
+    stands in for an install without the extra."""
     blocked = tmp_path / "block" / "pyoidn"
     blocked.mkdir(parents=True)
     (blocked / "__init__.py").write_text("raise ImportError('pyoidn is not installed (test)')\n")

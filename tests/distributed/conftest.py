@@ -10,7 +10,8 @@ styletrace.init()
 
 @pytest.fixture(scope="session")
 def ray_cluster():
-    """A real local Ray instance of 2 CPUs for the tests of this folder; its workers import our src/."""
+    """A real local Ray instance of 2 CPUs for the tests of this folder; its workers import our
+    src/."""
     ray = pytest.importorskip("ray")
     os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
     if not ray.is_initialized():

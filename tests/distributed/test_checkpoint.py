@@ -6,26 +6,30 @@ import subprocess
 import sys
 import time
 
-import mitsuba as mi
 import numpy as np
 import pytest
 from conftest import child_env
 
 from styletrace.errors import UsageError
 from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.pipeline.ray_checkpoint import Checkpoint
 from styletrace.pipeline.ray_run import Render, job_for
 
 STYLE = {"style": "cel", "inner": 2, "max_depth": 3}
 
 
-def test_break_then_resume_renders_only_the_rest_and_equals_the_undisturbed_render(ray_cluster, tmp_path):
+def test_break_then_resume_renders_only_the_rest_and_equals_the_undisturbed_render(
+    ray_cluster, tmp_path
+):
     w, h, spp, seed = 48, 32, 8, 4
     job = job_for("cornell-box", api.make_integrator(**STYLE), w, h)
     out = str(tmp_path / "img.exr")
     whole = Render(job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1)
     list(whole)
-    first = Render(job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1, output=out, checkpoint_every=3600)
+    first = Render(
+        job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1, output=out, checkpoint_every=3600
+    )
     for prog in first:
         if prog.spp_done >= 3:  # units may arrive out of order; those after a gap are summed later
             break
@@ -54,7 +58,9 @@ def test_checkpoint_keeps_the_exact_float32_sum(tmp_path):
 
 
 def test_resume_with_other_settings_is_refused_in_one_line(tmp_path):
-    Checkpoint(str(tmp_path / "a.png"), {"spp": 4, "seed": 0}).save(np.zeros((2, 2, 3), np.float32), [1])
+    Checkpoint(str(tmp_path / "a.png"), {"spp": 4, "seed": 0}).save(
+        np.zeros((2, 2, 3), np.float32), [1]
+    )
     with pytest.raises(UsageError, match=r"other settings \(seed 0, now 1\); drop --resume"):
         Checkpoint(str(tmp_path / "a.png"), {"spp": 4, "seed": 1}).load()
     with pytest.raises(UsageError, match="no checkpoint"):
@@ -62,8 +68,8 @@ def test_resume_with_other_settings_is_refused_in_one_line(tmp_path):
 
 
 def rounds_checkpointed(proc, manifest, at_least, timeout=240):
-    """Poll the checkpoint manifest every 50 ms until it counts `at_least` finished rounds, the process
-    ends or `timeout` seconds pass; the rounds counted last."""
+    """Poll the checkpoint manifest every 50 ms until it counts `at_least` finished rounds, the
+    process ends or `timeout` seconds pass; the rounds counted last."""
     done, deadline = 0, time.monotonic() + timeout
     while done < at_least and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)
@@ -75,10 +81,30 @@ def rounds_checkpointed(proc, manifest, at_least, timeout=240):
 
 
 def cli(*args, **kw):
-    # passes long enough (~0.1 s of paths each) that the tests' 50 ms polls see the render midway: with
-    # millisecond passes a loaded machine finished the render between two polls, and the kill missed it
-    return [sys.executable, "-m", "styletrace", "render", "cornell-box", "--width", "96", "--height", "64",
-            "--spp", "10", "--pass-spp", "1", "--style", "cel", "--inner", "32", "-q", *args]
+    # passes long enough (~0.1 s of paths each) that the tests' 50 ms polls see the render midway:
+    # with millisecond passes a loaded machine finished the render between two polls, and the kill
+    # missed it
+    return [
+        sys.executable,
+        "-m",
+        "styletrace",
+        "render",
+        "cornell-box",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--spp",
+        "10",
+        "--pass-spp",
+        "1",
+        "--style",
+        "cel",
+        "--inner",
+        "32",
+        "-q",
+        *args,
+    ]
 
 
 def read(path):
@@ -86,14 +112,20 @@ def read(path):
 
 
 def test_killed_driver_then_resume_equals_the_undisturbed_render(ray_cluster, tmp_path):
-    """SIGKILL the command line (and its process group) once a few passes are checkpointed; `--resume`
-    finishes the render, equal to the single-process one; other settings are refused in one line."""
+    """SIGKILL the command line (and its process group) once a few passes are checkpointed;
+    `--resume` finishes the render, equal to the single-process one; other settings are refused
+    in one line."""
     ref, out = str(tmp_path / "ref.exr"), str(tmp_path / "out.exr")
     r = subprocess.run(cli("-o", ref), env=child_env(), capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     args = cli("-o", out, "--checkpoint-every", "0", "--ray", ray_cluster)
-    proc = subprocess.Popen(args, env=child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
+    proc = subprocess.Popen(
+        args,
+        env=child_env(),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
     manifest = out + ".checkpoint.json"
     try:
         done = rounds_checkpointed(proc, manifest, 3)
@@ -101,11 +133,18 @@ def test_killed_driver_then_resume_equals_the_undisturbed_render(ray_cluster, tm
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
     assert 3 <= done < 10 and not os.path.exists(out)
-    bad = subprocess.run(args + ["--resume", "--seed", "1"], env=child_env(), capture_output=True, text=True,
-                         timeout=300)
+    bad = subprocess.run(
+        args + ["--resume", "--seed", "1"],
+        env=child_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1
     assert "other settings (seed 0, now 1)" in bad.stderr
-    r = subprocess.run(args + ["--resume"], env=child_env(), capture_output=True, text=True, timeout=300)
+    r = subprocess.run(
+        args + ["--resume"], env=child_env(), capture_output=True, text=True, timeout=300
+    )
     assert r.returncode == 0, r.stderr
     assert np.array_equal(read(out), read(ref))
     assert not os.path.exists(manifest)
@@ -114,7 +153,9 @@ def test_killed_driver_then_resume_equals_the_undisturbed_render(ray_cluster, tm
 def test_ctrl_c_keeps_the_finished_passes_in_the_image_and_the_checkpoint(ray_cluster, tmp_path):
     out = str(tmp_path / "out.exr")
     args = cli("-o", out, "--checkpoint-every", "0", "--ray", ray_cluster)
-    proc = subprocess.Popen(args, env=child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        args, env=child_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
     manifest = out + ".checkpoint.json"
     rounds_checkpointed(proc, manifest, 2)
     proc.send_signal(signal.SIGINT)

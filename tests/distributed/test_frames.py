@@ -4,34 +4,46 @@ import pickle
 import subprocess
 import sys
 
-import mitsuba as mi
 import numpy as np
 from conftest import child_env
 
 from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.pipeline.orbit import camera_target, orbit, rotation, sensor_to_world
 from styletrace.pipeline.ray_describe import SceneSpec, _decode
 
 
 def test_target_is_where_the_central_ray_hits_and_the_orbit_turns_about_it():
-    """The furnace's camera at (0, 0, 4) looks at its unit sphere at the origin: the target is (0, 0, 1)."""
+    """The furnace's camera at (0, 0, 4) looks at its unit sphere at the origin: the target is
+    (0, 0, 1)."""
     scene = api.load_scene("furnace", 16, 16)
     m = sensor_to_world(scene)
     target = camera_target(scene)
     np.testing.assert_allclose(target, [0, 0, 1], atol=1e-5)
     mats = orbit(m, target, m[:3, 1], 4, 360.0)
     assert np.array_equal(mats[0], m)
-    np.testing.assert_allclose(mats[2][:3, 3], [0, 0, -2], atol=1e-5)  # half a turn about the y axis through it
-    np.testing.assert_allclose(mats[1][:3, 3], [3, 0, 1], atol=1e-5)   # a quarter turn (right-handed about +y)
+    # half a turn about the y axis through it
+    np.testing.assert_allclose(mats[2][:3, 3], [0, 0, -2], atol=1e-5)
+    # a quarter turn (right-handed about +y)
+    np.testing.assert_allclose(mats[1][:3, 3], [3, 0, 1], atol=1e-5)
     for k in range(4):  # the camera keeps its distance to the target and still looks at it
         fwd = mats[k][:3, 2] / np.linalg.norm(mats[k][:3, 2])
         np.testing.assert_allclose(np.cross(fwd, target - mats[k][:3, 3]), 0, atol=1e-6)
 
 
 def test_target_falls_back_to_the_bbox_centre_when_the_central_ray_misses():
-    scene = mi.load_dict({"type": "scene", "sensor": {"type": "perspective", "to_world": mi.ScalarTransform4f()
-                          .look_at(origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0])},
-                          "s": {"type": "sphere", "center": [3, 0, 0], "radius": 1.0}})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "sensor": {
+                "type": "perspective",
+                "to_world": mi.ScalarTransform4f().look_at(
+                    origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0]
+                ),
+            },
+            "s": {"type": "sphere", "center": [3, 0, 0], "radius": 1.0},
+        }
+    )
     np.testing.assert_allclose(camera_target(scene), [3, 0, 0], atol=1e-5)
 
 
@@ -54,9 +66,30 @@ def test_scene_dicts_with_transforms_travel_to_workers():
 
 
 def render_cli(*args):
-    return subprocess.run([sys.executable, "-m", "styletrace", "render", "--width", "24", "--height", "16",
-                           "--spp", "2", "--style", "cel", "--inner", "2", "-q", *args],
-                          env=child_env(), capture_output=True, text=True, timeout=300)
+    return subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--spp",
+            "2",
+            "--style",
+            "cel",
+            "--inner",
+            "2",
+            "-q",
+            *args,
+        ],
+        env=child_env(),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
 
 
 def test_turntable_frames_are_numbered_and_frame_zero_is_the_still(ray_cluster, tmp_path):
@@ -74,7 +107,9 @@ def test_turntable_frames_are_numbered_and_frame_zero_is_the_still(ray_cluster, 
 
 def test_bad_frame_arguments_are_one_line(tmp_path):
     r = render_cli("cornell-box", "--orbit", "90", "-o", str(tmp_path / "a.png"))
-    assert r.returncode == 2 and "--orbit needs --frames N" in r.stderr and r.stderr.count("\n") == 1
+    assert (
+        r.returncode == 2 and "--orbit needs --frames N" in r.stderr and r.stderr.count("\n") == 1
+    )
     r = render_cli("cornell-box", "--ray", "cornell-box", "-o", str(tmp_path / "a.png"))
     assert r.returncode == 2 and "bad --ray address 'cornell-box'" in r.stderr
 
@@ -88,13 +123,15 @@ SPHERE_XML = """<scene version="3.0.0">
             <rfilter type="box"/></film>
     </sensor>
     <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
-    <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="{colour}"/></bsdf></shape>
+    <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" \
+value="{colour}"/></bsdf></shape>
 </scene>
 """
 
 
 def test_a_list_of_scene_files_renders_one_numbered_frame_each(ray_cluster, tmp_path):
-    """Each file is one frame (a task on the cluster); frame k equals rendering file k on its own."""
+    """Each file is one frame (a task on the cluster); frame k equals rendering file k on its
+    own."""
     files = []
     for k, colour in enumerate(("0.8,0.2,0.2", "0.2,0.2,0.8")):
         path = tmp_path / f"s{k}.xml"
@@ -106,6 +143,8 @@ def test_a_list_of_scene_files_renders_one_numbered_frame_each(ray_cluster, tmp_
     for k, path in enumerate(files):
         alone = str(tmp_path / f"alone{k}.exr")
         assert render_cli(path, "--style", "cel", "-o", alone).returncode == 0
-        assert np.array_equal(np.array(mi.Bitmap(str(tmp_path / f"seq_{k:04d}.exr"))), np.array(mi.Bitmap(alone)))
+        assert np.array_equal(
+            np.array(mi.Bitmap(str(tmp_path / f"seq_{k:04d}.exr"))), np.array(mi.Bitmap(alone))
+        )
     first, second = (np.array(mi.Bitmap(str(tmp_path / f"seq_{k:04d}.exr"))) for k in range(2))
     assert not np.array_equal(first, second)

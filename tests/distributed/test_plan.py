@@ -1,4 +1,5 @@
-"""The (tile, pass) units are api.passes' launches; their merge is order-independent, bit for bit."""
+"""The (tile, pass) units are api.passes' launches; their merge is order-independent, bit for
+bit."""
 import numpy as np
 
 from styletrace.frontends import api
@@ -16,7 +17,9 @@ def test_units_follow_api_passes_launch_order_seeds_and_counts():
 def test_merge_in_any_arrival_order_is_bit_identical():
     layout, units = plan_units(30, 20, 40, 0, pass_spp=1)
     rng = np.random.default_rng(3)
-    tiles = [(rng.random((20, 30, 3)) * 10.0 ** rng.integers(-3, 4)).astype(np.float32) for _ in units]
+    tiles = [
+        (rng.random((20, 30, 3)) * 10.0 ** rng.integers(-3, 4)).astype(np.float32) for _ in units
+    ]
     forward, backward = Merge(30, 20, 40, layout), Merge(30, 20, 40, layout)
     for u, t in zip(units, tiles):
         forward.add(u, t)
@@ -26,5 +29,6 @@ def test_merge_in_any_arrival_order_is_bit_identical():
     naive = np.zeros((20, 30, 3), np.float32)
     for t in reversed(tiles):
         naive += t
-    assert not np.array_equal(naive, forward.total)  # float32 summation order matters: the test can fail
+    # float32 summation order matters: the test can fail
+    assert not np.array_equal(naive, forward.total)
     assert forward.progress().spp_done == 40

@@ -1,4 +1,5 @@
-"""Passes as Ray tasks on a real local cluster: the merged image equals the single-process one, bit for bit."""
+"""Passes as Ray tasks on a real local cluster: the merged image equals the single-process one,
+bit for bit."""
 import os
 import signal
 
@@ -22,8 +23,9 @@ def local(scene, width, height, spp, seed, pass_spp, style=STYLE):
 
 def test_cluster_render_is_bit_identical_to_the_local_one(ray_cluster):
     ref = local("cornell-box", 40, 24, 8, 7, 2)
-    got = styletrace.render("cornell-box", spp=8, seed=7, width=40, height=24, pass_spp=2, cluster=ray_cluster,
-                            **STYLE)
+    got = styletrace.render(
+        "cornell-box", spp=8, seed=7, width=40, height=24, pass_spp=2, cluster=ray_cluster, **STYLE
+    )
     assert got.dtype == np.float32 and got.shape == (24, 40, 3)
     assert np.array_equal(got, ref)
     # another seed draws other samples: the comparison can tell images apart
@@ -31,7 +33,8 @@ def test_cluster_render_is_bit_identical_to_the_local_one(ray_cluster):
 
 
 def test_tiled_image_on_the_cluster_equals_api_passes(ray_cluster):
-    """1030 x 1024 pixels is two tiles of 1024 x 1024 (the second shifted inwards); two passes each."""
+    """1030 x 1024 pixels is two tiles of 1024 x 1024 (the second shifted inwards); two passes
+    each."""
     w, h = 1030, 1024
     cheap = {"style": "identity", "inner": 1, "max_depth": 2}
     ref = local("cornell-box", w, h, 2, 3, 1, cheap)
@@ -44,8 +47,8 @@ def test_tiled_image_on_the_cluster_equals_api_passes(ray_cluster):
 
 
 def test_a_killed_worker_is_retried_and_the_image_is_unchanged(ray_cluster):
-    """SIGKILL the worker that delivered the first unit while it renders its next one: Ray runs that unit
-    again (max_retries) and the merged image equals the undisturbed render."""
+    """SIGKILL the worker that delivered the first unit while it renders its next one: Ray runs
+    that unit again (max_retries) and the merged image equals the undisturbed render."""
     w, h, spp = 96, 96, 12
     ref = local("cornell-box", w, h, spp, 11, 1)
     job = job_for("cornell-box", api.make_integrator(**STYLE), w, h)

@@ -1,21 +1,15 @@
 """Local setup for the estimator tests.
 
-The estimators run on numpy without Dr.Jit or Mitsuba; the Dr.Jit tests get their array types from the
-``jit`` fixture: the Dr.Jit module of the backend in use (``drjit.llvm`` or ``drjit.cuda``, or their
-``.ad`` submodules once a Mitsuba variant is active), obtained after ``styletrace.jit.prepare_drjit()``
-pointed Dr.Jit at a working libLLVM. So the suite runs unchanged on a CPU-only or a CUDA-only machine.
-(tests/conftest.py puts the source tree on sys.path; this folder goes there too, for ``estimator_stats``.)
+The estimators run on numpy without Dr.Jit or Mitsuba; the Dr.Jit tests get their array types from
+the ``jit`` fixture: the Dr.Jit module of the backend in use (``drjit.llvm`` or ``drjit.cuda``, or
+their ``.ad`` submodules once a Mitsuba variant is active), obtained after
+``styletrace.jit.prepare_drjit()`` pointed Dr.Jit at a working libLLVM. So the suite runs unchanged
+on a CPU-only or a CUDA-only machine. (tests/conftest.py puts the source tree on sys.path;
+``estimator_stats`` is imported relatively.)
 """
-import os
-import sys
-
 import pytest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-
-from estimator_stats import drjit_backend  # noqa: E402
+from .estimator_stats import drjit_backend
 
 
 @pytest.fixture

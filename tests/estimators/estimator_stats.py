@@ -7,10 +7,10 @@ per check (normal approximation; the seeds are fixed, so the suite is determinis
 """
 import numpy as np
 
-Z = 4.0
-
 #: The test distributions of I (all with known mean): bounded, heavy-ish tailed, discrete.
-from styletrace.estimators import Exponential, TwoPoint, Uniform  # noqa: E402
+from styletrace.estimators import Exponential, TwoPoint, Uniform
+
+Z = 4.0
 
 DISTS = {
     "uniform": Uniform(0.2, 1.0),
@@ -52,8 +52,9 @@ BACKENDS = ("numpy", "drjit")
 
 
 def drjit_backend():
-    """The Dr.Jit array module in use (drjit.llvm / drjit.cuda, or .ad under a Mitsuba AD variant), after
-    ``styletrace.jit.prepare_drjit()`` (a working libLLVM) when Dr.Jit is not loaded yet."""
+    """The Dr.Jit array module in use (drjit.llvm / drjit.cuda, or .ad under a Mitsuba AD
+    variant), after ``styletrace.jit.prepare_drjit()`` (a working libLLVM) when Dr.Jit is not
+    loaded yet."""
     import sys
     if "drjit" not in sys.modules:
         from styletrace.jit import prepare_drjit
@@ -66,6 +67,8 @@ def run_estimates(estimator, dist, lanes, backend="numpy", seed=0, channels=None
     """One estimate per lane on the chosen backend (Dr.Jit: float32 kernel with a PCG32 carry)."""
     from styletrace.estimators import estimate_drjit, estimate_numpy
     if backend == "numpy":
-        return estimate_numpy(estimator, dist, lanes, np.random.default_rng(seed), channels=channels, dtype=dtype)
+        return estimate_numpy(
+            estimator, dist, lanes, np.random.default_rng(seed), channels=channels, dtype=dtype
+        )
     drjit_backend()  # Dr.Jit loaded with a working libLLVM
     return estimate_drjit(estimator, dist, lanes, seed=seed, channels=channels)

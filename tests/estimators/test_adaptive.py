@@ -1,14 +1,16 @@
-"""Direct application with adaptive stopping (estimators/adaptive.py): where it stops, what it reports, and
-that at the same mean number of children it beats a fixed count on a step function."""
+"""Direct application with adaptive stopping (estimators/adaptive.py): where it stops, what it
+reports, and that at the same mean number of children it beats a fixed count on a step function."""
 import numpy as np
 import pytest
-from estimator_stats import Z
 
 from styletrace.estimators import AdaptiveDirect, Direct, channel_mean
 
+from .estimator_stats import Z
+
 
 def lanes_with_means(mu, half_width, seed):
-    """draw/uniform over lanes whose samples are U(mu - w, mu + w), mu per lane (numpy, lane-compacting)."""
+    """draw/uniform over lanes whose samples are U(mu - w, mu + w), mu per lane (numpy,
+    lane-compacting)."""
     rng = np.random.default_rng(seed)
 
     def draw(carry):
@@ -26,28 +28,31 @@ def step(x):
 
 
 def test_stops_at_n0_far_from_the_threshold_and_goes_to_n_max_at_it():
-    # samples within 0.1 of mu: at n0 = 4, s <= 0.1 sqrt(4/3) and the band t s / sqrt(n) <= 3.17 * 0.058 =
-    # 0.183, while a mean of a lane at mu = 0.05 or 0.95 is at least 0.35 from the threshold: never past n0
+    # samples within 0.1 of mu: at n0 = 4, s <= 0.1 sqrt(4/3) and the band t s / sqrt(n) <= 3.17 *
+    # 0.058 = 0.183, while a mean of a lane at mu = 0.05 or 0.95 is at least 0.35 from the
+    # threshold: never past n0
     mu = np.repeat([0.05, 0.95, 0.5], 2000)
     est = AdaptiveDirect(step, 4, 64, thresholds=(0.5,), z=2.0)
     draw, uniform, carry = lanes_with_means(mu, 0.1, seed=1)
     est.run(draw, carry, uniform, like=np.zeros(len(mu)))
     n = est.stats["children"][:, 0]
     assert np.all(n[:4000] == 4)
-    # at the threshold the mean stays within z standard errors of it with probability about 0.95 at every
-    # step, so most lanes draw all 64; those that stop early left the band (checked from the stats)
+    # at the threshold the mean stays within z standard errors of it with probability about 0.95 at
+    # every step, so most lanes draw all 64; those that stop early left the band (checked from the
+    # stats)
     at = n[4000:]
     assert np.all((at >= 4) & (at <= 64)) and np.mean(at == 64) > 0.5
 
 
 def test_the_stop_rule_holds_where_each_lane_stopped():
-    # replay: a lane that stopped before n_max has its mean outside the band, one at n_max may be inside
-    # (the band in standard errors is Student's t quantile for z = 2, at least 2)
+    # replay: a lane that stopped before n_max has its mean outside the band, one at n_max may be
+    # inside (the band in standard errors is Student's t quantile for z = 2, at least 2)
     rng = np.random.default_rng(2)
     mu = rng.uniform(0.0, 1.0, 5000)
     est = AdaptiveDirect(lambda x: x, 4, 32, thresholds=(0.5,), z=2.0)
     draw, uniform, carry = lanes_with_means(mu, 0.5, seed=3)
-    value, _ = est.run(draw, carry, uniform, like=np.zeros(len(mu)))  # g = identity: value is the mean
+    # g = identity: value is the mean
+    value, _ = est.run(draw, carry, uniform, like=np.zeros(len(mu)))
     n, var = est.stats["children"][:, 0], est.stats["variance"][:, 0]
     inside = np.abs(value - 0.5) < est.band_width(n) * np.sqrt(var / n)
     assert not np.any(inside & (n < 32))
@@ -55,7 +60,8 @@ def test_the_stop_rule_holds_where_each_lane_stopped():
 
 
 def test_smooth_rule_draws_until_the_predicted_bias_is_below_target():
-    # g = x^2 has g'' = 2: predicted bias 2 s^2 / (2n) = s^2 / n, the exact bias of direct application
+    # g = x^2 has g'' = 2: predicted bias 2 s^2 / (2n) = s^2 / n, the exact bias of direct
+    # application
     mu = np.full(4000, 0.5)
     target = (1.0 / 12.0) / 20  # U(0, 1): Var = 1/12, so about 20 children
     est = AdaptiveDirect(lambda x: x * x, 4, 64, curvature=lambda m, h: 2.0 + 0.0 * m, bias=target)
@@ -83,8 +89,9 @@ def test_a_fixed_count_is_direct_application_bit_for_bit():
 
 
 def test_adaptive_beats_a_fixed_count_with_the_same_mean_children_on_a_step():
-    # means spread over [0, 1] around one threshold; the reference is the exact g(mu) (brute force would
-    # converge to it). Paired per-lane squared errors give the MSE difference and its standard error.
+    # means spread over [0, 1] around one threshold; the reference is the exact g(mu) (brute force
+    # would converge to it). Paired per-lane squared errors give the MSE difference and its standard
+    # error.
     lanes = 40_000
     mu = np.random.default_rng(6).uniform(0.0, 1.0, lanes)
     est = AdaptiveDirect(step, 4, 64, thresholds=(0.5,))
@@ -124,7 +131,8 @@ def test_on_drjit_arrays(jit):
 
 
 def t_quantile(p, v):
-    """Student's t quantile by bisection on its CDF, the density integrated numerically (Simpson)."""
+    """Student's t quantile by bisection on its CDF, the density integrated numerically
+    (Simpson)."""
     import math
     c = math.gamma((v + 1) / 2) / (math.sqrt(v * math.pi) * math.gamma(v / 2))
 
@@ -148,8 +156,12 @@ def test_the_band_is_students_t_for_few_children():
     for n in (4, 8, 16, 64):
         v = n - 1
         exact = t_quantile(0.5 * (1 + math.erf(z / math.sqrt(2))), v)
-        next_term = (79 * z ** 9 + 776 * z ** 7 + 1482 * z ** 5 - 1920 * z ** 3 - 945 * z) / (92160 * v ** 4)
-        assert abs(est.band_width(float(n)) - exact) <= next_term, (n, est.band_width(float(n)), exact)
+        next_term = (79 * z**9 + 776 * z**7 + 1482 * z**5 - 1920 * z**3 - 945 * z) / (92160 * v**4)
+        assert abs(est.band_width(float(n)) - exact) <= next_term, (
+            n,
+            est.band_width(float(n)),
+            exact,
+        )
     assert est.band_width(1e6) == pytest.approx(z, rel=1e-5)
 
 

@@ -1,9 +1,11 @@
-"""Affine estimators (S1-S3): scalar, per-channel, channel-mixing matrix; the comb-stratified mean."""
+"""Affine estimators (S1-S3): scalar, per-channel, channel-mixing matrix; the comb-stratified
+mean."""
 import numpy as np
 import pytest
-from estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates, variance_and_se
 
 from styletrace.estimators import Affine, Mean, TwoPoint, Uniform, channel_means
+
+from .estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates, variance_and_se
 
 SEPIA = np.array([[0.393, 0.769, 0.189], [0.349, 0.686, 0.168], [0.272, 0.534, 0.131]])
 
@@ -16,7 +18,9 @@ def test_affine_is_unbiased(backend, a1, a0):
         r = run_estimates(est, dist, 50_000, backend=backend, seed=i, channels=3)
         I = channel_means(dist, 3)
         assert_unbiased(r.values, est.exact(I), what=f"{est.name} {name}")
-        np.testing.assert_allclose(est.exact(I), np.asarray(a1) @ I + a0 if np.ndim(a1) == 2 else np.asarray(a1) * I + a0)
+        np.testing.assert_allclose(
+            est.exact(I), np.asarray(a1) @ I + a0 if np.ndim(a1) == 2 else np.asarray(a1) * I + a0
+        )
         assert np.all(r.draws == 2)
 
 
@@ -26,17 +30,23 @@ def test_mean_variance_falls_as_one_over_m_and_comb_as_one_over_m_squared(backen
     # and the variance would not fall
     dist = Uniform(0.0, 1.0)
     for m in (1, 4, 16):
-        v, se = variance_and_se(run_estimates(Mean(m), dist, 100_000, backend=backend, seed=m).values)
+        v, se = variance_and_se(
+            run_estimates(Mean(m), dist, 100_000, backend=backend, seed=m).values
+        )
         assert abs(v - dist.var / m) <= Z * se
-        vc, sec = variance_and_se(run_estimates(Mean(m, comb=True), dist, 100_000, backend=backend, seed=m).values)
-        assert abs(vc - dist.var / m ** 2) <= Z * sec  # linear quantile: the comb mean is xi/m + const
+        vc, sec = variance_and_se(
+            run_estimates(Mean(m, comb=True), dist, 100_000, backend=backend, seed=m).values
+        )
+        # linear quantile: the comb mean is xi/m + const
+        assert abs(vc - dist.var / m ** 2) <= Z * sec
 
 
 def test_comb_keeps_the_mean_unbiased_on_a_discrete_distribution():
     dist = TwoPoint(0.0, 1.0, 0.37)
     r = run_estimates(Mean(5, comb=True), dist, 100_000, seed=2)
     assert_unbiased(r.values, dist.mean)
-    # a comb of 5 over P(1) = 0.37 gives 1 or 2 ones: variance (0.85 * 0.15) / 25 vs iid 0.37 * 0.63 / 5
+    # a comb of 5 over P(1) = 0.37 gives 1 or 2 ones: variance (0.85 * 0.15) / 25 vs iid 0.37 * 0.63
+    # / 5
     v, se = variance_and_se(r.values)
     assert abs(v - 0.85 * 0.15 / 25) <= Z * se
 

@@ -1,7 +1,6 @@
 """Theorem 4.1: sums (shared samples), products (independent groups), compositions."""
 import numpy as np
 import pytest
-from estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates
 
 from styletrace.estimators import (
     Affine,
@@ -19,6 +18,8 @@ from styletrace.estimators import (
     inner_mean,
 )
 
+from .estimator_stats import BACKENDS, DISTS, Z, assert_unbiased, run_estimates
+
 SEPIA = np.array([[0.393, 0.769, 0.189], [0.349, 0.686, 0.168], [0.272, 0.534, 0.131]])
 
 
@@ -30,7 +31,8 @@ def cases():
         "sum-unshared": (Sum(sq, lin, shared=False), 3),
         "product": (Product(lin, PolynomialU([0.0, 0.0, 1.0], n=3)), 4),
         "compose": (Compose(PolynomialU([0.0, 0.0, 1.0], n=3), Affine(2.0, 1.0)), 3),
-        "operators": (sq + lin * Affine(0.5, 0.0), 2),  # shared sum of x^2 and a product of two affines
+        # shared sum of x^2 and a product of two affines
+        "operators": (sq + lin * Affine(0.5, 0.0), 2),
     }
 
 
@@ -54,8 +56,8 @@ def test_exact_values_of_the_combinations():
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_composition_with_an_inner_estimator_that_sometimes_needs_no_draws(backend):
-    # single-term series pick k = 0 with probability e^-2: that inner estimate needs no draw at all, so
-    # the composition must produce it without waiting for one (a nested loop in the kernel)
+    # single-term series pick k = 0 with probability e^-2: that inner estimate needs no draw at all,
+    # so the composition must produce it without waiting for one (a nested loop in the kernel)
     inner = SeriesEstimator(exp_series(), b=0.5, selection="single", truncation=Poisson(2.0))
     est = Compose(PolynomialU([0.0, 0.0, 1.0], n=2), inner)
     dist = DISTS["uniform"]
@@ -68,7 +70,8 @@ def test_composition_with_an_inner_estimator_that_sometimes_needs_no_draws(backe
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_sepia_then_contrast_on_rgb(backend):
-    # Fig. 10's combined estimator: contrast c (<I> - p) + p of a sepia matrix, then squared per channel
+    # Fig. 10's combined estimator: contrast c (<I> - p) + p of a sepia matrix, then squared per
+    # channel
     contrast = Affine(1.4, -0.4 * 0.5)
     est = Compose(PolynomialU([0.0, 0.0, 1.0], n=2), Compose(contrast, Affine(SEPIA)))
     dist = DISTS["two-point"]

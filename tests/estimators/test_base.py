@@ -1,7 +1,6 @@
 """The kernel contract: run(draw, carry, uniform, active, like) on numpy and inside Dr.Jit loops."""
 import numpy as np
 import pytest
-from estimator_stats import DISTS, Z, assert_unbiased, drjit_backend, run_estimates, variance_and_se
 
 from styletrace.estimators import (
     Cumulative,
@@ -14,6 +13,15 @@ from styletrace.estimators import (
     estimate_drjit,
     estimate_numpy,
     gamma_series,
+)
+
+from .estimator_stats import (
+    DISTS,
+    Z,
+    assert_unbiased,
+    drjit_backend,
+    run_estimates,
+    variance_and_se,
 )
 
 
@@ -73,7 +81,9 @@ def test_drjit_and_numpy_agree_on_mean_and_variance():
     assert_unbiased(b, dist.mean ** (1 / 2.2))
     (va, sa), (vb, sb) = variance_and_se(a), variance_and_se(b)
     assert abs(va - vb) <= Z * np.hypot(sa, sb)
-    assert abs(a.mean() - b.mean()) <= Z * np.hypot(a.std() / np.sqrt(len(a)), b.std() / np.sqrt(len(b)))
+    assert abs(a.mean() - b.mean()) <= Z * np.hypot(
+        a.std() / np.sqrt(len(a)), b.std() / np.sqrt(len(b))
+    )
 
 
 @pytest.mark.parametrize("backend", ["numpy", "drjit"])
@@ -82,9 +92,13 @@ def test_inactive_lanes_draw_nothing_and_return_zero(backend):
     active = np.arange(lanes) % 3 != 0
     est = PolynomialU([0.0, 1.0, 1.0], n=3)
     if backend == "numpy":
-        r = estimate_numpy(est, DISTS["uniform"], lanes, np.random.default_rng(0), channels=3, active=active)
+        r = estimate_numpy(
+            est, DISTS["uniform"], lanes, np.random.default_rng(0), channels=3, active=active
+        )
     else:
-        r = estimate_drjit(est, DISTS["uniform"], lanes, channels=3, active=drjit_backend().Bool(active))
+        r = estimate_drjit(
+            est, DISTS["uniform"], lanes, channels=3, active=drjit_backend().Bool(active)
+        )
     assert np.all(r.values[~active] == 0.0) and np.all(r.draws[~active] == 0)
     assert np.all(r.draws[active] == 3) and np.all(r.values[active] != 0.0)
 
@@ -92,9 +106,17 @@ def test_inactive_lanes_draw_nothing_and_return_zero(backend):
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("channels", [None, 3])
 def test_numpy_values_keep_the_shape_and_dtype_of_the_samples(dtype, channels):
-    r = estimate_numpy(PolynomialU([0.5, 1.0, 1.0], n=2), DISTS["two-point"], 50_000, np.random.default_rng(1),
-                       channels=channels, dtype=dtype)
-    assert r.values.dtype == dtype and r.values.shape == ((50_000,) if channels is None else (50_000, channels))
+    r = estimate_numpy(
+        PolynomialU([0.5, 1.0, 1.0], n=2),
+        DISTS["two-point"],
+        50_000,
+        np.random.default_rng(1),
+        channels=channels,
+        dtype=dtype,
+    )
+    assert r.values.dtype == dtype and r.values.shape == (
+        (50_000,) if channels is None else (50_000, channels)
+    )
     I = channel_means(DISTS["two-point"], channels)
     assert_unbiased(r.values, 0.5 + I + I * I)
 
@@ -118,12 +140,15 @@ def test_drjit_needs_like_and_checks_the_type(jit):
     Array3f, Bool, Float = jit.Array3f, jit.Bool, jit.Float
     with pytest.raises(ValueError, match="needs like="):
         Mean(1).run(lambda c: (Float(1.0), c), (), lambda c: (Float(0.5), c), active=Bool(True))
-    with pytest.raises((ValueError, RuntimeError)) as err:  # Dr.Jit re-raises errors from a loop body
+    # Dr.Jit re-raises errors from a loop body
+    with pytest.raises((ValueError, RuntimeError)) as err:
         Mean(1).run(lambda c: (np.ones(3), c), (), lambda c: (Float(0.5), c), like=Array3f)
     chain = [err.value, err.value.__cause__, err.value.__context__]
     assert any("draw() returned ndarray; like=Array3f" in str(e) for e in chain if e is not None)
     with pytest.raises(ValueError, match="like must be the type"):
-        Mean(1).run(lambda c: (Float(1.0), c), (), lambda c: (Float(0.5), c), Bool(True), like="Color3f")
+        Mean(1).run(
+            lambda c: (Float(1.0), c), (), lambda c: (Float(0.5), c), Bool(True), like="Color3f"
+        )
     with pytest.raises(TypeError):  # like is keyword-only: a fifth positional argument is a mistake
         Mean(1).run(lambda c: (Float(1.0), c), (), lambda c: (Float(0.5), c), Bool(True), Float)
     v, _ = Mean(2).run(lambda c: (Array3f(1, 2, 3), c), (), lambda c: (Float(0.5), c), like=Array3f)
@@ -132,13 +157,14 @@ def test_drjit_needs_like_and_checks_the_type(jit):
 
 
 def mitsuba_with_variant():
-    """Mitsuba with the variant styletrace.init() chose (cuda_ad_rgb where CUDA works, else llvm_ad_rgb,
-    or the one set before): the tests follow the backend instead of naming one."""
+    """Mitsuba with the variant styletrace.init() chose (cuda_ad_rgb where CUDA works, else
+    llvm_ad_rgb, or the one set before): the tests follow the backend instead of naming one."""
     import importlib.util
     if importlib.util.find_spec("mitsuba") is None:
         pytest.skip("Mitsuba is not installed")
     import styletrace
-    variant = styletrace.init()  # before `import mitsuba`: it loads Dr.Jit, which needs a working libLLVM
+    # before `import mitsuba`: it loads Dr.Jit, which needs a working libLLVM
+    variant = styletrace.init()
     import mitsuba as mi
     assert mi.variant() == variant
     return mi
@@ -155,7 +181,8 @@ def test_mitsuba_color3f_values():
 
 
 def test_a_mitsuba_sampler_in_the_carry_advances_every_iteration():
-    """The integrator's set-up: carry = (sampler,), draw returns mi.Color3f, uniform uses the sampler."""
+    """The integrator's set-up: carry = (sampler,), draw returns mi.Color3f, uniform uses the
+    sampler."""
     mi = mitsuba_with_variant()
     if not hasattr(mi, "Color3f") or mi.variant().startswith("scalar"):
         pytest.skip("needs a JIT Mitsuba variant")

@@ -34,7 +34,9 @@ def test_reciprocal_coefficients_are_s17():
     want = [3.0 * (-1) ** k * b ** (-k - 1) for k in range(10)]
     np.testing.assert_allclose(s.coefficients(b, 9), want, rtol=1e-13)
     I = 0.6
-    assert sum(c * (I - b) ** k for k, c in enumerate(s.coefficients(b, 200))) == pytest.approx(3.0 / I, rel=1e-12)
+    assert sum(c * (I - b) ** k for k, c in enumerate(s.coefficients(b, 200))) == pytest.approx(
+        3.0 / I, rel=1e-12
+    )
 
 
 @pytest.mark.parametrize("gamma", [2.2, 1.0 / 3.0, -2.0])
@@ -44,12 +46,16 @@ def test_power_coefficients_are_generalized_binomials(gamma):
     want = [gen_binom(p, k) * b ** (p - k) for k in range(10)]
     np.testing.assert_allclose(s.coefficients(b, 9), want, rtol=1e-12)
     I = 1.0
-    assert sum(c * (I - b) ** k for k, c in enumerate(s.coefficients(b, 200))) == pytest.approx(I ** p, rel=1e-12)
+    assert sum(c * (I - b) ** k for k, c in enumerate(s.coefficients(b, 200))) == pytest.approx(
+        I**p, rel=1e-12
+    )
 
 
 def test_integer_power_series_is_finite():
     assert power_series(3.0).degree == 3 and power_series(2.5).degree is None
-    np.testing.assert_allclose(power_series(2.0).coefficients(0.5, 4), [0.25, 1.0, 1.0, 0.0, 0.0], atol=1e-15)
+    np.testing.assert_allclose(
+        power_series(2.0).coefficients(0.5, 4), [0.25, 1.0, 1.0, 0.0, 0.0], atol=1e-15
+    )
 
 
 def test_taylor_series_from_a_derivative_callable():
@@ -72,13 +78,18 @@ def test_taylor_shift_moves_the_expansion_point():
     np.testing.assert_allclose(p.shifted(0.7).coeffs, shifted, rtol=1e-15)
     lanes = np.array([[0.1], [0.5], [-1.0]])  # per-lane shift points (array-generic)
     per_lane = taylor_shift([np.full((3, 1), v) for v in c], lanes)
-    np.testing.assert_allclose(np.hstack(per_lane), np.array([taylor_shift(c, float(h)) for h in lanes[:, 0]]))
+    np.testing.assert_allclose(
+        np.hstack(per_lane), np.array([taylor_shift(c, float(h)) for h in lanes[:, 0]])
+    )
 
 
 def test_reciprocal_refuses_expansion_points_outside_the_convergence_region():
     s = reciprocal_series(1.0, lo=0.5, hi=2.0)
     s.check_center(1.01)  # 2.0 < 2 * 1.01: every I in [0.5, 2] has |b - I| < |b|
-    with pytest.raises(ValueError, match=r"b=0.9 is outside the convergence region for I in \[0.5, 2.0\].*\|b - I\| < \|b\|"):
+    with pytest.raises(
+        ValueError,
+        match=r"b=0.9 is outside the convergence region for I in \[0.5, 2.0\].*\|b - I\| < \|b\|",
+    ):
         s.check_center(0.9)
     with pytest.raises(ValueError, match=r"b must be > 1.0"):
         s.check_center(1.0)  # I = 2 = 2b sits on the boundary: the series does not converge there
@@ -107,7 +118,8 @@ def test_pilot_expansion_points_are_clamped_into_the_region():
 
 def test_power_series_checks():
     g = gamma_series(2.2, lo=0.0, hi=1.0)
-    g.check_center(0.5)  # I = 0 and I = 1 sit on |b - I| = |b|, where sum |C(p, k)| converges for p > 0
+    # I = 0 and I = 1 sit on |b - I| = |b|, where sum |C(p, k)| converges for p > 0
+    g.check_center(0.5)
     with pytest.raises(ValueError, match="b >= hi/2 = 0.5"):
         g.check_center(0.4)
     with pytest.raises(ValueError, match="must be > 0"):

@@ -3,16 +3,17 @@ import math
 
 import numpy as np
 import pytest
-from estimator_stats import DISTS, Z, assert_detectably_biased, run_estimates, variance_and_se
 
 from styletrace.estimators import Direct, Exponential, Uniform
+
+from .estimator_stats import DISTS, Z, assert_detectably_biased, run_estimates, variance_and_se
 
 
 def test_bias_matches_the_delta_method():
     # g = exp on U(0, 1), n = 8: predicted bias g''(I) Var / (2n) = e^0.5 / 192 = 8.6e-3. The exact
-    # bias is known too, E[exp(<I>_n)] = (n (e^(1/n) - 1))^n: the delta method's remainder (4th-order,
-    # the 3rd central moment of U is 0) is 2e-5 here, far below the standard error (2.7e-4), so the
-    # comparison with the prediction is limited by noise only.
+    # bias is known too, E[exp(<I>_n)] = (n (e^(1/n) - 1))^n: the delta method's remainder
+    # (4th-order, the 3rd central moment of U is 0) is 2e-5 here, far below the standard error
+    # (2.7e-4), so the comparison with the prediction is limited by noise only.
     dist, n, lanes = Uniform(0.0, 1.0), 8, 400_000
     r = run_estimates(Direct(np.exp, n), dist, lanes, seed=3)
     measured = r.values.mean() - math.exp(dist.mean)
@@ -36,7 +37,9 @@ def test_quadratic_bias_is_var_over_n(n):
 def test_direct_on_drjit_matches_numpy():
     dist = DISTS["uniform"]
     a = run_estimates(Direct(lambda x: x * x, 3), dist, 200_000, backend="numpy", seed=1)
-    b = run_estimates(Direct(lambda x: x * x, 3), dist, 200_000, backend="drjit", seed=1, channels=3)
+    b = run_estimates(
+        Direct(lambda x: x * x, 3), dist, 200_000, backend="drjit", seed=1, channels=3
+    )
     want = (dist.mean * np.arange(1, 4)) ** 2 + dist.var * np.arange(1, 4) ** 2 / 3
     assert abs(a.values.mean() - want[0]) <= Z * a.stderr
     assert np.all(np.abs(b.values.mean(axis=0) - want) <= Z * b.stderr)

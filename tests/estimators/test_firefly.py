@@ -1,13 +1,14 @@
-"""The firefly control of direct application (`estimators.affine.MeanOfN(cap=(k, floor))`): exact values on
-fixed children, on numpy and on Dr.Jit, and the switch that turns it off."""
+"""The firefly control of direct application (`estimators.affine.MeanOfN(cap=(k, floor))`): exact
+values on fixed children, on numpy and on Dr.Jit, and the switch that turns it off."""
 import numpy as np
 import pytest
-from estimator_stats import drjit_backend
 
 from styletrace.estimators import Direct
 
-#: per lane, the children in draw order (RGB); lane 0 holds a firefly, lane 1 none, lane 2 a firefly in a
-#: shadow (the others are 0: the floor decides), lane 3 two equal bright children
+from .estimator_stats import drjit_backend
+
+#: per lane, the children in draw order (RGB); lane 0 holds a firefly, lane 1 none, lane 2 a firefly
+#: in a shadow (the others are 0: the floor decides), lane 3 two equal bright children
 CHILDREN = np.array([
     [(1.0, 1.0, 1.0), (1.2, 0.9, 0.9), (0.8, 1.0, 1.2), (90.0, 30.0, 60.0)],
     [(1.0, 1.0, 1.0), (2.0, 2.0, 2.0), (3.0, 3.0, 3.0), (2.5, 2.0, 1.5)],
@@ -17,7 +18,8 @@ CHILDREN = np.array([
 
 
 def expected(children, k, floor):
-    """The cap by hand: the brightest child scaled to k * max(mean brightness of the others, floor)."""
+    """The cap by hand: the brightest child scaled to k * max(mean brightness of the others,
+    floor)."""
     out = []
     for lane in children:
         b = lane.mean(axis=1)
@@ -39,8 +41,12 @@ def run_numpy(est, children):
         x = children[np.arange(lanes), np.minimum(i[:, 0], n - 1)]
         return x, (i + 1,)
 
-    value, _ = est.run(draw, (np.zeros((lanes, 1), dtype=np.int64),), lambda c: (np.zeros((lanes, 1)), c),
-                       like=None)
+    value, _ = est.run(
+        draw,
+        (np.zeros((lanes, 1), dtype=np.int64),),
+        lambda c: (np.zeros((lanes, 1)), c),
+        like=None,
+    )
     return np.asarray(value)
 
 
@@ -48,7 +54,8 @@ def run_numpy(est, children):
 def test_the_brightest_child_is_capped_at_k_times_the_others(k, floor):
     got = run_numpy(Direct(lambda x: x, 4, cap=(k, floor)), CHILDREN)
     np.testing.assert_allclose(got, expected(CHILDREN, k, floor), rtol=1e-12)
-    # lane 1 has no outlier at k = 4: untouched; lane 0's firefly is cut to k times the others' mean brightness
+    # lane 1 has no outlier at k = 4: untouched; lane 0's firefly is cut to k times the others' mean
+    # brightness
     plain = CHILDREN.mean(axis=1)
     if k == 4.0:
         np.testing.assert_allclose(got[1], plain[1], rtol=1e-12)
@@ -58,7 +65,8 @@ def test_the_brightest_child_is_capped_at_k_times_the_others(k, floor):
 def test_off_is_the_plain_mean_and_the_shadow_keeps_its_child_below_the_floor():
     plain = run_numpy(Direct(lambda x: x, 4), CHILDREN)
     np.testing.assert_allclose(plain, CHILDREN.mean(axis=1), rtol=1e-12)
-    # a lit child in a shadow (the others black) is kept up to k * floor: floor 1.5 keeps all of brightness 4
+    # a lit child in a shadow (the others black) is kept up to k * floor: floor 1.5 keeps all of
+    # brightness 4
     kept = run_numpy(Direct(lambda x: x, 4, cap=(4.0, 1.5)), CHILDREN)
     np.testing.assert_allclose(kept[2], CHILDREN[2].mean(axis=0), rtol=1e-12)
 
@@ -78,8 +86,15 @@ def test_the_cap_on_drjit_matches_numpy():
     import drjit as dr
     mod = drjit_backend()
     lanes, n, _ = CHILDREN.shape
-    flat = [mod.Array3f(*(mod.Float(np.ascontiguousarray(CHILDREN[:, j, c], dtype=np.float32)) for c in range(3)))
-            for j in range(n)]
+    flat = [
+        mod.Array3f(
+            *(
+                mod.Float(np.ascontiguousarray(CHILDREN[:, j, c], dtype=np.float32))
+                for c in range(3)
+            )
+        )
+        for j in range(n)
+    ]
 
     def draw(carry):
         (i,) = carry
@@ -89,7 +104,9 @@ def test_the_cap_on_drjit_matches_numpy():
         return x, (i + 1,)
 
     est = Direct(lambda x: x, n, cap=(4.0, 0.25))
-    value, _ = est.run(draw, (dr.zeros(mod.UInt32, lanes),), lambda c: (mod.Float(0.0), c), like=mod.Array3f)
+    value, _ = est.run(
+        draw, (dr.zeros(mod.UInt32, lanes),), lambda c: (mod.Float(0.0), c), like=mod.Array3f
+    )
     got = np.stack([np.asarray(value[c]) for c in range(3)], -1)
     np.testing.assert_allclose(got, expected(CHILDREN, 4.0, 0.25), rtol=1e-5)
 

@@ -1,10 +1,10 @@
-"""Polynomial fits (S25-S28): agreement with numpy.polynomial, change of basis, fitted estimators."""
+"""Polynomial fits (S25-S28): agreement with numpy.polynomial, change of basis, fitted
+estimators."""
 import math
 from fractions import Fraction
 
 import numpy as np
 import pytest
-from estimator_stats import BACKENDS, assert_unbiased, run_estimates
 from numpy.polynomial import chebyshev as npcheb
 from numpy.polynomial import legendre as npleg
 
@@ -20,6 +20,8 @@ from styletrace.estimators import (
     taylor_fit,
     to_unit,
 )
+
+from .estimator_stats import BACKENDS, assert_unbiased, run_estimates
 
 EPS = np.finfo(np.float64).eps
 FUNCS = {
@@ -62,16 +64,17 @@ def test_chebyshev_nodes_with_more_points_truncate_the_larger_interpolant():
 def test_chebyshev_even_nodes_riemann_sum_converges_to_the_projection(name):
     g, lo, hi = FUNCS[name]
     D = 8
-    proj = npcheb.chebinterpolate(on_unit(g, lo, hi), 200)[:D + 1]  # projection coefficients (analytic g)
+    # projection coefficients (analytic g)
+    proj = npcheb.chebinterpolate(on_unit(g, lo, hi), 200)[:D + 1]
     gmax = np.max(np.abs(g(np.linspace(lo, hi, 10001))))
     errs = []
     for n in (1024, 16384):
         fit = chebyshev_fit(g, D, lo, hi, nodes="even", points=n)
         err = np.max(np.abs(fit.coeffs - proj))
-        # The weight 1/sqrt(1-t^2) is integrable but unbounded: the two end cells of width h = 2/(n+1)
-        # hold mass ~sqrt(2h) each that the Riemann sum gets wrong by O(1), and the interior rule's
-        # error (h times the variation of the weighted integrand) is of the same order; with |T_i| <= 1
-        # and 1/C(i) <= 2/pi: |error| <= 4 sqrt(2h) max|g| 2/pi.
+        # The weight 1/sqrt(1-t^2) is integrable but unbounded: the two end cells of width h =
+        # 2/(n+1) hold mass ~sqrt(2h) each that the Riemann sum gets wrong by O(1), and the interior
+        # rule's error (h times the variation of the weighted integrand) is of the same order; with
+        # |T_i| <= 1 and 1/C(i) <= 2/pi: |error| <= 4 sqrt(2h) max|g| 2/pi.
         h = 2.0 / (n + 1)
         assert err <= 4 * math.sqrt(2 * h) * gmax * 2 / math.pi
         errs.append(err)
@@ -87,10 +90,13 @@ def test_legendre_gauss_fit_is_numpy_weighted_least_squares(name, n_extra):
     fit = legendre_fit(g, D, lo, hi, points=n)
     t, w = npleg.leggauss(n)
     want = npleg.legfit(t, on_unit(g, lo, hi)(t), D, w=np.sqrt(w))
-    # Gauss quadrature with n >= D+1 nodes integrates P_i P_k exactly (degree <= 2n-1), so the discrete
-    # projection is the weighted least-squares fit at those nodes. numpy solves that by lstsq on a
-    # Vandermonde matrix whose condition number is O(D) here: agreement to ~1e3 eps max|a|.
-    np.testing.assert_allclose(fit.coeffs, want, atol=1e3 * EPS * max(1.0, np.max(np.abs(want))), rtol=0)
+    # Gauss quadrature with n >= D+1 nodes integrates P_i P_k exactly (degree <= 2n-1), so the
+    # discrete projection is the weighted least-squares fit at those nodes. numpy solves that by
+    # lstsq on a Vandermonde matrix whose condition number is O(D) here: agreement to ~1e3 eps
+    # max|a|.
+    np.testing.assert_allclose(
+        fit.coeffs, want, atol=1e3 * EPS * max(1.0, np.max(np.abs(want))), rtol=0
+    )
 
 
 def test_legendre_even_riemann_sum_is_first_order_accurate():
@@ -124,18 +130,24 @@ def test_bernstein_fit_is_the_s26_sum():
     fit = bernstein_fit(g, k, lo, hi)
     x = np.linspace(lo, hi, 57)
     s = (x - lo) / (hi - lo)
-    want = sum(g(lo + i / k * (hi - lo)) * math.comb(k, i) * s ** i * (1 - s) ** (k - i) for i in range(k + 1))
+    want = sum(
+        g(lo + i / k * (hi - lo)) * math.comb(k, i) * s**i * (1 - s) ** (k - i)
+        for i in range(k + 1)
+    )
     np.testing.assert_allclose(fit(x), want, rtol=1e-12, atol=1e-12)
 
 
 def test_taylor_fit_coefficients_are_derivatives_over_factorials():
     fit = taylor_fit(lambda k, b: np.exp(b), 6, b=0.5)
-    np.testing.assert_allclose(fit.coeffs, [math.exp(0.5) / math.factorial(k) for k in range(7)], rtol=1e-15)
+    np.testing.assert_allclose(
+        fit.coeffs, [math.exp(0.5) / math.factorial(k) for k in range(7)], rtol=1e-15
+    )
     np.testing.assert_allclose(fit.to_monomial(0.5), fit.coeffs, rtol=1e-15)
 
 
 def basis_to_monomial_exact(fit):
-    """Exact rational matrix B with u^k coefficient of basis function i in B[k][i] (u = t, s or x - c)."""
+    """Exact rational matrix B with u^k coefficient of basis function i in B[k][i] (u = t, s or x
+    - c)."""
     D = fit.degree
     B = [[Fraction(0)] * (D + 1) for _ in range(D + 1)]
     if fit.basis == "monomial":
@@ -166,8 +178,13 @@ def shift_exact(fit, b):
     D = fit.degree
     alpha, beta = Fraction(fit.alpha), Fraction(fit.beta)
     ub = alpha * Fraction(b) + beta
-    return [[math.comb(j, k) * ub ** (j - k) * alpha ** k if j >= k else Fraction(0) for j in range(D + 1)]
-            for k in range(D + 1)]
+    return [
+        [
+            math.comb(j, k) * ub ** (j - k) * alpha**k if j >= k else Fraction(0)
+            for j in range(D + 1)
+        ]
+        for k in range(D + 1)
+    ]
 
 
 @pytest.mark.parametrize("make", [
@@ -185,17 +202,22 @@ def test_change_of_basis_gives_coefficients_about_b_in_the_original_variable(mak
     a = [Fraction(float(v)) for v in fit.coeffs]
     mono = [sum(B[k][i] * a[i] for i in range(D + 1)) for k in range(D + 1)]
     exact = [float(sum(S[k][j] * mono[j] for j in range(D + 1))) for k in range(D + 1)]
-    # floating-point matrix products: |error| <= ~2 (D+1) eps (|S| |B| |a|) per coefficient, doubled for
-    # the two stages and the float64 rounding of alpha, beta and the shift point
+    # floating-point matrix products: |error| <= ~2 (D+1) eps (|S| |B| |a|) per coefficient, doubled
+    # for the two stages and the float64 rounding of alpha, beta and the shift point
     absa = [abs(v) for v in a]
     absmono = [sum(abs(B[k][i]) * absa[i] for i in range(D + 1)) for k in range(D + 1)]
-    bound = [4 * (D + 1) * EPS * float(sum(abs(S[k][j]) * absmono[j] for j in range(D + 1))) for k in range(D + 1)]
+    bound = [
+        4 * (D + 1) * EPS * float(sum(abs(S[k][j]) * absmono[j] for j in range(D + 1)))
+        for k in range(D + 1)
+    ]
     assert np.all(np.abs(c - exact) <= np.array(bound) + 1e-300)
-    # and the polynomial about b is the fit itself (up to that conversion error and the evaluation's)
+    # and the polynomial about b is the fit itself (up to that conversion error and the
+    # evaluation's)
     x = np.linspace(fit.lo, fit.hi, 301)
     y = fit.series(b)(x)
     tol = sum((bound[k] + 8 * (D + 1) * EPS * abs(c[k])) * np.abs(x - b) ** k for k in range(D + 1))
-    tol = tol + 8 * (D + 1) ** 2 * EPS * float(np.sum(np.abs(fit.coeffs)))  # the basis recurrence's own rounding
+    # the basis recurrence's own rounding
+    tol = tol + 8 * (D + 1) ** 2 * EPS * float(np.sum(np.abs(fit.coeffs)))
     assert np.all(np.abs(y - fit(x)) <= tol)
 
 

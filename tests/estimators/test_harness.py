@@ -12,7 +12,9 @@ from styletrace.estimators import (
 )
 
 
-@pytest.mark.parametrize("dist", [Uniform(0.2, 1.0), Exponential(0.3, 0.2), TwoPoint(0.25, 1.0, 0.3)])
+@pytest.mark.parametrize(
+    "dist", [Uniform(0.2, 1.0), Exponential(0.3, 0.2), TwoPoint(0.25, 1.0, 0.3)]
+)
 def test_distribution_moments_match_their_quantile_function(dist):
     u = (np.arange(400_000) + 0.5) / 400_000
     x = dist.quantile(u)

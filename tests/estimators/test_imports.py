@@ -1,4 +1,5 @@
-"""The estimator package is numpy-only until asked for Dr.Jit, and its modules import each other without cycles."""
+"""The estimator package is numpy-only until asked for Dr.Jit, and its modules import each other
+without cycles."""
 import ast
 import os
 import subprocess
@@ -7,7 +8,9 @@ import textwrap
 
 from conftest import child_env
 
-PKG = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "src", "styletrace", "estimators")
+PKG = os.path.join(
+    os.path.dirname(os.path.abspath(__file__)), "..", "..", "src", "styletrace", "estimators"
+)
 
 NUMPY_ONLY = textwrap.dedent("""
     import sys
@@ -36,7 +39,8 @@ def test_numpy_estimates_load_neither_drjit_nor_mitsuba():
 
 
 def test_the_import_check_catches_a_module_that_loads_drjit():
-    # the same child, with a stand-in `drjit` module put in sys.modules as an import would, must fail
+    # the same child, with a stand-in `drjit` module put in sys.modules as an import would, must
+    # fail
     r = run_child("import types; dr = sys.modules['drjit'] = types.ModuleType('drjit'); "
                   "dr.ArrayBase = type('ArrayBase', (), {})")
     assert r.returncode != 0 and "loaded: drjit" in r.stderr, r.stdout + r.stderr
@@ -52,9 +56,14 @@ def intra_package_imports():
         deps = set()
         for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom) and node.level == 1:
-                deps.update([node.module.split(".")[0]] if node.module else [a.name for a in node.names])
-            elif isinstance(node, ast.ImportFrom) and node.level == 0 and (node.module or "").startswith(
-                    "styletrace.estimators"):
+                deps.update(
+                    [node.module.split(".")[0]] if node.module else [a.name for a in node.names]
+                )
+            elif (
+                isinstance(node, ast.ImportFrom)
+                and node.level == 0
+                and (node.module or "").startswith("styletrace.estimators")
+            ):
                 parts = node.module.split(".")
                 deps.update([parts[2]] if len(parts) > 2 else [a.name for a in node.names])
             elif isinstance(node, ast.Import):

@@ -1,10 +1,11 @@
 """Expansion points from pilot samples: independent of the terms, counted, clamped."""
 import numpy as np
 import pytest
-from estimator_stats import DISTS, assert_unbiased, run_estimates
 
 from styletrace.estimators import Pilot, PolynomialU, SeriesEstimator, gamma_series
 from styletrace.estimators.pilot import ExpansionPoint
+
+from .estimator_stats import DISTS, assert_unbiased, run_estimates
 
 
 def test_pilot_samples_are_counted_and_separate():
@@ -40,15 +41,20 @@ def _pilot_b(pilot, xs):
     point = ExpansionPoint(pilot, series=gamma_series(2.2))
     state = point.start(ctx)
     for x in xs:
-        state, _ = point.feed(ctx, state, x[:, None], np.ones((lanes, 1), bool))  # numpy lanes are (lanes, 1)
+        # numpy lanes are (lanes, 1)
+        state, _ = point.feed(ctx, state, x[:, None], np.ones((lanes, 1), bool))
     return np.asarray(point.value(ctx, state)).ravel()
 
 
 def test_pilot_spread_aims_at_the_second_moment_ratio():
-    """b = max(scale * mean, spread * mean(x^2) / mean(x)) over the pilot, against numpy on the same draws."""
-    xs = np.random.default_rng(4).exponential(1.0, (16, 64)) ** 3  # heavy tailed: the ratio dominates
+    """b = max(scale * mean, spread * mean(x^2) / mean(x)) over the pilot, against numpy on the
+    same draws."""
+    # heavy tailed: the ratio dominates
+    xs = np.random.default_rng(4).exponential(1.0, (16, 64)) ** 3
     mean, ratio = xs.mean(0), (xs ** 2).mean(0) / xs.mean(0)
-    np.testing.assert_allclose(_pilot_b(Pilot(16, scale=1.5, spread=1.0), xs), np.maximum(1.5 * mean, ratio))
+    np.testing.assert_allclose(
+        _pilot_b(Pilot(16, scale=1.5, spread=1.0), xs), np.maximum(1.5 * mean, ratio)
+    )
     np.testing.assert_allclose(_pilot_b(Pilot(16, scale=1.5), xs), 1.5 * mean)
     zeros = np.zeros((4, 3))  # a pilot of zeros keeps the mean rule (then the floor), no 0/0
     assert np.all(np.isfinite(_pilot_b(Pilot(4, lo=0.02, spread=1.0), zeros)))

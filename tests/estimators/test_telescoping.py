@@ -1,9 +1,10 @@
 """Telescoping debiasing of the direct estimator (Eq. 15 form)."""
 import numpy as np
 import pytest
-from estimator_stats import DISTS, Z, assert_unbiased, run_estimates
 
 from styletrace.estimators import Direct, Geometric, PowerLaw, Telescoping, TwoPoint
+
+from .estimator_stats import DISTS, Z, assert_unbiased, run_estimates
 
 
 @pytest.mark.parametrize("name", list(DISTS))
@@ -30,7 +31,8 @@ def test_telescoping_removes_a_bias_the_same_test_detects_in_direct():
 
 
 def test_light_tailed_truncation_caps_early_and_keeps_the_capped_bias():
-    # Geometric(0.5) reaches at most K = 24 differences: the expectation is E[g(<I>_(n0+K))] = I^2 + Var/(n0+K)
+    # Geometric(0.5) reaches at most K = 24 differences: the expectation is E[g(<I>_(n0+K))] = I^2 +
+    # Var/(n0+K)
     dist = DISTS["two-point"]
     tel = Telescoping(lambda x: x * x, n0=1, truncation=Geometric(0.5))
     assert tel.K == 24

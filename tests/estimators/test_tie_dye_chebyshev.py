@@ -3,7 +3,6 @@ import math
 
 import numpy as np
 import pytest
-from estimator_stats import assert_unbiased, run_estimates
 
 from styletrace.estimators import (
     TIE_DYE,
@@ -18,10 +17,12 @@ from styletrace.estimators import (
     tie_dye_r,
 )
 
-#: Stated maximum error of tie_dye_fit() (degree 20, Chebyshev nodes) on [-1, 4], per channel r, g, b,
-#: measured on a 20001-point grid (4.4e-3, 2.3e-2, 6.0e-2) and rounded up. The blue channel has the
-#: highest frequency (2.3 pi over an interval of length 5, about 5.75 periods), so degree 20 resolves
-#: it worst; degree 28 would give < 5e-5 on every channel.
+from .estimator_stats import assert_unbiased, run_estimates
+
+#: Stated maximum error of tie_dye_fit() (degree 20, Chebyshev nodes) on [-1, 4], per channel r, g,
+#: b, measured on a 20001-point grid (4.4e-3, 2.3e-2, 6.0e-2) and rounded up. The blue channel has
+#: the highest frequency (2.3 pi over an interval of length 5, about 5.75 periods), so degree 20
+#: resolves it worst; degree 28 would give < 5e-5 on every channel.
 TIE_DYE_MAX_ERROR = (5e-3, 2.5e-2, 6.5e-2)
 
 
@@ -30,7 +31,9 @@ def test_channel_functions_follow_the_supplement():
     np.testing.assert_allclose(tie_dye_r(x), (1 - np.cos(2 * math.pi * (x + 1))) / 2)
     np.testing.assert_allclose(tie_dye_g(x), (1 - np.cos(2.15 * math.pi * (x + 1.13))) / 2)
     np.testing.assert_allclose(tie_dye_b(x), (1 - np.cos(2.3 * math.pi * (x + 1.29))) / 2)
-    np.testing.assert_allclose(tie_dye(np.stack([x, x, x], -1)), np.stack([f(x) for f in TIE_DYE], -1))
+    np.testing.assert_allclose(
+        tie_dye(np.stack([x, x, x], -1)), np.stack([f(x) for f in TIE_DYE], -1)
+    )
 
 
 def test_degree20_fit_holds_its_stated_maximum_error():

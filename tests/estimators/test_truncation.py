@@ -3,7 +3,6 @@ import math
 
 import numpy as np
 import pytest
-from estimator_stats import Z, drjit_backend
 
 from styletrace.estimators import (
     Context,
@@ -14,6 +13,8 @@ from styletrace.estimators import (
     PowerLaw,
     resolve_truncation,
 )
+
+from .estimator_stats import Z, drjit_backend
 
 
 def test_poisson_cmf_evaluates_until_the_cmf_reaches_the_threshold():

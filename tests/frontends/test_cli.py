@@ -6,13 +6,13 @@ import subprocess
 import sys
 import time
 
-import mitsuba as mi
 import numpy as np
 import pytest
 from conftest import child_env
 
 import styletrace
 from styletrace.frontends.cli import StopSignals, main
+from styletrace.gate import mi
 from styletrace.styles import style_class, style_names
 
 ENV = child_env()
@@ -20,8 +20,13 @@ SMALL = ["--width", "24", "--height", "16", "--spp", "4", "--inner", "2", "-q"]
 
 
 def run_cli(*args, timeout=120):
-    return subprocess.run([sys.executable, "-m", "styletrace", *args], capture_output=True, text=True,
-                          env=ENV, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "styletrace", *args],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=timeout,
+    )
 
 
 def read(path):
@@ -48,7 +53,9 @@ def test_exr_is_linear_and_png_is_srgb(tmp_path):
     exr, png = tmp_path / "a.exr", tmp_path / "a.png"
     assert main(["render", "--style", "gamma", *SMALL, "--seed", "5", "-o", str(exr)]) == 0
     assert main(["render", "--style", "gamma", *SMALL, "--seed", "5", "-o", str(png)]) == 0
-    direct = styletrace.render("cornell-box", style="gamma", spp=4, inner=2, seed=5, width=24, height=16)
+    direct = styletrace.render(
+        "cornell-box", style="gamma", spp=4, inner=2, seed=5, width=24, height=16
+    )
     linear = read(exr)
     assert linear.shape == (16, 24, 3)
     np.testing.assert_allclose(linear, direct, rtol=1e-6, atol=0)
@@ -60,14 +67,43 @@ def test_exr_is_linear_and_png_is_srgb(tmp_path):
 def test_same_seed_same_image(tmp_path):
     a, b, c = (tmp_path / f"{k}.exr" for k in "abc")
     for path, seed in ((a, 1), (b, 1), (c, 2)):
-        assert main(["render", "--style", "cel", *SMALL, "--seed", str(seed), "--pass-spp", "1", "-o", str(path)]) == 0
+        assert (
+            main(
+                [
+                    "render",
+                    "--style",
+                    "cel",
+                    *SMALL,
+                    "--seed",
+                    str(seed),
+                    "--pass-spp",
+                    "1",
+                    "-o",
+                    str(path),
+                ]
+            )
+            == 0
+        )
     assert np.array_equal(read(a), read(b))
     assert not np.array_equal(read(a), read(c))
 
 
 def test_progress_bar_for_multi_pass_renders(tmp_path):
-    r = run_cli("render", "--width", "24", "--height", "16", "--spp", "4", "--inner", "2", "--pass-spp", "1",
-                "-o", str(tmp_path / "p.png"))
+    r = run_cli(
+        "render",
+        "--width",
+        "24",
+        "--height",
+        "16",
+        "--spp",
+        "4",
+        "--inner",
+        "2",
+        "--pass-spp",
+        "1",
+        "-o",
+        str(tmp_path / "p.png"),
+    )
     assert r.returncode == 0, r.stderr
     assert "4/4" in r.stderr and "spp" in r.stderr
 
@@ -89,8 +125,14 @@ BAD = [
     (["--lines", "--set", "line_width=-2"], "bad value '-2' for 'line_width'"),
     (["--lines", "--set", "lines=maybe"], "bad value 'maybe' for 'lines'"),
     (["--lines", "--set", "line_tests=outline"], "bad value 'outline' in 'line_tests'"),
-    (["--style", "gamma", "--estimator", "series", "--expansion-pass", "-1"], "bad value -1 for 'expansion_pass'"),
-    (["--style", "gamma", "--expansion-pass", "8"], "bad value 8 for 'expansion_pass' with estimator 'direct'"),
+    (
+        ["--style", "gamma", "--estimator", "series", "--expansion-pass", "-1"],
+        "bad value -1 for 'expansion_pass'",
+    ),
+    (
+        ["--style", "gamma", "--expansion-pass", "8"],
+        "bad value 8 for 'expansion_pass' with estimator 'direct'",
+    ),
 ]
 
 
@@ -133,10 +175,14 @@ def test_xml_scene_with_stylized_integrator(tmp_path):
     path = tmp_path / "s.xml"
     path.write_text("""<scene version="3.0.0">
       <default name="resx" value="20"/><default name="resy" value="12"/>
-      <integrator type="stylized"><string name="style" value="cel"/><string name="levels" value="0.2,0.9"/>
-        <string name="thresholds" value="0.75"/><integer name="inner_samples" value="2"/></integrator>
-      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" value="$resy"/>
+      <integrator type="stylized"><string name="style" value="cel"/><string name="levels" \
+value="0.2,0.9"/>
+        <string name="thresholds" value="0.75"/><integer name="inner_samples" \
+value="2"/></integrator>
+      <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" \
+up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="$resx"/><integer name="height" \
+value="$resy"/>
         <rfilter type="box"/></film></sensor>
       <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>""")
     out = tmp_path / "o.exr"
@@ -155,9 +201,28 @@ def test_xml_scene_with_stylized_integrator(tmp_path):
 def interrupt(out, pass_spp, ctrl_c, sig=signal.SIGINT):
     """Start a long render, wait until tqdm reports `pass_spp * 2` (resp. one pass) done, send `sig`
     (Ctrl-C: SIGINT) `ctrl_c` times, and return (exit status, stderr after the signal)."""
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", "render", "--width", "64", "--height", "64",
-                             "--spp", "100000", "--inner", "4", "--pass-spp", str(pass_spp), "-o", str(out)],
-                            stderr=subprocess.PIPE, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "styletrace",
+            "render",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--spp",
+            "100000",
+            "--inner",
+            "4",
+            "--pass-spp",
+            str(pass_spp),
+            "-o",
+            str(out),
+        ],
+        stderr=subprocess.PIPE,
+        env=ENV,
+    )
     wait_for = f"{2 * pass_spp if pass_spp == 1 else pass_spp}/100000".encode()
     seen = b""
     deadline = time.time() + 120
@@ -198,9 +263,12 @@ def test_sigterm_is_like_ctrl_c_with_status_143(tmp_path):
 
 
 def started(args: list, marker: bytes):
-    """`styletrace ARGS` started with its stderr read until `marker` shows (the render's progress line);
-    (the process, what it printed so far). A process that ends first fails the test with what it printed."""
-    proc = subprocess.Popen([sys.executable, "-m", "styletrace", *args], stderr=subprocess.PIPE, env=ENV)
+    """`styletrace ARGS` started with its stderr read until `marker` shows (the render's progress
+    line); (the process, what it printed so far). A process that ends first fails the test with
+    what it printed."""
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "styletrace", *args], stderr=subprocess.PIPE, env=ENV
+    )
     seen = b""
     while marker not in seen:
         chunk = os.read(proc.stderr.fileno(), 4096)
@@ -211,11 +279,28 @@ def started(args: list, marker: bytes):
 
 @pytest.mark.parametrize("sig,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_one_signal_stops_a_long_pass(tmp_path, sig, status):
-    """A pass of 2^20 camera samples with 64 inner samples each runs for minutes on a CPU; one signal ends
-    the render after the grace period, not after the pass (the first pass: nothing to write)."""
+    """A pass of 2^20 camera samples with 64 inner samples each runs for minutes on a CPU; one
+    signal ends the render after the grace period, not after the pass (the first pass: nothing to
+    write)."""
     out = tmp_path / "never.exr"
-    proc, seen = started(["render", "--width", "64", "--height", "64", "--spp", "512", "--inner", "64",
-                          "--pass-spp", "256", "-o", str(out)], b"0/512")
+    proc, seen = started(
+        [
+            "render",
+            "--width",
+            "64",
+            "--height",
+            "64",
+            "--spp",
+            "512",
+            "--inner",
+            "64",
+            "--pass-spp",
+            "256",
+            "-o",
+            str(out),
+        ],
+        b"0/512",
+    )
     time.sleep(0.5)
     proc.send_signal(sig)
     rest = proc.communicate(timeout=90)[1]
@@ -223,12 +308,25 @@ def test_one_signal_stops_a_long_pass(tmp_path, sig, status):
     assert b"nothing written" in rest and not out.exists()
 
 
-#: a pass of 64 x 64 camera samples with 4000 inner samples each: about 4 s on an idle 2-core machine, so a
-#: signal 0.5 s after the first pass finished lands in the second pass's kernel (Mitsuba traces a pass in
-#: 10-30 ms, and a SIGINT in that window is Mitsuba's: `StopSignals`), and the pass is still running 1 s
-#: after a second one 0.2 s later
-LONG_PASSES = ["render", "--width", "64", "--height", "64", "--spp", "1000", "--inner", "4000", "--pass-spp", "1",
-               "--seed", "7"]
+#: a pass of 64 x 64 camera samples with 4000 inner samples each: about 4 s on an idle 2-core
+#: machine, so a signal 0.5 s after the first pass finished lands in the second pass's kernel
+#: (Mitsuba traces a pass in 10-30 ms, and a SIGINT in that window is Mitsuba's: `StopSignals`), and
+#: the pass is still running 1 s after a second one 0.2 s later
+LONG_PASSES = [
+    "render",
+    "--width",
+    "64",
+    "--height",
+    "64",
+    "--spp",
+    "1000",
+    "--inner",
+    "4000",
+    "--pass-spp",
+    "1",
+    "--seed",
+    "7",
+]
 
 
 @pytest.fixture(scope="module")
@@ -242,15 +340,18 @@ def one_long_pass(tmp_path_factory):
 
 @pytest.mark.parametrize("sig,count,status,bound", [
     (signal.SIGINT, 2, 130, 1.0),  # a second signal: "at once"
-    (signal.SIGTERM, 1, 143, StopSignals.GRACE + 1.0),  # one signal: the grace period, then the same write
+    # one signal: the grace period, then the same write
+    (signal.SIGTERM, 1, 143, StopSignals.GRACE + 1.0),
 ])
-def test_a_signal_in_a_long_pass_writes_the_finished_pass_within_the_promise(tmp_path, one_long_pass, sig, count,
-                                                                              status, bound):
-    """The pass under way is abandoned, not waited for: the exit comes `bound` seconds after the last signal at
-    the latest (measured 0.06 s for the second signal and 1.02 s for one; the write of a 64 x 64 image and
-    the exit take milliseconds, so the bound leaves 1 s for a machine shared by several processes), and the
-    image is the first pass, bit for bit (the same seed gives the same passes). Before the watcher's write
-    went around Mitsuba (images.encode_plain) it waited for the pass's kernel: 6.3-12 s and 15.8 s."""
+def test_a_signal_in_a_long_pass_writes_the_finished_pass_within_the_promise(
+    tmp_path, one_long_pass, sig, count, status, bound
+):
+    """The pass under way is abandoned, not waited for: the exit comes `bound` seconds after the
+    last signal at the latest (measured 0.06 s for the second signal and 1.02 s for one; the
+    write of a 64 x 64 image and the exit take milliseconds, so the bound leaves 1 s for a
+    machine shared by several processes), and the image is the first pass, bit for bit (the same
+    seed gives the same passes). Before the watcher's write went around Mitsuba
+    (images.encode_plain) it waited for the pass's kernel: 6.3-12 s and 15.8 s."""
     out = tmp_path / "partial.exr"
     proc, seen = started([*LONG_PASSES, "-o", str(out)], b"1/1000")
     time.sleep(0.5)
@@ -281,7 +382,10 @@ def test_non_finite_pixels_are_counted_in_one_line(tmp_path, capsys, monkeypatch
     out = tmp_path / "n.png"
     assert main(["render", *SMALL, "-o", str(out)]) == 0
     err = capsys.readouterr().err
-    assert "styletrace: warning: 2 pixel(s) are not finite (NaN or inf): NaN as 0 and +inf as 1 in the PNG" in err
+    assert (
+        "styletrace: warning: 2 pixel(s) are not finite (NaN or inf): NaN as 0 and +inf as 1 in "
+        "the PNG" in err
+    )
     assert (read(out)[..., 0] == [[1, 1, 1], [1, 1, 1]]).all() and read(out)[0, 0, 1] == 0
 
 
@@ -298,8 +402,10 @@ def test_output_that_is_the_scene_is_refused_before_loading(tmp_path, capsys):
 GAMMA_XML = """<scene version="3.0.0">
   <integrator type="stylized"><string name="style" value="gamma"/><float name="gamma" value="4"/>
     <float name="exposure" value="1"/><integer name="inner_samples" value="2"/></integrator>
-  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
-    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+  <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" \
+up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" \
+value="8"/><rfilter type="box"/></film></sensor>
   <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>"""
 
 
@@ -308,14 +414,17 @@ def test_flags_refine_the_scenes_own_integrator(tmp_path, capsys):
     path.write_text(GAMMA_XML)
     out = tmp_path / "o.exr"
     assert main(["render", str(path), "--inner", "4", "--spp", "1", "-o", str(out)]) == 0
-    assert "gamma(gamma=4, exposure=1)" in capsys.readouterr().err  # --inner alone keeps the scene's style
-    # the sphere (albedo 0.5 under a white sky) is 0.5^(1/4) with gamma 4; --max-depth 1 leaves emission only
+    # --inner alone keeps the scene's style
+    assert "gamma(gamma=4, exposure=1)" in capsys.readouterr().err
+    # the sphere (albedo 0.5 under a white sky) is 0.5^(1/4) with gamma 4; --max-depth 1 leaves
+    # emission only
     np.testing.assert_allclose(read(out)[3:5, 3:5], 0.5 ** 0.25, rtol=0.05)
     assert main(["render", str(path), "--max-depth", "1", "--spp", "1", "-q", "-o", str(out)]) == 0
     np.testing.assert_allclose(read(out)[3:5, 3:5], 0.0, atol=1e-6)
     assert main(["render", str(path), "--style", "cel", "--spp", "1", "-o", str(out)]) == 0
     err = capsys.readouterr().err
-    # a new style drops the old one's parameters: cel at its own defaults (auto thresholds and levels, printed)
+    # a new style drops the old one's parameters: cel at its own defaults (auto thresholds and
+    # levels, printed)
     assert re.search(r"styletrace: auto values: cel thresholds=[0-9.,]+ levels=[0-9.,]+", err), err
     assert "bands=3" in err and "gamma=" not in err
 
@@ -323,12 +432,50 @@ def test_flags_refine_the_scenes_own_integrator(tmp_path, capsys):
 @pytest.mark.parametrize("style", ["contrast", "exp_tone", "reinhard", "gamma", "tie_dye"])
 def test_the_tone_styles_auto_exposure_is_printed_and_a_given_one_wins(style, tmp_path, capsys):
     out = tmp_path / "o.exr"
-    assert main(["render", "--style", style, "--width", "8", "--height", "8", "--spp", "1", "--inner", "1",
-                 "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "--style",
+                style,
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--spp",
+                "1",
+                "--inner",
+                "1",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert f"styletrace: auto values: {style} exposure=" in err, err
-    assert main(["render", "--style", style, "--set", "exposure=2", "--width", "8", "--height", "8", "--spp", "1",
-                 "--inner", "1", "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "--style",
+                style,
+                "--set",
+                "exposure=2",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--spp",
+                "1",
+                "--inner",
+                "1",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "auto values" not in err and "exposure=2" in err, err
 
@@ -356,12 +503,17 @@ def test_a_failing_later_pass_keeps_the_finished_ones(tmp_path, capsys, monkeypa
     out = tmp_path / "p.exr"
     assert main(["render", *SMALL, "--pass-spp", "1", "-o", str(out)]) == 1
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "error after 1 of 4 spp (second line)" in err and "wrote the finished passes" in err
+    assert (
+        "\n" not in err
+        and "error after 1 of 4 spp (second line)" in err
+        and "wrote the finished passes" in err
+    )
     assert read(out).shape == (16, 24, 3)
 
 
 def test_lines_flag_and_set_draw_lines(tmp_path, capsys):
-    """`--lines` alone turns lines on; `--set line_color=...` reaches them; `styletrace lines` lists the settings."""
+    """`--lines` alone turns lines on; `--set line_color=...` reaches them; `styletrace lines`
+    lists the settings."""
     args = ["render", "--style", "identity", "--width", "24", "--height", "24", "--spp", "2", "-q"]
     assert main([*args, "furnace", "-o", str(tmp_path / "plain.exr")]) == 0
     assert main([*args, "--lines", "furnace", "--set", "line_color=0,9,0", "--set", "line_width=3",
@@ -377,21 +529,58 @@ def test_lines_flag_and_set_draw_lines(tmp_path, capsys):
 def test_wild_series_estimates_are_reported_after_the_render(tmp_path, capsys):
     """One warning line on stderr, after the image is written (styletrace.wild); none for direct."""
     out = tmp_path / "g.exr"
-    common = ["render", "--style", "gamma", "--width", "32", "--height", "32", "--spp", "4", "--inner", "16",
-              "--seed", "0", "-q", "-o", str(out)]
+    common = [
+        "render",
+        "--style",
+        "gamma",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--spp",
+        "4",
+        "--inner",
+        "16",
+        "--seed",
+        "0",
+        "-q",
+        "-o",
+        str(out),
+    ]
     assert main([*common, "--estimator", "series"]) == 0
     lines = [ln for ln in capsys.readouterr().err.splitlines() if "are wild" in ln]
-    assert out.exists() and len(lines) == 1 and lines[0].startswith("styletrace: warning: the 'series' estimator")
+    assert (
+        out.exists()
+        and len(lines) == 1
+        and lines[0].startswith("styletrace: warning: the 'series' estimator")
+    )
     assert "use --expansion-pass 64 or --estimator direct" in lines[0]
     assert main([*common, "--estimator", "direct"]) == 0
     assert "are wild" not in capsys.readouterr().err
 
 
 def test_expansion_pass_flag_and_set(tmp_path):
-    """`--expansion-pass M` and `--set expansion_pass=M` run the pass: the same image, other than without it;
-    its values stay near g's range where the renderer's series alone gives -23.6 (test_wild_estimates)."""
-    common = ["render", "--style", "gamma", "--estimator", "series", "--width", "32", "--height", "32", "--spp",
-              "4", "--inner", "16", "--seed", "0", "-q"]
+    """`--expansion-pass M` and `--set expansion_pass=M` run the pass: the same image, other than
+    without it; its values stay near g's range where the renderer's series alone gives -23.6
+    (test_wild_estimates)."""
+    common = [
+        "render",
+        "--style",
+        "gamma",
+        "--estimator",
+        "series",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--spp",
+        "4",
+        "--inner",
+        "16",
+        "--seed",
+        "0",
+        "-q",
+    ]
     imgs = []
     for extra in (["--expansion-pass", "64"], ["--set", "expansion_pass=64"], []):
         out = tmp_path / f"e{len(imgs)}.exr"
@@ -401,33 +590,79 @@ def test_expansion_pass_flag_and_set(tmp_path):
     assert imgs[0].min() > -1.0 and imgs[2].min() < -10.0
 
 
-# ---- no silent waits: a long phase names itself on stderr (status.py) ------------------------------------
+# ---- no silent waits: a long phase names itself on stderr (status.py) ----------------------------
 def test_long_phases_name_themselves_on_stderr(tmp_path):
-    """With STYLETRACE_STATUS_DELAY=0 every phase is long enough to show: the load, the auto values' pilot and
-    the first pass (its kernel compilation included); -q shows none of it."""
+    """With STYLETRACE_STATUS_DELAY=0 every phase is long enough to show: the load, the auto
+    values' pilot and the first pass (its kernel compilation included); -q shows none of it."""
     env = dict(ENV, STYLETRACE_STATUS_DELAY="0")
-    args = ["render", "--style", "cel", "--width", "16", "--height", "16", "--spp", "2", "--inner", "1",
-            "-o", str(tmp_path / "s.png")]
-    one = subprocess.run([sys.executable, "-m", "styletrace", *args], capture_output=True, text=True, env=env,
-                         timeout=120)
+    args = [
+        "render",
+        "--style",
+        "cel",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "2",
+        "--inner",
+        "1",
+        "-o",
+        str(tmp_path / "s.png"),
+    ]
+    one = subprocess.run(
+        [sys.executable, "-m", "styletrace", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert one.returncode == 0, one.stderr
     for words in ("styletrace: loading scene cornell-box (", "compiling and rendering a pilot (",
                   "styletrace: compiling and rendering ("):
         assert words in one.stderr, one.stderr
-    two = subprocess.run([sys.executable, "-m", "styletrace", *args, "--pass-spp", "1"], capture_output=True,
-                         text=True, env=env, timeout=120)
+    two = subprocess.run(
+        [sys.executable, "-m", "styletrace", *args, "--pass-spp", "1"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert two.returncode == 0, two.stderr
-    assert "compiling and rendering pass 1 of 2" in two.stderr and "rendering: 100%" in two.stderr, two.stderr
-    quiet = subprocess.run([sys.executable, "-m", "styletrace", *args, "--pass-spp", "1", "-q"], capture_output=True,
-                           text=True, env=env, timeout=120)
+    assert (
+        "compiling and rendering pass 1 of 2" in two.stderr and "rendering: 100%" in two.stderr
+    ), two.stderr
+    quiet = subprocess.run(
+        [sys.executable, "-m", "styletrace", *args, "--pass-spp", "1", "-q"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert quiet.returncode == 0 and quiet.stderr == "", quiet.stderr
 
 
 def test_a_slow_first_pass_is_named_at_the_default_delay(tmp_path):
-    """At the default delay (2 s) a single pass of 64 x 64 x 4096 paths (about 5 s on 2 cores) shows its line;
-    the pilot is skipped (thresholds given) and the load is quick, so they stay quiet."""
-    r = run_cli("render", "--style", "cel", "--set", "thresholds=0.3", "--width", "64", "--height", "64",
-                "--spp", "1", "--inner", "4096", "-o", str(tmp_path / "slow.png"))
+    """At the default delay (2 s) a single pass of 64 x 64 x 4096 paths (about 5 s on 2 cores)
+    shows its line; the pilot is skipped (thresholds given) and the load is quick, so they stay
+    quiet."""
+    r = run_cli(
+        "render",
+        "--style",
+        "cel",
+        "--set",
+        "thresholds=0.3",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--spp",
+        "1",
+        "--inner",
+        "4096",
+        "-o",
+        str(tmp_path / "slow.png"),
+    )
     assert r.returncode == 0, r.stderr
     assert "styletrace: compiling and rendering (" in r.stderr, r.stderr
     assert "loading scene" not in r.stderr and "pilot" not in r.stderr, r.stderr
@@ -445,7 +680,9 @@ def test_status_shows_only_phases_longer_than_its_delay():
     with status.phase("slow thing"):
         time.sleep(1.2)
     assert "quick" not in out.getvalue()
-    assert "styletrace: slow thing (1 s)" in out.getvalue() and out.getvalue().endswith("\n"), repr(out.getvalue())
+    assert "styletrace: slow thing (1 s)" in out.getvalue() and out.getvalue().endswith("\n"), repr(
+        out.getvalue()
+    )
     silent = io.StringIO()
     with Status(enabled=False, delay=0.0, stream=silent).phase("anything"):
         time.sleep(0.3)

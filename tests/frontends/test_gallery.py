@@ -1,5 +1,6 @@
-"""`styletrace gallery --quick`: every setup renders, references and the contact sheet are written; the
-equal-time section's numbers agree with renders redone here and its verdicts follow its ratios."""
+"""`styletrace gallery --quick`: every setup renders, references and the contact sheet are
+written; the equal-time section's numbers agree with renders redone here and its verdicts follow
+its ratios."""
 import json
 
 import numpy as np
@@ -32,8 +33,9 @@ def test_quick_gallery(quick):
     assert {e["key"] for e in with_ref} == {"color_map", "cel"}
     for e in with_ref:
         mse = [r["mse"] for r in e["renders"]]
-        # direct application: both the bias and the variance of g(<I>_n) shrink with n; over thousands of
-        # pixel channels the drop from n=1 to n=4 is far larger than the MSE's own sampling error
+        # direct application: both the bias and the variance of g(<I>_n) shrink with n; over
+        # thousands of pixel channels the drop from n=1 to n=4 is far larger than the MSE's own
+        # sampling error
         assert mse[-1] < mse[0], (e["key"], mse)
     # the equal-time section: one side-by-side PNG per comparison, shown on both sheets
     assert [e["key"] for e in res["equal_time"]] == [c.key for c in gallery.EQUAL_TIME]
@@ -44,18 +46,27 @@ def test_quick_gallery(quick):
 
 
 def render_again(e, inner=None, config=None):
-    """A render of an equal-time entry redone from the settings gallery.json records, by the public API."""
+    """A render of an equal-time entry redone from the settings gallery.json records, by the
+    public API."""
     import styletrace
     kw = {**e["integrator"], **e["params"], **(config if config is not None else {"inner": inner})}
     kw["inner"] = tuple(kw["inner"]) if isinstance(kw["inner"], list) else kw["inner"]
-    return styletrace.render(e["scene"], style=e["style"], spp=e["spp"], seed=e["seed"], width=e["size"],
-                             height=e["size"], **kw)
+    return styletrace.render(
+        e["scene"],
+        style=e["style"],
+        spp=e["spp"],
+        seed=e["seed"],
+        width=e["size"],
+        height=e["size"],
+        **kw,
+    )
 
 
 def test_equal_time_numbers_are_consistent(quick):
-    """The JSON's MSEs are those numpy computes from the renders redone from its settings; the count at equal
-    time is the largest rendered n not slower than the method (the smallest when all are slower), the
-    fixed counts stop at the first one slower than the method, and the verdict follows the ratio."""
+    """The JSON's MSEs are those numpy computes from the renders redone from its settings; the
+    count at equal time is the largest rendered n not slower than the method (the smallest when
+    all are slower), the fixed counts stop at the first one slower than the method, and the
+    verdict follows the ratio."""
     _, res = quick
     for e in res["equal_time"]:
         ref = render_again(e, e["reference"]["inner"]).astype(np.float64)
@@ -63,11 +74,14 @@ def test_equal_time_numbers_are_consistent(quick):
         f = fixed[i]
         for img, recorded in ((render_again(e, config=m["config"]), m["mse"]),
                               (render_again(e, f["inner"]), f["mse"])):
-            assert recorded == pytest.approx(np.mean((img.astype(np.float64) - ref) ** 2), rel=1e-12, abs=0)
+            assert recorded == pytest.approx(
+                np.mean((img.astype(np.float64) - ref) ** 2), rel=1e-12, abs=0
+            )
         for r in (m, *fixed):
             assert r["seconds"] == np.median(r["times"]) and len(r["times"]) == e["repeats"]
         secs = [r["seconds"] for r in fixed]
-        assert all(t <= m["seconds"] for t in secs[:-1])  # only the last rendered count may be slower
+        # only the last rendered count may be slower
+        assert all(t <= m["seconds"] for t in secs[:-1])
         within = [j for j, t in enumerate(secs) if t <= m["seconds"]]
         assert i == (max(within) if within else 0), (e["key"], secs, m["seconds"])
         assert e["fixed_slower"] == (f["seconds"] > m["seconds"])
@@ -76,29 +90,43 @@ def test_equal_time_numbers_are_consistent(quick):
 
 
 def test_a_method_worse_than_every_fixed_count_is_a_loss(tmp_path, monkeypatch):
-    """A deliberately bad method: an adaptive count 4:4 (the image of n=4, plus the adaptive bookkeeping)
-    against fixed counts from 8 up. Every fixed count averages more children than it, so whichever of them
-    is at equal time has the lower error, and the section must call the method a LOSS: on its entry, in its
-    picture's sheets. (Timing decides only which fixed count it meets, so the test asserts no speed.)"""
-    bad = Comparison("equal_time_bad", "Cel, an adaptive count that never adapts", "cel", method={"inner": "4:4"},
-                     reference=4096, counts=(8, 16, 32))
+    """A deliberately bad method: an adaptive count 4:4 (the image of n=4, plus the adaptive
+    bookkeeping) against fixed counts from 8 up. Every fixed count averages more children than
+    it, so whichever of them is at equal time has the lower error, and the section must call the
+    method a LOSS: on its entry, in its picture's sheets. (Timing decides only which fixed count
+    it meets, so the test asserts no speed.)"""
+    bad = Comparison(
+        "equal_time_bad",
+        "Cel, an adaptive count that never adapts",
+        "cel",
+        method={"inner": "4:4"},
+        reference=4096,
+        counts=(8, 16, 32),
+    )
     monkeypatch.setattr(gallery, "EQUAL_TIME", [bad])
     out = tmp_path / "g"
     assert main(["gallery", "--quick", "--only", "equal_time", "-o", str(out)]) == 0
     (e,) = json.loads((out / "gallery.json").read_text())["equal_time"]
     f = e["fixed"][e["equal_time"]]
     assert e["method"]["mse"] > f["mse"] and e["ratio"] < 1 and e["verdict"] == "loss", e
-    assert "### Cel, an adaptive count that never adapts: **LOSS**" in (out / "index.md").read_text()
+    assert (
+        "### Cel, an adaptive count that never adapts: **LOSS**" in (out / "index.md").read_text()
+    )
     assert ">LOSS</strong></h3>" in (out / "index.html").read_text()
     assert (out / e["file"]).stat().st_size > 0
 
 
 def test_ctrl_c_in_a_comparison_keeps_the_finished_ones(tmp_path, monkeypatch):
-    """The section saves gallery.json and the sheets after each comparison: Ctrl-C during the second loses
-    nothing of the first."""
+    """The section saves gallery.json and the sheets after each comparison: Ctrl-C during the
+    second loses nothing of the first."""
     from styletrace.frontends import equal_time
-    first, second = (Comparison(f"equal_time_{k}", k, "color_map", method={"inner": 4}, reference=64, counts=(4,))
-                     for k in ("first", "second"))
+
+    first, second = (
+        Comparison(
+            f"equal_time_{k}", k, "color_map", method={"inner": 4}, reference=64, counts=(4,)
+        )
+        for k in ("first", "second")
+    )
     monkeypatch.setattr(gallery, "EQUAL_TIME", [first, second])
     compare = equal_time.compare
 
@@ -110,13 +138,18 @@ def test_ctrl_c_in_a_comparison_keeps_the_finished_ones(tmp_path, monkeypatch):
     out = tmp_path / "g"
     assert main(["gallery", "--quick", "--only", "equal_time", "-o", str(out)]) == 130
     entries = json.loads((out / "gallery.json").read_text())["equal_time"]
-    assert [e["key"] for e in entries] == [first.key] and (out / entries[0]["file"]).stat().st_size > 0
+    assert [e["key"] for e in entries] == [first.key] and (
+        out / entries[0]["file"]
+    ).stat().st_size > 0
     assert f"]({entries[0]['file']})" in (out / "index.md").read_text()
 
 
-def test_refused_settings_in_the_table_stop_the_gallery_before_it_renders(tmp_path, monkeypatch, capsys):
-    """reuse_deep=world is refused at the first hit (it pools second-level vertices): the gallery says so in one
-    line and renders nothing, not even the dragon setups that come before the section."""
+def test_refused_settings_in_the_table_stop_the_gallery_before_it_renders(
+    tmp_path, monkeypatch, capsys
+):
+    """reuse_deep=world is refused at the first hit (it pools second-level vertices): the gallery
+    says so in one line and renders nothing, not even the dragon setups that come before the
+    section."""
     refused = Comparison("equal_time_refused", "refused", "cel", reference=64,
                          method={"inner": 4, "reuse": "pixels", "reuse_deep": "world"})
     monkeypatch.setattr(gallery, "EQUAL_TIME", [refused])
@@ -136,7 +169,9 @@ def test_only_and_skip_select_setups_and_the_equal_time_section():
     assert [s.key for s in setups] == ["cel"] and comps == gallery.EQUAL_TIME[:1]
     setups, comps = gallery.select_setups(["equal_time", "cel"], [gallery.EQUAL_TIME[0].key, "cel"])
     assert setups == [] and comps == gallery.EQUAL_TIME[1:]
-    with pytest.raises(ValueError, match="unknown gallery setup.s. nope: available are .*equal_time"):
+    with pytest.raises(
+        ValueError, match="unknown gallery setup.s. nope: available are .*equal_time"
+    ):
         gallery.select_setups(None, ["nope"])
 
 
@@ -144,14 +179,17 @@ def test_unknown_setup_is_one_line(tmp_path, capsys):
     assert main(["gallery", "--quick", "--only", "nope", "-o", str(tmp_path / "g")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("styletrace: error: unknown gallery setup(s) nope") and "\n" not in err
-    assert main(["gallery", "--quick", "--skip", "equal_time,nope2", "-o", str(tmp_path / "g")]) == 2
+    assert (
+        main(["gallery", "--quick", "--skip", "equal_time,nope2", "-o", str(tmp_path / "g")]) == 2
+    )
     err = capsys.readouterr().err.strip()
     assert err.startswith("styletrace: error: unknown gallery setup(s) nope2") and "\n" not in err
     assert not (tmp_path / "g").exists()
 
 
 def test_mse_of_non_finite_renders_is_honest_and_quiet():
-    """A render with an inf pixel has an infinite MSE, and computing it sends no numpy warning to stderr."""
+    """A render with an inf pixel has an infinite MSE, and computing it sends no numpy warning to
+    stderr."""
     import warnings
 
     import numpy as np

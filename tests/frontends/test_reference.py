@@ -1,4 +1,5 @@
-"""The reference tables in README.md and docs/ are generated from the registries and agree with them."""
+"""The reference tables in README.md and docs/ are generated from the registries and agree with
+them."""
 import os
 import re
 import sys
@@ -17,7 +18,9 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 @pytest.mark.parametrize("path", reference.files(ROOT), ids=os.path.basename)
 def test_generated_blocks_are_up_to_date(path):
     text = open(path, encoding="utf-8").read()
-    assert reference.render_file(text) == text, f"run: python -m styletrace.frontends.reference ({path} is stale)"
+    assert reference.render_file(text) == text, (
+        f"run: python -m styletrace.frontends.reference ({path} is stale)"
+    )
 
 
 def test_every_table_has_its_block():
@@ -43,16 +46,22 @@ def test_the_tables_carry_every_registry_entry():
 def test_a_stale_block_is_rewritten():
     stale = "intro\n<!-- reference:style:cel -->\n| old | table |\n<!-- /reference -->\nend\n"
     fresh = reference.render_file(stale)
-    assert "| old | table |" not in fresh and reference.style_table("cel") in fresh and fresh.endswith("end\n")
+    assert (
+        "| old | table |" not in fresh
+        and reference.style_table("cel") in fresh
+        and fresh.endswith("end\n")
+    )
 
 
 @pytest.mark.parametrize("name", style_names())
 def test_each_style_module_opens_with_its_parameters_and_defaults(name):
-    """The third place a style's parameters appear, its module's reference block, names each with its default."""
+    """The third place a style's parameters appear, its module's reference block, names each with
+    its default."""
     cls = style_class(name)
     doc = sys.modules[cls.__module__].__doc__
     for p in cls.params:
         assert f"- {p.name} (" in doc or f", {p.name} (" in doc, (name, p.name)
-        if isinstance(p.default, (int, float, tuple)):  # derived and gradient defaults are described in words
+        # derived and gradient defaults are described in words
+        if isinstance(p.default, (int, float, tuple)):
             m = re.search(rf"\b{p.name} \([^)]*default ([^\s,)]+(?:,[^\s,)]+)*)", doc)
             assert m and p.parse(m.group(1)) == p.default, (name, p.name, p.show(p.default))

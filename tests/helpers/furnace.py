@@ -1,7 +1,8 @@
 """The furnace scene as a test fixture: exact first-hit radiance I = rho * E on the sphere.
 
 By symmetry every visible point of the sphere has the same distribution of path-traced estimates, so
-the pixels inside the silhouette are independent draws of one estimator (spp = 1 gives one per pixel).
+the pixels inside the silhouette are independent draws of one estimator (spp = 1 gives one per
+pixel).
 """
 import numpy as np
 
@@ -16,7 +17,8 @@ def scene(res):
 
 
 def sphere_mask(res):
-    """The central 85% of the sphere's projected disk (camera at distance 4, fov 35 deg on the smaller axis)."""
+    """The central 85% of the sphere's projected disk (camera at distance 4, fov 35 deg on the
+    smaller axis)."""
     rpix = np.tan(np.arcsin(0.25)) / np.tan(np.radians(17.5)) * res / 2
     yy, xx = np.mgrid[0:res, 0:res]
     c = (res - 1) / 2
@@ -31,8 +33,8 @@ def draws(scene, mask, style, n, seeds, seed0, **kw):
 
 
 def resolved(scene, style, **kw):
-    """The style as a render of `scene` uses it: its scene-relative 'auto' values (the tone styles' exposure,
-    from the pilot) pinned, as `passes` pins them."""
+    """The style as a render of `scene` uses it: its scene-relative 'auto' values (the tone
+    styles' exposure, from the pilot) pinned, as `passes` pins them."""
     from styletrace.frontends.api import resolve_defaults
     return resolve_defaults(scene, make_integrator(style, **kw))[0].settings.slot.style
 

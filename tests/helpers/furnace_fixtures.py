@@ -1,5 +1,5 @@
-"""The furnace fixtures shared by the configuration and kernel test folders (their conftests import them):
-each test module sets RES, the image side."""
+"""The furnace fixtures shared by the configuration and kernel test folders (their conftests
+import them): each test module sets RES, the image side."""
 import pytest
 
 from helpers import furnace

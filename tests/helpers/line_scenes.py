@@ -1,30 +1,47 @@
-"""The scene of the lifted-lines tests (tests/kernel): a box seen directly (left) and, with a plane behind the
-camera, in a mirror ball (right; `flat`: a flat mirror facing the camera, turned 8 degrees, instead)."""
-import drjit as dr
-import mitsuba as mi
+"""The scene of the lifted-lines tests (tests/kernel): a box seen directly (left) and, with a
+plane behind the camera, in a mirror ball (right; `flat`: a flat mirror facing the camera, turned
+8 degrees, instead)."""
 import numpy as np
+
+from styletrace.gate import dr, mi
 
 RES = 64
 
 
 def line_scene(alpha=0.0, flat=False, res=RES, light=None) -> dict:
-    """The scene as a dict; `light`: a constant environment's grey radiance (None: no light at all)."""
+    """The scene as a dict; `light`: a constant environment's grey radiance (None: no light at
+    all)."""
     T = mi.ScalarTransform4f
     ball = {"type": "conductor", "material": "none"} if alpha == 0 else \
         {"type": "roughconductor", "material": "none", "distribution": "ggx", "alpha": alpha}
     grey = {"type": "diffuse"}
     d = {
         "type": "scene",
-        "sensor": {"type": "perspective", "fov": 40,
-                   "to_world": T().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}}},
-        "box": {"type": "cube", "bsdf": grey,
-                "to_world": T().translate([-1.4, 0, 0]) @ T().rotate([1, 1, 0], 30) @ T().scale(0.7)},
-        "ball": {"type": "rectangle", "bsdf": ball,
-                 "to_world": T().translate([1.4, 0, 0]) @ T().rotate([0, 1, 0], -8) @ T().scale(1.0)} if flat else
-                {"type": "sphere", "center": [1.4, 0, 0], "radius": 1.1, "bsdf": ball},
-        "back": {"type": "rectangle", "bsdf": grey,
-                 "to_world": T().translate([1.0, 0.5, 8]) @ T().rotate([0, 1, 0], 180) @ T().scale([1.5, 1.0, 1])},
+        "sensor": {
+            "type": "perspective",
+            "fov": 40,
+            "to_world": T().look_at(origin=[0, 0, 6], target=[0, 0, 0], up=[0, 1, 0]),
+            "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
+        },
+        "box": {
+            "type": "cube",
+            "bsdf": grey,
+            "to_world": T().translate([-1.4, 0, 0]) @ T().rotate([1, 1, 0], 30) @ T().scale(0.7),
+        },
+        "ball": {
+            "type": "rectangle",
+            "bsdf": ball,
+            "to_world": T().translate([1.4, 0, 0]) @ T().rotate([0, 1, 0], -8) @ T().scale(1.0),
+        }
+        if flat
+        else {"type": "sphere", "center": [1.4, 0, 0], "radius": 1.1, "bsdf": ball},
+        "back": {
+            "type": "rectangle",
+            "bsdf": grey,
+            "to_world": T().translate([1.0, 0.5, 8])
+            @ T().rotate([0, 1, 0], 180)
+            @ T().scale([1.5, 1.0, 1]),
+        },
     }
     if light is not None:
         d["light"] = {"type": "constant", "radiance": {"type": "rgb", "value": [light] * 3}}
@@ -32,8 +49,9 @@ def line_scene(alpha=0.0, flat=False, res=RES, light=None) -> dict:
 
 
 def reference(sc, t, spp=16, seed=3):
-    """Image-space lines: the pair test on id(s), the shape seen along the perfectly specular path from s
-    (reflection about the shading normal at the ball), with the type's stencil and count."""
+    """Image-space lines: the pair test on id(s), the shape seen along the perfectly specular
+    path from s (reflection about the shading normal at the ball), with the type's stencil and
+    count."""
     w = h = RES
     n = w * h * spp
     idx = np.arange(n) // spp
@@ -71,10 +89,14 @@ def ball_mask(sc):
     from styletrace.kernel.lifted_lines import Lifted
     lifted = Lifted(sc, [LineType("shape_id")], depth=1)
     col, row = np.meshgrid(np.arange(RES), np.arange(RES))
-    s = mi.Point2f((RES / 2 - col - 0.5).ravel().astype(np.float32), (RES / 2 - row - 0.5).ravel().astype(np.float32))
+    s = mi.Point2f(
+        (RES / 2 - col - 0.5).ravel().astype(np.float32),
+        (RES / 2 - row - 0.5).ravel().astype(np.float32),
+    )
     si = sc.ray_intersect(lifted._ray(s, mi.Bool(True)))
     ball = [x for x in sc.shapes() if x.id() == "ball"][0]
     m = np.array(si.is_valid()) & (np.array(dr.reinterpret_array(mi.UInt32, si.shape)) ==
                                    np.array(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(ball)))[0])
     m = m.reshape(RES, RES)
-    return m & np.roll(m, 2, 0) & np.roll(m, -2, 0) & np.roll(m, 2, 1) & np.roll(m, -2, 1)   # inside, not its rim
+    # inside, not its rim
+    return m & np.roll(m, 2, 0) & np.roll(m, -2, 0) & np.roll(m, 2, 1) & np.roll(m, -2, 1)

@@ -1,15 +1,17 @@
-"""Spacing and angle of a periodic stroke pattern in part of an image, from the peak of its 2D spectrum."""
+"""Spacing and angle of a periodic stroke pattern in part of an image, from the peak of its 2D
+spectrum."""
 from __future__ import annotations
 
 import numpy as np
 
 
 def peak(ink: np.ndarray, region: np.ndarray, pad: int = 1024) -> tuple[float, float, float]:
-    """(spacing in pixels, angle in degrees in [0, 180), peak magnitude / mean magnitude) of the strongest
-    periodic component of `ink` (float image) inside the boolean `region`. The region's mean is removed
-    and it is zero-padded to `pad` (a frequency bin of 1/pad cycles per pixel), then the peak is refined
-    by a parabola through its neighbours on each axis. Angle: the direction of the frequency vector, i.e.
-    the lines' normal, measured counter-clockwise from the image's x axis with y pointing up."""
+    """(spacing in pixels, angle in degrees in [0, 180), peak magnitude / mean magnitude) of the
+    strongest periodic component of `ink` (float image) inside the boolean `region`. The region's
+    mean is removed and it is zero-padded to `pad` (a frequency bin of 1/pad cycles per pixel),
+    then the peak is refined by a parabola through its neighbours on each axis. Angle: the
+    direction of the frequency vector, i.e. the lines' normal, measured counter-clockwise from
+    the image's x axis with y pointing up."""
     a = np.where(region, ink - ink[region].mean(), 0.0)
     F = np.abs(np.fft.fft2(a, s=(pad, pad)))
     F[0, 0] = 0.0

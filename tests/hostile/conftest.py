@@ -1,4 +1,5 @@
-"""The hostile-input corpus renders and builds styles: pick the backend and register the plugins first."""
+"""The hostile-input corpus renders and builds styles: pick the backend and register the plugins
+first."""
 import styletrace
 
 styletrace.init()

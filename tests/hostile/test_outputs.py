@@ -1,23 +1,26 @@
-"""Hostile outputs and sizes for the command line: each case is one line on stderr and its exit status.
+"""Hostile outputs and sizes for the command line: each case is one line on stderr and its exit
+status.
 
-`{tmp}` in an argument is the test's temporary folder; `setup` prepares files there first. Every case
-must fail before rendering, so each takes well under a second after the backend is up.
+`{tmp}` in an argument is the test's temporary folder; `setup` prepares files there first. Every
+case must fail before rendering, so each takes well under a second after the backend is up.
 """
 import os
 import stat
 import tempfile
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
 from styletrace.frontends.cli import main
+from styletrace.gate import mi
 
 styletrace.init()
 
-SCENE = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/>
-<integer name="height" value="4"/></film></sensor><shape type="sphere"/><emitter type="constant"/></scene>"""
+SCENE = """<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer \
+name="width" value="4"/>
+<integer name="height" value="4"/></film></sensor><shape type="sphere"/><emitter \
+type="constant"/></scene>"""
 
 
 def scene_file(tmp):
@@ -35,7 +38,8 @@ def tiny_scene(tmp):
 
 
 def odd_targets(tmp):
-    """Names that are no regular file: a fifo, links to a device, a fifo, a folder, and a link loop."""
+    """Names that are no regular file: a fifo, links to a device, a fifo, a folder, and a link
+    loop."""
     tiny_scene(tmp)
     os.mkfifo(tmp / "fifo.exr")
     os.mkfifo(tmp / "frame_0001.exr")  # the second image of `--frames 2 -o frame.exr`
@@ -53,28 +57,94 @@ def read_only(tmp):
 
 CORPUS = [
     # (command line, setup, exit status, message fragment)
-    (["render", "--width", "1000000", "--height", "1000000", "-o", "{tmp}/x.png"], None, 2,
-     "image 1000000x1000000 is too large"),
-    (["render", "--width", "300000", "--height", "300000", "-o", "{tmp}/x.exr"], None, 2, "GiB available"),
-    (["render", "{tmp}/scene.exr", "-o", "{tmp}/scene.exr"], scene_file, 2, "it is the scene file being rendered"),
-    (["render", "{tmp}/scene.exr", "-o", "{tmp}/link.exr"], scene_file, 2, "it is the scene file being rendered"),
-    (["render", "{tmp}/scene.exr", "-o", "{tmp}/./scene.exr"], scene_file, 2, "it is the scene file being rendered"),
-    (["render", "{tmp}/tiny.xml", "-o", "{tmp}/fifo.exr"], odd_targets, 2, "'{tmp}/fifo.exr': it is a fifo;"),
-    (["render", "{tmp}/tiny.xml", "-o", "{tmp}/null.exr"], odd_targets, 2,
-     "'{tmp}/null.exr': it is a character device (a link to '/dev/null')"),
-    (["render", "{tmp}/tiny.xml", "-o", "{tmp}/to_fifo.png"], odd_targets, 2, "to_fifo.png': it is a fifo (a link"),
-    (["render", "{tmp}/tiny.xml", "-o", "{tmp}/to_dir.exr"], odd_targets, 2, "to_dir.exr': it is a folder (a link"),
-    (["render", "{tmp}/tiny.xml", "-o", "{tmp}/loop.exr"], odd_targets, 2, "loop.exr': it is not a usable path"),
-    (["render", "{tmp}/tiny.xml", "--frames", "2", "-o", "{tmp}/frame.exr"], odd_targets, 2,
-     "'{tmp}/frame_0001.exr': it is a fifo;"),
-    (["render", "{tmp}/tiny.xml", "-q", "--buffer", "{tmp}/b.npz", "-o", "{tmp}/x.exr"],
-     lambda tmp: (tiny_scene(tmp), os.mkfifo(tmp / "b.npz")), 2, "'{tmp}/b.npz': it is a fifo;"),
-    (["render", "{tmp}/new\nline.xml", "-o", "{tmp}/x.png"], None, 2, "new\\nline.xml' does not exist"),
+    (
+        ["render", "--width", "1000000", "--height", "1000000", "-o", "{tmp}/x.png"],
+        None,
+        2,
+        "image 1000000x1000000 is too large",
+    ),
+    (
+        ["render", "--width", "300000", "--height", "300000", "-o", "{tmp}/x.exr"],
+        None,
+        2,
+        "GiB available",
+    ),
+    (
+        ["render", "{tmp}/scene.exr", "-o", "{tmp}/scene.exr"],
+        scene_file,
+        2,
+        "it is the scene file being rendered",
+    ),
+    (
+        ["render", "{tmp}/scene.exr", "-o", "{tmp}/link.exr"],
+        scene_file,
+        2,
+        "it is the scene file being rendered",
+    ),
+    (
+        ["render", "{tmp}/scene.exr", "-o", "{tmp}/./scene.exr"],
+        scene_file,
+        2,
+        "it is the scene file being rendered",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "-o", "{tmp}/fifo.exr"],
+        odd_targets,
+        2,
+        "'{tmp}/fifo.exr': it is a fifo;",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "-o", "{tmp}/null.exr"],
+        odd_targets,
+        2,
+        "'{tmp}/null.exr': it is a character device (a link to '/dev/null')",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "-o", "{tmp}/to_fifo.png"],
+        odd_targets,
+        2,
+        "to_fifo.png': it is a fifo (a link",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "-o", "{tmp}/to_dir.exr"],
+        odd_targets,
+        2,
+        "to_dir.exr': it is a folder (a link",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "-o", "{tmp}/loop.exr"],
+        odd_targets,
+        2,
+        "loop.exr': it is not a usable path",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "--frames", "2", "-o", "{tmp}/frame.exr"],
+        odd_targets,
+        2,
+        "'{tmp}/frame_0001.exr': it is a fifo;",
+    ),
+    (
+        ["render", "{tmp}/tiny.xml", "-q", "--buffer", "{tmp}/b.npz", "-o", "{tmp}/x.exr"],
+        lambda tmp: (tiny_scene(tmp), os.mkfifo(tmp / "b.npz")),
+        2,
+        "'{tmp}/b.npz': it is a fifo;",
+    ),
+    (
+        ["render", "{tmp}/new\nline.xml", "-o", "{tmp}/x.png"],
+        None,
+        2,
+        "new\\nline.xml' does not exist",
+    ),
     (["render", "-o", "{tmp}/no\nsuch/x.png"], None, 2, "no\\nsuch' does not exist"),
     (["render", "-o", "{tmp}/x\n.jpg"], None, 2, "bad output"),
     (["gallery", "-o", "{tmp}/no/such/dir"], None, 2, "folder '{tmp}/no/such' does not exist"),
     (["gallery", "-o", "{tmp}/plain"], a_file, 2, "expected a folder"),
-    (["gallery", "--only", "nope\nx", "-o", "{tmp}/g"], None, 2, "unknown gallery setup(s) nope\\nx"),
+    (
+        ["gallery", "--only", "nope\nx", "-o", "{tmp}/g"],
+        None,
+        2,
+        "unknown gallery setup(s) nope\\nx",
+    ),
 ]
 
 
@@ -92,7 +162,9 @@ def test_hostile_output_is_one_line(argv, setup, status, message, tmp_path, caps
         assert stat.S_ISFIFO(os.lstat(tmp_path / "frame_0001.exr").st_mode)
         for name in ("null.exr", "to_fifo.png", "to_dir.exr", "loop.exr"):
             assert os.path.islink(tmp_path / name)
-        assert os.readlink(tmp_path / "null.exr") == "/dev/null" and stat.S_ISCHR(os.stat("/dev/null").st_mode)
+        assert os.readlink(tmp_path / "null.exr") == "/dev/null" and stat.S_ISCHR(
+            os.stat("/dev/null").st_mode
+        )
         assert sorted(os.listdir(tmp_path / "dir")) == []
 
 
@@ -109,8 +181,9 @@ def links(tmp):
 
 @pytest.mark.parametrize("name,target", [("out.exr", "target.exr"), ("chain.png", "deep.png")])
 def test_an_output_that_is_a_link_is_written_through_it(tmp_path, monkeypatch, name, target):
-    """The image lands in the link's final target, through a temporary file beside that target (so that the
-    rename stays within one folder and file system); the links stay links, pointing where they did."""
+    """The image lands in the link's final target, through a temporary file beside that target
+    (so that the rename stays within one folder and file system); the links stay links, pointing
+    where they did."""
     links(tmp_path)
     folders = []
     real_mkstemp = tempfile.mkstemp
@@ -121,9 +194,24 @@ def test_an_output_that_is_a_link_is_written_through_it(tmp_path, monkeypatch, n
 
     monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
     before = {n: os.readlink(tmp_path / "links" / n) for n in ("out.exr", "hop.png", "chain.png")}
-    assert main(["render", str(tmp_path / "tiny.xml"), "--spp", "1", "-q", "-o", str(tmp_path / "links" / name)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(tmp_path / "tiny.xml"),
+                "--spp",
+                "1",
+                "-q",
+                "-o",
+                str(tmp_path / "links" / name),
+            ]
+        )
+        == 0
+    )
     assert {n: os.readlink(tmp_path / "links" / n) for n in before} == before
-    assert os.path.isfile(tmp_path / "real" / target) and sorted(os.listdir(tmp_path / "links")) == sorted(before)
+    assert os.path.isfile(tmp_path / "real" / target) and sorted(
+        os.listdir(tmp_path / "links")
+    ) == sorted(before)
     assert folders == [str(tmp_path / "real")]
     assert np.asarray(mi.Bitmap(str(tmp_path / "real" / target))).shape[:2] == (4, 4)
 

@@ -1,5 +1,8 @@
+from helpers.furnace_fixtures import mask, scene
+
 import styletrace
 
-styletrace.init()  # the kernel tests render: pick the backend and register the plugins first
+#: pytest finds fixtures by name here
+__all__ = ["mask", "scene"]
 
-from helpers.furnace_fixtures import mask, scene  # noqa: E402,F401  (pytest finds fixtures by name here)
+styletrace.init()  # the kernel tests render: pick the backend and register the plugins first

@@ -1,32 +1,49 @@
-"""Emitter selection: independent of the emitter list's order, probabilities as specified, and the MIS
-density at a hit emitter equal to the density with which next-event estimation produced the direction."""
+"""Emitter selection: independent of the emitter list's order, probabilities as specified, and
+the MIS density at a hit emitter equal to the density with which next-event estimation produced
+the direction."""
 import itertools
 import math
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 from styletrace.errors import SettingsError
+from styletrace.gate import dr, mi
 from styletrace.kernel.emitter_sampler import EmitterSampler, selection_order, stable_key
 
 RATIO = 20.0  # radiance of the bright light over the dim one (same area)
 
 
 def lights_scene(first="dim"):
-    """A floor under two equal 0.5 x 0.5 area lights, one RATIO times brighter, plus a point light; the
-    insertion order of the lights is `first`-first (Mitsuba mostly lists emitters in that order)."""
+    """A floor under two equal 0.5 x 0.5 area lights, one RATIO times brighter, plus a point
+    light; the insertion order of the lights is `first`-first (Mitsuba mostly lists emitters in
+    that order)."""
     T = mi.ScalarTransform4f
     lights = {
-        "dim": {"type": "rectangle", "to_world": T().translate([-1, 2, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.25),
-                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}}},
-        "bright": {"type": "rectangle", "to_world": T().translate([1, 2, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.25),
-                   "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [RATIO] * 3}}},
+        "dim": {
+            "type": "rectangle",
+            "to_world": T().translate([-1, 2, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.25),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}},
+        },
+        "bright": {
+            "type": "rectangle",
+            "to_world": T().translate([1, 2, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.25),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [RATIO] * 3}},
+        },
     }
-    d = {"type": "scene",
-         "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90) @ T().scale(3), "bsdf": {"type": "diffuse"}},
-         "bulb": {"type": "point", "position": [0, 1, 1], "intensity": {"type": "rgb", "value": [2.0] * 3}}}
+    d = {
+        "type": "scene",
+        "floor": {
+            "type": "rectangle",
+            "to_world": T().rotate([1, 0, 0], -90) @ T().scale(3),
+            "bsdf": {"type": "diffuse"},
+        },
+        "bulb": {
+            "type": "point",
+            "position": [0, 1, 1],
+            "intensity": {"type": "rgb", "value": [2.0] * 3},
+        },
+    }
     for name in ([first] + [n for n in lights if n != first]):
         d[name] = lights[name]
     return d
@@ -49,7 +66,8 @@ def test_selection_order_does_not_depend_on_the_list_order():
 
 @pytest.mark.parametrize("mode", ["uniform", "power"])
 def test_scenes_listed_differently_select_alike(mode):
-    """Two loads of one scene agree on the selection order and probabilities, whatever Mitsuba listed."""
+    """Two loads of one scene agree on the selection order and probabilities, whatever Mitsuba
+    listed."""
     a, b = mi.load_dict(lights_scene()), mi.load_dict(scene_with_lights_swapped(lights_scene()))
     sa, sb = EmitterSampler(a, mode), EmitterSampler(b, mode)
     assert sa.keys == sb.keys
@@ -60,10 +78,19 @@ def test_uniform_and_power_probabilities():
     scene = mi.load_dict(lights_scene())
     assert EmitterSampler(scene, "uniform").probabilities == pytest.approx([1 / 3] * 3)
     power = EmitterSampler(scene, "power")
-    p = {("area" if e.get_shape() else "point", e.get_shape().bbox().min.x if e.get_shape() else 0): q
-         for e, q in zip(sorted(scene.emitters(), key=stable_key), power.probabilities)}
+    p = {
+        (
+            "area" if e.get_shape() else "point",
+            e.get_shape().bbox().min.x if e.get_shape() else 0,
+        ): q
+        for e, q in zip(sorted(scene.emitters(), key=stable_key), power.probabilities)
+    }
     # analytic powers: an area light pi L A, a point light 4 pi I
-    phi = {("area", -1.25): math.pi * 1.0 * 0.25, ("area", 0.75): math.pi * RATIO * 0.25, ("point", 0): 4 * math.pi * 2.0}
+    phi = {
+        ("area", -1.25): math.pi * 1.0 * 0.25,
+        ("area", 0.75): math.pi * RATIO * 0.25,
+        ("point", 0): 4 * math.pi * 2.0,
+    }
     total = sum(phi.values())
     for k, v in phi.items():
         assert p[k] == pytest.approx(v / total, rel=1e-4), (k, p)
@@ -76,8 +103,9 @@ def test_unknown_mode_is_refused():
 
 @pytest.mark.parametrize("mode", ["uniform", "power"])
 def test_hit_density_matches_the_sampling_density(mode):
-    """For directions next-event estimation samples from points on the floor, `pdf_direction` (the density
-    MIS uses when a BSDF sample hits the emitter) must equal the density the sample was drawn with."""
+    """For directions next-event estimation samples from points on the floor, `pdf_direction`
+    (the density MIS uses when a BSDF sample hits the emitter) must equal the density the sample
+    was drawn with."""
     scene = mi.load_dict(lights_scene())
     sampler = EmitterSampler(scene, mode)
     n = 4096
@@ -87,7 +115,9 @@ def test_hit_density_matches_the_sampling_density(mode):
     si.n = mi.Normal3f(0, 1, 0)
     si.sh_frame = mi.Frame3f(si.n)
     active = mi.Bool(True)
-    ds, weight = sampler.sample_direction(si, mi.Point2f(rng.next_float32(), rng.next_float32()), active)
+    ds, weight = sampler.sample_direction(
+        si, mi.Point2f(rng.next_float32(), rng.next_float32()), active
+    )
     area = ~ds.delta & (ds.pdf > 0)
     got = np.asarray(sampler.pdf_direction(mi.Interaction3f(si), ds, area))
     want = np.asarray(ds.pdf)

@@ -1,16 +1,17 @@
 """Truth of the direct estimator on a scene whose first-hit radiance is known exactly.
 
-A diffuse sphere of albedo rho under a constant environment E has exitant radiance I = rho*E at every
-point (it is convex: each point sees only the environment). Each inner sample X is one path-traced
-estimate of I; by symmetry every visible point of the sphere has the same distribution of X, so the
-pixels inside the sphere's silhouette are independent draws, which gives standard errors directly.
+A diffuse sphere of albedo rho under a constant environment E has exitant radiance I = rho*E at
+every point (it is convex: each point sees only the environment). Each inner sample X is one
+path-traced estimate of I; by symmetry every visible point of the sphere has the same distribution
+of X, so the pixels inside the sphere's silhouette are independent draws, which gives standard
+errors directly.
 """
-import mitsuba as mi
 import numpy as np
 import pytest
 from helpers.furnace import I, draws
 
 import styletrace
+from styletrace.gate import mi
 
 RES = 128
 GAMMA = 2.2
@@ -29,12 +30,14 @@ def test_identity_is_exact(single):
     assert np.all(np.abs(z) < Z), f"mean {single.mean(0)} vs exact {I}: z = {z}"
 
 
-@pytest.mark.parametrize("sampler", ["independent", "stratified", "multijitter", "orthogonal", "ldsampler"])
+@pytest.mark.parametrize(
+    "sampler", ["independent", "stratified", "multijitter", "orthogonal", "ldsampler"]
+)
 def test_inner_samples_are_independent(mask, sampler):
-    """Var(<I>_n) = Var(<I>_1)/n whatever the scene's sampler: catches inner loops that replay the same
-    random numbers (a sampler outside the loop state, or one whose dimension counter is a trace-time
-    constant, as ldsampler's) or correlate them (orthogonal). 4 samples per pixel: a size every one of
-    these samplers accepts as it is."""
+    """Var(<I>_n) = Var(<I>_1)/n whatever the scene's sampler: catches inner loops that replay
+    the same random numbers (a sampler outside the loop state, or one whose dimension counter is
+    a trace-time constant, as ldsampler's) or correlate them (orthogonal). 4 samples per pixel: a
+    size every one of these samplers accepts as it is."""
     n = 8
     d = styletrace.frontends.api.scene_dict("furnace", RES, RES)
     d["sensor"]["sampler"] = {"type": sampler, "sample_count": 4}
@@ -71,14 +74,18 @@ def test_direct_bias_follows_delta_method(scene, mask, single, n):
     resampled = g_pool.mean(0) - gamma(I)
     se_pool = g_pool.std(0, ddof=1) / np.sqrt(len(g_pool))
     # the pool's own mean differs from I by sampling error; carry it into the truth's uncertainty
-    se_pool = np.sqrt(se_pool ** 2 + (gamma(I) / GAMMA / I * single.std(0) / np.sqrt(len(single))) ** 2)
+    se_pool = np.sqrt(
+        se_pool**2 + (gamma(I) / GAMMA / I * single.std(0) / np.sqrt(len(single))) ** 2
+    )
     z = (bias - resampled) / np.sqrt(se ** 2 + se_pool ** 2)
     assert np.all(np.abs(z) < Z), f"n={n}: bias {bias} vs resampled {resampled}: z = {z}"
 
     g2 = (1 / GAMMA) * (1 / GAMMA - 1) * I ** (1 / GAMMA - 2)
     delta = g2 * single.var(0, ddof=1) / (2 * n)
     if n == 1:
-        assert np.all(bias / se < -Z), f"direct application with n=1 should be measurably biased: z = {bias / se}"
+        assert np.all(bias / se < -Z), (
+            f"direct application with n=1 should be measurably biased: z = {bias / se}"
+        )
     if n >= 4:
         zd = (bias - delta) / se
         assert np.all(np.abs(zd) < Z), f"n={n}: bias {bias} vs delta method {delta}: z = {zd}"

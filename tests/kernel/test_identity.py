@@ -1,18 +1,19 @@
 """The identity style reproduces physically based rendering (Mitsuba's own `path` integrator)."""
-import mitsuba as mi
 import numpy as np
 import pytest
 from helpers.stats import mean_threshold, mean_z, pixel_t_test
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import load_scene, make_integrator, passes
+from styletrace.gate import mi
 
 K = 16          # independent renders per side
 SPP, INNER = 8, 8
 RES = 40
 # Family-wise error of the per-pixel test; the mean test uses a Bonferroni bound over 3 channels.
 ALPHA = 1e-3
-Z_MAX = mean_threshold(K)  # two-sided 1e-4 over 3 channels, Student's t with 2K - 2 degrees of freedom
+# two-sided 1e-4 over 3 channels, Student's t with 2K - 2 degrees of freedom
+Z_MAX = mean_threshold(K)
 
 
 def renders(scene, integrator, spp, seed0):
@@ -29,32 +30,52 @@ def test_identity_matches_path(name):
 
 
 def assert_matches_path(scene, integrator):
-    """Our renders against Mitsuba's `path` at the same number of light paths: image means and per-pixel t."""
+    """Our renders against Mitsuba's `path` at the same number of light paths: image means and
+    per-pixel t."""
     ours = renders(scene, integrator, SPP, 1000)
     ref = renders(scene, mi.load_dict({"type": "path"}), SPP * INNER, 5000)
     z = mean_z(ours, ref)
     assert np.all(np.abs(z) < Z_MAX), f"image means differ: z = {z}"
     tmax, thr, frac = pixel_t_test(ours, ref, ALPHA)
-    assert tmax < thr, f"max |t| {tmax:.2f} over Bonferroni threshold {thr:.2f} ({frac:.4%} of pixel channels)"
+    assert tmax < thr, (
+        f"max |t| {tmax:.2f} over Bonferroni threshold {thr:.2f} ({frac:.4%} of pixel channels)"
+    )
 
 
 def two_lights(res):
-    """A diffuse sphere on a floor under a large dim area light and a small one 400 times as powerful."""
+    """A diffuse sphere on a floor under a large dim area light and a small one 400 times as
+    powerful."""
     T = mi.ScalarTransform4f
     return {
         "type": "scene",
-        "sensor": {"type": "perspective", "fov": 40,
-                   "to_world": T().look_at(origin=[0, 2.5, 4.5], target=[0, 0.4, 0], up=[0, 1, 0]),
-                   "sampler": {"type": "independent"},
-                   "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}}},
-        "floor": {"type": "rectangle", "to_world": T().rotate([1, 0, 0], -90) @ T().scale(3),
-                  "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.6, 0.6, 0.6]}}},
-        "ball": {"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5,
-                 "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.4, 0.2]}}},
-        "dim": {"type": "rectangle", "to_world": T().translate([-1.0, 2.5, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(1.0),
-                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}}},
-        "bright": {"type": "rectangle", "to_world": T().translate([1.2, 2.0, 0.5]) @ T().rotate([1, 0, 0], 90)
-                   @ T().scale(0.1), "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2000.0] * 3}}},
+        "sensor": {
+            "type": "perspective",
+            "fov": 40,
+            "to_world": T().look_at(origin=[0, 2.5, 4.5], target=[0, 0.4, 0], up=[0, 1, 0]),
+            "sampler": {"type": "independent"},
+            "film": {"type": "hdrfilm", "width": res, "height": res, "rfilter": {"type": "box"}},
+        },
+        "floor": {
+            "type": "rectangle",
+            "to_world": T().rotate([1, 0, 0], -90) @ T().scale(3),
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.6, 0.6, 0.6]}},
+        },
+        "ball": {
+            "type": "sphere",
+            "center": [0, 0.5, 0],
+            "radius": 0.5,
+            "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.7, 0.4, 0.2]}},
+        },
+        "dim": {
+            "type": "rectangle",
+            "to_world": T().translate([-1.0, 2.5, 0]) @ T().rotate([1, 0, 0], 90) @ T().scale(1.0),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}},
+        },
+        "bright": {
+            "type": "rectangle",
+            "to_world": T().translate([1.2, 2.0, 0.5]) @ T().rotate([1, 0, 0], 90) @ T().scale(0.1),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [2000.0] * 3}},
+        },
     }
 
 

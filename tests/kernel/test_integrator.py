@@ -34,8 +34,9 @@ print("survived")
 
 
 def test_no_scene_objects_outlive_the_trace():
-    """An integrator kept alive after its scene is collected must not make the next trace crash (it did:
-    Dr.Jit traces calls on every live emitter, and one of a half-collected scene segfaulted)."""
+    """An integrator kept alive after its scene is collected must not make the next trace crash
+    (it did: Dr.Jit traces calls on every live emitter, and one of a half-collected scene
+    segfaulted)."""
     code = SCENARIO.format(tests=TESTS, render=os.path.join(TESTS, "kernel"))
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
                        env=child_env())

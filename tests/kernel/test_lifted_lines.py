@@ -1,11 +1,11 @@
-"""Building blocks of LLaT's conditional lifting (kernel/lifted_lines.py): half-vector transport keeps the
-tilt h . n to 1e-6, reduces to the identity where nothing moves, and makes a reflected auxiliary ray after a
-flat mirror the mirror image of the camera's; minimal rotation; the slope metric; the priority composition
-of two overlapping line types (Eqs. 32 and 34) against Monte Carlo."""
-import drjit as dr
-import mitsuba as mi
+"""Building blocks of LLaT's conditional lifting (kernel/lifted_lines.py): half-vector transport
+keeps the tilt h . n to 1e-6, reduces to the identity where nothing moves, and makes a reflected
+auxiliary ray after a flat mirror the mirror image of the camera's; minimal rotation; the slope
+metric; the priority composition of two overlapping line types (Eqs. 32 and 34) against Monte
+Carlo."""
 import numpy as np
 
+from styletrace.gate import dr, mi
 from styletrace.kernel import lifted_lines as ll
 
 RNG = np.random.default_rng(11)
@@ -48,8 +48,9 @@ def test_transport_is_the_identity_where_nothing_moves():
 
 
 def test_after_a_flat_mirror_the_auxiliary_reflects_like_the_mirrored_camera():
-    """Flat mirror, perfectly specular base (h = n): the transported h is n at every auxiliary vertex, so
-    the auxiliary ray leaves as the mirror image of its camera ray (the special case the paper notes)."""
+    """Flat mirror, perfectly specular base (h = n): the transported h is n at every auxiliary
+    vertex, so the auxiliary ray leaves as the mirror image of its camera ray (the special case
+    the paper notes)."""
     n = np.tile([[0.0, 0.0, 1.0]], (50, 1))
     v = unit(np.c_[RNG.normal(size=(50, 2)) * 0.3, -np.ones(50)])
     v2 = unit(v + 0.05 * RNG.normal(size=(50, 3)))
@@ -74,7 +75,9 @@ def test_minimal_rotation_takes_n_to_n2_and_keeps_angles():
     n = unit(RNG.normal(size=(200, 3)))
     n2 = unit(n + 0.5 * RNG.normal(size=(200, 3)))
     w = unit(RNG.normal(size=(200, 3)))
-    np.testing.assert_allclose(np.array(ll.minimal_rotation(vec(n), vec(n2), vec(n))).T, n2, atol=2e-6)
+    np.testing.assert_allclose(
+        np.array(ll.minimal_rotation(vec(n), vec(n2), vec(n))).T, n2, atol=2e-6
+    )
     w2 = np.array(ll.minimal_rotation(vec(n), vec(n2), vec(w))).T
     np.testing.assert_allclose((w2 * n2).sum(1), (w * n).sum(1), atol=2e-6)
     axis = np.cross(n, n2)                                   # the axis itself does not move
@@ -92,9 +95,10 @@ def test_slope_metric_in_pixels():
 
 
 def test_two_overlapping_line_types_compose_by_priority():
-    """Type A (priority 0, red) fires on a pair with probability pa, type B (priority 1, blue) with pb,
-    independently; a type draws with w_i = (1 - p_i)^n_i over its n_i metric samples. Where both fire the
-    red colour wins; the sample mean of Eq. 34's estimator matches Eq. 32 within 4 standard errors."""
+    """Type A (priority 0, red) fires on a pair with probability pa, type B (priority 1, blue)
+    with pb, independently; a type draws with w_i = (1 - p_i)^n_i over its n_i metric samples.
+    Where both fire the red colour wins; the sample mean of Eq. 34's estimator matches Eq. 32
+    within 4 standard errors."""
     pa, pb, na, nb = 0.05, 0.08, 12, 16
     L, ca, cb = np.array([0.5, 0.5, 0.5]), np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
     N = 200_000

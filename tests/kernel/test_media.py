@@ -1,5 +1,5 @@
-"""Participating media: with the identity style `stylized` equals Mitsuba's `volpath` (kernel/volume.py)."""
-import mitsuba as mi
+"""Participating media: with the identity style `stylized` equals Mitsuba's `volpath`
+(kernel/volume.py)."""
 import numpy as np
 import pytest
 from helpers.media import (
@@ -16,6 +16,7 @@ from helpers.stats import mean_z
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator
+from styletrace.gate import mi
 
 
 @pytest.mark.parametrize("name", list(SCENES))
@@ -24,7 +25,8 @@ def test_identity_matches_volpath(name):
 
 
 def test_the_comparison_detects_media_ignored():
-    """Mitsuba's `path` (which ignores media) against volpath, by the same test: far apart (the issue's z = 58)."""
+    """Mitsuba's `path` (which ignores media) against volpath, by the same test: far apart (the
+    issue's z = 58)."""
     scene = mi.load_dict(fog_ball())
     ours = renders(scene, mi.load_dict({"type": "path"}), SPP * INNER, 1000)
     ref = renders(scene, mi.load_dict({"type": "volpath"}), SPP * INNER, 5000)
@@ -32,7 +34,8 @@ def test_the_comparison_detects_media_ignored():
 
 
 def test_the_media_switch_is_off_without_media():
-    """Scenes without media trace the plain path kernel (path.walk), those with media the volumetric one."""
+    """Scenes without media trace the plain path kernel (path.walk), those with media the
+    volumetric one."""
     plain = fog_ball()
     del plain["ball"]["interior"]
     for d, media in ((plain, False), (fog_ball(), True), (foggy_room(), True)):

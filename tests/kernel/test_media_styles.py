@@ -1,11 +1,11 @@
-"""Stylization in scenes with participating media: the identity style at recursive and per-object vertices
-equals `volpath`; other styles render (kernel/integrator.py, kernel/volume.py)."""
-import mitsuba as mi
+"""Stylization in scenes with participating media: the identity style at recursive and per-object
+vertices equals `volpath`; other styles render (kernel/integrator.py, kernel/volume.py)."""
 import numpy as np
 from helpers.media import INNER, SPP, T, assert_matches_volpath, fog_ball
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator, passes
+from styletrace.gate import mi
 
 
 def test_first_n_hits_through_media_matches_volpath():
@@ -15,23 +15,28 @@ def test_first_n_hits_through_media_matches_volpath():
 
 
 def test_first_object_hit_through_media_matches_volpath():
-    """The styled floor is stylized where paths reach it, seen through the medium or after scattering in it."""
+    """The styled floor is stylized where paths reach it, seen through the medium or after
+    scattering in it."""
     integrator = make_integrator("identity", inner=INNER, stylize="first_object_hit")
     assert_matches_volpath(mi.load_dict(fog_ball(styled_floor=True)), integrator)
 
 
 def test_hidden_emitters_in_a_foggy_scene_match_volpath():
-    """`hide_emitters`: the environment and an area light seen directly are black (camera rays pass the light),
-    what is seen through the glass's fog is not, as in volpath."""
+    """`hide_emitters`: the environment and an area light seen directly are black (camera rays
+    pass the light), what is seen through the glass's fog is not, as in volpath."""
     d = fog_ball()
-    d["panel"] = {"type": "rectangle", "to_world": T().translate([0.9, 0.3, 2.0]) @ T().scale(0.3),
-                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [3.0, 3.0, 3.0]}}}
+    d["panel"] = {
+        "type": "rectangle",
+        "to_world": T().translate([0.9, 0.3, 2.0]) @ T().scale(0.3),
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [3.0, 3.0, 3.0]}},
+    }
     integrator = make_integrator("identity", inner=INNER, hide_emitters=True)
     assert_matches_volpath(mi.load_dict(d), integrator, {"hide_emitters": True})
 
 
 def test_a_style_renders_a_scene_with_media():
-    """cel on the fog ball: finite, and not the identity image (the style applies at surface vertices)."""
+    """cel on the fog ball: finite, and not the identity image (the style applies at surface
+    vertices)."""
     scene = mi.load_dict(fog_ball())
     cel = list(passes(scene, make_integrator("cel", inner=2), SPP, seed=3))[-1].image
     ident = list(passes(scene, make_integrator("identity", inner=2), SPP, seed=3))[-1].image
@@ -40,10 +45,11 @@ def test_a_style_renders_a_scene_with_media():
 
 
 def test_lines_in_a_scene_with_media():
-    """line_depth 1 draws the camera ray's lines (the glass sphere's outline against the floor); the volume
-    walk tests later edges as the surface walk does (line_depth 3 renders: tests/kernel/test_media_hooks.py
-    measures those lines). line_mode lifted, whose auxiliary paths know no media, refuses a deeper
-    line_depth in one line rather than silently cutting it to 1."""
+    """line_depth 1 draws the camera ray's lines (the glass sphere's outline against the floor);
+    the volume walk tests later edges as the surface walk does (line_depth 3 renders:
+    tests/kernel/test_media_hooks.py measures those lines). line_mode lifted, whose auxiliary
+    paths know no media, refuses a deeper line_depth in one line rather than silently cutting it
+    to 1."""
     import pytest
 
     from styletrace.errors import SceneError
@@ -52,7 +58,8 @@ def test_lines_in_a_scene_with_media():
     image = list(passes(scene, red, SPP, seed=3))[-1].image
     plain = list(passes(scene, make_integrator("identity", inner=1), SPP, seed=3))[-1].image
     assert np.all(np.isfinite(image))
-    assert np.any(np.abs(image - plain).sum(axis=-1) > 0.5)   # some pixels took the (red) line colour
+    # some pixels took the (red) line colour
+    assert np.any(np.abs(image - plain).sum(axis=-1) > 0.5)
     deep = make_integrator("identity", inner=1, lines=True, line_color="1,0,0", line_depth=3)
     assert np.all(np.isfinite(list(passes(scene, deep, SPP, seed=3))[-1].image))
     lifted = make_integrator("identity", inner=1, lines=True, line_mode="lifted", line_depth=3)

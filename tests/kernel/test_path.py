@@ -1,15 +1,17 @@
-"""The path kernel's MIS weight: finite for every pair of densities, with the power heuristic's limits."""
-import mitsuba as mi
+"""The path kernel's MIS weight: finite for every pair of densities, with the power heuristic's
+limits."""
 import numpy as np
 
+from styletrace.gate import mi
 from styletrace.kernel.vertex import mis_power
 
 BIG = [0.0, 1e-30, 1.0, 3.0, 1e19, 2.6e19, 1e30, 3.0e38, float("inf")]
 
 
 def test_mis_power_is_finite_and_complementary():
-    """Densities above ~1.8e19 overflow when squared in float32 (a grazing direction towards an area light
-    reaches them): the weight must stay finite and the two strategies' weights sum to 1."""
+    """Densities above ~1.8e19 overflow when squared in float32 (a grazing direction towards an
+    area light reaches them): the weight must stay finite and the two strategies' weights sum to
+    1."""
     a, b = np.meshgrid(np.array(BIG[1:], np.float32), np.array(BIG[1:], np.float32))
     a, b = a.ravel(), b.ravel()
     wa = np.asarray(mis_power(mi.Float(a), mi.Float(b)))

@@ -1,16 +1,17 @@
-"""reuse=pixels with stylize=first_n_hits and reuse_deep=world (kernel/reuse_world.py, kernel/world_grid.py): the
-second-level vertices pool their world-space neighbours' children too, then the first hits pool theirs.
+"""reuse=pixels with stylize=first_n_hits and reuse_deep=world (kernel/reuse_world.py,
+kernel/world_grid.py): the second-level vertices pool their world-space neighbours' children too,
+then the first hits pool theirs.
 
-Truth from outside the pooling code: the analytic glowing shell, Mitsuba's `path` on the Cornell box, and the
-pools a render used checked against the stored positions with numpy.
+Truth from outside the pooling code: the analytic glowing shell, Mitsuba's `path` on the Cornell
+box, and the pools a render used checked against the stored positions with numpy.
 """
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
 from styletrace.errors import SettingsError
 from styletrace.frontends import api
+from styletrace.gate import mi
 from styletrace.kernel import reuse
 
 from .test_reuse import Z, seed_means
@@ -40,12 +41,19 @@ def test_world_own_density_weights_darken_the_shell(shell):
 
 
 def test_world_identity_on_the_cornell_box_matches_path():
-    """As test_identity_on_the_cornell_box_matches_path, with the second level pooled over world-space
-    neighbours (a blur of radius h there: its effect on the image mean is below the standard error)."""
+    """As test_identity_on_the_cornell_box_matches_path, with the second level pooled over
+    world-space neighbours (a blur of radius h there: its effect on the image mean is below the
+    standard error)."""
     scene = api.load_scene("cornell-box", 32, 32)
     path = mi.load_dict({"type": "path"})
-    refs = np.array([np.asarray(mi.render(scene, integrator=path, spp=256, seed=s), dtype=np.float64)[..., :3].mean()
-                     for s in range(6)])
+    refs = np.array(
+        [
+            np.asarray(mi.render(scene, integrator=path, spp=256, seed=s), dtype=np.float64)[
+                ..., :3
+            ].mean()
+            for s in range(6)
+        ]
+    )
     integ = api.make_integrator("identity", inner="1,1", reuse_k=8, reuse_mis="pairwise", **WORLD)
     means = seed_means(scene, integ, 6, 32)
     se = np.hypot(means.std(ddof=1), refs.std(ddof=1)) / np.sqrt(len(means))
@@ -54,19 +62,24 @@ def test_world_identity_on_the_cornell_box_matches_path():
 
 
 def test_world_pools_on_the_cornell_box_hold_neighbours_within_h_only():
-    """The pools a render used, rebuilt from the stored grid and checked against the stored positions: every
-    accepted neighbour lies within h, and the pools are not trivially empty."""
+    """The pools a render used, rebuilt from the stored grid and checked against the stored
+    positions: every accepted neighbour lies within h, and the pools are not trivially empty."""
     scene = api.load_scene("cornell-box", 16, 16)
     integ = api.make_integrator("identity", inner="2,1", reuse_k=8, reuse_k2=12, **WORLD)
     keep = {}
     reuse.render_reuse(integ, scene, scene.sensors()[0], 5, 4, keep=keep)
     P, mask, h = keep["world_p"], keep["world_mask"], keep["world_h"]
-    order, first, count, offset = (keep[k].astype(np.int64) for k in ("world_order", "world_first", "world_count",
-                                                                         "world_offset"))
+    order, first, count, offset = (
+        keep[k].astype(np.int64)
+        for k in ("world_order", "world_first", "world_count", "world_offset")
+    )
     sizes = []
     for i in np.flatnonzero(keep["world_pool"]):
-        members = [i] + [order[first[i] + (offset[i] + q - 1) % count[i]] for q in range(1, keep["world_k"] + 1)
-                         if int(mask[i]) >> q & 1]
+        members = [i] + [
+            order[first[i] + (offset[i] + q - 1) % count[i]]
+            for q in range(1, keep["world_k"] + 1)
+            if int(mask[i]) >> q & 1
+        ]
         assert keep["world_pool"][members].all()
         d = np.linalg.norm(P[:, members] - P[:, [i]], axis=0)
         assert np.all(d <= h * (1 + 1e-5)), f"vertex {i}: neighbours at {d.max()} > h = {h}"

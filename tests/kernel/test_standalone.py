@@ -1,9 +1,9 @@
-"""`stylized` as Mitsuba builds it (scene/standalone.py): `mi.render` resolves the style's auto values on the
-scene once, caches them per scene, and renders what the pipeline renders."""
-import mitsuba as mi
+"""`stylized` as Mitsuba builds it (scene/standalone.py): `mi.render` resolves the style's auto
+values on the scene once, caches them per scene, and renders what the pipeline renders."""
 import numpy as np
 
 import styletrace
+from styletrace.gate import mi
 from styletrace.pipeline.passes import pass_seed
 from styletrace.scene import standalone
 from styletrace.scene.builtin import BUILTIN
@@ -18,7 +18,9 @@ def scene_with(integrator: dict) -> mi.Scene:
 def test_auto_values_resolve_once_per_scene(monkeypatch):
     calls = []
     real = standalone.resolve_defaults
-    monkeypatch.setattr(standalone, "resolve_defaults", lambda scene, integ: calls.append(1) or real(scene, integ))
+    monkeypatch.setattr(
+        standalone, "resolve_defaults", lambda scene, integ: calls.append(1) or real(scene, integ)
+    )
     scene = scene_with({"type": "stylized", "style": "cel", "inner_samples": 2})
     first = np.array(mi.render(scene, spp=2, seed=3))
     second = np.array(mi.render(scene, spp=2, seed=3))
@@ -29,8 +31,9 @@ def test_auto_values_resolve_once_per_scene(monkeypatch):
 
 
 def test_mi_render_equals_the_pipelines_one_pass():
-    """Cel (auto thresholds) and reuse=pixels with its refinement round: mi.render on the scene's own integrator
-    is `styletrace.render` of the same scene for the pass seed of the pipeline's only pass."""
+    """Cel (auto thresholds) and reuse=pixels with its refinement round: mi.render on the scene's
+    own integrator is `styletrace.render` of the same scene for the pass seed of the pipeline's
+    only pass."""
     for values in ({"style": "cel", "inner_samples": 2},
                    {"style": "cel", "inner_samples": "2:8", "reuse": "pixels"}):
         scene = scene_with({"type": "stylized", **values})
@@ -39,7 +42,8 @@ def test_mi_render_equals_the_pipelines_one_pass():
 
 
 def test_integrators_built_from_values_keep_mitsubas_render():
-    """Only Mitsuba-built integrators get the resolving `render` (on the instance): the pipeline's own do not."""
+    """Only Mitsuba-built integrators get the resolving `render` (on the instance): the
+    pipeline's own do not."""
     built = mi.load_dict({"type": "stylized", "style": "cel"})
     assert "render" in vars(built)
     assert "render" not in vars(styletrace.frontends.api.make_integrator("cel"))

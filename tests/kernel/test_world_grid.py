@@ -1,14 +1,12 @@
 """kernel/world_grid.py: world-space neighbours, checked against numpy brute force."""
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
+from styletrace.gate import dr, mi
+from styletrace.kernel.world_grid import WorldGrid, cell_keys, density_h
 
 styletrace.init()
-
-from styletrace.kernel.world_grid import WorldGrid, cell_keys, density_h  # noqa: E402
 
 K = 8
 
@@ -16,8 +14,15 @@ K = 8
 def grid_of(P, valid, h, jitter, start, normals=None):
     n = P.shape[1]
     p = mi.Point3f(*[mi.Float(P[i].astype(np.float32)) for i in range(3)])
-    grid = WorldGrid(p, mi.Bool(valid), h, K, mi.Point3f(*[mi.Float(jitter[i].astype(np.float32)) for i in range(3)]),
-                     mi.Float(start.astype(np.float32)), [0.0, 0.0, 0.0])
+    grid = WorldGrid(
+        p,
+        mi.Bool(valid),
+        h,
+        K,
+        mi.Point3f(*[mi.Float(jitter[i].astype(np.float32)) for i in range(3)]),
+        mi.Float(start.astype(np.float32)),
+        [0.0, 0.0, 0.0],
+    )
     N = normals if normals is not None else np.tile([[0.0], [0.0], [1.0]], (1, n))
     mask = grid.accepted(dr.zeros(mi.Int32, n), dr.zeros(mi.BSDFPtr, n), mi.Bool(valid),
                          mi.Vector3f(*[mi.Float(N[i].astype(np.float32)) for i in range(3)]), 0.9)
@@ -52,8 +57,9 @@ def test_candidates_are_the_jittered_cell_and_accepted_within_h(points):
         cell = set(np.flatnonzero(valid & (keys == lookup[i])).tolist()) - {i}
         found = {int(slots[q][0][i]) for q in range(1, K + 1) if slots[q][1][i]}
         assert found <= cell, f"vertex {i}: candidates outside its jittered cell"
-        assert len(found) == min(len(cell), K) or (i in np.flatnonzero(valid & (keys == lookup[i])) and
-                                                   len(found) == min(len(cell), K - 1)), f"vertex {i}"
+        assert len(found) == min(len(cell), K) or (
+            i in np.flatnonzero(valid & (keys == lookup[i])) and len(found) == min(len(cell), K - 1)
+        ), f"vertex {i}"
         accepted = {int(slots[q][0][i]) for q in range(K + 1) if int(mask[i]) >> q & 1}
         if not valid[i]:
             assert accepted == set()
@@ -68,7 +74,8 @@ def test_candidates_are_the_jittered_cell_and_accepted_within_h(points):
             checked += 1
         assert i in accepted
     assert checked > 500
-    assert np.mean([bin(int(x)).count("1") for x in mask[valid]]) > 2  # pools are not trivially empty
+    # pools are not trivially empty
+    assert np.mean([bin(int(x)).count("1") for x in mask[valid]]) > 2
 
 
 def test_normals_must_agree(points):

@@ -1,3 +1,4 @@
 import styletrace
 
-styletrace.init()  # the look-development tests render: pick the backend and register the plugins first
+# the look-development tests render: pick the backend and register the plugins first
+styletrace.init()

@@ -36,7 +36,9 @@ def test_size_per_camera_sample_is_what_the_docs_say(buf):
 def test_the_api_names(buf, tmp_path):
     path = buf.save(str(tmp_path / "c.npz"))
     back = styletrace.load_buffer(path)
-    np.testing.assert_array_equal(styletrace.restyle(back, style="sepia"), restyle(buf, style="sepia"))
+    np.testing.assert_array_equal(
+        styletrace.restyle(back, style="sepia"), restyle(buf, style="sepia")
+    )
     assert styletrace.render_buffer is render_buffer
 
 
@@ -50,7 +52,10 @@ def test_bad_files(buf, tmp_path):
     newer = dict(buf.header, version=VERSION + 1)
     path = str(tmp_path / "newer.npz")
     np.savez(path, header=np.frombuffer(json.dumps(newer).encode(), dtype=np.uint8), **buf.arrays)
-    with pytest.raises(UsageError, match=f"format version {VERSION + 1}; this styletrace reads version {VERSION} and earlier"):
+    with pytest.raises(
+        UsageError,
+        match=f"format version {VERSION + 1}; this styletrace reads version {VERSION} and earlier",
+    ):
         load_buffer(path)
     with pytest.raises(UsageError, match="the extension must be .npz"):
         buf.save(str(tmp_path / "b.exr"))
@@ -59,8 +64,11 @@ def test_bad_files(buf, tmp_path):
 
 
 def test_a_saved_buffer_keeps_its_pilot_and_camera(buf, tmp_path):
-    """Auto values (cel thresholds, hatching's pixel spacing) resolve from what the file keeps, as before saving."""
+    """Auto values (cel thresholds, hatching's pixel spacing) resolve from what the file keeps,
+    as before saving."""
     back = load_buffer(buf.save(str(tmp_path / "p.npz")))
-    assert back.pilot_nbytes == buf.pilot_nbytes > 0 and back.header["sensor"] == buf.header["sensor"]
+    assert (
+        back.pilot_nbytes == buf.pilot_nbytes > 0 and back.header["sensor"] == buf.header["sensor"]
+    )
     for style in ("cel", "hatching"):
         np.testing.assert_array_equal(restyle(back, style=style), restyle(buf, style=style))

@@ -1,8 +1,8 @@
 """`styletrace render --buffer`, `restyle`, `fit` on the command line."""
-import mitsuba as mi
 import numpy as np
 
 from styletrace.frontends import cli
+from styletrace.gate import mi
 from styletrace.lookdev.buffer import load_buffer
 from styletrace.lookdev.restyle import restyle
 
@@ -19,14 +19,38 @@ def test_render_buffer_restyle_fit(tmp_path, capsys):
     b = load_buffer(str(buf))
     np.testing.assert_array_equal(read(img), restyle(b))
     out = tmp_path / "heat.exr"
-    assert cli.main(["restyle", str(buf), "--style", "color_map", "--set", "gradient=heat", "-o", str(out)]) == 0
+    assert (
+        cli.main(
+            ["restyle", str(buf), "--style", "color_map", "--set", "gradient=heat", "-o", str(out)]
+        )
+        == 0
+    )
     np.testing.assert_array_equal(read(out), restyle(b, style="color_map", gradient="heat"))
     fitted = tmp_path / "fit.exr"
-    assert cli.main(["fit", str(buf), "--style", "contrast", "--target", str(tmp_path / "t.exr"), "-o", str(fitted)]) == 2
+    assert (
+        cli.main(
+            [
+                "fit",
+                str(buf),
+                "--style",
+                "contrast",
+                "--target",
+                str(tmp_path / "t.exr"),
+                "-o",
+                str(fitted),
+            ]
+        )
+        == 2
+    )
     assert "cannot read target image" in capsys.readouterr().err
     target = tmp_path / "t.exr"
     mi.Bitmap(restyle(b, style="contrast", c=2.0, pivot=0.4)).write(str(target))
-    assert cli.main(["fit", str(buf), "--style", "contrast", "--target", str(target), "-o", str(fitted)]) == 0
+    assert (
+        cli.main(
+            ["fit", str(buf), "--style", "contrast", "--target", str(target), "-o", str(fitted)]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     import re
     assert "styletrace restyle" in printed
@@ -45,7 +69,12 @@ def test_one_line_refusals(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "estimator 'direct' cannot restyle this buffer" in err
     assert "this estimator needs more" in err
-    assert cli.main(["render", *SMALL, "--buffer", str(tmp_path / "b.bin"), "-o", str(tmp_path / "r.png")]) == 2
+    assert (
+        cli.main(
+            ["render", *SMALL, "--buffer", str(tmp_path / "b.bin"), "-o", str(tmp_path / "r.png")]
+        )
+        == 2
+    )
     assert "the extension must be .npz" in capsys.readouterr().err
     assert cli.main(["restyle", str(tmp_path / "none.npz"), "-o", str(tmp_path / "x.png")]) == 2
     assert "does not exist" in capsys.readouterr().err

@@ -9,13 +9,12 @@ sample_border, over several passes, and on a film rendered in tiles (each pass d
 window, as the render);
 - the filter survives the file, and buffers of a box filter keep their format (no positions).
 """
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 import pytest
 
 import styletrace
 from styletrace.frontends import api
+from styletrace.gate import dr, mi
 from styletrace.lookdev import film_filter
 from styletrace.lookdev.buffer import bytes_per_sample, load_buffer
 from styletrace.lookdev.fit import fit
@@ -140,7 +139,8 @@ def test_fit_differentiates_through_the_filter():
 
 
 def test_a_version_2_file_of_a_box_filter_still_restyles(tmp_path):
-    """Files written before filters were recorded (version 2: no positions, "filter": "box") read as before."""
+    """Files written before filters were recorded (version 2: no positions, "filter": "box") read
+    as before."""
     import json
     box = render_buffer(scene_dict({"type": "box"}, w=8, h=6), style="cel", spp=2, inner=1)
     old = dict(box.header, version=2)

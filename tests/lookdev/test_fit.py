@@ -1,11 +1,11 @@
 """Fitting θ recovers the parameters a target was restyled with.
 
-Tolerances: contrast and the colour map are smooth in θ (the image is affine in their parameters), so
-gradient descent converges to the exact θ; we accept 1e-3 (contrast) and 1e-2 per colour channel (colour
-stops with few samples near them converge last), far below a visible difference. A cel threshold is only
-identifiable up to the gap between the brightnesses of neighbouring camera samples: any threshold with no
-sample's brightness between it and the true one gives the identical image, which is what we require;
-its levels must then be within 1e-3.
+Tolerances: contrast and the colour map are smooth in θ (the image is affine in their parameters),
+so gradient descent converges to the exact θ; we accept 1e-3 (contrast) and 1e-2 per colour channel
+(colour stops with few samples near them converge last), far below a visible difference. A cel
+threshold is only identifiable up to the gap between the brightnesses of neighbouring camera
+samples: any threshold with no sample's brightness between it and the true one gives the identical
+image, which is what we require; its levels must then be within 1e-3.
 """
 import numpy as np
 import pytest
@@ -38,7 +38,8 @@ def test_contrast(buf):
 
 def test_color_map(buf, u):
     truth = Gradient.parse("heat").stops
-    # the gradient's own span as the range (absolute mapping), so a stop is identifiable where u reaches it
+    # the gradient's own span as the range (absolute mapping), so a stop is identifiable where u
+    # reaches it
     span = (truth[0][0], truth[-1][0])
     target = restyle(buf, style="color_map", gradient="heat", range=span)
     r = fit(buf, style="color_map", target=target, gradient=GREY5, range=span, fixed=("range",))
@@ -58,14 +59,21 @@ def test_color_map(buf, u):
 
 def test_cel(buf, u):
     truth = dict(thresholds=(0.1, 0.4), levels=(0.05, 0.3, 0.8))
-    r = fit(buf, style="cel", target=restyle(buf, style="cel", **truth), thresholds=(0.2, 0.6), levels=(0.2, 0.5, 0.6))
+    r = fit(
+        buf,
+        style="cel",
+        target=restyle(buf, style="cel", **truth),
+        thresholds=(0.2, 0.6),
+        levels=(0.2, 0.5, 0.6),
+    )
     for got, want in zip(r.params["thresholds"], truth["thresholds"]):
         assert not np.any((u - got) * (u - want) < 0), (got, want)
     np.testing.assert_allclose(r.params["levels"], truth["levels"], atol=1e-3)
 
 
 def test_without_the_surrogate_cel_thresholds_do_not_move(buf):
-    """The surrogate is what makes thresholds fittable: with τ ~ 0 the sigmoid is a step, no gradient."""
+    """The surrogate is what makes thresholds fittable: with τ ~ 0 the sigmoid is a step, no
+    gradient."""
     truth = dict(thresholds=(0.1, 0.4), levels=(0.05, 0.3, 0.8))
     r = fit(buf, style="cel", target=restyle(buf, style="cel", **truth), thresholds=(0.2, 0.6),
             levels=(0.2, 0.5, 0.6), tau=1e-12, tau_end=1e-12, iterations=50)

@@ -33,7 +33,10 @@ def server(session):
     import uvicorn
 
     from styletrace.preview.server import make_app
-    srv = uvicorn.Server(uvicorn.Config(make_app(session), host="127.0.0.1", port=0, log_level="warning"))
+
+    srv = uvicorn.Server(
+        uvicorn.Config(make_app(session), host="127.0.0.1", port=0, log_level="warning")
+    )
     thread = threading.Thread(target=srv.run, daemon=True)
     thread.start()
     wait_until(lambda: srv.started, 30, "the server")

@@ -1,12 +1,13 @@
-"""The preview's JSON API: styles from the registry, restyles, saves, bad requests, concurrent clients."""
+"""The preview's JSON API: styles from the registry, restyles, saves, bad requests, concurrent
+clients."""
 import base64
 import threading
 
-import mitsuba as mi
 import numpy as np
 import pytest
 from starlette.testclient import TestClient
 
+from styletrace.gate import mi
 from styletrace.lookdev.restyle import restyle
 from styletrace.preview.server import make_app
 from styletrace.styles import style_class, style_names
@@ -21,7 +22,11 @@ def test_styles_come_from_the_registry(client):
     table = {s["name"]: s for s in client.get("/api/styles").json()["styles"]}
     assert set(table) == {n for n in style_names() if not style_class(n).per_sample}
     cel = {p["name"]: p for p in table["cel"]["params"]}
-    assert cel["levels"]["kind"] == "floats" and cel["levels"]["low"] == 0.0 and cel["levels"]["default"] == "auto"
+    assert (
+        cel["levels"]["kind"] == "floats"
+        and cel["levels"]["low"] == 0.0
+        and cel["levels"]["default"] == "auto"
+    )
     assert cel["bands"]["default"] == "3"
     assert table["contrast"]["estimators"] == ["direct", "affine"]
     assert "gradient" in {p["kind"] for p in table["color_map"]["params"]}
@@ -29,12 +34,16 @@ def test_styles_come_from_the_registry(client):
 
 def test_state_reports_the_cap(client, session):
     st = client.get("/api/state").json()
-    assert st["spp_done"] == 2 and st["samples"] == 48 * 40 * 2 and st["bytes"] == st["samples"] * 65
+    assert (
+        st["spp_done"] == 2 and st["samples"] == 48 * 40 * 2 and st["bytes"] == st["samples"] * 65
+    )
     assert st["cap_samples"] == session.max_samples
 
 
 def test_save_exr_is_the_restyle(client, session):
-    r = client.post("/api/save", json={"style": "gamma", "params": {"gamma": "1.8"}, "format": "exr"})
+    r = client.post(
+        "/api/save", json={"style": "gamma", "params": {"gamma": "1.8"}, "format": "exr"}
+    )
     assert r.status_code == 200 and r.headers["content-type"] == "image/x-exr"
     got = _read_exr(r.content)
     np.testing.assert_array_equal(got, restyle(session.buffer, style="gamma", gamma=1.8))
@@ -57,18 +66,27 @@ def test_restyle_returns_a_png_and_the_command(client):
     body = r.json()
     assert r.status_code == 200 and body["spp"] == 2
     assert base64.b64decode(body["image"].split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
-    assert body["command"].startswith("styletrace render cornell-box --style cel --inner 2 --spp 2 --seed 0 --pass-spp 1")
+    assert body["command"].startswith(
+        "styletrace render cornell-box --style cel --inner 2 --spp 2 --seed 0 --pass-spp 1"
+    )
     assert "--set levels=0.1,0.9" in body["command"]
 
 
-@pytest.mark.parametrize("body,status,message", [
-    ({"style": "nope"}, 400, "bad style 'nope'"),
-    ({"style": "cel", "params": {"levels": "0.1,0.5", "thresholds": "0.3,0.6"}}, 400, "expected 3 levels for 2 thresholds"),
-    ({"style": "cel", "params": {"nope": "1"}}, 400, "unknown property 'nope'"),
-    ({"style": "gamma", "estimator": "series"}, 400, "estimator 'series' cannot restyle"),
-    ({"style": "cel", "params": ["x"]}, 400, "bad params"),
-    ("not an object", 400, "must be a JSON object"),
-])
+@pytest.mark.parametrize(
+    "body,status,message",
+    [
+        ({"style": "nope"}, 400, "bad style 'nope'"),
+        (
+            {"style": "cel", "params": {"levels": "0.1,0.5", "thresholds": "0.3,0.6"}},
+            400,
+            "expected 3 levels for 2 thresholds",
+        ),
+        ({"style": "cel", "params": {"nope": "1"}}, 400, "unknown property 'nope'"),
+        ({"style": "gamma", "estimator": "series"}, 400, "estimator 'series' cannot restyle"),
+        ({"style": "cel", "params": ["x"]}, 400, "bad params"),
+        ("not an object", 400, "must be a JSON object"),
+    ],
+)
 def test_bad_requests_get_a_4xx_with_a_message(client, body, status, message):
     r = client.post("/api/restyle", json=body)
     assert r.status_code == status and message in r.json()["error"]
@@ -80,7 +98,8 @@ def test_bad_save_format(client):
 
 
 def test_two_clients_at_once_get_consistent_images(session):
-    """Two clients restyle different styles concurrently; each gets exactly its own style's image."""
+    """Two clients restyle different styles concurrently; each gets exactly its own style's
+    image."""
     styles = {"cel": {}, "color_map": {"gradient": "heat"}}
     want = {s: restyle(session.buffer, style=s, **p) for s, p in styles.items()}
     errors = []
@@ -88,7 +107,9 @@ def test_two_clients_at_once_get_consistent_images(session):
     def worker(style):
         client = TestClient(make_app(session))
         for _ in range(4):
-            r = client.post("/api/save", json={"style": style, "params": styles[style], "format": "exr"})
+            r = client.post(
+                "/api/save", json={"style": style, "params": styles[style], "format": "exr"}
+            )
             if r.status_code != 200 or not np.array_equal(_read_exr(r.content), want[style]):
                 errors.append(style)
 

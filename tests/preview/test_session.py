@@ -9,17 +9,29 @@ from .conftest import wait_until
 
 def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkeypatch):
     from styletrace.preview import session as module
-    monkeypatch.setattr(module, "DRAFT_GRACE_S", 120.0)  # the render thread waits for the draft to be shown
+    # the render thread waits for the draft to be shown
+    monkeypatch.setattr(module, "DRAFT_GRACE_S", 120.0)
     from styletrace.denoise.draft import (  # with the denoise extra the draft is denoised
         QUALITY,
         available,
     )
-    # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page restyles); rendered
-    # before the session starts: the page's Dr.Jit work runs under the session's lock, a render of the test's own
-    # beside the session's render thread would not (a CI run once failed there with an empty-array gather)
-    extra = {"denoise": "expectation", "denoise_quality": QUALITY, "coverage": 0} if available() else {}
-    want = styletrace.render("cornell-box", style="cel", spp=1, inner=module.DRAFT_INNER, seed=0, width=24, height=20,
-                             **extra)
+    # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page
+    # restyles); rendered before the session starts: the page's Dr.Jit work runs under the session's
+    # lock, a render of the test's own beside the session's render thread would not (a CI run once
+    # failed there with an empty-array gather)
+    extra = (
+        {"denoise": "expectation", "denoise_quality": QUALITY, "coverage": 0} if available() else {}
+    )
+    want = styletrace.render(
+        "cornell-box",
+        style="cel",
+        spp=1,
+        inner=module.DRAFT_INNER,
+        seed=0,
+        width=24,
+        height=20,
+        **extra,
+    )
     s = module.Session("cornell-box", inner=2, spp=2, width=24, height=20)
     assert s.restyle("cel", None, {}) == (None, 0, 0)  # nothing rendered yet
     s.start()

@@ -1,3 +1,4 @@
 import styletrace
 
-styletrace.init()  # the scene-analysis tests render: pick the backend and register the plugins first
+# the scene-analysis tests render: pick the backend and register the plugins first
+styletrace.init()

@@ -1,16 +1,16 @@
-"""Tone-level coverage on a scene whose brightness range is set by a window (docs/look.md): at defaults every
-hatching level and every cel band covers a fair share of the image, where a linear ramp between the 5% and 95%
-brightness quantiles (the default before) put most of the room into one level."""
-import mitsuba as mi
+"""Tone-level coverage on a scene whose brightness range is set by a window (docs/look.md): at
+defaults every hatching level and every cel band covers a fair share of the image, where a linear
+ramp between the 5% and 95% brightness quantiles (the default before) put most of the room into
+one level."""
 import numpy as np
 import pytest
+from helpers.look_scenes import window_room
 
 import styletrace
 from styletrace.frontends.api import load_scene, make_integrator, resolve_defaults
+from styletrace.gate import mi
 
 styletrace.init()
-
-from helpers.look_scenes import window_room
 
 
 @pytest.fixture(scope="module")
@@ -27,13 +27,16 @@ def shares(levels, count):
 
 
 def test_hatching_levels_each_cover_a_fair_share(brightness):
-    integrator, chosen = resolve_defaults(load_scene(window_room()), make_integrator(style="hatching"))
+    integrator, chosen = resolve_defaults(
+        load_scene(window_room()), make_integrator(style="hatching")
+    )
     style = integrator.settings.style
     assert "tones=" in chosen and style.uses_tones
     got = shares(style.active(mi.Float(brightness.astype(np.float32))), style.sets + 1)
     fair = 1.0 / (style.sets + 1)
     assert got.min() >= 0.5 * fair, got  # measured: 0.18, 0.23, 0.32, 0.27
-    # the linear ramp between the 5% and 95% quantiles: the room piles into one level (measured 0.61)
+    # the linear ramp between the 5% and 95% quantiles: the room piles into one level (measured
+    # 0.61)
     lo, hi = np.quantile(brightness, [0.05, 0.95])
     ramp = make_integrator(style="hatching", u_min=float(lo), u_max=float(hi)).settings.style
     old = shares(ramp.active(mi.Float(brightness.astype(np.float32))), ramp.sets + 1)

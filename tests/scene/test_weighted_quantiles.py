@@ -1,12 +1,15 @@
-"""`scene_defaults.weighted_quantiles`, spelled out for numpy 1.x (bpy pins numpy < 2), equals numpy 2's weighted
-inverted-CDF quantiles, which the auto style defaults use."""
+"""`scene_defaults.weighted_quantiles`, spelled out for numpy 1.x (bpy pins numpy < 2), equals
+numpy 2's weighted inverted-CDF quantiles, which the auto style defaults use."""
 import numpy as np
 import pytest
 
 from styletrace.scene.defaults import weighted_quantiles
 
 
-@pytest.mark.skipif(int(np.__version__.split(".")[0]) < 2, reason="the reference, np.quantile(weights=), needs numpy 2")
+@pytest.mark.skipif(
+    int(np.__version__.split(".")[0]) < 2,
+    reason="the reference, np.quantile(weights=), needs numpy 2",
+)
 def test_equals_numpy2_with_real_weights():
     rng = np.random.default_rng(4)
     for _ in range(300):

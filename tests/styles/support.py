@@ -1,4 +1,5 @@
-"""Shared helpers of the style tests (tests/styles only): numpy <-> Dr.Jit, vertices, error checks."""
+"""Shared helpers of the style tests (tests/styles only): numpy <-> Dr.Jit, vertices, error
+checks."""
 from __future__ import annotations
 
 import numpy as np
@@ -44,8 +45,13 @@ def vertex(p=None, n=None, wo=None, view=(0.0, 0.0, 1.0), N=None):
         r = rows(default if a is None else a)
         return np.broadcast_to(r, (N, 3)) if len(r) == 1 else r
 
-    return Vertex(p=point(fill(p, (0, 0, 0))), n=vector(fill(n, (0, 0, 1))), wo=vector(fill(wo, (0, 0, 1))),
-                  view=vector(fill(view, view)), depth=mi.UInt32(np.zeros(N, dtype=np.uint32)))
+    return Vertex(
+        p=point(fill(p, (0, 0, 0))),
+        n=vector(fill(n, (0, 0, 1))),
+        wo=vector(fill(wo, (0, 0, 1))),
+        view=vector(fill(view, view)),
+        depth=mi.UInt32(np.zeros(N, dtype=np.uint32)),
+    )
 
 
 def run(style, I, v=None) -> np.ndarray:

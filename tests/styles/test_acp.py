@@ -12,7 +12,8 @@ def hexc(h):
 def test_hand_values_default_gradient():
     a = create("acp")
     assert a.per_sample is True
-    # 'dusk': Y = 0.5 is a stop (#e07a5f); Y = 0 -> first stop scaled by 0.01; Y = 2 -> last stop (clamped) * 2
+    # 'dusk': Y = 0.5 is a stop (#e07a5f); Y = 0 -> first stop scaled by 0.01; Y = 2 -> last stop
+    # (clamped) * 2
     out = run(a, [(0.2, 0.5, 0.8), (0, 0, 0), (2, 2, 2), (-1, 0, 0)])
     np.testing.assert_allclose(out[0], 0.5 * hexc("#e07a5f"), atol=1e-6)
     np.testing.assert_allclose(out[1], 0.01 * hexc("#161a3a"), atol=1e-6)

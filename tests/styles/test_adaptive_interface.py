@@ -1,4 +1,5 @@
-"""What each style tells the adaptive controller: its jumps (`step_thresholds`) and its curvature."""
+"""What each style tells the adaptive controller: its jumps (`step_thresholds`) and its
+curvature."""
 import numpy as np
 import pytest
 
@@ -6,7 +7,8 @@ from styletrace.styles import create, style_names
 
 from .support import color, tonp, vertex
 
-#: brightness grid along the grey axis: fine enough that a continuous style moves little between neighbours
+#: brightness grid along the grey axis: fine enough that a continuous style moves little between
+#: neighbours
 U = np.arange(0.01, 1.6, 1e-3, dtype=np.float32)
 LANES = 64
 
@@ -30,13 +32,15 @@ def along_grey(style, v=None):
 def thresholds_of(style, v) -> np.ndarray:
     """(k, LANES) the style's thresholds per lane (+inf: none)."""
     ts = style.step_thresholds(v)
-    return np.array([np.broadcast_to(np.array(t, dtype=np.float64), (LANES,)) for t in ts]).reshape(-1, LANES)
+    return np.array([np.broadcast_to(np.array(t, dtype=np.float64), (LANES,)) for t in ts]).reshape(
+        -1, LANES
+    )
 
 
 @pytest.mark.parametrize("name", [n for n in style_names()] + ["contrast+sepia"])
 def test_every_jump_is_a_declared_threshold(name):
-    # brute force along the grey axis: between two neighbouring brightnesses where g jumps (moves more than a
-    # continuous style can over 1e-3), one of the lane's declared thresholds must lie
+    # brute force along the grey axis: between two neighbouring brightnesses where g jumps (moves
+    # more than a continuous style can over 1e-3), one of the lane's declared thresholds must lie
     style = create(name)
     v = vertices()
     g = along_grey(style)
@@ -55,11 +59,14 @@ def test_the_step_styles_declare_thresholds():
     v = vertices()
     for name in ("cel", "hatching", "halftone"):
         assert np.isfinite(thresholds_of(create(name), v)).any(), name
-    assert thresholds_of(create("cel", thresholds=(0.3, 0.8), levels=(0.1, 0.5, 0.9)), v)[:, 0].tolist() == \
-        pytest.approx([0.3, 0.8])
+    assert thresholds_of(create("cel", thresholds=(0.3, 0.8), levels=(0.1, 0.5, 0.9)), v)[
+        :, 0
+    ].tolist() == pytest.approx([0.3, 0.8])
 
 
-@pytest.mark.parametrize("name", ["identity", "contrast", "sepia", "contrast+sepia", "cel", "hatching", "halftone"])
+@pytest.mark.parametrize(
+    "name", ["identity", "contrast", "sepia", "contrast+sepia", "cel", "hatching", "halftone"]
+)
 def test_affine_and_step_styles_have_no_curvature(name):
     import mitsuba as mi
     c = tonp(create(name).curvature(color(np.full((LANES, 3), 0.4)), vertices(), mi.Float(0.05)))

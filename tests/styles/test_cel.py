@@ -17,11 +17,13 @@ def test_bands_keep_colour():
 def test_band_edge_exactly_at_threshold():
     c = create("cel", thresholds=0.75, levels="0.4,0.95")
     I = np.array([(0.75, 0.75, 0.75), (0.75, 0.5, 1.0), (0.7499, 0.7499, 0.7499)], dtype=np.float32)
-    assert np.float32(I[0].sum()) * np.float32(1 / 3) == np.float32(0.75)   # u is exactly the threshold
+    # u is exactly the threshold
+    assert np.float32(I[0].sum()) * np.float32(1 / 3) == np.float32(0.75)
     out = run(c, I)
     np.testing.assert_allclose(out[0], [0.95] * 3, rtol=1e-6)                 # u >= t: upper band
     np.testing.assert_allclose(out[1], I[1] * (0.95 / 0.75), rtol=1e-6)
-    np.testing.assert_allclose(out[2], [0.4] * 3, rtol=1e-6)                  # just below: lower band
+    # just below: lower band
+    np.testing.assert_allclose(out[2], [0.4] * 3, rtol=1e-6)
 
 
 def test_zero_brightness_is_grey_at_first_level():
@@ -37,7 +39,9 @@ def test_unresolved_auto_thresholds_are_evenly_spaced():
     out = run(create("cel", levels="0.4,0.95"), [(0.49,) * 3, (0.5,) * 3])
     np.testing.assert_allclose(out, [(0.4,) * 3, (0.95,) * 3], rtol=1e-6)
     c = create("cel", levels="0.1,0.5,0.9")
-    np.testing.assert_allclose(run(c, [(0.3,) * 3, (0.34,) * 3, (0.67,) * 3])[:, 0], [0.1, 0.5, 0.9], rtol=1e-6)
+    np.testing.assert_allclose(
+        run(c, [(0.3,) * 3, (0.34,) * 3, (0.67,) * 3])[:, 0], [0.1, 0.5, 0.9], rtol=1e-6
+    )
 
 
 def test_unresolved_auto_levels_are_evenly_spaced_in_lightness():
@@ -53,13 +57,16 @@ def test_several_thresholds():
     c = create("cel", thresholds="0.2,0.5", levels="0.1,0.4,0.9")
     u = np.array([0.1, 0.2, 0.35, 0.5, 2.0])
     I = np.stack([u, u, u], axis=1)
-    np.testing.assert_allclose(run(c, I), np.repeat(np.array([0.1, 0.4, 0.4, 0.9, 0.9])[:, None], 3, 1), rtol=1e-6)
+    np.testing.assert_allclose(
+        run(c, I), np.repeat(np.array([0.1, 0.4, 0.4, 0.9, 0.9])[:, None], 3, 1), rtol=1e-6
+    )
 
 
 def test_parameters():
     msg = rejects("cel", "thresholds", "0.5,0.2", levels="0.1,0.2,0.3")
     assert "increase" in msg
-    msg = rejects("cel", "levels", "0.1,0.2,0.3", thresholds="0.5")      # 1 threshold needs 2 levels
+    # 1 threshold needs 2 levels
+    msg = rejects("cel", "levels", "0.1,0.2,0.3", thresholds="0.5")
     assert "expected 2 levels" in msg
     rejects("cel", "levels", "-0.1,0.5")
     rejects("cel", "thresholds", "")

@@ -41,4 +41,6 @@ def test_parameters():
     rejects("color_map", "gradient", "0:#000000")
     rejects("color_map", "gradient", "nopreset")
     rejects_unknown("color_map")
-    assert create("color_map", gradient=[(0, (0, 0, 0)), (2, (1, 1, 1))]).gradient.stops[1][0] == 2.0
+    assert (
+        create("color_map", gradient=[(0, (0, 0, 0)), (2, (1, 1, 1))]).gradient.stops[1][0] == 2.0
+    )

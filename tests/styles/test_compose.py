@@ -1,4 +1,5 @@
-"""Compositions `a+b+...`: one style applying its operands in order, with prefixed parameters and forms."""
+"""Compositions `a+b+...`: one style applying its operands in order, with prefixed parameters and
+forms."""
 import numpy as np
 import pytest
 
@@ -13,20 +14,31 @@ from .support import run
 
 def test_applies_its_operands_in_order():
     I = np.random.default_rng(3).uniform(0, 2, size=(40, 3))
-    comp = create("contrast+gamma", **{"contrast.c": 1.2, "contrast.pivot": 0.3, "gamma.gamma": 2.0})
+    comp = create(
+        "contrast+gamma", **{"contrast.c": 1.2, "contrast.pivot": 0.3, "gamma.gamma": 2.0}
+    )
     contrast = 1.2 * (I - 0.3) + 0.3
     np.testing.assert_allclose(run(comp, I), np.maximum(contrast, 0) ** 0.5, rtol=2e-6, atol=1e-6)
     # the other order is another function
-    other = create("gamma+contrast", **{"contrast.c": 1.2, "contrast.pivot": 0.3, "gamma.gamma": 2.0})
+    other = create(
+        "gamma+contrast", **{"contrast.c": 1.2, "contrast.pivot": 0.3, "gamma.gamma": 2.0}
+    )
     np.testing.assert_allclose(run(other, I), 1.2 * (I ** 0.5 - 0.3) + 0.3, rtol=2e-6, atol=1e-6)
 
 
 def test_parameters_are_the_operands_under_their_names():
     cls = style_class("contrast+sepia")
-    assert [p.name for p in cls.params] == ["contrast.c", "contrast.pivot", "contrast.exposure", "sepia.gradient"]
+    assert [p.name for p in cls.params] == [
+        "contrast.c",
+        "contrast.pivot",
+        "contrast.exposure",
+        "sepia.gradient",
+    ]
     comp = create("contrast+sepia", **{"contrast.c": "2"})
     assert comp.operands[0].c == 2.0 and comp.operands[0].pivot == style_class("contrast")().pivot
-    assert comp.describe().startswith("contrast+sepia(contrast.c=2, contrast.pivot=0.5, contrast.exposure=auto, sepia.gradient=")
+    assert comp.describe().startswith(
+        "contrast+sepia(contrast.c=2, contrast.pivot=0.5, contrast.exposure=auto, sepia.gradient="
+    )
     assert style_class("contrast+sepia") is cls  # one class per spelling
     assert "contrast+sepia" not in style_names()  # compositions are spelled, not registered
 
@@ -61,18 +73,30 @@ def test_bad_compositions_are_one_line(name, message):
 
 
 def test_bad_operand_parameter_names_both():
-    with pytest.raises(StyleError, match="bad value -1.0 for parameter 'contrast.c'|bad value -1 for parameter 'c'"):
+    with pytest.raises(
+        StyleError, match="bad value -1.0 for parameter 'contrast.c'|bad value -1 for parameter 'c'"
+    ):
         create("contrast+sepia", **{"contrast.c": -1.0})
     with pytest.raises(StyleError, match="unknown parameter 'c' for style 'contrast\\+sepia'"):
         create("contrast+sepia", c=1.0)
 
 
 def test_settings_accept_prefixed_parameters():
-    s = settings.parse({"style": "contrast+sepia", "contrast.c": "1.6", "estimator": "combined", "inner_samples": 1})
+    s = settings.parse(
+        {
+            "style": "contrast+sepia",
+            "contrast.c": "1.6",
+            "estimator": "combined",
+            "inner_samples": 1,
+        }
+    )
     assert s.style.operands[0].c == 1.6 and s.slot.estimator == "combined"
 
 
 def test_a_closed_form_first_operand_makes_a_closed_form_composite():
-    assert style_class("gooch+contrast").default_inner == 0  # contrast acts on gooch's colour, not on radiance
+    # contrast acts on gooch's colour, not on radiance
+    assert style_class("gooch+contrast").default_inner == 0
     assert style_class("contrast+gooch").default_inner == style_class("contrast").default_inner
-    assert style_class("cel+gamma").default_inner == max(style_class("cel").default_inner, style_class("gamma").default_inner)
+    assert style_class("cel+gamma").default_inner == max(
+        style_class("cel").default_inner, style_class("gamma").default_inner
+    )

@@ -18,7 +18,9 @@ def test_series_form_matches_the_curve():
     style = create("exp_tone", exposure=1.5)
     form = style.form()
     I = np.linspace(0, 3, 7)
-    np.testing.assert_allclose(form.scale * form.series.function(I) + form.offset, 1 - np.exp(-1.5 * I), rtol=1e-12)
+    np.testing.assert_allclose(
+        form.scale * form.series.function(I) + form.offset, 1 - np.exp(-1.5 * I), rtol=1e-12
+    )
 
 
 def test_parameters():

@@ -1,9 +1,9 @@
 import itertools
 import math
 
-import mitsuba as mi
 import numpy as np
 
+from styletrace.gate import mi
 from styletrace.styles import create
 from styletrace.styles.halftone import dot_radius, halftone_mask
 
@@ -46,7 +46,8 @@ def test_apply_hand_values():
     p = [(0.1, 0.1, 0.1), (2.3, 0.0, 0.0), (2.6, 0.0, 0.0), (1.0, 1.0, 1.0), (0.5, 0.5, 0.45)]
     I = [(0.05,) * 3, (0.475,) * 3, (0.475,) * 3, (0.9,) * 3, (0.0,) * 3]
     out = run(h, I, vertex(p=p))
-    # |(2.3,0,0)-(2,0,0)| = 0.3 < 0.433; |(2.6,0,0)-(3,0,0)| = 0.4 < 0.433; corner-ish point: 0.835 < 0.866
+    # |(2.3,0,0)-(2,0,0)| = 0.3 < 0.433; |(2.6,0,0)-(3,0,0)| = 0.4 < 0.433; corner-ish point: 0.835
+    # < 0.866
     np.testing.assert_allclose(out, [dark, dark, dark, light, dark], atol=1e-6)
     out = run(h, [(0.475,) * 3], vertex(p=[(2.45, 0, 0)]))          # 0.45 > 0.433
     np.testing.assert_allclose(out[0], light, atol=1e-6)
@@ -54,8 +55,13 @@ def test_apply_hand_values():
 
 def test_parameters_and_defaults():
     h = create("halftone")
-    # spacing is auto: a screen grid spacing_px = 8 pixels apart, radius up to 0.75 of half its diagonal
-    assert h.spacing is None and h.spacing_px == 8 and math.isclose(h.r_max, 0.75 * 0.5 * math.sqrt(2) * 8)
+    # spacing is auto: a screen grid spacing_px = 8 pixels apart, radius up to 0.75 of half its
+    # diagonal
+    assert (
+        h.spacing is None
+        and h.spacing_px == 8
+        and math.isclose(h.r_max, 0.75 * 0.5 * math.sqrt(2) * 8)
+    )
     assert math.isclose(create("halftone", spacing=0.05).r_max, 0.75 * 0.5 * math.sqrt(3) * 0.05)
     rejects("halftone", "spacing", -1.0)
     rejects("halftone", "max_radius_fraction", 0.0)

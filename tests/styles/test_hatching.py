@@ -1,9 +1,9 @@
 import itertools
 
-import mitsuba as mi
 import numpy as np
 import pytest
 
+from styletrace.gate import mi
 from styletrace.styles import create
 from styletrace.styles.hatching import active_sets, hatch_mask, plane_normals
 
@@ -11,8 +11,8 @@ from .support import point, rejects, rejects_unknown, run, vertex
 
 
 def brute_force(p, u, normals, spacing, thickness, u_min, u_max):
-    """Line test by scanning the planes k*spacing near each point, float64; also returns a 'too close
-    to call' flag for points within float32 noise of a slab edge or of a change of m."""
+    """Line test by scanning the planes k*spacing near each point, float64; also returns a 'too
+    close to call' flag for points within float32 noise of a slab edge or of a change of m."""
     sets = len(normals)
     x = 1 - np.clip((u - u_min) / (u_max - u_min), 0, 1)
     m = np.floor(x * sets + 0.5)
@@ -36,7 +36,9 @@ def test_mask_matches_brute_force(sets):
     normals = plane_normals((0.2, -0.3, 0.9), (0, 1, 0), sets, 30.0)
     spacing, thickness = 0.07, 0.025
     got = np.array(hatch_mask(point(p), mi.Float(u), normals, spacing, thickness, 0.05, 0.9))
-    want, amb = brute_force(p.astype(np.float64), u.astype(np.float64), normals, spacing, thickness, 0.05, 0.9)
+    want, amb = brute_force(
+        p.astype(np.float64), u.astype(np.float64), normals, spacing, thickness, 0.05, 0.9
+    )
     assert amb.sum() < N // 50
     np.testing.assert_array_equal(got[~amb], want[~amb])
     assert 0 < want.sum() < N
@@ -51,8 +53,11 @@ def test_plane_normals_contain_view_direction():
         np.testing.assert_allclose(ns @ view, 0.0, atol=1e-12)
         for a, b in itertools.combinations(range(sets), 2):
             c = np.cross(ns[a], ns[b])
-            np.testing.assert_allclose(np.cross(c, view), 0.0, atol=1e-12)   # n_a x n_b parallel to view
-            np.testing.assert_allclose(abs(ns[a] @ ns[b]), abs(np.cos((b - a) * np.pi / sets)), atol=1e-12)
+            # n_a x n_b parallel to view
+            np.testing.assert_allclose(np.cross(c, view), 0.0, atol=1e-12)
+            np.testing.assert_allclose(
+                abs(ns[a] @ ns[b]), abs(np.cos((b - a) * np.pi / sets)), atol=1e-12
+            )
     # up parallel to view still gives a valid frame
     ns = np.array(plane_normals((0, 1, 0), (0, 1, 0), 2, 0.0))
     np.testing.assert_allclose(ns @ np.array([0, 1, 0]), 0.0, atol=1e-12)
@@ -77,9 +82,17 @@ def test_apply_colours_and_thresholds():
 
 
 def test_prepare_reads_camera():
-    scene = mi.load_dict({"type": "scene", "sensor": {
-        "type": "perspective",
-        "to_world": mi.ScalarTransform4f().look_at(origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0])}})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "sensor": {
+                "type": "perspective",
+                "to_world": mi.ScalarTransform4f().look_at(
+                    origin=[0, 0, 5], target=[0, 0, 0], up=[0, 1, 0]
+                ),
+            },
+        }
+    )
     h = create("hatching", sets=3)
     h.prepare(scene)
     np.testing.assert_allclose(h.view, (0, 0, -1), atol=1e-6)
@@ -88,8 +101,14 @@ def test_prepare_reads_camera():
 
 def test_parameters_and_defaults():
     h = create("hatching")
-    # spacing is auto: lines spacing_px = 8 pixels apart, 0.3 * 8 thick; a given spacing is in scene units
-    assert h.sets == 3 and h.spacing is None and h.spacing_px == 8 and abs(h.line_thickness - 2.4) < 1e-12
+    # spacing is auto: lines spacing_px = 8 pixels apart, 0.3 * 8 thick; a given spacing is in scene
+    # units
+    assert (
+        h.sets == 3
+        and h.spacing is None
+        and h.spacing_px == 8
+        and abs(h.line_thickness - 2.4) < 1e-12
+    )
     assert abs(create("hatching", spacing=0.1).line_thickness - 0.03) < 1e-12
     assert abs(create("hatching", spacing_px=20).line_thickness - 6.0) < 1e-12
     msg = rejects("hatching", "thickness", 8.5)          # >= default spacing_px 8

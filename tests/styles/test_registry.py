@@ -6,8 +6,21 @@ from styletrace.styles import Style, StyleError, create, style_class, style_name
 
 from .support import run, vertex
 
-EXPECTED = ["acp", "cel", "color_map", "contrast", "gamma", "gooch", "halftone", "hatching", "identity",
-       "saturation", "sepia", "tie_dye", "xtoon"]
+EXPECTED = [
+    "acp",
+    "cel",
+    "color_map",
+    "contrast",
+    "gamma",
+    "gooch",
+    "halftone",
+    "hatching",
+    "identity",
+    "saturation",
+    "sepia",
+    "tie_dye",
+    "xtoon",
+]
 
 
 ALL = style_names()

@@ -16,8 +16,9 @@ def test_series_form_matches_the_curve():
     """1 - w/(w + I): the reciprocal series of the shifted samples w + X, scaled and offset."""
     form = create("reinhard", white=2.0).form()
     I = np.linspace(0, 5, 11)
-    np.testing.assert_allclose(form.scale * form.series.function(I + form.shift) + form.offset, I / (2 + I),
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        form.scale * form.series.function(I + form.shift) + form.offset, I / (2 + I), rtol=1e-12
+    )
 
 
 def test_parameters():

@@ -30,7 +30,9 @@ def test_hand_values():
 def test_matches_supplement_formula(w):
     rng = np.random.default_rng(1)
     I = rng.uniform(0.0, 3.0, size=(64, 3)).astype(np.float32)
-    np.testing.assert_allclose(run(create("saturation", w=w), I), paper_saturation(I, w), rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(
+        run(create("saturation", w=w), I), paper_saturation(I, w), rtol=1e-5, atol=1e-5
+    )
 
 
 def test_w1_is_grey_and_w0_is_saturated_at_same_brightness():
@@ -42,8 +44,10 @@ def test_w1_is_grey_and_w0_is_saturated_at_same_brightness():
     sat = run(create("saturation", w=0), I)
     np.testing.assert_allclose(sat.min(axis=1), 0.0, atol=1e-6)          # one channel at zero
     np.testing.assert_allclose(sat.mean(axis=1), u, rtol=1e-5)           # same brightness
-    d = I - I.min(axis=1, keepdims=True)                                  # same hue
-    np.testing.assert_allclose(sat * d.sum(axis=1, keepdims=True), d * sat.sum(axis=1, keepdims=True), atol=1e-5)
+    d = I - I.min(axis=1, keepdims=True)  # same hue
+    np.testing.assert_allclose(
+        sat * d.sum(axis=1, keepdims=True), d * sat.sum(axis=1, keepdims=True), atol=1e-5
+    )
 
 
 def test_grey_and_black_inputs_are_returned_grey():

@@ -17,7 +17,9 @@ def test_default_is_linear_ramp_to_sepia_and_extrapolates():
 def test_custom_two_stop_gradient():
     s = create("sepia", gradient="0.2:0.1,0.1,0.1;0.7:0.9,0.5,0.3")
     c0, c1 = np.array([0.1, 0.1, 0.1]), np.array([0.9, 0.5, 0.3])
-    I = np.array([(0.0, 0.0, 0.0), (0.2, 0.2, 0.2), (0.7, 0.7, 0.7), (1.5, 0.3, 0.6), (-0.3, 0.0, 0.0)])
+    I = np.array(
+        [(0.0, 0.0, 0.0), (0.2, 0.2, 0.2), (0.7, 0.7, 0.7), (1.5, 0.3, 0.6), (-0.3, 0.0, 0.0)]
+    )
     u = I.mean(axis=1)
     want = c0 + (c1 - c0) * ((u - 0.2) / 0.5)[:, None]
     np.testing.assert_allclose(run(s, I), want, atol=1e-5)

@@ -15,8 +15,8 @@ def printed(I):
 
 
 def test_hand_values():
-    # r = 0: (1 - cos(2 pi))/2 = 0; r = 0.5: (1 - cos(3 pi))/2 = 1; r = 0.25: (1 - cos(2.5 pi))/2 = 0.5
-    # g = 2/2.15 - 1.13: 2.15 pi (g + 1.13) = 2 pi -> 0; b = -1.29 is below -1, clamps to -1:
+    # r = 0: (1 - cos(2 pi))/2 = 0; r = 0.5: (1 - cos(3 pi))/2 = 1; r = 0.25: (1 - cos(2.5 pi))/2 =
+    # 0.5 g = 2/2.15 - 1.13: 2.15 pi (g + 1.13) = 2 pi -> 0; b = -1.29 is below -1, clamps to -1:
     # (1 - cos(2.3 pi * 0.29))/2
     out = run(create("tie_dye"), [(0.0, 2 / 2.15 - 1.13, -1.29), (0.5, 0.0, 0.0), (0.25, 0.0, 0.0)])
     np.testing.assert_allclose(out[:, 0], [0.0, 1.0, 0.5], atol=1e-6)

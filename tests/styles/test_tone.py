@@ -1,4 +1,5 @@
-"""The tone curve and cel's levels from a brightness distribution (`styles.tone`): equal shares, lightness steps."""
+"""The tone curve and cel's levels from a brightness distribution (`styles.tone`): equal shares,
+lightness steps."""
 import numpy as np
 import pytest
 
@@ -26,7 +27,9 @@ ROOM = np.concatenate([np.random.default_rng(0).lognormal(np.log(0.05), 0.8, 700
 def test_lightness_round_trips():
     y = np.array([0.0, 0.001, 0.008856, 0.18, 0.5, 1.0])
     np.testing.assert_allclose(luminance_of(lightness(y)), y, atol=1e-12)
-    assert lightness(0.18) == pytest.approx(49.5, abs=0.05) and lightness(1.0) == pytest.approx(100.0)
+    assert lightness(0.18) == pytest.approx(49.5, abs=0.05) and lightness(1.0) == pytest.approx(
+        100.0
+    )
 
 
 def test_knots_give_every_level_a_fair_share_where_a_linear_ramp_does_not():
@@ -41,7 +44,9 @@ def test_knots_give_every_level_a_fair_share_where_a_linear_ramp_does_not():
     levels = np.asarray(h.active(u)).astype(int)
     shares = np.bincount(levels, minlength=4) / len(ROOM)
     assert shares.min() > 0.5 * 0.25, shares  # each of the 4 levels at least half its fair share
-    lin = create("hatching", u_min=float(np.quantile(ROOM, 0.05)), u_max=float(np.quantile(ROOM, 0.95)))
+    lin = create(
+        "hatching", u_min=float(np.quantile(ROOM, 0.05)), u_max=float(np.quantile(ROOM, 0.95))
+    )
     shares_lin = np.bincount(np.asarray(lin.active(u)).astype(int), minlength=4) / len(ROOM)
     assert shares_lin.max() > 0.6, shares_lin  # the room falls into the darkest level
 
@@ -58,14 +63,19 @@ def test_cel_levels_are_distinct_and_displayable(bands):
     for values in (ROOM, np.random.default_rng(2).normal(0.5, 0.01, 5000), ROOM * 1e-3):
         levels = band_levels(quantile_of(values), bands)
         lstar = lightness(levels)
-        assert np.all(np.diff(lstar) >= min(MIN_STEP_LSTAR, (LSTAR_RANGE[1] - LSTAR_RANGE[0]) / (bands - 1)) - 1e-6)
+        assert np.all(
+            np.diff(lstar)
+            >= min(MIN_STEP_LSTAR, (LSTAR_RANGE[1] - LSTAR_RANGE[0]) / (bands - 1)) - 1e-6
+        )
         assert LSTAR_RANGE[0] - 1e-6 <= lstar.min() and lstar.max() <= LSTAR_RANGE[1] + 1e-6
 
 
 def test_levels_follow_exposure_not_absolute_brightness():
-    """A scene and the same scene a thousand times dimmer get the same levels (the median is middle grey)."""
-    np.testing.assert_allclose(band_levels(quantile_of(ROOM), 3), band_levels(quantile_of(ROOM * 1e-3), 3),
-                               rtol=1e-9)
+    """A scene and the same scene a thousand times dimmer get the same levels (the median is
+    middle grey)."""
+    np.testing.assert_allclose(
+        band_levels(quantile_of(ROOM), 3), band_levels(quantile_of(ROOM * 1e-3), 3), rtol=1e-9
+    )
 
 
 def test_given_values_win_and_tones_exclude_a_linear_ramp():
