@@ -705,8 +705,8 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
         The slot, its estimator checked against the style.
 
     Raises:
-        SettingsError: an unknown key, a bad estimator or inner count. StyleError: an unknown
-            style, or a bad value of its parameters.
+        SettingsError: an unknown key, a bad estimator or inner count.
+        StyleError: an unknown style, or a bad value of its parameters.
     """
     values = dict(values)
     style_name = str(values.pop("style", DEFAULTS["style"]))

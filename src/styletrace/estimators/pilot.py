@@ -29,7 +29,7 @@ class Pilot:
         n: pilot draws (>= 1).
         lo, hi: clamp bounds on b (finite, lo < hi), or None: unbounded on that side.
         scale: factor on the pilot mean (finite, > 0).
-        spread: 0, or aims b at spread x b* = spread E[x^2] / E[x] where that is larger (finite).
+        spread: 0, or aims b at spread E[x^2] / E[x] where that is larger (finite, >= 0).
 
     Raises:
         ValueError: any of them out of range.

@@ -62,7 +62,7 @@ def composite_class(name: str, lookup) -> type[Style]:
         A new subclass of Composite.
 
     Raises:
-        StyleError: fewer than two operands, a repeated one, a per-sample or composite operand.
+        StyleError: fewer than two operands, or an unknown, repeated, per-sample or composite one.
     """
     ops = [o.strip() for o in name.split(SEPARATOR)]
     if len(ops) < 2 or any(not o for o in ops):
