@@ -111,11 +111,12 @@ def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) 
 
 
 def tone_of(u, knots: Sequence[float]):
-    """F(u) from `tone_knots`' knots on Dr.Jit (or numpy) arrays: 0 at and below the first knot, 1
-    at and above the last, linear in between.
+    """F(u) from `tone_knots`' knots on Dr.Jit arrays: 0 at and below the first knot, 1 at and
+    above the last, linear in between.
 
     Args:
-        u: brightness (mi.Float per lane); knots: u_0 <= ... <= u_K (K >= 1).
+        u: brightness (mi.Float per lane; drjit.clip refuses numpy arrays).
+        knots: u_0 <= ... <= u_K (K >= 1).
 
     Returns:
         F(u) in [0, 1], of u's kind.
