@@ -14,20 +14,20 @@ MODES = ("absorb", "expectation", "lifted")
 class LineSettings:
     """Parsed in `settings.parse` from the `line_*` integrator properties, whose declarations
     (`settings.PROPERTIES`) hold the defaults, bounds and docs: none are repeated here."""
-    width: float                             # pixels, the line's full width
-    samples: int                             # N auxiliary rays per edge
-    depth: int                               # edges 0 .. depth - 1 (1: the camera ray only)
+    width: float            # pixels, the line's full width
+    samples: int            # N auxiliary rays per edge
+    depth: int              # edges 0 .. depth - 1 (1: the camera ray only)
     tests: tuple[str, ...]
     crease: float
     albedo: float
     slope: float
     color: tuple[float, float, float]
-    gradient: tuple | None                   # ((r,g,b), (r,g,b), y0 or None, y1 or None)
+    gradient: tuple | None  # ((r,g,b), (r,g,b), y0 or None, y1 or None)
     objects: tuple[str, ...]
-    mode: str                                # "absorb", "expectation" (LLaT): k stencil pairs, or "lifted"
+    mode: str               # "absorb", "expectation" (LLaT): k stencil pairs, or "lifted"
     k: int
-    types: tuple = ()                        # lifted: the line dictionary (config/line_types.LineType)
-    diffuse: bool = False                    # lifted: auxiliary paths go on through diffuse vertices
+    types: tuple = ()       # lifted: the line dictionary (config/line_types.LineType)
+    diffuse: bool = False   # lifted: auxiliary paths go on through diffuse vertices
 
     def describe(self) -> str:
         if self.mode == "lifted":

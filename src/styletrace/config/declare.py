@@ -20,38 +20,102 @@ from styletrace.errors import SettingsError
 COUNT_MAX = 2 ** 32 - 2
 
 def integer(key: str, raw: Any, low: int, high: int = COUNT_MAX) -> int:
-    """An integer in [low, high] from a number or a string; exact (1.5 and '2.7' are refused, not
-    truncated)."""
+    """An integer in [low, high] from a number or a string, exact: 1.5 and '2.7' are refused.
+
+    Args:
+        key: the setting's name, as the error names it.
+        raw: an int, an integral float or a string; True/False are refused.
+        low, high: the inclusive bounds (high: COUNT_MAX unless given).
+
+    Returns:
+        The integer.
+
+    Raises:
+        SettingsError: not an exact integer, or out of bounds.
+    """
     return Property(key, None, "int", "", low=low, high=high).parse(raw)
 
 
-def number(key: str, raw: Any, low: float, high: float = float("inf"), low_open: bool = False) -> float:
-    """A finite float in [low, high] (or (low, high] with `low_open`) from a number or a string."""
+def number(key: str, raw: Any, low: float, high: float = float("inf"),
+           low_open: bool = False) -> float:
+    """A finite float in [low, high] (or (low, high] with `low_open`) from a number or a string.
+
+    Args:
+        key: the setting's name, as the error names it.
+        raw: a number or a string; True/False are refused.
+        low, high: the bounds (high: unbounded unless given); low_open: exclude `low` itself.
+
+    Returns:
+        The float.
+
+    Raises:
+        SettingsError: not a number, or outside the bounds (NaN always is).
+    """
     return Property(key, None, "float", "", low=low, high=high, low_open=low_open).parse(raw)
 
 
 def parse_names(key: str, raw: Any) -> tuple[str, ...]:
-    """A list of names from 'a,b' or a list/tuple of strings."""
+    """A list of names from 'a,b' or a list/tuple of strings.
+
+    Args:
+        key: the setting's name, as the error names it.
+        raw: 'a,b' (comma-separated) or a list or tuple; names are stripped, empty ones dropped.
+
+    Returns:
+        The names.
+
+    Raises:
+        SettingsError: `raw` is neither a string nor a list or tuple.
+    """
     return Property(key, None, "list", "").parse(raw)
 
 
 def rgb(key: str, raw: Any) -> tuple[float, float, float]:
-    """An RGB colour from 'r,g,b', a list of three numbers, or one grey number."""
+    """An RGB colour from 'r,g,b', a list of three numbers, or one grey number.
+
+    Args:
+        key: the setting's name, as the error names it.
+        raw: 'r,g,b', a sequence of three numbers, or one number (grey); each component >= 0.
+
+    Returns:
+        (r, g, b) floats.
+
+    Raises:
+        SettingsError: not three numbers, or a component below 0.
+    """
     return Property(key, None, "rgb", "").parse(raw)
 
 
 def boolean(key: str, raw: Any) -> bool:
-    """A bool from True/False, 1/0 or the strings 'true'/'false'/'1'/'0' (any case)."""
+    """A bool from True/False, 1/0 or the strings 'true'/'false'/'1'/'0' (any case).
+
+    Args:
+        key: the setting's name, as the error names it.
+        raw: a bool, an int 1/0, or one of those strings (a float is refused).
+
+    Returns:
+        The bool.
+
+    Raises:
+        SettingsError: any other value.
+    """
     return Property(key, None, "bool", "").parse(raw)
 
 
 @dataclass(frozen=True, init=False)
 class Property(Declaration):
     """One integrator property (see the module doc): a `Declaration` with its command-line flag.
-    `kind`: int | float | bool | string | list | rgb | the docs' wording for the few parsed in
-    `settings.parse` (int or list); `low`/`high` bound a number (`low_open`: the low end excluded);
-    `choices`: the strings a `string` accepts. Spellings: bool is true/false/1/0; an int or float is
-    never True/False; an rgb is 'r,g,b' with each value >= 0."""
+    Spellings: bool is true/false/1/0; an int or float is never True/False; an rgb is 'r,g,b' >= 0.
+
+    Args:
+        name, default, doc: the property's name, default value, and its docs' line.
+        kind: int | float | bool | string | list | rgb | the docs' wording for the few parsed in
+            `settings.parse` (int or list).
+        flag, metavar: the `styletrace render` flag, if it has its own, and its value's name.
+        bare: the flag is a switch without a value (`--lines`).
+        low, high: bound a number (None: unbounded); low_open: the low end excluded.
+        choices: the strings a `string` accepts (none: any string).
+    """
 
     flag: str = ""            # the `styletrace render` flag, if it has its own
     metavar: str = ""
@@ -87,7 +151,8 @@ class Property(Declaration):
 
     def bounds(self) -> tuple[float, float]:
         if self.kind == "int":
-            return (-COUNT_MAX if self.low is None else int(self.low), COUNT_MAX if self.high is None else int(self.high))
+            return (-COUNT_MAX if self.low is None else int(self.low),
+                    COUNT_MAX if self.high is None else int(self.high))
         if self.kind == "rgb":
             return (0.0, float("inf"))
         return super().bounds()
@@ -113,7 +178,8 @@ class Property(Declaration):
 
     def convert(self, raw: Any) -> Any:
         if self.kind == "list":
-            parts = raw.split(",") if isinstance(raw, str) else list(raw) if isinstance(raw, (list, tuple)) else None
+            parts = (raw.split(",") if isinstance(raw, str)
+                     else list(raw) if isinstance(raw, (list, tuple)) else None)
             if parts is None:
                 raise self.fail(raw)
             return tuple(str(p).strip() for p in parts if str(p).strip())

@@ -5,7 +5,8 @@ its fixed parameters and a doc line; `styletrace styles` and the docs print this
 check names against it, and `make_estimator` builds the kernel object from it. It mirrors the style
 registry.
 
-    make_estimator(slot, level, vertex).run(draw, carry, uniform, active, like=mi.Color3f) -> (value, carry)
+    est = make_estimator(slot, level, vertex)
+    value, carry = est.run(draw, carry, uniform, active, like=mi.Color3f)
 
 Series and telescoping estimators draw a random number of children per lane; the draws happen inside
 the lane's own loop, so lanes are never widened.
@@ -22,32 +23,27 @@ from styletrace.styles.base import Style
 from styletrace.styles.forms import AffineForm, CompositeForm, PolynomialForm, SeriesForm
 
 #: Highest series term the renderer evaluates. Products of (x - b) over radiance samples with
-#: fireflies
-#: (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is unbiased
-#: for the series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for |I - b| <
-#: b/2).
+#: fireflies (a light hit at 18x the pixel's mean) overflow float32 past ~30 terms; the estimate is
+#: unbiased for the series truncated here, whose remainder is below (|I - b| / b)^24 (< 1e-7 for
+#: |I - b| < b/2).
 SERIES_MAX_TERMS = 24
 
 #: The series with the expansion pass (settings.expansion_pass): b* from the pass changes how the
-#: terms decay
-#: (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation keeps 8
-#: terms always
-#: and continues with probability 0.9 up to 64 terms, evaluated scaled
+#: terms decay (rho^k with rho = cv^2 / (1 + cv^2), close to 1 on firefly pixels), so the truncation
+#: keeps 8 terms always and continues with probability 0.9 up to 64 terms, evaluated scaled
 #: (SeriesEstimator(scaled=True)), whose factors stay within float32 (measured:
 #: benchmarks/gamma_series.py; docs/estimators.md).
 PASS_TRUNCATION = (0.9, 8)
 PASS_MAX_TERMS = 64
 #: b = PASS_B_SCALE x b*: children up to 2 x PASS_B_SCALE x b* stay inside |x - b| < b, where the
-#: series
-#: converges; the pass's b* is low wherever its m children missed a rare bright one, and a child far
-#: beyond 2b
-#: enters every term's products. Measured (32x32, equal time, benchmarks/gamma_series.py's scenes):
-#: scale 1 gave glossy-sphere images with MSE 1e6 (values to -5e5), 2 gave 0.008-0.016, 4 gave 0.03
-#: and 128.
+#: series converges; the pass's b* is low wherever its m children missed a rare bright one, and a
+#: child far beyond 2b enters every term's products. Measured (32x32, equal time,
+#: benchmarks/gamma_series.py's scenes): scale 1 gave glossy-sphere images with MSE 1e6 (values to
+#: -5e5), 2 gave 0.008-0.016, 4 gave 0.03 and 128.
 PASS_B_SCALE = 2.0
 
-#: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a smooth
-#: g)
+#: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a
+#: smooth g)
 ANY_FORM = (AffineForm, SeriesForm, PolynomialForm, CompositeForm)
 FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial",
               CompositeForm: "composite"}
@@ -66,6 +62,14 @@ class EstimatorKind:
     when: Callable | None = None                 # a further condition on the form, if any
 
     def accepts(self, style: Style) -> bool:
+        """Whether this estimator applies to a style.
+
+        Args:
+            style: the style, whose `form()` is tested against `forms` and `when`.
+
+        Returns:
+            True where `forms` is None, or the style's form is one of them and passes `when`.
+        """
         if self.forms is None:
             return True
         form = style.form()
@@ -85,7 +89,18 @@ _REGISTRY: dict[str, EstimatorKind] = {}
 
 
 def estimator(name: str, forms, doc: str, inner: str, when=None, **params: str):
-    """Register the decorated builder `(style, n, vertex) -> Transformed` under `name`."""
+    """Register the decorated builder `(style, n, vertex) -> Transformed` under `name`.
+
+    Args:
+        name: the registry name (a later registration of the name replaces the earlier).
+        forms: the form classes it accepts (`styles.forms`), or None for every style.
+        doc, inner: the docs' line, and what inner_samples n means for it.
+        when: a further condition on the style's form, or None.
+        **params: fixed internals, name -> text, for the docs.
+
+    Returns:
+        The decorator, which registers the builder and returns it unchanged.
+    """
     def deco(build):
         _REGISTRY[name] = EstimatorKind(name, forms, doc, inner, dict(params), build, when)
         return build
@@ -97,6 +112,17 @@ def estimator_names() -> list[str]:
 
 
 def estimator_entry(name: str) -> EstimatorKind:
+    """The registry entry of an estimator.
+
+    Args:
+        name: the estimator's registry name.
+
+    Returns:
+        Its `EstimatorKind`.
+
+    Raises:
+        SettingsError: no estimator of that name (the message lists those available).
+    """
     try:
         return _REGISTRY[name]
     except KeyError:
@@ -109,12 +135,30 @@ def kinds() -> list[EstimatorKind]:
 
 
 def applicable(style: Style) -> list[str]:
-    """Estimator names that apply to `style`."""
+    """Estimator names that apply to `style`.
+
+    Args:
+        style: the style to test (`EstimatorKind.accepts`).
+
+    Returns:
+        The names, in registration order.
+    """
     return [k.name for k in _REGISTRY.values() if k.accepts(style)]
 
 
 def check_estimator(name: str, style: Style) -> str:
-    """`name` if it is an estimator that applies to `style`; a SettingsError otherwise."""
+    """`name` if it is an estimator that applies to `style`.
+
+    Args:
+        name: an estimator's registry name.
+        style: the style it is to estimate.
+
+    Returns:
+        `name`.
+
+    Raises:
+        SettingsError: an unknown estimator, or one that does not apply (naming those that do).
+    """
     if not estimator_entry(name).accepts(style):
         form = style.form()
         what = FORM_NAMES.get(type(form), "no unbiased") + " form"
@@ -129,13 +173,31 @@ def check_estimator(name: str, style: Style) -> str:
 
 class Transformed:
     """An estimator of h(X') with X' = f(X) per sample and the result mapped by scale * value +
-    offset."""
+    offset; `name` and `mean_samples` are the inner estimator's.
+
+    Args:
+        inner: the estimator of h (`estimators.Estimator` or a composite with the same `run`).
+        sample: f, applied to each sample `draw` returns; None: the identity.
+        scale, offset: the map of the inner estimate (floats, or per-channel arrays).
+    """
 
     def __init__(self, inner, sample=None, scale=1.0, offset=0.0):
         self.inner, self.sample, self.scale, self.offset = inner, sample, scale, offset
         self.name, self.mean_samples = inner.name, getattr(inner, "mean_samples", None)
 
     def run(self, draw, carry, uniform, active, like):
+        """One estimate per lane, as `estimators.Estimator.run` (the kernel contract).
+
+        Args:
+            draw: draw(carry[, u]) -> (x, carry), one sample X per lane (f is applied here).
+            carry: the caller's opaque pytree, handed through draw and uniform.
+            uniform: uniform(carry) -> (u, carry), one uniform per lane.
+            active: the lanes that take part (mi.Bool or a numpy bool array), or None for all.
+            like: the type of x (e.g. mi.Color3f; required for Dr.Jit).
+
+        Returns:
+            (value, carry): scale * the inner estimate + offset (0 on inactive lanes), and carry.
+        """
         if self.sample is not None:
             base = draw
 
@@ -151,7 +213,15 @@ class Transformed:
 def check_adaptive(name: str, style: Style, raw) -> None:
     """Adaptive inner counts (`n0:n_max`) only with direct application of a function of expectation:
     the unbiased estimators' guarantee does not survive a data-dependent number of children
-    (docs/adaptive.md)."""
+    (docs/adaptive.md).
+
+    Args:
+        name: the slot's estimator name; style: its style.
+        raw: the `inner_samples` value as given, for the message.
+
+    Raises:
+        SettingsError: an estimator other than direct, or a per-sample style.
+    """
     if name != "direct":
         raise SettingsError(
             f"bad value {raw!r} for 'inner_samples' with estimator '{name}': adaptive counts "
@@ -168,7 +238,17 @@ def check_adaptive(name: str, style: Style, raw) -> None:
 
 def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
     """Direct application with adaptive stopping (`estimators.AdaptiveDirect`), told by the style
-    where its steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`)."""
+    where its steps are (`Style.step_thresholds`) and how curved it is (`Style.curvature`).
+
+    Args:
+        style: the style g; vertex: the `styles.base.Vertex` it is applied at.
+        n0, n_max: the children drawn first, and the most drawn (n0 <= n_max).
+        z: the confidence band in standard errors (`adaptive_z`).
+        bias: the predicted-bias target of smooth styles (`adaptive_bias`).
+
+    Returns:
+        The `estimators.AdaptiveDirect` (not wrapped in `Transformed`).
+    """
     return E.AdaptiveDirect(
         lambda I: style.apply(I, vertex),
         n0,
@@ -180,21 +260,29 @@ def adaptive_direct(style, n0: int, n_max: int, vertex, z: float, bias: float):
     )
 
 
-def make_estimator(slot, level: int, vertex, settings=None, moments=None, emitted=None) -> Transformed:
-    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace
-    time). An adaptive count (`settings.AdaptiveCount`), or error AOVs asked for in `settings`,
-    give `AdaptiveDirect` (its `stats` feed the AOVs); `moments` (the lane's pixel's mean x and
-    x^2 from the expansion pass) at level 0 give the series about that pixel's b*
-    (`series_with_pass`); a fixed count without AOVs takes the registry's builder as before.
-    `emitted`: the vertex's own emission, which the firefly control of direct application leaves
-    out of its cap (`child_mean`)."""
+def make_estimator(slot, level: int, vertex, settings=None, moments=None,
+                   emitted=None) -> Transformed:
+    """The estimator `slot.estimator` for the slot's style at stylized level `level` (trace time).
+
+    Args:
+        slot: the `settings.StyleSlot`; level: the stylized level (0: the first), picks n.
+        vertex: the `styles.base.Vertex` the style is applied at.
+        settings: the parsed `Settings` or None. With direct application, an adaptive count or
+            error AOVs give `AdaptiveDirect` (its `stats` feed the AOVs); `firefly` caps children.
+        moments: (sets, known) of `series_with_pass`, from the expansion pass; used by "series" at
+            level 0 only. emitted: the vertex's own emission, left out of the firefly cap.
+
+    Returns:
+        The estimator; without any of these, the registry's builder's.
+    """
     if moments is not None and level == 0 and slot.estimator == "series":
         return series_with_pass(slot.style, *moments)
     n = slot.n(level)
     n_max = getattr(n, "n_max", None)
     aovs = settings is not None and settings.aovs and level == 0
     if (n_max is not None or aovs) and slot.estimator == "direct" and not slot.style.per_sample:
-        z, bias = (settings.adaptive_z, settings.adaptive_bias) if settings is not None else (2.0, 2e-3)
+        z, bias = ((settings.adaptive_z, settings.adaptive_bias) if settings is not None
+                   else (2.0, 2e-3))
         return Transformed(adaptive_direct(slot.style, int(n), n_max or int(n), vertex, z, bias))
     cap = firefly_cap(settings)
     if cap is not None and slot.estimator == "direct" and not slot.style.per_sample:
@@ -208,13 +296,21 @@ def _capped(g, n: int, cap: tuple[float, float], emitted) -> Transformed:
     are)."""
     if emitted is None:
         return Transformed(E.Direct(g, n, cap=cap))
-    return Transformed(E.Direct(lambda I: g(I + emitted), n, cap=cap), sample=lambda x: x - emitted)
+    return Transformed(E.Direct(lambda I: g(I + emitted), n, cap=cap),
+                       sample=lambda x: x - emitted)
 
 
 def firefly_cap(settings) -> tuple[float, float] | None:
     """(k, floor) of the firefly control for direct application (`estimators.affine.MeanOfN`), or
     None where it is off (firefly 0, no settings, or error AOVs, which describe the paper's
-    estimator). An unresolved floor (no pilot ran) is 0."""
+    estimator). An unresolved floor (no pilot ran) is 0.
+
+    Args:
+        settings: the parsed `Settings` (its `firefly`, `firefly_floor`, `aovs`), or None.
+
+    Returns:
+        (k, floor) as floats, or None.
+    """
     k = getattr(settings, "firefly", 0.0) if settings is not None else 0.0
     if not k or settings.aovs:
         return None
@@ -223,8 +319,18 @@ def firefly_cap(settings) -> tuple[float, float] | None:
 
 def child_mean(slot, level: int, settings=None, emitted=None) -> Transformed:
     """The mean of a slot's n children as direct application computes it (the firefly control
-    included): what an expectation buffer keeps and restyles from (`lookdev.record`)."""
-    cap = firefly_cap(settings) if slot.estimator == "direct" and not slot.style.per_sample else None
+    included): what an expectation buffer keeps and restyles from (`lookdev.record`).
+
+    Args:
+        slot: the `settings.StyleSlot`; level: the stylized level, which picks n.
+        settings: the parsed `Settings` (for `firefly_cap`), or None: no cap.
+        emitted: the vertex's own emission, left out of the cap; None: the children as they are.
+
+    Returns:
+        The estimator of the mean (capped only for direct application of a non-per-sample style).
+    """
+    cap = (firefly_cap(settings) if slot.estimator == "direct" and not slot.style.per_sample
+           else None)
     if cap is None:
         return Transformed(E.Direct(lambda x: x, slot.n(level)))
     return _capped(lambda x: x, slot.n(level), cap, emitted)
@@ -277,11 +383,18 @@ def _series(selection):
 
 
 def series_with_pass(style, sets, known=0.0) -> Transformed:
-    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample X'
-    = gain X + shift = gain known + shift + gain R, the largest over `sets`: the expansion pass's
-    (mean r, mean r^2) of the lane's pixel and of its window, and the lane's own `known` part of
-    every child (its vertex's emission). No pilot children; b floored at the form's pilot_lo and
-    clamped into the series' convergence region as a pilot's b is."""
+    """The series estimator expanded about PASS_B_SCALE x b*, b* = E[X'^2] / E[X'] of the sample
+    X' = gain X + shift = gain known + shift + gain R, the largest over `sets`. No pilot children;
+    b floored at the form's pilot_lo and clamped into the series' convergence region as a pilot's.
+
+    Args:
+        style: a style with a `SeriesForm`.
+        sets: (mean r, mean r^2) pairs of the expansion pass (per lane: its pixel's, its window's).
+        known: the lane's own part of every child, R = X - known (its vertex's emission).
+
+    Returns:
+        The `SeriesEstimator` (iterative, geometric truncation PASS_TRUNCATION), transformed.
+    """
     form = style.form()
     gain = form.gain
     e = known * gain + form.shift
@@ -361,7 +474,8 @@ def _operand(form, n: int):
     if isinstance(form, AffineForm):
         return E.Affine(form.a1, form.a0, n=1)
     if isinstance(form, SeriesForm):
-        est = E.SeriesEstimator(form.series, b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
+        est = E.SeriesEstimator(form.series,
+                                b=E.Pilot(n, lo=form.pilot_lo, scale=form.pilot_scale),
                                 selection="iterative", max_terms=SERIES_MAX_TERMS)
         if form.shift or form.gain != 1.0:
             est = E.Compose(est, E.Affine(form.gain, form.shift, n=1))
@@ -369,7 +483,8 @@ def _operand(form, n: int):
             est = E.Compose(E.Affine(form.scale, form.offset, n=1), est)
         return est
     if isinstance(form, PolynomialForm):
-        return E.Compose(E.PolynomialNaive(form.fit, b=E.Pilot(n)), E.Direct(_clamp_sample(form), 1))
+        return E.Compose(E.PolynomialNaive(form.fit, b=E.Pilot(n)),
+                         E.Direct(_clamp_sample(form), 1))
     raise AssertionError(f"no operand estimator for {form!r}")
 
 

@@ -18,8 +18,8 @@ from styletrace.errors import SettingsError
 
 MEASUREMENTS = ("shape_id", "material_id", "depth", "normal")
 STENCILS = ("disk", "square")
-#: slope thresholds per pixel where the entry names none (ids fire on any difference: the value is
-#: unused)
+#: slope thresholds per pixel where the entry names none (ids fire on any difference: the value
+#: is unused)
 DEFAULT_THRESHOLD = {"shape_id": 0.5, "material_id": 0.5, "depth": 0.1, "normal": 0.3}
 FIELDS = ("threshold", "stencil", "radius", "count", "color")
 
@@ -37,8 +37,19 @@ class LineType:
 
 
 def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tuple[LineType, ...]:
-    """`line_types` (module doc) with the line group's width (pixels), sample count and colour as
-    the defaults of radius, count and colour. One-line `SettingsError` on a bad entry."""
+    """`line_types` (module doc) parsed, the line group's settings giving the fields' defaults.
+
+    Args:
+        raw: the `line_types` string, entries split by ';' (None or empty: one shape_id type).
+        width: the line width in pixels; an entry's radius defaults to width / 2.
+        samples: the default `count`; color: the default `color`, (r, g, b).
+
+    Returns:
+        One LineType per entry, in priority order (the first fires first).
+
+    Raises:
+        SettingsError: not a string, or a bad measurement, field, stencil or value (one line).
+    """
     text = "" if raw is None else raw
     if not isinstance(text, str):
         raise SettingsError(f"bad value {raw!r} for 'line_types': expected a string like "
@@ -95,7 +106,14 @@ def parse_line_types(raw: Any, width: float, samples: int, color: tuple) -> tupl
 def without_colours(raw: str) -> str:
     """`line_types` with every entry's own `color=` field dropped, the rest as given: each type then
     takes the line group's colour (the Blender add-on's line mask renders the lines once black and
-    once white)."""
+    once white).
+
+    Args:
+        raw: a `line_types` string (not checked here).
+
+    Returns:
+        The entries without their `color=` words, joined by '; ' (empty entries dropped).
+    """
     return "; ".join(" ".join(w for w in entry.split() if w.partition("=")[0] != "color")
                      for entry in raw.split(";") if entry.strip())
 

@@ -1,14 +1,14 @@
-"""The `stylized` integrator's settings: their names, defaults, parsing, docs and refinement, in one
-place.
+"""The `stylized` integrator's settings: names, defaults, parsing, docs, refinement, in one place.
 
 Every front end goes through here: Mitsuba properties (XML, dicts), the command line's flags and
 `--set`, and the Python API's keywords. A mapping of property values is parsed once into `Settings`;
 bad values raise `SettingsError` (or `StyleError` for the style's own parameters) with one line.
-The integrator's property table in docs/python.md is generated from `PROPERTIES`, whose entries
-(`declare.Property`) declare each property once: type, default, bounds, choices, doc line and flag.
+The property table in docs/python.md is generated from `PROPERTIES`, which declares each property
+once (`declare.Property`: type, default, bounds, choices, doc line and flag).
 
-    settings = parse({"style": "cel", "inner_samples": "8,4", "stylize": "first_n_hits", "stylize_depth": 2})
-    values = refine(scene_integrator.values, {"inner_samples": 16})   # a scene's own integrator, refined
+    settings = parse({"style": "cel", "inner_samples": "8,4", "stylize": "first_n_hits",
+                      "stylize_depth": 2})
+    values = refine_values(scene_integrator.values, {"inner_samples": 16})  # a scene's, refined
 """
 from __future__ import annotations
 
@@ -62,9 +62,8 @@ EXPANSION_ESTIMATORS = ("series",)
 #: Largest pixel window half-size for reuse=pixels (a 17 x 17 window).
 MAX_REUSE_RADIUS = 8
 #: Most neighbours a pool holds: the kernel keeps a pool as one bit per neighbour (and one for the
-#: vertex
-#: itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density sums
-#: K+1 terms).
+#: vertex itself) in a UInt64, and the cost grows as (K+1)^2 (every pooled sample's mixture density
+#: sums K+1 terms).
 MAX_REUSE_K = 63
 
 PROPERTIES = (
@@ -124,7 +123,8 @@ PROPERTIES = (
         "estimator",
         "direct",
         "string",
-        "how g(E[L]) is estimated from the children: " + ", ".join(estimator_registry.estimator_names()),
+        "how g(E[L]) is estimated from the children: "
+        + ", ".join(estimator_registry.estimator_names()),
         "--estimator",
         "NAME",
     ),
@@ -398,7 +398,17 @@ DEFAULTS = {p.name: p.default for p in PROPERTIES}
 
 def declare(prop: Property) -> Property:
     """Add an integrator property: its flag, docs row, parsing and `Settings` attribute follow
-    (declare.py)."""
+    (declare.py); `parse` puts its value in `Settings.extra`, read as an attribute.
+
+    Args:
+        prop: the new property's declaration.
+
+    Returns:
+        `prop`.
+
+    Raises:
+        ValueError: a property of that name is declared already.
+    """
     global PROPERTIES
     if prop.name in DEFAULTS:
         raise ValueError(f"integrator property {prop.name!r} is declared already")
@@ -409,7 +419,18 @@ def declare(prop: Property) -> Property:
 
 def value(key: str, values: Mapping[str, Any]) -> Any:
     """The value of property `key` in `values` (else its default), parsed as its declaration
-    says."""
+    says.
+
+    Args:
+        key: a declared property's name (`PROPERTIES`).
+        values: property name -> raw value (CLI strings, Mitsuba properties or Python values).
+
+    Returns:
+        The parsed value; None where the value and the default are both None (auto).
+
+    Raises:
+        SettingsError: the value is not what the declaration allows.
+    """
     prop = next(p for p in PROPERTIES if p.name == key)
     raw = values.get(key, prop.default)
     return None if raw is None and prop.default is None else prop.parse(raw)
@@ -420,20 +441,23 @@ SLOT_KEYS = ("style", "inner_samples", "estimator")
 #: properties Mitsuba's SamplingIntegrator reads itself
 BASE_KEYS = ("samples_per_pass", "timeout")
 #: Most stylized levels for first_n_hits/first_object_hit. Each level's loop is traced inside the
-#: draw of
-#: the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body twice,
-#: the trace time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces with
-#: the flag off (`integrator.tracing`) and the trace time grows linearly (BENCHMARKS.md, recursion
-#: depth;
-#: tests/kernel/test_recursion_depth.py). 16 levels of one child each already make a path of 16
-#: stylized vertices; the cap keeps the kernel and Python's recursion (1000 levels overflow it)
-#: bounded.
+#: draw of the one above; with Dr.Jit's JitFlag.OptimizeLoops, which traces a symbolic loop's body
+#: twice, the trace time doubled per level (52 s at 12 levels), so the cap was 8. styletrace traces
+#: with the flag off (`integrator.tracing`) and the trace time grows linearly (BENCHMARKS.md,
+#: recursion depth; tests/kernel/test_recursion_depth.py). 16 levels of one child each already make
+#: a path of 16 stylized vertices; the cap keeps the kernel and Python's recursion (1000 levels
+#: overflow it) bounded.
 MAX_STYLIZE_DEPTH = 16
 
 
 class AdaptiveCount(int):
     """An adaptive inner count `n0:n_max`: an int equal to n0 (what code that wants one count sees),
-    with n_max."""
+    with n_max.
+
+    Args:
+        n0: the children every estimate draws first.
+        n_max: the most children an estimate may draw (>= n0; `parse_inner` checks it).
+    """
 
     def __new__(cls, n0: int, n_max: int):
         out = super().__new__(cls, n0)
@@ -446,13 +470,22 @@ class AdaptiveCount(int):
     __str__ = __repr__
 
     def __eq__(self, other):
-        return isinstance(other, AdaptiveCount) and (int(self), self.n_max) == (int(other), other.n_max)
+        return (isinstance(other, AdaptiveCount)
+                and (int(self), self.n_max) == (int(other), other.n_max))
 
     def __hash__(self):
         return hash((int(self), self.n_max))
 
 
 def adaptive(inner: tuple[int, ...]) -> bool:
+    """Whether any level's inner count is adaptive.
+
+    Args:
+        inner: the inner counts, one per stylized level (`StyleSlot.inner`).
+
+    Returns:
+        True where one of them is an `AdaptiveCount`.
+    """
     return any(isinstance(n, AdaptiveCount) for n in inner)
 
 
@@ -466,6 +499,14 @@ class StyleSlot:
     estimator: str = "direct"
 
     def n(self, level: int) -> int:
+        """The inner count at a stylized level.
+
+        Args:
+            level: the stylized level, 0 for the first; past the last count, the last applies.
+
+        Returns:
+            The count (an `AdaptiveCount` where it is adaptive).
+        """
         return self.inner[min(level, len(self.inner) - 1)]
 
 
@@ -492,8 +533,8 @@ class Settings:
     reuse_h: float
     reuse_k2: int
     expansion_pass: int
-    #: declared properties that no field above holds (`declare`): parsed by their declaration, read
-    #: as attributes
+    #: declared properties that no field above holds (`declare`): parsed by their declaration,
+    #: read as attributes
     extra: Mapping[str, Any] = field(default_factory=dict)
 
     def __getattr__(self, name: str) -> Any:
@@ -542,7 +583,18 @@ GROUPED = frozenset(
 )
 
 def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
-    """The `line_*` properties: None where `lines` is off (then the others are still checked)."""
+    """The `line_*` properties: None where `lines` is off (then the others are still checked).
+
+    Args:
+        values: property name -> raw value; missing names take DEFAULTS.
+
+    Returns:
+        The parsed line group, or None where `lines` is off.
+
+    Raises:
+        SettingsError: a bad value, no test with lines on, line_gradient with line_mode lifted,
+            or line_types without it.
+    """
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
     on = boolean("lines", get_("lines"))
     tests = parse_names("line_tests", get_("line_tests"))
@@ -600,7 +652,18 @@ def parse_lines(values: Mapping[str, Any]) -> LineSettings | None:
 
 def parse_inner(raw: Any, default: int) -> tuple[int, ...]:
     """`inner_samples`: one count, or one per stylized level ('8,4', [8, 4] or (8, 4)); a count
-    `n0:n_max` (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'."""
+    `n0:n_max` (a string) is adaptive (`AdaptiveCount`), e.g. '4:64' or '4:64,2:8'.
+
+    Args:
+        raw: the property's value: None, a count, a string (',' or ';' between levels) or a list.
+        default: the count where `raw` is None (the style's own).
+
+    Returns:
+        The counts, each >= 1.
+
+    Raises:
+        SettingsError: no count, a count not an integer >= 1, or an adaptive n_max < n0.
+    """
     if raw is None:
         return (default,)
     if isinstance(raw, str):
@@ -632,8 +695,19 @@ def _count(part: Any) -> int:
 
 def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrator",
                extra_keys: tuple[str, ...] = ()) -> StyleSlot:
-    """A style, its parameters, inner_samples and estimator from a flat mapping; unknown keys are
-    errors."""
+    """A style, its parameters, inner_samples and estimator from a flat mapping.
+
+    Args:
+        values: property name -> raw value (style, its parameters, inner_samples, estimator).
+        context: who reads them, for the errors; extra_keys: names allowed besides the slot's.
+
+    Returns:
+        The slot, its estimator checked against the style.
+
+    Raises:
+        SettingsError: an unknown key, a bad estimator or inner count.
+        StyleError: an unknown style, or a bad value of its parameters.
+    """
     values = dict(values)
     style_name = str(values.pop("style", DEFAULTS["style"]))
     cls = style_class(style_name)
@@ -648,7 +722,8 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
     style = create(style_name, **style_values)
     inner = parse_inner(values.get("inner_samples"), max(style.default_inner, 1))
     name = str(values.get("estimator", DEFAULTS["estimator"]))
-    slot = StyleSlot(style=style, inner=inner, estimator=estimator_registry.check_estimator(name, style))
+    slot = StyleSlot(style=style, inner=inner,
+                     estimator=estimator_registry.check_estimator(name, style))
     if adaptive(inner):
         estimator_registry.check_adaptive(name, style, values.get("inner_samples"))
     return slot
@@ -656,7 +731,18 @@ def parse_slot(values: Mapping[str, Any], context: str = "the stylized integrato
 
 def parse(values: Mapping[str, Any]) -> Settings:
     """Validated integrator settings from a flat name -> value mapping (property values, CLI strings
-    or Python values); missing names take DEFAULTS."""
+    or Python values); missing names take DEFAULTS.
+
+    Args:
+        values: property name -> raw value; `samples_per_pass` is refused (styletrace sets passes).
+
+    Returns:
+        The settings, every field filled.
+
+    Raises:
+        SettingsError: a bad value, or values that do not go together.
+        StyleError: an unknown style, or a bad value of its parameters.
+    """
     if "samples_per_pass" in values:
         raise SettingsError(
             f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
@@ -679,7 +765,8 @@ def parse(values: Mapping[str, Any]) -> Settings:
             f"styles come from 'styled' BSDFs, so the integrator's own style must be identity"
         )
     if len(slot.inner) not in (1, depth):
-        expected = "1 count (one stylized level)" if depth == 1 else f"1 or {depth} counts (one per stylized level)"
+        expected = ("1 count (one stylized level)" if depth == 1
+                    else f"1 or {depth} counts (one per stylized level)")
         raise SettingsError(f"bad value {values.get('inner_samples')!r} for 'inner_samples': "
                             f"expected {expected}")
     max_depth = integer("max_depth", get_("max_depth"), -1)
@@ -688,7 +775,8 @@ def parse(values: Mapping[str, Any]) -> Settings:
                             f"[1, {COUNT_MAX}]")
     rr_depth, lights = value("rr_depth", values), value("emitter_sampling", values)
     hide = value("hide_emitters", values)
-    z, target, aovs = value("adaptive_z", values), value("adaptive_bias", values), value("aovs", values)
+    z, target, aovs = (value("adaptive_z", values), value("adaptive_bias", values),
+                       value("aovs", values))
     if aovs and slot.estimator != "direct":
         raise SettingsError(
             f"bad value True for 'aovs' with estimator '{slot.estimator}': the error AOVs "
@@ -735,25 +823,51 @@ def parse(values: Mapping[str, Any]) -> Settings:
 
 def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:
     """`expansion_pass`: 0 (off) or the children per pixel of the pre-pass, for the series estimator
-    only."""
+    only.
+
+    Args:
+        values: property name -> raw value.
+        slot: the parsed style slot, whose estimator the pass must serve.
+
+    Returns:
+        m, in [0, MAX_EXPANSION_PASS].
+
+    Raises:
+        SettingsError: a bad value, or m > 0 with an estimator other than EXPANSION_ESTIMATORS.
+    """
     m = value("expansion_pass", values)
     if m and slot.estimator not in EXPANSION_ESTIMATORS:
         raise SettingsError(
             f"bad value {m} for 'expansion_pass' with estimator '{slot.estimator}': the pass gives "
             f"the expansion point of estimator {', '.join(EXPANSION_ESTIMATORS)} only; use 0"
         )
-    return m  # reuse=pixels takes estimator direct only (check_reusable), so it never meets the pass
+    # reuse=pixels takes estimator direct only (check_reusable), so it never meets the pass
+    return m
 
 
-def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tuple[str, int, int, str]:
+def parse_reuse(values: Mapping[str, Any], slot: StyleSlot,
+                stylize: str) -> tuple[str, int, int, str]:
     """`reuse`, `reuse_radius`, `reuse_k`, `reuse_mis`; reuse=pixels only where it is
-    implemented."""
+    implemented.
+
+    Args:
+        values: property name -> raw value (names and weights in any case, spaces stripped).
+        slot: the parsed style slot (`check_reusable`); stylize: the parsed `stylize` mode.
+
+    Returns:
+        (mode, radius r, neighbours k <= min((2r+1)^2 - 1, MAX_REUSE_K), weights).
+
+    Raises:
+        SettingsError: a bad value, or reuse=pixels where it is not implemented.
+    """
     mode = str(values.get("reuse", DEFAULTS["reuse"])).strip().lower()
     if mode not in REUSE_MODES:
         raise SettingsError(f"bad value {values.get('reuse')!r} for 'reuse': expected one of "
                             f"{', '.join(REUSE_MODES)}")
-    radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1, MAX_REUSE_RADIUS)
-    k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1, min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
+    radius = integer("reuse_radius", values.get("reuse_radius", DEFAULTS["reuse_radius"]), 1,
+                     MAX_REUSE_RADIUS)
+    k = integer("reuse_k", values.get("reuse_k", DEFAULTS["reuse_k"]), 1,
+                min((2 * radius + 1) ** 2 - 1, MAX_REUSE_K))
     mis = str(values.get("reuse_mis", DEFAULTS["reuse_mis"])).strip().lower()
     if mis not in REUSE_WEIGHTS:
         raise SettingsError(
@@ -772,7 +886,19 @@ def parse_reuse(values: Mapping[str, Any], slot: StyleSlot, stylize: str) -> tup
 
 def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, stylize: str,
                      depth: int) -> tuple[str, float, int]:
-    """`reuse_deep`, `reuse_h`, `reuse_k2`; world-space pooling only at first_n_hits depth 2."""
+    """`reuse_deep`, `reuse_h`, `reuse_k2`; world-space pooling only at first_n_hits depth 2.
+
+    Args:
+        values: property name -> raw value.
+        slot: the parsed style slot (`check_reusable` where reuse_deep is world).
+        reuse, stylize, depth: the parsed `reuse`, `stylize` and `stylize_depth`.
+
+    Returns:
+        (reuse_deep, reuse_h in {0} or [MIN_REUSE_H, 1], reuse_k2).
+
+    Raises:
+        SettingsError: a bad value, or world pooling without reuse=pixels at first_n_hits depth 2.
+    """
     deep = str(values.get("reuse_deep", DEFAULTS["reuse_deep"])).strip().lower()
     if deep not in REUSE_DEEP:
         raise SettingsError(
@@ -797,11 +923,21 @@ def parse_reuse_deep(values: Mapping[str, Any], slot: StyleSlot, reuse: str, sty
     return deep, h, k2
 
 
-def check_reusable(slot: StyleSlot, where: str = "the integrator's "
-                                                 "style", deep: str = "tree") -> None:
+def check_reusable(slot: StyleSlot, where: str = "the integrator's style",
+                   deep: str = "tree") -> None:
     """reuse=pixels estimates g(mean of the pooled samples): direct application, a style of
     expectation (an adaptive count n0:n_max adds a refinement round at the first hit, docs/reuse.md;
-    not with reuse_deep=world, whose first-level children are drawn all at once)."""
+    not with reuse_deep=world, whose first-level children are drawn all at once).
+
+    Args:
+        slot: the style slot to pool for.
+        where: whose slot it is, as the errors say it.
+        deep: the parsed `reuse_deep`; "world" also refuses adaptive counts at levels 0 and 1.
+
+    Raises:
+        SettingsError: a per-sample style, an estimator other than direct, or (world) an adaptive
+            count.
+    """
     if deep == "world":
         for level in (0, 1):
             n = slot.n(level)
@@ -822,8 +958,19 @@ def check_reusable(slot: StyleSlot, where: str = "the integrator's "
 
 
 def refine_values(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[str, Any]:
-    """`base` property values (a scene's own integrator) with `changes` applied; a new style drops the old
-    style's parameters, which belong to it."""
+    """`base` property values (a scene's own integrator) with `changes` applied; a new style drops
+    the old style's parameters, which belong to it.
+
+    Args:
+        base: property name -> raw value, as the scene's integrator has them (not changed).
+        changes: property name -> raw value to set; a `style` other than base's drops its params.
+
+    Returns:
+        A new mapping, not yet parsed.
+
+    Raises:
+        StyleError: base names an unknown style (read only where `changes` sets another style).
+    """
     values = dict(base)
     new_style = changes.get("style")
     if new_style is not None and new_style != values.get("style", DEFAULTS["style"]):
@@ -834,7 +981,14 @@ def refine_values(base: Mapping[str, Any], changes: Mapping[str, Any]) -> dict[s
 
 
 def properties_of(props) -> dict[str, Any]:
-    """mi.Properties -> plain dict (reading marks each entry as used; `parse` validates them)."""
+    """mi.Properties -> plain dict (reading marks each entry as used; `parse` validates them).
+
+    Args:
+        props: a Mitsuba `mi.Properties` (the integrator's or a BSDF's).
+
+    Returns:
+        property name -> value, as Mitsuba holds it.
+    """
     return {key: props[key] for key in props.keys()}
 
 

@@ -20,7 +20,22 @@ __all__ = ["AdaptiveDirect"]
 
 
 class AdaptiveDirect(Estimator):
-    def __init__(self, g, n0: int, n_max: int, thresholds=(), curvature=None, z: float = 2.0, bias: float = 1e-3):
+    """g(<I>_n), n chosen per lane by the stopping rules of the module doc.
+
+    Args:
+        g: callable g(x) -> y, array-generic as for ``Direct``.
+        n0, n_max: 1 <= n0 <= n_max; n0 == n_max is a fixed count that still reports statistics.
+        thresholds: brightnesses where g jumps: numbers or per-lane arrays (+inf: none there).
+        curvature: None (no smooth rule), or (mean, h) -> g''(mean) per channel, h the standard
+            error per lane (on numpy it must not close over per-lane data: lanes are compacted).
+        z: the band's confidence in standard normal deviations; bias: the smooth rule's target.
+
+    Raises:
+        ValueError: g or curvature not callable, bad counts, z or bias not positive and finite.
+    """
+
+    def __init__(self, g, n0: int, n_max: int, thresholds=(), curvature=None, z: float = 2.0,
+                 bias: float = 1e-3):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")
         if curvature is not None and not callable(curvature):
@@ -66,18 +81,42 @@ class AdaptiveDirect(Estimator):
         return state, carry
 
     def mean(self, state):
-        if self.n0 == self.n_max:  # as Direct computes it: a fixed count gives Direct's estimate bit for bit
+        """<I>_n, the mean of the lane's children.
+
+        Args:
+            state: the loop state.
+
+        Returns:
+            The per-lane mean value (like x).
+        """
+        # as Direct computes it: a fixed count gives Direct's estimate bit for bit
+        if self.n0 == self.n_max:
             return state["sum"] * (1.0 / self.n0)
         return state["sum"] / A.maximum(state["count"], 1.0)
 
     def variance(self, state):
-        """Sample variance of the children's brightness (0 below 2 children)."""
+        """Sample variance of the children's brightness (0 below 2 children).
+
+        Args:
+            state: the loop state.
+
+        Returns:
+            s^2 per lane (a per-lane scalar).
+        """
         n = state["count"]
         return A.select(n > 1.5, A.maximum(state["m2_u"], 0.0) / A.maximum(n - 1.0, 1.0), 0.0 * n)
 
     def predicted_bias(self, state, signed: bool):
-        """g''(<I>_n) s^2 / (2n): per-channel magnitudes' largest (the rule) or the channels' signed
-        mean."""
+        """g''(<I>_n) s^2 / (2n), the Eq. 21 prediction (0 without ``curvature``).
+
+        Args:
+            state: the loop state.
+            signed: True: the channels' signed mean (the AOV); False: the largest per-channel
+                magnitude (the stopping rule).
+
+        Returns:
+            A per-lane scalar.
+        """
         n = A.maximum(state["count"], 1.0)
         var = self.variance(state)
         if self.curvature is None:
@@ -90,7 +129,14 @@ class AdaptiveDirect(Estimator):
         """The band's half-width in standard errors at n children: Student's t quantile with n - 1
         degrees of freedom at z's normal confidence (s is estimated from the same few children), by
         its expansion in 1/v (Abramowitz and Stegun 26.7.5, four terms: 3.303 for z = 2, v = 3,
-        where the exact quantile is 3.307), tending to z as n grows."""
+        where the exact quantile is 3.307), tending to z as n grows.
+
+        Args:
+            n: the children per lane (n < 2 is taken as 2).
+
+        Returns:
+            t_(n-1)(z) per lane.
+        """
         z = self.z
         w = 1.0 / A.maximum(n - 1.0, 1.0)
         terms = [(z ** 3 + z) / 4.0, (5 * z ** 5 + 16 * z ** 3 + 3 * z) / 96.0,
@@ -99,6 +145,14 @@ class AdaptiveDirect(Estimator):
         return z + w * (terms[0] + w * (terms[1] + w * (terms[2] + w * terms[3])))
 
     def needs_more(self, state):
+        """Whether a lane's step or smooth rule asks for another child (n0 and n_max aside).
+
+        Args:
+            state: the loop state.
+
+        Returns:
+            A per-lane mask.
+        """
         n = A.maximum(state["count"], 1.0)
         band = self.band_width(n) * A.sqrt(self.variance(state) / n)
         near = state["count"] < 0.0  # all False, as a per-lane mask

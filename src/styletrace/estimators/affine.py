@@ -20,7 +20,18 @@ __all__ = ["Affine", "Mean", "MeanOfN", "apply_linear"]
 
 
 def apply_linear(a1: np.ndarray, x):
-    """a1 x for a scalar, per-channel vector or (C, C) matrix a1; x numpy (..., C) or Dr.Jit."""
+    """a1 x for a scalar, per-channel vector or (C, C) matrix a1.
+
+    Args:
+        a1: a float64 array: 0-D, (C,) per channel, or (C, C) (y = A x, mixing channels).
+        x: numpy (..., C), or a Dr.Jit value (a C-channel one for a matrix).
+
+    Returns:
+        a1 x, of x's kind.
+
+    Raises:
+        ValueError: a matrix whose size is not x's channel count (per-channel: `const_like`'s).
+    """
     if a1.ndim < 2:
         return A.const_like(a1, x) * x if a1.ndim == 1 else float(a1) * x
     C = a1.shape[0]
@@ -40,10 +51,16 @@ class MeanOfN(Estimator):
     """The running mean of n draws (optionally comb-stratified) that Affine and Direct both finish
     from.
 
-    `cap` = (k, floor), or None: the firefly control. The brightest draw (by channel mean) is scaled
-    down to at most k * max(mean brightness of the other n - 1 draws, floor); a lone draw (n = 1)
-    to at most LONE_CAP * floor. Biased (it lowers rare bright draws); docs/look.md says by how
-    much."""
+    Args:
+        n: draws per estimate (>= 1); comb: stratify them (docs/design/comb_stratification.md).
+        cap: (k >= 1, floor >= 0), the firefly control, or None. The brightest draw (by channel
+            mean) is scaled down to at most k * max(mean brightness of the other n - 1, floor); a
+            lone draw to at most LONE_CAP * floor (none if floor is 0). Biased (it lowers rare
+            bright draws); docs/look.md says by how much.
+
+    Raises:
+        ValueError: n not an integer >= 1, or a bad cap.
+    """
 
     #: a lone draw's cap in units of `floor` (the scene's median brightness): Cycles' indirect clamp
     #: of 10 at the exposure that maps the median to middle grey (10 / 0.18)
@@ -54,7 +71,8 @@ class MeanOfN(Estimator):
         self.comb = bool(comb)
         if cap is not None and not (cap[0] >= 1.0 and cap[1] >= 0.0):
             raise ValueError(f"cap must be (k >= 1, floor >= 0), got {cap!r}")
-        self.cap = None if cap is None or (self.n == 1 and cap[1] <= 0.0) else (float(cap[0]), float(cap[1]))
+        self.cap = (None if cap is None or (self.n == 1 and cap[1] <= 0.0)
+                    else (float(cap[0]), float(cap[1])))
 
     def start(self, ctx: Context, carry):
         state = {"sum": ctx.vzero(), "count": ctx.lane(0.0)}
@@ -84,6 +102,14 @@ class MeanOfN(Estimator):
         return state, carry
 
     def mean(self, state):
+        """The mean of the n draws, the brightest one capped where `cap` says.
+
+        Args:
+            state: the loop state after n draws.
+
+        Returns:
+            The per-lane mean value (like x).
+        """
         total = state["sum"]
         if self.cap is not None:
             k, floor = self.cap
@@ -112,6 +138,17 @@ class MeanOfN(Estimator):
 
 
 class Affine(MeanOfN):
+    """a1 <I>_n + a0: unbiased for an affine g (supplement Eqs. S1-S3).
+
+    Args:
+        a1: a scalar, one value per channel (C,), or a (C, C) matrix (y = A x, mixing channels).
+        a0: a scalar or one value per channel.
+        n: draws averaged per estimate (>= 1); comb: stratify them with the comb.
+
+    Raises:
+        ValueError: a1 or a0 of a bad shape or not finite; n not an integer >= 1.
+    """
+
     def __init__(self, a1=1.0, a0=0.0, n: int = 1, comb: bool = False):
         self.a1 = np.asarray(a1, dtype=np.float64)
         self.a0 = np.asarray(a0, dtype=np.float64)
@@ -136,7 +173,17 @@ class Affine(MeanOfN):
 
 
 def Mean(m: int = 1, comb: bool = False) -> Affine:
-    """The mean of m draws (optionally comb-stratified): a gu estimator of I itself."""
+    """The mean of m draws (optionally comb-stratified): a gu estimator of I itself.
+
+    Args:
+        m: draws per estimate (>= 1); comb: stratify them with the comb.
+
+    Returns:
+        Affine(1, 0, m, comb), named "mean(m=...)".
+
+    Raises:
+        ValueError: m not an integer >= 1.
+    """
     est = Affine(1.0, 0.0, n=m, comb=comb)
     est.name = f"mean(m={est.n}{', comb' if comb else ''})"
     return est

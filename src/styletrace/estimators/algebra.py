@@ -84,6 +84,17 @@ class _Sequential(Estimator):
 
 
 class Sum(_Sequential):
+    """<A> + <B> + ...: group-unbiased for gA + gB + ... (Theorem 4.1).
+
+    Args:
+        *parts: the estimators summed (at least one).
+        shared: every draw goes to every part that still wants one (cost: the largest part's; no
+            comb-stratified parts); False: the parts draw in turn (all or none use a comb).
+
+    Raises:
+        ValueError: no parts, a part not an Estimator, or comb use that does not fit `shared`.
+    """
+
     def __init__(self, *parts, shared: bool = True):
         self.parts = _check_parts(parts, "Sum")
         self.shared = bool(shared)
@@ -91,7 +102,8 @@ class Sum(_Sequential):
             raise ValueError("a shared Sum cannot hold comb-stratified parts; use shared=False")
         if not self.shared:
             self._check_comb()
-        self.name = ("sum(" if self.shared else "sum-unshared(") + ", ".join(p.name for p in self.parts) + ")"
+        self.name = (("sum(" if self.shared else "sum-unshared(")
+                     + ", ".join(p.name for p in self.parts) + ")")
 
     def feed(self, ctx, state, x, mask, carry):
         if not self.shared:
@@ -127,6 +139,15 @@ class Sum(_Sequential):
 
 
 class Product(_Sequential):
+    """<A> <B> ...: group-unbiased for gA gB ..., the factors drawing independent groups in turn.
+
+    Args:
+        *factors: the estimators multiplied (at least one; all or none use a comb).
+
+    Raises:
+        ValueError: no factors, a factor not an Estimator, or only some using a comb.
+    """
+
     def __init__(self, *factors):
         self.parts = _check_parts(factors, "Product")
         self._check_comb()
@@ -146,6 +167,16 @@ class Product(_Sequential):
 
 
 class Compose(Estimator):
+    """gA(gB(I)): each sample the outer estimator takes is a fresh estimate of the inner one.
+
+    Args:
+        outer: the estimator of gA (it cannot use a comb: it receives estimates, not draws).
+        inner: the estimator of gB, which consumes the draws.
+
+    Raises:
+        ValueError: either is not an Estimator, or the outer one uses a comb.
+    """
+
     def __init__(self, outer: Estimator, inner: Estimator):
         _check_parts((outer, inner), "Compose")
         if outer.uses_comb:
@@ -211,7 +242,15 @@ class Compose(Estimator):
 
 
 def inner_mean(estimator: Estimator, m: int, comb: bool = False) -> Compose:
-    """Feed `estimator` means of m draws (comb-stratified if asked) instead of single draws."""
+    """Feed `estimator` means of m draws (comb-stratified if asked) instead of single draws.
+
+    Args:
+        estimator: the outer estimator.
+        m: draws per inner mean (>= 1); comb: stratify them with the comb.
+
+    Returns:
+        Compose(estimator, Mean(m, comb)).
+    """
     return Compose(estimator, Mean(m, comb))
 
 

@@ -60,19 +60,24 @@ def _module_for(dr, backend, diff: bool):
 
 
 def backend_module(like=None):
-    """The Dr.Jit array module to build arrays with (``drjit.llvm``, ``drjit.cuda``, or their
-    ``.ad``).
+    """The Dr.Jit array module to build arrays with (``drjit.llvm``, ``drjit.cuda``, or their .ad).
 
-    ``like`` (a Dr.Jit array type or instance, e.g. ``mitsuba.Color3f``): its own backend and
-    AD-ness. Otherwise the backend of the active Mitsuba variant if Mitsuba is loaded and has one
-    (``.ad`` for ``*_ad_*`` variants), else ``drjit.cuda`` where CUDA works (``jit.prepare_drjit``)
-    and ``drjit.llvm`` otherwise. Imports Dr.Jit if needed (after pointing it at a working libLLVM),
-    never Mitsuba.
+    Args:
+        like: a Dr.Jit array type or instance (e.g. ``mitsuba.Color3f``): its backend and AD-ness.
+            None: a loaded Mitsuba's cuda/llvm variant's (.ad for ``*_ad_*``), else drjit.cuda where
+            CUDA works (``jit.prepare_drjit``) and ``drjit.llvm`` otherwise.
+
+    Returns:
+        The module; Dr.Jit imported if needed (with a working libLLVM), Mitsuba never.
+
+    Raises:
+        TypeError: ``like`` is not a CUDA or LLVM Dr.Jit array type.
     """
     dr = _import_drjit()
     if like is not None:
         tp = like if isinstance(like, type) else type(like)
-        if not issubclass(tp, dr.ArrayBase) or dr.backend_v(tp) not in (dr.JitBackend.CUDA, dr.JitBackend.LLVM):
+        if (not issubclass(tp, dr.ArrayBase)
+                or dr.backend_v(tp) not in (dr.JitBackend.CUDA, dr.JitBackend.LLVM)):
             raise TypeError(f"backend_module: {tp.__name__} is not a JIT (CUDA or LLVM) Dr.Jit "
                             "array type")
         return _module_for(dr, dr.backend_v(tp), bool(dr.is_diff_v(tp)))
@@ -92,6 +97,14 @@ def backend_module(like=None):
 
 
 def is_drjit(x) -> bool:
+    """Whether x is a Dr.Jit array (False whenever Dr.Jit is not imported).
+
+    Args:
+        x: any value.
+
+    Returns:
+        True for an instance of ``drjit.ArrayBase``.
+    """
     dr = drjit()
     return dr is not None and isinstance(x, dr.ArrayBase)
 
@@ -101,7 +114,14 @@ def _any_drjit(*xs) -> bool:
 
 
 def select(mask, a, b):
-    """Elementwise ``a if mask else b``; a (lanes, 1) numpy mask broadcasts over channels."""
+    """Elementwise ``a if mask else b``; a (lanes, 1) numpy mask broadcasts over channels.
+
+    Args:
+        mask: Dr.Jit Bool or numpy bool array; a, b: the values (Dr.Jit if any operand is).
+
+    Returns:
+        ``drjit.select`` or ``np.where`` of them.
+    """
     if _any_drjit(mask, a, b):
         return drjit().select(mask, a, b)
     return np.where(mask, a, b)
@@ -125,19 +145,43 @@ sin = _unary(np.sin, "sin")
 
 
 def minimum(a, b):
+    """Elementwise minimum.
+
+    Args:
+        a, b: numpy arrays, Dr.Jit arrays or numbers (Dr.Jit if either is).
+
+    Returns:
+        ``drjit.minimum`` or ``np.minimum`` of them.
+    """
     if _any_drjit(a, b):
         return drjit().minimum(a, b)
     return np.minimum(a, b)
 
 
 def maximum(a, b):
+    """Elementwise maximum.
+
+    Args:
+        a, b: numpy arrays, Dr.Jit arrays or numbers (Dr.Jit if either is).
+
+    Returns:
+        ``drjit.maximum`` or ``np.maximum`` of them.
+    """
     if _any_drjit(a, b):
         return drjit().maximum(a, b)
     return np.maximum(a, b)
 
 
 def clip(x, lo, hi):
-    """Clamp x to [lo, hi]; either bound may be None (unbounded)."""
+    """Clamp x to [lo, hi].
+
+    Args:
+        x: the values (numpy or Dr.Jit).
+        lo, hi: the bounds (numbers or arrays); None: unbounded on that side.
+
+    Returns:
+        The clamped values.
+    """
     if lo is not None:
         x = maximum(x, lo)
     if hi is not None:
@@ -146,7 +190,14 @@ def clip(x, lo, hi):
 
 
 def hmax(v):
-    """Largest channel per lane: a per-lane scalar from a value (random decisions are per lane)."""
+    """Largest channel per lane: a per-lane scalar from a value (random decisions are per lane).
+
+    Args:
+        v: a Dr.Jit value (e.g. mi.Color3f) or numpy (lanes, C); other inputs are returned as is.
+
+    Returns:
+        Dr.Jit Float, or numpy (lanes, 1).
+    """
     if is_drjit(v):
         dr = drjit()
         if dr.depth_v(v) > 1:
@@ -161,8 +212,14 @@ def hmax(v):
 
 
 def channel_mean(v):
-    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value (Dr.Jit
-    Float from Color3f/Array3f, numpy (lanes, 1) from (lanes, C))."""
+    """Mean over the channels per lane, (r+g+b)/3 for RGB: a per-lane scalar from a value.
+
+    Args:
+        v: a Dr.Jit value (Color3f/Array3f) or numpy (lanes, C); other inputs are returned as is.
+
+    Returns:
+        Dr.Jit Float, or numpy (lanes, 1).
+    """
     if is_drjit(v):
         dr = drjit()
         if dr.depth_v(v) > 1:
@@ -177,7 +234,18 @@ def channel_mean(v):
 
 
 def const_like(c, x):
-    """Constant c (scalar or one value per channel) in a form that combines elementwise with x."""
+    """Constant c (scalar or one value per channel) in a form that combines elementwise with x.
+
+    Args:
+        c: a number, or a 1-D sequence with one value per channel of x.
+        x: a value of the type to combine with (Dr.Jit array, or numpy with channels last).
+
+    Returns:
+        A float (scalar c), an instance of x's Dr.Jit type, or a numpy (C,) array of x's dtype.
+
+    Raises:
+        ValueError: c is not 0-D or 1-D, or its length is not x's channel count.
+    """
     c = np.asarray(c, dtype=np.float64)
     if c.ndim == 0:
         return float(c)
@@ -202,6 +270,15 @@ def const_like(c, x):
 
 
 def tree_map(fn, *trees):
+    """Apply fn leafwise over pytrees of one structure (dicts, namedtuples, tuples, lists).
+
+    Args:
+        fn: called with the corresponding leaf of every tree.
+        *trees: the pytrees; the first one's structure (dict keys) is followed.
+
+    Returns:
+        A pytree of that structure holding fn's results.
+    """
     t0 = trees[0]
     if isinstance(t0, dict):
         return {k: tree_map(fn, *[t[k] for t in trees]) for k in t0}
@@ -213,9 +290,18 @@ def tree_map(fn, *trees):
 
 
 def tree_select(mask, a, b):
-    """``select`` over two pytrees of the same structure; non-array leaves are taken from a."""
+    """``select`` over two pytrees of the same structure; non-array leaves are taken from a.
+
+    Args:
+        mask: Dr.Jit Bool or numpy bool array, per lane.
+        a, b: the pytrees chosen from where mask is true and false.
+
+    Returns:
+        The selected pytree.
+    """
     def pick(x, y):
-        if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray) or is_drjit(x) or is_drjit(y)):
+        if not (isinstance(x, np.ndarray) or isinstance(y, np.ndarray)
+                or is_drjit(x) or is_drjit(y)):
             return x
         return select(mask, x, y)
     return tree_map(pick, a, b)
@@ -241,8 +327,10 @@ def _put(old_tree, new_tree, idx, lanes):
         if not _lane_leaf(old, lanes) and not _lane_leaf(new, idx.size) and old.shape == new.shape \
                 and np.array_equal(old, new):
             return old  # an unchanged broadcast literal stays a literal
-        trail = np.broadcast_shapes(old.shape[1:] if old.ndim else (), new.shape[1:] if new.ndim else ())
-        if _lane_leaf(old, lanes) and old.shape[1:] == trail and np.can_cast(new.dtype, old.dtype, "safe"):
+        trail = np.broadcast_shapes(old.shape[1:] if old.ndim else (),
+                                    new.shape[1:] if new.ndim else ())
+        if (_lane_leaf(old, lanes) and old.shape[1:] == trail
+                and np.can_cast(new.dtype, old.dtype, "safe")):
             if new is not old:
                 old[idx] = np.broadcast_to(new, (idx.size,) + trail)
             return old
@@ -256,13 +344,20 @@ def _flat_mask(mask):
     return mask.reshape(mask.shape[0], -1)[:, 0]
 
 
-def numpy_while_loop(state: tuple, cond, body, set_lanes=None, max_iterations: int = 10_000_000) -> tuple:
+def numpy_while_loop(state: tuple, cond, body, set_lanes=None,
+                     max_iterations: int = 10_000_000) -> tuple:
     """Masked, lane-compacting emulation of ``drjit.while_loop`` for numpy states.
 
-    As in Dr.Jit, a lane whose condition fails keeps its state and so never runs again; only the
-    lanes still running are gathered for ``cond`` and ``body``. ``set_lanes(k)`` (optional) is told
-    how many lanes those functions see, and the full count afterwards, so that code creating fresh
-    per-lane arrays inside them matches.
+    Args:
+        state, cond, body: as drjit.while_loop's (a tuple of pytrees; cond(*state) -> a per-lane
+            mask, 0-D: a plain loop; body(*state) -> state), called on the running lanes only.
+        set_lanes: told the lanes cond and body see (k), then the full count; max_iterations: cap.
+
+    Returns:
+        The final state; a lane whose condition failed kept its state from then on.
+
+    Raises:
+        RuntimeError: lanes still run after max_iterations.
     """
     def call(fn, args, k, lanes):
         if set_lanes is not None:
@@ -281,7 +376,8 @@ def numpy_while_loop(state: tuple, cond, body, set_lanes=None, max_iterations: i
             mask = np.asarray(cond(*state))
         return state
     lanes = mask.shape[0]
-    state = tree_map(lambda x: np.array(x) if _lane_leaf(x, lanes) else x, state)  # own what we update
+    # own what we update
+    state = tree_map(lambda x: np.array(x) if _lane_leaf(x, lanes) else x, state)
     running = np.flatnonzero(_flat_mask(mask))
     for _ in range(max_iterations):
         if running.size == 0:

@@ -22,12 +22,27 @@ _COMBINATORS: dict = {}
 
 
 def register_combinator(name: str, cls) -> None:
-    """Make ``cls(a, b)`` the estimator that operator ``name`` ("sum": +, "product": *) builds."""
+    """Make ``cls(a, b)`` the estimator that operator ``name`` builds.
+
+    Args:
+        name: "sum" (``a + b``) or "product" (``a * b``).
+        cls: the estimator class, called with the two operands.
+    """
     _COMBINATORS[name] = cls
 
 
 def combinator(name: str):
-    """The estimator class registered for operator ``name`` (see ``register_combinator``)."""
+    """The estimator class registered for operator ``name`` (see ``register_combinator``).
+
+    Args:
+        name: "sum" or "product".
+
+    Returns:
+        The class.
+
+    Raises:
+        RuntimeError: none registered (styletrace.estimators, which imports algebra, not imported).
+    """
     try:
         return _COMBINATORS[name]
     except KeyError:
@@ -36,14 +51,36 @@ def combinator(name: str):
 
 
 def check_count(name: str, value, minimum: int = 1) -> int:
-    """An integer parameter >= minimum, or a ValueError naming it."""
+    """An integer parameter >= minimum, or a ValueError naming it.
+
+    Args:
+        name: the parameter's name, for the message.
+        value: the value (a Python or numpy integer; bool is refused).
+        minimum: the smallest allowed value.
+
+    Returns:
+        The value as an int.
+
+    Raises:
+        ValueError: not an integer, or below minimum.
+    """
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
 
 
 class Context:
-    """Backend-specific helpers for one ``run`` (numpy lanes or a Dr.Jit value type)."""
+    """Backend-specific helpers for one ``run`` (numpy lanes or a Dr.Jit value type); made by
+    ``for_run``.
+
+    Args:
+        backend: "numpy" or "drjit".
+        lanes: numpy: the lane count (``while_loop`` narrows it to the running lanes).
+        like_t: Dr.Jit: the value type (e.g. mi.Color3f); float_t, uint_t, bool_t derive from it.
+        dtype, channels, ndim: numpy: the samples' dtype, channel count C and ndim (1 or 2); None
+            until known (``adopt`` fills them from the first sample).
+        uniform: the caller's uniform(carry) -> (u, carry).
+    """
 
     def __init__(
         self,
@@ -73,7 +110,18 @@ class Context:
     # -- construction ------------------------------------------------------------------------
     @classmethod
     def for_run(cls, like, active, uniform, carry):
-        """Pick the backend from `like` / `active`; numpy may probe `uniform` for the lane count."""
+        """Pick the backend from `like` / `active`; numpy may probe `uniform` for the lane count.
+
+        Args:
+            like, active, uniform, carry: as ``Estimator.run`` takes them.
+
+        Returns:
+            (ctx, carry): the context, and carry (advanced where uniform was probed).
+
+        Raises:
+            ValueError: like is neither a Dr.Jit type nor a numpy array of shape (lanes,) or
+                (lanes, C); Dr.Jit `active` or uniforms without like; lane counts that disagree.
+        """
         dr = A.drjit()
         like_t = like if isinstance(like, type) else (type(like) if like is not None else None)
         if like_t is not None and dr is not None and issubclass(like_t, dr.ArrayBase):
@@ -105,7 +153,8 @@ class Context:
                 raise ValueError("the Dr.Jit backend needs like=<type of the samples draw() "
                                  "returns>")
             lanes = np.asarray(u).shape[0]
-        return cls("numpy", lanes=lanes, dtype=dtype, channels=channels, ndim=ndim, uniform=uniform), carry
+        return cls("numpy", lanes=lanes, dtype=dtype, channels=channels, ndim=ndim,
+                   uniform=uniform), carry
 
     @property
     def is_drjit(self) -> bool:
@@ -113,11 +162,27 @@ class Context:
 
     # -- per-lane scalars, masks, values -------------------------------------------------------
     def lane(self, v: float):
+        """A per-lane scalar holding v.
+
+        Args:
+            v: the number.
+
+        Returns:
+            The Dr.Jit leaf Float, or numpy (lanes, 1).
+        """
         if self.is_drjit:
             return self.float_t(float(v))
         return np.full((self.lanes, 1), float(v))
 
     def mask(self, v: bool):
+        """A per-lane mask holding v.
+
+        Args:
+            v: the bool.
+
+        Returns:
+            The Dr.Jit Bool of the value type, or numpy bool (lanes, 1).
+        """
         if self.is_drjit:
             return self.bool_t(bool(v))
         return np.full((self.lanes, 1), bool(v))
@@ -128,10 +193,22 @@ class Context:
         return np.zeros((self.lanes, 1))
 
     def vconst(self, c):
-        """c (scalar or per-channel) as something that combines with values."""
+        """c (scalar or per-channel) as something that combines with values.
+
+        Args:
+            c: a number, or one per channel (numpy: sets the channel count if none is known yet).
+
+        Returns:
+            A float, a value of like_t, or a numpy (C,) array (``arrays.const_like``).
+
+        Raises:
+            ValueError: c's shape, or its channel count, does not fit the values.
+        """
         c = np.asarray(c, dtype=np.float64)
-        if self.is_drjit or c.ndim != 1:  # scalars, bad shapes and Dr.Jit values: const_like's checks
-            return A.const_like(c, self.like_t(0.0) if self.is_drjit else np.zeros(c.shape[-1:] or (1,)))
+        # scalars, bad shapes and Dr.Jit values: const_like's checks
+        if self.is_drjit or c.ndim != 1:
+            return A.const_like(c, self.like_t(0.0) if self.is_drjit
+                                else np.zeros(c.shape[-1:] or (1,)))
         if self.channels is not None and self.channels != c.shape[0]:
             raise ValueError(f"{c.shape[0]} per-channel constants for samples with {self.channels} "
                              "channel(s)")
@@ -140,18 +217,44 @@ class Context:
 
     def value_array(self, c):
         """A per-lane value holding constant c (state entries must be arrays, never Python
-        floats)."""
+        floats).
+
+        Args:
+            c: a number, or one per channel (as ``vconst``).
+
+        Returns:
+            A like_t value, or numpy (lanes, C).
+        """
         return self.vzero() + self.vconst(c)
 
     # -- randomness and samples -----------------------------------------------------------------
     def uniform(self, carry):
+        """One uniform per lane from the caller's stream.
+
+        Args:
+            carry: the caller's pytree, handed to its uniform(carry).
+
+        Returns:
+            (u, carry): u a Dr.Jit Float, or numpy float64 (lanes, 1).
+        """
         u, carry = self._uniform(carry)
         if not self.is_drjit:
             u = np.asarray(u, dtype=np.float64).reshape(-1, 1)
         return u, carry
 
     def adopt(self, x):
-        """A sample from draw() in the estimators' layout, checked against what we expect."""
+        """A sample from draw() in the estimators' layout, checked against what we expect.
+
+        Args:
+            x: what draw() returned: a Dr.Jit array, or numpy (lanes,) or (lanes, C).
+
+        Returns:
+            x as like_t, or numpy (lanes, C) (the first sample fixes ndim, dtype, channels).
+
+        Raises:
+            ValueError: not a Dr.Jit array where one was promised, a bad shape, or a channel count
+                other than the one expected.
+        """
         if self.is_drjit:
             if not A.is_drjit(x):
                 raise ValueError(f"draw() returned {type(x).__name__}; like={self.like_t.__name__} "
@@ -175,7 +278,14 @@ class Context:
         return x.reshape(x.shape[0], -1)
 
     def user_u(self, u):
-        """The comb's first-dimension uniform in the layout draw() receives."""
+        """The comb's first-dimension uniform in the layout draw() receives.
+
+        Args:
+            u: the per-lane uniform (Dr.Jit Float or numpy (lanes, 1)).
+
+        Returns:
+            u as it is (Dr.Jit), or flattened to numpy (lanes,).
+        """
         return u if self.is_drjit else np.asarray(u).reshape(-1)
 
     # -- tables indexed per lane --------------------------------------------------------------
@@ -186,7 +296,15 @@ class Context:
         return self._tables[key][1]
 
     def lookup(self, table: np.ndarray, k):
-        """table[k] per lane (k a per-lane integer-valued float, clamped into the table)."""
+        """table[k] per lane.
+
+        Args:
+            table: a 1-D table of floats.
+            k: per-lane integer-valued floats, clamped into [0, len(table) - 1].
+
+        Returns:
+            The entries, a Dr.Jit Float (gathered) or numpy float64 of k's shape.
+        """
         n = len(table)
         if self.is_drjit:
             dr = A.drjit()
@@ -196,10 +314,15 @@ class Context:
         return np.asarray(table, dtype=np.float64)[idx]
 
     def count_above(self, survival: np.ndarray, u):
-        """#{k >= 1 : survival[k] > u} for a non-increasing table with survival[0] = 1 > u.
+        """#{k >= 1 : survival[k] > u} for a non-increasing table with survival[0] = 1 > u, by a
+        binary search with a fixed number of steps (the traced kernel has no data-dependent loop).
 
-        A binary search with a fixed number of steps, so the traced kernel has no data-dependent
-        loop.
+        Args:
+            survival: the non-increasing table, survival[0] = 1.
+            u: per-lane uniforms in [0, 1).
+
+        Returns:
+            The count per lane, as an integer-valued per-lane float.
         """
         K = len(survival) - 1
         lo = self.lane(0.0)            # survival[lo] > u holds
@@ -218,11 +341,14 @@ class Context:
 
     def when(self, mask, compute, otherwise):
         """select(mask, compute(), otherwise), skipping the computation on numpy when no lane needs
-        it.
+        it (a traced Dr.Jit kernel evaluates both sides anyway; numpy saves expensive work, like
+        re-expanding a polynomial about a pilot b, on iterations where no lane finished).
 
-        (A traced Dr.Jit kernel evaluates both sides anyway; numpy can save expensive per-estimate
-        work, like re-expanding a polynomial about a pilot b, on the iterations where no lane
-        finished.)
+        Args:
+            mask: per-lane mask; compute: () -> a pytree like `otherwise`; otherwise: a pytree.
+
+        Returns:
+            ``arrays.tree_select(mask, compute(), otherwise)``, or `otherwise` itself.
         """
         if not self.is_drjit and not np.any(mask):
             return otherwise
@@ -230,6 +356,15 @@ class Context:
 
     # -- loops ----------------------------------------------------------------------------------
     def while_loop(self, state: tuple, cond, body) -> tuple:
+        """``drjit.while_loop``, or its numpy emulation (``lanes`` follows the running lanes).
+
+        Args:
+            state: a tuple of pytrees.
+            cond: cond(*state) -> per-lane mask; body: body(*state) -> the new state.
+
+        Returns:
+            The final state, as a tuple.
+        """
         if self.is_drjit:
             return tuple(A.drjit().while_loop(state=tuple(state), cond=cond, body=body))
         def set_lanes(k):
@@ -237,7 +372,15 @@ class Context:
         return A.numpy_while_loop(tuple(state), cond, body, set_lanes)
 
     def finish(self, value, active):
-        """The estimate in the caller's layout: inactive lanes 0, numpy reshaped and cast back."""
+        """The estimate in the caller's layout: inactive lanes 0, numpy reshaped and cast back.
+
+        Args:
+            value: the estimator's value (like_t, or numpy (lanes, C) or broadcastable to it).
+            active: the caller's active lanes, or None for all.
+
+        Returns:
+            A like_t value, or numpy in the samples' shape ((lanes,) or (lanes, C)) and dtype.
+        """
         if self.is_drjit:
             if not isinstance(value, self.like_t):
                 value = self.like_t(value)
@@ -262,22 +405,71 @@ class Estimator:
 
     # -- protocol (overridden) ------------------------------------------------------------------
     def start(self, ctx: Context, carry):
+        """The per-lane state before the first sample.
+
+        Args:
+            ctx: the run's context; carry: the caller's pytree (uniforms may be drawn from it).
+
+        Returns:
+            (state, carry): state a pytree of per-lane arrays (never Python floats).
+        """
         raise NotImplementedError
 
     def wants(self, ctx: Context, state):
+        """Which lanes need another sample.
+
+        Args:
+            ctx: the run's context; state: the current state.
+
+        Returns:
+            A per-lane mask (Dr.Jit Bool or numpy bool (lanes, 1)).
+        """
         raise NotImplementedError
 
     def feed(self, ctx: Context, state, x, mask, carry):
+        """Take one sample into the state.
+
+        Args:
+            ctx: the run's context; state: the current state.
+            x: the sample (``Context.adopt``'s layout); mask: the lanes that wanted it (others keep
+                their state); carry: the caller's pytree.
+
+        Returns:
+            (state, carry) after the sample.
+        """
         raise NotImplementedError
 
     def value(self, ctx: Context, state):
+        """The estimate from the final state.
+
+        Args:
+            ctx: the run's context; state: the state after the loop.
+
+        Returns:
+            The per-lane estimate (like_t, or numpy (lanes, C)).
+        """
         raise NotImplementedError
 
     def next_u(self, ctx: Context, state):
+        """The stratified first dimension of the next draw.
+
+        Args:
+            ctx: the run's context; state: the current state.
+
+        Returns:
+            Per-lane uniforms for draw(carry, u), or None (draw(carry); the default).
+        """
         return None
 
     def exact(self, I):
-        """The function this estimator's expectation equals (for Direct: the target g)."""
+        """The function this estimator's expectation equals (for Direct: the target g).
+
+        Args:
+            I: the expected input, numpy or Dr.Jit.
+
+        Returns:
+            The value the estimates average to at I (numpy or Dr.Jit, as I).
+        """
         raise NotImplementedError
 
     @property
@@ -307,12 +499,18 @@ class Estimator:
 
     # -- the kernel contract ----------------------------------------------------------------------
     def run(self, draw, carry, uniform, active=None, *, like=None):
-        """value, carry = estimator.run(draw, carry, uniform, active=None, like=None)
+        """One estimate per lane: the kernel contract (package docstring).
 
-        Runs one estimate per lane. ``draw`` is called once per loop iteration, inside the loop
-        body only, and only on lanes that still want a sample; when this estimator (or a part of it)
-        uses a stratified comb, it is called as ``draw(carry, u)`` with ``u`` the first primary
-        dimension to use. ``like`` (type or instance of x) is required for Dr.Jit.
+        Args:
+            draw: draw(carry) -> (x, carry), one sample per lane; called once per loop iteration,
+                in the loop body only, on the lanes that still want one. With a stratified comb:
+                draw(carry, u), u the first primary dimension to use.
+            carry: an opaque pytree; uniform: uniform(carry) -> (u, carry), one per lane.
+            active: the lanes that take part (Dr.Jit Bool or numpy bool), None: all.
+            like: the type or an instance of x (e.g. mi.Color3f); required for Dr.Jit.
+
+        Returns:
+            (value, carry): the estimates (0 on inactive lanes), in x's layout; carry after them.
         """
         return self._run(draw, carry, uniform, active, like)
 
@@ -323,7 +521,8 @@ class Estimator:
         if ctx.is_drjit:
             act = active if active is not None else ctx.mask(True)
         else:
-            act = np.ones((ctx.lanes, 1), bool) if active is None else np.asarray(active, bool).reshape(-1, 1)
+            act = (np.ones((ctx.lanes, 1), bool) if active is None
+                   else np.asarray(active, bool).reshape(-1, 1))
         state, carry = self.start(ctx, carry)
 
         def cond(state, carry, act):

@@ -1,5 +1,4 @@
-"""Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k for a (possibly per-lane) expansion point
-b.
+"""Coefficient generators: g(I) = sum_k a_k(b) (I - b)^k about a (possibly per-lane) point b.
 
 Reference: West & Mukherjee, "Stylized Rendering as a Function of Expectation", supplement S2.3-S2.6
 and Eq. 24: exp (S15, any b), reciprocal a/I (S17, |b - I| < |b|), power I^p (Eq. 24, b > 0), Taylor
@@ -40,7 +39,15 @@ TINY = 1e-6
 
 
 def taylor_shift(coeffs: list, h) -> list:
-    """Coefficients of p about b from those about c, h = b - c (array-generic, O(K^2))."""
+    """Coefficients of p about b from those about c, h = b - c (array-generic, O(K^2)).
+
+    Args:
+        coeffs: c_0..c_K of p about c (numbers, numpy or Dr.Jit arrays).
+        h: the shift b - c (a number or per-lane array).
+
+    Returns:
+        A new list of the K + 1 coefficients about b.
+    """
     c = list(coeffs)
     K = len(c) - 1
     for i in range(K):
@@ -50,7 +57,8 @@ def taylor_shift(coeffs: list, h) -> list:
 
 
 def _finite_real(name, v):
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) or not math.isfinite(v):
+    if (isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer))
+            or not math.isfinite(v)):
         raise ValueError(f"{name} must be a finite real number, got {v!r}")
     return float(v)
 
@@ -68,37 +76,120 @@ def _check_range(lo, hi):
 
 
 class Series:
+    """A coefficient generator (the module doc; used by `series.SeriesEstimator` and `polynomial`).
+
+    Coefficient states are tuples of `state_len` per-lane arrays; `degree` is None for an infinite
+    series; `channels` the channel count of per-channel coefficients (None: scalar).
+    """
+
     degree = None  # None: infinite
     channels = None
     name = "series"
     state_len = 1  # arrays in the coefficient state
 
     def function(self, I):
+        """The exact g(I).
+
+        Args:
+            I: numpy or Dr.Jit values.
+
+        Returns:
+            g(I), of I's kind.
+        """
         raise NotImplementedError
 
     def check_center(self, b):
-        pass
+        """Refuse a fixed expansion point outside the convergence region (default: any b is fine).
+
+        Args:
+            b: the fixed point (a float or per-channel vector).
+
+        Raises:
+            ValueError: b is outside the region, given the known range of I.
+        """
 
     def clamp_center(self, b):
+        """A pilot's expansion point moved into the convergence region (default: b as it is).
+
+        Args:
+            b: per-lane expansion points (array-generic).
+
+        Returns:
+            The clamped points.
+        """
         return b
 
     def start(self, ctx, b) -> tuple:
+        """The coefficient state at k = 0 for a per-lane b.
+
+        Args:
+            ctx: the run's `base.Context`; b: per-lane expansion points (a value array).
+
+        Returns:
+            The state, a tuple of `state_len` per-lane arrays.
+        """
         raise NotImplementedError
 
     def start_fixed(self, ctx, b) -> tuple:
+        """The coefficient state at k = 0 for a fixed b.
+
+        Args:
+            ctx: the run's `base.Context`; b: a host float or per-channel vector.
+
+        Returns:
+            The state, as `start`'s.
+        """
         return self.start(ctx, ctx.value_array(b))
 
     def coefficient(self, state):
+        """a_k of a coefficient state.
+
+        Args:
+            state: the state at k.
+
+        Returns:
+            a_k, a per-lane value.
+        """
         return state[0]
 
     def advance(self, ctx, state, k, b) -> tuple:
+        """The coefficient state at k + 1.
+
+        Args:
+            ctx: the run's `base.Context`; state: the state at k.
+            k: the current index (a per-lane float); b: the expansion points the state was made for.
+
+        Returns:
+            The state at k + 1.
+        """
         raise NotImplementedError
 
     def advance_scaled(self, ctx, state, k, b) -> tuple:
+        """`advance` for the scaled coefficients a_k b^k (ratio series only): the terms are
+        (a_k b^k) ((I - b) / b)^k, whose factors stay within float32 where a_k alone overflows.
+
+        Args:
+            ctx, state, k, b: as `advance`'s (the state holds a_k b^k).
+
+        Returns:
+            The state at k + 1.
+
+        Raises:
+            ValueError: a series not defined by its coefficient ratio.
+        """
         raise ValueError(f"{self.name}: scaled terms need a series defined by its coefficient "
                          "ratio")
 
     def coefficients(self, b, K: int) -> np.ndarray:
+        """a_0..a_K for a fixed b, host float64 (tests, docs).
+
+        Args:
+            b: a float or per-channel vector.
+            K: the last index (a finite series may take None: its own degree).
+
+        Returns:
+            Shape (K+1,) or (K+1, C).
+        """
         raise NotImplementedError
 
 
@@ -131,7 +222,14 @@ class _RatioSeries(Series):
 
 
 class ExpSeries(_RatioSeries):
-    """a^I (S14-S15): a_0 = a^b, a_(k+1) = a_k ln(a) / (k + 1)."""
+    """a^I (S14-S15): a_0 = a^b, a_(k+1) = a_k ln(a) / (k + 1); converges for any b.
+
+    Args:
+        a: the base, finite and > 0 (default e).
+
+    Raises:
+        ValueError: a not a finite real > 0.
+    """
 
     def __init__(self, a: float = math.e):
         a = _finite_real("a", a)
@@ -151,7 +249,16 @@ class ExpSeries(_RatioSeries):
 
 
 class ReciprocalSeries(_RatioSeries):
-    """a / I (S16-S17): a_0 = a / b, a_(k+1) = -a_k / b."""
+    """a / I (S16-S17): a_0 = a / b, a_(k+1) = -a_k / b; converges where |b - I| < |b|.
+
+    Args:
+        a: the numerator, a finite real.
+        lo, hi: the known range of I (both or neither): refuses fixed points that diverge on it,
+            and a pilot b is clamped to b >= 0.55 hi (b <= 0.55 lo for a negative range).
+
+    Raises:
+        ValueError: a not finite, a bad range, or a range containing 0 (the pole).
+    """
 
     def __init__(self, a: float = 1.0, lo=None, hi=None):
         self.a = _finite_real("a", a)
@@ -200,7 +307,17 @@ class ReciprocalSeries(_RatioSeries):
 
 
 class PowerFunctionSeries(_RatioSeries):
-    """I^p (Eq. 24 with p = 1/gamma): a_0 = b^p, a_(k+1) = a_k (p - k) / ((k + 1) b)."""
+    """I^p (Eq. 24 with p = 1/gamma): a_0 = b^p, a_(k+1) = a_k (p - k) / ((k + 1) b); needs b > 0
+    and |b - I| <= |b| (strict for p < 0). An integer p > 0 terminates (degree p).
+
+    Args:
+        p: the power, finite and non-zero.
+        lo, hi: the known range of I (both or neither), lo >= 0 (> 0 for p < 0): refuses fixed
+            points that diverge on it; a pilot b is clamped to b >= max(0.55 hi, 1e-6).
+
+    Raises:
+        ValueError: p not finite or 0, a bad range, or a range reaching below 0 (or 0 for p < 0).
+    """
 
     def __init__(self, p: float, lo=None, hi=None):
         self.p = _finite_real("p", p)
@@ -263,7 +380,16 @@ class _TableSeries(Series):
 
 
 class PolynomialSeries(_TableSeries):
-    """sum_k c_k (x - center)^k with float64 coefficients of shape (K+1,) or (K+1, C)."""
+    """sum_k c_k (x - center)^k with float64 coefficients of shape (K+1,) or (K+1, C).
+
+    Args:
+        coeffs: c_0..c_K, shape (K+1,) or (K+1, C), finite.
+        center: the point they are about: a finite scalar or per-channel vector.
+
+    Raises:
+        ValueError: a bad shape, values not finite, or coefficients and center of different
+            channel counts.
+    """
 
     def __init__(self, coeffs, center=0.0):
         c = np.asarray(coeffs, dtype=np.float64)
@@ -278,7 +404,8 @@ class PolynomialSeries(_TableSeries):
                              f"{center!r}")
         self.coeffs, self.center = c, center
         self.degree = c.shape[0] - 1
-        chans = {c.shape[1] if c.ndim == 2 else None, center.shape[0] if center.ndim == 1 else None} - {None}
+        chans = {c.shape[1] if c.ndim == 2 else None,
+                 center.shape[0] if center.ndim == 1 else None} - {None}
         if len(chans) > 1:
             raise ValueError(f"coefficients for {c.shape[1]} channels but a center for "
                              f"{center.shape[0]}")
@@ -286,7 +413,14 @@ class PolynomialSeries(_TableSeries):
         self.name = f"polynomial(degree={self.degree})"
 
     def shifted(self, b) -> "PolynomialSeries":
-        """The same polynomial with coefficients about a fixed b (float64 on the host)."""
+        """The same polynomial with coefficients about a fixed b (float64 on the host).
+
+        Args:
+            b: the new center, a float or per-channel vector.
+
+        Returns:
+            A new PolynomialSeries about b.
+        """
         b = np.asarray(b, dtype=np.float64)
         h = b - self.center
         rows = taylor_shift([self.coeffs[k] for k in range(self.degree + 1)], h)
@@ -320,7 +454,16 @@ class PolynomialSeries(_TableSeries):
 
 class TaylorSeries(_TableSeries):
     """a_k = derivative(k, b) / k! for k <= order (S10 truncated, i.e. the Taylor fit S25 about
-    b)."""
+    b).
+
+    Args:
+        derivative: derivative(k, b) -> g^(k)(b), array-generic in b.
+        order: the highest k (an integer >= 0).
+        function: g itself, for `function` (exact values); None: unknown.
+
+    Raises:
+        ValueError: derivative not callable, or order not an integer >= 0.
+    """
 
     def __init__(self, derivative, order: int, function=None):
         if not callable(derivative):
@@ -338,7 +481,8 @@ class TaylorSeries(_TableSeries):
         return self._function(I)
 
     def start(self, ctx, b):
-        return tuple(ctx.vzero() + self.derivative(k, b) * (1.0 / math.factorial(k)) for k in range(self.degree + 1))
+        return tuple(ctx.vzero() + self.derivative(k, b) * (1.0 / math.factorial(k))
+                     for k in range(self.degree + 1))
 
     def start_fixed(self, ctx, b):
         c = self.coefficients(b)
@@ -358,22 +502,62 @@ class TaylorSeries(_TableSeries):
 
 
 def exp_series(a: float = math.e) -> ExpSeries:
-    """a^I; exp(I) by default."""
+    """a^I; exp(I) by default.
+
+    Args:
+        a: the base, finite and > 0.
+
+    Returns:
+        ExpSeries(a).
+
+    Raises:
+        ValueError: a bad base.
+    """
     return ExpSeries(a)
 
 
 def reciprocal_series(a: float = 1.0, lo=None, hi=None) -> ReciprocalSeries:
-    """a / I, with the known range [lo, hi] of I (optional) used to refuse divergent expansions."""
+    """a / I, with the known range [lo, hi] of I (optional) used to refuse divergent expansions.
+
+    Args:
+        a: the numerator; lo, hi: the known range of I, or None.
+
+    Returns:
+        ReciprocalSeries(a, lo, hi).
+
+    Raises:
+        ValueError: as the class.
+    """
     return ReciprocalSeries(a, lo, hi)
 
 
 def power_series(p: float, lo=None, hi=None) -> PowerFunctionSeries:
-    """I^p via the binomial series about b."""
+    """I^p via the binomial series about b.
+
+    Args:
+        p: the power (finite, non-zero); lo, hi: the known range of I, or None.
+
+    Returns:
+        PowerFunctionSeries(p, lo, hi).
+
+    Raises:
+        ValueError: as the class.
+    """
     return PowerFunctionSeries(p, lo, hi)
 
 
 def gamma_series(gamma: float = 2.2, lo=None, hi=None) -> PowerFunctionSeries:
-    """Gamma correction I^(1/gamma)."""
+    """Gamma correction I^(1/gamma).
+
+    Args:
+        gamma: the gamma, finite and non-zero (default 2.2); lo, hi: the known range of I, or None.
+
+    Returns:
+        PowerFunctionSeries(1 / gamma, lo, hi), named "gamma(1/...)".
+
+    Raises:
+        ValueError: gamma not finite or 0, or a bad range.
+    """
     gamma = _finite_real("gamma", gamma)
     if gamma == 0.0:
         raise ValueError("gamma must be non-zero")
@@ -383,10 +567,31 @@ def gamma_series(gamma: float = 2.2, lo=None, hi=None) -> PowerFunctionSeries:
 
 
 def taylor_series(derivative, order: int, function=None) -> TaylorSeries:
-    """Taylor coefficients from derivative(k, b) -> g^(k)(b), k = 0..order (array-generic in b)."""
+    """Taylor coefficients from derivative(k, b) -> g^(k)(b), k = 0..order (array-generic in b).
+
+    Args:
+        derivative: derivative(k, b) -> g^(k)(b); order: the highest k (>= 0).
+        function: g itself, or None.
+
+    Returns:
+        TaylorSeries(derivative, order, function).
+
+    Raises:
+        ValueError: as the class.
+    """
     return TaylorSeries(derivative, order, function)
 
 
 def polynomial_series(coeffs, center=0.0) -> PolynomialSeries:
-    """sum_k coeffs[k] (x - center)^k."""
+    """sum_k coeffs[k] (x - center)^k.
+
+    Args:
+        coeffs: shape (K+1,) or (K+1, C); center: a scalar or per-channel vector.
+
+    Returns:
+        PolynomialSeries(coeffs, center).
+
+    Raises:
+        ValueError: as the class.
+    """
     return PolynomialSeries(coeffs, center)

@@ -15,6 +15,17 @@ __all__ = ["Direct"]
 
 
 class Direct(MeanOfN):
+    """g(<I>_n), the mean of n samples passed through g (biased O(1/n), consistent).
+
+    Args:
+        g: callable g(x) -> y, array-generic (numpy or Dr.Jit values).
+        n: samples per estimate (>= 1); comb: stratify them with the comb.
+        cap: (k, floor), the firefly control of `affine.MeanOfN`, or None.
+
+    Raises:
+        ValueError: g not callable, n not an integer >= 1, or a bad cap.
+    """
+
     def __init__(self, g, n: int, comb: bool = False, cap: tuple[float, float] | None = None):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")

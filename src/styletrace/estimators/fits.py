@@ -54,28 +54,63 @@ def _check_interval(lo, hi):
 
 
 def to_unit(x, lo, hi):
-    """[lo, hi] -> [-1, 1]."""
+    """[lo, hi] -> [-1, 1]: t = (2x - lo - hi) / (hi - lo).
+
+    Args:
+        x: numbers or arrays (numpy or Dr.Jit); lo, hi: the interval, lo < hi.
+
+    Returns:
+        t, of x's kind.
+    """
     return (2.0 * x - (lo + hi)) * (1.0 / (hi - lo))
 
 
 def from_unit(t, lo, hi):
-    """[-1, 1] -> [lo, hi]."""
+    """[-1, 1] -> [lo, hi], the inverse of `to_unit`.
+
+    Args:
+        t: numbers or arrays (numpy or Dr.Jit); lo, hi: the interval.
+
+    Returns:
+        x = lo + (t + 1) (hi - lo) / 2, of t's kind.
+    """
     return lo + (t + 1.0) * (0.5 * (hi - lo))
 
 
 def chebyshev_nodes(n: int) -> np.ndarray:
-    """cos((2j-1) pi / (2n)), j = 1..n, in ascending order."""
+    """cos((2j-1) pi / (2n)), j = 1..n, in ascending order.
+
+    Args:
+        n: the node count (>= 1).
+
+    Returns:
+        The nodes, numpy float64 (n,).
+    """
     j = np.arange(1, n + 1)
     return np.sort(np.cos((2 * j - 1) * np.pi / (2 * n)))
 
 
 def even_nodes(n: int) -> np.ndarray:
-    """-1 + 2j/(n+1), j = 1..n: evenly spaced, strictly inside (-1, 1)."""
+    """-1 + 2j/(n+1), j = 1..n: evenly spaced, strictly inside (-1, 1).
+
+    Args:
+        n: the node count (>= 1).
+
+    Returns:
+        The nodes, numpy float64 (n,).
+    """
     return -1.0 + 2.0 * np.arange(1, n + 1) / (n + 1)
 
 
 def gauss_legendre(n: int):
-    """Gauss-Legendre nodes (ascending) and weights on [-1, 1] (Golub-Welsch eigenproblem)."""
+    """Gauss-Legendre nodes (ascending) and weights on [-1, 1] (Golub-Welsch eigenproblem).
+
+    Args:
+        n: the node count (>= 1); the rule is exact for polynomials of degree <= 2n - 1.
+
+    Returns:
+        (nodes, weights), numpy float64 (n,) each.
+    """
     k = np.arange(1, n)
     beta = k / np.sqrt(4.0 * k * k - 1.0)
     nodes, vecs = np.linalg.eigh(np.diag(beta, 1) + np.diag(beta, -1))
@@ -83,7 +118,14 @@ def gauss_legendre(n: int):
 
 
 def chebyshev_basis(t, K: int) -> list:
-    """[T_0(t), ..., T_K(t)] by T_(n+1) = 2t T_n - T_(n-1) (array-generic)."""
+    """[T_0(t), ..., T_K(t)] by T_(n+1) = 2t T_n - T_(n-1) (array-generic).
+
+    Args:
+        t: points in [-1, 1] (numpy or Dr.Jit); K: the highest degree (>= 0).
+
+    Returns:
+        A list of K + 1 arrays of t's kind.
+    """
     T = [t * 0.0 + 1.0, t]
     for n in range(1, K):
         T.append(2.0 * t * T[n] - T[n - 1])
@@ -91,7 +133,14 @@ def chebyshev_basis(t, K: int) -> list:
 
 
 def legendre_basis(t, K: int) -> list:
-    """[P_0(t), ..., P_K(t)] by (n+1) P_(n+1) = (2n+1) t P_n - n P_(n-1) (array-generic)."""
+    """[P_0(t), ..., P_K(t)] by (n+1) P_(n+1) = (2n+1) t P_n - n P_(n-1) (array-generic).
+
+    Args:
+        t: points in [-1, 1] (numpy or Dr.Jit); K: the highest degree (>= 0).
+
+    Returns:
+        A list of K + 1 arrays of t's kind.
+    """
     P = [t * 0.0 + 1.0, t]
     for n in range(1, K):
         P.append(((2 * n + 1) * t * P[n] - n * P[n - 1]) * (1.0 / (n + 1)))
@@ -107,9 +156,22 @@ def _pad(p, n):
 
 
 class Fit:
-    """A fitted polynomial on [lo, hi] in one of BASES, coefficients (D+1,) or (D+1, C) float64."""
+    """A fitted polynomial h on [lo, hi] in one of BASES; made by the *_fit functions.
 
-    def __init__(self, basis: str, coeffs, lo: float, hi: float, center: float = None, label: str = ""):
+    Args:
+        basis: one of BASES (Chebyshev and Legendre in t in [-1, 1], Bernstein in s in [0, 1]).
+        coeffs: (D+1,) or (D+1, C) coefficients in that basis, stored float64.
+        lo, hi: the fit interval, finite, lo < hi.
+        center: the default expansion point (monomial basis: the point the coefficients are
+            about, required); None: the interval's midpoint.
+        label: the name shown; empty: made from basis, degree and interval.
+
+    Raises:
+        ValueError: an unknown basis, or a bad interval.
+    """
+
+    def __init__(self, basis: str, coeffs, lo: float, hi: float, center: float = None,
+                 label: str = ""):
         if basis not in BASES:
             raise ValueError(f"unknown basis {basis!r}; allowed: {', '.join(BASES)}")
         self.basis = basis
@@ -122,7 +184,8 @@ class Fit:
         elif basis == "bernstein":
             self.alpha, self.beta = 1.0 / (self.hi - self.lo), -self.lo / (self.hi - self.lo)
         else:
-            self.alpha, self.beta = 2.0 / (self.hi - self.lo), -(self.hi + self.lo) / (self.hi - self.lo)
+            self.alpha, self.beta = (2.0 / (self.hi - self.lo),
+                                     -(self.hi + self.lo) / (self.hi - self.lo))
         self.center = float(center) if center is not None else 0.5 * (self.lo + self.hi)
         self.label = label or f"{basis}(degree={self.degree}, [{self.lo:g}, {self.hi:g}])"
 
@@ -138,7 +201,8 @@ class Fit:
         """h(x), array-generic (numpy (..., C) or Dr.Jit values for per-channel fits)."""
         u = x * self.alpha + self.beta
         if self.basis in ("chebyshev", "legendre"):
-            B = chebyshev_basis(u, self.degree) if self.basis == "chebyshev" else legendre_basis(u, self.degree)
+            B = (chebyshev_basis(u, self.degree) if self.basis == "chebyshev"
+                 else legendre_basis(u, self.degree))
             out = 0.0
             for i, Bi in enumerate(B):
                 out = out + self._c(i, x) * Bi
@@ -178,8 +242,14 @@ class Fit:
         return out
 
     def to_monomial(self, b=None) -> np.ndarray:
-        """c_k with h(x) = sum_k c_k (x - b)^k in the original variable (b defaults to the
-        center)."""
+        """c_k with h(x) = sum_k c_k (x - b)^k in the original variable x.
+
+        Args:
+            b: the expansion point; None: the fit's center.
+
+        Returns:
+            numpy float64 (D+1,) or (D+1, C).
+        """
         b = self.center if b is None else float(b)
         d = self.monomial_in_u()
         ub = self.alpha * b + self.beta
@@ -187,12 +257,30 @@ class Fit:
         return np.array([e[k] * self.alpha ** k for k in range(self.degree + 1)])
 
     def series(self, center=None) -> PolynomialSeries:
-        """The fit as sum_k c_k (x - center)^k for the polynomial / power-series estimators."""
+        """The fit as sum_k c_k (x - center)^k for the polynomial / power-series estimators.
+
+        Args:
+            center: the expansion point; None: the fit's center.
+
+        Returns:
+            A `coefficients.PolynomialSeries`.
+        """
         center = self.center if center is None else float(center)
         return PolynomialSeries(self.to_monomial(center), center)
 
     def max_error(self, g, points: int = 20001) -> np.ndarray:
-        """max |h - g| over an even grid of [lo, hi] (per channel if g is a sequence)."""
+        """max |h - g| over an even grid of [lo, hi] (per channel if g is a sequence).
+
+        Args:
+            g: the fitted callable, or one per channel.
+            points: the grid's size.
+
+        Returns:
+            A float, or numpy (C,) for a per-channel fit.
+
+        Raises:
+            ValueError: g is not a callable or a sequence of callables.
+        """
         x = np.linspace(self.lo, self.hi, points)
         gs = _callables(g)
         if self.channels is None:
@@ -224,7 +312,21 @@ def _points(points, default):
     return int(points)
 
 
-def chebyshev_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str = "chebyshev", points=None) -> Fit:
+def chebyshev_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str = "chebyshev",
+                  points=None) -> Fit:
+    """Chebyshev fit (S27): a_i = sum_j g(x_j) T_i(t_j) w_j / C(i), C(0) = pi, C(i>0) = pi/2.
+
+    Args:
+        g: a callable on numpy arrays, or a sequence of per-channel callables; degree: D >= 0.
+        lo, hi: the fit interval; points: the node count n (None: D + 1, or 4096 for even).
+        nodes: "chebyshev" (interpolation, exact below degree n) or "even" (S27's literal weights).
+
+    Returns:
+        The Fit.
+
+    Raises:
+        ValueError: a bad degree, interval, nodes, points or g.
+    """
     D = _check_degree(degree)
     lo, hi = _check_interval(lo, hi)
     if nodes == "chebyshev":
@@ -246,7 +348,21 @@ def chebyshev_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str 
                                              f"{hi:g}])")
 
 
-def legendre_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str = "gauss", points=None) -> Fit:
+def legendre_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str = "gauss",
+                 points=None) -> Fit:
+    """Legendre fit (S28): a_i = (2i+1)/2 sum_j g(x_j) P_i(t_j) w_j.
+
+    Args:
+        g: a callable on numpy arrays, or a sequence of per-channel callables; degree: D >= 0.
+        lo, hi: the fit interval; points: the node count n (None: D + 1, or 4096 for even).
+        nodes: "gauss" (Gauss-Legendre, exact to degree 2n - 1) or "even" (S28's literal weights).
+
+    Returns:
+        The Fit.
+
+    Raises:
+        ValueError: a bad degree, interval, nodes, points or g.
+    """
     D = _check_degree(degree)
     lo, hi = _check_interval(lo, hi)
     if nodes == "gauss":
@@ -267,6 +383,18 @@ def legendre_fit(g, degree: int, lo: float = -1.0, hi: float = 1.0, nodes: str =
 
 
 def bernstein_fit(g, degree: int, lo: float = 0.0, hi: float = 1.0) -> Fit:
+    """Bernstein fit (S26): h(x) = sum_i g(x_i) C(D, i) s^i (1 - s)^(D - i), x_i at s = i / D.
+
+    Args:
+        g: a callable g(x) -> y on numpy arrays, or a sequence of per-channel callables.
+        degree: D >= 0; lo, hi: the fit interval (s = (x - lo) / (hi - lo)).
+
+    Returns:
+        The Fit.
+
+    Raises:
+        ValueError: a bad degree, interval or g.
+    """
     D = _check_degree(degree)
     lo, hi = _check_interval(lo, hi)
     s = np.arange(D + 1) / D if D > 0 else np.zeros(1)
@@ -275,13 +403,26 @@ def bernstein_fit(g, degree: int, lo: float = 0.0, hi: float = 1.0) -> Fit:
 
 
 def taylor_fit(derivative, degree: int, b: float, lo: float = None, hi: float = None) -> Fit:
-    """Taylor polynomial about b; [lo, hi] (default b +- 1) only sets where max_error looks."""
+    """Taylor polynomial about b (S25): h(x) = sum_i g^(i)(b) / i! (x - b)^i.
+
+    Args:
+        derivative: derivative(i, b) -> g^(i)(b) (a number, or one per channel).
+        degree: D >= 0; b: the expansion point.
+        lo, hi: where max_error looks (None: b - 1 and b + 1); no effect on h.
+
+    Returns:
+        The Fit (monomial basis, center b).
+
+    Raises:
+        ValueError: a bad degree or derivative.
+    """
     D = _check_degree(degree)
     if not callable(derivative):
         raise ValueError("derivative must be a callable derivative(k, b) -> g^(k)(b), got "
                          f"{derivative!r}")
     b = float(b)
-    c = np.array([np.asarray(derivative(k, b), dtype=np.float64) / math.factorial(k) for k in range(D + 1)])
+    c = np.array([np.asarray(derivative(k, b), dtype=np.float64) / math.factorial(k)
+                  for k in range(D + 1)])
     lo = b - 1.0 if lo is None else lo
     hi = b + 1.0 if hi is None else hi
     return Fit("monomial", c, lo, hi, center=b, label=f"taylor(degree={D}, b={b:g})")

@@ -16,27 +16,56 @@ import numpy as np
 
 from styletrace.estimators import arrays as A
 
-__all__ = ["Distribution", "Uniform", "Exponential", "TwoPoint", "estimate_numpy", "estimate_drjit", "NumpyEstimate", "channel_means"]
+__all__ = ["Distribution", "Uniform", "Exponential", "TwoPoint", "estimate_numpy",
+           "estimate_drjit", "NumpyEstimate", "channel_means"]
 
 
 class Distribution:
+    """A test distribution of X with a closed-form `mean` and `var` (set by each subclass)."""
+
     mean: float
     var: float
 
     def quantile(self, u):
+        """The quantile function F^-1(u).
+
+        Args:
+            u: uniforms in [0, 1), numpy or Dr.Jit.
+
+        Returns:
+            Samples of X, of u's kind.
+        """
         raise NotImplementedError
 
     def sample(self, rng, size, u=None):
+        """Samples of X by the quantile function.
+
+        Args:
+            rng: a numpy Generator; size: the output shape.
+            u: the uniforms to use instead of rng's (a comb's), or None.
+
+        Returns:
+            numpy samples.
+        """
         return self.quantile(rng.random(size) if u is None else np.asarray(u))
 
     def moment(self, k: int) -> float:
-        """E[X^k] (numerically, from the quantile on a fine midpoint grid unless overridden)."""
+        """E[X^k] (numerically, from the quantile on a fine midpoint grid unless overridden).
+
+        Args:
+            k: the order.
+
+        Returns:
+            The moment.
+        """
         u = (np.arange(200000) + 0.5) / 200000
         return float(np.mean(self.quantile(u) ** k))
 
 
 @dataclass
 class Uniform(Distribution):
+    """Uniform on [lo, hi]."""
+
     lo: float = 0.0
     hi: float = 1.0
 
@@ -53,6 +82,8 @@ class Uniform(Distribution):
 
 @dataclass
 class Exponential(Distribution):
+    """shift + an exponential of mean `scale`."""
+
     scale: float = 1.0
     shift: float = 0.0
 
@@ -85,7 +116,14 @@ class TwoPoint(Distribution):
 
 
 def channel_means(dist: Distribution, channels=None):
-    """E[x] per channel under the harness' channel convention (channel c = (1 + c) x)."""
+    """E[x] per channel under the harness' channel convention (channel c = (1 + c) x).
+
+    Args:
+        dist: the distribution of x; channels: C, or None for scalar values.
+
+    Returns:
+        dist.mean, or numpy (C,).
+    """
     if channels is None:
         return dist.mean
     return dist.mean * (1.0 + np.arange(channels))
@@ -93,6 +131,8 @@ def channel_means(dist: Distribution, channels=None):
 
 @dataclass
 class NumpyEstimate:
+    """The estimates, one per lane ((lanes,) or (lanes, C)), and the draws each used (lanes,)."""
+
     values: np.ndarray
     draws: np.ndarray
 
@@ -109,8 +149,20 @@ class NumpyEstimate:
         return np.sqrt(self.var / self.values.shape[0])
 
 
-def estimate_numpy(estimator, dist, lanes: int, rng, channels=None, dtype=np.float64, active=None) -> NumpyEstimate:
-    """One estimate per lane with draws from `dist`; returns the values and the draws per lane."""
+def estimate_numpy(estimator, dist, lanes: int, rng, channels=None, dtype=np.float64,
+                   active=None) -> NumpyEstimate:
+    """One estimate per lane with draws from `dist`, counting the draws per lane.
+
+    Args:
+        estimator: the estimator to run (`Estimator.run`).
+        dist: a Distribution, or a callable sample(rng, size[, u]).
+        lanes: the lane count; rng: a numpy Generator for draws and uniforms.
+        channels: C for (lanes, C) values, channel c = (1 + c) x; None: (lanes,).
+        dtype: the samples' dtype; active: the lanes that take part (bool (lanes,)), or None.
+
+    Returns:
+        NumpyEstimate(values, draws).
+    """
     sample = dist.sample if isinstance(dist, Distribution) else dist
 
     def draw(carry, u=None):
@@ -134,11 +186,24 @@ def estimate_numpy(estimator, dist, lanes: int, rng, channels=None, dtype=np.flo
 def estimate_drjit(
     estimator, dist: Distribution, lanes: int, seed: int = 0, channels=None, like=None, active=None
 ) -> NumpyEstimate:
-    """One estimate per lane inside a Dr.Jit loop whose carry holds a PCG32 and a draw counter."""
+    """One estimate per lane inside a Dr.Jit loop whose carry holds a PCG32 and a draw counter.
+
+    Args:
+        estimator, dist: what to run, and a Distribution whose quantile maps PCG32 uniforms.
+        lanes, seed, active: the lane count, the PCG32 seed, the lanes taking part (or None).
+        channels: None (Float) or 3 (Array3f, channel c = (1 + c) x); like: the value type or None.
+
+    Returns:
+        NumpyEstimate(values, draws), copied to numpy.
+
+    Raises:
+        ValueError: channels other than None or 3.
+    """
     if channels not in (None, 3):
         raise ValueError("estimate_drjit supports channels=None (Float) or 3 (Array3f), got "
                          f"{channels!r}")
-    m = A.backend_module(like)  # like's backend, else the one in use (drjit.llvm, drjit.cuda, .ad)
+    # like's backend, else the one in use (drjit.llvm, drjit.cuda, .ad)
+    m = A.backend_module(like)
     dr = A.drjit()
     PCG32, UInt32 = m.PCG32, m.UInt32
     if like is not None and not isinstance(like, type):

@@ -22,12 +22,26 @@ __all__ = ["Pilot", "PerLane", "ExpansionPoint"]
 
 
 class Pilot:
+    """b from the estimate's own first n draws (the pilot), independent of its term samples:
+    b = clamp(max(scale mean, spread mean(x^2) / mean(x)), lo, hi), then `Series.clamp_center`.
+
+    Args:
+        n: pilot draws (>= 1).
+        lo, hi: clamp bounds on b (finite, lo < hi), or None: unbounded on that side.
+        scale: factor on the pilot mean (finite, > 0).
+        spread: 0, or aims b at spread E[x^2] / E[x] where that is larger (finite, >= 0).
+
+    Raises:
+        ValueError: any of them out of range.
+    """
+
     def __init__(self, n: int = 1, lo=None, hi=None, scale: float = 1.0, spread: float = 0.0):
         self.n = check_count("pilot n", n)
         if not (isinstance(scale, (int, float)) and math.isfinite(scale) and scale > 0):
             raise ValueError(f"pilot scale must be a finite number > 0, got {scale!r}")
         self.scale = float(scale)
-        if isinstance(spread, bool) or not (isinstance(spread, (int, float)) and math.isfinite(spread) and spread >= 0):
+        if isinstance(spread, bool) or not (isinstance(spread, (int, float))
+                                            and math.isfinite(spread) and spread >= 0):
             raise ValueError(f"pilot spread must be a finite number >= 0, got {spread!r}")
         self.spread = float(spread)
         for name, v in (("lo", lo), ("hi", hi)):
@@ -43,8 +57,16 @@ class Pilot:
 
 
 class PerLane:
-    """b per lane, computed by the caller from samples independent of the estimate's own (lo: a
-    floor)."""
+    """b per lane, computed by the caller from samples independent of the estimate's own (the
+    renderer's `expansion_pass`); clamped as a pilot's b.
+
+    Args:
+        b: per-lane expansion points (Dr.Jit value, or numpy with one row per lane).
+        lo: a floor on b (finite), or None.
+
+    Raises:
+        ValueError: lo not a finite number or None.
+    """
 
     def __init__(self, b, lo=None):
         if lo is not None and not (isinstance(lo, (int, float)) and math.isfinite(lo)):
@@ -56,7 +78,16 @@ class PerLane:
 
 
 class ExpansionPoint:
-    """The b of an estimator: fixed (checked against the series) or a pilot (clamped per lane)."""
+    """The b of an estimator: fixed (checked against the series) or a pilot (clamped per lane).
+
+    Args:
+        b: a Pilot, a PerLane, a fixed float or per-channel vector, or None (`default`).
+        default: the fixed b where b is None.
+        series: the `coefficients.Series` expanded (checks a fixed b, clamps the others), or None.
+
+    Raises:
+        ValueError: a fixed b not finite, not 0-D or 1-D, or outside the series' region.
+    """
 
     def __init__(self, b, default=0.0, series=None):
         self.series = series
@@ -85,10 +116,19 @@ class ExpansionPoint:
             return f"b=pilot({self.pilot.n})"
         if self.lane:
             return "b=per-lane"
-        return f"b={np.array2string(self.fixed, precision=3)}" if self.fixed.ndim else f"b={float(self.fixed):g}"
+        return (f"b={np.array2string(self.fixed, precision=3)}" if self.fixed.ndim
+                else f"b={float(self.fixed):g}")
 
     # -- kernel side --------------------------------------------------------------------------
     def start(self, ctx) -> dict:
+        """The expansion point's part of an estimator's state.
+
+        Args:
+            ctx: the run's `base.Context`.
+
+        Returns:
+            {} (fixed b), {"b": ...} (per lane), or the pilot's running sums with b = 1 until done.
+        """
         if self.lane:
             return {"b": self._lane_b(ctx)}
         if not self.pilot:
@@ -100,13 +140,28 @@ class ExpansionPoint:
         return state
 
     def in_pilot(self, state):
-        """Lanes still collecting pilot samples (None when b is fixed)."""
+        """Lanes still collecting pilot samples (None when b is fixed).
+
+        Args:
+            state: the estimator's state.
+
+        Returns:
+            A per-lane mask, or None without a pilot.
+        """
         if not self.pilot:
             return None
         return state["pcount"] < self.pilot.n
 
     def feed(self, ctx, state, x, mask):
-        """Take x on pilot lanes of mask; returns (state, lanes whose b became known now)."""
+        """Take x on the pilot lanes of mask (a pilot's b only).
+
+        Args:
+            ctx: the run's `base.Context`; state: the estimator's state.
+            x: the draw; mask: the lanes that drew it.
+
+        Returns:
+            (state, done): the new state, and the lanes whose b became known with this draw.
+        """
         state = dict(state)
         take = mask & (state["pcount"] < self.pilot.n)
         state["psum"] = A.select(take, state["psum"] + x, state["psum"])
@@ -134,7 +189,14 @@ class ExpansionPoint:
         return ctx.vzero() + b
 
     def value(self, ctx, state):
-        """b as a value array (pilot, per lane) or a constant (fixed)."""
+        """b as a value array (pilot, per lane) or a constant (fixed).
+
+        Args:
+            ctx: the run's `base.Context`; state: the estimator's state.
+
+        Returns:
+            The per-lane b, or `Context.vconst` of the fixed b.
+        """
         if self.pilot or self.lane:
             return state["b"]
         return ctx.vconst(self.fixed)

@@ -23,8 +23,13 @@ __all__ = ["ustat_update", "u_statistic_means", "PolynomialNaive", "PolynomialU"
 def ustat_update(m: list, y, j) -> list:
     """One step of the running-mean recurrence: m = [m_1..m_K] after j-1 samples -> after j.
 
-    j may be a Python int or a per-lane array; terms with k > j stay exactly 0 because their inputs
-    are 0.
+    Args:
+        m: [m_1..m_K] after j - 1 samples (m_0 = 1 is implied).
+        y: the j-th sample (of x - b), numpy or Dr.Jit.
+        j: the sample's 1-based index, a Python int or a per-lane array.
+
+    Returns:
+        A new list [m_1..m_K] after j samples; terms with k > j stay exactly 0 (their inputs are).
     """
     inv_j = 1.0 / j
     out = list(m)
@@ -36,7 +41,18 @@ def ustat_update(m: list, y, j) -> list:
 
 def u_statistic_means(samples, K: int) -> list:
     """[m_0, ..., m_K] for samples[0..n-1] (axis 0), with m_k = e_k / C(n, k), in the samples'
-    precision."""
+    precision.
+
+    Args:
+        samples: n samples along axis 0 (a sequence or numpy array).
+        K: the highest order (an integer >= 0, at most n).
+
+    Returns:
+        K + 1 arrays (m_0 = 1).
+
+    Raises:
+        ValueError: K not an integer >= 0, or fewer than K samples.
+    """
     K = check_count("K", K, 0)
     n = len(samples)
     if n < K:
@@ -49,6 +65,17 @@ def u_statistic_means(samples, K: int) -> list:
 
 
 def as_polynomial(poly) -> PolynomialSeries:
+    """A polynomial given in any accepted form, as a PolynomialSeries.
+
+    Args:
+        poly: a PolynomialSeries, anything with a `series()` (a fit), or coefficients of I^k.
+
+    Returns:
+        The PolynomialSeries (coefficients: about 0).
+
+    Raises:
+        ValueError: coefficients the PolynomialSeries refuses.
+    """
     if isinstance(poly, PolynomialSeries):
         return poly
     if hasattr(poly, "series") and callable(poly.series):
@@ -95,6 +122,17 @@ class _PolynomialBase(Estimator):
 
 
 class PolynomialNaive(_PolynomialBase):
+    """Unbiased sum_k a_k (I - b)^k from products of independent samples (S6); K draws (the terms
+    share their prefix), plus the pilot's.
+
+    Args:
+        poly: a PolynomialSeries, a fit, or coefficients of I^k.
+        b: None (the polynomial's center), a fixed value or per-channel vector, or Pilot(n).
+
+    Raises:
+        ValueError: a bad polynomial or expansion point.
+    """
+
     def __init__(self, poly, b=None):
         super().__init__(poly, b)
         self.name = f"poly-naive(K={self.K}, {self.point.describe()})"
@@ -117,7 +155,8 @@ class PolynomialNaive(_PolynomialBase):
         state, mask = self._feed_pilot(ctx, state, x, mask)
         prod = state["prod"] * self._y(ctx, state, x)
         k = state["k"] + 1.0
-        state["P"] = tuple(A.select(mask & (k == float(j + 1)), prod, P) for j, P in enumerate(state["P"]))
+        state["P"] = tuple(A.select(mask & (k == float(j + 1)), prod, P)
+                           for j, P in enumerate(state["P"]))
         state["prod"] = A.select(mask, prod, state["prod"])
         state["k"] = A.select(mask, k, state["k"])
         return state, carry
@@ -135,6 +174,17 @@ class PolynomialNaive(_PolynomialBase):
 
 
 class PolynomialU(_PolynomialBase):
+    """Unbiased sum_k a_k (I - b)^k from the U-statistics of n samples (S7-S8), plus the pilot's.
+
+    Args:
+        poly: a PolynomialSeries, a fit, or coefficients of I^k.
+        n: samples per estimate, at least the degree K.
+        b: None (the polynomial's center), a fixed value or per-channel vector, or Pilot(m).
+
+    Raises:
+        ValueError: a bad polynomial or expansion point, or n not an integer >= K.
+    """
+
     def __init__(self, poly, n: int, b=None):
         super().__init__(poly, b)
         self.n = check_count("n", n)

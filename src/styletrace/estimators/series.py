@@ -33,6 +33,20 @@ def _term(coefficient, estimate):
 
 
 class SeriesEstimator(Estimator):
+    """sum_k a_k (I - b)^k with randomly selected, reweighted terms (the module doc).
+
+    Args:
+        series: a `coefficients.Series`, or a fit (its `.series()`).
+        b: Pilot(1) if None, a fixed float or per-channel vector, Pilot(n), or PerLane(b).
+        selection, terms: one of SELECTIONS; "ustat" (iterative only, its default) or "naive".
+        truncation: a `truncation.Truncation` or its name; None: PoissonCMF(2), Cumulative() or
+            Poisson(2) for iterative, recursive, single. Adaptive ones: recursive only.
+        max_terms: the highest term ever evaluated (ustat: <= 64); scaled: (a_k b^k) ((x-b)/b)^k.
+
+    Raises:
+        ValueError: a bad series, selection, truncation, terms, max_terms or combination of them.
+    """
+
     def __init__(self, series, b=None, selection: str = "iterative", truncation=None, terms=None,
                  max_terms: int = 64, scaled: bool = False):
         if not isinstance(series, Series):
@@ -45,7 +59,8 @@ class SeriesEstimator(Estimator):
             raise ValueError(f"unknown selection {selection!r}; allowed: {', '.join(SELECTIONS)}")
         self.selection = selection
         if truncation is None:
-            truncation = {"iterative": PoissonCMF(2.0), "recursive": Cumulative(), "single": Poisson(2.0)}[selection]
+            truncation = {"iterative": PoissonCMF(2.0), "recursive": Cumulative(),
+                          "single": Poisson(2.0)}[selection]
         self.truncation = resolve_truncation(truncation)
         if terms is None:
             terms = "ustat" if selection == "iterative" else "naive"
@@ -58,7 +73,8 @@ class SeriesEstimator(Estimator):
             )
         self.terms = terms
         self.scaled = bool(scaled)
-        if self.scaled and not (selection == "iterative" and terms == "ustat" and hasattr(series, "ratio")):
+        if self.scaled and not (selection == "iterative" and terms == "ustat"
+                                and hasattr(series, "ratio")):
             raise ValueError(
                 "scaled=True needs selection='iterative', terms='ustat' and a series defined by "
                 f"its coefficient ratio (got {selection!r}, {terms!r}, {series.name})"
@@ -88,7 +104,8 @@ class SeriesEstimator(Estimator):
                 f"terms='ustat' keeps one running mean per term; K={self.K} > {MAX_USTAT_TERMS}: "
                 f"lower max_terms"
             )
-        self.name = f"series[{series.name}; {selection}/{self.truncation.name}/{terms}; {self.point.describe()}]"
+        self.name = (f"series[{series.name}; {selection}/{self.truncation.name}/{terms}; "
+                     f"{self.point.describe()}]")
 
     # -- helpers ----------------------------------------------------------------------------------
     def _b(self, ctx, state):

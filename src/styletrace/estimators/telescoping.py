@@ -22,6 +22,18 @@ __all__ = ["Telescoping"]
 
 
 class Telescoping(Estimator):
+    """The randomized telescoping sum of the module doc, N drawn before the samples.
+
+    Args:
+        g: callable g(x) -> y, array-generic.
+        n0: samples of the base term (>= 1).
+        truncation: a sample-independent `truncation.Truncation` or its name; None: PowerLaw(1.5).
+        max_terms: the most differences N (>= 1).
+
+    Raises:
+        ValueError: g not callable, a bad count, or an adaptive or unknown truncation.
+    """
+
     def __init__(self, g, n0: int = 1, truncation=None, max_terms: int = 1 << 16):
         if not callable(g):
             raise ValueError(f"g must be a callable g(x) -> y, got {g!r}")

@@ -1,8 +1,8 @@
 """Style functions g_theta and their registry.
 
 Each style lives in a module of its own and registers itself on import; this package imports them
-all, so `registry.style_names()` lists every style. Styles evaluate inside the render kernel on Dr.Jit
-arrays (see `base.Style`).
+all, so `registry.style_names()` lists every style. Styles evaluate inside the render kernel on
+Dr.Jit arrays (see `base.Style`).
 """
 
 

@@ -23,7 +23,8 @@ from styletrace.styles.registry import register_style
 class ACP(ColorMap):
     """The colour map's parameters, range rule and checks (`ColorMap`), applied per path sample."""
     name = "acp"
-    summary = "baseline (Doi et al. 2021): max(Y', 0.01) colormap(Y') per path sample, Y' rescaled as color_map's; biased by design"
+    summary = ("baseline (Doi et al. 2021): max(Y', 0.01) colormap(Y') per path sample, Y' "
+               "rescaled as color_map's; biased by design")
     default_inner = 16
     per_sample = True
 

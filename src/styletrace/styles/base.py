@@ -20,7 +20,14 @@ from styletrace.styles.params import Param, StyleError
 
 
 def brightness(I: mi.Color3f) -> mi.Float:
-    """u = (r + g + b) / 3, the brightness used by every setup of the paper's supplement (S5)."""
+    """u = (r + g + b) / 3, the brightness used by every setup of the paper's supplement (S5).
+
+    Args:
+        I: radiance per lane (mi.Color3f).
+
+    Returns:
+        u per lane (mi.Float).
+    """
     return (I.x + I.y + I.z) * (1.0 / 3.0)
 
 
@@ -46,6 +53,17 @@ class Vertex:
 
 
 class Style:
+    """A style g_theta (the module doc); subclasses declare name, summary, params, default_inner
+    and `apply`.
+
+    Args:
+        **values: parameter name -> value (strings, numbers, sequences, as `Param.parse` reads
+            them; None or 'auto': the auto rule); omitted parameters take their defaults.
+
+    Raises:
+        StyleError: an unknown parameter, a bad value, or values that do not go together.
+    """
+
     name: ClassVar[str] = ""
     summary: ClassVar[str] = ""
     params: ClassVar[tuple[Param, ...]] = ()
@@ -85,23 +103,52 @@ class Style:
         """Checks that involve several parameters at once; raise StyleError."""
 
     def prepare(self, scene: mi.Scene) -> None:
-        """Called once per render before the kernel is traced (e.g. to read the camera)."""
+        """Called once per render before the kernel is traced (e.g. to read the camera).
+
+        Args:
+            scene: the scene about to be rendered.
+        """
 
     def auto_values(self, facts) -> dict[str, Any]:
         """Values for the parameters left at 'auto' whose rule needs the scene (`scene.defaults`
-        computes them before rendering). `facts` offers `camera` (a `Camera`), `brightness(qs)` and
-        `depth(qs)`: quantiles of the first-hit brightness and camera depth of what this style
-        covers."""
+        computes them before rendering; default: none).
+
+        Args:
+            facts: a `scene.defaults.Facts`: `camera` (a `Camera`), `brightness(qs)` and
+                `depth(qs)`, quantiles of the first-hit brightness and camera depth of what this
+                style covers.
+
+        Returns:
+            parameter name -> value, for `pinned`.
+        """
         return {}
 
     def pinned(self, values: Mapping[str, Any]) -> "Style":
         """A new style of the same kind: the given parameters kept, `values` filling in auto ones
-        (named in the new style's `chosen`)."""
+        (named in the new style's `chosen`).
+
+        Args:
+            values: parameter name -> value (e.g. `auto_values`' result).
+
+        Returns:
+            The new style.
+
+        Raises:
+            StyleError: a bad value.
+        """
         out = type(self)(**{**self.given, **values})
         out.chosen = tuple(sorted(set(self.chosen) | set(values)))
         return out
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
+        """g_theta(I), branch-free on Dr.Jit arrays (dr.select, no `if` on array values).
+
+        Args:
+            I: the radiance estimate per lane (mi.Color3f); v: the vertices (`Vertex`).
+
+        Returns:
+            The styled colour per lane (mi.Color3f).
+        """
         raise NotImplementedError
 
     def form(self):
@@ -110,21 +157,37 @@ class Style:
         return None
 
     def step_thresholds(self, v: Vertex) -> tuple:
-        """Brightness values (numbers or per-lane mi.Float; +inf: none at that lane) at which g
-        jumps at the vertices `v`. The adaptive controller keeps drawing children while the mean's
-        brightness is within a confidence band of one. Default: none (a continuous g)."""
+        """The brightnesses at which g jumps: the adaptive controller keeps drawing children while
+        the mean's brightness is within a confidence band of one. Default: none (a continuous g).
+
+        Args:
+            v: the vertices (`Vertex`).
+
+        Returns:
+            A tuple of numbers or per-lane mi.Float (+inf: none at that lane).
+        """
         return ()
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
-        """g'' along the grey direction at I, d^2/dt^2 g(I + t (1, 1, 1)) per output channel, as the adaptive
-        controller's smooth rule and the bias AOV (Eq. 21) use it. Default: 0 for an affine g (its form says
-        so), else the central second difference over +-h, h the children's standard error, which is g''(I)
-        for a smooth g and |jump of g'|/h at a kink (colour-map stops, clamps): the Jensen gap that spread sees."""
+        """g'' along the grey direction at I, d^2/dt^2 g(I + t (1, 1, 1)) per output channel, as
+        the adaptive controller's smooth rule and the bias AOV (Eq. 21) use it. Default: 0 for an
+        affine g (its form says so), else the central second difference over +-h: g''(I) for a
+        smooth g, |jump of g'|/h at a kink (colour-map stops, clamps): the Jensen gap spread sees.
+
+        Args:
+            I: the children's mean (mi.Color3f); v: the vertices (`Vertex`).
+            h: the children's standard error per lane (mi.Float), floored at 1e-4 max(u, 1).
+
+        Returns:
+            mi.Color3f.
+        """
         from styletrace.styles.forms import AffineForm, CompositeForm
         form = self.form()
-        if isinstance(form, AffineForm) or (isinstance(form, CompositeForm) and form.affine is not None):
+        if isinstance(form, AffineForm) or (isinstance(form, CompositeForm)
+                                            and form.affine is not None):
             return mi.Color3f(0.0)
-        h = dr.maximum(h, 1e-4 * dr.maximum(brightness(I), 1.0))  # no 0/0 where the children agree
+        # no 0/0 where the children agree
+        h = dr.maximum(h, 1e-4 * dr.maximum(brightness(I), 1.0))
         return (self.apply(I + h, v) - 2.0 * self.apply(I, v) + self.apply(I - h, v)) / (h * h)
 
     def describe(self) -> str:
@@ -133,6 +196,14 @@ class Style:
 
 
 def key_in(values: Mapping[str, Any], key: str) -> bool:
+    """Whether a parameter is given a value.
+
+    Args:
+        values: parameter name -> value; key: the parameter's name.
+
+    Returns:
+        True where `key` is present and not None.
+    """
     return key in values and values[key] is not None
 
 
@@ -147,7 +218,14 @@ class Camera:
 
 
 def camera(scene: mi.Scene) -> Camera:
-    """The frame of the scene's first sensor (Mitsuba's default frame if it has none)."""
+    """The frame of the scene's first sensor (Mitsuba's default frame if it has none).
+
+    Args:
+        scene: a loaded mi.Scene.
+
+    Returns:
+        The Camera (position, unit forward and up).
+    """
     import numpy as np
     sensors = scene.sensors()
     if not sensors:
@@ -156,7 +234,8 @@ def camera(scene: mi.Scene) -> Camera:
 
     def unit(v):
         return tuple(float(x) for x in v / np.linalg.norm(v))
-    return Camera(position=tuple(float(x) for x in m[:3, 3]), forward=unit(m[:3, 2]), up=unit(m[:3, 1]))
+    return Camera(position=tuple(float(x) for x in m[:3, 3]), forward=unit(m[:3, 2]),
+                  up=unit(m[:3, 1]))
 
 
 @dataclass(frozen=True)
@@ -172,31 +251,61 @@ class Projection:
     b: float = 0.0
 
     def footprint(self, p: mi.Point3f) -> tuple[mi.Vector3f, mi.Float]:
-        """(p - camera position, the scene units per pixel at p's depth) on Dr.Jit arrays."""
+        """Where p lies from the camera, and its pixel size.
+
+        Args:
+            p: world points (mi.Point3f).
+
+        Returns:
+            (p - camera position as mi.Vector3f, the scene units per pixel at p's depth, mi.Float).
+        """
         rel = mi.Vector3f(p - mi.Point3f(*self.camera.position))
-        z = dr.maximum(dr.dot(rel, mi.Vector3f(*self.camera.forward)), 1e-6)  # points behind: finite, tiny
+        # points behind: finite, tiny
+        z = dr.maximum(dr.dot(rel, mi.Vector3f(*self.camera.forward)), 1e-6)
         return rel, z * self.a + self.b
 
     def pixels(self, p: mi.Point3f) -> tuple[mi.Float, mi.Float]:
-        """Screen coordinates of p in pixels (right, up), relative to the image centre."""
+        """Screen coordinates of p in pixels (right, up), relative to the image centre.
+
+        Args:
+            p: world points (mi.Point3f).
+
+        Returns:
+            (right, up) in pixels, mi.Float each.
+        """
         rel, fp = self.footprint(p)
         inv = dr.rcp(fp)
-        return dr.dot(rel, mi.Vector3f(*self.right)) * inv, dr.dot(rel, mi.Vector3f(*self.camera.up)) * inv
+        return (dr.dot(rel, mi.Vector3f(*self.right)) * inv,
+                dr.dot(rel, mi.Vector3f(*self.camera.up)) * inv)
 
 
 def lanes(v, n: int):
     """A Dr.Jit 3-vector as a (3, n) float64 numpy array. A sensor returns a component that is the
     same for every lane as an array of width 1 (an orthographic sensor's ray direction, a
     perspective one's origin before the near-clip offset): it is repeated, so that lane k is ray k
-    whatever the sensor type."""
+    whatever the sensor type.
+
+    Args:
+        v: a Dr.Jit 3-vector of width n or 1; n: the lane count.
+
+    Returns:
+        numpy float64 (3, n), a read-only view.
+    """
     import numpy as np
     a = np.array(v, dtype=np.float64).reshape(3, -1)
     return np.broadcast_to(a, (3, n))
 
 
 def projection(scene: mi.Scene) -> Projection:
-    """Measured on the sensor itself: the rays through the film centre and one pixel to its
-    right."""
+    """The first sensor's Projection, measured on the sensor itself: the rays through the film
+    centre and one pixel to its right.
+
+    Args:
+        scene: a loaded mi.Scene.
+
+    Returns:
+        The Projection (the default one where the scene has no sensor).
+    """
     import numpy as np
     sensors = scene.sensors()
     if not sensors:
@@ -223,19 +332,40 @@ def projection(scene: mi.Scene) -> Projection:
 
 
 def camera_forward(scene: mi.Scene) -> tuple[float, float, float]:
-    """World-space viewing direction of the scene's first sensor."""
+    """World-space viewing direction of the scene's first sensor.
+
+    Args:
+        scene: a loaded mi.Scene.
+
+    Returns:
+        The unit forward vector (x, y, z).
+    """
     return camera(scene).forward
 
 
 def rounded(x: float) -> float:
     """x to 4 significant digits: auto values are pinned as printed, so the printed line reproduces
-    them."""
+    them.
+
+    Args:
+        x: the value.
+
+    Returns:
+        float(f"{x:.4g}").
+    """
     return float(f"{x:.4g}")
 
 
 def increasing(values) -> tuple[float, ...]:
     """Quantiles, rounded and made strictly increasing (ties, e.g. a scene of one brightness, are
-    spread by a relative 1e-3, at least 1e-6), so that they are valid thresholds."""
+    spread by a relative 1e-3, at least 1e-6), so that they are valid thresholds.
+
+    Args:
+        values: non-decreasing numbers.
+
+    Returns:
+        A strictly increasing tuple of `rounded` floats.
+    """
     out: list[float] = []
     for x in values:
         x = rounded(x)
@@ -246,22 +376,26 @@ def increasing(values) -> tuple[float, ...]:
 
 
 #: The auto exposure of the tone styles (contrast, exp_tone, reinhard, gamma, tie_dye): the scene's
-#: median
-#: first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard et al.
-#: 2002), so a scene ten times dimmer gets ten times the exposure and looks the same.
+#: median first-hit brightness is scaled to photographic middle grey (the key value 0.18 of Reinhard
+#: et al. 2002), so a scene ten times dimmer gets ten times the exposure and looks the same.
 EXPOSURE_KEY = 0.18
 #: Largest exposure. The unbiased series estimators take powers of exposed samples in float32: on
-#: the Cornell
-#: box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2 (measured), so
-#: the auto rule
-#: stops here: a scene whose median brightness is below 0.18 / 100 comes out darker than middle
-#: grey.
+#: the Cornell box (light 18) series_recursive overflowed at exposure 1e3 and was finite at 1e2
+#: (measured), so the auto rule stops here: a scene whose median brightness is below 0.18 / 100
+#: comes out darker than middle grey.
 MAX_EXPOSURE = 100.0
 
 
 def exposure_param(what: str = "") -> Param:
     """The tone styles' `exposure` s: <I> is scaled by s before the tone curve (auto: see
-    `auto_exposure`)."""
+    `auto_exposure`).
+
+    Args:
+        what: the auto rule's text; empty: the median rule of `auto_exposure`.
+
+    Returns:
+        The Param (float in (0, MAX_EXPOSURE], default auto).
+    """
     return Param(
         "exposure",
         "float",
@@ -278,8 +412,17 @@ def exposure_param(what: str = "") -> Param:
 
 def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSURE) -> float:
     """`target` over the median first-hit brightness of what the style covers, at most `high`,
-    rounded as printed; NaN where the median or the target is not positive (a black scene, a pivot
-    <= 0: the value is refused and the unresolved fallback applies)."""
+    rounded as printed.
+
+    Args:
+        facts: the style's `scene.defaults.Facts` (its `brightness([0.5])`).
+        target: the brightness the median maps to (EXPOSURE_KEY; a style's pivot).
+        high: the largest exposure.
+
+    Returns:
+        The exposure; NaN where the median or the target is not positive (a black scene, a pivot
+        <= 0: the value is refused and the unresolved fallback applies).
+    """
     (median,) = facts.brightness([0.5])
     if not (median > 0 and target > 0):
         return float("nan")
@@ -289,7 +432,14 @@ def auto_exposure(facts, target: float = EXPOSURE_KEY, high: float = MAX_EXPOSUR
 def light_from_camera(cam: Camera) -> tuple[float, float, float]:
     """The 'auto' light direction of gooch and xtoon: the camera's up vector tilted a little towards
     the camera, normalize(up - 0.3 forward) (the old fixed default 0,1,0.3 for a y-up camera looking
-    along -z)."""
+    along -z).
+
+    Args:
+        cam: the scene's Camera.
+
+    Returns:
+        The unit direction, each component rounded to 4 decimals.
+    """
     v = [u - 0.3 * f for u, f in zip(cam.up, cam.forward)]
     n = sum(x * x for x in v) ** 0.5
     return tuple(round(x / n, 4) for x in v)

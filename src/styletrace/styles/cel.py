@@ -97,6 +97,14 @@ class Cel(Style):
         return out
 
     def target(self, u: mi.Float) -> mi.Float:
+        """m_j, the level of u's band (j the number of thresholds <= u).
+
+        Args:
+            u: brightness per lane (mi.Float).
+
+        Returns:
+            mi.Float.
+        """
         levels = self.band_values()
         out = mi.Float(levels[0])
         for t, m in zip(self.steps(), levels[1:]):
@@ -107,9 +115,8 @@ class Cel(Style):
         return self.steps()
 
     def curvature(self, I: mi.Color3f, v: Vertex, h: mi.Float) -> mi.Color3f:
-        # constant along grey inside a band (I * level / u of a grey shift keeps the band's level);
-        # its
-        # jumps are the thresholds
+        # constant along grey inside a band (I * level / u of a grey shift keeps the band's
+        # level); its jumps are the thresholds
         return mi.Color3f(0.0)
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:

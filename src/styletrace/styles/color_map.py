@@ -50,7 +50,8 @@ class ColorMap(Style):
         return self.gradient.stops[0][0], self.gradient.stops[-1][0]
 
     def auto_values(self, facts) -> dict:
-        return {} if self.range is not None else {"range": increasing(facts.brightness([0.05, 0.95]))}
+        return ({} if self.range is not None
+                else {"range": increasing(facts.brightness([0.05, 0.95]))})
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         lo, hi = self.span()

@@ -25,11 +25,26 @@ SEPARATOR = "+"
 
 
 def is_composite(name: str) -> bool:
+    """Whether a style name is a composition.
+
+    Args:
+        name: a style name.
+
+    Returns:
+        True where it contains SEPARATOR ('+').
+    """
     return SEPARATOR in name
 
 
 def affine_matrix(form: AffineForm) -> tuple[np.ndarray, np.ndarray]:
-    """(A, b) as a 3x3 matrix and a 3-vector, whatever shapes the form's a1 and a0 have."""
+    """(A, b) as a 3x3 matrix and a 3-vector, whatever shapes the form's a1 and a0 have.
+
+    Args:
+        form: the AffineForm (a1 a scalar, 3-vector or 3x3 matrix; a0 a scalar or 3-vector).
+
+    Returns:
+        (A, b), float64, with g(I) = A I + b.
+    """
     a1 = np.asarray(form.a1, dtype=np.float64)
     A = a1 if a1.ndim == 2 else np.diag(np.broadcast_to(a1, (3,)))
     b = np.broadcast_to(np.asarray(form.a0, dtype=np.float64), (3,)).copy()
@@ -37,7 +52,18 @@ def affine_matrix(form: AffineForm) -> tuple[np.ndarray, np.ndarray]:
 
 
 def composite_class(name: str, lookup) -> type[Style]:
-    """The Style class of `name` = 'a+b+...'; `lookup(op)` returns an operand's class."""
+    """The Style class of `name` = 'a+b+...', its parameters named 'operand.param'.
+
+    Args:
+        name: the composition, operands joined by '+' in application order.
+        lookup: lookup(op) -> the operand's Style class (raises StyleError for an unknown one).
+
+    Returns:
+        A new subclass of Composite.
+
+    Raises:
+        StyleError: fewer than two operands, or an unknown, repeated, per-sample or composite one.
+    """
     ops = [o.strip() for o in name.split(SEPARATOR)]
     if len(ops) < 2 or any(not o for o in ops):
         raise StyleError(f"bad style {name!r}: a composition is 'STYLE+STYLE[+...]', e.g. "
@@ -76,7 +102,14 @@ def composite_class(name: str, lookup) -> type[Style]:
 
 
 class Composite(Style):
-    """Base of the classes `composite_class` makes; `operand_classes` in application order."""
+    """Base of the classes `composite_class` makes; `operand_classes` in application order.
+
+    Args:
+        **values: 'operand.param' -> value; each operand is made from its own.
+
+    Raises:
+        StyleError: an unknown parameter, or a bad value.
+    """
 
     operand_classes: tuple[type[Style], ...] = ()
 

@@ -8,9 +8,8 @@ Parameters
 
     g(<I>) = c (s <I> - p) + p        per channel.
 
-Affine, so every unbiased estimator of <I> suffices.
-
-Why the auto exposure ignores the pivot: docs/design/scene_relative_defaults.md.
+Affine, so every unbiased estimator of <I> suffices. Why the auto exposure ignores the pivot:
+docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 
@@ -42,8 +41,7 @@ class Contrast(Style):
 
     def auto_values(self, facts) -> dict:
         # contrast spreads tones about the pivot: the scene's median goes to the default pivot
-        # (middle grey,
-        # 0.18, would leave most of the image below 0 after c = 1.5 about 0.5)
+        # (middle grey, 0.18, would leave most of the image below 0 after c = 1.5 about 0.5)
         return {} if self.exposure is not None else {"exposure": auto_exposure(facts, MID)}
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:

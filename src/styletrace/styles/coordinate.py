@@ -1,14 +1,15 @@
-"""coordinate: the vertex's image coordinate and how it was found, as a colour (LLaT's lifting made visible).
+"""coordinate: the vertex's image coordinate and how it was found, as a colour (LLaT's lifting).
 
-Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan Mukherjee and
-Yonghao Yue (ACM TOG 45(4), 2026), Section 5 (canonical lifting) and S2.5 (its fallback chain).
+Reference: "Lifting Lines and Tone: Image-space Stylization in Path-space", Rex West, Sayan
+Mukherjee and Yonghao Yue (ACM TOG 45(4), 2026), Section 5 (canonical lifting) and S2.5 (fallbacks).
 
-No parameters. Closed form (no children): g = (s_x, s_y, method), with s the image coordinate the integrator
-computed for the vertex (`Vertex.s`, pixels right and up of the image centre; kernel/anchors.py) and method
-its code (kernel/mls.py): 0 the pixel (direct view), 1 the first-edge pixel of an all-delta prefix, 2 MLS,
-3 affine, 4 nearest anchor, 5 first-edge fallback. Rendered on a styled object with one camera sample per
-pixel it is the coordinate and method AOV of the lifting; averaged over samples it is their pixel mean.
-Without a coordinate (a renderer that computes none) s is the projection of the vertex's position, method 0.
+No parameters. Closed form (no children): g = (s_x, s_y, method), s the image coordinate the
+integrator computed for the vertex (`Vertex.s`, pixels right and up of the image centre;
+kernel/anchors.py), method its code (kernel/mls.py): 0 the pixel (direct view), 1 the first-edge
+pixel of an all-delta prefix, 2 MLS, 3 affine, 4 nearest anchor, 5 first-edge fallback. On a
+styled object with one camera sample per pixel it is the lifting's coordinate and method AOV;
+averaged over samples, their pixel mean.
+Without a coordinate (a renderer that computes none): s the vertex's projection, method 0.
 """
 from __future__ import annotations
 
@@ -19,6 +20,15 @@ from styletrace.styles.registry import register_style
 
 @register_style
 class Coordinate(Style):
+    """The coordinate style (the module doc).
+
+    Args:
+        **values: none are accepted (the style has no parameters).
+
+    Raises:
+        StyleError: any parameter given.
+    """
+
     name = "coordinate"
     summary = "debug: the vertex's image coordinate (pixels) and how it was found (LLaT) as r, g, b"
     default_inner = 0

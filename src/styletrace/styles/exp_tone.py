@@ -30,9 +30,8 @@ class ExpTone(Style):
     name = "exp_tone"
     summary = "exponential tone curve 1 - exp(-k I), per channel (series form, S14-S15)"
     # k <= 87 < -ln(FLT_MIN) = 87.3: the series' base a = e^-k, and exp(-k I) at unit radiance, stay
-    # normal
-    # float32 numbers (above 1.2e-38) instead of flushing to 0, where ln(a) and the series break
-    # down
+    # normal float32 numbers (above 1.2e-38) instead of flushing to 0, where ln(a) and the series
+    # break down
     params = (
         replace(
             exposure_param(),
@@ -49,7 +48,8 @@ class ExpTone(Style):
         return K_AT_KEY if self.exposure is None else self.exposure
 
     def auto_values(self, facts) -> dict:
-        return {} if self.exposure is not None else {"exposure": auto_exposure(facts, K_AT_KEY * EXPOSURE_KEY, MAX_EXPOSURE)}
+        return ({} if self.exposure is not None
+                else {"exposure": auto_exposure(facts, K_AT_KEY * EXPOSURE_KEY, MAX_EXPOSURE)})
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:
         return 1.0 - dr.exp(-self.k * I)

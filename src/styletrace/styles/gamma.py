@@ -63,12 +63,9 @@ class Gamma(Style):
     def form(self):
         from styletrace.estimators import gamma_series
         # binomial series of I^(1/gamma) about a pilot b > 0 (main paper Eq. 24); the floor and the
-        # 1.5x
-        # margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b (measured
-        # in
-        # tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples s X (b and its
-        # floor in
-        # exposed units: the same on a scene of any brightness)
+        # 1.5x margin keep dark or sparsely lit pixels inside the convergence region 0 < I < 2b
+        # (measured in tests/styles/test_gamma.py and docs/estimators.md), on the exposed samples
+        # s X (b and its floor in exposed units: the same on a scene of any brightness)
         return SeriesForm(
             gamma_series(self.gamma),
             gain=self.scale,

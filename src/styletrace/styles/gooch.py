@@ -1,7 +1,6 @@
-"""gooch: cool-to-warm shading for technical illustration, in closed form (supplement S5.6).
-
-Reference: Gooch, Gooch, Shirley, Cohen, "A Non-Photorealistic Lighting Model for Automatic
-Technical Illustration" (1998).
+"""gooch: cool-to-warm shading for technical illustration, in closed form (supplement S5.6), after
+Gooch, Gooch, Shirley, Cohen, "A Non-Photorealistic Lighting Model for Automatic Technical
+Illustration" (1998).
 
 Parameters
 - light_dir (vector, default auto): direction towards the light; auto: normalize(up - 0.3 forward)
@@ -22,12 +21,27 @@ from styletrace.styles.registry import register_style
 
 
 def unit(v) -> tuple[float, float, float]:
+    """v normalised.
+
+    Args:
+        v: a non-zero 3-vector (a sequence of numbers).
+
+    Returns:
+        v / |v| as a tuple.
+    """
     n = math.sqrt(sum(x * x for x in v))
     return tuple(x / n for x in v)
 
 
 def facing(n: mi.Vector3f, wo: mi.Vector3f) -> mi.Vector3f:
-    """Unit shading normal flipped to the side of `wo` (n.wo >= 0 after the flip)."""
+    """Unit shading normal flipped to the side of `wo` (n.wo >= 0 after the flip).
+
+    Args:
+        n: shading normals (mi.Vector3f, any length); wo: directions towards the viewer.
+
+    Returns:
+        mi.Vector3f, unit.
+    """
     n = dr.normalize(n)
     return dr.select(dr.dot(n, wo) < 0, -n, n)
 
@@ -42,21 +56,38 @@ class CameraLight:
     block)."""
 
     def light(self) -> tuple[float, float, float]:
+        """The unit light direction in use: light_dir, else the prepared camera's, else
+        FALLBACK_LIGHT."""
         if self.light_dir is not None:
             return unit(self.light_dir)
         return unit(self.__dict__.get("camera_light", FALLBACK_LIGHT))
 
     def read_light(self, scene: mi.Scene) -> None:
+        """Keep the scene camera's auto light (`light_from_camera`) for an auto light_dir.
+
+        Args:
+            scene: the scene about to be rendered.
+        """
         self.camera_light = light_from_camera(camera(scene))
 
     def auto_values(self, facts) -> dict:
-        return {} if self.light_dir is not None else {"light_dir": light_from_camera(facts.camera)}
+        """The auto light_dir, pinned from the camera (as `Style.auto_values`).
+
+        Args:
+            facts: the style's `scene.defaults.Facts` (its `camera`).
+
+        Returns:
+            {"light_dir": ...}, or {} where light_dir is given.
+        """
+        return ({} if self.light_dir is not None
+                else {"light_dir": light_from_camera(facts.camera)})
 
 
 @register_style
 class Gooch(CameraLight, Style):
     name = "gooch"
-    summary = "Gooch cool-to-warm shading from a user light direction, closed form (Gooch et al. 1998)"
+    summary = ("Gooch cool-to-warm shading from a user light direction, closed form "
+               "(Gooch et al. 1998)")
     params = (
         Param(
             "light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT

@@ -26,7 +26,16 @@ PRESETS = {
 
 
 class Gradient:
-    """Colour stops over brightness; `spec` is the text it was parsed from."""
+    """Colour stops over brightness; `spec` is the text it was parsed from.
+
+    Args:
+        stops: [(position u_i, (r, g, b)), ...], at least two, positions finite and strictly
+            increasing (in float32 too).
+        spec: the text the stops were parsed from (what `Param.show` prints).
+
+    Raises:
+        ValueError: fewer than two stops, or positions that do not strictly increase.
+    """
 
     def __init__(self, stops: list[tuple[float, tuple[float, float, float]]], spec: str):
         if len(stops) < 2:
@@ -46,6 +55,17 @@ class Gradient:
 
     @staticmethod
     def parse_color(text: str) -> list[float]:
+        """A colour from text.
+
+        Args:
+            text: '#rrggbb', '#rgb', 'r,g,b', 'r g b', or one grey number.
+
+        Returns:
+            [r, g, b] floats (hex digits scaled to [0, 1]).
+
+        Raises:
+            ValueError: anything else.
+        """
         s = text.strip()
         if s.startswith("#"):
             h = s[1:]
@@ -63,7 +83,18 @@ class Gradient:
 
     @classmethod
     def parse(cls, raw: Any) -> "Gradient":
-        """From a preset name, a 'pos:colour;...' string, or a sequence of (pos, colour) pairs."""
+        """From a preset name, a 'pos:colour;...' string, or a sequence of (pos, colour) pairs.
+
+        Args:
+            raw: a name in PRESETS, 'pos:colour;pos:colour;...' (colours as `parse_color`
+                reads them), or a sequence of (pos, (r, g, b)) pairs.
+
+        Returns:
+            The Gradient.
+
+        Raises:
+            StyleError: a bad gradient (one line naming what is expected and the presets).
+        """
         allowed = (
             "expected 'pos:colour;pos:colour;...' with finite positions that strictly increase (in "
             "float32 too) and colours '#rrggbb' or 'r,g,b', or a "
@@ -80,14 +111,23 @@ class Gradient:
                     pos, col = part.split(":", 1)
                     stops.append((float(pos), tuple(cls.parse_color(col))))
             else:
-                spec = ";".join(f"{float(p):g}:{','.join(f'{float(c):g}' for c in col)}" for p, col in raw)
+                spec = ";".join(f"{float(p):g}:{','.join(f'{float(c):g}' for c in col)}"
+                                for p, col in raw)
                 stops = [(float(p), tuple(float(c) for c in col)) for p, col in raw]
             return cls(stops, spec)
         except (ValueError, TypeError) as exc:
             raise StyleError(f"bad gradient {raw!r}: {allowed}") from exc
 
     def eval(self, u, extrapolate: bool = False) -> mi.Color3f:
-        """Colour at brightness u (Dr.Jit Float); clamped to the end stops unless `extrapolate`."""
+        """Colour at brightness u, piecewise linear between the stops.
+
+        Args:
+            u: brightness per lane (mi.Float).
+            extrapolate: continue the end segments linearly instead of clamping to the end stops.
+
+        Returns:
+            mi.Color3f.
+        """
         (p0, c0) = self.stops[0]
         out = mi.Color3f(*c0)
         last = len(self.stops) - 2

@@ -1,9 +1,7 @@
-"""halftone: dots of brightness-dependent radius on a 3D or screen grid (supplement S5.6).
+"""halftone: dots of brightness-dependent radius on a 3D or screen grid (S5.6; Hall 1999).
 
-Reference: Peter Hall, "Non-photorealistic Rendering by Q-mapping" (1999); lifting after West,
-Mukherjee, Yue (2026).
-
-Parameters
+g = dark where `halftone_mask` holds (|p - round(p / d) d| < r), light elsewhere; lifting after
+West, Mukherjee, Yue (2026). Formulas and rationale: docs/design/screen_space_patterns.md.
 - spacing_px (float, default 8, > 0): grid interval on screen, in pixels
 - spacing (float, default auto, > 0): grid interval d in scene units; given, it replaces spacing_px
 - max_radius_fraction (float, default 0.75, in (0, 1]): darkest dot's radius / half the diagonal
@@ -11,9 +9,6 @@ Parameters
 - u_min (float), u_max (float, > u_min): a linear ramp instead of the tone curve
 - dark (colour, default 0.1,0.1,0.15), light (colour, default 0.97,0.95,0.9)
 - lift (choice, default canonical): canonical (image coordinate s) or position (own projection)
-
-g = dark where `halftone_mask` holds (|p - round(p / d) d| < r), light elsewhere. Formulas and
-rationale: docs/design/screen_space_patterns.md.
 """
 from __future__ import annotations
 
@@ -27,27 +22,61 @@ from styletrace.styles.tone import tone_inverse
 
 
 def dot_radius(u: mi.Float, r_max: float, u_min: float = 0.05, u_max: float = 0.9) -> mi.Float:
-    """r = (1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) r_max."""
+    """r = (1 - clamp((u - u_min) / (u_max - u_min), 0, 1)) r_max, the linear ramp's radius.
+
+    Args:
+        u: brightness per lane (mi.Float); r_max: the largest radius.
+        u_min, u_max: the ramp's ends (largest dot, no dot).
+
+    Returns:
+        mi.Float in [0, r_max].
+    """
     return coverage(u, u_min, u_max) * r_max
 
 
 def halftone_mask(p: mi.Point3f, u: mi.Float, spacing: float, r_max: float,
                   u_min: float = 0.05, u_max: float = 0.9) -> mi.Bool:
-    """True where p is closer than r(u) to its nearest grid point (see module doc)."""
+    """True where p is closer than r(u) to its nearest point of the 3D grid (the linear ramp).
+
+    Args:
+        p: world points (mi.Point3f); u: their brightness (mi.Float).
+        spacing: the grid interval d (scene units); r_max: the largest radius.
+        u_min, u_max: the ramp's ends.
+
+    Returns:
+        mi.Bool.
+    """
     g = dr.round(mi.Vector3f(p) * (1.0 / spacing)) * spacing
     r = dot_radius(u, r_max, u_min, u_max)
     return dr.squared_norm(mi.Vector3f(p) - g) < r * r
 
 
 def grid_distance(p: mi.Point3f, spacing: float) -> mi.Float:
-    """Distance from p to its nearest point of the 3D grid."""
+    """Distance from p to its nearest point of the 3D grid.
+
+    Args:
+        p: world points (mi.Point3f); spacing: the grid interval d (scene units).
+
+    Returns:
+        mi.Float, in scene units.
+    """
     g = dr.round(mi.Vector3f(p) * (1.0 / spacing)) * spacing
     return dr.norm(mi.Vector3f(p) - g)
 
 
-def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float, s: mi.Point2f | None = None) -> mi.Float:
+def screen_distance(p: mi.Point3f, proj: Projection, spacing_px: float,
+                    s: mi.Point2f | None = None) -> mi.Float:
     """Distance in pixels from p's screen position (the image coordinate `s` where given) to its
-    nearest screen grid point."""
+    nearest screen grid point.
+
+    Args:
+        p: world points (mi.Point3f); proj: the sensor's Projection (used where s is None).
+        spacing_px: the grid interval, in pixels.
+        s: the image coordinates (mi.Point2f, pixels), or None: p's own projection.
+
+    Returns:
+        mi.Float, in pixels.
+    """
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
@@ -65,7 +94,17 @@ def screen_halftone_mask(
     s: mi.Point2f | None = None,
 ) -> mi.Bool:
     """True where p's screen position (the image coordinate `s` where given) is closer than r(u)
-    pixels to its nearest screen grid point."""
+    pixels to its nearest screen grid point (the linear ramp).
+
+    Args:
+        p: world points (mi.Point3f); u: their brightness (mi.Float).
+        proj: the sensor's Projection; spacing_px: the grid interval, in pixels.
+        r_max_px: the largest radius, in pixels; u_min, u_max: the ramp's ends.
+        s: the image coordinates (mi.Point2f), or None: p's own projection.
+
+    Returns:
+        mi.Bool.
+    """
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
@@ -75,8 +114,18 @@ def screen_halftone_mask(
 
 @register_style
 class Halftone(BrightnessRange, Style):
+    """The halftone style (the module doc).
+
+    Args:
+        **values: its parameters (the module doc), as `Style` takes them.
+
+    Raises:
+        StyleError: a bad value, or a bad tone range.
+    """
+
     name = "halftone"
-    summary = "half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness falls"
+    summary = ("half-tone: dark dots on a screen grid (or a 3D grid), radius growing as brightness "
+               "falls")
     params = (
         Param(
             "spacing_px",

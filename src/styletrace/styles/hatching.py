@@ -1,22 +1,15 @@
-"""hatching: cross-hatching by slabs around planes through the view direction (supplement S5.6).
+"""hatching: cross-hatching by slabs around planes through the view (S5.6; Deussen et al. 1999).
 
-Reference: Deussen, Hamel, Raab, Schlechtweg, Strothotte, "An Illustration Technique Using
-Hardware-Based Intersections and Skeletons" (1999); lifting after West, Mukherjee, Yue (2026).
-
-Parameters
-- sets (int, default 3, in [1, 8]): number of hatching directions n
-- spacing_px (float, default 8, > 0): line distance on screen, in pixels
-- spacing (float, default auto, > 0): world-space plane distance; given, it replaces spacing_px
+g = line_color where `hatch_mask` holds, else background (docs/design/screen_space_patterns.md).
+- sets (int, default 3, in [1, 8]), angle (float, default 45): n directions, the first's (degrees)
+- spacing_px (float, default 8, > 0), spacing (float, default auto, > 0): line distance on screen
+  in pixels, or of world-space planes (given, it replaces spacing_px)
 - thickness (float, default auto = 0.3 * the spacing, in (0, spacing)): line thickness d
-- angle (float, default 45): rotation of the first set around the view direction, in degrees
-- tones (floats, default auto): the tone curve u_0 < ... < u_K (`tone.tone_knots`)
-- u_min (float), u_max (float, > u_min): a linear ramp instead of tones (unresolved: 0.05 and 0.9)
+- tones (floats, default auto), u_min (float), u_max (float, > u_min): the tone curve u_0 < ... <
+  u_K (`tone.tone_knots`), or a linear ramp instead (unresolved: 0.05 and 0.9)
 - line_color (colour, default 0.05,0.05,0.08), background (colour, default 0.97,0.95,0.9)
-- lift (choice, default canonical): canonical (image coordinate s) or position (own projection)
-- angle_reflected (float, default auto = angle): the first set's angle at path depth > 0
-
-g = line_color where `hatch_mask` holds, background elsewhere. Formulas and rationale:
-docs/design/screen_space_patterns.md.
+- lift (choice, default canonical), angle_reflected (float, default auto = angle): lines at the
+  image coordinate s (LLaT, West et al. 2026) or own projection; first angle at path depth > 0
 """
 from __future__ import annotations
 
@@ -43,7 +36,14 @@ Vec = tuple[float, float, float]
 
 
 def camera_up(scene: mi.Scene) -> Vec:
-    """World-space up vector of the scene's first sensor (its local +y); +y if there is none."""
+    """World-space up vector of the scene's first sensor (its local +y); +y if there is none.
+
+    Args:
+        scene: a loaded mi.Scene.
+
+    Returns:
+        The unit up vector (x, y, z).
+    """
     return camera(scene).up
 
 
@@ -56,12 +56,22 @@ def _unit(a: Sequence[float]) -> Vec:
     return tuple(x / n for x in a)
 
 
-def plane_normals(view: Sequence[float], up: Sequence[float], sets: int, angle_deg: float) -> list[Vec]:
-    """Unit normals n_j perpendicular to `view`, at angles angle + j pi / sets around it."""
+def plane_normals(view: Sequence[float], up: Sequence[float], sets: int,
+                  angle_deg: float) -> list[Vec]:
+    """Unit normals n_j perpendicular to `view`, at angles angle + j pi / sets around it.
+
+    Args:
+        view: the view direction; up: the camera's up (made perpendicular to view: e2).
+        sets: the number of normals; angle_deg: the first one's angle from e1, in degrees.
+
+    Returns:
+        The normals, n_j = cos(theta_j) e1 + sin(theta_j) e2.
+    """
     f = _unit(view)
     d = sum(a * b for a, b in zip(up, f))
     e2 = tuple(a - d * b for a, b in zip(up, f))
-    if math.sqrt(sum(x * x for x in e2)) < 1e-6:  # up parallel to view: any perpendicular will do
+    # up parallel to view: any perpendicular will do
+    if math.sqrt(sum(x * x for x in e2)) < 1e-6:
         helper = (1.0, 0.0, 0.0) if abs(f[0]) < 0.9 else (0.0, 1.0, 0.0)
         e2 = _cross(f, helper)
     e2 = _unit(e2)
@@ -76,21 +86,45 @@ def plane_normals(view: Sequence[float], up: Sequence[float], sets: int, angle_d
 
 def coverage(u: mi.Float, u_min: float, u_max: float) -> mi.Float:
     """1 - clamp((u - u_min) / (u_max - u_min), 0, 1): 1 at (or below) u_min, 0 at (or above)
-    u_max."""
+    u_max.
+
+    Args:
+        u: brightness per lane (mi.Float); u_min, u_max: the ramp's ends, u_min < u_max.
+
+    Returns:
+        mi.Float in [0, 1].
+    """
     return 1.0 - dr.clip((u - u_min) * (1.0 / (u_max - u_min)), 0.0, 1.0)
 
 
 def active_sets(u: mi.Float, sets: int, u_min: float, u_max: float) -> mi.Float:
-    """m = floor(coverage(u) sets + 1/2), an integer-valued Float in {0..sets}."""
+    """m = floor(coverage(u) sets + 1/2), the number of sets drawn at brightness u.
+
+    Args:
+        u: brightness per lane (mi.Float); sets: the set count; u_min, u_max: the ramp's ends.
+
+    Returns:
+        An integer-valued mi.Float in {0..sets}.
+    """
     return dr.floor(coverage(u, u_min, u_max) * sets + 0.5)
 
 
 def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], spacing: float,
                thickness: float, u_min: float = 0.05, u_max: float = 0.9,
                projection: Projection | None = None) -> mi.Bool:
-    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (see module
-    doc). With `projection`, spacing and thickness are in pixels: the planes form pencils through
-    the camera."""
+    """True where p lies within thickness/2 of a plane of one of the m(u) active sets (the linear
+    ramp).
+
+    Args:
+        p: world points (mi.Point3f); u: their brightness (mi.Float).
+        normals: the sets' unit plane normals (`plane_normals`).
+        spacing, thickness: plane distance and line thickness (pixels with `projection`).
+        u_min, u_max: the ramp's ends.
+        projection: None: parallel world planes; given: pencils of planes through the camera.
+
+    Returns:
+        mi.Bool.
+    """
     m = active_sets(u, len(normals), u_min, u_max)
     hit = dr.zeros(mi.Bool, dr.width(p))
     for j, on_line in enumerate(line_masks(p, normals, spacing, thickness, projection)):
@@ -100,7 +134,16 @@ def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], s
 
 def line_masks(p: mi.Point3f, normals: Sequence[Sequence[float]], spacing: float, thickness: float,
                projection: Projection | None = None) -> list[mi.Bool]:
-    """Per set j: True where p lies within thickness/2 of one of its planes (drawn or not)."""
+    """Per set j: True where p lies within thickness/2 of one of its planes (drawn or not).
+
+    Args:
+        p: world points (mi.Point3f); normals: the sets' unit plane normals.
+        spacing, thickness: plane distance and line thickness (pixels with `projection`).
+        projection: None: parallel world planes; given: pencils of planes through the camera.
+
+    Returns:
+        One mi.Bool per set.
+    """
     if projection is None:
         rel, scale = mi.Vector3f(p), 1.0 / spacing
     else:
@@ -124,8 +167,17 @@ def coordinate_line_masks(
     thickness: float,
 ) -> list[mi.Bool]:
     """Per set j: True where the image coordinate s (pixels) lies within thickness/2 of one of its
-    lines, the set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (module doc,
-    canonical lifting)."""
+    lines, the set's angle theta_j = angle (angle_reflected at depth > 0) + j pi / sets (canonical
+    lifting).
+
+    Args:
+        s: image coordinates (mi.Point2f, pixels); depth: path depth per lane (mi.UInt32).
+        sets: the set count; angle, angle_reflected: the first set's angles (degrees).
+        spacing, thickness: line distance and thickness, in pixels.
+
+    Returns:
+        One mi.Bool per set.
+    """
     out = []
     for j in range(sets):
         t0 = math.radians(angle) + j * math.pi / sets
@@ -140,12 +192,21 @@ def coordinate_line_masks(
 
 def set_thresholds(sets: int, u_min: float, u_max: float) -> list[float]:
     """Set j is drawn iff u <= its threshold u_max - (j + 1/2)(u_max - u_min)/sets (where m(u) >
-    j)."""
+    j).
+
+    Args:
+        sets: the set count; u_min, u_max: the linear ramp's ends.
+
+    Returns:
+        The thresholds, one per set.
+    """
     return [u_max - (j + 0.5) * (u_max - u_min) / sets for j in range(sets)]
 
 
-AUTO_U_MIN = "unused while tones applies; given u_max only: the 5% brightness quantile (unresolved: 0.05)"
-AUTO_U_MAX = "unused while tones applies; given u_min only: the 95% brightness quantile (unresolved: 0.9)"
+AUTO_U_MIN = ("unused while tones applies; given u_max only: the 5% brightness quantile "
+              "(unresolved: 0.05)")
+AUTO_U_MAX = ("unused while tones applies; given u_min only: the 95% brightness quantile "
+              "(unresolved: 0.9)")
 AUTO_TONES = (
     "the scene's first-hit brightness distribution mixed with its lightness at 9 knots, unless "
     "u_min or u_max is given (unresolved: the linear ramp)"
@@ -154,7 +215,15 @@ AUTO_TONES = (
 
 def tone_params(full: str, none: str) -> tuple[Param, ...]:
     """The tone parameters of hatching and halftone: `tones`, and `u_min` / `u_max` of the linear
-    ramp, whose docs end with what happens at full tone (`full`) and at none (`none`)."""
+    ramp.
+
+    Args:
+        full: what happens at full tone, ending u_min's doc (e.g. "all sets are drawn").
+        none: what happens at no tone, ending u_max's doc.
+
+    Returns:
+        (tones, u_min, u_max) Params, all auto.
+    """
     return (
         Param(
             "tones",
@@ -190,6 +259,8 @@ class BrightnessRange:
         return self.tones is not None and self.u_min is None and self.u_max is None
 
     def u_range(self) -> tuple[float, float]:
+        """The brightness range toned: the tone curve's ends, else (u_min, u_max) with an
+        unresolved end 0.05 or 0.9 (kept 0.85 from the given one where that would invert them)."""
         if self.uses_tones:
             return self.tones[0], self.tones[-1]
         lo = 0.05 if self.u_min is None else self.u_min
@@ -201,12 +272,21 @@ class BrightnessRange:
         return lo, hi
 
     def toned(self, u: mi.Float) -> mi.Float:
-        """1 where fully toned (dark) to 0 where untoned, by the tone curve or the linear ramp."""
+        """1 where fully toned (dark) to 0 where untoned, by the tone curve or the linear ramp.
+
+        Args:
+            u: brightness per lane (mi.Float).
+
+        Returns:
+            mi.Float in [0, 1].
+        """
         if self.uses_tones:
             return 1.0 - tone_of(u, self.tones)
         return coverage(u, *self.u_range())
 
     def check_u_range(self) -> None:
+        """Raise StyleError for tones given with u_min/u_max, a decreasing or too short tone
+        curve, or u_max <= u_min."""
         if self.tones is not None and (self.u_min is not None or self.u_max is not None):
             raise StyleError("bad value for parameter 'tones': tones and u_min/u_max are "
                              "alternatives; give one")
@@ -225,8 +305,17 @@ class BrightnessRange:
             raise StyleError(f"bad value {hi:g} for parameter 'u_max': must exceed u_min = {lo:g}")
 
     def auto_values(self, facts) -> dict:
+        """The auto tone curve, or the missing end of a linear ramp (as `Style.auto_values`).
+
+        Args:
+            facts: the style's `scene.defaults.Facts` (its brightness quantiles).
+
+        Returns:
+            {"tones": ...} with neither ramp end given; the unset one of u_min, u_max with one.
+        """
         if self.u_min is None and self.u_max is None:
-            return {} if self.tones is not None else {"tones": increasing(tone_knots(facts.brightness))}
+            return ({} if self.tones is not None
+                    else {"tones": increasing(tone_knots(facts.brightness))})
         if self.u_min is not None and self.u_max is not None:
             return {}
         lo, hi = increasing(facts.brightness([0.05, 0.95]))
@@ -241,8 +330,18 @@ class BrightnessRange:
 
 @register_style
 class Hatching(BrightnessRange, Style):
+    """The hatching style (the module doc).
+
+    Args:
+        **values: its parameters (the module doc), as `Style` takes them.
+
+    Raises:
+        StyleError: a bad value, thickness >= the spacing in use, or a bad tone range.
+    """
+
     name = "hatching"
-    summary = "cross-hatching: brightness picks how many plane sets around the view direction draw lines"
+    summary = ("cross-hatching: brightness picks how many plane sets around the view direction "
+               "draw lines")
     params = (
         Param("sets", "int", 3, "number of hatching directions", low=1, high=8),
         Param(
@@ -320,6 +419,11 @@ class Hatching(BrightnessRange, Style):
         self.check_u_range()
 
     def set_camera(self, view: Sequence[float], up: Sequence[float]) -> None:
+        """Orient the plane sets for a camera (`prepare` reads the scene's).
+
+        Args:
+            view: the camera's forward direction; up: its up vector.
+        """
         self.view = tuple(float(x) for x in view)
         self.up = tuple(float(x) for x in up)
         self.normals = plane_normals(self.view, up, self.sets, self.angle)
@@ -364,7 +468,14 @@ class Hatching(BrightnessRange, Style):
         return self.angle if self.angle_reflected is None else self.angle_reflected
 
     def active(self, u: mi.Float) -> mi.Float:
-        """m(u), the number of sets drawn at brightness u (module doc)."""
+        """m(u), the number of sets drawn at brightness u.
+
+        Args:
+            u: brightness per lane (mi.Float).
+
+        Returns:
+            An integer-valued mi.Float in {0..sets}.
+        """
         if self.uses_tones:
             return dr.minimum(dr.floor(self.toned(u) * (self.sets + 1)), self.sets)
         return active_sets(u, self.sets, *self.u_range())
@@ -372,7 +483,8 @@ class Hatching(BrightnessRange, Style):
     def thresholds_of_sets(self) -> list[float]:
         """Set j is drawn iff u <= its threshold (where m(u) > j)."""
         if self.uses_tones:
-            return [float(tone_inverse(1.0 - (j + 1) / (self.sets + 1), self.tones)) for j in range(self.sets)]
+            return [float(tone_inverse(1.0 - (j + 1) / (self.sets + 1), self.tones))
+                    for j in range(self.sets)]
         return set_thresholds(self.sets, *self.u_range())
 
     def apply(self, I: mi.Color3f, v: Vertex) -> mi.Color3f:

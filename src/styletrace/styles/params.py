@@ -5,10 +5,10 @@ A style declares its parameters once; the CLI (`--set key=value` strings), Mitsu
 same spellings and rejects bad values with the same one-line message.
 
 Every real value (a number, a list entry, a colour or vector component) is finite and lies in
-[-LIMIT, LIMIT] unless the parameter's own range is narrower. The kernels compute in float32 (largest
-value 3.4e38): a product of two parameters and a radiance up to 1e20 then stays finite, and no value
-turns into inf when it is converted to float32. Parameters whose formula overflows sooner carry their
-own bounds, derived where they are declared.
+[-LIMIT, LIMIT] unless the parameter's own range is narrower. The kernels compute in float32
+(largest value 3.4e38): a product of two parameters and a radiance up to 1e20 then stays finite, and
+no value turns into inf when it is converted to float32. Parameters whose formula overflows sooner
+carry their own bounds, derived where they are declared.
 """
 from __future__ import annotations
 
@@ -36,11 +36,19 @@ def _floats(text: str) -> list[float]:
 
 @dataclass(frozen=True, init=False)
 class Param(Declaration):
-    """One parameter: `kind` is float | int | bool | color | vector | floats | gradient | choice.
-    The styles' side of the shared `styletrace.declaration.Declaration`: the common kinds (float,
-    int, bool, color, choice) are parsed there; here the `auto` rule, the vector, floats and
-    gradient kinds, the ±LIMIT bound on reals and the styles' spellings (bool also yes/no/on/off,
-    True/False as numbers, a colour also '#rrggbb' or 'r g b', a choice stripped)."""
+    """One style parameter: the styles' side of the shared `styletrace.declaration.Declaration`,
+    which parses the common kinds (float, int, bool, color, choice); here the `auto` rule, the
+    vector, floats and gradient kinds, the ±LIMIT bound on reals and the styles' spellings (bool
+    also yes/no/on/off, True/False as numbers, a colour also '#rrggbb' or 'r g b', a choice
+    stripped).
+
+    Args:
+        name, default, doc: the parameter's name, default (None: auto) and docs' line.
+        kind: float | int | bool | color | vector | floats | gradient | choice.
+        low, high: bound a real or each component (None: ±LIMIT for reals, none for ints).
+        low_open: the low end excluded; choices: the strings a choice accepts.
+        auto: for a default of None, the rule that derives the value (from the scene or others).
+    """
 
     #: for a default of None ('auto'): the rule that derives the value (from the scene or other
     #: parameters)
@@ -100,7 +108,8 @@ class Param(Declaration):
             return ""
         lo_text = "-inf" if lo == -math.inf else f"{lo:g}"
         hi_text = "inf" if hi == math.inf else f"{hi:g}"
-        return f" in {'(' if self.low_open else '['}{lo_text}, {hi_text}{')' if hi == math.inf else ']'}"
+        return (f" in {'(' if self.low_open else '['}{lo_text}, "
+                f"{hi_text}{')' if hi == math.inf else ']'}")
 
     def fail(self, value: Any) -> StyleError:
         """The error for a bad value of this parameter.
@@ -172,7 +181,8 @@ class Param(Declaration):
                 raise self.fail(raw)
             return vals
         if k == "floats":
-            vals = _floats(raw) if isinstance(raw, str) else ([float(v) for v in raw] if _is_seq(raw) else [float(raw)])
+            vals = (_floats(raw) if isinstance(raw, str)
+                    else ([float(v) for v in raw] if _is_seq(raw) else [float(raw)]))
             if not vals:
                 raise self.fail(raw)
             return tuple(self.check(v, raw) for v in vals)

@@ -26,7 +26,14 @@ class Saturation(Style):
 
     def saturated(self, I: mi.Color3f) -> mi.Color3f:
         """The maximally saturated colour of brightness u = brightness(I) (I_min where I is
-        grey)."""
+        grey).
+
+        Args:
+            I: the colour per lane (mi.Color3f).
+
+        Returns:
+            I_max u / u' (mi.Color3f).
+        """
         u = brightness(I)
         c_min = dr.minimum(dr.minimum(I.x, I.y), I.z)
         D = I - c_min                      # >= 0, smallest channel exactly 0

@@ -24,8 +24,7 @@ from styletrace.styles.registry import register_style
 #: Degree of the Chebyshev fit the unbiased estimators use (supplement S5.5).
 FIT_DEGREE = 20
 #: Largest cosine argument pi f (x + phi) the kernel is handed: float32 (24-bit mantissa) resolves
-#: an
-#: argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger
+#: an argument below 2^14 to 2^-10 ~ 0.001 rad, a colour error below 8-bit quantisation; larger
 #: arguments lose the radiance x in rounding, and huge ones make cos return NaN.
 MAX_ARGUMENT = float(2 ** 14)
 
@@ -72,7 +71,8 @@ class TieDye(Style):
                 f"bad value {self.domain_max:g} for parameter 'domain_max': must exceed "
                 f"domain_min = {self.domain_min:g}"
             )
-        largest = math.pi * max(self.frequencies) * (max(-self.domain_min, self.domain_max) + max(map(abs, self.phases)))
+        largest = math.pi * max(self.frequencies) * (max(-self.domain_min, self.domain_max)
+                                                     + max(map(abs, self.phases)))
         if largest > MAX_ARGUMENT:
             raise StyleError(
                 f"bad values frequencies={','.join(f'{x:g}' for x in self.frequencies)}, "
@@ -90,7 +90,8 @@ class TieDye(Style):
         # the paper's Fig. 11 setup: a degree-20 Chebyshev fit per channel on the clamp interval
         # fitted in exposed units on [lo, hi]; the estimators expose each sample (gain) before the
         # clamp
-        return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi), lo, hi, gain=self.scale)
+        return PolynomialForm(chebyshev_fit(list(self.channel_functions()), FIT_DEGREE, lo, hi),
+                              lo, hi, gain=self.scale)
 
     def channel_functions(self) -> tuple[Callable, Callable, Callable]:
         """g_r, g_g, g_b of the exposed value y = s x as numpy callables (array in, array out),

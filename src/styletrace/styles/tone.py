@@ -28,22 +28,43 @@ MIDDLE_GREY = 0.18
 
 
 def lightness(y) -> np.ndarray:
-    """CIE 1976 L* of relative luminance y (1 = white), in [0, 100] for y in [0, 1]."""
+    """CIE 1976 L* of relative luminance y (1 = white), in [0, 100] for y in [0, 1].
+
+    Args:
+        y: relative luminances (numbers or a numpy array; below 0 taken as 0).
+
+    Returns:
+        L*, numpy float64.
+    """
     y = np.maximum(np.asarray(y, dtype=np.float64), 0.0)
     return np.where(y > (6 / 29) ** 3, 116.0 * np.cbrt(y) - 16.0, y * (29 / 3) ** 3)
 
 
 def luminance_of(lstar) -> np.ndarray:
-    """The relative luminance of lightness L* (the inverse of `lightness`)."""
+    """The relative luminance of lightness L* (the inverse of `lightness`).
+
+    Args:
+        lstar: lightness values (numbers or a numpy array).
+
+    Returns:
+        y, numpy float64.
+    """
     lstar = np.asarray(lstar, dtype=np.float64)
     return np.where(lstar > 8.0, ((lstar + 16.0) / 116.0) ** 3, lstar / (29 / 3) ** 3)
 
 
-def tone_knots(quantile: Callable[[Sequence[float]], list[float]], knots: int = TONE_KNOTS) -> list[float]:
-    """The brightnesses u_0 < ... < u_K where F (module doc) is 0, 1/K, ..., 1.
+def tone_knots(quantile: Callable[[Sequence[float]], list[float]],
+               knots: int = TONE_KNOTS) -> list[float]:
+    """The brightnesses u_0 <= ... <= u_K where F (module doc) is 0, 1/K, ..., 1.
 
-    Parameters: `quantile(qs)`, the scene's brightness quantiles
-    (`scene.defaults.Facts.brightness`); `knots`, K. Returns K + 1 strictly increasing floats."""
+    Args:
+        quantile: quantile(qs) -> the scene's brightness quantiles
+            (`scene.defaults.Facts.brightness`).
+        knots: K.
+
+    Returns:
+        K + 1 non-decreasing floats (equal where the brightness is; `base.increasing` spreads them).
+    """
     qs = np.linspace(LOW_Q, HIGH_Q, 65)
     u = np.maximum.accumulate(np.asarray(quantile(list(qs)), dtype=np.float64))
     white = max(u[-1], 1e-12)
@@ -61,8 +82,13 @@ def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) 
     (j + 1/2) / bands) under the exposure that maps the scene's median to middle grey (0.18), spread
     to at least MIN_STEP_LSTAR of lightness between neighbours and kept in LSTAR_RANGE.
 
-    Parameters: `quantile(qs)` as in `tone_knots`; `bands`, the number of levels. Returns `bands`
-    increasing floats in (0, 1)."""
+    Args:
+        quantile: quantile(qs) -> brightness quantiles, as in `tone_knots`.
+        bands: the number of levels.
+
+    Returns:
+        `bands` increasing floats in (0, 1).
+    """
     qs = [0.5] + [(j + 0.5) / bands for j in range(bands)]
     u = np.asarray(quantile(qs), dtype=np.float64)
     exposure = MIDDLE_GREY / max(u[0], 1e-12)
@@ -70,7 +96,8 @@ def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) 
     lo, hi = LSTAR_RANGE
     steps = np.maximum(np.diff(lstar), MIN_STEP_LSTAR)
     least = MIN_STEP_LSTAR * len(steps)
-    if steps.sum() > hi - lo:  # too wide: shrink what exceeds the least step, or make all steps equal
+    # too wide: shrink what exceeds the least step, or make all steps equal
+    if steps.sum() > hi - lo:
         steps = (
             np.full_like(steps, (hi - lo) / max(len(steps), 1))
             if least >= hi - lo
@@ -84,8 +111,16 @@ def band_levels(quantile: Callable[[Sequence[float]], list[float]], bands: int) 
 
 
 def tone_of(u, knots: Sequence[float]):
-    """F(u) from `tone_knots`' knots on Dr.Jit (or numpy) arrays: 0 at and below the first knot, 1
-    at and above the last, linear in between."""
+    """F(u) from `tone_knots`' knots on Dr.Jit arrays: 0 at and below the first knot, 1 at and
+    above the last, linear in between.
+
+    Args:
+        u: brightness (mi.Float per lane; drjit.clip refuses numpy arrays).
+        knots: u_0 <= ... <= u_K (K >= 1).
+
+    Returns:
+        F(u) in [0, 1], of u's kind.
+    """
     import drjit as dr
     k = len(knots) - 1
     out = 0.0 * u
@@ -99,8 +134,15 @@ def tone_of(u, knots: Sequence[float]):
 
 
 def tone_inverse(f, knots: Sequence[float]):
-    """The brightness u where F(u) = f (the inverse of `tone_of` on the knots' range), f a float or
-    a Dr.Jit array."""
+    """The brightness u where F(u) = f (the inverse of `tone_of` on the knots' range).
+
+    Args:
+        f: tone values, a float or a Dr.Jit array (clamped to [0, 1] per segment).
+        knots: u_0 <= ... <= u_K (K >= 1).
+
+    Returns:
+        u in [u_0, u_K], of f's kind.
+    """
     k = len(knots) - 1
     out = knots[0] + 0.0 * f
     for j, (a, b) in enumerate(zip(knots, knots[1:])):
@@ -115,4 +157,5 @@ def _clip01(x):
     return dr.clip(x, 0.0, 1.0)
 
 
-__all__ = ["TONE_KNOTS", "tone_inverse", "lightness", "luminance_of", "tone_knots", "band_levels", "tone_of"]
+__all__ = ["TONE_KNOTS", "tone_inverse", "lightness", "luminance_of", "tone_knots", "band_levels",
+           "tone_of"]

@@ -1,6 +1,5 @@
-"""xtoon: X-Toon, a toon shader with a "tone detail" axis, in closed form (supplement S5.6).
-
-Reference: Barla, Thollot, Markosian, "X-Toon: An Extended Toon Shader" (2006).
+"""xtoon: X-Toon, a toon shader with a "tone detail" axis, in closed form (supplement S5.6), after
+Barla, Thollot, Markosian, "X-Toon: An Extended Toon Shader" (2006).
 
 Parameters
 - light_dir (vector, default auto): direction towards the light; auto as in `gooch`
@@ -10,8 +9,7 @@ Parameters
 - gradient (gradient, default a 3-band warm ramp over tone in [0, 1]): G, clamped at its end stops
 - detail_color (colour, default 0.95,0.92,0.85): colour at zero detail
 
-g = D G(n.l) + (1 - D) detail_color; g ignores the estimate. Formulas and the auto depth range:
-docs/design/closed_form_styles.md.
+g = D G(n.l) + (1 - D) detail_color, ignoring the estimate; docs/design/closed_form_styles.md.
 """
 from __future__ import annotations
 
@@ -28,14 +26,31 @@ BANDS = "0:#4a2c2a;0.32:#4a2c2a;0.34:#b5563a;0.64:#b5563a;0.66:#f4c98b;1:#f4c98b
 
 
 def camera_position(scene: mi.Scene) -> tuple[float, float, float]:
-    """World-space position of the scene's first sensor (origin if there is none)."""
+    """World-space position of the scene's first sensor (origin if there is none).
+
+    Args:
+        scene: a loaded mi.Scene.
+
+    Returns:
+        (x, y, z).
+    """
     return camera(scene).position
 
 
 @register_style
 class XToon(CameraLight, Style):
+    """The xtoon style (the module doc).
+
+    Args:
+        **values: its parameters (the module doc), as `Style` takes them.
+
+    Raises:
+        StyleError: a bad value, or z_max <= z_min.
+    """
+
     name = "xtoon"
-    summary = "X-Toon: toon ramp over n.l faded by an orientation or depth detail, closed form (Barla et al. 2006)"
+    summary = ("X-Toon: toon ramp over n.l faded by an orientation or depth detail, closed form "
+               "(Barla et al. 2006)")
     params = (
         Param(
             "light_dir", "vector", None, "direction towards the light (normalised)", auto=AUTO_LIGHT
@@ -94,7 +109,8 @@ class XToon(CameraLight, Style):
             hi = hi if self.z_max is None else self.z_max
             if not hi > lo:  # one end given beyond the scene's depth range: keep a decade
                 lo, hi = (lo, lo * 10) if self.z_max is None else (hi / 10, hi)
-            out.update({k: v for k, v in (("z_min", lo), ("z_max", hi)) if self.values[k] is None})
+            out.update({k: v for k, v in (("z_min", lo), ("z_max", hi))
+                        if self.values[k] is None})
         return out
 
     def prepare(self, scene: mi.Scene) -> None:
@@ -102,7 +118,15 @@ class XToon(CameraLight, Style):
         self.read_light(scene)
 
     def detail(self, n: mi.Vector3f, v: Vertex) -> mi.Float:
-        """D in [0, 1] for the unit, viewer-facing normal n."""
+        """D in [0, 1] for the unit, viewer-facing normal n: |n.wo|^r (orientation), or
+        1 - log(z / z_min) / log(z_max / z_min), z the clamped camera depth (depth).
+
+        Args:
+            n: unit, viewer-facing normals (mi.Vector3f); v: the vertices (`Vertex`).
+
+        Returns:
+            mi.Float.
+        """
         if self.mode == "orientation":
             return dr.power(dr.clip(dr.abs(dr.dot(n, v.wo)), 0.0, 1.0), self.r)
         z = dr.dot(v.p - mi.Point3f(*self.camera), v.view)
