@@ -3,8 +3,9 @@
 `import styletrace` loads neither Dr.Jit nor Mitsuba. The first use of the rendering API
 (`styletrace.render`, `styletrace.variant`, ...) or an explicit `styletrace.init()` picks a working
 libLLVM and the JIT variant (`cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`; a variant you set
-before is kept) and registers the Mitsuba plugins `stylized` and `styled` (see `styletrace.scene.plugins`).
-The estimator library `styletrace.estimators` needs none of it and runs on numpy alone.
+before is kept) and registers the Mitsuba plugins `stylized` and `styled` (see
+`styletrace.scene.plugins`). The estimator library `styletrace.estimators` needs none of it and
+runs on numpy alone.
 """
 from __future__ import annotations
 
@@ -45,5 +46,5 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'styletrace' has no attribute {name!r}")
 
 
-__all__ = ["init", "variant", "StyletraceError", "BackendError", "StyleError", "SettingsError", "SceneError",
-           "UsageError", "__version__", *_API, *_LOOKDEV]
+__all__ = ["init", "variant", "StyletraceError", "BackendError", "StyleError", "SettingsError",
+           "SceneError", "UsageError", "__version__", *_API, *_LOOKDEV]

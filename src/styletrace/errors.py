@@ -31,4 +31,5 @@ class UsageError(StyletraceError, ValueError):
     """Malformed command-line or API arguments (flags, output paths, sample counts)."""
 
 
-__all__ = ["StyletraceError", "BackendError", "StyleError", "SettingsError", "SceneError", "UsageError"]
+__all__ = ["StyletraceError", "BackendError", "StyleError", "SettingsError", "SceneError",
+           "UsageError"]

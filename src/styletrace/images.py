@@ -26,21 +26,42 @@ IMAGE_TYPES = (".exr", ".png")
 
 
 def nonfinite_pixels(image) -> int:
-    """Pixels with a NaN or infinite channel."""
+    """Count the pixels with a NaN or infinite channel.
+
+    Args:
+        image: H x W x C array-like (the last axis holds the channels).
+
+    Returns:
+        How many pixels have at least one non-finite channel.
+    """
     arr = np.asarray(image)
     return int(np.count_nonzero(~np.isfinite(arr).all(axis=-1)))
 
 
 def mse(image, reference) -> float:
-    """Mean squared error; inf or NaN when either image has non-finite pixels (that is the honest
-    answer, so numpy's warnings about it are silenced here rather than sent to stderr)."""
+    """Mean squared error of two images, in float64.
+
+    Args:
+        image, reference: array-likes of one shape (or shapes numpy broadcasts together).
+
+    Returns:
+        The mean of the squared differences; inf or NaN when either image has non-finite pixels
+        (numpy's warnings about that are silenced, not sent to stderr).
+    """
+    # inf or NaN is the honest answer for such images: no warning on stderr
     with np.errstate(over="ignore", invalid="ignore"):
         return float(np.mean((np.asarray(image, dtype=np.float64) - reference) ** 2))
 
 
 def srgb8(image) -> np.ndarray:
-    """Linear radiance -> sRGB-encoded uint8: NaN -> 0, +inf -> 1 (255), everything clamped to [0,
-    1]."""
+    """Encode linear radiance as sRGB 8 bit, clamped first (NaN -> 0, +inf -> 1, -inf -> 0).
+
+    Args:
+        image: array-like of linear values, any shape.
+
+    Returns:
+        uint8 array of the same shape: the sRGB transfer function of the values clamped to [0, 1].
+    """
     x = np.nan_to_num(np.asarray(image, dtype=np.float32), nan=0.0, posinf=1.0, neginf=0.0)
     x = np.clip(x, 0.0, 1.0)  # before the power, so that no negative base reaches it
     enc = np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
@@ -62,8 +83,18 @@ PIXEL_FORMATS = {
 
 
 def bitmap_format(pixel_format: str, channels: int) -> str:
-    """The Bitmap pixel format name ('RGB', 'Y', 'XYZA', ...) of an image with `channels`
-    channels."""
+    """The Bitmap pixel format name of a film's pixel format.
+
+    Args:
+        pixel_format: a key of PIXEL_FORMATS (any case): rgb, rgba, luminance or y, ya, xyz, ...
+        channels: the image's channel count, which must match the format's.
+
+    Returns:
+        'RGB', 'RGBA', 'Y', 'YA', 'XYZ' or 'XYZA'.
+
+    Raises:
+        ValueError: an unknown pixel format, or a channel count the format does not have.
+    """
     name = PIXEL_FORMATS.get(pixel_format.lower())
     if name is None:
         raise ValueError(f"unknown pixel format {pixel_format!r}: expected one of "
@@ -75,7 +106,15 @@ def bitmap_format(pixel_format: str, channels: int) -> str:
 
 
 def check_format(pixel_format: str, ext: str) -> None:
-    """XYZ has no sRGB encoding: such a film is written as EXR only (ValueError otherwise)."""
+    """Refuse a PNG of an XYZ film: XYZ has no sRGB encoding, so it is written as EXR only.
+
+    Args:
+        pixel_format: the film's pixel format (a key of PIXEL_FORMATS, any case).
+        ext: the output's extension, lower case with its dot ('.png', '.exr').
+
+    Raises:
+        ValueError: an xyz or xyza format with ext '.png'.
+    """
     if PIXEL_FORMATS.get(pixel_format.lower(), "").startswith("XYZ") and ext == ".png":
         raise ValueError(
             f"the film's pixel_format is {pixel_format!r}: XYZ images are written as .exr only "
@@ -84,9 +123,19 @@ def check_format(pixel_format: str, ext: str) -> None:
 
 
 def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
-    """The file contents of `image` as `.exr` (linear float32) or `.png` (sRGB 8 bit; alpha stays
-    linear). `image` is H x W x C in the film's `pixel_format`: rgb, rgba, luminance (Y),
-    luminance_alpha, xyz, xyza."""
+    """Encode an image in memory with Mitsuba's Bitmap (chooses the backend first).
+
+    Args:
+        image: H x W x C (or H x W for one channel) linear pixels in the film's `pixel_format`.
+        ext: '.exr' (linear float32) or '.png' (sRGB 8 bit; an alpha channel stays linear).
+        pixel_format: rgb, rgba, luminance (Y), luminance_alpha, xyz or xyza.
+
+    Returns:
+        The file's contents.
+
+    Raises:
+        ValueError: an unknown format or extension, a wrong channel count, XYZ as PNG.
+    """
     import mitsuba as mi
 
     from styletrace.jit import backend
@@ -97,7 +146,8 @@ def encode(image, ext: str, pixel_format: str = "rgb") -> bytes:
     if ext == ".png":
         data, fmt = srgb8(image), mi.Bitmap.FileFormat.PNG
         if name.endswith("A"):  # coverage is no colour: quantized linearly
-            data[..., -1] = np.round(np.clip(np.nan_to_num(image[..., -1]), 0.0, 1.0) * 255.0).astype(np.uint8)
+            data[..., -1] = np.round(
+                np.clip(np.nan_to_num(image[..., -1]), 0.0, 1.0) * 255.0).astype(np.uint8)
     elif ext == ".exr":
         data, fmt = np.ascontiguousarray(image, dtype=np.float32), mi.Bitmap.FileFormat.OpenEXR
     else:
@@ -120,7 +170,8 @@ def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
     The format stores channels sorted by name, each line channel after channel."""
     height, width = data.shape[:2]
     order = sorted(range(len(names)), key=lambda i: names[i])
-    chlist = b"".join(names[i].encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for i in order) + b"\0"
+    chlist = b"".join(names[i].encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1)
+                      for i in order) + b"\0"
     box = struct.pack("<iiii", 0, 0, width - 1, height - 1)
     header = (b"\x76\x2f\x31\x01" + struct.pack("<i", 2)
               + _exr_attribute("channels", "chlist", chlist)
@@ -133,7 +184,8 @@ def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
               + _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
     # every line: y, byte count, then the channels' values (sorted channel order, little-endian
     # float32)
-    lines = np.ascontiguousarray(data[..., order].transpose(0, 2, 1), dtype="<f4").reshape(height, -1)
+    lines = np.ascontiguousarray(data[..., order].transpose(0, 2, 1),
+                                 dtype="<f4").reshape(height, -1)
     line_bytes = lines.shape[1] * 4
     start = len(header) + 8 * height
     offsets = np.arange(height, dtype="<u8") * (8 + line_bytes) + start
@@ -144,7 +196,8 @@ def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
 
 
 def _png_chunk(kind: bytes, body: bytes) -> bytes:
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF)
+    return (struct.pack(">I", len(body)) + kind + body
+            + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF))
 
 
 def _plain_png(data: np.ndarray) -> bytes:
@@ -163,9 +216,19 @@ def _plain_png(data: np.ndarray) -> bytes:
 
 
 def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None = None) -> bytes:
-    """What `encode` (`encode_with_aovs` with `aovs`) writes, the same pixel values, without
-    Mitsuba: for a thread that must write while a kernel runs. EXR: float32, uncompressed; PNG:
-    `srgb8`'s bytes."""
+    """Encode as `encode` (`encode_with_aovs` with `aovs`) does, the same pixel values, without
+    Mitsuba: for a thread that must write while a kernel runs.
+
+    Args:
+        image, ext, pixel_format: as for `encode`.
+        aovs: the error AOVs to add as EXR channels (`with_aovs`), or None.
+
+    Returns:
+        The file's contents: an uncompressed float32 EXR, or a PNG of `srgb8`'s bytes.
+
+    Raises:
+        ValueError: as `encode`; also aovs with a '.png'.
+    """
     image = np.asarray(image, dtype=np.float32)
     if image.ndim == 2:
         image = image[..., None]
@@ -176,7 +239,8 @@ def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None =
             raise ValueError(f"error AOVs are written to .exr files only, not {ext!r}")
         data = srgb8(image)
         if name.endswith("A"):  # as `encode`: coverage is quantized linearly
-            data[..., -1] = np.round(np.clip(np.nan_to_num(image[..., -1]), 0.0, 1.0) * 255.0).astype(np.uint8)
+            data[..., -1] = np.round(
+                np.clip(np.nan_to_num(image[..., -1]), 0.0, 1.0) * 255.0).astype(np.uint8)
         return _plain_png(data)
     if ext != ".exr":
         raise ValueError(f"unknown image type {ext!r}: expected one of {', '.join(IMAGE_TYPES)}")
@@ -200,11 +264,22 @@ DENOISED_AOV_CHANNELS = (
 
 
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
-    """The image's channels (`names`) followed by the AOVs present in `aovs` (`AOV_CHANNELS`, or
-    with denoising `DENOISED_AOV_CHANNELS`), as one float32 H x W x C array and its channel names:
-    what both EXR writers lay out."""
+    """Lay out an image and its error AOVs as both EXR writers write them.
+
+    Args:
+        image: H x W x C pixels; names: its channel names ('R', 'G', 'B', ...).
+        aovs: H x W (x k) arrays by key: with 'variance', every key of AOV_CHANNELS; else the
+            keys of DENOISED_AOV_CHANNELS present. Empty: the image alone.
+
+    Returns:
+        (one float32 H x W x C' array, its channel names): the image's channels, then the AOVs'.
+
+    Raises:
+        KeyError: a key of AOV_CHANNELS missing where 'variance' is given.
+    """
     layers = [image]
-    table = AOV_CHANNELS if "variance" in aovs else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs]
+    table = (AOV_CHANNELS if "variance" in aovs
+             else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs])
     for key, channels in table if aovs else ():
         arr = np.asarray(aovs[key], dtype=np.float32)
         layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
@@ -213,9 +288,19 @@ def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarr
 
 
 def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
-    """A multi-channel float32 EXR: the image's channels (R, G, B[, A]) and then the error AOVs
-    under the names of `AOV_CHANNELS`. (PNG has no room for them: the front ends refuse aovs with a
-    PNG output.)"""
+    """Encode a float32 EXR of the image and its error AOVs with Mitsuba (PNG has no room for
+    AOVs: the front ends refuse aovs with a PNG output).
+
+    Args:
+        image, pixel_format: H x W x C linear pixels, and their film's format (see `encode`).
+        aovs: the error AOVs by key, laid out after the image's channels (`with_aovs`).
+
+    Returns:
+        The EXR file's contents.
+
+    Raises:
+        ValueError: an unknown pixel format, or a channel count it does not have.
+    """
     import mitsuba as mi
 
     from styletrace.jit import backend
@@ -230,9 +315,17 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
 
 
 def creation_mode(path: str) -> int:
-    """The permission bits `path` should get: those of the file it replaces, else what `open` would
-    give a new file (0o666 less the umask). A temporary file is created 0o600, which a rename would
-    keep."""
+    """The permission bits a file written to `path` should get.
+
+    A temporary file is created 0o600, which a rename would keep: the caller sets these instead.
+
+    Args:
+        path: the destination.
+
+    Returns:
+        The mode bits of the file it replaces, else what `open` gives a new file (0o666 less the
+        umask).
+    """
     try:
         return os.stat(path).st_mode & 0o7777
     except OSError:
@@ -242,17 +335,28 @@ def creation_mode(path: str) -> int:
 
 
 def destination(path: str) -> str:
-    """Where a write of `path` lands: `path` itself, or for a symbolic link its final target (a link
-    to a link is followed to the end), so that the rename replaces the target and the link stays a
-    link."""
+    """Where a write of `path` lands, so that the rename replaces a link's target, not the link.
+
+    Args:
+        path: the destination as given.
+
+    Returns:
+        `path` itself, or for a symbolic link its final target (links followed to the end).
+    """
     return os.path.realpath(path) if os.path.islink(path) else path
 
 
 def unwritable_kind(path: str) -> str | None:
-    """Why `path` cannot be replaced by a rename of a new file ("a folder", "a character device",
-    ...), or
-    None: a regular file, a name not yet taken, or a link to either. Nothing is opened: a fifo or a
-    device is only looked at (stat)."""
+    """Why `path` cannot be replaced by renaming a new file over it. Nothing is opened: a fifo or
+    a device is only looked at (stat).
+
+    Args:
+        path: the destination as given (links are followed).
+
+    Returns:
+        None for a regular file, a name not yet taken, or a link to either; else what it is ("a
+        folder", "a character device", ..., "not a usable path (reason)").
+    """
     try:
         mode = os.stat(path).st_mode  # follows links
     except FileNotFoundError:
@@ -274,11 +378,19 @@ def unwritable_kind(path: str) -> str | None:
 
 
 def write_bytes_atomically(data: bytes, path: str) -> None:
-    """Temporary file in the same folder, full write checked, fsync, then os.replace over `path`. A
-    symbolic link is written through: the temporary file goes beside its target and is renamed over
-    the target (`destination`), so the link keeps pointing there. A `path` that is no regular file
-    (`unwritable_kind`: a device such as /dev/null, a fifo, a folder) raises OSError untouched: a
-    rename would replace it."""
+    """Write bytes atomically: a temporary file in the same folder, full write checked, fsync,
+    then os.replace over `path` (and an fsync of the folder where it can be opened).
+
+    Args:
+        data: the file's contents.
+        path: the destination; a symbolic link is written through: the temporary file goes beside
+            its target and replaces it (`destination`), so the link keeps pointing there.
+
+    Raises:
+        OSError: `path` is no regular file (`unwritable_kind`: /dev/null, a fifo, a folder; left
+            untouched, since a rename would replace it), or the write failed or fell short (the
+            temporary file is removed).
+    """
     kind = unwritable_kind(path)
     if kind is not None:
         raise OSError(f"{path!r} is {kind}: only a regular file (or a new name) can be replaced "
@@ -286,7 +398,8 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
     path = destination(path)
     folder = os.path.dirname(os.path.abspath(path))
     mode = creation_mode(path)
-    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part", dir=folder)
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".part",
+                               dir=folder)
     try:
         os.fchmod(fd, mode)
         with os.fdopen(fd, "wb") as f:
@@ -313,7 +426,8 @@ def write_bytes_atomically(data: bytes, path: str) -> None:
         pass
 
 
-def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> None:
+def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None,
+                plain: bool = False) -> None:
     """Write `image` atomically: EXR as linear float32, PNG as sRGB 8 bit, clamped.
 
     Args:
@@ -324,7 +438,8 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
         plain: encode with `encode_plain` (no Mitsuba: a kernel may be running).
 
     Raises:
-        OSError: the file cannot be written. ValueError: AOVs for a format other than EXR.
+        OSError: the file cannot be written (`write_bytes_atomically`).
+        ValueError: AOVs for a format other than EXR, or a format `encode` refuses.
     """
     ext = os.path.splitext(path)[1].lower()
     if plain:
@@ -338,7 +453,8 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
     write_bytes_atomically(encode(image, ext, pixel_format), path)
 
 
-def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None, plain: bool = False) -> str:
+def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None = None,
+                plain: bool = False) -> str:
     """Write `image`; if that fails, keep it in a temporary EXR instead of losing it.
 
     Args:
@@ -369,11 +485,16 @@ def save_safely(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
 
 
 def check_target(path: str) -> None:
-    """`path` can be replaced by renaming a new file over it (images.write_bytes_atomically): a
-    regular file or a new name in an existing, writable folder; a symbolic link counts as its
-    target, which is where the file goes (the link stays). Devices (/dev/null included: the rename
-    would replace the device node, so it is refused rather than written to), fifos, sockets and
-    folders are refused untouched."""
+    """Check, before a render, that `write_bytes_atomically` can replace `path`.
+
+    Args:
+        path: the output: a regular file or a new name in an existing, writable folder; a symbolic
+            link counts as its target, which is where the file goes (the link stays).
+
+    Raises:
+        UsageError: a device (/dev/null too: the rename would replace the device node), fifo,
+            socket or folder (all left untouched), a missing folder, or no write permission.
+    """
     kind = unwritable_kind(path)
     if kind is not None:
         via = f" (a link to {os.path.realpath(path)!r})" if os.path.islink(path) else ""
@@ -383,7 +504,8 @@ def check_target(path: str) -> None:
     folder = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(folder):
         raise UsageError(f"cannot write {path!r}: folder {folder!r} does not exist")
-    if not os.access(folder, os.W_OK) or (os.path.exists(target) and not os.access(target, os.W_OK)):
+    if not os.access(folder, os.W_OK) or (os.path.exists(target)
+                                          and not os.access(target, os.W_OK)):
         raise UsageError(f"cannot write {path!r}: permission denied")
 
 __all__ = [

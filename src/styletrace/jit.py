@@ -6,7 +6,8 @@ and hand it to Dr.Jit through `DRJIT_LIBLLVM_PATH` before the first `import drji
 Then the variant: `cuda_ad_rgb` where CUDA works, else `llvm_ad_rgb`, unless the user chose one.
 
 `no_collection()` keeps Python's cyclic garbage collector from running while a pass is traced and
-launched (see its docstring: a scene freed by it in the middle of a trace made LLVM abort).
+launched (a scene freed by it in the middle of a trace made LLVM abort:
+docs/design/collection_during_traces.md).
 """
 from __future__ import annotations
 
@@ -34,8 +35,15 @@ from styletrace.errors import BackendError  # noqa: E402  (re-exported: callers 
 
 
 def llvm_major(path: str) -> int | None:
-    """Major version encoded in a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1,
-    libLLVM-15.0.7.so...)."""
+    """The major version encoded in a libLLVM file name.
+
+    Args:
+        path: a file path; only its name is read (libLLVM-19.so, libLLVM.so.19.1,
+            libLLVM-15.0.7.so, libLLVM.19.dylib, ...).
+
+    Returns:
+        The major version, or None for a name of no such form.
+    """
     name = os.path.basename(path)
     m = re.match(r"libLLVM(?:-(\d+)[.\d]*\.(?:so|dylib)|\.so\.(\d+)|\.(\d+)\.dylib)", name)
     if not m:
@@ -44,10 +52,17 @@ def llvm_major(path: str) -> int | None:
 
 
 def llvm_major_of_file(path: str) -> int | None:
-    """Major version of the libLLVM at `path`, read from the file itself: libLLVM exports its
-    symbols under an ELF symbol version named `LLVM_<major>[.<minor>]` (in .dynstr, near the start
-    of the file), so a copy renamed to plain libLLVM.so is still recognised. Falls back to the file
-    name; None if neither says."""
+    """The major version of the libLLVM at `path`, read from the file itself.
+
+    libLLVM exports its symbols under an ELF symbol version `LLVM_<major>[.<minor>]` (in .dynstr),
+    so a copy renamed to plain libLLVM.so is still recognised.
+
+    Args:
+        path: the library file (an unreadable or empty file falls back to its name).
+
+    Returns:
+        The major version from the file, else from its name (`llvm_major`), else None.
+    """
     try:
         with open(path, "rb") as fh, mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as data:
             at = data.find(b"\0LLVM_")
@@ -62,10 +77,18 @@ def llvm_major_of_file(path: str) -> int | None:
 
 
 def find_libllvm(dirs=None) -> str | None:
-    """Newest libLLVM with major >= MIN_LLVM_MAJOR in `dirs` (default SEARCH_DIRS), or None."""
+    """Find the newest libLLVM that Dr.Jit runs correctly with, judged by file name.
+
+    Args:
+        dirs: folders to search (and their llvm-*/lib subfolders); None: SEARCH_DIRS.
+
+    Returns:
+        The path of the libLLVM file of the highest major >= MIN_LLVM_MAJOR, or None.
+    """
     best = None
     for d in SEARCH_DIRS if dirs is None else dirs:
-        for path in glob.glob(os.path.join(d, "libLLVM*")) + glob.glob(os.path.join(d, "llvm-*", "lib", "libLLVM*")):
+        for path in (glob.glob(os.path.join(d, "libLLVM*"))
+                     + glob.glob(os.path.join(d, "llvm-*", "lib", "libLLVM*"))):
             major = llvm_major(path)
             if major is None or major < MIN_LLVM_MAJOR or not os.path.isfile(path):
                 continue
@@ -147,7 +170,17 @@ def prepare_drjit() -> str:
 
 
 def check_variant(variant: str) -> str:
-    """Refuse variants styles cannot run on: they act on RGB radiance inside JIT-compiled loops."""
+    """Refuse variants styles cannot run on: they act on RGB radiance inside JIT-compiled loops.
+
+    Args:
+        variant: a Mitsuba variant name.
+
+    Returns:
+        `variant`, where it is a JIT variant ending in `_rgb`.
+
+    Raises:
+        BackendError: a scalar variant or one that is not RGB.
+    """
     if variant.startswith("scalar") or not variant.endswith("_rgb"):
         raise BackendError(
             f"styletrace needs an RGB JIT variant (llvm_ad_rgb or cuda_ad_rgb); the active "
@@ -157,8 +190,18 @@ def check_variant(variant: str) -> str:
 
 
 def select_variant(requested: str | None = None) -> str:
-    """Set the Mitsuba variant and return it: `requested` if given, else the one the user already
-    set, else `cuda_ad_rgb` where CUDA works and `llvm_ad_rgb` otherwise."""
+    """Prepare Dr.Jit (`prepare_drjit`), then set the Mitsuba variant.
+
+    Args:
+        requested: the variant to set; None: the one the user already set, else `cuda_ad_rgb`
+            where CUDA works and `llvm_ad_rgb` otherwise.
+
+    Returns:
+        The active variant.
+
+    Raises:
+        BackendError: a variant styles cannot run on or this Mitsuba lacks, or no usable backend.
+    """
     if requested is not None:
         check_variant(requested)
     backend = prepare_drjit()
@@ -179,12 +222,19 @@ def select_variant(requested: str | None = None) -> str:
 
 
 def backend(variant: str | None = None) -> str:
-    """Choose libLLVM and the Mitsuba variant once (`variant` switches to another) and return the
-    variant.
+    """Choose libLLVM and the Mitsuba variant once; idempotent and cheap once chosen. Every
+    styletrace module that imports Dr.Jit or Mitsuba when it loads calls it first.
 
-    Idempotent and cheap once chosen; every styletrace module that imports Dr.Jit or Mitsuba when it
-    loads calls it first. A variant the user set before is kept (and refused if styles cannot run on
-    it)."""
+    Args:
+        variant: a variant to switch to; None keeps the active one (a variant the user set before
+            is kept), choosing one where none is set (`select_variant`).
+
+    Returns:
+        The active variant.
+
+    Raises:
+        BackendError: no usable backend, or a variant styles cannot run on (`check_variant`).
+    """
     mi = sys.modules.get("mitsuba")
     if variant is None and mi is not None and mi.variant():
         return check_variant(mi.variant())
@@ -193,18 +243,15 @@ def backend(variant: str | None = None) -> str:
 
 @contextlib.contextmanager
 def no_collection():
-    """No automatic cyclic garbage collection inside the block (the previous state is restored after
-    it).
+    """No automatic cyclic garbage collection inside the block (a context manager).
 
-    Dr.Jit records a virtual call (a BSDF's `eval`, say) over every live instance of the class.
-    Python's cyclic collector runs at arbitrary allocations; when it finalised a scene that had
-    become cyclic garbage (a refused render's traceback held by an exception, say) while a pass was
-    being recorded, that scene's BSDFs left Dr.Jit's registry in the middle of the recording, and
-    the kernel LLVM then compiled had one function defined twice: "invalid redefinition of
-    function", an abort (measured: the collector ran inside reuse's child walk, a while_loop body;
-    tests/test_jit.py reproduces it in a subprocess). Such garbage is collected before or after the
-    pass instead: reference counting still frees everything that is not in a cycle at once, and the
-    collector runs at the next allocation after the block."""
+    The collector's previous state is restored after the block; reference counting still frees
+    everything that is not in a cycle at once, and the collector runs at the next allocation after
+    the block. Wrap the tracing and launch of a kernel in it: a scene finalised mid-recording makes
+    LLVM abort.
+
+    Design: docs/design/collection_during_traces.md.
+    """
     was = gc.isenabled()
     gc.disable()
     try:

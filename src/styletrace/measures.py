@@ -1,9 +1,12 @@
 """Reference-free measures of a rendered image, as a user judges a default (docs/look.md).
 
-    noise_psnr(a, b)          PSNR (dB) between two renders that differ only in seed, in display space
-    firefly_share(img)        share of pixels brighter than 5x the median of their 5 x 5 neighbourhood (>= 0.01)
-    clipped_share(img), crushed_share(img)   pixels with every channel >= 0.99 / <= 0.01 in display space
-    tone_correlation(img, ref, period)       rank correlation of local luminance with a converged render
+    noise_psnr(a, b)        PSNR (dB) of two renders differing only in seed, in display space
+    firefly_share(img)      share of pixels brighter than 5x the median of their 5 x 5
+                            neighbourhood (a median of at least 0.01)
+    clipped_share(img), crushed_share(img)
+                            pixels with every channel >= 0.99 / <= 0.01 in display space
+    tone_correlation(img, ref, period)
+                            rank correlation of local luminance with a converged render
 
 Images are H x W x 3 float arrays of linear radiance; display space is sRGB of the values clamped to
 [0, 1]. numpy only.
@@ -21,20 +24,41 @@ FIREFLY_FLOOR = 0.01
 
 
 def srgb(img: np.ndarray) -> np.ndarray:
-    """sRGB encoding of linear values clamped to [0, 1]."""
+    """The sRGB encoding of linear values clamped to [0, 1] (NaN as 0).
+
+    Args:
+        img: array-like of linear values, any shape.
+
+    Returns:
+        float64 array of the same shape, in [0, 1].
+    """
     x = np.clip(np.nan_to_num(np.asarray(img, dtype=np.float64), nan=0.0), 0.0, 1.0)
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
 def luminance(img: np.ndarray) -> np.ndarray:
-    """Rec. 709 luminance of linear RGB, H x W."""
+    """The Rec. 709 luminance of linear RGB.
+
+    Args:
+        img: H x W x 3 array-like (or any shape with RGB on the last axis).
+
+    Returns:
+        float64 array without the last axis (H x W).
+    """
     img = np.asarray(img, dtype=np.float64)
     return img[..., 0] * 0.2126 + img[..., 1] * 0.7152 + img[..., 2] * 0.0722
 
 
 def noise_psnr(a: np.ndarray, b: np.ndarray) -> float:
-    """PSNR in dB of one render's noise, from two renders differing only in seed: the per-render
-    variance is mean((a - b)^2) / 2 in display space (peak 1). inf for identical images."""
+    """The PSNR of one render's noise, from two renders differing only in seed.
+
+    Args:
+        a, b: H x W x 3 linear images of one scene and settings, different seeds.
+
+    Returns:
+        PSNR in dB, peak 1, with the per-render variance mean((a - b)^2) / 2 in display space;
+        inf for identical images.
+    """
     var = float(np.mean((srgb(a) - srgb(b)) ** 2)) / 2.0
     return float("inf") if var == 0.0 else float(10.0 * np.log10(1.0 / var))
 
@@ -45,22 +69,45 @@ def _windows(x: np.ndarray, size: int) -> np.ndarray:
     return np.lib.stride_tricks.sliding_window_view(padded, (size, size))
 
 
-def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO, size: int = FIREFLY_WINDOW) -> float:
-    """Share of pixels whose luminance exceeds `ratio` times the median of their `size` x `size`
-    neighbourhood (edges repeated), that median taken as at least FIREFLY_FLOOR, of the linear image
-    (negative values as 0)."""
+def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO,
+                  size: int = FIREFLY_WINDOW) -> float:
+    """The share of pixels that are fireflies, on the linear image (NaN and negatives as 0).
+
+    Args:
+        img: H x W x 3 linear image.
+        ratio: a pixel is a firefly when its luminance exceeds `ratio` times the median of its
+            neighbourhood, that median taken as at least FIREFLY_FLOOR.
+        size: the neighbourhood's side in pixels (odd; edges repeated).
+
+    Returns:
+        The fraction of pixels, in [0, 1].
+    """
     lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
     median = np.median(_windows(lum, size), axis=(-2, -1))
     return float(np.mean(lum > ratio * np.maximum(median, FIREFLY_FLOOR)))
 
 
 def clipped_share(img: np.ndarray) -> float:
-    """Share of pixels with every channel at or above 0.99 in display space."""
+    """The share of pixels with every channel at or above 0.99 in display space.
+
+    Args:
+        img: H x W x 3 linear image.
+
+    Returns:
+        The fraction of pixels, in [0, 1].
+    """
     return float(np.mean(np.all(srgb(img) >= 0.99, axis=-1)))
 
 
 def crushed_share(img: np.ndarray) -> float:
-    """Share of pixels with every channel at or below 0.01 in display space."""
+    """The share of pixels with every channel at or below 0.01 in display space.
+
+    Args:
+        img: H x W x 3 linear image.
+
+    Returns:
+        The fraction of pixels, in [0, 1].
+    """
     return float(np.mean(np.all(srgb(img) <= 0.01, axis=-1)))
 
 
@@ -81,9 +128,17 @@ def _ranks(x: np.ndarray) -> np.ndarray:
 
 
 def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8) -> float:
-    """Spearman's rank correlation between the display luminance of `img` and of a converged
-    `reference`, both blurred by a box of about `period` pixels (the pattern's period, so a screen
-    of lines or dots reads as its tone)."""
+    """Spearman's rank correlation between the blurred display luminance of two images.
+
+    Args:
+        img: H x W x 3 linear image.
+        reference: a converged render of the same shape.
+        period: the side in pixels of the box blur (made odd; <= 1: none): the pattern's period,
+            so that a screen of lines or dots reads as its tone.
+
+    Returns:
+        The correlation in [-1, 1]; 0 where either image is flat.
+    """
     a = _box_blur(luminance(srgb(img)), period).ravel()
     b = _box_blur(luminance(srgb(reference)), period).ravel()
     ra, rb = _ranks(a), _ranks(b)

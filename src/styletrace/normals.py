@@ -18,9 +18,16 @@ TOLERANCE = 1e-4
 
 
 def angle_weighted(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Unit vertex normals (V x 3, float64) of a triangle mesh: per vertex, the sum of its faces'
-    unit normals weighted by the interior angle at the vertex. Vertices of degenerate faces only get
-    zero (NaN-free)."""
+    """Angle-weighted unit vertex normals of a triangle mesh, summed in a fixed order.
+
+    Args:
+        positions: V x 3 vertex positions (float64 recommended).
+        faces: F x 3 integer vertex indices per triangle.
+
+    Returns:
+        V x 3 float64: per vertex, the normalized sum of its faces' unit normals weighted by the
+        interior angle at the vertex; zero (never NaN) for vertices of degenerate faces only.
+    """
     v = [positions[faces[:, i]] for i in range(3)]
     n = np.cross(v[1] - v[0], v[2] - v[0])
     length = np.linalg.norm(n, axis=1, keepdims=True)
@@ -41,9 +48,17 @@ def angle_weighted(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def canonical_normals(scene: Any) -> int:
-    """Replace every mesh's computed vertex normals (those matching `angle_weighted` to TOLERANCE)
-    by the host's deterministic ones; returns how many meshes changed. Meshes inside shape groups
-    are included."""
+    """Replace every mesh's computed vertex normals by the host's deterministic ones.
+
+    Only normals matching `angle_weighted` to TOLERANCE are replaced (a file's own are left);
+    meshes inside shape groups are included.
+
+    Args:
+        scene: a loaded mi.Scene (its parameters are updated in place).
+
+    Returns:
+        How many meshes changed.
+    """
     import mitsuba as mi
     params = mi.traverse(scene)
     changed = 0
@@ -59,7 +74,8 @@ def canonical_normals(scene: Any) -> int:
         if len(positions) != len(loaded) or len(faces) == 0:
             continue
         ours = angle_weighted(positions, faces)
-        covered = np.linalg.norm(ours, axis=1) > 0  # vertices of degenerate faces only: keep Mitsuba's value
+        # vertices of degenerate faces only: keep Mitsuba's value
+        covered = np.linalg.norm(ours, axis=1) > 0
         if not np.all(np.abs(ours[covered] - loaded[covered]) <= TOLERANCE):
             continue  # the file's own normals
         out = loaded.copy()

@@ -19,7 +19,17 @@ TOLERANCE = 0.1
 
 
 def measure(image, lo, hi):
-    """(wild fraction, observed min, observed max, median |value|) of the finite channel values."""
+    """Measure how many channel values lie outside [lo, hi] by more than the tolerance.
+
+    Args:
+        image: array-like of channel values (non-finite ones are ignored).
+        lo: the low end of g's range.
+        hi: the high end, or None for no upper end.
+
+    Returns:
+        (wild fraction, observed min, observed max, median |value|) of the finite values; a value
+        is wild outside [lo, hi] by more than TOLERANCE times the median. All 0 without finite ones.
+    """
     x = np.asarray(image, dtype=np.float64)
     x = x[np.isfinite(x)]
     if x.size == 0:
@@ -33,7 +43,17 @@ def measure(image, lo, hi):
 
 
 def warning(image, settings) -> str | None:
-    """A one-line warning when the render's estimates are wild, else None."""
+    """The warning for a render whose estimates are wild (see the module doc).
+
+    Args:
+        image: the rendered image (linear channel values).
+        settings: the integrator's parsed settings: its slot (style, estimator) and
+            `expansion_pass`, which choose the advice.
+
+    Returns:
+        A one-line warning when at least WILD_FRACTION of the values are wild, else None (also for
+        the `direct` estimator and for a style whose form declares no range).
+    """
     slot = settings.slot
     if slot.estimator == "direct":
         return None

@@ -27,8 +27,8 @@ VERSION = 3  # 3: filters other than a box; 2: "sequence" buffers; versions 1 an
 #: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
 #: bytes_per_sample times this (~270 MB for first_hit)
 MAX_SAMPLES = 1 << 22
-#: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 17 x 64 bytes per camera sample
-#: more
+#: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 18 x 64 bytes per camera sample
+#: more (13 per child, 5 per uniform, up to MAX_EVENTS_PER_SAMPLE of each)
 MAX_SEQUENCE_SAMPLES = 1 << 20
 SEQUENCE = ("seq_count", "seq_kind", "child", "uniform")
 
@@ -40,21 +40,44 @@ _BYTES = {"pixel": 4, "depth": 4, "seq_count": 4, "slot": 1, "own": 1, "pos": 8}
 
 
 def fields_for(stylize: str, stores: str = "mean", filtered: bool = False) -> tuple[str, ...]:
-    """The arrays of a buffer (`filtered`: recorded with a filter other than a box)."""
-    base = ("pixel", "slot", "p", "n", "wo") + (("mean",) if stores == "mean" else ()) + ("L_before",)
+    """The names of a buffer's per-sample arrays, in order.
+
+    Args:
+        stylize: the integrator's stylize mode; "first_object_hit" adds beta and depth.
+        stores: "mean" (adds mean) or "sequence" (adds the SEQUENCE arrays).
+        filtered: recorded with a filter other than a box (adds the FILTERED arrays).
+
+    Returns:
+        The field names.
+    """
+    base = (("pixel", "slot", "p", "n", "wo") + (("mean",) if stores == "mean" else ())
+            + ("L_before",))
     return base + (("beta", "depth") if stylize == "first_object_hit" else ()) + (
         SEQUENCE if stores == "sequence" else ()) + (FILTERED if filtered else ())
 
 
 def bytes_per_sample(stylize: str, stores: str = "mean", filtered: bool = False) -> int:
-    """Bytes per camera sample of the fixed fields (a sequence buffer adds its events)."""
+    """The bytes per camera sample of a buffer's fixed fields.
+
+    Args:
+        stylize, stores, filtered: as for `fields_for`.
+
+    Returns:
+        The bytes of the fixed-size fields (a sequence buffer adds its events on top).
+    """
     fields = fields_for(stylize, stores, filtered)
     return sum(_BYTES.get(k, 12) for k in fields if k not in SEQUENCE[1:])
 
 
 def filtered(header: dict) -> bool:
-    """Whether a buffer's header names a filter other than a box (it then has `FILTERED`'s
-    arrays)."""
+    """Whether a buffer was recorded with a filter other than a box.
+
+    Args:
+        header: the buffer's header; its "filter" entry (missing in old buffers: a box).
+
+    Returns:
+        True where the filter is no box: the buffer then has `FILTERED`'s arrays.
+    """
     spec = header.get("filter")
     return not (spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box"))
 
@@ -63,8 +86,8 @@ def filtered(header: dict) -> bool:
 #: it (`lookdev.restyle.finish_spread`, docs/denoise.md)
 SPREAD = "denoise_spread"
 
-#: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.Pilot.samples`), so that
-#: a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
+#: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.ScenePilot.samples`),
+#: so that a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
 PILOT = "pilot_"
 
 
@@ -128,7 +151,18 @@ class Buffer:
         return sum(a.nbytes for k, a in self.arrays.items() if k.startswith(PILOT))
 
     def save(self, path: str) -> str:
-        """Write the buffer to `path` (.npz) atomically; returns the path."""
+        """Write the buffer atomically (temporary file, rename), as the images are written.
+
+        Args:
+            path: the .npz file (a str or path-like); a symbolic link is written through.
+
+        Returns:
+            `path` as a str.
+
+        Raises:
+            UsageError: no .npz extension, a path no regular file may replace, a missing folder,
+                or a failed write (no temporary file is left).
+        """
         path = os.fspath(path)
         if not path.lower().endswith(".npz"):
             raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
@@ -154,12 +188,24 @@ class Buffer:
             raise UsageError(f"cannot write {path!r}: {exc.strerror or exc}") from None
         return path
 
-    def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int, tile: int | None = None) -> None:
-        """Add one pass's camera samples (in the order the render loop made them); `tile`: the index
-        of the crop window it rendered, where the film is rendered in tiles (`pipeline.passes`)."""
+    def append(self, arrays: dict[str, np.ndarray], spp: int, seed: int,
+               tile: int | None = None) -> None:
+        """Add one pass's camera samples, in the order the render loop made them; drops the
+        Dr.Jit copies (`device`).
+
+        Args:
+            arrays: the pass's arrays by name (`fields_for` this buffer; film pixels, `to_film`).
+            spp, seed: the pass's camera samples per pixel and its seed.
+            tile: the index of the crop window the pass rendered, where the film is rendered in
+                tiles (`pipeline.passes`); None otherwise.
+
+        Raises:
+            KeyError: an array of `fields_for` missing from `arrays`.
+        """
         for k in fields_for(self.stylize, self.stores, self.filtered):
             a = arrays[k]
-            self.arrays[k] = a if k not in self.arrays else np.concatenate([self.arrays[k], a], axis=-1)
+            self.arrays[k] = (a if k not in self.arrays
+                              else np.concatenate([self.arrays[k], a], axis=-1))
         entry = {"spp": int(spp), "seed": int(seed)}
         if tile is not None:
             entry["tile"] = int(tile)
@@ -170,8 +216,18 @@ class Buffer:
 
 
 def load_buffer(path: str) -> Buffer:
-    """Read a buffer written by `Buffer.save`; one-line UsageError for a missing, foreign or newer
-    file."""
+    """Read a buffer written by `Buffer.save` (format versions 1 to VERSION).
+
+    Args:
+        path: the .npz file (a str or path-like).
+
+    Returns:
+        The Buffer: its camera samples' arrays, the pilot's and a denoised render's, if kept.
+
+    Raises:
+        UsageError: a missing, unreadable, foreign or newer file, or arrays whose shapes, tiles or
+            sample counts disagree (one line).
+    """
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise UsageError(f"buffer file {path!r} does not exist")
@@ -188,7 +244,8 @@ def load_buffer(path: str) -> Buffer:
             arrays = {k: z[k] for k in fields_for(header["stylize"], header.get("stores", "mean"),
                                                   filtered(header))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
-            denoised = {k: z[k] for k in z.files if k in ("denoised_mean", SPREAD)}  # docs/denoise.md
+            # docs/denoise.md
+            denoised = {k: z[k] for k in z.files if k in ("denoised_mean", SPREAD)}
     except UsageError:
         raise
     except (OSError, ValueError, KeyError, EOFError) as exc:
@@ -196,7 +253,8 @@ def load_buffer(path: str) -> Buffer:
     n = arrays["pixel"].shape[0]
     if "seq_kind" in arrays:
         events, children = int(arrays["seq_count"].sum()), int(arrays["seq_kind"].sum())
-        seq = {"seq_count": (n,), "seq_kind": (events,), "child": (3, children), "uniform": (events - children,)}
+        seq = {"seq_count": (n,), "seq_kind": (events,), "child": (3, children),
+               "uniform": (events - children,)}
     for k, a in arrays.items():
         want = (seq[k] if k in SEQUENCE else (n,) if k in SCALAR else (2, n) if k == "pos"
                 else (3, n))
@@ -228,7 +286,14 @@ def load_buffer(path: str) -> Buffer:
 
 
 def check_buffer_path(path: str) -> None:
-    """A one-line UsageError before the render if the buffer could not be written to `path` (an .npz)."""
+    """Check, before the render, that the buffer can be written to `path`.
+
+    Args:
+        path: the buffer file to write.
+
+    Raises:
+        UsageError: no .npz extension, or a path `images.check_target` refuses (one line).
+    """
     if not path.lower().endswith(".npz"):
         raise UsageError(f"bad buffer file {path!r}: the extension must be .npz")
     from styletrace.images import check_target

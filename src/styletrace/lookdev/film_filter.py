@@ -1,6 +1,6 @@
 """The film's reconstruction filter for buffers: where Mitsuba put each sample, and its splat.
 
-    spec = describe(film.rfilter())        # the header's filter: {"type": "gaussian", ...}
+    spec = describe_filter(film.rfilter())  # the header's filter: {"type": "gaussian", ...}
     pos = positions(sensor, spp, seed)     # 2 x N float32: each camera sample's film position
     img = develop(buf, values)             # the restyled image, as Mitsuba's film develops it
 
@@ -29,8 +29,14 @@ _KINDS = {"BoxFilter": "box", "TentFilter": "tent", "GaussianFilter": "gaussian"
 
 
 def is_box(spec: Any) -> bool:
-    """Whether a header's filter entry ("box", or a spec dict; None: a buffer older than filters) is
-    a box."""
+    """Whether a header's filter entry is a box.
+
+    Args:
+        spec: the entry: "box", a spec dict, or None (a buffer older than filters: a box).
+
+    Returns:
+        True for a box.
+    """
     return spec in (None, "box") or (isinstance(spec, dict) and spec.get("type") == "box")
 
 
@@ -55,8 +61,18 @@ def _candidates(rfilter) -> list[dict]:
 
 
 def describe_filter(rfilter) -> dict:
-    """The film's filter as a plugin dict that `build` turns back into the same filter (its `eval`
-    equal at every tested offset); SceneError (one line) for a filter that cannot be rebuilt so."""
+    """The film's filter as a plugin dict that `build_filter` turns back into the same filter.
+
+    Args:
+        rfilter: the film's mi.ReconstructionFilter.
+
+    Returns:
+        The spec ({"type": "gaussian", "stddev": 0.5}, ...) whose filter has the same radius and an
+        `eval` equal at every tested offset.
+
+    Raises:
+        SceneError: a filter that cannot be rebuilt so (one line).
+    """
     xs = mi.Float(np.linspace(-4.0, 4.0, 257, dtype=np.float32))
     want = np.asarray(rfilter.eval(xs))
     for spec in _candidates(rfilter):
@@ -78,21 +94,42 @@ def _key(spec: dict) -> tuple:
 
 @lru_cache(maxsize=16)
 def build_filter(key: tuple):
-    """The Mitsuba filter of a spec (as `_key` orders it), made once per variant and spec."""
+    """The Mitsuba filter of a spec, made once per spec and cached (16 kept).
+
+    Args:
+        key: the spec's items as a sorted tuple (`_key`).
+
+    Returns:
+        The mi.ReconstructionFilter `mi.load_dict` makes of it.
+    """
     return mi.load_dict(dict(key))
 
 
 def rebuild(spec: Any):
-    """The filter of a header's entry (`is_box` entries: a box)."""
+    """The filter of a header's entry.
+
+    Args:
+        spec: the header's "filter" entry (`is_box` entries: a box).
+
+    Returns:
+        The mi.ReconstructionFilter (`build_filter`).
+    """
     return build_filter(_key(BOX if is_box(spec) else dict(spec)))
 
 
 def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)):
-    """(the sensor's sampler seeded as Mitsuba's render loop seeds it for a pass of `spp` spp and
-    seed `seed`, each lane's film position): lane i is pixel i // spp of the crop window widened
-    by `border` on each side, its corner moved by `offset` (integers, as Mitsuba adds them) plus
-    the sampler's first `next_2d()`. The sampler's next draws are the aperture's and the
-    integrator's."""
+    """Seed a clone of the sensor's sampler as Mitsuba's render loop does, and place each lane.
+
+    Args:
+        sensor: the mi.Sensor; its film's crop size and its sampler are read.
+        spp, seed: the pass's camera samples per pixel and seed.
+        border: pixels added on each side of the crop window (where the film samples its border).
+        offset: integer (x, y) added to each pixel corner (the crop offset), as Mitsuba adds it.
+
+    Returns:
+        (the seeded sampler, whose next draws are the aperture's and the integrator's; each lane's
+        film position, mi.Vector2f): lane i is pixel i // spp, its corner plus the first next_2d().
+    """
     w, h = (int(v) + 2 * border for v in sensor.film().crop_size())
     lanes = w * h * spp
     sampler = sensor.sampler().clone()
@@ -102,14 +139,21 @@ def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)
     idx = dr.arange(mi.UInt32, lanes) // spp
     py = idx // w
     px = idx - py * w
-    corner = mi.Vector2i(mi.Int32(px) + (int(offset[0]) - border), mi.Int32(py) + (int(offset[1]) - border))
+    corner = mi.Vector2i(mi.Int32(px) + (int(offset[0]) - border),
+                         mi.Int32(py) + (int(offset[1]) - border))
     return sampler, mi.Vector2f(corner) + sampler.next_2d()
 
 
 def positions(sensor, spp: int, seed: int) -> np.ndarray:
-    """Each camera sample's film position of a pass of `spp` spp and seed `seed` on the sensor's
-    film as it is set now (crop window, border): 2 x lanes float32, pixels of the full film (crop
-    offset included)."""
+    """Each camera sample's film position in a pass, bit for bit the render's.
+
+    Args:
+        sensor: the mi.Sensor, its film as it is set now (crop window, border sampling).
+        spp, seed: the pass's camera samples per pixel and seed.
+
+    Returns:
+        2 x lanes float32 positions in pixels of the full film (crop offset included).
+    """
     film = sensor.film()
     b = int(film.rfilter().border_size()) if film.sample_border() else 0
     _, pos = seeded_positions(sensor, spp, seed, b, [int(v) for v in film.crop_offset()])
@@ -127,8 +171,16 @@ def _keep_index(tile: dict, width: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def develop(buffer, values) -> mi.Float:
-    """The image of per-sample `values` (Color3f, one lane per camera sample) of a buffer recorded
-    with a filter other than a box: flat H*W*3 row-major RGB, differentiable in the values."""
+    """The image of per-sample values as Mitsuba's film develops it, pass by pass.
+
+    Args:
+        buffer: a Buffer recorded with a filter other than a box, its Dr.Jit arrays made
+            (`restyle.device`: `pos`); the tiles' pixel indices are cached there.
+        values: mi.Color3f, one lane per camera sample.
+
+    Returns:
+        mi.Float, flat H*W*3 row-major RGB: the passes averaged by spp; differentiable in values.
+    """
     d = buffer.device
     rf = rebuild(buffer.header["filter"])
     w, h = buffer.width, buffer.height

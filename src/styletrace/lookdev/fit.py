@@ -33,11 +33,9 @@ from styletrace.styles.gradient import Gradient
 
 FITTABLE = ("float", "floats", "color", "gradient")
 #: parameters that stay fixed although of a fittable kind (hatching's plane normals are built in
-#: Python; the
-#: tone styles' exposure is the scene's normalisation, resolved from the pilot, and for contrast and
-#: reinhard it
-#: is redundant with the curve's own parameters: c (s I - p) + p and s I / (w + s I) = I / (w / s +
-#: I))
+#: Python; the tone styles' exposure is the scene's normalisation, resolved from the pilot, and for
+#: contrast and reinhard it is redundant with the curve's own parameters: c (s I - p) + p and
+#: s I / (w + s I) = I / (w / s + I))
 NOT_FITTED = {
     "hatching": ("angle", "spacing", "thickness"),
     "contrast": ("exposure",),
@@ -53,14 +51,15 @@ NOT_SMOOTHED = ("halftone",)
 class FitResult:
     params: dict[str, Any]               # the fitted values, as the style's parameters take them
     loss: float                          # mean squared error of the restyled image with `params`
-    iterations: int                      # iterations run (fewer than asked where the loss reached `tol`)
+    # iterations run (fewer than asked where the loss reached `tol`)
+    iterations: int
     seconds: float
-    history: list[float] = field(default_factory=list)   # loss (true style) after each checked iteration
+    # loss (true style) after each checked iteration
+    history: list[float] = field(default_factory=list)
     image: np.ndarray | None = None
 
 
-# ---- θ as Dr.Jit arrays
-# ------------------------------------------------------------------------------
+# ---- θ as Dr.Jit arrays --------------------------------------------------------------------------
 
 def _flatten(kind: str, value: Any) -> list[float]:
     if kind == "float":
@@ -86,7 +85,8 @@ def _plain_value(kind: str, flat: np.ndarray, like: Any) -> Any:
     if kind == "float":
         return float(flat[0])
     if kind == "gradient":
-        return [(pos, tuple(float(c) for c in flat[3 * i:3 * i + 3])) for i, (pos, _) in enumerate(like.stops)]
+        return [(pos, tuple(float(c) for c in flat[3 * i:3 * i + 3]))
+                for i, (pos, _) in enumerate(like.stops)]
     return tuple(float(v) for v in flat)
 
 
@@ -98,16 +98,19 @@ def _clamp(p, x: mi.Float) -> mi.Float:
     return x
 
 
-# ---- smoothed surrogates
-# -------------------------------------------------------------------------------
+# ---- smoothed surrogates -------------------------------------------------------------------------
 
 def _sigmoid(x):
     return dr.rcp(1.0 + dr.exp(-x))
 
 
 class Smoothed:
-    """A style whose `apply` is a smooth surrogate of temperature `tau` (everything else
-    delegates)."""
+    """A style whose `apply` is a smooth surrogate (`SURROGATES`); everything else delegates.
+
+    Args:
+        style: the prepared style, one of SURROGATES' (cel, hatching).
+        tau: the temperature, mi.Float (the smaller, the nearer the true steps).
+    """
 
     def __init__(self, style: Style, tau: mi.Float):
         self.style, self.tau = style, tau
@@ -116,6 +119,14 @@ class Smoothed:
         return getattr(self.style, key)
 
     def apply(self, I, v):
+        """The surrogate of the style's g at temperature `tau`.
+
+        Args:
+            I: mi.Color3f, the radiance estimate per lane; v: the lanes' Vertex.
+
+        Returns:
+            mi.Color3f, differentiable in the style's values and in I.
+        """
         return SURROGATES[self.style.name](self.style, I, v, self.tau)
 
 
@@ -145,10 +156,21 @@ def _smooth_hatching(style, I, v, tau):
 SURROGATES: dict[str, Callable] = {"cel": _smooth_cel, "hatching": _smooth_hatching}
 
 
-# ---- the loop
-# ----------------------------------------------------------------------------------------
+# ---- the loop ------------------------------------------------------------------------------------
 
 def read_target(target: Any, width: int, height: int) -> np.ndarray:
+    """The target image of a fit, as linear RGB.
+
+    Args:
+        target: an H x W x 3 array (linear), or an image file's path (EXR linear, PNG sRGB).
+        width, height: the buffer's image size, which the target must have.
+
+    Returns:
+        float32 H x W x 3 linear RGB.
+
+    Raises:
+        UsageError: an unreadable file, or a target of another shape.
+    """
     if isinstance(target, np.ndarray):
         img = np.asarray(target, dtype=np.float32)
     else:
@@ -183,10 +205,24 @@ def fit(
     callback: Callable[[int, float], None] | None = None,
     **initial: Any,
 ) -> FitResult:
-    """Fit the parameters of `style` (the buffer's recorded style if None) so that the restyled
-    buffer matches `target` (H x W x 3 linear array, or an image file: EXR linear, PNG sRGB).
-    `initial` gives starting values (the style's defaults otherwise); `fixed` names parameters to
-    keep."""
+    """Fit a style's θ so that the restyled buffer matches a target (module doc: how).
+
+    Args:
+        buffer: a "mean" Buffer or its .npz path. style: the style to fit (None: the recorded).
+        target: H x W x 3 linear array, or an image file (`read_target`).
+        iterations, lr: Adam's steps; its learning rate, falling geometrically to lr / 100.
+        tau, tau_end: the step surrogates' temperature, falling geometrically from one to the other.
+        tol, check_every: stop once the true style's loss is <= tol, checked every check_every.
+        fixed: parameters to keep. callback: called with (iterations done, loss) at each check.
+        initial: starting values (else the recorded values, or a new style's defaults).
+
+    Returns:
+        FitResult: the fitted values (validated by the style), loss, iterations, image, ...
+
+    Raises:
+        BackendError: a variant without AD. UsageError: a bad target or iterations, a sequence
+            buffer or one with nothing styled, halftone, an unknown fixed name, nothing to fit.
+    """
     if not mi.variant().endswith("_ad_rgb") and "_ad_" not in mi.variant():
         raise BackendError("fitting needs an AD variant (llvm_ad_rgb or cuda_ad_rgb), not "
                            f"{mi.variant()}")
@@ -232,11 +268,13 @@ def fit(
 
     def restyled(smooth: bool) -> mi.Float:
         style = create(base.name, **{k: v for k, v in base.values.items()})
-        style.__dict__.update({k: v for k, v in base.__dict__.items() if k != "values"})  # prepared camera etc.
+        # the prepared camera etc.
+        style.__dict__.update({k: v for k, v in base.__dict__.items() if k != "values"})
         for p in free:
             style.values[p.name] = _unflatten(p.kind, opt[p.name], base.values[p.name])
         used = Smoothed(style, tau_now) if smooth and base.name in SURROGATES else style
-        here = [S.StyleSlot(used, s.inner, s.estimator) if i in owned else s for i, s in enumerate(slots)]
+        here = [S.StyleSlot(used, s.inner, s.estimator) if i in owned else s
+                for i, s in enumerate(slots)]
         return accumulate(buf, sample_values(buf, here))
 
     def loss_of(img):
@@ -267,12 +305,15 @@ def fit(
             if exact <= tol:
                 break
     seconds = time.perf_counter() - start
-    params = {p.name: _plain_value(p.kind, np.asarray(opt[p.name], dtype=np.float64), base.values[p.name]) for p in free}
-    fitted = create(base.name, **{**{k: v for k, v in base.values.items() if k not in params}, **params})
+    params = {p.name: _plain_value(p.kind, np.asarray(opt[p.name], dtype=np.float64),
+                                   base.values[p.name]) for p in free}
+    fitted = create(base.name,
+                    **{**{k: v for k, v in base.values.items() if k not in params}, **params})
     values = {p.name: fitted.values[p.name] for p in free}
     from styletrace.lookdev.restyle import restyle
     image = restyle(buf, style=base.name, **{**_given(base), **values})
-    loss = float(np.mean(np.square(image.astype(np.float64) - np.asarray(goal, dtype=np.float64).reshape(image.shape))))
+    loss = float(np.mean(np.square(image.astype(np.float64)
+                                   - np.asarray(goal, dtype=np.float64).reshape(image.shape))))
     return FitResult(values, loss, done, seconds, history, image)
 
 

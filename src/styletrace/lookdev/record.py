@@ -43,6 +43,16 @@ from styletrace.styles.base import Vertex, camera_forward
 
 
 def check_recordable(settings: S.Settings, slots) -> None:
+    """Refuse settings a buffer cannot record, before anything is traced.
+
+    Args:
+        settings: the integrator's parsed Settings.
+        slots: its StyleSlots for the per-slot checks ([]: the settings alone).
+
+    Raises:
+        SettingsError: reuse, first_n_hits, stylize_depth != 1, an expansion pass, feature lines,
+            aovs, an adaptive inner count or a per-sample style (one line each).
+    """
     if settings.reuse != "off":
         raise SettingsError(
             f"reuse={settings.reuse} cannot be buffered: a buffer keeps each camera sample's own "
@@ -87,11 +97,21 @@ def check_recordable(settings: S.Settings, slots) -> None:
 
 
 def check_film(scene: mi.Scene) -> mi.Film:
-    """The scene's film if a buffer can record it (any filter `film_filter.describe` rebuilds, any
-    border); SceneError (one line) otherwise."""
+    """The scene's film, where a buffer can record it.
+
+    Args:
+        scene: the mi.Scene (its first sensor's film).
+
+    Returns:
+        The mi.Film: an rgb film with any filter `film_filter.describe_filter` rebuilds, any border.
+
+    Raises:
+        SceneError: another pixel format or filter (one line).
+    """
     film = scene.sensors()[0].film()
     if film_format(scene) != "rgb":
-        raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb film")
+        raise SceneError(f"the film's pixel_format is '{film_format(scene)}': buffers need an rgb "
+                         f"film")
     film_filter.describe_filter(film.rfilter())
     return film
 
@@ -99,13 +119,19 @@ def check_film(scene: mi.Scene) -> mi.Film:
 def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int,
             height: int | None = None, border: int = 0, filtered: bool = False
             ) -> dict[str, np.ndarray]:
-    """One pass's arrays with `pixel` made the film's crop window's (until here: the lane's pixel in
-    the pass's crop window, widened by `border` on each side where the film samples its border).
+    """One pass's arrays with `pixel` made the film's (until here: the pass's window's).
 
-    Box filter (`filtered` False): the samples of the pixels the tile shares with its neighbour are
-    dropped, as the render drops those pixels (`Tile.keep`). Other filters: every sample stays (it
-    weighs on the pixels its filter covers), `own` marks those of the kept pixels, and a border
-    sample's `pixel` is the nearest pixel of the film."""
+    Args:
+        arrays: the pass's arrays; `pixel`: the lane's pixel in the pass's (widened) crop window.
+        tile: the pass's `pipeline.passes.Tile`; width, height: the film's crop size (height
+            None: the tile's bottom edge). border: the window's widening on each side.
+        filtered: a filter other than a box: every sample stays (it weighs on the pixels its filter
+            covers), `own` marks those of kept pixels, a border sample's pixel is the film's
+            nearest. Box: the samples of pixels the tile leaves to a neighbour go (`Tile.keep`).
+
+    Returns:
+        The pass's arrays, `pixel` a row-major index into the film's crop window.
+    """
     tw, th = tile.size
     height = height if height is not None else tile.offset[1] + th
     ew = np.int64(tw + 2 * border)
@@ -122,7 +148,8 @@ def to_film(arrays: dict[str, np.ndarray], tile: pass_loop.Tile, width: int,
         out["pixel"] = (fy * width + fx).astype(np.uint32)
         return out
     out = {}
-    if "seq_count" in arrays:  # a sequence's events, children and uniform numbers follow their camera sample
+    # a sequence's events, children and uniform numbers follow their camera sample
+    if "seq_count" in arrays:
         events = np.repeat(keep, arrays["seq_count"].astype(np.int64))
         kinds = arrays["seq_kind"]
         out.update(
@@ -150,7 +177,14 @@ def _window(tile: pass_loop.Tile) -> dict:
 
 class RecordingIntegrator(StylizedIntegrator):
     """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each
-    `sample()`."""
+    `sample()`.
+
+    Args:
+        base: the StylizedIntegrator to record (its settings and values: auto values pinned).
+        sequence: keep each camera sample's children and uniforms in call order (an unbiased
+            estimator); False: the children's mean.
+        per_sample: the sequence recorder's places per camera sample (`sequence.budget`).
+    """
 
     def __init__(self, base: StylizedIntegrator, sequence: bool = False, per_sample: int = 0):
         super().__init__(mi.Properties(), base.settings, base.values)
@@ -165,7 +199,8 @@ class RecordingIntegrator(StylizedIntegrator):
             self.recorder = Recorder(dr.width(ray.d), self.per_sample)
         spec, valid, aovs = super().sample(scene, sampler, ray, medium, active)
         kept = self.kept
-        if "slot" not in kept:  # no stylized vertex traced at all (first_object_hit without styled objects)
+        # no stylized vertex traced at all (first_object_hit without styled objects)
+        if "slot" not in kept:
             width = dr.width(ray.d)
             zero = dr.zeros(mi.Vector3f, width)
             kept.update(
@@ -179,7 +214,8 @@ class RecordingIntegrator(StylizedIntegrator):
                 beta=mi.Color3f(zero),
             )
         if self.settings.stylize == "first_hit":
-            kept["L_before"] = dr.select(kept["slot"] >= 0, 0.0, spec)  # the environment where nothing was hit
+            # the environment where nothing was hit
+            kept["L_before"] = dr.select(kept["slot"] >= 0, 0.0, spec)
         dr.schedule(*kept.values())  # evaluated by the same kernel as the image
         return spec, valid, aovs
 
@@ -203,7 +239,15 @@ class RecordingIntegrator(StylizedIntegrator):
         return total
 
     def finish_mean(self, slot, m, v):
-        """The slot's estimate from the children's mean m (`restyle.finish`; `denoise.coverage` overrides it)."""
+        """The slot's estimate from the children's mean (`restyle.finish_slot`;
+        `denoise.coverage` overrides it).
+
+        Args:
+            slot: the StyleSlot; m: mi.Color3f, the children's mean per lane; v: the Vertex.
+
+        Returns:
+            mi.Color3f, the estimate per lane.
+        """
         return finish_slot(slot, m, v)
 
     def through(self, w, value):
@@ -211,8 +255,8 @@ class RecordingIntegrator(StylizedIntegrator):
         return super().through(w, value)
 
     def estimate(self, slot, level, sampler, site, active, v) -> mi.Spectrum:
-        """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's pool.
-        The same calls on the same stream in the same order: the estimate is the render's."""
+        """`StylizedIntegrator.estimate` with every draw and uniform also noted in the recorder's
+        pool. The same calls on the same stream in the same order: the estimate is the render's."""
         if not self.sequence:
             return super().estimate(slot, level, sampler, site, active, v)
         style, rec = slot.style, self.recorder
@@ -237,8 +281,8 @@ class RecordingIntegrator(StylizedIntegrator):
         return value
 
     def _mean(self, slot, level, sampler, site, active) -> mi.Color3f:
-        """The mean of the slot's n children: the same draws, in the same order, and the same firefly control
-        as the `direct` estimator."""
+        """The mean of the slot's n children: the same draws, in the same order, and the same
+        firefly control as the `direct` estimator."""
         if slot.style.closed_form:
             return mi.Color3f(0.0)
 
@@ -252,8 +296,8 @@ class RecordingIntegrator(StylizedIntegrator):
 
         scene = self.walk_config.scene
         emitted = emission(scene, site.si, active) if firefly_cap(self.settings) else None
-        value, _ = child_mean(slot, level, self.settings, emitted).run(draw, (sampler,), uniform, active,
-                                                                         like=mi.Color3f)
+        value, _ = child_mean(slot, level, self.settings, emitted).run(draw, (sampler,), uniform,
+                                                                       active, like=mi.Color3f)
         return value
 
 
@@ -265,8 +309,15 @@ def _any(ptr, bsdfs) -> mi.Bool:
 
 
 def sensor_description(sensor) -> dict:
-    """What a restyle needs to rebuild the camera (`restyle.camera_scene`): its kind, field of view
-    and film."""
+    """What a restyle needs to rebuild the camera (`restyle.camera_scene`).
+
+    Args:
+        sensor: the mi.Sensor.
+
+    Returns:
+        {"kind": "perspective" or "orthographic", "x_fov" (None if orthographic), "size",
+        "crop_size", "crop_offset"}: JSON-able.
+    """
     params = mi.traverse(sensor)
     film = sensor.film()
     return {"kind": "perspective" if "x_fov" in params else "orthographic",
@@ -289,7 +340,8 @@ def _vec(x) -> np.ndarray:
     return np.stack([np.asarray(x[i], dtype=np.float32) for i in range(3)])
 
 
-def _pass_arrays(kept: dict, spp: int, stylize: str, recorder: Recorder | None) -> dict[str, np.ndarray]:
+def _pass_arrays(kept: dict, spp: int, stylize: str,
+                 recorder: Recorder | None) -> dict[str, np.ndarray]:
     """One pass's kept arrays on the host; `pixel` is the lane's pixel in the pass's (widened) crop
     window."""
     dr.eval(*kept.values())
@@ -320,17 +372,25 @@ def record(
     pass_spp: int | None = None,
     recorder: Callable[..., RecordingIntegrator] | None = None,
 ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
-    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass. `pilot`:
-    the scene's `Pilot` if the caller resolved the auto values with it already
-    (`render_with_buffer`), so that the pilot is traced once for both (it is stored in the buffer).
-    `pass_spp`: camera samples per pixel in one pass (`pipeline.passes`); `recorder`: makes the
-    recording integrator from (integrator, sequence, per_sample) (default `RecordingIntegrator`;
-    `denoise.coverage` places its own camera rays)."""
+    """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass.
+
+    Args:
+        scene, integrator, spp, seed, lanes_per_pass, pass_spp: as for `pipeline.passes`.
+        label: how the buffer names its scene; max_samples: the cap on its camera samples
+            (MAX_SAMPLES, the default, means MAX_SEQUENCE_SAMPLES for a sequence buffer).
+        pilot: the ScenePilot the caller resolved auto values with (`pipeline.resolve`), or None.
+        recorder: makes the recording integrator of (integrator, sequence, per_sample) (default
+            RecordingIntegrator; `denoise.coverage`'s places its own camera rays).
+
+    Raises:
+        SceneError, SettingsError, UsageError: what a buffer cannot record (one line).
+    """
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = ScenePilot(scene, integrator.settings)
-    # pin the scene-relative defaults on the integrator, not on the recording wrapper below: a copy would lose
-    # the recording; with the pilot stored below (traced here if an auto value needs it)
+    # pin the scene-relative defaults on the integrator, not on the recording wrapper below: a copy
+    # would lose the recording; with the pilot stored below (traced here if an auto value needs it):
+    # a pilot the caller resolved with is traced once for both
     integrator = pass_loop.pin_auto_values(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
@@ -383,7 +443,8 @@ def record(
         header.update(sample_border=bool(border), layout=[_window(t) for t in layout])
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of
     # the scene would
-    pilot = pilot.samples  # the one trace of the pilot: resolve's, or here if no auto value needed it
+    # the one trace of the pilot: resolve's, or here if no auto value needed it
+    pilot = pilot.samples
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
@@ -391,8 +452,8 @@ def record(
         # again
         rec_slot["auto"] = list(getattr(target.slot.style, "chosen", ()))
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
-    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass, pass_spp,
-                                                                  pinned=True)):
+    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass,
+                                                  pass_spp, pinned=True)):
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
         if filtered and "pos" not in arrays:  # where Mitsuba put each sample
             seed_i = pass_loop.pass_seed(seed, index)
@@ -401,13 +462,21 @@ def record(
         if tiled:
             buf.header["tiles"] = len(prog.layout)
         arrays = to_film(arrays, prog.layout[prog.tile], w, h, border, filtered)
-        buf.append(arrays, prog.samples, pass_loop.pass_seed(seed, index), prog.tile if tiled else None)
+        buf.append(arrays, prog.samples, pass_loop.pass_seed(seed, index),
+                   prog.tile if tiled else None)
         rec.kept, rec.recorder = {}, None
         yield prog, buf
 
 
 def scene_label(scene: Any) -> str:
-    """How the buffer names its scene (the equivalent command line uses it)."""
+    """How the buffer names its scene (the equivalent command line uses it).
+
+    Args:
+        scene: the scene as the caller gave it: None, a name or path, a dict or an mi.Scene.
+
+    Returns:
+        DEFAULT for None, the name or path as a str, else "<TypeName>".
+    """
     if scene is None:
         return DEFAULT
     if isinstance(scene, (str, os.PathLike)):
@@ -432,26 +501,41 @@ def render_buffer(
 ) -> Buffer:
     """Render as `styletrace.render` does and return the expectation buffer of every camera sample.
 
-    The render is the pipeline's (`pipeline.resolve`: the scene's own integrator settings merged, auto values
-    pinned); `buffer.image` is the rendered image (what `styletrace.render` returns for the same arguments
-    and pass split)."""
+    The render is the pipeline's (`pipeline.resolve`: the scene's integrator settings merged, auto
+    values pinned); `buffer.image` is `styletrace.render`'s image for the same pass split.
+
+    Args:
+        scene, style, spp, inner, estimator, seed, width, height, integrator, defines, params: as
+            for `styletrace.render` (`pipeline.execute.render_pipeline`).
+        max_samples: the cap on camera samples (`record`); callback: called with each Progress.
+
+    Raises:
+        StyletraceError: what `styletrace.render` refuses, and what a buffer cannot record.
+    """
     from styletrace.pipeline.execute import InProcess
     from styletrace.pipeline.job import python_job
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
-    r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines, **params))
+    r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator,
+                           defines, **params))
     recorded = Recorded(label=scene_label(scene), max_samples=max_samples)
     return Runner(r, InProcess(), recorded).result(callback)
 
 
 class Recorded(Finisher):
-    """A run's finisher that records the expectation buffer of every finished pass (`record`) beside the
-    image: the command line's `--buffer FILE` (`path`), Blender's Record buffer (`keep(buffer)` after the
-    passes). `label`: how the buffer names its scene (`scene_label`)."""
+    """A run's finisher that records the expectation buffer of every finished pass (`record`)
+    beside the image: the command line's `--buffer FILE`, Blender's Record buffer.
+
+    Args:
+        path: the .npz file the buffer is written to beside the image, or None (not written).
+        label: how the buffer names its scene ('': `scene_label` of the job's scene).
+        keep: called with the buffer after the passes (Blender), or None.
+        max_samples: the cap on camera samples (`record`).
+    """
     local = "--buffer renders locally: the buffer is recorded in this process (no --ray)"
 
-    def __init__(self, path: str | None = None, label: str = "", keep: Callable[[Buffer], None] | None = None,
-                 max_samples: int = MAX_SAMPLES):
+    def __init__(self, path: str | None = None, label: str = "",
+                 keep: Callable[[Buffer], None] | None = None, max_samples: int = MAX_SAMPLES):
         self.buffer, self.label, self.keep, self.max_samples = path, label, keep, max_samples
         self.recorded: Buffer | None = None
 
@@ -464,8 +548,9 @@ class Recorded(Finisher):
 
     def source(self, resolved, executor, lock) -> Iterator[pass_loop.Progress]:
         job = resolved.job
-        for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed, self.label,
-                                self.max_samples, lanes_per_pass=resolved.lanes, pilot=resolved.pilot, pass_spp=job.pass_spp):
+        for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed,
+                                self.label, self.max_samples, lanes_per_pass=resolved.lanes,
+                                pilot=resolved.pilot, pass_spp=job.pass_spp):
             buf.image = prog.image
             self.recorded = buf
             yield prog
@@ -483,4 +568,5 @@ class Recorded(Finisher):
                        f"; {buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB")
 
 
-__all__ = ["RecordingIntegrator", "record", "render_buffer", "Recorded", "check_recordable", "check_film", "to_film"]
+__all__ = ["RecordingIntegrator", "record", "render_buffer", "Recorded", "check_recordable",
+           "check_film", "to_film"]

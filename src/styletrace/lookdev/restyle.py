@@ -36,11 +36,19 @@ from styletrace.styles.gradient import Gradient
 RESTYLABLE_ESTIMATORS = ("direct", "affine")
 
 
-# ---- the value of one camera sample
-# ----------------------------------------------------------------
+# ---- the value of one camera sample --------------------------------------------------------------
 
 def finish_slot(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex) -> mi.Color3f:
-    """The slot's estimate from the mean of its n children, as its estimator computes it in the kernel."""
+    """A slot's estimate from the mean of its n children, as its estimator computes it in the
+    kernel (`direct`: g(mean); `affine`: a1 mean + a0; closed-form styles: g of nothing).
+
+    Args:
+        slot: the StyleSlot (style, n, estimator: direct or affine).
+        mean: mi.Color3f, the children's mean per lane; v: the lanes' Vertex.
+
+    Returns:
+        mi.Color3f, the estimate per lane.
+    """
     style = slot.style
     if style.closed_form:
         return style.apply(mi.Color3f(0.0), v)
@@ -59,20 +67,25 @@ SPREAD_NODES = ((0.0, 0.53333333), (1.35562618, 0.22207592), (-1.35562618, 0.222
 
 
 def finish_spread(slot: S.StyleSlot, mean: mi.Color3f, v: Vertex, spread) -> mi.Color3f:
-    """The slot's estimate averaged over a relative uncertainty of the mean: E over z ~ N(0, 1) of
-    finish(slot, mean (1 + spread z)) (SPREAD_NODES; the scaled mean is clamped at 0). With spread 0
-    it is `finish`. Why: a denoised expectation D carries a residual error, and g of it flips a step
-    style's band wherever that error crosses a threshold; the mean of g over the error's spread is
-    the estimate of g(E[L]) with the least squared error when the error is Gaussian
-    (docs/denoise.md, step 7)."""
+    """A slot's estimate averaged over a relative uncertainty of the mean (a denoised D's).
+
+    Args:
+        slot, mean, v: as for `finish_slot`.
+        spread: mi.Float, the mean's relative standard error per lane (0: `finish_slot`).
+
+    Returns:
+        mi.Color3f: E over z ~ N(0, 1) of finish_slot(slot, mean (1 + spread z), v), by
+        quadrature (SPREAD_NODES), the scaled mean clamped at 0.
+
+    Design: docs/denoise.md, step 7 (why the mean of g over D's error).
+    """
     out = mi.Color3f(0.0)
     for z, weight in SPREAD_NODES:
         out += weight * finish_slot(slot, dr.maximum(mean * (1.0 + spread * z), 0.0), v)
     return out
 
 
-# ---- slots: what the header records, and what a restyle makes of it
-# ---------------------------------
+# ---- slots: what the header records, and what a restyle makes of it ------------------------------
 
 def _jsonable(value: Any) -> Any:
     if isinstance(value, Gradient):
@@ -83,7 +96,15 @@ def _jsonable(value: Any) -> Any:
 
 
 def slot_record(slot: S.StyleSlot, owner: str, ident: str = "") -> dict:
-    """A style slot as the buffer's header keeps it (exact parameter values, JSON)."""
+    """A style slot as the buffer's header keeps it (exact parameter values, JSON).
+
+    Args:
+        slot: the StyleSlot.
+        owner: "integrator" or "object" (a `styled` BSDF's slot); ident: that BSDF's id.
+
+    Returns:
+        {"owner", "id", "style", "params", "inner" (0 for closed-form styles), "estimator"}.
+    """
     style = slot.style
     return {"owner": owner, "id": ident, "style": style.name,
             "params": {p.name: _jsonable(style.values[p.name]) for p in style.params},
@@ -91,6 +112,14 @@ def slot_record(slot: S.StyleSlot, owner: str, ident: str = "") -> dict:
 
 
 def changed_owner(buffer: Buffer) -> str:
+    """Which slots a restyle changes.
+
+    Args:
+        buffer: the buffer.
+
+    Returns:
+        "object" (every styled object's) for first_object_hit, else "integrator".
+    """
     return "object" if buffer.stylize == "first_object_hit" else "integrator"
 
 
@@ -101,8 +130,19 @@ def slots_for(
     inner: Any = None,
     **params: Any,
 ) -> list[S.StyleSlot]:
-    """The style slots of a restyle: the recorded ones, with the changes applied to the slot(s) they
-    name."""
+    """The style slots of a restyle: the recorded ones, those of `changed_owner` changed.
+
+    Args:
+        buffer: the Buffer; style: the new style (None: the recorded; a new one starts at defaults).
+        estimator, inner: None keeps the recorded ones (or direct); a new n needs a sequence buffer.
+        params: new values (None ignored); with them, the pilot's auto choices are made again.
+
+    Returns:
+        One StyleSlot per header slot.
+
+    Raises:
+        UsageError: a change the buffer cannot replay; StyleError, SettingsError: bad values.
+    """
     slots = []
     for rec in buffer.header["slots"]:
         values = {"style": rec["style"], **rec["params"]}
@@ -110,9 +150,11 @@ def slots_for(
         n = int(rec["inner"])
         if rec["owner"] == changed_owner(buffer):
             given = {k: v for k, v in params.items() if v is not None}
-            if given and style in (None, rec["style"]):  # new values: the pilot's choices are made again
+            # new values: the pilot's choices are made again
+            if given and style in (None, rec["style"]):
                 values = {k: v for k, v in values.items() if k not in rec.get("auto", ())}
-            values = S.refine_values(values, {k: v for k, v in {"style": style, **params}.items() if v is not None})
+            values = S.refine_values(values, {k: v for k, v in {"style": style, **params}.items()
+                                              if v is not None})
             new = style_class(str(values["style"]))()
             if inner is not None and S.adaptive(S.parse_inner(inner, 1)):
                 raise UsageError(
@@ -120,7 +162,8 @@ def slots_for(
                     f"adaptive counts n0:n_max need a new render"
                 )
             if inner is not None and buffer.stores == "sequence":
-                n = S.parse_inner(inner, 1)[0]  # the replay finds out whether the stored sequence suffices
+                # the replay finds out whether the stored sequence suffices
+                n = S.parse_inner(inner, 1)[0]
             elif inner is not None and S.parse_inner(inner, 1) != (n,):
                 raise UsageError(
                     f"bad value {inner!r} for inner: the buffer holds the mean of n = {n} children "
@@ -151,11 +194,18 @@ def slots_for(
     return slots
 
 
-# ---- the kernel
-# --------------------------------------------------------------------------------------
+# ---- the kernel ----------------------------------------------------------------------------------
 
 def device(buffer: Buffer) -> dict[str, Any]:
-    """The buffer's arrays as Dr.Jit arrays (made once per buffer and kept)."""
+    """The buffer's arrays as Dr.Jit arrays, made once per buffer and kept in `buffer.device`.
+
+    Args:
+        buffer: the Buffer.
+
+    Returns:
+        The arrays by name (p, n, wo, mean, L_before, slot, pixel, depth, ...), with the
+        summation order and weights `accumulate` uses.
+    """
     d = buffer.device
     if d:
         return d
@@ -170,7 +220,8 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d["mean"] = vec("mean", mi.Color3f)
     else:
         d.update(device_arrays(a))
-    if "denoised_mean" in a:  # a denoised render (docs/denoise.md): each sample styles the denoised E[L]
+    # a denoised render (docs/denoise.md): each sample styles the denoised E[L]
+    if "denoised_mean" in a:
         d["mean"] = vec("denoised_mean", mi.Color3f)
     if SPREAD in a:  # and averages the style over D's uncertainty (`finish_spread`)
         d["spread"] = mi.Float(np.ascontiguousarray(a[SPREAD], dtype=np.float32))
@@ -196,9 +247,16 @@ def device(buffer: Buffer) -> dict[str, Any]:
 
 
 def camera_scene(buffer: Buffer) -> mi.Scene:
-    """A scene holding only the recorded camera (kind, field of view, film), for styles that read it
-    in `prepare` (hatching and halftone project their spacing through it, gooch and xtoon take its
-    frame)."""
+    """A scene holding only the recorded camera, for styles that read it in `prepare` (hatching
+    and halftone project their spacing through it, gooch and xtoon take its frame).
+
+    Args:
+        buffer: the Buffer (its header's sensor_to_world and sensor).
+
+    Returns:
+        An mi.Scene: the camera's kind, field of view and film; a buffer older than the sensor
+        entry gets a default perspective camera with the recorded frame.
+    """
     m = mi.ScalarTransform4f(np.asarray(buffer.header["sensor_to_world"], dtype=np.float64))
     sensor = buffer.header.get("sensor")
     if sensor is None:  # a buffer written before the sensor was kept: its frame alone
@@ -214,8 +272,16 @@ def camera_scene(buffer: Buffer) -> mi.Scene:
 
 
 def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> list[S.StyleSlot]:
-    """The slots with their styles' 'auto' values pinned from the pilot the buffer kept, as a render
-    of the scene pins them (`scene.defaults`); unchanged for a buffer without a pilot."""
+    """Pin the styles' 'auto' values from the pilot the buffer kept, as a render of the scene pins
+    them (`scene.defaults`).
+
+    Args:
+        buffer: the Buffer (its pilot arrays and each slot's pilot_owner).
+        slots: the restyle's StyleSlots, one per header slot; scene: the camera scene.
+
+    Returns:
+        The slots, styles pinned; unchanged for a buffer without a pilot.
+    """
     pilot = {k[len(PILOT):]: v for k, v in buffer.arrays.items() if k.startswith(PILOT)}
     if not pilot:
         return slots
@@ -228,7 +294,15 @@ def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> l
 
 
 def prepare_slots(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]:
-    """The slots ready to evaluate: auto values resolved, each style prepared on the recorded camera."""
+    """The slots ready to evaluate: auto values resolved, each style prepared on the recorded
+    camera (`camera_scene`).
+
+    Args:
+        buffer: the Buffer; slots: its restyle's StyleSlots (`slots_for`).
+
+    Returns:
+        The slots (their styles prepared in place).
+    """
     scene = camera_scene(buffer)
     slots = resolve_auto(buffer, slots, scene)
     for slot in slots:
@@ -237,16 +311,28 @@ def prepare_slots(buffer: Buffer, slots: list[S.StyleSlot]) -> list[S.StyleSlot]
 
 
 def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
-    """Each camera sample's contribution (Dr.Jit, one lane per sample); differentiable in the
-    styles' θ for "mean" buffers."""
+    """Each camera sample's contribution with the given slots.
+
+    Args:
+        buffer: the Buffer; slots: prepared StyleSlots, one per header slot (`prepare_slots`).
+
+    Returns:
+        mi.Color3f, one lane per camera sample: L_before + beta g (L_before where no stylized
+        vertex); differentiable in the styles' θ for "mean" buffers.
+
+    Raises:
+        UsageError: a sequence buffer whose replay needs more than is stored (`replayed`).
+    """
     d = device(buffer)
-    v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buffer.header["view"]), depth=d["depth"])
+    v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buffer.header["view"]),
+               depth=d["depth"])
     if buffer.stores == "sequence":
         total = replayed(buffer, d, slots, v)
     else:
         total = mi.Color3f(0.0)
         for i, slot in enumerate(slots):
-            value = finish_slot(slot, d["mean"], v) if "spread" not in d else finish_spread(slot, d["mean"], v, d["spread"])
+            value = (finish_slot(slot, d["mean"], v) if "spread" not in d
+                     else finish_spread(slot, d["mean"], v, d["spread"]))
             total = dr.select(d["slot"] == i, value, total)
     found = d["slot"] >= 0
     if "beta" in d:
@@ -255,8 +341,18 @@ def sample_values(buffer: Buffer, slots: list[S.StyleSlot]) -> mi.Color3f:
 
 
 def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi.Color3f:
-    """The slots' estimators replayed over the stored sequences; refused where one needs more than
-    is stored."""
+    """The slots' estimators replayed over a sequence buffer's stored sequences.
+
+    Args:
+        buffer: the sequence Buffer; d: its Dr.Jit arrays (`device`).
+        slots: prepared StyleSlots; v: the camera samples' Vertex.
+
+    Returns:
+        mi.Color3f, each slot's estimate per camera sample.
+
+    Raises:
+        UsageError: a camera sample whose estimator needs more than is stored, or another order.
+    """
     total, bad = replay(d, d["slot"], slots, v)
     bad = bad & (d["slot"] >= 0)
     dr.eval(total, bad)
@@ -285,15 +381,26 @@ def replay_lanes(
     inner: Any = None,
     **params: Any,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A sequence buffer's per-camera-sample contributions with a new style, and the samples whose
-    replay needs more than is stored (N x 3 float32, N bool); no refusal (for inspection and
-    tests)."""
+    """A sequence buffer's per-sample contributions with a new style, without the refusal of
+    lanes that need more than is stored (for inspection and tests).
+
+    Args:
+        buffer, style, estimator, inner, params: as for `restyle`.
+
+    Returns:
+        (N x 3 float32 contributions, N bool: the samples whose replay needs more than is stored).
+
+    Raises:
+        UsageError: a buffer that is not a sequence buffer, or a change `slots_for` refuses.
+    """
     buf = as_buffer(buffer)
     if buf.stores != "sequence":
-        raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased estimator)")
+        raise UsageError("replay_lanes needs a sequence buffer (recorded with an unbiased "
+                         "estimator)")
     slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
     d = device(buf)
-    v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buf.header["view"]), depth=d["depth"])
+    v = Vertex(p=d["p"], n=d["n"], wo=d["wo"], view=mi.Vector3f(*buf.header["view"]),
+               depth=d["depth"])
     total, bad = replay(d, d["slot"], slots, v)
     found = d["slot"] >= 0
     value = (d["L_before"] + dr.select(found, d["beta"] * total, 0.0) if "beta" in d
@@ -303,16 +410,18 @@ def replay_lanes(
 
 
 def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
-    """The image of per-sample values as the film makes it, flat H*W*3, row-major RGB;
-    differentiable.
+    """The image of per-sample values as the film makes it.
 
-    Box filter: the per-pixel mean of the samples. Where every pixel holds the same number k of
-    samples, they are gathered pixel by pixel and summed in blocks of k: one order on every run. An
-    atomic scatter-add (the fallback, and what Mitsuba's film does) adds a pixel's samples in
-    whatever order the threads reach them, so two restyles of one buffer could differ in the last
-    bit. Other filters: each pass splatted with the filter's weights and developed as Mitsuba's film
-    does, then the passes averaged (`film_filter.develop`; atomic adds, so the last bit may
-    vary)."""
+    Box filter: the per-pixel mean of the samples, summed in one order on every run where every
+    pixel holds the same number of samples (else by atomic adds: the last bit may vary). Other
+    filters: `film_filter.develop` (atomic adds). Design: docs/design/expectation_buffer.md.
+
+    Args:
+        buffer: the Buffer; values: mi.Color3f, one lane per camera sample.
+
+    Returns:
+        mi.Float, flat H*W*3 row-major RGB; differentiable in the values.
+    """
     d = device(buffer)
     if buffer.filtered:
         return film_filter.develop(buffer, values)
@@ -332,6 +441,17 @@ def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
 
 
 def as_buffer(buffer: Any) -> Buffer:
+    """A Buffer, loaded where a path is given.
+
+    Args:
+        buffer: a Buffer, or the path (str or path-like) of its .npz file.
+
+    Returns:
+        The Buffer.
+
+    Raises:
+        UsageError: another type, or a file `load_buffer` refuses.
+    """
     if isinstance(buffer, Buffer):
         return buffer
     if isinstance(buffer, (str, os.PathLike)):
@@ -342,8 +462,19 @@ def as_buffer(buffer: Any) -> Buffer:
 
 def restyle(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
             **params: Any) -> np.ndarray:
-    """The image of the buffer's camera samples with a new style / parameters: H x W x 3 float32,
-    linear."""
+    """The image of the buffer's camera samples with a new style or parameters (module doc).
+
+    Args:
+        buffer: a Buffer or its .npz path; style: the new style (None: the recorded one).
+        estimator, inner: None: the recorded ones (`slots_for` says what may change).
+        params: new parameter values of the changed slots (`changed_owner`).
+
+    Returns:
+        H x W x 3 float32, linear.
+
+    Raises:
+        UsageError: a change the buffer cannot replay; StyleError, SettingsError: bad values.
+    """
     buf = as_buffer(buffer)
     slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
     img = accumulate(buf, sample_values(buf, slots))

@@ -1,7 +1,7 @@
 """Checks of the Python API's call arguments and of loaded scenes, before anything renders.
 
-    check_render_args(spp=16, seed=0, integrator=None)   # UsageError naming the argument and what is allowed
-    check_scene(scene, "scene file 'x.xml'")            # SceneError: no sensor, or a spectrum RGB cannot render
+    check_render_args(spp=16, seed=0, integrator=None)  # UsageError: the argument, what is allowed
+    check_scene(scene, "scene file 'x.xml'")  # SceneError: no sensor, a spectrum RGB cannot render
 
 `api.render`, `api.passes` and `api.load_scene` call these first, so a bad argument fails with one
 line instead of a TypeError deep in Mitsuba or a silently different image. Needs Mitsuba (a variant
@@ -30,13 +30,33 @@ UNRENDERABLE = {
 
 
 def whole(name: str, value: Any, low: int, high: int) -> int:
-    """An int argument in [low, high]; bools, floats and strings are refused, not converted."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value <= high:
+    """An int argument in [low, high]; bools, floats and strings are refused, not converted.
+
+    Args:
+        name: the argument's name, for the message; value: its value.
+        low, high: the inclusive range.
+
+    Returns:
+        `value` as an int.
+
+    Raises:
+        UsageError: a value that is no integral number (or a bool), or outside [low, high].
+    """
+    if (isinstance(value, bool) or not isinstance(value, numbers.Integral)
+            or not low <= value <= high):
         raise UsageError(f"bad value {value!r} for {name}: expected an integer in [{low}, {high}]")
     return int(value)
 
 
 def check_integrator(integrator: Any) -> None:
+    """Refuse an `integrator=` argument that is no Mitsuba integrator.
+
+    Args:
+        integrator: None or an mi.Integrator (`styletrace.make_integrator(...)`).
+
+    Raises:
+        UsageError: anything else (a style name, say: the message points to style=...).
+    """
     if integrator is not None and not isinstance(integrator, mi.Integrator):
         raise UsageError(
             f"bad value {integrator!r} for integrator: expected None or an mi.Integrator such as "
@@ -45,14 +65,32 @@ def check_integrator(integrator: Any) -> None:
 
 
 def check_render_args(spp: Any, seed: Any, integrator: Any = None) -> None:
-    """The arguments of `render` / `passes` that do not need the scene."""
+    """Check the arguments of `render` / `passes` that do not need the scene.
+
+    Args:
+        spp: camera samples per pixel, an int in [1, SPP_MAX].
+        seed: an int in [0, SEED_MAX]; integrator: None or an mi.Integrator.
+
+    Raises:
+        UsageError: the first argument out of range or of the wrong type.
+    """
     whole("spp", spp, 1, SPP_MAX)
     whole("seed", seed, 0, SEED_MAX)
     check_integrator(integrator)
 
 
 def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
-    """The arguments of `passes`: a renderable scene as well."""
+    """Check the arguments of `passes`: a renderable scene as well, and its feature lines.
+
+    Args:
+        scene: the mi.Scene to render (`check_scene`).
+        integrator, spp, seed: as for `check_render_args`.
+
+    Raises:
+        UsageError: as `check_render_args`.
+        SceneError: a scene that cannot be rendered, or lines it cannot draw (`line_objects`
+            naming shapes it lacks, lifted lines deeper than 1 in participating media).
+    """
     check_render_args(spp, seed, integrator)
     check_scene(scene, "the scene")
     from styletrace.kernel.integrator import (
@@ -65,16 +103,14 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
         problem = line_problem(integrator.settings, SceneGraph(scene).has_media)
         if problem is not None:
             raise SceneError(problem)
-        Lines(integrator.settings.lines, scene)  # line_objects names shapes of this scene (else refused)
+        # line_objects names shapes of this scene (else refused)
+        Lines(integrator.settings.lines, scene)
 
 
 @functools.cache
 def _collector() -> type:
-    """The traversal callback of `_objects`, one class for the process (made on first use, when a
-    variant is set). A class made per call was a new type object each time, cyclic garbage holding
-    its closure (the whole `seen` dict while the traversal ran); it was suspected of keeping scenes
-    alive, which it did not (`seen` is emptied after use; the abort it was suspected of came from
-    jit.no_collection's cause), but types that pile up until a collection are no use."""
+    """The traversal callback class of `_objects`, one for the process (made on first use, when a
+    variant is set). Design: docs/design/collection_during_traces.md."""
 
     class Collect(mi.TraversalCallback):
         def __init__(self, seen: dict[int, mi.Object]):
@@ -98,13 +134,17 @@ def _objects(obj: mi.Object, seen: dict[int, mi.Object]) -> None:
 
 
 def scene_problem(scene: Any, origin: str) -> str | None:
-    """Why `scene` (named `origin` in the message) cannot be rendered, or None if it is a renderable
-    mi.Scene.
+    """Why a scene cannot be rendered; the message is returned, not raised, so that the caller
+    drops its reference to the scene first (docs/design/refused_scenes.md).
 
-    Returns the message rather than raising it, so that the caller can drop its reference to the
-    scene
-    first: a refused scene kept alive by a traceback would still be part of every later kernel
-    (Dr.Jit traces virtual calls on all live instances), and its blackbody spectrum fails there."""
+    Args:
+        scene: what was loaded (an mi.Scene, or another object).
+        origin: how the message names it ("scene file 'x.xml'", "the scene dict", ...).
+
+    Returns:
+        One line: not a scene, no sensor, a spectrum the variant cannot render, styled BSDFs no
+        style can apply to (`SceneGraph`); None for a renderable mi.Scene.
+    """
     if not isinstance(scene, mi.Scene):
         kind = scene.class_name() if isinstance(scene, mi.Object) else type(scene).__name__
         return (
@@ -129,12 +169,22 @@ def scene_problem(scene: Any, origin: str) -> str | None:
 
 
 def check_scene(scene: Any, origin: str) -> mi.Scene:
-    """`scene` if it is renderable (a scene the caller keeps anyway); a SceneError naming `origin`
-    otherwise."""
+    """Check a scene the caller keeps anyway (so raising is safe: `scene_problem`).
+
+    Args:
+        scene: the scene to check; origin: how the message names it.
+
+    Returns:
+        `scene`, where it is a renderable mi.Scene.
+
+    Raises:
+        SceneError: `scene_problem`'s message, naming `origin`.
+    """
     problem = scene_problem(scene, origin)
     if problem is not None:
         raise SceneError(problem)
     return scene
 
 
-__all__ = ["check_render_args", "check_passes_args", "check_integrator", "check_scene", "scene_problem", "whole", "SEED_MAX"]
+__all__ = ["check_render_args", "check_passes_args", "check_integrator", "check_scene",
+           "scene_problem", "whole", "SEED_MAX"]

@@ -31,6 +31,14 @@ def _sensor(origin, target, fov: float, width: int, height: int, up=(0, 1, 0)) -
 
 
 def cornell_box(width: int = 256, height: int = 256) -> dict[str, Any]:
+    """Mitsuba's Cornell box without its integrator, with this module's film and sampler.
+
+    Args:
+        width, height: the film's size in pixels.
+
+    Returns:
+        The scene dict.
+    """
     scene = mi.cornell_box()
     scene.pop("integrator", None)
     scene["sensor"]["film"] = _film(width, height)
@@ -54,6 +62,15 @@ def dragon_to_world() -> mi.ScalarTransform4f:
 
 
 def dragon(width: int = 256, height: int = 256) -> dict[str, Any]:
+    """The bundled scanned dragon (unit height) on a ground plane under two area lights and a dim
+    sky.
+
+    Args:
+        width, height: the film's size in pixels.
+
+    Returns:
+        The scene dict.
+    """
     T = mi.ScalarTransform4f
     light = {"type": "area", "radiance": {"type": "rgb", "value": [7.0, 6.6, 6.0]}}
     return {
@@ -96,7 +113,14 @@ def dragon(width: int = 256, height: int = 256) -> dict[str, Any]:
 def mixed(width: int = 256, height: int = 256) -> dict[str, Any]:
     """The dragon scene with per-object styles: a cel-shaded dragon, a cross-hatched floor and a
     physically based glass sphere in front of the dragon (render with stylize=first_object_hit to
-    see the dragon stylized through the glass too)."""
+    see the dragon stylized through the glass too).
+
+    Args:
+        width, height: the film's size in pixels.
+
+    Returns:
+        The scene dict.
+    """
     scene = dragon(width, height)
     scene["dragon"]["bsdf"] = {
         "type": "styled",
@@ -121,7 +145,14 @@ def mixed(width: int = 256, height: int = 256) -> dict[str, Any]:
 def lines(width: int = 256, height: int = 256) -> dict[str, Any]:
     """The dragon scene with a standing mirror behind the dragon and a glass sphere in front of it:
     feature lines (`--lines --set line_depth=3`) show in the reflection and through the glass
-    (docs/lines.md)."""
+    (docs/lines.md).
+
+    Args:
+        width, height: the film's size in pixels.
+
+    Returns:
+        The scene dict.
+    """
     T = mi.ScalarTransform4f
     scene = dragon(width, height)
     scene["mirror"] = {
@@ -135,7 +166,18 @@ def lines(width: int = 256, height: int = 256) -> dict[str, Any]:
     return scene
 
 
-def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO, radiance: float = FURNACE_RADIANCE) -> dict[str, Any]:
+def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO,
+            radiance: float = FURNACE_RADIANCE) -> dict[str, Any]:
+    """A diffuse unit sphere under a constant environment: every first hit's exitant radiance is
+    albedo * radiance exactly.
+
+    Args:
+        width, height: the film's size in pixels.
+        albedo: the sphere's RGB reflectance rho; radiance: the environment's grey radiance E.
+
+    Returns:
+        The scene dict.
+    """
     return {
         "type": "scene",
         "sensor": _sensor(
@@ -151,12 +193,19 @@ def furnace(width: int = 64, height: int = 64, albedo=FURNACE_ALBEDO, radiance: 
 
 
 def scaled(scene: dict[str, Any], factor: float, light: float = 1.0) -> dict[str, Any]:
-    """`scene` (a dict) scaled by `factor` about the origin, camera included, with every area
-    emitter's radiance times `light`. Shapes get a scale before their `to_world` (spheres: centre
-    and radius); the perspective sensor keeps its orientation and field of view, moves its position
-    (Mitsuba refuses scale in a camera transform) and scales its clip and focus distances. Radiance
-    is scale-free, so with light = 1 the image is unchanged: only the scene's units differ (the
-    built-in scenes' test of scene-relative style defaults)."""
+    """A scene dict scaled about the origin, camera included; with light = 1 the image is the same
+    in other units (radiance is scale-free): the test of scene-relative style defaults. Shapes get
+    a scale before their `to_world` (spheres: centre and radius); a perspective or thinlens sensor
+    moves its position (Mitsuba refuses scale in a camera transform), scales its clip and focus
+    distances, and keeps its orientation and field of view.
+
+    Args:
+        scene: the scene dict (left unchanged); factor: the scale.
+        light: the factor on every area emitter's RGB radiance.
+
+    Returns:
+        The scaled copy.
+    """
     T = mi.ScalarTransform4f
 
     def visit(node):
@@ -178,7 +227,8 @@ def scaled(scene: dict[str, Any], factor: float, light: float = 1.0) -> dict[str
             out["center"] = [factor * c for c in out.get("center", [0, 0, 0])]
             out["radius"] = factor * out.get("radius", 1.0)
         if kind == "area" and isinstance(out.get("radiance"), dict):
-            out["radiance"] = {**out["radiance"], "value": [light * v for v in out["radiance"]["value"]]}
+            out["radiance"] = {**out["radiance"],
+                               "value": [light * v for v in out["radiance"]["value"]]}
         return out
 
     return visit(scene)

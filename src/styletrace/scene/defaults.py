@@ -1,14 +1,14 @@
 """Scene-relative defaults: the styles' 'auto' parameters, resolved on the scene about to be
 rendered.
 
-    integrator, chosen = resolve(scene, integrator)   # before rendering
+    integrator, chosen = resolve_defaults(scene, integrator)   # before rendering
 
 A style declares a parameter 'auto' (default None) with a rule (`Param.auto`);
 `Style.auto_values(facts)` applies it to the `Facts` computed here per style slot: `camera`,
 `brightness(qs)` (quantiles of a pilot's first-hit brightness on the slot's objects) and
-`depth(qs)`. `resolve` returns the integrator with the values pinned (given values win) and one line
-naming them. The pilot runs here, before Mitsuba's render call, and only if a brightness rule is
-left. Rationale and the pilot's design: docs/design/scene_relative_defaults.md.
+`depth(qs)`. `resolve_defaults` returns the integrator with the values pinned (given values win)
+and one line naming them. The pilot runs here, before Mitsuba's render call, and only if a
+brightness rule is left. Rationale and the pilot's design: docs/design/scene_relative_defaults.md.
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ from styletrace.kernel.styled_bsdf import StyledBSDF
 from styletrace.kernel.volume import volume_walk
 from styletrace.styles.base import Camera, Style, Vertex, camera, lanes
 
-#: the settings the pilot's trace reads (`Pilot._trace`)
+#: the settings the pilot's trace reads (`ScenePilot._trace`)
 PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling")
 #: cells of the pilot grid along the film's longer side, and camera samples per cell
 PILOT_CELLS = 32
@@ -39,10 +39,18 @@ PILOT_SEED = 0x5EED
 
 
 def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[float]:
-    """Quantiles of the distribution putting mass `weights` on `values`: the inverted CDF, the
-    smallest value whose cumulative weight reaches q (numpy 2's `np.quantile(..., weights=,
-    method="inverted_cdf")`, which numpy 1.x, still allowed by pyproject, lacks; spelled out so both
-    give the same auto values)."""
+    """Quantiles of the distribution putting mass `weights` on `values` (the inverted CDF).
+
+    Args:
+        values: the values, any shape (flattened).
+        weights: their weights, the same size; values of weight <= 0 are never quantiles.
+        qs: the probabilities, each in [0, 1].
+
+    Returns:
+        Per q, the smallest value whose cumulative weight reaches q (as floats).
+    """
+    # numpy 2's np.quantile(..., weights=, method="inverted_cdf"), which numpy 1.x (still allowed
+    # by pyproject) lacks; spelled out so that both give the same auto values
     v = np.asarray(values, dtype=np.float64).ravel()
     w = np.asarray(weights, dtype=np.float64).ravel()
     keep = w > 0  # a value of no weight is never a quantile, not even the 0th
@@ -56,21 +64,36 @@ def weighted_quantiles(values: np.ndarray, weights: np.ndarray, qs) -> list[floa
 
 
 class ScenePilot:
-    """The pilot's camera samples: per sample its cell, first hit (BSDF, position, normal, direction, depth)
-    and one `path` estimate of the radiance there. Traced on first use, once per `resolve`."""
+    """The pilot's camera samples: per sample its cell, first hit (BSDF, position, normal,
+    direction, depth) and one `path` estimate of the radiance there (`samples`). Traced on first
+    use, once per `resolve_defaults` (or per `pipeline.resolve`, which shares it).
+
+    Args:
+        scene: the mi.Scene to trace (its first sensor and crop).
+        settings: the integrator's Settings; the trace reads PILOT_SETTINGS.
+    """
 
     def __init__(self, scene: mi.Scene, settings: S.Settings):
         self.scene, self.settings = scene, settings
 
     def serves(self, scene: mi.Scene, settings: S.Settings) -> bool:
-        """Whether these samples are the pilot of `scene` under `settings`: the same scene, and the
-        settings the trace reads (the style is not among them: a pinned copy of an integrator shares
-        its pilot)."""
-        return self.scene is scene and all(getattr(self.settings, k) == getattr(settings, k) for k in PILOT_SETTINGS)
+        """Whether these samples are the pilot of `scene` under `settings`.
+
+        Args:
+            scene: the scene to render; settings: the integrator's Settings.
+
+        Returns:
+            True for the same scene object and equal PILOT_SETTINGS (the style is not among them:
+            a pinned copy of an integrator shares its pilot).
+        """
+        return self.scene is scene and all(getattr(self.settings, k) == getattr(settings, k)
+                                           for k in PILOT_SETTINGS)
 
     @cached_property
     def samples(self) -> dict[str, Any]:
-        with no_collection():  # traced and evaluated with no scene finalised meanwhile (jit.no_collection)
+        """The samples by name: cell, owner, colour, depth, p, n, wo (numpy, one row per sample)."""
+        # traced and evaluated with no scene finalised meanwhile (jit.no_collection)
+        with no_collection():
             return self._trace()
 
     def _trace(self) -> dict[str, Any]:
@@ -94,8 +117,8 @@ class ScenePilot:
         sampler = mi.load_dict({"type": "independent"})
         sampler.seed(PILOT_SEED, n)
         # our own path kernel, not Mitsuba's `path`: its emitter choice does not depend on the order
-        # Mitsuba
-        # lists the emitters in, so the auto values (and the image) are the same for the same seed
+        # Mitsuba lists the emitters in, so the auto values (and the image) are the same for the
+        # same seed
         pi = scene.ray_intersect_preliminary(ray, coherent=True)
         graph = SceneGraph(scene)
         emitters = EmitterSampler(scene, self.settings.emitter_sampling)
@@ -108,12 +131,12 @@ class ScenePilot:
             L = exitant(cfg, sampler, Start(pi, ray), mi.Bool(True))
         cam = camera(scene)
         depth = dr.dot(si.p - mi.Point3f(*cam.position), mi.Vector3f(*cam.forward))
-        owner = np.full(n, -1, dtype=np.int64)       # -1: missed; 0: the integrator's style; k: styled BSDF k-1
+        # -1: missed; 0: the integrator's style; k: styled BSDF k-1
+        owner = np.full(n, -1, dtype=np.int64)
         hit = np.array(si.is_valid(), dtype=bool)
         owner[hit] = 0
         # in `unique_styled` order; each styled BSDF with the pointers an intersection reports for
-        # it (itself
-        # and the wrappers that hold it): one traversal of the scene
+        # it (itself and the wrappers that hold it): one traversal of the scene
         for k, (_, pointers, _) in enumerate(graph.styled, start=1):
             for ptr in pointers:
                 owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
@@ -130,9 +153,18 @@ class ScenePilot:
 
 
 def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The pilot's mean colour per cell over the samples in `mask`: (colour (cells, 3), samples per
-    cell, each masked sample's cell index)."""
-    cells, inverse, counts = np.unique(samples["cell"][mask], return_inverse=True, return_counts=True)
+    """The pilot's mean colour per cell over some of its samples.
+
+    Args:
+        samples: the pilot's samples (`ScenePilot.samples`).
+        mask: bool per sample: the samples to average.
+
+    Returns:
+        (mean colour (cells, 3), samples per cell, each masked sample's index into those cells),
+        over the cells that hold a masked sample.
+    """
+    cells, inverse, counts = np.unique(samples["cell"][mask], return_inverse=True,
+                                       return_counts=True)
     colour = np.zeros((len(cells), 3))
     np.add.at(colour, inverse, samples["colour"][mask])
     colour /= counts[:, None]
@@ -140,8 +172,16 @@ def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def median_brightness(pilot: ScenePilot) -> float | None:
-    """The median first-hit brightness (r+g+b)/3 the camera sees, over every object (cells weighted by
-    their samples), or None where it sees none: the firefly control's floor (`firefly_floor`)."""
+    """The firefly control's floor (`firefly_floor`): the median first-hit brightness the camera
+    sees.
+
+    Args:
+        pilot: the scene's ScenePilot (traced here if not yet).
+
+    Returns:
+        The median over every object of the per-cell brightness (r+g+b)/3, cells weighted by
+        their samples; None where the camera sees no surface.
+    """
     mask = pilot.samples["owner"] >= 0
     if not mask.any():
         return None
@@ -150,10 +190,17 @@ def median_brightness(pilot: ScenePilot) -> float | None:
 
 
 class Facts:
-    """What a style's auto rule may read about the part of the scene it covers (see the module
-    doc)."""
+    """What a style's auto rule may read about the part of the scene it covers (module doc).
 
-    def __init__(self, scene: mi.Scene, pilot: ScenePilot, owner: int, styles: tuple[Style, ...] = ()):
+    Args:
+        scene: the mi.Scene; pilot: its ScenePilot (or anything with the same `samples`).
+        owner: whose objects: 0 the integrator's style, k the k-th of `unique_styled`.
+        styles: styles applied before this one in a composition (`mapped`): the brightness is
+            that of their output.
+    """
+
+    def __init__(self, scene: mi.Scene, pilot: ScenePilot, owner: int,
+                 styles: tuple[Style, ...] = ()):
         self.scene, self.pilot, self.owner, self.styles = scene, pilot, owner, styles
 
     @cached_property
@@ -161,7 +208,14 @@ class Facts:
         return camera(self.scene)
 
     def mapped(self, style: Style) -> "Facts":
-        """The facts of `style`'s output (for the next operand of a composition)."""
+        """The facts of `style`'s output, for the next operand of a composition.
+
+        Args:
+            style: the operand applied before the next one.
+
+        Returns:
+            Facts of the same scene, pilot and owner whose brightness is after `style`.
+        """
         return Facts(self.scene, self.pilot, self.owner, self.styles + (style,))
 
     @cached_property
@@ -200,10 +254,33 @@ class Facts:
         return np.array(I, dtype=np.float64).T
 
     def brightness(self, qs) -> list[float]:
+        """Quantiles of the first-hit brightness (r+g+b)/3 on the covered objects, per cell
+        weighted by its samples (all objects where the camera sees none of the covered).
+
+        Args:
+            qs: the probabilities, each in [0, 1].
+
+        Returns:
+            One brightness per q.
+
+        Raises:
+            NothingSeen: the camera sees no surface.
+        """
         u, counts = self._cells
         return weighted_quantiles(u, counts, qs)
 
     def depth(self, qs) -> list[float]:
+        """Quantiles of the camera depth (p - c) . forward of the covered objects' first hits.
+
+        Args:
+            qs: the probabilities, each in [0, 1].
+
+        Returns:
+            One depth per q, in scene units.
+
+        Raises:
+            NothingSeen: the camera sees no surface.
+        """
         d = self.pilot.samples["depth"][self._mine]
         return weighted_quantiles(d, np.ones_like(d), qs)
 
@@ -214,9 +291,17 @@ class NothingSeen(Exception):
 
 
 def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
-    """The style's auto values that its parameters accept. A rule pushed past a parameter's range by
-    an extreme given value (u_min = 1e6 leaves no u_max above it) pins nothing: the style's
-    unresolved fallback applies, as it does when the camera sees nothing."""
+    """The style's auto values that its parameters accept.
+
+    Args:
+        style: the style; facts: the Facts of the objects it covers.
+
+    Returns:
+        The values by parameter name; {} where the camera sees nothing, or where together they
+        break a check across parameters. A value outside its parameter's range (a rule pushed
+        past it by an extreme given value: u_min = 1e6 leaves no u_max above it) is left out:
+        the style's unresolved fallback applies.
+    """
     try:
         chosen = style.auto_values(facts)
     except NothingSeen:
@@ -237,24 +322,42 @@ def auto_values(style: Style, facts: Facts) -> dict[str, Any]:
 
 
 def unique_styled(scene: mi.Scene) -> list[StyledBSDF]:
-    """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups), in a
-    fixed order."""
+    """The scene's styled BSDFs wherever they sit (inside wrappers, in instanced shapegroups).
+
+    Args:
+        scene: the mi.Scene.
+
+    Returns:
+        The StyledBSDFs in a fixed order (the pilot's owners 1, 2, ...).
+
+    Raises:
+        SceneError: styling the scene graph refuses (`kernel.scene_graph.SceneGraph`).
+    """
     return [styled for styled, _, _ in SceneGraph(scene).styled]
 
 
 def describe_defaults(style: Style, values: dict[str, Any]) -> str:
+    """The account of a style's chosen auto values.
+
+    Args:
+        style: the style; values: its chosen values by parameter name.
+
+    Returns:
+        'name key=value ...', each value as its parameter shows it.
+    """
     params = {p.name: p for p in type(style).params}
     return f"{style.name} " + " ".join(f"{k}={params[k].show(v)}" for k, v in values.items())
 
 
-def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePilot | None = None) -> tuple[mi.Integrator, str]:
+def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator,
+                     pilot: ScenePilot | None = None) -> tuple[mi.Integrator, str]:
     """Pin the auto values of an integrator's style and of the scene's `styled` BSDFs.
 
     Args:
         scene: the scene about to be rendered; its `styled` BSDFs are updated in place.
         integrator: the integrator to resolve (any other integrator is returned as it is).
-        pilot: a `Pilot` of this scene to reuse (traced only if an auto value needs it), so that a
-            caller that keeps the pilot's samples (the look-dev recorder) traces it once.
+        pilot: a `ScenePilot` of this scene to reuse (traced only if an auto value needs it), so
+            that a caller that keeps the pilot's samples (the look-dev recorder) traces it once.
 
     Returns:
         (integrator, chosen): the integrator with values pinned, and a one-line account ('' if
@@ -276,7 +379,8 @@ def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePil
             # module)
             s = integrator.settings
             pinned = replace(s, slot=replace(s.slot, style=style.pinned(chosen)))
-            integrator = StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen})
+            integrator = StylizedIntegrator(mi.Properties(), pinned,
+                                            {**integrator.values, **chosen})
             notes.append(describe_defaults(style, chosen))
     for k, bsdf in enumerate(unique_styled(scene), start=1):
         style = bsdf.slot.style
@@ -287,10 +391,19 @@ def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator, pilot: ScenePil
     return integrator, "; ".join(n for n in notes if n)
 
 
-def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: ScenePilot | None, k: float
-                ) -> tuple[StylizedIntegrator, str]:
-    """`integrator` with the firefly control's k and, unless given, its floor (the scene's median
-    brightness, `median_brightness`) pinned, and the note naming what was chosen ('' if nothing)."""
+def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: ScenePilot | None,
+                k: float) -> tuple[StylizedIntegrator, str]:
+    """Pin the firefly control's k and, unless given, its floor (`median_brightness`).
+
+    Args:
+        scene: the scene about to be rendered; integrator: the stylized integrator.
+        pilot: the scene's ScenePilot to reuse, or None (one is made if the floor needs it).
+        k: the control's multiple to pin (its own `firefly`, or another: the denoiser's).
+
+    Returns:
+        (the integrator, a new one where anything was pinned; the note naming the values chosen,
+        '' if none).
+    """
     s = integrator.settings
     chosen = {} if s.firefly == k else {"firefly": float(k)}
     if s.firefly_floor is None:
@@ -305,4 +418,5 @@ def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: ScenePil
     return StylizedIntegrator(mi.Properties(), pinned, {**integrator.values, **chosen}), note
 
 
-__all__ = ["resolve_defaults", "pin_firefly", "Facts", "ScenePilot", "weighted_quantiles", "PILOT_CELLS", "PILOT_SPP"]
+__all__ = ["resolve_defaults", "pin_firefly", "Facts", "ScenePilot", "weighted_quantiles",
+           "PILOT_CELLS", "PILOT_SPP"]

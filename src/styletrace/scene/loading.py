@@ -1,9 +1,11 @@
-"""Loading a scene: a built-in name, a Mitsuba XML file (with defines and a new film size), a dict or an mi.Scene.
+"""Loading a scene: a built-in name, a Mitsuba XML file (with defines and a new film size), a dict
+or an mi.Scene.
 
     scene = load_scene("scene.xml", width=64, height=48, defines={"depth": "3"})
 
-Every loaded scene gets canonical vertex normals (`normals`), so the same seed gives the same image in every
-process; a refused scene raises `SceneError` with one line and does not outlive the call.
+Every loaded scene gets canonical vertex normals (`normals`), so the same seed gives the same image
+in every process; a refused scene raises `SceneError` with one line and does not outlive the call
+(docs/design/refused_scenes.md).
 """
 from __future__ import annotations
 
@@ -23,6 +25,14 @@ from styletrace.scene.plugins import init
 
 
 def first_line(exc: BaseException) -> str:
+    """The one line of an exception's message worth showing.
+
+    Args:
+        exc: the exception (Mitsuba's carry context lines before the cause).
+
+    Returns:
+        The message's last non-empty line, stripped; the exception's type name if it has none.
+    """
     text = str(exc).strip()
     lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
     # Mitsuba prefixes the real cause with context lines; the last line is the most specific.
@@ -35,26 +45,53 @@ def _size(width, height, keys=("width", "height")) -> dict[str, int]:
 
 
 def scene_dict(name: str, width: int | None = None, height: int | None = None) -> dict[str, Any]:
+    """The dict of a built-in scene.
+
+    Args:
+        name: a key of `builtin.BUILTIN`.
+        width, height: the film's size in pixels; None (or 0) keeps the scene's default.
+
+    Returns:
+        The Mitsuba scene dict.
+
+    Raises:
+        SceneError: an unknown name.
+    """
     if name not in BUILTIN:
-        raise SceneError(f"unknown built-in scene '{name}': available are {', '.join(sorted(BUILTIN))}")
+        raise SceneError(f"unknown built-in scene '{name}': available are "
+                         f"{', '.join(sorted(BUILTIN))}")
     return BUILTIN[name](**_size(width, height))
 
 
 def canonical_scene_normals(scene: mi.Scene) -> mi.Scene:
-    """The scene with its computed vertex normals made the same in every process (`normals`): the same seed
-    then gives the same image to the bit. Scenes load on all of Dr.Jit's threads (one thread deadlocks
-    Mitsuba's OpenEXR reader)."""
+    """Make a scene's computed vertex normals the same in every process (`normals`), so that the
+    same seed gives the same image to the bit. Design: docs/design/canonical_normals.md.
+
+    Args:
+        scene: the loaded mi.Scene (changed in place).
+
+    Returns:
+        `scene`.
+    """
     _canonical(scene)
     return scene
 
 
 def load_scene(scene: Any = None, width: int | None = None, height: int | None = None,
                defines: dict[str, Any] | None = None) -> mi.Scene:
-    """A built-in name, a Mitsuba XML path, a scene dict or an mi.Scene -> mi.Scene.
+    """Load a scene, checked renderable, its normals canonical (module doc).
 
-    For an XML file, `defines` are the values of its `<default>` parameters (as `mitsuba -D name=value`),
-    and width/height resize its film; an integrator type Mitsuba does not know is replaced, with a
-    `SceneWarning` (see `scene_file`)."""
+    Args:
+        scene: a built-in name (None: DEFAULT), a Mitsuba XML path, a scene dict or an mi.Scene.
+        width, height: a new film size (built-in scenes and XML files; an mi.Scene must match).
+        defines: an XML file's `<default>` parameters, as `mitsuba -D name=value`.
+
+    Returns:
+        The mi.Scene; an XML integrator type Mitsuba lacks is replaced, with a `SceneWarning`.
+
+    Raises:
+        SceneError: a scene that cannot be found, loaded, resized or rendered (one line).
+    """
     init()
     if scene is None:
         scene = DEFAULT
@@ -65,11 +102,13 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         if width or height:
             size = scene.sensors()[0].film().size()
             if (width and width != size[0]) or (height and height != size[1]):
-                raise SceneError("width/height cannot change an already loaded mi.Scene; pass a dict or file")
+                raise SceneError("width/height cannot change an already loaded mi.Scene; pass a "
+                                 "dict or file")
         return scene
     if isinstance(scene, dict):
         if width or height:
-            raise SceneError("width/height apply to built-in scenes and XML files; set the film size in the dict")
+            raise SceneError("width/height apply to built-in scenes and XML files; set the film "
+                             "size in the dict")
         try:
             loaded = mi.load_dict(scene)
         except Exception as exc:  # Mitsuba raises RuntimeError with several context lines
@@ -80,8 +119,9 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
             raise SceneError(problem)
         return canonical_scene_normals(loaded)
     if not isinstance(scene, (str, os.PathLike)):
-        raise SceneError(f"bad scene {scene!r}: expected a built-in name ({', '.join(sorted(BUILTIN))}), an XML "
-                         f"path, a scene dict or an mi.Scene")
+        raise SceneError(f"bad scene {scene!r}: expected a built-in name "
+                         f"({', '.join(sorted(BUILTIN))}), an XML path, a scene dict or an "
+                         f"mi.Scene")
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
@@ -89,8 +129,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         except Exception as exc:
             raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
-        raise SceneError(f"unknown scene '{name}': expected a built-in scene ({', '.join(sorted(BUILTIN))}) "
-                         f"or a Mitsuba XML file")
+        raise SceneError(f"unknown scene '{name}': expected a built-in scene "
+                         f"({', '.join(sorted(BUILTIN))}) or a Mitsuba XML file")
     if not os.path.isfile(name):
         raise SceneError(f"scene file '{name}' does not exist")
     try:
@@ -100,8 +140,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     except Exception as exc:
         if "unused parameters" in str(exc):  # Mitsuba lists them as "- $name=value"
             unused = ", ".join(re.findall(r"\$(\w+)=", str(exc)))
-            raise SceneError(f"scene file '{name}' uses no parameter {unused}: -D/defines set only the file's "
-                             f"$parameters (its <default> names)") from None
+            raise SceneError(f"scene file '{name}' uses no parameter {unused}: -D/defines set only "
+                             f"the file's $parameters (its <default> names)") from None
         raise SceneError(f"cannot load scene file '{name}': {first_line(exc)}") from None
     problem = scene_problem(loaded, f"scene file '{name}'")
     if problem is not None:
@@ -113,12 +153,23 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
 
 
 class SceneWarning(UserWarning):
-    """A scene was changed to render (an unknown integrator replaced); the message names what changed."""
+    """A scene was changed to render (an unknown integrator replaced); the message names what
+    changed."""
 
 
 def film_format(scene: mi.Scene) -> str:
-    """The pixel format of the scene's film as Mitsuba develops it ('rgb', 'rgba', 'y', 'ya', 'xyz', 'xyza'):
-    the kernel computes RGB radiance and the film converts it (luminance Y, CIE XYZ, alpha coverage)."""
+    """The pixel format of the scene's film as Mitsuba develops it: the kernel computes RGB
+    radiance and the film converts it (luminance Y, CIE XYZ, alpha coverage).
+
+    Args:
+        scene: the mi.Scene (its first sensor's film, read from its description).
+
+    Returns:
+        'rgb' (also where the description names none), 'rgba', 'y', 'ya', 'xyz' or 'xyza'.
+
+    Raises:
+        SceneError: a format images cannot be written in.
+    """
     found = re.search(r"pixel_format\s*=\s*(\w+)", str(scene.sensors()[0].film()))
     name = found.group(1).lower() if found else "rgb"
     if name not in PIXEL_FORMATS:
@@ -128,8 +179,16 @@ def film_format(scene: mi.Scene) -> str:
 
 
 def scene_spp(scene: mi.Scene) -> int:
-    """The scene's own camera samples per pixel: its sampler's sample_count."""
+    """The scene's own camera samples per pixel.
+
+    Args:
+        scene: the mi.Scene.
+
+    Returns:
+        Its first sensor's sampler's sample_count.
+    """
     return int(scene.sensors()[0].sampler().sample_count())
 
 
-__all__ = ["load_scene", "scene_dict", "canonical_scene_normals", "first_line", "SceneWarning", "film_format", "scene_spp"]
+__all__ = ["load_scene", "scene_dict", "canonical_scene_normals", "first_line", "SceneWarning",
+           "film_format", "scene_spp"]

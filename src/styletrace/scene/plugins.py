@@ -1,16 +1,14 @@
-"""The one place where styletrace meets the engine: choosing the backend and registering the
-plugins.
+"""Where styletrace meets the engine: choosing the backend and registering the Mitsuba plugins.
 
-    styletrace.init()                 # idempotent: pick the variant, register `stylized` and `styled`
+    styletrace.init()                 # idempotent: pick the variant, register `stylized`, `styled`
     styletrace.init("cuda_ad_rgb")    # or insist on one
 
-`jit.backend()` picks a working libLLVM and the Mitsuba variant; a variant the user set before is
-kept. Every styletrace module that imports Dr.Jit or Mitsuba when it loads calls it first (the
-`styles`, `kernel` and `scene` packages, `assets.scenes`, `api`, `images`), because Dr.Jit chooses
-its libLLVM at import time. `init()` does that and registers the plugins for the active variant. The
-command line, the API entry points and the tests call `init()`; a script that loads Mitsuba XML
-naming `stylized` calls it before `mi.load_file`. `import styletrace` alone does neither: it loads
-no Dr.Jit, no Mitsuba.
+`jit.backend()` picks a working libLLVM and the Mitsuba variant (one the user set before is kept);
+every module that imports Dr.Jit or Mitsuba when it loads calls it first (through `styletrace.gate`;
+`images` itself), because Dr.Jit chooses its libLLVM at import time. `init()` does that and
+registers the plugins for the active variant. The command line, the API entry points and the tests
+call `init()`; a script that loads Mitsuba XML naming `stylized` calls it before `mi.load_file`.
+`import styletrace` alone does neither: it loads no Dr.Jit, no Mitsuba.
 """
 from __future__ import annotations
 
@@ -20,7 +18,18 @@ _registered: set[str] = set()
 
 
 def init(variant: str | None = None) -> str:
-    """`backend(variant)`, then register styletrace's Mitsuba plugins for it (idempotent)."""
+    """Choose the backend (`jit.backend`), then register styletrace's Mitsuba plugins `stylized`
+    and `styled` for the active variant, once per variant.
+
+    Args:
+        variant: a variant to switch to; None keeps the active one or chooses one.
+
+    Returns:
+        The active variant.
+
+    Raises:
+        BackendError: no usable backend, or a variant styles cannot run on.
+    """
     active = jit.backend(variant)
     if active not in _registered:
         import mitsuba as mi

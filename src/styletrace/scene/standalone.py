@@ -1,17 +1,14 @@
-"""The `stylized` integrator as Mitsuba builds it from a scene file or dict: `mi.render` pins `auto` values too.
+"""The `stylized` integrator as Mitsuba builds it from a scene file or dict: `mi.render` pins
+`auto` values too.
 
-    scene = mi.load_file("scene.xml")      # <integrator type="stylized"><string name="style" value="cel"/>...
-    img = mi.render(scene)                 # cel thresholds from the scene's brightness, as `styletrace render`
+    scene = mi.load_file("scene.xml")  # <integrator type="stylized"><string name="style" .../>
+    img = mi.render(scene)             # cel thresholds from the scene's brightness, as the CLI's
 
-The front ends pin a style's scene-relative `auto` values (`scene.defaults.resolve_defaults`) before Mitsuba's render
-call. A user who loads a file and calls `mi.render` skips them, and got each style's unresolved fallback (cel
-thresholds 0.5): the same file and seed drew another image. `from_properties`, the factory `runtime.init`
-registers for `stylized`, gives such an integrator a `render` of its own (on the instance only, as the
-reuse render is set: a Python `render` on the class changed how Ctrl-C reaches a render in progress) that
-resolves against the scene once, caches the result for that scene, and hands the call to the resolved
-integrator. That one is built from property values (`from_values`), so it has no such `render` and never
-resolves again; the pilot itself traces the path kernel directly, never `mi.render`, so nothing recurses.
-The pipeline never renders with this object: it builds its integrator from the values (`pipeline.resolve`).
+`from_properties`, the factory `scene.plugins.init` registers for `stylized`, gives the integrator
+a `render` of its own (`ResolvingRender`) that pins the style's scene-relative `auto` values
+(`scene.defaults.resolve_defaults`) once per scene and hands the call to the resolved integrator,
+which has no such `render`. The pipeline never renders with this object (`pipeline.resolve`).
+Design: docs/design/standalone_render.md.
 """
 from __future__ import annotations
 
@@ -23,8 +20,16 @@ from styletrace.scene.defaults import resolve_defaults
 
 
 def scene_key(scene: mi.Scene) -> tuple:
-    """What identifies the scene a resolution belongs to: the object and its film (a crop changes the pilot);
-    no reference to the scene is kept (see `StylizedIntegrator.sample`)."""
+    """What identifies the scene a resolution belongs to, keeping no reference to it (see
+    `StylizedIntegrator.sample`).
+
+    Args:
+        scene: the mi.Scene.
+
+    Returns:
+        (id(scene), its film's crop size, its crop offset; both () without a sensor): a crop
+        changes the pilot.
+    """
     film = scene.sensors()[0].film() if scene.sensors() else None
     size = tuple(int(v) for v in film.crop_size()) if film is not None else ()
     offset = tuple(int(v) for v in film.crop_offset()) if film is not None else ()
@@ -32,16 +37,21 @@ def scene_key(scene: mi.Scene) -> tuple:
 
 
 class ResolvingRender:
-    """The `render` a Mitsuba-built integrator gets (see the module doc). It holds its integrator weakly: a
-    bound method would make a reference cycle, and garbage that only the collector frees changes what
-    Dr.Jit traces (jit.no_collection says how); the resolved integrator it caches holds no scene object."""
+    """The `render` a Mitsuba-built integrator gets (module doc). It holds its integrator weakly,
+    and the resolved integrator it caches holds no scene object: no reference cycle
+    (docs/design/standalone_render.md).
+
+    Args:
+        integrator: the StylizedIntegrator whose `render` this is.
+    """
 
     def __init__(self, integrator: StylizedIntegrator):
         self.owner = weakref.ref(integrator)
         self.resolved_for: tuple | None = None
 
     def __call__(self, scene, sensor=0, seed=0, spp=0, develop=True, evaluate=True):
-        """`mi.render`'s call: render with the owner's values, `auto` values pinned on `scene` (cached)."""
+        """`mi.render`'s call: render with the owner's values, `auto` values pinned on `scene`
+        (cached per `scene_key`)."""
         key = scene_key(scene)
         if self.resolved_for is None or self.resolved_for[0] != key:
             fresh = StylizedIntegrator.from_values(self.owner().values)
@@ -50,7 +60,17 @@ class ResolvingRender:
 
 
 def from_properties(props: mi.Properties) -> StylizedIntegrator:
-    """A `stylized` integrator from Mitsuba properties whose `mi.render` resolves `auto` values (module doc)."""
+    """The factory of `stylized`: an integrator whose `mi.render` resolves `auto` values.
+
+    Args:
+        props: the integrator's mi.Properties (from a scene file or dict).
+
+    Returns:
+        The StylizedIntegrator, its `render` a `ResolvingRender`.
+
+    Raises:
+        SettingsError, StyleError: properties the integrator refuses.
+    """
     integrator = StylizedIntegrator(props)
     integrator.render = ResolvingRender(integrator)
     return integrator

@@ -1,6 +1,6 @@
 """Loading a Mitsuba XML scene file as its author meant, with the command line's changes applied.
 
-    scene, notes = load("cbox.xml", width=64, height=48, defines={"spp": "4"})
+    scene, notes = load_xml("cbox.xml", width=64, height=48, defines={"spp": "4"})
 
 `defines` are the file's `<default>` parameters (as `mitsuba -D`); `width`/`height` resize the
 film of the first top-level sensor, includes expanded as Mitsuba expands them; an unknown
@@ -26,6 +26,14 @@ OWN = ("stylized",)
 
 
 def known_integrator(kind: str) -> bool:
+    """Whether Mitsuba can make an integrator of this type (ours included).
+
+    Args:
+        kind: the integrator's type name, `$parameters` substituted.
+
+    Returns:
+        False only where Mitsuba reports the plugin "not found"; its other errors count as known.
+    """
     if kind in OWN or mi.PluginManager.instance().plugin_type(kind) == mi.ObjectType.Integrator:
         return True
     try:
@@ -36,26 +44,44 @@ def known_integrator(kind: str) -> bool:
 
 
 def substitute(text: str, params: Mapping[str, str]) -> str:
-    """`text` with its `$parameters` replaced as Mitsuba 3.9.1's parser does: longest name first
-    ($ab before $a), plain text replacement."""
+    """Replace `$parameters` as Mitsuba 3.9.1's parser does: longest name first ($ab before $a),
+    plain text replacement.
+
+    Args:
+        text: the attribute's text; params: the parameters' values by name (without `$`).
+
+    Returns:
+        The text with every `$name` known replaced (unknown ones stay).
+    """
     for key in sorted(params, key=len, reverse=True):
         text = text.replace("$" + key, params[key])
     return text
 
 
 def add_default(params: dict[str, str], node: ET.Element) -> None:
-    """Record a `<default>` as Mitsuba's parser meets it: a name already known (a define, an
-    earlier default) keeps its value; the default's own value has the parameters known so far
-    substituted."""
+    """Record a `<default>` as Mitsuba's parser meets it.
+
+    Args:
+        params: the parameters known so far (changed in place): a name already known (a define,
+            an earlier default) keeps its value.
+        node: the `<default name value>` element; its value has the known parameters substituted.
+    """
     params.setdefault(node.get("name", ""), substitute(node.get("value", ""), params))
 
 
-def replace_integrator(root: ET.Element, origin: str, defines: Mapping[str, str] | None = None) -> str | None:
-    """Swap an unknown top-level integrator for `path` with the shared depths; the note to show, or
-    None.
+def replace_integrator(root: ET.Element, origin: str,
+                       defines: Mapping[str, str] | None = None) -> str | None:
+    """Swap an unknown top-level integrator for `path` with the SHARED properties, in place.
 
-    The type is read as Mitsuba reads it: `defines`, then the `<default>`s before the integrator in
-    document order, substituted for its `$parameters`."""
+    Args:
+        root: the parsed `<scene>`; origin: how the note names the file.
+        defines: the file's parameters; the type is read as Mitsuba reads it, `defines` and then
+            the `<default>`s before the integrator (document order) substituted.
+
+    Returns:
+        The note to show (what was kept, what dropped), or None where nothing was replaced (a
+        type with an undefined `$parameter` is left to Mitsuba's parser to report).
+    """
     params = {str(k): str(v) for k, v in (defines or {}).items()}
     tops = [node for node in root if node.tag == "integrator"]
     for node in root.iter():
@@ -65,7 +91,8 @@ def replace_integrator(root: ET.Element, origin: str, defines: Mapping[str, str]
         if not any(node is top for top in tops):
             continue
         kind = substitute(node.get("type", ""), params)
-        if "$" in kind or known_integrator(kind):  # "$": undefined here, Mitsuba's parser reports it
+        # "$": undefined here, Mitsuba's parser reports it
+        if "$" in kind or known_integrator(kind):
             continue
         kept = [c for c in node if c.get("name") in SHARED]
         dropped = [c.get("name") or c.tag for c in node if c.get("name") not in SHARED]
@@ -73,16 +100,23 @@ def replace_integrator(root: ET.Element, origin: str, defines: Mapping[str, str]
         new.extend(kept)  # their $parameters stay: Mitsuba substitutes them in the edited text
         new.tail = node.tail
         root[list(root).index(node)] = new
-        keep = ", ".join(f"{c.get('name')}={substitute(c.get('value', ''), params)}" for c in kept) or "nothing"
+        keep = ", ".join(f"{c.get('name')}={substitute(c.get('value', ''), params)}"
+                         for c in kept) or "nothing"
         return (f"{origin}: integrator '{kind}' is not a Mitsuba plugin: rendering with stylized, "
                 f"keeping {keep}; dropped {', '.join(dropped) or 'nothing'}")
     return None
 
 
 def used_defines(defines: Mapping[str, str], before: str, after: str) -> dict[str, str]:
-    """The defines to hand Mitsuba for the edited text `after` of the file text `before`: all but
-    those the edit removed every use of (Mitsuba refuses an unused define; it was used in the file
-    as written)."""
+    """The defines to hand Mitsuba for an edited file: all but those the edit removed every use of
+    (Mitsuba refuses an unused define; it was used in the file as written).
+
+    Args:
+        defines: the given defines; before, after: the file's text before and after the edit.
+
+    Returns:
+        The defines used in `after`, and those `before` never used (Mitsuba reports them).
+    """
     return {k: v for k, v in defines.items() if "$" + k in after or "$" + k not in before}
 
 
@@ -98,21 +132,16 @@ def _version(node: ET.Element) -> tuple[int, ...] | None:
 
 
 class _Includes:
-    """One expansion of a scene file's includes, following Mitsuba 3.9.1's parser (parser.cpp).
+    """One expansion of a scene file's includes, following Mitsuba 3.9.1's parser (parser.cpp):
+    `params` the $parameters known so far (defines first, then each `<default>` met), file lookups
+    on per-file resolvers, `<path>` and `<spectrum filename>` resolved as Mitsuba resolves them.
+    `problem` is set when the expansion could not be faithful (the caller then refuses a resize).
+    Design: docs/design/scene_files.md (include expansion).
 
-    - `params` holds the $parameters known so far, in Mitsuba's order: the defines first (they win),
-      then each `<default>` as the parser meets it, in document order through the included files.
-    - File lookups: each file is parsed with a resolver, a list of folders searched in order (then
-      Mitsuba's own file resolver). The scene's is its folder. An `<include>` in a file of folder D
-      and resolver R is looked up on [D] + R, and the included file is parsed with that list as its
-      resolver. A `<path value>` is looked up in its file's folder, else on its resolver, and is put
-      first on that
-      resolver: it serves the rest of that file and the files it includes, and is gone when the
-      include ends (Mitsuba restores the resolver), so an included file's `<path>` is used here and
-      dropped from the spliced text. A `<spectrum filename>` is looked up on its file's resolver and
-      made absolute.
-    - `problem` is set when the expansion could not be faithful; the caller refuses a resize then
-      (the unexpanded file still loads through Mitsuba, which reports its own errors)."""
+    Args:
+        defines: the given defines (they win over defaults); origin: how messages name the file.
+        legacy: the scene's own version is before 2.0.
+    """
 
     def __init__(self, defines: Mapping[str, str], origin: str, legacy: bool):
         self.params = dict(defines)
@@ -150,7 +179,8 @@ class _Includes:
                 if not os.path.exists(found):
                     found = self.find(value, resolver) or found
                 resolver.insert(0, os.path.abspath(found))
-                if depth > 0:  # its effect ends with the include: nothing of it may reach the scene's text
+                # its effect ends with the include: nothing of it may reach the scene's text
+                if depth > 0:
                     del parent[i]
                     continue
             elif node.tag == "include":
@@ -168,7 +198,8 @@ class _Includes:
                 self.expand(node, folder, resolver, depth)
             i += 1
 
-    def included(self, node: ET.Element, folder: str, resolver: list[str], depth: int) -> list[ET.Element] | None:
+    def included(self, node: ET.Element, folder: str, resolver: list[str],
+                 depth: int) -> list[ET.Element] | None:
         name = self.subst(node.get("filename", ""))
         if depth + 1 >= MAX_INCLUDE_DEPTH:
             self.problem = (
@@ -188,7 +219,8 @@ class _Includes:
             return None
         version = _version(root)
         if root.get("version") is None:
-            self.problem = f"{self.origin}: included file '{path}' has no version attribute, which Mitsuba requires"
+            self.problem = (f"{self.origin}: included file '{path}' has no version attribute, "
+                            f"which Mitsuba requires")
             return None
         if version is None or (version < (2,)) != self.legacy:
             self.problem = (
@@ -208,10 +240,18 @@ class _Includes:
         return [root]
 
 
-def expand_includes(root: ET.Element, path: str, defines: Mapping[str, str] | None = None) -> str | None:
-    """Replace every `<include>` under `root` (the parsed file `path`) by what Mitsuba splices in,
-    in place (see `_Includes`); None, or the reason the expansion cannot be faithful (root is then
-    partly expanded and must not be used)."""
+def expand_includes(root: ET.Element, path: str,
+                    defines: Mapping[str, str] | None = None) -> str | None:
+    """Replace every `<include>` under `root` by what Mitsuba splices in, in place (`_Includes`).
+
+    Args:
+        root: the parsed file's root; path: the file (its folder starts the lookups).
+        defines: the given defines, or None.
+
+    Returns:
+        None, or the reason the expansion cannot be faithful (root is then partly expanded and
+        must not be used).
+    """
     version = _version(root)
     inc = _Includes({str(k): str(v) for k, v in (defines or {}).items()}, f"scene file '{path}'",
                     legacy=version is not None and version < (2,))
@@ -221,6 +261,14 @@ def expand_includes(root: ET.Element, path: str, defines: Mapping[str, str] | No
 
 
 def has_include(root: ET.Element) -> bool:
+    """Whether an element holds an `<include>` at any depth.
+
+    Args:
+        root: the element.
+
+    Returns:
+        True where `<include>` occurs under it (or is it).
+    """
     return any(True for _ in root.iter("include"))
 
 
@@ -232,6 +280,17 @@ def _set_int(parent: ET.Element, name: str, value: int) -> None:
 
 
 def resize(root: ET.Element, width: int | None, height: int | None, origin: str) -> None:
+    """Set the film size of the first top-level `<sensor>`, in place (a film is added where it has
+    none: Mitsuba's default hdrfilm).
+
+    Args:
+        root: the parsed `<scene>`, includes expanded; origin: how messages name the file.
+        width, height: the new size in pixels; None (or 0) keeps that side.
+
+    Raises:
+        SceneError: no top-level `<sensor>` (one behind a `<ref>` is not reached), or a film with
+            a crop window.
+    """
     sensor = root.find("sensor")
     if sensor is None:
         raise SceneError(
@@ -263,10 +322,19 @@ def _load_text(text: str, folder: str, defines: Mapping[str, str]) -> mi.Scene:
 
 
 def parse_xml(path: str) -> ET.ElementTree:
-    """The file's element tree. Mitsuba's parser accepts a comment holding "--", which XML forbids
-    (a licence header `<!-- -- SPDX ... -->`); comments are dropped and the file read again where
-    that is what fails. Raises ET.ParseError, OSError or ValueError where it is not XML all the
-    same."""
+    """Parse an XML file as Mitsuba's parser reads it: that accepts a comment holding "--", which
+    XML forbids (a licence header `<!-- -- SPDX ... -->`), so where parsing fails the comments are
+    dropped and the text parsed again.
+
+    Args:
+        path: the XML file (UTF-8).
+
+    Returns:
+        The file's ET.ElementTree.
+
+    Raises:
+        ET.ParseError, OSError, ValueError: a file that is not XML all the same, or unreadable.
+    """
     try:
         return ET.parse(path)
     except ET.ParseError:
@@ -302,8 +370,7 @@ def load_xml(path: str, width: int | None = None, height: int | None = None,
         root = tree.getroot()
         if has_include(root):
             # expanded on a copy: a file whose includes cannot be expanded faithfully still loads
-            # through
-            # Mitsuba as it is, unless it has to be edited (resized)
+            # through Mitsuba as it is, unless it has to be edited (resized)
             expanded = ET.fromstring(ET.tostring(root))
             problem = expand_includes(expanded, path, defines)
             if problem is None:
@@ -324,7 +391,9 @@ def load_xml(path: str, width: int | None = None, height: int | None = None,
     if not edited:
         return mi.load_file(path, **defines), notes
     text = ET.tostring(tree.getroot(), encoding="unicode")
-    return _load_text(text, os.path.dirname(os.path.abspath(path)), used_defines(defines, before, text)), notes
+    return (_load_text(text, os.path.dirname(os.path.abspath(path)),
+                       used_defines(defines, before, text)), notes)
 
 
-__all__ = ["load_xml", "resize", "replace_integrator", "known_integrator", "expand_includes", "substitute", "SHARED"]
+__all__ = ["load_xml", "resize", "replace_integrator", "known_integrator", "expand_includes",
+           "substitute", "SHARED"]
