@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import threading
 import time
+import traceback
 from types import SimpleNamespace
 from typing import Any, Callable
 
@@ -26,6 +27,7 @@ from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
 from styletrace.denoise.draft import available as denoise_available
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
+from styletrace.lookdev.buffer import MAX_SAMPLES
 from styletrace.lookdev.record import Recorded
 from styletrace.lookdev.restyle import restyle as lookdev_restyle
 from styletrace.pipeline.execute import InProcess
@@ -73,6 +75,7 @@ class Session:
         self.version = 0
         self.passes_run = 0
         self.buffer = None
+        self.recorded = False  # the passes record a buffer (restyles need no new pass)
         self.style: dict | None = None  # a restyled style: later passes are shown restyled
         self.error: str | None = None
         self.spp_done = 0
@@ -149,10 +152,15 @@ class Session:
                 return
             sc = api.load_scene(self.scene_dict(*self.size))
             resolved = self._job(sc, v["spp"], v["pass_spp"])
-            try:
-                runner = Runner(resolved, InProcess(), Recorded(label="<viewport>"))
-            except StyletraceError:  # not recordable (e.g. its estimator): a style change retraces
-                runner = Runner(resolved, InProcess())
+            runner = None
+            if self.size[0] * self.size[1] * v["spp"] <= MAX_SAMPLES:
+                try:
+                    runner = Runner(resolved, InProcess(), Recorded(label="<viewport>"))
+                except StyletraceError:  # not recordable (e.g. its estimator)
+                    pass
+            # unrecorded (over the buffer's cap, or not recordable): a style change retraces
+            runner = runner or Runner(resolved, InProcess())
+            self.recorded = isinstance(runner.finisher, Recorded)
             passes = runner.passes()
         total = -(-v["spp"] // v["pass_spp"])
         for k in range(1, total + 1):
@@ -291,3 +299,97 @@ class Viewport:
 
 
 __all__ = ["Viewport", "Session", "snapshot", "draft_size", "JIT", "DRAFT_PIXELS"]
+
+
+# ---- Blender's side: the engine's view_update and view_draw --------------------------------------
+
+#: the viewports of the live engines, by `RenderEngine.as_pointer()`
+VIEWS: dict[int, Viewport] = {}
+#: seconds between the main thread's checks for a new image (Blender's UI is not touched from the
+#: worker: a timer asks for the redraw)
+REDRAW_S = 0.05
+
+
+def view_update(engine, context, depsgraph) -> None:
+    """`RenderEngine.view_update`: sync the depsgraph's updates into this engine's viewport."""
+    key = engine.as_pointer()
+    vp = VIEWS.get(key)
+    if vp is None:
+        vp = VIEWS[key] = Viewport(warn=lambda m: print(m))
+        vp.engine, vp.drawn = engine, -1
+        import bpy
+        bpy.app.timers.register(lambda: _poll(key), first_interval=REDRAW_S)
+    try:
+        vp.update(depsgraph, depsgraph.scene.styletrace)
+    except StyletraceError as exc:
+        vp.close()
+        engine.update_stats("", f"styletrace: {str(exc).strip().splitlines()[0]}")
+    # Mitsuba's refusal of the exported scene, or a bug: one line, the trace on stderr
+    except Exception as exc:
+        traceback.print_exc()
+        vp.close()
+        engine.update_stats("", f"styletrace: {type(exc).__name__}: {exc}".splitlines()[0])
+
+
+def _poll(key: int) -> float | None:
+    """Ask for a redraw where the session has a newer image; None ends the timer."""
+    vp = VIEWS.get(key)
+    if vp is None:
+        return None
+    s = vp.session
+    if s is not None and (s.version != vp.drawn or s.error):
+        try:
+            vp.engine.tag_redraw()
+        except ReferenceError:  # the engine was freed (the view left Rendered mode)
+            free_key(key)
+            return None
+    return REDRAW_S
+
+
+def view_draw(engine, context, depsgraph) -> None:
+    """`RenderEngine.view_draw`: follow the region's camera; draw the newest image."""
+    vp = VIEWS.get(engine.as_pointer())
+    if vp is None:
+        return
+    region, rv3d = context.region, context.region_data
+    vp.set_view(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height)
+    s = vp.session
+    if s is None:
+        return
+    image, label = s.latest()
+    engine.update_stats("", f"styletrace: {s.error or label or 'starting'}")
+    if image is None:
+        return
+    vp.drawn = s.version
+    draw(engine, depsgraph.scene, image, region.width, region.height)
+
+
+def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
+    """Draw `image` (H x W x 3, linear, top row first) over the region, through the view's colour
+    management (`bind_display_space_shader`)."""
+    import gpu
+    from gpu_extras.presets import draw_texture_2d
+    h, w = image.shape[:2]
+    px = np.ones((h, w, 4), np.float32)
+    px[..., :3] = image[::-1]
+    data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
+    texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
+    gpu.state.blend_set("ALPHA_PREMULT")
+    engine.bind_display_space_shader(scene)
+    draw_texture_2d(texture, (0, 0), width, height)
+    engine.unbind_display_space_shader()
+    gpu.state.blend_set("NONE")
+
+
+def free_key(key: int) -> None:
+    vp = VIEWS.pop(key, None)
+    if vp is not None:
+        vp.close()
+
+
+def free(engine) -> None:
+    """The engine is going away (`RenderEngine.__del__`): stop its session."""
+    try:
+        free_key(engine.as_pointer())
+    except ReferenceError:
+        pass

@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
 
+import bpy
 import numpy as np
 
 from styletrace.blender import build, camera, exporter, lights, world
@@ -48,7 +49,7 @@ def changes_of(updates: Iterable[Any]) -> Changes:
     `id_type`, `name`, `is_embedded_data`)."""
     out = Changes()
     for u in updates:
-        kind, name = u.id.id_type, u.id.name
+        kind, name = id_type(u.id), u.id.name
         if kind == "OBJECT":
             out.objects.add(name)
             if getattr(u.id, "type", "") == "CAMERA":
@@ -70,6 +71,22 @@ def changes_of(updates: Iterable[Any]) -> Changes:
     return out
 
 
+def id_type(idb) -> str:
+    """An ID's type, e.g. 'OBJECT', 'MATERIAL' (`ID.id_type`; derived from its class before
+    Blender 4)."""
+    kind = getattr(idb, "id_type", None)
+    if kind:
+        return kind
+    t = bpy.types
+    for cls, name in ((t.Object, "OBJECT"), (t.Mesh, "MESH"), (t.Light, "LIGHT"),
+                      (t.Material, "MATERIAL"), (t.World, "WORLD"), (t.NodeTree, "NODETREE"),
+                      (t.Image, "IMAGE"), (t.Scene, "SCENE"), (t.Camera, "CAMERA"),
+                      (t.Curve, "CURVE"), (t.MetaBall, "META"), (t.Collection, "COLLECTION")):
+        if isinstance(idb, cls):
+            return name
+    return type(idb).__name__.upper()
+
+
 def view_sensor(view_matrix, window_matrix, width: int, height: int, spp: int) -> dict:
     """The Mitsuba sensor of a 3D view: `view_matrix` (world -> view) and `window_matrix` (the
     projection) of `context.region_data`, the region's size in pixels.
@@ -78,7 +95,9 @@ def view_sensor(view_matrix, window_matrix, width: int, height: int, spp: int) -
         A `perspective` or `orthographic` sensor description, as `camera.sensor` writes one."""
     view = np.array(view_matrix, dtype=np.float64)
     proj = np.array(window_matrix, dtype=np.float64)
-    to_world = np.linalg.inv(view) @ camera.FLIP
+    # a view matrix kept in float32 (or a view rotation not quite unit) carries a scale of
+    # about 1e-7, which Mitsuba's sensors refuse
+    to_world = camera._unscaled_camera(np.linalg.inv(view)) @ camera.FLIP
     film = {"type": "hdrfilm", "width": int(width), "height": int(height), "pixel_format": "rgb",
             "rfilter": {"type": "box"}}
     out = {"film": film, "sampler": {"type": "independent", "sample_count": int(spp)}}
