@@ -20,7 +20,7 @@ import traceback
 import bpy
 import numpy as np
 
-from styletrace.blender import animation, f12, preview, restyle
+from styletrace.blender import animation, f12, preview, restyle, viewport
 from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
@@ -53,6 +53,17 @@ class StyletraceEngine(bpy.types.RenderEngine):
     bl_label = "styletrace"
     bl_use_preview = True
     bl_use_postprocess = True
+
+    def __del__(self):
+        viewport.free(self)
+
+    def view_update(self, context, depsgraph):
+        """Rendered shading: sync the edits (`viewport.view_update`)."""
+        viewport.view_update(self, context, depsgraph)
+
+    def view_draw(self, context, depsgraph):
+        """Rendered shading: draw the newest progressive image (`viewport.view_draw`)."""
+        viewport.view_draw(self, context, depsgraph)
 
     def stop_requested(self) -> bool:
         """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can

@@ -50,7 +50,11 @@ def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
     slots = _get(tris, "material_index", 1, np.int32)
     corner_vert = _get(mesh.loops, "vertex_index", 1, np.int32)
     co = _get(mesh.vertices, "co", 3, np.float32)
-    normals = _get(mesh.corner_normals, "vector", 3, np.float32)
+    if hasattr(mesh, "corner_normals"):
+        normals = _get(mesh.corner_normals, "vector", 3, np.float32)
+    else:  # Blender before 4.1 (e.g. 3.4, where docs/blender_viewport.png was taken)
+        mesh.calc_normals_split()
+        normals = _get(mesh.loops, "normal", 3, np.float32)
     uv_layer = mesh.uv_layers.active
     uvs = _get(uv_layer.data, "uv", 2, np.float32) if uv_layer is not None else None
     if matrix is not None:

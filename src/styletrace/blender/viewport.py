@@ -1,0 +1,395 @@
+"""Rendered shading in the 3D viewport: a progressive session per view, fed by `viewport_sync`.
+
+    vp = Viewport()
+    vp.update(depsgraph, settings)                     # view_update: sync what changed
+    vp.set_view(view_matrix, window_matrix, w, h)      # view_draw: the region's camera
+    image, label = vp.session.latest()                 # the newest image, drawn with `gpu`
+
+A `Session` renders in a worker thread: first a draft (1 spp, one child per camera sample, at most
+`DRAFT_PIXELS` pixels, denoised with OIDN where the `denoise` extra is installed), then F12's passes
+(same seed, samples and pass split), recorded as an expectation buffer where the settings allow.
+A style change restyles that buffer (no new pass); any other change starts a new session on the
+kept Mitsuba objects. Dr.Jit work of every session runs under one lock, `JIT`.
+"""
+from __future__ import annotations
+
+import threading
+import time
+import traceback
+from types import SimpleNamespace
+from typing import Any, Callable
+
+import numpy as np
+
+from styletrace.blender import f12
+from styletrace.blender.properties import settings_integrator_values, style_values
+from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
+from styletrace.denoise.draft import available as denoise_available
+from styletrace.errors import StyletraceError
+from styletrace.frontends import api
+from styletrace.lookdev.buffer import MAX_SAMPLES
+from styletrace.lookdev.record import Recorded
+from styletrace.lookdev.restyle import restyle as lookdev_restyle
+from styletrace.pipeline.execute import InProcess
+from styletrace.pipeline.resolve import resolve
+from styletrace.pipeline.runner import Runner
+
+#: the draft's largest film (pixels): a larger view is drafted at a reduced resolution
+DRAFT_PIXELS = 160 * 120
+DRAFT_QUALITY = "balanced"
+#: one Dr.Jit user at a time: sessions replaced by a newer one finish their pass under it
+JIT = threading.Lock()
+#: the render settings that are not the style's: a change starts new passes
+PASS_KEYS = ("spp", "seed", "pass_spp")
+
+
+def snapshot(settings) -> dict:
+    """The settings the viewport renders with, read on Blender's main thread: `style` (the style
+    slot's values), `integrator` (the `stylized` integrator's) and the sampling."""
+    return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
+            **{k: int(getattr(settings, k)) for k in PASS_KEYS}}
+
+
+def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int, int]:
+    """The draft's film: the view's size scaled down (same aspect) to at most `limit` pixels."""
+    scale = min(1.0, (limit / float(width * height)) ** 0.5)
+    return max(1, round(width * scale)), max(1, round(height * scale))
+
+
+class Session:
+    """A view's progressive render. `latest()` is the newest image; `version` counts images.
+
+    Args:
+        scene_dict: a callable (width, height) -> the Mitsuba scene dict (`SceneSync.scene_dict`).
+        width, height: the view's size in pixels. values: `snapshot` of the settings.
+        on_image: called (in the worker) after each new image. draft: render the draft first.
+
+    `stats`: seconds to the draft and to the last pass, passes run; `error`: a refusal's line."""
+
+    def __init__(self, scene_dict: Callable[[int, int], dict], width: int, height: int,
+                 values: dict, on_image: Callable[[], None] | None = None, draft: bool = True):
+        self.scene_dict, self.size, self.values = scene_dict, (width, height), values
+        self.on_image = on_image or (lambda: None)
+        self.image: np.ndarray | None = None
+        self.label = ""
+        self.version = 0
+        self.passes_run = 0
+        self.buffer = None
+        self.recorded = False  # the passes record a buffer (restyles need no new pass)
+        self.style: dict | None = None  # a restyled style: later passes are shown restyled
+        self.error: str | None = None
+        self.spp_done = 0
+        self.stats: dict = {"started": time.perf_counter()}
+        self._draft = draft
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="styletrace-viewport", daemon=True)
+
+    def start(self) -> "Session":
+        self._thread.start()
+        return self
+
+    def stop(self, wait: float = 0.0) -> None:
+        """Ask the worker to stop after its pass under way; wait up to `wait` seconds for it."""
+        self._stop.set()
+        if wait and self._thread.is_alive():
+            self._thread.join(wait)
+
+    def join(self, timeout: float | None = None) -> None:
+        self._thread.join(timeout)
+
+    @property
+    def done(self) -> bool:
+        return not self._thread.is_alive()
+
+    def latest(self) -> tuple[np.ndarray | None, str]:
+        with self._lock:
+            return self.image, self.label
+
+    def _show(self, image: np.ndarray, label: str) -> None:
+        with self._lock:
+            self.image, self.label = np.array(image, dtype=np.float32), label
+            self.version += 1
+        self.on_image()
+
+    def _job(self, sc, spp: int, pass_spp: int, **override) -> Any:
+        values = {**self.values["integrator"], "aovs": False, **override}
+        integ = api.make_integrator_from(values)
+        sampling = SimpleNamespace(spp=spp, seed=self.values["seed"], pass_spp=pass_spp)
+        return resolve(f12.job(sc, integ, sampling), scene=sc)
+
+    def _run(self) -> None:
+        try:
+            if self._draft:
+                self._run_draft()
+            self._run_passes()
+        except StyletraceError as exc:
+            self.error = str(exc).strip().splitlines()[0]
+        except Exception as exc:  # a bug or Mitsuba's refusal: one line, the finished image kept
+            self.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+
+    def _run_draft(self) -> None:
+        w, h = draft_size(*self.size)
+        with JIT:
+            if self._stop.is_set():
+                return
+            sc = api.load_scene(self.scene_dict(w, h))
+            resolved = self._job(sc, 1, 1, inner_samples="1")
+            prog = next(iter(Runner(resolved, InProcess()).passes()))
+            image, label = prog.image, "draft"
+            if denoise_available():
+                from styletrace.denoise.image import finish_denoised_image
+                image = finish_denoised_image(sc, prog, self.values["seed"], DRAFT_QUALITY)[0]
+                label = "draft, denoised"
+            self.passes_run += 1
+        self.stats["draft_s"] = time.perf_counter() - self.stats["started"]
+        self._show(image[..., :3], f"{label} ({w}x{h}, 1 spp)")
+
+    def _run_passes(self) -> None:
+        v = self.values
+        with JIT:
+            if self._stop.is_set():
+                return
+            sc = api.load_scene(self.scene_dict(*self.size))
+            resolved = self._job(sc, v["spp"], v["pass_spp"])
+            runner = None
+            if self.size[0] * self.size[1] * v["spp"] <= MAX_SAMPLES:
+                try:
+                    runner = Runner(resolved, InProcess(), Recorded(label="<viewport>"))
+                except StyletraceError:  # not recordable (e.g. its estimator)
+                    pass
+            # unrecorded (over the buffer's cap, or not recordable): a style change retraces
+            runner = runner or Runner(resolved, InProcess())
+            self.recorded = isinstance(runner.finisher, Recorded)
+            passes = runner.passes()
+        total = -(-v["spp"] // v["pass_spp"])
+        for k in range(1, total + 1):
+            if self._stop.is_set():
+                return
+            with JIT:
+                prog = next(passes, None)
+                if prog is None:
+                    return
+                self.passes_run += 1
+                self.spp_done = prog.spp_done
+                self.buffer = getattr(runner.finisher, "recorded", None)
+                image = prog.image
+                if self.style is not None and self.buffer is not None:
+                    image = _restyled(self.buffer, self.style)
+            self.stats["last_pass_s"] = time.perf_counter() - self.stats["started"]
+            self._show(image[..., :3], f"pass {k}/{total}, {prog.spp_done} spp")
+
+    def restyle(self, style: dict) -> float | None:
+        """Show the recorded buffer restyled with `style` (`style_values`), with no new pass.
+
+        Returns:
+            The seconds taken, or None where there is no buffer to restyle yet or it cannot take
+            the style (then the caller starts new passes)."""
+        with JIT:
+            if self.buffer is None:
+                return None
+            start = time.perf_counter()
+            try:
+                image = _restyled(self.buffer, style)
+            except StyletraceError:
+                return None
+            self.style = style
+            seconds = time.perf_counter() - start
+        self._show(image, f"restyled, {self.spp_done} spp")
+        return seconds
+
+
+def _rest(values: dict) -> dict:
+    """The integrator's values that are not the style slot's."""
+    return {k: v for k, v in values["integrator"].items() if k not in values["style"]}
+
+
+def _restyled(buf, style: dict) -> np.ndarray:
+    values = dict(style)
+    return lookdev_restyle(buf, style=values.pop("style"), inner=values.pop("inner_samples", None),
+                           estimator=values.pop("estimator", None), **values)
+
+
+class Viewport:
+    """One 3D view's state: the synced scene, its camera, the session rendering it.
+
+    `log`: one dict per update (`kind`: first, objects, camera, settings, restyle or none;
+    `objects`: names re-exported; `world`; `seconds`)."""
+
+    def __init__(self, on_image: Callable[[], None] | None = None, draft: bool = True,
+                 warn: Callable[[str], None] = print):
+        self.sync = SceneSync(warn)
+        self.on_image, self.draft = on_image, draft
+        self.values: dict | None = None
+        self.view: tuple | None = None
+        self.sensor: dict | None = None
+        self.session: Session | None = None
+        self.log: list[dict] = []
+
+    def update(self, depsgraph, settings) -> dict:
+        """Sync a depsgraph's updates (view_update); restyle, or start new passes, as needed."""
+        start = time.perf_counter()
+        first = self.values is None
+        values = snapshot(settings)
+        changes = None if first else changes_of(depsgraph.updates)
+        synced = self.sync.sync(depsgraph, changes)
+        entry = {"kind": "first" if first else "none", "objects": synced["objects"],
+                 "world": synced["world"] and not first}
+        old, self.values = self.values, values
+        if first:
+            pass
+        elif synced["objects"] or entry["world"]:
+            entry["kind"] = "objects"
+        elif any(old[k] != values[k] for k in PASS_KEYS) or _rest(old) != _rest(values):
+            entry["kind"] = "settings"
+        elif old["style"] != values["style"]:
+            seconds = self.session.restyle(values["style"]) if self.session else None
+            entry["kind"] = "restyle" if seconds is not None else "settings"
+            entry["restyle_s"] = seconds
+        elif changes.camera:  # the view through a moved camera reaches `set_view`
+            entry["kind"] = "camera"
+        if entry["kind"] in ("first", "objects", "settings"):
+            self.restart()
+        entry["seconds"] = time.perf_counter() - start
+        self.log.append(entry)
+        return entry
+
+    def set_view(self, view_matrix, window_matrix, width: int, height: int) -> bool:
+        """The region's camera (view_draw): a new view starts new passes without exporting.
+
+        Returns:
+            Whether the view changed."""
+        key = (tuple(map(tuple, view_matrix)), tuple(map(tuple, window_matrix)), width, height)
+        if key == self.view:
+            return False
+        self.view = key
+        return self.set_sensor(view_sensor(view_matrix, window_matrix, width, height, 1))
+
+    def set_sensor(self, sensor: dict) -> bool:
+        """Render through `sensor` (a sensor description, e.g. `camera.sensor`'s)."""
+        self.sensor = sensor
+        start = time.perf_counter()
+        if self.values is not None:
+            self.restart()
+            self.log.append({"kind": "camera", "objects": [], "world": False,
+                             "seconds": time.perf_counter() - start})
+        return True
+
+    def restart(self) -> None:
+        """Stop the running session and start one on the kept objects and the current view."""
+        if self.session is not None:
+            self.session.stop()
+        if self.sensor is None or self.values is None:
+            return
+        film = self.sensor["film"]
+        w, h = film["width"], film["height"]
+        sensor = dict(self.sensor, sampler={"type": "independent",
+                                            "sample_count": self.values["spp"]})
+        # both films' dicts are made now, on the main thread: the sync changes after this call
+        desc = {size: self.sync.scene_dict(dict(sensor, film=dict(film, width=size[0],
+                                                                   height=size[1])))
+                for size in ((w, h), draft_size(w, h))}
+        self.session = Session(lambda width, height: desc[(width, height)], w, h, self.values,
+                               self.on_image, self.draft).start()
+
+    def close(self) -> None:
+        if self.session is not None:
+            self.session.stop()
+            self.session = None
+
+
+__all__ = ["Viewport", "Session", "snapshot", "draft_size", "JIT", "DRAFT_PIXELS"]
+
+
+# ---- Blender's side: the engine's view_update and view_draw --------------------------------------
+
+#: the viewports of the live engines, by `RenderEngine.as_pointer()`
+VIEWS: dict[int, Viewport] = {}
+#: seconds between the main thread's checks for a new image (Blender's UI is not touched from the
+#: worker: a timer asks for the redraw)
+REDRAW_S = 0.05
+
+
+def view_update(engine, context, depsgraph) -> None:
+    """`RenderEngine.view_update`: sync the depsgraph's updates into this engine's viewport."""
+    key = engine.as_pointer()
+    vp = VIEWS.get(key)
+    if vp is None:
+        vp = VIEWS[key] = Viewport(warn=lambda m: print(m))
+        vp.engine, vp.drawn = engine, -1
+        import bpy
+        bpy.app.timers.register(lambda: _poll(key), first_interval=REDRAW_S)
+    try:
+        vp.update(depsgraph, depsgraph.scene.styletrace)
+    except StyletraceError as exc:
+        vp.close()
+        engine.update_stats("", f"styletrace: {str(exc).strip().splitlines()[0]}")
+    # Mitsuba's refusal of the exported scene, or a bug: one line, the trace on stderr
+    except Exception as exc:
+        traceback.print_exc()
+        vp.close()
+        engine.update_stats("", f"styletrace: {type(exc).__name__}: {exc}".splitlines()[0])
+
+
+def _poll(key: int) -> float | None:
+    """Ask for a redraw where the session has a newer image; None ends the timer."""
+    vp = VIEWS.get(key)
+    if vp is None:
+        return None
+    s = vp.session
+    if s is not None and (s.version != vp.drawn or s.error):
+        try:
+            vp.engine.tag_redraw()
+        except ReferenceError:  # the engine was freed (the view left Rendered mode)
+            free_key(key)
+            return None
+    return REDRAW_S
+
+
+def view_draw(engine, context, depsgraph) -> None:
+    """`RenderEngine.view_draw`: follow the region's camera; draw the newest image."""
+    vp = VIEWS.get(engine.as_pointer())
+    if vp is None:
+        return
+    region, rv3d = context.region, context.region_data
+    vp.set_view(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height)
+    s = vp.session
+    if s is None:
+        return
+    image, label = s.latest()
+    engine.update_stats("", f"styletrace: {s.error or label or 'starting'}")
+    if image is None:
+        return
+    vp.drawn = s.version
+    draw(engine, depsgraph.scene, image, region.width, region.height)
+
+
+def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
+    """Draw `image` (H x W x 3, linear, top row first) over the region, through the view's colour
+    management (`bind_display_space_shader`)."""
+    import gpu
+    from gpu_extras.presets import draw_texture_2d
+    h, w = image.shape[:2]
+    px = np.ones((h, w, 4), np.float32)
+    px[..., :3] = image[::-1]
+    data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
+    texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
+    gpu.state.blend_set("ALPHA_PREMULT")
+    engine.bind_display_space_shader(scene)
+    draw_texture_2d(texture, (0, 0), width, height)
+    engine.unbind_display_space_shader()
+    gpu.state.blend_set("NONE")
+
+
+def free_key(key: int) -> None:
+    vp = VIEWS.pop(key, None)
+    if vp is not None:
+        vp.close()
+
+
+def free(engine) -> None:
+    """The engine is going away (`RenderEngine.__del__`): stop its session."""
+    try:
+        free_key(engine.as_pointer())
+    except ReferenceError:
+        pass

@@ -1,0 +1,250 @@
+"""The viewport's scene sync: depsgraph updates -> what to export again, and the Mitsuba objects
+kept per Blender object so that a rebuilt scene reuses every unchanged one.
+
+    sync = SceneSync()
+    sync.sync(depsgraph, changes_of(depsgraph.updates))   # re-exports what changed
+    sc = sync.scene(view_sensor(view, window, w, h, spp))  # reuses the rest
+
+What each kind of edit re-exports (docs/blender.md, Viewport): an object's move, geometry or
+shading: that object; a light's move or change: that light; a material: the objects using it; the
+world: the world only; the view or the scene camera: nothing (only the sensor is new). The
+scene's objects are walked in `depsgraph.object_instances` order with F12's keys, so the rebuilt
+scene equals F12's (`exporter.Exporter.export`) and renders the same image with the same seed.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable
+
+import bpy
+import numpy as np
+
+from styletrace.blender import build, camera, exporter, lights, world
+from styletrace.frontends import api
+from styletrace.gate import mi
+
+MESH_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT")
+#: ID types whose datablock belongs to objects (its users are re-exported)
+DATA_TYPES = ("MESH", "CURVE", "SURFACE", "META", "FONT", "LIGHT", "VOLUME", "GREASEPENCIL")
+
+
+@dataclass
+class Changes:
+    """What a batch of depsgraph updates touched: names of objects, object data, materials; the
+    world; every material (a shared node group or an image changed); the camera; the scene (its
+    render settings). `everything`: export the whole scene (the first sync)."""
+    objects: set = field(default_factory=set)
+    data: set = field(default_factory=set)
+    materials: set = field(default_factory=set)
+    world: bool = False
+    all_materials: bool = False
+    camera: bool = False
+    settings: bool = False
+    everything: bool = False
+
+
+def changes_of(updates: Iterable[Any]) -> Changes:
+    """The `Changes` of depsgraph updates (`depsgraph.updates`: items with `.id`, an ID with
+    `id_type`, `name`, `is_embedded_data`)."""
+    out = Changes()
+    for u in updates:
+        kind, name = id_type(u.id), u.id.name
+        if kind == "OBJECT":
+            out.objects.add(name)
+            if getattr(u.id, "type", "") == "CAMERA":
+                out.camera = True
+        elif kind in DATA_TYPES:
+            out.data.add(name)
+        elif kind == "MATERIAL":
+            out.materials.add(name)
+        elif kind == "WORLD":
+            out.world = True
+        elif kind == "CAMERA":
+            out.camera = True
+        elif kind == "SCENE":
+            out.settings = True
+        # an embedded node tree comes with its material's or world's own update; a node group or
+        # an image may be used by any material and the world
+        elif kind == "NODETREE" and not u.id.is_embedded_data or kind == "IMAGE":
+            out.all_materials = out.world = True
+    return out
+
+
+def id_type(idb) -> str:
+    """An ID's type, e.g. 'OBJECT', 'MATERIAL' (`ID.id_type`; derived from its class before
+    Blender 4)."""
+    kind = getattr(idb, "id_type", None)
+    if kind:
+        return kind
+    t = bpy.types
+    for cls, name in ((t.Object, "OBJECT"), (t.Mesh, "MESH"), (t.Light, "LIGHT"),
+                      (t.Material, "MATERIAL"), (t.World, "WORLD"), (t.NodeTree, "NODETREE"),
+                      (t.Image, "IMAGE"), (t.Scene, "SCENE"), (t.Camera, "CAMERA"),
+                      (t.Curve, "CURVE"), (t.MetaBall, "META"), (t.Collection, "COLLECTION")):
+        if isinstance(idb, cls):
+            return name
+    return type(idb).__name__.upper()
+
+
+def view_sensor(view_matrix, window_matrix, width: int, height: int, spp: int) -> dict:
+    """The Mitsuba sensor of a 3D view: `view_matrix` (world -> view) and `window_matrix` (the
+    projection) of `context.region_data`, the region's size in pixels.
+
+    Returns:
+        A `perspective` or `orthographic` sensor description, as `camera.sensor` writes one."""
+    view = np.array(view_matrix, dtype=np.float64)
+    proj = np.array(window_matrix, dtype=np.float64)
+    # a view matrix kept in float32 (or a view rotation not quite unit) carries a scale of
+    # about 1e-7, which Mitsuba's sensors refuse
+    to_world = camera._unscaled_camera(np.linalg.inv(view)) @ camera.FLIP
+    film = {"type": "hdrfilm", "width": int(width), "height": int(height), "pixel_format": "rgb",
+            "rfilter": {"type": "box"}}
+    out = {"film": film, "sampler": {"type": "independent", "sample_count": int(spp)}}
+    a, b = proj[2, 2], proj[2, 3]
+    if proj[3, 3] == 1.0:  # orthographic: x' = x / half_x + offset
+        half_x, half_y = 1.0 / proj[0, 0], 1.0 / proj[1, 1]
+        shift = np.eye(4)
+        # the view's centre is offset by -proj[:2, 3] * half; Mitsuba's x points left
+        shift[0, 3] = proj[0, 3]
+        shift[1, 3] = -proj[1, 3] * half_y / half_x
+        near, far = (b + 1.0) / a, (b - 1.0) / a
+        out.update(type="orthographic",
+                   to_world=to_world @ np.diag([half_x, half_x, 1.0, 1.0]) @ shift,
+                   near_clip=max(float(near), 0.0), far_clip=float(far))
+        return out
+    fit_x = width >= height
+    scale = proj[0, 0] if fit_x else proj[1, 1]
+    fov = float(np.degrees(2.0 * np.arctan(1.0 / scale)))
+    out.update(type="perspective", to_world=to_world, fov=fov, fov_axis="x" if fit_x else "y",
+               near_clip=float(b / (a - 1.0)), far_clip=float(b / (a + 1.0)))
+    if proj[0, 2] or proj[1, 2]:
+        out["principal_point_offset_x"] = float(proj[0, 2]) / 2.0
+        out["principal_point_offset_y"] = -float(proj[1, 2]) / 2.0
+    return out
+
+
+@dataclass
+class Entry:
+    """One Blender object's exported part: its Mitsuba objects (`built`, (kind, object) pairs),
+    the world matrix and the datablocks it was made from."""
+    built: list
+    matrix: np.ndarray
+    data: str = ""
+    materials: frozenset = frozenset()
+
+
+class SceneSync:
+    """The exported scene of a viewport, kept between depsgraph updates.
+
+    `last` after each `sync`: `objects` (names re-exported, sorted), `world` (re-exported),
+    `seconds`. `exported` counts every object export since creation."""
+
+    def __init__(self, warn: Callable[[str], None] = print):
+        self.warn = warn
+        self.entries: dict[str, Entry] = {}   # objects placed once, by name
+        self.groups: dict[str, Entry] = {}    # instanced objects, by name
+        self.order: list[tuple[str, str, np.ndarray | None]] = []
+        self.world_emitter: Any = None
+        self.world_done = False
+        self.last: dict = {}
+        self.exported = 0
+
+    def _dirty(self, name: str, entry: Entry | None, matrix, ch: Changes) -> bool:
+        if entry is None or ch.everything or name in ch.objects or entry.data in ch.data:
+            return True
+        if matrix is not None and not np.array_equal(matrix, entry.matrix):
+            return True
+        return bool(entry.materials & ch.materials) or (ch.all_materials and bool(entry.materials))
+
+    def _export(self, ex: exporter.Exporter, obj, matrix) -> Entry:
+        self.exported += 1
+        slots = getattr(obj, "material_slots", ())
+        mats = frozenset(s.material.name for s in slots if s.material is not None)
+        data = obj.data.name if obj.data is not None else ""
+        if obj.type == "LIGHT":
+            desc = lights.convert_light(obj.data, matrix, self.warn)
+            built = [] if desc is None else [("light", _made(desc))]
+            return Entry(built, matrix, data, mats)
+        shapes = ex._shapes(obj, matrix)
+        return Entry([("shape", build.node(s)) for s in shapes], matrix, data, mats)
+
+    def sync(self, depsgraph, changes: Changes | None = None) -> dict:
+        """Export what `changes` touched (everything when None) and forget removed objects.
+
+        Returns:
+            `last`: the names re-exported, whether the world was, the seconds taken."""
+        start = time.perf_counter()
+        ch = changes or Changes(everything=True)
+        ex = exporter.Exporter(depsgraph, warn=self.warn)
+        done: list[str] = []
+        order: list[tuple[str, str, np.ndarray | None]] = []
+        seen, seen_groups = set(), set()
+        for inst in depsgraph.object_instances:
+            obj = inst.object
+            if not inst.show_self or obj.type not in MESH_TYPES + ("LIGHT",):
+                continue
+            matrix = np.array(inst.matrix_world, dtype=np.float64)
+            name = obj.name
+            if inst.is_instance and obj.type != "LIGHT":
+                if name not in seen_groups:
+                    seen_groups.add(name)
+                    if self._dirty(name, self.groups.get(name), None, ch):
+                        self.groups[name] = self._export(ex, obj, None)
+                        done.append(name)
+                order.append(("instance", name, matrix))
+            elif not inst.is_instance and name not in seen:
+                seen.add(name)
+                if self._dirty(name, self.entries.get(name), matrix, ch):
+                    self.entries[name] = self._export(ex, obj, matrix)
+                    done.append(name)
+                order.append(("object", name, None))
+        for gone in set(self.entries) - seen:
+            del self.entries[gone]
+        for gone in set(self.groups) - seen_groups:
+            del self.groups[gone]
+        self.order = order
+        redo_world = ch.everything or ch.world or not self.world_done
+        if redo_world:
+            env = world.convert_world(depsgraph.scene_eval.world, ex.ctx)
+            self.world_emitter = None if env is None else _made(env)
+            self.world_done = True
+        ex.ctx.flush()
+        self.last = {"objects": sorted(done), "world": redo_world,
+                     "seconds": time.perf_counter() - start}
+        return self.last
+
+    def scene_dict(self, sensor: dict) -> dict:
+        """The Mitsuba scene dict of the kept objects and `sensor`, keyed and ordered as F12's."""
+        desc: dict = {"type": "scene", "sensor": build.node(sensor)}
+        n = 0
+        for kind, name, matrix in self.order:
+            if kind == "instance":
+                if self.groups[name].built:
+                    desc[f"instance_{n}"] = {"type": "instance",
+                                             "to_world": mi.ScalarTransform4f(matrix.tolist()),
+                                             "shapegroup": {"type": "ref", "id": f"group_{name}"}}
+                    n += 1
+                continue
+            for what, made in self.entries[name].built:
+                desc[f"{what}_{n}"] = made
+                n += 1
+        for name, entry in self.groups.items():
+            if entry.built:
+                desc[f"group_{name}"] = {"type": "shapegroup",
+                                         **{f"part_{i}": m for i, (_, m) in enumerate(entry.built)}}
+        if self.world_emitter is not None:
+            desc["world"] = self.world_emitter
+        return desc
+
+    def scene(self, sensor: dict):
+        """The loaded `mi.Scene` (`api.load_scene` checks it as F12's)."""
+        return api.load_scene(self.scene_dict(sensor))
+
+
+def _made(desc: dict) -> Any:
+    """A description node made into its Mitsuba object once, so that later scenes reuse it."""
+    return mi.load_dict(build.node(desc))
+
+
+__all__ = ["Changes", "changes_of", "view_sensor", "SceneSync", "Entry"]
