@@ -7,10 +7,10 @@ Standard, display sRGB, exposure 0, gamma 1, no dither): 255 * srgb_oetf(clip(li
 0.5 + DELTA levels; with exposure +1 it is the same of linear x 2 and differs from Standard; an
 image drawn upside down or sRGB-encoded before the draw fails that comparison.
 
-`viewport.draw` draws its texture at (0, 0) of the region's pixel space, which Blender shifts by
-GLA_PIXEL_OFS = 0.01 px: each drawn pixel is the linear-filtered sample 0.01 px left of and below
-its texel's centre (about 1 % of each neighbour). `DRAW_OFFSET_PX` models that; a draw at
-(-0.01, -0.01) would draw the image itself (then set it to 0).
+Blender shifts a region's pixel space by GLA_PIXEL_OFS = 0.01 px; `viewport.draw` draws its texture
+at (-0.01, -0.01) to undo it, so each drawn pixel is its own texel. `DRAW_OFFSET_PX` is the offset
+the comparison models: 0 (a draw at (0, 0) would blur each pixel with about 1 % of its left and
+lower neighbours: 19.8 levels at most on this image's noise, measured).
 
 Skipped where `blender` or `xvfb-run` is missing, or where Blender's Python is not the minor
 version of the .venv whose site-packages it borrows (STYLETRACE_SITE).
@@ -28,7 +28,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 SCRIPT = os.path.join(HERE, "viewport_draw_blender.py")
 SPP = 4
-DRAW_OFFSET_PX = 0.01
+DRAW_OFFSET_PX = 0.0
 #: the region's border, rounded corners and the arrows of its hidden regions: left out
 MARGIN = 12
 # Each step that moves the drawn level before the 8-bit rounding, in levels (x: linear, 0..1):

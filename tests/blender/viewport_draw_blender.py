@@ -129,7 +129,8 @@ def unbound(draw):
         data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
         texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
         gpu.state.blend_set("ALPHA_PREMULT")
-        draw_texture_2d(texture, (0, 0), width, height)
+        offset = -viewport.PIXEL_OFFSET
+        draw_texture_2d(texture, (offset, offset), width, height)
         gpu.state.blend_set("NONE")
     return body
 

@@ -410,6 +410,12 @@ def view_draw(engine, context, depsgraph) -> None:
     draw(engine, depsgraph.scene, image, region.width, region.height)
 
 
+#: Blender shifts a region's pixel space by 0.01 px (GLA_PIXEL_OFS); a texture drawn at
+#: (-PIXEL_OFFSET, -PIXEL_OFFSET) lands on the pixel centres, unblurred
+#: (tests/blender/test_viewport_draw.py)
+PIXEL_OFFSET = 0.01
+
+
 def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
     """Draw `image` (H x W x 3, linear, top row first) over the region, through the view's colour
     management (`bind_display_space_shader`)."""
@@ -422,7 +428,7 @@ def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
     texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
     gpu.state.blend_set("ALPHA_PREMULT")
     engine.bind_display_space_shader(scene)
-    draw_texture_2d(texture, (0, 0), width, height)
+    draw_texture_2d(texture, (-PIXEL_OFFSET, -PIXEL_OFFSET), width, height)
     engine.unbind_display_space_shader()
     gpu.state.blend_set("NONE")
 
