@@ -30,6 +30,7 @@ from styletrace.denoise.draft import available as denoise_available
 from styletrace.denoise.finishers import Denoised, Expectation, plan_finisher
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
+from styletrace.gate import dr, mi
 from styletrace.lookdev.buffer import MAX_SAMPLES
 from styletrace.lookdev.record import Recorded
 from styletrace.lookdev.restyle import restyle as lookdev_restyle
@@ -53,6 +54,23 @@ def snapshot(settings) -> dict:
     return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
             **{k: int(getattr(settings, k)) for k in PASS_KEYS},
             **{k: str(getattr(settings, k)) for k in DENOISE_KEYS}}
+
+
+def load_view_scene(description: dict):
+    """The loaded scene (`api.load_scene`) with its camera's transform opaque to Dr.Jit: a moved
+    camera then renders with the kernels already compiled instead of a new literal's (0.45 s of
+    LLVM per move, holding Python's lock; docs/design/viewport.md).
+
+    Args:
+        description: the scene dict (`SceneSync.scene_dict`), its sensor under the key "sensor".
+    Returns:
+        The `mi.Scene`.
+    """
+    sc = api.load_scene(description)
+    params = mi.traverse(sc)
+    dr.make_opaque(params["sensor.to_world"])
+    params.update()
+    return sc
 
 
 def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int, int]:
@@ -138,7 +156,7 @@ class Session:
         with JIT:
             if self._stop.is_set():
                 return
-            sc = api.load_scene(self.scene_dict(w, h))
+            sc = load_view_scene(self.scene_dict(w, h))
             resolved = self._job(sc, 1, 1, inner_samples="1")
             prog = next(iter(Runner(resolved, InProcess()).passes()))
             image, label = prog.image, "draft"
@@ -171,7 +189,7 @@ class Session:
         with JIT:
             if self._stop.is_set():
                 return
-            sc = api.load_scene(self.scene_dict(*self.size))
+            sc = load_view_scene(self.scene_dict(*self.size))
             runner = self._runner(self._job(sc, v["spp"], v["pass_spp"]))
             finisher = runner.finisher
             denoised = isinstance(finisher, Denoised)
