@@ -27,6 +27,10 @@ import os
 import sys
 import tempfile
 import time
+from importlib import import_module
+
+import bpy
+from mathutils import Quaternion, Vector
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -44,13 +48,10 @@ for name in NEEDED:
         os.symlink(path, os.path.join(links, os.path.basename(path)))
 sys.path[:0] = [links, os.path.join(ROOT, "src")]
 
-import bpy  # noqa: E402
-from mathutils import Quaternion, Vector  # noqa: E402
-
-import styletrace.blender  # noqa: E402
-from styletrace.blender import viewport  # noqa: E402
-
-styletrace.blender.register()
+# styletrace comes from the links and src/ put on sys.path above: imported by name
+addon = import_module("styletrace.blender")
+viewport = import_module("styletrace.blender.viewport")
+addon.register()
 scene = bpy.context.scene
 scene.render.engine = "STYLETRACE"
 st = scene.styletrace
