@@ -5,13 +5,11 @@
     vp.set_view(view_matrix, window_matrix, w, h)      # view_draw: the region's camera
     image, label = vp.session.latest()                 # the newest image, drawn with `gpu`
 
-A `Session` renders in a worker thread: first a draft (1 spp, one child per camera sample, at most
-`DRAFT_PIXELS` pixels, denoised with OIDN where the `denoise` extra is installed), then F12's passes
-(same seed, samples, pass split and Denoise finisher, `denoise.finishers.plan_finisher`). After a
-pass the finisher's result of the passes so far is shown (denoised), where `denoise_now` says so.
-A style change restyles the buffer F12's Record buffer would keep (no new pass); any other change,
-and a style change under Denoise image, starts a new session on the kept Mitsuba objects. Dr.Jit
-work of every session runs under one lock, `JIT`.
+A `Session` renders in a worker thread a draft (1 spp, at most `DRAFT_PIXELS` pixels), then F12's
+passes and finisher, denoised where `denoise_now` says so. A style change restyles the recorded
+buffer; any other change starts a new session on the kept Mitsuba objects. All Dr.Jit work runs
+under the lock `JIT`. Blender's hooks: `view_update`, `view_draw`, `free`. Design:
+docs/design/viewport.md.
 """
 from __future__ import annotations
 
