@@ -5,13 +5,11 @@
     vp.set_view(view_matrix, window_matrix, w, h)      # view_draw: the region's camera
     image, label = vp.session.latest()                 # the newest image, drawn with `gpu`
 
-A `Session` renders in a worker thread: first a draft (1 spp, one child per camera sample, at most
-`DRAFT_PIXELS` pixels, denoised with OIDN where the `denoise` extra is installed), then F12's passes
-(same seed, samples, pass split and Denoise finisher, `denoise.finishers.plan_finisher`). After a
-pass the finisher's result of the passes so far is shown (denoised), where `denoise_now` says so.
-A style change restyles the buffer F12's Record buffer would keep (no new pass); any other change,
-and a style change under Denoise image, starts a new session on the kept Mitsuba objects. Dr.Jit
-work of every session runs under one lock, `JIT`.
+A `Session` renders in a worker thread a draft (1 spp, at most `DRAFT_PIXELS` pixels), then F12's
+passes and finisher, denoised where `denoise_now` says so. A style change restyles the recorded
+buffer; any other change starts a new session on the kept Mitsuba objects. All Dr.Jit work runs
+under the lock `JIT`. Blender's hooks: `view_update`, `view_draw`, `free`. Design:
+docs/design/viewport.md.
 """
 from __future__ import annotations
 
@@ -49,22 +47,32 @@ DENOISE_KEYS = ("denoise", "denoise_quality")
 
 
 def snapshot(settings) -> dict:
-    """The settings the viewport renders with, read on Blender's main thread: `style` (the style
-    slot's values), `integrator` (the `stylized` integrator's), the sampling and Denoise."""
+    """The settings the viewport renders with, read on Blender's main thread.
+
+    Args:
+        settings: the scene's styletrace settings (a SceneSettings, `scene.styletrace`).
+
+    Returns:
+        `style` (the style slot's values, `style_values`), `integrator` (the `stylized`
+        integrator's), `spp`, `seed`, `pass_spp` (ints), `denoise`, `denoise_quality` (strings).
+    """
     return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
             **{k: int(getattr(settings, k)) for k in PASS_KEYS},
             **{k: str(getattr(settings, k)) for k in DENOISE_KEYS}}
 
 
 def load_view_scene(description: dict):
-    """The loaded scene (`api.load_scene`) with its camera's transform opaque to Dr.Jit: a moved
-    camera then renders with the kernels already compiled instead of a new literal's (0.45 s of
-    LLVM per move, holding Python's lock; docs/design/viewport.md).
+    """The loaded scene (`api.load_scene`) with its camera's transform opaque to Dr.Jit, so that a
+    moved camera renders with the kernels already compiled (docs/design/viewport.md).
 
     Args:
         description: the scene dict (`SceneSync.scene_dict`), its sensor under the key "sensor".
+
     Returns:
         The `mi.Scene`.
+
+    Raises:
+        SceneError: a scene `api.load_scene` refuses (let through).
     """
     sc = api.load_scene(description)
     params = mi.traverse(sc)
@@ -74,20 +82,32 @@ def load_view_scene(description: dict):
 
 
 def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int, int]:
-    """The draft's film: the view's size scaled down (same aspect) to at most `limit` pixels."""
+    """The draft's film: the view's size scaled down (same aspect) to at most `limit` pixels.
+
+    Args:
+        width, height: the view's size in pixels.
+        limit: the draft's most pixels (default `DRAFT_PIXELS`); a smaller view keeps its size.
+
+    Returns:
+        (width, height) of the draft, each at least 1.
+    """
     scale = min(1.0, (limit / float(width * height)) ** 0.5)
     return max(1, round(width * scale)), max(1, round(height * scale))
 
 
 class Session:
-    """A view's progressive render. `latest()` is the newest image; `version` counts images.
+    """A view's progressive render in a worker thread. `latest()` is the newest image; `version`
+    counts images.
 
     Args:
         scene_dict: a callable (width, height) -> the Mitsuba scene dict (`SceneSync.scene_dict`).
-        width, height: the view's size in pixels. values: `snapshot` of the settings.
-        on_image: called (in the worker) after each new image. draft: render the draft first.
+        width, height: the view's size in pixels.
+        values: `snapshot` of the settings.
+        on_image: called (in the worker) after each new image; None: nothing is called.
+        draft: render the draft first.
 
-    `stats`: seconds to the draft and to the last pass, passes run; `error`: a refusal's line."""
+    `stats`: `draft_s`, `last_pass_s` (seconds from the start), `denoise_s` (seconds per
+    denoising); `passes_run` counts passes; `error`: a refusal's line (None without one)."""
 
     def __init__(self, scene_dict: Callable[[int, int], dict], width: int, height: int,
                  values: dict, on_image: Callable[[], None] | None = None, draft: bool = True):
@@ -109,23 +129,35 @@ class Session:
         self._thread = threading.Thread(target=self._run, name="styletrace-viewport", daemon=True)
 
     def start(self) -> "Session":
+        """Start the worker. Returns: this session."""
         self._thread.start()
         return self
 
     def stop(self, wait: float = 0.0) -> None:
-        """Ask the worker to stop after its pass under way; wait up to `wait` seconds for it."""
+        """Ask the worker to stop after its pass under way.
+
+        Args:
+            wait: seconds to wait at most for the worker to end; 0 returns at once.
+        """
         self._stop.set()
         if wait and self._thread.is_alive():
             self._thread.join(wait)
 
     def join(self, timeout: float | None = None) -> None:
+        """Wait for the worker to end.
+
+        Args:
+            timeout: seconds to wait at most; None waits until it ends.
+        """
         self._thread.join(timeout)
 
     @property
     def done(self) -> bool:
+        """Whether the worker has ended (or never started)."""
         return not self._thread.is_alive()
 
     def latest(self) -> tuple[np.ndarray | None, str]:
+        """The newest image (H x W x 3 float32; None before the first) and its label."""
         with self._lock:
             return self.image, self.label
 
@@ -229,7 +261,12 @@ class Session:
             self._show(image[..., :3], label)
 
     def restyle(self, style: dict) -> float | None:
-        """Show the recorded buffer restyled with `style` (`style_values`), with no new pass.
+        """Show the recorded buffer restyled with `style`, with no new pass; later passes are
+        shown restyled too.
+
+        Args:
+            style: the style slot's values (`style_values`: "style", its parameters and optional
+                "inner_samples", "estimator").
 
         Returns:
             The seconds taken, or None where there is no buffer to restyle yet or it cannot take
@@ -276,8 +313,13 @@ def _restyled(buf, style: dict) -> np.ndarray:
 class Viewport:
     """One 3D view's state: the synced scene, its camera, the session rendering it.
 
+    Args:
+        on_image: called in the session's worker after each new image; None: nothing is called.
+        draft: each session renders a draft first.
+        warn: takes the export's warnings, one line each (default: print).
+
     `log`: one dict per update (`kind`: first, objects, camera, settings, restyle or none;
-    `objects`: names re-exported; `world`; `seconds`)."""
+    `objects`: names re-exported; `world`; `seconds`; `restyle_s` after a style change)."""
 
     def __init__(self, on_image: Callable[[], None] | None = None, draft: bool = True,
                  warn: Callable[[str], None] = print):
@@ -290,7 +332,15 @@ class Viewport:
         self.log: list[dict] = []
 
     def update(self, depsgraph, settings) -> dict:
-        """Sync a depsgraph's updates (view_update); restyle, or start new passes, as needed."""
+        """Sync a depsgraph's updates (view_update); restyle, or start new passes, as needed.
+
+        Args:
+            depsgraph: the evaluated depsgraph (its `updates` after the first call).
+            settings: the scene's styletrace settings (`snapshot` reads them).
+
+        Returns:
+            This update's `log` entry.
+        """
         start = time.perf_counter()
         first = self.values is None
         values = snapshot(settings)
@@ -321,6 +371,11 @@ class Viewport:
     def set_view(self, view_matrix, window_matrix, width: int, height: int) -> bool:
         """The region's camera (view_draw): a new view starts new passes without exporting.
 
+        Args:
+            view_matrix: the region's world -> view matrix (4 x 4, `region_data.view_matrix`).
+            window_matrix: its projection (4 x 4, `region_data.window_matrix`).
+            width, height: the region's size in pixels.
+
         Returns:
             Whether the view changed."""
         key = (tuple(map(tuple, view_matrix)), tuple(map(tuple, window_matrix)), width, height)
@@ -330,7 +385,15 @@ class Viewport:
         return self.set_sensor(view_sensor(view_matrix, window_matrix, width, height, 1))
 
     def set_sensor(self, sensor: dict) -> bool:
-        """Render through `sensor` (a sensor description, e.g. `camera.sensor`'s)."""
+        """Render through `sensor`: new passes once the settings are known (after `update`).
+
+        Args:
+            sensor: a sensor description with its `film` (e.g. `view_sensor`'s, `camera.sensor`'s);
+                its sampler is replaced by one of the settings' spp.
+
+        Returns:
+            True.
+        """
         self.sensor = sensor
         start = time.perf_counter()
         if self.values is not None:
@@ -375,7 +438,15 @@ REDRAW_S = 0.05
 
 
 def view_update(engine, context, depsgraph) -> None:
-    """`RenderEngine.view_update`: sync the depsgraph's updates into this engine's viewport."""
+    """`RenderEngine.view_update`: sync the depsgraph's updates into this engine's viewport.
+
+    Args:
+        engine: the `RenderEngine`; its pointer keys `VIEWS`, its status line shows a refusal.
+        context: Blender's context (unused).
+        depsgraph: the evaluated depsgraph; its scene's styletrace settings are read.
+
+    A refusal or a bug closes the viewport and shows one line in the status (not raised).
+    """
     key = engine.as_pointer()
     vp = VIEWS.get(key)
     if vp is None:
@@ -411,7 +482,13 @@ def _poll(key: int) -> float | None:
 
 
 def view_draw(engine, context, depsgraph) -> None:
-    """`RenderEngine.view_draw`: follow the region's camera; draw the newest image."""
+    """`RenderEngine.view_draw`: follow the region's camera; draw the newest image.
+
+    Args:
+        engine: the `RenderEngine` (its viewport in `VIEWS`; none: nothing is drawn).
+        context: Blender's context: its `region` and `region_data` give the view and size.
+        depsgraph: the evaluated depsgraph; its scene's colour management applies.
+    """
     vp = VIEWS.get(engine.as_pointer())
     if vp is None:
         return
@@ -435,8 +512,15 @@ PIXEL_OFFSET = 0.01
 
 
 def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
-    """Draw `image` (H x W x 3, linear, top row first) over the region, through the view's colour
-    management (`bind_display_space_shader`)."""
+    """Draw `image` over the region, through the view's colour management
+    (`bind_display_space_shader`).
+
+    Args:
+        engine: the `RenderEngine` whose display-space shader is bound.
+        scene: the Blender scene whose view transform, look and exposure apply.
+        image: H x W x 3 floats, linear, top row first; stretched to the region.
+        width, height: the region's size in pixels.
+    """
     import gpu
     from gpu_extras.presets import draw_texture_2d
     h, w = image.shape[:2]
@@ -452,13 +536,22 @@ def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
 
 
 def free_key(key: int) -> None:
+    """Forget the viewport of an engine and stop its session.
+
+    Args:
+        key: the engine's `as_pointer()`; a key with no viewport is ignored.
+    """
     vp = VIEWS.pop(key, None)
     if vp is not None:
         vp.close()
 
 
 def free(engine) -> None:
-    """The engine is going away (`RenderEngine.__del__`): stop its session."""
+    """The engine is going away (`RenderEngine.__del__`): stop its session.
+
+    Args:
+        engine: the `RenderEngine`; one already freed by Blender (ReferenceError) is ignored.
+    """
     try:
         free_key(engine.as_pointer())
     except ReferenceError:

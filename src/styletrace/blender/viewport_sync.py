@@ -45,8 +45,15 @@ class Changes:
 
 
 def changes_of(updates: Iterable[Any]) -> Changes:
-    """The `Changes` of depsgraph updates (`depsgraph.updates`: items with `.id`, an ID with
-    `id_type`, `name`, `is_embedded_data`)."""
+    """The `Changes` of a batch of depsgraph updates.
+
+    Args:
+        updates: `depsgraph.updates`: items with `.id`, an ID with `id_type` (or a known class),
+            `name` and `is_embedded_data`.
+
+    Returns:
+        What they touched (`everything` stays False).
+    """
     out = Changes()
     for u in updates:
         kind, name = id_type(u.id), u.id.name
@@ -73,7 +80,14 @@ def changes_of(updates: Iterable[Any]) -> Changes:
 
 def id_type(idb) -> str:
     """An ID's type, e.g. 'OBJECT', 'MATERIAL' (`ID.id_type`; derived from its class before
-    Blender 4)."""
+    Blender 4).
+
+    Args:
+        idb: a Blender ID (datablock).
+
+    Returns:
+        Its type; for a class not known here, the class's name in capitals.
+    """
     kind = getattr(idb, "id_type", None)
     if kind:
         return kind
@@ -88,8 +102,13 @@ def id_type(idb) -> str:
 
 
 def view_sensor(view_matrix, window_matrix, width: int, height: int, spp: int) -> dict:
-    """The Mitsuba sensor of a 3D view: `view_matrix` (world -> view) and `window_matrix` (the
-    projection) of `context.region_data`, the region's size in pixels.
+    """The Mitsuba sensor of a 3D view (`context.region_data`).
+
+    Args:
+        view_matrix: the world -> view matrix (4 x 4, `region_data.view_matrix`).
+        window_matrix: the projection (4 x 4, `region_data.window_matrix`).
+        width, height: the region's size in pixels (the film's).
+        spp: the sampler's sample count.
 
     Returns:
         A `perspective` or `orthographic` sensor description, as `camera.sensor` writes one."""
@@ -137,6 +156,9 @@ class Entry:
 class SceneSync:
     """The exported scene of a viewport, kept between depsgraph updates.
 
+    Args:
+        warn: takes the export's warnings, one line each (default: print).
+
     `last` after each `sync`: `objects` (names re-exported, sorted), `world` (re-exported),
     `seconds`. `exported` counts every object export since creation."""
 
@@ -170,7 +192,12 @@ class SceneSync:
         return Entry([("shape", build.node(s)) for s in shapes], matrix, data, mats)
 
     def sync(self, depsgraph, changes: Changes | None = None) -> dict:
-        """Export what `changes` touched (everything when None) and forget removed objects.
+        """Export what `changes` touched (everything when None), and any object whose world
+        matrix moved; forget removed objects.
+
+        Args:
+            depsgraph: the evaluated depsgraph (its object instances and the scene's world).
+            changes: what the updates touched (`changes_of`); None exports everything.
 
         Returns:
             `last`: the names re-exported, whether the world was, the seconds taken."""
@@ -215,7 +242,14 @@ class SceneSync:
         return self.last
 
     def scene_dict(self, sensor: dict) -> dict:
-        """The Mitsuba scene dict of the kept objects and `sensor`, keyed and ordered as F12's."""
+        """The Mitsuba scene dict of the kept objects and `sensor`, keyed and ordered as F12's.
+
+        Args:
+            sensor: a sensor description (e.g. `view_sensor`'s); `build.node` converts it.
+
+        Returns:
+            The scene dict; its Mitsuba objects are the kept ones, shared with earlier dicts.
+        """
         desc: dict = {"type": "scene", "sensor": build.node(sensor)}
         n = 0
         for kind, name, matrix in self.order:
@@ -238,7 +272,17 @@ class SceneSync:
         return desc
 
     def scene(self, sensor: dict):
-        """The loaded `mi.Scene` (`api.load_scene` checks it as F12's)."""
+        """The loaded `mi.Scene` (`api.load_scene` checks it as F12's).
+
+        Args:
+            sensor: a sensor description, as for `scene_dict`.
+
+        Returns:
+            The `mi.Scene`.
+
+        Raises:
+            SceneError: a scene `api.load_scene` refuses (let through).
+        """
         return api.load_scene(self.scene_dict(sensor))
 
 
