@@ -1,10 +1,10 @@
-"""The viewport's progressive session (`viewport.Session`): a denoised draft, then F12's passes,
-whose images converge to F12's image of the same seed (equal after the last pass; before it, the
-error shrinks as the variance of the passes left predicts); a style change restyles the recorded
-buffer with no new pass into F12's image with the new value; the UI thread is not blocked.
-With Denoise on, the passes are shown through F12's finisher: the last image is F12's denoised
-image, the ones before it are denoised too, and a style change restyles the buffer F12's Record
-buffer keeps (Denoise expectation) or starts new passes (Denoise image)."""
+"""The viewport's progressive session (`viewport.ViewportSession`): a denoised draft, then F12's
+passes, whose images converge to F12's image of the same seed (equal after the last pass; before it,
+the error shrinks as the variance of the passes left predicts); a style change restyles the recorded
+buffer with no new pass into F12's image with the new value; the UI thread is not blocked. With
+Denoise on, the passes are shown through F12's finisher: the last image is F12's denoised image, the
+ones before it are denoised too, and a style change restyles the buffer F12's Record buffer keeps
+(Denoise expectation) or starts new passes (Denoise image)."""
 import time
 
 import bpy

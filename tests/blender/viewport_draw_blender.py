@@ -6,14 +6,13 @@
 
 Builds a small scene (a cube on a floor, a sphere, a sun; the identity style, 4 spp), shows it in
 the 3D view's Rendered shading with no overlay, gizmo or region but the view's own, waits for the
-session's last pass, then writes to DIR, per phase, `NAME.png.npy` (the region's pixels cropped
-from `screen.screenshot`, top row first, uint8 RGB) and `NAME.image.npy` (the session's
-`latest()` image drawn then, linear float32, top row first). Phases: `standard` (view transform
-Standard, exposure 0, no dither), `exposure` (exposure +1) and three draws broken on purpose
-(`viewport.draw` replaced): `flipped` (upside down), `encoded` (sRGB-encoded before the draw) and
-`unbound` (no `bind_display_space_shader`). `log.json`: what each phase saw; exit status 0 when
-every phase ran, 1 otherwise (a timeout or an error; `log.json` says which).
-"""
+session's last pass, then writes to DIR, per phase, `NAME.png.npy` (the region's pixels cropped from
+`screen.screenshot`, top row first, uint8 RGB) and `NAME.image.npy` (the session's `latest()` image
+drawn then, linear float32, top row first). Phases: `standard` (view transform Standard, exposure 0,
+no dither), `exposure` (exposure +1) and three draws broken on purpose (`viewport.draw_view_image`
+replaced): `flipped` (upside down), `encoded` (sRGB-encoded before the draw) and `unbound` (no
+`bind_display_space_shader`). `log.json`: what each phase saw; exit status 0 when every phase ran, 1
+otherwise (a timeout or an error; `log.json` says which). """
 import json
 import math
 import os
@@ -121,7 +120,7 @@ def encoded(draw):
 
 
 def unbound(draw):
-    """`viewport.draw` without `bind_display_space_shader` (a copy of its body)."""
+    """`viewport.draw_view_image` without `bind_display_space_shader` (a copy of its body)."""
     def body(engine, scene, image, width, height):
         h, w = image.shape[:2]
         px = np.ones((h, w, 4), np.float32)
@@ -140,7 +139,7 @@ class Run:
 
     def __init__(self, scene, window, area):
         self.scene, self.window, self.area = scene, window, area
-        self.draw = viewport.draw
+        self.draw = viewport.draw_view_image
         self.phases = [("standard", None, 0.0), ("exposure", None, 1.0),
                        ("flipped", flipped, 0.0), ("encoded", encoded, 0.0),
                        ("unbound", unbound, 0.0)]
@@ -158,7 +157,7 @@ class Run:
         name, broken, exposure = self.phase = self.phases.pop(0)
         self.calls, self.t0 = 0, time.perf_counter()
         self.scene.view_settings.exposure = exposure
-        viewport.draw = self.counted(broken(self.draw) if broken else self.draw)
+        viewport.draw_view_image = self.counted(broken(self.draw) if broken else self.draw)
         self.area.tag_redraw()
 
     def step(self):
@@ -215,7 +214,7 @@ class Run:
             "updates": [e["kind"] for e in vp.log]}
 
     def finish(self):
-        viewport.draw = self.draw
+        viewport.draw_view_image = self.draw
         LOG["seconds"] = round(time.perf_counter() - self.start, 3)
         with open(os.path.join(OUT, "log.json"), "w") as f:
             json.dump(LOG, f, indent=1)

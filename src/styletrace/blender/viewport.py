@@ -5,10 +5,10 @@
     vp.set_view(view_matrix, window_matrix, w, h)      # view_draw: the region's camera
     image, label = vp.session.latest()                 # the newest image, drawn with `gpu`
 
-A `Session` renders in a worker thread a draft (1 spp, at most `DRAFT_PIXELS` pixels), then F12's
-passes and finisher, denoised where `denoise_now` says so. A style change restyles the recorded
-buffer; any other change starts a new session on the kept Mitsuba objects. All Dr.Jit work runs
-under the lock `JIT`. Blender's hooks: `view_update`, `view_draw`, `free`. Design:
+A `ViewportSession` renders in a worker thread a draft (1 spp, at most `DRAFT_PIXELS` pixels),
+then F12's passes and finisher, denoised where `denoise_now` says so. A style change restyles the
+recorded buffer; any other change starts a new session on the kept Mitsuba objects. All Dr.Jit work
+runs under the lock `JIT`. Blender's hooks: `view_update`, `view_draw`, `free`. Design:
 docs/design/viewport.md.
 """
 from __future__ import annotations
@@ -95,7 +95,7 @@ def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int,
     return max(1, round(width * scale)), max(1, round(height * scale))
 
 
-class Session:
+class ViewportSession:
     """A view's progressive render in a worker thread. `latest()` is the newest image; `version`
     counts images.
 
@@ -128,7 +128,7 @@ class Session:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="styletrace-viewport", daemon=True)
 
-    def start(self) -> "Session":
+    def start(self) -> "ViewportSession":
         """Start the worker. Returns: this session."""
         self._thread.start()
         return self
@@ -328,7 +328,7 @@ class Viewport:
         self.values: dict | None = None
         self.view: tuple | None = None
         self.sensor: dict | None = None
-        self.session: Session | None = None
+        self.session: ViewportSession | None = None
         self.log: list[dict] = []
 
     def update(self, depsgraph, settings) -> dict:
@@ -416,8 +416,10 @@ class Viewport:
         desc = {size: self.sync.scene_dict(dict(sensor, film=dict(film, width=size[0],
                                                                    height=size[1])))
                 for size in ((w, h), draft_size(w, h))}
-        self.session = Session(lambda width, height: desc[(width, height)], w, h, self.values,
-                               self.on_image, self.draft).start()
+        self.session = ViewportSession(
+            lambda width, height: desc[(width, height)], w, h, self.values, self.on_image,
+            self.draft,
+        ).start()
 
     def close(self) -> None:
         if self.session is not None:
@@ -425,7 +427,9 @@ class Viewport:
             self.session = None
 
 
-__all__ = ["Viewport", "Session", "snapshot", "draft_size", "denoise_now", "JIT", "DRAFT_PIXELS"]
+__all__ = [
+    "Viewport", "ViewportSession", "snapshot", "draft_size", "denoise_now", "JIT", "DRAFT_PIXELS",
+]
 
 
 # ---- Blender's side: the engine's view_update and view_draw --------------------------------------
@@ -502,7 +506,7 @@ def view_draw(engine, context, depsgraph) -> None:
     if image is None:
         return
     vp.drawn = s.version
-    draw(engine, depsgraph.scene, image, region.width, region.height)
+    draw_view_image(engine, depsgraph.scene, image, region.width, region.height)
 
 
 #: Blender shifts a region's pixel space by 0.01 px (GLA_PIXEL_OFS); a texture drawn at
@@ -511,7 +515,7 @@ def view_draw(engine, context, depsgraph) -> None:
 PIXEL_OFFSET = 0.01
 
 
-def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
+def draw_view_image(engine, scene, image: np.ndarray, width: int, height: int) -> None:
     """Draw `image` over the region, through the view's colour management
     (`bind_display_space_shader`).
 
