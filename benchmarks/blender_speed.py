@@ -149,14 +149,12 @@ def viewport_times(S, width: int, height: int) -> list[tuple[str, float, float]]
             st = scene.styletrace
             st.style = "cel"
             dg = bpy.context.evaluated_depsgraph_get()
-            times = []
-            vp = Viewport()
+            times, start = [], [0.0]
+            vp = Viewport(on_image=lambda: times.append(time.perf_counter() - start[0]))
             vp.set_sensor(camera.sensor(dg.scene_eval, st.spp))
-            start = time.perf_counter()
+            start[0] = time.perf_counter()
             vp.update(dg, st)
-            session = vp.session
-            session.on_image = lambda: times.append(time.perf_counter() - start)
-            session.join(600)
+            vp.session.join(600)
             vp.close()
         rows.append((name, times[0], times[-1]))
     return rows
