@@ -19,6 +19,9 @@ import os
 import re
 import sys
 
+# re-exported: callers catch BackendError from here
+from styletrace.errors import BackendError
+
 #: Oldest libLLVM major version that Dr.Jit 1.5 runs correctly with (15 aborts, 14 is refused).
 MIN_LLVM_MAJOR = 16
 
@@ -30,8 +33,6 @@ SEARCH_DIRS = (
 FIX = ("install a newer LLVM (Debian/Ubuntu: `apt-get install libllvm19`) or point "
        "DRJIT_LIBLLVM_PATH at a libLLVM.so of version >= %d" % MIN_LLVM_MAJOR)
 
-
-from styletrace.errors import BackendError  # noqa: E402  (re-exported: callers catch it from here)
 
 
 def llvm_major(path: str) -> int | None:

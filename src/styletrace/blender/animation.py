@@ -30,16 +30,26 @@ def frame_seed(seed: int, frame: int) -> int:
 
 
 def at_frame(settings: Any, frame: int) -> Overridden:
-    """`settings` with the seed of `frame` (`frame_seed`); everything else is the settings' own."""
+    """`settings` with the seed of `frame` (`frame_seed`); everything else is the settings' own.
+
+    Args:
+        settings: the scene's styletrace render settings. frame: Blender's frame number.
+    Returns:
+        An `Overridden` view of `settings`.
+    """
     return Overridden(settings, seed=frame_seed(settings.seed, frame))
 
 
 def stop_message(frame: int, spp_done: int, spp_total: int) -> str:
     """The error line that ends Render Animation after a cancel during `frame`.
 
-    An error report is the one way a Python engine stops Blender's animation loop (Blender sets its
-    break flag when a render reports an error); the frame's finished passes stay in the Render
-    Result, and Blender writes no file for it, as for any cancelled frame.
+    An error report is the one way a Python engine stops Blender's animation loop
+    (docs/design/blender_frames_previews.md).
+
+    Args:
+        frame: the cancelled frame. spp_done, spp_total: its finished and asked samples per pixel.
+    Returns:
+        One line for Blender's report.
     """
     return (
         f"styletrace: cancelled during frame {frame} after {spp_done} of {spp_total} spp: "

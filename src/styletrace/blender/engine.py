@@ -1,16 +1,12 @@
-"""The `styletrace` render engine: F12 renders the evaluated depsgraph through styletrace's passes.
+"""The `styletrace` render engine: F12, Render Animation, material previews and the viewport.
 
-Progress is reported after each pass (`update_progress`), the image so far is shown, and
-`test_break` is asked between passes: a cancel keeps the finished passes in the render result. The
-error AOVs (variance, bias, children; `aovs`) and, with lines, a line mask are added as render
-passes. With "Record buffer" the look-development buffer of the render is kept (`restyle`), so style
-changes restyle it in milliseconds. F12 is one pipeline run (`f12.run_f12`: a Job resolved, the
-runner of `pipeline.runner`); with Denoise on its finisher denoises the finished passes after the
-last one (or after a cancel), a Noisy pass keeps the image before denoising, and the error passes
-are off (they would not be the denoised pixel's). Errors the user can cause (a bad style value, an
-unsupported scene) are one-line Blender error reports. Every render uses the seed of its frame
-(`animation.frame_seed`); a cancel during Render Animation ends the sequence (`animation`). Material
-previews render Blender's preview scene with the preview's budget (`preview`).
+F12 is one pipeline run (`f12.run_f12`): progress after each pass (`update_progress`), the image so
+far shown, `test_break` asked between passes (a cancel keeps the finished passes). Render passes:
+the error AOVs (`aovs`), a line mask with lines, a Noisy pass where Denoise is on (then no error
+passes). "Record buffer" keeps the look-development buffer for restyles (`restyle`). Each render
+uses its frame's seed; a cancel during Render Animation ends it (`animation`). Previews render
+Blender's preview scene at their own budget (`preview`); Rendered shading is `viewport`'s. Errors
+the user can cause are one-line Blender error reports. Docs: docs/blender.md.
 """
 from __future__ import annotations
 

@@ -9,6 +9,8 @@ class Overridden:
     """Read-only view of `settings` (a `properties.SceneSettings`) in which `values` replace the
     settings' own; every other attribute is read from `settings`.
 
+    Args:
+        settings: the render settings to read through. values: the replaced settings by name.
     Raises:
         AttributeError: a name in `values` that `settings` does not have.
     """

@@ -24,7 +24,13 @@ SEED = 0
 def settings(scene_settings: Any) -> Overridden:
     """The render settings of a preview: `scene_settings` (the preview scene's own, defaults) with
     the identity style, `SPP` at `PASS_SPP` per pass, seed `SEED`, and no lines, denoising, error
-    passes, recorded buffer or reuse."""
+    passes, recorded buffer or reuse.
+
+    Args:
+        scene_settings: the preview scene's styletrace render settings.
+    Returns:
+        An `Overridden` view of them.
+    """
     return Overridden(
         scene_settings, style="identity", inner_samples="", estimator="direct", spp=SPP,
         pass_spp=PASS_SPP, seed=SEED, lines=False, denoise="off", aovs=False,
@@ -35,6 +41,10 @@ def settings(scene_settings: Any) -> Overridden:
 def report(kinds: set, message: str) -> None:
     """A preview's report: an error is printed to stderr, a warning dropped (they name the preview
     scene's own floor nodes). No error goes to Blender: an error report sets Blender's global
-    break flag, which would cancel an F12 render running beside the preview."""
+    break flag, which would cancel an F12 render running beside the preview.
+
+    Args:
+        kinds: Blender's report kinds ({"ERROR"}, {"WARNING"}, ...). message: the line.
+    """
     if "ERROR" in kinds:
         print(f"styletrace preview: {message}", file=sys.stderr)

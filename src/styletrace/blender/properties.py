@@ -15,14 +15,13 @@ import math
 
 import bpy
 
-from styletrace import init
+# first: the plugins are registered before the registries below load (blender/registered.py)
+from styletrace.blender.registered import VARIANT  # noqa: F401
 from styletrace.config import estimator_registry
 from styletrace.config import settings as S
 from styletrace.denoise import default_method
 from styletrace.denoise.oidn import QUALITIES
 from styletrace.styles import registry
-
-init()  # the plugins that F12 renders with (the registries above load through styletrace.gate)
 
 SEP = "__"
 
