@@ -51,9 +51,10 @@ def scenes_module():
     return scenes
 
 
-def timed(fn, runs: int) -> tuple[float, object]:
-    """(median seconds over `runs` calls after one untimed call, the last call's result)."""
-    out = fn()
+def timed(fn, runs: int, warm: bool = True) -> tuple[float, object]:
+    """(median seconds over `runs` calls, the last call's result); `warm`: after one untimed call
+    (styletrace's kernels compiled; Cycles compiles nothing at run time)."""
+    out = fn() if warm else None
     times = []
     for _ in range(runs):
         start = time.perf_counter()
@@ -77,7 +78,7 @@ def equal_noise(S, name: str, size: int, spp: int, runs: int, tmp: str) -> dict:
             S.SCENES[name](size)
             path = os.path.join(tmp, f"{who}-{seed}.exr")
             if who == "cycles":
-                t, img = timed(lambda: S.cycles(path, spp, seed=seed), runs)
+                t, img = timed(lambda: S.cycles(path, spp, seed=seed), runs, warm=False)
             else:
                 t, out = timed(lambda: S.styletrace(path, spp, seed=seed, pass_spp=spp,
                                                     style="identity", denoise="off",
@@ -105,7 +106,7 @@ def defaults(S, size: int, runs: int, tmp: str) -> list[tuple[str, float]]:
     S.room(size)
     bpy.context.scene.render.engine = "CYCLES"
     bpy.context.scene.cycles.device = "CPU"
-    t, _ = timed(lambda: S.f12(os.path.join(tmp, "cycles.exr")), runs)
+    t, _ = timed(lambda: S.f12(os.path.join(tmp, "cycles.exr")), runs, warm=False)
     rows.append(("Cycles (factory defaults)", t))
     return rows
 
