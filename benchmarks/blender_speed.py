@@ -125,7 +125,9 @@ def engine_against_command(S, size: int, runs: int, tmp: str) -> dict:
     out = os.path.join(tmp, "cli.exr")
 
     def cli():
-        subprocess.run([exe, *command[2:], "-o", out], check=True, capture_output=True)
+        done = subprocess.run([exe, *command[1:], "-o", out], capture_output=True, text=True)
+        if done.returncode:
+            raise SystemExit(f"styletrace render failed: {done.stderr.strip()}")
 
     t_cli, _ = timed(cli, runs)
     t_f12, _ = timed(lambda: S.f12(os.path.join(tmp, "f12.exr")), runs)
