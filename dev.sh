@@ -7,7 +7,8 @@
 # The first run installs what is missing: python3 + venv (apt), libLLVM >= 16 (apt: libllvm19, because
 # Dr.Jit 1.5 aborts on Debian's default LLVM 15), a virtual environment in .venv, and styletrace with
 # versions pinned by constraints.txt (mitsuba 3.9.1, drjit 1.5.0, numpy, ray, ...); for `test` also Chromium (apt),
-# which the preview's browser test drives through Playwright.
+# which the preview's browser test drives through Playwright, and Blender + Xvfb (apt, about 195 MB), which
+# tests/blender/test_viewport_draw.py runs to read what the 3D viewport draws.
 set -euo pipefail
 cd "$(dirname "$0")"
 VENV=${STYLETRACE_VENV:-.venv}
@@ -41,6 +42,10 @@ setup() {
   have_llvm || apt_install libllvm19
   # the preview's browser test drives Debian's Chromium with Playwright (Playwright's own download cannot work here)
   if [ "${1:-}" = test ] && ! command -v chromium >/dev/null; then apt_install chromium; fi
+  # the viewport's drawing test runs Debian's Blender (a GUI) under Xvfb (tests/blender/test_viewport_draw.py)
+  if [ "${1:-}" = test ] && ! { command -v blender && command -v xvfb-run && command -v xauth; } >/dev/null; then
+    apt_install --no-install-recommends blender xvfb xauth libgl1-mesa-dri
+  fi
   if [ ! -x "$VENV/bin/python" ]; then python3 -m venv "$VENV"; fi
   local stamp="$VENV/.styletrace-installed"
   if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints.txt -nt "$stamp" ]; then

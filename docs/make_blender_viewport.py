@@ -4,16 +4,24 @@ engine and the cel style (docs/blender.md, Viewport).
 Run by Blender itself (a GUI: `bpy` as a module draws nothing), e.g. Debian's Blender 3.4 under
 Xvfb, as docs/make_blender_screenshot.py:
 
+    LD_PRELOAD=/lib/x86_64-linux-gnu/libhwloc.so.15 \\
     STYLETRACE_SITE=/path/to/.venv/lib/python3.11/site-packages \\
-    xvfb-run -a -s "-screen 0 960x600x24" blender --factory-startup \\
+    xvfb-run -a -s "-screen 0 760x490x24" blender --factory-startup \\
         --python docs/make_blender_viewport.py
 
-The script builds a small scene (the startup cube on a floor, a sphere, a sun), sets the render
-engine to styletrace with the cel style, switches the 3D view to Rendered shading, waits for the
-last pass, then moves the cube and changes a cel level (printing the viewport's log: what each
-update re-exported and how long it took), waits again, takes Blender's screenshot of the window,
-crops it to the 3D view and quits. Timings print as `styletrace viewport:` lines.
+(LD_PRELOAD: Debian's Blender allocates with jemalloc, and the system's hwloc, which the oneTBB
+bundled with pyoidn calls, frees its memory with glibc's `free`: Blender aborts on the first
+denoise; hwloc preloaded binds to jemalloc. docs/blender.md, Viewport.)
+
+The script builds a small scene (the startup cube, a sphere and a torus on a floor, an area light
+and a dim sky), sets the render engine to styletrace with the cel style and every other render
+setting at its default (Denoise auto: expectation where the view's buffer fits its cap), switches
+the 3D view to Rendered shading, waits for the last pass, then moves the cube and changes the cel
+levels (printing the viewport's log: what each update re-exported and how long it took), waits
+again, takes Blender's screenshot of the window, crops it to the 3D view and quits. Timings print
+as `styletrace viewport:` lines, and whether the denoiser could be imported.
 """
+import glob
 import math
 import os
 import sys
@@ -25,17 +33,19 @@ ROOT = os.path.dirname(HERE)
 OUT = os.environ.get("STYLETRACE_SHOT", os.path.join(HERE, "blender_viewport.png"))
 SITE = os.path.abspath(os.environ.get("STYLETRACE_SITE", os.path.join(
     ROOT, ".venv", "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")))
-NEEDED = ("numpy", "numpy.libs", "mitsuba", "drjit", "tqdm", "PIL", "pillow.libs", "pyoidn")
+# pyoidn calls OIDN through cffi: without cffi (Blender's Python has none) it cannot be imported
+NEEDED = ("numpy", "numpy.libs", "mitsuba", "drjit", "tqdm", "PIL", "pillow.libs", "pyoidn",
+          "cffi", "_cffi_backend*.so", "pycparser")
 TIMEOUT_S = float(os.environ.get("STYLETRACE_VIEWPORT_TIMEOUT", "300"))
 
 links = tempfile.mkdtemp(prefix="styletrace_site_")
 for name in NEEDED:
-    if os.path.exists(os.path.join(SITE, name)):
-        os.symlink(os.path.join(SITE, name), os.path.join(links, name))
+    for path in glob.glob(os.path.join(SITE, name)):
+        os.symlink(path, os.path.join(links, os.path.basename(path)))
 sys.path[:0] = [links, os.path.join(ROOT, "src")]
 
 import bpy  # noqa: E402
-from mathutils import Quaternion  # noqa: E402
+from mathutils import Quaternion, Vector  # noqa: E402
 
 import styletrace.blender  # noqa: E402
 from styletrace.blender import viewport  # noqa: E402
@@ -44,18 +54,19 @@ styletrace.blender.register()
 scene = bpy.context.scene
 scene.render.engine = "STYLETRACE"
 st = scene.styletrace
-st.style = "cel"
-st.params.cel__bands = 3
-st.spp, st.pass_spp, st.seed = 8, 2, 1  # 8 spp: under the buffer's cap at this view's size
-st.inner_samples = "16"  # enough children per camera sample for clean bands
+st.style = "cel"  # every other setting at its default: 16 spp in passes of 4, Denoise auto
 
 cube = bpy.data.objects["Cube"]
 cube.location = (0.0, 0.0, 1.0)
-bpy.ops.mesh.primitive_plane_add(size=14, location=(0, 0, 0))
-bpy.ops.mesh.primitive_uv_sphere_add(radius=0.8, location=(2.2, 0.8, 0.8))
+cube.rotation_euler = (0.0, 0.0, math.radians(20))
+bpy.ops.mesh.primitive_plane_add(size=16, location=(0, 0, 0))
+bpy.ops.mesh.primitive_uv_sphere_add(radius=0.9, location=(2.3, 1.0, 0.9), segments=48,
+                                     ring_count=24)
+bpy.ops.object.shade_smooth()
+bpy.ops.mesh.primitive_torus_add(location=(-1.6, 1.9, 0.35), major_radius=0.9, minor_radius=0.35)
 bpy.ops.object.shade_smooth()
 for name, colour in (("Cube", (0.8, 0.25, 0.15)), ("Plane", (0.75, 0.75, 0.7)),
-                     ("Sphere", (0.2, 0.45, 0.8))):
+                     ("Sphere", (0.2, 0.45, 0.8)), ("Torus", (0.85, 0.7, 0.2))):
     mat = bpy.data.materials.new(name.lower())
     mat.use_nodes = True  # a Diffuse BSDF: 3.4's Principled has other socket names than 4.x's
     nt = mat.node_tree
@@ -66,15 +77,20 @@ for name, colour in (("Cube", (0.8, 0.25, 0.15)), ("Plane", (0.75, 0.75, 0.7)),
     obj = bpy.data.objects[name]
     obj.data.materials.clear()
     obj.data.materials.append(mat)
-sun = bpy.data.lights.new("sun", "SUN")
-sun.energy = 3.0
-sun_obj = bpy.data.objects.new("sun", sun)
-scene.collection.objects.link(sun_obj)
-sun_obj.rotation_euler = (math.radians(40), 0, math.radians(30))
+# an area light close above: its falloff spreads the floor over the bands, its shadows add edges
+area = bpy.data.lights.new("area", "AREA")
+area.energy, area.size = 2000.0, 2.0
+area_obj = bpy.data.objects.new("area", area)
+scene.collection.objects.link(area_obj)
+area_obj.location = (2.0, -3.0, 6.5)  # above the view's top edge: an area light is seen
+area_obj.rotation_euler = (Vector((0.0, 0.5, 0.0)) - area_obj.location).to_track_quat(
+    "-Z", "Y").to_euler()
+for name in ("Light",):  # the startup point light: the area light alone
+    bpy.data.objects.remove(bpy.data.objects[name])
 world = scene.world
 world.use_nodes = True
 world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.5, 0.6, 0.8, 1.0)
-world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.6
+world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.3
 
 bpy.context.preferences.view.show_splash = False
 window = bpy.context.window_manager.windows[0]
@@ -92,6 +108,13 @@ state = {"t0": time.perf_counter(), "step": "first", "seen": set()}
 
 def say(*args):
     print("styletrace viewport:", *args, flush=True)
+
+
+try:
+    import pyoidn  # noqa: F401
+    say("denoiser: pyoidn", pyoidn.__file__)
+except ImportError as exc:
+    say("denoiser unavailable:", exc)
 
 
 def session():
@@ -117,8 +140,9 @@ def step():
         say(f"{elapsed:.2f} s: {s.label}")
     if not s.done:
         return 0.1
-    say("session stats", {k: round(v, 3) for k, v in s.stats.items() if k != "started"},
-        "passes", s.passes_run)
+    say("session stats", {k: (round(v, 3) if isinstance(v, float) else [round(x, 3) for x in v])
+                          for k, v in s.stats.items() if k != "started"},
+        "passes", s.passes_run, "size", s.size, "denoise", s.values["denoise"])
     if state["step"] == "first":
         state["step"], state["t0"] = "move", time.perf_counter()
         cube.location.x -= 0.6

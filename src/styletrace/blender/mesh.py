@@ -33,6 +33,49 @@ def _get(collection, attr: str, width: int, dtype) -> np.ndarray:
     return out.reshape(-1, width) if width > 1 else out
 
 
+#: the multiplier of the row hash (2^64 / golden ratio, odd)
+_MIX = np.uint64(0x9E3779B97F4A7C15)
+
+
+def merge_corners(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge equal rows (corners with the same position, normal and UV), bit for bit.
+
+    Rows are grouped by a hash of their bits, sorted, and split wherever two neighbours differ in
+    any bit, so a hash collision can only leave two equal rows apart, never merge different ones.
+    About 6x faster than `np.unique(axis=0)` on a million triangles (docs/blender.md, Export).
+
+    Args:
+        table: N x C float32 rows.
+    Returns:
+        (unique, inverse): the distinct rows in order of first appearance (float32), and for every
+        row its index in `unique` (unique[inverse] == table).
+    """
+    rows = np.ascontiguousarray(table, dtype=np.float32)
+    n, width = rows.shape
+    if n == 0:
+        return rows.copy(), np.zeros(0, np.int64)
+    if width % 2:  # whole 64-bit words
+        rows = np.concatenate([rows, np.zeros((n, 1), np.float32)], axis=1)
+    words = rows.view(np.uint64)
+    h = np.zeros(n, np.uint64)
+    for j in range(words.shape[1]):
+        h ^= words[:, j]
+        h *= _MIX  # wraps modulo 2^64, as a hash should
+        h ^= h >> np.uint64(29)
+    order = np.argsort(h, kind="stable")
+    ordered = words[order]
+    new = np.empty(n, bool)
+    new[0] = True
+    np.any(ordered[1:] != ordered[:-1], axis=1, out=new[1:])
+    group = np.cumsum(new) - 1
+    first = order[new]  # each group's first row (the sort is stable)
+    rank = np.empty(len(first), np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    inverse = np.empty(n, np.int64)
+    inverse[order] = rank[group]
+    return np.ascontiguousarray(rows[np.sort(first), :width]), inverse
+
+
 def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
     """The parts of an evaluated `bpy.types.Mesh`, one per material slot.
 
@@ -75,9 +118,7 @@ def read(mesh, matrix: np.ndarray | None = None) -> list[Part]:
             uv = uvs[c].copy()
             uv[:, 1] = units.flip_v(uv[:, 1])
             cols.append(uv)
-        table = np.concatenate(cols, axis=1)
-        unique, inverse = np.unique(table, axis=0, return_inverse=True)
-        unique = np.ascontiguousarray(unique, dtype=np.float32)
+        unique, inverse = merge_corners(np.concatenate(cols, axis=1))
         parts.append(Part(int(slot), unique[:, :3].copy(), unique[:, 3:6].copy(),
                           unique[:, 6:8].copy() if uvs is not None else None,
                           inverse.reshape(-1, 3).astype(np.uint32)))

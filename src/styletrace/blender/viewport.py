@@ -7,9 +7,11 @@
 
 A `Session` renders in a worker thread: first a draft (1 spp, one child per camera sample, at most
 `DRAFT_PIXELS` pixels, denoised with OIDN where the `denoise` extra is installed), then F12's passes
-(same seed, samples and pass split), recorded as an expectation buffer where the settings allow.
-A style change restyles that buffer (no new pass); any other change starts a new session on the
-kept Mitsuba objects. Dr.Jit work of every session runs under one lock, `JIT`.
+(same seed, samples, pass split and Denoise finisher, `denoise.finishers.plan_finisher`). After a
+pass the finisher's result of the passes so far is shown (denoised), where `denoise_now` says so.
+A style change restyles the buffer F12's Record buffer would keep (no new pass); any other change,
+and a style change under Denoise image, starts a new session on the kept Mitsuba objects. Dr.Jit
+work of every session runs under one lock, `JIT`.
 """
 from __future__ import annotations
 
@@ -25,8 +27,10 @@ from styletrace.blender import f12
 from styletrace.blender.properties import settings_integrator_values, style_values
 from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
 from styletrace.denoise.draft import available as denoise_available
+from styletrace.denoise.finishers import Denoised, Expectation, plan_finisher
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
+from styletrace.gate import dr, mi
 from styletrace.lookdev.buffer import MAX_SAMPLES
 from styletrace.lookdev.record import Recorded
 from styletrace.lookdev.restyle import restyle as lookdev_restyle
@@ -41,13 +45,32 @@ DRAFT_QUALITY = "balanced"
 JIT = threading.Lock()
 #: the render settings that are not the style's: a change starts new passes
 PASS_KEYS = ("spp", "seed", "pass_spp")
+DENOISE_KEYS = ("denoise", "denoise_quality")
 
 
 def snapshot(settings) -> dict:
     """The settings the viewport renders with, read on Blender's main thread: `style` (the style
-    slot's values), `integrator` (the `stylized` integrator's) and the sampling."""
+    slot's values), `integrator` (the `stylized` integrator's), the sampling and Denoise."""
     return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
-            **{k: int(getattr(settings, k)) for k in PASS_KEYS}}
+            **{k: int(getattr(settings, k)) for k in PASS_KEYS},
+            **{k: str(getattr(settings, k)) for k in DENOISE_KEYS}}
+
+
+def load_view_scene(description: dict):
+    """The loaded scene (`api.load_scene`) with its camera's transform opaque to Dr.Jit: a moved
+    camera then renders with the kernels already compiled instead of a new literal's (0.45 s of
+    LLVM per move, holding Python's lock; docs/design/viewport.md).
+
+    Args:
+        description: the scene dict (`SceneSync.scene_dict`), its sensor under the key "sensor".
+    Returns:
+        The `mi.Scene`.
+    """
+    sc = api.load_scene(description)
+    params = mi.traverse(sc)
+    dr.make_opaque(params["sensor.to_world"])
+    params.update()
+    return sc
 
 
 def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int, int]:
@@ -133,7 +156,7 @@ class Session:
         with JIT:
             if self._stop.is_set():
                 return
-            sc = api.load_scene(self.scene_dict(w, h))
+            sc = load_view_scene(self.scene_dict(w, h))
             resolved = self._job(sc, 1, 1, inner_samples="1")
             prog = next(iter(Runner(resolved, InProcess()).passes()))
             image, label = prog.image, "draft"
@@ -145,39 +168,65 @@ class Session:
         self.stats["draft_s"] = time.perf_counter() - self.stats["started"]
         self._show(image[..., :3], f"{label} ({w}x{h}, 1 spp)")
 
+    def _runner(self, resolved) -> Runner:
+        """F12's runner of `resolved` (`f12.run_f12`'s finisher plan), recording the buffer to
+        restyle where it can: the passes' (Denoise off) or the denoised one (expectation)."""
+        v = self.values
+        plan = dict(method=v["denoise"], quality=v["denoise_quality"], label="<viewport>")
+        if self.size[0] * self.size[1] * v["spp"] <= MAX_SAMPLES:
+            try:
+                return plan_finisher(resolved, keep=self._keep, **plan)[0]
+            except StyletraceError:  # not recordable (e.g. its estimator): refused again below
+                pass
+        # unrecorded (over the buffer's cap, or not recordable): a style change retraces
+        return plan_finisher(resolved, **plan)[0]
+
+    def _keep(self, buf) -> None:
+        self.buffer = buf
+
     def _run_passes(self) -> None:
         v = self.values
         with JIT:
             if self._stop.is_set():
                 return
-            sc = api.load_scene(self.scene_dict(*self.size))
-            resolved = self._job(sc, v["spp"], v["pass_spp"])
-            runner = None
-            if self.size[0] * self.size[1] * v["spp"] <= MAX_SAMPLES:
-                try:
-                    runner = Runner(resolved, InProcess(), Recorded(label="<viewport>"))
-                except StyletraceError:  # not recordable (e.g. its estimator)
-                    pass
-            # unrecorded (over the buffer's cap, or not recordable): a style change retraces
-            runner = runner or Runner(resolved, InProcess())
-            self.recorded = isinstance(runner.finisher, Recorded)
+            sc = load_view_scene(self.scene_dict(*self.size))
+            runner = self._runner(self._job(sc, v["spp"], v["pass_spp"]))
+            finisher = runner.finisher
+            denoised = isinstance(finisher, Denoised)
+            # Denoise image keeps no buffer: its restyle would not be the denoised image
+            self.recorded = isinstance(finisher, Recorded) or (
+                isinstance(finisher, Expectation) and finisher.keep is not None)
             passes = runner.passes()
         total = -(-v["spp"] // v["pass_spp"])
+        self.stats["denoise_s"] = []
+        since = 0.0  # seconds of passes since the last denoised image
         for k in range(1, total + 1):
             if self._stop.is_set():
                 return
             with JIT:
+                start = time.perf_counter()
                 prog = next(passes, None)
                 if prog is None:
                     return
                 self.passes_run += 1
                 self.spp_done = prog.spp_done
-                self.buffer = getattr(runner.finisher, "recorded", None)
-                image = prog.image
+                since += time.perf_counter() - start
+                image, label = prog.image, f"pass {k}/{total}, {prog.spp_done} spp"
+                if not denoised:
+                    self.buffer = getattr(finisher, "recorded", None)
+                elif finisher.ready(prog):
+                    if not denoise_now(k, total, since, self.stats["denoise_s"]):
+                        continue  # the last denoised image stays
+                    start = time.perf_counter()
+                    # Expectation: `_keep` gets the denoised buffer (coverage points: its own
+                    # object, which later passes leave as it is)
+                    image = runner.finish(prog)
+                    self.stats["denoise_s"].append(time.perf_counter() - start)
+                    since, label = 0.0, label + ", denoised"
                 if self.style is not None and self.buffer is not None:
                     image = _restyled(self.buffer, self.style)
             self.stats["last_pass_s"] = time.perf_counter() - self.stats["started"]
-            self._show(image[..., :3], f"pass {k}/{total}, {prog.spp_done} spp")
+            self._show(image[..., :3], label)
 
     def restyle(self, style: dict) -> float | None:
         """Show the recorded buffer restyled with `style` (`style_values`), with no new pass.
@@ -197,6 +246,20 @@ class Session:
             seconds = time.perf_counter() - start
         self._show(image, f"restyled, {self.spp_done} spp")
         return seconds
+
+
+def denoise_now(k: int, total: int, since: float, denoise_s: list[float]) -> bool:
+    """Whether the viewport denoises after pass `k` of `total`: the first pass that can be, the
+    last, and any pass where the passes since the last denoised image took at least as long as
+    that denoising did (so denoising takes at most about half the time; docs/design/viewport.md).
+
+    Args:
+        k, total: the pass (from 1) and the passes. since: seconds of passes since the last
+            denoised image. denoise_s: the seconds of each denoising so far.
+
+    Returns:
+        True where this pass's image is denoised and shown."""
+    return k == total or not denoise_s or since >= denoise_s[-1]
 
 
 def _rest(values: dict) -> dict:
@@ -240,7 +303,8 @@ class Viewport:
             pass
         elif synced["objects"] or entry["world"]:
             entry["kind"] = "objects"
-        elif any(old[k] != values[k] for k in PASS_KEYS) or _rest(old) != _rest(values):
+        elif (any(old[k] != values[k] for k in PASS_KEYS + DENOISE_KEYS)
+              or _rest(old) != _rest(values)):
             entry["kind"] = "settings"
         elif old["style"] != values["style"]:
             seconds = self.session.restyle(values["style"]) if self.session else None
@@ -298,7 +362,7 @@ class Viewport:
             self.session = None
 
 
-__all__ = ["Viewport", "Session", "snapshot", "draft_size", "JIT", "DRAFT_PIXELS"]
+__all__ = ["Viewport", "Session", "snapshot", "draft_size", "denoise_now", "JIT", "DRAFT_PIXELS"]
 
 
 # ---- Blender's side: the engine's view_update and view_draw --------------------------------------
@@ -364,6 +428,12 @@ def view_draw(engine, context, depsgraph) -> None:
     draw(engine, depsgraph.scene, image, region.width, region.height)
 
 
+#: Blender shifts a region's pixel space by 0.01 px (GLA_PIXEL_OFS); a texture drawn at
+#: (-PIXEL_OFFSET, -PIXEL_OFFSET) lands on the pixel centres, unblurred
+#: (tests/blender/test_viewport_draw.py)
+PIXEL_OFFSET = 0.01
+
+
 def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
     """Draw `image` (H x W x 3, linear, top row first) over the region, through the view's colour
     management (`bind_display_space_shader`)."""
@@ -376,7 +446,7 @@ def draw(engine, scene, image: np.ndarray, width: int, height: int) -> None:
     texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
     gpu.state.blend_set("ALPHA_PREMULT")
     engine.bind_display_space_shader(scene)
-    draw_texture_2d(texture, (0, 0), width, height)
+    draw_texture_2d(texture, (-PIXEL_OFFSET, -PIXEL_OFFSET), width, height)
     engine.unbind_display_space_shader()
     gpu.state.blend_set("NONE")
 
