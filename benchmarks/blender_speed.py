@@ -193,7 +193,8 @@ def main(argv=None) -> int:
                 for n in ("room", "glossy", "textured_plane")]
         lines += [
             f"Identity at equal noise ({args.size}x{args.size}, {args.spp} spp, seeds 1 and 2; "
-            f"median of {args.runs} runs after a warm-up):",
+            f"median of {args.runs} runs, styletrace's after a warm-up render that compiles its "
+            f"kernels):",
             "",
             "| scene | Cycles s | Cycles noise | styletrace s | styletrace noise "
             "| time at equal noise, styletrace / Cycles |",
