@@ -411,7 +411,7 @@ def record(
         per = bytes_per_sample(rec.settings.stylize, filtered=filtered)
         what = (f"~{max_samples * per / 2**20:.0f} MiB" if not sequence else
                 f"the children and uniforms of the '{slots[0].estimator}' estimator take up to "
-                f"up to {4 + per_sample * 18} bytes each")
+                f"{4 + per_sample * 18} bytes each")
         raise UsageError(
             f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
             f"{max_samples} ({what}); lower spp or the image size"

@@ -265,13 +265,15 @@ class Projection:
         return rel, z * self.a + self.b
 
     def pixels(self, p: mi.Point3f) -> tuple[mi.Float, mi.Float]:
-        """Screen coordinates of p in pixels (right, up), relative to the image centre.
+        """Screen coordinates of p in pixels along (`right`, camera up), relative to the image
+        centre. `right` is cross(up, forward), which for a Mitsuba camera points towards the
+        image's left (docs/design/mirror_anchors.md).
 
         Args:
             p: world points (mi.Point3f).
 
         Returns:
-            (right, up) in pixels, mi.Float each.
+            (x, y) in pixels, mi.Float each.
         """
         rel, fp = self.footprint(p)
         inv = dr.rcp(fp)
