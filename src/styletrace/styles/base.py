@@ -267,7 +267,7 @@ class Projection:
     def pixels(self, p: mi.Point3f) -> tuple[mi.Float, mi.Float]:
         """Screen coordinates of p in pixels along (`right`, camera up), relative to the image
         centre. `right` is cross(up, forward), which for a Mitsuba camera points towards the
-        image's left (docs/design/mirror_anchors.md).
+        image's left (measured: film u = 0.9 gives a ray with x < 0; `kernel.anchors`).
 
         Args:
             p: world points (mi.Point3f).
