@@ -258,7 +258,9 @@ def run(rows):
         f"the first frame more than {FIRST_LEVELS:.0f} levels (mean absolute difference, 8-bit "
         "sRGB) from the Solid frame; settled = the last frame more than "
         f"{SETTLED_LEVELS:.0f} level from the final frame. Last column: the final frame "
-        "against the one a second before (above 0: still changing when the run stopped).", "",
+        "against the one a second before (above 0: still changing when the run stopped). "
+        "The scenes' Principled materials are Diffuse ones of the same colour or texture for both "
+        "engines (the exporter reads Blender 4's Principled sockets).", "",
         table(rows)])
     if not os.environ.get("STYLETRACE_VPB_NO_WRITE"):
         report.write_section("blender_viewport", body)
