@@ -203,3 +203,16 @@ def test_denoise_now_spends_at_most_about_half_the_time_denoising():
     assert shown == [1, 5, 8]
     # passes slower than the denoising: every pass
     assert all(denoise_now(k, 8, 2.0, [1.0]) for k in range(1, 9))
+
+
+def test_loading_a_file_frees_every_viewport():
+    """Blender drops the old file's engines on a load without their `__del__` reaching `free`; the
+    add-on's `load_pre` handler stops and forgets every viewport."""
+    from styletrace.blender import viewport
+
+    vp, _, _ = run_viewport()
+    key = -1  # a key no engine has
+    viewport.VIEWS[key] = vp
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    assert key not in viewport.VIEWS and vp.session is None
+    assert viewport.free_all in bpy.app.handlers.load_pre  # kept across the load

@@ -550,6 +550,34 @@ def free_key(key: int) -> None:
         vp.close()
 
 
+def free_all(*_args) -> None:
+    """Stop and forget every viewport: a `load_pre` handler, since Blender drops the engines of
+    the old file without their `__del__` reaching `free`.
+
+    Args:
+        _args: what Blender passes a handler (the file path, ...), unused.
+    """
+    for key in list(VIEWS):
+        free_key(key)
+
+
+def register_viewport() -> None:
+    """Free the viewports whenever Blender loads a file (`free_all`)."""
+    import bpy
+    # persistent: Blender keeps the handler across the loads it is there for
+    bpy.app.handlers.persistent(free_all)
+    if free_all not in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.append(free_all)
+
+
+def unregister_viewport() -> None:
+    """Remove the load handler and free every viewport."""
+    import bpy
+    if free_all in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(free_all)
+    free_all()
+
+
 def free(engine) -> None:
     """The engine is going away (`RenderEngine.__del__`): stop its session.
 
