@@ -28,11 +28,9 @@ the last frame more than 1 level from the final frame. Dither is off (display no
 frame). Writes the `blender_viewport` section of BENCHMARKS.md; STYLETRACE_VPB_SCENES=room,glossy
 picks scenes, STYLETRACE_VPB_NO_WRITE=1 only prints.
 """
-import glob
 import importlib.util
 import os
 import sys
-import tempfile
 import time
 import traceback
 from importlib import import_module
@@ -42,10 +40,6 @@ import bpy
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-SITE = os.path.abspath(os.environ.get("STYLETRACE_SITE", os.path.join(
-    ROOT, ".venv", "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")))
-NEEDED = ("numpy", "numpy.libs", "mitsuba", "drjit", "tqdm", "PIL", "pillow.libs", "pyoidn",
-          "cffi", "_cffi_backend*.so", "pycparser")
 SCENE_NAMES = os.environ.get("STYLETRACE_VPB_SCENES", "room,glossy,textured_plane").split(",")
 ENGINES = (("Cycles", "CYCLES", None), ("styletrace identity", "STYLETRACE", "identity"),
            ("styletrace cel", "STYLETRACE", "cel"))
@@ -54,11 +48,8 @@ STEP_S = 0.25
 FIRST_LEVELS, SETTLED_LEVELS = 3.0, 1.0
 WIDTH, HEIGHT = 400, 300
 
-links = tempfile.mkdtemp(prefix="styletrace_site_")
-for name in NEEDED:
-    for path in glob.glob(os.path.join(SITE, name)):
-        os.symlink(path, os.path.join(links, os.path.basename(path)))
-sys.path[:0] = [links, os.path.join(ROOT, "src"), HERE]
+sys.path[:0] = [os.path.join(ROOT, "src"), HERE]
+links = import_module("styletrace.blender.borrowed_site").borrow_site(ROOT)  # with the denoiser
 
 # styletrace, its dependencies and the report's plumbing are importable only now: loaded by name
 np = import_module("numpy")

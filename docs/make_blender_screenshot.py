@@ -22,7 +22,6 @@ window.
 import os
 import shutil
 import sys
-import tempfile
 from importlib import import_module
 
 import bpy
@@ -30,15 +29,10 @@ import bpy
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 OUT = os.environ.get("STYLETRACE_SHOT", os.path.join(HERE, "blender_panel.png"))
-SITE = os.path.abspath(os.environ.get("STYLETRACE_SITE", os.path.join(
-    ROOT, ".venv", "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")))
-NEEDED = ("numpy", "numpy.libs", "mitsuba", "drjit", "tqdm", "PIL", "pillow.libs")
 
-links = tempfile.mkdtemp(prefix="styletrace_site_")
-for name in NEEDED:
-    if os.path.exists(os.path.join(SITE, name)):
-        os.symlink(os.path.join(SITE, name), os.path.join(links, name))
-sys.path[:0] = [links, os.path.join(ROOT, "src")]
+sys.path.insert(0, os.path.join(ROOT, "src"))
+site = import_module("styletrace.blender.borrowed_site")
+links = site.borrow_site(ROOT, site.PACKAGES)  # no denoiser: F12 is not run here
 
 # styletrace and its dependencies are importable only now: loaded by name
 blender = import_module("styletrace.blender")

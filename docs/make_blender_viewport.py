@@ -21,11 +21,9 @@ levels (printing the viewport's log: what each update re-exported and how long i
 again, takes Blender's screenshot of the window, crops it to the 3D view and quits. Timings print
 as `styletrace viewport:` lines, and whether the denoiser could be imported.
 """
-import glob
 import math
 import os
 import sys
-import tempfile
 import time
 from importlib import import_module
 
@@ -35,18 +33,10 @@ from mathutils import Quaternion, Vector
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 OUT = os.environ.get("STYLETRACE_SHOT", os.path.join(HERE, "blender_viewport.png"))
-SITE = os.path.abspath(os.environ.get("STYLETRACE_SITE", os.path.join(
-    ROOT, ".venv", "lib", f"python{sys.version_info[0]}.{sys.version_info[1]}", "site-packages")))
-# pyoidn calls OIDN through cffi: without cffi (Blender's Python has none) it cannot be imported
-NEEDED = ("numpy", "numpy.libs", "mitsuba", "drjit", "tqdm", "PIL", "pillow.libs", "pyoidn",
-          "cffi", "_cffi_backend*.so", "pycparser")
 TIMEOUT_S = float(os.environ.get("STYLETRACE_VIEWPORT_TIMEOUT", "300"))
 
-links = tempfile.mkdtemp(prefix="styletrace_site_")
-for name in NEEDED:
-    for path in glob.glob(os.path.join(SITE, name)):
-        os.symlink(path, os.path.join(links, os.path.basename(path)))
-sys.path[:0] = [links, os.path.join(ROOT, "src")]
+sys.path.insert(0, os.path.join(ROOT, "src"))
+links = import_module("styletrace.blender.borrowed_site").borrow_site(ROOT)  # with the denoiser
 
 # styletrace comes from the links and src/ put on sys.path above: imported by name
 addon = import_module("styletrace.blender")
