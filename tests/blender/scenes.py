@@ -240,12 +240,57 @@ def instanced(size: int = 64):
     return s
 
 
+def interior(size: int = 64):
+    """A room lit through a window: a sun and a blue sky outside, a small area lamp on the ceiling,
+    a glossy floor, a mirror, Principled materials. The sun falls through the window onto the
+    floor; the rest of the room is lit by what bounces off that patch, the sky seen through the
+    window and the lamp (the hard light of real interiors)."""
+    s = reset(size)
+
+    def principled(name, colour, roughness=0.9, specular=0.5, metallic=0.0):
+        return material(name, "ShaderNodeBsdfPrincipled", **{
+            "Base Color": colour, "Roughness": roughness, "Specular IOR Level": specular,
+            "Metallic": metallic})[0]
+
+    wall = principled("wall", (0.75, 0.72, 0.65))
+    floor = principled("floor", (0.45, 0.28, 0.15), roughness=0.25)
+    ceiling = principled("ceiling", (0.8, 0.8, 0.8))
+    sofa = principled("sofa", (0.15, 0.3, 0.6))
+    table = principled("table", (0.7, 0.5, 0.3), roughness=0.5)
+    vase = principled("vase", (0.8, 0.2, 0.1), roughness=0.3)
+    mirror = principled("mirror", (0.9, 0.9, 0.9), roughness=0.02, metallic=1.0)
+    # a 6 x 6 x 3 room; the wall at x = 3 has a 2 x 1.4 window, its centre at y = 0.5, z = 1.6
+    plane(6, (0, 0, 0), mat=floor)
+    plane(6, (0, 0, 3), (math.pi, 0, 0), mat=ceiling)
+    plane(6, (0, 3, 1.5), (math.pi / 2, 0, 0), mat=wall)
+    plane(6, (0, -3, 1.5), (-math.pi / 2, 0, 0), mat=wall)
+    plane(6, (-3, 0, 1.5), (0, math.pi / 2, 0), mat=wall)
+    for (y0, y1, z0, z1) in ((-3, -0.5, 0, 3), (1.5, 3, 0, 3), (-0.5, 1.5, 0, 0.9),
+                             (-0.5, 1.5, 2.3, 3)):
+        piece = cube(1.0, (3.05, (y0 + y1) / 2, (z0 + z1) / 2), mat=wall)
+        piece.scale = (0.1, y1 - y0, z1 - z0)
+    cube(1.0, (-2.2, 1.0, 0.4), mat=sofa).scale = (1.2, 2.4, 0.8)
+    cube(1.0, (0.3, 0.6, 0.35), mat=table).scale = (1.2, 0.8, 0.7)
+    sphere(0.25, (0.3, 0.6, 0.95), mat=vase)
+    m = plane(1.0, (-2.95, -1.2, 1.5), (0, math.pi / 2, 0), mat=mirror)
+    m.scale = (1.8, 1.2, 1.0)  # the mirror on the back wall, facing the window
+    world = s.world.node_tree.nodes["Background"]
+    world.inputs["Color"].default_value = (0.35, 0.55, 1.0, 1.0)
+    world.inputs["Strength"].default_value = 1.5
+    light("SUN", (6, 0, 6), (0, math.radians(55), math.radians(-10)), energy=4.0,
+          angle=math.radians(1.0))
+    light("AREA", (-2.4, -2.4, 2.9), energy=40.0, size=0.25)  # above the camera, out of view
+    camera((-2.6, -2.6, 1.7), look((-2.6, -2.6, 1.7), (2.0, 1.0, 1.0)), lens=22)
+    return s
+
+
 SCENES = {
     "room": room,
     "textured_plane": textured_plane,
     "glossy": lambda size=64: sphere_scene("glossy", size),
     "glass": lambda size=64: sphere_scene("glass", size),
     "instanced": instanced,
+    "interior": interior,
 }
 
 
