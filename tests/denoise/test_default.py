@@ -1,7 +1,7 @@
 """What a render does at defaults (`denoise.default`): auto denoises the expectation where it
-applies, with the firefly control and the scene's sample count spent on children; where it
-cannot, it says why in one line and renders as `denoise="off"` does; `off` is the pipeline's
-render of the paper's estimators, bit for bit."""
+applies, with the firefly control and an auto spp within the buffer's cap; where it cannot, it
+says why in one line and renders as `denoise="off"` does; `off` is the pipeline's render of the
+paper's estimators, bit for bit."""
 import os
 import subprocess
 import sys
@@ -13,7 +13,7 @@ from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tre
 
 import styletrace
 from styletrace.denoise import NotDenoised
-from styletrace.denoise.default import FIREFLY_K, MIN_SPP, SPEND, choose
+from styletrace.denoise.default import FIREFLY_K, choose
 from styletrace.pipeline.job import python_job
 from styletrace.pipeline.resolve import resolve
 
@@ -32,9 +32,10 @@ def test_auto_plans_expectation_with_the_firefly_control_and_the_budget_spent(au
     assert plan.method == "expectation" and plan.note == ""
     s = plan.resolved.integrator.settings
     assert s.firefly == FIREFLY_K and s.firefly_floor > 0
-    # the built-in scene's 16 samples, n = 16 children: max(2, round(2 * 16 / 16)) camera samples
-    assert plan.resolved.spp == max(MIN_SPP, round(SPEND * 16 / 16)) == 2
-    assert "firefly=4" in plan.resolved.auto and "spp=2" in plan.resolved.auto
+    # the built-in scene's 16 samples, cel's n = 16 children: 1 camera sample (pipeline.budget)
+    assert plan.resolved.spp == 1 and int(s.slot.n(0)) == 16
+    assert "firefly=4" in plan.resolved.auto
+    assert "samples=16: spp=1 x 16 children" in plan.resolved.auto
     # a given spp is the user's: kept
     assert choose(resolve(python_job("cornell-box", style="cel", spp=8, **SMALL))).resolved.spp == 8
 
@@ -170,6 +171,10 @@ def test_a_given_spp_over_the_buffers_cap_denoises_the_image(auto, monkeypatch):
     from styletrace.lookdev import buffer
     monkeypatch.setattr(buffer, "MAX_SAMPLES", 24 * 24 * 3)
     assert choose(resolve(python_job("cornell-box", style="cel", spp=4, **SMALL))).method == "image"
-    # without a given spp the budget is spent within the cap instead
-    plan = choose(resolve(python_job("cornell-box", style="cel", **SMALL)))
-    assert plan.method == "expectation" and plan.resolved.spp == 2
+    # without a given spp the budget is spent within the cap instead: 64 samples would be 4 x 16,
+    # the cap allows 3 camera samples, so each takes ceil(64 / 3) = 22 children
+    plan = choose(resolve(python_job("cornell-box", style="cel", samples=64, **SMALL)))
+    assert plan.method == "expectation" and plan.resolved.spp == 3
+    assert int(plan.resolved.integrator.settings.slot.n(0)) == 22
+    assert "samples=64: spp=3 x 22 children" in plan.resolved.auto
+    assert "spp=4" not in plan.resolved.auto

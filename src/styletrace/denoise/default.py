@@ -1,5 +1,5 @@
 """What a render does at defaults: denoise where it can, with the firefly control and the
-sample budget.
+buffer's cap on camera samples.
 
     plan = choose(resolved, method="auto", local=True)
     plan.method, plan.resolved, plan.note   # expectation | image | off, the pinned job, why not
@@ -24,10 +24,6 @@ ENV = "STYLETRACE_DENOISE"
 
 #: the firefly control's k where a render denoises
 FIREFLY_K = 4.0
-#: paths per pixel of a denoised style at defaults, in units of the scene's sample count
-SPEND = 2.0
-#: the fewest camera samples per pixel a denoised style gets at defaults
-MIN_SPP = 2
 
 
 def check_method(method) -> str:
@@ -187,33 +183,37 @@ def with_firefly(scene, integrator, method: str, pilot=None):
 
 
 def pin_denoise_budget(resolved, method: str):
-    """`resolved` with the firefly control on and, without a given spp, the budget spent on
-    children.
+    """`resolved` with the firefly control on and, for the expectation denoiser, an auto spp within
+    its buffer's cap.
 
     Args:
         resolved: the resolved job. method: "expectation" or "image".
 
     Returns:
-        A copy with the firefly control (`with_firefly`) and, where spp was not given and n > 1,
-        spp = max(MIN_SPP, round(SPEND * S / n)) for the scene's S (expectation: within the
-        buffer's cap); its `auto` line names the values. Other integrators: as they are.
+        A copy with the firefly control (`with_firefly`) and, with expectation, the budget split
+        again within MAX_SAMPLES // (w x h) camera samples per pixel (`pipeline.budget.split`: an
+        auto spp lowered to the cap, an auto n raised to ceil(samples / spp)); its `auto` line
+        names the values. Other integrators: as they are.
     """
     from styletrace.kernel.integrator import StylizedIntegrator
-    integrator, auto = resolved.integrator, [resolved.auto] if resolved.auto else []
+    integrator, auto = resolved.integrator, resolved.auto
     if not isinstance(integrator, StylizedIntegrator):
         return resolved
-    integrator, note = with_firefly(resolved.scene, integrator, method, resolved.pilot)
-    auto.append(note)
-    spp = resolved.spp
-    n = int(integrator.settings.slot.n(0))
-    if resolved.job.spp is None and n > 1:
+    budget = resolved.budget
+    if method == "expectation" and budget is not None:  # within what the buffer holds
         from styletrace.lookdev.buffer import MAX_SAMPLES
+        from styletrace.pipeline.budget import split
+        from styletrace.pipeline.resolve import with_inner
         w, h = resolved.size
-        spp = max(MIN_SPP, round(SPEND * resolved.spp / n))
-        if method == "expectation":  # within what the buffer holds
-            spp = max(1, min(spp, MAX_SAMPLES // (w * h)))
-        auto.append(f"spp={spp} (the scene's {resolved.spp} samples as {spp} x {n} children)")
-    return replace(resolved, integrator=integrator, spp=spp, auto="; ".join(a for a in auto if a))
+        capped = split(budget.request, MAX_SAMPLES // (w * h))
+        if capped != budget:
+            integrator = with_inner(integrator, capped.inner)
+            auto = auto.replace(budget.note, capped.note) if budget.note else auto
+            budget = capped
+    integrator, note = with_firefly(resolved.scene, integrator, method, resolved.pilot)
+    auto = "; ".join(a for a in (auto, note) if a)
+    spp = resolved.spp if budget is None else budget.spp
+    return replace(resolved, integrator=integrator, spp=spp, auto=auto, budget=budget)
 
 
 __all__ = [
@@ -229,6 +229,4 @@ __all__ = [
     "with_firefly",
     "pin_denoise_budget",
     "FIREFLY_K",
-    "SPEND",
-    "MIN_SPP",
 ]

@@ -153,11 +153,13 @@ def render_pipeline(scene: Any = None, style: str | None = None, spp: int | None
            height: int | None = None, integrator: Any = None,
            callback: Callable[[Progress], None] | None = None, cluster: str | None = None,
            pass_spp: int | None = None, defines: dict[str, Any] | None = None,
-           **params: Any) -> np.ndarray:
+           samples: int | None = None, **params: Any) -> np.ndarray:
     """`styletrace.render`: a Job of the keywords (`job.python_job`), resolved once, run in passes.
 
     Args:
         scene, spp, seed, width, height, integrator, defines, pass_spp: as `job.Job`'s fields.
+        samples: paths per pixel, whatever the style (None: the scene's sample count), split into
+            spp x children (`pipeline.budget`); spp and inner, where given, win.
         style, inner, estimator, **params: the integrator values given (`job.Job`'s `given`);
             `auto` values are resolved on the scene.
         callback: called with each pass's `Progress`. cluster: "local" or a Ray address: the passes
@@ -168,7 +170,7 @@ def render_pipeline(scene: Any = None, style: str | None = None, spp: int | None
         film); with aovs=True, (image, aovs) (`Progress.aovs`).
     """
     job = python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines,
-                     pass_spp, **params)
+                     pass_spp, samples, **params)
     return run_resolved(resolve(job), cluster, callback)
 
 

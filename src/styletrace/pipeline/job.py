@@ -3,6 +3,7 @@ to `execute`.
 
     job = Job(scene="scene.xml", defines={"depth": "3"}, width=64, height=48,
               given={"style": "cel", "inner_samples": 8}, spp=16, seed=0)
+    job = Job(scene="scene.xml", samples=64)   # 64 paths per pixel, split by `resolve`
 
 A `Job` holds what the caller said and nothing derived (its fields: `Job`). It is frozen:
 resolving it twice gives the same scene, integrator and passes.
@@ -30,8 +31,11 @@ class Job:
         given: integrator values, laid over the scene's own `stylized` integrator, else over its
             carried settings with `default_style` (PYTHON_STYLE by default).
         integrator: a prebuilt integrator, used as it is (with `given` too: a UsageError).
-        spp: camera samples per pixel (None: the scene sampler's count); seed: the render's seed.
+        spp: camera samples per pixel (None: chosen from samples, `pipeline.budget`); seed: the
+            render's seed.
         pass_spp, lanes_per_pass: the pass split (None: the device's, `sizing`).
+        samples: paths per pixel, the render's cost whatever the style (None: the scene sampler's
+            count), split into spp x children by `pipeline.budget`.
     """
     scene: Any = None
     defines: Mapping[str, Any] = field(default_factory=dict)
@@ -44,6 +48,7 @@ class Job:
     seed: int = 0
     pass_spp: int | None = None
     lanes_per_pass: int | None = None
+    samples: int | None = None
 
     def __post_init__(self):
         if self.integrator is not None and self.given:
@@ -94,12 +99,14 @@ def python_job(
     integrator: Any = None,
     defines: dict[str, Any] | None = None,
     pass_spp: int | None = None,
+    samples: int | None = None,
     **params: Any,
 ) -> "Job":
     """The Job of a Python API call (`styletrace.render`, `render_buffer`, `render(denoise=...)`).
 
     Args:
-        scene, spp, seed, width, height, integrator, defines, pass_spp: as `Job`'s fields.
+        scene, spp, seed, width, height, integrator, defines, pass_spp, samples: as `Job`'s
+            fields.
         style, inner, estimator, **params: the integrator values given (`given_values`: None
             leaves a value out).
 
@@ -119,6 +126,7 @@ def python_job(
         spp=spp,
         seed=seed,
         pass_spp=pass_spp,
+        samples=samples,
     )
 
 

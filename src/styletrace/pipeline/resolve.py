@@ -1,12 +1,16 @@
 """Resolving a `Job`, once: the scene loaded, its own integrator settings merged, `auto`
-values pinned.
+values pinned, the sample budget split.
 
-    r = resolve(Job(scene="scene.xml", given={"style": "cel"}))
+    r = resolve(Job(scene="scene.xml", given={"style": "cel"}, samples=64))
     r.scene, r.integrator, r.spp, r.lanes, r.auto   # what `execute` runs; auto: the values pinned
+    r.budget                                        # the split: spp x children (`budget.Split`)
 
 The integrator is a prebuilt one as it is; else the given values laid over the scene's own
 `stylized` integrator (also one nested in `moment` or `aov`); else over the scene's carried
-settings (`carried`) with the job's default style. Its `auto` values are then pinned on this scene
+settings (`carried`) with the job's default style. The job's samples (else the scene's sample
+count) are split into camera samples and children once, here, by `budget.split`: a count the
+budget chooses replaces the integrator's default (`with_inner`; a count given, by the caller or the
+scene file, is kept). Its `auto` values are then pinned on this scene
 (`scene.defaults.resolve_defaults`), so every route that renders the result draws the same image.
 Design: docs/design/render_pipeline.md.
 """
@@ -18,11 +22,12 @@ from typing import Any
 from styletrace.config import settings as S
 from styletrace.gate import mi
 from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.pipeline.budget import Request, Split, split
 from styletrace.pipeline.carried import carried_settings, nested_stylized
 from styletrace.pipeline.job import Job
 from styletrace.pipeline.passes import pin_auto_values
 from styletrace.pipeline.sizing import lanes_per_pass
-from styletrace.scene.arguments import check_render_args
+from styletrace.scene.arguments import SPP_MAX, check_render_args, whole
 from styletrace.scene.defaults import ScenePilot
 from styletrace.scene.loading import load_scene, scene_spp
 from styletrace.scene.plugins import init
@@ -40,6 +45,7 @@ class Resolved:
     lanes_note: str | None = None  # why the device's pass size is below its default, if it is
     # the scene-defaults pilot the auto values came from (the recorder stores it)
     pilot: ScenePilot | None = None
+    budget: Split | None = None  # the samples split into spp x children (`budget.split`)
 
     @property
     def size(self) -> tuple[int, int]:
@@ -90,6 +96,44 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
     return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
 
 
+def budget_request(job: Job, integrator: mi.Integrator, samples: int) -> Request:
+    """What the job and its integrator say about the render's cost (`budget.Request`).
+
+    Args:
+        job: the job (its spp, and whether it names samples).
+        integrator: the job's integrator before its auto values are pinned.
+        samples: the budget: the job's samples, else the scene's sample count.
+
+    Returns:
+        The request. The children count as given where the integrator's values name
+        `inner_samples` (the caller's, the scene file's own `stylized`), and for a prebuilt
+        integrator of another class; an integrator without styles draws no children.
+    """
+    given = job.samples is not None
+    if not isinstance(integrator, StylizedIntegrator):
+        return Request(samples, job.spp, None, 0, samples_given=given)
+    s = integrator.settings
+    fixed = "inner_samples" in integrator.values or type(integrator) is not StylizedIntegrator
+    return Request(samples, job.spp, s.slot.inner if fixed else None, s.slot.style.default_inner,
+                   s.stylize_depth, given)
+
+
+def with_inner(integrator: StylizedIntegrator, inner: tuple[int, ...]) -> StylizedIntegrator:
+    """`integrator` with other children counts, where they differ (its other values kept).
+
+    Args:
+        integrator: a `stylized` integrator. inner: the counts, one for every level or one per
+            level.
+
+    Returns:
+        `integrator` itself where its counts are `inner`, else a new one of its values.
+    """
+    if tuple(integrator.settings.slot.inner) == tuple(inner):
+        return integrator
+    counts = ",".join(str(n) for n in inner)
+    return StylizedIntegrator.from_values({**integrator.values, "inner_samples": counts})
+
+
 def lanes_for(job: Job) -> tuple[int, str | None]:
     """Camera samples per pass of a job: the job's, else the device's (`sizing`).
 
@@ -113,23 +157,30 @@ def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
 
     Returns:
         The `Resolved` job: scene, integrator (auto values pinned), spp, lanes, the line naming the
-        auto values, the lanes note and the scene-defaults pilot.
+        auto values (the split first), the lanes note, the scene-defaults pilot and the split.
 
     Raises:
-        UsageError: a bad spp, seed or integrator (`scene.arguments.check_render_args`).
+        UsageError: a bad spp, samples, seed or integrator (`scene.arguments.check_render_args`),
+            or samples, spp and inner that disagree (`budget.split`).
     """
     check_render_args(1 if job.spp is None else job.spp, job.seed, job.integrator)
+    if job.samples is not None:
+        whole("samples", job.samples, 1, SPP_MAX)
     if scene is None:
         scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
     chosen = choose_integrator(scene, job)
+    samples = scene_spp(scene) if job.samples is None else int(job.samples)
+    budget = split(budget_request(job, chosen, samples))
+    if isinstance(chosen, StylizedIntegrator):
+        chosen = with_inner(chosen, budget.inner)
     # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value
     # needs it)
     pilot = ScenePilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
     integrator, auto = pin_auto_values(scene, chosen, pilot)
-    spp = scene_spp(scene) if job.spp is None else int(job.spp)
+    auto = "; ".join(a for a in (budget.note, auto) if a)
     lanes, note = lanes_for(job)
-    return Resolved(job, scene, integrator, spp, lanes, auto, note, pilot)
+    return Resolved(job, scene, integrator, budget.spp, lanes, auto, note, pilot, budget)
 
 
 __all__ = ["Resolved", "resolve", "pin_auto_values", "choose_integrator", "job_integrator_values",
-           "lanes_for"]
+           "lanes_for", "budget_request", "with_inner"]

@@ -1,0 +1,165 @@
+"""The sample budget (`pipeline.budget`, issue 36): `samples`, paths per pixel, split once by
+`pipeline.resolve` into camera samples x children for every style; explicit counts win exactly,
+three that disagree are refused in one line, and the expectation buffer's cap lowers an auto spp.
+The observable is the resolved job (its spp, its integrator's `slot.n`), not a render."""
+import pytest
+
+from styletrace.config.settings import AdaptiveCount
+from styletrace.errors import UsageError
+from styletrace.frontends import api
+from styletrace.pipeline.budget import Request, split
+from styletrace.pipeline.job import Job, python_job
+from styletrace.pipeline.resolve import resolve
+from styletrace.styles import registry
+
+W = H = 8
+#: the split of the built-in scene's samples by the style's default n: {n: {samples: (spp, n)}}
+EXPECTED = {
+    16: {16: (1, 16), 64: (4, 16)},   # cel, color_map, gamma, hatching, ...
+    8: {16: (2, 8), 64: (8, 8)},      # saturation
+    1: {16: (16, 1), 64: (64, 1)},    # identity, contrast, sepia
+    0: {16: (16, 1), 64: (64, 1)},    # closed form (gooch, xtoon, coordinate): no children
+}
+
+
+@pytest.fixture(scope="module")
+def box():
+    """The built-in Cornell box at 8 x 8 (its sampler's sample_count is 16)."""
+    return api.load_scene("cornell-box", W, H)
+
+
+def resolved(scene, **kw):
+    return resolve(python_job("cornell-box", width=W, height=H, **kw), scene=scene)
+
+
+def counts(r):
+    """(spp, n at the first stylized level) of a resolved job."""
+    return r.spp, int(r.integrator.settings.slot.n(0))
+
+
+@pytest.mark.parametrize("samples", [16, 64])
+@pytest.mark.parametrize("style", registry.style_names())
+def test_every_style_spends_the_samples_as_paths_per_pixel(box, style, samples):
+    default = registry.style_class(style).default_inner
+    assert default in EXPECTED, f"{style}: add the split of a default n of {default}"
+    r = resolved(box, style=style, samples=samples)
+    assert counts(r) == EXPECTED[default][samples]
+    assert r.budget.paths == samples
+    assert r.auto.startswith(f"samples={samples}: spp={r.spp}")
+
+
+def test_the_scenes_sample_count_is_the_default_budget(box):
+    r = resolved(box, style="cel")
+    assert counts(r) == (1, 16) and r.budget.request.samples == 16
+    assert r.auto.startswith("samples=16: spp=1 x 16 children; ")
+    # fewer samples than the style's children: n shrinks to the samples, one camera sample
+    assert counts(resolved(box, style="cel", samples=4)) == (1, 4)
+    assert counts(resolved(box, style="cel", samples=24)) == (2, 16)  # round(24 / 16) = 2
+
+
+def test_a_given_inner_count_wins_and_spp_follows(box):
+    assert counts(resolved(box, style="cel", inner=8)) == (2, 8)
+    assert counts(resolved(box, style="cel", inner=8, samples=64)) == (8, 8)
+    assert counts(resolved(box, style="cel", inner=3, samples=16)) == (5, 3)  # round(16 / 3)
+    # an adaptive count n0:n_max spends n0 per camera sample
+    r = resolved(box, style="cel", inner="4:64", samples=64)
+    assert r.spp == 16 and r.integrator.settings.slot.n(0) == AdaptiveCount(4, 64)
+
+
+def test_a_given_spp_wins_and_keeps_the_styles_n_without_samples(box):
+    """spp alone is every call before samples existed: the style's own n, no split named."""
+    r = resolved(box, style="cel", spp=4)
+    assert counts(r) == (4, 16) and "samples=" not in r.auto
+    assert counts(resolved(box, style="cel", spp=4, samples=64)) == (4, 16)
+    assert counts(resolved(box, style="cel", spp=4, samples=16)) == (4, 4)
+    assert counts(resolved(box, style="cel", spp=3, samples=16)) == (3, 5)  # round(16 / 3)
+    assert counts(resolved(box, style="cel", spp=32, samples=16)) == (32, 1)
+
+
+def test_spp_and_inner_given_are_used_exactly_and_samples_must_agree(box):
+    r = resolved(box, style="cel", spp=4, inner=8)
+    assert counts(r) == (4, 8) and "samples=" not in r.auto
+    assert counts(resolved(box, style="cel", spp=4, inner=8, samples=32)) == (4, 8)
+    with pytest.raises(UsageError) as info:
+        resolved(box, style="cel", spp=4, inner=8, samples=64)
+    assert str(info.value) == ("--samples 64 with --spp 4 and --inner 8 (32 paths per pixel): give "
+                               "at most two of the three")
+
+
+def test_several_levels_keep_their_counts(box):
+    two = dict(style="cel", stylize="first_n_hits", stylize_depth=2)
+    r = resolved(box, samples=64, **two)
+    assert counts(r) == (1, 16) and r.integrator.settings.slot.n(1) == 16  # 256 paths: spp >= 1
+    assert "samples=64: spp=1 x 16,16 children (256 paths per pixel)" in r.auto
+    r = resolved(box, samples=64, inner="4,2", **two)
+    assert counts(r) == (8, 4) and r.budget.paths == 64
+    assert counts(resolved(box, samples=64, spp=2, **two)) == (2, 16)  # n is not split over levels
+
+
+def test_the_scene_files_own_inner_count_is_given(tmp_path):
+    scene = tmp_path / "own.xml"
+    scene.write_text(
+        '<scene version="3.0.0"><integrator type="stylized"><string name="style" value="cel"/>'
+        '<integer name="inner_samples" value="4"/></integrator>'
+        '<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/>'
+        '<integer name="height" value="8"/></film><sampler type="independent">'
+        '<integer name="sample_count" value="32"/></sampler></sensor>'
+        '<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter>'
+        "</shape></scene>"
+    )
+    assert counts(resolve(Job(scene=str(scene)))) == (8, 4)
+    assert counts(resolve(Job(scene=str(scene), samples=64))) == (16, 4)
+    with pytest.raises(UsageError, match=r"--inner 4 \(16 paths per pixel\)"):
+        resolve(Job(scene=str(scene), samples=64, spp=4))
+
+
+def test_a_prebuilt_integrator_is_split_unless_it_names_its_count(box):
+    cel = api.make_integrator(style="cel")
+    assert counts(resolve(Job(scene=box, integrator=cel, samples=64))) == (4, 16)
+    assert counts(resolve(Job(scene=box, integrator=cel, samples=8))) == (1, 8)
+    given = api.make_integrator(style="cel", inner=2)
+    r = resolve(Job(scene=box, integrator=given, samples=8))
+    assert counts(r) == (4, 2) and r.integrator.values["inner_samples"] == 2
+    from styletrace.gate import mi
+    path = mi.load_dict({"type": "path"})  # no children: a camera sample is one path
+    assert resolve(Job(scene=box, integrator=path, samples=64)).spp == 64
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.5, True, "16"])
+def test_bad_samples_are_refused_in_one_line(box, bad):
+    with pytest.raises(UsageError) as info:
+        resolved(box, style="cel", samples=bad)
+    assert str(info.value).startswith(f"bad value {bad!r} for samples: expected an integer in [1, ")
+
+
+def test_the_rule_itself():
+    """`split` alone: the module doc's cases, without a scene."""
+    assert (s := split(Request(16, None, None, 16))).spp == 1 and s.inner == (16,)
+    assert s.note == "samples=16: spp=1 x 16 children"
+    assert split(Request(16, None, None, 0)).note == "samples=16: spp=16 (no children)"
+    assert split(Request(16, None, None, 1)).note == "samples=16: spp=16 x 1 child"
+    assert split(Request(64, 4, None, 16, samples_given=True)).inner == (16,)
+    assert split(Request(64, 4, None, 16, samples_given=False)).inner == (16,)
+    assert split(Request(16, 4, None, 16, samples_given=True)).inner == (4,)
+    assert split(Request(16, 4, None, 16, samples_given=False)).inner == (16,)
+    assert split(Request(16, 4, None, 16)).note == ""  # spp alone: nothing chosen
+    # a closed-form style draws no children: spp alone sets its cost, nothing to refuse
+    assert split(Request(64, 4, None, 0, samples_given=True)).paths == 4
+    with pytest.raises(UsageError, match=r"--inner 4:64 \(16 paths"):
+        split(Request(64, 4, (AdaptiveCount(4, 64),), 16, samples_given=True))
+
+
+def test_the_expectation_buffers_cap_lowers_an_auto_spp_and_raises_an_auto_n():
+    assert split(Request(64, None, None, 16), cap=16) == split(Request(64, None, None, 16))
+    capped = split(Request(1024, None, None, 16), cap=16)  # 64 x 16 would be 64 camera samples
+    assert (capped.spp, capped.inner) == (16, (64,))
+    assert capped.note == "samples=1024: spp=16 x 64 children"
+    assert split(Request(1000, None, None, 16), cap=16).inner == (63,)  # ceil(1000 / 16)
+    # a given n stays; the spp is held to the cap
+    assert (lambda s: (s.spp, s.inner))(split(Request(1024, None, (8,), 16), cap=16)) == (16, (8,))
+    # a given spp is the caller's (the denoiser refuses it instead: denoise.default.method_for)
+    assert split(Request(1024, 32, None, 16), cap=16).spp == 32
+    # several levels keep their counts
+    two = split(Request(4096, None, (4, 2), 16, levels=2), cap=16)
+    assert (two.spp, two.inner) == (16, (4, 2))
+    assert split(Request(64, None, None, 16), cap=0).spp == 1  # a film over the cap: one
