@@ -163,3 +163,14 @@ def test_the_expectation_buffers_cap_lowers_an_auto_spp_and_raises_an_auto_n():
     two = split(Request(4096, None, (4, 2), 16, levels=2), cap=16)
     assert (two.spp, two.inner) == (16, (4, 2))
     assert split(Request(64, None, None, 16), cap=0).spp == 1  # a film over the cap: one
+
+
+def test_error_aovs_take_at_least_two_camera_samples(box):
+    """Their variance needs two camera samples (`runner.Runner.check` refuses one): an auto spp
+    is raised to 2 and an auto n lowered to round(samples / 2); a given spp is the caller's."""
+    r = resolved(box, style="cel", aovs=True)
+    assert counts(r) == (2, 8) and r.budget.paths == 16
+    assert counts(resolved(box, style="cel", aovs=True, samples=64)) == (4, 16)
+    assert counts(resolved(box, style="cel", aovs=True, inner=16)) == (2, 16)
+    assert counts(resolved(box, style="cel", aovs=True, spp=1)) == (1, 16)
+    assert split(Request(16, None, None, 16, min_spp=2), cap=1).spp == 1  # the cap wins

@@ -15,7 +15,9 @@ with no children, one). The rule (chosen by measurement; docs/look.md):
 - both given: as given; with samples given as well they must agree (spp x P = samples).
 
 P is the product of the levels' counts (an adaptive count n0:n_max counts n0). A cap on camera
-samples (the expectation buffer's) lowers an auto spp and raises an auto n to ceil(samples / spp).
+samples (the expectation buffer's) lowers an auto spp and raises an auto n to ceil(samples / spp);
+a floor (the error AOVs' variance needs 2 camera samples) raises an auto spp and lowers an auto n
+to max(1, round(samples / spp)).
 `pipeline.resolve` asks for the split of every render; the preview asks for its own.
 Design: docs/look.md, "The sample budget".
 """
@@ -39,6 +41,8 @@ class Request:
             integrator without children).
         levels: the stylized levels (`stylize_depth`).
         samples_given: whether the caller named `samples` (the scene's count is a default only).
+        min_spp: the fewest camera samples an auto spp may take (2 where the error AOVs estimate
+            each pixel's variance).
     """
     samples: int
     spp: int | None
@@ -46,6 +50,7 @@ class Request:
     default: int
     levels: int = 1
     samples_given: bool = False
+    min_spp: int = 1
 
     @property
     def closed(self) -> bool:
@@ -146,6 +151,10 @@ def split(request: Request, cap: int | None = None) -> Split:
             )
         return Split(r, r.spp, inner)
     spp = max(1, round(r.samples / per))
+    if spp < r.min_spp:
+        spp = r.min_spp
+        if r.inner is None and one_level(r):
+            inner = (max(1, round(r.samples / spp)),)
     if cap is not None and spp > cap:
         spp = max(1, cap)
         if r.inner is None and one_level(r):

@@ -107,15 +107,17 @@ def budget_request(job: Job, integrator: mi.Integrator, samples: int) -> Request
     Returns:
         The request. The children count as given where the integrator's values name
         `inner_samples` (the caller's, the scene file's own `stylized`), and for a prebuilt
-        integrator of another class; an integrator without styles draws no children.
+        integrator of another class; an integrator without styles draws no children. With error
+        AOVs an auto spp is at least 2 (their variance; `runner.Runner.check`).
     """
     given = job.samples is not None
+    least = 2 if integrator.aov_names() else 1
     if not isinstance(integrator, StylizedIntegrator):
-        return Request(samples, job.spp, None, 0, samples_given=given)
+        return Request(samples, job.spp, None, 0, samples_given=given, min_spp=least)
     s = integrator.settings
     fixed = "inner_samples" in integrator.values or type(integrator) is not StylizedIntegrator
     return Request(samples, job.spp, s.slot.inner if fixed else None, s.slot.style.default_inner,
-                   s.stylize_depth, given)
+                   s.stylize_depth, given, least)
 
 
 def with_inner(integrator: StylizedIntegrator, inner: tuple[int, ...]) -> StylizedIntegrator:
