@@ -202,7 +202,7 @@ def cmd_render(args) -> int:
     check_output(args.output, scene)
     params = _parse_set(args.set)
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
-                 ("--pass-spp", args.pass_spp))
+                 ("--samples", args.samples), ("--pass-spp", args.pass_spp))
     from styletrace.denoise.finishers import plan_finisher
     from styletrace.frontends.command_job import job_of
     from styletrace.frontends.ray_command import executor_of
@@ -374,11 +374,20 @@ def build_parser() -> argparse.ArgumentParser:
         "the EXR output (refused with a PNG output); docs/adaptive.md",
     )
     r.add_argument(
+        "--samples",
+        type=int,
+        default=None,
+        metavar="N",
+        help="paths per pixel, the render's cost whatever the style (as Cycles' Samples), split "
+        "into camera samples x children (default: the scene sampler's sample_count; 16 for the "
+        "built-in scenes; docs/look.md)",
+    )
+    r.add_argument(
         "--spp",
         type=int,
         default=None,
-        help="camera samples per pixel; overrides the scene sampler's "
-        "sample_count (default: that count; 16 for the built-in scenes)",
+        help="camera samples per pixel, each with --inner children (default: auto, from "
+        "--samples)",
     )
     r.add_argument("--width", type=int, default=None, help="image width (resizes the scene's film)")
     r.add_argument(
@@ -409,8 +418,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="OIDN with albedo/normal guides: on the expectation before the style (first_hit), or "
         "on the final image; auto (the default, or $STYLETRACE_DENOISE): expectation where it "
-        "applies, with the firefly control and the scene's samples spent on children; off: the "
-        "paper's estimators exactly (docs/denoise.md, docs/look.md)",
+        "applies, with the firefly control; off: the paper's estimators exactly "
+        "(docs/denoise.md, docs/look.md)",
     )
     r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
                    help="OIDN's filter quality with --denoise (default: high)")

@@ -39,7 +39,7 @@ def job_of(
     """The job of `styletrace render`.
 
     Args:
-        args: its parsed arguments (size, spp, seed, pass split, setting flags).
+        args: its parsed arguments (size, samples, spp, seed, pass split, setting flags).
         params: the `--set` values. defines: the `-D` values, or None.
         scene: one of several scene arguments (None: `args.scene`, its first where a list).
 
@@ -60,6 +60,7 @@ def job_of(
         spp=args.spp,
         seed=args.seed,
         pass_spp=args.pass_spp,
+        samples=getattr(args, "samples", None),
     )
 
 

@@ -107,7 +107,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     if args.orbit is not None and args.frames is None:
         raise UsageError("--orbit needs --frames N (how many frames the rotation is split into)")
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
-                 ("--pass-spp", args.pass_spp))
+                 ("--samples", args.samples), ("--pass-spp", args.pass_spp))
     for scene in scenes:
         check_output(args.output, scene)
     count = args.frames if len(scenes) == 1 else len(scenes)
@@ -137,7 +137,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         specs.append(job.spec.describe())
         del resolved
     settings = frame_settings("orbit" if len(scenes) == 1 else "files", specs, values, args.spp,
-                              args.seed, count, args.orbit, lanes, args.pass_spp, variant)
+                              args.seed, count, args.orbit, lanes, args.pass_spp, variant,
+                              args.samples)
     manifest = Manifest(args.output, settings)
     bar = None
     if not args.quiet:

@@ -99,20 +99,25 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str,
 
 
 def frame_settings(kind: str, scenes: list, values: list, spp: int, seed: int, count: int,
-                   orbit: float | None, lanes: int, pass_spp: int | None, variant: str) -> dict:
+                   orbit: float | None, lanes: int, pass_spp: int | None, variant: str,
+                   samples: int | None = None) -> dict:
     """The settings a frames manifest records: what a `--resume` must match.
 
     Args:
         kind: "orbit" or "files". scenes: the scenes' descriptions. values: their integrator values.
         spp, seed, count, orbit: samples per pixel, seed, frames, turn (degrees; None for files).
         lanes, pass_spp, variant: camera samples per pass, samples per pixel of a pass, the variant.
+        samples: the paths per pixel given (`--samples`), or None.
 
     Returns:
-        The settings, a dict.
+        The settings, a dict (`samples` only where given: manifests written before it resume).
     """
-    return {"kind": kind, "scenes": scenes, "integrators": values, "spp": spp, "seed": seed,
-            "frames": count, "orbit": orbit, "lanes_per_pass": lanes, "pass_spp": pass_spp,
-            "variant": variant}
+    settings = {"kind": kind, "scenes": scenes, "integrators": values, "spp": spp, "seed": seed,
+                "frames": count, "orbit": orbit, "lanes_per_pass": lanes, "pass_spp": pass_spp,
+                "variant": variant}
+    if samples is not None:  # the split it makes is in the integrators' values only where n moved
+        settings["samples"] = samples
+    return settings
 
 
 __all__ = ["render_frames", "Manifest", "frame_settings"]
