@@ -110,7 +110,8 @@ def cmd_preview(args, parse_set) -> int:
     """`styletrace preview`: serve the preview page until Ctrl-C.
 
     Args:
-        args: the parsed arguments (scene, port, style, set, inner, spp, width, height).
+        args: the parsed arguments (scene, port, style, set, samples, inner, spp, width,
+            height).
         parse_set: the command line's --set parser.
 
     Returns:
@@ -123,10 +124,12 @@ def cmd_preview(args, parse_set) -> int:
     if not 0 <= args.port < 65536:
         raise UsageError(f"bad value {args.port} for --port: expected 0..65535")
     from styletrace.pipeline.job import check_counts
-    check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp))
+    check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
+                 ("--samples", args.samples), ("--inner", args.inner))
     from styletrace.preview.server import serve
     return serve(args.scene, style=args.style, inner=args.inner, spp=args.spp, width=args.width,
-                 height=args.height, port=args.port, params=params, open_browser=False)
+                 height=args.height, port=args.port, params=params, open_browser=False,
+                 samples=args.samples)
 
 
 def add_parsers(sub, parse_set, check_output) -> None:
@@ -193,10 +196,18 @@ def add_parsers(sub, parse_set, check_output) -> None:
     p.add_argument(
         "--set", action="append", default=[], metavar="KEY=VALUE", help="a starting style parameter"
     )
-    p.add_argument("--inner", type=int, default=None, help="children per camera sample (default 8)")
     p.add_argument(
-        "--spp", type=int, default=None, help="camera samples per pixel to refine to (default 16)"
+        "--samples",
+        type=int,
+        default=None,
+        metavar="N",
+        help="paths per pixel to refine to, split into camera samples x children for the starting "
+        "style as `render --samples` (default: the scene's sample count; 16 for built-in scenes)",
     )
+    p.add_argument("--inner", type=int, default=None,
+                   help="children per camera sample (default: from --samples)")
+    p.add_argument("--spp", type=int, default=None,
+                   help="camera samples per pixel to refine to (default: from --samples)")
     p.add_argument("--width", type=int, default=None, help="image width (default 256)")
     p.add_argument("--height", type=int, default=None, help="image height (default 256)")
     p.set_defaults(func=partial(cmd_preview, parse_set=parse_set))

@@ -200,11 +200,13 @@ def serve(
     port: int = 8765,
     params: dict | None = None,
     open_browser: bool = False,
+    samples: int | None = None,
 ) -> int:
     """Run the preview server on 127.0.0.1 until Ctrl-C; prints the page's URL once it listens.
 
     Args:
-        scene, inner, spp, width, height: the session's (`preview.session.Session`).
+        scene, samples, inner, spp, width, height: the session's (`preview.session.Session`; the
+            samples are split for `style`).
         style, params: what the page starts with. port: the port (0: a free one).
         open_browser: not used (the URL is printed).
 
@@ -225,7 +227,8 @@ def serve(
             f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
             f"preview's buffer keeps only their mean"
         )
-    session = Session(scene, inner=inner, spp=spp, width=width, height=height)
+    session = Session(scene, inner=inner, spp=spp, width=width, height=height, samples=samples,
+                      style=style)
     app = make_app(session)
     session.initial = {"style": style, "params": params or {}}
     config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")

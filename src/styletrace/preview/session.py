@@ -1,13 +1,15 @@
 """One preview session: a scene, a growing expectation buffer rendered in the background, restyles
 of it.
 
-    s = Session("cornell-box", inner=8, spp=16).start()     # the background thread records
-    image, spp, n = s.restyle("cel", None, {})               # the buffer so far, restyled
+    s = Session("cornell-box", samples=64).start()   # the background thread records
+    image, spp, n = s.restyle("cel", None, {})        # the buffer so far, restyled
 
 A background thread takes the passes of two pipeline runs (`pipeline.runner.Runner`, in process,
 one pass = the whole film at 1 spp): first the **draft** (1 spp, one child per camera sample,
 denoised where it can: `denoise.draft`), shown until the first full pass is done; then the full
 passes (the `identity` style, n children; recorded, with D attached where the default denoises).
+The samples (paths per pixel; default the scene's) are split into spp x n by the render's rule
+(`pipeline.budget.split`) for the style the page starts with; a given spp or inner wins.
 Dr.Jit work of both threads runs under one lock, `jit`. Design: docs/design/preview_session.md.
 """
 from __future__ import annotations
@@ -26,16 +28,20 @@ from styletrace.errors import UsageError
 from styletrace.lookdev.buffer import MAX_SAMPLES, Buffer, bytes_per_sample
 from styletrace.lookdev.record import Recorded, scene_label
 from styletrace.lookdev.restyle import restyle
+from styletrace.pipeline.budget import Request, split
 from styletrace.pipeline.execute import InProcess
 from styletrace.pipeline.job import Job
 from styletrace.pipeline.resolve import resolve
 from styletrace.pipeline.runner import Runner
-from styletrace.scene.loading import first_line, load_scene
+from styletrace.scene.loading import first_line, load_scene, scene_spp
+from styletrace.styles.registry import style_class
 
 #: OIDN's quality on the full passes (the draft's is `denoise.draft.QUALITY`)
 FULL_QUALITY = "high"
 
-DEFAULT_SIZE, DEFAULT_SPP, DEFAULT_INNER = 256, 16, 8
+DEFAULT_SIZE = 256
+#: the style the page starts with where the caller names none (its default n sets the split)
+DEFAULT_STYLE = "cel"
 DRAFT_INNER = 1  # children per camera sample of the draft pass
 #: how long the render thread waits, after the draft, for a restyle to show it before the first
 #: full pass takes the lock for about a second (the page polls every 0.3 s; measured: the first
@@ -49,31 +55,42 @@ class Session:
 
     Args:
         scene, width, height, seed: the render's (a built-in scene defaults to DEFAULT_SIZE square).
-        inner, spp: children per camera sample and camera samples per pixel of the full passes.
+        samples: paths per pixel of the full passes (None: the scene's sample count), split into
+            spp x inner by `pipeline.budget.split` for `style`'s default n, within the cap.
+        inner, spp: children per camera sample and camera samples per pixel of the full passes
+            (None: from samples).
+        style: the style the page starts with (its default n splits the samples).
         max_samples: the buffer's cap. denoise: auto, expectation or off (`denoise.default`).
 
     Raises:
-        UsageError: over the cap, denoise 'image', or a refusal of a run (one line each)."""
+        UsageError: over the cap, denoise 'image', samples that disagree with spp and inner, or a
+            refusal of a run (one line each)."""
 
     def __init__(self, scene: Any = None, inner: int | None = None, spp: int | None = None,
                  width: int | None = None, height: int | None = None, seed: int = 0,
-                 max_samples: int = MAX_SAMPLES, denoise: str | None = None):
+                 max_samples: int = MAX_SAMPLES, denoise: str | None = None,
+                 samples: int | None = None, style: str = DEFAULT_STYLE):
         self.label = scene_label(scene)
         builtin = isinstance(scene, str) and not scene.lower().endswith(".xml") or scene is None
         w = width or (DEFAULT_SIZE if builtin else None)
         h = height or (DEFAULT_SIZE if builtin else None)
         self.size = (w, h)
-        self.inner = int(inner or DEFAULT_INNER)
-        self.spp = int(spp or DEFAULT_SPP)
         self.seed = seed
         self.max_samples = max_samples
+        self.scene = load_scene(scene, w, h)
+        film = self.scene.sensors()[0].film().crop_size()
+        self.width, self.height = int(film[0]), int(film[1])
+        # the render's rule, for the style the page starts with: its n is what restyles see; an
+        # auto spp stays within the buffer's cap
+        request = Request(scene_spp(self.scene) if samples is None else int(samples), spp,
+                          None if inner is None else (int(inner),),
+                          style_class(style).default_inner, samples_given=samples is not None)
+        self.budget = split(request, max(1, max_samples // (self.width * self.height)))
+        self.inner, self.spp = int(self.budget.inner[0]), self.budget.spp
         # the render pipeline's scene and integrator: the scene's own max_depth, rr_depth and
         # hide_emitters kept; one pass is the whole film at 1 spp
         job = Job(scene=scene, width=w, height=h, spp=self.spp, seed=seed,
                   given={"style": "identity", "inner_samples": self.inner})
-        self.scene = load_scene(scene, w, h)
-        film = self.scene.sensors()[0].film().crop_size()
-        self.width, self.height = int(film[0]), int(film[1])
         self.job = job.with_(lanes_per_pass=self.width * self.height)
         resolved = resolve(self.job, self.scene)
         if self.width * self.height * self.spp > max_samples:
