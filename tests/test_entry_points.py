@@ -227,3 +227,38 @@ def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
     assert np.array_equal(np.array(mi.Bitmap(str(out)))[..., :3], image)
     from styletrace.preview.session import Session
     assert Session(files[0], inner=INNER, spp=2).denoised
+
+
+def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
+    """`samples` (paths per pixel; default the scene's sample count, 4 in this file) is split once
+    (`pipeline.budget`) for every front end: cel's 16 children at 32 samples make 2 camera samples,
+    the file's 4 one camera sample of 4 children. The command line names the split on its line of
+    auto values and records it in its buffer (`render --buffer`), `styletrace.render` runs it (the
+    job its runner gets), `render_buffer` records it and the preview's session takes it. Blender's
+    F12: tests/blender/test_samples.py."""
+    from styletrace.pipeline import execute
+    from styletrace.preview.session import Session
+    ran = []
+    run = execute.run_resolved
+    monkeypatch.setattr(execute, "run_resolved", lambda r, *a: ran.append(r) or run(r, *a))
+    cli = [sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3", "--style", "cel",
+           "--seed", str(SEED), "--denoise", "off"]
+    for samples, (spp, n) in ((32, (2, 16)), (None, (1, 4))):
+        flag = [] if samples is None else ["--samples", str(samples)]
+        npz = tmp_path / f"{samples}.npz"
+        r = subprocess.run(cli + flag + ["--buffer", str(npz), "-o", str(tmp_path / "o.exr")],
+                           capture_output=True, text=True, env=child_env(), timeout=300)
+        assert r.returncode == 0, r.stderr
+        assert f"auto values: samples={samples or 4}: spp={spp} x {n} children; " in r.stderr
+        recorded = styletrace.load_buffer(str(npz))
+        assert (recorded.spp, recorded.header["slots"][0]["inner"]) == (spp, n)
+        given = {} if samples is None else {"samples": samples}
+        totals = []
+        styletrace.render(files[0], style="cel", seed=SEED, defines={"depth": "3"},
+                          callback=lambda p: totals.append(p.spp_total), **given)
+        assert set(totals) == {spp} and int(ran.pop().integrator.settings.slot.n(0)) == n
+        buf = styletrace.render_buffer(files[0], style="cel", seed=SEED, defines={"depth": "3"},
+                                       **given)
+        assert (buf.spp, buf.header["slots"][0]["inner"]) == (spp, n)
+        session = Session(files[0], **given)  # its page starts with cel
+        assert (session.spp, session.inner) == (spp, n)
