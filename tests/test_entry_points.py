@@ -241,8 +241,8 @@ def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
     ran = []
     run = execute.run_resolved
     monkeypatch.setattr(execute, "run_resolved", lambda r, *a: ran.append(r) or run(r, *a))
-    cli = [sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3", "--style", "cel",
-           "--seed", str(SEED), "--denoise", "off"]
+    cli = [sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3",
+           "--style", "cel", "--seed", str(SEED), "--denoise", "off"]
     for samples, (spp, n) in ((32, (2, 16)), (None, (1, 4))):
         flag = [] if samples is None else ["--samples", str(samples)]
         npz = tmp_path / f"{samples}.npz"
