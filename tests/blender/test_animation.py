@@ -31,6 +31,7 @@ def moving_scene(still: bool = False):
     s.render.engine = "STYLETRACE"
     st = s.styletrace
     st.spp, st.pass_spp, st.seed, st.style, st.denoise = SPP, PASS_SPP, SEED, "identity", "off"
+    st.inner_samples = "1"  # explicit counts: an F12 with fewer camera samples keeps one child
     return s, cube
 
 

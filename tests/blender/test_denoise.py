@@ -66,7 +66,7 @@ def test_f12_denoises_as_the_command_line(method, tmp_path):
     bpy.context.scene.styletrace.denoise = method
     assert bpy.ops.styletrace.export_xml(filepath=xml) == {"FINISHED"}
     line = operators.command_line(xml, bpy.context.scene.styletrace)  # what the export reports
-    assert line.endswith(f"--spp 8 --seed 11 --pass-spp 4 --denoise {method}"), line
+    assert line.endswith(f"--spp 8 --inner 4 --seed 11 --pass-spp 4 --denoise {method}"), line
     cli = str(tmp_path / "cli.exr")
     run = subprocess.run(
         [

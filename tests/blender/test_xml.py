@@ -29,6 +29,11 @@ def test_exported_xml_renders_the_f12_image(name, tmp_path):
     ]
     xml = str(tmp_path / "scene.xml")
     assert bpy.ops.styletrace.export_xml(filepath=xml) == {"FINISHED"}
+    # the counts the export reports (Samples 16 with Camera samples 8: 8 x 2 children)
+    from styletrace.blender.operators import command_line
+    line = command_line(xml, bpy.context.scene.styletrace)
+    assert f"{xml} --samples 16 --spp 8 --seed 11" in line, line
+    counts = ["--samples", "16", "--spp", "8"]
     text = open(xml).read()
     assert '<integrator type="stylized">' in text and 'type="ply"' in text
     if name == "instanced":
@@ -43,6 +48,7 @@ def test_exported_xml_renders_the_f12_image(name, tmp_path):
             "styletrace",
             "render",
             xml,
+            *counts,
             "--seed",
             "11",
             "--pass-spp",
@@ -71,6 +77,7 @@ def test_exported_xml_renders_the_f12_image(name, tmp_path):
                 "styletrace",
                 "render",
                 xml,
+                *counts,
                 "--seed",
                 "11",
                 "--pass-spp",

@@ -134,7 +134,8 @@ class StyletraceEngine(bpy.types.RenderEngine):
         start = time.perf_counter()
         source = runner.passes()
         prog = None
-        total = -(-st.spp // st.pass_spp)
+        spp = runner.resolved.spp  # Camera samples, or the split of Samples (`f12.sampling`)
+        total = -(-spp // st.pass_spp)
         for k, prog in enumerate(source, start=1):
             self.progress(
                 prog.spp_done / prog.spp_total,
@@ -144,13 +145,13 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self._show(prog.image, w, h)
             if self.stop_requested():
                 break
-        done = dict(spp_done=prog.spp_done if prog else 0, spp_total=st.spp,
+        done = dict(spp_done=prog.spp_done if prog else 0, spp_total=spp,
                     cancelled=self.stop_requested(), seconds=time.perf_counter() - start)
         (PREVIEW if self.is_preview else LAST).update(done)
         # ends Render Animation after this frame (Blender sets its break flag on an error report)
         if self.is_animation and done["cancelled"]:
             self._report({"ERROR"}, animation.stop_message(
-                depsgraph.scene.frame_current, done["spp_done"], st.spp))
+                depsgraph.scene.frame_current, done["spp_done"], spp))
         if prog is None:
             return
         mask = None

@@ -4,9 +4,10 @@ F12.
 The engine (F12), the restyle operator and the XML export all go through here, so that they agree on
 the scene, the style and the pass split: `styletrace render FILE.xml --seed K --pass-spp N` renders
 the image F12 renders with seed K and N samples per pass. F12 is a pipeline run (`run_f12`): a Job
-of the exported scene and the settings' integrator, resolved (auto values pinned), with the finisher
-of its Denoise and Record buffer settings (`denoise.finishers.plan_finisher`: plain, expectation or
-image denoising, the recorded buffer).
+of the exported scene, the settings' integrator and their Samples (split into camera samples x
+children by the pipeline's rule, `pipeline.budget`), resolved (auto values pinned), with the
+finisher of its Denoise and Record buffer settings (`denoise.finishers.plan_finisher`: plain,
+expectation or image denoising, the recorded buffer).
 """
 from __future__ import annotations
 
@@ -41,7 +42,8 @@ def error_passes(settings) -> bool:
 
 
 def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dict:
-    """The scene description of the depsgraph (`exporter.export`) at the settings' sample count.
+    """The scene description of the depsgraph (`exporter.export`), its sampler's sample count the
+    settings' Samples (the budget a command line render of its XML spends).
 
     Args:
         depsgraph: the evaluated depsgraph. settings: the scene's styletrace settings.
@@ -50,7 +52,7 @@ def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dic
     Returns:
         The description.
     """
-    return exporter.export(depsgraph, spp=settings.spp, warn=warn)
+    return exporter.export(depsgraph, spp=settings.samples, warn=warn)
 
 
 def scene(depsgraph, settings, warn: Callable[[str], None] = print):
@@ -86,9 +88,26 @@ def integrator(settings, aovs: bool | None = None, **override):
     return api.make_integrator_from(values)
 
 
+def sampling(settings, integ) -> dict:
+    """The Job's counts of the settings: Samples, and Camera samples where given (0: auto).
+
+    Args:
+        settings: the scene's styletrace settings (samples, spp). integ: the render's integrator
+            (its values name inner_samples where Inner samples, or an override, gives them).
+
+    Returns:
+        {"samples", "spp"}: samples None where spp and the children are both given (they set the
+        cost, as the command line's --spp with --inner; Samples is greyed out then), spp None
+        where 0.
+    """
+    spp = int(settings.spp) or None
+    given = spp is not None and "inner_samples" in getattr(integ, "values", {})
+    return {"samples": None if given else int(settings.samples), "spp": spp}
+
+
 def job(sc, integ, settings):
     """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their
-    sampling (the pass split of `pass_spp`, tiles of the pass loop's own size).
+    sampling (`sampling`; the pass split of `pass_spp`, tiles of the pass loop's own size).
 
     Args:
         sc: the loaded scene. integ: the integrator. settings: the scene's styletrace settings.
@@ -97,8 +116,8 @@ def job(sc, integ, settings):
         The `pipeline.job.Job`.
     """
     from styletrace.pipeline.job import Job
-    return Job(scene=sc, integrator=integ, spp=settings.spp, seed=settings.seed,
-               pass_spp=settings.pass_spp, lanes_per_pass=api.LANES_PER_PASS)
+    return Job(scene=sc, integrator=integ, seed=settings.seed, pass_spp=settings.pass_spp,
+               lanes_per_pass=api.LANES_PER_PASS, **sampling(settings, integ))
 
 
 def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):

@@ -15,8 +15,8 @@ def command_line(path: str, settings) -> str:
     """The `styletrace render` command that renders the F12 image of the exported file.
 
     Args:
-        path: the exported XML file. settings: the scene's styletrace settings (spp, seed, pass
-            split, denoising).
+        path: the exported XML file. settings: the scene's styletrace settings (samples, spp,
+            inner samples, seed, pass split, denoising).
 
     Returns:
         The command line.
@@ -24,10 +24,14 @@ def command_line(path: str, settings) -> str:
     denoise = f" --denoise {settings.denoise}" + (
         "" if settings.denoise == "off" or settings.denoise_quality == "high"
         else f" --denoise-quality {settings.denoise_quality}")
-    # --spp: F12 renders the Samples as camera samples, which the command line's default would spend
-    # on children
+    inner = settings.inner_samples.strip()
+    # F12's counts (`f12.sampling`): Samples, and Camera samples and Inner samples where given;
+    # with both of those, Samples is not used (the command line would refuse three that disagree)
+    counts = "" if settings.spp and inner else f" --samples {settings.samples}"
+    counts += f" --spp {settings.spp}" if settings.spp else ""
+    counts += f" --inner {inner}" if inner else ""
     return (
-        f"styletrace render {path} --spp {settings.spp} --seed {settings.seed} --pass-spp "
+        f"styletrace render {path}{counts} --seed {settings.seed} --pass-spp "
         f"{settings.pass_spp}{denoise}"
     )
 
@@ -43,7 +47,7 @@ class STYLETRACE_OT_export_xml(bpy.types.Operator, ExportHelper):
     def execute(self, context):
         st = context.scene.styletrace
         try:
-            desc = exporter.export(context.evaluated_depsgraph_get(), spp=st.spp,
+            desc = exporter.export(context.evaluated_depsgraph_get(), spp=st.samples,
                                    warn=lambda m: self.report({"WARNING"}, m))
             values = settings_integrator_values(st)
             values["aovs"] = False

@@ -1,6 +1,7 @@
-"""The style panels, drawn from the registries: Render Properties -> styletrace, Material
-Properties -> styletrace style. `layout_rows` lists what a panel shows (the same walk as
-`draw`), so the layout can be checked and documented headless, where Blender draws no UI."""
+"""The style panels, drawn from the registries: Render Properties -> styletrace (and its
+Advanced sampling sub-panel), Material Properties -> styletrace style. `layout_rows` lists what a
+panel shows (the same walk as `draw`), so the layout can be checked and documented headless, where
+Blender draws no UI."""
 from __future__ import annotations
 
 import bpy
@@ -9,7 +10,6 @@ from styletrace.blender.properties import key
 from styletrace.styles import registry
 
 RENDER_ROWS = (
-    "inner_samples",
     "estimator",
     "stylize",
     "stylize_depth",
@@ -17,8 +17,7 @@ RENDER_ROWS = (
     "line_mode",
     "line_types",
     "reuse",
-    "spp",
-    "pass_spp",
+    "samples",
     "max_depth",
     "seed",
     "aovs",
@@ -28,6 +27,8 @@ RENDER_ROWS = (
     "firefly",
     "firefly_k",
 )
+#: the sub-panel Advanced sampling (closed by default): the split of Samples, given by hand
+ADVANCED_ROWS = ("spp", "inner_samples", "pass_spp")
 
 
 def style_rows(settings) -> list[tuple[object, str]]:
@@ -47,12 +48,14 @@ def style_rows(settings) -> list[tuple[object, str]]:
     return rows
 
 
-def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
+def layout_rows(settings, material: bool = False,
+                advanced: bool = False) -> list[tuple[object, str]]:
     """What a panel shows, in order (the same walk as `draw`).
 
     Args:
         settings: the scene's or a material's styletrace settings.
         material: the material panel (its Style this material switch, inner samples, estimator).
+        advanced: the render panel's Advanced sampling sub-panel (ADVANCED_ROWS).
 
     Returns:
         (owner, property name) per row.
@@ -61,21 +64,36 @@ def layout_rows(settings, material: bool = False) -> list[tuple[object, str]]:
         rows = [(settings, "use_style")]
         return rows + (style_rows(settings) + [(settings, "inner_samples"), (settings, "estimator")]
                        if settings.use_style else [])
+    if advanced:
+        return [(settings, name) for name in ADVANCED_ROWS]
     return style_rows(settings) + [(settings, name) for name in RENDER_ROWS]
 
 
-def dump(settings, material: bool = False) -> list[str]:
+def samples_used(settings) -> bool:
+    """Whether Samples sets the render's cost: not where Camera samples and Inner samples are both
+    given (`f12.job`), which the panel shows by greying it out.
+
+    Args:
+        settings: the scene's styletrace settings.
+
+    Returns:
+        False where both are given, else True.
+    """
+    return not (settings.spp and settings.inner_samples.strip())
+
+
+def dump(settings, material: bool = False, advanced: bool = False) -> list[str]:
     """The panel as text, one row each: label, value and Blender property type (docs/blender.md
     shows it next to a screenshot: `bpy` as a module draws no UI).
 
     Args:
-        settings, material: as `layout_rows`'s.
+        settings, material, advanced: as `layout_rows`'s.
 
     Returns:
         The lines.
     """
     lines = []
-    for owner, name in layout_rows(settings, material):
+    for owner, name in layout_rows(settings, material, advanced):
         prop = owner.bl_rna.properties[name]
         value = getattr(owner, name)
         if prop.type == "FLOAT" and getattr(prop, "array_length", 0):
@@ -91,7 +109,12 @@ def dump(settings, material: bool = False) -> list[str]:
 
 def _draw(layout, rows):
     for owner, name in rows:
-        layout.prop(owner, name)
+        if name == "samples" and not samples_used(owner):
+            row = layout.row()
+            row.active = False  # Camera samples and Inner samples set the cost
+            row.prop(owner, name)
+        else:
+            layout.prop(owner, name)
 
 
 class STYLETRACE_PT_render(bpy.types.Panel):
@@ -113,6 +136,24 @@ class STYLETRACE_PT_render(bpy.types.Panel):
             self.layout.operator("styletrace.restyle")
 
 
+class STYLETRACE_PT_render_advanced(bpy.types.Panel):
+    bl_label = "Advanced sampling"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    bl_parent_id = "STYLETRACE_PT_render"
+    bl_options = {"DEFAULT_CLOSED"}
+    COMPAT_ENGINES = {"STYLETRACE"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        _draw(self.layout, layout_rows(context.scene.styletrace, advanced=True))
+
+
 class STYLETRACE_PT_material(bpy.types.Panel):
     bl_label = "styletrace style"
     bl_space_type = "PROPERTIES"
@@ -129,7 +170,7 @@ class STYLETRACE_PT_material(bpy.types.Panel):
         _draw(self.layout, layout_rows(context.material.styletrace, material=True))
 
 
-CLASSES = (STYLETRACE_PT_render, STYLETRACE_PT_material)
+CLASSES = (STYLETRACE_PT_render, STYLETRACE_PT_render_advanced, STYLETRACE_PT_material)
 
 
 def register_panels():

@@ -198,8 +198,19 @@ class SceneSettings(bpy.types.PropertyGroup):
         "color=1,0,0; depth threshold=0.05; normal threshold=0.5'; empty: styletrace's default",
     )
     reuse: bpy.props.EnumProperty(name="Reuse", items=_enum(S.REUSE_MODES), default="off")
+    samples: bpy.props.IntProperty(
+        name="Samples",
+        default=16,
+        min=1,
+        description="paths per pixel, the render's cost whatever the style (as Cycles' Samples): "
+        "split into camera samples x children (`styletrace render --samples`; docs/look.md)",
+    )
     spp: bpy.props.IntProperty(
-        name="Samples", default=16, min=1, description="camera samples per pixel"
+        name="Camera samples",
+        default=0,
+        min=0,
+        description="camera samples per pixel, each with Inner samples children; 0: auto, from "
+        "Samples (with Inner samples given too, the two set the cost and Samples is not used)",
     )
     pass_spp: bpy.props.IntProperty(
         name="Samples per pass",

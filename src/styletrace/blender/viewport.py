@@ -42,7 +42,7 @@ DRAFT_QUALITY = "balanced"
 #: one Dr.Jit user at a time: sessions replaced by a newer one finish their pass under it
 JIT = threading.Lock()
 #: the render settings that are not the style's: a change starts new passes
-PASS_KEYS = ("spp", "seed", "pass_spp")
+PASS_KEYS = ("samples", "spp", "seed", "pass_spp")
 DENOISE_KEYS = ("denoise", "denoise_quality")
 
 
@@ -54,7 +54,8 @@ def snapshot(settings) -> dict:
 
     Returns:
         `style` (the style slot's values, `style_values`), `integrator` (the `stylized`
-        integrator's), `spp`, `seed`, `pass_spp` (ints), `denoise`, `denoise_quality` (strings).
+        integrator's), `samples`, `spp` (0: auto), `seed`, `pass_spp` (ints), `denoise`,
+        `denoise_quality` (strings).
     """
     return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
             **{k: int(getattr(settings, k)) for k in PASS_KEYS},
@@ -170,7 +171,8 @@ class ViewportSession:
     def _job(self, sc, spp: int, pass_spp: int, **override) -> Any:
         values = {**self.values["integrator"], "aovs": False, **override}
         integ = api.make_integrator_from(values)
-        sampling = SimpleNamespace(spp=spp, seed=self.values["seed"], pass_spp=pass_spp)
+        sampling = SimpleNamespace(samples=self.values["samples"], spp=spp,
+                                   seed=self.values["seed"], pass_spp=pass_spp)
         return resolve(f12.job(sc, integ, sampling), scene=sc)
 
     def _run(self) -> None:
@@ -205,7 +207,7 @@ class ViewportSession:
         restyle where it can: the passes' (Denoise off) or the denoised one (expectation)."""
         v = self.values
         plan = dict(method=v["denoise"], quality=v["denoise_quality"], label="<viewport>")
-        if self.size[0] * self.size[1] * v["spp"] <= MAX_SAMPLES:
+        if self.size[0] * self.size[1] * resolved.spp <= MAX_SAMPLES:
             try:
                 return plan_finisher(resolved, keep=self._keep, **plan)[0]
             except StyletraceError:  # not recordable (e.g. its estimator): refused again below
@@ -229,7 +231,7 @@ class ViewportSession:
             self.recorded = isinstance(finisher, Recorded) or (
                 isinstance(finisher, Expectation) and finisher.keep is not None)
             passes = runner.passes()
-        total = -(-v["spp"] // v["pass_spp"])
+        total = -(-runner.resolved.spp // v["pass_spp"])  # spp 0: the split of samples
         self.stats["denoise_s"] = []
         since = 0.0  # seconds of passes since the last denoised image
         for k in range(1, total + 1):
@@ -389,7 +391,7 @@ class Viewport:
 
         Args:
             sensor: a sensor description with its `film` (e.g. `view_sensor`'s, `camera.sensor`'s);
-                its sampler is replaced by one of the settings' spp.
+                its sampler is replaced by one of the settings' samples.
 
         Returns:
             True.
@@ -411,7 +413,7 @@ class Viewport:
         film = self.sensor["film"]
         w, h = film["width"], film["height"]
         sensor = dict(self.sensor, sampler={"type": "independent",
-                                            "sample_count": self.values["spp"]})
+                                            "sample_count": self.values["samples"]})
         # both films' dicts are made now, on the main thread: the sync changes after this call
         desc = {size: self.sync.scene_dict(dict(sensor, film=dict(film, width=size[0],
                                                                    height=size[1])))

@@ -1,0 +1,76 @@
+"""Blender's Samples (issue 36): paths per pixel, split into camera samples x children by the
+pipeline's rule (`pipeline.budget`), as the Python API and the command line split the same scene's
+samples; Camera samples and Inner samples, where given, win; the export reports the counts F12
+uses."""
+import bpy
+import scenes as S
+
+from styletrace.blender import engine, f12, operators, panels
+from styletrace.pipeline.job import python_job
+from styletrace.pipeline.resolve import resolve
+
+
+def split_of(st):
+    """(spp, n) of F12's run with the settings `st`, and the loaded scene (the resolved job of the
+    runner F12 builds: nothing renders)."""
+    sc = f12.scene(bpy.context.evaluated_depsgraph_get(), st)
+    r = f12.run_f12(sc, st, aovs=False)[0].resolved
+    return (r.spp, int(r.integrator.settings.slot.n(0))), sc
+
+
+def test_samples_split_as_every_front_end_splits_them(tmp_path):
+    S.room(16)
+    st = bpy.context.scene.styletrace
+    st.style, st.denoise = "cel", "off"
+    assert (st.samples, st.spp, st.inner_samples) == (16, 0, "")  # Samples 16, the rest auto
+    got, sc = split_of(st)
+    assert got == (1, 16)
+    # the exported sampler counts Samples; the Python API's split of the same scene is F12's
+    from styletrace.scene.loading import scene_spp
+    assert scene_spp(sc) == 16
+    api = resolve(python_job(sc, style="cel"), scene=sc)
+    assert (api.spp, int(api.integrator.settings.slot.n(0))) == got
+    st.samples = 64
+    got, sc = split_of(st)
+    assert got == (4, 16) and scene_spp(sc) == 64
+    api = resolve(python_job(sc, style="cel", samples=64), scene=sc)
+    assert (api.spp, int(api.integrator.settings.slot.n(0))) == got
+    line = operators.command_line("s.xml", st)
+    assert line.startswith("styletrace render s.xml --samples 64 --seed 0 --pass-spp 4"), line
+    # F12 renders the split: its passes' spp (one pass of 4 camera samples)
+    st.samples = 16
+    S.styletrace(str(tmp_path / "f12.exr"), 0, pass_spp=4, style="cel", aovs=False)
+    assert engine.LAST["spp_total"] == 1 and engine.LAST["spp_done"] == 1
+
+
+def test_camera_and_inner_samples_win():
+    S.room(16)
+    st = bpy.context.scene.styletrace
+    st.style, st.denoise, st.samples = "cel", "off", 64
+    st.spp = 4  # Camera samples alone: Samples / 4 children each
+    assert split_of(st)[0] == (4, 16)
+    assert "--samples 64 --spp 4 --seed" in operators.command_line("s.xml", st)
+    st.samples = 16
+    assert split_of(st)[0] == (4, 4)
+    st.spp, st.inner_samples = 0, "8"  # Inner samples alone: Samples / 8 camera samples
+    assert split_of(st)[0] == (2, 8)
+    assert "--samples 16 --inner 8 --seed" in operators.command_line("s.xml", st)
+    assert panels.samples_used(st)
+    st.spp = 3  # both: they set the cost, Samples is not used (3 x 8 != 16 is no refusal)
+    assert split_of(st)[0] == (3, 8) and not panels.samples_used(st)
+    line = operators.command_line("s.xml", st)
+    assert " --spp 3 --inner 8 --seed" in line and "--samples" not in line, line
+
+
+def test_the_advanced_sub_panel_holds_the_split():
+    S.reset(16)
+    st = bpy.context.scene.styletrace
+    main = [name for _, name in panels.layout_rows(st)]
+    assert "samples" in main and not {"spp", "inner_samples", "pass_spp"} & set(main)
+    assert [name for _, name in panels.layout_rows(st, advanced=True)] == [
+        "spp", "inner_samples", "pass_spp"]
+    rna = st.bl_rna.properties
+    assert (rna["samples"].name, rna["samples"].default, rna["samples"].hard_min) == (
+        "Samples", 16, 1)
+    assert (rna["spp"].name, rna["spp"].default, rna["spp"].hard_min) == ("Camera samples", 0, 0)
+    assert panels.dump(st, advanced=True)[0].startswith("Camera samples           0")
