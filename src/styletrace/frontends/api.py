@@ -3,6 +3,7 @@
     import styletrace
     # H x W x 3 float32, linear
     img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)
+    img = styletrace.render("cornell-box", style="cel", samples=64)   # 4 camera samples x 16
 
 `render` is the render pipeline's (`pipeline.execute.render_pipeline`): a `Job` resolved once and
 executed. The building blocks live in `pipeline/` and `scene/` and are re-exported here under
@@ -61,7 +62,8 @@ def render(
     """`styletrace.render`: the render pipeline's; a denoiser finishes it unless denoise is off.
 
     Args:
-        *args, **kw, callback, cluster: as `pipeline.execute.render_pipeline`'s (scene, style, ...).
+        *args, **kw, callback, cluster: as `pipeline.execute.render_pipeline`'s (scene, style,
+            samples, spp, inner, ...).
         denoise: auto, expectation, image or off (None: $STYLETRACE_DENOISE, else auto).
         denoise_quality, coverage, denoise_uncertainty: as `denoise.render_denoised`'s.
 
