@@ -1,11 +1,25 @@
 """Stylization in scenes with participating media: the identity style at recursive and per-object
 vertices equals `volpath`; other styles render (kernel/integrator.py, kernel/volume.py)."""
 import numpy as np
-from helpers.media import INNER, SPP, T, assert_matches_volpath, fog_ball
+from helpers.media import INNER, RES, SPP, T, assert_matches_volpath, fog_ball, lit, sensor
 
 import styletrace  # noqa: F401
 from styletrace.frontends.api import make_integrator, passes
 from styletrace.gate import mi
+
+
+def test_first_hit_in_a_chromatic_medium_matches_volpath():
+    """With first_hit a camera ray's first collision in a medium is a stylized vertex: the walk's
+    throughput there times g's argument, albedo x the in-scattered light, is volpath's weight at
+    the collision. A medium whose extinction differs per channel (free flights in one channel per
+    path) behind a `null` boundary checks the split per channel."""
+    d = lit({"type": "scene", "sensor": sensor(RES),
+             "fog": {"type": "homogeneous", "scale": 4.0,
+                     "sigma_t": {"type": "rgb", "value": [0.125, 0.375, 1.0]},
+                     "albedo": {"type": "rgb", "value": [0.9, 0.6, 0.3]}},
+             "cube": {"type": "cube", "to_world": T().scale(0.8), "bsdf": {"type": "null"},
+                      "interior": {"type": "ref", "id": "fog"}}})
+    assert_matches_volpath(mi.load_dict(d), make_integrator("identity", inner=INNER))
 
 
 def test_first_n_hits_through_media_matches_volpath():
@@ -35,8 +49,8 @@ def test_hidden_emitters_in_a_foggy_scene_match_volpath():
 
 
 def test_a_style_renders_a_scene_with_media():
-    """cel on the fog ball: finite, and not the identity image (the style applies at surface
-    vertices)."""
+    """cel on the fog ball: finite, and not the identity image (the style applies at the glass,
+    the first scattering of every camera ray that meets the ball)."""
     scene = mi.load_dict(fog_ball())
     cel = list(passes(scene, make_integrator("cel", inner=2), SPP, seed=3))[-1].image
     ident = list(passes(scene, make_integrator("identity", inner=2), SPP, seed=3))[-1].image

@@ -6,8 +6,10 @@ At a stylized vertex n children of g's argument are drawn in a nested loop in th
 and handed to the style's estimator. `stylize` chooses the vertices: first_hit, first_n_hits (the
 first `stylize_depth` vertices of every path, recursively) or first_object_hit (the first vertex
 on a styled object, at any depth). Properties (XML, dict, the CLI's --set) are parsed by
-`config.settings`. Escaped rays see the environment unstylized; with `hide_emitters` camera rays
-pass through area lights. Media: volume.py; lines: line_hooks.py; expansion pass: expansion.py.
+`config.settings`. With first_hit a camera ray's first real collision in a medium is stylized
+too (volume.Collision). Escaped rays see the environment unstylized; with `hide_emitters` camera
+rays pass through area lights. Media: volume.py; lines: line_hooks.py; expansion pass:
+expansion.py.
 Design: docs/design/stylized_integrator.md.
 """
 from __future__ import annotations
@@ -36,7 +38,7 @@ from styletrace.kernel.render_context import RenderContext
 from styletrace.kernel.scene_graph import SceneGraph
 from styletrace.kernel.scene_graph import any_ptr as _any_ptr
 from styletrace.kernel.vertex import Site, emission, environment
-from styletrace.kernel.volume import volume_walk
+from styletrace.kernel.volume import collision_site, volume_walk
 from styletrace.styles.base import Vertex
 
 #: Dr.Jit's JitFlag.OptimizeLoops while styletrace traces its kernels (True only to measure what it
@@ -206,7 +208,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         """
         s = self.settings
         if level + 1 >= s.stylize_depth:
-            start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium)
+            start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium,
+                          collision=site.collision)
             return self._walk(sampler, start, active, Hooks(lines=walk_lines(self, level))).L
         if s.stylize == "first_object_hit":
             start = Start(site.pi, site.ray, site.depth, medium=site.medium)
@@ -442,19 +445,27 @@ class StylizedIntegrator(mi.SamplingIntegrator):
                 [],
             )
         if self.media:
-            # the stylized vertex is the first surface that scatters; lanes that scatter in a medium
-            # before reaching it go on as ordinary volumetric paths (volume.py), the others
-            # carry the transmittance
+            # first_hit: the stylized vertex is the first scattering, on a surface or at a real
+            # collision in a medium (volume.Collision: the integrator's style, of albedo x the
+            # in-scattered light), so what is seen in a medium follows g as surfaces do. A
+            # closed-form style reads only the vertex, of which a collision has no normal or
+            # object, and first_n_hits the next surface: there, as before, lanes that scatter in a
+            # medium first go on as ordinary volumetric paths (volume.py). The others carry the
+            # transmittance. Design: docs/design/participating_media.md.
+            s = self.settings
+            in_medium = ((lambda d: d == 0)
+                         if s.stylize == "first_hit" and not s.style.closed_form else None)
             w = self._walk(
                 sampler,
                 Start(pi, ray, 0, medium=medium, flight=True, hide=hide),
                 active,
-                Hooks(stop=lambda si, d: d == 0),
+                Hooks(stop=lambda si, d: d == 0, halt_in_medium=in_medium),
             )
             si = w.pi.compute_surface_interaction(w.ray, ray_flags=mi.RayFlags.All, active=w.halted)
-            value = self.stylized(
-                0, sampler, Site(w.pi, si, w.ray, mi.UInt32(0), w.medium), w.halted
-            )
+            if w.collision is not None:
+                si = collision_site(si, w.collision, w.ray)
+            site = Site(w.pi, si, w.ray, mi.UInt32(0), w.medium, w.collision)
+            value = self.stylized(0, sampler, site, w.halted)
             return self.through(w, value), valid | w.halted | (active & (w.depth > 0)), []
         if self.nulls:  # the stylized vertex is the first that scatters (path.first_scattering)
             front = first_scattering(scene, sampler, pi, ray, active)

@@ -45,12 +45,15 @@ class Hooks:
 
     stop: stop(si, depth) -> Bool, lanes that halt at si; skip_emitter: skip_emitter(ds) -> Bool,
     lights that next-event estimation leaves out; lines: (lines.Lines, lines.LineState at the start
-    vertex); tone: anchors.ToneState at the start vertex.
+    vertex); tone: anchors.ToneState at the start vertex. Volume walks only: halt_in_medium:
+    halt_in_medium(depth) -> Bool, lanes that halt at a real scattering collision in a medium
+    (the Walk's `collision`).
     """
     stop: Optional[Callable] = None
     skip_emitter: Optional[Callable] = None
     lines: Optional[tuple] = None
     tone: Optional[Any] = None
+    halt_in_medium: Optional[Callable] = None
 
 
 NO_HOOKS = Hooks()
@@ -77,6 +80,7 @@ class Start:
     flight: bool = False
     delta: bool = False
     hide: bool = False
+    collision: Optional[Any] = None
 
 
 @dataclass
@@ -167,6 +171,8 @@ class Walk:
     # MediumPtr: the medium each lane stands in (volume.py's walk only)
     medium: Any = None
     tone: Optional[Any] = None      # anchors.ToneState at the halting vertex (where tone is on)
+    # volume.Collision: lanes halted in a medium rather than at `pi` (Hooks.halt_in_medium only)
+    collision: Optional[Any] = None
 
 
 def exitant(cfg: WalkConfig, sampler, start: Start, active: mi.Bool) -> mi.Spectrum:

@@ -13,12 +13,15 @@ from styletrace.gate import dr, mi
 @dataclass
 class Site:
     """A stylized vertex: its preliminary and full intersection, the ray that reached it, its depth,
-    and the medium on the side that ray came from (None: vacuum, or a scene without media)."""
+    the medium on the side that ray came from (None: vacuum, or a scene without media), and the
+    volume.Collision of lanes whose vertex is in that medium instead (None: none can be; their si
+    is then `volume.collision_site`'s)."""
     pi: mi.PreliminaryIntersection3f
     si: mi.SurfaceInteraction3f
     ray: mi.Ray3f
     depth: Any
     medium: Any = None
+    collision: Any = None
 
 
 def mis_power(pdf_a: mi.Float, pdf_b: mi.Float) -> mi.Float:

@@ -7,9 +7,12 @@ through media.
 Mitsuba's `volpath` estimator: delta tracking from the medium's majorant in one hero colour
 channel per path, next-event estimation with ratio-tracked transmittance through media and null
 surfaces, MIS against phase and BSDF sampling; depth counts real scatterings. `volume_walk` has
-path.walk's signature; a stylized vertex is always a surface one. `Start.flight`: sample the
-medium along the first ray; `Start.delta`: the start vertex samples delta lights only;
-`Start.hide`: no emission before the first scattering. Design: docs/design/participating_media.md.
+path.walk's signature. A stylized vertex is a surface one, or with `Hooks.halt_in_medium` the
+first real collision in a medium (`Collision`: g's argument there is albedo x in-scattered
+radiance). `Start.flight`: sample the medium along the first ray; `Start.delta`: the start vertex
+samples delta lights only; `Start.hide`: no emission before the first scattering;
+`Start.collision`: its lanes start by scattering at that collision. Design:
+docs/design/participating_media.md.
 """
 from __future__ import annotations
 
@@ -73,6 +76,54 @@ def medium_vertex(mei: mi.MediumInteraction3f) -> mi.Interaction3f:
         mi.Interaction3f.
     """
     return mi.Interaction3f(t=mei.t, time=mei.time, wavelengths=mei.wavelengths, p=mei.p)
+
+
+@dataclass
+class Collision:
+    """A stylized vertex in a medium (a Dr.Jit PyTree): the real collision a walk halted at.
+
+    inside: the lanes whose vertex it is (the others stand at a surface or none); mei: the
+    collision; albedo: sigma_s / sigma_t there per channel (0 where sigma_t is), the share of the
+    in-scattered radiance the collision sends on. The halted walk's throughput times albedo is
+    volpath's weight at the collision, so g sees a radiance, as at a surface.
+    """
+    inside: mi.Bool
+    mei: mi.MediumInteraction3f
+    albedo: mi.Spectrum
+
+
+def no_collision(width: int) -> Collision:
+    """A Collision with no lane inside.
+
+    Args:
+        width: the number of lanes.
+
+    Returns:
+        Collision.
+    """
+    return Collision(inside=dr.zeros(mi.Bool, width), mei=dr.zeros(mi.MediumInteraction3f, width),
+                     albedo=dr.zeros(mi.Spectrum, width))
+
+
+def collision_site(si: mi.SurfaceInteraction3f, collision: Collision,
+                   ray: mi.Ray3f) -> mi.SurfaceInteraction3f:
+    """The interaction a style reads at a stylized vertex: si at surfaces, at a collision in a
+    medium one of no shape (no BSDF, no emitter) at the collision's point and time, its normal
+    towards where the ray came from.
+
+    Args:
+        si: the surface interactions. collision: the Collision. ray: the ray that reached them.
+
+    Returns:
+        mi.SurfaceInteraction3f.
+    """
+    m = collision.mei
+    at = dr.zeros(mi.SurfaceInteraction3f, dr.width(ray.d))
+    at.t, at.time, at.wavelengths, at.p = m.t, m.time, m.wavelengths, m.p
+    at.n = mi.Normal3f(-ray.d)
+    at.sh_frame = mi.Frame3f(-ray.d)
+    at.wi = mi.Vector3f(0.0, 0.0, 1.0)
+    return dr.select(collision.inside, at, si)
 
 
 @dataclass
@@ -149,6 +200,7 @@ class VolumeState:
     first: mi.Bool                       # at the starting vertex
     lines: Optional[Any] = None          # lines.LineState where feature lines are on
     tone: Optional[Any] = None           # anchors.ToneState where a style reads image coordinates
+    collision: Optional[Any] = None      # Collision where the walk halts in media
 
 
 def volume_walk(
@@ -166,6 +218,7 @@ def volume_walk(
     """
     scene, emitters, nulls, rr_depth = cfg.scene, cfg.emitters, cfg.nulls, cfg.rr_depth
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
+    halt_in_medium, start_at = hooks.halt_in_medium, start.collision
     opaque_start, delta_start, hide_first = start.opaque, start.delta, start.hide
     ctx, pctx = mi.BSDFContext(), mi.PhaseFunctionContext(None)
     limit = depth_limit(cfg.max_depth)
@@ -189,21 +242,31 @@ def volume_walk(
         first=mi.Bool(True),
         lines=None if lines is None else lines[1],
         tone=tone,
+        collision=None if halt_in_medium is None else no_collision(dr.width(start.ray.d)),
     )
 
     def body(s: VolumeState):
+        # lanes that start at a collision scatter there first, with no flight before it
+        forced = None if start_at is None else s.first & s.active & start_at.inside
         # ---- the medium between the ray's origin and the surface `pi` (volpath's delta tracking)
         in_med = s.active & s.flight & (s.medium != None)  # noqa: E711
+        if forced is not None:
+            in_med &= ~forced
         mei = s.medium.sample_interaction(s.ray, s.sampler.next_1d(in_med), channel, in_med)
         t_surf = dr.select(s.pi.is_valid(), s.pi.t, dr.inf)
         mei.t = dr.select(mei.t > t_surf, dr.inf, mei.t)
         s.beta *= free_flight_weight(s.medium, mei, t_surf, channel, in_med)
         real = in_med & mei.is_valid()
+        if forced is not None:
+            mei = dr.select(forced, start_at.mei, mei)
+            real |= forced
         majorant_c, sigma_t_c = (
             channel_of(mei.combined_extinction, channel),
             channel_of(mei.sigma_t, channel),
         )
         null_coll = real & (s.sampler.next_1d(real) >= sigma_t_c / majorant_c)
+        if forced is not None:
+            null_coll &= ~forced
         sigma_n_c = channel_of(mei.sigma_n, channel)
         s.beta *= dr.select(
             null_coll, dr.select(sigma_n_c > 0, mei.sigma_n * majorant_c / sigma_n_c, 0.0), 1.0
@@ -212,6 +275,23 @@ def volume_walk(
         depth_m = s.depth + 1
         scat &= depth_m < limit                  # a collision past the last depth ends the path
         beta_m = s.beta * dr.select(sigma_t_c > 0, mei.sigma_s * majorant_c / sigma_t_c, 0.0)
+        if forced is not None:  # the halted walk's weight times albedo was beta_m (Collision)
+            beta_m = dr.select(forced, s.beta * start_at.albedo, beta_m)
+        halt_m = None
+        if halt_in_medium is not None:
+            halt_m = scat & halt_in_medium(s.depth)
+            scat &= ~halt_m
+            s.halted |= halt_m
+            # beta_m = weight x albedo: the weight is the throughput, the albedo goes inside g
+            weight_m = s.beta * dr.select(sigma_t_c > 0, majorant_c * mei.sigma_t / sigma_t_c, 0.0)
+            c = s.collision
+            s.collision = Collision(
+                inside=c.inside | halt_m,
+                mei=dr.select(halt_m, mei, c.mei),
+                albedo=dr.select(
+                    halt_m, dr.select(mei.sigma_t > 0, mei.sigma_s / mei.sigma_t, 0.0), c.albedo
+                ),
+            )
         it_m = medium_vertex(mei)
 
         # ---- the surface, for lanes whose flight reached it (or that travel in no medium)
@@ -322,7 +402,8 @@ def volume_walk(
         pi_moved.t = s.pi.t - mei.t
         s.pi = dr.select(go, pi_next, dr.select(null_coll, pi_moved, s.pi))
         s.ray = dr.select(go, ray_next, dr.select(null_coll, moved, s.ray))
-        s.beta = dr.select(go, beta_next, s.beta)
+        s.beta = dr.select(go, beta_next, s.beta if halt_m is None
+                           else dr.select(halt_m, weight_m, s.beta))
         s.depth = dr.select(go, depth_next, s.depth)
         s.flight = mi.Bool(True)
         s.first = mi.Bool(False)
@@ -331,7 +412,8 @@ def volume_walk(
 
     (out,) = dr.while_loop((state,), lambda s: s.active, body, label="styletrace volumetric path")
     # as at the end of path.walk: a sample that is not finite is dropped
-    return finished(out, medium=out.medium, lines=out.lines, tone=out.tone)
+    return finished(out, medium=out.medium, lines=out.lines, tone=out.tone,
+                    collision=out.collision)
 
 
 def scattered_in_medium(tone: ToneState, active: mi.Bool) -> ToneState:
