@@ -154,6 +154,22 @@ def test_the_pilot_sees_through_participating_media():
     assert np.isfinite(foggy) and 0 < foggy < clear / 3, (foggy, clear)
 
 
+def test_the_pilot_covers_what_the_camera_sees_in_a_fog():
+    """The camera stands in a fog that fills the scene (helpers.media.foggy_room: a ball on a floor,
+    nothing above the horizon): with first_hit a camera ray's first collision in the fog is a
+    stylized vertex (kernel/integrator.py), so the pilot counts every ray that scatters in the fog
+    as what the style covers, at the collision's depth. Rays above the horizon meet no surface:
+    when the pilot counted surfaces only, they were left out."""
+    from helpers.media import foggy_room
+
+    from styletrace.scene.defaults import ScenePilot
+    scene = load_scene(foggy_room(RES))
+    samples = ScenePilot(scene, make_integrator(style="gamma").settings).samples
+    assert (samples["owner"] == 0).all()
+    # the sky's rays scatter within a few free paths (1 / 0.25 = 4 units): their depth is finite
+    assert np.isfinite(samples["depth"]).all() and np.median(samples["depth"]) < 12
+
+
 def test_a_composition_resolves_under_an_orthographic_camera():
     """Under an orthographic sensor every ray has the same direction, which Mitsuba returns as an
     array of width 1; the pilot's per-sample view directions (read by a composition's later

@@ -24,14 +24,14 @@ from styletrace.gate import dr, mi
 from styletrace.jit import no_collection
 from styletrace.kernel.emitter_sampler import EmitterSampler
 from styletrace.kernel.integrator import StylizedIntegrator
-from styletrace.kernel.path import Start, WalkConfig, exitant
+from styletrace.kernel.path import Hooks, Start, WalkConfig, exitant
 from styletrace.kernel.scene_graph import SceneGraph
 from styletrace.kernel.styled_bsdf import StyledBSDF
-from styletrace.kernel.volume import volume_walk
+from styletrace.kernel.volume import collision_site, volume_walk
 from styletrace.styles.base import Camera, Style, Vertex, camera, lanes
 
 #: the settings the pilot's trace reads (`ScenePilot._trace`)
-PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling")
+PILOT_SETTINGS = ("max_depth", "rr_depth", "emitter_sampling", "stylize")
 #: cells of the pilot grid along the film's longer side, and camera samples per cell
 PILOT_CELLS = 32
 PILOT_SPP = 16
@@ -124,9 +124,13 @@ class ScenePilot:
         emitters = EmitterSampler(scene, self.settings.emitter_sampling)
         cfg = WalkConfig(scene, emitters, self.settings.max_depth, self.settings.rr_depth,
                          nulls=graph.has_null, media=graph.has_media)
+        inside = None
         if graph.has_media:
             start = Start(pi, ray, medium=sensor.get_medium(), flight=True)
-            L = volume_walk(cfg, sampler, start, mi.Bool(True)).L
+            if self.settings.stylize == "first_hit":
+                L, si, inside = first_scattering_radiance(cfg, sampler, start, si)
+            else:
+                L = volume_walk(cfg, sampler, start, mi.Bool(True)).L
         else:
             L = exitant(cfg, sampler, Start(pi, ray), mi.Bool(True))
         cam = camera(scene)
@@ -140,6 +144,8 @@ class ScenePilot:
         for k, (_, pointers, _) in enumerate(graph.styled, start=1):
             for ptr in pointers:
                 owner[np.array(si.bsdf() == mi.BSDFPtr(ptr), dtype=bool) & hit] = k
+        if inside is not None:  # a collision in a medium takes the integrator's style
+            owner[np.array(inside, dtype=bool)] = 0
         n_sh = dr.normalize(si.sh_frame.n)
         return {
             "cell": cell,
@@ -150,6 +156,28 @@ class ScenePilot:
             "n": np.array(n_sh).T,
             "wo": -lanes(ray.d, n).T,
         }
+
+
+def first_scattering_radiance(cfg: WalkConfig, sampler, start: Start,
+                              si: mi.SurfaceInteraction3f):
+    """One radiance sample per camera ray, split where the integrator's first_hit stylizes: the walk
+    to the first scattering (a surface, or a collision in a medium), then one path from there.
+
+    Args:
+        cfg, sampler: the pilot's WalkConfig and random stream. start: the camera rays' Start.
+        si: the camera rays' first surface interactions.
+
+    Returns:
+        (radiance (mi.Spectrum), the interaction of the first scattering vertex (si, or
+        `volume.collision_site`'s where that is in a medium), the lanes whose vertex is in a
+        medium (mi.Bool)).
+    """
+    active = mi.Bool(True)
+    w = volume_walk(cfg, sampler, start, active,
+                    Hooks(stop=lambda s, d: d == 0, halt_in_medium=lambda d: d == 0))
+    child = Start(w.pi, w.ray, w.depth, opaque=True, medium=w.medium, collision=w.collision)
+    L = w.L + dr.select(w.halted, w.beta * volume_walk(cfg, sampler, child, w.halted).L, 0.0)
+    return L, collision_site(si, w.collision, start.ray), w.collision.inside
 
 
 def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
