@@ -1,4 +1,6 @@
-"""The buffer file: round trip, version field, atomic writes, one-line errors."""
+"""The buffer file: round trip, version field, atomic writes, one-line errors; in memory, a recorded
+buffer's arrays stay where the kernel wrote them until read (the same numbers then), and a copy of
+the arrays is a copy of the names only."""
 import json
 import os
 
@@ -7,7 +9,7 @@ import pytest
 
 import styletrace
 from styletrace.errors import UsageError
-from styletrace.lookdev.buffer import VERSION, bytes_per_sample, load_buffer
+from styletrace.lookdev.buffer import VERSION, Arrays, bytes_per_sample, load_buffer
 from styletrace.lookdev.record import render_buffer
 from styletrace.lookdev.restyle import restyle
 
@@ -72,3 +74,28 @@ def test_a_saved_buffer_keeps_its_pilot_and_camera(buf, tmp_path):
     )
     for style in ("cel", "hatching"):
         np.testing.assert_array_equal(restyle(back, style=style), restyle(buf, style=style))
+
+
+def test_recorded_arrays_stay_on_the_device_until_read():
+    b = render_buffer("cornell-box", style="cel", spp=2, inner=2, seed=1, width=8, height=6,
+                      pass_spp=1)
+    a = b.arrays
+    assert not a.on_host("p") and a.length("p") == b.samples == 8 * 6 * 2
+    assert len(a.parts("p")) == 2  # one per pass
+    nbytes = b.nbytes
+    p = a["p"]  # read: joined on the host once
+    assert p.shape == (3, b.samples) and p.dtype == np.float32 and a.on_host("p")
+    assert a["p"] is p and b.nbytes == nbytes
+    np.testing.assert_array_equal(p, np.concatenate([np.asarray(x) for x in a.parts("p")], -1))
+    assert a["slot"].dtype == np.int8 and a["pixel"].dtype == np.uint32
+
+
+def test_a_copy_shares_the_arrays_not_the_names():
+    a = Arrays({"x": np.arange(3.0)})
+    a.append("x", np.arange(2.0))
+    b = a.copy()
+    b["y"] = np.zeros(5)
+    del b["x"]
+    assert list(a) == ["x"] and list(b) == ["y"]
+    np.testing.assert_array_equal(a["x"], [0, 1, 2, 0, 1])
+    assert len(a.parts("x")) == 1  # host parts joined once, not kept twice

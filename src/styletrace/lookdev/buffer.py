@@ -4,9 +4,10 @@ Two kinds (`header["stores"]`): "mean" (`direct`, `affine`: value = L_before + b
 vertex)) and "sequence" (the unbiased estimators: the children and uniforms in call order,
 `lookdev.sequence`). Arrays per camera sample: pixel, slot, p, n, wo, mean, L_before, beta, depth,
 plus pos and own for a non-box filter, or seq_count, seq_kind, child and uniform for a sequence
-buffer; the header keeps the passes, tiles, filter and the sensor's to-world matrix. Files are
-`.npz`, written atomically. Sizes: `bytes_per_sample` (65 bytes for first_hit); caps `MAX_SAMPLES`,
-`MAX_SEQUENCE_SAMPLES`, `MAX_EVENTS_PER_SAMPLE`. Layout in full: docs/lookdev.md and
+buffer; the header keeps the passes, tiles, filter and the sensor's to-world matrix. In memory the
+arrays are an `Arrays`: Dr.Jit arrays where the recording kernel wrote them, numpy once read. Files
+are `.npz`, written atomically. Sizes: `bytes_per_sample` (65 bytes for first_hit); caps
+`MAX_SAMPLES`, `MAX_SEQUENCE_SAMPLES`, `MAX_EVENTS_PER_SAMPLE`. Layout in full: docs/lookdev.md and
 docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
@@ -14,8 +15,9 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+from collections.abc import MutableMapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
@@ -85,25 +87,198 @@ def filtered(header: dict) -> bool:
 #: a denoised buffer's relative uncertainty of D per sample (float32 (N,)): restyles average g over
 #: it (`lookdev.restyle.finish_spread`, docs/denoise.md)
 SPREAD = "denoise_spread"
+#: a denoised buffer's D at each camera sample (float32 (3, N), in place of `mean` when restyling;
+#: `denoise.expectation.attach` with k = 0)
+DENOISED = "denoised_mean"
 
 #: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.ScenePilot.samples`),
 #: so that a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
 PILOT = "pilot_"
 
 
+#: the host dtype of each array that is not float32 (a Dr.Jit part is converted to it)
+HOST_DTYPES = {**SCALAR, "seq_count": np.uint32, "seq_kind": np.uint8}
+
+
+def _part_length(part) -> int:
+    """The samples (last axis) of one part, numpy or Dr.Jit (whose `shape` ends in its width)."""
+    return int(part.shape[-1])
+
+
+def _part_nbytes(key: str, part) -> int:
+    if isinstance(part, np.ndarray):
+        return int(part.nbytes)
+    rows = int(np.prod(part.shape[:-1], dtype=np.int64)) if len(part.shape) > 1 else 1
+    return rows * _part_length(part) * np.dtype(HOST_DTYPES.get(key, np.float32)).itemsize
+
+
+def host_array(key: str, part) -> np.ndarray:
+    """One part of a buffer's array as numpy, in the dtype the buffer stores it in.
+
+    Args:
+        key: the array's name (its dtype: HOST_DTYPES, else float32).
+        part: a numpy array (returned as it is) or a Dr.Jit array: a scalar type (N,) or a vector
+            type (2 or 3 rows, N).
+
+    Returns:
+        The numpy array, (N,) or (rows, N); a Dr.Jit part is copied (never a view of the device's
+        memory, which a write on the host would change).
+    """
+    if isinstance(part, np.ndarray):
+        return part
+    dtype = HOST_DTYPES.get(key, np.float32)
+    out = np.asarray(part)
+    # a vector type's rows are gathered into a new array already; a scalar type's is a view of the
+    # device's memory: copied (np.array(part, copy=True) costs 5-50x more for a vector type)
+    return out.astype(dtype) if out.ndim == 1 else np.asarray(out, dtype=dtype)
+
+
+class Arrays(MutableMapping):
+    """A buffer's per-sample arrays by name: numpy arrays on the host, each joined on first read.
+
+    An array is kept as the parts it was appended in, pass by pass (`Buffer.append`): numpy arrays,
+    or Dr.Jit arrays where the kernel that wrote them left them (`lookdev.record`). Reading an array
+    (`arrays[k]`, `items()`, `np.savez(**arrays)`) joins its parts on the host once and keeps the
+    result; `parts(k)` gives them as they are, for `lookdev.restyle`'s Dr.Jit copies, so a buffer
+    that is only restyled (the denoiser's coverage points) is never copied to the host. Why: at 4M
+    samples the host copies cost a second or more (issue 36; docs/design/expectation_buffer.md).
+
+    Args:
+        arrays: the initial arrays by name (numpy or Dr.Jit), one part each; None: empty.
+    """
+
+    def __init__(self, arrays: dict[str, Any] | None = None):
+        self._parts: dict[str, list] = {}
+        self._host: dict[str, np.ndarray] = {}
+        for k, v in (arrays or {}).items():
+            self[k] = v
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key not in self._host:
+            parts = [host_array(key, p) for p in self._parts[key]]
+            joined = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
+            self._host[key] = joined
+            if all(isinstance(p, np.ndarray) for p in self._parts[key]):
+                self._parts[key] = [joined]  # host parts are not kept twice
+        return self._host[key]
+
+    def __setitem__(self, key: str, value) -> None:
+        self._parts[key] = [value]
+        if isinstance(value, np.ndarray):
+            self._host[key] = value
+        else:
+            self._host.pop(key, None)
+
+    def __delitem__(self, key: str) -> None:
+        del self._parts[key]
+        self._host.pop(key, None)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(list(self._parts))
+
+    def __len__(self) -> int:
+        return len(self._parts)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._parts
+
+    def append(self, key: str, value) -> None:
+        """Add one pass's part to an array (a new array where `key` has none).
+
+        Args:
+            key: the array's name. value: the part, numpy or Dr.Jit, samples on its last axis.
+        """
+        self._parts.setdefault(key, []).append(value)
+        self._host.pop(key, None)
+
+    def parts(self, key: str) -> list:
+        """The parts of an array as they were appended (numpy or Dr.Jit), without a copy.
+
+        Args:
+            key: the array's name.
+
+        Returns:
+            A new list of the parts; one part, numpy, once the array was read on the host.
+
+        Raises:
+            KeyError: no such array.
+        """
+        return list(self._parts[key])
+
+    def on_host(self, key: str) -> bool:
+        """Whether reading `key` copies nothing (its one part is numpy, or it was read before).
+
+        Args:
+            key: the array's name.
+
+        Returns:
+            True where the array is on the host already.
+
+        Raises:
+            KeyError: no such array.
+        """
+        return key in self._host or all(isinstance(p, np.ndarray) for p in self._parts[key])
+
+    def length(self, key: str) -> int:
+        """The samples (last axis) of an array, without copying it.
+
+        Args:
+            key: the array's name.
+
+        Returns:
+            The sum of its parts' lengths.
+
+        Raises:
+            KeyError: no such array.
+        """
+        return sum(_part_length(p) for p in self._parts[key])
+
+    def nbytes(self, key: str) -> int:
+        """The bytes an array takes on the host (its dtype there), without copying it.
+
+        Args:
+            key: the array's name.
+
+        Returns:
+            The bytes.
+
+        Raises:
+            KeyError: no such array.
+        """
+        if key in self._host:
+            return int(self._host[key].nbytes)
+        return sum(_part_nbytes(key, p) for p in self._parts[key])
+
+    def copy(self) -> "Arrays":
+        """A shallow copy: the same parts and host arrays, its own names (a change of one array
+        in either leaves the other's alone).
+
+        Returns:
+            The new Arrays.
+        """
+        out = Arrays()
+        out._parts = {k: list(v) for k, v in self._parts.items()}
+        out._host = dict(self._host)
+        return out
+
+
 @dataclass
 class Buffer:
-    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (numpy, see module
-    doc)."""
+    """An expectation buffer in memory: `header` (JSON-able dict) and `arrays` (`Arrays`: numpy on
+    first read, see the module doc; a dict given is wrapped)."""
 
     header: dict[str, Any]
-    arrays: dict[str, np.ndarray]
+    arrays: Arrays
     #: Dr.Jit copies of the arrays, made by `lookdev.restyle` on first use and kept for later
     #: restyles
     device: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
     #: the image rendered while recording (not saved; `restyle` with the recorded style reproduces
     #: it)
     image: Any = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        if not isinstance(self.arrays, Arrays):
+            self.arrays = Arrays(self.arrays)
 
     @property
     def width(self) -> int:
@@ -115,7 +290,7 @@ class Buffer:
 
     @property
     def samples(self) -> int:
-        return int(self.arrays["pixel"].shape[0])
+        return self.arrays.length("pixel")
 
     @property
     def spp(self) -> int:
@@ -144,11 +319,11 @@ class Buffer:
     @property
     def nbytes(self) -> int:
         """Bytes of the camera samples' arrays (the fixed-size pilot aside: `pilot_nbytes`)."""
-        return sum(a.nbytes for k, a in self.arrays.items() if not k.startswith(PILOT))
+        return sum(self.arrays.nbytes(k) for k in self.arrays if not k.startswith(PILOT))
 
     @property
     def pilot_nbytes(self) -> int:
-        return sum(a.nbytes for k, a in self.arrays.items() if k.startswith(PILOT))
+        return sum(self.arrays.nbytes(k) for k in self.arrays if k.startswith(PILOT))
 
     def save(self, path: str) -> str:
         """Write the buffer atomically (temporary file, rename), as the images are written.
@@ -194,7 +369,8 @@ class Buffer:
         Dr.Jit copies (`device`).
 
         Args:
-            arrays: the pass's arrays by name (`fields_for` this buffer; film pixels, `to_film`).
+            arrays: the pass's arrays by name (`fields_for` this buffer; film pixels, `to_film`),
+                numpy or Dr.Jit: kept as they are, joined when read (`Arrays`).
             spp, seed: the pass's camera samples per pixel and its seed.
             tile: the index of the crop window the pass rendered, where the film is rendered in
                 tiles (`pipeline.passes`); None otherwise.
@@ -202,15 +378,17 @@ class Buffer:
         Raises:
             KeyError: an array of `fields_for` missing from `arrays`.
         """
-        for k in fields_for(self.stylize, self.stores, self.filtered):
-            a = arrays[k]
-            self.arrays[k] = (a if k not in self.arrays
-                              else np.concatenate([self.arrays[k], a], axis=-1))
+        names = fields_for(self.stylize, self.stores, self.filtered)
+        missing = [k for k in names if k not in arrays]
+        if missing:
+            raise KeyError(missing[0])
+        for k in names:
+            self.arrays.append(k, arrays[k])
         entry = {"spp": int(spp), "seed": int(seed)}
         if tile is not None:
             entry["tile"] = int(tile)
         if self.filtered:
-            entry["samples"] = int(arrays["pixel"].shape[0])
+            entry["samples"] = _part_length(arrays["pixel"])
         self.header["passes"].append(entry)
         self.device.clear()
 
@@ -245,7 +423,7 @@ def load_buffer(path: str) -> Buffer:
                                                   filtered(header))}
             pilot = {k: z[k] for k in z.files if k.startswith(PILOT)}
             # docs/denoise.md
-            denoised = {k: z[k] for k in z.files if k in ("denoised_mean", SPREAD)}
+            denoised = {k: z[k] for k in z.files if k in (DENOISED, SPREAD)}
     except UsageError:
         raise
     except (OSError, ValueError, KeyError, EOFError) as exc:
@@ -302,9 +480,12 @@ def check_buffer_path(path: str) -> None:
 
 __all__ = [
     "Buffer",
+    "Arrays",
+    "host_array",
     "load_buffer",
     "check_buffer_path",
     "SPREAD",
+    "DENOISED",
     "FORMAT",
     "VERSION",
     "MAX_SAMPLES",

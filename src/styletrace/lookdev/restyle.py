@@ -25,7 +25,14 @@ from styletrace.estimators import apply_linear
 from styletrace.estimators.arrays import const_like
 from styletrace.gate import dr, mi
 from styletrace.lookdev import film_filter
-from styletrace.lookdev.buffer import PILOT, SPREAD, Buffer, load_buffer
+from styletrace.lookdev.buffer import (
+    DENOISED,
+    PILOT,
+    SPREAD,
+    Arrays,
+    Buffer,
+    load_buffer,
+)
 from styletrace.lookdev.sequence import device_arrays, replay
 from styletrace.scene.defaults import Facts, auto_values
 from styletrace.styles import style_class
@@ -196,6 +203,50 @@ def slots_for(
 
 # ---- the kernel ----------------------------------------------------------------------------------
 
+#: the Dr.Jit type of each per-sample array a restyle reads (`field`)
+FIELD_TYPES = {"p": "Point3f", "n": "Vector3f", "wo": "Vector3f", "mean": "Color3f",
+               "L_before": "Color3f", "beta": "Color3f", DENOISED: "Color3f", "pos": "Point2f",
+               "slot": "Int32", "pixel": "UInt32", "depth": "UInt32", SPREAD: "Float"}
+
+
+#: the numpy dtype each scalar Dr.Jit type of FIELD_TYPES is made from
+_SCALAR = {"Int32": np.int32, "UInt32": np.uint32, "Float": np.float32}
+
+
+def _on_device(part, kind: str):
+    """One part of a buffer's array as the Dr.Jit type `kind` (a numpy part is wrapped)."""
+    T = getattr(mi, kind)
+    if not isinstance(part, np.ndarray):
+        return T(part)
+    if kind in _SCALAR:
+        return T(np.ascontiguousarray(part, dtype=_SCALAR[kind]))
+    return T(*(mi.Float(np.ascontiguousarray(part[i], dtype=np.float32))
+               for i in range(part.shape[0])))
+
+
+def field(buffer: Buffer | Arrays, name: str):
+    """One per-sample array of the buffer as a Dr.Jit array, its pass parts joined on the device.
+
+    Args:
+        buffer: the Buffer, or its `Arrays`. name: the array (FIELD_TYPES names its type).
+
+    Returns:
+        The Dr.Jit array (a Dr.Jit part is used as it is, a numpy part wrapped); not cached:
+        `device` keeps what a restyle reads.
+
+    Raises:
+        KeyError: the buffer has no such array.
+    """
+    kind = FIELD_TYPES[name]
+    arrays = buffer if isinstance(buffer, Arrays) else buffer.arrays
+    parts = [_on_device(p, kind) for p in arrays.parts(name)]
+    if len(parts) == 1:
+        return parts[0]
+    if kind in _SCALAR:
+        return getattr(mi, kind)(dr.concat(parts))
+    return getattr(mi, kind)(*(dr.concat([p[i] for p in parts]) for i in range(len(parts[0]))))
+
+
 def device(buffer: Buffer) -> dict[str, Any]:
     """The buffer's arrays as Dr.Jit arrays, made once per buffer and kept in `buffer.device`.
 
@@ -204,45 +255,46 @@ def device(buffer: Buffer) -> dict[str, Any]:
 
     Returns:
         The arrays by name (p, n, wo, mean, L_before, slot, pixel, depth, ...), with the
-        summation order and weights `accumulate` uses.
+        summation order and weights `accumulate` uses. Arrays the recording kernel left on the
+        device are used as they are (`buffer.Arrays`): nothing is copied to the host but `pixel`.
     """
     d = buffer.device
-    if d:
+    if "slot" in d:
         return d
     a = buffer.arrays
-
-    def vec(k, T):
-        return T(*(mi.Float(np.ascontiguousarray(a[k][i])) for i in range(3)))
-
-    d["p"], d["n"], d["wo"] = vec("p", mi.Point3f), vec("n", mi.Vector3f), vec("wo", mi.Vector3f)
-    d["L_before"] = vec("L_before", mi.Color3f)
+    for k in ("p", "n", "wo", "L_before"):
+        d[k] = field(buffer, k)
     if buffer.stores == "mean":
-        d["mean"] = vec("mean", mi.Color3f)
+        d["mean"] = field(buffer, "mean")
     else:
         d.update(device_arrays(a))
     # a denoised render (docs/denoise.md): each sample styles the denoised E[L]
-    if "denoised_mean" in a:
-        d["mean"] = vec("denoised_mean", mi.Color3f)
+    if DENOISED in a:
+        d["mean"] = field(buffer, DENOISED)
     if SPREAD in a:  # and averages the style over D's uncertainty (`finish_spread`)
-        d["spread"] = mi.Float(np.ascontiguousarray(a[SPREAD], dtype=np.float32))
-    d["slot"] = mi.Int32(a["slot"].astype(np.int32))
-    d["pixel"] = mi.UInt32(a["pixel"])
+        d["spread"] = field(buffer, SPREAD)
+    d["slot"] = field(buffer, "slot")
+    pixel = a["pixel"]
+    d["pixel"] = mi.UInt32(pixel)
     if "beta" in a:
-        d["beta"], d["depth"] = vec("beta", mi.Color3f), mi.UInt32(a["depth"])
+        d["beta"], d["depth"] = field(buffer, "beta"), field(buffer, "depth")
     else:
         d["depth"] = dr.zeros(mi.UInt32, buffer.samples)
     if buffer.filtered:  # splatted with the film's filter (`film_filter.develop`)
-        d["pos"] = mi.Point2f(*(mi.Float(np.ascontiguousarray(a["pos"][i])) for i in range(2)))
+        d["pos"] = field(buffer, "pos")
         dr.eval(*[x for x in d.values()])
         return d
-    counts = np.bincount(a["pixel"], minlength=buffer.width * buffer.height)
+    counts = np.bincount(pixel, minlength=buffer.width * buffer.height)
     if counts.size and counts.min() == counts.max() > 0:
-        # every pixel holds k samples: `accumulate` sums them in a fixed order (see there)
-        d["by_pixel"] = mi.UInt32(np.argsort(a["pixel"], kind="stable").astype(np.uint32))
+        # every pixel holds k samples: `accumulate` sums them in a fixed order (see there); in
+        # pixel order already (coverage points, one pass): that order is the samples' own
+        in_order = pixel.size < 2 or bool(np.all(pixel[1:] >= pixel[:-1]))
+        d["by_pixel"] = (None if in_order else
+                         mi.UInt32(np.argsort(pixel, kind="stable").astype(np.uint32)))
         d["per_pixel"] = int(counts[0])
     counts = counts.astype(np.float32)
     d["inv_weight"] = mi.Float(np.repeat(1.0 / np.maximum(counts, 1.0), 3).astype(np.float32))
-    dr.eval(*[x for x in d.values()])
+    dr.eval(*[x for x in d.values() if x is not None and not isinstance(x, int)])
     return d
 
 
@@ -425,9 +477,10 @@ def accumulate(buffer: Buffer, values: mi.Color3f) -> mi.Float:
     d = device(buffer)
     if buffer.filtered:
         return film_filter.develop(buffer, values)
-    if "by_pixel" in d:
-        k = d["per_pixel"]
-        out = [dr.block_sum(dr.gather(mi.Float, values[c], d["by_pixel"]), k) for c in range(3)]
+    if "per_pixel" in d:
+        k, order = d["per_pixel"], d["by_pixel"]
+        out = [dr.block_sum(values[c] if order is None else dr.gather(mi.Float, values[c], order),
+                            k) for c in range(3)]
         rgb = dr.zeros(mi.Float, buffer.width * buffer.height * 3)
         idx = dr.arange(mi.UInt32, buffer.width * buffer.height) * 3
         for c in range(3):
@@ -495,4 +548,5 @@ __all__ = [
     "RESTYLABLE_ESTIMATORS",
     "as_buffer",
     "replay_lanes",
+    "field",
 ]
