@@ -22,19 +22,18 @@ from styletrace.denoise import guides, oidn
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.kernel.integrator import StylizedIntegrator
-from styletrace.lookdev.buffer import MAX_SAMPLES, SPREAD, Buffer
+from styletrace.lookdev.buffer import DENOISED, MAX_SAMPLES, SPREAD, Buffer
 from styletrace.lookdev.record import record, scene_label
 from styletrace.lookdev.restyle import (
     RESTYLABLE_ESTIMATORS,
     accumulate,
+    field,
     prepare_slots,
     sample_values,
     slots_for,
 )
 from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed
-
-#: the buffer array holding the denoised expectation at each camera sample (3 x samples, as `mean`)
-DENOISED = "denoised_mean"
+from styletrace.scene.defaults import ScenePilot
 
 
 def check_expectation(integrator) -> None:
@@ -83,83 +82,93 @@ def check_expectation(integrator) -> None:
         raise UsageError(f"--denoise expectation cannot render {why}")
 
 
-def expectation(buf: Buffer, emission: np.ndarray | None = None) -> np.ndarray:
+def expectation(buf: Buffer, emission=None) -> np.ndarray:
     """M: per pixel, the mean of its camera samples' children means where a stylized vertex was
     found (0 where none was).
 
     Args:
-        buf: the buffer of means. emission: each sample's own emitted radiance (N x 3,
-            `own_surface`), taken off first (M is then the reflected part alone), or None.
+        buf: the buffer of means. emission: each sample's own emitted radiance (N x 3 or a
+            mi.Color3f, `own_surface`, `own_on_device`), taken off first (M is then the reflected
+            part alone), or None.
 
     Returns:
         M, H x W x 3 float32.
     """
-    return (
-        _sample_moments(buf, reflected(buf, emission))[1]
-        .reshape(buf.height, buf.width, 3)
-        .astype(np.float32)
-    )
+    return _expectation(buf, _reflected(buf, emission))
 
 
-def reflected(buf: Buffer, emission: np.ndarray | None) -> np.ndarray:
+def _expectation(buf: Buffer, refl: np.ndarray) -> np.ndarray:
+    """M of the samples' reflected parts (3 x N, `_reflected`)."""
+    return _sample_moments(buf, refl)[1].T.reshape(buf.height, buf.width, 3).astype(np.float32)
+
+
+def reflected(buf: Buffer, emission) -> np.ndarray:
     """Each camera sample's children mean, less its own emission where given.
 
     Args:
-        buf: the buffer of means. emission: N x 3, or None.
+        buf: the buffer of means. emission: N x 3 or a mi.Color3f, or None.
 
     Returns:
         N x 3 float64.
     """
-    mean = buf.arrays["mean"].astype(np.float64).T
-    return mean if emission is None else mean - emission
+    return _reflected(buf, emission).T
+
+
+def _reflected(buf: Buffer, emission) -> np.ndarray:
+    """`reflected` as 3 x N (each channel's samples next to each other, as bincount reads them)."""
+    mean = buf.arrays["mean"].astype(np.float64)
+    if emission is None:
+        return mean
+    return mean - (emission.T if isinstance(emission, np.ndarray) else np.asarray(emission))
 
 
 def _sample_moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = None):
-    """Per pixel, over its samples with a stylized vertex (or those of `found`) of `values` (N x C):
+    """Per pixel, over its samples with a stylized vertex (or those of `found`) of `values` (C x N):
     (count, mean, variance of the mean = (mean of squares - squared mean) / (count - 1)); mean 0
     where a pixel has no such sample, variance NaN below 2. Float64, flat over the pixels (H*W, and
-    H*W x C)."""
+    C x H*W)."""
     a = buf.arrays
     found = a["slot"] >= 0 if found is None else found
     if "own" in a:  # a filtered buffer: each pixel's own samples (not the border's, a neighbour's)
         found = found & (a["own"] > 0)
-    pix = a["pixel"].astype(np.int64)[found]
+    pix = a["pixel"][found]
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
-    v = values[found]
-    s1 = np.stack(
-        [np.bincount(pix, weights=v[:, c], minlength=size) for c in range(v.shape[1])], -1
-    )
-    s2 = np.stack(
-        [np.bincount(pix, weights=v[:, c] * v[:, c], minlength=size) for c in range(v.shape[1])], -1
-    )
-    n = np.maximum(count, 1.0)[:, None]
+    v = values[:, found]
+    s1 = np.stack([np.bincount(pix, weights=c, minlength=size) for c in v])
+    s2 = np.stack([np.bincount(pix, weights=c * c, minlength=size) for c in v])
+    n = np.maximum(count, 1.0)
     mean = s1 / n
     with np.errstate(divide="ignore", invalid="ignore"):
-        var = np.maximum(s2 / n - mean * mean, 0.0) / (count[:, None] - 1.0)
-    var[count < 2] = np.nan
+        var = np.maximum(s2 / n - mean * mean, 0.0) / (count - 1.0)
+    var[:, count < 2] = np.nan
     return count, mean, var
 
 
-def raster(scene, p: np.ndarray) -> np.ndarray:
+def raster(scene, p) -> np.ndarray:
     """Each vertex's position on the film in pixels of the crop window: where its camera ray left
     the sensor, found by projecting the vertex (`Sensor.sample_direction`'s uv).
 
     Args:
-        scene: the scene (its first sensor). p: the vertices, 3 x N.
+        scene: the scene (its first sensor). p: the vertices, 3 x N (numpy or a Dr.Jit 3-vector).
 
     Returns:
         N x 2 float64.
     """
+    uv = _raster(scene, p if not isinstance(p, np.ndarray) else
+                 mi.Point3f(*(mi.Float(np.ascontiguousarray(p[i], np.float32)) for i in range(3))))
+    return np.stack([np.asarray(uv.x, dtype=np.float64), np.asarray(uv.y, dtype=np.float64)], -1)
+
+
+def _raster(scene, p) -> mi.Point2f:
+    """`raster` on the device: the film positions, mi.Point2f (crop window pixels)."""
     sensor = scene.sensors()[0]
-    it = dr.zeros(mi.Interaction3f, p.shape[1])
-    it.p = mi.Point3f(*(mi.Float(np.ascontiguousarray(p[i])) for i in range(3)))
+    it = dr.zeros(mi.Interaction3f, dr.width(p))
+    it.p = mi.Point3f(p)
     ds, _ = sensor.sample_direction(it, mi.Point2f(0.5, 0.5))
     # uv is in pixels of the crop window already (tests/denoise/test_expectation.py measures it on
     # a crop)
-    return np.stack(
-        [np.asarray(ds.uv.x, dtype=np.float64), np.asarray(ds.uv.y, dtype=np.float64)], -1
-    )
+    return mi.Point2f(ds.uv)
 
 
 def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) -> np.ndarray:
@@ -171,50 +180,62 @@ def at_samples(buf: Buffer, d: np.ndarray, scene, g: guides.Guides, own: tuple) 
     Args:
         buf: the buffer of means. d: D, H x W x 3 (the reflected part). scene: the scene.
         g: the pixel-footprint guides. own: (albedo, emission) at each sample's vertex, N x 3 each
-            (`own_surface`).
+            (`own_surface`) or mi.Color3f each (`own_on_device`).
 
     Returns:
-        3 x N float32.
+        3 x N float32 (`at_samples_on_device`'s values on the host).
+    """
+    return np.asarray(at_samples_on_device(buf, d, scene, g, own), dtype=np.float32)
+
+
+def _color(x) -> mi.Color3f:
+    """A mi.Color3f of an N x 3 host array (float32 on the device), or of a Dr.Jit one."""
+    if not isinstance(x, np.ndarray):
+        return mi.Color3f(x)
+    return mi.Color3f(*(mi.Float(np.ascontiguousarray(x[:, i], np.float32)) for i in range(3)))
+
+
+def at_samples_on_device(buf: Buffer, d: np.ndarray, scene, g: guides.Guides,
+                         own: tuple) -> mi.Color3f:
+    """`at_samples` on the device: one kernel, the buffer's arrays read where they lie.
+
+    Args:
+        buf, d, scene, g, own: as `at_samples`'s.
+
+    Returns:
+        mi.Color3f, evaluated: D at each camera sample (the buffer's DENOISED array).
     """
     a = buf.arrays
-    own_albedo, emission = own
     w = buf.width
-    pix = a["pixel"].astype(np.int64)
-    px, py = pix % w, pix // w
-    found = a["slot"] >= 0
-    if not found.any():  # the fallback everywhere: the sample's own pixel's D
-        return np.ascontiguousarray(d[py, px].T.astype(np.float32))
+    pixel = a["pixel"]
+    found_host = a["slot"] >= 0
+    if not found_host.any():  # the fallback everywhere: the sample's own pixel's D
+        pix = pixel.astype(np.int64)
+        flat = np.ascontiguousarray(d[pix // w, pix % w].T.astype(np.float32))
+        return mi.Color3f(*(mi.Float(flat[i]) for i in range(3)))
+    own_albedo, emission = (_color(x) for x in own)
+    found = mi.Bool(found_host)
+    pix = mi.UInt32(pixel)
+    p = field(buf, "p")
     if "pos" in a:  # where the render loop put the sample (filtered buffers), in crop pixels
-        uv = a["pos"].T.astype(np.float64) - np.asarray(buf.header["crop_offset"], np.float64)
+        off = buf.header["crop_offset"]
+        # float32 pos less an integer offset of the same film: exact, as the float64 of before
+        uv = field(buf, "pos") - mi.ScalarVector2f(float(off[0]), float(off[1]))
     else:
-        uv = raster(scene, a["p"])
-    good = found & np.all(np.isfinite(uv), -1)
-    good &= (np.floor(uv[:, 0]) == px) & (np.floor(uv[:, 1]) == py)
+        uv = _raster(scene, p)
+    good = found & dr.isfinite(uv.x) & dr.isfinite(uv.y)
+    good &= (dr.floor(uv.x) == mi.Float(pix % w)) & (dr.floor(uv.y) == mi.Float(pix // w))
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
-
-    def vec(x, T):  # N x 3 or 3 x N host array -> Dr.Jit
-        x = x if x.shape[0] == 3 else x.T
-        return T(*(mi.Float(np.ascontiguousarray(x[i], np.float32)) for i in range(3)))
-    near = mi.Bool(np.ascontiguousarray(good))
-    fx = dr.select(near, mi.Float(np.ascontiguousarray(uv[:, 0], np.float32)), 0.5)
-    fy = dr.select(near, mi.Float(np.ascontiguousarray(uv[:, 1], np.float32)), 0.5)
+    fx = dr.select(good, uv.x, 0.5)
+    fy = dr.select(good, uv.y, 0.5)
     # samples without a vertex keep their pixel's D as it is: no albedo (no remodulation),
     # no emission
-    albedo = np.where(found[:, None], own_albedo, np.nan)
-    emitted = np.where(found[:, None], emission, 0.0)
-    out = Field(d, g, diag).at(
-        fx,
-        fy,
-        vec(a["p"], mi.Point3f),
-        vec(a["n"], mi.Vector3f),
-        mi.UInt32(np.ascontiguousarray(pix, np.uint32)),
-        vec(albedo, mi.Color3f),
-        vec(emitted, mi.Color3f),
-        mi.Bool(True),
-        near,
-    )
+    albedo = dr.select(found, own_albedo, dr.nan)
+    emitted = dr.select(found, emission, 0.0)
+    out = Field(d, g, diag).at(fx, fy, mi.Point3f(p), field(buf, "n"), pix, albedo, emitted,
+                               mi.Bool(True), good)
     dr.eval(out)  # one kernel for the three channels
-    return np.ascontiguousarray(np.stack([np.asarray(out[i], np.float32) for i in range(3)]))
+    return out
 
 
 class Field:
@@ -324,42 +345,60 @@ REMODULATE = True
 EMISSION_APART = True
 
 
-def own_surface(scene, a: dict) -> tuple[np.ndarray, np.ndarray]:
+def own_surface(scene, a) -> tuple[np.ndarray, np.ndarray]:
     """(albedo, emission) at each camera sample's own vertex, found again by a ray from just in
-    front of the vertex (along wo) back onto it.
+    front of the vertex (along wo) back onto it: `own_on_device`'s, on the host.
 
     Args:
-        scene: the scene. a: the buffer's arrays (`p`, `wo`: 3 x N).
+        scene: the scene. a: the buffer's arrays (`p`, `wo`: 3 x N; a `buffer.Arrays` is read where
+            its arrays lie, a dict of numpy arrays on the host).
 
     Returns:
-        (albedo, emission), N x 3 float64 each. albedo: as `guides.first_hit` forms it (through
-        mirrors and glass); NaN where the vertex is not found again (`Field.at` then leaves the
-        sample as it is). emission: the radiance the vertex emits towards wo (0 elsewhere and where
-        not found); `attach` denoises the reflected part alone and adds it back per sample.
+        (albedo, emission), N x 3 float64 each (see `own_on_device`).
     """
-    p = np.asarray(a["p"], np.float64)
-    wo = np.asarray(a["wo"], np.float64)
+    if hasattr(a, "parts"):
+        p, wo = field(a, "p"), field(a, "wo")
+    else:
+        p, wo = (mi.Vector3f(*(mi.Float(np.ascontiguousarray(a[k][i], np.float32))
+                               for i in range(3))) for k in ("p", "wo"))
+    albedo, emission = own_on_device(scene, p, wo)
+    return np.asarray(albedo, dtype=np.float64).T, np.asarray(emission, dtype=np.float64).T
+
+
+def own_on_device(scene, p, wo) -> tuple[mi.Color3f, mi.Color3f]:
+    """(albedo, emission) at each vertex, found again by a ray from just in front of the vertex
+    (along wo) back onto it; one kernel, evaluated.
+
+    Args:
+        scene: the scene. p, wo: the vertices and their directions towards the viewer (Dr.Jit
+            3-vectors, float32).
+
+    Returns:
+        (albedo, emission), mi.Color3f each. albedo: as `guides.first_hit` forms it (through
+        mirrors and glass); NaN where the vertex is not found again (`Field.at` then leaves the
+        sample as it is). emission: the radiance the vertex emits towards wo (0 elsewhere, where
+        not found and where NaN); `attach` denoises the reflected part alone and adds it back per
+        sample.
+    """
     diag = float(np.linalg.norm(np.asarray(scene.bbox().extents())))
     eps = 1e-4 * max(diag, 1e-6)
-    o = p + wo * eps
-    ray = mi.Ray3f(
-        mi.Point3f(*(mi.Float(np.ascontiguousarray(o[i], np.float32)) for i in range(3))),
-        mi.Vector3f(*(mi.Float(np.ascontiguousarray(-wo[i], np.float32)) for i in range(3))),
-    )
+    # the ray's origin p + wo eps in float64, rounded to float32 once, unfused: as numpy formed it
+    # before the arrays stayed on the device (the same origins, bit for bit)
+    with dr.scoped_set_flag(dr.JitFlag.FastMath, False):
+        o = mi.Point3f(*(mi.Float(mi.Float64(p[i]) + mi.Float64(wo[i]) * eps) for i in range(3)))
+        dr.eval(o)
+    ray = mi.Ray3f(o, -mi.Vector3f(wo))
     ray.maxt = mi.Float(3.0 * eps)
     si = scene.ray_intersect(ray)
     dr.eval(si)  # measured: the chain after an evaluated hit costs half of one kernel doing both
     found = si.is_valid()
     alb, _ = guides.through_delta(scene, si, found)
     le = mi.Color3f(si.emitter(scene, found).eval(si, found))
+    albedo = dr.select(found, alb, dr.nan)  # not found again: no correction for this sample
+    emission = dr.select(found & ~dr.isnan(le), le, 0.0)
     # one kernel: reading the channels one by one would trace the chain three times
-    dr.eval(alb, le, found)
-    hit = np.asarray(found, bool)
-    albedo = np.stack([np.asarray(alb[i], np.float64) for i in range(3)], -1)
-    albedo[~hit] = np.nan  # not found again: no correction for this sample
-    emission = np.stack([np.asarray(le[i], np.float64) for i in range(3)], -1)
-    emission[~hit] = 0.0
-    return albedo, np.nan_to_num(emission)
+    dr.eval(albedo, emission)
+    return albedo, emission
 
 
 #: OIDN's output is trusted down to this fraction of the image's mean brightness (see
@@ -395,6 +434,8 @@ def attach(
     integrator=None,
     k: int = 0,
     uncertainty: float = 0.0,
+    cache: dict | None = None,
+    pilot=None,
 ):
     """Denoise the buffer's expectation: M formed, denoised into D, g's points placed.
 
@@ -402,9 +443,15 @@ def attach(
         buf, scene, spp, seed: the recorded buffer of means, its scene, samples per pixel, seed.
         quality: OIDN's. integrator: the render's (for k > 0). uncertainty: `spread`'s (> 0).
         k: 0: D kept at each camera sample in the buffer; > 0: g at k points (`coverage.points`).
+        cache: a dict kept between calls on one growing buffer (`ExpectationJob`'s), in which the
+            guides of each spp and the own albedo and emission of each pass are made once (the
+            same values as made anew); None: nothing kept.
+        pilot: the render's scene-defaults pilot (`scene.defaults.ScenePilot`) for the points'
+            buffer, or None: traced anew.
 
     Returns:
-        (D per pixel H x W x 3, None) for k = 0; (D, the points' buffer) for k > 0.
+        (D per pixel H x W x 3, None) for k = 0; (D, the points' buffer) for k > 0. The arrays
+        the kernels write stay on the device until read (`lookdev.buffer.Arrays`).
 
     Raises:
         UsageError: a buffer that does not store means.
@@ -413,33 +460,85 @@ def attach(
         raise UsageError(
             "--denoise expectation needs a buffer of children means (direct or affine estimator)"
         )
-    g = guides.first_hit(scene, spp, pass_seed(seed, 0), footprint="pixel")  # M's footprint
-    own = _own(scene, buf)
+    g = _guides(scene, spp, seed, cache)  # M's footprint
+    own = _own_device(scene, buf, cache)
     # the reflected part: each sample's own emission goes back in at_samples
-    m = expectation(buf, own[1])
+    refl = _reflected(buf, own[1])
+    m = _expectation(buf, refl)
     d = oidn.denoise_oidn(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
     header = {"method": "expectation", "quality": quality,
               "guides": "albedo and shading normal through specular chains (guides.first_hit)",
               "at_samples": "guided bilinear interpolation of D at each sample's film position"}
     if k:
-        field = Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
-        rel = spread(buf, own[1], uncertainty) if uncertainty > 0 else None
+        lookup = Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
+        rel = _spread(buf, refl, uncertainty) if uncertainty > 0 else None
         if rel is not None:
-            field.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
-        cover = coverage_module.points(scene, integrator, field, k, seed)
+            lookup.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
+        cover = coverage_module.points(scene, integrator, lookup, k, seed, pilot=pilot)
         if rel is not None:  # per point, its pixel's: restyles average g over it too
-            cover.arrays[SPREAD] = np.ascontiguousarray(
-                rel.ravel()[cover.arrays["pixel"]], dtype=np.float32
-            )
+            cover.arrays[SPREAD] = dr.gather(mi.Float, lookup.spread,
+                                             mi.UInt32(cover.arrays["pixel"]))
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
         if cover.filtered:  # the render loop splatted each point at its sample_pos, not the point's
             cover.image = image_of(cover)
         return d, cover
-    buf.arrays[DENOISED] = at_samples(buf, d, scene, g, own)
+    buf.arrays[DENOISED] = at_samples_on_device(buf, d, scene, g, own)
     buf.header["denoise"] = header
     buf.device.clear()  # the Dr.Jit copy must pick up the denoised means
     return d, None
+
+
+def _guides(scene, spp: int, seed: int, cache: dict | None) -> guides.Guides:
+    """M's guides (`guides.first_hit`, the pixel footprint), kept in `cache` per spp."""
+    key = ("guides", int(spp), int(seed))
+    if cache is not None and key in cache:
+        return cache[key]
+    g = guides.first_hit(scene, spp, pass_seed(seed, 0), footprint="pixel")
+    if cache is not None:
+        for old in [c for c in cache if isinstance(c, tuple) and c[0] == "guides"]:
+            del cache[old]
+        cache[key] = g
+    return g
+
+
+def _own_device(scene, buf: Buffer, cache: dict | None) -> tuple[mi.Color3f, mi.Color3f]:
+    """(albedo, emission) at every camera sample's vertex (`own_on_device`), the emission 0 unless
+    EMISSION_APART; with a cache, those of the passes done before are kept (keyed by the passes'
+    own `p` and `wo` arrays) and only the new passes' traced, in one kernel."""
+    p_parts, wo_parts = buf.arrays.parts("p"), buf.arrays.parts("wo")
+    pairs = list(zip(p_parts, wo_parts))
+    done = cache.get("own", []) if cache is not None else []
+    kept, at = [], 0
+    for parts, albedo, emission in done:  # the kept entries that still match the buffer's passes
+        here = pairs[at:at + len(parts)]
+        if len(here) != len(parts) or any(a is not b or c is not e
+                                          for (a, c), (b, e) in zip(here, parts)):
+            break
+        kept.append((parts, albedo, emission))
+        at += len(parts)
+    if at < len(pairs):
+        new = pairs[at:]
+        p, wo = (_joined([x[i] for x in new], mi.Vector3f) for i in (0, 1))
+        albedo, emission = own_on_device(scene, p, wo)
+        if not EMISSION_APART:
+            emission = dr.zeros(mi.Color3f, dr.width(albedo))
+        kept.append((new, albedo, emission))
+    if cache is not None:
+        cache["own"] = kept
+    albedo = _joined([e[1] for e in kept], mi.Color3f)
+    emission = _joined([e[2] for e in kept], mi.Color3f)
+    return albedo, emission
+
+
+def _joined(parts: list, T):
+    """Dr.Jit 3-vectors of type T (numpy 3 x N parts wrapped) joined along the samples."""
+    parts = [T(x) if not isinstance(x, np.ndarray) else
+             T(*(mi.Float(np.ascontiguousarray(x[i], np.float32)) for i in range(3)))
+             for x in parts]
+    if len(parts) == 1:
+        return parts[0]
+    return T(*(dr.concat([x[i] for x in parts]) for i in range(3)))
 
 
 #: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error,
@@ -481,14 +580,19 @@ def spread(buf: Buffer, emission: np.ndarray, uncertainty: float) -> np.ndarray:
     under 2 samples with a stylized vertex count 0), capped at 1. Design: expectation_denoising.md.
 
     Args:
-        buf: the buffer of means. emission: each sample's own emission, N x 3.
+        buf: the buffer of means. emission: each sample's own emission, N x 3 or a mi.Color3f.
         uncertainty: the factor (`check_uncertainty`).
 
     Returns:
         H x W float64 in [0, 1]; it goes to 0 as the samples grow.
     """
-    _, mean, var = _sample_moments(buf, reflected(buf, emission).mean(1, keepdims=True))
-    mean, var_of_mean = mean[:, 0], np.nan_to_num(var[:, 0])  # below 2 samples: 0
+    return _spread(buf, _reflected(buf, emission), uncertainty)
+
+
+def _spread(buf: Buffer, refl: np.ndarray, uncertainty: float) -> np.ndarray:
+    """`spread` of the samples' reflected parts (3 x N, `_reflected`)."""
+    _, mean, var = _sample_moments(buf, refl.mean(0, keepdims=True))
+    mean, var_of_mean = mean[0], np.nan_to_num(var[0])  # below 2 samples: 0
     floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
     rel2 = (var_of_mean / np.maximum(np.abs(mean), floor) ** 2).reshape(buf.height, buf.width)
     padded = np.pad(rel2, 1, mode="edge")
@@ -523,7 +627,8 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
     """The variance of each pixel's *undenoised* estimate from its camera samples' values.
 
     That is (mean of squares - squared mean) / (spp - 1), as `pipeline.passes.Progress.aovs` defines
-    `variance`; NaN below 2 samples. D, where the buffer holds it, is set aside meanwhile.
+    `variance`; NaN below 2 samples. D, where the buffer holds it, is left out (of a view that
+    shares the buffer's arrays: the buffer itself is not changed).
 
     Args:
         buf: the buffer.
@@ -531,18 +636,14 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
     Returns:
         H x W x 3 float32.
     """
-    slots = prepare_slots(buf, slots_for(buf))
-    held = buf.arrays.pop(DENOISED, None)
-    buf.device.clear()
-    try:
-        v = sample_values(buf, slots)
-        vals = np.stack([np.asarray(v[c], dtype=np.float64) for c in range(3)], axis=-1)
-    finally:
-        if held is not None:
-            buf.arrays[DENOISED] = held
-        buf.device.clear()
-    var = _sample_moments(buf, vals, np.ones(buf.samples, bool))[2]  # every sample, vertex or not
-    return var.reshape(buf.height, buf.width, 3).astype(np.float32)
+    noisy = Buffer(buf.header, buf.arrays.copy())
+    if DENOISED in noisy.arrays:
+        del noisy.arrays[DENOISED]
+    slots = prepare_slots(noisy, slots_for(noisy))
+    vals = np.asarray(sample_values(noisy, slots), dtype=np.float64)
+    # every sample, vertex or not
+    var = _sample_moments(noisy, vals, np.ones(noisy.samples, bool))[2]
+    return var.T.reshape(buf.height, buf.width, 3).astype(np.float32)
 
 
 def render_denoised_expectation(
@@ -600,6 +701,8 @@ class ExpectationJob:
             the render's. quality: OIDN's. max_samples: the buffer's cap. label: the scene's label.
         coverage: points per pixel where g meets D (`coverage.resolve_k`). uncertainty: `spread`'s.
         lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
+        pilot: the scene-defaults pilot the job was resolved with (`pipeline.resolve`), or None:
+            one of the job's own, traced once for the passes and the coverage points.
 
     Raises:
         UsageError: no pyoidn, a bad quality, coverage or uncertainty, or an unsupported render
@@ -619,6 +722,7 @@ class ExpectationJob:
         uncertainty: float = UNCERTAINTY,
         lanes_per_pass: int = LANES_PER_PASS,
         pass_spp: int | None = None,
+        pilot: ScenePilot | None = None,
     ):
         oidn.require()
         oidn.check_quality(quality)
@@ -644,8 +748,23 @@ class ExpectationJob:
         )
         #: the noisy buffer of the passes recorded so far (None before the first)
         self.buffer: Buffer | None = None
+        #: what `attach` keeps between two calls on the growing buffer (`attach`'s)
+        self._cache: dict = {}
+        #: the scene-defaults pilot of the passes and the points (traced once, where first used)
+        self.pilot = (pilot if pilot is not None and pilot.serves(scene, integrator.settings)
+                      else ScenePilot(scene, integrator.settings))
 
     def passes(self) -> Iterator[tuple[Progress, Buffer]]:
+        """Record the noisy buffer pass by pass (`lookdev.record.record`).
+
+        Returns:
+            An iterator of (the pass's `Progress`, the buffer so far: `buffer`, its `image` the
+            noisy render so far).
+
+        Raises:
+            StyletraceError: what `record` refuses (one line).
+        """
+        self._cache = {}
         for prog, buf in record(
             self.scene,
             self.integrator,
@@ -654,6 +773,7 @@ class ExpectationJob:
             self.label or scene_label(None),
             self.max_samples,
             self.lanes,
+            pilot=self.pilot,
             pass_spp=self.pass_spp,
         ):
             buf.image = prog.image
@@ -661,10 +781,20 @@ class ExpectationJob:
             yield prog, buf
 
     def finish(self) -> tuple[np.ndarray, Buffer]:
-        """(the denoised image, the buffer that restyles to it) from the recorded buffer; one-line
-        UsageError if not every pixel has a camera sample yet (a render cancelled in its first round
-        of tiles)."""
-        buf = self.buffer
+        """Denoise the recorded buffer and apply g: the render's result.
+
+        Returns:
+            (the denoised image, H x W x 3 float32; the buffer that restyles to it: with coverage
+            points theirs, `source` the camera samples' buffer; with k = 0 the recorded buffer,
+            D at its samples).
+
+        Raises:
+            UsageError: not every pixel has a camera sample yet (a render cancelled in its first
+                round of tiles; one line).
+        """
+        return self._finish(self.buffer, self.k, self.quality)
+
+    def _finish(self, buf: Buffer | None, k: int, quality: str) -> tuple[np.ndarray, Buffer]:
         if buf is None or buf.spp < 1:
             raise UsageError("nothing to denoise: no pass of the render finished")
         _, cover = attach(
@@ -672,10 +802,12 @@ class ExpectationJob:
             self.scene,
             buf.spp,
             self.seed,
-            self.quality,
+            quality,
             self.integrator,
-            self.k,
+            k,
             self.uncertainty,
+            self._cache,
+            self.pilot,
         )
         if cover is None:
             return image_of(buf), buf
