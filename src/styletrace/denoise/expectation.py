@@ -12,6 +12,7 @@ Design: docs/design/expectation_denoising.md.
 """
 from __future__ import annotations
 
+import copy
 from typing import Callable, Iterator
 
 import numpy as np
@@ -748,7 +749,7 @@ class ExpectationJob:
         )
         #: the noisy buffer of the passes recorded so far (None before the first)
         self.buffer: Buffer | None = None
-        #: what `attach` keeps between two calls on the growing buffer (`attach`'s)
+        #: what `attach` keeps between a preview and the next preview or `finish` (`attach`'s)
         self._cache: dict = {}
         #: the scene-defaults pilot of the passes and the points (traced once, where first used)
         self.pilot = (pilot if pilot is not None and pilot.serves(scene, integrator.settings)
@@ -793,6 +794,35 @@ class ExpectationJob:
                 round of tiles; one line).
         """
         return self._finish(self.buffer, self.k, self.quality)
+
+    def preview(self, k: int | str = 1, quality: str = "fast") -> tuple[np.ndarray, Buffer]:
+        """A quick denoised image of the passes so far, for a viewport; `finish` is not changed.
+
+        Args:
+            k: where g meets D: 0 at the camera samples (D looked up at each), else k coverage
+                points per pixel (a square: 1, one per pixel, is the cheapest; "auto" as a render),
+                within the buffer's cap (`coverage.resolve_k`).
+            quality: OIDN's: "fast", "balanced" or "high" (`finish`'s is the job's).
+
+        Returns:
+            (the image, H x W x 3 float32; the buffer that restyles to it, as `finish`'s, but for
+            k = 0 a copy of the recorded buffer sharing its arrays, with D at its samples: the
+            recorded buffer, its `source`, stays noisy for the passes to come). The guides and each
+            pass's own albedo and emission are kept for the next preview and for `finish`.
+
+        Raises:
+            UsageError: no pass finished yet, a bad k or quality (one line).
+        """
+        oidn.check_quality(quality)
+        w, h = (int(v) for v in self.scene.sensors()[0].film().crop_size())
+        k = coverage_module.resolve_k(k, w, h, self.max_samples)
+        buf = self.buffer
+        if k == 0 and buf is not None:
+            view = Buffer(copy.deepcopy(buf.header), buf.arrays.copy(), image=buf.image)
+            image, out = self._finish(view, 0, quality)
+            out.source = buf
+            return image, out
+        return self._finish(buf, k, quality)
 
     def _finish(self, buf: Buffer | None, k: int, quality: str) -> tuple[np.ndarray, Buffer]:
         if buf is None or buf.spp < 1:
