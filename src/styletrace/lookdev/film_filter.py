@@ -144,20 +144,25 @@ def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)
     return sampler, mi.Vector2f(corner) + sampler.next_2d()
 
 
-def positions(sensor, spp: int, seed: int) -> np.ndarray:
+def positions(sensor, spp: int, seed: int, device: bool = False):
     """Each camera sample's film position in a pass, bit for bit the render's.
 
     Args:
         sensor: the mi.Sensor, its film as it is set now (crop window, border sampling).
         spp, seed: the pass's camera samples per pixel and seed.
+        device: return the Dr.Jit array (a recording keeps it there: `buffer.Arrays`).
 
     Returns:
-        2 x lanes float32 positions in pixels of the full film (crop offset included).
+        2 x lanes float32 positions in pixels of the full film (crop offset included): numpy, or
+        with `device` a mi.Point2f, evaluated.
     """
     film = sensor.film()
     b = int(film.rfilter().border_size()) if film.sample_border() else 0
     _, pos = seeded_positions(sensor, spp, seed, b, [int(v) for v in film.crop_offset()])
+    pos = mi.Point2f(pos)
     dr.eval(pos)
+    if device:
+        return pos
     return np.stack([np.asarray(pos.x, dtype=np.float32), np.asarray(pos.y, dtype=np.float32)])
 
 

@@ -475,7 +475,7 @@ def record(
         arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
         if filtered and "pos" not in arrays:  # where Mitsuba put each sample
             seed_i = pass_loop.pass_seed(seed, index)
-            arrays["pos"] = film_filter.positions(sensor, prog.samples, seed_i)
+            arrays["pos"] = film_filter.positions(sensor, prog.samples, seed_i, device=True)
         tiled = len(prog.layout) > 1  # the crop windows `pipeline.passes` renders, one per pass
         if tiled:
             buf.header["tiles"] = len(prog.layout)
