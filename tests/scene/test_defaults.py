@@ -271,8 +271,10 @@ def test_auto_exposure_maps_the_median_to_middle_grey():
     contrast = resolve_defaults(scene, make_integrator(style="contrast", pivot=0.4))[
         0
     ].settings.slot.style
-    # contrast: the median to the default pivot
-    assert contrast.exposure == pytest.approx(0.5 / median, rel=1e-3)
+    # contrast: the median to the auto pivot (styles/contrast.py), whatever pivot is given
+    auto = resolve_defaults(scene, make_integrator(style="contrast"))[0].settings.slot.style
+    assert contrast.pivot == 0.4 and 0 < auto.pivot <= 0.5
+    assert contrast.exposure == auto.exposure == pytest.approx(auto.pivot / median, rel=1e-3)
     exp_tone = resolve_defaults(scene, make_integrator(style="exp_tone"))[0].settings.slot.style
     assert exp_tone.exposure == pytest.approx(1.5 * 0.18 / median, rel=1e-3)
 

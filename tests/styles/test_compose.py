@@ -37,7 +37,7 @@ def test_parameters_are_the_operands_under_their_names():
     comp = create("contrast+sepia", **{"contrast.c": "2"})
     assert comp.operands[0].c == 2.0 and comp.operands[0].pivot == style_class("contrast")().pivot
     assert comp.describe().startswith(
-        "contrast+sepia(contrast.c=2, contrast.pivot=0.5, contrast.exposure=auto, sepia.gradient="
+        "contrast+sepia(contrast.c=2, contrast.pivot=auto, contrast.exposure=auto, sepia.gradient="
     )
     assert style_class("contrast+sepia") is cls  # one class per spelling
     assert "contrast+sepia" not in style_names()  # compositions are spelled, not registered
