@@ -132,7 +132,7 @@ def _sample_moments(buf: Buffer, values: np.ndarray, found: np.ndarray | None = 
     found = a["slot"] >= 0 if found is None else found
     if "own" in a:  # a filtered buffer: each pixel's own samples (not the border's, a neighbour's)
         found = found & (a["own"] > 0)
-    pix = a["pixel"][found]
+    pix = a["pixel"][found].astype(np.intp)  # bincount would convert uint32 on every call
     size = buf.width * buf.height
     count = np.bincount(pix, minlength=size).astype(np.float64)
     v = values[:, found]
