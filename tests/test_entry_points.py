@@ -231,10 +231,11 @@ def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
 
 def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
     """`samples` (paths per pixel; default the scene's sample count, 4 in this file) is split once
-    (`pipeline.budget`) for every front end: cel's 16 children at 32 samples make 2 camera samples,
-    the file's 4 one camera sample of 4 children. The command line names the split on its line of
-    auto values and records it in its buffer (`render --buffer`), `styletrace.render` runs it (the
-    job its runner gets), `render_buffer` records it and the preview's session takes it. Blender's
+    (`pipeline.budget`) for every front end: at 32 samples cel's camera samples take 4 children
+    each (`budget.CHILDREN`), 8 of them; the file's 4 one camera sample of 4 children. The command
+    line names the split on its line of auto values and records it in its buffer (`render
+    --buffer`), `styletrace.render` runs it (the job its runner gets), `render_buffer` records it
+    and the preview's session takes it. Blender's
     F12: tests/blender/test_samples.py."""
     from styletrace.pipeline import execute
     from styletrace.preview.session import Session
@@ -243,7 +244,7 @@ def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
     monkeypatch.setattr(execute, "run_resolved", lambda r, *a: ran.append(r) or run(r, *a))
     cli = [sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3",
            "--style", "cel", "--seed", str(SEED), "--denoise", "off"]
-    for samples, (spp, n) in ((32, (2, 16)), (None, (1, 4))):
+    for samples, (spp, n) in ((32, (8, 4)), (None, (1, 4))):
         flag = [] if samples is None else ["--samples", str(samples)]
         npz = tmp_path / f"{samples}.npz"
         r = subprocess.run(cli + flag + ["--buffer", str(npz), "-o", str(tmp_path / "o.exr")],

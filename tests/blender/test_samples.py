@@ -24,7 +24,7 @@ def test_samples_split_as_every_front_end_splits_them(tmp_path):
     st.style, st.denoise = "cel", "off"
     assert (st.samples, st.spp, st.inner_samples) == (16, 0, "")  # Samples 16, the rest auto
     got, sc = split_of(st)
-    assert got == (1, 16)
+    assert got == (4, 4)
     # the exported sampler counts Samples; the Python API's split of the same scene is F12's
     from styletrace.scene.loading import scene_spp
     assert scene_spp(sc) == 16
@@ -32,15 +32,15 @@ def test_samples_split_as_every_front_end_splits_them(tmp_path):
     assert (api.spp, int(api.integrator.settings.slot.n(0))) == got
     st.samples = 64
     got, sc = split_of(st)
-    assert got == (4, 16) and scene_spp(sc) == 64
+    assert got == (16, 4) and scene_spp(sc) == 64
     api = resolve(python_job(sc, style="cel", samples=64), scene=sc)
     assert (api.spp, int(api.integrator.settings.slot.n(0))) == got
     line = operators.command_line("s.xml", st)
-    assert line.startswith("styletrace render s.xml --samples 64 --seed 0 --pass-spp 4"), line
+    assert line.startswith("styletrace render s.xml --samples 64 --seed 0 --pass-spp 1"), line
     # F12 renders the split: its passes' spp (one pass of 4 camera samples)
     st.samples = 16
     S.styletrace(str(tmp_path / "f12.exr"), 0, pass_spp=4, style="cel", aovs=False)
-    assert engine.LAST["spp_total"] == 1 and engine.LAST["spp_done"] == 1
+    assert engine.LAST["spp_total"] == 4 and engine.LAST["spp_done"] == 4
 
 
 def test_camera_and_inner_samples_win():

@@ -32,10 +32,10 @@ def test_auto_plans_expectation_with_the_firefly_control_and_the_budget_spent(au
     assert plan.method == "expectation" and plan.note == ""
     s = plan.resolved.integrator.settings
     assert s.firefly == FIREFLY_K and s.firefly_floor > 0
-    # the built-in scene's 16 samples, cel's n = 16 children: 1 camera sample (pipeline.budget)
-    assert plan.resolved.spp == 1 and int(s.slot.n(0)) == 16
+    # the built-in scene's 16 samples: 4 camera samples of 4 children (pipeline.budget)
+    assert plan.resolved.spp == 4 and int(s.slot.n(0)) == 4
     assert "firefly=4" in plan.resolved.auto
-    assert "samples=16: spp=1 x 16 children" in plan.resolved.auto
+    assert "samples=16: spp=4 x 4 children" in plan.resolved.auto
     # a given spp is the user's: kept
     assert choose(resolve(python_job("cornell-box", style="cel", spp=8, **SMALL))).resolved.spp == 8
 
@@ -49,6 +49,7 @@ def test_the_default_is_auto_and_equals_expectation_with_the_values_it_pins(auto
         style="cel",
         denoise="expectation",
         spp=plan.resolved.spp,
+        inner=int(s.slot.n(0)),
         firefly=s.firefly,
         firefly_floor=s.firefly_floor,
         **SMALL,
@@ -171,7 +172,7 @@ def test_a_given_spp_over_the_buffers_cap_denoises_the_image(auto, monkeypatch):
     from styletrace.lookdev import buffer
     monkeypatch.setattr(buffer, "MAX_SAMPLES", 24 * 24 * 3)
     assert choose(resolve(python_job("cornell-box", style="cel", spp=4, **SMALL))).method == "image"
-    # without a given spp the budget is spent within the cap instead: 64 samples would be 4 x 16,
+    # without a given spp the budget is spent within the cap instead: 64 samples would be 16 x 4,
     # the cap allows 3 camera samples, so each takes ceil(64 / 3) = 22 children
     plan = choose(resolve(python_job("cornell-box", style="cel", samples=64, **SMALL)))
     assert plan.method == "expectation" and plan.resolved.spp == 3

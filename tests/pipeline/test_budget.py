@@ -7,7 +7,7 @@ import pytest
 from styletrace.config.settings import AdaptiveCount
 from styletrace.errors import UsageError
 from styletrace.frontends import api
-from styletrace.pipeline.budget import Request, split
+from styletrace.pipeline.budget import CHILDREN, Request, split
 from styletrace.pipeline.job import Job, python_job
 from styletrace.pipeline.resolve import resolve
 from styletrace.styles import registry
@@ -15,8 +15,8 @@ from styletrace.styles import registry
 W = H = 8
 #: the split of the built-in scene's samples by the style's default n: {n: {samples: (spp, n)}}
 EXPECTED = {
-    16: {16: (1, 16), 64: (4, 16)},   # cel, color_map, gamma, hatching, ...
-    8: {16: (2, 8), 64: (8, 8)},      # saturation
+    16: {16: (4, 4), 64: (16, 4)},    # cel, color_map, gamma, hatching, ...: n = CHILDREN
+    8: {16: (4, 4), 64: (16, 4)},     # saturation
     1: {16: (16, 1), 64: (64, 1)},    # identity, contrast, sepia
     0: {16: (16, 1), 64: (64, 1)},    # closed form (gooch, xtoon, coordinate): no children
 }
@@ -50,11 +50,13 @@ def test_every_style_spends_the_samples_as_paths_per_pixel(box, style, samples):
 
 def test_the_scenes_sample_count_is_the_default_budget(box):
     r = resolved(box, style="cel")
-    assert counts(r) == (1, 16) and r.budget.request.samples == 16
-    assert r.auto.startswith("samples=16: spp=1 x 16 children; ")
-    # fewer samples than the style's children: n shrinks to the samples, one camera sample
-    assert counts(resolved(box, style="cel", samples=4)) == (1, 4)
-    assert counts(resolved(box, style="cel", samples=24)) == (2, 16)  # round(24 / 16) = 2
+    assert counts(r) == (4, CHILDREN) and r.budget.request.samples == 16
+    assert r.auto.startswith("samples=16: spp=4 x 4 children; ")
+    # fewer samples than CHILDREN: n shrinks to the samples, one camera sample
+    assert counts(resolved(box, style="cel", samples=2)) == (1, 2)
+    assert counts(resolved(box, style="cel", samples=24)) == (6, 4)  # round(24 / 4) = 6
+    # a style of fewer children than CHILDREN keeps its own n
+    assert counts(resolved(box, style="identity", samples=24)) == (24, 1)
 
 
 def test_a_given_inner_count_wins_and_spp_follows(box):
@@ -115,8 +117,8 @@ def test_the_scene_files_own_inner_count_is_given(tmp_path):
 
 def test_a_prebuilt_integrator_is_split_unless_it_names_its_count(box):
     cel = api.make_integrator(style="cel")
-    assert counts(resolve(Job(scene=box, integrator=cel, samples=64))) == (4, 16)
-    assert counts(resolve(Job(scene=box, integrator=cel, samples=8))) == (1, 8)
+    assert counts(resolve(Job(scene=box, integrator=cel, samples=64))) == (16, 4)
+    assert counts(resolve(Job(scene=box, integrator=cel, samples=8))) == (2, 4)
     given = api.make_integrator(style="cel", inner=2)
     r = resolve(Job(scene=box, integrator=given, samples=8))
     assert counts(r) == (4, 2) and r.integrator.values["inner_samples"] == 2
@@ -134,8 +136,8 @@ def test_bad_samples_are_refused_in_one_line(box, bad):
 
 def test_the_rule_itself():
     """`split` alone: the module doc's cases, without a scene."""
-    assert (s := split(Request(16, None, None, 16))).spp == 1 and s.inner == (16,)
-    assert s.note == "samples=16: spp=1 x 16 children"
+    assert (s := split(Request(16, None, None, 16))).spp == 4 and s.inner == (4,)
+    assert s.note == "samples=16: spp=4 x 4 children"
     assert split(Request(16, None, None, 0)).note == "samples=16: spp=16 (no children)"
     assert split(Request(16, None, None, 1)).note == "samples=16: spp=16 x 1 child"
     assert split(Request(64, 4, None, 16, samples_given=True)).inner == (16,)
@@ -169,8 +171,9 @@ def test_error_aovs_take_at_least_two_camera_samples(box):
     """Their variance needs two camera samples (`runner.Runner.check` refuses one): an auto spp
     is raised to 2 and an auto n lowered to round(samples / 2); a given spp is the caller's."""
     r = resolved(box, style="cel", aovs=True)
-    assert counts(r) == (2, 8) and r.budget.paths == 16
-    assert counts(resolved(box, style="cel", aovs=True, samples=64)) == (4, 16)
+    assert counts(r) == (4, 4) and r.budget.paths == 16
+    assert counts(resolved(box, style="cel", aovs=True, samples=4)) == (2, 2)
+    assert counts(resolved(box, style="cel", aovs=True, samples=64)) == (16, 4)
     assert counts(resolved(box, style="cel", aovs=True, inner=16)) == (2, 16)
     assert counts(resolved(box, style="cel", aovs=True, spp=1)) == (1, 16)
     assert split(Request(16, None, None, 16, min_spp=2), cap=1).spp == 1  # the cap wins
