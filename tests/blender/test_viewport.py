@@ -14,7 +14,8 @@ import scenes as S
 from test_restyle import pixels
 
 from styletrace.blender import camera, restyle
-from styletrace.blender.viewport import Viewport, denoise_now, draft_size
+from styletrace.blender.viewport import REST_S, Viewport, denoise_now, draft_size
+from styletrace.lookdev.slider import quick_restyle
 
 SPP, PASS_SPP, SEED = 16, 4, 3
 SETTINGS = dict(style="cel", inner_samples="4", denoise="off")
@@ -68,26 +69,46 @@ def test_passes_converge_to_f12(tmp_path):
     vp.close()
 
 
-def test_style_change_restyles_without_a_pass(tmp_path):
+def test_a_drag_restyles_each_value_without_a_pass_and_rests_at_f12s_image(tmp_path):
+    """A slider dragged through several values: each is shown at once, restyled at one point per
+    pixel (`lookdev.slider`) with no new pass; at rest (`Viewport.settle`, which the timer of
+    REST_S calls in Blender) the whole buffer is restyled: a fresh F12 with the last value."""
     vp, st, images = run_viewport()
     s = vp.session
     passes = s.passes_run
-    st.params.cel__levels = "0.1,0.5"
-    entry = vp.update(bpy.context.evaluated_depsgraph_get(), st)
-    print(f"restyle: {entry['restyle_s'] * 1000:.1f} ms ({entry['seconds'] * 1000:.1f} ms the "
-          f"update)")
-    assert entry["kind"] == "restyle" and vp.session is s and s.done
+    for levels in ("0.1,0.5", "0.12,0.52", "0.14,0.55", "0.15,0.6", "0.1,0.5"):
+        st.params.cel__levels = levels
+        entry = vp.update(bpy.context.evaluated_depsgraph_get(), st)
+        print(f"{levels}: restyle {entry['restyle_s'] * 1000:.1f} ms "
+              f"({entry['seconds'] * 1000:.1f} ms the update)")
+        assert entry["kind"] == "restyle" and vp.session is s and s.done
+        assert s.latest()[1].startswith("restyled at one point per pixel")
+        # each pixel shows its first camera sample's value with the new levels
+        np.testing.assert_allclose(s.latest()[0],
+                                   quick_restyle(s.buffer, style="cel", levels=levels),
+                                   rtol=1e-6, atol=1e-7)
     assert s.passes_run == passes  # no new trace
-    assert entry["seconds"] < 1.0
-    st.params.cel__levels = "0.15,0.6"
-    entry = vp.update(bpy.context.evaluated_depsgraph_get(), st)
-    print(f"second restyle: {entry['restyle_s'] * 1000:.1f} ms")
-    st.params.cel__levels = "0.1,0.5"
-    vp.update(bpy.context.evaluated_depsgraph_get(), st)
-    assert s.passes_run == passes
+    rest = vp.settle()
+    print(f"at rest: {rest * 1000:.1f} ms")
+    assert s.latest()[1].startswith("restyled, ") and s.passes_run == passes
+    assert vp.settle() is None  # nothing left to rest
     fresh = S.styletrace(str(tmp_path / "fresh.exr"), SPP, seed=SEED, pass_spp=PASS_SPP,
                          aovs=False, **SETTINGS)["Combined"][..., :3]
     np.testing.assert_allclose(s.latest()[0], fresh, rtol=1e-4, atol=1e-5)
+    vp.close()
+
+
+def test_the_rest_timer_restyles_the_whole_buffer():
+    """Without `settle`, the timer restyles the whole buffer REST_S after the last value."""
+    vp, st, images = run_viewport()
+    s = vp.session
+    st.params.cel__levels = "0.12,0.52"
+    vp.update(bpy.context.evaluated_depsgraph_get(), st)
+    version = s.version
+    deadline = time.perf_counter() + REST_S + 10.0
+    while s.version == version and time.perf_counter() < deadline:
+        time.sleep(0.01)
+    assert s.latest()[1].startswith("restyled, ")
     vp.close()
 
 
@@ -137,9 +158,11 @@ def test_denoised_passes_end_at_f12s_denoised_image(method, tmp_path):
     labels = [label for _, _, label in images]
     print("images:", [(f"{t:.2f} s", label) for t, _, label in images],
           "denoise:", [f"{t:.3f} s" for t in s.stats["denoise_s"]])
-    # the first pass and the last are always shown, each denoised (`denoise_now`)
-    assert labels[1] == "pass 1/4, 4 spp, denoised" and labels[-1] == "pass 4/4, 16 spp, denoised"
-    assert all(label.endswith(" spp, denoised") for label in labels[1:])
+    # the first pass and the last are always shown, each denoised (`denoise_now`): the passes
+    # before the last as quick previews (`ExpectationJob.preview`), the last by F12's finisher
+    assert labels[1] == "pass 1/4, 4 spp, denoised (preview)"
+    assert labels[-1] == "pass 4/4, 16 spp, denoised"
+    assert all(label.endswith(" spp, denoised (preview)") for label in labels[1:-1])
     out = S.styletrace(str(tmp_path / "f12.exr"), SPP, seed=SEED, pass_spp=PASS_SPP,
                        **{**SETTINGS, "denoise": method})
     f12, noisy = out["Combined"][..., :3], out["Noisy"][..., :3]
@@ -152,11 +175,52 @@ def test_denoised_passes_end_at_f12s_denoised_image(method, tmp_path):
     np.testing.assert_array_equal(plain_images[-1][1], noisy)
     by_label = {label: img for _, img, label in plain_images}
     for _, img, label in images[1:-1]:
-        raw = by_label[label.removesuffix(", denoised")]
+        raw = by_label[label.removesuffix(", denoised (preview)")]
         err, raw_err = (float(((a - b) ** 2).mean()) for a, b in ((img, f12), (raw, noisy)))
         print(f"{label}: mean squared error to the final image {err:.3e}, undenoised {raw_err:.3e}")
         assert err < raw_err
     plain.close()
+
+
+def defaults_session(seed: int, size: int = 64) -> list[tuple[str, np.ndarray]]:
+    """(label, image) of the viewport's session on the interior at the add-on's defaults (cel,
+    Samples 16, Denoise auto) with `seed`, after an untimed one (kernels compiled)."""
+    S.interior(size)
+    st = bpy.context.scene.styletrace
+    # the suite's environment makes Denoise default to off (tests/conftest.py): the add-on's own
+    # default is auto
+    st.style, st.seed, st.denoise = "cel", seed, "auto"
+    vp = Viewport()
+    dg = bpy.context.evaluated_depsgraph_get()
+    vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
+    images = []
+    vp.on_image = lambda: images.append(vp.session.latest()[::-1])
+    vp.update(dg, st)
+    vp.session.join(300)
+    assert vp.session.error is None
+    vp.close()
+    return images
+
+
+def test_each_viewport_image_is_no_noisier_than_the_one_before():
+    """The interior lit through a window at the defaults, two seeds: along the full-size images
+    both sessions showed (the previews after the passes `denoise_now` picked, then F12's image),
+    the noise between the seeds never grows. The draft (a smaller image) is left out. The noise of
+    an image: the mean squared difference of the two seeds' images in sRGB; a later one may exceed
+    an earlier one by at most 3 standard errors of the difference, from 8 x 8 blocks (denoised
+    pixels are correlated, so single pixels would understate it)."""
+    from styletrace.measures import srgb
+    a, b = (dict(defaults_session(seed)) for seed in (1, 2))
+    labels = [label for label in a if label in b and not label.startswith("draft")]
+    print("images:", list(a), list(b))
+    assert len(labels) >= 2 and labels[-1] == "pass 4/4, 4 spp, denoised"
+    d2 = [(srgb(a[k]) - srgb(b[k])) ** 2 for k in labels]
+    for k in range(1, len(labels)):
+        diff = S.blocks((d2[k] - d2[k - 1]).mean(-1), 8).ravel()
+        se = diff.std(ddof=1) / np.sqrt(diff.size)
+        print(f"{labels[k - 1]} -> {labels[k]}: noise {d2[k - 1].mean():.3e} -> "
+              f"{d2[k].mean():.3e} (z {diff.mean() / se:.2f})")
+        assert diff.mean() <= 3 * se
 
 
 def test_style_change_with_denoise_expectation_restyles_f12s_recorded_buffer(tmp_path):
@@ -168,6 +232,7 @@ def test_style_change_with_denoise_expectation_restyles_f12s_recorded_buffer(tmp
     print(f"restyle of the denoised buffer: {entry['restyle_s'] * 1000:.1f} ms")
     assert entry["kind"] == "restyle" and vp.session is s and s.passes_run == passes
     assert s.buffer.header["denoise"]["method"] == "expectation"
+    vp.settle()  # the drag's rest: the whole denoised buffer restyled
     shown = s.latest()[0]
     vp.close()
     # F12 with Record buffer and the same settings, then Blender's restyle of the same change

@@ -214,10 +214,11 @@ class SceneSettings(bpy.types.PropertyGroup):
     )
     pass_spp: bpy.props.IntProperty(
         name="Samples per pass",
-        default=4,
+        default=1,
         min=1,
-        description="camera samples per pixel in one pass: cancel and progress act between passes; "
-        "the same seed and split give the same image (`styletrace render --pass-spp`)",
+        description="camera samples per pixel in one pass: cancel, progress and the viewport's "
+        "images act between passes; the same seed and split give the same image "
+        "(`styletrace render --pass-spp`)",
     )
     max_depth: bpy.props.IntProperty(name="Max depth", default=-1, min=-1)
     seed: bpy.props.IntProperty(name="Seed", default=0, min=0)

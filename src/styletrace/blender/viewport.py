@@ -32,6 +32,8 @@ from styletrace.gate import dr, mi
 from styletrace.lookdev.buffer import MAX_SAMPLES
 from styletrace.lookdev.record import Recorded
 from styletrace.lookdev.restyle import restyle as lookdev_restyle
+from styletrace.lookdev.restyle import slots_for
+from styletrace.lookdev.slider import quick_restyle
 from styletrace.pipeline.execute import InProcess
 from styletrace.pipeline.resolve import resolve
 from styletrace.pipeline.runner import Runner
@@ -39,6 +41,11 @@ from styletrace.pipeline.runner import Runner
 #: the draft's largest film (pixels): a larger view is drafted at a reduced resolution
 DRAFT_PIXELS = 160 * 120
 DRAFT_QUALITY = "balanced"
+#: the denoised previews between the passes: coverage points per pixel and OIDN's quality
+#: (`ExpectationJob.preview`; chosen by measurement: docs/design/viewport.md)
+PREVIEW_K, PREVIEW_QUALITY = 4, "fast"
+#: seconds without a new style value after which a drag is at rest: the whole buffer is restyled
+REST_S = 0.25
 #: one Dr.Jit user at a time: sessions replaced by a newer one finish their pass under it
 JIT = threading.Lock()
 #: the render settings that are not the style's: a change starts new passes
@@ -125,6 +132,8 @@ class ViewportSession:
         self.spp_done = 0
         self.stats: dict = {"started": time.perf_counter()}
         self._draft = draft
+        #: the next denoised image is a preview: none at full size has been shown yet
+        self._previewing = True
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="styletrace-viewport", daemon=True)
@@ -245,45 +254,91 @@ class ViewportSession:
                 self.passes_run += 1
                 self.spp_done = prog.spp_done
                 since += time.perf_counter() - start
-                image, label = prog.image, f"pass {k}/{total}, {prog.spp_done} spp"
+                label = f"pass {k}/{total}, {prog.spp_done} spp"
                 if not denoised:
                     self.buffer = getattr(finisher, "recorded", None)
+                    self._show(self._styled(prog.image), label)
                 elif finisher.ready(prog):
-                    if not denoise_now(k, total, since, self.stats["denoise_s"]):
+                    if k < total and not denoise_now(k, total, since, self.stats["denoise_s"]):
                         continue  # the last denoised image stays
-                    start = time.perf_counter()
-                    # Expectation: `_keep` gets the denoised buffer (coverage points: its own
-                    # object, which later passes leave as it is)
-                    image = runner.finish(prog)
-                    self.stats["denoise_s"].append(time.perf_counter() - start)
-                    since, label = 0.0, label + ", denoised"
-                if self.style is not None and self.buffer is not None:
-                    image = _restyled(self.buffer, self.style)
+                    self._denoised(runner, prog, label, k == total)
+                    since = 0.0
+                else:
+                    self._show(self._styled(prog.image), label)
             self.stats["last_pass_s"] = time.perf_counter() - self.stats["started"]
-            self._show(image[..., :3], label)
+        self._warm_quick_restyle()
 
-    def restyle(self, style: dict) -> float | None:
-        """Show the recorded buffer restyled with `style`, with no new pass; later passes are
+    def _denoised(self, runner, prog, label: str, last: bool) -> None:
+        """Show the denoised images of a pass, under `JIT`: a preview (`ExpectationJob.preview`)
+        unless this is the last pass and a full-size denoised image is on screen already; after
+        the last pass, F12's finisher. Each is restyled with a style changed meanwhile."""
+        finisher = runner.finisher
+        if isinstance(finisher, Expectation) and (not last or self._previewing):
+            start = time.perf_counter()
+            image, buf = finisher.job.preview(PREVIEW_K, PREVIEW_QUALITY)
+            self.stats["denoise_s"].append(time.perf_counter() - start)
+            if self.recorded:  # the preview's buffer restyles until the finisher's replaces it
+                self.buffer = buf
+            self._previewing = False
+            self._show(self._styled(image), label + ", denoised (preview)")
+        if last or not isinstance(finisher, Expectation):
+            start = time.perf_counter()
+            # Expectation: `_keep` gets the denoised buffer (coverage points: its own object,
+            # which later passes leave as it is)
+            image = runner.finish(prog)
+            self.stats["denoise_s"].append(time.perf_counter() - start)
+            self._show(self._styled(image), label + ", denoised")
+
+    def _styled(self, image: np.ndarray) -> np.ndarray:
+        """`image`, or the buffer restyled where the style changed since the passes started."""
+        if self.style is not None and self.buffer is not None:
+            return _restyled(self.buffer, self.style)
+        return image[..., :3]
+
+    def _warm_quick_restyle(self) -> None:
+        """Trace and compile the quick restyle of the final buffer (`lookdev.slider`) before the
+        first drag needs it: the one-point-per-pixel view and its kernel, for the current style."""
+        if not self.recorded or self.buffer is None or self._stop.is_set():
+            return
+        with JIT:
+            try:
+                _restyled(self.buffer, self.style or self.values["style"], quick=True)
+            except StyletraceError:
+                pass  # a buffer the quick restyle does not take: drags restyle in full
+
+    def restyle(self, style: dict, quick: bool = False) -> float | None:
+        """Show the recorded buffer restyled with `style`, with no new pass; later images are
         shown restyled too.
 
         Args:
             style: the style slot's values (`style_values`: "style", its parameters and optional
                 "inner_samples", "estimator").
+            quick: restyle one point per pixel with θ as kernel inputs (`lookdev.slider`: a
+                slider being dragged); else the whole buffer (the look at rest).
 
         Returns:
-            The seconds taken, or None where there is no buffer to restyle yet or it cannot take
-            the style (then the caller starts new passes)."""
-        with JIT:
-            if self.buffer is None:
-                return None
+            The seconds taken; 0.0 where a pass or a denoising holds Dr.Jit (`JIT`): the style is
+            then kept and the worker shows its next image with it, without waiting here; None
+            where there is no buffer to restyle yet or it cannot take the style (then the caller
+            starts new passes)."""
+        buf = self.buffer
+        if buf is None or not restylable(buf, style):
+            return None
+        if not JIT.acquire(blocking=not quick):
+            self.style = style  # Blender's UI thread does not wait for a pass
+            return 0.0
+        try:
             start = time.perf_counter()
             try:
-                image = _restyled(self.buffer, style)
+                image = _restyled(self.buffer, style, quick=quick)
             except StyletraceError:
                 return None
             self.style = style
             seconds = time.perf_counter() - start
-        self._show(image, f"restyled, {self.spp_done} spp")
+        finally:
+            JIT.release()
+        how = "restyled at one point per pixel" if quick else "restyled"
+        self._show(image, f"{how}, {self.spp_done} spp")
         return seconds
 
 
@@ -306,10 +361,32 @@ def _rest(values: dict) -> dict:
     return {k: v for k, v in values["integrator"].items() if k not in values["style"]}
 
 
-def _restyled(buf, style: dict) -> np.ndarray:
+def _restyled(buf, style: dict, quick: bool = False) -> np.ndarray:
+    """`buf` restyled with the style slot's values `style` (`quick`: `lookdev.slider`'s)."""
     values = dict(style)
-    return lookdev_restyle(buf, style=values.pop("style"), inner=values.pop("inner_samples", None),
-                           estimator=values.pop("estimator", None), **values)
+    how = quick_restyle if quick else lookdev_restyle
+    return how(buf, style=values.pop("style"), inner=values.pop("inner_samples", None),
+               estimator=values.pop("estimator", None), **values)
+
+
+def restylable(buf, style: dict) -> bool:
+    """Whether `buf` can take the style slot's values `style` without a new pass (host only: no
+    Dr.Jit, so it needs no `JIT`).
+
+    Args:
+        buf: a recorded buffer. style: the style slot's values (`style_values`).
+
+    Returns:
+        False where `lookdev.restyle.slots_for` refuses the change (another n, a per-sample
+        style, an estimator a buffer of means cannot replay, a bad value).
+    """
+    values = dict(style)
+    try:
+        slots_for(buf, style=values.pop("style"), inner=values.pop("inner_samples", None),
+                  estimator=values.pop("estimator", None), **values)
+    except StyletraceError:
+        return False
+    return True
 
 
 class Viewport:
@@ -332,6 +409,7 @@ class Viewport:
         self.sensor: dict | None = None
         self.session: ViewportSession | None = None
         self.log: list[dict] = []
+        self._rest: threading.Timer | None = None  # the restyle at rest of the last drag
 
     def update(self, depsgraph, settings) -> dict:
         """Sync a depsgraph's updates (view_update); restyle, or start new passes, as needed.
@@ -359,9 +437,12 @@ class Viewport:
               or _rest(old) != _rest(values)):
             entry["kind"] = "settings"
         elif old["style"] != values["style"]:
-            seconds = self.session.restyle(values["style"]) if self.session else None
+            # a slider's new value at once, one point per pixel; the whole look at rest
+            seconds = self.session.restyle(values["style"], quick=True) if self.session else None
             entry["kind"] = "restyle" if seconds is not None else "settings"
             entry["restyle_s"] = seconds
+            if seconds is not None:
+                self._rest_later(values["style"])
         elif changes.camera:  # the view through a moved camera reaches `set_view`
             entry["kind"] = "camera"
         if entry["kind"] in ("first", "objects", "settings"):
@@ -369,6 +450,33 @@ class Viewport:
         entry["seconds"] = time.perf_counter() - start
         self.log.append(entry)
         return entry
+
+    def _rest_later(self, style: dict) -> None:
+        """Restyle the whole buffer with `style` once no newer value came for REST_S seconds, in
+        a timer's thread (the session's image then changes; Blender's poll redraws)."""
+        if self._rest is not None:
+            self._rest.cancel()
+        session = self.session
+        self._rest = threading.Timer(REST_S, self._at_rest, (session, style))
+        self._rest.daemon = True
+        self._rest.start()
+
+    def _at_rest(self, session, style: dict) -> float | None:
+        if session is not self.session or session is None or style != self.values["style"]:
+            return None  # a newer session or value: its own rest restyle follows
+        return session.restyle(style)
+
+    def settle(self) -> float | None:
+        """The restyle at rest now, without waiting for REST_S (tests, benchmarks).
+
+        Returns:
+            Its seconds, or None where no drag is pending.
+        """
+        timer, self._rest = self._rest, None
+        if timer is None:
+            return None
+        timer.cancel()
+        return self._at_rest(self.session, self.values["style"])
 
     def set_view(self, view_matrix, window_matrix, width: int, height: int) -> bool:
         """The region's camera (view_draw): a new view starts new passes without exporting.
@@ -424,6 +532,8 @@ class Viewport:
         ).start()
 
     def close(self) -> None:
+        if self._rest is not None:
+            self._rest.cancel()
         if self.session is not None:
             self.session.stop()
             self.session = None
