@@ -103,7 +103,8 @@ class Expectation(Denoised):
                                    self.quality, self.max_samples,
                                    label=self.label or scene_label(job.scene),
                                    coverage=self.coverage, uncertainty=self.uncertainty,
-                                   lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp)
+                                   lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp,
+                                   pilot=resolved.pilot)  # the resolve's: not traced again
         self.aovs = bool(resolved.integrator.settings.aovs)
 
     def source(self, resolved, executor, lock):
