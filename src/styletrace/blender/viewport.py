@@ -26,6 +26,7 @@ from styletrace.blender.properties import settings_integrator_values, style_valu
 from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
 from styletrace.denoise.draft import available as denoise_available
 from styletrace.denoise.finishers import Denoised, Expectation, plan_finisher
+from styletrace.denoise.progressive import denoise_now
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
 from styletrace.gate import dr, mi
@@ -340,20 +341,6 @@ class ViewportSession:
         how = "restyled at one point per pixel" if quick else "restyled"
         self._show(image, f"{how}, {self.spp_done} spp")
         return seconds
-
-
-def denoise_now(k: int, total: int, since: float, denoise_s: list[float]) -> bool:
-    """Whether the viewport denoises after pass `k` of `total`: the first pass that can be, the
-    last, and any pass where the passes since the last denoised image took at least as long as
-    that denoising did (so denoising takes at most about half the time; docs/design/viewport.md).
-
-    Args:
-        k, total: the pass (from 1) and the passes. since: seconds of passes since the last
-            denoised image. denoise_s: the seconds of each denoising so far.
-
-    Returns:
-        True where this pass's image is denoised and shown."""
-    return k == total or not denoise_s or since >= denoise_s[-1]
 
 
 def _rest(values: dict) -> dict:
