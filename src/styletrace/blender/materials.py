@@ -2,12 +2,12 @@
 
 Supported behind the active Material Output: Principled BSDF (base colour from a value or an
 Image Texture, roughness, IOR, Specular IOR Level and Specular Tint, metallic, transmission,
-emission, alpha as a mask), Diffuse, Glossy, Glass and Emission nodes; each node's mapping:
-`principled`, `convert_node`, docs/blender.md ("From the depsgraph to Mitsuba", "Principled
-BSDF"). Every other node is named in one warning per export and rendered as grey diffuse.
-Reflective BSDFs are wrapped in `twosided` (Cycles shades both sides). A material with a
-styletrace style (`properties.MaterialSettings`) wraps its BSDF in a `styled` BSDF. Design:
-docs/design/blender_export.md.
+emission, alpha as a mask; Blender 3.x's node read by 4.x's names), Diffuse, Glossy, Glass and
+Emission nodes; each node's mapping: `principled`, `convert_node`, docs/blender.md ("From the
+depsgraph to Mitsuba", "Principled BSDF"). Every other node is named in one warning per export
+and rendered as grey diffuse. Reflective BSDFs are wrapped in `twosided` (Cycles shades both
+sides). A material with a styletrace style (`properties.MaterialSettings`) wraps its BSDF in a
+`styled` BSDF. Design: docs/design/blender_export.md.
 """
 from __future__ import annotations
 
@@ -289,6 +289,58 @@ def _dielectric(base, tint, roughness: float, f0: float) -> dict:
     return _blend(albedo, {"type": "diffuse", "reflectance": base}, layer)
 
 
+#: Blender 3.x's names of the Principled BSDF inputs that 4.0 renamed, by 4.x's name
+PRINCIPLED_3X_NAMES = {"Specular IOR Level": "Specular", "Transmission Weight": "Transmission",
+                       "Emission Color": "Emission"}
+#: the IOR at which 4.x's F0 = ((IOR - 1) / (IOR + 1))^2 x 2 x level is 3.x's 0.08 x Specular
+PRINCIPLED_3X_IOR = 1.5
+#: Rec. 709 luminance of linear RGB: Cycles' `linear_rgb_to_gray` in Blender's default colour space
+LUMA = (0.2126, 0.7152, 0.0722)
+
+
+def principled_3x_tint(tint: float, base: dict) -> dict:
+    """Blender 3.x's Specular Tint (a float) as 4.x's colour: 3.x's F0 colour is
+    (1 - tint) + tint x Base Color / its luminance (white where that is 0), as Cycles 3.x's.
+
+    Args:
+        tint: the 3.x input's value, in [0, 1]. base: Base Color's description (`colour`).
+
+    Returns:
+        An `rgb` description, or a `bitmap` texture where Base Color is one.
+    """
+    if base.get("type") == "rgb":
+        c = np.asarray(base["value"], dtype=np.float64)
+        lum = float(np.dot(c, LUMA))
+        hue = c / lum if lum > 0 else np.ones(3)
+        return {"type": "rgb", "value": tuple(float(v) for v in (1.0 - tint) + tint * hue)}
+    data = base["data"]
+    lum = data @ np.asarray(LUMA, dtype=np.float32)
+    hue = np.where(lum[..., None] > 0, data / np.maximum(lum, 1e-30)[..., None], 1.0)
+    return texture(((1.0 - tint) + tint * hue).astype(np.float32))
+
+
+def principled_sockets(node) -> tuple[Callable[[str], Any], float | None]:
+    """The Principled BSDF's inputs by Blender 4.x's names, for 4.x's node and for 3.x's.
+
+    Blender 3.x names three of the inputs `principled` reads otherwise (`PRINCIPLED_3X_NAMES`),
+    its Specular Tint is a float (`principled_3x_tint`), and its specular layer's F0 is
+    0.08 x Specular whatever the IOR, which 4.x's formula gives at IOR 1.5 with level = Specular;
+    3.x's IOR sets the transmission's refraction only. A 3.x node is one without "Specular IOR
+    Level".
+
+    Args:
+        node: the Principled BSDF node (anything with `inputs[name]` and `inputs.get(name)`).
+
+    Returns:
+        (socket by 4.x name, the IOR of F0: None for a 4.x node, whose IOR input it is;
+        `PRINCIPLED_3X_IOR` for a 3.x node).
+    """
+    inputs = node.inputs
+    if inputs.get("Specular IOR Level") is not None:
+        return inputs.__getitem__, None
+    return (lambda name: inputs[PRINCIPLED_3X_NAMES.get(name, name)]), PRINCIPLED_3X_IOR
+
+
 def principled(node, ctx: MaterialContext, material) -> tuple[dict, dict | None, Any]:
     """(bsdf, emitter or None, opacity) of a Principled BSDF node.
 
@@ -301,7 +353,8 @@ def principled(node, ctx: MaterialContext, material) -> tuple[dict, dict | None,
     compensation and Specular Tint (which tints the whole layer; Cycles tints F0 only). `diffuse`
     alone where F0 = 0. That base is blended with a `roughdielectric` by Transmission Weight and
     a `roughconductor` (Fresnel taken as 1, as Cycles' F82 at normal incidence) by Metallic;
-    emission colour x strength as an `area` emitter.
+    emission colour x strength as an `area` emitter. Blender 3.x's node is read by 4.x's names
+    and meaning (`principled_sockets`).
 
     Args:
         node: the node. ctx: the export's MaterialContext. material: the material.
@@ -309,32 +362,36 @@ def principled(node, ctx: MaterialContext, material) -> tuple[dict, dict | None,
     Returns:
         The BSDF, the emitter or None, and the opacity (a float, or a texture of the Alpha input).
     """
-    inp = node.inputs
-    base = colour(inp["Base Color"], ctx, material)
-    rough = scalar(inp["Roughness"], ctx, material)
-    metal = scalar(inp["Metallic"], ctx, material)
-    trans = scalar(inp["Transmission Weight"], ctx, material)
-    ior = scalar(inp["IOR"], ctx, material)
-    level = scalar(inp["Specular IOR Level"], ctx, material)
-    f0 = ((ior - 1.0) / (ior + 1.0)) ** 2 * 2.0 * max(level, 0.0)
+    inp, f0_ior = principled_sockets(node)
+    base = colour(inp("Base Color"), ctx, material)
+    rough = scalar(inp("Roughness"), ctx, material)
+    metal = scalar(inp("Metallic"), ctx, material)
+    trans = scalar(inp("Transmission Weight"), ctx, material)
+    ior = scalar(inp("IOR"), ctx, material)
+    level = scalar(inp("Specular IOR Level"), ctx, material)
+    eta = ior if f0_ior is None else f0_ior
+    f0 = ((eta - 1.0) / (eta + 1.0)) ** 2 * 2.0 * max(level, 0.0)
     if f0 <= 0:
         bsdf = {"type": "diffuse", "reflectance": base}
     else:
-        tint = colour(inp["Specular Tint"], ctx, material)
+        if f0_ior is None:
+            tint = colour(inp("Specular Tint"), ctx, material)
+        else:
+            tint = principled_3x_tint(scalar(inp("Specular Tint"), ctx, material), base)
         bsdf = _dielectric(base, tint, rough, f0)
     bsdf = _blend(trans, bsdf, _glass(base, rough, ior))
     bsdf = _blend(metal, bsdf, _conductor(base, rough))
-    strength = scalar(inp["Emission Strength"], ctx, material)
+    strength = scalar(inp("Emission Strength"), ctx, material)
     emitter = None
     if strength > 0:
-        e = colour(inp["Emission Color"], ctx, material)
+        e = colour(inp("Emission Color"), ctx, material)
         if e.get("type") == "rgb":
             e = {"type": "rgb", "value": tuple(c * strength for c in e["value"])}
             emitter = {"type": "area", "radiance": e} if any(e["value"]) else None
         else:
             emitter = {"type": "area", "radiance": texture(e["data"] * np.float32(strength))}
-    a_src = _source(inp["Alpha"])
-    opacity = colour(inp["Alpha"], ctx, material) if a_src else float(inp["Alpha"].default_value)
+    a_src = _source(inp("Alpha"))
+    opacity = colour(inp("Alpha"), ctx, material) if a_src else float(inp("Alpha").default_value)
     return bsdf, emitter, opacity
 
 
