@@ -33,7 +33,8 @@ full-size denoised image), and again once the session has ended, of its last ima
 image was replaced before it was taken fails the run. Each shot is checked against the session's
 image: the mean and largest difference in 8-bit levels from 255 sRGB(clip(image)), inside the
 area's 1-pixel border (Blender's dither: about 0.4 on average, 1.4 at most); a mean over
-SAME_LEVELS fails the run (another pass's image differs by about 7).
+SAME_LEVELS fails the run (another pass's image differs by about 7). A draft, smaller than the
+region and drawn stretched, is not compared.
 
 Writes docs/interactive_viewport.png (STYLETRACE_SHOT: another path): the two shots side by side,
 each captioned with its label and the seconds since the edit; prints the timings as
@@ -202,8 +203,10 @@ def shoot(draws, entry, path):
     _, s = session()
     if draws.last is not image or s is None or s.latest()[0] is not image:
         raise RuntimeError(f"the image {label!r} was replaced before its screenshot")
-    if shot.shape[:2] != image.shape[:2]:
-        raise RuntimeError(f"region {shot.shape[:2]} but the image is {image.shape[:2]}")
+    if shot.shape[:2] != image.shape[:2]:  # a draft, drawn stretched
+        say(f"shot {label!r}: first drawn {entry[0]:.2f} s after the edit, screenshot at "
+            f"{taken:.2f} s; a {image.shape[1]}x{image.shape[0]} image stretched: not compared")
+        return shot
     # the outermost pixels are the area's border, drawn over the image
     diff = np.abs(shot.astype(np.float64) - srgb8(image))[1:-1, 1:-1]
     say(f"shot {label!r}: first drawn {entry[0]:.2f} s after the edit, screenshot at "
