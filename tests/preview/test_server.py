@@ -119,3 +119,47 @@ def test_two_clients_at_once_get_consistent_images(session):
     for t in threads:
         t.join()
     assert errors == []
+
+
+def _png_of(image):
+    from styletrace.preview.server import encode_image_file
+    return "data:image/png;base64," + base64.b64encode(encode_image_file(image, "png")).decode()
+
+
+def test_quick_restyles_one_point_per_pixel_and_the_full_one_the_buffer(client, session):
+    from styletrace.lookdev.slider import quick_restyle
+    params = {"c": "1.7", "pivot": "auto", "exposure": "auto"}
+    quick = client.post("/api/restyle", json={"style": "contrast", "params": params,
+                                              "quick": True}).json()
+    assert quick["quick"] and not quick["busy"] and quick["kind"] == "final"
+    assert quick["image"] == _png_of(quick_restyle(session.buffer, style="contrast", **params))
+    full = client.post("/api/restyle", json={"style": "contrast", "params": params,
+                                             "wait": False}).json()
+    assert not full["quick"] and not full["busy"] and full["stamp"] > quick["stamp"]
+    assert full["image"] == _png_of(restyle(session.buffer, style="contrast", **params))
+    assert full["image"] != quick["image"]
+    assert full["version"] == session.state()["version"] == len(session.shown)
+
+
+def test_a_quick_restyle_does_not_wait_for_a_pass(client, session):
+    """While a pass holds the session's lock (held here by the test), a quick restyle answers at
+    once, busy, with no image of its own (the render thread restyles its style after its pass:
+    test_schedule.py)."""
+    params = {"c": "1.3", "pivot": "auto", "exposure": "auto"}
+    busy = session.counts["busy"]
+    with session.jit:
+        body = client.post("/api/restyle", json={"style": "contrast", "params": params,
+                                                 "quick": True}).json()
+        bad = client.post("/api/restyle", json={"style": "contrast", "params": {"c": "-1"},
+                                                "quick": True})
+    assert body["busy"] and session.counts["busy"] == busy + 1
+    # a bad value is refused at once, busy or not
+    assert bad.status_code == 400 and "bad value" in bad.json()["error"]
+    # the render thread has finished: nothing of this style restyled after a pass to show
+    assert body["image"] is None and body["kind"] == "final" and session.state()["restyled"] == 0
+
+
+@pytest.mark.parametrize("flag", ["quick", "wait"])
+def test_bad_flags(client, flag):
+    r = client.post("/api/restyle", json={"style": "cel", flag: "yes"})
+    assert r.status_code == 400 and f"bad {flag} 'yes'" in r.json()["error"]

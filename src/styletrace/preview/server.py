@@ -5,8 +5,9 @@ Routes (JSON API documented in docs/preview.md):
     GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices)
                         and the estimators that can restyle it
     GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
-    POST /api/restyle   {"style", "params", "estimator"}
-                        -> {"image": PNG data URL, "spp", "draft", "ms", "command"}
+    POST /api/restyle   {"style", "params", "estimator", "quick", "wait"}
+                        -> {"image": PNG data URL or null, "spp", "draft", "ms", "command",
+                            "quick", "busy", "stamp", "version", "kind", "label"}
     POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
 A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
 """
@@ -124,6 +125,16 @@ def make_app(session):
             raise ValueError(f"bad estimator {estimator!r}: expected a name")
         return style, estimator, {str(k): v for k, v in params.items()}
 
+    async def flags(request: Request) -> tuple[bool, bool]:
+        """The restyle's `quick` (default false) and `wait` (default: not quick)."""
+        body = await request.json()
+        quick = body.get("quick", False)
+        wait = body.get("wait", not quick)
+        for name, value in (("quick", quick), ("wait", wait)):
+            if not isinstance(value, bool):
+                raise ValueError(f"bad {name} {value!r}: expected true or false")
+        return quick, wait
+
     async def page(request):
         return FileResponse(PAGE, media_type="text/html")
 
@@ -136,23 +147,34 @@ def make_app(session):
     async def do_restyle(request: Request):
         try:
             style, estimator, params = await parse(request)
+            quick, wait = await flags(request)
             t = time.perf_counter()
-            img, spp, inner = await run_in_threadpool(session.restyle, style, estimator, params)
+            r = await run_in_threadpool(session.styled, style, estimator, params, quick, wait)
             ms = (time.perf_counter() - t) * 1e3
         except (ValueError, StyletraceError) as exc:
             return bad(str(exc))
-        if img is None:
+        if r.shown is None:
             return bad("no image yet: the first pass is still rendering", 409)
-        png = await run_in_threadpool(encode_image_file, img, "png")
-        draft = inner != session.inner
-        command = session.command(style, estimator, params, *((spp, inner) if draft else ()))
+        png = None if r.image is None else await run_in_threadpool(encode_image_file, r.image,
+                                                                   "png")
+        shown = r.shown
+        draft = shown.kind == "draft"
+        command = session.command(style, estimator, params,
+                                  *((shown.spp, shown.inner) if draft else ()))
         return JSONResponse(
             {
-                "image": "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
-                "spp": 0 if draft else spp,
+                "image": None if png is None else
+                "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
+                "spp": 0 if draft else shown.spp,
                 "draft": draft,
                 "ms": ms,
                 "command": command,
+                "quick": r.quick,
+                "busy": r.busy,
+                "stamp": r.stamp,
+                "version": shown.version,
+                "kind": shown.kind,
+                "label": shown.label,
             }
         )
 
