@@ -61,7 +61,7 @@ setup_blender() {  # Blender as a Python module with numpy 1.26, beside the main
   local stamp="$BLENDER_VENV/.styletrace-installed"
   if [ ! -f "$stamp" ] || [ pyproject.toml -nt "$stamp" ] || [ constraints-blender.txt -nt "$stamp" ]; then
     "$BLENDER_VENV/bin/python" -m pip install -q --upgrade pip
-    "$BLENDER_VENV/bin/python" -m pip install -q -c constraints-blender.txt -e ".[test,blender,denoise]"
+    "$BLENDER_VENV/bin/python" -m pip install -q -c constraints-blender.txt -e ".[test,blender,denoise,plots]"
     touch "$stamp"
   fi
 }

@@ -23,8 +23,9 @@ RES = 16
 
 def job():
     scene = api.load_scene("cornell-box", RES, RES)
+    # with an uncertainty, so that the spread a finish keeps is compared too
     return X.ExpectationJob(scene, api.make_integrator(style="cel", inner=2), spp=2, seed=4,
-                            coverage=4, pass_spp=1)
+                            coverage=4, pass_spp=1, uncertainty=0.3)
 
 
 @pytest.fixture(scope="module")

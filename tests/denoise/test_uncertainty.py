@@ -120,10 +120,12 @@ def test_bad_uncertainty_is_refused(bad):
 def test_uncertainty_zero_styles_d_itself():
     scene = api.load_scene("cornell-box", 16, 16)
     integ = api.make_integrator(style="cel", inner=2)
-    img0, b0 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4, uncertainty=0)
-    img1, b1 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4)
+    img0, b0 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4)
+    img1, b1 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4,
+                                             uncertainty=0.3)
+    assert X.UNCERTAINTY == 0 and b0.header["denoise"]["uncertainty"] == 0  # the default
     assert SPREAD not in b0.arrays and SPREAD in b1.arrays
-    assert b1.header["denoise"]["uncertainty"] == X.UNCERTAINTY and np.all(b1.arrays[SPREAD] >= 0)
+    assert b1.header["denoise"]["uncertainty"] == 0.3 and np.all(b1.arrays[SPREAD] >= 0)
     # the same D at the same points
     np.testing.assert_array_equal(b0.arrays["mean"], b1.arrays["mean"])
     assert np.abs(img0 - img1).max() > 1e-3  # and a different style of it

@@ -542,9 +542,11 @@ def _joined(parts: list, T):
     return T(*(dr.concat([x[i] for x in parts]) for i in range(3)))
 
 
-#: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error,
-#: chosen on the Cornell box (BENCHMARKS.md denoise: 0.15, 0.2, 0.3, 0.45 and 1 tried)
-UNCERTAINTY = 0.3
+#: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error. 0:
+#: g of D itself. 0.3 had the least squared error on the Cornell box (BENCHMARKS.md denoise), but
+#: on an interior its five-node average drew stepped rings around every band edge, where 0 keeps
+#: the bands flat and sharp (docs/design/expectation_denoising.md, "The uncertainty's default")
+UNCERTAINTY = 0.0
 
 
 def check_uncertainty(value) -> float:
