@@ -90,8 +90,8 @@ class Styled:
         shown: the image of the schedule it restyles (None before the draft).
         quick: whether it is one point per pixel (`lookdev.slider.quick_restyle`).
         busy: the lock was held by a pass or a denoising: the style is kept for the render
-            thread, and `image` is the newest one it restyled for a request of the same style
-            (or None).
+            thread, and `image` is the newest one it restyled for a request of the same style and
+            estimator (or None).
         stamp: the restyle's number, from 1, in the order they were made (a page shows an
             answer only if it is newer than the one on screen). seconds: the restyle's own time.
         key: what it restyled (style, estimator, params, quick).
@@ -441,7 +441,7 @@ class Session:
                 self._wanted = key
                 self.counts["busy"] += 1
                 last = self._by_render
-            if last is None or last.key[0] != style:
+            if last is None or last.key[:2] != key[:2]:  # another style or estimator
                 return Styled(None, self.current, quick, busy=True, key=key)
             return replace(last, busy=True)
         try:
