@@ -35,7 +35,6 @@ from styletrace.lookdev.record import Recorded
 from styletrace.lookdev.restyle import restyle as lookdev_restyle
 from styletrace.lookdev.restyle import slots_for
 from styletrace.lookdev.slider import quick_restyle
-from styletrace.pipeline.execute import InProcess
 from styletrace.pipeline.resolve import resolve
 from styletrace.pipeline.runner import Runner
 
@@ -196,15 +195,26 @@ class ViewportSession:
             self.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
 
     def _run_draft(self) -> None:
+        """The draft: one camera sample of the passes' children (at most `budget.CHILDREN`) at
+        the draft's size, denoised at every Denoise setting as auto denoises: the expectation,
+        previewed, for a style of several children (its bands, not a style of single paths
+        blurred), else OIDN's image denoiser."""
         w, h = draft_size(*self.size)
         with JIT:
             if self._stop.is_set():
                 return
             sc = load_view_scene(self.scene_dict(w, h))
-            resolved = self._job(sc, 1, 1, inner_samples="1")
-            prog = next(iter(Runner(resolved, InProcess()).passes()))
+            children = self.values["style"].get("inner_samples") or str(draft_children(
+                self.values["style"]["style"]))
+            resolved = self._job(sc, 1, 1, inner_samples=children)
+            # whatever Denoise says: the draft is a glimpse, not F12's image
+            runner = plan_finisher(resolved, method="auto", label="<draft>")[0]
+            prog = next(iter(runner.passes()))
             image, label = prog.image, "draft"
-            if denoise_available():
+            if isinstance(runner.finisher, Expectation):
+                image = runner.finisher.job.preview(PREVIEW_K, PREVIEW_QUALITY)[0]
+                label = "draft, denoised"
+            elif denoise_available():
                 from styletrace.denoise.image import finish_denoised_image
                 image = finish_denoised_image(sc, prog, self.values["seed"], DRAFT_QUALITY)[0]
                 label = "draft, denoised"
@@ -297,13 +307,15 @@ class ViewportSession:
         return image[..., :3]
 
     def _warm_quick_restyle(self) -> None:
-        """Trace and compile the quick restyle of the final buffer (`lookdev.slider`) before the
-        first drag needs it: the one-point-per-pixel view and its kernel, for the current style."""
+        """Trace and compile the restyles of the final buffer before the first drag needs them:
+        the quick one's one-point-per-pixel view and kernel (`lookdev.slider`), and the whole
+        buffer's kernel, for the current style (θ is a kernel input: later values reuse them)."""
         if not self.recorded or self.buffer is None or self._stop.is_set():
             return
         with JIT:
-            try:
+            try:  # the quick restyle's view and kernel, and the whole buffer's kernel
                 _restyled(self.buffer, self.style or self.values["style"], quick=True)
+                _restyled(self.buffer, self.style or self.values["style"])
             except StyletraceError:
                 pass  # a buffer the quick restyle does not take: drags restyle in full
 
@@ -341,6 +353,21 @@ class ViewportSession:
         how = "restyled at one point per pixel" if quick else "restyled"
         self._show(image, f"{how}, {self.spp_done} spp")
         return seconds
+
+
+def draft_children(style: str) -> int:
+    """Children per camera sample of the draft: the budget's auto count for `style`
+    (`pipeline.budget.CHILDREN` at most; 1 for a style without children).
+
+    Args:
+        style: the style's registry name.
+
+    Returns:
+        n >= 1.
+    """
+    from styletrace.pipeline.budget import CHILDREN
+    from styletrace.styles import style_class
+    return max(1, min(style_class(style).default_inner, CHILDREN))
 
 
 def _rest(values: dict) -> dict:
