@@ -291,11 +291,13 @@ class Session:
                 if not self.denoised:
                     self._show(self.runner.finisher.recorded, "final" if last else "pass", label,
                                prog.spp_done, self.inner)
-                elif denoise_now(k, total, since, self.stats["denoise_s"]):
+                    continue
+                # a request found the lock busy during the pass: its style now, on the image
+                # shown, before a denoising holds the lock longer
+                self._restyle_wanted()
+                if denoise_now(k, total, since, self.stats["denoise_s"]):
                     self._denoised(prog, label, last)
                     since = 0.0
-                elif self._wanted is not None:  # a request found the lock busy: its style now
-                    self._restyle_wanted()
         self.finished = True
         self.stats["final_s"] = time.perf_counter() - self.started
 
