@@ -26,7 +26,7 @@ from styletrace.blender.properties import settings_integrator_values, style_valu
 from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
 from styletrace.denoise.draft import available as denoise_available
 from styletrace.denoise.finishers import Denoised, Expectation, plan_finisher
-from styletrace.denoise.progressive import denoise_now
+from styletrace.denoise.progressive import PREVIEW_K, PREVIEW_QUALITY, denoise_now
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
 from styletrace.gate import dr, mi
@@ -41,9 +41,6 @@ from styletrace.pipeline.runner import Runner
 #: the draft's largest film (pixels): a larger view is drafted at a reduced resolution
 DRAFT_PIXELS = 160 * 120
 DRAFT_QUALITY = "balanced"
-#: the denoised previews between the passes: coverage points per pixel and OIDN's quality
-#: (`ExpectationJob.preview`; chosen by measurement: docs/design/viewport.md)
-PREVIEW_K, PREVIEW_QUALITY = 4, "fast"
 #: seconds without a new style value after which a drag is at rest: the whole buffer is restyled
 REST_S = 0.25
 #: one Dr.Jit user at a time: sessions replaced by a newer one finish their pass under it

@@ -348,7 +348,8 @@ def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> l
     Returns:
         The slots, styles pinned; unchanged for a buffer without a pilot.
     """
-    pilot = {k[len(PILOT):]: v for k, v in buffer.arrays.items() if k.startswith(PILOT)}
+    # by key: `items()` would copy every array of the buffer to the host, the pilot's alone needed
+    pilot = {k[len(PILOT):]: buffer.arrays[k] for k in list(buffer.arrays) if k.startswith(PILOT)}
     if not pilot:
         return slots
     stored = SimpleNamespace(samples=pilot)
