@@ -27,8 +27,8 @@ after nearest-neighbour upscaling). Reported:
 The converged render of the same look: F12 with the same settings and the same children per
 camera sample, 256 paths per pixel: for a denoised expectation, whose camera samples its buffer
 caps (16 per pixel at 512 x 512), the mean of 4 such renders (seeds 99 to 102).
-Cost: each style's render at the defaults through F12, the command line and Python, against the
-identity style's; the viewport's from the timelines.
+Cost: each style's render at the defaults through F12, the command line, Python and the preview,
+against the identity style's; the viewport's from the timelines.
 
 Cycles: Debian's Blender 3.4 (the only windowed Blender here) is built without OIDN, so Cycles'
 viewport denoiser cannot run in a window on this machine. Its viewport is measured as F12 renders
@@ -270,8 +270,9 @@ def median_time(fn, runs: int = COST_RUNS) -> float:
 
 def cost_rows(S, name: str, size: int, tmp: str) -> dict:
     """Seconds of each COST_STYLES render at the defaults (Samples 16, Denoise auto) through F12,
-    the command line (`styletrace render` of the scene exported to XML, a fresh process each) and
-    Python (`styletrace.render` of that file, in this process)."""
+    the command line (`styletrace render` of the scene exported to XML, a fresh process each),
+    Python (`styletrace.render` of that file, in this process) and the preview (its session, to
+    its last image)."""
     import subprocess
 
     import styletrace
@@ -292,8 +293,22 @@ def cost_rows(S, name: str, size: int, tmp: str) -> dict:
                 raise SystemExit(f"styletrace render failed: {done.stderr.strip()}")
         out[("command line", style)] = median_time(cli)
         out[("Python", style)] = median_time(lambda: styletrace.render(xml, style=style))
+        out[("preview", style)] = median_time(lambda: preview_final(xml, style))
         say(name, style, {k[0]: f"{v:.2f} s" for k, v in out.items() if k[1] == style})
     return out
+
+
+def preview_final(xml: str, style: str) -> float:
+    """Seconds from the preview session's start to its last image (`styletrace preview` at the
+    defaults, the page's starting style `style`; no server)."""
+    from styletrace.preview.session import Session
+    s = Session(xml, style=style).start()
+    while not s.done and s.error is None:
+        time.sleep(0.005)
+    s.stop()
+    if s.error is not None:
+        raise SystemExit(f"preview failed: {s.error}")
+    return s.stats["final_s"]
 
 
 def cost_table(costs: dict, rows: list[dict]) -> str:
@@ -301,7 +316,7 @@ def cost_table(costs: dict, rows: list[dict]) -> str:
     (seconds to its last image)."""
     done = {(r["scene"], r["who"].split()[-1]): r["done"] for r in rows
             if r["who"].startswith("styletrace")}
-    fronts = ("F12", "command line", "Python")
+    fronts = ("F12", "command line", "Python", "preview")
     out = ["| scene | front end | identity s | " + " | ".join(
         f"{s} s (x identity)" for s in COST_STYLES[1:]) + " |",
            "|---|---|---|" + "---|" * (len(COST_STYLES) - 1)]
