@@ -19,7 +19,8 @@ differ only in the seed (both in sRGB, `measures`; a draft smaller than the view
 after nearest-neighbour upscaling). Reported:
 - first image: the first image shown;
 - clean: the first full-size image at PSNR >= 30 dB against the converged render, and the noise
-  PSNR between the two seeds' images on screen at that time (the other seed's latest);
+  PSNR between the two seeds' images of that state (the same label; else the other seed's image
+  on screen at that time);
 - done: the session's last image;
 - drag (cel): its levels changed ten times in a row, each restyled at one point per pixel: the
   median and largest time from the change (the update call) to its image; rest: the whole
@@ -177,9 +178,12 @@ def styletrace_row(S, name: str, size: int, style: str, tmp: str) -> dict:
     h, w = ref.shape[:2]
     a, b = runs[0]["images"], runs[1]["images"]
     rows = []
+    by_label = {label: img for _, label, img in b}
     for t, label, img in a:
-        # the other seed's image on screen at that time (its first before it showed any)
-        pair = next((o for u, _, o in reversed(b) if u <= t), b[0][2])
+        # the other seed's image of the same state (label), else the one on screen at that time
+        pair = by_label.get(label)
+        if pair is None:
+            pair = next((o for u, _, o in reversed(b) if u <= t), b[0][2])
         rows.append({"t": t, "label": label, "full": img.shape[:2] == (h, w),
                      "ref": psnr(full_size(img, h, w), ref),
                      "seeds": measures.noise_psnr(full_size(img, h, w), full_size(pair, h, w))})
