@@ -77,7 +77,8 @@ def write_section(name: str, body: str) -> None:
         if pattern.search(text)
         else text.rstrip() + "\n\n" + block + "\n"
     )
-    REPORT.write_text(text)
+    from styletrace.images import write_bytes_atomically  # a cut write never halves the file
+    write_bytes_atomically(text.encode(), str(REPORT))
 
 
 def median_time(fn, runs: int) -> float:

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from styletrace.gate import dr, mi
+from styletrace.kernel.launch import render_pass
 from styletrace.lookdev.film_filter import seeded_positions
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever);
@@ -121,8 +122,7 @@ def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "f
     if footprint == "pixel" and not scene.sensors()[0].film().rfilter().is_box_filter():
         img = _in_pixels(scene, int(spp), int(seed))
     else:
-        img = np.asarray(mi.render(scene, integrator=GuidePass(), spp=int(spp), seed=int(seed)),
-                         dtype=np.float32)
+        img = np.asarray(render_pass(scene, GuidePass(), int(spp), int(seed)), dtype=np.float32)
     img = np.nan_to_num(img[..., -12:])  # the AOVs come last whatever the film's own channels
     return Guides(*(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, 12, 3)))
 

@@ -18,6 +18,7 @@ import numpy as np
 from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
 from styletrace.jit import no_collection
+from styletrace.kernel.launch import render_pass
 
 #: Camera samples per pixel of the pass, each drawing ceil(m / PASS_SPP) children: the pixel's
 #: footprint, not one point of it (a lane whose children are far brighter than its pixel's b
@@ -260,7 +261,7 @@ class Expansion:
         try:
             # as pipeline.passes: no scene finalised while the pass is recorded
             with no_collection():
-                mi.render(scene, integrator=integrator, spp=PASS_SPP, seed=seed)
+                render_pass(scene, integrator, PASS_SPP, seed)
                 sets = self.collector.means(key)
         finally:
             self.collector = None

@@ -21,6 +21,7 @@ from styletrace.errors import UsageError
 from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.jit import no_collection
+from styletrace.kernel.launch import render_pass
 from styletrace.scene.arguments import check_passes_args
 from styletrace.scene.defaults import ScenePilot
 from styletrace.scene.defaults import resolve_defaults as resolve_defaults
@@ -361,9 +362,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     expand(scene, expansion_seed(seed, t))
                 # recorded and launched with no scene finalised meanwhile (jit.no_collection)
                 with no_collection():
-                    img = mi.render(
-                        scene, integrator=integrator, spp=n, seed=pass_seed(seed, index)
-                    )
+                    img = render_pass(scene, integrator, n, pass_seed(seed, index))
                     arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)

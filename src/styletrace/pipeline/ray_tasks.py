@@ -73,14 +73,15 @@ def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size:
         (the float32 window, h x w x 3; this worker's process id).
     """
     scene, integrator = _prepare(job)
-    from styletrace.gate import mi  # deliberately here: after `load` chose the driver's variant
+    # deliberately here: after `load` chose the driver's variant
+    from styletrace.kernel.launch import render_pass
     from styletrace.pipeline.passes import Crop
     sensor = scene.sensors()[0]
     with _camera(sensor, job.camera), Crop(sensor) as crop:
         if tuple(size) != crop.full:  # as the pass loop does for its tiles
             crop.set(offset, size)
         with no_collection():  # as the pass loop: no scene finalised while the pass is recorded
-            img = mi.render(scene, integrator=integrator, spp=spp, seed=seed)
+            img = render_pass(scene, integrator, spp, seed)
             arr = np.array(img, dtype=np.float32)[..., :3]
     return arr, os.getpid()
 
