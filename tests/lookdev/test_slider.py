@@ -1,4 +1,4 @@
-"""Restyles at slider speed (`restyle.opaque_style`, `slider.quick_restyle`).
+"""Restyles at slider speed (`Style.opaque`, `slider.quick_restyle`).
 
 - Every restyle passes the style's real parameters to its kernel as inputs: after the first value
   of a parameter, a new value launches only kernels already compiled (Dr.Jit's kernel history:
@@ -16,7 +16,6 @@ from styletrace.gate import dr
 from styletrace.lookdev.record import render_buffer
 from styletrace.lookdev.restyle import (
     accumulate,
-    opaque_style,
     per_pixel,
     prepare_slots,
     restyle,
@@ -82,12 +81,13 @@ def test_a_new_value_launches_the_same_kernels(buf, style):
                                rtol=1e-5, atol=1e-7)
 
 
-def test_opaque_style_leaves_the_style_as_it_was(buf):
+def test_opaque_leaves_the_style_as_it_was(buf):
     slot = prepare_slots(buf, slots_for(buf, style="gamma", gamma=1.8))[0]
-    copy = opaque_style(slot.style)
+    copy = slot.style.opaque()
     assert slot.style.values["gamma"] == 1.8 and isinstance(slot.style.values["gamma"], float)
     assert not isinstance(copy.values["gamma"], float)
     assert replace(slot, style=copy).style is copy
+    assert isinstance(slot.style.opaque(names=()).values["gamma"], float)  # only those named
 
 
 def test_quick_restyle_is_the_restyle_of_the_one_point_view(buf):

@@ -285,9 +285,15 @@ def make_estimator(slot, level: int, vertex, settings=None, moments=None,
                    else (2.0, 2e-3))
         return Transformed(adaptive_direct(slot.style, int(n), n_max or int(n), vertex, z, bias))
     cap = firefly_cap(settings)
-    if cap is not None and slot.estimator == "direct" and not slot.style.per_sample:
-        return _capped(lambda I: slot.style.apply(I, vertex), int(n), cap, emitted)
-    return estimator_entry(slot.estimator).build(slot.style, int(n), vertex)
+    style = slot.style
+    if slot.estimator == "direct":
+        # the values pinned from the scene are kernel inputs: an edit that moves them (a moved
+        # object changes the pilot's quantiles) reuses the compiled megakernel; given values stay
+        # literals, so a render of given values draws what it drew before
+        style = style.opaque(style.chosen)
+    if cap is not None and slot.estimator == "direct" and not style.per_sample:
+        return _capped(lambda I: style.apply(I, vertex), int(n), cap, emitted)
+    return estimator_entry(slot.estimator).build(style, int(n), vertex)
 
 
 def _capped(g, n: int, cap: tuple[float, float], emitted) -> Transformed:

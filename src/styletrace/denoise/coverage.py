@@ -18,7 +18,7 @@ from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.lookdev.buffer import MAX_SAMPLES, Buffer
-from styletrace.lookdev.record import RecordingIntegrator, record
+from styletrace.lookdev.record import RecordingIntegrator, inputs, record
 from styletrace.lookdev.restyle import finish_spread
 from styletrace.pipeline.passes import pass_seed
 from styletrace.scene.defaults import ScenePilot
@@ -153,7 +153,7 @@ class CoverageIntegrator(RecordingIntegrator):
         if self.field.spread is None:
             return super().finish_mean(slot, m, v)
         _, pixel, _ = self._at
-        return finish_spread(slot, m, v, dr.gather(mi.Float, self.field.spread, pixel))
+        return finish_spread(inputs(slot), m, v, dr.gather(mi.Float, self.field.spread, pixel))
 
     def _mean(self, slot, level, sampler, site, active) -> mi.Color3f:
         """D at the vertex in place of the children's mean (one lookup per camera ray, whatever

@@ -114,6 +114,9 @@ class MeanOfN(Estimator):
         if self.cap is not None:
             k, floor = self.cap
             top, top_b = state["top"], state["top_b"]
+            # the floor (the scene's median brightness, pinned per render) as a kernel input: an
+            # edit that moves it reuses the compiled kernel
+            floor = A.input_like(floor, top_b)
             if self.n == 1:
                 limit = self.LONE_CAP * floor
             else:

@@ -33,6 +33,7 @@ __all__ = [
     "tree_select",
     "numpy_while_loop",
     "const_like",
+    "input_like",
 ]
 
 _pyabs = abs
@@ -267,6 +268,22 @@ def const_like(c, x):
 
 # ---------------------------------------------------------------------------------------------
 # pytrees (tuple / list / dict) for loop states
+
+
+def input_like(c: float, x):
+    """The number `c` for arithmetic with `x`: as it is for numpy, and for a Dr.Jit `x` an opaque
+    scalar of x's type, a kernel input rather than a literal (a new `c` reuses the kernel).
+
+    Args:
+        c: a Python number. x: a numpy or Dr.Jit value (its type for Dr.Jit).
+
+    Returns:
+        c, or a Dr.Jit array of width 1 holding it.
+    """
+    if not is_drjit(x):
+        return c
+    dr = drjit()
+    return dr.opaque(dr.leaf_t(x) if dr.depth_v(x) > 1 else type(x), float(c))
 
 
 def tree_map(fn, *trees):

@@ -11,6 +11,7 @@ samples than the cap. See docs/design/expectation_buffer.md.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from typing import Any, Callable, Iterator
 
 import numpy as np
@@ -196,6 +197,23 @@ def _window(tile: pass_loop.Tile) -> dict:
                      cols.start or 0, tw if cols.stop is None else cols.stop]}
 
 
+def inputs(slot):
+    """`slot` with its style's real parameters as kernel inputs (`Style.opaque`) where its
+    estimator is direct application: a new value (a restyle's, or auto values an edit moved)
+    reuses the compiled kernel, and a restyle evaluates g as the recording did. Other estimators
+    build their forms from the values on the host: as they are.
+
+    Args:
+        slot: a StyleSlot.
+
+    Returns:
+        The StyleSlot.
+    """
+    if slot.estimator != "direct":
+        return slot
+    return replace(slot, style=slot.style.opaque())
+
+
 class RecordingIntegrator(StylizedIntegrator):
     """`stylized`, plus the per-lane data of an expectation buffer in `self.kept` after each
     `sample()`.
@@ -269,7 +287,7 @@ class RecordingIntegrator(StylizedIntegrator):
         Returns:
             mi.Color3f, the estimate per lane.
         """
-        return finish_slot(slot, m, v)
+        return finish_slot(inputs(slot), m, v)
 
     def through(self, w, value):
         self.kept.update(L_before=mi.Color3f(w.L), beta=dr.select(w.halted, w.beta, 0.0))

@@ -618,8 +618,8 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
     """
     buf = as_buffer(buffer)
     slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
-    try:  # θ as the kernel's inputs: a new value reuses the kernel compiled for the last one
-        img = accumulate(buf, sample_values(buf, [replace(s, style=opaque_style(s.style))
+    try:  # θ as the kernel's inputs (`Style.opaque`): a new value reuses the compiled kernel
+        img = accumulate(buf, sample_values(buf, [replace(s, style=s.style.opaque())
                                                   for s in slots]))
         dr.eval(img)
     except StyletraceError:
@@ -629,43 +629,10 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
-#: parameter kinds a restyle passes to its kernel as opaque values; the others (int, bool, choice,
-#: vector, gradient) shape the traced code or are read on the host, and stay literals
-OPAQUE_KINDS = ("float", "floats", "color")
-
-
-def opaque_style(style):
-    """A copy of `style` whose real-valued parameters are opaque Dr.Jit scalars.
-
-    A literal θ is part of the traced kernel, so every new value compiles a new kernel (about
-    40 ms here, more than a restyle of 512 x 512 takes); an opaque one is a kernel input.
-    Literals and inputs can round the last bit differently (LLVM folds constants).
-
-    Args:
-        style: a prepared style (`prepare_slots`'s).
-
-    Returns:
-        The copy: each parameter of a kind in OPAQUE_KINDS (float: one mi.Float of width 1;
-        floats and color: a tuple of them) is an evaluated Dr.Jit variable. Attributes that
-        `prepare` set are shared with `style`.
-    """
-    out = copy.copy(style)
-    out.values = dict(style.values)
-    for p in style.params:
-        value = style.values[p.name]
-        if value is None or p.kind not in OPAQUE_KINDS:
-            continue
-        if p.kind == "float":
-            out.values[p.name] = dr.opaque(mi.Float, float(value))
-        else:
-            out.values[p.name] = tuple(dr.opaque(mi.Float, float(x)) for x in value)
-    return out
 
 
 __all__ = [
     "restyle",
-    "opaque_style",
-    "OPAQUE_KINDS",
     "finish_slot",
     "finish_spread",
     "SPREAD_NODES",

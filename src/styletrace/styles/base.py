@@ -52,6 +52,11 @@ class Vertex:
     method: Any = None
 
 
+#: parameter kinds `Style.opaque` makes kernel inputs; the others (int, bool, choice, vector,
+#: gradient) shape the traced code or are read on the host, and stay literals
+OPAQUE_KINDS = ("float", "floats", "color")
+
+
 class Style:
     """A style g_theta (the module doc); subclasses declare name, summary, params, default_inner
     and `apply`.
@@ -189,6 +194,37 @@ class Style:
         # no 0/0 where the children agree
         h = dr.maximum(h, 1e-4 * dr.maximum(brightness(I), 1.0))
         return (self.apply(I + h, v) - 2.0 * self.apply(I, v) + self.apply(I - h, v)) / (h * h)
+
+    def opaque(self, names=None) -> "Style":
+        """A copy whose real-valued parameters are opaque Dr.Jit scalars, kernel inputs.
+
+        A literal θ is part of the traced kernel and of its hash, so each new value compiles a
+        new kernel (tens of milliseconds for a restyle, a second or more for a render's
+        megakernel); an opaque one is an input the compiled kernel takes. Literals and inputs can
+        round the last bit differently (LLVM folds constants). Design:
+        docs/design/slider_restyles.md.
+
+        Args:
+            names: the parameters to make opaque (None: every one of a kind in OPAQUE_KINDS;
+                others, and those of other kinds, stay as they are).
+
+        Returns:
+            The copy (float: one mi.Float of width 1; floats and color: a tuple of them);
+            attributes that `prepare` set are shared with this style.
+        """
+        import copy
+        out = copy.copy(self)
+        out.values = dict(self.values)
+        for p in self.params:
+            value = self.values[p.name]
+            if value is None or p.kind not in OPAQUE_KINDS or (names is not None
+                                                               and p.name not in names):
+                continue
+            if p.kind == "float":
+                out.values[p.name] = dr.opaque(mi.Float, float(value))
+            else:
+                out.values[p.name] = tuple(dr.opaque(mi.Float, float(x)) for x in value)
+        return out
 
     def describe(self) -> str:
         vals = ", ".join(f"{p.name}={p.show(self.values[p.name])}" for p in self.params)
@@ -449,6 +485,7 @@ def light_from_camera(cam: Camera) -> tuple[float, float, float]:
 
 __all__ = [
     "Style",
+    "OPAQUE_KINDS",
     "Vertex",
     "Param",
     "StyleError",
