@@ -231,12 +231,13 @@ def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
 
 def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
     """`samples` (paths per pixel; default the scene's sample count, 4 in this file) is split once
-    (`pipeline.budget`) for every front end: at 32 samples cel's camera samples take 4 children
-    each (`budget.CHILDREN`), 8 of them; the file's 4 one camera sample of 4 children. The command
+    (`pipeline.budget`) for every front end. Denoise off: at 32 samples cel's camera samples take
+    its own 16 children, 2 of them; the file's 4 one camera sample of 4 children. The command
     line names the split on its line of auto values and records it in its buffer (`render
     --buffer`), `styletrace.render` runs it (the job its runner gets), `render_buffer` records it
-    and the preview's session takes it. Blender's
-    F12: tests/blender/test_samples.py."""
+    and the preview's session takes it. With the expectation denoised (the default) a camera
+    sample takes at most 4 children (`budget.CHILDREN`): 8 x 4. Blender's F12:
+    tests/blender/test_samples.py."""
     from styletrace.pipeline import execute
     from styletrace.preview.session import Session
     ran = []
@@ -244,7 +245,12 @@ def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
     monkeypatch.setattr(execute, "run_resolved", lambda r, *a: ran.append(r) or run(r, *a))
     cli = [sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3",
            "--style", "cel", "--seed", str(SEED), "--denoise", "off"]
-    for samples, (spp, n) in ((32, (8, 4)), (None, (1, 4))):
+    r = subprocess.run(cli[:-2] + ["--denoise", "expectation", "--samples", "32", "-o",
+                              str(tmp_path / "d.exr")],
+                       capture_output=True, text=True, env=child_env(), timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "auto values: samples=32: spp=8 x 4 children; " in r.stderr, r.stderr
+    for samples, (spp, n) in ((32, (2, 16)), (None, (1, 4))):
         flag = [] if samples is None else ["--samples", str(samples)]
         npz = tmp_path / f"{samples}.npz"
         r = subprocess.run(cli + flag + ["--buffer", str(npz), "-o", str(tmp_path / "o.exr")],

@@ -10,6 +10,13 @@ from styletrace.pipeline.job import python_job
 from styletrace.pipeline.resolve import resolve
 
 
+def planned(sc, st, **kw):
+    """(spp, n) the Python API's render of `sc` with F12's denoise setting runs."""
+    from styletrace.denoise.default import choose
+    r = choose(resolve(python_job(sc, style="cel", **kw), scene=sc), st.denoise).resolved
+    return r.spp, int(r.integrator.settings.slot.n(0))
+
+
 def split_of(st):
     """(spp, n) of F12's run with the settings `st`, and the loaded scene (the resolved job of the
     runner F12 builds: nothing renders)."""
@@ -21,26 +28,28 @@ def split_of(st):
 def test_samples_split_as_every_front_end_splits_them(tmp_path):
     S.room(16)
     st = bpy.context.scene.styletrace
-    st.style, st.denoise = "cel", "off"
+    st.style, st.denoise = "cel", "expectation"
     assert (st.samples, st.spp, st.inner_samples) == (16, 0, "")  # Samples 16, the rest auto
     got, sc = split_of(st)
     assert got == (4, 4)
     # the exported sampler counts Samples; the Python API's split of the same scene is F12's
     from styletrace.scene.loading import scene_spp
     assert scene_spp(sc) == 16
-    api = resolve(python_job(sc, style="cel"), scene=sc)
-    assert (api.spp, int(api.integrator.settings.slot.n(0))) == got
+    assert planned(sc, st) == got
     st.samples = 64
     got, sc = split_of(st)
     assert got == (16, 4) and scene_spp(sc) == 64
-    api = resolve(python_job(sc, style="cel", samples=64), scene=sc)
-    assert (api.spp, int(api.integrator.settings.slot.n(0))) == got
+    assert planned(sc, st, samples=64) == got
+    # not denoised: g meets each camera sample's mean, and cel keeps its own 16 children
+    st.denoise = "off"
+    got, sc = split_of(st)
+    assert got == (4, 16) and planned(sc, st, samples=64) == got
     line = operators.command_line("s.xml", st)
     assert line.startswith("styletrace render s.xml --samples 64 --seed 0 --pass-spp 1"), line
-    # F12 renders the split: its passes' spp (one pass of 4 camera samples)
+    # F12 renders the split: its passes' spp (one pass of 1 camera sample of 16 children)
     st.samples = 16
     S.styletrace(str(tmp_path / "f12.exr"), 0, pass_spp=4, style="cel", aovs=False)
-    assert engine.LAST["spp_total"] == 4 and engine.LAST["spp_done"] == 4
+    assert engine.LAST["spp_total"] == 1 and engine.LAST["spp_done"] == 1
 
 
 def test_camera_and_inner_samples_win():
@@ -51,6 +60,8 @@ def test_camera_and_inner_samples_win():
     assert split_of(st)[0] == (4, 16)
     assert "--samples 64 --spp 4 --seed" in operators.command_line("s.xml", st)
     st.samples = 16
+    assert split_of(st)[0] == (4, 4)
+    st.spp, st.denoise = 0, "expectation"
     assert split_of(st)[0] == (4, 4)
     st.spp, st.inner_samples = 0, "8"  # Inner samples alone: Samples / 8 camera samples
     assert split_of(st)[0] == (2, 8)

@@ -1,10 +1,12 @@
-"""The sample budget (`pipeline.budget`, issue 36): `samples`, paths per pixel, split once by
-`pipeline.resolve` into camera samples x children for every style; explicit counts win exactly,
-three that disagree are refused in one line, and the expectation buffer's cap lowers an auto spp.
-The observable is the resolved job (its spp, its integrator's `slot.n`), not a render."""
+"""The sample budget (`pipeline.budget`, issue 36): `samples`, paths per pixel, split by
+`pipeline.resolve` into camera samples x children for every style, and again for the expectation
+denoiser (`denoise.default.choose`, every front end's default): explicit counts win exactly, three
+that disagree are refused in one line, and the expectation buffer's cap lowers an auto spp. The
+observable is the planned job (its spp, its integrator's `slot.n`), not a render."""
 import pytest
 
 from styletrace.config.settings import AdaptiveCount
+from styletrace.denoise.default import choose
 from styletrace.errors import UsageError
 from styletrace.frontends import api
 from styletrace.pipeline.budget import CHILDREN, Request, split
@@ -28,8 +30,15 @@ def box():
     return api.load_scene("cornell-box", W, H)
 
 
-def resolved(scene, **kw):
-    return resolve(python_job("cornell-box", width=W, height=H, **kw), scene=scene)
+def resolved(scene, denoise="expectation", **kw):
+    """The job a render of `denoise` runs (the expectation: every front end's default for a style
+    of several children)."""
+    return planned(resolve(python_job("cornell-box", width=W, height=H, **kw), scene=scene),
+                   denoise)
+
+
+def planned(r, denoise="expectation"):
+    return choose(r, denoise).resolved
 
 
 def counts(r):
@@ -57,6 +66,19 @@ def test_the_scenes_sample_count_is_the_default_budget(box):
     assert counts(resolved(box, style="cel", samples=24)) == (6, 4)  # round(24 / 4) = 6
     # a style of fewer children than CHILDREN keeps its own n
     assert counts(resolved(box, style="identity", samples=24)) == (24, 1)
+
+
+def test_without_the_expectation_denoised_an_auto_n_is_the_styles():
+    """g applied to each camera sample's mean of n children is biased by O(1/n): where the
+    expectation is not denoised (denoise off or image) the budget keeps the style's own n."""
+    box = api.load_scene("cornell-box", W, H)
+    for denoise in ("off", "image"):
+        r = resolved(box, denoise, style="cel")
+        assert counts(r) == (1, 16) and r.auto.startswith("samples=16: spp=1 x 16 children")
+        assert counts(resolved(box, denoise, style="cel", samples=64)) == (4, 16)
+        assert counts(resolved(box, denoise, style="saturation")) == (2, 8)
+        assert counts(resolved(box, denoise, style="identity")) == (16, 1)
+        assert counts(resolved(box, denoise, style="cel", inner=2)) == (8, 2)  # given: as given
 
 
 def test_a_given_inner_count_wins_and_spp_follows(box):
@@ -109,18 +131,19 @@ def test_the_scene_files_own_inner_count_is_given(tmp_path):
         '<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter>'
         "</shape></scene>"
     )
-    assert counts(resolve(Job(scene=str(scene)))) == (8, 4)
-    assert counts(resolve(Job(scene=str(scene), samples=64))) == (16, 4)
+    assert counts(planned(resolve(Job(scene=str(scene))))) == (8, 4)
+    assert counts(planned(resolve(Job(scene=str(scene), samples=64)))) == (16, 4)
     with pytest.raises(UsageError, match=r"--inner 4 \(16 paths per pixel\)"):
         resolve(Job(scene=str(scene), samples=64, spp=4))
 
 
 def test_a_prebuilt_integrator_is_split_unless_it_names_its_count(box):
     cel = api.make_integrator(style="cel")
-    assert counts(resolve(Job(scene=box, integrator=cel, samples=64))) == (16, 4)
-    assert counts(resolve(Job(scene=box, integrator=cel, samples=8))) == (2, 4)
+    assert counts(planned(resolve(Job(scene=box, integrator=cel, samples=64)))) == (16, 4)
+    assert counts(planned(resolve(Job(scene=box, integrator=cel, samples=8)))) == (2, 4)
+    assert counts(resolve(Job(scene=box, integrator=cel, samples=8))) == (1, 8)  # not denoised
     given = api.make_integrator(style="cel", inner=2)
-    r = resolve(Job(scene=box, integrator=given, samples=8))
+    r = planned(resolve(Job(scene=box, integrator=given, samples=8)))
     assert counts(r) == (4, 2) and r.integrator.values["inner_samples"] == 2
     from styletrace.gate import mi
     path = mi.load_dict({"type": "path"})  # no children: a camera sample is one path
@@ -136,8 +159,10 @@ def test_bad_samples_are_refused_in_one_line(box, bad):
 
 def test_the_rule_itself():
     """`split` alone: the module doc's cases, without a scene."""
-    assert (s := split(Request(16, None, None, 16))).spp == 4 and s.inner == (4,)
+    assert (s := split(Request(16, None, None, 16, denoised=True))).spp == 4 and s.inner == (4,)
     assert s.note == "samples=16: spp=4 x 4 children"
+    assert (s := split(Request(16, None, None, 16))).spp == 1 and s.inner == (16,)
+    assert split(Request(64, None, None, 8)).inner == (8,)
     assert split(Request(16, None, None, 0)).note == "samples=16: spp=16 (no children)"
     assert split(Request(16, None, None, 1)).note == "samples=16: spp=16 x 1 child"
     assert split(Request(64, 4, None, 16, samples_given=True)).inner == (16,)
@@ -153,10 +178,11 @@ def test_the_rule_itself():
 
 def test_the_expectation_buffers_cap_lowers_an_auto_spp_and_raises_an_auto_n():
     assert split(Request(64, None, None, 16), cap=16) == split(Request(64, None, None, 16))
-    capped = split(Request(1024, None, None, 16), cap=16)  # 64 x 16 would be 64 camera samples
+    # 64 x 16 would be 64 camera samples
+    capped = split(Request(1024, None, None, 16, denoised=True), cap=16)
     assert (capped.spp, capped.inner) == (16, (64,))
     assert capped.note == "samples=1024: spp=16 x 64 children"
-    assert split(Request(1000, None, None, 16), cap=16).inner == (63,)  # ceil(1000 / 16)
+    assert split(Request(1000, None, None, 16, denoised=True), cap=16).inner == (63,)  # ceil
     # a given n stays; the spp is held to the cap
     assert (lambda s: (s.spp, s.inner))(split(Request(1024, None, (8,), 16), cap=16)) == (16, (8,))
     # a given spp is the caller's (the denoiser refuses it instead: denoise.default.method_for)

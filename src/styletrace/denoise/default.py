@@ -8,7 +8,9 @@ buffer's cap on camera samples.
 denoiser applies to a style of more than one child, `image` where the image denoiser takes the
 render, else `off` with a one-line note (`method_for`). A render that denoises also gets, unless
 the caller set them, the firefly control (`with_firefly`) and, without a given spp, the scene's
-samples spent on children (`pin_denoise_budget`). Design: docs/design/denoise_defaults.md.
+samples split again where it denoises the expectation (`pin_denoise_budget`: at most
+`pipeline.budget.CHILDREN` children, within the buffer's cap).
+Design: docs/design/denoise_defaults.md.
 """
 from __future__ import annotations
 
@@ -164,6 +166,31 @@ def choose(resolved, method: str | None = None, local: bool = True) -> Plan:
     return Plan(method, pin_denoise_budget(resolved, method), note)
 
 
+def resplit(resolved, request, cap: int | None = None):
+    """`resolved` with its budget split again for `request` (`pipeline.budget.split`).
+
+    Args:
+        resolved: the resolved job. request: the budget's request, changed. cap: the most camera
+            samples per pixel an auto spp may take, or None.
+
+    Returns:
+        `resolved` itself where the split is the same or it has no budget or no `stylized`
+        integrator; else a copy with the new children, spp and `auto` line.
+    """
+    from styletrace.kernel.integrator import StylizedIntegrator
+    from styletrace.pipeline.budget import split
+    from styletrace.pipeline.resolve import with_inner
+    budget = resolved.budget
+    if budget is None or not isinstance(resolved.integrator, StylizedIntegrator):
+        return resolved
+    again = split(request, cap)
+    if again == budget:
+        return resolved
+    auto = resolved.auto.replace(budget.note, again.note) if budget.note else resolved.auto
+    return replace(resolved, integrator=with_inner(resolved.integrator, again.inner),
+                   spp=again.spp, auto=auto, budget=again)
+
+
 def with_firefly(scene, integrator, method: str, pilot=None):
     """The firefly control a render of `method` gets at its default: on where it denoises, unless
     `firefly` was given or error AOVs (which describe the paper's estimator) are on.
@@ -183,37 +210,31 @@ def with_firefly(scene, integrator, method: str, pilot=None):
 
 
 def pin_denoise_budget(resolved, method: str):
-    """`resolved` with the firefly control on and, for the expectation denoiser, an auto spp within
-    its buffer's cap.
+    """`resolved` with the firefly control on and, for the expectation denoiser, the budget split
+    for it: at most `pipeline.budget.CHILDREN` children, an auto spp within its buffer's cap.
 
     Args:
         resolved: the resolved job. method: "expectation" or "image".
 
     Returns:
         A copy with the firefly control (`with_firefly`) and, with expectation, the budget split
-        again within MAX_SAMPLES // (w x h) camera samples per pixel (`pipeline.budget.split`: an
-        auto spp lowered to the cap, an auto n raised to ceil(samples / spp)); its `auto` line
+        again as denoised, within MAX_SAMPLES // (w x h) camera samples per pixel
+        (`pipeline.budget.split`: an auto spp lowered to the cap, an auto n raised to
+        ceil(samples / spp)); its `auto` line
         names the values. Other integrators: as they are.
     """
     from styletrace.kernel.integrator import StylizedIntegrator
-    integrator, auto = resolved.integrator, resolved.auto
-    if not isinstance(integrator, StylizedIntegrator):
+    if not isinstance(resolved.integrator, StylizedIntegrator):
         return resolved
-    budget = resolved.budget
-    if method == "expectation" and budget is not None:  # within what the buffer holds
+    if method == "expectation" and resolved.budget is not None:  # within what the buffer holds
         from styletrace.lookdev.buffer import MAX_SAMPLES
-        from styletrace.pipeline.budget import split
-        from styletrace.pipeline.resolve import with_inner
         w, h = resolved.size
-        capped = split(budget.request, MAX_SAMPLES // (w * h))
-        if capped != budget:
-            integrator = with_inner(integrator, capped.inner)
-            auto = auto.replace(budget.note, capped.note) if budget.note else auto
-            budget = capped
-    integrator, note = with_firefly(resolved.scene, integrator, method, resolved.pilot)
-    auto = "; ".join(a for a in (auto, note) if a)
-    spp = resolved.spp if budget is None else budget.spp
-    return replace(resolved, integrator=integrator, spp=spp, auto=auto, budget=budget)
+        # g meets the denoised expectation: at most CHILDREN children (`pipeline.budget`)
+        request = replace(resolved.budget.request, denoised=True)
+        resolved = resplit(resolved, request, MAX_SAMPLES // (w * h))
+    integrator, note = with_firefly(resolved.scene, resolved.integrator, method, resolved.pilot)
+    auto = "; ".join(a for a in (resolved.auto, note) if a)
+    return replace(resolved, integrator=integrator, auto=auto)
 
 
 __all__ = [
@@ -228,5 +249,6 @@ __all__ = [
     "nonlinear",
     "with_firefly",
     "pin_denoise_budget",
+    "resplit",
     "FIREFLY_K",
 ]

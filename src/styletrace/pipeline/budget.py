@@ -1,6 +1,6 @@
 """The sample budget: a render's paths per pixel split into camera samples and children.
 
-    s = split(Request(samples=16, spp=None, inner=None, default=16))
+    s = split(Request(samples=16, spp=None, inner=None, default=16, denoised=True))
     s.spp, s.inner, s.paths, s.note     # 4, (4,), 16, "samples=16: spp=4 x 4 children"
 
 `samples` is what Cycles calls Samples: paths per pixel, whatever the style. A camera sample of a
@@ -8,7 +8,10 @@ style with n children costs n paths (the product over the stylized levels; a clo
 with no children, one). The rule (chosen by measurement; docs/look.md):
 
 - neither spp nor inner given: n = min(the style's default n, CHILDREN, samples) for one stylized
-  level (several levels keep their defaults), spp = max(1, round(samples / P));
+  level where the expectation is denoised before g (every front end's default for a style of
+  several children), n = min(the style's default n, samples) where it is not (g applied to each
+  camera sample's mean of n children is biased by O(1/n)); several levels keep their defaults;
+  spp = max(1, round(samples / P));
 - inner given: spp = max(1, round(samples / P));
 - spp given: n = max(1, round(samples / spp)) for one level where samples was given too, else the
   style's default (the render of every call before samples existed);
@@ -50,6 +53,9 @@ class Request:
         samples_given: whether the caller named `samples` (the scene's count is a default only).
         min_spp: the fewest camera samples an auto spp may take (2 where the error AOVs estimate
             each pixel's variance).
+        denoised: the expectation is denoised before g (`denoise.default.pin_denoise_budget`
+            says so), so an auto n is at most CHILDREN; False (what `pipeline.resolve` asks):
+            g meets each camera sample's mean, and an auto n is the style's.
     """
     samples: int
     spp: int | None
@@ -58,6 +64,7 @@ class Request:
     levels: int = 1
     samples_given: bool = False
     min_spp: int = 1
+    denoised: bool = False
 
     @property
     def closed(self) -> bool:
@@ -145,7 +152,8 @@ def split(request: Request, cap: int | None = None) -> Split:
     inner = r.inner if r.inner is not None else default
     if r.inner is None and one_level(r):
         if r.spp is None:
-            inner = (min(default[0], CHILDREN, r.samples),)
+            most = CHILDREN if r.denoised else default[0]
+            inner = (min(default[0], most, r.samples),)
         elif r.samples_given:
             inner = (max(1, round(r.samples / r.spp)),)
     per = paths_per_camera_sample(inner, r)

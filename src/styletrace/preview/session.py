@@ -27,6 +27,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from styletrace.denoise.default import check_method, default_method
 from styletrace.denoise.draft import QUALITY as DRAFT_QUALITY
 from styletrace.denoise.draft import available as denoise_available
 from styletrace.denoise.draft import draft as denoise_draft
@@ -161,7 +162,8 @@ class Session:
         # auto spp stays within the buffer's cap
         request = Request(scene_spp(self.scene) if samples is None else int(samples), spp,
                           None if inner is None else (int(inner),),
-                          style_class(style).default_inner, samples_given=samples is not None)
+                          style_class(style).default_inner, samples_given=samples is not None,
+                          denoised=check_method(denoise or default_method()) != "off")
         self.budget = split(request, max(1, max_samples // (self.width * self.height)))
         self.inner, self.spp = int(self.budget.inner[0]), self.budget.spp
         if self.width * self.height * self.spp > max_samples:
