@@ -204,3 +204,15 @@ def test_a_restyle_with_new_parameters_chooses_the_auto_values_again():
     for params in ({"levels": "0.2,0.8"}, {"levels": "0.1,0.3,0.6,0.9"}, {"bands": 5}):
         fresh = styletrace.render("cornell-box", style="cel", denoise="off", **kw, **params)
         np.testing.assert_allclose(styletrace.restyle(buf, **params), fresh, rtol=1e-5, atol=1e-6)
+
+
+def test_join_keeps_the_order_of_many_parts():
+    """`join` (a buffer's pass parts, JOIN at a time): the same array as numpy's concatenation, for
+    one part, one group and groups of groups."""
+    from styletrace.gate import mi
+    from styletrace.lookdev.restyle import JOIN, join
+    rng = np.random.default_rng(3)
+    for count in (1, JOIN, JOIN * JOIN + 3):
+        host = [rng.random(int(rng.integers(1, 9))).astype(np.float32) for _ in range(count)]
+        got = np.asarray(join([mi.Float(h) for h in host]))
+        assert np.array_equal(got, np.concatenate(host))

@@ -29,6 +29,7 @@ from styletrace.lookdev.restyle import (
     RESTYLABLE_ESTIMATORS,
     accumulate,
     field,
+    join,
     prepare_slots,
     sample_values,
     slots_for,
@@ -539,7 +540,7 @@ def _joined(parts: list, T):
              for x in parts]
     if len(parts) == 1:
         return parts[0]
-    return T(*(dr.concat([x[i] for x in parts]) for i in range(3)))
+    return T(*(join([x[i] for x in parts]) for i in range(3)))
 
 
 #: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error. 0:
