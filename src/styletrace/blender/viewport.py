@@ -13,6 +13,7 @@ docs/design/viewport.md.
 """
 from __future__ import annotations
 
+import gc
 import threading
 import time
 import traceback
@@ -190,6 +191,12 @@ class ViewportSession:
             self.error = str(exc).strip().splitlines()[0]
         except Exception as exc:  # a bug or Mitsuba's refusal: one line, the finished image kept
             self.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+        if not self._stop.is_set():
+            # the garbage of this session and those before it (scenes, buffers, kernels' arrays)
+            # collected now, while the view is idle, not in the next session's draft (cel on the
+            # interior at 512 x 512, sessions in a row: drafts 0.54, 0.78, 0.90 s after an edit
+            # without; 0.22 to 0.35 s in 11 of 12 with)
+            gc.collect()
 
     def _run_draft(self) -> None:
         """The draft: one camera sample of the passes' children (at most `budget.CHILDREN`) at
