@@ -13,9 +13,10 @@ Scenes are tests/blender/scenes.py's (room: diffuse; glossy: a glossy sphere; te
 - Defaults: F12 with every style at the render settings' defaults (denoise auto, firefly auto), and
   Cycles at its factory defaults (adaptive sampling, OIDN denoising), each on the room.
 - Engine against the command line: the scene exported by File > Export (blender/xml.py) and
-  rendered by `styletrace render FILE --spp N --seed K --pass-spp P` (the export operator's own
-  command line) in a fresh process, against F12 of the same settings: F12's export (depsgraph to a
-  loaded scene) and render timed apart; the command's wall time includes its process start.
+  rendered by `styletrace render FILE --samples S --spp N --seed K --pass-spp P` (the export
+  operator's own command line) in a fresh process, against F12 of the same settings: F12's export
+  (depsgraph to a loaded scene) and render timed apart; the command's wall time includes its
+  process start.
 - Export of a 1-million-triangle mesh (a 707 x 707 grid: 999,698 triangles): the depsgraph to a
   scene description, then to a loaded Mitsuba scene.
 Times are medians over --runs after one untimed run (kernel compilation).
@@ -117,7 +118,9 @@ def engine_against_command(S, size: int, runs: int, tmp: str) -> dict:
     scene = bpy.context.scene
     scene.render.engine = "STYLETRACE"
     st = scene.styletrace
+    # Samples 1024 with 64 camera samples: cel's own 16 children each (the budget, docs/look.md)
     st.style, st.spp, st.pass_spp, st.seed, st.denoise = "cel", 64, 16, 3, "off"
+    st.samples = 64 * 16
     path = os.path.join(tmp, "room.xml")
     bpy.ops.styletrace.export_xml(filepath=path)
     command = command_line(path, st).split()
@@ -154,7 +157,7 @@ def viewport_times(S, width: int, height: int) -> list[tuple[str, float, float]]
             dg = bpy.context.evaluated_depsgraph_get()
             times, start = [], [0.0]
             vp = Viewport(on_image=lambda: times.append(time.perf_counter() - start[0]))
-            vp.set_sensor(camera.sensor(dg.scene_eval, st.spp))
+            vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
             start[0] = time.perf_counter()
             vp.update(dg, st)
             vp.session.join(600)
@@ -173,7 +176,7 @@ def million_triangles(runs: int) -> dict:
     bpy.context.scene.render.engine = "STYLETRACE"
     depsgraph = bpy.context.evaluated_depsgraph_get()
     st = bpy.context.scene.styletrace
-    t_desc, desc = timed(lambda: exporter.export(depsgraph, spp=st.spp), runs)
+    t_desc, desc = timed(lambda: exporter.export(depsgraph, spp=st.samples), runs)
     t_load, _ = timed(lambda: f12.api.load_scene(build.description_scene_dict(desc)), runs)
     tris = sum(len(p.vertices) - 2 for p in bpy.data.meshes[0].polygons)
     return {"triangles": tris, "describe": t_desc, "load": t_load}
@@ -211,7 +214,8 @@ def main(argv=None) -> int:
             lines.append(f"| {label} | {t:.2f} |")
             print(lines[-1], flush=True)
         e = engine_against_command(S, args.size, args.runs, tmp)
-        lines += ["", f"Engine against the command line (room, cel, 64 spp, passes of 16, "
+        lines += ["", f"Engine against the command line (room, cel, 64 camera samples of 16 "
+                      f"children, passes of 16, "
                       f"{args.size}x{args.size}): F12 {e['f12']:.2f} s = export "
                       f"{e['export']:.2f} s + render {e['render']:.2f} s; `styletrace render` "
                       f"of the exported XML {e['cli']:.2f} s (a fresh process: start-up, scene "
