@@ -220,8 +220,7 @@ def pin_denoise_budget(resolved, method: str):
         A copy with the firefly control (`with_firefly`) and, with expectation, the budget split
         again as denoised, within MAX_SAMPLES // (w x h) camera samples per pixel
         (`pipeline.budget.split`: an auto spp lowered to the cap, an auto n raised to
-        ceil(samples / spp)); its `auto` line
-        names the values. Other integrators: as they are.
+        ceil(samples / spp)); its `auto` line names the values. Other integrators: as they are.
     """
     from styletrace.kernel.integrator import StylizedIntegrator
     if not isinstance(resolved.integrator, StylizedIntegrator):

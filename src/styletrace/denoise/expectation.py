@@ -29,7 +29,7 @@ from styletrace.lookdev.restyle import (
     RESTYLABLE_ESTIMATORS,
     accumulate,
     field,
-    join,
+    joined,
     prepare_slots,
     sample_values,
     slots_for,
@@ -521,26 +521,16 @@ def _own_device(scene, buf: Buffer, cache: dict | None) -> tuple[mi.Color3f, mi.
         at += len(parts)
     if at < len(pairs):
         new = pairs[at:]
-        p, wo = (_joined([x[i] for x in new], mi.Vector3f) for i in (0, 1))
+        p, wo = (joined([x[i] for x in new], "Vector3f") for i in (0, 1))
         albedo, emission = own_on_device(scene, p, wo)
         if not EMISSION_APART:
             emission = dr.zeros(mi.Color3f, dr.width(albedo))
         kept.append((new, albedo, emission))
     if cache is not None:
         cache["own"] = kept
-    albedo = _joined([e[1] for e in kept], mi.Color3f)
-    emission = _joined([e[2] for e in kept], mi.Color3f)
+    albedo = joined([e[1] for e in kept], "Color3f")
+    emission = joined([e[2] for e in kept], "Color3f")
     return albedo, emission
-
-
-def _joined(parts: list, T):
-    """Dr.Jit 3-vectors of type T (numpy 3 x N parts wrapped) joined along the samples."""
-    parts = [T(x) if not isinstance(x, np.ndarray) else
-             T(*(mi.Float(np.ascontiguousarray(x[i], np.float32)) for i in range(3)))
-             for x in parts]
-    if len(parts) == 1:
-        return parts[0]
-    return T(*(join([x[i] for x in parts]) for i in range(3)))
 
 
 #: `uncertainty` by default: D's residual error as a fraction of the noisy M's standard error. 0:

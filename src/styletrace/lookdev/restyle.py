@@ -241,9 +241,21 @@ def field(buffer: Buffer | Arrays, name: str):
     Raises:
         KeyError: the buffer has no such array.
     """
-    kind = FIELD_TYPES[name]
     arrays = buffer if isinstance(buffer, Arrays) else buffer.arrays
-    parts = [_on_device(p, kind) for p in arrays.parts(name)]
+    return joined(arrays.parts(name), FIELD_TYPES[name])
+
+
+def joined(parts: list, kind: str):
+    """A per-sample array's pass parts as one Dr.Jit array of type `kind`, joined on the device.
+
+    Args:
+        parts: the parts, numpy (wrapped) or Dr.Jit (used as they are). kind: the Dr.Jit type's
+            name in `mi` (FIELD_TYPES' values).
+
+    Returns:
+        The Dr.Jit array (`join`: evaluated where there were several parts).
+    """
+    parts = [_on_device(p, kind) for p in parts]
     if len(parts) == 1:
         return parts[0]
     if kind in _SCALAR:
@@ -651,11 +663,10 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
-
-
 __all__ = [
     "restyle",
     "join",
+    "joined",
     "JOIN",
     "finish_slot",
     "finish_spread",
