@@ -30,6 +30,7 @@ def render_denoised(
     denoise_quality: str = "high",
     coverage: int | str = "auto",
     denoise_uncertainty: float | None = None,
+    denoise_footprint: str = "pixel",
 ):
     """`styletrace.render(..., denoise=...)`: the job run with a denoiser as its finisher.
 
@@ -40,6 +41,7 @@ def render_denoised(
         cluster: the passes on Ray, which no denoiser takes (auto renders them undenoised).
         denoise_quality: OIDN's "high", "balanced" or "fast". coverage: `coverage.check_k`'s k.
         denoise_uncertainty: `expectation.spread`'s factor (None: 0.3; 0: g of D itself).
+        denoise_footprint: the image denoiser's, "pixel" or "film" (`denoise.image`).
 
     Returns:
         The image, or (image, aovs) with aovs=True.
@@ -56,6 +58,7 @@ def render_denoised(
         quality=denoise_quality,
         coverage=coverage,
         uncertainty=denoise_uncertainty,
+        footprint=denoise_footprint,
     )
     if note:
         import warnings

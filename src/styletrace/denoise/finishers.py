@@ -141,7 +141,19 @@ class Expectation(Denoised):
 
 
 class Image(Denoised):
-    """The average of the finished passes denoised (`denoise.image`), the baseline."""
+    """The average of the finished passes denoised (`denoise.image`), the baseline.
+
+    Args:
+        quality, buffer: as `Denoised`'s. footprint: "pixel" (each sample kept in its pixel where
+            the film's filter is not a box: `denoise.image.in_pixels`) or "film" (the film's
+            image as it is, the image denoiser before issue 37).
+    """
+
+    def __init__(self, quality: str = "high", buffer: str | None = None,
+                 footprint: str = "pixel"):
+        super().__init__(quality, buffer)
+        from styletrace.denoise.image import check_footprint
+        self.footprint = check_footprint(footprint)
 
     def check(self, resolved, executor) -> None:
         super().check(resolved, executor)
@@ -150,6 +162,16 @@ class Image(Denoised):
                              "which image denoising leaves noisy; use --denoise expectation")
         self.scene, self.seed = resolved.scene, resolved.job.seed
         self.aovs = bool(resolved.integrator.aov_names())
+        from styletrace.denoise.image import in_pixels
+        self.in_pixels = (self.footprint == "pixel"
+                          and in_pixels(resolved.scene, resolved.integrator))
+
+    def source(self, resolved, executor, lock):
+        """The executor's passes; on a film whose filter is not a box, each sample kept in its
+        pixel (`denoise.image.in_pixels`; the finisher renders in this process only)."""
+        if not self.in_pixels:
+            return executor.source(resolved, lock)
+        return executor.source(resolved, lock, in_pixels=True)
 
     def _finish(self, prog):
         from styletrace.denoise.image import finish_denoised_image
@@ -167,13 +189,15 @@ class Image(Denoised):
 def plan_finisher(resolved, method: str | None = None, executor: Any = None,
                   buffer: str | None = None,
          quality: str = "high", coverage: int | str = "auto", uncertainty: float | None = None,
-         label: str = "", keep: Callable[[Any], None] | None = None) -> tuple[Runner, str]:
+         label: str = "", keep: Callable[[Any], None] | None = None,
+         footprint: str = "pixel") -> tuple[Runner, str]:
     """The run of a resolved job with the finisher of its denoising method.
 
     Args:
         resolved: the resolved job. method: auto, expectation, image, off (None: the default).
         executor: the pipeline's (None: in process). buffer: a file for the buffer, or None.
         keep: called with the buffer kept. quality, coverage, uncertainty, label: `Expectation`'s.
+        footprint: `Image`'s.
 
     Returns:
         (the `pipeline.runner.Runner`, the one-line note where auto could not denoise, else '').
@@ -188,7 +212,7 @@ def plan_finisher(resolved, method: str | None = None, executor: Any = None,
     if chosen.method == "expectation":
         finisher = Expectation(quality, buffer, label, coverage, uncertainty, keep)
     elif chosen.method == "image":
-        finisher = Image(quality, buffer)
+        finisher = Image(quality, buffer, footprint)
     elif buffer is not None or keep is not None:
         from styletrace.lookdev.record import Recorded
         finisher = Recorded(buffer, label, keep)

@@ -17,8 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from styletrace.gate import dr, mi
-from styletrace.kernel.launch import render_pass
-from styletrace.lookdev.film_filter import seeded_positions
+from styletrace.kernel.launch import render_pass, seeded_positions
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever);
 #: a chain still specular after them keeps its specular weight as albedo
@@ -137,6 +136,7 @@ def _in_pixels(scene: mi.Scene, spp: int, seed: int) -> np.ndarray:
     ray, _ = sensor.sample_ray_differential(mi.Float(sensor.shutter_open()), mi.Float(0.0),
                                             mi.Point2f(pos) / mi.ScalarVector2f(w, h), aperture)
     _, _, aovs = GuidePass().sample(scene, sampler, ray)
+    dr.eval(aovs)  # one kernel for all of them: each block sum would launch its own
     means = [dr.block_sum(a, spp) / spp for a in aovs]  # a pixel's lanes are next to each other
     dr.eval(means)
     return np.stack([np.asarray(m, dtype=np.float32) for m in means], -1).reshape(h, w, len(means))

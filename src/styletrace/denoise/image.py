@@ -6,6 +6,12 @@ The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it
 albedo and normal guides as `--denoise expectation`. Every mode of the renderer works (it is a
 post-process), but a step style's band flips are edges to the denoiser, which keeps them
 (docs/denoise.md, BENCHMARKS.md).
+
+On a film whose filter is not a box, the passes keep each camera sample in its own pixel
+(`in_pixels`: `passes(in_pixels=True)`), OIDN denoises that image with guides of the same
+footprint, and the film's filter is applied to the denoised image (`film_filter.filtered_pixels`):
+a tent or gaussian filter would spread each sample over neighbouring pixels, and OIDN keeps noise
+so correlated as texture (docs/look.md, "Clean where the light is hard").
 """
 from __future__ import annotations
 
@@ -14,18 +20,22 @@ from typing import Callable
 import numpy as np
 
 from styletrace.denoise import guides, oidn
+from styletrace.errors import UsageError
+from styletrace.lookdev.film_filter import filtered_pixels
 from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes
 
 
 def render_denoised_image(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
            callback: Callable[[Progress], None] | None = None, lanes_per_pass: int = LANES_PER_PASS,
-           pass_spp: int | None = None) -> tuple[np.ndarray, np.ndarray, dict | None]:
+           pass_spp: int | None = None, footprint: str = "pixel"
+           ) -> tuple[np.ndarray, np.ndarray, dict | None]:
     """Render in passes (`pipeline.passes.passes`), then denoise the final image.
 
     Args:
         scene, integrator: what to render. spp: samples per pixel. seed: the render's seed.
         quality: OIDN's "high", "balanced" or "fast". callback: called with each pass's `Progress`.
         lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
+        footprint: "pixel" (the module doc) or "film" (the film's image as it is).
 
     Returns:
         (denoised image, noisy image, AOVs or None: `finish_denoised_image`), H x W x 3 float32.
@@ -35,13 +45,51 @@ def render_denoised_image(scene, integrator, spp: int, seed: int = 0, quality: s
     """
     oidn.require()
     oidn.check_quality(quality)
+    pixels = check_footprint(footprint) == "pixel" and in_pixels(scene, integrator)
     prog = None
     for prog in passes(
-        scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp
+        scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp,
+        in_pixels=pixels
     ):
         if callback is not None:
             callback(prog)
     return finish_denoised_image(scene, prog, seed, quality)
+
+
+#: what the image denoiser denoises: each pixel's own samples, or the film's image as it is
+FOOTPRINTS = ("pixel", "film")
+
+
+def check_footprint(footprint) -> str:
+    """`footprint` if it is one of FOOTPRINTS.
+
+    Raises:
+        UsageError: any other value (one line).
+    """
+    if footprint not in FOOTPRINTS:
+        raise UsageError(f"bad value {footprint!r} for denoise_footprint: expected one of "
+                         f"{', '.join(FOOTPRINTS)}")
+    return footprint
+
+
+def in_pixels(scene, integrator) -> bool:
+    """Whether the image denoiser's passes keep each sample in its pixel (the module doc): a film
+    whose filter is not a box, and a `stylized` integrator whose `sample` is its whole render
+    (not reuse=pixels) without error AOVs (they describe the film's image).
+
+    Args:
+        scene: the scene (its first sensor's film). integrator: the render's integrator.
+
+    Returns:
+        True where `passes(in_pixels=True)` applies.
+    """
+    from styletrace.kernel.integrator import StylizedIntegrator
+    if scene.sensors()[0].film().rfilter().is_box_filter():
+        return False
+    if not isinstance(integrator, StylizedIntegrator):
+        return False
+    s = integrator.settings
+    return s.reuse == "off" and not integrator.aov_names()
 
 
 def finish_denoised_image(
@@ -60,8 +108,12 @@ def finish_denoised_image(
         (denoised - noisy).
     """
     noisy = np.asarray(prog.image, dtype=np.float32)
-    g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0))
+    pixels = getattr(prog, "in_pixels", False)
+    g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0),
+                         footprint="pixel" if pixels else "film")
     out = oidn.denoise_oidn(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
+    if pixels:
+        out = filtered_pixels(out, scene.sensors()[0].film().rfilter())
     errs = prog.aovs
     if errs is not None:
         errs = {
@@ -73,4 +125,5 @@ def finish_denoised_image(
     return out, noisy, errs
 
 
-__all__ = ["render_denoised_image", "finish_denoised_image"]
+__all__ = ["render_denoised_image", "finish_denoised_image", "in_pixels", "check_footprint",
+           "FOOTPRINTS"]

@@ -57,6 +57,7 @@ def render(
     denoise_quality: str = "high",
     coverage: int | str = "auto",
     denoise_uncertainty: float | None = None,
+    denoise_footprint: str = "pixel",
     **kw: Any,
 ):
     """`styletrace.render`: the render pipeline's; a denoiser finishes it unless denoise is off.
@@ -65,7 +66,8 @@ def render(
         *args, **kw, callback, cluster: as `pipeline.execute.render_pipeline`'s (scene, style,
             samples, spp, inner, ...).
         denoise: auto, expectation, image or off (None: $STYLETRACE_DENOISE, else auto).
-        denoise_quality, coverage, denoise_uncertainty: as `denoise.render_denoised`'s.
+        denoise_quality, coverage, denoise_uncertainty, denoise_footprint: as
+            `denoise.render_denoised`'s.
 
     Returns:
         The image, float32 H x W x C, or (image, aovs) with aovs=True.
@@ -80,7 +82,7 @@ def render(
     from styletrace.denoise import render_denoised as denoised
     from styletrace.pipeline.job import python_job
     return denoised(python_job(*args, **kw), method, callback, cluster, denoise_quality, coverage,
-                    denoise_uncertainty)
+                    denoise_uncertainty, denoise_footprint)
 
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,

@@ -219,6 +219,7 @@ def cmd_render(args) -> int:
         args.denoise_quality,
         "auto" if args.coverage is None else args.coverage,
         args.denoise_uncertainty,
+        footprint=args.denoise_footprint,
     )
     if note and not args.quiet:
         say(f"styletrace: {note}")
@@ -423,6 +424,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     r.add_argument("--denoise-quality", choices=("high", "balanced", "fast"), default="high",
                    help="OIDN's filter quality with --denoise (default: high)")
+    r.add_argument("--denoise-footprint", choices=("pixel", "film"), default="pixel",
+                   help="what --denoise image denoises: each pixel's own samples, the film's "
+                   "filter applied after (pixel, the default), or the film's image as it is (film, "
+                   "the denoiser before; a tent or gaussian filter's correlated noise survives "
+                   "it: docs/look.md)")
     r.add_argument(
         "--coverage",
         default=None,

@@ -20,6 +20,7 @@ import numpy as np
 
 from styletrace.errors import SceneError
 from styletrace.gate import dr, mi
+from styletrace.kernel.launch import seeded_positions
 
 BOX = {"type": "box"}
 #: Mitsuba class -> (plugin name, parameters read from its radius or description)
@@ -117,31 +118,49 @@ def rebuild(spec: Any):
     return build_filter(_key(BOX if is_box(spec) else dict(spec)))
 
 
-def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)):
-    """Seed a clone of the sensor's sampler as Mitsuba's render loop does, and place each lane.
+def pixel_kernel(rfilter, steps: int = 64) -> np.ndarray:
+    """The filter's weights on a smooth image of pixel means: for a pixel offset k, the integral
+    of f(x) times the linear interpolation's hat around k (what the film makes of a smooth image
+    known at pixel centres), normalised to sum 1.
 
     Args:
-        sensor: the mi.Sensor; its film's crop size and its sampler are read.
-        spp, seed: the pass's camera samples per pixel and seed.
-        border: pixels added on each side of the crop window (where the film samples its border).
-        offset: integer (x, y) added to each pixel corner (the crop offset), as Mitsuba adds it.
+        rfilter: the film's mi.ReconstructionFilter (separable: f(x, y) = f(x) f(y)).
+        steps: integration points per pixel.
 
     Returns:
-        (the seeded sampler, whose next draws are the aperture's and the integrator's; each lane's
-        film position, mi.Vector2f): lane i is pixel i // spp, its corner plus the first next_2d().
+        1-D float64 weights for offsets -r .. r (r = ceil(radius)); [1.0] for a box.
     """
-    w, h = (int(v) + 2 * border for v in sensor.film().crop_size())
-    lanes = w * h * spp
-    sampler = sensor.sampler().clone()
-    sampler.set_sample_count(spp)
-    sampler.set_samples_per_wavefront(spp)
-    sampler.seed(seed, lanes)
-    idx = dr.arange(mi.UInt32, lanes) // spp
-    py = idx // w
-    px = idx - py * w
-    corner = mi.Vector2i(mi.Int32(px) + (int(offset[0]) - border),
-                         mi.Int32(py) + (int(offset[1]) - border))
-    return sampler, mi.Vector2f(corner) + sampler.next_2d()
+    if rfilter.is_box_filter():
+        return np.ones(1)
+    r = int(np.ceil(float(rfilter.radius())))
+    x = (np.arange(-(r + 1) * steps, (r + 1) * steps + 1) + 0.0) / steps
+    f = np.asarray(rfilter.eval(mi.Float(x)), dtype=np.float64)
+    weights = np.array([np.sum(f * np.maximum(1.0 - np.abs(x - k), 0.0)) for k in range(-r, r + 1)])
+    return weights / weights.sum()
+
+
+def filtered_pixels(image: np.ndarray, rfilter) -> np.ndarray:
+    """A smooth image of pixel means (a denoised one) as the film's filter would develop it
+    (`pixel_kernel` along each axis, edges repeated).
+
+    Args:
+        image: H x W x C float array. rfilter: the film's mi.ReconstructionFilter.
+
+    Returns:
+        H x W x C float32; `image` itself for a box.
+    """
+    k = pixel_kernel(rfilter)
+    if len(k) == 1:
+        return image
+    r = len(k) // 2
+    out = np.asarray(image, dtype=np.float64)
+    for axis in (0, 1):
+        pad = [(0, 0)] * out.ndim
+        pad[axis] = (r, r)
+        padded = np.pad(out, pad, mode="edge")
+        n = out.shape[axis]
+        out = sum(w * np.take(padded, range(i, i + n), axis=axis) for i, w in enumerate(k))
+    return out.astype(np.float32)
 
 
 def positions(sensor, spp: int, seed: int, device: bool = False):
@@ -218,4 +237,5 @@ def develop(buffer, values) -> mi.Float:
     return total / mi.Float(np.repeat(np.maximum(spp, 1.0), 3))
 
 
-__all__ = ["describe_filter", "build_filter", "rebuild", "is_box", "positions", "develop", "BOX"]
+__all__ = ["describe_filter", "build_filter", "rebuild", "is_box", "positions", "develop", "BOX",
+           "pixel_kernel", "filtered_pixels"]

@@ -46,20 +46,22 @@ class InProcess:
     """The passes in this process (`passes.passes`: tiles, pass seeds, the float32 sum)."""
     local = True
 
-    def source(self, resolved: Resolved,
-               lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
+    def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext(),
+               in_pixels: bool = False) -> Iterator[Progress]:
         """The render's passes in this process (`passes.passes`, the `auto` values pinned already).
 
         Args:
             resolved: the resolved job.
             lock: a context manager held while the running sum changes.
+            in_pixels: each sample kept in its own pixel (the image denoiser's: `passes.passes`).
 
         Returns:
             An iterator of `Progress`, the running average after each pass.
         """
         job = resolved.job
         return passes(resolved.scene, resolved.integrator, resolved.spp, job.seed,
-                      lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp, lock=lock, pinned=True)
+                      lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp, lock=lock, pinned=True,
+                      in_pixels=in_pixels)
 
 
 class OnRay:

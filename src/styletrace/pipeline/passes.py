@@ -21,7 +21,7 @@ from styletrace.errors import UsageError
 from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.jit import no_collection
-from styletrace.kernel.launch import render_pass
+from styletrace.kernel.launch import render_pass, render_pixel_pass
 from styletrace.scene.arguments import check_passes_args
 from styletrace.scene.defaults import ScenePilot
 from styletrace.scene.defaults import resolve_defaults as resolve_defaults
@@ -229,6 +229,7 @@ class Progress:
         channels: the image's channels in `total` (None: all of them).
         tile, samples: the pass just done: its tile's index in `layout`, its samples per pixel (a
             recording maps that pass's lanes to the film's pixels with them: `lookdev.record`).
+        in_pixels: the passes kept each sample in its own pixel (`passes`' in_pixels).
     """
 
     def __init__(
@@ -241,8 +242,11 @@ class Progress:
         channels: int | None = None,
         tile: int = 0,
         samples: int = 0,
+        in_pixels: bool = False,
     ):
         self.spp_done, self.spp_total = spp_done, spp_total
+        #: each sample counted in its own pixel only (`passes`' in_pixels), not the film's filter
+        self.in_pixels = in_pixels
         #: the pass just done: the index in `layout` of the tile it rendered, and its samples per
         #: pixel (a recording maps that pass's lanes to the film's pixels with them:
         #: `lookdev.record`)
@@ -313,13 +317,17 @@ def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER
 
 def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
            lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
-           lock: Any = contextlib.nullcontext(), pinned: bool = False) -> Iterator[Progress]:
+           lock: Any = contextlib.nullcontext(), pinned: bool = False,
+           in_pixels: bool = False) -> Iterator[Progress]:
     """Render `spp` samples per pixel in passes, tile by tile; yield the running average after each.
 
     Args:
         scene, integrator: what to render. spp: samples per pixel. seed: the render's seed.
         lanes_per_pass, pass_spp: the pass split (`pass_size`). lock: held while the sum changes.
         pinned: the `auto` values are pinned already (else `pin_auto_values` pins them here).
+        in_pixels: each camera sample counts in its own pixel only, as with a box filter,
+            whatever the film's (`kernel.launch.render_pixel_pass`: the image denoiser's input);
+            an rgb film and an integrator without error AOVs only.
 
     Returns:
         An iterator of `Progress`, one after each pass (with the error AOVs of aovs=True summed).
@@ -362,14 +370,16 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                     expand(scene, expansion_seed(seed, t))
                 # recorded and launched with no scene finalised meanwhile (jit.no_collection)
                 with no_collection():
-                    img = render_pass(scene, integrator, n, pass_seed(seed, index))
+                    launch = render_pixel_pass if in_pixels else render_pass
+                    img = launch(scene, integrator, n, pass_seed(seed, index))
                     arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
                     counts[t] += n
                 del img, arr
                 index += 1
-                yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n)
+                yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n,
+                               in_pixels)
 
 
 def pass_count(
