@@ -29,6 +29,7 @@ def denoise_off():
     yield
     st = bpy.context.scene.styletrace
     st.denoise, st.record_buffer, st.aovs, st.firefly = "off", False, True, "auto"
+    st.denoise_footprint = "pixel"
 
 
 @pytest.mark.parametrize("method", ["expectation", "image"])
@@ -98,6 +99,30 @@ def test_f12_denoises_as_the_command_line(method, tmp_path):
     np.testing.assert_allclose(
         np.array(mi.Bitmap(cli), dtype=np.float32)[..., :3], f12, rtol=1e-5, atol=1e-5
     )
+
+
+def test_the_image_denoisers_footprint_reaches_f12_and_the_command_line(tmp_path, monkeypatch):
+    """Denoise image's input (`denoise_footprint`, docs/look.md): Pixel by default, Film as the
+    switch back to the film's image; F12's finisher and the exported command line both carry it."""
+    from styletrace.denoise import finishers
+    props = type(bpy.context.scene.styletrace).bl_rna.properties
+    assert props["denoise_footprint"].default == "pixel"
+    seen, plan = [], finishers.plan_finisher
+
+    def recorded(*args, **kw):
+        runner, note = plan(*args, **kw)
+        seen.append(runner.finisher.footprint)
+        return runner, note
+
+    monkeypatch.setattr(finishers, "plan_finisher", recorded)
+    S.textured_plane(16)
+    for footprint in ("pixel", "film"):
+        S.styletrace(str(tmp_path / f"{footprint}.exr"), 2, style="identity",
+                     denoise="image", denoise_footprint=footprint, aovs=False)
+    assert seen == ["pixel", "film"]
+    # the scene's settings now (textured_plane made a new scene)
+    line = operators.command_line(str(tmp_path / "s.xml"), bpy.context.scene.styletrace)
+    assert line.endswith("--denoise image --denoise-footprint film"), line
 
 
 def test_the_denoise_default_is_every_front_ends():

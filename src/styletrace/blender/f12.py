@@ -139,7 +139,8 @@ def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
     from styletrace.pipeline.resolve import resolve
     resolved = resolve(job(sc, integrator(settings, aovs=aovs), settings), scene=sc)
     runner, note = plan_finisher(resolved, settings.denoise, quality=settings.denoise_quality,
-                        label="<blender>", keep=keep)
+                                 label="<blender>", keep=keep,
+                                 footprint=settings.denoise_footprint)
     if isinstance(runner.finisher, Image) and keep is not None:
         raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would "
                          "not be the denoised image; use Denoise 'expectation' (its buffer keeps "

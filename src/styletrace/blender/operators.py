@@ -24,6 +24,8 @@ def command_line(path: str, settings) -> str:
     denoise = f" --denoise {settings.denoise}" + (
         "" if settings.denoise == "off" or settings.denoise_quality == "high"
         else f" --denoise-quality {settings.denoise_quality}")
+    if settings.denoise != "off" and settings.denoise_footprint != "pixel":
+        denoise += f" --denoise-footprint {settings.denoise_footprint}"
     inner = settings.inner_samples.strip()
     # F12's counts (`f12.sampling`): Samples, and Camera samples and Inner samples where given;
     # with both of those, Samples is not used (the command line would refuse three that disagree)

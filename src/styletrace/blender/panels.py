@@ -24,6 +24,7 @@ RENDER_ROWS = (
     "record_buffer",
     "denoise",
     "denoise_quality",
+    "denoise_footprint",
     "firefly",
     "firefly_k",
 )

@@ -255,6 +255,13 @@ class SceneSettings(bpy.types.PropertyGroup):
     )
     denoise_quality: bpy.props.EnumProperty(name="Denoise quality", items=_enum(QUALITIES),
                                             default="high")
+    denoise_footprint: bpy.props.EnumProperty(
+        name="Image denoiser's input", default="pixel",
+        items=[("pixel", "Pixel", "each pixel's own samples, the film's filter applied after "
+                "(docs/look.md)"),
+               ("film", "Film", "the film's image as it is: a tent or gaussian filter's "
+                "correlated noise survives OIDN (the denoiser before)")],
+        description="what Denoise 'image' denoises (`denoise_footprint`)")
     firefly: bpy.props.EnumProperty(
         name="Firefly control", default="auto",
         items=[("auto", "Auto", "on where the render is denoised, else off (docs/look.md)"),

@@ -48,7 +48,7 @@ REST_S = 0.25
 JIT = threading.Lock()
 #: the render settings that are not the style's: a change starts new passes
 PASS_KEYS = ("samples", "spp", "seed", "pass_spp")
-DENOISE_KEYS = ("denoise", "denoise_quality")
+DENOISE_KEYS = ("denoise", "denoise_quality", "denoise_footprint")
 
 
 def snapshot(settings) -> dict:
@@ -60,7 +60,7 @@ def snapshot(settings) -> dict:
     Returns:
         `style` (the style slot's values, `style_values`), `integrator` (the `stylized`
         integrator's), `samples`, `spp` (0: auto), `seed`, `pass_spp` (ints), `denoise`,
-        `denoise_quality` (strings).
+        `denoise_quality`, `denoise_footprint` (strings).
     """
     return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
             **{k: int(getattr(settings, k)) for k in PASS_KEYS},
@@ -230,7 +230,8 @@ class ViewportSession:
         """F12's runner of `resolved` (`f12.run_f12`'s finisher plan), recording the buffer to
         restyle where it can: the passes' (Denoise off) or the denoised one (expectation)."""
         v = self.values
-        plan = dict(method=v["denoise"], quality=v["denoise_quality"], label="<viewport>")
+        plan = dict(method=v["denoise"], quality=v["denoise_quality"], label="<viewport>",
+                    footprint=v["denoise_footprint"])
         if self.size[0] * self.size[1] * resolved.spp <= MAX_SAMPLES:
             try:
                 return plan_finisher(resolved, keep=self._keep, **plan)[0]
