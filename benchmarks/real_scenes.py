@@ -58,8 +58,10 @@ SHARED_PANEL = ROOT.parent / "shared" / "scenes"
 LEGACY_PANEL = HERE / ".cache" / "panel"
 CACHE = HERE / ".cache" / "real_scenes"
 SHEET = ROOT / "docs" / "real_scenes.png"
-#: what decides a render: a row of older code is rendered again (`code_version`)
-CODE_PATHS = ("src", "pyproject.toml", "constraints.txt")
+#: what decides a render: a row of older code is rendered again (`code_version`); the Blender
+#: add-on and the preview server render nothing here
+CODE_PATHS = ("src", "pyproject.toml", "constraints.txt", ":(exclude)src/styletrace/blender",
+              ":(exclude)src/styletrace/preview")
 #: raised when what a row holds or how it is measured changes, so that older rows are not mixed in
 ROW_FORMAT = 1
 #: the cache's name for the tone reference of a scene and size
