@@ -59,13 +59,19 @@ LEGACY_PANEL = HERE / ".cache" / "panel"
 CACHE = HERE / ".cache" / "real_scenes"
 SHEET = ROOT / "docs" / "real_scenes.png"
 #: what decides a render: a row of older code is rendered again (`code_version`); the Blender
-#: add-on and the preview server render nothing here
+#: add-on and the preview server render nothing here, and the measures are recomputed from the
+#: cached images
 CODE_PATHS = ("src", "pyproject.toml", "constraints.txt", ":(exclude)src/styletrace/blender",
-              ":(exclude)src/styletrace/preview")
+              ":(exclude)src/styletrace/preview", ":(exclude)src/styletrace/measures.py")
 #: raised when what a row holds or how it is measured changes, so that older rows are not mixed in
 ROW_FORMAT = 1
 #: the cache's name for the tone reference of a scene and size
 REFERENCE = "reference"
+#: the cache's name for a scene's stylized pixels: where the camera's specular chain ends at a
+#: surface or in a medium (the environment seen directly, or through glass, is shown as it is)
+HITS = "hits"
+#: the tone measure's blur (pixels): the stylized pixels are taken this far from the environment
+TONE_PERIOD = 8
 SCREEN = ("hatching", "halftone")  # styles with a screen pattern: no firefly share
 #: styles that map other things than brightness: their tone is reported, not a goal
 NOT_BRIGHTNESS = ("gooch", "tie_dye", "xtoon")
@@ -242,23 +248,53 @@ def measure_row(path: Path, size: tuple[int, int], style: str, runs: int,
             b = img
     row = {"first": first, "times": times, "time": statistics.median(times),
            "psnr": measures.noise_psnr(a, b)}
-    row.update(image_measures(a, reference, style))
+    row.update(image_measures(a, reference, style, None))
     return row, a
 
 
-def image_measures(img: np.ndarray, reference: np.ndarray, style: str) -> dict:
+def image_measures(img: np.ndarray, reference: np.ndarray, style: str,
+                   hits: np.ndarray | None) -> dict:
     """The measures of one image (tone against the reference), so that a change of them needs no
-    new render: the table recomputes them from the cached images."""
-    return {"tone": measures.tone_correlation(img, reference, 8),
+    new render: the table recomputes them from the cached images.
+
+    `tone` is over the stylized pixels (`hits`, True where a style applies; eroded by the blur, so
+    that no environment pixel is blurred in), `tone_all` over the whole image: where a scene shows
+    much environment (glass-of-milk: 63%), g on the objects and the environment as it is mix two
+    mappings of brightness, which no style is asked to follow; None: the whole image for both."""
+    whole = measures.tone_correlation(img, reference, TONE_PERIOD)
+    tone = whole if hits is None else measures.tone_correlation(img, reference, TONE_PERIOD,
+                                                                mask=inside(hits, TONE_PERIOD))
+    return {"tone": tone, "tone_all": whole,
             "clipped": measures.clipped_share(img), "crushed": measures.crushed_share(img),
             "fireflies": None if style in SCREEN else measures.firefly_share(img)}
+
+
+def inside(mask: np.ndarray, period: int) -> np.ndarray:
+    """The pixels of `mask` whose whole period x period neighbourhood (made odd) is in it."""
+    from numpy.lib.stride_tricks import sliding_window_view
+    r = (period | 1) // 2
+    return sliding_window_view(np.pad(mask, r, mode="edge"), (2 * r + 1,) * 2).all(axis=(-2, -1))
+
+
+def stylized_pixels(path: Path, size: tuple[int, int]) -> tuple[np.ndarray, float]:
+    """Where the camera's specular chain ends at a surface or in a medium (the guides' normal is
+    not 0: `denoise.guides.first_hit`, 16 rays a pixel); returns (H x W x 3 of 0 and 1, seconds)."""
+    from styletrace.denoise import guides
+    from styletrace.scene.loading import load_scene
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(str(path), *size)
+        t = time.perf_counter()
+        g = guides.first_hit(scene, 16, 0, footprint="pixel")
+    hit = (np.abs(g.normal).sum(-1) > 0).astype(np.float32)
+    return np.repeat(hit[..., None], 3, -1), time.perf_counter() - t
 
 
 def measure_scene(name: str, path: Path, styles: list[str], longest: int, runs: int,
                   cache: RowCache, code: str, fresh: bool) -> None:
     """Render what the cache lacks of a scene's rows (identity and the reference included), each
     kept as soon as it is finished."""
-    wanted = [row_key(code, name, s, longest) for s in [REFERENCE, *styles]]
+    wanted = [row_key(code, name, s, longest) for s in [REFERENCE, HITS, *styles]]
     kept = cache.rows()
     todo = to_render(wanted, kept, fresh)
     for key in wanted:
@@ -277,6 +313,11 @@ def measure_scene(name: str, path: Path, styles: list[str], longest: int, runs: 
     reference = cache.image(kept[ref_key])
     for key in todo:
         style = key[2]
+        if style == HITS:
+            mask, seconds = stylized_pixels(path, size)
+            cache.put(key, {"film": size, "time": seconds, "share": float(mask.mean())}, mask)
+            print(f"  {HITS:>10}: {100 * mask.mean():.0f}% of the image is stylized", flush=True)
+            continue
         if style == REFERENCE:
             continue
         row, img = measure_row(path, size, style, runs, reference)
@@ -301,13 +342,15 @@ def gather(cache: RowCache, panel: list[dict], styles: list[str], longest: int,
         if ref is None:
             continue
         reference = cache.image(ref)
+        hits_row = kept.get(row_key(code, name, HITS, longest))
+        hits = None if hits_row is None else cache.image(hits_row)[..., 0] > 0.5
         rows, images = {}, {}
         for style in styles:
             row = kept.get(row_key(code, name, style, longest))
             if row is None:
                 continue
             images[style] = cache.image(row)
-            rows[style] = dict(row, **image_measures(images[style], reference, style))
+            rows[style] = dict(row, **image_measures(images[style], reference, style, hits))
         base = rows.get("identity", {}).get("time")
         for row in rows.values():
             row["cost"] = row["time"] / base if base else None
@@ -343,9 +386,9 @@ def look_rows(res: dict):
 def table(results: dict, panel: list[dict], held_out: bool) -> str:
     """The Markdown look table of one half of the panel (`gather`'s results), in panel order."""
     lines = [
-        "| scene | style | time (s) | cost vs identity | PSNR (dB) | tone | clipped | crushed | "
-        "fireflies | goals missed |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| scene | style | time (s) | cost vs identity | PSNR (dB) | tone | tone, whole image | "
+        "clipped | crushed | fireflies | goals missed |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for entry in panel:
         if entry["name"] not in results or entry["held_out"] != held_out:
@@ -353,11 +396,12 @@ def table(results: dict, panel: list[dict], held_out: bool) -> str:
         for style, row in look_rows(results[entry["name"]]):
             ff = "-" if row["fireflies"] is None else f"{100 * row['fireflies']:.2f}%"
             cost = "-" if row["cost"] is None else f"{row['cost']:.2f}x"
-            tone = f"({row['tone']:.2f})" if style in NOT_BRIGHTNESS else f"{row['tone']:.2f}"
+            tone, whole = (f"({row[k]:.2f})" if style in NOT_BRIGHTNESS else f"{row[k]:.2f}"
+                           for k in ("tone", "tone_all"))
             lines.append(
                 f"| {entry['name']} | {style} | {row['time']:.1f} | {cost} | {row['psnr']:.1f} | "
-                f"{tone} | {100 * row['clipped']:.1f}% | {100 * row['crushed']:.1f}% | {ff} | "
-                f"{', '.join(misses(row, style)) or 'none'} |"
+                f"{tone} | {whole} | {100 * row['clipped']:.1f}% | {100 * row['crushed']:.1f}% | "
+                f"{ff} | {', '.join(misses(row, style)) or 'none'} |"
             )
     return "\n".join(lines)
 
@@ -437,7 +481,11 @@ longer side {args.size}, each with its own filter, integrator, sensor and sample
 {scenes_line}. Time is the median of {args.runs} renders after a first one that compiles the \
 style's kernels, loading excluded; cost is that over the identity style's median, the same scene \
 and size. PSNR is between seeds 0 and 1. Tone is the rank correlation with the blurred luminance \
-of the identity style denoised at 4x the scene's sample count; in parentheses for gooch, xtoon \
+of the identity style denoised at 4x the scene's sample count, over the stylized pixels (where \
+the camera's specular chain ends at a surface or in a medium, {TONE_PERIOD} pixels from the \
+environment: the environment seen directly, or through glass, is shown as it is, and g on the \
+objects beside it is a second mapping of brightness that no style is asked to follow); "tone, \
+whole image" is the same over every pixel. In parentheses for gooch, xtoon \
 and tie_dye, which map other things than brightness: reported, not a goal. The debug view \
 `coordinate` is not in the table. Goals (issues 29 and 37), on the held-out half: PSNR >= \
 {GOALS['psnr']:g} dB, tone >= {GOALS['tone']:g} (styles that follow brightness), clipped and \
@@ -485,7 +533,8 @@ def main(argv: list[str]) -> int:
         styles = ["identity"] + [s for s in styles if s != "identity"]
     elif args.sheet_only:
         # what the cache holds decides the columns; no Mitsuba needed
-        styles = ["identity"] + sorted({k[2] for k in cache.rows()} - {"identity", REFERENCE})
+        styles = ["identity"] + sorted({k[2] for k in cache.rows()} - {"identity", REFERENCE,
+                                                                         HITS})
     else:
         from styletrace.styles import style_names
         styles = ["identity"] + [s for s in style_names()

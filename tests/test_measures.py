@@ -43,3 +43,18 @@ def test_tone_correlation_is_rank_based_and_sees_a_reversal():
     ramp = np.linspace(0, 1, 32)[None, :, None] * np.ones((32, 32, 3))
     assert measures.tone_correlation(ramp ** 3, ramp, period=1) == pytest.approx(1.0)  # monotone: 1
     assert measures.tone_correlation(1 - ramp, ramp, period=1) == pytest.approx(-1.0)
+
+
+def test_tone_over_a_mask_compares_only_its_pixels():
+    """Two mappings of brightness side by side (an object brightened, the environment beside it
+    as it is) break the whole image's rank order; over either part alone it holds."""
+    rng = np.random.default_rng(5)
+    ref = np.repeat(rng.uniform(0.05, 1.0, (32, 32, 1)), 3, -1)
+    img = ref.copy()
+    left = np.zeros((32, 32), bool)
+    left[:, :16] = True
+    img[left] = ref[left] ** 0.2  # the object, gamma-brightened
+    whole = measures.tone_correlation(img, ref, 1)
+    assert measures.tone_correlation(img, ref, 1, mask=left) == pytest.approx(1.0)
+    assert measures.tone_correlation(img, ref, 1, mask=~left) == pytest.approx(1.0)
+    assert whole < 0.9, whole

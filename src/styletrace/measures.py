@@ -127,7 +127,8 @@ def _ranks(x: np.ndarray) -> np.ndarray:
     return (sums / counts)[inverse]
 
 
-def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8) -> float:
+def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8,
+                     mask: np.ndarray | None = None) -> float:
     """Spearman's rank correlation between the blurred display luminance of two images.
 
     Args:
@@ -135,12 +136,14 @@ def tone_correlation(img: np.ndarray, reference: np.ndarray, period: int = 8) ->
         reference: a converged render of the same shape.
         period: the side in pixels of the box blur (made odd; <= 1: none): the pattern's period,
             so that a screen of lines or dots reads as its tone.
+        mask: H x W booleans, the pixels compared (after the blur), or None: all.
 
     Returns:
-        The correlation in [-1, 1]; 0 where either image is flat.
+        The correlation in [-1, 1]; 0 where either image is flat (or the mask is empty).
     """
-    a = _box_blur(luminance(srgb(img)), period).ravel()
-    b = _box_blur(luminance(srgb(reference)), period).ravel()
+    a = _box_blur(luminance(srgb(img)), period)
+    b = _box_blur(luminance(srgb(reference)), period)
+    a, b = (a.ravel(), b.ravel()) if mask is None else (a[mask], b[mask])
     ra, rb = _ranks(a), _ranks(b)
     ra -= ra.mean()
     rb -= rb.mean()
