@@ -96,3 +96,39 @@ def test_a_mirror_that_sees_nothing_keeps_its_specular_weight():
         )
         got = guides.first_hit(sc, 1, 0)
         np.testing.assert_allclose(got.albedo, want, rtol=1e-5)
+
+
+def wall_scene(rfilter):
+    sensor = camera(-4, 1)
+    sensor["film"] = dict(sensor["film"], rfilter={"type": rfilter})
+    return api.load_scene({"type": "scene", "sensor": sensor, "wall": WALL})
+
+
+def test_many_samples_are_split_over_launches_of_bounded_size_and_averaged(monkeypatch):
+    """A sample count whose rays would not fit one launch (a scene file's 4096 spp at 256 px is
+    200 million rays, over 20 GB) is traced in launches of at most `lanes_per_launch` rays, and
+    the guides are their mean weighted by each launch's samples: the same as tracing each launch
+    alone, with its own seed, and averaging by hand."""
+    spp, budget = 24, RES * RES * 7  # 7 samples a launch at most: launches of 6, 6, 6 and 6
+    for rfilter, footprint in (("box", "film"), ("gaussian", "film"), ("gaussian", "pixel")):
+        sc = wall_scene(rfilter)
+        calls = []
+        name = "_in_pixels" if footprint == "pixel" and rfilter != "box" else "render_pass"
+        launch = getattr(guides, name)
+
+        def counted(*args, f=launch):
+            calls.append(tuple(args[-2:]))  # (spp, seed) of the launch
+            return f(*args)
+        monkeypatch.setattr(guides, name, counted)
+        got = guides.first_hit(sc, spp, 5, footprint=footprint, lanes_per_launch=budget)
+        monkeypatch.undo()
+        assert [n for n, _ in calls] == [6, 6, 6, 6], (rfilter, calls)
+        assert len({seed for _, seed in calls}) == 4, "each launch its own rays"
+        assert calls[0][1] == 5, "one launch (few samples) stays what it was: the caller's seed"
+        alone = [guides.first_hit(sc, n, seed, footprint=footprint) for n, seed in calls]
+        for name in guides.Guides._fields:
+            want = sum(n * getattr(g, name) for (n, _), g in zip(calls, alone)) / spp
+            np.testing.assert_allclose(getattr(got, name), want, rtol=1e-6, atol=1e-6,
+                                       err_msg=f"{rfilter} {footprint} {name}")
+        # the checker edges are antialiased by all 24 samples, not by one launch's 6
+        assert not np.allclose(got.albedo, alone[0].albedo, atol=1e-3)

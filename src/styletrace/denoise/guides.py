@@ -12,12 +12,14 @@ Design: docs/design/denoise_guides.md.
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 
 from styletrace.gate import dr, mi
 from styletrace.kernel.launch import render_pass, seeded_positions
+from styletrace.pipeline.passes import LANES_PER_PASS, pass_seed
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever);
 #: a chain still specular after them keeps its specular weight as albedo
@@ -104,7 +106,8 @@ class GuidePass(mi.SamplingIntegrator):
         return mi.Spectrum(0.0), mi.Bool(True), aovs
 
 
-def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "film") -> Guides:
+def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "film",
+              lanes_per_launch: int = LANES_PER_PASS) -> Guides:
     """The guides of the film's crop window, H x W x 3 float32 each.
 
     Args:
@@ -114,15 +117,28 @@ def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "f
             of a rendered image, `--denoise image`); "pixel" as the mean of camera samples inside
             the pixel (a box: the guides of a per-pixel mean, `--denoise expectation`'s M). The two
             are the same for a film with a box filter.
+        lanes_per_launch: the most camera rays of one kernel launch (at least one per pixel): the
+            `spp` rays per pixel are split over launches of that size, so that a scene of
+            thousands of samples per pixel takes no more memory than a pass of its render.
 
     Returns:
-        The `Guides`.
+        The `Guides`: each pixel the mean over its `spp` rays, whatever the split.
     """
-    if footprint == "pixel" and not scene.sensors()[0].film().rfilter().is_box_filter():
-        img = _in_pixels(scene, int(spp), int(seed))
-    else:
-        img = np.asarray(render_pass(scene, GuidePass(), int(spp), int(seed)), dtype=np.float32)
-    img = np.nan_to_num(img[..., -12:])  # the AOVs come last whatever the film's own channels
+    w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
+    spp = int(spp)
+    launches = max(1, math.ceil(w * h * spp / max(1, int(lanes_per_launch))))
+    per = math.ceil(spp / launches)
+    pixel = footprint == "pixel" and not scene.sensors()[0].film().rfilter().is_box_filter()
+    parts = []
+    for k, done in enumerate(range(0, spp, per)):
+        n = min(per, spp - done)
+        s = int(seed) if k == 0 else pass_seed(int(seed), k)
+        img = _in_pixels(scene, n, s) if pixel else np.asarray(
+            render_pass(scene, GuidePass(), n, s), dtype=np.float32)
+        # the AOVs come last whatever the film's own channels
+        parts.append((n, np.nan_to_num(img[..., -12:])))
+    img = parts[0][1] if len(parts) == 1 else (
+        sum(n * part for n, part in parts) / np.float32(spp)).astype(np.float32)
     return Guides(*(np.ascontiguousarray(img[..., i:i + 3]) for i in range(0, 12, 3)))
 
 
@@ -131,7 +147,8 @@ def _in_pixels(scene: mi.Scene, spp: int, seed: int) -> np.ndarray:
     render with a box filter places them (the sensor's sampler, seeded alike): H x W x 12."""
     sensor = scene.sensors()[0]
     w, h = (int(v) for v in sensor.film().crop_size())
-    sampler, pos = seeded_positions(sensor, spp, seed)
+    # the seed as a kernel input: the launches of one `first_hit` share a kernel
+    sampler, pos = seeded_positions(sensor, spp, dr.opaque(mi.UInt32, int(seed)))
     aperture = sampler.next_2d() if sensor.needs_aperture_sample() else mi.Point2f(0.5)
     ray, _ = sensor.sample_ray_differential(mi.Float(sensor.shutter_open()), mi.Float(0.0),
                                             mi.Point2f(pos) / mi.ScalarVector2f(w, h), aperture)
