@@ -234,3 +234,32 @@ def test_the_switch_is_the_image_denoiser_of_before_and_a_bad_value_is_refused(a
     assert np.array_equal(film, styletrace.render("cornell-box", **kw))
     with pytest.raises(UsageError, match="bad value 'box' for denoise_footprint"):
         styletrace.render("cornell-box", denoise_footprint="box", **kw)
+
+
+def test_the_switch_off_is_oidn_on_the_films_image_bit_for_bit():
+    """On a gaussian film, `denoise_footprint="film"` is the image denoiser of before, bit for bit:
+    OIDN on the film's image as `--denoise off` renders it, with the guides formed by the film.
+    One thread, so that the film's splats add up in the same order in every render."""
+    from helpers.look_scenes import sky_room
+
+    from styletrace.denoise import guides, oidn
+    from styletrace.frontends import api
+    from styletrace.gate import dr
+    from styletrace.pipeline.passes import pass_seed
+    threads = dr.thread_count()
+    dr.set_thread_count(1)
+    try:
+        kw = dict(style="identity", seed=3)
+        plain = np.asarray(styletrace.render(sky_room(24, 4), denoise="off", **kw), np.float32)
+        switched = styletrace.render(sky_room(24, 4), denoise="image", denoise_footprint="film",
+                                     **kw)
+        scene = api.load_scene(sky_room(24, 4))
+        g = guides.first_hit(scene, 4, pass_seed(3, 0), footprint="film")
+        by_hand = oidn.denoise_oidn(plain[..., :3], g.albedo, g.normal, "high",
+                                    guides.to_sensor(scene))
+        assert np.array_equal(np.asarray(switched)[..., :3], by_hand)
+        # and the default (the pixel footprint) is not that image
+        default = styletrace.render(sky_room(24, 4), denoise="image", **kw)
+        assert not np.array_equal(np.asarray(default)[..., :3], by_hand)
+    finally:
+        dr.set_thread_count(threads)
