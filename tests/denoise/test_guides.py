@@ -132,3 +132,38 @@ def test_many_samples_are_split_over_launches_of_bounded_size_and_averaged(monke
                                        err_msg=f"{rfilter} {footprint} {name}")
         # the checker edges are antialiased by all 24 samples, not by one launch's 6
         assert not np.allclose(got.albedo, alone[0].albedo, atol=1e-3)
+
+
+def test_a_surface_without_a_diffuse_lobe_has_albedo_one_whatever_the_view():
+    """Rough glass and a rough conductor have no diffuse reflectance: their albedo guide is 1 from
+    every direction, not `eval_diffuse_reflectance` of their glossy lobe (measured: 36 for rough
+    glass seen head-on, 1e-5 at other angles, whose ratio to a neighbour's remodulated the
+    expectation of glass-of-milk's glass into black dots). A diffuse surface keeps its
+    reflectance, and a blend of diffuse and conductor stays a reflectance (at most 1)."""
+    cases = (
+        ({"type": "roughdielectric", "alpha": 0.005, "int_ior": 1.33}, None),
+        ({"type": "roughconductor", "alpha": 0.1}, None),
+        ({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.2, 0.4, 0.6]}},
+         [0.2, 0.4, 0.6]),
+        ({"type": "blendbsdf", "weight": 0.5, "bsdf_0": {"type": "diffuse"},
+          "bsdf_1": {"type": "roughconductor", "alpha": 0.1}}, "at most 1"),
+    )
+    for bsdf, want in cases:
+        for z in (4.0, 2.5):  # head-on, and from a slant
+            sc = api.load_scene({
+                "type": "scene",
+                "sensor": camera(z, 0) if z == 4.0 else {
+                    **camera(z, 0),
+                    "to_world": mi.ScalarTransform4f().look_at(
+                        origin=[2.0, 0, z], target=[0, 0, 0], up=[0, 1, 0]),
+                },
+                "plane": {"type": "rectangle", "to_world": mi.ScalarTransform4f().scale(20),
+                          "bsdf": bsdf},
+            })
+            got = guides.first_hit(sc, 1, 0).albedo
+            if want is None:
+                np.testing.assert_allclose(got, 1.0, rtol=1e-6, err_msg=f"{bsdf['type']} z={z}")
+            elif want == "at most 1":
+                assert got.max() <= 1.0 and got.min() > 0.0, (bsdf["type"], z, got.min(), got.max())
+            else:
+                np.testing.assert_allclose(got.reshape(-1, 3), [want] * RES * RES, rtol=1e-5)

@@ -60,8 +60,12 @@ def through_delta(
         flags = bsdf.flags()
         specular = mi.has_flag(flags, mi.BSDFFlags.Delta) & ~mi.has_flag(flags, mi.BSDFFlags.Smooth)
         stop = ~done & ~specular
-        diffuse = mi.Color3f(bsdf.eval_diffuse_reflectance(si, stop))
-        diffuse = dr.select(dr.all(diffuse <= 0.0), mi.Color3f(1.0), diffuse)
+        # a BSDF without a diffuse lobe (rough glass, a rough conductor) evaluates its glossy
+        # lobe here, from 1e-5 to 36 as the view turns: no albedo; a blend's glossy part can
+        # lift it above 1, which no reflectance is
+        lobe = mi.has_flag(flags, mi.BSDFFlags.Diffuse)
+        diffuse = dr.minimum(mi.Color3f(bsdf.eval_diffuse_reflectance(si, stop & lobe)), 1.0)
+        diffuse = dr.select(~lobe | dr.all(diffuse <= 0.0), mi.Color3f(1.0), diffuse)
         albedo[stop] = throughput * diffuse
         normal[stop] = si.sh_frame.n
         done |= stop
