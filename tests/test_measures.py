@@ -29,6 +29,17 @@ def test_fireflies_are_counted_against_their_neighbourhood_not_in_the_dark():
     assert measures.firefly_share(dark) == pytest.approx(1 / 400)
 
 
+def test_dark_specks_are_counted_in_a_bright_neighbourhood_only():
+    img = np.full((20, 20, 3), 0.5)
+    img[5, 5] = 0.0                     # a speck: black among 0.5
+    img[10, 10] = 0.15                  # darker, but above 0.5 / 5
+    img[14:, :] = 0.02                  # a dim stripe (median 0.02 < the 5% floor) ...
+    img[18, 18] = 0.0                   # ... where black is no speck
+    img[0, 0] = np.nan                  # NaN counts as 0: a speck
+    assert measures.speck_share(img) == pytest.approx(2 / 400)
+    assert measures.speck_share(np.zeros((8, 8, 3))) == 0.0
+
+
 def test_clipped_and_crushed_count_pixels_with_every_channel_at_the_end():
     img = np.full((10, 10, 3), 0.3)
     img[0, :] = 2.0                     # clipped

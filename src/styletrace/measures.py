@@ -3,6 +3,9 @@
     noise_psnr(a, b)        PSNR (dB) of two renders differing only in seed, in display space
     firefly_share(img)      share of pixels brighter than 5x the median of their 5 x 5
                             neighbourhood (a median of at least 0.01)
+    speck_share(img)        share of pixels darker than 1/5 of that median (a median of at
+                            least 0.05): a firefly's mirror, which a defect that stays put
+                            between seeds leaves and noise_psnr cannot see
     clipped_share(img), crushed_share(img)
                             pixels with every channel >= 0.99 / <= 0.01 in display space
     tone_correlation(img, ref, period)
@@ -85,6 +88,32 @@ def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO,
     lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
     median = np.median(_windows(lum, size), axis=(-2, -1))
     return float(np.mean(lum > ratio * np.maximum(median, FIREFLY_FLOOR)))
+
+
+#: a pixel is a dark speck below the median of its neighbourhood over this
+SPECK_RATIO = FIREFLY_RATIO
+#: the least median a speck is measured against (5% of display white): a black pixel among dim
+#: ones is seen as little as a dim one among black
+SPECK_FLOOR = 0.05
+
+
+def speck_share(img: np.ndarray, ratio: float = SPECK_RATIO,
+                size: int = FIREFLY_WINDOW) -> float:
+    """The share of pixels that are dark specks in a bright neighbourhood, on the linear image
+    (NaN and negatives as 0).
+
+    Args:
+        img: H x W x 3 linear image.
+        ratio: a pixel is a speck when its luminance is below the median of its neighbourhood
+            over `ratio`, where that median is at least SPECK_FLOOR.
+        size: the neighbourhood's side in pixels (odd; edges repeated).
+
+    Returns:
+        The fraction of pixels, in [0, 1].
+    """
+    lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
+    median = np.median(_windows(lum, size), axis=(-2, -1))
+    return float(np.mean((median >= SPECK_FLOOR) & (lum < median / ratio)))
 
 
 def clipped_share(img: np.ndarray) -> float:
