@@ -72,6 +72,13 @@ def _windows(x: np.ndarray, size: int) -> np.ndarray:
     return np.lib.stride_tricks.sliding_window_view(padded, (size, size))
 
 
+def _local_median(img: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """(luminance, its median over each size x size neighbourhood) of a linear image, NaN and
+    negatives as 0."""
+    lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
+    return lum, np.median(_windows(lum, size), axis=(-2, -1))
+
+
 def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO,
                   size: int = FIREFLY_WINDOW) -> float:
     """The share of pixels that are fireflies, on the linear image (NaN and negatives as 0).
@@ -85,8 +92,7 @@ def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO,
     Returns:
         The fraction of pixels, in [0, 1].
     """
-    lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
-    median = np.median(_windows(lum, size), axis=(-2, -1))
+    lum, median = _local_median(img, size)
     return float(np.mean(lum > ratio * np.maximum(median, FIREFLY_FLOOR)))
 
 
@@ -111,8 +117,7 @@ def speck_share(img: np.ndarray, ratio: float = SPECK_RATIO,
     Returns:
         The fraction of pixels, in [0, 1].
     """
-    lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
-    median = np.median(_windows(lum, size), axis=(-2, -1))
+    lum, median = _local_median(img, size)
     return float(np.mean((median >= SPECK_FLOOR) & (lum < median / ratio)))
 
 
