@@ -272,9 +272,7 @@ def image_measures(img: np.ndarray, reference: np.ndarray, style: str,
 
 def inside(mask: np.ndarray, period: int) -> np.ndarray:
     """The pixels of `mask` whose whole period x period neighbourhood (made odd) is in it."""
-    from numpy.lib.stride_tricks import sliding_window_view
-    r = (period | 1) // 2
-    return sliding_window_view(np.pad(mask, r, mode="edge"), (2 * r + 1,) * 2).all(axis=(-2, -1))
+    return measures.windows(mask, period | 1).all(axis=(-2, -1))
 
 
 def stylized_pixels(path: Path, size: tuple[int, int]) -> tuple[np.ndarray, float]:

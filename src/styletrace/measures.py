@@ -10,6 +10,7 @@
                             pixels with every channel >= 0.99 / <= 0.01 in display space
     tone_correlation(img, ref, period)
                             rank correlation of local luminance with a converged render
+    windows(x, size)        every element's size x size neighbourhood, edges repeated
 
 Images are H x W x 3 float arrays of linear radiance; display space is sRGB of the values clamped to
 [0, 1]. numpy only.
@@ -66,7 +67,16 @@ def noise_psnr(a: np.ndarray, b: np.ndarray) -> float:
     return float("inf") if var == 0.0 else float(10.0 * np.log10(1.0 / var))
 
 
-def _windows(x: np.ndarray, size: int) -> np.ndarray:
+def windows(x: np.ndarray, size: int) -> np.ndarray:
+    """The size x size neighbourhood of every element of a 2-D array, edges repeated.
+
+    Args:
+        x: H x W array.
+        size: the neighbourhood's side (odd).
+
+    Returns:
+        An H x W x size x size view of x (no copy).
+    """
     r = size // 2
     padded = np.pad(x, r, mode="edge")
     return np.lib.stride_tricks.sliding_window_view(padded, (size, size))
@@ -76,7 +86,7 @@ def _local_median(img: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     """(luminance, its median over each size x size neighbourhood) of a linear image, NaN and
     negatives as 0."""
     lum = luminance(np.maximum(np.nan_to_num(np.asarray(img, dtype=np.float64)), 0.0))
-    return lum, np.median(_windows(lum, size), axis=(-2, -1))
+    return lum, np.median(windows(lum, size), axis=(-2, -1))
 
 
 def firefly_share(img: np.ndarray, ratio: float = FIREFLY_RATIO,
@@ -148,7 +158,7 @@ def crushed_share(img: np.ndarray) -> float:
 def _box_blur(x: np.ndarray, size: int) -> np.ndarray:
     if size <= 1:
         return x
-    return np.mean(_windows(x, size | 1), axis=(-2, -1))
+    return np.mean(windows(x, size | 1), axis=(-2, -1))
 
 
 def _ranks(x: np.ndarray) -> np.ndarray:
