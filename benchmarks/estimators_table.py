@@ -36,7 +36,7 @@ def measure(est, exact, seed, dist=DIST, channels=None, lanes=LANES):
     bias = float(np.mean(v.mean(axis=0) - np.atleast_1d(exact)))
     se = float(np.sqrt(np.mean(v.var(axis=0, ddof=1)) / lanes))
     return {"name": est.name, "samples": float(r.draws.mean()), "var": var, "bias": bias, "se": se,
-            "expected_samples": est.mean_samples}
+            "expected_samples": est.mean_draws}
 
 
 def efficiency(row, base):

@@ -59,7 +59,7 @@ import styletrace.blender as addon
 from styletrace import measures
 from styletrace.blender import camera
 from styletrace.blender.viewport import Viewport
-from styletrace.lookdev.buffer import MAX_SAMPLES
+from styletrace.lookdev.buffer import MAX_CAMERA_SAMPLES
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -168,7 +168,7 @@ def reference(S, name: str, size: int, style: str, tmp: str, n: int) -> np.ndarr
     for seed in range(REF_SEED, REF_SEED + (REF_SEEDS if n > 1 else 1)):
         scene, st = build(S, name, size, style, seed)
         st.inner_samples = str(n)
-        st.spp = min(REF_PATHS // n, MAX_SAMPLES // (size * size)) if n > 1 else REF_PATHS
+        st.spp = min(REF_PATHS // n, MAX_CAMERA_SAMPLES // (size * size)) if n > 1 else REF_PATHS
         st.pass_spp = 4
         images.append(S.f12(os.path.join(tmp, f"ref-{name}-{style}.exr"))["Combined"][..., :3])
     return np.mean(images, axis=0)

@@ -154,8 +154,8 @@ def main():
         "",
         machine_description(),
         "",
-        f"Cornell box 512x512, 16 camera samples per pixel, n = 16 children ({buf.samples} camera "
-        f"samples). "
+        f"Cornell box 512x512, 16 camera samples per pixel, n = 16 children "
+        f"({buf.camera_samples} camera samples). "
         f"Fresh render (`styletrace.render`, cel): {fresh_s:.1f} s; the same render recording the "
         f"buffer: "
         f"{record_s:.1f} s. Restyle, median of {args.runs} after a warm-up (goal: >= 500x faster "
@@ -166,9 +166,9 @@ def main():
         "|---|---|---|",
         *rows,
         "",
-        f"Buffer memory: {buf.nbytes / buf.samples:.0f} bytes per camera sample in the file and "
-        f"in numpy "
-        f"({buf.nbytes / 2**20:.0f} MiB here), plus {dev_bytes / buf.samples:.0f} bytes per "
+        f"Buffer memory: {buf.nbytes / buf.camera_samples:.0f} bytes per camera sample in the file "
+        f"and in numpy "
+        f"({buf.nbytes / 2**20:.0f} MiB here), plus {dev_bytes / buf.camera_samples:.0f} bytes per "
         f"sample for the Dr.Jit "
         f"copy restyles work on; the default cap of 4194304 camera samples bounds both.",
         "",

@@ -186,12 +186,12 @@ def test_mi_render_against_another_pass_split(files, reference):
 
 
 def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
-    """The default of `denoise` is one (`denoise.default_method`: auto, unless
+    """The default of `denoise` is one (`pipeline.denoising.default_method`: auto, unless
     $STYLETRACE_DENOISE, which the suite sets to off and this test clears): `styletrace.render`,
     the command line, the preview and Blender's Denoise property (tests/blender/test_denoise.py)
     all take it, and the Python call and the command line draw the same denoised image."""
     monkeypatch.delenv("STYLETRACE_DENOISE", raising=False)
-    from styletrace.denoise import default_method
+    from styletrace.pipeline.denoising import default_method
     assert default_method() == "auto"
     args = dict(style="cel", inner=INNER, seed=SEED, defines={"depth": "3"})
     image = styletrace.render(files[0], **args)
@@ -225,47 +225,66 @@ def test_every_front_end_denoises_by_default(files, tmp_path, monkeypatch):
     assert r.returncode == 0, r.stderr
     assert "denoised: expectation" in r.stderr, r.stderr
     assert np.array_equal(np.array(mi.Bitmap(str(out)))[..., :3], image)
-    from styletrace.preview.session import Session
-    assert Session(files[0], inner=INNER, spp=2).denoised
+    from styletrace.preview.jobs import page_job, prepare
+    assert prepare(page_job(files[0], inner=INNER, spp=2)).page.method == "expectation"
 
 
-def test_every_front_end_splits_the_samples_alike(files, tmp_path, monkeypatch):
+@pytest.fixture
+def splits(monkeypatch):
+    """Every answer of the one split (`pipeline.budget.split`, called by `pipeline.resolve`)."""
+    from styletrace.pipeline import resolve as module
+    answers, split = [], module.split
+    monkeypatch.setattr(module, "split", lambda *a, **k: answers.append(split(*a, **k))
+                        or answers[-1])
+    return answers
+
+
+def test_every_front_end_takes_the_one_splits_answer(files, tmp_path, splits):
     """`samples` (paths per pixel; default the scene's sample count, 4 in this file) is split once
-    (`pipeline.budget`) for every front end. Denoise off: at 32 samples cel's camera samples take
-    its own 16 children, 2 of them; the file's 4 one camera sample of 4 children. The command
-    line names the split on its line of auto values and records it in its buffer (`render
-    --buffer`), `styletrace.render` runs it (the job its runner gets), `render_buffer` records it
-    and the preview's session takes it. With the expectation denoised (the default) a camera
-    sample takes at most 4 children (`budget.CHILDREN`): 8 x 4. Blender's F12:
-    tests/blender/test_samples.py."""
-    from styletrace.pipeline import execute
-    from styletrace.preview.session import Session
-    ran = []
-    run = execute.run_resolved
-    monkeypatch.setattr(execute, "run_resolved", lambda r, *a: ran.append(r) or run(r, *a))
-    cli = [sys.executable, "-m", "styletrace", "render", files[0], "-D", "depth=3",
-           "--style", "cel", "--seed", str(SEED), "--denoise", "off"]
-    r = subprocess.run(cli[:-2] + ["--denoise", "expectation", "--samples", "32", "-o",
-                              str(tmp_path / "d.exr")],
-                       capture_output=True, text=True, env=child_env(), timeout=300)
-    assert r.returncode == 0, r.stderr
-    assert "auto values: samples=32: spp=8 x 4 children; " in r.stderr, r.stderr
+    per render, by `pipeline.budget.split` in `pipeline.resolve.resolve`, after the denoising
+    method is chosen; every front end renders that answer: the command line (its auto line and its
+    buffer), `styletrace.render` (its passes), `render_buffer` and the preview's session. Denoise
+    off: at 32 samples cel's camera samples take its own 16 children, 2 of them; the file's 4 one
+    camera sample of 4 children. With the expectation denoised a camera sample takes at most 4
+    children (`budget.CHILDREN`): 8 x 4. Blender's F12 and viewport: tests/blender/test_samples.py.
+    """
+    from styletrace.frontends import cli
+    from styletrace.preview.jobs import page_job, prepare
+
+    def one(count=1):
+        """The answers of the render just made (one split each), emptied."""
+        got = list(splits)
+        splits.clear()
+        assert len(got) == count, got
+        return got[-1]
+
+    words = [files[0], "-D", "depth=3", "--style", "cel", "--seed", str(SEED), "-q"]
+    assert cli.main(["render", *words, "--denoise", "expectation", "--samples", "32", "-o",
+                     str(tmp_path / "d.exr")]) == 0
+    answer = one()
+    assert (answer.camera_samples, answer.children) == (8, (4,))
+    assert answer.note == "samples=32: spp=8 x 4 children"
     for samples, (spp, n) in ((32, (2, 16)), (None, (1, 4))):
         flag = [] if samples is None else ["--samples", str(samples)]
         npz = tmp_path / f"{samples}.npz"
-        r = subprocess.run(cli + flag + ["--buffer", str(npz), "-o", str(tmp_path / "o.exr")],
-                           capture_output=True, text=True, env=child_env(), timeout=300)
-        assert r.returncode == 0, r.stderr
-        assert f"auto values: samples={samples or 4}: spp={spp} x {n} children; " in r.stderr
+        assert cli.main(["render", *words, "--denoise", "off", *flag, "--buffer", str(npz),
+                         "-o", str(tmp_path / "o.exr")]) == 0
+        answer = one()
+        assert (answer.camera_samples, answer.children) == (spp, (n,))
+        assert f"samples={samples or 4}: spp={spp} x {n} children" == answer.note
         recorded = styletrace.load_buffer(str(npz))
         assert (recorded.spp, recorded.header["slots"][0]["inner"]) == (spp, n)
         given = {} if samples is None else {"samples": samples}
         totals = []
         styletrace.render(files[0], style="cel", seed=SEED, defines={"depth": "3"},
-                          callback=lambda p: totals.append(p.spp_total), **given)
-        assert set(totals) == {spp} and int(ran.pop().integrator.settings.slot.n(0)) == n
+                          denoise="off", callback=lambda p: totals.append(p.spp_total), **given)
+        assert one().camera_samples == spp and set(totals) == {spp}
         buf = styletrace.render_buffer(files[0], style="cel", seed=SEED, defines={"depth": "3"},
                                        **given)
-        assert (buf.spp, buf.header["slots"][0]["inner"]) == (spp, n)
-        session = Session(files[0], **given)  # its page starts with cel
-        assert (session.spp, session.inner) == (spp, n)
+        answer = one()
+        assert (buf.spp, buf.header["slots"][0]["inner"]) == (answer.camera_samples,
+                                                               answer.children[0]) == (spp, n)
+        page = prepare(page_job(files[0], denoise="off", **given)).page  # the page starts with cel
+        assert (page.spp, page.budget.children) == (spp, (n,)) and one().children == (n,)
+
+

@@ -75,12 +75,13 @@ def test_each_point_lies_in_its_own_cell(k, tiled, crop, monkeypatch):
     assert buf.header.get("tiles", 1) == (4 if tiled else 1)
     np.testing.assert_allclose(styletrace.restyle(buf, style="cel"), image, atol=2e-6)
     a = buf.arrays
-    assert buf.samples == buf.width * buf.height * k and buf.width == w and np.all(a["slot"] >= 0)
+    assert buf.camera_samples == buf.width * buf.height * k and buf.width == w
+    assert np.all(a["slot"] >= 0)
     uv = X.raster(scene, a["p"])
     pixel = a["pixel"].astype(np.int64)
     assert np.all(np.floor(uv[:, 0]) == pixel % w) and np.all(np.floor(uv[:, 1]) == pixel // w)
     m = math.isqrt(k)
-    j = np.arange(buf.samples) % k  # the lane's point within its pixel
+    j = np.arange(buf.camera_samples) % k  # the lane's point within its pixel
     cell = np.floor((uv - np.floor(uv)) * m).astype(np.int64)
     assert np.array_equal(cell[:, 0], j % m) and np.array_equal(cell[:, 1], j // m)
 

@@ -13,12 +13,17 @@ from conftest import child_env  # noqa: F401  (tests/conftest.py: the source tre
 
 import styletrace
 from styletrace.denoise import NotDenoised
-from styletrace.denoise.default import FIREFLY_K, choose
+from styletrace.pipeline.denoising import FIREFLY_K, Denoising
 from styletrace.pipeline.job import python_job
 from styletrace.pipeline.resolve import resolve
 
 ROOT = os.path.join(os.path.dirname(__file__), "..", "..")
 SMALL = dict(width=24, height=24, seed=3)
+
+
+def planned(job):
+    """`job` resolved at every front end's default denoising (auto, read from the environment)."""
+    return resolve(job.with_(denoising=Denoising()))
 
 
 @pytest.fixture
@@ -28,27 +33,27 @@ def auto(monkeypatch):
 
 
 def test_auto_plans_expectation_with_the_firefly_control_and_the_budget_spent(auto):
-    plan = choose(resolve(python_job("cornell-box", style="cel", **SMALL)))
+    plan = planned(python_job("cornell-box", style="cel", **SMALL))
     assert plan.method == "expectation" and plan.note == ""
-    s = plan.resolved.integrator.settings
+    s = plan.integrator.settings
     assert s.firefly == FIREFLY_K and s.firefly_floor > 0
     # the built-in scene's 16 samples: 4 camera samples of 4 children (pipeline.budget)
-    assert plan.resolved.spp == 4 and int(s.slot.n(0)) == 4
-    assert "firefly=4" in plan.resolved.auto
-    assert "samples=16: spp=4 x 4 children" in plan.resolved.auto
+    assert plan.spp == 4 and int(s.slot.n(0)) == 4
+    assert "firefly=4" in plan.auto
+    assert "samples=16: spp=4 x 4 children" in plan.auto
     # a given spp is the user's: kept
-    assert choose(resolve(python_job("cornell-box", style="cel", spp=8, **SMALL))).resolved.spp == 8
+    assert planned(python_job("cornell-box", style="cel", spp=8, **SMALL)).spp == 8
 
 
 def test_the_default_is_auto_and_equals_expectation_with_the_values_it_pins(auto):
     image = styletrace.render("cornell-box", style="cel", **SMALL)
-    plan = choose(resolve(python_job("cornell-box", style="cel", **SMALL)))
-    s = plan.resolved.integrator.settings
+    plan = planned(python_job("cornell-box", style="cel", **SMALL))
+    s = plan.integrator.settings
     explicit = styletrace.render(
         "cornell-box",
         style="cel",
         denoise="expectation",
-        spp=plan.resolved.spp,
+        spp=plan.spp,
         inner=int(s.slot.n(0)),
         firefly=s.firefly,
         firefly_floor=s.firefly_floor,
@@ -160,7 +165,7 @@ def test_auto_denoises_the_image_where_the_expectation_adds_nothing_or_is_refuse
     """One child or none (identity, gooch: g of the denoised mean is the denoised image), or g
     applied to every child (acp, which the expectation's denoiser refuses): auto denoises the
     image."""
-    plan = choose(resolve(python_job("cornell-box", style=style, inner=inner, **SMALL)))
+    plan = planned(python_job("cornell-box", style=style, inner=inner, **SMALL))
     assert plan.method == "image" and plan.note == ""
     image = styletrace.render("cornell-box", style=style, inner=inner, **SMALL)
     assert np.array_equal(
@@ -169,16 +174,16 @@ def test_auto_denoises_the_image_where_the_expectation_adds_nothing_or_is_refuse
 
 
 def test_a_given_spp_over_the_buffers_cap_denoises_the_image(auto, monkeypatch):
-    from styletrace.lookdev import buffer
-    monkeypatch.setattr(buffer, "MAX_SAMPLES", 24 * 24 * 3)
-    assert choose(resolve(python_job("cornell-box", style="cel", spp=4, **SMALL))).method == "image"
+    from styletrace.pipeline import budget
+    monkeypatch.setattr(budget, "MAX_CAMERA_SAMPLES", 24 * 24 * 3)
+    assert planned(python_job("cornell-box", style="cel", spp=4, **SMALL)).method == "image"
     # without a given spp the budget is spent within the cap instead: 64 samples would be 16 x 4,
     # the cap allows 3 camera samples, so each takes ceil(64 / 3) = 22 children
-    plan = choose(resolve(python_job("cornell-box", style="cel", samples=64, **SMALL)))
-    assert plan.method == "expectation" and plan.resolved.spp == 3
-    assert int(plan.resolved.integrator.settings.slot.n(0)) == 22
-    assert "samples=64: spp=3 x 22 children" in plan.resolved.auto
-    assert "spp=4" not in plan.resolved.auto
+    plan = planned(python_job("cornell-box", style="cel", samples=64, **SMALL))
+    assert plan.method == "expectation" and plan.spp == 3
+    assert int(plan.integrator.settings.slot.n(0)) == 22
+    assert "samples=64: spp=3 x 22 children" in plan.auto
+    assert "spp=4" not in plan.auto
 
 
 @pytest.mark.parametrize("style", ["identity", "sepia", "contrast", "saturation", "acp"])
@@ -204,7 +209,7 @@ def test_a_room_lit_through_a_window_is_clean_at_defaults(auto, style):
     plain, film, default = psnr(denoise="off"), psnr(denoise_footprint="film"), psnr()
     assert plain < 27.0, plain  # the scene is speckled (else this tests nothing)
     assert default >= 30.0, (default, plain)
-    if choose(resolve(python_job(sky_room(48), style=style))).method == "image":
+    if planned(python_job(sky_room(48), style=style)).method == "image":
         assert default > film + 5.0, (default, film)
     else:  # saturation's children: the expectation denoiser, which the switch does not touch
         # (equal up to the last bits that a gaussian film's atomic adds leave in any order)

@@ -39,7 +39,7 @@ def cases():
 @pytest.mark.parametrize("name", list(cases()))
 def test_algebra_is_unbiased_with_the_stated_cost(name):
     est, draws = cases()[name]
-    assert est.mean_samples == draws
+    assert est.mean_draws == draws
     for i, (dname, dist) in enumerate(DISTS.items()):
         r = run_estimates(est, dist, 100_000, seed=30 + i)
         assert_unbiased(r.values, est.exact(dist.mean), what=f"{est.name} on {dname}")
@@ -64,7 +64,7 @@ def test_composition_with_an_inner_estimator_that_sometimes_needs_no_draws(backe
     r = run_estimates(est, dist, 200_000, backend=backend, seed=6)
     assert_unbiased(r.values, np.exp(dist.mean) ** 2, what=est.name)
     d = r.draws.astype(float)
-    assert abs(d.mean() - est.mean_samples) <= Z * d.std() / np.sqrt(len(d))  # Wald: 2 x E[k] = 4
+    assert abs(d.mean() - est.mean_draws) <= Z * d.std() / np.sqrt(len(d))  # Wald: 2 x E[k] = 4
     assert (r.draws == 0).any()
 
 
@@ -85,7 +85,7 @@ def test_inner_means_with_and_without_comb():
     dist = DISTS["exponential"]
     for comb in (False, True):
         est = inner_mean(PolynomialU([0.0, 0.0, 0.0, 1.0], n=3), m=4, comb=comb)
-        assert est.mean_samples == 12 and est.uses_comb == comb
+        assert est.mean_draws == 12 and est.uses_comb == comb
         r = run_estimates(est, dist, 100_000, seed=4)
         assert_unbiased(r.values, dist.mean ** 3, what=est.name)
         assert np.all(r.draws == 12)

@@ -62,5 +62,5 @@ def test_invalid_parameters():
         Direct(np.exp, -3)
     with pytest.raises(ValueError, match="g must be a callable"):
         Direct(2.0, 4)
-    assert Direct(np.exp, 5).mean_samples == 5 and Direct(np.exp, 5).exact(0.0) == 1.0
+    assert Direct(np.exp, 5).mean_draws == 5 and Direct(np.exp, 5).exact(0.0) == 1.0
     assert Exponential(2.0).mean == 2.0

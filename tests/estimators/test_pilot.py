@@ -12,7 +12,7 @@ def test_pilot_samples_are_counted_and_separate():
     est = SeriesEstimator(gamma_series(2.2, lo=0.2, hi=1.0), b=Pilot(3))
     dist = DISTS["uniform"]
     r = run_estimates(est, dist, 100_000, seed=12)
-    assert r.draws.min() >= 3 and est.mean_samples == pytest.approx(3 + np.sum(est.S[1:]))
+    assert r.draws.min() >= 3 and est.mean_draws == pytest.approx(3 + np.sum(est.S[1:]))
     assert_unbiased(r.values, dist.mean ** (1 / 2.2))
 
 

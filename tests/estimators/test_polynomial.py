@@ -105,7 +105,7 @@ def test_naive_and_ustat_are_unbiased_for_powers(dist_name, k):
     coeffs = [0.0] * k + [1.0]
     for est in (PolynomialNaive(coeffs), PolynomialU(coeffs, n=k + 3)):
         r = run_estimates(est, dist, 100_000, seed=10 * k)
-        assert np.all(r.draws == est.mean_samples)
+        assert np.all(r.draws == est.mean_draws)
         assert_unbiased(r.values, dist.mean ** k, what=f"{est.name} on {dist_name}")
 
 
@@ -120,7 +120,7 @@ def test_multiterm_polynomial_about_a_pilot_point_is_unbiased(backend):
     ):
         r = run_estimates(est, dist, 200_000, backend=backend, seed=5)
         assert_unbiased(r.values, poly(dist.mean), what=est.name)
-        assert np.all(r.draws == est.mean_samples)
+        assert np.all(r.draws == est.mean_draws)
 
 
 def test_unbiasedness_check_can_fail_on_the_direct_estimator():
@@ -160,7 +160,7 @@ def test_ustat_variance_is_at_most_naive_at_equal_sample_count(k, n):
 def test_equal_variance_when_n_equals_k():
     # with n = k the U-statistic has one subset: it is the naive product (a sanity check of the test
     # above)
-    assert PolynomialU([0, 0, 1], n=2).mean_samples == PolynomialNaive([0, 0, 1]).mean_samples
+    assert PolynomialU([0, 0, 1], n=2).mean_draws == PolynomialNaive([0, 0, 1]).mean_draws
 
 
 def test_invalid_parameters_are_refused_with_the_bad_value():

@@ -41,12 +41,12 @@ TARGETS = {
 
 
 def check_draws(r, est):
-    """The measured draws per estimate agree with est.mean_samples (z-test on the count)."""
-    if est.mean_samples is None:
+    """The measured draws per estimate agree with est.mean_draws (z-test on the count)."""
+    if est.mean_draws is None:
         return
     d = r.draws.astype(float)
     se = max(d.std(ddof=1), 1e-12) / np.sqrt(len(d))
-    assert abs(d.mean() - est.mean_samples) <= Z * se + 1e-12, (d.mean(), est.mean_samples)
+    assert abs(d.mean() - est.mean_draws) <= Z * se + 1e-12, (d.mean(), est.mean_draws)
 
 
 @pytest.mark.parametrize("target", list(TARGETS))
@@ -117,7 +117,7 @@ def test_integer_power_is_finite_and_exact_cost():
     est = SeriesEstimator(
         power_series(2.0), b=0.5, selection="iterative", truncation=PoissonCMF(2.0)
     )
-    assert est.K == 2 and est.mean_samples == 2.0
+    assert est.K == 2 and est.mean_draws == 2.0
     dist = DISTS["exponential"]
     r = run_estimates(est, dist, 100_000, seed=1)
     assert_unbiased(r.values, dist.mean ** 2)
@@ -159,9 +159,9 @@ def test_random_counts_are_drawn_per_lane_inside_the_kernel(selection):
     r = E.estimate_drjit(est, E.Uniform(0.2, 1.0), 20000, seed=3)
     counts = r.draws.astype(np.float64)
     assert len(np.unique(counts)) > 3
-    if est.mean_samples is not None:
+    if est.mean_draws is not None:
         se = counts.std(ddof=1) / np.sqrt(len(counts))
-        assert abs(counts.mean() - est.mean_samples) < 4 * se, (counts.mean(), est.mean_samples)
+        assert abs(counts.mean() - est.mean_draws) < 4 * se, (counts.mean(), est.mean_draws)
 
 
 def test_scaled_terms_keep_float32_finite(jit):

@@ -15,7 +15,7 @@ def test_telescoping_is_unbiased_where_direct_is_not(name):
     r = run_estimates(tel, dist, 200_000, seed=9)
     assert_unbiased(r.values, dist.mean ** 2, what=f"{tel.name} {name}")
     d = r.draws.astype(float)
-    assert abs(d.mean() - tel.mean_samples) <= Z * d.std() / np.sqrt(len(d))
+    assert abs(d.mean() - tel.mean_draws) <= Z * d.std() / np.sqrt(len(d))
 
 
 def test_telescoping_removes_a_bias_the_same_test_detects_in_direct():

@@ -59,7 +59,7 @@ def test_the_first_level_expands_about_the_pass_b_not_a_pilot():
     e = mi.Color3f([0.0, 0.0, 3.0], 0.0, 0.0)
     est = estimation.make_estimator(slot, 0, v, None, ([own, window], e))
     point = est.inner.point
-    assert point.pilot is None and point.lane is not None and point.samples == 0
+    assert point.pilot is None and point.lane is not None and point.draws == 0
     # lanes x RGB
     b = np.asarray(point.start(Context("drjit", like_t=mi.Color3f))["b"], dtype=np.float64).T
     m1 = np.array([[0.1, 0.2, 0.0], [0.0, 0.2, 0.0], [0.5, 0.2, 0.0]])

@@ -19,4 +19,4 @@ def test_a_scene_keeps_its_sample_count_across_renders():
     api.render(scene, style="identity", spp=3, denoise="off")
     assert scene_spp(scene) == 16
     again = resolve(python_job(scene, style="cel"), scene=scene)
-    assert (again.spp, again.budget.inner) == (first.spp, first.budget.inner)
+    assert (again.spp, again.budget.children) == (first.spp, first.budget.children)

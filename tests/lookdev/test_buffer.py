@@ -9,7 +9,7 @@ import pytest
 
 import styletrace
 from styletrace.errors import UsageError
-from styletrace.lookdev.buffer import VERSION, Arrays, bytes_per_sample, load_buffer
+from styletrace.lookdev.buffer import VERSION, Arrays, bytes_per_camera_sample, load_buffer
 from styletrace.lookdev.record import render_buffer
 from styletrace.lookdev.restyle import restyle
 
@@ -30,9 +30,10 @@ def test_round_trip(buf, tmp_path):
 
 
 def test_size_per_camera_sample_is_what_the_docs_say(buf):
-    assert buf.samples == 12 * 10 * 2
-    assert buf.nbytes == buf.samples * bytes_per_sample("first_hit") == buf.samples * 65
-    assert bytes_per_sample("first_object_hit") == 81
+    assert buf.camera_samples == 12 * 10 * 2
+    per = bytes_per_camera_sample("first_hit")
+    assert buf.nbytes == buf.camera_samples * per == buf.camera_samples * 65
+    assert bytes_per_camera_sample("first_object_hit") == 81
 
 
 def test_the_api_names(buf, tmp_path):
@@ -80,11 +81,11 @@ def test_recorded_arrays_stay_on_the_device_until_read():
     b = render_buffer("cornell-box", style="cel", spp=2, inner=2, seed=1, width=8, height=6,
                       pass_spp=1)
     a = b.arrays
-    assert not a.on_host("p") and a.length("p") == b.samples == 8 * 6 * 2
+    assert not a.on_host("p") and a.length("p") == b.camera_samples == 8 * 6 * 2
     assert len(a.parts("p")) == 2  # one per pass
     nbytes = b.nbytes
     p = a["p"]  # read: joined on the host once
-    assert p.shape == (3, b.samples) and p.dtype == np.float32 and a.on_host("p")
+    assert p.shape == (3, b.camera_samples) and p.dtype == np.float32 and a.on_host("p")
     assert a["p"] is p and b.nbytes == nbytes
     np.testing.assert_array_equal(p, np.concatenate([np.asarray(x) for x in a.parts("p")], -1))
     assert a["slot"].dtype == np.int8 and a["pixel"].dtype == np.uint32

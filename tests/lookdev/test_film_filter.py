@@ -16,7 +16,7 @@ import styletrace
 from styletrace.frontends import api
 from styletrace.gate import dr, mi
 from styletrace.lookdev import film_filter
-from styletrace.lookdev.buffer import bytes_per_sample, load_buffer
+from styletrace.lookdev.buffer import bytes_per_camera_sample, load_buffer
 from styletrace.lookdev.fit import fit
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
@@ -86,7 +86,7 @@ def test_restyle_equals_a_fresh_render(rfilter):
 def test_sample_border():
     kw = dict(spp=SPP, inner=INNER, seed=SEED)
     buf = render_buffer(scene_dict({"type": "gaussian"}, border=True), style="cel", **kw)
-    assert buf.header["sample_border"] and buf.samples == (W + 4) * (H + 4) * SPP
+    assert buf.header["sample_border"] and buf.camera_samples == (W + 4) * (H + 4) * SPP
     own = buf.arrays["own"].astype(bool)
     counts = np.bincount(buf.arrays["pixel"][own], minlength=W * H)
     assert np.array_equal(counts, np.full(W * H, SPP))
@@ -126,8 +126,8 @@ def test_the_filters_format():
     buf = render_buffer(scene_dict(None, w=8, h=6), style="cel", spp=1, inner=1, seed=0)
     assert buf.header["filter"] == {"type": "gaussian", "stddev": 0.5}
     assert buf.header["layout"] == [{"offset": [0, 0], "size": [8, 6], "keep": [0, 6, 0, 8]}]
-    per = bytes_per_sample("first_hit", filtered=True)
-    assert buf.nbytes == buf.samples * per == buf.samples * 74
+    per = bytes_per_camera_sample("first_hit", filtered=True)
+    assert buf.nbytes == buf.camera_samples * per == buf.camera_samples * 74
     box = render_buffer(scene_dict({"type": "box"}, w=8, h=6), style="cel", spp=1, inner=1)
     assert box.header["filter"] == "box" and "pos" not in box.arrays and "layout" not in box.header
 

@@ -46,7 +46,8 @@ def chosen(buf, point):
 @pytest.mark.parametrize("style", ["cel", "hatching"])
 def test_the_view_restyles_to_the_whole_buffer_at_its_samples(buf, style, point):
     view = per_pixel(buf, point)
-    assert view.samples == W * H and view.header["per_pixel"] == {"point": point, "of": 4 * W * H}
+    assert view.camera_samples == W * H
+    assert view.header["per_pixel"] == {"point": point, "of": 4 * W * H}
     got = restyle(view, style=style)
     values = sample_values(buf, prepare_slots(buf, slots_for(buf, style=style)))
     idx = chosen(buf, point)
@@ -64,7 +65,7 @@ def test_the_view_restyles_to_the_whole_buffer_at_its_samples(buf, style, point)
 def test_the_view_is_kept_and_refused_where_it_cannot_be(buf):
     assert per_pixel(buf) is per_pixel(buf)
     view = per_pixel(buf, 4)  # no pixel has a fifth sample: all left out
-    assert view.samples == 0
+    assert view.camera_samples == 0
     with pytest.raises(UsageError, match="bad value -1 for point"):
         per_pixel(buf, -1)
     seq = render_buffer("cornell-box", style="gamma", estimator="series", spp=1, inner=2,

@@ -91,4 +91,5 @@ def test_spp_waits_for_every_tile(tiled):
 def test_a_film_of_one_pass_is_recorded():
     scene = api.load_scene("cornell-box", 8, 6)
     prog, buf = next(record(scene, api.make_integrator(style="cel", inner=1), 1))
-    assert buf.samples == 48 and "tiles" not in buf.header and "tile" not in buf.header["passes"][0]
+    assert buf.camera_samples == 48
+    assert "tiles" not in buf.header and "tile" not in buf.header["passes"][0]

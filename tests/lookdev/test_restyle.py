@@ -81,7 +81,7 @@ def test_several_passes_are_all_kept():
     *_, (prog, buf) = record(
         scene, api.make_integrator("cel", inner=INNER), SPP, SEED, lanes_per_pass=lanes
     )
-    assert [p["spp"] for p in buf.header["passes"]] == [2, 1] and buf.samples == W * H * SPP
+    assert [p["spp"] for p in buf.header["passes"]] == [2, 1] and buf.camera_samples == W * H * SPP
     *_, want = api.passes(scene, api.make_integrator("gamma", inner=INNER), SPP, SEED, lanes)
     np.testing.assert_allclose(restyle(buf, style="gamma"), want.image, rtol=RTOL, atol=ATOL)
 
@@ -146,7 +146,7 @@ def test_a_film_other_than_rgb_is_refused():
 def test_the_cap_on_camera_samples():
     with pytest.raises(UsageError, match="holds 256 camera samples, over the cap of 100"):
         render_buffer(
-            "cornell-box", style="cel", spp=4, inner=1, width=8, height=8, max_samples=100
+            "cornell-box", style="cel", spp=4, inner=1, width=8, height=8, max_camera_samples=100
         )
 
 

@@ -8,7 +8,11 @@ from helpers.same_render import assert_same_render
 import styletrace
 from styletrace.errors import UsageError
 from styletrace.lookdev import record as record_module
-from styletrace.lookdev.buffer import MAX_SEQUENCE_SAMPLES, bytes_per_sample, load_buffer
+from styletrace.lookdev.buffer import (
+    MAX_SEQUENCE_CAMERA_SAMPLES,
+    bytes_per_camera_sample,
+    load_buffer,
+)
 from styletrace.lookdev.fit import fit
 from styletrace.lookdev.record import render_buffer
 from styletrace.lookdev.restyle import replay_lanes, restyle
@@ -155,12 +159,12 @@ def test_file_round_trip_and_size(tmp_path):
     uniforms = int(a["seq_count"].sum()) - children
     assert a["child"].shape == (3, children) and a["uniform"].shape == (uniforms,)
     # the fixed fields, as docs/lookdev.md says
-    assert bytes_per_sample("first_hit", "sequence") == 57
-    assert buf.nbytes == 57 * buf.samples + 13 * children + 5 * uniforms
+    assert bytes_per_camera_sample("first_hit", "sequence") == 57
+    assert buf.nbytes == 57 * buf.camera_samples + 13 * children + 5 * uniforms
 
 
 def test_the_sequence_cap_and_fit():
-    with pytest.raises(UsageError, match=f"over the cap of {MAX_SEQUENCE_SAMPLES}"):
+    with pytest.raises(UsageError, match=f"over the cap of {MAX_SEQUENCE_CAMERA_SAMPLES}"):
         render_buffer(
             "cornell-box",
             style="gamma",

@@ -1,15 +1,17 @@
-"""The sample budget (`pipeline.budget`, issue 36): `samples`, paths per pixel, split by
-`pipeline.resolve` into camera samples x children for every style, and again for the expectation
-denoiser (`denoise.default.choose`, every front end's default): explicit counts win exactly, three
-that disagree are refused in one line, and the expectation buffer's cap lowers an auto spp. The
-observable is the planned job (its spp, its integrator's `slot.n`), not a render."""
+"""The sample budget (`pipeline.budget`, issues 36 and 44): `samples`, paths per pixel, split once
+by `pipeline.resolve` into camera samples x children for every style, after the denoising method is
+chosen (the expectation denoiser, every front end's default, takes at most CHILDREN children):
+explicit counts win exactly, three that disagree are refused in one line in the caller's terms, and
+the expectation buffer's cap lowers an auto spp. The observable is the resolved job (its spp, its
+integrator's `slot.n`), not a render."""
 import pytest
 
 from styletrace.config.settings import AdaptiveCount
-from styletrace.denoise.default import choose
 from styletrace.errors import UsageError
 from styletrace.frontends import api
-from styletrace.pipeline.budget import CHILDREN, Request, split
+from styletrace.pipeline import terms
+from styletrace.pipeline.budget import CHILDREN, Request, averages_children, draft_request, split
+from styletrace.pipeline.denoising import Denoising
 from styletrace.pipeline.job import Job, python_job
 from styletrace.pipeline.resolve import resolve
 from styletrace.styles import registry
@@ -33,12 +35,13 @@ def box():
 def resolved(scene, denoise="expectation", **kw):
     """The job a render of `denoise` runs (the expectation: every front end's default for a style
     of several children)."""
-    return planned(resolve(python_job("cornell-box", width=W, height=H, **kw), scene=scene),
-                   denoise)
+    return resolve(python_job("cornell-box", width=W, height=H, denoising=Denoising(denoise), **kw),
+                   scene=scene)
 
 
-def planned(r, denoise="expectation"):
-    return choose(r, denoise).resolved
+def planned(job, denoise="expectation"):
+    """`job` resolved with `denoise`."""
+    return resolve(job.with_(denoising=Denoising(denoise)))
 
 
 def counts(r):
@@ -59,7 +62,7 @@ def test_every_style_spends_the_samples_as_paths_per_pixel(box, style, samples):
 
 def test_the_scenes_sample_count_is_the_default_budget(box):
     r = resolved(box, style="cel")
-    assert counts(r) == (4, CHILDREN) and r.budget.request.samples == 16
+    assert counts(r) == (4, CHILDREN) and r.budget.request.budget == 16
     assert r.auto.startswith("samples=16: spp=4 x 4 children; ")
     # fewer samples than CHILDREN: n shrinks to the samples, one camera sample
     assert counts(resolved(box, style="cel", samples=2)) == (1, 2)
@@ -106,8 +109,22 @@ def test_spp_and_inner_given_are_used_exactly_and_samples_must_agree(box):
     assert counts(resolved(box, style="cel", spp=4, inner=8, samples=32)) == (4, 8)
     with pytest.raises(UsageError) as info:
         resolved(box, style="cel", spp=4, inner=8, samples=64)
-    assert str(info.value) == ("--samples 64 with --spp 4 and --inner 8 (32 paths per pixel): give "
-                               "at most two of the three")
+    assert str(info.value) == ("samples=64 with spp=4 and inner=8 (32 paths per pixel): give at "
+                               "most two of the three")
+
+
+@pytest.mark.parametrize("caller, words", [
+    (terms.PYTHON, "samples=64 with spp=4 and inner=8"),
+    (terms.COMMAND_LINE, "--samples 64 with --spp 4 and --inner 8"),
+    (terms.BLENDER, "'Samples' 64 with 'Camera samples' 4 and 'Inner samples' 8"),
+])
+def test_a_refusal_names_the_settings_in_the_callers_terms(box, caller, words):
+    """The same three counts that disagree, asked by Python, the command line and Blender: each
+    hears its own names (the keyword, the flag, the field's label)."""
+    job = python_job("cornell-box", width=W, height=H, style="cel", spp=4, inner=8, samples=64)
+    with pytest.raises(UsageError) as info:
+        resolve(job.with_(terms=caller), scene=box)
+    assert str(info.value) == f"{words} (32 paths per pixel): give at most two of the three"
 
 
 def test_several_levels_keep_their_counts(box):
@@ -131,19 +148,19 @@ def test_the_scene_files_own_inner_count_is_given(tmp_path):
         '<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter>'
         "</shape></scene>"
     )
-    assert counts(planned(resolve(Job(scene=str(scene))))) == (8, 4)
-    assert counts(planned(resolve(Job(scene=str(scene), samples=64)))) == (16, 4)
-    with pytest.raises(UsageError, match=r"--inner 4 \(16 paths per pixel\)"):
+    assert counts(planned(Job(scene=str(scene)))) == (8, 4)
+    assert counts(planned(Job(scene=str(scene), samples=64))) == (16, 4)
+    with pytest.raises(UsageError, match=r"inner=4 \(16 paths per pixel\)"):
         resolve(Job(scene=str(scene), samples=64, spp=4))
 
 
 def test_a_prebuilt_integrator_is_split_unless_it_names_its_count(box):
     cel = api.make_integrator(style="cel")
-    assert counts(planned(resolve(Job(scene=box, integrator=cel, samples=64)))) == (16, 4)
-    assert counts(planned(resolve(Job(scene=box, integrator=cel, samples=8)))) == (2, 4)
+    assert counts(planned(Job(scene=box, integrator=cel, samples=64))) == (16, 4)
+    assert counts(planned(Job(scene=box, integrator=cel, samples=8))) == (2, 4)
     assert counts(resolve(Job(scene=box, integrator=cel, samples=8))) == (1, 8)  # not denoised
     given = api.make_integrator(style="cel", inner=2)
-    r = planned(resolve(Job(scene=box, integrator=given, samples=8)))
+    r = planned(Job(scene=box, integrator=given, samples=8))
     assert counts(r) == (4, 2) and r.integrator.values["inner_samples"] == 2
     from styletrace.gate import mi
     path = mi.load_dict({"type": "path"})  # no children: a camera sample is one path
@@ -157,40 +174,69 @@ def test_bad_samples_are_refused_in_one_line(box, bad):
     assert str(info.value).startswith(f"bad value {bad!r} for samples: expected an integer in [1, ")
 
 
+def rq(samples, spp=None, inner=None, style_children=16, given=True, **kw):
+    """A request: `samples` paths per pixel (named by the caller where `given`, else the scene's),
+    `spp` camera samples and `inner` children given, a style of `style_children`."""
+    return Request(scene_samples=samples, samples=samples if given else None, camera_samples=spp,
+                   children=inner, style_children=style_children, **kw)
+
+
 def test_the_rule_itself():
     """`split` alone: the module doc's cases, without a scene."""
-    assert (s := split(Request(16, None, None, 16, denoised=True))).spp == 4 and s.inner == (4,)
+    s = split(rq(16, given=False, denoised=True))
+    assert (s.camera_samples, s.children) == (4, (4,))
     assert s.note == "samples=16: spp=4 x 4 children"
-    assert (s := split(Request(16, None, None, 16))).spp == 1 and s.inner == (16,)
-    assert split(Request(64, None, None, 8)).inner == (8,)
-    assert split(Request(16, None, None, 0)).note == "samples=16: spp=16 (no children)"
-    assert split(Request(16, None, None, 1)).note == "samples=16: spp=16 x 1 child"
-    assert split(Request(64, 4, None, 16, samples_given=True)).inner == (16,)
-    assert split(Request(64, 4, None, 16, samples_given=False)).inner == (16,)
-    assert split(Request(16, 4, None, 16, samples_given=True)).inner == (4,)
-    assert split(Request(16, 4, None, 16, samples_given=False)).inner == (16,)
-    assert split(Request(16, 4, None, 16)).note == ""  # spp alone: nothing chosen
+    assert (s := split(rq(16, given=False))).camera_samples == 1 and s.children == (16,)
+    assert split(rq(64, style_children=8, given=False)).children == (8,)
+    assert split(rq(16, style_children=0, given=False)).note == "samples=16: spp=16 (no children)"
+    assert split(rq(16, style_children=1, given=False)).note == "samples=16: spp=16 x 1 child"
+    assert split(rq(64, 4)).children == (16,)
+    assert split(rq(64, 4, given=False)).children == (16,)
+    assert split(rq(16, 4)).children == (4,)
+    assert split(rq(16, 4, given=False)).children == (16,)
+    assert split(rq(16, 4, given=False)).note == ""  # spp alone: nothing chosen
     # a closed-form style draws no children: spp alone sets its cost, nothing to refuse
-    assert split(Request(64, 4, None, 0, samples_given=True)).paths == 4
-    with pytest.raises(UsageError, match=r"--inner 4:64 \(16 paths"):
-        split(Request(64, 4, (AdaptiveCount(4, 64),), 16, samples_given=True))
+    assert split(rq(64, 4, style_children=0)).paths == 4
+    with pytest.raises(UsageError, match=r"inner=4:64 \(16 paths"):
+        split(rq(64, 4, (AdaptiveCount(4, 64),)))
+
+
+def test_the_method_is_chosen_from_the_request_before_the_split():
+    """Whether a camera sample averages children, which decides auto's method, reads the request:
+    it is so in the split the method then makes, denoised or not."""
+    for request in (rq(16), rq(2), rq(1), rq(16, style_children=1), rq(16, style_children=0),
+                    rq(16, 16), rq(16, 4), rq(3, least_camera_samples=2),
+                    rq(2, least_camera_samples=2), rq(16, inner=(1,)), rq(16, inner=(3,))):
+        for denoised in (False, True):
+            s = split(Request(**{**request.__dict__, "denoised": denoised}))
+            many = not request.closed and int(s.children[0]) > 1
+            assert averages_children(request) == many, (request, denoised)
+
+
+def test_a_draft_is_one_camera_sample_of_the_renders_children():
+    for whole in (split(rq(16, denoised=True)), split(rq(64, inner=(8,))),
+                  split(rq(16, style_children=0)), split(rq(64, levels=2, inner=(4, 2)))):
+        d = split(draft_request(whole))
+        assert d.camera_samples == 1 and d.children == whole.children
+        assert d.per_camera_sample == whole.per_camera_sample
 
 
 def test_the_expectation_buffers_cap_lowers_an_auto_spp_and_raises_an_auto_n():
-    assert split(Request(64, None, None, 16), cap=16) == split(Request(64, None, None, 16))
+    assert split(rq(64, given=False), cap=16) == split(rq(64, given=False))
     # 64 x 16 would be 64 camera samples
-    capped = split(Request(1024, None, None, 16, denoised=True), cap=16)
-    assert (capped.spp, capped.inner) == (16, (64,))
+    capped = split(rq(1024, given=False, denoised=True), cap=16)
+    assert (capped.camera_samples, capped.children) == (16, (64,))
     assert capped.note == "samples=1024: spp=16 x 64 children"
-    assert split(Request(1000, None, None, 16, denoised=True), cap=16).inner == (63,)  # ceil
+    assert split(rq(1000, given=False, denoised=True), cap=16).children == (63,)  # ceil
     # a given n stays; the spp is held to the cap
-    assert (lambda s: (s.spp, s.inner))(split(Request(1024, None, (8,), 16), cap=16)) == (16, (8,))
-    # a given spp is the caller's (the denoiser refuses it instead: denoise.default.method_for)
-    assert split(Request(1024, 32, None, 16), cap=16).spp == 32
+    s = split(rq(1024, inner=(8,), given=False), cap=16)
+    assert (s.camera_samples, s.children) == (16, (8,))
+    # a given spp is the caller's (auto then takes the image denoiser: denoising.choose_method)
+    assert split(rq(1024, 32, given=False), cap=16).camera_samples == 32
     # several levels keep their counts
-    two = split(Request(4096, None, (4, 2), 16, levels=2), cap=16)
-    assert (two.spp, two.inner) == (16, (4, 2))
-    assert split(Request(64, None, None, 16), cap=0).spp == 1  # a film over the cap: one
+    two = split(rq(4096, inner=(4, 2), given=False, levels=2), cap=16)
+    assert (two.camera_samples, two.children) == (16, (4, 2))
+    assert split(rq(64, given=False), cap=0).camera_samples == 1  # a film over the cap: one
 
 
 def test_error_aovs_take_at_least_two_camera_samples(box):
@@ -202,4 +248,4 @@ def test_error_aovs_take_at_least_two_camera_samples(box):
     assert counts(resolved(box, style="cel", aovs=True, samples=64)) == (16, 4)
     assert counts(resolved(box, style="cel", aovs=True, inner=16)) == (2, 16)
     assert counts(resolved(box, style="cel", aovs=True, spp=1)) == (1, 16)
-    assert split(Request(16, None, None, 16, min_spp=2), cap=1).spp == 1  # the cap wins
+    assert split(rq(16, given=False, least_camera_samples=2), cap=1).camera_samples == 1

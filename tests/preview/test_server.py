@@ -37,7 +37,7 @@ def test_state_reports_the_cap(client, session):
     assert (
         st["spp_done"] == 2 and st["samples"] == 48 * 40 * 2 and st["bytes"] == st["samples"] * 65
     )
-    assert st["cap_samples"] == session.max_samples
+    assert st["cap_samples"] == session.max_camera_samples
 
 
 def test_save_exr_is_the_restyle(client, session):

@@ -63,5 +63,5 @@ def test_a_film_with_a_gaussian_filter(tmp_path):
     assert s.error is None and s.buffer.filtered
     img, spp, inner = s.restyle("sepia", None, {})
     s.stop()
-    assert (spp, inner) == (2, 2) and s.state()["bytes_per_sample"] == 74
+    assert (spp, inner) == (2, 2) and s.state()["bytes_per_camera_sample"] == 74
     np.testing.assert_allclose(img, want, rtol=1e-5, atol=1e-6)

@@ -150,7 +150,7 @@ def test_the_pilot_sees_through_participating_media():
         return mi.load_dict(d)
 
     settings = make_integrator("cel").settings
-    foggy, clear = (ScenePilot(scene(f), settings).samples["colour"].mean() for f in (True, False))
+    foggy, clear = (ScenePilot(scene(f), settings).records["colour"].mean() for f in (True, False))
     assert np.isfinite(foggy) and 0 < foggy < clear / 3, (foggy, clear)
 
 

@@ -17,7 +17,7 @@ bl_info = {"name": "styletrace", "author": "styletrace", "version": (0, 1, 0), "
            "location": "Render Properties > Render Engine > styletrace", "category": "Render",
            "description": "Stylized global illumination as a function of expectation (Mitsuba 3)"}
 
-_MODULES = ("properties", "engine", "panels", "restyle", "operators", "viewport")
+_MODULES = ("properties", "engine", "panels", "restyle", "operators", "viewport_hooks")
 
 
 def _modules():

@@ -16,7 +16,7 @@ import traceback
 import bpy
 import numpy as np
 
-from styletrace.blender import animation, f12, preview, restyle, viewport
+from styletrace.blender import animation, f12, preview, restyle, viewport_hooks
 from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
@@ -51,15 +51,15 @@ class StyletraceEngine(bpy.types.RenderEngine):
     bl_use_postprocess = True
 
     def __del__(self):
-        viewport.free(self)
+        viewport_hooks.free(self)
 
     def view_update(self, context, depsgraph):
-        """Rendered shading: sync the edits (`viewport.view_update`)."""
-        viewport.view_update(self, context, depsgraph)
+        """Rendered shading: sync the edits (`viewport_hooks.view_update`)."""
+        viewport_hooks.view_update(self, context, depsgraph)
 
     def view_draw(self, context, depsgraph):
-        """Rendered shading: draw the newest progressive image (`viewport.view_draw`)."""
-        viewport.view_draw(self, context, depsgraph)
+        """Rendered shading: draw the newest progressive image (`viewport_hooks.view_draw`)."""
+        viewport_hooks.view_draw(self, context, depsgraph)
 
     def stop_requested(self) -> bool:
         """Esc was pressed (Blender's `test_break`); a method of our own, so that a test can
@@ -120,9 +120,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
         aovs = f12.error_passes(st)
         if not self.is_preview:  # a preview keeps the user's recorded buffer
             restyle.forget()
-        runner, note = f12.run_f12(sc, st, aovs, restyle.keep if st.record_buffer else None)
-        if note:
-            self._report({"WARNING"}, f"styletrace: {note}")
+        runner = f12.run_f12(sc, st, aovs, restyle.keep if st.record_buffer else None)
+        if runner.resolved.note:
+            self._report({"WARNING"}, f"styletrace: {runner.resolved.note}")
         denoised = isinstance(runner.finisher, Denoised)
         if aovs:
             for name, channels, ids in f12.AOV_PASSES.values():
@@ -135,7 +135,7 @@ class StyletraceEngine(bpy.types.RenderEngine):
         source = runner.passes()
         prog = None
         spp = runner.resolved.spp  # Camera samples, or the split of Samples (`f12.sampling`)
-        total = -(-spp // st.pass_spp)
+        total = runner.resolved.launches
         for k, prog in enumerate(source, start=1):
             self.progress(
                 prog.spp_done / prog.spp_total,

@@ -6,7 +6,7 @@ the scene, the style and the pass split: `styletrace render FILE.xml --seed K --
 the image F12 renders with seed K and N samples per pass. F12 is a pipeline run (`run_f12`): a Job
 of the exported scene, the settings' integrator and their Samples (split into camera samples x
 children by the pipeline's rule, `pipeline.budget`), resolved (auto values pinned), with the
-finisher of its Denoise and Record buffer settings (`denoise.finishers.plan_finisher`: plain,
+finisher of its Denoise and Record buffer settings (`denoise.finishers.plan`: plain,
 expectation or image denoising, the recorded buffer).
 """
 from __future__ import annotations
@@ -105,51 +105,71 @@ def sampling(settings, integ) -> dict:
     return {"samples": None if given else int(settings.samples), "spp": spp}
 
 
-def job(sc, integ, settings):
+def denoising(settings, denoise: bool = True):
+    """The render settings' denoising options (`pipeline.denoising.Denoising`).
+
+    Args:
+        settings: the scene's styletrace settings (Denoise, its quality and footprint).
+        denoise: False: off, whatever Denoise says (the line mask's renders).
+
+    Returns:
+        The Denoising.
+    """
+    from styletrace.pipeline.denoising import OFF, Denoising
+    if not denoise:
+        return OFF
+    return Denoising(settings.denoise, quality=settings.denoise_quality,
+                     footprint=settings.denoise_footprint)
+
+
+def job(sc, integ, settings, denoise: bool = True):
     """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their
-    sampling (`sampling`; the pass split of `pass_spp`, tiles of the pass loop's own size).
+    sampling (`sampling`; the pass split of `pass_spp`, tiles of the pass loop's own size) and
+    denoising, in Blender's terms (`pipeline.terms.BLENDER`: errors name the fields' labels).
 
     Args:
         sc: the loaded scene. integ: the integrator. settings: the scene's styletrace settings.
+        denoise: False: not denoised, whatever Denoise says (`denoising`).
 
     Returns:
         The `pipeline.job.Job`.
     """
     from styletrace.pipeline.job import Job
+    from styletrace.pipeline.terms import BLENDER
     return Job(scene=sc, integrator=integ, seed=settings.seed, pass_spp=settings.pass_spp,
-               lanes_per_pass=api.LANES_PER_PASS, **sampling(settings, integ))
+               lanes_per_pass=api.LANES_PER_PASS, denoising=denoising(settings, denoise),
+               terms=BLENDER, **sampling(settings, integ))
 
 
 def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
-    """F12's run: a `pipeline.runner.Runner` with the Denoise setting's finisher (`plan_finisher`).
+    """F12's run: the job's `denoise.finishers.plan` (every front end's), the Denoise setting's
+    finisher.
 
     Args:
         sc: the loaded scene. settings: the scene's styletrace settings. aovs: the error AOVs.
         keep: called with the buffer to restyle (Record buffer), or None.
 
     Returns:
-        (the runner, the one-line note where Denoise auto could not denoise, else '').
+        The `pipeline.runner.Runner` (`runner.resolved.note`: why Denoise auto could not denoise).
 
     Raises:
         UsageError: the refusals (one line each; Record buffer with Denoise 'image'), before
             anything renders.
     """
-    from styletrace.denoise.finishers import Image, plan_finisher
+    from styletrace.denoise.finishers import Image, plan
     from styletrace.errors import UsageError
-    from styletrace.pipeline.resolve import resolve
-    resolved = resolve(job(sc, integrator(settings, aovs=aovs), settings), scene=sc)
-    runner, note = plan_finisher(resolved, settings.denoise, quality=settings.denoise_quality,
-                                 label="<blender>", keep=keep,
-                                 footprint=settings.denoise_footprint)
+    runner = plan(job(sc, integrator(settings, aovs=aovs), settings), scene=sc,
+                  label="<blender>", keep=keep)
     if isinstance(runner.finisher, Image) and keep is not None:
         raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would "
                          "not be the denoised image; use Denoise 'expectation' (its buffer keeps "
                          "the denoised expectation)")
-    return runner, note
+    return runner
 
 
 def f12_passes(sc, integ, settings) -> Iterator[api.Progress]:
-    """The plain passes of `integ` with F12's sampling (a pipeline run, auto values pinned).
+    """The plain passes of `integ` with F12's sampling, not denoised (a pipeline run, auto values
+    pinned): the line mask's.
 
     Args:
         sc: the loaded scene. integ: the integrator. settings: the scene's styletrace settings.
@@ -160,7 +180,8 @@ def f12_passes(sc, integ, settings) -> Iterator[api.Progress]:
     from styletrace.pipeline.execute import InProcess
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
-    return Runner(resolve(job(sc, integ, settings), scene=sc), InProcess()).passes()
+    return Runner(resolve(job(sc, integ, settings, denoise=False), scene=sc),
+                  InProcess()).passes()
 
 
 def line_mask(sc, settings, should_stop: Callable[[], bool] = lambda: False) -> np.ndarray | None:

@@ -14,17 +14,17 @@ from typing import Any
 
 from styletrace.blender.overridden import Overridden
 
-#: the preview's budget: paths per pixel (camera samples on the identity render style, whose
-#: camera samples draw one path each), and camera samples per pass (Blender stops a preview between
-#: passes when the material changes under it)
-SPP = 16
+#: the preview's budget: samples, paths per pixel (on the identity render style a camera sample
+#: draws one path), and camera samples per pass (Blender stops a preview between passes when the
+#: material changes under it)
+SAMPLES = 16
 PASS_SPP = 4
 SEED = 0
 
 
 def settings(scene_settings: Any) -> Overridden:
     """The render settings of a preview: `scene_settings` (the preview scene's own, defaults) with
-    the identity style, `SPP` samples (camera samples, auto) at `PASS_SPP` per pass, seed `SEED`,
+    the identity style, `SAMPLES` samples (camera samples auto) at `PASS_SPP` per pass, seed `SEED`,
     and no lines, denoising, error passes, recorded buffer or reuse.
 
     Args:
@@ -33,8 +33,8 @@ def settings(scene_settings: Any) -> Overridden:
         An `Overridden` view of them.
     """
     return Overridden(
-        scene_settings, style="identity", inner_samples="", estimator="direct", samples=SPP, spp=0,
-        pass_spp=PASS_SPP, seed=SEED, lines=False, denoise="off", aovs=False,
+        scene_settings, style="identity", inner_samples="", estimator="direct", samples=SAMPLES,
+        spp=0, pass_spp=PASS_SPP, seed=SEED, lines=False, denoise="off", aovs=False,
         record_buffer=False, reuse="off",
     )
 

@@ -19,8 +19,8 @@ import bpy
 from styletrace.blender.registered import VARIANT  # noqa: F401
 from styletrace.config import estimator_registry
 from styletrace.config import settings as S
-from styletrace.denoise import default_method
 from styletrace.denoise.oidn import QUALITIES
+from styletrace.pipeline.denoising import default_method
 from styletrace.styles import registry
 
 SEP = "__"
@@ -213,7 +213,7 @@ class SceneSettings(bpy.types.PropertyGroup):
         "Samples (with Inner samples given too, the two set the cost and Samples is not used)",
     )
     pass_spp: bpy.props.IntProperty(
-        name="Samples per pass",
+        name="Camera samples per pass",
         default=1,
         min=1,
         description="camera samples per pixel in one pass: cancel, progress and the viewport's "

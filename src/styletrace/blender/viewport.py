@@ -1,51 +1,48 @@
-"""Rendered shading in the 3D viewport: a progressive session per view, fed by `viewport_sync`.
+"""Rendered shading in the 3D viewport: the model, one progressive schedule per view, fed by
+`viewport_sync`. Blender's hooks that draw it are `viewport_hooks`'.
 
     vp = Viewport()
     vp.update(depsgraph, settings)                     # view_update: sync what changed
     vp.set_view(view_matrix, window_matrix, w, h)      # view_draw: the region's camera
     image, label = vp.session.latest()                 # the newest image, drawn with `gpu`
 
-A `ViewportSession` renders in a worker thread a draft (1 spp, at most `DRAFT_PIXELS` pixels),
-then F12's passes and finisher, denoised where `denoise_now` says so. A style change restyles the
-recorded buffer; any other change starts a new session on the kept Mitsuba objects. All Dr.Jit work
-runs under the lock `JIT`. Blender's hooks: `view_update`, `view_draw`, `free`. Design:
-docs/design/viewport.md.
+A `ViewportSession` is a thin adapter around the one progressive schedule
+(`progressive.schedule.Schedule`, the browser preview's too): its draft (`Job.draft` at
+`rules.draft_size`), then F12's job (`f12.job`: the same samples, seed, pass split and Denoise,
+`denoise.finishers.plan`), its previews and final image, then the warm-up of the restyle kernels.
+The session shows each frame, restyled where the style changed since the passes started. A style
+change restyles the recorded buffer; any other change starts a new session on the kept Mitsuba
+objects. Every session's Dr.Jit work runs under one lock, `TURNS`. Design: docs/design/viewport.md.
 """
 from __future__ import annotations
 
 import gc
 import threading
 import time
-import traceback
 from types import SimpleNamespace
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
 from styletrace.blender import f12
 from styletrace.blender.properties import settings_integrator_values, style_values
 from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
-from styletrace.denoise.draft import available as denoise_available
-from styletrace.denoise.finishers import Denoised, Expectation, plan_finisher
-from styletrace.denoise.progressive import PREVIEW_K, PREVIEW_QUALITY, denoise_now
+from styletrace.denoise.finishers import Expectation, Recording, plan
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
 from styletrace.gate import dr, mi
-from styletrace.lookdev.buffer import MAX_SAMPLES
 from styletrace.lookdev.record import Recorded
 from styletrace.lookdev.restyle import restyle as lookdev_restyle
 from styletrace.lookdev.restyle import slots_for
 from styletrace.lookdev.slider import quick_restyle
-from styletrace.pipeline.resolve import resolve
-from styletrace.pipeline.runner import Runner
+from styletrace.pipeline.denoising import Denoising
+from styletrace.progressive.rules import DRAFT_QUALITY, draft_size
+from styletrace.progressive.schedule import Frame, Schedule, Turns
 
-#: the draft's largest film (pixels): a larger view is drafted at a reduced resolution
-DRAFT_PIXELS = 160 * 120
-DRAFT_QUALITY = "balanced"
 #: seconds without a new style value after which a drag is at rest: the whole buffer is restyled
 REST_S = 0.25
-#: one Dr.Jit user at a time: sessions replaced by a newer one finish their pass under it
-JIT = threading.Lock()
+#: one Dr.Jit user at a time: sessions replaced by a newer one finish their step under it
+TURNS = Turns()
 #: the render settings that are not the style's: a change starts new passes
 PASS_KEYS = ("samples", "spp", "seed", "pass_spp")
 DENOISE_KEYS = ("denoise", "denoise_quality", "denoise_footprint")
@@ -87,23 +84,10 @@ def load_view_scene(description: dict):
     return sc
 
 
-def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int, int]:
-    """The draft's film: the view's size scaled down (same aspect) to at most `limit` pixels.
-
-    Args:
-        width, height: the view's size in pixels.
-        limit: the draft's most pixels (default `DRAFT_PIXELS`); a smaller view keeps its size.
-
-    Returns:
-        (width, height) of the draft, each at least 1.
-    """
-    scale = min(1.0, (limit / float(width * height)) ** 0.5)
-    return max(1, round(width * scale)), max(1, round(height * scale))
-
-
 class ViewportSession:
-    """A view's progressive render in a worker thread. `latest()` is the newest image; `version`
-    counts images.
+    """A view's progressive render: the one schedule (`progressive.schedule.Schedule`) in a worker
+    thread, its frames shown (restyled where the style changed). `latest()` is the newest image;
+    `version` counts images.
 
     Args:
         scene_dict: a callable (width, height) -> the Mitsuba scene dict (`SceneSync.scene_dict`).
@@ -112,8 +96,8 @@ class ViewportSession:
         on_image: called (in the worker) after each new image; None: nothing is called.
         draft: render the draft first.
 
-    `stats`: `draft_s`, `last_pass_s` (seconds from the start), `denoise_s` (seconds per
-    denoising); `passes_run` counts passes; `error`: a refusal's line (None without one)."""
+    `schedule`: the schedule (its `stats`: `draft_s`, `first_s`, `final_s`, `pass_s`, `denoise_s`);
+    `error`: a refusal's line (None without one)."""
 
     def __init__(self, scene_dict: Callable[[int, int], dict], width: int, height: int,
                  values: dict, on_image: Callable[[], None] | None = None, draft: bool = True):
@@ -122,47 +106,64 @@ class ViewportSession:
         self.image: np.ndarray | None = None
         self.label = ""
         self.version = 0
-        self.passes_run = 0
         self.buffer = None
         self.recorded = False  # the passes record a buffer (restyles need no new pass)
-        self.style: dict | None = None  # a restyled style: later passes are shown restyled
-        self.error: str | None = None
-        self.spp_done = 0
-        self.stats: dict = {"started": time.perf_counter()}
-        self._draft = draft
-        #: the next denoised image is a preview: none at full size has been shown yet
-        self._previewing = True
+        self.style: dict | None = None  # a restyled style: later frames are shown restyled
         self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="styletrace-viewport", daemon=True)
+        self.schedule = Schedule(self._plan, self._draft_plan if draft else None, turns=TURNS,
+                                 on_frame=self._on_frame, warm=self._warm)
+
+    # ---- the schedule's view ------------------------------------------------------------------
+
+    @property
+    def stats(self) -> dict:
+        return self.schedule.stats
+
+    @property
+    def error(self) -> str | None:
+        return self.schedule.error
+
+    @property
+    def spp_done(self) -> int:
+        return self.schedule.spp_done
+
+    @property
+    def passes_run(self) -> int:
+        """Passes traced (the draft's included)."""
+        s = self.schedule.stats
+        return len(s["pass_s"]) + (s["draft_s"] is not None)
+
+    @property
+    def done(self) -> bool:
+        """Whether the worker has ended (or the schedule ran out of steps)."""
+        return self.schedule.done
 
     def start(self) -> "ViewportSession":
         """Start the worker. Returns: this session."""
-        self._thread.start()
+        self.schedule.start("styletrace-viewport")
+        threading.Thread(target=self._collect, daemon=True).start()
         return self
 
+    def _collect(self) -> None:
+        """After the schedule: the garbage of this session and those before it (scenes, buffers,
+        kernels' arrays) collected now, while the view is idle, not in the next session's draft
+        (cel on the interior at 512 x 512, sessions in a row: drafts 0.54, 0.78, 0.90 s after an
+        edit without; 0.22 to 0.35 s in 11 of 12 with)."""
+        self.schedule.join()
+        if not self.schedule.stopped:
+            gc.collect()
+
     def stop(self, wait: float = 0.0) -> None:
-        """Ask the worker to stop after its pass under way.
+        """Ask the worker to stop after its step under way.
 
         Args:
             wait: seconds to wait at most for the worker to end; 0 returns at once.
         """
-        self._stop.set()
-        if wait and self._thread.is_alive():
-            self._thread.join(wait)
+        self.schedule.stop(wait)
 
     def join(self, timeout: float | None = None) -> None:
-        """Wait for the worker to end.
-
-        Args:
-            timeout: seconds to wait at most; None waits until it ends.
-        """
-        self._thread.join(timeout)
-
-    @property
-    def done(self) -> bool:
-        """Whether the worker has ended (or never started)."""
-        return not self._thread.is_alive()
+        """Wait for the worker to end (None: until it does)."""
+        self.schedule.join(timeout)
 
     def latest(self) -> tuple[np.ndarray | None, str]:
         """The newest image (H x W x 3 float32; None before the first) and its label."""
@@ -175,154 +176,69 @@ class ViewportSession:
             self.version += 1
         self.on_image()
 
-    def _job(self, sc, spp: int, pass_spp: int, **override) -> Any:
-        values = {**self.values["integrator"], "aovs": False, **override}
-        integ = api.make_integrator_from(values)
-        sampling = SimpleNamespace(samples=self.values["samples"], spp=spp,
-                                   seed=self.values["seed"], pass_spp=pass_spp)
-        return resolve(f12.job(sc, integ, sampling), scene=sc)
+    # ---- the jobs -----------------------------------------------------------------------------
 
-    def _run(self) -> None:
-        try:
-            if self._draft:
-                self._run_draft()
-            self._run_passes()
-        except StyletraceError as exc:
-            self.error = str(exc).strip().splitlines()[0]
-        except Exception as exc:  # a bug or Mitsuba's refusal: one line, the finished image kept
-            self.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
-        if not self._stop.is_set():
-            # the garbage of this session and those before it (scenes, buffers, kernels' arrays)
-            # collected now, while the view is idle, not in the next session's draft (cel on the
-            # interior at 512 x 512, sessions in a row: drafts 0.54, 0.78, 0.90 s after an edit
-            # without; 0.22 to 0.35 s in 11 of 12 with)
-            gc.collect()
-
-    def _run_draft(self) -> None:
-        """The draft: one camera sample of the passes' children (at most `budget.CHILDREN`) at
-        the draft's size, denoised at every Denoise setting as auto denoises: the expectation,
-        previewed, for a style of several children (its bands, not a style of single paths
-        blurred), else OIDN's image denoiser."""
-        w, h = draft_size(*self.size)
-        with JIT:
-            if self._stop.is_set():
-                return
-            sc = load_view_scene(self.scene_dict(w, h))
-            children = self.values["style"].get("inner_samples") or str(draft_children(
-                self.values["style"]["style"]))
-            resolved = self._job(sc, 1, 1, inner_samples=children)
-            # whatever Denoise says: the draft is a glimpse, not F12's image
-            runner = plan_finisher(resolved, method="auto", label="<draft>")[0]
-            prog = next(iter(runner.passes()))
-            image, label = prog.image, "draft"
-            if isinstance(runner.finisher, Expectation):
-                image = runner.finisher.job.preview(PREVIEW_K, PREVIEW_QUALITY)[0]
-                label = "draft, denoised"
-            elif denoise_available():
-                from styletrace.denoise.image import finish_denoised_image
-                image = finish_denoised_image(sc, prog, self.values["seed"], DRAFT_QUALITY)[0]
-                label = "draft, denoised"
-            self.passes_run += 1
-        self.stats["draft_s"] = time.perf_counter() - self.stats["started"]
-        self._show(image[..., :3], f"{label} ({w}x{h}, 1 spp)")
-
-    def _runner(self, resolved) -> Runner:
-        """F12's runner of `resolved` (`f12.run_f12`'s finisher plan), recording the buffer to
-        restyle where it can: the passes' (Denoise off) or the denoised one (expectation)."""
+    def _job(self, sc):
+        """F12's job of the settings on the loaded scene `sc` (no error AOVs)."""
         v = self.values
-        plan = dict(method=v["denoise"], quality=v["denoise_quality"], label="<viewport>",
-                    footprint=v["denoise_footprint"])
-        if self.size[0] * self.size[1] * resolved.spp <= MAX_SAMPLES:
-            try:
-                return plan_finisher(resolved, keep=self._keep, **plan)[0]
-            except StyletraceError:  # not recordable (e.g. its estimator): refused again below
-                pass
-        # unrecorded (over the buffer's cap, or not recordable): a style change retraces
-        return plan_finisher(resolved, **plan)[0]
+        integ = api.make_integrator_from({**v["integrator"], "aovs": False})
+        settings = SimpleNamespace(**{k: v[k] for k in (*PASS_KEYS, *DENOISE_KEYS)})
+        return f12.job(sc, integ, settings)
+
+    def _draft_plan(self):
+        """The draft's run: one camera sample of the render's children at the draft's size,
+        denoised as auto would, whatever Denoise says (a glimpse, not F12's image)."""
+        w, h = draft_size(*self.size)
+        sc = load_view_scene(self.scene_dict(w, h))
+        job = self._job(sc)
+        job = job.with_(draft=True, denoising=Denoising(
+            "auto", quality=DRAFT_QUALITY, footprint=job.denoising.footprint))
+        return plan(job, scene=sc, recording=Recording(label="<draft>"))
+
+    def _plan(self):
+        """F12's run of the settings, recording the buffer to restyle where it can: the passes'
+        (Denoise off) or the denoised one (expectation); over the buffer's cap, or for a render it
+        cannot record, unrecorded (a style change then traces new passes)."""
+        sc = load_view_scene(self.scene_dict(*self.size))
+        job = self._job(sc)
+        try:
+            runner = plan(job, scene=sc, recording=Recording(label="<viewport>", keep=self._keep))
+            w, h = runner.resolved.size
+            if not isinstance(runner.finisher, Recorded) or w * h * runner.resolved.spp <= job.cap:
+                self.recorded = isinstance(runner.finisher, (Recorded, Expectation))
+                return runner
+        except StyletraceError:  # not recordable (e.g. its estimator): refused again below
+            pass
+        self.recorded = False
+        return plan(job, scene=sc, recording=Recording(label="<viewport>"))
 
     def _keep(self, buf) -> None:
         self.buffer = buf
 
-    def _run_passes(self) -> None:
-        v = self.values
-        with JIT:
-            if self._stop.is_set():
-                return
-            sc = load_view_scene(self.scene_dict(*self.size))
-            runner = self._runner(self._job(sc, v["spp"], v["pass_spp"]))
-            finisher = runner.finisher
-            denoised = isinstance(finisher, Denoised)
-            # Denoise image keeps no buffer: its restyle would not be the denoised image
-            self.recorded = isinstance(finisher, Recorded) or (
-                isinstance(finisher, Expectation) and finisher.keep is not None)
-            passes = runner.passes()
-        total = -(-runner.resolved.spp // v["pass_spp"])  # spp 0: the split of samples
-        self.stats["denoise_s"] = []
-        since = 0.0  # seconds of passes since the last denoised image
-        for k in range(1, total + 1):
-            if self._stop.is_set():
-                return
-            with JIT:
-                start = time.perf_counter()
-                prog = next(passes, None)
-                if prog is None:
-                    return
-                self.passes_run += 1
-                self.spp_done = prog.spp_done
-                since += time.perf_counter() - start
-                label = f"pass {k}/{total}, {prog.spp_done} spp"
-                if not denoised:
-                    self.buffer = getattr(finisher, "recorded", None)
-                    self._show(self._styled(prog.image), label)
-                elif finisher.ready(prog):
-                    if k < total and not denoise_now(k, total, since, self.stats["denoise_s"]):
-                        continue  # the last denoised image stays
-                    self._denoised(runner, prog, label, k == total)
-                    since = 0.0
-                else:
-                    self._show(self._styled(prog.image), label)
-            self.stats["last_pass_s"] = time.perf_counter() - self.stats["started"]
-        self._warm_quick_restyle()
+    # ---- frames and restyles ------------------------------------------------------------------
 
-    def _denoised(self, runner, prog, label: str, last: bool) -> None:
-        """Show the denoised images of a pass, under `JIT`: a preview (`ExpectationJob.preview`)
-        unless this is the last pass and a full-size denoised image is on screen already; after
-        the last pass, F12's finisher. Each is restyled with a style changed meanwhile."""
-        finisher = runner.finisher
-        if isinstance(finisher, Expectation) and (not last or self._previewing):
-            start = time.perf_counter()
-            image, buf = finisher.job.preview(PREVIEW_K, PREVIEW_QUALITY)
-            self.stats["denoise_s"].append(time.perf_counter() - start)
-            if self.recorded:  # the preview's buffer restyles until the finisher's replaces it
-                self.buffer = buf
-            self._previewing = False
-            self._show(self._styled(image), label + ", denoised (preview)")
-        if last or not isinstance(finisher, Expectation):
-            start = time.perf_counter()
-            # Expectation: `_keep` gets the denoised buffer (coverage points: its own object,
-            # which later passes leave as it is)
-            image = runner.finish(prog)
-            self.stats["denoise_s"].append(time.perf_counter() - start)
-            self._show(self._styled(image), label + ", denoised")
+    def _on_frame(self, frame: Frame) -> None:
+        """Show a frame of the schedule (under its lock), restyled with a style changed since the
+        passes started."""
+        if frame.kind != "draft" and self.recorded and frame.buffer is not None:
+            self.buffer = frame.buffer  # a preview's buffer restyles until the next replaces it
+        image = frame.image
+        if frame.kind != "draft" and self.style is not None and self.buffer is not None:
+            image = _restyled(self.buffer, self.style)
+        self._show(image, frame.label)
 
-    def _styled(self, image: np.ndarray) -> np.ndarray:
-        """`image`, or the buffer restyled where the style changed since the passes started."""
-        if self.style is not None and self.buffer is not None:
-            return _restyled(self.buffer, self.style)
-        return image[..., :3]
-
-    def _warm_quick_restyle(self) -> None:
-        """Trace and compile the restyles of the final buffer before the first drag needs them:
-        the quick one's one-point-per-pixel view and kernel (`lookdev.slider`), and the whole
-        buffer's kernel, for the current style (θ is a kernel input: later values reuse them)."""
-        if not self.recorded or self.buffer is None or self._stop.is_set():
+    def _warm(self) -> None:
+        """Trace and compile the restyles of the final buffer before the first drag needs them
+        (under the schedule's lock): the quick one's one-point-per-pixel view and kernel
+        (`lookdev.slider`), and the whole buffer's kernel, for the current style (θ is a kernel
+        input: later values reuse them)."""
+        if not self.recorded or self.buffer is None:
             return
-        with JIT:
-            try:  # the quick restyle's view and kernel, and the whole buffer's kernel
-                _restyled(self.buffer, self.style or self.values["style"], quick=True)
-                _restyled(self.buffer, self.style or self.values["style"])
-            except StyletraceError:
-                pass  # a buffer the quick restyle does not take: drags restyle in full
+        try:  # the quick restyle's view and kernel, and the whole buffer's kernel
+            _restyled(self.buffer, self.style or self.values["style"], quick=True)
+            _restyled(self.buffer, self.style or self.values["style"])
+        except StyletraceError:
+            pass  # a buffer the quick restyle does not take: drags restyle in full
 
     def restyle(self, style: dict, quick: bool = False) -> float | None:
         """Show the recorded buffer restyled with `style`, with no new pass; later images are
@@ -335,14 +251,14 @@ class ViewportSession:
                 slider being dragged); else the whole buffer (the look at rest).
 
         Returns:
-            The seconds taken; 0.0 where a pass or a denoising holds Dr.Jit (`JIT`): the style is
+            The seconds taken; 0.0 where a step of a schedule holds Dr.Jit (`TURNS`): the style is
             then kept and the worker shows its next image with it, without waiting here; None
             where there is no buffer to restyle yet or it cannot take the style (then the caller
             starts new passes)."""
         buf = self.buffer
         if buf is None or not restylable(buf, style):
             return None
-        if not JIT.acquire(blocking=not quick):
+        if not TURNS.acquire(wait=not quick):
             self.style = style  # Blender's UI thread does not wait for a pass
             return 0.0
         try:
@@ -354,25 +270,10 @@ class ViewportSession:
             self.style = style
             seconds = time.perf_counter() - start
         finally:
-            JIT.release()
+            TURNS.release()
         how = "restyled at one point per pixel" if quick else "restyled"
         self._show(image, f"{how}, {self.spp_done} spp")
         return seconds
-
-
-def draft_children(style: str) -> int:
-    """Children per camera sample of the draft: the budget's auto count for `style`
-    (`pipeline.budget.CHILDREN` at most; 1 for a style without children).
-
-    Args:
-        style: the style's registry name.
-
-    Returns:
-        n >= 1.
-    """
-    from styletrace.pipeline.budget import CHILDREN
-    from styletrace.styles import style_class
-    return max(1, min(style_class(style).default_inner, CHILDREN))
 
 
 def _rest(values: dict) -> dict:
@@ -390,7 +291,7 @@ def _restyled(buf, style: dict, quick: bool = False) -> np.ndarray:
 
 def restylable(buf, style: dict) -> bool:
     """Whether `buf` can take the style slot's values `style` without a new pass (host only: no
-    Dr.Jit, so it needs no `JIT`).
+    Dr.Jit, so it needs no lock).
 
     Args:
         buf: a recorded buffer. style: the style slot's values (`style_values`).
@@ -558,164 +459,5 @@ class Viewport:
             self.session = None
 
 
-__all__ = [
-    "Viewport", "ViewportSession", "snapshot", "draft_size", "denoise_now", "JIT", "DRAFT_PIXELS",
-]
-
-
-# ---- Blender's side: the engine's view_update and view_draw --------------------------------------
-
-#: the viewports of the live engines, by `RenderEngine.as_pointer()`
-VIEWS: dict[int, Viewport] = {}
-#: seconds between the main thread's checks for a new image (Blender's UI is not touched from the
-#: worker: a timer asks for the redraw)
-REDRAW_S = 0.05
-
-
-def view_update(engine, context, depsgraph) -> None:
-    """`RenderEngine.view_update`: sync the depsgraph's updates into this engine's viewport.
-
-    Args:
-        engine: the `RenderEngine`; its pointer keys `VIEWS`, its status line shows a refusal.
-        context: Blender's context (unused).
-        depsgraph: the evaluated depsgraph; its scene's styletrace settings are read.
-
-    A refusal or a bug closes the viewport and shows one line in the status (not raised).
-    """
-    key = engine.as_pointer()
-    vp = VIEWS.get(key)
-    if vp is None:
-        vp = VIEWS[key] = Viewport(warn=lambda m: print(m))
-        vp.engine, vp.drawn = engine, -1
-        import bpy
-        bpy.app.timers.register(lambda: _poll(key), first_interval=REDRAW_S)
-    try:
-        vp.update(depsgraph, depsgraph.scene.styletrace)
-    except StyletraceError as exc:
-        vp.close()
-        engine.update_stats("", f"styletrace: {str(exc).strip().splitlines()[0]}")
-    # Mitsuba's refusal of the exported scene, or a bug: one line, the trace on stderr
-    except Exception as exc:
-        traceback.print_exc()
-        vp.close()
-        engine.update_stats("", f"styletrace: {type(exc).__name__}: {exc}".splitlines()[0])
-
-
-def _poll(key: int) -> float | None:
-    """Ask for a redraw where the session has a newer image; None ends the timer."""
-    vp = VIEWS.get(key)
-    if vp is None:
-        return None
-    s = vp.session
-    if s is not None and (s.version != vp.drawn or s.error):
-        try:
-            vp.engine.tag_redraw()
-        except ReferenceError:  # the engine was freed (the view left Rendered mode)
-            free_key(key)
-            return None
-    return REDRAW_S
-
-
-def view_draw(engine, context, depsgraph) -> None:
-    """`RenderEngine.view_draw`: follow the region's camera; draw the newest image.
-
-    Args:
-        engine: the `RenderEngine` (its viewport in `VIEWS`; none: nothing is drawn).
-        context: Blender's context: its `region` and `region_data` give the view and size.
-        depsgraph: the evaluated depsgraph; its scene's colour management applies.
-    """
-    vp = VIEWS.get(engine.as_pointer())
-    if vp is None:
-        return
-    region, rv3d = context.region, context.region_data
-    vp.set_view(rv3d.view_matrix, rv3d.window_matrix, region.width, region.height)
-    s = vp.session
-    if s is None:
-        return
-    image, label = s.latest()
-    engine.update_stats("", f"styletrace: {s.error or label or 'starting'}")
-    if image is None:
-        return
-    vp.drawn = s.version
-    draw_view_image(engine, depsgraph.scene, image, region.width, region.height)
-
-
-#: Blender shifts a region's pixel space by 0.01 px (GLA_PIXEL_OFS); a texture drawn at
-#: (-PIXEL_OFFSET, -PIXEL_OFFSET) lands on the pixel centres, unblurred
-#: (tests/blender/test_viewport_draw.py)
-PIXEL_OFFSET = 0.01
-
-
-def draw_view_image(engine, scene, image: np.ndarray, width: int, height: int) -> None:
-    """Draw `image` over the region, through the view's colour management
-    (`bind_display_space_shader`).
-
-    Args:
-        engine: the `RenderEngine` whose display-space shader is bound.
-        scene: the Blender scene whose view transform, look and exposure apply.
-        image: H x W x 3 floats, linear, top row first; stretched to the region.
-        width, height: the region's size in pixels.
-    """
-    import gpu
-    from gpu_extras.presets import draw_texture_2d
-    h, w = image.shape[:2]
-    px = np.ones((h, w, 4), np.float32)
-    px[..., :3] = image[::-1]
-    data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
-    texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
-    gpu.state.blend_set("ALPHA_PREMULT")
-    engine.bind_display_space_shader(scene)
-    draw_texture_2d(texture, (-PIXEL_OFFSET, -PIXEL_OFFSET), width, height)
-    engine.unbind_display_space_shader()
-    gpu.state.blend_set("NONE")
-
-
-def free_key(key: int) -> None:
-    """Forget the viewport of an engine and stop its session.
-
-    Args:
-        key: the engine's `as_pointer()`; a key with no viewport is ignored.
-    """
-    vp = VIEWS.pop(key, None)
-    if vp is not None:
-        vp.close()
-
-
-def free_all(*_args) -> None:
-    """Stop and forget every viewport: a `load_pre` handler, since Blender drops the engines of
-    the old file without their `__del__` reaching `free`.
-
-    Args:
-        _args: what Blender passes a handler (the file path, ...), unused.
-    """
-    for key in list(VIEWS):
-        free_key(key)
-
-
-def register_viewport() -> None:
-    """Free the viewports whenever Blender loads a file (`free_all`)."""
-    import bpy
-    # persistent: Blender keeps the handler across the loads it is there for
-    bpy.app.handlers.persistent(free_all)
-    if free_all not in bpy.app.handlers.load_pre:
-        bpy.app.handlers.load_pre.append(free_all)
-
-
-def unregister_viewport() -> None:
-    """Remove the load handler and free every viewport."""
-    import bpy
-    if free_all in bpy.app.handlers.load_pre:
-        bpy.app.handlers.load_pre.remove(free_all)
-    free_all()
-
-
-def free(engine) -> None:
-    """The engine is going away (`RenderEngine.__del__`): stop its session.
-
-    Args:
-        engine: the `RenderEngine`; one already freed by Blender (ReferenceError) is ignored.
-    """
-    try:
-        free_key(engine.as_pointer())
-    except ReferenceError:
-        pass
+__all__ = ["Viewport", "ViewportSession", "snapshot", "load_view_scene", "restylable", "TURNS",
+           "REST_S"]

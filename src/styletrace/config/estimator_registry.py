@@ -45,6 +45,9 @@ PASS_B_SCALE = 2.0
 #: forms whose presence makes an estimator applicable; ANY_FORM: any style that has a form (a
 #: smooth g)
 ANY_FORM = (AffineForm, SeriesForm, PolynomialForm, CompositeForm)
+#: the estimators whose estimate needs only the mean of the children: a buffer of means replays
+#: them (`lookdev.restyle`), and the expectation denoiser styles D with them
+MEAN_ESTIMATORS = ("direct", "affine")
 FORM_NAMES = {AffineForm: "affine", SeriesForm: "power-series", PolynomialForm: "polynomial",
               CompositeForm: "composite"}
 
@@ -173,7 +176,7 @@ def check_estimator(name: str, style: Style) -> str:
 
 class Transformed:
     """An estimator of h(X') with X' = f(X) per sample and the result mapped by scale * value +
-    offset; `name` and `mean_samples` are the inner estimator's.
+    offset; `name` and `mean_draws` are the inner estimator's.
 
     Args:
         inner: the estimator of h (`estimators.Estimator` or a composite with the same `run`).
@@ -183,7 +186,7 @@ class Transformed:
 
     def __init__(self, inner, sample=None, scale=1.0, offset=0.0):
         self.inner, self.sample, self.scale, self.offset = inner, sample, scale, offset
-        self.name, self.mean_samples = inner.name, getattr(inner, "mean_samples", None)
+        self.name, self.mean_draws = inner.name, getattr(inner, "mean_draws", None)
 
     def run(self, draw, carry, uniform, active, like):
         """One estimate per lane, as `estimators.Estimator.run` (the kernel contract).
@@ -508,6 +511,7 @@ def _combined(style, n, vertex):
 
 __all__ = [
     "EstimatorKind",
+    "MEAN_ESTIMATORS",
     "estimator",
     "estimator_names",
     "estimator_entry",

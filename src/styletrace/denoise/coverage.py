@@ -17,7 +17,7 @@ from styletrace.denoise import guides
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.kernel.integrator import StylizedIntegrator
-from styletrace.lookdev.buffer import MAX_SAMPLES, Buffer
+from styletrace.lookdev.buffer import MAX_CAMERA_SAMPLES, Buffer
 from styletrace.lookdev.record import RecordingIntegrator, inputs, record
 from styletrace.lookdev.restyle import finish_spread
 from styletrace.pipeline.passes import pass_seed
@@ -56,12 +56,12 @@ def check_k(k) -> int | str:
     return value
 
 
-def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int:
+def resolve_k(k, width: int, height: int, max_camera_samples: int = MAX_CAMERA_SAMPLES) -> int:
     """The points per pixel of a render.
 
     Args:
         k: as `check_k` takes it. width, height: the film's size.
-        max_samples: the buffer's cap (MAX_SAMPLES).
+        max_camera_samples: the buffer's cap (MAX_CAMERA_SAMPLES).
 
     Returns:
         For "auto" DEFAULT_K, or the largest square whose points fit the cap (0 where not even one
@@ -73,12 +73,12 @@ def resolve_k(k, width: int, height: int, max_samples: int = MAX_SAMPLES) -> int
     k = check_k(k)
     pixels = max(1, width * height)
     if k == AUTO:
-        return min(DEFAULT_K, math.isqrt(max_samples // pixels) ** 2)
-    if k * pixels > max_samples:
+        return min(DEFAULT_K, math.isqrt(max_camera_samples // pixels) ** 2)
+    if k * pixels > max_camera_samples:
         raise UsageError(
             f"bad value {k} for coverage: {width}x{height} at {k} points per pixel is {k * pixels} "
-            f"points, over the buffer's cap of {max_samples}; use at most "
-            f"{math.isqrt(max_samples // pixels) ** 2} or 'auto'"
+            f"points, over the buffer's cap of {max_camera_samples}; use at most "
+            f"{math.isqrt(max_camera_samples // pixels) ** 2} or 'auto'"
         )
     return k
 

@@ -7,7 +7,8 @@ its children (`lookdev.record`). Per pixel M averages those means, less each sam
 (`expectation`); OIDN denoises M with the guides into D (`attach`), and every camera sample takes
 its own slot's g of D interpolated at its own film position (`at_samples`), or with coverage g is
 evaluated at k stratified points per pixel (`coverage`). D at the samples is kept in the buffer
-(`DENOISED`), so a restyle styles D too. Supported and refused: `check_expectation`.
+(`DENOISED`), so a restyle styles D too. Supported and refused:
+`pipeline.denoising.expectation_refusal`.
 Design: docs/design/expectation_denoising.md.
 """
 from __future__ import annotations
@@ -17,16 +18,14 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-from styletrace.config import settings as S
 from styletrace.denoise import coverage as coverage_module
 from styletrace.denoise import guides, oidn
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.kernel.integrator import StylizedIntegrator
-from styletrace.lookdev.buffer import DENOISED, MAX_SAMPLES, SPREAD, Buffer
+from styletrace.lookdev.buffer import DENOISED, MAX_CAMERA_SAMPLES, SPREAD, Buffer
 from styletrace.lookdev.record import record, scene_label
 from styletrace.lookdev.restyle import (
-    RESTYLABLE_ESTIMATORS,
     accumulate,
     field,
     joined,
@@ -34,54 +33,9 @@ from styletrace.lookdev.restyle import (
     sample_values,
     slots_for,
 )
+from styletrace.pipeline.denoising import check_expectation
 from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed
 from styletrace.scene.defaults import ScenePilot
-
-
-def check_expectation(integrator) -> None:
-    """Refuse what the expectation denoiser does not support.
-
-    Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the
-    `direct` and `affine` estimators, fixed counts n (films other than rgb: the buffer's refusal).
-
-    Args:
-        integrator: the render's `stylized` integrator.
-
-    Raises:
-        UsageError: first_object_hit, first_n_hits or stylize_depth > 1, lines, reuse, the expansion
-            pass, another estimator, adaptive counts, a per-sample style (one line each).
-    """
-    s = integrator.settings
-    why = None
-    if s.stylize == "first_object_hit":
-        why = (
-            "stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, where "
-            "the pixel's guides describe another surface; use first_hit or --denoise image"
-        )
-    elif s.stylize == "first_n_hits" or s.stylize_depth != 1:
-        why = (
-            "stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the "
-            "inner levels' vertices are not the pixel's); use first_hit or --denoise image"
-        )
-    elif s.lines is not None:
-        why = "feature lines: lines replace radiance inside the estimate; use --denoise image"
-    elif s.reuse != "off":
-        why = f"reuse={s.reuse}: denoising and reuse both filter the expectation; use one"
-    elif s.expansion_pass:
-        why = ("expansion_pass: it serves the series estimators, which denoising replaces by "
-               "direct application")
-    elif s.slot.estimator not in RESTYLABLE_ESTIMATORS:
-        why = (
-            f"estimator '{s.slot.estimator}': the denoised expectation is styled by direct "
-            "application; use direct or affine"
-        )
-    elif S.adaptive(s.inner):
-        why = "adaptive counts n0:n_max: give a fixed count (the denoiser does the averaging)"
-    elif s.style.per_sample:
-        why = (f"style '{s.style.name}': it applies g to every child, there is no expectation to "
-               "denoise")
-    if why is not None:
-        raise UsageError(f"--denoise expectation cannot render {why}")
 
 
 def expectation(buf: Buffer, emission=None) -> np.ndarray:
@@ -636,7 +590,7 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
     slots = prepare_slots(noisy, slots_for(noisy))
     vals = np.asarray(sample_values(noisy, slots), dtype=np.float64)
     # every sample, vertex or not
-    var = _sample_moments(noisy, vals, np.ones(noisy.samples, bool))[2]
+    var = _sample_moments(noisy, vals, np.ones(noisy.camera_samples, bool))[2]
     return var.T.reshape(buf.height, buf.width, 3).astype(np.float32)
 
 
@@ -647,7 +601,7 @@ def render_denoised_expectation(
     seed: int = 0,
     quality: str = "high",
     callback: Callable[[Progress], None] | None = None,
-    max_samples: int = MAX_SAMPLES,
+    max_camera_samples: int = MAX_CAMERA_SAMPLES,
     label: str = "",
     coverage: int | str = "auto",
     uncertainty: float = UNCERTAINTY,
@@ -657,7 +611,7 @@ def render_denoised_expectation(
     """The denoised-expectation render: `ExpectationJob`'s passes, then its `finish`.
 
     Args:
-        scene, integrator, spp, seed, quality, max_samples, label, coverage, uncertainty,
+        scene, integrator, spp, seed, quality, max_camera_samples, label, coverage, uncertainty,
             lanes_per_pass, pass_spp: as `ExpectationJob`'s. callback: called with each `Progress`.
 
     Returns:
@@ -673,7 +627,7 @@ def render_denoised_expectation(
         spp,
         seed,
         quality,
-        max_samples,
+        max_camera_samples,
         label,
         coverage,
         uncertainty,
@@ -692,7 +646,8 @@ class ExpectationJob:
 
     Args:
         scene, integrator: what to render (its error AOVs come from the buffer, `aovs`). spp, seed:
-            the render's. quality: OIDN's. max_samples: the buffer's cap. label: the scene's label.
+            the render's. quality: OIDN's. max_camera_samples: the buffer's cap. label: the
+            scene's label.
         coverage: points per pixel where g meets D (`coverage.resolve_k`). uncertainty: `spread`'s.
         lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
         pilot: the scene-defaults pilot the job was resolved with (`pipeline.resolve`), or None:
@@ -700,7 +655,8 @@ class ExpectationJob:
 
     Raises:
         UsageError: no pyoidn, a bad quality, coverage or uncertainty, or an unsupported render
-            (`check_expectation`), refused when the job is made, before anything renders.
+            (`pipeline.denoising.check_expectation`), refused when the job is made, before
+            anything renders.
     """
 
     def __init__(
@@ -710,7 +666,7 @@ class ExpectationJob:
         spp: int,
         seed: int = 0,
         quality: str = "high",
-        max_samples: int = MAX_SAMPLES,
+        max_camera_samples: int = MAX_CAMERA_SAMPLES,
         label: str = "",
         coverage: int | str = "auto",
         uncertainty: float = UNCERTAINTY,
@@ -722,7 +678,7 @@ class ExpectationJob:
         oidn.check_quality(quality)
         check_expectation(integrator)
         w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
-        self.k = coverage_module.resolve_k(coverage, w, h, max_samples)
+        self.k = coverage_module.resolve_k(coverage, w, h, max_camera_samples)
         self.uncertainty = check_uncertainty(uncertainty)
         # the buffer records without them; `aovs` below derives them from it
         if integrator.settings.aovs:
@@ -734,8 +690,8 @@ class ExpectationJob:
             seed,
             quality,
         )
-        self.max_samples, self.label, self.lanes, self.pass_spp = (
-            max_samples,
+        self.max_camera_samples, self.label, self.lanes, self.pass_spp = (
+            max_camera_samples,
             label,
             lanes_per_pass,
             pass_spp,
@@ -765,7 +721,7 @@ class ExpectationJob:
             self.spp,
             self.seed,
             self.label or scene_label(None),
-            self.max_samples,
+            self.max_camera_samples,
             self.lanes,
             pilot=self.pilot,
             pass_spp=self.pass_spp,
@@ -808,7 +764,7 @@ class ExpectationJob:
         """
         oidn.check_quality(quality)
         w, h = (int(v) for v in self.scene.sensors()[0].film().crop_size())
-        k = coverage_module.resolve_k(k, w, h, self.max_samples)
+        k = coverage_module.resolve_k(k, w, h, self.max_camera_samples)
         buf = self.buffer
         if k == 0 and buf is not None:
             view = Buffer(copy.deepcopy(buf.header), buf.arrays.copy(), image=buf.image)
@@ -867,7 +823,6 @@ __all__ = [
     "ExpectationJob",
     "attach",
     "Field",
-    "check_expectation",
     "expectation",
     "image_of",
     "noisy_variance",

@@ -1,23 +1,57 @@
-"""The denoisers as a run's finishers, and the run of a resolved job at every front end's default.
+"""The denoisers as a run's finishers, and the run of a job at every front end's default.
 
-    runner, note = plan_finisher(resolve(job), method="auto", executor=InProcess(), buffer="b.npz")
-    image = runner.result()                # or runner.write("out.exr", voice) on the command line
+    runner = plan(job, executor=InProcess(), buffer="b.npz")
+    runner.resolved.method, runner.resolved.note   # expectation | image | off, why auto did not
+    image = runner.result()                        # or runner.write("out.exr", voice)
 
-`Expectation` records the expectation buffer pass by pass and, after the last pass or a stop,
-denoises it and applies g (`denoise.expectation.ExpectationJob`); `Image` denoises the average of
-the finished passes (`denoise.image.finish_denoised_image`). `plan_finisher` picks the finisher of
-a resolved job (`denoise.default.choose`: auto, expectation, image or off; off with `buffer`
-records the buffer, `lookdev.record.Recorded`) and returns the one-line note where auto could not
-denoise.
+`plan` is what every front end calls (the command line, Python, F12, the viewport, the preview,
+their drafts): the job resolved once (`pipeline.resolve.resolve`: the denoising method chosen, then
+the samples split for it), and the finisher of that method (`finisher_for`). `Expectation` records
+the expectation buffer pass by pass and, after the last pass or a stop, denoises it and applies g
+(`denoise.expectation.ExpectationJob`); `Image` denoises the average of the finished passes
+(`denoise.image.finish_denoised_image`); undenoised, a buffer asked for is recorded
+(`lookdev.record.Recorded`), else the passes are the result (`Plain`). The denoising options travel
+in the job (`Job.denoising`).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Callable
 
 from styletrace.errors import UsageError
 from styletrace.images import save_safely
+from styletrace.pipeline.denoising import Denoising, check_expectation
+from styletrace.pipeline.resolve import Resolved, resolve
 from styletrace.pipeline.runner import Finisher, Plain, Runner, Written
 from styletrace.scene.loading import film_format
+
+
+@dataclass(frozen=True)
+class Recording:
+    """What a run keeps of its expectation buffer.
+
+    Args:
+        path: the .npz file the buffer is written to (`--buffer`), or None.
+        label: how the buffer names its scene ('': from the job's scene).
+        keep: called with the buffer after the passes (Blender's Record buffer, the viewport, the
+            preview), or None.
+        image_denoised: also where the image denoiser finishes the run (its buffer is the raw
+            one, and each restyle of it is denoised again: `Image.denoiser`; the preview's); else
+            such a run keeps none.
+    """
+    path: str | None = None
+    label: str = ""
+    keep: Callable[[Any], None] | None = None
+    image_denoised: bool = False
+
+    @property
+    def wanted(self) -> bool:
+        """Whether a buffer is asked for at all."""
+        return self.path is not None or self.keep is not None
+
+
+#: nothing kept
+NOTHING = Recording()
 
 #: why a denoiser needs the whole image in one process
 LOCAL = ("--denoise renders locally: the denoiser needs the whole image in one process (no --ray, "
@@ -30,15 +64,17 @@ class Denoised(Finisher):
     result.
 
     Args:
-        quality: OIDN's "high", "balanced" or "fast".
+        denoising: the options (`pipeline.denoising.Denoising`: quality, coverage, uncertainty,
+            footprint).
         buffer: the file to keep the denoised expectation buffer in (or None; `Image` refuses one).
     """
     how = ", denoised,"
     local = LOCAL
     plain_note = NOT_DENOISED
 
-    def __init__(self, quality: str = "high", buffer: str | None = None):
-        self.quality, self.buffer = quality, buffer
+    def __init__(self, denoising: Denoising, buffer: str | None = None):
+        self.denoising, self.buffer = denoising, buffer
+        self.quality = denoising.quality
 
     def check(self, resolved, executor) -> None:
         from styletrace.denoise import oidn
@@ -59,26 +95,23 @@ class Expectation(Denoised):
     """The per-pixel expectation denoised before g (`denoise.expectation`).
 
     Args:
-        quality: OIDN's quality. buffer: the file to keep the denoised buffer in, or None.
-        label: the buffer's scene label ('': from the scene). coverage: points per pixel where g
-            meets D (`coverage.check_k`). uncertainty: `expectation.spread`'s (None: UNCERTAINTY).
-        keep: called with the denoised buffer (Blender's Record buffer), or None.
-        max_samples: the buffer's cap (None: MAX_SAMPLES).
-        live: attach D after every pass to the buffer so far, at its camera samples
-            (`expectation.attach`, k = 0), so that a restyle of it styles D (the preview's).
+        denoising: the options (its quality, coverage and uncertainty). buffer: the file to keep
+            the denoised buffer in, or None.
+        label: the buffer's scene label ('': from the scene).
+        keep: called with the denoised buffer (Blender's Record buffer, the viewport), or None.
+    The buffer's cap is the job's (`Job.cap`), the one its split was made within.
     """
 
-    def __init__(self, quality: str = "high", buffer: str | None = None, label: str = "",
-                 coverage: int | str = "auto", uncertainty: float | None = None,
-                 keep: Callable[[Any], None] | None = None, max_samples: int | None = None,
-                 live: bool = False):
-        super().__init__(quality, buffer)
+    def __init__(self, denoising: Denoising, buffer: str | None = None, label: str = "",
+                 keep: Callable[[Any], None] | None = None):
+        super().__init__(denoising, buffer)
         from styletrace.denoise.expectation import UNCERTAINTY
-        from styletrace.lookdev.buffer import MAX_SAMPLES
-        self.label, self.coverage, self.keep, self.live = label, coverage, keep, live
-        self.uncertainty = UNCERTAINTY if uncertainty is None else uncertainty
-        self.max_samples = MAX_SAMPLES if max_samples is None else max_samples
+        self.label, self.keep = label, keep
+        self.coverage = denoising.coverage
+        self.uncertainty = UNCERTAINTY if denoising.uncertainty is None else denoising.uncertainty
         self.job = None
+        #: the denoised buffer of the last `result` or `write` (None before)
+        self.kept = None
 
     @property
     def recorded(self):
@@ -92,7 +125,7 @@ class Expectation(Denoised):
         from styletrace.lookdev.record import check_film, scene_label
         check_k(self.coverage)
         expectation.check_uncertainty(self.uncertainty)
-        expectation.check_expectation(resolved.integrator)
+        check_expectation(resolved.integrator)
         check_film(resolved.scene)  # the buffer's conditions: an rgb film, a filter it can record
         if self.buffer is not None:
             from styletrace.lookdev.buffer import check_buffer_path
@@ -100,7 +133,7 @@ class Expectation(Denoised):
         job = resolved.job
         self.job = expectation.ExpectationJob(resolved.scene, resolved.integrator, resolved.spp,
                                               job.seed,
-                                   self.quality, self.max_samples,
+                                   self.quality, job.cap,
                                    label=self.label or scene_label(job.scene),
                                    coverage=self.coverage, uncertainty=self.uncertainty,
                                    lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp,
@@ -108,10 +141,7 @@ class Expectation(Denoised):
         self.aovs = bool(resolved.integrator.settings.aovs)
 
     def source(self, resolved, executor, lock):
-        from styletrace.denoise.expectation import attach
-        for prog, buf in self.job.passes():
-            if self.live:
-                attach(buf, self.job.scene, buf.spp, self.job.seed, self.quality)
+        for prog, _ in self.job.passes():
             yield prog
 
     def ready(self, prog) -> bool:
@@ -119,6 +149,7 @@ class Expectation(Denoised):
 
     def _finish(self):
         image, buf = self.job.finish()
+        self.kept = buf
         if self.keep is not None:
             self.keep(buf)
         return image, buf
@@ -144,16 +175,22 @@ class Image(Denoised):
     """The average of the finished passes denoised (`denoise.image`), the baseline.
 
     Args:
-        quality, buffer: as `Denoised`'s. footprint: "pixel" (each sample kept in its pixel where
-            the film's filter is not a box: `denoise.image.in_pixels`) or "film" (the film's
-            image as it is, the image denoiser before issue 37).
+        denoising, buffer: as `Denoised`'s; the denoising's footprint: "pixel" (each sample kept in
+            its pixel where the film's filter is not a box: `denoise.image.in_pixels`) or "film"
+            (the film's image as it is, the image denoiser before issue 37).
+        label, keep: where given, the passes record the raw expectation buffer (`recorded`; `keep`
+            gets it after the passes) and `denoiser` denoises restyles of it (the preview's).
     """
 
-    def __init__(self, quality: str = "high", buffer: str | None = None,
-                 footprint: str = "pixel"):
-        super().__init__(quality, buffer)
+    def __init__(self, denoising: Denoising, buffer: str | None = None, label: str = "",
+                 keep: Callable[[Any], None] | None = None):
+        super().__init__(denoising, buffer)
         from styletrace.denoise.image import check_footprint
-        self.footprint = check_footprint(footprint)
+        self.footprint = check_footprint(denoising.footprint)
+        self.label, self.keep = label, keep
+        #: the raw buffer of the passes so far, where they record one (None before the first)
+        self.recorded = None
+        self._guides: dict = {}
 
     def check(self, resolved, executor) -> None:
         super().check(resolved, executor)
@@ -165,17 +202,54 @@ class Image(Denoised):
         from styletrace.denoise.image import in_pixels
         self.in_pixels = (self.footprint == "pixel"
                           and in_pixels(resolved.scene, resolved.integrator))
+        self.resolved = resolved
+        if self.keep is not None:
+            from styletrace.lookdev.record import check_recordable, scene_label
+            if self.in_pixels:  # a restyle develops the film's image: its footprint is the film's
+                raise UsageError("a recorded buffer denoised as an image needs denoise footprint "
+                                 "'film' on a film whose filter is not a box")
+            check_recordable(resolved.integrator.settings, [])
+            self.label = self.label or scene_label(resolved.job.scene)
 
     def source(self, resolved, executor, lock):
         """The executor's passes; on a film whose filter is not a box, each sample kept in its
-        pixel (`denoise.image.in_pixels`; the finisher renders in this process only)."""
+        pixel (`denoise.image.in_pixels`; the finisher renders in this process only); recording
+        the raw buffer where a `keep` asks for it."""
+        if self.keep is not None:
+            return self._recorded(resolved)
         if not self.in_pixels:
             return executor.source(resolved, lock)
         return executor.source(resolved, lock, in_pixels=True)
 
+    def _recorded(self, resolved):
+        from styletrace.lookdev.record import record
+        job = resolved.job
+        for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed,
+                                self.label, job.cap, lanes_per_pass=resolved.lanes,
+                                pilot=resolved.pilot, pass_spp=job.pass_spp):
+            buf.image = prog.image
+            self.recorded = buf
+            yield prog
+        self.keep(self.recorded)
+
     def _finish(self, prog):
         from styletrace.denoise.image import finish_denoised_image
         return finish_denoised_image(self.scene, prog, self.seed, self.quality)
+
+    def denoiser(self, prog) -> Callable:
+        """What denoises an image of the passes up to `prog` as `result` does: OIDN with the
+        guides of as many camera samples (`denoise.image.denoise_like`), for restyles of the
+        recorded buffer.
+
+        Args:
+            prog: the last finished pass's `Progress`.
+
+        Returns:
+            A function of an H x W x 3 image (a restyle of `recorded`) to its denoised image.
+        """
+        from styletrace.denoise.image import denoise_like
+        return lambda image: denoise_like(self.scene, image, prog.spp_done, self.seed,
+                                          self.quality, self._guides)
 
     def result(self, prog):
         out, _, errs = self._finish(prog)
@@ -186,39 +260,52 @@ class Image(Denoised):
         return Written(save_safely(out, output, pixel_format, errs), (), out, ", denoised: image")
 
 
-def plan_finisher(resolved, method: str | None = None, executor: Any = None,
-                  buffer: str | None = None,
-         quality: str = "high", coverage: int | str = "auto", uncertainty: float | None = None,
-         label: str = "", keep: Callable[[Any], None] | None = None,
-         footprint: str = "pixel") -> tuple[Runner, str]:
-    """The run of a resolved job with the finisher of its denoising method.
+def finisher_for(resolved: Resolved, recording: Recording = NOTHING) -> Finisher:
+    """The finisher of a resolved job's denoising method (`Resolved.method`).
 
     Args:
-        resolved: the resolved job. method: auto, expectation, image, off (None: the default).
-        executor: the pipeline's (None: in process). buffer: a file for the buffer, or None.
-        keep: called with the buffer kept. quality, coverage, uncertainty, label: `Expectation`'s.
-        footprint: `Image`'s.
+        resolved: the resolved job (its method and its job's denoising options).
+        recording: what the run keeps of its buffer (`Recording`).
 
     Returns:
-        (the `pipeline.runner.Runner`, the one-line note where auto could not denoise, else '').
+        `Expectation`, `Image`, `lookdev.record.Recorded` (off, with a buffer asked for), or
+        `Plain`.
+    """
+    denoising = resolved.job.denoising
+    r = recording
+    if resolved.method == "expectation":
+        return Expectation(denoising, r.path, r.label, r.keep)
+    if resolved.method == "image":
+        if r.image_denoised:
+            return Image(denoising, r.path, r.label, r.keep)
+        return Image(denoising, r.path)
+    if r.wanted:
+        from styletrace.lookdev.record import Recorded
+        return Recorded(r.path, r.label, r.keep, resolved.job.cap)
+    return Plain()
+
+
+def plan(job, executor: Any = None, scene: Any = None, recording: Recording = NOTHING) -> Runner:
+    """The run of a job at its denoising: what every front end calls.
+
+    Args:
+        job: the `pipeline.job.Job` (its `denoising` says what was asked).
+        executor: the pipeline's (None: in process); on Ray auto does not denoise.
+        scene: the scene already loaded from `job.scene`, or None.
+        recording: what the run keeps of its buffer (`Recording`).
+
+    Returns:
+        The `pipeline.runner.Runner`; its `resolved.method` and `resolved.note` say what it
+        denoises and why auto did not.
 
     Raises:
-        UsageError: a refusal of the run (one line), before anything renders.
+        UsageError: a refusal of the job or of the run (one line), before anything renders.
     """
-    from styletrace.denoise.default import choose
     from styletrace.pipeline.execute import InProcess
     executor = executor if executor is not None else InProcess()
-    chosen = choose(resolved, method, local=executor.local)
-    if chosen.method == "expectation":
-        finisher = Expectation(quality, buffer, label, coverage, uncertainty, keep)
-    elif chosen.method == "image":
-        finisher = Image(quality, buffer, footprint)
-    elif buffer is not None or keep is not None:
-        from styletrace.lookdev.record import Recorded
-        finisher = Recorded(buffer, label, keep)
-    else:
-        finisher = Plain()
-    return Runner(chosen.resolved, executor, finisher), chosen.note
+    resolved = resolve(job, scene, local=executor.local)
+    return Runner(resolved, executor, finisher_for(resolved, recording))
 
 
-__all__ = ["Expectation", "Image", "plan_finisher", "LOCAL"]
+__all__ = ["Expectation", "Image", "Denoised", "Recording", "NOTHING", "plan", "finisher_for",
+           "LOCAL"]

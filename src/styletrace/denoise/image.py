@@ -125,5 +125,30 @@ def finish_denoised_image(
     return out, noisy, errs
 
 
-__all__ = ["render_denoised_image", "finish_denoised_image", "in_pixels", "check_footprint",
+def denoise_like(scene, image: np.ndarray, spp: int, seed: int, quality: str,
+                 cache: dict | None = None) -> np.ndarray:
+    """`image` denoised as `finish_denoised_image` denoises the film's image of `spp` camera
+    samples per pixel: OIDN with the guides of as many (a restyle of a recorded buffer, denoised
+    as the render that recorded it was).
+
+    Args:
+        scene: the scene rendered. image: H x W x 3, the film's image. spp: its camera samples per
+            pixel. seed: the render's seed. quality: OIDN's quality.
+        cache: {spp: guides} kept between calls (the guides are traced once per spp), or None.
+
+    Returns:
+        H x W x 3 float32.
+    """
+    g = None if cache is None else cache.get(spp)
+    if g is None:
+        g = guides.first_hit(scene, spp, pass_seed(seed, 0), footprint="film")
+        if cache is not None:
+            cache.clear()  # only the newest count serves
+            cache[spp] = g
+    return oidn.denoise_oidn(np.asarray(image, np.float32), g.albedo, g.normal, quality,
+                             guides.to_sensor(scene))
+
+
+__all__ = ["render_denoised_image", "finish_denoised_image", "denoise_like", "in_pixels",
+           "check_footprint",
            "FOOTPRINTS"]

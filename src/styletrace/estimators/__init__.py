@@ -7,7 +7,7 @@ Kernel contract (`base.Estimator.run`):
     value, carry = estimator.run(draw, carry, uniform, active=None, *, like=None)
 draw(carry[, u]) -> (x, carry) gives one unbiased sample of I per lane, uniform(carry) -> (u,
 carry) one uniform per lane; carry is an opaque pytree, active the lanes that take part, like the
-type of x (required for Dr.Jit). Every estimator has `name`, `mean_samples`, `fixed_samples` and
+type of x (required for Dr.Jit). Every estimator has `name`, `mean_draws`, `fixed_draws` and
 `exact(I)`. Rationale: docs/design/estimator_kernel_contract.md.
 """
 from __future__ import annotations

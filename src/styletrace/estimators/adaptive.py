@@ -174,11 +174,11 @@ class AdaptiveDirect(Estimator):
         return self.g(I)
 
     @property
-    def mean_samples(self):
+    def mean_draws(self):
         return None if self.n0 != self.n_max else float(self.n0)
 
     @property
-    def fixed_samples(self):
+    def fixed_draws(self):
         return self.n0 == self.n_max
 
     def run(self, draw, carry, uniform, active=None, *, like=None):

@@ -128,11 +128,11 @@ class MeanOfN(Estimator):
         return total * (1.0 / self.n)
 
     @property
-    def mean_samples(self):
+    def mean_draws(self):
         return float(self.n)
 
     @property
-    def fixed_samples(self):
+    def fixed_draws(self):
         return True
 
     @property

@@ -7,7 +7,7 @@ estimator of gA give gA(gB(I)).
 `Sum(*parts, shared=True)`: shared, every draw goes to every part that still wants one (cost: the
 largest part's; no comb-stratified parts); unshared, parts draw in turn. `Product(*factors)`:
 factors draw in turn. `Compose(outer, inner)`: each outer sample is a fresh inner estimate.
-`inner_mean(estimator, m, comb=False)` = Compose(estimator, Mean(m, comb)). mean_samples: shared Sum
+`inner_mean(estimator, m, comb=False)` = Compose(estimator, Mean(m, comb)). mean_draws: shared Sum
 -> max of fixed parts, else None; unshared Sum and Product -> the sum; Compose -> the product.
 """
 from __future__ import annotations
@@ -68,8 +68,8 @@ class _Sequential(Estimator):
         return any(p.uses_comb for p in self.parts)
 
     @property
-    def fixed_samples(self):
-        return all(p.fixed_samples for p in self.parts)
+    def fixed_draws(self):
+        return all(p.fixed_draws for p in self.parts)
 
     def _check_comb(self):
         flags = [p.uses_comb for p in self.parts]
@@ -78,8 +78,8 @@ class _Sequential(Estimator):
                              "draw(carry, u) vs draw(carry) is fixed per kernel")
 
     @property
-    def mean_samples(self):
-        ms = [p.mean_samples for p in self.parts]
+    def mean_draws(self):
+        ms = [p.mean_draws for p in self.parts]
         return None if any(m is None for m in ms) else float(sum(ms))
 
 
@@ -130,11 +130,11 @@ class Sum(_Sequential):
         return out
 
     @property
-    def mean_samples(self):
+    def mean_draws(self):
         if not self.shared:
-            return super().mean_samples
-        if all(p.fixed_samples for p in self.parts):
-            return float(max(p.mean_samples for p in self.parts))
+            return super().mean_draws
+        if all(p.fixed_draws for p in self.parts):
+            return float(max(p.mean_draws for p in self.parts))
         return None
 
 
@@ -232,12 +232,12 @@ class Compose(Estimator):
         return self.inner.uses_comb
 
     @property
-    def fixed_samples(self):
-        return self.outer.fixed_samples and self.inner.fixed_samples
+    def fixed_draws(self):
+        return self.outer.fixed_draws and self.inner.fixed_draws
 
     @property
-    def mean_samples(self):
-        mo, mi = self.outer.mean_samples, self.inner.mean_samples
+    def mean_draws(self):
+        mo, mi = self.outer.mean_draws, self.inner.mean_draws
         return None if mo is None or mi is None else float(mo * mi)
 
 

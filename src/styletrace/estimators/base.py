@@ -473,14 +473,14 @@ class Estimator:
         raise NotImplementedError
 
     @property
-    def mean_samples(self):
+    def mean_draws(self):
         """Expected draw() calls per estimate; None where it depends on the data (adaptive
         truncation)."""
         raise NotImplementedError
 
     @property
-    def fixed_samples(self) -> bool:
-        """True when every estimate draws exactly ``mean_samples`` samples."""
+    def fixed_draws(self) -> bool:
+        """True when every estimate draws exactly ``mean_draws`` samples."""
         return False
 
     @property

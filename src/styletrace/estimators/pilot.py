@@ -108,7 +108,8 @@ class ExpansionPoint:
             self.fixed = arr
 
     @property
-    def samples(self) -> int:
+    def draws(self) -> int:
+        """The draws of X the pilot consumes (0 for a fixed centre)."""
         return self.pilot.n if self.pilot else 0
 
     def describe(self) -> str:

@@ -165,11 +165,11 @@ class PolynomialNaive(_PolynomialBase):
         return self._combine(ctx, state, state["P"])
 
     @property
-    def mean_samples(self):
-        return float(self.point.samples + self.K)
+    def mean_draws(self):
+        return float(self.point.draws + self.K)
 
     @property
-    def fixed_samples(self):
+    def fixed_draws(self):
         return True
 
 
@@ -216,9 +216,9 @@ class PolynomialU(_PolynomialBase):
         return self._combine(ctx, state, state["m"])
 
     @property
-    def mean_samples(self):
-        return float(self.point.samples + self.n)
+    def mean_draws(self):
+        return float(self.point.draws + self.n)
 
     @property
-    def fixed_samples(self):
+    def fixed_draws(self):
         return True

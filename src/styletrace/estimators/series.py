@@ -221,11 +221,11 @@ class SeriesEstimator(Estimator):
         return out
 
     @property
-    def mean_samples(self):
+    def mean_draws(self):
         if self.truncation.adaptive:
             return None
         if self.selection == "single":
             terms = float(np.dot(np.arange(len(self.pmf)), self.pmf))
         else:
             terms = float(np.sum(self.S[1:]))
-        return self.point.samples + terms
+        return self.point.draws + terms

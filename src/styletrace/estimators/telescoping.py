@@ -77,5 +77,5 @@ class Telescoping(Estimator):
         return self.g(I)
 
     @property
-    def mean_samples(self):
+    def mean_draws(self):
         return float(self.n0 + np.sum(self.S[1:]))

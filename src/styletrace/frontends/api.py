@@ -5,20 +5,19 @@
     img = styletrace.render("cornell-box", style="cel", spp=16, inner=8)
     img = styletrace.render("cornell-box", style="cel", samples=64)   # 4 camera samples x 16
 
-`render` is the render pipeline's (`pipeline.execute.render_pipeline`): a `Job` resolved once and
-executed. The building blocks live in `pipeline/` and `scene/` and are re-exported here under
-their established names: loading (`scene.loading`), the pass loop (`pipeline.passes`), the carried
-settings (`pipeline.carried`).
+`render` builds one `Job` of its keywords (`pipeline.job.python_job`), which
+`denoise.finishers.plan` resolves once and runs. The building blocks live in `pipeline/` and
+`scene/` and are re-exported here under their established names: loading (`scene.loading`), the
+pass loop (`pipeline.passes`), the carried settings (`pipeline.carried`).
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from styletrace.errors import SceneError, UsageError
 from styletrace.images import PIXEL_FORMATS, save_safely, write_image
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.pipeline.carried import carried_settings
-from styletrace.pipeline.execute import render_pipeline as pipeline_render
 from styletrace.pipeline.job import given_values
 from styletrace.pipeline.passes import (
     LANE_BYTES,
@@ -49,40 +48,63 @@ from styletrace.scene.loading import (
 from styletrace.scene.plugins import init
 
 
-def render(
-    *args: Any,
-    denoise: str | None = None,
-    cluster: str | None = None,
-    callback: Any = None,
-    denoise_quality: str = "high",
-    coverage: int | str = "auto",
-    denoise_uncertainty: float | None = None,
-    denoise_footprint: str = "pixel",
-    **kw: Any,
-):
-    """`styletrace.render`: the render pipeline's; a denoiser finishes it unless denoise is off.
+def render(scene: Any = None, *, style: str | None = None, samples: int | None = None,
+           spp: int | None = None, inner: Any = None, estimator: str | None = None, seed: int = 0,
+           width: int | None = None, height: int | None = None,
+           defines: dict[str, Any] | None = None, integrator: Any = None,
+           pass_spp: int | None = None, denoise: str | None = None, denoise_quality: str = "high",
+           coverage: int | str = "auto", denoise_uncertainty: float | None = None,
+           denoise_footprint: str = "pixel", cluster: str | None = None,
+           callback: Callable[[Progress], None] | None = None, **params: Any):
+    """`styletrace.render`: a scene rendered with a style, denoised at defaults (docs/python.md).
+
+    Every keyword is one of the user's settings, named here and in docs/python.md (this is why it
+    takes more than 7 parameters); they become one `pipeline.job.Job` (`python_job`), which
+    `denoise.finishers.plan` resolves once and runs.
 
     Args:
-        *args, **kw, callback, cluster: as `pipeline.execute.render_pipeline`'s (scene, style,
-            samples, spp, inner, ...).
+        scene: a built-in name, a Mitsuba XML file, a scene dict or an mi.Scene (None: the Cornell
+            box).
+        style: the style's name (None: the scene's own `stylized` integrator's, else identity).
+        samples: paths per pixel, the render's cost whatever the style (None: the scene's sample
+            count), split into spp camera samples x inner children (`pipeline.budget`).
+        spp: camera samples per pixel; inner: children per stylized vertex (a count, one per
+            level, or 'n0:n_max'); None: chosen from samples.
+        estimator: the estimator of g(E[L]) (None: direct). seed: the render's seed.
+        width, height: the film's size (None: the scene's). defines: an XML file's `<default>`
+            values. integrator: a prebuilt integrator, used as it is (not with style or params).
+        pass_spp: camera samples per pixel per pass (None: by memory).
         denoise: auto, expectation, image or off (None: $STYLETRACE_DENOISE, else auto).
-        denoise_quality, coverage, denoise_uncertainty, denoise_footprint: as
-            `denoise.render_denoised`'s.
+        denoise_quality, coverage, denoise_uncertainty, denoise_footprint: the denoiser's options
+            (`pipeline.denoising.Denoising`, docs/denoise.md).
+        cluster: "local" or a Ray address: the passes as Ray tasks (not denoised); None: here.
+        callback: called with each pass's `Progress`.
+        **params: the style's parameters and the integrator's other properties, by name.
 
     Returns:
-        The image, float32 H x W x C, or (image, aovs) with aovs=True.
+        The image, float32 H x W x C, linear; or (image, aovs) with aovs=True.
 
     Raises:
-        UsageError: an unknown denoise method; a refusal of the run (one line).
+        StyletraceError: a bad value or a refused combination (one line), before rendering.
+
+    Warns:
+        NotDenoised: auto could not denoise (the message says why).
     """
-    from styletrace.denoise import check_method, default_method
-    method = check_method(denoise if denoise is not None else default_method())
-    if method == "off":
-        return pipeline_render(*args, cluster=cluster, callback=callback, **kw)
-    from styletrace.denoise import render_denoised as denoised
+    from styletrace.denoise import NotDenoised
+    from styletrace.denoise.finishers import plan
+    from styletrace.pipeline.denoising import Denoising
+    from styletrace.pipeline.execute import executor_for
     from styletrace.pipeline.job import python_job
-    return denoised(python_job(*args, **kw), method, callback, cluster, denoise_quality, coverage,
-                    denoise_uncertainty, denoise_footprint)
+    denoising = Denoising(denoise, denoise_quality, coverage, denoise_uncertainty,
+                          denoise_footprint)
+    job = python_job(scene, style=style, samples=samples, spp=spp, inner=inner,
+                     estimator=estimator, seed=seed, width=width, height=height, defines=defines,
+                     integrator=integrator, pass_spp=pass_spp, denoising=denoising, **params)
+    runner = plan(job, executor_for(cluster))
+    if runner.resolved.note:
+        import warnings
+        warnings.warn(runner.resolved.note, NotDenoised, stacklevel=2)
+    return runner.result(callback)
 
 
 def make_integrator(style: str | None = None, inner: Any = None, estimator: str | None = None,

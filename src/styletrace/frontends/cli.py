@@ -174,8 +174,8 @@ def cmd_render(args) -> int:
         UsageError: flags that do not go together (--coverage or --denoise-uncertainty without
             expectation, --denoise with frames), bad values, or a refusal of the run (one line).
     """
-    from styletrace.denoise import check_method, default_method
-    method = check_method(args.denoise or default_method())
+    from styletrace.frontends.command_job import denoising_of, job_of
+    method = denoising_of(args).method
     if args.denoise_uncertainty is not None and method not in ("expectation", "auto"):
         raise UsageError(
             f"--denoise-uncertainty {args.denoise_uncertainty} applies to --denoise expectation "
@@ -193,9 +193,9 @@ def cmd_render(args) -> int:
         )
     if several:  # numbered images, on Ray
         if method == "auto" and not args.quiet:
-            from styletrace.denoise.default import why_not
+            from styletrace.pipeline.denoising import why_not
             say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
-        args.denoise = None
+        args.denoise = "off"
         from styletrace.frontends.ray_command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     scene = args.scene[0] if args.scene else "cornell-box"
@@ -203,44 +203,31 @@ def cmd_render(args) -> int:
     params = _parse_set(args.set)
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                  ("--samples", args.samples), ("--pass-spp", args.pass_spp))
-    from styletrace.denoise.finishers import plan_finisher
-    from styletrace.frontends.command_job import job_of
     from styletrace.frontends.ray_command import executor_of
     from styletrace.pipeline.runner import Voice
     status = Status(enabled=not args.quiet)
-    resolved = resolve_with_status(
-        job_of(args, params, _parse_defines(args.define), scene=scene), status
-    )
-    runner, note = plan_finisher(
-        resolved,
-        method,
-        executor_of(args),
-        args.buffer,
-        args.denoise_quality,
-        "auto" if args.coverage is None else args.coverage,
-        args.denoise_uncertainty,
-        footprint=args.denoise_footprint,
-    )
-    if note and not args.quiet:
-        say(f"styletrace: {note}")
+    runner = plan_with_status(job_of(args, params, _parse_defines(args.define), scene=scene),
+                              executor_of(args), args.buffer, status)
+    if runner.resolved.note and not args.quiet:
+        say(f"styletrace: {runner.resolved.note}")
     return runner.write(args.output, Voice(args.quiet, status))
 
 
-def resolve_with_status(job, status):
-    """The job resolved (`pipeline.resolve`), its long phases named on the status line.
+def plan_with_status(job, executor, buffer, status):
+    """The job's run (`denoise.finishers.plan`), its long phases named on the status line.
 
     Args:
-        job: the `pipeline.job.Job`. status: the `status.Status` line.
+        job: the `pipeline.job.Job`. executor: where its passes run. buffer: a file for the
+            expectation buffer, or None. status: the `status.Status` line.
 
     Returns:
-        The `Resolved` job; the scene's warnings have been said, one line each.
+        The `pipeline.runner.Runner`; the scene's warnings have been said, one line each.
     """
     from styletrace.jit import backend
     # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
     backend()
-    from styletrace.pipeline.resolve import resolve
+    from styletrace.denoise.finishers import Recording, plan
     from styletrace.scene.loading import SceneWarning, load_scene
-    # the render pipeline: load, merge, pin auto values
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
         with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
@@ -248,11 +235,11 @@ def resolve_with_status(job, status):
         with status.phase(
             "measuring the scene for its auto values: compiling and rendering a pilot"
         ):
-            resolved = resolve(job, scene=loaded)
+            runner = plan(job, executor, loaded, Recording(path=buffer))
         del loaded
     for w in caught:
         say(f"styletrace: warning: {w.message}")
-    return resolved
+    return runner
 
 
 def cli_integrator(scene, args, params):

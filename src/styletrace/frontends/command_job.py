@@ -12,7 +12,9 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
+from styletrace.pipeline.denoising import Denoising
 from styletrace.pipeline.job import Job
+from styletrace.pipeline.terms import COMMAND_LINE
 
 
 def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
@@ -33,13 +35,33 @@ def given_flags(args, params: Mapping[str, Any]) -> dict[str, Any]:
     return given
 
 
+def denoising_of(args) -> Denoising:
+    """The denoising options of `styletrace render`'s flags (`--denoise`, `--denoise-quality`,
+    `--coverage`, `--denoise-uncertainty`, `--denoise-footprint`).
+
+    Args:
+        args: the parsed arguments; a flag it lacks takes the option's default.
+
+    Returns:
+        The `pipeline.denoising.Denoising` (method None: $STYLETRACE_DENOISE, else auto).
+
+    Raises:
+        UsageError: $STYLETRACE_DENOISE names no method (one line).
+    """
+    coverage = getattr(args, "coverage", None)
+    return Denoising(getattr(args, "denoise", None), getattr(args, "denoise_quality", "high"),
+                     "auto" if coverage is None else coverage,
+                     getattr(args, "denoise_uncertainty", None),
+                     getattr(args, "denoise_footprint", "pixel"))
+
+
 def job_of(
     args, params: Mapping[str, Any], defines: Mapping[str, Any] | None = None, scene: Any = None
 ) -> Job:
-    """The job of `styletrace render`.
+    """The job of `styletrace render`, in the command line's terms (`pipeline.terms`).
 
     Args:
-        args: its parsed arguments (size, samples, spp, seed, pass split, setting flags).
+        args: its parsed arguments (size, samples, spp, seed, pass split, setting flags, denoising).
         params: the `--set` values. defines: the `-D` values, or None.
         scene: one of several scene arguments (None: `args.scene`, its first where a list).
 
@@ -61,7 +83,9 @@ def job_of(
         seed=args.seed,
         pass_spp=args.pass_spp,
         samples=getattr(args, "samples", None),
+        denoising=denoising_of(args),
+        terms=COMMAND_LINE,
     )
 
 
-__all__ = ["job_of", "given_flags"]
+__all__ = ["job_of", "given_flags", "denoising_of"]

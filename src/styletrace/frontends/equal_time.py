@@ -191,12 +191,13 @@ def timed(
     Returns:
         (the last render's image, the seconds of each timed render).
     """
-    from styletrace.pipeline.execute import render_pipeline
+    from styletrace.frontends.api import render
 
     def once() -> tuple[np.ndarray, float]:
         t = time.perf_counter()
-        img = render_pipeline(
-            scene, style=c.style, spp=SPP, seed=SEED, **{**c.integrator, **c.params, **config}
+        img = render(
+            scene, denoise="off", style=c.style, spp=SPP, seed=SEED,
+            **{**c.integrator, **c.params, **config}
         )
         return img, time.perf_counter() - t
 
@@ -216,13 +217,13 @@ def compare(c: Comparison, out_dir: str, size: int, repeats: int,
     Returns:
         (its gallery.json entry, its images: "reference", "fixed" (at equal time), "method").
     """
-    from styletrace.pipeline.execute import render_pipeline
+    from styletrace.frontends.api import render
     from styletrace.scene.loading import load_scene
 
     scene = load_scene(c.scene, size, size)
     t = time.perf_counter()
-    reference = render_pipeline(scene, style=c.style, spp=SPP, seed=SEED,
-                           **{**c.integrator, **c.params, "inner": c.reference})
+    reference = render(scene, denoise="off", style=c.style, spp=SPP, seed=SEED,
+                       **{**c.integrator, **c.params, "inner": c.reference})
     ref_seconds = time.perf_counter() - t
     log(f"{c.key}: reference inner {show(c.reference)} in {ref_seconds:.1f} s")
     method_img, times = timed(scene, c, c.method, repeats)

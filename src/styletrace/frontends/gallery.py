@@ -300,7 +300,7 @@ def run_gallery(out_dir: str, options: Options = Options(), only: list[str] | No
     Raises:
         ValueError: an unknown key. StyletraceError: a refused setting, before any render.
     """
-    from styletrace.pipeline.execute import render_pipeline
+    from styletrace.frontends.api import render
     from styletrace.scene.loading import load_scene
 
     os.makedirs(out_dir, exist_ok=True)
@@ -325,8 +325,9 @@ def run_gallery(out_dir: str, options: Options = Options(), only: list[str] | No
         reference = None
         if setup.reference:
             t = time.perf_counter()
-            reference = render_pipeline(
+            reference = render(
                 scene,
+                denoise="off",
                 style=setup.style,
                 inner=setup.reference,
                 spp=options.reference_spp,
@@ -350,8 +351,9 @@ def run_gallery(out_dir: str, options: Options = Options(), only: list[str] | No
         for n in setup.counts:
             t = time.perf_counter()
             inner = None if n == 0 else n
-            img = render_pipeline(
+            img = render(
                 scene,
+                denoise="off",
                 style=setup.style,
                 inner=inner,
                 estimator=setup.estimator if n else "direct",

@@ -6,7 +6,7 @@
     styletrace preview dragon --port 8765
 
 `render --buffer` runs through the pipeline's runner with `lookdev.record.Recorded`
-(`denoise.finishers.plan_finisher`). `cli.build_parser` calls `add_parsers`, handing over its own
+(`denoise.finishers.plan`). `cli.build_parser` calls `add_parsers`, handing over its own
 helpers (so this module never imports `cli`); nothing here loads Dr.Jit or Mitsuba before a
 command runs.
 """
@@ -111,7 +111,7 @@ def cmd_preview(args, parse_set) -> int:
 
     Args:
         args: the parsed arguments (scene, port, style, set, samples, inner, spp, width,
-            height).
+            height, seed, denoise).
         parse_set: the command line's --set parser.
 
     Returns:
@@ -126,10 +126,12 @@ def cmd_preview(args, parse_set) -> int:
     from styletrace.pipeline.job import check_counts
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                  ("--samples", args.samples), ("--inner", args.inner))
+    from styletrace.preview.jobs import page_job
     from styletrace.preview.server import serve
-    return serve(args.scene, style=args.style, inner=args.inner, spp=args.spp, width=args.width,
-                 height=args.height, port=args.port, params=params, open_browser=False,
-                 samples=args.samples)
+    job = page_job(args.scene, style=args.style, params=params, samples=args.samples,
+                   spp=args.spp, inner=args.inner, width=args.width, height=args.height,
+                   seed=args.seed, denoise=args.denoise)
+    return serve(job, port=args.port)
 
 
 def add_parsers(sub, parse_set, check_output) -> None:
@@ -210,6 +212,9 @@ def add_parsers(sub, parse_set, check_output) -> None:
                    help="camera samples per pixel to refine to (default: from --samples)")
     p.add_argument("--width", type=int, default=None, help="image width (default 256)")
     p.add_argument("--height", type=int, default=None, help="image height (default 256)")
+    p.add_argument("--seed", type=int, default=0, help="the render's seed (default 0)")
+    p.add_argument("--denoise", choices=("auto", "expectation", "image", "off"), default=None,
+                   help="as `render --denoise` (default: auto, or $STYLETRACE_DENOISE)")
     p.set_defaults(func=partial(cmd_preview, parse_set=parse_set))
 
 

@@ -6,8 +6,9 @@ vertex)) and "sequence" (the unbiased estimators: the children and uniforms in c
 plus pos and own for a non-box filter, or seq_count, seq_kind, child and uniform for a sequence
 buffer; the header keeps the passes, tiles, filter and the sensor's to-world matrix. In memory the
 arrays are an `Arrays`: Dr.Jit arrays where the recording kernel wrote them, numpy once read. Files
-are `.npz`, written atomically. Sizes: `bytes_per_sample` (65 bytes for first_hit); caps
-`MAX_SAMPLES`, `MAX_SEQUENCE_SAMPLES`, `MAX_EVENTS_PER_SAMPLE`. Layout in full: docs/lookdev.md and
+are `.npz`, written atomically. Sizes: `bytes_per_camera_sample` (65 bytes for first_hit); caps
+`MAX_CAMERA_SAMPLES`, `MAX_SEQUENCE_CAMERA_SAMPLES`, `MAX_EVENTS_PER_SAMPLE`. Layout in full:
+docs/lookdev.md and
 docs/design/expectation_buffer.md.
 """
 from __future__ import annotations
@@ -24,14 +25,15 @@ import numpy as np
 from styletrace.errors import UsageError
 from styletrace.images import creation_mode, destination, unwritable_kind
 
+#: the default cap on one buffer's camera samples (the budget's: an expectation render is split
+#: within it)
+from styletrace.pipeline.budget import MAX_CAMERA_SAMPLES
+
 FORMAT = "styletrace-buffer"
 VERSION = 3  # 3: filters other than a box; 2: "sequence" buffers; versions 1 and 2 still read
-#: default cap on the camera samples one buffer holds (512 x 512 at 16 spp); memory is about
-#: bytes_per_sample times this (~270 MB for first_hit)
-MAX_SAMPLES = 1 << 22
 #: the cap for sequence buffers (256 x 256 at 16 spp): at most 4 + 18 x 64 bytes per camera sample
 #: more (13 per child, 5 per uniform, up to MAX_EVENTS_PER_SAMPLE of each)
-MAX_SEQUENCE_SAMPLES = 1 << 20
+MAX_SEQUENCE_CAMERA_SAMPLES = 1 << 20
 SEQUENCE = ("seq_count", "seq_kind", "child", "uniform")
 
 SCALAR = {"pixel": np.uint32, "slot": np.int8, "depth": np.uint32, "own": np.uint8}
@@ -58,7 +60,7 @@ def fields_for(stylize: str, stores: str = "mean", filtered: bool = False) -> tu
         SEQUENCE if stores == "sequence" else ()) + (FILTERED if filtered else ())
 
 
-def bytes_per_sample(stylize: str, stores: str = "mean", filtered: bool = False) -> int:
+def bytes_per_camera_sample(stylize: str, stores: str = "mean", filtered: bool = False) -> int:
     """The bytes per camera sample of a buffer's fixed fields.
 
     Args:
@@ -91,7 +93,7 @@ SPREAD = "denoise_spread"
 #: `denoise.expectation.attach` with k = 0)
 DENOISED = "denoised_mean"
 
-#: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.ScenePilot.samples`),
+#: prefix of the arrays that keep the scene-defaults pilot (`scene.defaults.ScenePilot.records`),
 #: so that a restyle resolves a style's 'auto' values exactly as a fresh render of the scene does
 PILOT = "pilot_"
 
@@ -289,7 +291,8 @@ class Buffer:
         return int(self.header["height"])
 
     @property
-    def samples(self) -> int:
+    def camera_samples(self) -> int:
+        """The camera samples it holds (of every pixel and pass)."""
         return self.arrays.length("pixel")
 
     @property
@@ -488,10 +491,10 @@ __all__ = [
     "DENOISED",
     "FORMAT",
     "VERSION",
-    "MAX_SAMPLES",
-    "MAX_SEQUENCE_SAMPLES",
+    "MAX_CAMERA_SAMPLES",
+    "MAX_SEQUENCE_CAMERA_SAMPLES",
     "fields_for",
-    "bytes_per_sample",
+    "bytes_per_camera_sample",
     "filtered",
     "FILTERED",
 ]

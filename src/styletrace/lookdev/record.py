@@ -17,7 +17,12 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from styletrace.config import settings as S
-from styletrace.config.estimator_registry import child_mean, firefly_cap, make_estimator
+from styletrace.config.estimator_registry import (
+    MEAN_ESTIMATORS,
+    child_mean,
+    firefly_cap,
+    make_estimator,
+)
 from styletrace.errors import SceneError, SettingsError, UsageError
 from styletrace.gate import dr, mi
 from styletrace.images import save_safely
@@ -26,15 +31,15 @@ from styletrace.kernel.vertex import emission
 from styletrace.lookdev import film_filter
 from styletrace.lookdev.buffer import (
     FORMAT,
-    MAX_SAMPLES,
-    MAX_SEQUENCE_SAMPLES,
+    MAX_CAMERA_SAMPLES,
+    MAX_SEQUENCE_CAMERA_SAMPLES,
     PILOT,
     VERSION,
     Buffer,
-    bytes_per_sample,
+    bytes_per_camera_sample,
     host_array,
 )
-from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS, finish_slot, slot_record
+from styletrace.lookdev.restyle import finish_slot, slot_record
 from styletrace.lookdev.sequence import Recorder, budget
 from styletrace.pipeline import passes as pass_loop
 from styletrace.pipeline.runner import Finisher, Written
@@ -402,7 +407,7 @@ def record(
     spp: int,
     seed: int = 0,
     label: str = "",
-    max_samples: int = MAX_SAMPLES,
+    max_camera_samples: int = MAX_CAMERA_SAMPLES,
     lanes_per_pass: int = pass_loop.LANES_PER_PASS,
     pilot: ScenePilot | None = None,
     pass_spp: int | None = None,
@@ -412,8 +417,9 @@ def record(
 
     Args:
         scene, integrator, spp, seed, lanes_per_pass, pass_spp: as for `pipeline.passes`.
-        label: how the buffer names its scene; max_samples: the cap on its camera samples
-            (MAX_SAMPLES, the default, means MAX_SEQUENCE_SAMPLES for a sequence buffer).
+        label: how the buffer names its scene; max_camera_samples: the cap on its camera samples
+            (MAX_CAMERA_SAMPLES, the default, means MAX_SEQUENCE_CAMERA_SAMPLES for a sequence
+            buffer).
         pilot: the ScenePilot the caller resolved auto values with (`pipeline.resolve`), or None.
         recorder: makes the recording integrator of (integrator, sequence, per_sample) (default
             RecordingIntegrator; `denoise.coverage`'s places its own camera rays).
@@ -430,7 +436,7 @@ def record(
     integrator = pass_loop.pin_auto_values(scene, integrator, pilot)[0]
     slots = [t.slot for t in integrator.targets_for(scene)]
     check_recordable(integrator.settings, slots)
-    sequence = any(s.estimator not in RESTYLABLE_ESTIMATORS for s in slots)
+    sequence = any(s.estimator not in MEAN_ESTIMATORS for s in slots)
     per_sample = budget(slots) if sequence else 0
     rec = (recorder or RecordingIntegrator)(integrator, sequence, per_sample)
     size = film.crop_size()
@@ -441,16 +447,16 @@ def record(
     layout = pass_loop.tiles(w, h)
     tw, th = layout[0].size
     total = len(layout) * (tw + 2 * border) * (th + 2 * border) * spp if filtered else w * h * spp
-    if sequence and max_samples == MAX_SAMPLES:
-        max_samples = MAX_SEQUENCE_SAMPLES
-    if total > max_samples:
-        per = bytes_per_sample(rec.settings.stylize, filtered=filtered)
-        what = (f"~{max_samples * per / 2**20:.0f} MiB" if not sequence else
+    if sequence and max_camera_samples == MAX_CAMERA_SAMPLES:
+        max_camera_samples = MAX_SEQUENCE_CAMERA_SAMPLES
+    if total > max_camera_samples:
+        per = bytes_per_camera_sample(rec.settings.stylize, filtered=filtered)
+        what = (f"~{max_camera_samples * per / 2**20:.0f} MiB" if not sequence else
                 f"the children and uniforms of the '{slots[0].estimator}' estimator take up to "
                 f"{4 + per_sample * 18} bytes each")
         raise UsageError(
             f"a buffer of {w}x{h} at {spp} spp holds {total} camera samples, over the cap of "
-            f"{max_samples} ({what}); lower spp or the image size"
+            f"{max_camera_samples} ({what}); lower spp or the image size"
         )
     sensor = scene.sensors()[0]
     header = {
@@ -480,7 +486,7 @@ def record(
     # the scene-defaults pilot, kept so that a restyle resolves 'auto' style values as a render of
     # the scene would
     # the one trace of the pilot: resolve's, or here if no auto value needed it
-    pilot = pilot.samples
+    pilot = pilot.records
     owners = {id(b): k for k, b in enumerate(unique_styled(scene), start=1)}
     for rec_slot, target in zip(header["slots"], rec.targets_for(scene)):
         rec_slot["pilot_owner"] = owners.get(id(target.bsdfs[0]), 0) if target.bsdfs else 0
@@ -490,15 +496,15 @@ def record(
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
     for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass,
                                                   pass_spp, pinned=True)):
-        arrays = _pass_arrays(rec.kept, prog.samples, rec.settings.stylize, rec.recorder)
+        arrays = _pass_arrays(rec.kept, prog.pass_spp, rec.settings.stylize, rec.recorder)
         if filtered and "pos" not in arrays:  # where Mitsuba put each sample
             seed_i = pass_loop.pass_seed(seed, index)
-            arrays["pos"] = film_filter.positions(sensor, prog.samples, seed_i, device=True)
+            arrays["pos"] = film_filter.positions(sensor, prog.pass_spp, seed_i, device=True)
         tiled = len(prog.layout) > 1  # the crop windows `pipeline.passes` renders, one per pass
         if tiled:
             buf.header["tiles"] = len(prog.layout)
         arrays = to_film(arrays, prog.layout[prog.tile], w, h, border, filtered)
-        buf.append(arrays, prog.samples, pass_loop.pass_seed(seed, index),
+        buf.append(arrays, prog.pass_spp, pass_loop.pass_seed(seed, index),
                    prog.tile if tiled else None)
         rec.kept, rec.recorder = {}, None
         yield prog, buf
@@ -520,30 +526,21 @@ def scene_label(scene: Any) -> str:
     return f"<{type(scene).__name__}>"
 
 
-def render_buffer(
-    scene: Any = None,
-    style: str | None = None,
-    spp: int | None = None,
-    inner: Any = None,
-    estimator: str | None = None,
-    seed: int = 0,
-    width: int | None = None,
-    height: int | None = None,
-    integrator: StylizedIntegrator | None = None,
-    max_samples: int = MAX_SAMPLES,
-    callback: Callable[[pass_loop.Progress], None] | None = None,
-    defines: dict[str, Any] | None = None,
-    **params: Any,
-) -> Buffer:
-    """Render as `styletrace.render` does and return the expectation buffer of every camera sample.
+def render_buffer(scene: Any = None, *,
+                  callback: Callable[[pass_loop.Progress], None] | None = None,
+                  max_camera_samples: int = MAX_CAMERA_SAMPLES, **keywords: Any) -> Buffer:
+    """Render as `styletrace.render` does, undenoised, and return the expectation buffer of every
+    camera sample.
 
     The render is the pipeline's (`pipeline.resolve`: the scene's integrator settings merged, auto
-    values pinned); `buffer.image` is `styletrace.render`'s image for the same pass split.
+    values pinned); `buffer.image` is `styletrace.render(..., denoise="off")`'s image for the same
+    pass split.
 
     Args:
-        scene, style, spp, inner, estimator, seed, width, height, integrator, defines, params: as
-            for `styletrace.render` (`pipeline.execute.render_pipeline`).
-        max_samples: the cap on camera samples (`record`); callback: called with each Progress.
+        scene: as `styletrace.render`'s. callback: called with each Progress.
+        max_camera_samples: the cap on the buffer's camera samples (`record`).
+        **keywords: `styletrace.render`'s keywords but the denoising ones (the Job is
+            `pipeline.job.python_job`'s).
 
     Raises:
         StyletraceError: what `styletrace.render` refuses, and what a buffer cannot record.
@@ -552,9 +549,8 @@ def render_buffer(
     from styletrace.pipeline.job import python_job
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
-    r = resolve(python_job(scene, style, spp, inner, estimator, seed, width, height, integrator,
-                           defines, **params))
-    recorded = Recorded(label=scene_label(scene), max_samples=max_samples)
+    r = resolve(python_job(scene, max_camera_samples=max_camera_samples, **keywords))
+    recorded = Recorded(label=scene_label(scene), max_camera_samples=max_camera_samples)
     return Runner(r, InProcess(), recorded).result(callback)
 
 
@@ -566,13 +562,15 @@ class Recorded(Finisher):
         path: the .npz file the buffer is written to beside the image, or None (not written).
         label: how the buffer names its scene ('': `scene_label` of the job's scene).
         keep: called with the buffer after the passes (Blender), or None.
-        max_samples: the cap on camera samples (`record`).
+        max_camera_samples: the cap on camera samples (`record`).
     """
     local = "--buffer renders locally: the buffer is recorded in this process (no --ray)"
 
     def __init__(self, path: str | None = None, label: str = "",
-                 keep: Callable[[Buffer], None] | None = None, max_samples: int = MAX_SAMPLES):
-        self.buffer, self.label, self.keep, self.max_samples = path, label, keep, max_samples
+                 keep: Callable[[Buffer], None] | None = None,
+                 max_camera_samples: int = MAX_CAMERA_SAMPLES):
+        self.buffer, self.label, self.keep = path, label, keep
+        self.max_camera_samples = max_camera_samples
         self.recorded: Buffer | None = None
 
     def check(self, resolved, executor) -> None:
@@ -585,7 +583,7 @@ class Recorded(Finisher):
     def source(self, resolved, executor, lock) -> Iterator[pass_loop.Progress]:
         job = resolved.job
         for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed,
-                                self.label, self.max_samples, lanes_per_pass=resolved.lanes,
+                                self.label, self.max_camera_samples, lanes_per_pass=resolved.lanes,
                                 pilot=resolved.pilot, pass_spp=job.pass_spp):
             buf.image = prog.image
             self.recorded = buf
@@ -601,7 +599,7 @@ class Recorded(Finisher):
         buf = self.recorded
         buf.save(self.buffer)
         return Written(out, (self.buffer,), prog.image,
-                       f"; {buf.samples} camera samples, {buf.nbytes / 2**20:.1f} MiB")
+                       f"; {buf.camera_samples} camera samples, {buf.nbytes / 2**20:.1f} MiB")
 
 
 __all__ = ["RecordingIntegrator", "record", "render_buffer", "Recorded", "check_recordable",

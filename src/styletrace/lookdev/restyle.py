@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from styletrace.config import settings as S
-from styletrace.config.estimator_registry import applicable
+from styletrace.config.estimator_registry import MEAN_ESTIMATORS, applicable
 from styletrace.errors import StyletraceError, UsageError
 from styletrace.estimators import apply_linear
 from styletrace.estimators.arrays import const_like
@@ -42,10 +42,6 @@ from styletrace.scene.defaults import Facts, auto_values
 from styletrace.styles import style_class
 from styletrace.styles.base import Vertex
 from styletrace.styles.gradient import Gradient
-
-#: estimators whose value is a function of the children's mean alone
-RESTYLABLE_ESTIMATORS = ("direct", "affine")
-
 
 # ---- the value of one camera sample --------------------------------------------------------------
 
@@ -195,10 +191,10 @@ def slots_for(
                 est = estimator
             elif est not in applicable(new):
                 est = "direct"
-        if est not in RESTYLABLE_ESTIMATORS and buffer.stores == "mean":
+        if est not in MEAN_ESTIMATORS and buffer.stores == "mean":
             raise UsageError(
                 f"estimator '{est}' cannot restyle: it needs the children themselves, and a buffer "
-                f"keeps only their mean; use {' or '.join(RESTYLABLE_ESTIMATORS)}"
+                f"keeps only their mean; use {' or '.join(MEAN_ESTIMATORS)}"
             )
         slots.append(S.parse_slot({**values, "inner_samples": max(n, 1), "estimator": est},
                                   context="restyle"))
@@ -317,7 +313,7 @@ def device(buffer: Buffer) -> dict[str, Any]:
     if "beta" in a:
         d["beta"], d["depth"] = field(buffer, "beta"), field(buffer, "depth")
     else:
-        d["depth"] = dr.zeros(mi.UInt32, buffer.samples)
+        d["depth"] = dr.zeros(mi.UInt32, buffer.camera_samples)
     if buffer.filtered:  # splatted with the film's filter (`film_filter.develop`)
         d["pos"] = field(buffer, "pos")
         dr.eval(*[x for x in d.values()])
@@ -386,7 +382,7 @@ def resolve_auto(buffer: Buffer, slots: list[S.StyleSlot], scene: mi.Scene) -> l
     pilot = {k[len(PILOT):]: buffer.arrays[k] for k in list(buffer.arrays) if k.startswith(PILOT)}
     if not pilot:
         return slots
-    stored = SimpleNamespace(samples=pilot)
+    stored = SimpleNamespace(records=pilot)
     out = []
     for rec, slot in zip(buffer.header["slots"], slots):
         chosen = auto_values(slot.style, Facts(scene, stored, int(rec.get("pilot_owner", 0))))
@@ -467,12 +463,12 @@ def replayed(buffer: Buffer, d: dict, slots: list[S.StyleSlot], v: Vertex) -> mi
         recorded = sorted({r["estimator"] for r in buffer.header["slots"]})
         raise UsageError(
             f"estimator {', '.join(repr(n) for n in names)} cannot restyle this buffer: on "
-            f"{missing} of {buffer.samples} camera samples it asks for a child or uniform number "
-            "beyond the stored ones or in another order than the recorded "
+            f"{missing} of {buffer.camera_samples} camera samples it asks for a child or uniform "
+            "number beyond the stored ones or in another order than the recorded "
             f"{', '.join(repr(n) for n in recorded)} (the buffer stores "
-            f"{children / buffer.samples:.1f} children and "
-            f"{(events - children) / buffer.samples:.1f} uniform numbers per camera sample on "
-            "average); this estimator needs more: record a buffer with it"
+            f"{children / buffer.camera_samples:.1f} children and "
+            f"{(events - children) / buffer.camera_samples:.1f} uniform numbers per camera sample "
+            "on average); this estimator needs more: record a buffer with it"
         )
     return total
 
@@ -629,7 +625,7 @@ def per_pixel(buffer: Any, point: int = 0) -> Buffer:
         header.pop(k, None)
     first = buf.header["passes"][0] if buf.header["passes"] else {"seed": 0}
     header.update(filter="box", passes=[{"spp": 1, "seed": int(first["seed"])}],
-                  per_pixel={"point": int(point), "of": buf.samples})
+                  per_pixel={"point": int(point), "of": buf.camera_samples})
     view = Buffer(header, arrays)
     buf.device[key] = view
     return view
@@ -677,7 +673,6 @@ __all__ = [
     "accumulate",
     "device",
     "prepare_slots",
-    "RESTYLABLE_ESTIMATORS",
     "as_buffer",
     "replay_lanes",
     "per_pixel",

@@ -40,7 +40,7 @@ def budget(slots) -> int:
         if slot.style.closed_form:
             continue
         est = make_estimator(slot, 0, None)
-        draws = est.mean_samples
+        draws = est.mean_draws
         # adaptive truncation: the pilot plus every term
         if draws is None or not math.isfinite(draws):
             draws = slot.n(0) + SERIES_MAX_TERMS

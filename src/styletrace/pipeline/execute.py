@@ -2,7 +2,7 @@
 
     source = InProcess().source(resolve(job))             # a passes.Progress after each pass
     source = OnRay("local", output="o.exr").source(resolve(job), lock)   # the same, as Ray tasks
-    image = render("scene.xml", style="cel", defines={"depth": "3"}, cluster="local")
+    executor = executor_for(cluster="local")             # what `styletrace.render` runs on
 
 In process the passes are `passes.passes`; on Ray the same launches, with the same seeds and the
 same float32 merge, are Ray tasks (`pipeline.ray_run.Render`), so the image is bit-identical for the
@@ -13,13 +13,10 @@ executor of every front end).
 from __future__ import annotations
 
 import contextlib
-from typing import Any, Callable, Iterator
+from typing import Any, Iterator
 
-import numpy as np
-
-from styletrace.pipeline.job import python_job
 from styletrace.pipeline.passes import Progress, passes
-from styletrace.pipeline.resolve import Resolved, resolve
+from styletrace.pipeline.resolve import Resolved
 
 
 def ray_job(resolved: Resolved, camera: Any = None):
@@ -113,68 +110,4 @@ def executor_for(cluster: str | None = None, **ray_options: Any):
     return OnRay(cluster, **ray_options)
 
 
-def execute(resolved: Resolved, cluster: str | None = None, lock: Any = contextlib.nullcontext(),
-            **ray_options: Any) -> Iterator[Progress]:
-    """The render's passes through a plain `runner.Runner` (its checks first).
-
-    Args:
-        resolved: the resolved job. cluster: as `executor_for`'s (None: in process).
-        lock: held while the running sum changes. **ray_options: as `OnRay`'s.
-
-    Returns:
-        An iterator of `Progress`, one after each pass.
-
-    Raises:
-        UsageError: a refusal of the runner's checks (one line).
-    """
-    from styletrace.pipeline.runner import Runner
-    return Runner(resolved, executor_for(cluster, **ray_options)).passes(lock)
-
-
-def run_resolved(resolved: Resolved, cluster: str | None = None,
-        callback: Callable[[Progress], None] | None = None):
-    """Render a resolved job to its final result through a plain `runner.Runner`.
-
-    Args:
-        resolved: the resolved job. cluster: "local" or a Ray address (None: in process).
-        callback: called with the `Progress` after each pass, or None.
-
-    Returns:
-        The image (float32 H x W x C), or (image, aovs) for an integrator with aovs=True.
-
-    Raises:
-        UsageError: a refusal of the runner's checks (one line).
-    """
-    from styletrace.pipeline.runner import Runner
-    return Runner(resolved, executor_for(cluster)).result(callback)
-
-
-def render_pipeline(scene: Any = None, style: str | None = None, spp: int | None = None,
-                    inner: Any = None,
-           estimator: str | None = None, seed: int = 0, width: int | None = None,
-           height: int | None = None, integrator: Any = None,
-           callback: Callable[[Progress], None] | None = None, cluster: str | None = None,
-           pass_spp: int | None = None, defines: dict[str, Any] | None = None,
-           samples: int | None = None, **params: Any) -> np.ndarray:
-    """`styletrace.render`: a Job of the keywords (`job.python_job`), resolved once, run in passes.
-
-    Args:
-        scene, spp, seed, width, height, integrator, defines, pass_spp: as `job.Job`'s fields.
-        samples: paths per pixel, whatever the style (None: the scene's sample count), split into
-            spp x children (`pipeline.budget`); spp and inner, where given, win.
-        style, inner, estimator, **params: the integrator values given (`job.Job`'s `given`);
-            `auto` values are resolved on the scene.
-        callback: called with each pass's `Progress`. cluster: "local" or a Ray address: the passes
-            on Ray, bit-identical to the same split in process (None: in process).
-
-    Returns:
-        float32 H x W x C, linear radiance in the film's pixel format (C = 3 for the usual rgb
-        film); with aovs=True, (image, aovs) (`Progress.aovs`).
-    """
-    job = python_job(scene, style, spp, inner, estimator, seed, width, height, integrator, defines,
-                     pass_spp, samples, **params)
-    return run_resolved(resolve(job), cluster, callback)
-
-
-__all__ = ["InProcess", "OnRay", "executor_for", "execute", "run_resolved", "render_pipeline",
-           "ray_job"]
+__all__ = ["InProcess", "OnRay", "executor_for", "ray_job"]

@@ -15,6 +15,8 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
 from styletrace.errors import UsageError
+from styletrace.pipeline.denoising import OFF, Denoising
+from styletrace.pipeline.terms import PYTHON, Terms
 
 #: the style of a scene without a `stylized` integrator when the caller names none (Python:
 #: physically based)
@@ -33,9 +35,17 @@ class Job:
         integrator: a prebuilt integrator, used as it is (with `given` too: a UsageError).
         spp: camera samples per pixel (None: chosen from samples, `pipeline.budget`); seed: the
             render's seed.
-        pass_spp, lanes_per_pass: the pass split (None: the device's, `sizing`).
+        pass_spp, lanes_per_pass: the pass split, camera samples per pixel per pass and lanes per
+            launch (None: the device's, `sizing`).
         samples: paths per pixel, the render's cost whatever the style (None: the scene sampler's
             count), split into spp x children by `pipeline.budget`.
+        denoising: the denoising asked for (`pipeline.denoising.Denoising`; default off: a plain
+            pipeline run); `resolve` chooses the method before it splits the samples.
+        max_camera_samples: the most camera samples an expectation buffer of this render holds
+            (None: `pipeline.budget.MAX_CAMERA_SAMPLES`).
+        terms: how the caller names the settings, for errors (`pipeline.terms`).
+        draft: a glimpse of this render: one camera sample of the children its split gives
+            (`resolve` asks the budget for that smaller request, `budget.draft_request`).
     """
     scene: Any = None
     defines: Mapping[str, Any] = field(default_factory=dict)
@@ -49,6 +59,10 @@ class Job:
     pass_spp: int | None = None
     lanes_per_pass: int | None = None
     samples: int | None = None
+    denoising: Denoising = OFF
+    max_camera_samples: int | None = None
+    terms: Terms = PYTHON
+    draft: bool = False
 
     def __post_init__(self):
         if self.integrator is not None and self.given:
@@ -57,8 +71,14 @@ class Job:
                 f"cannot refine it; pass either a prebuilt integrator or style= and parameters"
             )
 
+    @property
+    def cap(self) -> int:
+        """The most camera samples an expectation buffer of this render holds."""
+        from styletrace.pipeline.budget import MAX_CAMERA_SAMPLES
+        return MAX_CAMERA_SAMPLES if self.max_camera_samples is None else self.max_camera_samples
+
     def with_(self, **changes: Any) -> "Job":
-        """This job with some fields replaced (a frame of a turntable, another seed).
+        """This job with some fields replaced (a frame of a turntable, another seed, a draft).
 
         Args:
             **changes: field names and their new values.
@@ -87,47 +107,35 @@ def given_values(style: str | None = None, inner: Any = None, estimator: str | N
     return {k: v for k, v in given.items() if v is not None}
 
 
-def python_job(
-    scene: Any = None,
-    style: str | None = None,
-    spp: int | None = None,
-    inner: Any = None,
-    estimator: str | None = None,
-    seed: int = 0,
-    width: int | None = None,
-    height: int | None = None,
-    integrator: Any = None,
-    defines: dict[str, Any] | None = None,
-    pass_spp: int | None = None,
-    samples: int | None = None,
-    **params: Any,
-) -> "Job":
-    """The Job of a Python API call (`styletrace.render`, `render_buffer`, `render(denoise=...)`).
+def python_job(scene: Any = None, *, style: str | None = None, samples: int | None = None,
+               spp: int | None = None, inner: Any = None, estimator: str | None = None,
+               seed: int = 0, width: int | None = None, height: int | None = None,
+               integrator: Any = None, defines: Mapping[str, Any] | None = None,
+               pass_spp: int | None = None, denoising: Denoising = OFF,
+               max_camera_samples: int | None = None, **params: Any) -> Job:
+    """The Job of the Python API's keywords: the one place that reads them (`styletrace.render`,
+    `render_buffer` and the other calls build on it).
+
+    Takes more than 7 parameters: each is one of `styletrace.render`'s documented keywords
+    (docs/python.md), named rather than passed down as a bag.
 
     Args:
-        scene, spp, seed, width, height, integrator, defines, pass_spp, samples: as `Job`'s
-            fields.
+        scene: a built-in name, an XML path, a scene dict or an mi.Scene.
+        samples, spp, seed, width, height, integrator, defines, pass_spp, denoising,
+            max_camera_samples: as `Job`'s fields.
         style, inner, estimator, **params: the integrator values given (`given_values`: None
             leaves a value out).
 
     Returns:
-        The Job; its `given` holds only the values that are not None.
+        The Job, in the Python API's terms; its `given` holds only the values that are not None.
 
     Raises:
         UsageError: a prebuilt `integrator` together with values to refine it.
     """
-    return Job(
-        scene=scene,
-        defines=dict(defines or {}),
-        width=width,
-        height=height,
-        given=given_values(style, inner, estimator, **params),
-        integrator=integrator,
-        spp=spp,
-        seed=seed,
-        pass_spp=pass_spp,
-        samples=samples,
-    )
+    return Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
+               given=given_values(style, inner, estimator, **params), integrator=integrator,
+               spp=spp, seed=seed, pass_spp=pass_spp, samples=samples, denoising=denoising,
+               max_camera_samples=max_camera_samples, terms=PYTHON)
 
 
 def check_counts(*named: tuple[str, Any]) -> None:

@@ -227,8 +227,9 @@ class Progress:
         total: the float32 running sum, H x W x (the image's channels + the error AOVs' sums).
         counts: samples per pixel summed so far, per tile. layout: the tiles.
         channels: the image's channels in `total` (None: all of them).
-        tile, samples: the pass just done: its tile's index in `layout`, its samples per pixel (a
-            recording maps that pass's lanes to the film's pixels with them: `lookdev.record`).
+        tile, pass_spp: the pass just done: its tile's index in `layout`, its camera samples per
+            pixel (a recording maps that pass's lanes to the film's pixels with them:
+            `lookdev.record`).
         in_pixels: the passes kept each sample in its own pixel (`passes`' in_pixels).
     """
 
@@ -241,16 +242,16 @@ class Progress:
         layout: list[Tile],
         channels: int | None = None,
         tile: int = 0,
-        samples: int = 0,
+        pass_spp: int = 0,
         in_pixels: bool = False,
     ):
         self.spp_done, self.spp_total = spp_done, spp_total
         #: each sample counted in its own pixel only (`passes`' in_pixels), not the film's filter
         self.in_pixels = in_pixels
-        #: the pass just done: the index in `layout` of the tile it rendered, and its samples per
-        #: pixel (a recording maps that pass's lanes to the film's pixels with them:
+        #: the pass just done: the index in `layout` of the tile it rendered, and its camera
+        #: samples per pixel (a recording maps that pass's lanes to the film's pixels with them:
         #: `lookdev.record`)
-        self.tile, self.samples = tile, samples
+        self.tile, self.pass_spp = tile, pass_spp
         self._total, self._counts, self._tiles = total, counts, layout
         #: the image's channels in `total`; the error AOVs' sums follow them (`AOV_NAMES`)
         self._channels = total.shape[-1] if channels is None else channels

@@ -1,56 +1,83 @@
-"""Resolving a `Job`, once: the scene loaded, its own integrator settings merged, `auto`
-values pinned, the sample budget split.
+"""Resolving a `Job`, once: the scene loaded, its own integrator settings merged, the denoising
+method chosen, the sample budget split, `auto` values pinned.
 
     r = resolve(Job(scene="scene.xml", given={"style": "cel"}, samples=64))
     r.scene, r.integrator, r.spp, r.lanes, r.auto   # what `execute` runs; auto: the values pinned
-    r.budget                                        # the split: spp x children (`budget.Split`)
+    r.budget, r.method, r.note                      # the split (`budget.Split`), the denoising
 
 The integrator is a prebuilt one as it is; else the given values laid over the scene's own
 `stylized` integrator (also one nested in `moment` or `aov`); else over the scene's carried
-settings (`carried`) with the job's default style. The job's samples (else the scene's sample
-count) are split into camera samples and children once, here, by `budget.split`: a count the
-budget chooses replaces the integrator's default (`with_inner`; a count given, by the caller or the
-scene file, is kept). Its `auto` values are then pinned on this scene
-(`scene.defaults.resolve_defaults`), so every route that renders the result draws the same image.
-Design: docs/design/render_pipeline.md.
+settings (`carried`) with the job's default style. Then, in this order and only here:
+the denoising method is chosen from the job's `denoising` and the request
+(`denoising.choose_method`: it reads the request, not a split); the job's samples (else the
+scene's sample count) are split into camera samples and children for that method
+(`budget.split`: at most `budget.CHILDREN` children where the expectation is denoised, within its
+buffer's cap; a draft asks for one camera sample of those children, `budget.draft_request`); a
+count the budget chooses replaces the integrator's default (`with_inner`; a count
+given, by the caller or the scene file, is kept); its `auto` values are pinned on this scene
+(`scene.defaults.resolve_defaults`), with the firefly control where it denoises. Every route that
+renders the result draws the same image. Design: docs/design/render_pipeline.md.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from styletrace.config import settings as S
 from styletrace.gate import mi
 from styletrace.kernel.integrator import StylizedIntegrator
-from styletrace.pipeline.budget import Request, Split, split
+from styletrace.pipeline.budget import Request, Split, draft_request, split
 from styletrace.pipeline.carried import carried_settings, nested_stylized
+from styletrace.pipeline.denoising import FIREFLY_K, choose_method
 from styletrace.pipeline.job import Job
-from styletrace.pipeline.passes import pin_auto_values
+from styletrace.pipeline.passes import pass_count, pin_auto_values
 from styletrace.pipeline.sizing import lanes_per_pass
-from styletrace.scene.arguments import SPP_MAX, check_render_args, whole
-from styletrace.scene.defaults import ScenePilot
+from styletrace.scene.arguments import SEED_MAX, SPP_MAX, check_integrator, whole
+from styletrace.scene.defaults import ScenePilot, pin_firefly
 from styletrace.scene.loading import load_scene, scene_spp
 from styletrace.scene.plugins import init
 
 
 @dataclass(frozen=True)
 class Resolved:
-    """A job with its scene loaded and its integrator final: everything `execute` needs."""
+    """A job with its scene loaded, its denoising chosen, its samples split and its integrator
+    final: everything a run needs.
+
+    Args:
+        job: the job. scene: its loaded scene. integrator: its integrator, auto values pinned.
+        budget: the samples split into camera samples x children (`budget.Split`).
+        lanes: camera samples per launch. method: expectation, image or off (`choose_method`).
+        note: why auto did not denoise ('' where it did, or was not asked to).
+        auto: the values chosen here, one line: the split first ('' if none).
+        lanes_note: why the device's pass size is below its default, if it is.
+        pilot: the scene-defaults pilot the auto values came from (the recorder reuses it).
+    """
     job: Job
     scene: mi.Scene
     integrator: mi.Integrator
-    spp: int
+    budget: Split
     lanes: int
-    auto: str = ""        # the auto values pinned, one line ('' if none)
-    lanes_note: str | None = None  # why the device's pass size is below its default, if it is
-    # the scene-defaults pilot the auto values came from (the recorder stores it)
+    method: str = "off"
+    note: str = ""
+    auto: str = ""
+    lanes_note: str | None = None
     pilot: ScenePilot | None = None
-    budget: Split | None = None  # the samples split into spp x children (`budget.split`)
+
+    @property
+    def spp(self) -> int:
+        """Camera samples per pixel (the split's)."""
+        return self.budget.camera_samples
 
     @property
     def size(self) -> tuple[int, int]:
         size = self.scene.sensors()[0].film().crop_size()
         return int(size[0]), int(size[1])
+
+    @property
+    def launches(self) -> int:
+        """How many kernel launches the passes make (`passes.pass_count`): what a progress bar
+        counts."""
+        return pass_count(self.scene, self.spp, self.lanes, pass_spp=self.job.pass_spp)
 
 
 def job_integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
@@ -96,28 +123,29 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
     return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
 
 
-def budget_request(job: Job, integrator: mi.Integrator, samples: int) -> Request:
+def budget_request(job: Job, integrator: mi.Integrator, scene_samples: int) -> Request:
     """What the job and its integrator say about the render's cost (`budget.Request`).
 
     Args:
-        job: the job (its spp, and whether it names samples).
+        job: the job (its samples, spp and terms).
         integrator: the job's integrator before its auto values are pinned.
-        samples: the budget: the job's samples, else the scene's sample count.
+        scene_samples: the scene's sample count (the budget where the job names no samples).
 
     Returns:
-        The request. The children count as given where the integrator's values name
-        `inner_samples` (the caller's, the scene file's own `stylized`), and for a prebuilt
+        The request, not yet denoised. The children count as given where the integrator's values
+        name `inner_samples` (the caller's, the scene file's own `stylized`), and for a prebuilt
         integrator of another class; an integrator without styles draws no children. With error
         AOVs an auto spp is at least 2 (their variance; `runner.Runner.check`).
     """
-    given = job.samples is not None
     least = 2 if integrator.aov_names() else 1
+    counts = dict(scene_samples=scene_samples, samples=job.samples, camera_samples=job.spp,
+                  least_camera_samples=least, terms=job.terms)
     if not isinstance(integrator, StylizedIntegrator):
-        return Request(samples, job.spp, None, 0, samples_given=given, min_spp=least)
+        return Request(**counts)
     s = integrator.settings
     fixed = "inner_samples" in integrator.values or type(integrator) is not StylizedIntegrator
-    return Request(samples, job.spp, s.slot.inner if fixed else None, s.slot.style.default_inner,
-                   s.stylize_depth, given, least)
+    return Request(**counts, children=s.slot.inner if fixed else None,
+                   style_children=s.slot.style.default_inner, levels=s.stylize_depth)
 
 
 def with_inner(integrator: StylizedIntegrator, inner: tuple[int, ...]) -> StylizedIntegrator:
@@ -150,39 +178,74 @@ def lanes_for(job: Job) -> tuple[int, str | None]:
     return lanes_per_pass(init())
 
 
-def resolve(job: Job, scene: mi.Scene | None = None) -> Resolved:
-    """Resolve a job once: load its scene, choose its integrator, pin its `auto` values.
+def with_firefly(scene: mi.Scene, integrator: mi.Integrator, method: str,
+                 pilot: ScenePilot | None) -> tuple[mi.Integrator, str]:
+    """The firefly control a render of `method` gets at its default: on where it denoises, unless
+    `firefly` was given or error AOVs (which describe the paper's estimator) are on.
+
+    Args:
+        scene: the scene. integrator: the render's integrator. method: the chosen method.
+        pilot: the scene-defaults pilot to measure the control's floor with (None: a new one).
+
+    Returns:
+        (the integrator, with firefly = FIREFLY_K pinned where it applies; the note naming it).
+    """
+    if method == "off" or not isinstance(integrator, StylizedIntegrator):
+        return integrator, ""
+    s = integrator.settings
+    if s.firefly is not None or s.aovs:
+        return integrator, ""
+    return pin_firefly(scene, integrator, pilot, FIREFLY_K)
+
+
+def resolve(job: Job, scene: mi.Scene | None = None, local: bool = True) -> Resolved:
+    """Resolve a job once: load its scene, choose its integrator and its denoising, split its
+    samples, pin its `auto` values (the module doc).
 
     Args:
         job: the job to resolve.
         scene: the scene already loaded from `job.scene` (None: loaded here).
+        local: the render runs in one process (a denoiser needs that; on Ray auto does not
+            denoise).
 
     Returns:
-        The `Resolved` job: scene, integrator (auto values pinned), spp, lanes, the line naming the
-        auto values (the split first), the lanes note, the scene-defaults pilot and the split.
+        The `Resolved` job.
 
     Raises:
-        UsageError: a bad spp, samples, seed or integrator (`scene.arguments.check_render_args`),
-            or samples, spp and inner that disagree (`budget.split`).
+        UsageError: a bad spp, samples, seed or integrator, in the job's terms, or samples, spp and
+            inner that disagree (`budget.split`).
     """
-    check_render_args(1 if job.spp is None else job.spp, job.seed, job.integrator)
+    t = job.terms
+    if job.spp is not None:
+        whole(t.name("spp"), job.spp, 1, SPP_MAX)
+    whole(t.name("seed"), job.seed, 0, SEED_MAX)
+    check_integrator(job.integrator)
     if job.samples is not None:
-        whole("samples", job.samples, 1, SPP_MAX)
+        whole(t.name("samples"), job.samples, 1, SPP_MAX)
     if scene is None:
         scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
     chosen = choose_integrator(scene, job)
-    samples = scene_spp(scene) if job.samples is None else int(job.samples)
-    budget = split(budget_request(job, chosen, samples))
+    request = budget_request(job, chosen, scene_spp(scene))
+    method, note = choose_method(scene, chosen, request, job.denoising, local, job.cap)
+    expectation = method == "expectation"
+    if expectation:  # g meets the denoised expectation, within what its buffer holds
+        w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
+        budget = split(replace(request, denoised=True), job.cap // (w * h))
+    else:
+        budget = split(request)
+    if job.draft:  # a glimpse: the draft's own request, one camera sample of these children
+        budget = split(draft_request(budget))
     if isinstance(chosen, StylizedIntegrator):
-        chosen = with_inner(chosen, budget.inner)
-    # one pilot for the auto values and, with --buffer, the recorder (it traces only if a value
-    # needs it)
+        chosen = with_inner(chosen, budget.children)
+    # one pilot for the auto values, the firefly floor and, with --buffer, the recorder (it traces
+    # only if a value needs it)
     pilot = ScenePilot(scene, chosen.settings) if isinstance(chosen, StylizedIntegrator) else None
     integrator, auto = pin_auto_values(scene, chosen, pilot)
-    auto = "; ".join(a for a in (budget.note, auto) if a)
-    lanes, note = lanes_for(job)
-    return Resolved(job, scene, integrator, budget.spp, lanes, auto, note, pilot, budget)
+    integrator, firefly = with_firefly(scene, integrator, method, pilot)
+    auto = "; ".join(a for a in (budget.note, auto, firefly) if a)
+    lanes, lanes_note = lanes_for(job)
+    return Resolved(job, scene, integrator, budget, lanes, method, note, auto, lanes_note, pilot)
 
 
 __all__ = ["Resolved", "resolve", "pin_auto_values", "choose_integrator", "job_integrator_values",
-           "lanes_for", "budget_request", "with_inner"]
+           "lanes_for", "budget_request", "with_inner", "with_firefly"]

@@ -4,7 +4,8 @@ Routes (JSON API documented in docs/preview.md):
     GET  /              the page (page.html)
     GET  /api/styles    the style registry: every style's parameters (kind, default, range, choices)
                         and the estimators that can restyle it
-    GET  /api/state     the background render: spp done / to do, samples, buffer bytes and cap
+    GET  /api/state     the background render: samples (paths per pixel), spp done / to do, camera
+                        samples recorded, buffer bytes and cap
     POST /api/restyle   {"style", "params", "estimator", "quick", "wait"}
                         -> {"image": PNG data URL or null, "spp", "draft", "ms", "command",
                             "quick", "busy", "stamp", "version", "kind", "label"}
@@ -26,8 +27,7 @@ PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 
 
 def styles_table() -> list[dict[str, Any]]:
-    from styletrace.config.estimator_registry import applicable
-    from styletrace.lookdev.restyle import RESTYLABLE_ESTIMATORS
+    from styletrace.config.estimator_registry import MEAN_ESTIMATORS, applicable
     from styletrace.styles import style_class, style_names
     out = []
     for name in style_names():
@@ -40,7 +40,7 @@ def styles_table() -> list[dict[str, Any]]:
                 "name": name,
                 "summary": cls.summary,
                 "closed_form": style.closed_form,
-                "estimators": [e for e in applicable(style) if e in RESTYLABLE_ESTIMATORS],
+                "estimators": [e for e in applicable(style) if e in MEAN_ESTIMATORS],
                 "params": [
                     {
                         "name": p.name,
@@ -159,8 +159,7 @@ def make_app(session):
                                                                    "png")
         shown = r.shown
         draft = shown.kind == "draft"
-        command = session.command(style, estimator, params,
-                                  *((shown.spp, shown.inner) if draft else ()))
+        command = session.command(style, estimator, params, draft=draft)
         return JSONResponse(
             {
                 "image": None if png is None else
@@ -212,47 +211,35 @@ def make_app(session):
     )
 
 
-def serve(
-    scene: Any = None,
-    style: str = "cel",
-    inner: int | None = None,
-    spp: int | None = None,
-    width: int | None = None,
-    height: int | None = None,
-    port: int = 8765,
-    params: dict | None = None,
-    open_browser: bool = False,
-    samples: int | None = None,
-) -> int:
+def serve(job, port: int = 8765) -> int:
     """Run the preview server on 127.0.0.1 until Ctrl-C; prints the page's URL once it listens.
 
     Args:
-        scene, samples, inner, spp, width, height: the session's (`preview.session.Session`; the
-            samples are split for `style`).
-        style, params: what the page starts with. port: the port (0: a free one).
-        open_browser: not used (the URL is printed).
+        job: the page's render (`preview.jobs.page_job`): its scene, counts, size, seed,
+            denoising, and the style the page starts with.
+        port: the port (0: a free one).
 
     Returns:
         The exit status, 0.
 
     Raises:
-        StyletraceError: a bad style or parameter, a per-sample style, a refusal of the session.
+        StyletraceError: a bad style or parameter, a per-sample style, a refusal of the session
+            (one line, before the server listens).
     """
     import uvicorn
 
     from styletrace.config.settings import parse_slot
     from styletrace.preview.session import Session
     # a bad start fails here, in one line
-    slot = parse_slot({"style": style, **(params or {})}, context="preview")
+    given = {k: v for k, v in job.given.items() if k != "inner_samples"}
+    slot = parse_slot(given, context="preview")
     if slot.style.per_sample:
         raise UsageError(
-            f"style '{style}' cannot be previewed: it applies g to every child sample, and the "
-            f"preview's buffer keeps only their mean"
+            f"style '{slot.style.name}' cannot be previewed: it applies g to every child sample, "
+            f"and the preview's buffer keeps only their mean"
         )
-    session = Session(scene, inner=inner, spp=spp, width=width, height=height, samples=samples,
-                      style=style)
+    session = Session(job).start()
     app = make_app(session)
-    session.initial = {"style": style, "params": params or {}}
     config = uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")
     server = uvicorn.Server(config)
 
@@ -263,7 +250,6 @@ def serve(
             time.sleep(0.02)
         sock = server.servers[0].sockets[0]
         print(f"styletrace preview: http://127.0.0.1:{sock.getsockname()[1]}/", flush=True)
-    session.start()
     threading.Thread(target=announce, daemon=True).start()
     try:
         server.run()

@@ -90,8 +90,9 @@ class ScenePilot:
                                            for k in PILOT_SETTINGS)
 
     @cached_property
-    def samples(self) -> dict[str, Any]:
-        """The samples by name: cell, owner, colour, depth, p, n, wo (numpy, one row per sample)."""
+    def records(self) -> dict[str, Any]:
+        """The pilot's camera samples by field: cell, owner, colour, depth, p, n, wo (numpy, one row
+        per camera sample)."""
         # traced and evaluated with no scene finalised meanwhile (jit.no_collection)
         with no_collection():
             return self._trace()
@@ -184,7 +185,7 @@ def cell_colours(samples: dict, mask: np.ndarray) -> tuple[np.ndarray, np.ndarra
     """The pilot's mean colour per cell over some of its samples.
 
     Args:
-        samples: the pilot's samples (`ScenePilot.samples`).
+        samples: the pilot's samples (`ScenePilot.records`).
         mask: bool per sample: the samples to average.
 
     Returns:
@@ -210,10 +211,10 @@ def median_brightness(pilot: ScenePilot) -> float | None:
         The median over every object of the per-cell brightness (r+g+b)/3, cells weighted by
         their samples; None where the camera sees no surface.
     """
-    mask = pilot.samples["owner"] >= 0
+    mask = pilot.records["owner"] >= 0
     if not mask.any():
         return None
-    colour, counts, _ = cell_colours(pilot.samples, mask)
+    colour, counts, _ = cell_colours(pilot.records, mask)
     return weighted_quantiles(colour.mean(axis=1), counts, [0.5])[0]
 
 
@@ -248,9 +249,9 @@ class Facts:
 
     @cached_property
     def _mine(self) -> np.ndarray:
-        mask = self.pilot.samples["owner"] == self.owner
+        mask = self.pilot.records["owner"] == self.owner
         if not mask.any():  # the style covers nothing the camera sees directly: use every first hit
-            mask = self.pilot.samples["owner"] >= 0
+            mask = self.pilot.records["owner"] >= 0
         if not mask.any():
             raise NothingSeen
         return mask
@@ -259,7 +260,7 @@ class Facts:
     def _cells(self) -> tuple[np.ndarray, np.ndarray]:
         """(brightness per cell, number of samples) over the cells with samples on the covered
         objects."""
-        s, mask = self.pilot.samples, self._mine
+        s, mask = self.pilot.records, self._mine
         colour, counts, inverse = cell_colours(s, mask)
         if self.styles:
             # a representative first hit per cell (the last sample of the cell) for styles that read
@@ -309,7 +310,7 @@ class Facts:
         Raises:
             NothingSeen: the camera sees no surface.
         """
-        d = self.pilot.samples["depth"][self._mine]
+        d = self.pilot.records["depth"][self._mine]
         return weighted_quantiles(d, np.ones_like(d), qs)
 
 
