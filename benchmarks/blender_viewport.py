@@ -55,7 +55,7 @@ links = import_module("styletrace.blender.borrowed_site").borrow_site(ROOT)  # w
 np = import_module("numpy")
 Image = import_module("PIL.Image")
 addon = import_module("styletrace.blender")
-viewport = import_module("styletrace.blender.viewport")
+viewport = import_module("styletrace.blender.viewport_hooks")
 report = import_module("_report")
 
 

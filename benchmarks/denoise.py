@@ -80,7 +80,7 @@ from _report import image_grid, machine_description, median_time, write_section
 from equal_time import envelope, fixed_mse_at
 
 import styletrace
-from styletrace.denoise import render as denoised_render
+from styletrace import render as denoised_render
 from styletrace.frontends import api
 from styletrace.gate import mi
 from styletrace.lookdev.record import render_buffer
@@ -1205,6 +1205,7 @@ def timing(size: int = 512, runs: int = 3) -> dict:
     buffer itself."""
     from styletrace.denoise import expectation as X
     from styletrace.denoise import guides, oidn
+    from styletrace.pipeline.passes import Shot
     scene = load("cornell-box", size)
     integ = api.make_integrator(style="cel", inner=8)
 
@@ -1229,7 +1230,7 @@ def timing(size: int = 512, runs: int = 3) -> dict:
     )
     out["interpolation at the samples"] = med(lambda: X.at_samples(buf, d, scene, g, own))
     out["attach (guides + OIDN high + interpolation at the camera samples, coverage 0)"] = med(
-        lambda: X.attach(buf, scene, 1, 0))
+        lambda: X.attach(buf, Shot(scene, integ, 1, 0)))
     from styletrace.denoise import coverage
     k = coverage.resolve_k("auto", size, size)
     field = X.Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
@@ -1237,7 +1238,7 @@ def timing(size: int = 512, runs: int = 3) -> dict:
         f"coverage points ({k} per pixel, the 'auto' count at this size; D looked up in the kernel)"
     ] = med(lambda: coverage.points(scene, integ, field, k, 0))
     out[f"attach with coverage points (guides + OIDN high + {k} points per pixel)"] = med(
-        lambda: X.attach(buf, scene, 1, 0, "high", integ, k))
+        lambda: X.attach(buf, Shot(scene, integ, 1, 0), "high", k))
     out["the whole denoised render (render_buffer + attach with coverage 'auto')"] = med(
         lambda: denoised_render(scene, style="cel", spp=1, inner=8, seed=0, denoise="expectation"))
     out["restyle of the denoised buffer"] = med(lambda: styletrace.restyle(buf, style="hatching"))

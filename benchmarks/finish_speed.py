@@ -5,7 +5,7 @@
     .venv/bin/python benchmarks/finish_speed.py cornell-box --save out.npz   # images to compare
 
 A render as `styletrace render SCENE --style cel --denoise expectation` makes it (the pipeline's
-job, resolved and planned, `denoise.finishers.plan_finisher`), 512x512 by default, one pass of all
+job, resolved and planned, `denoise.finishers.plan`), 512x512 by default, one pass of all
 camera samples. The first run compiles and caches the kernels and is not counted; each of `--runs`
 runs after it is timed, and every step's median over them is printed: wall seconds, and the
 passes' and the finish's CPU seconds of all threads (less sensitive to a shared machine). Steps
@@ -33,12 +33,12 @@ styletrace.init()
 from styletrace.denoise import coverage as C  # noqa: E402
 from styletrace.denoise import expectation as X  # noqa: E402
 from styletrace.denoise import guides, oidn  # noqa: E402
-from styletrace.denoise.finishers import plan_finisher  # noqa: E402
+from styletrace.denoise.finishers import plan  # noqa: E402
 from styletrace.lookdev import buffer as B  # noqa: E402
 from styletrace.lookdev import record as R  # noqa: E402
 from styletrace.lookdev import restyle as RS  # noqa: E402
+from styletrace.pipeline.denoising import Denoising  # noqa: E402
 from styletrace.pipeline.job import python_job  # noqa: E402
-from styletrace.pipeline.resolve import resolve  # noqa: E402
 
 #: (label, module, function name): wrapped where the module has the name
 STEPS = [
@@ -92,8 +92,9 @@ def _wrap(label, owner, name):
 
 def run(scene, args):
     job = python_job(scene, style=args.style, spp=args.spp, inner=args.inner, seed=0,
-                     width=args.size, height=args.size, pass_spp=args.spp)
-    runner, _ = plan_finisher(resolve(job), "expectation", quality=args.quality)
+                     width=args.size, height=args.size, pass_spp=args.spp,
+                     denoising=Denoising("expectation", quality=args.quality))
+    runner = plan(job)
     fin = runner.finisher
     _RUN.clear()
     t0 = time.perf_counter()

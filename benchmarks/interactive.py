@@ -321,10 +321,10 @@ PAGE_POLL_S = 0.3
 def preview_final(xml: str, style: str) -> float:
     """Seconds from the preview session's start to its last image (`styletrace preview` at the
     defaults, the page's starting style `style`; no server). The page is played as it behaves: it
-    polls every PAGE_POLL_S and restyles each new image, unwaiting (the session waits up to
-    `DRAFT_GRACE_S` for the page to fetch its draft)."""
+    polls every PAGE_POLL_S and restyles each new image, unwaiting."""
+    from styletrace.preview.jobs import page_job
     from styletrace.preview.session import Session
-    s = Session(xml, style=style).start()
+    s = Session(page_job(xml, style=style)).start()
     seen = None
     while not s.done and s.error is None:
         time.sleep(PAGE_POLL_S)

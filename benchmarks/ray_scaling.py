@@ -23,7 +23,9 @@ from _report import machine_description, median_time, write_section
 
 import styletrace
 from styletrace.frontends import api
-from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.passes import PassSplit
+from styletrace.pipeline.ray_checkpoint import Checkpoint, Checkpoints
+from styletrace.pipeline.ray_plan import Plan
 from styletrace.pipeline.ray_run import Render, job_for
 
 styletrace.init()
@@ -56,7 +58,7 @@ def main():
             pass
 
     def on_ray():
-        for _ in Render(job, spp, 0, w, h, cluster="local"):
+        for _ in Render(job, Plan(w, h, spp, 0), "local"):
             pass
 
     # alternate the two so that load from other processes (a shared machine) falls on both alike
@@ -70,12 +72,13 @@ def main():
             out.append(time.perf_counter() - t)
         loads.append(os.getloadavg()[0])
     t_local, t_ray = statistics.median(t_local), statistics.median(t_ray)
-    units = len(Render(job, spp, 0, w, h).units)
+    units = len(Render(job, Plan(w, h, spp, 0)).units)
 
     # resume: stop after half the passes, then finish from the checkpoint
     tmp = tempfile.mkdtemp()
     out = os.path.join(tmp, "r.exr")
-    half = Render(job, spp, 0, w, h, cluster="local", output=out, pass_spp=4, checkpoint_every=3600)
+    by_4 = Plan(w, h, spp, 0, PassSplit(pass_spp=4))
+    half = Render(job, by_4, "local", Checkpoints(out, every=3600))
     n_units = len(half.units)
     for i, _ in enumerate(half):
         if i + 1 >= n_units // 2:
@@ -84,13 +87,13 @@ def main():
     Checkpoint(out, half.checkpoint.settings).load()
     t_read = time.perf_counter() - t
     t = time.perf_counter()
-    rest = Render(job, spp, 0, w, h, cluster="local", output=out, pass_spp=4, resume=True)
+    rest = Render(job, by_4, "local", Checkpoints(out, resume=True))
     for _ in rest:
         pass
     t_rest = time.perf_counter() - t
     rest.finish()
     t = time.perf_counter()
-    for _ in Render(job, spp, 0, w, h, cluster="local", pass_spp=4):
+    for _ in Render(job, by_4, "local"):
         pass
     t_whole = time.perf_counter() - t
 
@@ -101,7 +104,8 @@ def main():
     for workers in (1, 2, 4):
         start(workers)
         secs = median_time(
-            lambda: [None for _ in Render(sjob, 16, 0, sw, sh, cluster="local", pass_spp=2)],
+            lambda: [None for _ in Render(sjob, Plan(sw, sh, 16, 0, PassSplit(pass_spp=2)),
+                                          "local")],
             args.runs,
         )
         rows.append((workers, secs, 60.0 / secs))

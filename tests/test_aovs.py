@@ -42,7 +42,7 @@ def test_the_exr_carries_named_aov_channels(tmp_path):
     "extra,why",
     [
         (["-o", "x.png"], "--aovs writes its channels into an .exr"),
-        (["--spp", "1", "-o", "x.exr"], "at least 2 samples per pixel"),
+        (["--spp", "1", "-o", "x.exr"], "at least 2 camera samples per pixel"),
         (["--estimator", "series", "--style", "gamma", "-o", "x.exr"], "use estimator=direct"),
     ],
 )
@@ -67,5 +67,5 @@ def test_python_render_returns_the_aovs():
         styletrace.render("cornell-box", style="cel", spp=2, inner=2, width=12, height=8),
         np.ndarray,
     )
-    with pytest.raises(UsageError, match="'spp' with aovs=True"):
+    with pytest.raises(UsageError, match="for spp with aovs=True"):
         api.render("cornell-box", style="cel", spp=1, width=8, height=8, aovs=True)

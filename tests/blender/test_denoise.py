@@ -107,14 +107,14 @@ def test_the_image_denoisers_footprint_reaches_f12_and_the_command_line(tmp_path
     from styletrace.denoise import finishers
     props = type(bpy.context.scene.styletrace).bl_rna.properties
     assert props["denoise_footprint"].default == "pixel"
-    seen, plan = [], finishers.plan_finisher
+    seen, plan = [], finishers.plan
 
     def recorded(*args, **kw):
-        runner, note = plan(*args, **kw)
+        runner = plan(*args, **kw)
         seen.append(runner.finisher.footprint)
-        return runner, note
+        return runner
 
-    monkeypatch.setattr(finishers, "plan_finisher", recorded)
+    monkeypatch.setattr(finishers, "plan", recorded)
     S.textured_plane(16)
     for footprint in ("pixel", "film"):
         S.styletrace(str(tmp_path / f"{footprint}.exr"), 2, style="identity",
@@ -126,10 +126,10 @@ def test_the_image_denoisers_footprint_reaches_f12_and_the_command_line(tmp_path
 
 
 def test_the_denoise_default_is_every_front_ends():
-    """Blender's Denoise starts at `denoise.default_method()`, the default of the command line,
-    the Python API and the preview (auto; the suite sets $STYLETRACE_DENOISE=off for its own
-    renders: tests/conftest.py)."""
-    from styletrace.denoise import default_method
+    """Blender's Denoise starts at `pipeline.denoising.default_method()`, the default of the
+    command line, the Python API and the preview (auto; the suite sets $STYLETRACE_DENOISE=off for
+    its own renders: tests/conftest.py)."""
+    from styletrace.pipeline.denoising import default_method
     prop = type(bpy.context.scene.styletrace).bl_rna.properties["denoise"]
     assert prop.default == default_method()
     assert {item.identifier for item in prop.enum_items} == {"auto", "off", "expectation", "image"}

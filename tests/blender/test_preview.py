@@ -70,14 +70,14 @@ def test_preview_shows_the_materials_style_and_keeps_the_last_render(tmp_path):
     st.inner_samples = "8"
     cel = preview_of(mat)
     print(f"preview: {plain.shape[1]}x{plain.shape[0]}, {engine.PREVIEW}")
-    assert engine.PREVIEW["spp_done"] == engine.PREVIEW["spp_total"] == preview.SPP
+    assert engine.PREVIEW["spp_done"] == engine.PREVIEW["spp_total"] == preview.SAMPLES
 
     h, w = cel.shape[:2]
     y, x = np.mgrid[:h, :w]
     # the preview ball fills the image's middle: a disc of a quarter of the size is all ball
     ball = (x + 0.5 - w / 2) ** 2 + (y + 0.5 - h / 2) ** 2 < (w / 4) ** 2
-    q_cel, _ = on_lattice(cel, preview.SPP)
-    q_plain, chance = on_lattice(plain, preview.SPP)
+    q_cel, _ = on_lattice(cel, engine.PREVIEW["spp_total"])
+    q_plain, chance = on_lattice(plain, engine.PREVIEW["spp_total"])
     p, n = chance[ball].mean(), ball.sum()
     print(f"on the cel lattice: cel {q_cel[ball].mean():.3f}, plain {q_plain[ball].mean():.3f} "
           f"(chance {p:.3f}, {n} pixels)")

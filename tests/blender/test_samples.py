@@ -12,8 +12,8 @@ from styletrace.pipeline.resolve import resolve
 
 def planned(sc, st, **kw):
     """(spp, n) the Python API's render of `sc` with F12's denoise setting runs."""
-    from styletrace.denoise.default import choose
-    r = choose(resolve(python_job(sc, style="cel", **kw), scene=sc), st.denoise).resolved
+    from styletrace.pipeline.denoising import Denoising
+    r = resolve(python_job(sc, style="cel", denoising=Denoising(st.denoise), **kw), scene=sc)
     return r.spp, int(r.integrator.settings.slot.n(0))
 
 
@@ -21,7 +21,7 @@ def split_of(st):
     """(spp, n) of F12's run with the settings `st`, and the loaded scene (the resolved job of the
     runner F12 builds: nothing renders)."""
     sc = f12.scene(bpy.context.evaluated_depsgraph_get(), st)
-    r = f12.run_f12(sc, st, aovs=False)[0].resolved
+    r = f12.run_f12(sc, st, aovs=False).resolved
     return (r.spp, int(r.integrator.settings.slot.n(0))), sc
 
 

@@ -1,10 +1,12 @@
-"""The viewport's progressive session (`viewport.ViewportSession`): a denoised draft, then F12's
+"""The viewport's progressive session (`viewport.ViewportSession`, an adapter around the one
+progressive schedule), driven step by step under a still clock: a denoised draft, then F12's
 passes, whose images converge to F12's image of the same seed (equal after the last pass; before it,
 the error shrinks as the variance of the passes left predicts); a style change restyles the recorded
-buffer with no new pass into F12's image with the new value; the UI thread is not blocked. With
+buffer with no new pass into F12's image with the new value; a drag never waits for a pass. With
 Denoise on, the passes are shown through F12's finisher: the last image is F12's denoised image, the
-ones before it are denoised too, and a style change restyles the buffer F12's Record buffer keeps
-(Denoise expectation) or starts new passes (Denoise image)."""
+ones before it are denoised too, each closer to it than its raw pass and than the image before, and
+a style change restyles the buffer F12's Record buffer keeps (Denoise expectation) or starts new
+passes (Denoise image)."""
 import time
 
 import bpy
@@ -14,38 +16,51 @@ import scenes as S
 from test_restyle import pixels
 
 from styletrace.blender import camera, restyle
-from styletrace.blender.viewport import REST_S, Viewport, denoise_now, draft_size
+from styletrace.blender.viewport import REST_S, TURNS, Viewport
 from styletrace.lookdev.slider import quick_restyle
+from styletrace.progressive.rules import draft_size
 
 SPP, PASS_SPP, SEED = 16, 4, 3
 SETTINGS = dict(style="cel", inner_samples="4", denoise="off")
 
 
+def still() -> float:
+    """A clock that stands still: every denoising looks free, so the schedule denoises at every
+    pass it may (`rules.denoise_now`), whatever this machine's speed."""
+    return 0.0
+
+
+def drive(vp: Viewport) -> None:
+    """Run the viewport's session step by step to its end, in this thread."""
+    s = vp.session
+    while not s.done:
+        s.schedule.step()
+    assert s.error is None
+
+
 def run_viewport(size=32, **settings):
+    """The viewport's session on the room at `size`, driven to its end: (the viewport, the
+    settings, [(label, image)] of every image it showed)."""
     S.room(size)
     st = bpy.context.scene.styletrace
     st.spp, st.pass_spp, st.seed = SPP, PASS_SPP, SEED
     for k, v in {**SETTINGS, **settings}.items():
         setattr(st, k, v)
     images = []
-    vp = Viewport()
+    vp = Viewport(start=False, clock=still)
     dg = bpy.context.evaluated_depsgraph_get()
     vp.set_sensor(camera.sensor(dg.scene_eval, SPP))  # the view through the scene camera
-    start = time.perf_counter()
-    vp.on_image = None
     vp.update(dg, st)
     s = vp.session
-    s.on_image = lambda: images.append((time.perf_counter() - start, *s.latest()))
-    s.join(300)
+    s.on_image = lambda: images.append(s.latest()[::-1])
+    drive(vp)
     return vp, st, images
 
 
 def test_passes_converge_to_f12(tmp_path):
     vp, st, images = run_viewport()
-    s = vp.session
-    assert s.error is None
-    labels = [label for _, _, label in images]
-    print("images:", [(f"{t:.2f} s", label) for t, _, label in images])
+    labels = [label for label, _ in images]
+    print("images:", labels)
     assert labels[0].startswith("draft, denoised") and images[0][1].shape[:2] == draft_size(32, 32)
     assert labels[1:] == [f"pass {k}/4, {4 * k} spp" for k in range(1, 5)]
     f12 = S.styletrace(str(tmp_path / "f12.exr"), SPP, seed=SEED, pass_spp=PASS_SPP, aovs=True,
@@ -56,7 +71,7 @@ def test_passes_converge_to_f12(tmp_path):
     # variance sigma^2 (1/k - 1/K), sigma^2 = K * (the Variance pass, the final pixel's variance)
     var = f12["Variance"].astype(np.float64)
     errors = []
-    for k, (_, img, _) in enumerate(images[1:-1], start=1):
+    for k, (_, img) in enumerate(images[1:-1], start=1):
         d2 = (img.astype(np.float64) - final) ** 2
         predicted = var * (4 / k - 1)
         # the sum's standard error from the pixels' own spread
@@ -112,57 +127,35 @@ def test_the_rest_timer_restyles_the_whole_buffer():
     vp.close()
 
 
-def ticks(s) -> tuple[list, float]:
-    """An event loop of 10 ms ticks, as Blender's, while session `s` renders: the gaps, seconds."""
-    gaps, last, start = [], time.perf_counter(), time.perf_counter()
-    while not s.done:
-        time.sleep(0.01)
-        now = time.perf_counter()
-        gaps.append(now - last)
-        last = now
-    return gaps, time.perf_counter() - start
-
-
-def test_the_ui_thread_runs_while_passes_render():
-    S.room(48)
-    st = bpy.context.scene.styletrace
-    st.spp, st.pass_spp, st.seed, st.style, st.denoise = 32, 4, 1, "identity", "off"
-    vp = Viewport()
-    dg = bpy.context.evaluated_depsgraph_get()
-    vp.set_sensor(camera.sensor(dg.scene_eval, st.spp))
-    vp.update(dg, st)
-    gaps, total = ticks(vp.session)
-    print(f"first session (kernels compiled): longest tick {max(gaps) * 1000:.0f} ms in "
-          f"{total:.2f} s")
-    bpy.data.objects["camera"].location.x += 0.2  # a camera move: a new session
-    dg = bpy.context.evaluated_depsgraph_get()
-    vp.set_sensor(camera.sensor(dg.scene_eval, st.spp))
+def test_a_drag_never_waits_for_a_pass():
+    """While a step of any view's schedule holds Dr.Jit (`TURNS`), a dragged value does not wait
+    for it (Blender's UI thread must not freeze): the restyle returns at once, busy, and the next
+    image shows the new value."""
+    vp, st, _ = run_viewport()
     s = vp.session
-    gaps, total = ticks(s)
-    print(f"{len(gaps)} ticks in {total:.2f} s, longest {max(gaps) * 1000:.0f} ms, "
-          f"median {np.median(gaps) * 1000:.1f} ms; first image {s.stats['draft_s']:.2f} s, "
-          f"clean {s.stats['last_pass_s']:.2f} s")
-    assert s.error is None and s.spp_done == 32
-    # the UI keeps ticking: never frozen for a second, and most ticks on time. Dr.Jit holds
-    # Python's lock while LLVM compiles a kernel (about 0.5 s; with an empty kernel cache some
-    # runs compile one here): such a hitch is allowed, a frozen view is not
-    assert max(gaps) < 1.0
-    assert np.median(gaps) < 0.02
+    assert TURNS.acquire(wait=False)  # a pass of another view holds it
+    try:
+        st.params.cel__levels = "0.12,0.52"
+        entry = vp.update(bpy.context.evaluated_depsgraph_get(), st)
+        assert entry["kind"] == "restyle" and entry["restyle_s"] == 0.0  # busy: not waited
+        assert s.style == vp.values["style"]  # kept: the next image shows it
+    finally:
+        TURNS.release()
+    assert vp.settle() is not None and s.latest()[1].startswith("restyled, ")
+    vp.close()
 
 
 @pytest.mark.parametrize("method", ["expectation", "auto"])
 def test_denoised_passes_end_at_f12s_denoised_image(method, tmp_path):
     vp, st, images = run_viewport(denoise=method)
     s = vp.session
-    assert s.error is None and s.spp_done == SPP
-    labels = [label for _, _, label in images]
-    print("images:", [(f"{t:.2f} s", label) for t, _, label in images],
-          "denoise:", [f"{t:.3f} s" for t in s.stats["denoise_s"]])
-    # the first pass and the last are always shown, each denoised (`denoise_now`): the passes
-    # before the last as quick previews (`ExpectationJob.preview`), the last by F12's finisher
-    assert labels[1] == "pass 1/4, 4 spp, denoised (preview)"
-    assert labels[-1] == "pass 4/4, 16 spp, denoised"
-    assert all(label.endswith(" spp, denoised (preview)") for label in labels[1:-1])
+    assert s.spp_done == SPP
+    labels = [label for label, _ in images]
+    print("images:", labels)
+    # passes of 4 camera samples: no quick preview (`rules.quick_serves`); F12's finisher on the
+    # passes so far after 4 and 8 camera samples (`rules.worth_showing`), then on all of them
+    assert labels[1:] == ["pass 1/4, 4 spp, denoised", "pass 2/4, 8 spp, denoised",
+                          "pass 4/4, 16 spp, denoised"]
     out = S.styletrace(str(tmp_path / "f12.exr"), SPP, seed=SEED, pass_spp=PASS_SPP,
                        **{**SETTINGS, "denoise": method})
     f12, noisy = out["Combined"][..., :3], out["Noisy"][..., :3]
@@ -170,41 +163,44 @@ def test_denoised_passes_end_at_f12s_denoised_image(method, tmp_path):
     np.testing.assert_array_equal(images[-1][1], f12)
     vp.close()
     # the undenoised passes of the same run: Denoise off with the firefly control a denoised
-    # render gets (their last image is F12's Noisy pass)
+    # render gets (their last image is F12's Noisy pass); each image shown is closer to the final
+    # image than the raw pass it was made from, and than the image before it
     plain, _, plain_images = run_viewport(denoise="off", firefly="on")
     np.testing.assert_array_equal(plain_images[-1][1], noisy)
-    by_label = {label: img for _, img, label in plain_images}
-    for _, img, label in images[1:-1]:
-        raw = by_label[label.removesuffix(", denoised (preview)")]
-        err, raw_err = (float(((a - b) ** 2).mean()) for a, b in ((img, f12), (raw, noisy)))
+    by_label = dict(plain_images)
+    errors = []
+    for label, img in images[1:-1]:
+        raw = by_label[label.removesuffix(", denoised")]
+        err, raw_err = (float(((a - b) ** 2).mean()) for a, b in ((img, f12), (raw, f12)))
         print(f"{label}: mean squared error to the final image {err:.3e}, undenoised {raw_err:.3e}")
         assert err < raw_err
+        errors.append(err)
+    assert errors == sorted(errors, reverse=True)
     plain.close()
 
 
 def defaults_session(seed: int, size: int = 64) -> list[tuple[str, np.ndarray]]:
     """(label, image) of the viewport's session on the interior at the add-on's defaults (cel,
-    Samples 16, Denoise auto) with `seed`, after an untimed one (kernels compiled)."""
+    Samples 16, Denoise auto) with `seed`."""
     S.interior(size)
     st = bpy.context.scene.styletrace
     # the suite's environment makes Denoise default to off (tests/conftest.py): the add-on's own
     # default is auto
     st.style, st.seed, st.denoise = "cel", seed, "auto"
-    vp = Viewport()
+    vp = Viewport(start=False, clock=still)
     dg = bpy.context.evaluated_depsgraph_get()
     vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
     images = []
     vp.on_image = lambda: images.append(vp.session.latest()[::-1])
     vp.update(dg, st)
-    vp.session.join(300)
-    assert vp.session.error is None
+    drive(vp)
     vp.close()
     return images
 
 
 def test_each_viewport_image_is_no_noisier_than_the_one_before():
     """The interior lit through a window at the defaults, two seeds: along the full-size images
-    both sessions showed (the previews after the passes `denoise_now` picked, then F12's image),
+    both sessions showed (the previews after the passes the schedule picked, then F12's image),
     the noise between the seeds never grows. The draft (a smaller image) is left out. The noise of
     an image: the mean squared difference of the two seeds' images in sRGB; a later one may exceed
     an earlier one by at most 3 standard errors of the difference, from 8 x 8 blocks (denoised
@@ -247,37 +243,21 @@ def test_style_change_with_denoise_expectation_restyles_f12s_recorded_buffer(tmp
 def test_style_change_with_denoise_image_starts_new_passes():
     vp, st, images = run_viewport(denoise="image")
     s = vp.session
-    assert images[-1][2] == "pass 4/4, 16 spp, denoised" and s.buffer is None
+    assert images[-1][0] == "pass 4/4, 16 spp, denoised" and s.buffer is None
     st.params.cel__levels = "0.1,0.5"
     entry = vp.update(bpy.context.evaluated_depsgraph_get(), st)
     assert entry["kind"] == "settings" and vp.session is not s
     vp.close()
 
 
-def test_denoise_now_spends_at_most_about_half_the_time_denoising():
-    # the first pass that can be denoised and the last always are
-    assert denoise_now(1, 4, 1.6, []) and denoise_now(4, 4, 0.1, [5.0])
-    # passes of 1.6 s, denoising of 5 s (400x300, Denoise expectation): 3 of 8 passes shown
-    shown, since, spent = [], 0.0, []
-    for k in range(1, 9):
-        since += 1.6
-        if denoise_now(k, 8, since, spent):
-            shown.append(k)
-            spent.append(5.0)
-            since = 0.0
-    assert shown == [1, 5, 8]
-    # passes slower than the denoising: every pass
-    assert all(denoise_now(k, 8, 2.0, [1.0]) for k in range(1, 9))
-
-
 def test_loading_a_file_frees_every_viewport():
     """Blender drops the old file's engines on a load without their `__del__` reaching `free`; the
     add-on's `load_pre` handler stops and forgets every viewport."""
-    from styletrace.blender import viewport
+    from styletrace.blender import viewport_hooks
 
     vp, _, _ = run_viewport()
     key = -1  # a key no engine has
-    viewport.VIEWS[key] = vp
+    viewport_hooks.VIEWS[key] = vp
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    assert key not in viewport.VIEWS and vp.session is None
-    assert viewport.free_all in bpy.app.handlers.load_pre  # kept across the load
+    assert key not in viewport_hooks.VIEWS and vp.session is None
+    assert viewport_hooks.free_all in bpy.app.handlers.load_pre  # kept across the load

@@ -7,10 +7,11 @@ Standard, display sRGB, exposure 0, gamma 1, no dither): 255 * srgb_oetf(clip(li
 0.5 + DELTA levels; with exposure +1 it is the same of linear x 2 and differs from Standard; an
 image drawn upside down or sRGB-encoded before the draw fails that comparison.
 
-Blender shifts a region's pixel space by GLA_PIXEL_OFS = 0.01 px; `viewport.draw_view_image` draws
-its texture at (-0.01, -0.01) to undo it, so each drawn pixel is its own texel. `DRAW_OFFSET_PX` is
-the offset the comparison models: 0 (a draw at (0, 0) would blur each pixel with about 1 % of its
-left and lower neighbours: 19.8 levels at most on this image's noise, measured).
+Blender shifts a region's pixel space by GLA_PIXEL_OFS = 0.01 px;
+`viewport_hooks.draw_view_image` draws its texture at (-0.01, -0.01) to undo it, so each drawn
+pixel is its own texel. `DRAW_OFFSET_PX` is the offset the comparison models: 0 (a draw at (0, 0)
+would blur each pixel with about 1 % of its left and lower neighbours: 19.8 levels at most on this
+image's noise, measured).
 
 Skipped where `blender` or `xvfb-run` is missing, or where Blender's Python is not the minor
 version of the .venv whose site-packages it borrows (STYLETRACE_SITE).

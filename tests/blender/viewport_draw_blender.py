@@ -9,7 +9,7 @@ the 3D view's Rendered shading with no overlay, gizmo or region but the view's o
 session's last pass, then writes to DIR, per phase, `NAME.png.npy` (the region's pixels cropped from
 `screen.screenshot`, top row first, uint8 RGB) and `NAME.image.npy` (the session's `latest()` image
 drawn then, linear float32, top row first). Phases: `standard` (view transform Standard, exposure 0,
-no dither), `exposure` (exposure +1) and three draws broken on purpose (`viewport.draw_view_image`
+no dither), `exposure` (exposure +1) and three draws broken on purpose (`hooks.draw_view_image`
 replaced): `flipped` (upside down), `encoded` (sRGB-encoded before the draw) and `unbound` (no
 `bind_display_space_shader`). `log.json`: what each phase saw; exit status 0 when every phase ran, 1
 otherwise (a timeout or an error; `log.json` says which). """
@@ -42,7 +42,7 @@ links = site.borrow_site(ROOT, site.PACKAGES + ("pyoidn",), links=os.path.join(O
 np = import_module("numpy")
 Image = import_module("PIL.Image")
 blender = import_module("styletrace.blender")
-viewport = import_module("styletrace.blender.viewport")
+hooks = import_module("styletrace.blender.viewport_hooks")
 
 LOG = {"blender": bpy.app.version_string, "phases": {}, "error": None}
 
@@ -116,7 +116,7 @@ def encoded(draw):
 
 
 def unbound(draw):
-    """`viewport.draw_view_image` without `bind_display_space_shader` (a copy of its body)."""
+    """`hooks.draw_view_image` without `bind_display_space_shader` (a copy of its body)."""
     def body(engine, scene, image, width, height):
         h, w = image.shape[:2]
         px = np.ones((h, w, 4), np.float32)
@@ -124,7 +124,7 @@ def unbound(draw):
         data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
         texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
         gpu.state.blend_set("ALPHA_PREMULT")
-        offset = -viewport.PIXEL_OFFSET
+        offset = -hooks.PIXEL_OFFSET
         draw_texture_2d(texture, (offset, offset), width, height)
         gpu.state.blend_set("NONE")
     return body
@@ -135,7 +135,7 @@ class Run:
 
     def __init__(self, scene, window, area):
         self.scene, self.window, self.area = scene, window, area
-        self.draw = viewport.draw_view_image
+        self.draw = hooks.draw_view_image
         self.phases = [("standard", None, 0.0), ("exposure", None, 1.0),
                        ("flipped", flipped, 0.0), ("encoded", encoded, 0.0),
                        ("unbound", unbound, 0.0)]
@@ -153,7 +153,7 @@ class Run:
         name, broken, exposure = self.phase = self.phases.pop(0)
         self.calls, self.t0 = 0, time.perf_counter()
         self.scene.view_settings.exposure = exposure
-        viewport.draw_view_image = self.counted(broken(self.draw) if broken else self.draw)
+        hooks.draw_view_image = self.counted(broken(self.draw) if broken else self.draw)
         self.area.tag_redraw()
 
     def step(self):
@@ -167,7 +167,7 @@ class Run:
         if time.perf_counter() - self.start > TIMEOUT_S:
             LOG["error"] = f"timed out in phase {self.phase and self.phase[0]}"
             return self.finish()
-        views = list(viewport.VIEWS.values())
+        views = list(hooks.VIEWS.values())
         vp = views[0] if views else None
         s = vp.session if vp else None
         if s is None or not s.done or s.version == 0:
@@ -210,7 +210,7 @@ class Run:
             "updates": [e["kind"] for e in vp.log]}
 
     def finish(self):
-        viewport.draw_view_image = self.draw
+        hooks.draw_view_image = self.draw
         LOG["seconds"] = round(time.perf_counter() - self.start, 3)
         with open(os.path.join(OUT, "log.json"), "w") as f:
             json.dump(LOG, f, indent=1)

@@ -24,6 +24,8 @@ from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError
 from styletrace.frontends import api
 from styletrace.gate import mi
+from styletrace.pipeline.denoising import Denoising
+from styletrace.pipeline.passes import Shot
 
 RES = 12
 
@@ -70,7 +72,8 @@ def test_each_point_lies_in_its_own_cell(k, tiled, crop, monkeypatch):
     scene = plane(crop)
     w = crop[2] if crop else RES
     image, buf = X.render_denoised_expectation(
-        scene, api.make_integrator(style="cel", inner=1), spp=1, seed=5, coverage=k
+        Shot(scene, api.make_integrator(style="cel", inner=1), 1, 5),
+        Denoising("expectation", coverage=k),
     )
     assert buf.header.get("tiles", 1) == (4 if tiled else 1)
     np.testing.assert_allclose(styletrace.restyle(buf, style="cel"), image, atol=2e-6)
@@ -90,7 +93,8 @@ def test_points_differ_by_seed_and_stay_by_seed():
     scene = plane()
     integ = api.make_integrator(style="cel", inner=1)
     p = [
-        X.render_denoised_expectation(scene, integ, spp=1, seed=s, coverage=4)[1].arrays["p"]
+        X.render_denoised_expectation(Shot(scene, integ, 1, s),
+                                      Denoising("expectation", coverage=4))[1].arrays["p"]
         for s in (1, 1, 2)
     ]
     assert np.array_equal(p[0], p[1]) and not np.allclose(p[0], p[2])

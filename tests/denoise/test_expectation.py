@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 
 from styletrace.denoise import expectation as X
+from styletrace.denoise.probe import Probe
 from styletrace.frontends import api
 from styletrace.lookdev.record import record
+from styletrace.pipeline.passes import Shot
 
 from .test_coverage import plane
 
@@ -22,7 +24,7 @@ from .test_coverage import plane
 @pytest.mark.parametrize("crop", [None, (3, 2, 7, 9)])
 def test_a_render_s_vertices_project_into_their_own_pixels(crop):
     scene = plane(crop)
-    for _, buf in record(scene, api.make_integrator(style="cel", inner=1), 4, seed=1):
+    for _, buf in record(Shot(scene, api.make_integrator(style="cel", inner=1), 4, seed=1)):
         pass
     uv = X.raster(scene, buf.arrays["p"])
     pixel = buf.arrays["pixel"].astype(np.int64)
@@ -54,14 +56,12 @@ def test_a_vertex_on_a_silhouette_takes_its_own_surface_s_neighbour():
     normal = np.zeros((2, 4, 3), np.float32)
     normal[..., 2] = 1.0
     field = X.Field(d, Guides(albedo, normal, position, normal), 1.0)
-    value = field.at(
-        mi.Float(1.3),
-        mi.Float(0.5),
+    probe = Probe(
+        mi.Point2f(1.3, 0.5),
         mi.Point3f(0.13, 0.0, 0.0),
         mi.Vector3f(0.0, 0.0, 1.0),
         mi.UInt32(1),
-        mi.Color3f(a_bright),
-        mi.Color3f(0.0),
         mi.Bool(True),
     )
+    value = field.at(probe, mi.Color3f(a_bright), mi.Color3f(0.0))
     np.testing.assert_allclose(np.asarray(value).ravel(), [e_bright] * 3, rtol=1e-5)

@@ -18,6 +18,8 @@ import numpy as np
 
 from styletrace.denoise import expectation as X
 from styletrace.frontends import api
+from styletrace.pipeline.denoising import Denoising
+from styletrace.pipeline.passes import Shot
 from styletrace.scene.builtin import FURNACE_ALBEDO, FURNACE_RADIANCE
 
 RES, Z = 64, 4.0
@@ -38,13 +40,14 @@ def interior(buf):
 def test_denoised_furnace_is_the_constant():
     scene = api.load_scene("furnace", RES, RES)
     _, buf = X.render_denoised_expectation(
-        scene, api.make_integrator(style="identity", inner=1), spp=1, seed=3, coverage=0
+        Shot(scene, api.make_integrator(style="identity", inner=1), 1, 3),
+        Denoising("expectation", coverage=0),
     )
     exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
     mask = interior(buf)
     assert mask.sum() > 500
     noisy = X.expectation(buf)[mask].astype(np.float64)
-    d = X.attach(buf, scene, 1, 3)[0][mask].astype(np.float64)  # D per pixel
+    d = X.attach(buf, Shot(scene, None, 1, 3))[0][mask].astype(np.float64)  # D per pixel
     sigma = noisy.std(0, ddof=1)
     assert np.all(sigma > 0.05 * exact), "the furnace's children carry no noise: nothing is tested"
     se = sigma / np.sqrt(mask.sum())
@@ -56,8 +59,9 @@ def test_denoised_furnace_is_the_constant():
 def test_denoised_furnace_is_the_constant_at_coverage_points():
     scene = api.load_scene("furnace", RES, RES)
     integ = api.make_integrator(style="identity", inner=1)
-    _, cam = X.render_denoised_expectation(scene, integ, spp=1, seed=3, coverage=0)
-    _, cover = X.render_denoised_expectation(scene, integ, spp=1, seed=3, coverage=16)
+    shot = Shot(scene, integ, 1, 3)
+    _, cam = X.render_denoised_expectation(shot, Denoising("expectation", coverage=0))
+    _, cover = X.render_denoised_expectation(shot, Denoising("expectation", coverage=16))
     assert cover.spp == 16 and cover.source.spp == 1
     exact = np.asarray(FURNACE_ALBEDO) * FURNACE_RADIANCE
     mask = interior(cam).ravel()

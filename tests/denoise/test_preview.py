@@ -17,6 +17,8 @@ import styletrace
 from styletrace.denoise import expectation as X
 from styletrace.errors import UsageError
 from styletrace.frontends import api
+from styletrace.pipeline.denoising import Denoising
+from styletrace.pipeline.passes import PassSplit, Shot
 
 RES = 16
 
@@ -24,8 +26,9 @@ RES = 16
 def job():
     scene = api.load_scene("cornell-box", RES, RES)
     # with an uncertainty, so that the spread a finish keeps is compared too
-    return X.ExpectationJob(scene, api.make_integrator(style="cel", inner=2), spp=2, seed=4,
-                            coverage=4, pass_spp=1, uncertainty=0.3)
+    return X.ExpectationJob(Shot(scene, api.make_integrator(style="cel", inner=2), 2, 4),
+                            Denoising("expectation", coverage=4, uncertainty=0.3),
+                            split=PassSplit(pass_spp=1))
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +57,7 @@ def test_a_preview_is_the_denoised_render_at_its_k_and_quality(finished):
     j, previews, (image, _), _ = finished
     last = previews[-1]
     im1, b1 = last[1, "fast"]
-    assert b1.samples == RES * RES and b1.header["denoise"]["coverage"] == 1
+    assert b1.camera_samples == RES * RES and b1.header["denoise"]["coverage"] == 1
     assert b1.header["denoise"]["quality"] == "fast" and b1.source is j.buffer
     assert np.abs(styletrace.restyle(b1) - im1).max() <= 1e-5
     im0, b0 = last[0, "fast"]
@@ -65,7 +68,7 @@ def test_a_preview_is_the_denoised_render_at_its_k_and_quality(finished):
     assert np.abs(last[1, "balanced"][0] - im1).max() > 1e-4
     assert np.abs(image - im1).max() > 1e-4
     # the first pass's preview saw one camera sample per pixel, the second's two
-    assert previews[0][0, "fast"][1].samples == RES * RES
+    assert previews[0][0, "fast"][1].camera_samples == RES * RES
 
 
 def test_bad_values_are_refused():

@@ -9,6 +9,7 @@ import pytest
 import styletrace
 from styletrace.denoise import expectation as X
 from styletrace.frontends import api
+from styletrace.pipeline.passes import Shot
 
 KW = dict(spp=2, inner=2, seed=11)
 
@@ -17,7 +18,7 @@ KW = dict(spp=2, inner=2, seed=11)
 def recorded():
     scene = api.load_scene("cornell-box", 32, 32)
     image, buf = X.render_denoised_expectation(
-        scene, api.make_integrator(style="cel", inner=KW["inner"]), KW["spp"], KW["seed"]
+        Shot(scene, api.make_integrator(style="cel", inner=KW["inner"]), KW["spp"], KW["seed"])
     )
     return scene, image, buf
 

@@ -22,6 +22,8 @@ from styletrace.frontends import api
 from styletrace.gate import mi
 from styletrace.lookdev.buffer import SPREAD, Buffer
 from styletrace.lookdev.restyle import SPREAD_NODES, finish_slot, finish_spread
+from styletrace.pipeline.denoising import Denoising
+from styletrace.pipeline.passes import Shot
 from styletrace.styles.base import Vertex
 
 
@@ -120,9 +122,11 @@ def test_bad_uncertainty_is_refused(bad):
 def test_uncertainty_zero_styles_d_itself():
     scene = api.load_scene("cornell-box", 16, 16)
     integ = api.make_integrator(style="cel", inner=2)
-    img0, b0 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4)
-    img1, b1 = X.render_denoised_expectation(scene, integ, spp=2, seed=1, coverage=4,
-                                             uncertainty=0.3)
+    shot = Shot(scene, integ, 2, 1)
+    img0, b0 = X.render_denoised_expectation(shot, Denoising("expectation", coverage=4))
+    img1, b1 = X.render_denoised_expectation(
+        shot, Denoising("expectation", coverage=4, uncertainty=0.3)
+    )
     assert X.UNCERTAINTY == 0 and b0.header["denoise"]["uncertainty"] == 0  # the default
     assert SPREAD not in b0.arrays and SPREAD in b1.arrays
     assert b1.header["denoise"]["uncertainty"] == 0.3 and np.all(b1.arrays[SPREAD] >= 0)

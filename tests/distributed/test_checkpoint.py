@@ -13,7 +13,9 @@ from conftest import child_env
 from styletrace.errors import UsageError
 from styletrace.frontends import api
 from styletrace.gate import mi
-from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.passes import PassSplit
+from styletrace.pipeline.ray_checkpoint import Checkpoint, Checkpoints
+from styletrace.pipeline.ray_plan import Plan
 from styletrace.pipeline.ray_run import Render, job_for
 
 STYLE = {"style": "cel", "inner": 2, "max_depth": 3}
@@ -25,11 +27,10 @@ def test_break_then_resume_renders_only_the_rest_and_equals_the_undisturbed_rend
     w, h, spp, seed = 48, 32, 8, 4
     job = job_for("cornell-box", api.make_integrator(**STYLE), w, h)
     out = str(tmp_path / "img.exr")
-    whole = Render(job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1)
+    plan = Plan(w, h, spp, seed, PassSplit(pass_spp=1))
+    whole = Render(job, plan, ray_cluster)
     list(whole)
-    first = Render(
-        job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1, output=out, checkpoint_every=3600
-    )
+    first = Render(job, plan, ray_cluster, Checkpoints(out, every=3600))
     for prog in first:
         if prog.spp_done >= 3:  # units may arrive out of order; those after a gap are summed later
             break
@@ -37,7 +38,7 @@ def test_break_then_resume_renders_only_the_rest_and_equals_the_undisturbed_rend
     saved = json.load(open(out + ".checkpoint.json"))
     done = sum(saved["rounds_done"])
     assert 3 <= done < spp
-    again = Render(job, spp, seed, w, h, cluster=ray_cluster, pass_spp=1, output=out, resume=True)
+    again = Render(job, plan, ray_cluster, Checkpoints(out, resume=True))
     assert again.resumed_units == done
     steps = list(again)
     assert len(steps) == 1 + spp - done  # the checkpoint's progress, then one per remaining unit

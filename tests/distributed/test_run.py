@@ -7,6 +7,8 @@ import numpy as np
 
 import styletrace
 from styletrace.frontends import api
+from styletrace.pipeline.passes import PassSplit
+from styletrace.pipeline.ray_plan import Plan
 from styletrace.pipeline.ray_run import Render, job_for
 
 STYLE = {"style": "cel", "inner": 2, "max_depth": 3}
@@ -39,7 +41,7 @@ def test_tiled_image_on_the_cluster_equals_api_passes(ray_cluster):
     cheap = {"style": "identity", "inner": 1, "max_depth": 2}
     ref = local("cornell-box", w, h, 2, 3, 1, cheap)
     job = job_for("cornell-box", api.make_integrator(**cheap), w, h)
-    run = Render(job, 2, 3, w, h, cluster=ray_cluster, pass_spp=1)
+    run = Render(job, Plan(w, h, 2, 3, PassSplit(pass_spp=1)), ray_cluster)
     assert len(run.layout) == 2 and run.total_units == 4
     spp_seen = [p.spp_done for p in run]
     assert spp_seen[-1] == 2 and len(spp_seen) == 4
@@ -52,7 +54,7 @@ def test_a_killed_worker_is_retried_and_the_image_is_unchanged(ray_cluster):
     w, h, spp = 96, 96, 12
     ref = local("cornell-box", w, h, spp, 11, 1)
     job = job_for("cornell-box", api.make_integrator(**STYLE), w, h)
-    run = Render(job, spp, 11, w, h, cluster=ray_cluster, pass_spp=1)
+    run = Render(job, Plan(w, h, spp, 11, PassSplit(pass_spp=1)), ray_cluster)
     killed = []
 
     def kill_first(pid):

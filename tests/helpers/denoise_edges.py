@@ -9,6 +9,8 @@ import numpy as np
 
 from styletrace.denoise import expectation as X
 from styletrace.frontends import api
+from styletrace.pipeline.denoising import Denoising
+from styletrace.pipeline.passes import Shot
 
 
 @dataclass
@@ -37,11 +39,8 @@ def denoised_identity(
     scene, spp: int = 8, inner: int = 4, seed: int = 2, coverage: int = 0
 ) -> Samples:
     _, buf = X.render_denoised_expectation(
-        scene,
-        api.make_integrator(style="identity", inner=inner),
-        spp=spp,
-        seed=seed,
-        coverage=coverage,
+        Shot(scene, api.make_integrator(style="identity", inner=inner), spp, seed),
+        Denoising("expectation", coverage=coverage),
     )
     a = buf.arrays
     albedo, emission = X.own_surface(scene, a)

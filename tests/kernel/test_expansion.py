@@ -201,10 +201,11 @@ def test_cluster_renders_refuse_the_pass():
     from types import SimpleNamespace
 
     from styletrace.errors import UsageError
+    from styletrace.pipeline.ray_plan import Plan
     from styletrace.pipeline.ray_run import Render
     job = SimpleNamespace(values={"style": "gamma", "estimator": "series", "expansion_pass": "16"})
     with pytest.raises(UsageError) as err:
-        Render(job, 4, 0, 16, 16)
+        Render(job, Plan(16, 16, 4, 0))
     assert "bad value '16' for 'expansion_pass' in a cluster render" in str(err.value)
 
 

@@ -21,6 +21,7 @@ from styletrace.frontends.cli import main
 from styletrace.gate import mi
 from styletrace.kernel import reuse
 from styletrace.lookdev.record import record
+from styletrace.pipeline.passes import Shot
 from styletrace.scene import defaults as scene_defaults
 
 from .test_reuse import plane_scene
@@ -120,18 +121,18 @@ def test_reuse_render_collects_no_garbage_and_leaves_the_collector_as_it_was(mon
 
 @pytest.fixture
 def counted_pilot(monkeypatch):
-    """How often the scene-defaults pilot is traced (its `samples`, a cached property, computed)."""
+    """How often the scene-defaults pilot is traced (its `records`, a cached property, computed)."""
     traces = []
-    original = scene_defaults.ScenePilot.__dict__["samples"].func
+    original = scene_defaults.ScenePilot.__dict__["records"].func
 
     @functools.wraps(original)
-    def samples(self):
+    def records(self):
         traces.append(self)
         return original(self)
 
-    prop = functools.cached_property(samples)
-    prop.__set_name__(scene_defaults.ScenePilot, "samples")
-    monkeypatch.setattr(scene_defaults.ScenePilot, "samples", prop)
+    prop = functools.cached_property(records)
+    prop.__set_name__(scene_defaults.ScenePilot, "records")
+    monkeypatch.setattr(scene_defaults.ScenePilot, "records", prop)
     return traces
 
 
@@ -155,7 +156,7 @@ def test_recording_a_buffer_from_the_command_line_traces_the_pilot_once(
 
 def test_recording_a_buffer_through_the_api_traces_the_pilot_once(tmp_path, counted_pilot):
     scene = api.load_scene(str((tmp_path / "s.xml").write_text(SCENE) and tmp_path / "s.xml"))
-    for _, buf in record(scene, api.make_integrator("cel"), 2):
+    for _, buf in record(Shot(scene, api.make_integrator("cel"), 2)):
         pass
     assert len(counted_pilot) == 1
     # the pilot's samples are in the buffer

@@ -107,7 +107,8 @@ def test_a_tiled_film_of_several_passes(tiled, rfilter, tmp_path):
     def scene():
         return mi.load_dict(scene_dict(rfilter, w=40, h=30))
     integ = api.make_integrator(style="cel", inner=2)
-    for prog, buf in record(scene(), integ, 3, seed=1, pass_spp=2):
+    shot, split = pass_loop.Shot(scene(), integ, 3, 1), pass_loop.PassSplit(pass_spp=2)
+    for prog, buf in record(shot, split):
         buf.image = prog.image
     assert len(buf.header["passes"]) == 18 and buf.spp == 3
     back = load_buffer(buf.save(str(tmp_path / "b.npz")))

@@ -23,6 +23,7 @@ from styletrace.frontends import api
 from styletrace.lookdev.buffer import load_buffer
 from styletrace.lookdev.record import record
 from styletrace.pipeline import passes as pass_loop
+from styletrace.pipeline.passes import PassSplit, Shot
 
 W, H = 40, 30
 
@@ -43,7 +44,7 @@ def _box():
 
 def test_every_sample_lands_on_its_own_pixel(tiled):
     scene = _box()
-    bufs = [b for _, b in record(scene, api.make_integrator(style="cel", inner=2), 3, seed=4)]
+    bufs = [b for _, b in record(Shot(scene, api.make_integrator(style="cel", inner=2), 3, 4))]
     buf = bufs[-1]
     a = buf.arrays
     assert buf.header["tiles"] == 9 and len(buf.header["passes"]) == 9 and buf.spp == 3
@@ -59,7 +60,7 @@ def test_every_sample_lands_on_its_own_pixel(tiled):
 
 def test_restyle_equals_the_render_of_a_tiled_film(tiled, tmp_path):
     scene = _box()
-    for prog, buf in record(scene, api.make_integrator(style="cel", inner=2), 2, seed=1):
+    for prog, buf in record(Shot(scene, api.make_integrator(style="cel", inner=2), 2, 1)):
         buf.image = prog.image
     buf.save(str(tmp_path / "b.npz"))
     again = styletrace.restyle(load_buffer(str(tmp_path / "b.npz")), style="cel")
@@ -69,7 +70,7 @@ def test_restyle_equals_the_render_of_a_tiled_film(tiled, tmp_path):
 def test_a_sequence_buffer_of_a_tiled_film_restyles_to_its_render(tiled):
     scene = _box()
     integ = api.make_integrator(style="gamma", inner=4, estimator="series", exposure=1.0)
-    for prog, buf in record(scene, integ, 1, seed=2):
+    for prog, buf in record(Shot(scene, integ, 1, 2)):
         buf.image = prog.image
     assert buf.stores == "sequence" and buf.header["tiles"] == 9
     np.testing.assert_allclose(
@@ -83,13 +84,14 @@ def test_spp_waits_for_every_tile(tiled):
     scene = _box()
     spp = [
         b.spp
-        for _, b in record(scene, api.make_integrator(style="cel", inner=1), 2, seed=0, pass_spp=1)
+        for _, b in record(Shot(scene, api.make_integrator(style="cel", inner=1), 2, 0),
+                           PassSplit(pass_spp=1))
     ]
     assert spp == [0] * 8 + [1] + [1] * 8 + [2]
 
 
 def test_a_film_of_one_pass_is_recorded():
     scene = api.load_scene("cornell-box", 8, 6)
-    prog, buf = next(record(scene, api.make_integrator(style="cel", inner=1), 1))
+    prog, buf = next(record(Shot(scene, api.make_integrator(style="cel", inner=1), 1)))
     assert buf.camera_samples == 48
     assert "tiles" not in buf.header and "tile" not in buf.header["passes"][0]

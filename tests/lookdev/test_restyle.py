@@ -10,6 +10,7 @@ from styletrace.errors import SceneError, SettingsError, StyleError, UsageError
 from styletrace.frontends import api
 from styletrace.lookdev.record import record, render_buffer
 from styletrace.lookdev.restyle import restyle
+from styletrace.pipeline.passes import PassSplit, Shot
 from styletrace.scene.builtin import cornell_box
 from styletrace.styles import style_class, style_names
 
@@ -79,7 +80,7 @@ def test_several_passes_are_all_kept():
     scene = api.load_scene("cornell-box", W, H)
     lanes = 2 * W * H
     *_, (prog, buf) = record(
-        scene, api.make_integrator("cel", inner=INNER), SPP, SEED, lanes_per_pass=lanes
+        Shot(scene, api.make_integrator("cel", inner=INNER), SPP, SEED), PassSplit(lanes)
     )
     assert [p["spp"] for p in buf.header["passes"]] == [2, 1] and buf.camera_samples == W * H * SPP
     *_, want = api.passes(scene, api.make_integrator("gamma", inner=INNER), SPP, SEED, lanes)

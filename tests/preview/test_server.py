@@ -1,6 +1,7 @@
 """The preview's JSON API: styles from the registry, restyles, saves, bad requests, concurrent
 clients."""
 import base64
+import json
 import threading
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 from starlette.testclient import TestClient
 
 from styletrace.gate import mi
+from styletrace.images import srgb8
 from styletrace.lookdev.restyle import restyle
 from styletrace.preview.server import make_app
 from styletrace.styles import style_class, style_names
@@ -32,12 +34,15 @@ def test_styles_come_from_the_registry(client):
     assert "gradient" in {p["kind"] for p in table["color_map"]["params"]}
 
 
-def test_state_reports_the_cap(client, session):
+def test_state_reports_the_split_and_the_cap(client, session):
+    """`samples` are paths per pixel (2 camera samples x 2 children); the buffer counts camera
+    samples."""
     st = client.get("/api/state").json()
-    assert (
-        st["spp_done"] == 2 and st["samples"] == 48 * 40 * 2 and st["bytes"] == st["samples"] * 65
-    )
-    assert st["cap_samples"] == session.max_camera_samples
+    assert (st["samples"], st["spp"], st["children"], st["spp_done"]) == (4, 2, 2, 2)
+    assert st["camera_samples"] == 48 * 40 * 2 and st["bytes"] == st["camera_samples"] * 65
+    assert st["bytes_per_camera_sample"] == 65
+    assert st["cap_camera_samples"] == session.job.cap
+    assert st["method"] == "off" and st["done"] and not st["draft"] and st["kind"] == "final"
 
 
 def test_save_exr_is_the_restyle(client, session):
@@ -138,7 +143,7 @@ def test_quick_restyles_one_point_per_pixel_and_the_full_one_the_buffer(client, 
     assert not full["quick"] and not full["busy"] and full["stamp"] > quick["stamp"]
     assert full["image"] == _png_of(restyle(session.buffer, style="contrast", **params))
     assert full["image"] != quick["image"]
-    assert full["version"] == session.state()["version"] == len(session.shown)
+    assert full["version"] == session.state()["version"] == len(session.frames)
 
 
 def test_a_quick_restyle_does_not_wait_for_a_pass(client, session):
@@ -147,19 +152,71 @@ def test_a_quick_restyle_does_not_wait_for_a_pass(client, session):
     test_schedule.py)."""
     params = {"c": "1.3", "pivot": "auto", "exposure": "auto"}
     busy = session.counts["busy"]
-    with session.jit:
+    with session.schedule.turns:
         body = client.post("/api/restyle", json={"style": "contrast", "params": params,
                                                  "quick": True}).json()
         bad = client.post("/api/restyle", json={"style": "contrast", "params": {"c": "-1"},
                                                 "quick": True})
-    assert body["busy"] and session.counts["busy"] == busy + 1
+    assert body["busy"] and session.counts["busy"] == busy + 1 and body["ms"] >= 0
     # a bad value is refused at once, busy or not
     assert bad.status_code == 400 and "bad value" in bad.json()["error"]
     # the render thread has finished: nothing of this style restyled after a pass to show
     assert body["image"] is None and body["kind"] == "final" and session.state()["restyled"] == 0
 
 
-@pytest.mark.parametrize("flag", ["quick", "wait"])
+@pytest.mark.parametrize("flag", ["quick", "wait", "format"])
 def test_bad_flags(client, flag):
     r = client.post("/api/restyle", json={"style": "cel", flag: "yes"})
     assert r.status_code == 400 and f"bad {flag} 'yes'" in r.json()["error"]
+
+
+def rgba(image):
+    """An H x W x 3 linear image as the page draws it: sRGB 8-bit, alpha 255 (H x W x 4)."""
+    out = np.full(image.shape[:2] + (4,), 255, dtype=np.uint8)
+    out[..., :3] = srgb8(image)
+    return out
+
+
+def test_the_pages_restyles_are_raw_pixels(client, session):
+    """`format: rgba8` (the page's): the restyle's pixels, 8-bit sRGB RGBA within one level of
+    `images.srgb8`, rows from the top, and the JSON answer's fields in X-Restyle."""
+    from styletrace.lookdev.slider import quick_restyle
+    params = {"c": "2.1", "pivot": "auto", "exposure": "auto"}
+    r = client.post("/api/restyle", json={"style": "contrast", "params": params, "quick": True,
+                                          "format": "rgba8"})
+    meta = json.loads(r.headers["x-restyle"])
+    assert r.status_code == 200 and r.headers["content-type"] == "application/octet-stream"
+    assert (meta["width"], meta["height"]) == (48, 40) and len(r.content) == 48 * 40 * 4
+    assert meta["quick"] and not meta["busy"] and meta["kind"] == "final" and meta["spp"] == 2
+    assert meta["ms"] >= meta["restyle_ms"] > 0
+    assert "--style contrast" in meta["command"] and "--set c=2.1" in meta["command"]
+    got = np.frombuffer(r.content, dtype=np.uint8).reshape(40, 48, 4)
+    want = rgba(quick_restyle(session.buffer, style="contrast", **params))
+    assert np.abs(got.astype(int) - want).max() <= 1
+    assert (got == want).mean() > 0.99  # the table's rounding differs only at a level's edge
+    # the whole buffer, as the JSON answer's PNG holds it
+    r = client.post("/api/restyle", json={"style": "contrast", "params": params,
+                                          "format": "rgba8"})
+    got = np.frombuffer(r.content, dtype=np.uint8).reshape(40, 48, 4)
+    want = rgba(restyle(session.buffer, style="contrast", **params))
+    assert not json.loads(r.headers["x-restyle"])["quick"]
+    assert np.abs(got.astype(int) - want).max() <= 1
+
+
+def test_rgba8_bounds_and_nan():
+    """Out of [0, 1] is clamped, NaN is black, as `images.srgb8` has them."""
+    from styletrace.preview.server import rgba8
+    image = np.array([[[-1.0, 0.0, 0.5], [np.nan, 1.0, 7.0], [0.002, 0.02, 0.2]]],
+                     dtype=np.float32)
+    got = np.frombuffer(rgba8(image), dtype=np.uint8).reshape(1, 3, 4)
+    assert got[0, :2].tolist() == [[0, 0, 188, 255], [0, 255, 255, 255]]
+    assert np.abs(got.astype(int) - rgba(image)).max() <= 1
+
+
+def test_a_busy_raw_restyle_without_an_image_is_a_204(client, session):
+    """A busy answer with nothing restyled for its style: no pixels, its fields in X-Restyle."""
+    with session.schedule.turns:
+        r = client.post("/api/restyle", json={"style": "hatching", "quick": True,
+                                              "format": "rgba8"})
+    meta = json.loads(r.headers["x-restyle"])
+    assert r.status_code == 204 and r.content == b"" and meta["busy"]

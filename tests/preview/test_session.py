@@ -1,67 +1,54 @@
-"""The preview session: a draft (1 spp, n = 1) is shown before the first full pass."""
+"""The preview session: its draft (one camera sample of the render's children at the draft's size)
+and its films, each restyle equal to `styletrace render` of the page's command line."""
 import numpy as np
 
-import styletrace
 from styletrace.lookdev.restyle import restyle
+from styletrace.preview.jobs import page_job
+from styletrace.preview.session import Session
+from styletrace.progressive.rules import draft_size
 
-from .conftest import wait_until
+from .conftest import JOIN_S, finished, run_command
 
 
-def test_the_draft_is_a_one_child_render_served_until_the_first_full_pass(monkeypatch):
-    from styletrace.preview import session as module
-    # the render thread waits for the draft to be shown
-    monkeypatch.setattr(module, "DRAFT_GRACE_S", 120.0)
-    from styletrace.denoise.draft import (  # with the denoise extra the draft is denoised
-        QUALITY,
-        available,
-    )
-    # the draft styles D at its camera samples (coverage 0: it must stay the buffer the page
-    # restyles); rendered before the session starts: the page's Dr.Jit work runs under the session's
-    # lock, a render of the test's own beside the session's render thread would not (a CI run once
-    # failed there with an empty-array gather)
-    extra = (
-        {"denoise": "expectation", "denoise_quality": QUALITY, "coverage": 0} if available() else {}
-    )
-    want = styletrace.render(
-        "cornell-box",
-        style="cel",
-        spp=1,
-        inner=module.DRAFT_INNER,
-        seed=0,
-        width=24,
-        height=20,
-        **extra,
-    )
-    s = module.Session("cornell-box", inner=2, spp=2, width=24, height=20)
+def test_the_draft_is_one_camera_sample_of_the_renders_children_at_the_draft_size(tmp_path):
+    """A film above the draft's pixels is drafted smaller (`rules.draft_size`), with the render's
+    children; restyled, the draft is the page's draft command line run. The session is stopped
+    from its draft's callback, so the draft stays the image restyles read."""
+    size = (200, 150)
+    s = Session(page_job("cornell-box", inner=4, spp=2, width=size[0], height=size[1]),
+                on_image=lambda frame: frame.kind == "draft" and s.schedule.stop())
     assert s.restyle("cel", None, {}) == (None, 0, 0)  # nothing rendered yet
     s.start()
-    wait_until(lambda: s.draft is not None, 120, "the draft")
-    assert s.buffer is None and s.state()["draft"]
-    img, spp, inner = s.restyle("cel", None, {})
-    assert (spp, inner) == (1, module.DRAFT_INNER)
-    np.testing.assert_allclose(img, want, rtol=0, atol=1e-5)
-    assert "--inner 1 --spp 1" in s.command("cel", None, {}, spp, inner)
-    wait_until(lambda: s.done or s.error, 120, "the background render")
-    assert s.error is None
-    img, spp, inner = s.restyle("cel", None, {})
-    assert (spp, inner) == (2, 2) and not s.state()["draft"]
-    np.testing.assert_array_equal(img, restyle(s.buffer, style="cel"))
-    s.stop()
+    s.join(JOIN_S)
+    assert s.done and s.error is None
+    assert [f.kind for f in s.frames] == ["draft"] and s.buffer is None
+    st = s.state()
+    assert st["draft"] and st["kind"] == "draft" and (st["width"], st["height"]) == size
+    assert (st["samples"], st["spp"], st["children"]) == (8, 2, 4)
+    img, spp, children = s.restyle("cel", None, {})
+    dw, dh = draft_size(*size)
+    assert (dw, dh) == (160, 120) and img.shape == (dh, dw, 3)
+    assert (spp, children) == (1, 4)
+    command = s.command("cel", None, {}, draft=True)
+    assert "--inner 4 --spp 1 " in command and "--width 160 --height 120" in command
+    print(command)
+    np.testing.assert_allclose(img, run_command(command, tmp_path), rtol=1e-5, atol=1e-6)
+    # the page's own command line names the render the session would end with
+    assert "--inner 4 --spp 2 " in s.command("cel", None, {})
 
 
 def test_a_film_with_a_gaussian_filter(tmp_path):
     """The session records and restyles a film with Mitsuba's default filter (no rfilter: a
     gaussian): the restyle is the render of the page's command line (1 spp per pass)."""
     from helpers.filtered_scene import GAUSSIAN_SCENE
-
-    from styletrace.preview import session as module
     scene = tmp_path / "g.xml"
     scene.write_text(GAUSSIAN_SCENE)
-    want = styletrace.render(str(scene), style="sepia", spp=2, inner=2, seed=0, pass_spp=1)
-    s = module.Session(str(scene), inner=2, spp=2).start()
-    wait_until(lambda: s.done or s.error, 120, "the background render")
-    assert s.error is None and s.buffer.filtered
-    img, spp, inner = s.restyle("sepia", None, {})
+    s = finished(page_job(str(scene), style="sepia", inner=2, spp=2))
+    assert s.buffer.filtered
+    img, spp, children = s.restyle("sepia", None, {})
+    command = s.command("sepia", None, {})
     s.stop()
-    assert (spp, inner) == (2, 2) and s.state()["bytes_per_camera_sample"] == 74
+    assert (spp, children) == (2, 2) and s.state()["bytes_per_camera_sample"] == 74
+    want = run_command(command, tmp_path)
     np.testing.assert_allclose(img, want, rtol=1e-5, atol=1e-6)
+    np.testing.assert_array_equal(img, restyle(s.buffer, style="sepia"))

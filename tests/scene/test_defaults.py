@@ -164,7 +164,7 @@ def test_the_pilot_covers_what_the_camera_sees_in_a_fog():
 
     from styletrace.scene.defaults import ScenePilot
     scene = load_scene(foggy_room(RES))
-    samples = ScenePilot(scene, make_integrator(style="gamma").settings).samples
+    samples = ScenePilot(scene, make_integrator(style="gamma").settings).records
     assert (samples["owner"] == 0).all()
     # the sky's rays scatter within a few free paths (1 / 0.25 = 4 units): their depth is finite
     assert np.isfinite(samples["depth"]).all() and np.median(samples["depth"]) < 12

@@ -35,7 +35,7 @@ def test_mask_matches_brute_force(sets):
     u = rng.uniform(-0.1, 1.1, size=N).astype(np.float32)
     normals = plane_normals((0.2, -0.3, 0.9), (0, 1, 0), sets, 30.0)
     spacing, thickness = 0.07, 0.025
-    got = np.array(hatch_mask(point(p), mi.Float(u), normals, spacing, thickness, 0.05, 0.9))
+    got = np.array(hatch_mask(point(p), mi.Float(u), normals, spacing, thickness, (0.05, 0.9)))
     want, amb = brute_force(
         p.astype(np.float64), u.astype(np.float64), normals, spacing, thickness, 0.05, 0.9
     )

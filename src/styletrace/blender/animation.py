@@ -47,7 +47,8 @@ def stop_message(frame: int, spp_done: int, spp_total: int) -> str:
     (docs/design/blender_frames_previews.md).
 
     Args:
-        frame: the cancelled frame. spp_done, spp_total: its finished and asked samples per pixel.
+        frame: the cancelled frame. spp_done, spp_total: its finished and asked camera samples per
+        pixel.
     Returns:
         One line for Blender's report.
     """

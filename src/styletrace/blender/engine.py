@@ -21,7 +21,7 @@ from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
 COMBINED = "Combined"
-#: what the last render did: samples per pixel finished and asked for, whether it was
+#: what the last render did: camera samples per pixel finished and asked for, whether it was
 #: cancelled, seconds
 LAST: dict = {}
 #: the same for the last material preview

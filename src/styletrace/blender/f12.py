@@ -3,11 +3,11 @@ F12.
 
 The engine (F12), the restyle operator and the XML export all go through here, so that they agree on
 the scene, the style and the pass split: `styletrace render FILE.xml --seed K --pass-spp N` renders
-the image F12 renders with seed K and N samples per pass. F12 is a pipeline run (`run_f12`): a Job
-of the exported scene, the settings' integrator and their Samples (split into camera samples x
+the image F12 renders with seed K and N camera samples per pass. F12 is a pipeline run (`run_f12`):
+a Job of the exported scene, the settings' integrator and their Samples (split into camera samples x
 children by the pipeline's rule, `pipeline.budget`), resolved (auto values pinned), with the
-finisher of its Denoise and Record buffer settings (`denoise.finishers.plan`: plain,
-expectation or image denoising, the recorded buffer).
+finisher of its Denoise and Record buffer settings (`denoise.finishers.plan`: plain, expectation or
+image denoising, the recorded buffer).
 """
 from __future__ import annotations
 
@@ -156,10 +156,10 @@ def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
         UsageError: the refusals (one line each; Record buffer with Denoise 'image'), before
             anything renders.
     """
-    from styletrace.denoise.finishers import Image, plan
+    from styletrace.denoise.finishers import Image, Recording, plan
     from styletrace.errors import UsageError
     runner = plan(job(sc, integrator(settings, aovs=aovs), settings), scene=sc,
-                  label="<blender>", keep=keep)
+                  recording=Recording(label="<blender>", keep=keep))
     if isinstance(runner.finisher, Image) and keep is not None:
         raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would "
                          "not be the denoised image; use Denoise 'expectation' (its buffer keeps "

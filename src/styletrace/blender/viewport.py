@@ -91,17 +91,19 @@ class ViewportSession:
 
     Args:
         scene_dict: a callable (width, height) -> the Mitsuba scene dict (`SceneSync.scene_dict`).
-        width, height: the view's size in pixels.
+        size: the view's (width, height) in pixels.
         values: `snapshot` of the settings.
         on_image: called (in the worker) after each new image; None: nothing is called.
         draft: render the draft first.
+        clock: the schedule's clock (`progressive.schedule.Schedule`; default time.perf_counter).
 
     `schedule`: the schedule (its `stats`: `draft_s`, `first_s`, `final_s`, `pass_s`, `denoise_s`);
     `error`: a refusal's line (None without one)."""
 
-    def __init__(self, scene_dict: Callable[[int, int], dict], width: int, height: int,
-                 values: dict, on_image: Callable[[], None] | None = None, draft: bool = True):
-        self.scene_dict, self.size, self.values = scene_dict, (width, height), values
+    def __init__(self, scene_dict: Callable[[int, int], dict], size: tuple[int, int],
+                 values: dict, on_image: Callable[[], None] | None = None, draft: bool = True,
+                 clock: Callable[[], float] = time.perf_counter):
+        self.scene_dict, self.size, self.values = scene_dict, tuple(size), values
         self.on_image = on_image or (lambda: None)
         self.image: np.ndarray | None = None
         self.label = ""
@@ -110,8 +112,8 @@ class ViewportSession:
         self.recorded = False  # the passes record a buffer (restyles need no new pass)
         self.style: dict | None = None  # a restyled style: later frames are shown restyled
         self._lock = threading.Lock()
-        self.schedule = Schedule(self._plan, self._draft_plan if draft else None, turns=TURNS,
-                                 on_frame=self._on_frame, warm=self._warm)
+        self.schedule = Schedule(self._plan, self._draft_plan if draft else None, clock=clock,
+                                 turns=TURNS, on_frame=self._on_frame, warm=self._warm)
 
     # ---- the schedule's view ------------------------------------------------------------------
 
@@ -316,14 +318,18 @@ class Viewport:
         on_image: called in the session's worker after each new image; None: nothing is called.
         draft: each session renders a draft first.
         warn: takes the export's warnings, one line each (default: print).
+        start: start each session's worker; False: the caller drives its schedule step by step
+            (`session.schedule.step()`: tests, benchmarks).
+        clock: each session's schedule's clock (default time.perf_counter).
 
     `log`: one dict per update (`kind`: first, objects, camera, settings, restyle or none;
     `objects`: names re-exported; `world`; `seconds`; `restyle_s` after a style change)."""
 
     def __init__(self, on_image: Callable[[], None] | None = None, draft: bool = True,
-                 warn: Callable[[str], None] = print):
+                 warn: Callable[[str], None] = print, start: bool = True,
+                 clock: Callable[[], float] = time.perf_counter):
         self.sync = SceneSync(warn)
-        self.on_image, self.draft = on_image, draft
+        self.on_image, self.draft, self.threaded, self.clock = on_image, draft, start, clock
         self.values: dict | None = None
         self.view: tuple | None = None
         self.sensor: dict | None = None
@@ -447,9 +453,11 @@ class Viewport:
                                                                    height=size[1])))
                 for size in ((w, h), draft_size(w, h))}
         self.session = ViewportSession(
-            lambda width, height: desc[(width, height)], w, h, self.values, self.on_image,
-            self.draft,
-        ).start()
+            lambda width, height: desc[(width, height)], (w, h), self.values, self.on_image,
+            self.draft, self.clock,
+        )
+        if self.threaded:
+            self.session.start()
 
     def close(self) -> None:
         if self._rest is not None:

@@ -115,6 +115,9 @@ class Property(Declaration):
         bare: the flag is a switch without a value (`--lines`).
         low, high: bound a number (None: unbounded); low_open: the low end excluded.
         choices: the strings a `string` accepts (none: any string).
+
+    Takes more than 7 parameters: it is a declaration, and each argument is one of its declared
+    attributes (the fields above and `Declaration`'s).
     """
 
     flag: str = ""            # the `styletrace render` flag, if it has its own

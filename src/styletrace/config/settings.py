@@ -746,7 +746,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if "samples_per_pass" in values:
         raise SettingsError(
             f"bad value {values['samples_per_pass']!r} for 'samples_per_pass': the stylized "
-            f"integrator renders in styletrace's own passes; set the samples per pass with "
+            f"integrator renders in styletrace's own passes; set the camera samples per pass with "
             f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead"
         )
     own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)

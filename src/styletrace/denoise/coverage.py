@@ -14,13 +14,14 @@ from __future__ import annotations
 import math
 
 from styletrace.denoise import guides
+from styletrace.denoise.probe import Probe
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.lookdev.buffer import MAX_CAMERA_SAMPLES, Buffer
 from styletrace.lookdev.record import RecordingIntegrator, inputs, record
 from styletrace.lookdev.restyle import finish_spread
-from styletrace.pipeline.passes import pass_seed
+from styletrace.pipeline.passes import PassSplit, Shot, pass_seed
 from styletrace.scene.defaults import ScenePilot
 
 #: points per pixel of coverage="auto" (chosen on the Cornell box, BENCHMARKS.md denoise), less
@@ -172,9 +173,8 @@ class CoverageIntegrator(RecordingIntegrator):
             if self.scale != 1:  # D's own pixel of the point
                 at = pos * self.scale
                 own = mi.UInt32(dr.floor(at.y)) * self.field.w + mi.UInt32(dr.floor(at.x))
-            value = self.field.at(
-                at.x, at.y, si.p, mi.Vector3f(si.sh_frame.n), own, albedo, emission, valid
-            )
+            probe = Probe(at, si.p, mi.Vector3f(si.sh_frame.n), own, valid)
+            value = self.field.at(probe, albedo, emission)
             self._at = (pos, pixel, value)
         return value
 
@@ -209,12 +209,9 @@ def points(
     buf = None
     origin = tuple(int(v) for v in scene.sensors()[0].film().crop_offset())
     for prog, buf in record(
-        scene,
-        integrator,
-        k,
-        pass_seed(seed, COVERAGE_PASS),
+        Shot(scene, integrator, k, pass_seed(seed, COVERAGE_PASS)),
+        PassSplit(pass_spp=k),
         pilot=pilot,
-        pass_spp=k,
         recorder=lambda base, *_: CoverageIntegrator(base, k, field, origin, scale),
     ):
         buf.image = prog.image

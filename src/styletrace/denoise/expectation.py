@@ -1,6 +1,6 @@
 """Denoising the expectation before the style: `--denoise expectation`.
 
-    image, buf = render_denoised_expectation(scene, integrator, spp=16, seed=0, quality="high")
+    image, buf = render_denoised_expectation(Shot(scene, integrator, spp=16, seed=0))
 
 Per camera sample the renderer records the stylized vertex, the radiance before it and the mean of
 its children (`lookdev.record`). Per pixel M averages those means, less each sample's own emission
@@ -14,12 +14,14 @@ Design: docs/design/expectation_denoising.md.
 from __future__ import annotations
 
 import copy
+from dataclasses import replace
 from typing import Callable, Iterator
 
 import numpy as np
 
 from styletrace.denoise import coverage as coverage_module
 from styletrace.denoise import guides, oidn
+from styletrace.denoise.probe import Probe
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.kernel.integrator import StylizedIntegrator
@@ -33,8 +35,8 @@ from styletrace.lookdev.restyle import (
     sample_values,
     slots_for,
 )
-from styletrace.pipeline.denoising import check_expectation
-from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed
+from styletrace.pipeline.denoising import Denoising, check_expectation
+from styletrace.pipeline.passes import PassSplit, Progress, Shot, pass_seed
 from styletrace.scene.defaults import ScenePilot
 
 
@@ -188,8 +190,8 @@ def at_samples_on_device(buf: Buffer, d: np.ndarray, scene, g: guides.Guides,
     # no emission
     albedo = dr.select(found, own_albedo, dr.nan)
     emitted = dr.select(found, emission, 0.0)
-    out = Field(d, g, diag).at(fx, fy, mi.Point3f(p), field(buf, "n"), pix, albedo, emitted,
-                               mi.Bool(True), good)
+    probe = Probe(mi.Point2f(fx, fy), mi.Point3f(p), field(buf, "n"), pix, mi.Bool(True), good)
+    out = Field(d, g, diag).at(probe, albedo, emitted)
     dr.eval(out)  # one kernel for the three channels
     return out
 
@@ -226,23 +228,23 @@ class Field:
     def _get(img, idx, mask):
         return mi.Vector3f(dr.gather(mi.Vector3f, img, idx, mask))
 
-    def lookup(self, fx, fy, ps, ns, pix, valid, near=None, albedo=None):
-        """Sums over the four pixel centres around film position (fx, fy) of w D, w albedo and w;
-        w: the bilinear weight where the pixel shows the vertex's own surface, else 0.
+    def lookup(self, probe: Probe, albedo=None):
+        """Sums over the four pixel centres around the probe's film position of w D, w albedo and
+        w; w: the bilinear weight where the pixel shows the vertex's own surface, else 0.
 
         Args:
-            fx, fy: the film position (mi.Float, pixels of the crop window). ps, ns: the vertex's
-                position (mi.Point3f) and normal (mi.Vector3f). pix: its pixel (mi.UInt32).
-            valid: the lanes (mi.Bool). near: those whose position can be trusted (None: `valid`).
-            albedo: the vertex's own albedo (mi.Color3f; None or not finite: pix's guide albedo).
+            probe: the vertex (its film position, position, normal, pixel and lanes).
+            albedo: the vertex's own albedo (mi.Color3f; None or not finite: its pixel's guide
+                albedo).
 
         Returns:
             (sum of w D, sum of w albedo: mi.Vector3f each; sum of w: mi.Float). Own surface: the
             normal within ~18 degrees, the hit ~6 degrees of the tangent plane, albedo within 0.05.
         """
-        near = valid if near is None else near
+        ps, ns, pix, valid = probe.p, probe.n, probe.pixel, probe.valid
+        near = valid if probe.near is None else probe.near
         w, h, get = self.w, self.h, self._get
-        fx, fy = fx - 0.5, fy - 0.5
+        fx, fy = probe.film.x - 0.5, probe.film.y - 0.5
         a_s = get(self.A, pix, valid)
         if albedo is not None and OWN_ALBEDO:
             albedo = mi.Vector3f(albedo)
@@ -267,7 +269,7 @@ class Field:
                 wsum += wt
         return acc, acc_a, wsum
 
-    def at(self, fx, fy, ps, ns, pix, own_albedo, emission, valid, near=None) -> mi.Color3f:
+    def at(self, probe: Probe, own_albedo, emission) -> mi.Color3f:
         """D for one vertex inside a kernel: interpolated (`lookup`), remodulated, emission added.
 
         Remodulated (REMODULATE): D x the vertex's own albedo / the albedo D was formed under (the
@@ -275,13 +277,14 @@ class Field:
         docs/design/expectation_denoising.md.
 
         Args:
-            fx, fy, ps, ns, pix, valid, near: as `lookup`'s. own_albedo: the vertex's albedo
-                (mi.Color3f; NaN: left as it is). emission: its own emitted radiance (mi.Color3f).
+            probe: the vertex, as `lookup`'s. own_albedo: its albedo (mi.Color3f; NaN: left as it
+                is). emission: its own emitted radiance (mi.Color3f).
 
         Returns:
             mi.Color3f: D (the own pixel's where no neighbour qualifies), remodulated, + emission.
         """
-        acc, acc_a, wsum = self.lookup(fx, fy, ps, ns, pix, valid, near, own_albedo)
+        pix, valid = probe.pixel, probe.valid
+        acc, acc_a, wsum = self.lookup(probe, own_albedo)
         some = wsum > 1e-6
         inv = dr.rcp(dr.maximum(wsum, 1e-12))
         out = dr.select(some, acc * inv, self._get(self.D, pix, valid))
@@ -383,11 +386,8 @@ def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 def attach(
     buf: Buffer,
-    scene,
-    spp: int,
-    seed: int,
+    shot: Shot,
     quality: str = "high",
-    integrator=None,
     k: int = 0,
     uncertainty: float = 0.0,
     cache: dict | None = None,
@@ -396,8 +396,9 @@ def attach(
     """Denoise the buffer's expectation: M formed, denoised into D, g's points placed.
 
     Args:
-        buf, scene, spp, seed: the recorded buffer of means, its scene, samples per pixel, seed.
-        quality: OIDN's. integrator: the render's (for k > 0). uncertainty: `spread`'s (> 0).
+        buf: the recorded buffer of means. shot: its scene, the render's integrator (read for
+            k > 0 only), samples per pixel (the guides' camera samples) and seed.
+        quality: OIDN's. uncertainty: `spread`'s (> 0).
         k: 0: D kept at each camera sample in the buffer; > 0: g at k points (`coverage.points`).
         cache: a dict kept between calls on one growing buffer (`ExpectationJob`'s), in which the
             guides of each spp and the own albedo and emission of each pass are made once (the
@@ -412,6 +413,7 @@ def attach(
     Raises:
         UsageError: a buffer that does not store means.
     """
+    scene, integrator, spp, seed = shot.scene, shot.integrator, shot.spp, shot.seed
     if buf.stores != "mean":
         raise UsageError(
             "--denoise expectation needs a buffer of children means (direct or affine estimator)"
@@ -595,24 +597,18 @@ def noisy_variance(buf: Buffer) -> np.ndarray:
 
 
 def render_denoised_expectation(
-    scene,
-    integrator,
-    spp: int,
-    seed: int = 0,
-    quality: str = "high",
-    callback: Callable[[Progress], None] | None = None,
+    shot: Shot,
+    denoising: Denoising = Denoising("expectation"),
+    split: PassSplit = PassSplit(),
     max_camera_samples: int = MAX_CAMERA_SAMPLES,
     label: str = "",
-    coverage: int | str = "auto",
-    uncertainty: float = UNCERTAINTY,
-    lanes_per_pass: int = LANES_PER_PASS,
-    pass_spp: int | None = None,
+    callback: Callable[[Progress], None] | None = None,
 ) -> tuple[np.ndarray, Buffer]:
     """The denoised-expectation render: `ExpectationJob`'s passes, then its `finish`.
 
     Args:
-        scene, integrator, spp, seed, quality, max_camera_samples, label, coverage, uncertainty,
-            lanes_per_pass, pass_spp: as `ExpectationJob`'s. callback: called with each `Progress`.
+        shot, denoising, split, max_camera_samples, label: as `ExpectationJob`'s.
+        callback: called with each `Progress`.
 
     Returns:
         (the image, H x W x 3 float32; its buffer, whose `image` is the noisy render). With coverage
@@ -621,19 +617,7 @@ def render_denoised_expectation(
     Raises:
         UsageError: a refusal of `ExpectationJob` or of its `finish`.
     """
-    job = ExpectationJob(
-        scene,
-        integrator,
-        spp,
-        seed,
-        quality,
-        max_camera_samples,
-        label,
-        coverage,
-        uncertainty,
-        lanes_per_pass,
-        pass_spp,
-    )
+    job = ExpectationJob(shot, denoising, max_camera_samples, label, split)
     for prog, _ in job.passes():
         if callback is not None:
             callback(prog)
@@ -645,11 +629,12 @@ class ExpectationJob:
     `passes()` records the noisy buffer (`buffer`), `finish()` denoises it and applies g.
 
     Args:
-        scene, integrator: what to render (its error AOVs come from the buffer, `aovs`). spp, seed:
-            the render's. quality: OIDN's. max_camera_samples: the buffer's cap. label: the
-            scene's label.
-        coverage: points per pixel where g meets D (`coverage.resolve_k`). uncertainty: `spread`'s.
-        lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
+        shot: what to render (its error AOVs come from the buffer, `aovs`), its spp and seed.
+        denoising: OIDN's quality, the points per pixel where g meets D (its coverage,
+            `coverage.resolve_k`) and `spread`'s uncertainty (None: UNCERTAINTY); its method and
+            footprint are not read.
+        max_camera_samples: the buffer's cap. label: the scene's label.
+        split: the pass split (`pipeline.passes.PassSplit`).
         pilot: the scene-defaults pilot the job was resolved with (`pipeline.resolve`), or None:
             one of the job's own, traced once for the passes and the coverage points.
 
@@ -661,48 +646,40 @@ class ExpectationJob:
 
     def __init__(
         self,
-        scene,
-        integrator,
-        spp: int,
-        seed: int = 0,
-        quality: str = "high",
+        shot: Shot,
+        denoising: Denoising = Denoising("expectation"),
         max_camera_samples: int = MAX_CAMERA_SAMPLES,
         label: str = "",
-        coverage: int | str = "auto",
-        uncertainty: float = UNCERTAINTY,
-        lanes_per_pass: int = LANES_PER_PASS,
-        pass_spp: int | None = None,
+        split: PassSplit = PassSplit(),
         pilot: ScenePilot | None = None,
     ):
+        quality = denoising.quality
         oidn.require()
         oidn.check_quality(quality)
+        integrator = shot.integrator
         check_expectation(integrator)
-        w, h = (int(v) for v in scene.sensors()[0].film().crop_size())
-        self.k = coverage_module.resolve_k(coverage, w, h, max_camera_samples)
+        w, h = (int(v) for v in shot.scene.sensors()[0].film().crop_size())
+        self.k = coverage_module.resolve_k(denoising.coverage, w, h, max_camera_samples)
+        uncertainty = UNCERTAINTY if denoising.uncertainty is None else denoising.uncertainty
         self.uncertainty = check_uncertainty(uncertainty)
         # the buffer records without them; `aovs` below derives them from it
         if integrator.settings.aovs:
             integrator = StylizedIntegrator.from_values({**integrator.values, "aovs": False})
-        self.scene, self.integrator, self.spp, self.seed, self.quality = (
-            scene,
-            integrator,
-            spp,
-            seed,
+        #: what the job renders (its integrator without error AOVs), its spp and seed
+        self.shot = replace(shot, integrator=integrator)
+        self.quality, self.max_camera_samples, self.label, self.split = (
             quality,
-        )
-        self.max_camera_samples, self.label, self.lanes, self.pass_spp = (
             max_camera_samples,
             label,
-            lanes_per_pass,
-            pass_spp,
+            split,
         )
         #: the noisy buffer of the passes recorded so far (None before the first)
         self.buffer: Buffer | None = None
         #: what `attach` keeps between a preview and the next preview or `finish` (`attach`'s)
         self._cache: dict = {}
         #: the scene-defaults pilot of the passes and the points (traced once, where first used)
-        self.pilot = (pilot if pilot is not None and pilot.serves(scene, integrator.settings)
-                      else ScenePilot(scene, integrator.settings))
+        self.pilot = (pilot if pilot is not None and pilot.serves(shot.scene, integrator.settings)
+                      else ScenePilot(shot.scene, integrator.settings))
 
     def passes(self) -> Iterator[tuple[Progress, Buffer]]:
         """Record the noisy buffer pass by pass (`lookdev.record.record`).
@@ -715,17 +692,8 @@ class ExpectationJob:
             StyletraceError: what `record` refuses (one line).
         """
         self._cache = {}
-        for prog, buf in record(
-            self.scene,
-            self.integrator,
-            self.spp,
-            self.seed,
-            self.label or scene_label(None),
-            self.max_camera_samples,
-            self.lanes,
-            pilot=self.pilot,
-            pass_spp=self.pass_spp,
-        ):
+        for prog, buf in record(self.shot, self.split, self.label or scene_label(None),
+                                self.max_camera_samples, self.pilot):
             buf.image = prog.image
             self.buffer = buf
             yield prog, buf
@@ -763,7 +731,7 @@ class ExpectationJob:
             UsageError: no pass finished yet, a bad k or quality (one line).
         """
         oidn.check_quality(quality)
-        w, h = (int(v) for v in self.scene.sensors()[0].film().crop_size())
+        w, h = (int(v) for v in self.shot.scene.sensors()[0].film().crop_size())
         k = coverage_module.resolve_k(k, w, h, self.max_camera_samples)
         buf = self.buffer
         if k == 0 and buf is not None:
@@ -776,18 +744,9 @@ class ExpectationJob:
     def _finish(self, buf: Buffer | None, k: int, quality: str) -> tuple[np.ndarray, Buffer]:
         if buf is None or buf.spp < 1:
             raise UsageError("nothing to denoise: no pass of the render finished")
-        _, cover = attach(
-            buf,
-            self.scene,
-            buf.spp,
-            self.seed,
-            quality,
-            self.integrator,
-            k,
-            self.uncertainty,
-            self._cache,
-            self.pilot,
-        )
+        # the guides of as many camera samples as the buffer holds (a preview's: fewer)
+        shot = replace(self.shot, spp=buf.spp)
+        _, cover = attach(buf, shot, quality, k, self.uncertainty, self._cache, self.pilot)
         if cover is None:
             return image_of(buf), buf
         image = np.asarray(cover.image, dtype=np.float32)[..., :3]

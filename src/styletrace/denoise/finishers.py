@@ -1,6 +1,6 @@
 """The denoisers as a run's finishers, and the run of a job at every front end's default.
 
-    runner = plan(job, executor=InProcess(), buffer="b.npz")
+    runner = plan(job, executor=InProcess(), recording=Recording(path="b.npz"))
     runner.resolved.method, runner.resolved.note   # expectation | image | off, why auto did not
     image = runner.result()                        # or runner.write("out.exr", voice)
 
@@ -131,13 +131,11 @@ class Expectation(Denoised):
             from styletrace.lookdev.buffer import check_buffer_path
             check_buffer_path(self.buffer)
         job = resolved.job
-        self.job = expectation.ExpectationJob(resolved.scene, resolved.integrator, resolved.spp,
-                                              job.seed,
-                                   self.quality, job.cap,
-                                   label=self.label or scene_label(job.scene),
-                                   coverage=self.coverage, uncertainty=self.uncertainty,
-                                   lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp,
-                                   pilot=resolved.pilot)  # the resolve's: not traced again
+        from styletrace.pipeline.execute import shot_of, split_of
+        self.job = expectation.ExpectationJob(shot_of(resolved), self.denoising, job.cap,
+                                              self.label or scene_label(job.scene),
+                                              split_of(resolved),
+                                              resolved.pilot)  # the resolve's: not traced again
         self.aovs = bool(resolved.integrator.settings.aovs)
 
     def source(self, resolved, executor, lock):
@@ -223,10 +221,9 @@ class Image(Denoised):
 
     def _recorded(self, resolved):
         from styletrace.lookdev.record import record
-        job = resolved.job
-        for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed,
-                                self.label, job.cap, lanes_per_pass=resolved.lanes,
-                                pilot=resolved.pilot, pass_spp=job.pass_spp):
+        from styletrace.pipeline.execute import shot_of, split_of
+        for prog, buf in record(shot_of(resolved), split_of(resolved), self.label,
+                                resolved.job.cap, resolved.pilot):
             buf.image = prog.image
             self.recorded = buf
             yield prog

@@ -123,7 +123,7 @@ def first_hit(scene: mi.Scene, spp: int = 16, seed: int = 0, footprint: str = "f
             are the same for a film with a box filter.
         lanes_per_launch: the most camera rays of one kernel launch (at least one per pixel): the
             `spp` rays per pixel are split over launches of that size, so that a scene of
-            thousands of samples per pixel takes no more memory than a pass of its render.
+            thousands of camera samples per pixel takes no more memory than a pass of its render.
 
     Returns:
         The `Guides`: each pixel the mean over its `spp` rays, whatever the split.

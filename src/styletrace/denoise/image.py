@@ -1,6 +1,6 @@
 """Denoising the final image: `--denoise image`, the baseline.
 
-    image, noisy, aovs = render_denoised_image(scene, integrator, spp=16, seed=0, quality="high")
+    image, noisy, aovs = render_denoised_image(Shot(scene, integrator, spp=16, seed=0))
 
 The stylized image is rendered as usual (`pipeline.passes`) and OIDN denoises it with the same
 albedo and normal guides as `--denoise expectation`. Every mode of the renderer works (it is a
@@ -8,7 +8,7 @@ post-process), but a step style's band flips are edges to the denoiser, which ke
 (docs/denoise.md, BENCHMARKS.md).
 
 On a film whose filter is not a box, the passes keep each camera sample in its own pixel
-(`in_pixels`: `passes(in_pixels=True)`), OIDN denoises that image with guides of the same
+(`in_pixels`: `run_passes(in_pixels=True)`), OIDN denoises that image with guides of the same
 footprint, and the film's filter is applied to the denoised image (`film_filter.filtered_pixels`):
 a tent or gaussian filter would spread each sample over neighbouring pixels, and OIDN keeps noise
 so correlated as texture (docs/look.md, "Clean where the light is hard").
@@ -22,38 +22,38 @@ import numpy as np
 from styletrace.denoise import guides, oidn
 from styletrace.errors import UsageError
 from styletrace.lookdev.film_filter import filtered_pixels
-from styletrace.pipeline.passes import LANES_PER_PASS, Progress, pass_seed, passes
+from styletrace.pipeline.denoising import Denoising
+from styletrace.pipeline.passes import PassSplit, Progress, Shot, pass_seed, run_passes
 
 
-def render_denoised_image(scene, integrator, spp: int, seed: int = 0, quality: str = "high",
-           callback: Callable[[Progress], None] | None = None, lanes_per_pass: int = LANES_PER_PASS,
-           pass_spp: int | None = None, footprint: str = "pixel"
-           ) -> tuple[np.ndarray, np.ndarray, dict | None]:
-    """Render in passes (`pipeline.passes.passes`), then denoise the final image.
+def render_denoised_image(shot: Shot, denoising: Denoising = Denoising("image"),
+                          split: PassSplit = PassSplit(),
+                          callback: Callable[[Progress], None] | None = None
+                          ) -> tuple[np.ndarray, np.ndarray, dict | None]:
+    """Render in passes (`pipeline.passes.run_passes`), then denoise the final image.
 
     Args:
-        scene, integrator: what to render. spp: samples per pixel. seed: the render's seed.
-        quality: OIDN's "high", "balanced" or "fast". callback: called with each pass's `Progress`.
-        lanes_per_pass, pass_spp: the pass split, as `pipeline.passes`'s.
-        footprint: "pixel" (the module doc) or "film" (the film's image as it is).
+        shot: what to render, its samples per pixel and seed.
+        denoising: OIDN's quality ("high", "balanced" or "fast") and the footprint, "pixel" (the
+            module doc) or "film" (the film's image as it is); its method is not read.
+        split: the pass split (`pipeline.passes.PassSplit`).
+        callback: called with each pass's `Progress`.
 
     Returns:
         (denoised image, noisy image, AOVs or None: `finish_denoised_image`), H x W x 3 float32.
 
     Raises:
-        UsageError: no pyoidn, a bad quality, or a refusal of the pass loop.
+        UsageError: no pyoidn, a bad quality or footprint, or a refusal of the pass loop.
     """
     oidn.require()
-    oidn.check_quality(quality)
-    pixels = check_footprint(footprint) == "pixel" and in_pixels(scene, integrator)
+    oidn.check_quality(denoising.quality)
+    pixels = (check_footprint(denoising.footprint) == "pixel"
+              and in_pixels(shot.scene, shot.integrator))
     prog = None
-    for prog in passes(
-        scene, integrator, spp, seed, lanes_per_pass=lanes_per_pass, pass_spp=pass_spp,
-        in_pixels=pixels
-    ):
+    for prog in run_passes(shot, split, in_pixels=pixels):
         if callback is not None:
             callback(prog)
-    return finish_denoised_image(scene, prog, seed, quality)
+    return finish_denoised_image(shot.scene, prog, shot.seed, denoising.quality)
 
 
 #: what the image denoiser denoises: each pixel's own samples, or the film's image as it is
@@ -81,7 +81,7 @@ def in_pixels(scene, integrator) -> bool:
         scene: the scene (its first sensor's film). integrator: the render's integrator.
 
     Returns:
-        True where `passes(in_pixels=True)` applies.
+        True where `run_passes(in_pixels=True)` applies.
     """
     from styletrace.kernel.integrator import StylizedIntegrator
     if scene.sensors()[0].film().rfilter().is_box_filter():

@@ -394,7 +394,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--seed", type=int, default=0, help="random seed; the same seed gives the same image"
     )
     r.add_argument(
-        "--pass-spp", type=int, default=None, help="samples per pixel per pass (default: by memory)"
+        "--pass-spp", type=int, default=None,
+        help="camera samples per pixel per pass (default: by memory)"
     )
     r.add_argument(
         "-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)"

@@ -53,13 +53,14 @@ def executor_of(args):
         UsageError: a negative `--checkpoint-every`, or a bad address.
     """
     from styletrace.pipeline.execute import InProcess, OnRay
+    from styletrace.pipeline.ray_checkpoint import Checkpoints
     if args.ray is None and not args.resume:
         return InProcess()
     if args.checkpoint_every is not None and args.checkpoint_every < 0:
         raise UsageError(f"bad value {args.checkpoint_every} for --checkpoint-every: expected "
                          f"seconds >= 0")
-    return OnRay(cluster_of(args), output=args.output, resume=args.resume,
-                 checkpoint_every=10.0 if args.checkpoint_every is None else args.checkpoint_every)
+    every = 10.0 if args.checkpoint_every is None else args.checkpoint_every
+    return OnRay(cluster_of(args), checkpoints=Checkpoints(args.output, args.resume, every))
 
 
 def frame_paths(output: str, count: int) -> list[str]:
@@ -125,7 +126,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         say(f"styletrace: {note}")
     frames, values, specs = [], [], []
     for name in scenes:  # each file resolved here once: a broken one fails before any frame renders
-        resolved = resolve(job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes))
+        asked = job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes)
+        resolved = resolve(asked)
         Runner(resolved, OnRay(cluster))  # the refusals of its frames' runs, before any renders
         job = ray_job(resolved)
         if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
@@ -136,9 +138,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         values.append(job.values)
         specs.append(job.spec.describe())
         del resolved
-    settings = frame_settings("orbit" if len(scenes) == 1 else "files", specs, values, args.spp,
-                              args.seed, count, args.orbit, lanes, args.pass_spp, variant,
-                              args.samples)
+    settings = frame_settings("orbit" if len(scenes) == 1 else "files", specs, values, count,
+                              args.orbit, asked, variant)
     manifest = Manifest(args.output, settings)
     bar = None
     if not args.quiet:

@@ -369,7 +369,7 @@ class Lifted:
         per-sample results are kept in `samples`.
 
         Args:
-            spp: samples per pixel. seed: the independent sampler's seed.
+            spp: camera samples per pixel. seed: the independent sampler's seed.
             background: the colour where no type fires (RGB).
             jitter: jitter the samples within their pixel; False: every one at the pixel centre.
 

@@ -57,7 +57,7 @@ class CameraSample:
 
     Args:
         ray: the camera ray with its differentials (mi.RayDifferential3f, scaled by Mitsuba).
-        spp: the samples per pixel those differentials were scaled for.
+        spp: the camera samples per pixel those differentials were scaled for.
         medium: the camera's medium (mi.MediumPtr or None).
     """
 

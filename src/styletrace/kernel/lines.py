@@ -213,7 +213,8 @@ class Lines:
         Args:
             scene, sampler: the scene and the lanes' random stream.
             ray: the camera ray (mi.RayDifferential3f, its differentials scaled by Mitsuba).
-            spp: the samples per pixel they were scaled for (undone: one-pixel differentials).
+            spp: the camera samples per pixel they were scaled for (undone: one-pixel
+            differentials).
             active: the camera lanes (mi.Bool).
 
         Returns:

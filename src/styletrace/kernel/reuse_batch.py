@@ -48,8 +48,9 @@ def camera_rays(sensor, sampler, frame: Frame, spp_total: int):
 
     Args:
         sensor, sampler: the scene's sensor and the batch's seeded sampler.
-        frame: the batch's pixels and samples per pixel.
-        spp_total: the pass's samples per pixel (the ray differentials are scaled by 1/sqrt of it).
+        frame: the batch's pixels and camera samples per pixel.
+        spp_total: the pass's camera samples per pixel (the ray differentials are scaled by 1/sqrt
+            of it).
 
     Returns:
         (mi.RayDifferential3f, its weight mi.Spectrum, film position mi.Vector2f) per lane.
@@ -82,9 +83,10 @@ def batch(scope, sensor, frame: Frame, seed: int, spp_total: int) -> Samples:
     Args:
         scope: the render's Scope (its `keep`, if any, receives this batch's pools).
         sensor: the scene's sensor.
-        frame: the batch's pixels and its samples per pixel (frame.spp of the pass's spp_total).
+        frame: the batch's pixels and its camera samples per pixel (frame.spp of the pass's
+            spp_total).
         seed: the batch's sampler seed.
-        spp_total: the pass's samples per pixel.
+        spp_total: the pass's camera samples per pixel.
 
     Returns:
         The batch's `Samples`.

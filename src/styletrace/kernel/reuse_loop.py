@@ -1,10 +1,10 @@
-"""The reuse pass loop: a pass of `spp` samples per pixel rendered in batches, each splatted onto
-one block.
+"""The reuse pass loop: a pass of `spp` camera samples per pixel rendered in batches, each splatted
+onto one block.
 
 The children of a pass are stored (16 floats each, side by side), so a pass is split into batches of
-samples per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one batch of
-one crop window (`pipeline.passes` tiles images above a million pixels; a window is clipped at
-a tile's edge).
+camera samples per pixel of at most BATCH_CHILDREN children. Neighbours are looked up within one
+batch of one crop window (`pipeline.passes` tiles images above a million pixels; a window is clipped
+at a tile's edge).
 """
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def render_reuse(
 
     Args:
         integ, scene, sensor: the `stylized` integrator (bound to scene here), scene, its sensor.
-        seed, spp: the pass's seed and samples per pixel.
+        seed, spp: the pass's seed and camera samples per pixel.
         weights: overrides `reuse_mis` ('balance', 'pairwise'); 'own' divides each pooled BSDF
             sample by its own density (wrong: the tests' negative control).
         keep: a dict that receives the first batch's pools as numpy arrays (`pool_pixels`).

@@ -207,6 +207,9 @@ def fit(
 ) -> FitResult:
     """Fit a style's θ so that the restyled buffer matches a target (module doc: how).
 
+    Takes more than 7 parameters: it is the public `styletrace.fit` (and `styletrace fit`'s), and
+    each keyword is a setting its user chooses on its own (docs/lookdev.md).
+
     Args:
         buffer: a "mean" Buffer or its .npz path. style: the style to fit (None: the recorded).
         target: H x W x 3 linear array, or an image file (`read_target`).

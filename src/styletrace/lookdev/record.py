@@ -402,21 +402,17 @@ def _pass_arrays(kept: dict, spp: int, stylize: str,
 
 
 def record(
-    scene: mi.Scene,
-    integrator: StylizedIntegrator,
-    spp: int,
-    seed: int = 0,
+    shot: pass_loop.Shot,
+    split: pass_loop.PassSplit = pass_loop.PassSplit(),
     label: str = "",
     max_camera_samples: int = MAX_CAMERA_SAMPLES,
-    lanes_per_pass: int = pass_loop.LANES_PER_PASS,
     pilot: ScenePilot | None = None,
-    pass_spp: int | None = None,
     recorder: Callable[..., RecordingIntegrator] | None = None,
 ) -> Iterator[tuple[pass_loop.Progress, Buffer]]:
     """Render like `pipeline.passes`, yielding (progress, buffer so far) after each pass.
 
     Args:
-        scene, integrator, spp, seed, lanes_per_pass, pass_spp: as for `pipeline.passes`.
+        shot: what to render (a `stylized` integrator), its spp and seed. split: the pass split.
         label: how the buffer names its scene; max_camera_samples: the cap on its camera samples
             (MAX_CAMERA_SAMPLES, the default, means MAX_SEQUENCE_CAMERA_SAMPLES for a sequence
             buffer).
@@ -427,6 +423,7 @@ def record(
     Raises:
         SceneError, SettingsError, UsageError: what a buffer cannot record (one line).
     """
+    scene, integrator, spp, seed = shot.scene, shot.integrator, shot.spp, shot.seed
     film = check_film(scene)
     if pilot is None or not pilot.serves(scene, integrator.settings):
         pilot = ScenePilot(scene, integrator.settings)
@@ -494,8 +491,8 @@ def record(
         # again
         rec_slot["auto"] = list(getattr(target.slot.style, "chosen", ()))
     buf = Buffer(header, {PILOT + k: np.ascontiguousarray(v) for k, v in pilot.items()})
-    for index, prog in enumerate(pass_loop.passes(scene, rec, spp, seed, lanes_per_pass,
-                                                  pass_spp, pinned=True)):
+    for index, prog in enumerate(pass_loop.run_passes(replace(shot, integrator=rec), split,
+                                                      pinned=True)):
         arrays = _pass_arrays(rec.kept, prog.pass_spp, rec.settings.stylize, rec.recorder)
         if filtered and "pos" not in arrays:  # where Mitsuba put each sample
             seed_i = pass_loop.pass_seed(seed, index)
@@ -581,10 +578,9 @@ class Recorded(Finisher):
             check_buffer_path(self.buffer)
 
     def source(self, resolved, executor, lock) -> Iterator[pass_loop.Progress]:
-        job = resolved.job
-        for prog, buf in record(resolved.scene, resolved.integrator, resolved.spp, job.seed,
-                                self.label, self.max_camera_samples, lanes_per_pass=resolved.lanes,
-                                pilot=resolved.pilot, pass_spp=job.pass_spp):
+        from styletrace.pipeline.execute import shot_of, split_of
+        for prog, buf in record(shot_of(resolved), split_of(resolved), self.label,
+                                self.max_camera_samples, resolved.pilot):
             buf.image = prog.image
             self.recorded = buf
             yield prog

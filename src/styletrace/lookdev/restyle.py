@@ -602,7 +602,7 @@ def per_pixel(buffer: Any, point: int = 0) -> Buffer:
     counts = np.bincount(pixel if mine is None else pixel[mine], minlength=size)
     if (mine is None and counts.size and counts.min() == counts.max() > point
             and (pixel.size < 2 or bool(np.all(pixel[1:] >= pixel[:-1])))):
-        # k samples per pixel in pixel order (coverage points): the point-th of each block
+        # k camera samples per pixel in pixel order (coverage points): the point-th of each block
         index = np.arange(size, dtype=np.int64) * int(counts[0]) + int(point)
     else:
         candidates = np.arange(pixel.size) if mine is None else np.flatnonzero(mine)

@@ -1,10 +1,10 @@
 """Where the passes of a resolved render run: in this process (tiled), or as Ray tasks; `render`.
 
     source = InProcess().source(resolve(job))             # a passes.Progress after each pass
-    source = OnRay("local", output="o.exr").source(resolve(job), lock)   # the same, as Ray tasks
+    source = OnRay("local", checkpoints=Checkpoints("o.exr")).source(resolve(job), lock)  # on Ray
     executor = executor_for(cluster="local")             # what `styletrace.render` runs on
 
-In process the passes are `passes.passes`; on Ray the same launches, with the same seeds and the
+In process the passes are `passes.run_passes`; on Ray the same launches, with the same seeds and the
 same float32 merge, are Ray tasks (`pipeline.ray_run.Render`), so the image is bit-identical for the
 same seed and split. Ray workers receive the job's scene source and the resolved integrator's
 property values (auto values pinned), never the loaded objects. A `runner.Runner` drives either (the
@@ -15,8 +15,34 @@ from __future__ import annotations
 import contextlib
 from typing import Any, Iterator
 
-from styletrace.pipeline.passes import Progress, passes
+from styletrace.pipeline.passes import PassSplit, Progress, Shot, run_passes
+from styletrace.pipeline.ray_checkpoint import Checkpoints
 from styletrace.pipeline.resolve import Resolved
+
+
+def split_of(resolved: Resolved) -> PassSplit:
+    """The pass split of a resolved job: its lanes per launch and its job's pass_spp.
+
+    Args:
+        resolved: the resolved job.
+
+    Returns:
+        The PassSplit.
+    """
+    return PassSplit(resolved.lanes, resolved.job.pass_spp)
+
+
+def shot_of(resolved: Resolved) -> Shot:
+    """What a resolved job renders: its scene, its integrator (`auto` values pinned), its spp and
+    its job's seed.
+
+    Args:
+        resolved: the resolved job.
+
+    Returns:
+        The Shot.
+    """
+    return Shot(resolved.scene, resolved.integrator, resolved.spp, resolved.job.seed)
 
 
 def ray_job(resolved: Resolved, camera: Any = None):
@@ -40,25 +66,25 @@ def ray_job(resolved: Resolved, camera: Any = None):
 
 
 class InProcess:
-    """The passes in this process (`passes.passes`: tiles, pass seeds, the float32 sum)."""
+    """The passes in this process (`passes.run_passes`: tiles, pass seeds, the float32 sum)."""
     local = True
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext(),
                in_pixels: bool = False) -> Iterator[Progress]:
-        """The render's passes in this process (`passes.passes`, the `auto` values pinned already).
+        """The render's passes in this process (`passes.run_passes`, the `auto` values pinned
+        already).
 
         Args:
             resolved: the resolved job.
             lock: a context manager held while the running sum changes.
-            in_pixels: each sample kept in its own pixel (the image denoiser's: `passes.passes`).
+            in_pixels: each sample kept in its own pixel (the image denoiser's:
+                `passes.run_passes`).
 
         Returns:
             An iterator of `Progress`, the running average after each pass.
         """
-        job = resolved.job
-        return passes(resolved.scene, resolved.integrator, resolved.spp, job.seed,
-                      lanes_per_pass=resolved.lanes, pass_spp=job.pass_spp, lock=lock, pinned=True,
-                      in_pixels=in_pixels)
+        return run_passes(shot_of(resolved), split_of(resolved), lock, pinned=True,
+                          in_pixels=in_pixels)
 
 
 class OnRay:
@@ -68,12 +94,14 @@ class OnRay:
         cluster: "local" or a Ray address (None: "local").
         camera: the sensor's to_world (4x4) on the workers in place of the scene's (a frame of a
             turntable), or None.
-        **options: output, resume and checkpoint_every of `pipeline.ray_run.Render`.
+        checkpoints: whether, where and how often the render checkpoints
+            (`pipeline.ray_checkpoint.Checkpoints`; default: none).
     """
     local = False
 
-    def __init__(self, cluster: str | None = None, camera: Any = None, **options: Any):
-        self.cluster, self.camera, self.options = cluster or "local", camera, options
+    def __init__(self, cluster: str | None = None, camera: Any = None,
+                 checkpoints: Checkpoints = Checkpoints()):
+        self.cluster, self.camera, self.checkpoints = cluster or "local", camera, checkpoints
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext()):
         """The render's passes as Ray tasks (`pipeline.ray_run.Render`).
@@ -88,26 +116,27 @@ class OnRay:
             UsageError: a job that cannot run on Ray (an expansion pass, a scene or integrator that
                 cannot travel, an unfinished checkpoint without resume).
         """
+        from styletrace.pipeline.ray_plan import Plan
         from styletrace.pipeline.ray_run import Render
-        job = resolved.job
         width, height = resolved.size
-        return Render(ray_job(resolved, self.camera), resolved.spp, job.seed, width, height,
-                      self.cluster, resolved.lanes, job.pass_spp, lock=lock, **self.options)
+        plan = Plan(width, height, resolved.spp, resolved.job.seed, split_of(resolved))
+        return Render(ray_job(resolved, self.camera), plan, self.cluster, self.checkpoints,
+                      lock=lock)
 
 
-def executor_for(cluster: str | None = None, **ray_options: Any):
+def executor_for(cluster: str | None = None, checkpoints: Checkpoints = Checkpoints()):
     """The executor of a run: in this process, or on Ray.
 
     Args:
         cluster: "local" or a Ray address; None renders in process unless resuming.
-        **ray_options: output, resume and checkpoint_every (`OnRay`).
+        checkpoints: a render on Ray's checkpoints (`OnRay`).
 
     Returns:
-        InProcess, or OnRay where a cluster is named or `resume` is set.
+        InProcess, or OnRay where a cluster is named or `checkpoints.resume` is set.
     """
-    if cluster is None and not ray_options.get("resume"):
+    if cluster is None and not checkpoints.resume:
         return InProcess()
-    return OnRay(cluster, **ray_options)
+    return OnRay(cluster, checkpoints=checkpoints)
 
 
-__all__ = ["InProcess", "OnRay", "executor_for", "ray_job"]
+__all__ = ["InProcess", "OnRay", "executor_for", "ray_job", "shot_of", "split_of"]

@@ -98,25 +98,27 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str,
     return written, 0
 
 
-def frame_settings(kind: str, scenes: list, values: list, spp: int, seed: int, count: int,
-                   orbit: float | None, lanes: int, pass_spp: int | None, variant: str,
-                   samples: int | None = None) -> dict:
+def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: float | None,
+                   job, variant: str) -> dict:
     """The settings a frames manifest records: what a `--resume` must match.
 
     Args:
         kind: "orbit" or "files". scenes: the scenes' descriptions. values: their integrator values.
-        spp, seed, count, orbit: samples per pixel, seed, frames, turn (degrees; None for files).
-        lanes, pass_spp, variant: camera samples per pass, samples per pixel of a pass, the variant.
-        samples: the paths per pixel given (`--samples`), or None.
+        count, orbit: frames, turn (degrees; None for files).
+        job: the frames' `pipeline.job.Job` (any frame's: they share its spp, seed, `samples`
+            (the paths per pixel given, or None) and pass split, `lanes_per_pass` set).
+        variant: the Mitsuba variant.
 
     Returns:
         The settings, a dict (`samples` only where given: manifests written before it resume).
     """
-    settings = {"kind": kind, "scenes": scenes, "integrators": values, "spp": spp, "seed": seed,
-                "frames": count, "orbit": orbit, "lanes_per_pass": lanes, "pass_spp": pass_spp,
+    settings = {"kind": kind, "scenes": scenes, "integrators": values, "spp": job.spp,
+                "seed": job.seed, "frames": count, "orbit": orbit,
+                "lanes_per_pass": job.lanes_per_pass, "pass_spp": job.pass_spp,
                 "variant": variant}
-    if samples is not None:  # the split it makes is in the integrators' values only where n moved
-        settings["samples"] = samples
+    # the split `samples` makes is in the integrators' values only where n moved
+    if job.samples is not None:
+        settings["samples"] = job.samples
     return settings
 
 

@@ -82,6 +82,61 @@ def expansion_seed(seed: int, tile: int) -> int:
 
 
 @dataclass(frozen=True)
+class Shot:
+    """What one render renders, and with which samples: the same shot and split give the same
+    image.
+
+    Args:
+        scene: the mi.Scene. integrator: its integrator (the `stylized` one, or any other).
+        spp: camera samples per pixel. seed: the render's seed (each pass's is `pass_seed`'s).
+    """
+    scene: Any
+    integrator: Any
+    spp: int
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class PassSplit:
+    """How a render is cut into passes (`pass_size`): a function of the counts only, never of
+    measured time, since a different split draws different samples.
+
+    Args:
+        lanes_per_pass: camera samples per pass (one kernel launch).
+        pass_spp: a fixed number of camera samples per pixel per pass (None, 0: from the lanes).
+    """
+    lanes_per_pass: int = LANES_PER_PASS
+    pass_spp: int | None = None
+
+    def size(self, width: int, height: int, spp: int) -> tuple[list["Tile"], int]:
+        """`pass_size` of this split.
+
+        Args:
+            width, height: the film's size. spp: the render's camera samples per pixel.
+
+        Returns:
+            (the tiles, the camera samples per pixel of one pass, within [1, spp]).
+        """
+        return pass_size(width, height, spp, self.lanes_per_pass, self.pass_spp)
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One kernel launch of the pass loop (Ray renders each as a task: `ray_plan`).
+
+    Args:
+        index: the launch number, round * tiles + tile. tile: its tile's index in the layout.
+        round: how many launches of that tile came before it. spp: its camera samples per pixel.
+        seed: its seed, `pass_seed(the render's seed, index)`.
+    """
+    index: int
+    tile: int
+    round: int
+    spp: int
+    seed: int
+
+
+@dataclass(frozen=True)
 class Tile:
     """One crop window of the film (all tiles of a render share one size, so the kernel compiles
     once per offset and not per size) and the part of it that is new: edge tiles are shifted inwards
@@ -222,36 +277,35 @@ class Progress:
     """State after a pass; `image` is the average of the finished passes, computed when asked for.
 
     Args:
-        spp_done: samples per pixel every pixel has at least (a tile may have one pass more).
-        spp_total: the render's samples per pixel.
+        spp_total: the render's camera samples per pixel.
         total: the float32 running sum, H x W x (the image's channels + the error AOVs' sums).
-        counts: samples per pixel summed so far, per tile. layout: the tiles.
+        counts: camera samples per pixel summed so far, per tile. layout: the tiles.
         channels: the image's channels in `total` (None: all of them).
-        tile, pass_spp: the pass just done: its tile's index in `layout`, its camera samples per
-            pixel (a recording maps that pass's lanes to the film's pixels with them:
-            `lookdev.record`).
-        in_pixels: the passes kept each sample in its own pixel (`passes`' in_pixels).
+        unit: the launch just done (a recording maps its lanes to the film's pixels with its tile
+            and camera samples per pixel: `lookdev.record`), or None.
+        in_pixels: the passes kept each sample in its own pixel (`run_passes`' in_pixels).
     """
 
     def __init__(
         self,
-        spp_done: int,
         spp_total: int,
         total: np.ndarray,
         counts: np.ndarray,
         layout: list[Tile],
         channels: int | None = None,
-        tile: int = 0,
-        pass_spp: int = 0,
+        unit: Unit | None = None,
         in_pixels: bool = False,
     ):
-        self.spp_done, self.spp_total = spp_done, spp_total
-        #: each sample counted in its own pixel only (`passes`' in_pixels), not the film's filter
+        #: camera samples per pixel every pixel has at least (a tile may have one pass more)
+        self.spp_done = int(counts.min())
+        self.spp_total = spp_total
+        #: each sample counted in its own pixel only (`run_passes`' in_pixels), not the film's
+        #: filter
         self.in_pixels = in_pixels
-        #: the pass just done: the index in `layout` of the tile it rendered, and its camera
-        #: samples per pixel (a recording maps that pass's lanes to the film's pixels with them:
-        #: `lookdev.record`)
-        self.tile, self.pass_spp = tile, pass_spp
+        #: the launch just done (None: none named), and its tile's index in `layout` and its camera
+        #: samples per pixel (0, 0 where none is named)
+        self.unit = unit
+        self.tile, self.pass_spp = (unit.tile, unit.spp) if unit is not None else (0, 0)
         self._total, self._counts, self._tiles = total, counts, layout
         #: the image's channels in `total`; the error AOVs' sums follow them (`AOV_NAMES`)
         self._channels = total.shape[-1] if channels is None else channels
@@ -298,17 +352,17 @@ class Progress:
 
 def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER_PASS,
               pass_spp: int | None = None) -> tuple[list[Tile], int]:
-    """The tiles and the samples per pixel of one pass.
+    """The tiles and the camera samples per pixel of one pass.
 
     A function of the image size and the counts only, never of measured time: the same seed gives
     the same image on every run.
 
     Args:
-        width, height: the film's size. spp: the render's samples per pixel.
+        width, height: the film's size. spp: the render's camera samples per pixel.
         lanes_per_pass: camera samples per pass. pass_spp: a fixed split (None, 0: from the lanes).
 
     Returns:
-        (the tiles, the samples per pixel of one pass, within [1, spp]).
+        (the tiles, the camera samples per pixel of one pass, within [1, spp]).
     """
     layout = tiles(width, height)
     tw, th = layout[0].size
@@ -317,14 +371,31 @@ def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER
 
 
 def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
-           lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
-           lock: Any = contextlib.nullcontext(), pinned: bool = False,
-           in_pixels: bool = False) -> Iterator[Progress]:
-    """Render `spp` samples per pixel in passes, tile by tile; yield the running average after each.
+           lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None
+           ) -> Iterator[Progress]:
+    """Render `spp` camera samples per pixel in passes, tile by tile; yield the running average
+    after each (`run_passes` of this shot and split, the `auto` values pinned here).
 
     Args:
-        scene, integrator: what to render. spp: samples per pixel. seed: the render's seed.
-        lanes_per_pass, pass_spp: the pass split (`pass_size`). lock: held while the sum changes.
+        scene, integrator: what to render. spp: camera samples per pixel. seed: the render's seed.
+        lanes_per_pass, pass_spp: the pass split (`PassSplit`).
+
+    Returns:
+        An iterator of `Progress`, one after each pass (with the error AOVs of aovs=True summed).
+
+    Raises:
+        UsageError, SceneError: bad arguments, too little memory, aovs on a film other than rgb(a).
+    """
+    return run_passes(Shot(scene, integrator, spp, seed), PassSplit(lanes_per_pass, pass_spp))
+
+
+def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextlib.nullcontext(),
+               pinned: bool = False, in_pixels: bool = False) -> Iterator[Progress]:
+    """The pass loop: `shot` in passes of `split`, tile by tile; the running average after each.
+
+    Args:
+        shot: what to render, its camera samples per pixel and seed. split: the pass split.
+        lock: held while the sum changes.
         pinned: the `auto` values are pinned already (else `pin_auto_values` pins them here).
         in_pixels: each camera sample counts in its own pixel only, as with a box filter,
             whatever the film's (`kernel.launch.render_pixel_pass`: the image denoiser's input);
@@ -336,6 +407,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     Raises:
         UsageError, SceneError: bad arguments, too little memory, aovs on a film other than rgb(a).
     """
+    scene, integrator, spp, seed = shot.scene, shot.integrator, shot.spp, shot.seed
     check_passes_args(scene, integrator, spp, seed)
     if not pinned:
         integrator = pin_auto_values(scene, integrator)[0]
@@ -343,7 +415,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
     check_memory(width, height)
-    layout, per_pass = pass_size(width, height, spp, lanes_per_pass, pass_spp)
+    layout, per_pass = split.size(width, height, spp)
     # the film's own: RGB, Y, XYZ, with alpha or not
     channels = len(PIXEL_FORMATS[film_format(scene)])
     # error AOVs (StylizedIntegrator.aov_names), after the film's channels
@@ -365,6 +437,7 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
         while counts[-1] < spp:
             for t, tile in enumerate(layout):
                 n = min(per_pass, spp - int(counts[t]))
+                unit = Unit(index, t, index // len(layout), n, pass_seed(seed, index))
                 if len(layout) > 1:
                     crop.set(tile.offset, tile.size)
                 if expand is not None:
@@ -372,15 +445,14 @@ def passes(scene: mi.Scene, integrator: mi.Integrator, spp: int, seed: int = 0,
                 # recorded and launched with no scene finalised meanwhile (jit.no_collection)
                 with no_collection():
                     launch = render_pixel_pass if in_pixels else render_pass
-                    img = launch(scene, integrator, n, pass_seed(seed, index))
+                    img = launch(scene, integrator, n, unit.seed)
                     arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
                     counts[t] += n
                 del img, arr
                 index += 1
-                yield Progress(int(counts.min()), spp, total, counts, layout, channels, t, n,
-                               in_pixels)
+                yield Progress(spp, total, counts, layout, channels, unit, in_pixels)
 
 
 def pass_count(
@@ -389,7 +461,7 @@ def pass_count(
     """How many kernel launches `passes` makes: tiles times passes per tile.
 
     Args:
-        scene: the scene (its film's crop size). spp: samples per pixel.
+        scene: the scene (its film's crop size). spp: camera samples per pixel.
         lanes_per_pass, pass_spp: the pass split (`pass_size`).
 
     Returns:
@@ -406,6 +478,9 @@ __all__ = [
     "LANE_BYTES",
     "pass_seed",
     "expansion_seed",
+    "Shot",
+    "PassSplit",
+    "Unit",
     "Tile",
     "tiles",
     "Crop",
@@ -416,5 +491,6 @@ __all__ = [
     "Progress",
     "pass_size",
     "passes",
+    "run_passes",
     "pass_count",
 ]

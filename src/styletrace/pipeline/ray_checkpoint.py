@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,19 @@ VERSION = 1
 def _plain_settings(value: Any) -> Any:
     """Settings as JSON reads them back (tuples as lists, other objects by repr), for comparison."""
     return json.loads(json.dumps(value, sort_keys=True, default=repr))
+
+
+@dataclass(frozen=True)
+class Checkpoints:
+    """Whether and how often a render on Ray checkpoints its finished passes.
+
+    Args:
+        output: the image's path, beside which the checkpoint is kept (None: no checkpoint).
+        resume: continue from the checkpoint. every: seconds between checkpoints.
+    """
+    output: str | None = None
+    resume: bool = False
+    every: float = 10.0
 
 
 class Checkpoint:
@@ -122,4 +136,4 @@ class Checkpoint:
         self._drop(self.generation)
 
 
-__all__ = ["Checkpoint", "VERSION"]
+__all__ = ["Checkpoints", "Checkpoint", "VERSION"]

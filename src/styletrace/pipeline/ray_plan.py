@@ -1,6 +1,6 @@
 """A render as independent (tile, pass) units, and their sum in the single-process order.
 
-    layout, units = plan_units(width, height, spp, seed, lanes_per_pass, pass_spp)
+    layout, units = plan_units(Plan(width, height, spp, seed, split))   # split: a PassSplit
     merge = Merge(width, height, spp, layout)
     merge.add(unit, rendered_tile)    # any order; summed per tile in the order of pass_loop.passes
     merge.progress()                  # a pipeline.passes.Progress: spp_done, image
@@ -17,36 +17,37 @@ from dataclasses import dataclass
 import numpy as np
 
 from styletrace.pipeline import passes as pass_loop  # the pass loop whose launches these are
+from styletrace.pipeline.passes import Unit
 
 
 @dataclass(frozen=True)
-class Unit:
-    index: int   # the launch number in pass_loop.passes: round * tiles + tile
-    tile: int
-    round: int
+class Plan:
+    """What fixes a render's units, and so what a checkpoint must match (`ray_run.settings_of`).
+
+    Args:
+        width, height: the film's size. spp: camera samples per pixel. seed: the render's seed.
+        split: the pass split (`pass_loop.PassSplit`).
+    """
+    width: int
+    height: int
     spp: int
-    seed: int
+    seed: int = 0
+    split: pass_loop.PassSplit = pass_loop.PassSplit()
 
 
-def plan_units(
-    width: int,
-    height: int,
-    spp: int,
-    seed: int,
-    lanes_per_pass: int = pass_loop.LANES_PER_PASS,
-    pass_spp: int | None = None,
-) -> tuple[list[pass_loop.Tile], list[Unit]]:
+def plan_units(plan: Plan) -> tuple[list[pass_loop.Tile], list[Unit]]:
     """The tiles of the film and every unit of the render, in launch order.
 
     Args:
-        width, height: the film's size. spp: samples per pixel. seed: the render's seed.
-        lanes_per_pass, pass_spp: the pass split (`pass_loop.pass_size`).
+        plan: the film's size, camera samples per pixel, seed and pass split.
 
     Returns:
         (tiles, units): round r of tile t is launch index r * tiles + t, seeded with
-        `pass_loop.pass_seed(seed, index)`, of min(per_pass, spp - r * per_pass) samples per pixel.
+        `pass_loop.pass_seed(seed, index)`, of min(per_pass, spp - r * per_pass) camera samples per
+        pixel.
     """
-    layout, per_pass = pass_loop.pass_size(width, height, spp, lanes_per_pass, pass_spp)
+    spp, seed = plan.spp, plan.seed
+    layout, per_pass = plan.split.size(plan.width, plan.height, spp)
     rounds = -(-spp // per_pass)
     units = [Unit(r * len(layout) + t, t, r, min(per_pass, spp - r * per_pass),
                   pass_loop.pass_seed(seed, r * len(layout) + t))
@@ -58,7 +59,8 @@ class Merge:
     """The running float32 sum of the finished units, added per tile in round order.
 
     Args:
-        width, height: the film's size. spp: samples per pixel. layout: the tiles (`plan_units`).
+        width, height: the film's size. spp: camera samples per pixel. layout: the tiles
+            (`plan_units`).
         total, rounds_done: a resumed checkpoint's sum (H x W x 3) and rounds per tile (None: none).
     """
 
@@ -102,9 +104,7 @@ class Merge:
         return added
 
     def progress(self) -> pass_loop.Progress:
-        return pass_loop.Progress(
-            int(self.counts.min()), self.spp, self.total, self.counts, self.layout
-        )
+        return pass_loop.Progress(self.spp, self.total, self.counts, self.layout)
 
 
-__all__ = ["Unit", "plan_units", "Merge"]
+__all__ = ["Unit", "Plan", "plan_units", "Merge"]

@@ -1,13 +1,13 @@
 """The driver of a render on Ray: hand out (tile, pass) units, merge them, checkpoint, report
 progress.
 
-    run = Render(job, spp=256, seed=0, width=512, height=512, cluster="local", output="o.exr")
+    run = Render(job, Plan(512, 512, spp=256, seed=0), "local", Checkpoints(output="o.exr"))
     for prog in run: ...   # a pipeline.passes.Progress after each finished unit
 
 Units go out in launch order, at most twice as many as the cluster runs at once. A task whose
 worker dies runs again (`MAX_RETRIES`); a styletrace error in a task is raised here as itself.
 Breaking out of the loop cancels the units under way and checkpoints the finished ones; checkpoints
-come at most every `checkpoint_every` seconds and change nothing in the image.
+come at most every `Checkpoints.every` seconds and change nothing in the image.
 Design: docs/design/ray_rendering.md.
 """
 from __future__ import annotations
@@ -19,32 +19,33 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from styletrace.errors import StyletraceError, UsageError
-from styletrace.pipeline.passes import LANES_PER_PASS, Progress
-from styletrace.pipeline.ray_checkpoint import Checkpoint
+from styletrace.pipeline.passes import Progress
+from styletrace.pipeline.ray_checkpoint import Checkpoint, Checkpoints
 from styletrace.pipeline.ray_cluster import connect, cpus
 from styletrace.pipeline.ray_describe import SceneSpec
-from styletrace.pipeline.ray_plan import Merge, plan_units
+from styletrace.pipeline.ray_plan import Merge, Plan, plan_units
 from styletrace.scene.loading import first_line
 
 #: Retries of a task whose worker process died (Ray re-runs it elsewhere; the unit's seed is fixed).
 MAX_RETRIES = 3
 
 
-def settings_of(job, spp: int, seed: int, width: int, height: int, lanes: int, per_pass: int,
-                tiles: int) -> dict:
+def settings_of(job, plan: Plan) -> dict:
     """What a checkpoint must match to be resumed.
 
     Args:
-        job: the `ray_tasks.RayJob`. spp, seed: the render's. width, height: the film's size.
-        lanes, per_pass, tiles: camera samples per pass, samples per pixel of a pass, tile count.
+        job: the `ray_tasks.RayJob`. plan: the film's size, spp, seed and pass split.
 
     Returns:
-        The settings: scene, integrator values, sampling, size, split, variant, and the camera of a
-        turntable's frame.
+        The settings: scene, integrator values, sampling, size, split (camera samples per pass,
+        camera samples per pixel of a pass, tile count), variant, and the camera of a turntable's
+        frame.
     """
-    settings = {"scene": job.spec.describe(), "integrator": job.values, "spp": spp, "seed": seed,
-                "size": [width, height], "lanes_per_pass": lanes, "pass_spp": per_pass,
-                "tiles": tiles, "variant": job.variant}
+    layout, per_pass = plan.split.size(plan.width, plan.height, plan.spp)
+    settings = {"scene": job.spec.describe(), "integrator": job.values, "spp": plan.spp,
+                "seed": plan.seed, "size": [plan.width, plan.height],
+                "lanes_per_pass": plan.split.lanes_per_pass, "pass_spp": per_pass,
+                "tiles": len(layout), "variant": job.variant}
     if job.camera is not None:  # a frame of a turntable
         settings["camera"] = [list(row) for row in job.camera]
     return settings
@@ -54,49 +55,44 @@ class Render:
     """Iterating renders; `progress()` after the loop: the final state; `worker_pids`: who rendered.
 
     Args:
-        job: the `ray_tasks.RayJob`. spp, seed: the render's. width, height: the film's size.
-        cluster: "local" or a Ray address. lanes_per_pass, pass_spp: the pass split.
-        output: the image's path, beside which the checkpoint is kept (None: no checkpoint).
-        resume: continue from the checkpoint. checkpoint_every: seconds between checkpoints.
-        cpus_per_task, gpus_per_task: a task's Ray resources. lock: held while the sum changes.
+        job: the `ray_tasks.RayJob`. plan: the film's size, spp, seed and pass split.
+        cluster: "local" or a Ray address. checkpoints: whether, where and how often to checkpoint.
+        lock: held while the sum changes. cpus_per_task, gpus_per_task: a task's Ray resources.
 
     Raises:
         UsageError: an expansion pass, an unwritable checkpoint, an unfinished checkpoint without
             `resume`, or a checkpoint that cannot be resumed.
     """
 
-    def __init__(self, job, spp: int, seed: int, width: int, height: int, cluster: str = "local",
-                 lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
-                 output: str | None = None, resume: bool = False, checkpoint_every: float = 10.0,
-                 cpus_per_task: int = 1, gpus_per_task: float = 0,
-                 lock: Any = contextlib.nullcontext()):
+    def __init__(self, job, plan: Plan, cluster: str = "local",
+                 checkpoints: Checkpoints = Checkpoints(), lock: Any = contextlib.nullcontext(),
+                 cpus_per_task: int = 1, gpus_per_task: float = 0):
         from styletrace.config.settings import parse
         if parse(job.values).expansion_pass:  # a unit is a bare mi.render: no pass map travels
             raise UsageError(f"bad value {job.values['expansion_pass']!r} for 'expansion_pass' in "
                              f"a cluster render: its pre-pass runs in a local render's passes "
                              f"only; render without --ray/cluster=, or use expansion_pass=0")
-        self.job, self.spp, self.seed, self.width, self.height = job, spp, seed, width, height
+        self.job, self.spp, self.seed = job, plan.spp, plan.seed
+        self.width, self.height = plan.width, plan.height
         self.cluster, self.lock = cluster, lock
-        self.layout, self.units = plan_units(width, height, spp, seed, lanes_per_pass, pass_spp)
-        per_pass = self.units[0].spp
+        self.layout, self.units = plan_units(plan)
+        output = checkpoints.output
         self.checkpoint = None
         if output is not None:
-            settings = settings_of(job, spp, seed, width, height, lanes_per_pass, per_pass,
-                                   len(self.layout))
-            self.checkpoint = Checkpoint(output, settings)
+            self.checkpoint = Checkpoint(output, settings_of(job, plan))
         # written beside the output, by the output's rules (images.check_target)
         if self.checkpoint is not None:
             from styletrace.images import check_target
             check_target(self.checkpoint.manifest)
-        if self.checkpoint is not None and not resume and self.checkpoint.exists():
+        if self.checkpoint is not None and not checkpoints.resume and self.checkpoint.exists():
             raise UsageError(f"{output!r} has the checkpoint of an unfinished render "
                              f"({self.checkpoint.manifest}): add --resume to continue it, or "
                              f"delete that file to start over")
-        total, rounds = self.checkpoint.load() if resume else (None, None)
-        self.merge = Merge(width, height, spp, self.layout, total, rounds)
+        total, rounds = self.checkpoint.load() if checkpoints.resume else (None, None)
+        self.merge = Merge(plan.width, plan.height, plan.spp, self.layout, total, rounds)
         self.merge.restore_counts(self.units)
         self.resumed_units = sum(rounds) if rounds else 0
-        self.checkpoint_every = checkpoint_every
+        self.checkpoint_every = checkpoints.every
         self.cpus_per_task, self.gpus_per_task = cpus_per_task, gpus_per_task
         self.worker_pids: set[int] = set()
         # called with the worker's pid after each result

@@ -66,7 +66,7 @@ def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size:
     """Render one unit's crop window in a worker.
 
     Args:
-        job: the render's `RayJob`. spp: samples per pixel. seed: the unit's seed.
+        job: the render's `RayJob`. spp: camera samples per pixel. seed: the unit's seed.
         offset, size: the crop window, relative to the film's own crop, in pixels.
 
     Returns:

@@ -161,8 +161,9 @@ class Runner:
         self.finisher.check(self.resolved, self.executor)
         spp = self.resolved.spp
         if self.aovs and spp < 2:
-            raise UsageError(f"bad value {spp} for 'spp' with aovs=True: the variance needs at "
-                             f"least 2 samples per pixel")
+            name = self.resolved.job.terms.name("spp")
+            raise UsageError(f"bad value {spp} for {name} with aovs=True: the variance needs at "
+                             f"least 2 camera samples per pixel")
         if self.finisher.local and not self.executor.local:
             raise UsageError(self.finisher.local)
         if self.aovs and not self.executor.local:

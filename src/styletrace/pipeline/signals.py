@@ -113,10 +113,10 @@ class Passes:
 
     `latest`: the last finished pass's progress (what an `abandon` of `StopSignals` writes);
     `failure`: the error of a later pass, which must not cost the finished ones; `bar`: a tqdm bar
-    over the samples per pixel, or None.
+    over the camera samples per pixel, or None.
 
     Args:
-        spp: the render's samples per pixel (the bar's total).
+        spp: the render's camera samples per pixel (the bar's total).
         total: the number of passes (no bar for one). quiet: no bar.
     """
 

@@ -6,24 +6,36 @@ Routes (JSON API documented in docs/preview.md):
                         and the estimators that can restyle it
     GET  /api/state     the background render: samples (paths per pixel), spp done / to do, camera
                         samples recorded, buffer bytes and cap
-    POST /api/restyle   {"style", "params", "estimator", "quick", "wait"}
-                        -> {"image": PNG data URL or null, "spp", "draft", "ms", "command",
-                            "quick", "busy", "stamp", "version", "kind", "label"}
+    POST /api/restyle   {"style", "params", "estimator", "quick", "wait", "format"}
+                        -> "json": {"image": PNG data URL or null, "spp", "draft", "ms",
+                            "restyle_ms", "command", "quick", "busy", "stamp", "version",
+                            "kind", "label"}; "rgba8": the pixels, 8-bit sRGB RGBA, the other
+                            fields in the header X-Restyle (204 without an image)
     POST /api/save      {"style", "params", "estimator", "format": "png"|"exr"} -> the image file
 A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0.1 only.
 """
 from __future__ import annotations
 
 import base64
+import functools
+import json
 import os
 import sys
 import tempfile
 import time
 from typing import Any
 
+import numpy as np
+
 from styletrace.errors import StyletraceError, UsageError
 
 PAGE = os.path.join(os.path.dirname(__file__), "page.html")
+#: the answers of /api/restyle: a PNG data URL in JSON, or the raw pixels (the page's)
+FORMATS = ("json", "rgba8")
+#: entries of the sRGB table `rgba8` reads: linear [0, 1] in steps of 1/65535, each within half
+#: a step of its value, so a pixel is within one level of `images.srgb8` (measured at 512 x 512 on
+#: the 2-core machine of BENCHMARKS.md: `srgb8` 15 ms, the table 3 ms)
+_STEPS = 65535
 
 
 def styles_table() -> list[dict[str, Any]]:
@@ -81,6 +93,41 @@ def encode_image_file(image, fmt: str) -> bytes:
         os.unlink(tmp)
 
 
+@functools.cache
+def _srgb_table() -> np.ndarray:
+    """`images.srgb8` of linear 0, 1/_STEPS, ..., 1 (made once)."""
+    from styletrace.images import srgb8
+    return srgb8(np.arange(_STEPS + 1, dtype=np.float64) / _STEPS)
+
+
+def rgba8(image) -> bytes:
+    """The image as the page's canvas takes it (`ImageData`): 8-bit sRGB, RGBA, rows from the top.
+
+    Args:
+        image: H x W x 3, linear (NaN as 0, clamped to [0, 1]).
+
+    Returns:
+        H * W * 4 bytes, alpha 255; each channel within one level of `images.srgb8`'s.
+    """
+    x = np.asarray(image, dtype=np.float32)[..., :3]
+    # fmax and fmin drop a NaN for the bound: NaN -> 0 before the cast to an index
+    y = np.fmin(np.fmax(x, np.float32(0.0)), np.float32(1.0))
+    y *= np.float32(_STEPS)
+    y += np.float32(0.5)
+    index = np.empty(x.shape[:2] + (4,), dtype=np.uint16)
+    index[..., :3] = y
+    index[..., 3] = _STEPS  # the table's 255: alpha
+    out = _srgb_table()[index]  # one gather: the table fits in the cache
+    return out.tobytes()
+
+
+def restyle_headers(meta: dict[str, Any], start: float) -> dict[str, str]:
+    """The headers of an `rgba8` answer: X-Restyle, the JSON answer's fields but the image (ASCII
+    JSON), with `ms` the server's time since `start` (`time.perf_counter`)."""
+    return {"X-Restyle": json.dumps({**meta, "ms": (time.perf_counter() - start) * 1e3}),
+            "Cache-Control": "no-store"}
+
+
 def make_app(session):
     """The Starlette app of a session: the routes of the module doc.
 
@@ -125,15 +172,24 @@ def make_app(session):
             raise ValueError(f"bad estimator {estimator!r}: expected a name")
         return style, estimator, {str(k): v for k, v in params.items()}
 
-    async def flags(request: Request) -> tuple[bool, bool]:
-        """The restyle's `quick` (default false) and `wait` (default: not quick)."""
+    async def flags(request: Request) -> tuple[bool, bool, str]:
+        """The restyle's `quick` (default false), `wait` (default: not quick) and `format`
+        (default json)."""
         body = await request.json()
         quick = body.get("quick", False)
         wait = body.get("wait", not quick)
         for name, value in (("quick", quick), ("wait", wait)):
             if not isinstance(value, bool):
                 raise ValueError(f"bad {name} {value!r}: expected true or false")
-        return quick, wait
+        fmt = body.get("format", "json")
+        if fmt not in FORMATS:
+            raise ValueError(f"bad format {fmt!r}: expected {' or '.join(FORMATS)}")
+        return quick, wait, fmt
+
+    def styled(style, estimator, params, quick, wait, fmt):
+        """`session.styled`, and its image as `rgba8` bytes for that format (else None)."""
+        r = session.styled(style, estimator, params, quick, wait)
+        return r, rgba8(r.image) if fmt == "rgba8" and r.image is not None else None
 
     async def page(request):
         return FileResponse(PAGE, media_type="text/html")
@@ -145,37 +201,33 @@ def make_app(session):
         return JSONResponse(session.state())
 
     async def do_restyle(request: Request):
+        t = time.perf_counter()
         try:
             style, estimator, params = await parse(request)
-            quick, wait = await flags(request)
-            t = time.perf_counter()
-            r = await run_in_threadpool(session.styled, style, estimator, params, quick, wait)
-            ms = (time.perf_counter() - t) * 1e3
+            quick, wait, fmt = await flags(request)
+            # one trip to a worker thread: the restyle and, where asked, its pixels
+            r, data = await run_in_threadpool(styled, style, estimator, params, quick, wait, fmt)
         except (ValueError, StyletraceError) as exc:
             return bad(str(exc))
         if r.shown is None:
             return bad("no image yet: the first pass is still rendering", 409)
-        png = None if r.image is None else await run_in_threadpool(encode_image_file, r.image,
-                                                                   "png")
         shown = r.shown
         draft = shown.kind == "draft"
-        command = session.command(style, estimator, params, draft=draft)
-        return JSONResponse(
-            {
-                "image": None if png is None else
-                "data:image/png;base64," + base64.b64encode(png).decode("ascii"),
-                "spp": 0 if draft else shown.spp,
-                "draft": draft,
-                "ms": ms,
-                "command": command,
-                "quick": r.quick,
-                "busy": r.busy,
-                "stamp": r.stamp,
-                "version": shown.version,
-                "kind": shown.kind,
-                "label": shown.label,
-            }
-        )
+        meta = {"spp": 0 if draft else shown.spp, "draft": draft,
+                "command": session.command(style, estimator, params, draft=draft),
+                "quick": r.quick, "busy": r.busy, "stamp": r.stamp, "version": shown.version,
+                "kind": shown.kind, "label": shown.label, "restyle_ms": r.seconds * 1e3}
+        if fmt == "rgba8":  # no PNG, no base64: the page draws these bytes as they come
+            if data is None:
+                return Response(status_code=204, headers=restyle_headers(meta, t))
+            h, w = r.image.shape[:2]
+            return Response(data, media_type="application/octet-stream",
+                            headers=restyle_headers({**meta, "width": w, "height": h}, t))
+        png = None if r.image is None else await run_in_threadpool(encode_image_file, r.image,
+                                                                   "png")
+        image = None if png is None else \
+            "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+        return JSONResponse({"image": image, **meta, "ms": (time.perf_counter() - t) * 1e3})
 
     async def save(request: Request):
         try:
@@ -259,4 +311,4 @@ def serve(job, port: int = 8765) -> int:
     return 0
 
 
-__all__ = ["make_app", "serve", "styles_table", "encode_image_file"]
+__all__ = ["make_app", "serve", "styles_table", "encode_image_file", "rgba8", "FORMATS"]

@@ -6,7 +6,8 @@ small a draft is.
     w, h = draft_size(512, 512)                      # the draft's film: (139, 139)
 
 The schedule (`progressive.schedule`) denoises the first pass that can be, the last, and any pass
-where the passes since the last denoised image took at least as long as that denoising did: the
+where the passes since the last denoised image took at least as long as that denoising did and
+that holds at least GROWTH times the camera samples of the denoised image on screen: the
 first with a quick preview (`ExpectationJob.preview`: PREVIEW_K coverage points per pixel, OIDN
 PREVIEW_QUALITY) where it serves (`quick_serves`), the others with the render's own denoiser.
 Design: docs/design/progressive_schedule.md.
@@ -19,6 +20,12 @@ from __future__ import annotations
 #: 30.1-30.2 dB for about 0.1 s more, 'high' 30.3-30.6 dB for 0.5 s more; 16 points instead of 4
 #: added 0.1 dB (docs/design/viewport.md)
 PREVIEW_K, PREVIEW_QUALITY = 4, "balanced"
+#: a denoised image is shown again only from at least GROWTH times the camera samples of the one on
+#: screen: its expected distance to the final image then falls by about that factor, far more than
+#: one image's realized distance strays from its expectation (cel on the Cornell box at 48 x 48,
+#: denoised after every pass of one camera sample: 9.8e-4 from the final image after 4, 1.04e-3
+#: after 5; after 1, 2, 4, 8 camera samples the distance fell every time)
+GROWTH = 2
 #: OIDN's quality for the draft, denoised as auto would whatever the render's Denoise says
 DRAFT_QUALITY = "balanced"
 #: the draft's largest film (pixels): a larger view is drafted at a reduced resolution
@@ -39,6 +46,20 @@ def denoise_now(k: int, total: int, since: float, denoise_s: list[float]) -> boo
     Returns:
         True where this pass's image is denoised."""
     return k == total or not denoise_s or since >= denoise_s[-1]
+
+
+def worth_showing(spp_done: int, shown_spp: int) -> bool:
+    """Whether a denoised image of the passes so far may replace the one on screen: made from at
+    least GROWTH times its camera samples (none shown yet: any).
+
+    Args:
+        spp_done: camera samples per pixel in the passes so far. shown_spp: those of the denoised
+            image on screen (0: none).
+
+    Returns:
+        True where the new image is expected to be closer to the final one, beyond doubt.
+    """
+    return spp_done >= GROWTH * shown_spp
 
 
 def quick_serves(spp_done: int) -> bool:
@@ -63,11 +84,12 @@ def quick_serves(spp_done: int) -> bool:
 
 
 def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int, int]:
-    """The draft's film: the view's size scaled down (same aspect) to at most `limit` pixels.
+    """The draft's film: the view's size scaled down (same aspect) to `limit` pixels, each side
+    rounded to whole pixels.
 
     Args:
         width, height: the view's size in pixels.
-        limit: the draft's most pixels (default `DRAFT_PIXELS`); a smaller view keeps its size.
+        limit: the draft's pixels (default `DRAFT_PIXELS`); a smaller view keeps its size.
 
     Returns:
         (width, height) of the draft, each at least 1.
@@ -76,5 +98,5 @@ def draft_size(width: int, height: int, limit: int = DRAFT_PIXELS) -> tuple[int,
     return max(1, round(width * scale)), max(1, round(height * scale))
 
 
-__all__ = ["denoise_now", "quick_serves", "draft_size", "PREVIEW_K", "PREVIEW_QUALITY",
-           "DRAFT_QUALITY", "DRAFT_PIXELS"]
+__all__ = ["denoise_now", "worth_showing", "quick_serves", "draft_size", "GROWTH", "PREVIEW_K",
+           "PREVIEW_QUALITY", "DRAFT_QUALITY", "DRAFT_PIXELS"]

@@ -11,11 +11,12 @@ decides which images a view shows, in this order:
 1. the **draft** (where given): one camera sample of the render's children, at the draft's size
    (`rules.draft_size`), denoised as auto would (`Job.draft`: the budget's own smaller request);
 2. after each **pass**: undenoised, the raw image of the passes so far; denoised, where
-   `rules.denoise_now` says so, a denoised image of the passes so far: a quick preview
-   (`ExpectationJob.preview`, `rules.PREVIEW_K` points, OIDN `rules.PREVIEW_QUALITY`) only while
-   the raw image holds one camera sample per pixel (`rules.quick_serves`: a quick preview's error
-   is below a single camera sample's, not below that of several), else the render's own denoiser
-   on the passes so far, which converges to the final image;
+   `rules.denoise_now` says so and the passes hold `rules.GROWTH` times the camera samples of the
+   denoised image on screen (`rules.worth_showing`), a denoised image of the passes so far: a quick
+   preview (`ExpectationJob.preview`, `rules.PREVIEW_K` points, OIDN `rules.PREVIEW_QUALITY`) only
+   while the raw image holds one camera sample per pixel (`rules.quick_serves`: a quick preview's
+   error is below a single camera sample's, not below that of several), else the render's own
+   denoiser on the passes so far, which converges to the final image;
 3. the **final** image, the render's own finisher (what F12 and the command line write);
 4. a **warm-up** (`warm`, an adapter's: its restyle kernels compiled before a drag needs them).
 
@@ -37,7 +38,13 @@ import numpy as np
 
 from styletrace.denoise.finishers import Denoised, Expectation
 from styletrace.pipeline.runner import Runner
-from styletrace.progressive.rules import PREVIEW_K, PREVIEW_QUALITY, denoise_now, quick_serves
+from styletrace.progressive.rules import (
+    PREVIEW_K,
+    PREVIEW_QUALITY,
+    denoise_now,
+    quick_serves,
+    worth_showing,
+)
 
 #: the kinds of image, in the order the schedule shows them
 KINDS = ("draft", "pass", "preview", "final")
@@ -334,7 +341,8 @@ class Schedule:
                     frame, final_next = self._quick(finisher, prog, label, children, state), True
                 elif last:
                     frame = self._final(runner, prog, label, children)
-                elif denoise_now(k, total, since, self.stats["denoise_s"]):
+                elif (denoise_now(k, total, since, self.stats["denoise_s"])
+                      and worth_showing(prog.spp_done, state.shown_spp)):
                     frame = self._preview(runner, prog, label, children, state)
                     since = 0.0
                 else:
@@ -365,7 +373,7 @@ class Schedule:
         start = self.clock()
         image, buf = finisher.job.preview(PREVIEW_K, PREVIEW_QUALITY)
         self.stats["denoise_s"].append(self.clock() - start)
-        state.previewing = False
+        state.previewing, state.shown_spp = False, prog.spp_done
         return self._show("preview", label + ", denoised (preview)", image, buf, prog, children)
 
     def _preview(self, runner: Runner, prog, label: str, children: int, state) -> Frame:
@@ -383,16 +391,18 @@ class Schedule:
             image, buf = runner.finish(prog), getattr(finisher, "recorded", None)
             denoiser = denoiser_of(finisher, prog)
         self.stats["denoise_s"].append(self.clock() - start)
-        state.previewing = False
+        state.previewing, state.shown_spp = False, prog.spp_done
         return self._show("preview", f"{label}, denoised", image, buf, prog, children, denoiser)
 
 
 class _State:
     """What the pass steps remember: whether a full-size denoised image is yet to be shown
-    (`previewing`: only the first may be a quick preview)."""
+    (`previewing`: only the first may be a quick preview), and the camera samples per pixel of
+    the one on screen (`shown_spp`)."""
 
     def __init__(self):
         self.previewing = True
+        self.shown_spp = 0
 
 
 def children_of(runner: Runner) -> int:

@@ -89,8 +89,7 @@ def screen_halftone_mask(
     proj: Projection,
     spacing_px: float,
     r_max_px: float,
-    u_min: float = 0.05,
-    u_max: float = 0.9,
+    ramp: tuple[float, float] = (0.05, 0.9),
     s: mi.Point2f | None = None,
 ) -> mi.Bool:
     """True where p's screen position (the image coordinate `s` where given) is closer than r(u)
@@ -99,7 +98,8 @@ def screen_halftone_mask(
     Args:
         p: world points (mi.Point3f); u: their brightness (mi.Float).
         proj: the sensor's Projection; spacing_px: the grid interval, in pixels.
-        r_max_px: the largest radius, in pixels; u_min, u_max: the ramp's ends.
+        r_max_px: the largest radius, in pixels; ramp: the ramp's ends (u_min, u_max), as
+            `BrightnessRange.u_range` gives them.
         s: the image coordinates (mi.Point2f), or None: p's own projection.
 
     Returns:
@@ -108,7 +108,7 @@ def screen_halftone_mask(
     x, y = proj.pixels(p) if s is None else (s.x, s.y)
     gx = dr.round(x * (1.0 / spacing_px)) * spacing_px
     gy = dr.round(y * (1.0 / spacing_px)) * spacing_px
-    r = dot_radius(u, r_max_px, u_min, u_max)
+    r = dot_radius(u, r_max_px, *ramp)
     return dr.square(x - gx) + dr.square(y - gy) < r * r
 
 

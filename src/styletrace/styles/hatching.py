@@ -110,7 +110,7 @@ def active_sets(u: mi.Float, sets: int, u_min: float, u_max: float) -> mi.Float:
 
 
 def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], spacing: float,
-               thickness: float, u_min: float = 0.05, u_max: float = 0.9,
+               thickness: float, ramp: tuple[float, float] = (0.05, 0.9),
                projection: Projection | None = None) -> mi.Bool:
     """True where p lies within thickness/2 of a plane of one of the m(u) active sets (the linear
     ramp).
@@ -119,13 +119,13 @@ def hatch_mask(p: mi.Point3f, u: mi.Float, normals: Sequence[Sequence[float]], s
         p: world points (mi.Point3f); u: their brightness (mi.Float).
         normals: the sets' unit plane normals (`plane_normals`).
         spacing, thickness: plane distance and line thickness (pixels with `projection`).
-        u_min, u_max: the ramp's ends.
+        ramp: the ramp's ends (u_min, u_max), as `BrightnessRange.u_range` gives them.
         projection: None: parallel world planes; given: pencils of planes through the camera.
 
     Returns:
         mi.Bool.
     """
-    m = active_sets(u, len(normals), u_min, u_max)
+    m = active_sets(u, len(normals), *ramp)
     hit = dr.zeros(mi.Bool, dr.width(p))
     for j, on_line in enumerate(line_masks(p, normals, spacing, thickness, projection)):
         hit |= on_line & (m > j)

@@ -48,6 +48,9 @@ class Param(Declaration):
         low, high: bound a real or each component (None: ±LIMIT for reals, none for ints).
         low_open: the low end excluded; choices: the strings a choice accepts.
         auto: for a default of None, the rule that derives the value (from the scene or others).
+
+    Takes more than 7 parameters: it is a declaration, and each argument is one of its declared
+    attributes (`auto` and `Declaration`'s fields).
     """
 
     #: for a default of None ('auto'): the rule that derives the value (from the scene or other

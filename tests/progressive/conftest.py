@@ -1,0 +1,3 @@
+import styletrace
+
+styletrace.init()  # the schedule renders: pick the backend and register the plugins first
