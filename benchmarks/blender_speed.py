@@ -186,7 +186,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=128)
     ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--spp", type=int, default=64, help="samples per pixel of the equal-noise runs")
+    ap.add_argument("--spp", type=int, default=64,
+                    help="camera samples per pixel of the equal-noise runs")
     args = ap.parse_args(argv)
     addon.register()
     S = scenes_module()

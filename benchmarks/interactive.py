@@ -213,13 +213,13 @@ def styletrace_row(S, name: str, size: int, style: str, tmp: str) -> dict:
 def children(S, name: str, size: int, style: str) -> int:
     """The children per camera sample of the defaults' split (the F12 job its Denoise plans)."""
     from styletrace.blender import f12
-    from styletrace.denoise.default import choose
     from styletrace.pipeline.resolve import resolve
     scene, st = build(S, name, size, style, 0)
     dg = bpy.context.evaluated_depsgraph_get()
     sc = f12.scene(dg, st)
-    r = choose(resolve(f12.job(sc, f12.integrator(st), st), scene=sc), st.denoise).resolved
-    return int(r.integrator.settings.slot.n(0))
+    # the job carries Denoise: resolve chooses the method, then splits the samples for it
+    r = resolve(f12.job(sc, f12.integrator(st), st), scene=sc)
+    return int(r.budget.children[0])
 
 
 # ---- Cycles ----------------------------------------------------------------------------------

@@ -5,10 +5,12 @@ fitting.
   (`render_buffer`); each restyle (cel, colour map, gamma) is warmed up once (kernel compilation),
   then timed `--runs` times (median, end to end: the H x W x 3 numpy image). The fresh render is
   `styletrace.render` with the same settings (one timed run after a warm-up at 64x64).
-- Preview: a `Session` of the Cornell box at 256x256 (16 spp, n = 8) and its server, in a fresh
-  process; the time from the server listening to the first 200 of /api/restyle (polled every 20 ms:
-  the draft, 1 spp with n = 1) and to the first restyle of the first full pass. Twice: with a cold
-  Dr.Jit kernel cache (HOME pointed at an empty folder, so ~/.drjit is empty) and with a warm one.
+- Preview: a `Session` of the Cornell box at 256x256 (16 camera samples per pixel, n = 8,
+  `preview.jobs.page_job`) and its server, in a fresh process; the time from the server listening to
+  the first 200 of /api/restyle (polled every 20 ms: the draft, one camera sample of the n children
+  at the draft's size) and to the first restyle of a full-size image (after the first pass). Twice:
+  with a cold Dr.Jit kernel cache (HOME pointed at an empty folder, so ~/.drjit is empty) and with a
+  warm one.
 - Memory: bytes per camera sample of the buffer (numpy) and of its Dr.Jit copy used by restyles.
 - Fit: a 128x128, 4 spp, n = 4 buffer; targets restyled with known θ; iterations and seconds until
   the loss reaches 1e-9 (or the 300 iterations end), and the error of the recovered θ.
@@ -40,9 +42,10 @@ def preview_first_image() -> tuple[float, float]:
     import httpx
     import uvicorn
 
+    from styletrace.preview.jobs import page_job
     from styletrace.preview.server import make_app
     from styletrace.preview.session import Session
-    session = Session("cornell-box", inner=8, spp=16, width=256, height=256)
+    session = Session(page_job("cornell-box", inner=8, spp=16, width=256, height=256))
     srv = uvicorn.Server(
         uvicorn.Config(make_app(session), host="127.0.0.1", port=0, log_level="warning")
     )
@@ -129,9 +132,9 @@ def main():
         )
         kinds = sb.arrays["seq_kind"]
         seq_rows.append(
-            f"| {style} | {est} | {kinds.sum() / sb.samples:.1f} | "
-            f"{(kinds.size - kinds.sum()) / sb.samples:.1f} "
-            f"| {sb.nbytes / sb.samples:.0f} |"
+            f"| {style} | {est} | {kinds.sum() / sb.camera_samples:.1f} | "
+            f"{(kinds.size - kinds.sum()) / sb.camera_samples:.1f} "
+            f"| {sb.nbytes / sb.camera_samples:.0f} |"
         )
 
     small = render_buffer("cornell-box", style="cel", spp=4, inner=4, seed=3, width=128, height=128)
@@ -172,13 +175,12 @@ def main():
         f"sample for the Dr.Jit "
         f"copy restyles work on; the default cap of 4194304 camera samples bounds both.",
         "",
-        f"Preview, Cornell box 256x256 (n = 8), each in a fresh process, time after the server "
-        f"listens (goal: "
-        f"first image <= 3 s). Warm kernel cache (~/.drjit filled by an earlier run): first image "
-        f"{warm[0]:.2f} s "
-        f"(the draft: 1 spp, n = 1), first full pass (1 spp, n = 8) {warm[1]:.2f} s. Cold cache "
-        f"(empty ~/.drjit, "
-        f"every kernel compiled): first image {cold[0]:.2f} s, first full pass {cold[1]:.2f} s.",
+        f"Preview, Cornell box 256x256 (16 camera samples per pixel, n = 8), each in a fresh "
+        f"process, time after the server listens (goal: first image <= 3 s). Warm kernel cache "
+        f"(~/.drjit filled by an earlier run): first image {warm[0]:.2f} s (the draft: one camera "
+        f"sample of n = 8 at the draft's size), first full-size image (after the first pass of "
+        f"one camera sample) {warm[1]:.2f} s. Cold cache (empty ~/.drjit, every kernel compiled): "
+        f"first image {cold[0]:.2f} s, first full-size image {cold[1]:.2f} s.",
         "",
         "Sequence buffers (the unbiased estimators; docs/lookdev.md): Cornell box 64x64, 4 spp, n "
         "= 8, bytes per "

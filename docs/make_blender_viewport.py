@@ -40,7 +40,7 @@ links = import_module("styletrace.blender.borrowed_site").borrow_site(ROOT)  # w
 
 # styletrace comes from the links and src/ put on sys.path above: imported by name
 addon = import_module("styletrace.blender")
-viewport = import_module("styletrace.blender.viewport")
+viewport = import_module("styletrace.blender.viewport_hooks")
 addon.register()
 scene = bpy.context.scene
 scene.render.engine = "STYLETRACE"

@@ -16,7 +16,7 @@ import styletrace
 from styletrace.frontends import api
 from styletrace.images import write_image
 from styletrace.scene.builtin import cornell_box, dragon, scaled
-from styletrace.styles import get, names
+from styletrace.styles import style_class, style_names
 
 styletrace.init()
 
@@ -32,8 +32,8 @@ def main():
     rows = []
     for scene_name, make in SCENES.items():
         row = []
-        for name in names():
-            inner = max(get(name).default_inner, 8)
+        for name in style_names():
+            inner = max(style_class(name).default_inner, 8)
             scene = api.load_scene(make())
             integrator, chosen = api.resolve_defaults(
                 scene, api.make_integrator(style=name, inner=inner)
@@ -46,7 +46,7 @@ def main():
         rows.append(np.concatenate(row, axis=1))
     sheet = np.concatenate(rows, axis=0)
     write_image(sheet, os.path.join(os.path.dirname(__file__), "defaults_contact_sheet.png"))
-    print("columns:", ", ".join(names()))
+    print("columns:", ", ".join(style_names()))
 
 
 if __name__ == "__main__":

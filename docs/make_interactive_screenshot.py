@@ -25,7 +25,7 @@ pixels at 4 camera samples fit the buffer's cap). The view switches to Rendered 
 first session has ended (its kernels compiled) and its last image is drawn, the vase (the sphere on
 the table) moves 0.2 m along -x, towards the camera: an edit, the clock's zero. Each image the view
 draws after it is noted with its label and the seconds from the edit to its first draw
-(`viewport.view_draw` wrapped; an image the worker replaced during the draw is not counted).
+(`viewport_hooks.view_draw` wrapped; an image the worker replaced during the draw is not counted).
 Blender's screenshot (`screen.screenshot`, cropped to the view's region) is taken on the main
 thread's next timer tick after the first draw of the first image whose label matches
 STYLETRACE_SHOT_LABEL (an fnmatch pattern; default `pass 1/*, denoised (preview)`: the first
@@ -74,7 +74,7 @@ Image = import_module("PIL.Image")
 ImageDraw = import_module("PIL.ImageDraw")
 ImageFont = import_module("PIL.ImageFont")
 addon = import_module("styletrace.blender")
-viewport = import_module("styletrace.blender.viewport")
+viewport = import_module("styletrace.blender.viewport_hooks")
 materials = import_module("styletrace.blender.materials")
 images = import_module("styletrace.images")
 
@@ -163,7 +163,8 @@ def srgb8(image):
 
 
 class Draws:
-    """The images the view draws, each noted at its first draw (`viewport.view_draw` wrapped)."""
+    """The images the view draws, each noted at its first draw (`viewport_hooks.view_draw`
+    wrapped)."""
 
     def __init__(self):
         self.t0 = None  # the edit's time; None: nothing is noted yet

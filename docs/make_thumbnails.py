@@ -9,7 +9,7 @@ import os
 
 import styletrace
 from styletrace.images import write_image
-from styletrace.styles import get, names
+from styletrace.styles import style_class, style_names
 
 styletrace.init()
 
@@ -33,8 +33,8 @@ def main():
     out = os.path.join(os.path.dirname(__file__), "styles")
     os.makedirs(out, exist_ok=True)
     images = {}
-    for name in names():
-        inner = max(get(name).default_inner, 8)
+    for name in style_names():
+        inner = max(style_class(name).default_inner, 8)
         img = styletrace.render("dragon", style=name, spp=SPP, inner=inner, width=SIZE, height=SIZE,
                                 **OVERRIDES.get(name, {}))
         write_image(img, os.path.join(out, f"{name}.png"))

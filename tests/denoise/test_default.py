@@ -1,4 +1,4 @@
-"""What a render does at defaults (`denoise.default`): auto denoises the expectation where it
+"""What a render does at defaults (`pipeline.denoising`): auto denoises the expectation where it
 applies, with the firefly control and an auto spp within the buffer's cap; where it cannot, it
 says why in one line and renders as `denoise="off"` does; `off` is the pipeline's render of the
 paper's estimators, bit for bit."""

@@ -397,7 +397,7 @@ def attach(
 
     Args:
         buf: the recorded buffer of means. shot: its scene, the render's integrator (read for
-            k > 0 only), samples per pixel (the guides' camera samples) and seed.
+            k > 0 only), camera samples per pixel (the guides') and seed.
         quality: OIDN's. uncertainty: `spread`'s (> 0).
         k: 0: D kept at each camera sample in the buffer; > 0: g at k points (`coverage.points`).
         cache: a dict kept between calls on one growing buffer (`ExpectationJob`'s), in which the

@@ -33,7 +33,7 @@ def render_denoised_image(shot: Shot, denoising: Denoising = Denoising("image"),
     """Render in passes (`pipeline.passes.run_passes`), then denoise the final image.
 
     Args:
-        shot: what to render, its samples per pixel and seed.
+        shot: what to render, its camera samples per pixel and seed.
         denoising: OIDN's quality ("high", "balanced" or "fast") and the footprint, "pixel" (the
             module doc) or "film" (the film's image as it is); its method is not read.
         split: the pass split (`pipeline.passes.PassSplit`).
@@ -128,8 +128,8 @@ def finish_denoised_image(
 def denoise_like(scene, image: np.ndarray, spp: int, seed: int, quality: str,
                  cache: dict | None = None) -> np.ndarray:
     """`image` denoised as `finish_denoised_image` denoises the film's image of `spp` camera
-    samples per pixel: OIDN with the guides of as many (a restyle of a recorded buffer, denoised
-    as the render that recorded it was).
+    samples per pixel: OIDN with the guides of as many (a restyle of a recorded buffer, denoised as
+    the render that recorded it was).
 
     Args:
         scene: the scene rendered. image: H x W x 3, the film's image. spp: its camera samples per

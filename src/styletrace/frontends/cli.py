@@ -431,7 +431,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="U",
         help="with --denoise expectation and coverage points: the style is averaged over the "
         "denoised expectation's residual error, taken as U times the noisy estimate's standard "
-        "error (default 0.3; 0: the style of the denoised expectation itself)",
+        "error (default 0: the style of the denoised expectation itself)",
     )
     r.set_defaults(func=cmd_render)
     add_ray_flags(r)

@@ -18,7 +18,7 @@ from functools import partial
 from styletrace.errors import UsageError
 
 BUFFER_HELP = (
-    "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`/`preview`; at most "
+    "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`; at most "
     "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
     "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's "
     "children and uniforms: at most 1048576 camera samples and 64 children per sample on average, "

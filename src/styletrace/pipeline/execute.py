@@ -1,4 +1,4 @@
-"""Where the passes of a resolved render run: in this process (tiled), or as Ray tasks; `render`.
+"""Where the passes of a resolved render run: in this process (tiled), or as Ray tasks.
 
     source = InProcess().source(resolve(job))             # a passes.Progress after each pass
     source = OnRay("local", checkpoints=Checkpoints("o.exr")).source(resolve(job), lock)  # on Ray
