@@ -5,7 +5,8 @@
   every JIT kernel a cache hit), for every style that takes such a parameter.
 - The image is the one with θ as literals (the kernel the render traces), to float rounding
   (LLVM folds literal constants, so the last bit may differ), for every restylable style.
-- `quick_restyle` is the restyle of the buffer's one-point-per-pixel view.
+- `quick_restyle` is the restyle of the buffer's one-point-per-pixel view; its pixels encoded on
+  the device (`quick_restyle_pixels`) are `images.srgb8` of it, bit for bit.
 """
 from dataclasses import replace
 
@@ -22,7 +23,7 @@ from styletrace.lookdev.restyle import (
     sample_values,
     slots_for,
 )
-from styletrace.lookdev.slider import quick_restyle
+from styletrace.lookdev.slider import quick_restyle, quick_restyle_pixels, srgb8_rgba
 from styletrace.styles import registry
 
 W, H = 12, 10
@@ -93,3 +94,20 @@ def test_opaque_leaves_the_style_as_it_was(buf):
 def test_quick_restyle_is_the_restyle_of_the_one_point_view(buf):
     np.testing.assert_array_equal(quick_restyle(buf, style="cel", levels="0.1,0.3,0.7"),
                                   restyle(per_pixel(buf), style="cel", levels="0.1,0.3,0.7"))
+
+
+def test_the_pixels_encoded_on_the_device_are_srgb8_of_the_quick_restyle():
+    """The page's 8-bit sRGB RGBA (`quick_restyle_pixels`) equals `images.srgb8` of the quick
+    restyle, bit for bit, including values out of [0, 1] and NaN (clamped, NaN as 0)."""
+    from styletrace.gate import mi
+    from styletrace.images import srgb8
+    buf = render_buffer("cornell-box", style="cel", spp=2, inner=2, width=W, height=H, seed=1)
+    for style, params in (("contrast", {"c": 2.5}), ("cel", {})):
+        image, pixels = quick_restyle_pixels(buf, style=style, **params)
+        np.testing.assert_array_equal(image, quick_restyle(buf, style=style, **params))
+        assert pixels.shape == (H, W, 4) and pixels.dtype == np.uint8
+        np.testing.assert_array_equal(pixels[..., :3], srgb8(image))
+        assert (pixels[..., 3] == 255).all()
+    odd = np.array([[-1.0, 0.0, 0.002, 0.5, 1.0, 7.0, np.nan, np.inf, -np.inf]] * 3, np.float32).T
+    got = srgb8_rgba(mi.Float(odd.ravel()), 9, 1)
+    np.testing.assert_array_equal(got[0, :, :3], srgb8(odd))

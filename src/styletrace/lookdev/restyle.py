@@ -631,6 +631,26 @@ def per_pixel(buffer: Any, point: int = 0) -> Buffer:
     return view
 
 
+def restyled(buffer: Any, style: str | None = None, estimator: str | None = None,
+             inner: Any = None, **params: Any) -> mi.Float:
+    """`restyle`'s image left on the device: flat H*W*3 row-major RGB, evaluated.
+
+    Args, Raises: as `restyle`'s.
+    """
+    buf = as_buffer(buffer)
+    slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
+    try:  # θ as the kernel's inputs (`Style.opaque`): a new value reuses the compiled kernel
+        img = accumulate(buf, sample_values(buf, [replace(s, style=s.style.opaque())
+                                                  for s in slots]))
+        dr.eval(img)
+    except StyletraceError:
+        raise
+    except Exception:  # a style that reads a parameter's value on the host: θ as literals
+        img = accumulate(buf, sample_values(buf, slots))
+        dr.eval(img)
+    return img
+
+
 def restyle(buffer: Any, style: str | None = None, estimator: str | None = None, inner: Any = None,
             **params: Any) -> np.ndarray:
     """The image of the buffer's camera samples with a new style or parameters (module doc).
@@ -647,20 +667,13 @@ def restyle(buffer: Any, style: str | None = None, estimator: str | None = None,
         UsageError: a change the buffer cannot replay; StyleError, SettingsError: bad values.
     """
     buf = as_buffer(buffer)
-    slots = prepare_slots(buf, slots_for(buf, style, estimator, inner, **params))
-    try:  # θ as the kernel's inputs (`Style.opaque`): a new value reuses the compiled kernel
-        img = accumulate(buf, sample_values(buf, [replace(s, style=s.style.opaque())
-                                                  for s in slots]))
-        dr.eval(img)
-    except StyletraceError:
-        raise
-    except Exception:  # a style that reads a parameter's value on the host: θ as literals
-        img = accumulate(buf, sample_values(buf, slots))
+    img = restyled(buf, style, estimator, inner, **params)
     return np.asarray(img, dtype=np.float32).reshape(buf.height, buf.width, 3)
 
 
 __all__ = [
     "restyle",
+    "restyled",
     "join",
     "joined",
     "JOIN",

@@ -187,9 +187,12 @@ def make_app(session):
         return quick, wait, fmt
 
     def styled(style, estimator, params, quick, wait, fmt):
-        """`session.styled`, and its image as `rgba8` bytes for that format (else None)."""
+        """`session.styled`, and its image as `rgba8` bytes for that format (else None): a quick
+        restyle's pixels as the session encoded them on the device, else `rgba8`'s."""
         r = session.styled(style, estimator, params, quick, wait)
-        return r, rgba8(r.image) if fmt == "rgba8" and r.image is not None else None
+        if fmt != "rgba8" or r.image is None:
+            return r, None
+        return r, r.pixels.tobytes() if r.pixels is not None else rgba8(r.image)
 
     async def page(request):
         return FileResponse(PAGE, media_type="text/html")

@@ -26,7 +26,7 @@ import numpy as np
 from styletrace.denoise.finishers import Recording, plan
 from styletrace.lookdev.buffer import Buffer, bytes_per_camera_sample
 from styletrace.lookdev.restyle import restyle, slots_for
-from styletrace.lookdev.slider import quick_restyle
+from styletrace.lookdev.slider import quick_restyle, quick_restyle_pixels
 from styletrace.pipeline.job import Job
 from styletrace.preview import jobs
 from styletrace.progressive.schedule import Frame, Schedule
@@ -45,6 +45,8 @@ class Styled:
         stamp: the restyle's number, from 1, in the order they were made (a page shows an
             answer only if it is newer than the one on screen). seconds: the restyle's own time.
         key: what it restyled (style, estimator, params, quick).
+        pixels: a quick restyle's image as a page draws it, H x W x 4 uint8 sRGB RGBA, encoded
+            on the device in the same trip (`lookdev.slider.quick_restyle_pixels`); else None.
     """
     image: np.ndarray | None
     shown: Frame | None
@@ -53,6 +55,7 @@ class Styled:
     stamp: int = 0
     seconds: float = 0.0
     key: tuple = ()
+    pixels: np.ndarray | None = None
 
 
 def request_key(style: str, estimator: str | None, params: dict[str, Any], quick: bool) -> tuple:
@@ -280,8 +283,10 @@ class Session:
         """A restyle of the newest frame's buffer, under the lock; kept to answer its key again."""
         frame = self.current
         start = time.perf_counter()
+        pixels = None
         if quick:
-            img = quick_restyle(frame.buffer, style=style, estimator=estimator, **params)
+            img, pixels = quick_restyle_pixels(frame.buffer, style=style, estimator=estimator,
+                                               **params)
         else:
             img = restyle(frame.buffer, style=style, estimator=estimator, **params)
             if frame.denoiser is not None:  # the image denoiser finishes the render
@@ -291,7 +296,7 @@ class Session:
             self._stamp += 1
             self.counts["quick" if quick else "full"] += 1
             out = Styled(img, frame, quick, False, self._stamp, seconds,
-                         request_key(style, estimator, params, quick))
+                         request_key(style, estimator, params, quick), pixels)
             self._kept = out
         return out
 
