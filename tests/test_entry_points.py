@@ -246,17 +246,19 @@ def test_every_front_end_takes_the_one_splits_answer(files, tmp_path, splits):
     buffer), `styletrace.render` (its passes), `render_buffer` and the preview's session. Denoise
     off: at 32 samples cel's camera samples take its own 16 children, 2 of them; the file's 4 one
     camera sample of 4 children. With the expectation denoised a camera sample takes at most 4
-    children (`budget.CHILDREN`): 8 x 4. Blender's F12 and viewport: tests/blender/test_samples.py.
-    """
+    children (`budget.CHILDREN`): 8 x 4. Ray takes the same answer, undenoised; a draft is the same
+    function asked one camera sample of the render's children. Blender's F12 and viewport:
+    tests/blender/test_samples.py."""
     from styletrace.frontends import cli
     from styletrace.preview.jobs import page_job, prepare
 
     def one(count=1):
-        """The answers of the render just made (one split each), emptied."""
+        """The answer of the render just made (one split; a draft's two: the render's, then its
+        own request's), emptied."""
         got = list(splits)
         splits.clear()
         assert len(got) == count, got
-        return got[-1]
+        return got[-1] if count == 1 else got
 
     words = [files[0], "-D", "depth=3", "--style", "cel", "--seed", str(SEED), "-q"]
     assert cli.main(["render", *words, "--denoise", "expectation", "--samples", "32", "-o",
@@ -286,5 +288,20 @@ def test_every_front_end_takes_the_one_splits_answer(files, tmp_path, splits):
                                                                answer.children[0]) == (spp, n)
         page = prepare(page_job(files[0], denoise="off", **given)).page  # the page starts with cel
         assert (page.spp, page.budget.children) == (spp, (n,)) and one().children == (n,)
+        # on Ray (nothing runs until its passes are asked for): the same answer, not denoised
+        from styletrace.denoise.finishers import plan
+        from styletrace.pipeline.execute import OnRay
+        from styletrace.pipeline.job import python_job
+        job = python_job(files[0], style="cel", seed=SEED, defines={"depth": "3"}, **given)
+        ray = plan(job, executor=OnRay("local")).resolved
+        assert ray.method == "off" and (ray.spp, ray.budget.children) == (spp, (n,))
+        assert one().camera_samples == spp
+    # a draft asks the same function for its own request: one camera sample of those children
+    from styletrace.pipeline.denoising import Denoising
+    job = python_job(files[0], style="cel", seed=SEED, defines={"depth": "3"},
+                     denoising=Denoising("expectation"))
+    draft = plan(job.with_(draft=True)).resolved
+    whole, mine = one(count=2)  # the render's split, then the draft's request's
+    assert (draft.spp, draft.budget.children) == (1, whole.children) == (1, mine.children)
 
 

@@ -85,3 +85,24 @@ def test_the_advanced_sub_panel_holds_the_split():
         "Samples", 16, 1)
     assert (rna["spp"].name, rna["spp"].default, rna["spp"].hard_min) == ("Camera samples", 0, 0)
     assert panels.dump(st, advanced=True)[0].startswith("Camera samples           0")
+
+
+def test_the_viewport_renders_f12s_split_and_its_draft_the_budgets_smaller_request():
+    """Rendered shading plans F12's job (`f12.job`): its passes' split is F12's, the one
+    function's answer; its draft is that function asked one camera sample of those children."""
+    from styletrace.blender import camera
+    from styletrace.blender.viewport import Viewport
+    S.room(16)
+    st = bpy.context.scene.styletrace
+    st.style, st.denoise, st.samples = "cel", "expectation", 64
+    f12_split, _ = split_of(st)
+    vp = Viewport(start=False, clock=lambda: 0.0)
+    dg = bpy.context.evaluated_depsgraph_get()
+    vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
+    vp.update(dg, st)
+    s = vp.session
+    draft = s.plan_draft().resolved
+    whole = s.plan().resolved
+    vp.close()
+    assert (whole.spp, int(whole.integrator.settings.slot.n(0))) == f12_split == (16, 4)
+    assert (draft.spp, draft.budget.children) == (1, whole.budget.children)

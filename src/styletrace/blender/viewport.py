@@ -112,7 +112,7 @@ class ViewportSession:
         self.recorded = False  # the passes record a buffer (restyles need no new pass)
         self.style: dict | None = None  # a restyled style: later frames are shown restyled
         self._lock = threading.Lock()
-        self.schedule = Schedule(self._plan, self._draft_plan if draft else None, clock=clock,
+        self.schedule = Schedule(self.plan, self.plan_draft if draft else None, clock=clock,
                                  turns=TURNS, on_frame=self._on_frame, warm=self._warm)
 
     # ---- the schedule's view ------------------------------------------------------------------
@@ -187,7 +187,7 @@ class ViewportSession:
         settings = SimpleNamespace(**{k: v[k] for k in (*PASS_KEYS, *DENOISE_KEYS)})
         return f12.job(sc, integ, settings)
 
-    def _draft_plan(self):
+    def plan_draft(self):
         """The draft's run: one camera sample of the render's children at the draft's size,
         denoised as auto would, whatever Denoise says (a glimpse, not F12's image)."""
         w, h = draft_size(*self.size)
@@ -197,7 +197,7 @@ class ViewportSession:
             "auto", quality=DRAFT_QUALITY, footprint=job.denoising.footprint))
         return plan(job, scene=sc, recording=Recording(label="<draft>"))
 
-    def _plan(self):
+    def plan(self):
         """F12's run of the settings, recording the buffer to restyle where it can: the passes'
         (Denoise off) or the denoised one (expectation); over the buffer's cap, or for a render it
         cannot record, unrecorded (a style change then traces new passes)."""
