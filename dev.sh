@@ -77,7 +77,10 @@ case "$cmd" in
   test)   if [ $# -gt 0 ]; then setup test; exec "$VENV/bin/python" -m pytest -q "$@"; fi
           setup_blender
           "$VENV/bin/ruff" check .  # the house rules: imports, line length 100 (pyproject.toml)
-          "$VENV/bin/python" -m pytest -q --ignore=tests/blender
+          # two processes (pytest-xdist, a file per process at a time): on a fresh machine each
+          # compiles its tests' kernels while the other renders (docs/install.md, "How long")
+          "$VENV/bin/python" -m pytest -q -n "${STYLETRACE_TEST_WORKERS:-2}" --dist loadfile \
+            --ignore=tests/blender
           exec "$BLENDER_VENV/bin/python" -m pytest -q tests/blender ;;
   test-blender) setup_blender; exec "$BLENDER_VENV/bin/python" -m pytest -q tests/blender "$@" ;;
   setup)  setup ;;
