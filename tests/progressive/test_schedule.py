@@ -83,6 +83,17 @@ def mse(a, b) -> float:
     return float(np.mean((np.asarray(a, np.float64) - b) ** 2))
 
 
+def assert_each_closer(frames, machine: Machine, final: np.ndarray) -> None:
+    """Every frame is at least as close to `final` as the raw image of the passes it was made
+    from (`machine.raws`), and no further from it than the frame before."""
+    errors = [mse(f.image, final) for f in frames]
+    for f, e in zip(frames, errors):
+        raw = mse(machine.raws[f.spp], final)
+        print(f"{f.label}: {e:.3e} from the final image, the raw pass {raw:.3e}")
+        assert e <= raw
+    assert errors == sorted(errors, reverse=True)
+
+
 def cel_job(samples=32, size=48):
     """Cel on the Cornell box: passes of one camera sample of 4 children (the budget's)."""
     return python_job("cornell-box", style="cel", width=size, height=size, samples=samples, seed=7,
@@ -121,13 +132,7 @@ def test_each_image_is_no_further_from_the_final_than_its_raw_pass_or_the_one_be
     machine = Machine(pass_s, denoise_s)
     _, frames = run(cel_job(), machine)
     full = [f for f in frames if f.kind != "draft"]
-    final = full[-1].image
-    errors = [mse(f.image, final) for f in full]
-    for f, e in zip(full, errors):
-        raw = mse(machine.raws[f.spp], final)
-        print(f"{f.label}: {e:.3e} from the final image, the raw pass {raw:.3e}")
-        assert e <= raw
-    assert errors == sorted(errors, reverse=True)
+    assert_each_closer(full, machine, full[-1].image)
 
 
 def test_where_a_quick_preview_loses_to_the_raw_pass_the_renders_own_denoiser_is_shown():
@@ -153,12 +158,7 @@ def test_where_a_quick_preview_loses_to_the_raw_pass_the_renders_own_denoiser_is
     np.testing.assert_array_equal(frames[-1].image, final)  # the same run, the same final
     assert [f.kind for f in frames] == ["preview"] * 2 + ["final"]  # 1, 2 and 4 passes
     assert not any(f.label.endswith("(preview)") for f in frames)  # no quick preview
-    errors = [mse(f.image, final) for f in frames]
-    for f, e in zip(frames, errors):
-        raw = mse(machine.raws[f.spp], final)
-        print(f"{f.label}: {e:.3e} from the final image, the raw pass {raw:.3e}")
-        assert e <= raw
-    assert errors == sorted(errors, reverse=True)
+    assert_each_closer(frames, machine, final)
 
 
 def test_a_quick_preview_is_shown_only_over_one_camera_sample():

@@ -112,6 +112,7 @@ class ViewportSession:
         self.recorded = False  # the passes record a buffer (restyles need no new pass)
         self.style: dict | None = None  # a restyled style: later frames are shown restyled
         self._lock = threading.Lock()
+        self._worker: threading.Thread | None = None
         self.schedule = Schedule(self.plan, self.plan_draft if draft else None, clock=clock,
                                  turns=TURNS, on_frame=self._on_frame, warm=self._warm)
 
@@ -137,21 +138,22 @@ class ViewportSession:
 
     @property
     def done(self) -> bool:
-        """Whether the worker has ended (or the schedule ran out of steps)."""
-        return self.schedule.done
+        """Whether the schedule ran out of steps and the worker, where started, has ended."""
+        return self.schedule.done and (self._worker is None or not self._worker.is_alive())
 
     def start(self) -> "ViewportSession":
         """Start the worker. Returns: this session."""
-        self.schedule.start("styletrace-viewport")
-        threading.Thread(target=self._collect, daemon=True).start()
+        self._worker = threading.Thread(target=self._work, name="styletrace-viewport",
+                                        daemon=True)
+        self._worker.start()
         return self
 
-    def _collect(self) -> None:
-        """After the schedule: the garbage of this session and those before it (scenes, buffers,
-        kernels' arrays) collected now, while the view is idle, not in the next session's draft
-        (cel on the interior at 512 x 512, sessions in a row: drafts 0.54, 0.78, 0.90 s after an
-        edit without; 0.22 to 0.35 s in 11 of 12 with)."""
-        self.schedule.join()
+    def _work(self) -> None:
+        """The schedule's steps, then the garbage of this session and those before it (scenes,
+        buffers, kernels' arrays) collected in the same thread, while the view is idle, not in the
+        next session's draft (cel on the interior at 512 x 512, sessions in a row: drafts 0.54,
+        0.78, 0.90 s after an edit without; 0.22 to 0.35 s in 11 of 12 with)."""
+        self.schedule.run()
         if not self.schedule.stopped:
             gc.collect()
 
@@ -161,11 +163,14 @@ class ViewportSession:
         Args:
             wait: seconds to wait at most for the worker to end; 0 returns at once.
         """
-        self.schedule.stop(wait)
+        self.schedule.stop()
+        if wait and self._worker is not None:
+            self._worker.join(wait)
 
     def join(self, timeout: float | None = None) -> None:
         """Wait for the worker to end (None: until it does)."""
-        self.schedule.join(timeout)
+        if self._worker is not None:
+            self._worker.join(timeout)
 
     def latest(self) -> tuple[np.ndarray | None, str]:
         """The newest image (H x W x 3 float32; None before the first) and its label."""
