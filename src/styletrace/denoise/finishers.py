@@ -33,21 +33,22 @@ class Recording:
     Args:
         path: the .npz file the buffer is written to (`--buffer`), or None.
         label: how the buffer names its scene ('': from the job's scene).
-        keep: called with the buffer after the passes (Blender's Record buffer, the viewport, the
-            preview), or None.
-        image_denoised: also where the image denoiser finishes the run (its buffer is the raw
-            one, and each restyle of it is denoised again: `Image.denoiser`; the preview's); else
-            such a run keeps none.
+        keep: called with the buffer after the passes (Blender's Record buffer, the viewport), or
+            None.
+        restyled: the run's frames are restyled whatever its method (the preview's): the buffer
+            is recorded without a path or `keep` too, and also where the image denoiser finishes
+            the run (the raw buffer, each restyle of it denoised again: `Image.denoiser`); without
+            it such a run keeps none (a restyle of the noisy buffer is not its image).
     """
     path: str | None = None
     label: str = ""
     keep: Callable[[Any], None] | None = None
-    image_denoised: bool = False
+    restyled: bool = False
 
     @property
     def wanted(self) -> bool:
         """Whether a buffer is asked for at all."""
-        return self.path is not None or self.keep is not None
+        return self.path is not None or self.keep is not None or self.restyled
 
 
 #: nothing kept
@@ -176,16 +177,17 @@ class Image(Denoised):
         denoising, buffer: as `Denoised`'s; the denoising's footprint: "pixel" (each sample kept in
             its pixel where the film's filter is not a box: `denoise.image.in_pixels`) or "film"
             (the film's image as it is, the image denoiser before issue 37).
-        label, keep: where given, the passes record the raw expectation buffer (`recorded`; `keep`
-            gets it after the passes) and `denoiser` denoises restyles of it (the preview's).
+        record: the passes record the raw expectation buffer (`recorded`), which `denoiser`
+            denoises restyles of (the preview's). label: its scene label. keep: called with it
+            after the passes, or None.
     """
 
-    def __init__(self, denoising: Denoising, buffer: str | None = None, label: str = "",
-                 keep: Callable[[Any], None] | None = None):
+    def __init__(self, denoising: Denoising, buffer: str | None = None, record: bool = False,
+                 label: str = "", keep: Callable[[Any], None] | None = None):
         super().__init__(denoising, buffer)
         from styletrace.denoise.image import check_footprint
         self.footprint = check_footprint(denoising.footprint)
-        self.label, self.keep = label, keep
+        self.record, self.label, self.keep = record, label, keep
         #: the raw buffer of the passes so far, where they record one (None before the first)
         self.recorded = None
         self._guides: dict = {}
@@ -200,8 +202,7 @@ class Image(Denoised):
         from styletrace.denoise.image import in_pixels
         self.in_pixels = (self.footprint == "pixel"
                           and in_pixels(resolved.scene, resolved.integrator))
-        self.resolved = resolved
-        if self.keep is not None:
+        if self.record:
             from styletrace.lookdev.record import check_recordable, scene_label
             if self.in_pixels:  # a restyle develops the film's image: its footprint is the film's
                 raise UsageError("a recorded buffer denoised as an image needs denoise footprint "
@@ -212,8 +213,8 @@ class Image(Denoised):
     def source(self, resolved, executor, lock):
         """The executor's passes; on a film whose filter is not a box, each sample kept in its
         pixel (`denoise.image.in_pixels`; the finisher renders in this process only); recording
-        the raw buffer where a `keep` asks for it."""
-        if self.keep is not None:
+        the raw buffer where asked (`record`)."""
+        if self.record:
             return self._recorded(resolved)
         if not self.in_pixels:
             return executor.source(resolved, lock)
@@ -227,7 +228,8 @@ class Image(Denoised):
             buf.image = prog.image
             self.recorded = buf
             yield prog
-        self.keep(self.recorded)
+        if self.keep is not None:
+            self.keep(self.recorded)
 
     def _finish(self, prog):
         from styletrace.denoise.image import finish_denoised_image
@@ -273,9 +275,7 @@ def finisher_for(resolved: Resolved, recording: Recording = NOTHING) -> Finisher
     if resolved.method == "expectation":
         return Expectation(denoising, r.path, r.label, r.keep)
     if resolved.method == "image":
-        if r.image_denoised:
-            return Image(denoising, r.path, r.label, r.keep)
-        return Image(denoising, r.path)
+        return Image(denoising, r.path, r.restyled, r.label, r.keep)
     if r.wanted:
         from styletrace.lookdev.record import Recorded
         return Recorded(r.path, r.label, r.keep, resolved.job.cap)

@@ -57,7 +57,4 @@ PYTHON = Terms({}, "keyword")
 #: the Blender add-on's render settings, by their labels
 BLENDER = Terms({"samples": "Samples", "spp": "Camera samples", "inner": "Inner samples",
                  "pass_spp": "Camera samples per pass", "seed": "Seed"}, "label")
-#: the browser preview's settings: `styletrace preview`'s flags
-PREVIEW = COMMAND_LINE
-
-__all__ = ["Terms", "COMMAND_LINE", "PYTHON", "BLENDER", "PREVIEW"]
+__all__ = ["Terms", "COMMAND_LINE", "PYTHON", "BLENDER"]

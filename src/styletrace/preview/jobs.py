@@ -24,7 +24,7 @@ from styletrace.lookdev.record import scene_label
 from styletrace.pipeline.denoising import Denoising
 from styletrace.pipeline.job import Job
 from styletrace.pipeline.resolve import Resolved, resolve
-from styletrace.pipeline.terms import PREVIEW
+from styletrace.pipeline.terms import COMMAND_LINE
 from styletrace.progressive.rules import DRAFT_QUALITY, PREVIEW_K, PREVIEW_QUALITY, draft_size
 from styletrace.scene.loading import load_scene
 
@@ -51,7 +51,7 @@ def page_job(scene: Any = None, *, style: str = DEFAULT_STYLE, params: dict | No
             (None: the default). max_camera_samples: the buffer's cap (None: the default).
 
     Returns:
-        The Job, in the preview's terms.
+        The Job, in the command line's terms (the preview's flags are `render`'s).
     """
     builtin = scene is None or isinstance(scene, str) and not scene.lower().endswith(".xml")
     given = {"style": style, **(params or {})}
@@ -60,7 +60,8 @@ def page_job(scene: Any = None, *, style: str = DEFAULT_STYLE, params: dict | No
     return Job(scene=scene, width=width or (DEFAULT_SIZE if builtin else None),
                height=height or (DEFAULT_SIZE if builtin else None), given=given, spp=spp,
                samples=samples, seed=seed, denoising=Denoising(denoise),
-               max_camera_samples=max_camera_samples, terms=PREVIEW)
+               max_camera_samples=max_camera_samples,
+               terms=COMMAND_LINE)  # `styletrace preview` shares render's flags
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,7 @@ def prepare(job: Job) -> Prepared:
         The `Prepared` jobs.
 
     Raises:
-        StyletraceError: a refusal of the render (one line, in the preview's terms), or a split
+        StyletraceError: a refusal of the render (one line, naming the preview's flags), or a split
             over the buffer's cap.
     """
     scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)

@@ -17,7 +17,6 @@ A bad request gets a 4xx with {"error": one line}. The server listens on 127.0.0
 from __future__ import annotations
 
 import base64
-import functools
 import json
 import os
 import sys
@@ -32,10 +31,6 @@ from styletrace.errors import StyletraceError, UsageError
 PAGE = os.path.join(os.path.dirname(__file__), "page.html")
 #: the answers of /api/restyle: a PNG data URL in JSON, or the raw pixels (the page's)
 FORMATS = ("json", "rgba8")
-#: entries of the sRGB table `rgba8` reads: linear [0, 1] in steps of 1/65535, each within half
-#: a step of its value, so a pixel is within one level of `images.srgb8` (measured at 512 x 512 on
-#: the 2-core machine of BENCHMARKS.md: `srgb8` 15 ms, the table 3 ms)
-_STEPS = 65535
 
 
 def styles_table() -> list[dict[str, Any]]:
@@ -93,31 +88,20 @@ def encode_image_file(image, fmt: str) -> bytes:
         os.unlink(tmp)
 
 
-@functools.cache
-def _srgb_table() -> np.ndarray:
-    """`images.srgb8` of linear 0, 1/_STEPS, ..., 1 (made once)."""
-    from styletrace.images import srgb8
-    return srgb8(np.arange(_STEPS + 1, dtype=np.float64) / _STEPS)
-
-
 def rgba8(image) -> bytes:
-    """The image as the page's canvas takes it (`ImageData`): 8-bit sRGB, RGBA, rows from the top.
+    """The image as the page's canvas takes it (`ImageData`): 8-bit sRGB (`images.srgb8`), RGBA,
+    rows from the top.
 
     Args:
         image: H x W x 3, linear (NaN as 0, clamped to [0, 1]).
 
     Returns:
-        H * W * 4 bytes, alpha 255; each channel within one level of `images.srgb8`'s.
+        H * W * 4 bytes, alpha 255.
     """
+    from styletrace.images import srgb8
     x = np.asarray(image, dtype=np.float32)[..., :3]
-    # fmax and fmin drop a NaN for the bound: NaN -> 0 before the cast to an index
-    y = np.fmin(np.fmax(x, np.float32(0.0)), np.float32(1.0))
-    y *= np.float32(_STEPS)
-    y += np.float32(0.5)
-    index = np.empty(x.shape[:2] + (4,), dtype=np.uint16)
-    index[..., :3] = y
-    index[..., 3] = _STEPS  # the table's 255: alpha
-    out = _srgb_table()[index]  # one gather: the table fits in the cache
+    out = np.full(x.shape[:2] + (4,), 255, dtype=np.uint8)
+    out[..., :3] = srgb8(x)
     return out.tobytes()
 
 

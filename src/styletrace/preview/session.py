@@ -147,7 +147,7 @@ class Session:
         return self.schedule.frames
 
     def _recording(self) -> Recording:
-        return Recording(label=self.prepared.label, keep=lambda buf: None, image_denoised=True)
+        return Recording(label=self.prepared.label, restyled=True)
 
     def _draft_plan(self):
         p = self.prepared

@@ -28,7 +28,6 @@ docs/design/progressive_schedule.md.
 """
 from __future__ import annotations
 
-import contextlib
 import threading
 import time
 from dataclasses import dataclass
@@ -45,9 +44,6 @@ from styletrace.progressive.rules import (
     quick_serves,
     worth_showing,
 )
-
-#: the kinds of image, in the order the schedule shows them
-KINDS = ("draft", "pass", "preview", "final")
 
 
 @dataclass(frozen=True)
@@ -112,15 +108,6 @@ class Turns:
     def release(self) -> None:
         self.lock.release()
 
-    @contextlib.contextmanager
-    def first(self):
-        """Hold the lock for a restyle, ahead of the schedule's next step."""
-        self.acquire()
-        try:
-            yield
-        finally:
-            self.lock.release()
-
     def let_waiting_go(self, stopped: Callable[[], bool]) -> None:
         """Before a step: wait while restyles wait for the lock (or until `stopped()`)."""
         while self._waiting and not stopped():
@@ -179,13 +166,9 @@ class Schedule:
 
     @property
     def done(self) -> bool:
-        """Whether every step has run (or one failed, or the schedule was stopped)."""
-        return self._done
-
-    @property
-    def latest(self) -> Frame | None:
-        """The newest Frame shown (None before the first)."""
-        return self.frames[-1] if self.frames else None
+        """Whether every step has run (or one failed, or the schedule was stopped) and the thread,
+        where started, has ended."""
+        return self._done and (self._thread is None or not self._thread.is_alive())
 
     def step(self) -> Frame | None:
         """Run the next step (module doc) under the lock.
@@ -223,9 +206,23 @@ class Schedule:
         finally:
             self._done = True
 
-    def start(self, name: str = "styletrace-progressive") -> "Schedule":
-        """Run the steps in a daemon thread. Returns: this schedule."""
-        self._thread = threading.Thread(target=self.run, name=name, daemon=True)
+    def start(self, name: str = "styletrace-progressive",
+              then: Callable[[], None] | None = None) -> "Schedule":
+        """Run the steps in a daemon thread.
+
+        Args:
+            name: the thread's name. then: called in that thread after the steps, unless stopped
+                (the viewport collects its garbage there), or None.
+
+        Returns:
+            This schedule.
+        """
+        def work():
+            self.run()
+            if then is not None and not self._stop.is_set():
+                then()
+
+        self._thread = threading.Thread(target=work, name=name, daemon=True)
         self._thread.start()
         return self
 
@@ -428,4 +425,4 @@ def denoiser_of(finisher, prog) -> Callable[[np.ndarray], np.ndarray] | None:
     return make(prog)
 
 
-__all__ = ["Schedule", "Frame", "Turns", "KINDS", "children_of", "denoiser_of"]
+__all__ = ["Schedule", "Frame", "Turns", "children_of", "denoiser_of"]
