@@ -24,7 +24,7 @@ def run_cli(*args, env=None):
 
 REFUSED = [
     (["--denoise", "expectation", "--lines"], "feature lines"),
-    (["--denoise", "expectation", "--reuse", "pixels"], "reuse=pixels"),
+    (["--denoise", "expectation", "--reuse", "pixels"], "--reuse pixels"),
     (
         [
             "--denoise",
@@ -39,18 +39,6 @@ REFUSED = [
             "2,2",
         ],
         "first_n_hits",
-    ),
-    (
-        [
-            "--denoise",
-            "expectation",
-            "mixed",
-            "--style",
-            "identity",
-            "--stylize",
-            "first_object_hit",
-        ],
-        "first_object_hit",
     ),
     (
         ["--denoise", "expectation", "--style", "gamma", "--estimator", "series"],

@@ -438,6 +438,7 @@ def attach(
             cover.arrays[SPREAD] = dr.gather(mi.Float, lookup.spread,
                                              mi.UInt32(cover.arrays["pixel"]))
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
+        cover.header["scene"] = buf.header.get("scene", "")  # the points keep the render's name
         if cover.filtered:  # the render loop splatted each point at its sample_pos, not the point's
             cover.image = image_of(cover)
         return d, cover

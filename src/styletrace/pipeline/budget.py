@@ -55,6 +55,8 @@ class Request:
         style_children: the style's own n (`Style.default_inner`; 0 for a closed-form style or an
             integrator without children).
         levels: the stylized levels (`stylize_depth`).
+        object_children: the most children a `styled` BSDF's own style draws at the first level
+            (its own count, which no split changes; 0: no styled object draws children).
         least_camera_samples: the fewest camera samples an auto count may take (2 where the error
             AOVs estimate each pixel's variance).
         denoised: the expectation is denoised before g, so an auto n is at most CHILDREN; False:
@@ -67,6 +69,7 @@ class Request:
     children: tuple[int, ...] | None = None
     style_children: int = 0
     levels: int = 1
+    object_children: int = 0
     least_camera_samples: int = 1
     denoised: bool = False
     terms: Terms = PYTHON
@@ -124,11 +127,14 @@ class Split:
             return ""
         r = self.request
         head = f"samples={r.budget}: spp={self.camera_samples}"
+        # a styled object's own count is not the split's: said, so the line is the whole cost
+        own = (f" (styled objects: their own, up to {r.object_children})"
+               if r.object_children else "")
         if r.closed:
-            return f"{head} (no children)"
+            return f"{head} (no children){own}"
         if r.levels == 1:
             n = self.children[0]
-            return f"{head} x {n} {'child' if n == 1 else 'children'}"
+            return f"{head} x {n} {'child' if n == 1 else 'children'}{own}"
         # several levels: each level's count, as --inner spells them, and what they multiply to
         counts = ",".join(str(self.children[min(k, len(self.children) - 1)])
                           for k in range(r.levels))
@@ -208,8 +214,11 @@ def averages_children(request: Request) -> bool:
         request: the request, before its denoising is chosen.
 
     Returns:
-        True where the first level's n (n0 of an adaptive count) is above 1.
+        True where the first level's n (n0 of an adaptive count) is above 1, the integrator's or
+        a styled object's.
     """
+    if request.object_children > 1:
+        return True
     if request.closed:
         return False
     return int(split(replace(request, denoised=True)).children[0]) > 1

@@ -88,25 +88,22 @@ OFF = Denoising("off")
 def expectation_refusal(integrator) -> str:
     """Why the expectation denoiser cannot render `integrator` ('' where it can).
 
-    Supported: `first_hit` with the integrator's style and per-object (`styled`) styles, the
-    estimators of the children's mean (`MEAN_ESTIMATORS`), fixed counts n (films other than rgb:
-    the buffer's refusal).
+    Supported: `first_hit` with the integrator's style and per-object (`styled`) styles,
+    `first_object_hit` (a vertex behind a mirror, glass or a bounce takes its pixel's D:
+    docs/look.md), the estimators of the children's mean (`MEAN_ESTIMATORS`), fixed counts n
+    (films other than rgb: the buffer's refusal).
 
     Args:
         integrator: the render's `stylized` integrator.
 
     Returns:
-        One line ('stylize=first_object_hit: ...'), or ''.
+        One line ('stylize=first_n_hits: ...'), or ''.
     """
     # config loads Dr.Jit: imported here, so that the command line's parser (which makes Jobs'
     # fields) does not
     from styletrace.config import settings as S
     from styletrace.config.estimator_registry import MEAN_ESTIMATORS
     s = integrator.settings
-    if s.stylize == "first_object_hit":
-        return ("stylize=first_object_hit: its stylized vertex may lie behind a mirror or glass, "
-                "where the pixel's guides describe another surface; use first_hit or --denoise "
-                "image")
     if s.stylize == "first_n_hits" or s.stylize_depth != 1:
         return ("stylize=first_n_hits: nested levels have no per-pixel expectation to denoise (the "
                 "inner levels' vertices are not the pixel's); use first_hit or --denoise image")

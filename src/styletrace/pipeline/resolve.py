@@ -33,7 +33,7 @@ from styletrace.pipeline.job import Job
 from styletrace.pipeline.passes import pass_count, pin_auto_values
 from styletrace.pipeline.sizing import lanes_per_pass
 from styletrace.scene.arguments import SEED_MAX, SPP_MAX, check_integrator, whole
-from styletrace.scene.defaults import ScenePilot, pin_firefly
+from styletrace.scene.defaults import ScenePilot, pin_firefly, unique_styled
 from styletrace.scene.loading import load_scene, scene_spp
 from styletrace.scene.plugins import init
 
@@ -123,13 +123,16 @@ def choose_integrator(scene: mi.Scene, job: Job) -> mi.Integrator:
     return StylizedIntegrator.from_values(scene.integrator().values if values is None else values)
 
 
-def budget_request(job: Job, integrator: mi.Integrator, scene_samples: int) -> Request:
-    """What the job and its integrator say about the render's cost (`budget.Request`).
+def budget_request(job: Job, integrator: mi.Integrator, scene_samples: int,
+                   scene: mi.Scene | None = None) -> Request:
+    """What the job, its integrator and its scene say about the render's cost (`budget.Request`).
 
     Args:
         job: the job (its samples, spp and terms).
         integrator: the job's integrator before its auto values are pinned.
         scene_samples: the scene's sample count (the budget where the job names no samples).
+        scene: the scene, whose `styled` BSDFs' own counts are the request's `object_children`
+            (None: none counted).
 
     Returns:
         The request, not yet denoised. The children count as given where the integrator's values
@@ -145,7 +148,18 @@ def budget_request(job: Job, integrator: mi.Integrator, scene_samples: int) -> R
     s = integrator.settings
     fixed = "inner_samples" in integrator.values or type(integrator) is not StylizedIntegrator
     return Request(**counts, children=s.slot.inner if fixed else None,
-                   style_children=s.slot.style.default_inner, levels=s.stylize_depth)
+                   style_children=s.slot.style.default_inner, levels=s.stylize_depth,
+                   object_children=object_children(scene))
+
+
+def object_children(scene: mi.Scene | None) -> int:
+    """The most children a `styled` BSDF of `scene` draws at the first stylized level (n0 of an
+    adaptive count; 0 for closed-form styles, for no styled BSDF and for None)."""
+    if scene is None:
+        return 0
+    counts = [0 if b.slot.style.closed_form else int(b.slot.inner[0])
+              for b in unique_styled(scene)]
+    return max(counts, default=0)
 
 
 def with_inner(integrator: StylizedIntegrator, inner: tuple[int, ...]) -> StylizedIntegrator:
@@ -225,7 +239,7 @@ def resolve(job: Job, scene: mi.Scene | None = None, local: bool = True) -> Reso
     if scene is None:
         scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
     chosen = choose_integrator(scene, job)
-    request = budget_request(job, chosen, scene_spp(scene))
+    request = budget_request(job, chosen, scene_spp(scene), scene)
     method, note = choose_method(scene, chosen, request, job.denoising, local, job.cap)
     expectation = method == "expectation"
     if expectation:  # g meets the denoised expectation, within what its buffer holds
@@ -248,4 +262,4 @@ def resolve(job: Job, scene: mi.Scene | None = None, local: bool = True) -> Reso
 
 
 __all__ = ["Resolved", "resolve", "pin_auto_values", "choose_integrator", "job_integrator_values",
-           "lanes_for", "budget_request", "with_inner", "with_firefly"]
+           "lanes_for", "budget_request", "object_children", "with_inner", "with_firefly"]
