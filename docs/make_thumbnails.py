@@ -1,11 +1,12 @@
 """Render the thumbnail of every style for docs/styles.md: `.venv/bin/python
-docs/make_thumbnails.py`.
+docs/make_thumbnails.py [STYLE ...]` (no names: every style, and docs/teaser.png).
 
 Each style is rendered on the built-in dragon scene at 160x160 with its default parameters except
 those in OVERRIDES, and its default inner sample count (at least 8, so affine styles are not shown
-at 1).
+at 1). A style whose values are not colours is shown through DISPLAY.
 """
 import os
+import sys
 
 import styletrace
 from styletrace.images import write_image
@@ -23,23 +24,32 @@ OVERRIDES = {
 }
 
 
+#: a debug style's values mapped to colours for its thumbnail: coordinate's (s_x, s_y, method), s in
+#: pixels from the image centre, becomes (s_x / SIZE + 0.5, s_y / SIZE + 0.5, method / 5)
+DISPLAY = {
+    "coordinate": lambda img: img / [SIZE, SIZE, 5] + [0.5, 0.5, 0.0],
+}
+
 #: styles side by side in docs/teaser.png, the README's first picture
 TEASER = ("identity", "cel", "color_map", "hatching", "tie_dye")
 
 
-def main():
+def main(names=()):
     import numpy as np
 
     out = os.path.join(os.path.dirname(__file__), "styles")
     os.makedirs(out, exist_ok=True)
     images = {}
-    for name in style_names():
+    for name in names or style_names():
         inner = max(style_class(name).default_inner, 8)
         img = styletrace.render("dragon", style=name, spp=SPP, inner=inner, width=SIZE, height=SIZE,
                                 **OVERRIDES.get(name, {}))
+        img = DISPLAY.get(name, lambda x: x)(img)
         write_image(img, os.path.join(out, f"{name}.png"))
         images[name] = img
         print(name, flush=True)
+    if names:  # a few thumbnails re-rendered: the teaser stays
+        return
     write_image(
         np.concatenate([images[n] for n in TEASER], axis=1),
         os.path.join(os.path.dirname(__file__), "teaser.png"),
@@ -47,4 +57,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    main(tuple(sys.argv[1:]))

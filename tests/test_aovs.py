@@ -43,7 +43,8 @@ def test_the_exr_carries_named_aov_channels(tmp_path):
     [
         (["-o", "x.png"], "--aovs writes its channels into an .exr"),
         (["--spp", "1", "-o", "x.exr"], "at least 2 camera samples per pixel"),
-        (["--estimator", "series", "--style", "gamma", "-o", "x.exr"], "use estimator=direct"),
+        (["--estimator", "series", "--style", "gamma", "-o", "x.exr"],
+         "--aovs with estimator 'series'"),
     ],
 )
 def test_refusals_are_one_line(tmp_path, capsys, extra, why):

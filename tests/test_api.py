@@ -183,3 +183,19 @@ def test_the_split_into_passes_depends_only_on_the_counts():
     assert api.pass_size(64, 64, 100) == (api.tiles(64, 64), 100)
     assert api.pass_size(2048, 2048, 100)[1] == 1 and len(api.pass_size(2048, 2048, 100)[0]) == 4
     assert api.pass_size(64, 64, 100, pass_spp=7)[1] == 7
+
+
+def test_the_default_style_is_identity_in_python_and_cel_on_the_command_line(capsys, tmp_path):
+    """The one default front ends do not share (docs/look.md, render()'s docstring): Python, the
+    `stylized` plugin and Blender render physically based; the command line and the preview start
+    from cel."""
+    from styletrace.config.settings import COMMAND_LINE_STYLE, PROPERTIES
+    from styletrace.frontends.cli import main
+    small = dict(width=8, height=8, spp=2, denoise="off")
+    np.testing.assert_array_equal(styletrace.render("furnace", **small),
+                                  styletrace.render("furnace", style="identity", **small))
+    assert next(p for p in PROPERTIES if p.name == "style").default == "identity"
+    assert main(["render", "furnace", "--width", "8", "--height", "8", "--spp", "2", "--denoise",
+                 "off", "-o", str(tmp_path / "cel.exr")]) == 0
+    assert f", {COMMAND_LINE_STYLE}(" in capsys.readouterr().err.splitlines()[-1]
+    assert COMMAND_LINE_STYLE == "cel"

@@ -265,3 +265,23 @@ def test_the_plain_encoder_keeps_the_aov_channels(tmp_path):
     assert [name for name, _ in a.split()] == [name for name, _ in b.split()]
     for (_, x), (_, y) in zip(a.split(), b.split()):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
+
+
+@pytest.mark.skipif(not os.path.isdir("/sys"), reason="needs Linux's /sys")
+def test_a_folder_that_refuses_new_files_is_refused_before_the_render():
+    """/sys passes `os.access(W_OK)` for root but refuses file creation: the check makes a file
+    to know (one line, naming the output and the folder)."""
+    with pytest.raises(styletrace.UsageError) as info:
+        images.check_target("/sys/out.png")
+    message = str(info.value)
+    assert "\n" not in message and message.startswith("cannot write '/sys/out.png': ")
+    # root: the folder refuses the attempt; anyone else: the permission bits already do
+    assert ("folder '/sys' refuses new files" in message) == os.access("/sys", os.W_OK)
+
+
+def test_the_check_of_a_target_leaves_its_folder_as_it_was(tmp_path):
+    (tmp_path / "old.png").write_bytes(b"old")
+    images.check_target(str(tmp_path / "new.exr"))
+    images.check_target(str(tmp_path / "old.png"))
+    assert sorted(os.listdir(tmp_path)) == ["old.png"]
+    assert (tmp_path / "old.png").read_bytes() == b"old"

@@ -35,6 +35,18 @@ def test_first_use_of_the_api_initialises_the_backend():
     assert words[0] == "True" and words[1].endswith("_rgb") and words[2] == "True"
 
 
+def test_scene_dict_is_served_after_a_bare_import():
+    """docs/guide.md builds a per-object scene from `styletrace.scene_dict` after `import
+    styletrace` alone (it once named `styletrace.frontends.api`, which that import does not
+    load)."""
+    r = run_child(
+        "import styletrace; d = styletrace.scene_dict('dragon', 8, 8); "
+        "print(d['type'], 'dragon' in d, 'scene_dict' in styletrace.__all__)"
+    )
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["scene", "True", "True"]
+
+
 def test_the_plugin_modules_import_on_their_own():
     """`styletrace.render` was both a function and a subpackage; the plugins now live in
     `styletrace.kernel`."""

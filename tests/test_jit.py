@@ -104,6 +104,34 @@ def test_a_chosen_variant_wins_over_cuda(monkeypatch):
     assert jit.select_variant() == "llvm_ad_rgb" and mi.variant() == "llvm_ad_rgb"
 
 
+def test_a_cuda_variant_without_cuda_is_one_backend_error(monkeypatch):
+    """`styletrace.init("cuda_ad_rgb")` where CUDA does not work: the documented BackendError in
+    one line (not Dr.Jit's traceback from `mi.set_variant`), and the active variant stays."""
+    import mitsuba as mi
+
+    import styletrace
+    before = styletrace.init()
+    monkeypatch.setattr(jit, "cuda_usable", lambda: False)
+    monkeypatch.delenv("STYLETRACE_NO_CUDA", raising=False)
+    with pytest.raises(styletrace.BackendError) as info:
+        styletrace.init("cuda_ad_rgb")
+    assert str(info.value) == ("cannot use variant 'cuda_ad_rgb': CUDA does not work here: no "
+                               "NVIDIA GPU or driver; use llvm_ad_rgb, the CPU backend")
+    assert mi.variant() == before
+
+
+def test_a_cuda_variant_with_cuda_switched_off_names_the_switch():
+    r = _import_in_child(
+        {"STYLETRACE_NO_CUDA": "1"},
+        "import styletrace\ntry:\n    styletrace.init('cuda_ad_rgb')\n"
+        "except styletrace.BackendError as exc:\n    print(exc)\nprint(styletrace.init())",
+    )
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.splitlines() == [
+        "cannot use variant 'cuda_ad_rgb': STYLETRACE_NO_CUDA is set; use llvm_ad_rgb, the CPU "
+        "backend", "llvm_ad_rgb"]
+
+
 def test_command_without_llvm_is_one_line_and_exit_2(tmp_path):
     """The command line turns a backend failure (no usable libLLVM) into its one-line error."""
     fake = tmp_path / "libLLVM-15.so"

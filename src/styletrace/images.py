@@ -493,7 +493,8 @@ def check_target(path: str) -> None:
 
     Raises:
         UsageError: a device (/dev/null too: the rename would replace the device node), fifo,
-            socket or folder (all left untouched), a missing folder, or no write permission.
+            socket or folder (all left untouched), a missing folder, no write permission, or a
+            folder that refuses the temporary file the write makes (tried: created and removed).
     """
     kind = unwritable_kind(path)
     if kind is not None:
@@ -507,9 +508,35 @@ def check_target(path: str) -> None:
     if not os.access(folder, os.W_OK) or (os.path.exists(target)
                                           and not os.access(target, os.W_OK)):
         raise UsageError(f"cannot write {path!r}: permission denied")
+    check_folder_takes_files(folder, path, "." + os.path.basename(target) + ".")
+
+
+def check_folder_takes_files(folder: str, path: str, prefix: str = ".styletrace.") -> None:
+    """Check that a new file can be made in `folder` by making one (a temporary `.part` file, as
+    `write_bytes_atomically` makes) and removing it.
+
+    Permission bits do not bind root, and /sys, /proc or a read-only mount pass `os.access` for
+    it; only an attempt tells.
+
+    Args:
+        folder: an existing folder. path: the output named in the error. prefix: the temporary
+            file's name prefix.
+
+    Raises:
+        UsageError: the folder refuses the file (one line naming `path` and the folder).
+    """
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=prefix, suffix=".part", dir=folder)
+    except OSError as exc:
+        raise UsageError(f"cannot write {path!r}: folder {folder!r} refuses new files "
+                         f"({exc.strerror or exc})") from None
+    os.close(fd)
+    os.remove(tmp)
+
 
 __all__ = [
     "check_target",
+    "check_folder_takes_files",
     "IMAGE_TYPES",
     "PIXEL_FORMATS",
     "AOV_CHANNELS",

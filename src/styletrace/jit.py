@@ -201,7 +201,8 @@ def select_variant(requested: str | None = None) -> str:
         The active variant.
 
     Raises:
-        BackendError: a variant styles cannot run on or this Mitsuba lacks, or no usable backend.
+        BackendError: a variant styles cannot run on or this Mitsuba lacks, a CUDA variant where
+            CUDA does not work, or no usable backend.
     """
     if requested is not None:
         check_variant(requested)
@@ -211,8 +212,18 @@ def select_variant(requested: str | None = None) -> str:
         if requested not in mi.variants():
             raise BackendError(f"unknown variant {requested!r}: this Mitsuba has "
                                f"{', '.join(mi.variants())}")
+        if requested.startswith("cuda") and backend != "cuda":
+            # Mitsuba would fail deep in Dr.Jit's initialisation, with its own traceback
+            why = ("STYLETRACE_NO_CUDA is set" if os.environ.get("STYLETRACE_NO_CUDA")
+                   else "CUDA does not work here: no NVIDIA GPU or driver")
+            raise BackendError(f"cannot use variant {requested!r}: {why}; use llvm_ad_rgb, the "
+                               f"CPU backend")
         if mi.variant() != requested:
-            mi.set_variant(requested)
+            try:
+                mi.set_variant(requested)
+            except ImportError as exc:  # a backend Dr.Jit cannot start: its message, one line
+                first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+                raise BackendError(f"cannot use variant {requested!r}: {first}") from None
         return requested
     current = mi.variant()
     if current:

@@ -148,3 +148,19 @@ def test_a_list_of_scene_files_renders_one_numbered_frame_each(ray_cluster, tmp_
         )
     first, second = (np.array(mi.Bitmap(str(tmp_path / f"seq_{k:04d}.exr"))) for k in range(2))
     assert not np.array_equal(first, second)
+
+
+def test_frames_without_spp_print_the_auto_values_and_the_resolved_spp(ray_cluster, tmp_path):
+    """The split of `--samples` is resolved per scene: the frames' run names it on the auto-values
+    line and its summary gives the camera samples it rendered (it once said `spp None`)."""
+    r = subprocess.run(
+        [sys.executable, "-m", "styletrace", "render", "cornell-box", "--width", "16", "--height",
+         "16", "--samples", "4", "--frames", "2", "-o", str(tmp_path / "t.png"), "--ray",
+         ray_cluster],
+        env=child_env(), capture_output=True, text=True, timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    auto = [line for line in r.stderr.splitlines() if line.startswith("styletrace: auto values:")]
+    assert len(auto) == 1 and "samples=4: spp=1 x 4 children" in auto[0], r.stderr
+    summary = r.stderr.strip().splitlines()[-1]
+    assert summary.startswith("wrote 2 frames") and summary.endswith("spp 1)"), summary

@@ -2,6 +2,8 @@
 written; the equal-time section's numbers agree with renders redone here and its verdicts follow
 its ratios."""
 import json
+import os
+import re
 
 import numpy as np
 import pytest
@@ -203,3 +205,18 @@ def test_mse_of_non_finite_renders_is_honest_and_quiet():
         warnings.simplefilter("error")
         assert np.isinf(mse(img, np.zeros_like(ref))) and np.isnan(mse(img, ref))
         assert mse(np.ones((2, 2, 3), np.float32), np.zeros_like(ref)) == 1.0
+
+
+def test_the_guide_gives_the_time_of_the_committed_gallery_run():
+    """docs/guide.md once gave two totals for one run (157 s and 525 s): the one it gives is the
+    `seconds` of docs/gallery/gallery.json, which docs/gallery/index.md shows."""
+    docs = os.path.join(os.path.dirname(__file__), "..", "..", "docs")
+    with open(os.path.join(docs, "gallery", "gallery.json"), encoding="utf-8") as f:
+        seconds = round(json.load(f)["seconds"])
+    with open(os.path.join(docs, "guide.md"), encoding="utf-8") as f:
+        guide = f.read()
+    with open(os.path.join(docs, "gallery", "index.md"), encoding="utf-8") as f:
+        assert f"total {seconds} s" in f.read()
+    stated = {int(t) for t in
+              re.findall(r"default gallery[^.]*?(?:took|takes about) (\d+) s", guide)}
+    assert stated == {seconds}, stated

@@ -34,6 +34,16 @@ def test_every_table_has_its_block():
             assert f"<!-- reference:style:{name} -->" in styles_md, name
 
 
+@pytest.mark.parametrize("name", style_names())
+def test_every_style_has_its_section_and_thumbnail_in_styles_md(name):
+    """`styletrace styles` lists the registry; docs/styles.md shows each with a thumbnail that
+    exists (docs/make_thumbnails.py makes them; `coordinate` was listed but not shown)."""
+    styles_md = open(os.path.join(ROOT, "docs", "styles.md"), encoding="utf-8").read()
+    assert f"\n## {name}\n" in styles_md
+    assert f"![{name}](styles/{name}.png)" in styles_md
+    assert os.path.isfile(os.path.join(ROOT, "docs", "styles", f"{name}.png"))
+
+
 def test_the_tables_carry_every_registry_entry():
     table = reference.integrator_table()
     for p in PROPERTIES:

@@ -50,7 +50,7 @@ def test_bad_files(buf, tmp_path):
         load_buffer(str(tmp_path / "none.npz"))
     junk = tmp_path / "junk.npz"
     junk.write_bytes(b"not a zip")
-    with pytest.raises(UsageError, match="cannot read buffer file"):
+    with pytest.raises(UsageError, match="'.*junk.npz' is not a styletrace buffer"):
         load_buffer(str(junk))
     newer = dict(buf.header, version=VERSION + 1)
     path = str(tmp_path / "newer.npz")
@@ -64,6 +64,29 @@ def test_bad_files(buf, tmp_path):
         buf.save(str(tmp_path / "b.exr"))
     with pytest.raises(UsageError, match="does not exist"):
         buf.save(str(tmp_path / "no" / "b.npz"))
+
+
+@pytest.mark.parametrize("make", ["xml", "other arrays", "other header"])
+def test_a_file_that_is_no_buffer_is_named_in_one_line(make, tmp_path, capsys):
+    """A scene file, numpy's own .npz or another program's header: "not a styletrace buffer",
+    never numpy's advice on pickles; `styletrace restyle` says it with exit status 2."""
+    if make == "xml":
+        path = tmp_path / "scene.xml"
+        path.write_text('<scene version="3.0.0"/>')
+    elif make == "other arrays":
+        path = tmp_path / "other.npz"
+        np.savez(path, a=np.zeros(3))
+    else:
+        path = tmp_path / "header.npz"
+        np.savez(path, header=np.frombuffer(b'{"format": "else"}', dtype=np.uint8))
+    with pytest.raises(UsageError) as info:
+        load_buffer(path)
+    assert str(info.value) == (f"{str(path)!r} is not a styletrace buffer: expected the .npz file "
+                               f"of `styletrace render --buffer` or Buffer.save")
+    from styletrace.frontends.cli import main
+    assert main(["restyle", str(path), "--style", "cel", "-o", str(tmp_path / "r.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is not a styletrace buffer" in err and "pickle" not in err
 
 
 def test_a_saved_buffer_keeps_its_pilot_and_camera(buf, tmp_path):

@@ -1,5 +1,8 @@
 """`styletrace render --buffer`, `restyle`, `fit` on the command line."""
+import os
+
 import numpy as np
+import pytest
 
 from styletrace.frontends import cli
 from styletrace.gate import mi
@@ -87,3 +90,47 @@ def test_preview_refuses_a_bad_start_in_one_line(capsys):
     assert "style 'acp' cannot be previewed" in capsys.readouterr().err
     assert cli.main(["preview", "--spp", "100000", "--width", "64", "--height", "64"]) == 2
     assert "over the preview's cap" in capsys.readouterr().err
+
+
+def test_the_buffer_sizes_in_the_help_are_the_files_written(tmp_path):
+    """`--buffer`'s help states what a user sees: at the defaults (denoised) the file holds the
+    coverage points, 64 per pixel at 65 bytes, plus the pilot; the help's 128x128 and capped
+    figures follow from a small file's measured parts."""
+    from styletrace.denoise.coverage import DEFAULT_K
+    from styletrace.frontends.lookdev_commands import BUFFER_HELP
+    from styletrace.lookdev.buffer import bytes_per_camera_sample
+    from styletrace.pipeline.budget import MAX_CAMERA_SAMPLES
+
+    path = tmp_path / "b.npz"
+    # --denoise auto as a user has it (the tests' environment sets $STYLETRACE_DENOISE=off)
+    assert cli.main(["render", "dragon", "--width", "16", "--height", "16", "-q", "--denoise",
+                     "auto", "--buffer", str(path), "-o", str(tmp_path / "b.png")]) == 0
+    per = bytes_per_camera_sample("first_hit")
+    with np.load(path) as z:
+        points = z["pixel"].shape[0]
+        pilot = sum(z[k].nbytes for k in z.files if k.startswith("pilot"))
+        own = sum(z[k].nbytes for k in z.files if not k.startswith("pilot") and k != "header")
+    assert points == 16 * 16 * DEFAULT_K and own == points * per
+    assert f"65 bytes each: {DEFAULT_K} per pixel ({DEFAULT_K * per / 1000:.1f} kB a pixel" in \
+        BUFFER_HELP and per == 65
+    assert f"{(128 * 128 * DEFAULT_K * per + pilot) / 1e6:.1f} MB at 128x128" in BUFFER_HELP
+    assert f"{MAX_CAMERA_SAMPLES} points (about " \
+        f"{(MAX_CAMERA_SAMPLES * per + pilot) / 1e6:.0f} MB" in BUFFER_HELP
+    assert f"pilot's {pilot / 2**20:.1f} MiB" in BUFFER_HELP
+    root = os.path.join(os.path.dirname(__file__), "..", "..")
+    for name in ("README.md", "docs/lookdev.md", "docs/cli.md"):  # the same figures
+        with open(os.path.join(root, name), encoding="utf-8") as f:
+            text = " ".join(f.read().split())
+        assert f"{(128 * 128 * DEFAULT_K * per + pilot) / 1e6:.1f} MB" in text, name
+        assert f"{DEFAULT_K} points per pixel" in text, name
+        assert "65 bytes per camera sample" in text, name
+
+
+@pytest.mark.parametrize("denoise", ["off", "auto"])
+def test_the_buffer_header_keeps_a_built_in_scenes_name(denoise, tmp_path):
+    """docs/lookdev.md: the header records the scene's name, for a built-in scene its name."""
+    path = tmp_path / "b.npz"
+    assert cli.main(["render", "furnace", "--width", "8", "--height", "8", "--samples", "4", "-q",
+                     "--denoise", denoise, "--buffer", str(path), "-o",
+                     str(tmp_path / "b.png")]) == 0
+    assert load_buffer(str(path)).header["scene"] == "furnace"

@@ -90,3 +90,40 @@ def test_bad_requests(buf):
         fit(buf, style="identity", target=target)
     with pytest.raises(UsageError, match="bad fixed parameter 'nope'"):
         fit(buf, style="cel", target=target, fixed=("nope",))
+
+
+def test_the_printed_restyle_line_is_accepted_and_gives_the_fitted_image(buf, tmp_path, capsys):
+    """Thresholds that differ only past the 6 digits `styletrace fit` prints (here: a start
+    0.2,0.2000001 that a tiny step leaves in place) once printed as 0.2,0.2, which the command line
+    refuses ("must increase"): the printed values are the fit's, strictly increasing as printed."""
+    import shlex
+
+    from styletrace.frontends.cli import main
+    path, target = str(tmp_path / "b.npz"), str(tmp_path / "t.exr")
+    buf.save(path)
+    from styletrace.images import write_image
+    write_image(restyle(buf, style="cel", thresholds=(0.3,), levels=(0.1, 0.8)), target)
+    fitted = str(tmp_path / "fitted.exr")
+    assert main(["fit", path, "--style", "cel", "--target", target, "--set",
+                 "thresholds=0.2,0.2000001", "--iterations", "1", "--lr", "1e-12", "-o",
+                 fitted]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    assert "thresholds=0.2,0.200001 " in line
+    again = str(tmp_path / "again.exr")
+    assert main(shlex.split(line)[1:] + ["-o", again]) == 0, capsys.readouterr().err
+    from styletrace.gate import mi
+    assert np.array_equal(np.array(mi.Bitmap(again)), np.array(mi.Bitmap(fitted)))
+
+
+@pytest.mark.parametrize("values,shown", [
+    ((0.199919, 0.199919), "0.199919,0.19992"),
+    ((0.5, 0.4, 0.4), "0.5,0.500001,0.500002"),
+    ((0.0, 0.0), "0,1e-06"),
+    ((-2.0, -2.0), "-2,-1.99999"),
+    ((0.1234567, 0.9), "0.123457,0.9"),
+])
+def test_increasing_values_are_strictly_increasing_as_printed(values, shown):
+    from styletrace.lookdev.fit import as_printed
+    from styletrace.styles import style_class
+    p = next(q for q in style_class("cel").params if q.name == "thresholds")
+    assert p.show(as_printed(p, values, increasing=True)) == shown

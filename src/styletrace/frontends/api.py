@@ -65,7 +65,9 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
     Args:
         scene: a built-in name, a Mitsuba XML file, a scene dict or an mi.Scene (None: the Cornell
             box).
-        style: the style's name (None: the scene's own `stylized` integrator's, else identity).
+        style: the style's name (None: the scene's own `stylized` integrator's, else identity,
+            as the `stylized` plugin's default and Blender's render setting; the command line
+            and the preview start from cel instead).
         samples: paths per pixel, the render's cost whatever the style (None: the scene's sample
             count), split into spp camera samples x inner children (`pipeline.budget`).
         spp: camera samples per pixel; inner: children per stylized vertex (a count, one per

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import warnings
-from typing import Sequence
+from typing import Mapping, Sequence
 
 from styletrace.errors import StyletraceError, UsageError
 from styletrace.frontends.status import Status
@@ -301,13 +302,16 @@ def check_gallery_folder(path: str) -> None:
         path: the folder.
 
     Raises:
-        UsageError: not a folder, not writable, or it cannot be created.
+        UsageError: not a folder, not writable (a file cannot be made in it: /sys as root too), or
+            it cannot be created.
     """
     if os.path.exists(path):
         if not os.path.isdir(path):
             raise UsageError(f"bad output {path!r}: expected a folder")
         if not os.access(path, os.W_OK):
             raise UsageError(f"cannot write into {path!r}: permission denied")
+        from styletrace.images import check_folder_takes_files
+        check_folder_takes_files(path, path)
         return
     parent = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(parent):
@@ -330,6 +334,17 @@ class Parser(argparse.ArgumentParser):
         self.exit(2, one_line(f"styletrace: error: {message} (see '{self.prog} --help')") + "\n")
 
 
+def builtin_scenes() -> str:
+    """The built-in scenes' names for a help text, from the one registry
+    (`scene.builtin.BUILTIN`), the default first.
+
+    Returns:
+        The names, comma-separated.
+    """
+    from styletrace.scene.builtin import BUILTIN, DEFAULT
+    return ", ".join([DEFAULT, *(name for name in BUILTIN if name != DEFAULT)])
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = Parser(
         prog="styletrace", description="Stylized global illumination as a function of expectation."
@@ -341,7 +356,7 @@ def build_parser() -> argparse.ArgumentParser:
         "scene",
         nargs="*",
         default=[],
-        help="built-in scene (cornell-box, dragon, mixed, furnace) or a Mitsuba XML file "
+        help=f"built-in scene ({builtin_scenes()}) or a Mitsuba XML file "
         "(default: cornell-box); several XML files render as numbered frames on Ray",
     )
     r.add_argument(
@@ -377,10 +392,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="camera samples per pixel, each with --inner children (default: auto, from "
         "--samples)",
     )
-    r.add_argument("--width", type=int, default=None, help="image width (resizes the scene's film)")
-    r.add_argument(
-        "--height", type=int, default=None, help="image height (resizes the scene's film)"
-    )
+    r.add_argument("--width", type=int, default=None,
+                   help="image width (resizes the scene's film; default: the film's, 256 for the "
+                   "built-in scenes but furnace, 64)")
+    r.add_argument("--height", type=int, default=None,
+                   help="image height (resizes the scene's film; default: as --width)")
     r.add_argument(
         "-D",
         "--define",
@@ -391,16 +407,19 @@ def build_parser() -> argparse.ArgumentParser:
              "repeatable",
     )
     r.add_argument(
-        "--seed", type=int, default=0, help="random seed; the same seed gives the same image"
+        "--seed", type=int, default=0,
+        help="random seed, 0 to 2^32 - 1; the same seed gives the same image (default: 0)"
     )
     r.add_argument(
         "--pass-spp", type=int, default=None,
         help="camera samples per pixel per pass (default: by memory)"
     )
     r.add_argument(
-        "-o", "--output", default="render.png", help="output image: .exr (linear) or .png (sRGB)"
+        "-o", "--output", default="render.png",
+        help="output image: .exr (linear) or .png (sRGB) (default: render.png)"
     )
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    r.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, notes, auto values or summary")
     r.add_argument(
         "--denoise",
         choices=("auto", "expectation", "image", "off"),
@@ -545,6 +564,54 @@ def add_setting_flags(parser) -> None:
         )
 
 
+#: setting flags `render` adds itself (the others come from `settings.PROPERTIES`' `flag`)
+OWN_SETTING_FLAGS = {"aovs": "--aovs"}
+
+
+def typed_flags(args) -> dict[str, str]:
+    """The integrator properties this command line set with their own flags, and those flags.
+
+    A property also given with `--set NAME=VALUE` is left out: that value wins
+    (`command_job.given_flags`), and the user typed its name.
+
+    Args:
+        args: the parsed arguments (of any subcommand; one without setting flags gives {}).
+
+    Returns:
+        {property name: flag}, e.g. {"inner_samples": "--inner"}.
+    """
+    from styletrace.config import settings
+    try:
+        by_set = _parse_set(getattr(args, "set", None) or [])
+    except UsageError:
+        by_set = {}
+    flags = {p.name: p.flag for p in settings.PROPERTIES if p.flag} | OWN_SETTING_FLAGS
+    return {name: flag for name, flag in flags.items()
+            if getattr(args, name, None) is not None and name not in by_set}
+
+
+def in_flag_terms(message: str, flags: Mapping[str, str]) -> str:
+    """An error of the settings (which names properties, as Python callers write them) in the
+    words the user typed on the command line: `for 'inner_samples'` becomes `for --inner`, and
+    `aovs=True` or `reuse=pixels` becomes `--aovs` or `--reuse pixels`, for the given flags only.
+
+    Args:
+        message: the error's one line. flags: {property: flag} (`typed_flags`).
+
+    Returns:
+        The message, translated.
+    """
+    for name, flag in flags.items():
+        switch = name in OWN_SETTING_FLAGS or name == "lines"  # flags without a value
+        if switch:  # the user typed no value: the flag itself is what is refused
+            message = message.replace(f"bad value True for '{name}'", flag)
+        message = message.replace(f"for '{name}'", f"for {flag}")
+        message = re.sub(rf"(?<![\w.-]){re.escape(name)}=(?:True|true)\b" if switch
+                         else rf"(?<![\w.-]){re.escape(name)}=(?=\w)",
+                         flag if switch else f"{flag} ", message)
+    return message
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """The `styletrace` command.
 
@@ -552,9 +619,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         argv: the arguments (None: sys.argv[1:]).
 
     Returns:
-        The exit status: the command's; 2 after a one-line error (a StyletraceError, bad usage);
-        130 after Ctrl-C.
+        The exit status: the command's; 2 after a one-line error (a StyletraceError, bad usage),
+        which names a setting by the flag the user typed (`in_flag_terms`); 130 after Ctrl-C.
     """
+    args = None
     try:
         # the flags' help comes from the settings table, which needs the backend: errors there are
         # one line too
@@ -564,7 +632,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         say("styletrace: interrupted")
         return 130
     except StyletraceError as exc:
-        say(f"styletrace: error: {exc}")
+        message = str(exc) if args is None else in_flag_terms(str(exc), typed_flags(args))
+        say(f"styletrace: error: {message}")
         return 2
 
 

@@ -17,12 +17,17 @@ from functools import partial
 
 from styletrace.errors import UsageError
 
+#: `--buffer`'s help: the sizes a user sees (tests/lookdev/test_commands.py measures them)
 BUFFER_HELP = (
-    "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`; at most "
-    "4194304 camera samples (512x512 at 16 spp), 65 bytes each (81 with first_object_hit); with an "
-    "unbiased estimator (series*, ustat, naive, telescoping, combined) it stores each sample's "
-    "children and uniforms: at most 1048576 camera samples and 64 children per sample on average, "
-    "57 bytes + 13 per child + 5 per uniform each"
+    "also write the expectation buffer (.npz) for `styletrace restyle`/`fit`. Denoised (as at the "
+    "defaults) it holds the denoised expectation at the --coverage points, 65 bytes each: 64 per "
+    "pixel (4.2 kB a pixel: 69.7 MB at 128x128), fewer where they would pass 4194304 points "
+    "(about 274 MB from 256x256 up). Not denoised, it holds the camera samples: 65 bytes each (81 "
+    "with first_object_hit; 77 with --coverage 0, which keeps them denoised), at most 4194304 "
+    "(512x512 at 16 spp); with an unbiased estimator (series*, ustat, naive, telescoping, "
+    "combined) it stores each sample's children and uniforms: at most 1048576 camera samples and "
+    "64 children per sample on average, 57 bytes + 13 per child + 5 per uniform each. Each file "
+    "adds the pilot's 1.5 MiB"
 )
 
 

@@ -97,6 +97,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     from styletrace.pipeline.orbit import turntable
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
+    from styletrace.pipeline.signals import one_line
     from styletrace.pipeline.sizing import lanes_per_pass
     from styletrace.scene.plugins import init
 
@@ -124,10 +125,14 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     lanes, note = lanes_per_pass(variant)
     if note and not args.quiet:
         say(f"styletrace: {note}")
-    frames, values, specs = [], [], []
+    frames, values, specs, spps = [], [], [], []
     for name in scenes:  # each file resolved here once: a broken one fails before any frame renders
         asked = job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes)
         resolved = resolve(asked)
+        spps.append(resolved.spp)
+        if resolved.auto and not args.quiet:  # as a single image's run says them, to pin them
+            which = f"{one_line(name)}: " if len(scenes) > 1 else ""
+            say(f"styletrace: auto values: {which}{resolved.auto}")
         Runner(resolved, OnRay(cluster))  # the refusals of its frames' runs, before any renders
         job = ray_job(resolved)
         if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
@@ -159,7 +164,9 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             f"(--resume continues)")
         return status
     if not args.quiet:
-        say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {args.spp})")
+        # the resolved split's camera samples (--spp may be absent), one value per distinct count
+        spp = ", ".join(str(n) for n in sorted(set(spps)))
+        say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {spp})")
     return 0
 
 __all__ = ["cluster_of", "executor_of", "frame_paths", "frames_command"]

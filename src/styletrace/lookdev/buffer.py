@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import zipfile
 from collections.abc import MutableMapping
 from dataclasses import dataclass, field
 from typing import Any, Iterator
@@ -412,11 +413,18 @@ def load_buffer(path: str) -> Buffer:
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise UsageError(f"buffer file {path!r} does not exist")
+    # np.load reads any other file as a pickle and answers with its advice on pickles
+    foreign = UsageError(f"{path!r} is not a styletrace buffer: expected the .npz file of "
+                         f"`styletrace render --buffer` or Buffer.save")
+    if not zipfile.is_zipfile(path):
+        raise foreign
     try:
         with np.load(path, allow_pickle=False) as z:
+            if "header" not in z.files:
+                raise foreign
             header = json.loads(bytes(z["header"]).decode("utf-8"))
             if not isinstance(header, dict) or header.get("format") != FORMAT:
-                raise ValueError("not a styletrace buffer")
+                raise foreign
             if header.get("version") not in range(1, VERSION + 1):
                 raise UsageError(
                     f"buffer file {path!r} has format version {header.get('version')!r}; this "

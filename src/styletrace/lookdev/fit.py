@@ -45,6 +45,9 @@ NOT_FITTED = {
 }
 #: styles whose steps have no smoothed surrogate
 NOT_SMOOTHED = ("halftone",)
+#: parameters whose values the style requires strictly increasing (its `validate` refuses others):
+#: kept sorted while fitting, and strictly increasing as printed at the end
+INCREASING = {"cel": "thresholds", "color_map": "range"}
 
 
 @dataclass
@@ -88,6 +91,32 @@ def _plain_value(kind: str, flat: np.ndarray, like: Any) -> Any:
         return [(pos, tuple(float(c) for c in flat[3 * i:3 * i + 3]))
                 for i, (pos, _) in enumerate(like.stops)]
     return tuple(float(v) for v in flat)
+
+
+def as_printed(p, value: Any, increasing: bool = False) -> Any:
+    """A fitted value as `Param.show` prints it (6 significant digits), so that the command line
+    `styletrace fit` prints gives the fit's own image.
+
+    Args:
+        p: the style's parameter. value: its validated value.
+        increasing: the values must increase strictly (`INCREASING`): a value that prints equal to
+            (or below) the one before it is raised to the next value that prints above it.
+
+    Returns:
+        The value `p.parse(p.show(value))`, made strictly increasing where asked.
+    """
+    if not increasing:
+        return p.parse(p.show(value))
+    out: list[float] = []
+    for x in value:
+        x = float(f"{x:g}")
+        if out and x <= out[-1]:
+            prev = out[-1]
+            # one unit in the 6th significant digit of the previous value (1e-6 above 0)
+            unit = 10.0 ** (np.floor(np.log10(abs(prev))) - 5) if prev else 1e-6
+            x = float(f"{prev + unit:g}")
+        out.append(x)
+    return p.parse(",".join(f"{x:g}" for x in out))
 
 
 def _clamp(p, x: mi.Float) -> mi.Float:
@@ -220,7 +249,9 @@ def fit(
         initial: starting values (else the recorded values, or a new style's defaults).
 
     Returns:
-        FitResult: the fitted values (validated by the style), loss, iterations, image, ...
+        FitResult: the fitted values (validated by the style, as `Param.show` prints them, so a
+        command line of them gives `image`; `INCREASING` ones strictly increasing as printed),
+        loss, iterations, image, ...
 
     Raises:
         BackendError: a variant without AD. UsageError: a bad target or iterations, a sequence
@@ -295,7 +326,7 @@ def fit(
         opt.step()
         for p in free:
             x = _clamp(p, opt[p.name])
-            if base.name == "cel" and p.name == "thresholds":
+            if INCREASING.get(base.name) == p.name:
                 x = mi.Float(np.sort(np.asarray(x)))
             opt[p.name] = x
         done = it + 1
@@ -310,9 +341,12 @@ def fit(
     seconds = time.perf_counter() - start
     params = {p.name: _plain_value(p.kind, np.asarray(opt[p.name], dtype=np.float64),
                                    base.values[p.name]) for p in free}
+    for p in free:  # sorted in float32 (ties possible), and printed with 6 digits
+        if INCREASING.get(base.name) == p.name:
+            params[p.name] = as_printed(p, params[p.name], increasing=True)
     fitted = create(base.name,
                     **{**{k: v for k, v in base.values.items() if k not in params}, **params})
-    values = {p.name: fitted.values[p.name] for p in free}
+    values = {p.name: as_printed(p, fitted.values[p.name]) for p in free}
     from styletrace.lookdev.restyle import restyle
     image = restyle(buf, style=base.name, **{**_given(base), **values})
     loss = float(np.mean(np.square(image.astype(np.float64)
@@ -324,4 +358,5 @@ def _given(style: Style) -> dict[str, Any]:
     return {k: v for k, v in style.values.items() if v is not None}
 
 
-__all__ = ["fit", "FitResult", "SURROGATES", "Smoothed", "read_target"]
+__all__ = ["fit", "FitResult", "SURROGATES", "Smoothed", "read_target", "as_printed",
+           "INCREASING"]
