@@ -1,0 +1,12 @@
+"""The examples of the docs pages in GROUPS["cli"] run, and print what the docs show
+(tests/docs/examples.py has the rules)."""
+import pytest
+
+from .examples import GROUPS, collect, run_case
+
+EXAMPLES = collect(GROUPS["cli"])
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=[e.id for e in EXAMPLES])
+def test_example(example, docs_pages):
+    run_case(example, EXAMPLES, docs_pages)
