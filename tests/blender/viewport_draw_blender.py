@@ -116,13 +116,10 @@ def encoded(draw):
 
 
 def unbound(draw):
-    """`hooks.draw_view_image` without `bind_display_space_shader` (a copy of its body)."""
+    """`hooks.draw_view_image` without `bind_display_space_shader` (its texture, drawn as it
+    draws it)."""
     def body(engine, scene, image, width, height):
-        h, w = image.shape[:2]
-        px = np.ones((h, w, 4), np.float32)
-        px[..., :3] = image[::-1]
-        data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
-        texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
+        texture = hooks.view_texture(image)
         gpu.state.blend_set("ALPHA_PREMULT")
         offset = -hooks.PIXEL_OFFSET
         draw_texture_2d(texture, (offset, offset), width, height)

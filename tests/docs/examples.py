@@ -72,7 +72,6 @@ placeholder among the arguments) and signatures (`*,` in a call that does not pa
 from __future__ import annotations
 
 import ast
-import os
 import re
 import shlex
 import signal
@@ -86,8 +85,9 @@ import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from conftest import child_env  # tests/conftest.py: the source tree first on PYTHONPATH
+
 ROOT = Path(__file__).resolve().parents[2]
-SRC = ROOT / "src"
 
 #: the image size every render runs at
 SIZE = 16
@@ -813,9 +813,8 @@ def output_lines(text: str) -> list[str]:
 def child_environment(extra: dict[str, str] | None = None) -> dict[str, str]:
     """The source tree first on PYTHONPATH, the documented defaults ($STYLETRACE_DENOISE
     removed), and the example's own NAME=VALUE words."""
-    env = dict(os.environ)
+    env = child_env()
     env.pop("STYLETRACE_DENOISE", None)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(SRC), os.environ.get("PYTHONPATH")) if p)
     env.update(extra or {})
     return env
 

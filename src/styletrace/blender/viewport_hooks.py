@@ -109,16 +109,29 @@ def draw_view_image(engine, scene, image: np.ndarray, width: int, height: int) -
     """
     import gpu
     from gpu_extras.presets import draw_texture_2d
-    h, w = image.shape[:2]
-    px = np.ones((h, w, 4), np.float32)
-    px[..., :3] = image[::-1]
-    data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
-    texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
+    texture = view_texture(image)
     gpu.state.blend_set("ALPHA_PREMULT")
     engine.bind_display_space_shader(scene)
     draw_texture_2d(texture, (-PIXEL_OFFSET, -PIXEL_OFFSET), width, height)
     engine.unbind_display_space_shader()
     gpu.state.blend_set("NONE")
+
+
+def view_texture(image: np.ndarray):
+    """`image` as the texture `draw_view_image` draws: opaque RGBA half floats, bottom row first.
+
+    Args:
+        image: H x W x 3 floats, linear, top row first.
+
+    Returns:
+        gpu.types.GPUTexture of W x H.
+    """
+    import gpu
+    h, w = image.shape[:2]
+    px = np.ones((h, w, 4), np.float32)
+    px[..., :3] = image[::-1]
+    data = gpu.types.Buffer("FLOAT", w * h * 4, px.reshape(-1))
+    return gpu.types.GPUTexture((w, h), format="RGBA16F", data=data)
 
 
 def free_key(key: int) -> None:
@@ -173,4 +186,5 @@ def free(engine) -> None:
 
 
 __all__ = ["VIEWS", "REDRAW_S", "PIXEL_OFFSET", "view_update", "view_draw", "draw_view_image",
+           "view_texture",
            "free_key", "free_all", "free", "register_viewport_hooks", "unregister_viewport_hooks"]

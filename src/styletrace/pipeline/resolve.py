@@ -157,8 +157,7 @@ def object_children(scene: mi.Scene | None) -> int:
     adaptive count; 0 for closed-form styles, for no styled BSDF and for None)."""
     if scene is None:
         return 0
-    counts = [0 if b.slot.style.closed_form else int(b.slot.inner[0])
-              for b in unique_styled(scene)]
+    counts = [0 if b.slot.style.closed_form else int(b.slot.n(0)) for b in unique_styled(scene)]
     return max(counts, default=0)
 
 
