@@ -43,6 +43,18 @@ def test_restyle_equals_fresh_denoised_render(recorded, tmp_path):
             assert np.abs(styletrace.restyle(b, style=style, **params) - fresh).max() <= 1e-5, style
 
 
+def test_first_object_hit_restyles_to_its_render(tmp_path):
+    """`mixed` (styled objects, surfaces without a style behind and around them): the points' light
+    before their styled vertex is denoised per pixel (`expectation.denoise_before`), and the buffer
+    restyles to the render, after save/load too."""
+    scene = api.load_scene("mixed", 32, 32)
+    integrator = api.make_integrator(style="identity", stylize="first_object_hit")
+    image, buf = X.render_denoised_expectation(Shot(scene, integrator, 2, 5))
+    loaded = styletrace.load_buffer(buf.save(str(tmp_path / "m.npz")))
+    for b in (buf, loaded):
+        assert np.abs(styletrace.restyle(b) - image).max() <= 1e-5
+
+
 def test_denoising_changed_the_image(recorded):
     """The buffer's image is the noisy render; the denoised one differs (else nothing above was
     tested)."""

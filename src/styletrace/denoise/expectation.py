@@ -439,13 +439,45 @@ def attach(
                                              mi.UInt32(cover.arrays["pixel"]))
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
         cover.header["scene"] = buf.header.get("scene", "")  # the points keep the render's name
-        if cover.filtered:  # the render loop splatted each point at its sample_pos, not the point's
+        if cover.stylize == "first_object_hit":
+            denoise_before(cover, g, quality, scene)
+        elif cover.filtered:  # the render loop splatted each point at its sample_pos, not its own
             cover.image = image_of(cover)
         return d, cover
     buf.arrays[DENOISED] = at_samples_on_device(buf, d, scene, g, own)
     buf.header["denoise"] = header
     buf.device.clear()  # the Dr.Jit copy must pick up the denoised means
     return d, None
+
+
+def denoise_before(cover: Buffer, g: guides.Guides, quality: str, scene) -> None:
+    """`first_object_hit`'s light gathered before the styled vertex, denoised: per pixel the mean
+    of the points' L_before (surfaces without a style, path traced by each point's own walk: as
+    noisy as a render of k samples) goes through OIDN with the guides, as the image denoiser
+    treats a physically based image, and every point takes its pixel's value, so that the buffer
+    restyles to the denoised image (`cover.image`: the pass's, the pixel's mean of L_before
+    exchanged for its denoised value).
+
+    Args:
+        cover: the coverage points' buffer (changed in place). g: the pixel-footprint guides.
+        quality: OIDN's. scene: the scene (its sensor, for the normals' frame).
+    """
+    before = np.asarray(cover.arrays["L_before"], dtype=np.float64)
+    every = np.ones(cover.camera_samples, bool)
+    m = _sample_moments(cover, before, every)[1].T.reshape(cover.height, cover.width, 3)
+    d = oidn.denoise_oidn(m.astype(np.float32), g.albedo, g.normal, quality,
+                          guides.to_sensor(scene))
+    d = np.maximum(d, 0.0)
+    pixel = np.asarray(cover.arrays["pixel"]).astype(np.intp)
+    cover.arrays["L_before"] = np.ascontiguousarray(d.reshape(-1, 3)[pixel].T, dtype=np.float32)
+    cover.device.clear()  # the Dr.Jit copy must pick up the new values
+    if cover.filtered:  # splatted with the film's filter: made as a restyle makes it
+        cover.image = image_of(cover)
+        return
+    # the kernel's own image, so that a restyle equals it up to rounding as it did before
+    image = np.array(cover.image, dtype=np.float32)
+    image[..., :3] += (d - m).astype(np.float32)
+    cover.image = image
 
 
 def _guides(scene, spp: int, seed: int, cache: dict | None) -> guides.Guides:
