@@ -17,8 +17,9 @@ def test_render_returns_linear_float32_hwc():
 
 def test_passes_average_is_weighted_by_samples():
     """Unequal passes (4 + 2 spp) combine as (4 a + 2 b) / 6, each pass with its own derived
-    seed."""
-    scene = api.load_scene("cornell-box", 8, 8)
+    seed (with independent samples; `owen_sobol` passes continue one sequence instead:
+    tests/kernel/test_owen_sobol_sampler.py)."""
+    scene = api.load_scene("cornell-box", 8, 8, sampler="independent")
     integ = api.make_integrator("identity", inner=1)
     progress = list(api.passes(scene, integ, 6, seed=5, lanes_per_pass=4 * 64))
     assert [p.spp_done for p in progress] == [4, 6]
@@ -140,12 +141,12 @@ def test_tiles_cover_the_image_once_with_one_size():
 
 def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
     """Tiles are crop windows: each must equal Mitsuba rendering that window of the film (its own
-    crop_offset/crop_width properties) with the tile's seed; shifted edge tiles keep only their
-    new pixels."""
+    crop_offset/crop_width properties) with the tile's seed (independent samples); shifted edge
+    tiles keep only their new pixels."""
     from styletrace.pipeline import passes as pass_loop  # the pass loop reads its own constants
     monkeypatch.setattr(pass_loop, "LANES_PER_PASS", 120)
     monkeypatch.setattr(pass_loop, "TILE_SIDE", 10)
-    scene = api.load_scene("cornell-box", 24, 16)
+    scene = api.load_scene("cornell-box", 24, 16, sampler="independent")
     # explicit: no pilot
     integ = api.make_integrator("cel", inner=2, thresholds=(0.5,), levels=(0.4, 0.95))
     layout = api.tiles(24, 16)
@@ -154,7 +155,7 @@ def test_a_tiled_render_matches_mitsubas_own_crop_windows(monkeypatch):
     assert [p.spp_done for p in progress] == [0] * 5 + [2]
     expect = np.zeros((16, 24, 3), np.float32)
     for index, tile in enumerate(layout):
-        d = api.scene_dict("cornell-box", 24, 16)
+        d = api.scene_dict("cornell-box", 24, 16, sampler="independent")
         d["sensor"]["film"].update(crop_offset_x=tile.offset[0], crop_offset_y=tile.offset[1],
                                    crop_width=tile.size[0], crop_height=tile.size[1])
         img = np.array(

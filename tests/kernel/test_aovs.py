@@ -60,10 +60,13 @@ def test_the_bias_aov_is_eq21_with_the_childrens_variance(scene, mask, children)
     assert abs(predicted) > Z * se  # resolvable: a wrong sign or a missing factor 2 would fail
 
 
-def test_the_variance_aov_matches_the_spread_of_independent_pixels(scene, mask):
+def test_the_variance_aov_matches_the_spread_of_independent_pixels(mask):
+    """With independent camera samples; a low-discrepancy sequence's pixel mean varies less than
+    the samples' spread says, so there the AOV is an upper bound (docs/aovs.md)."""
     # spp = 2: the sample variance's 1/(spp - 1) is then a factor 2 against a 1/spp, which the test
     # resolves
     spp = 2
+    scene = api.load_scene("furnace", RES, RES, sampler="independent")
     image, aovs = render(scene, "gamma", 4, spp, 6, aovs=True)
     vals = image[mask].astype(np.float64)                # independent draws of the pixel estimate
     dev = vals - vals.mean(axis=0)

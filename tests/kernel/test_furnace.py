@@ -31,7 +31,7 @@ def test_identity_is_exact(single):
 
 
 @pytest.mark.parametrize(
-    "sampler", ["independent", "stratified", "multijitter", "orthogonal", "ldsampler"]
+    "sampler", ["independent", "stratified", "multijitter", "orthogonal", "ldsampler", "owen_sobol"]
 )
 def test_inner_samples_are_independent(mask, sampler):
     """Var(<I>_n) = Var(<I>_1)/n whatever the scene's sampler: catches inner loops that replay

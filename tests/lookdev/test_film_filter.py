@@ -53,7 +53,7 @@ class Rays(mi.SamplingIntegrator):
         return mi.Spectrum(0.0), True, []
 
 
-@pytest.mark.parametrize("sampler", ["independent", "stratified", "multijitter"])
+@pytest.mark.parametrize("sampler", ["independent", "stratified", "multijitter", "owen_sobol"])
 @pytest.mark.parametrize("border", [False, True])
 def test_positions_are_the_render_loops(sampler, border):
     scene = mi.load_dict(scene_dict({"type": "gaussian"}, border, sampler, 9, 7))

@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from styletrace.config.choices import SAMPLER_DEFAULT
+
 FLIP = np.diag([-1.0, 1.0, -1.0, 1.0])
 
 
@@ -73,7 +75,7 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
         "near_clip": float(cam.clip_start),
         "far_clip": float(cam.clip_end),
         "film": film,
-        "sampler": {"type": "independent", "sample_count": int(spp)},
+        "sampler": {"type": SAMPLER_DEFAULT, "sample_count": int(spp)},
     }
     if cam.type == "ORTHO":
         half_x = cam.ortho_scale / 2.0 if fit_x else cam.ortho_scale / 2.0 * width / height

@@ -27,6 +27,7 @@ import numpy as np
 from styletrace.blender import f12
 from styletrace.blender.properties import settings_integrator_values, style_values
 from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
+from styletrace.config.choices import SAMPLER_DEFAULT
 from styletrace.denoise.finishers import Expectation, Recording, plan
 from styletrace.errors import StyletraceError
 from styletrace.frontends import api
@@ -443,7 +444,7 @@ class Viewport:
             return
         film = self.sensor["film"]
         w, h = film["width"], film["height"]
-        sensor = dict(self.sensor, sampler={"type": "independent",
+        sensor = dict(self.sensor, sampler={"type": SAMPLER_DEFAULT,
                                             "sample_count": self.values["samples"]})
         # both films' dicts are made now, on the main thread: the sync changes after this call
         desc = {size: self.sync.scene_dict(dict(sensor, film=dict(film, width=size[0],

@@ -21,6 +21,7 @@ import bpy
 import numpy as np
 
 from styletrace.blender import build, camera, exporter, lights, world
+from styletrace.config.choices import SAMPLER_DEFAULT
 from styletrace.frontends import api
 from styletrace.gate import mi
 
@@ -119,7 +120,7 @@ def view_sensor(view_matrix, window_matrix, width: int, height: int, spp: int) -
     to_world = camera._unscaled_camera(np.linalg.inv(view)) @ camera.FLIP
     film = {"type": "hdrfilm", "width": int(width), "height": int(height), "pixel_format": "rgb",
             "rfilter": {"type": "box"}}
-    out = {"film": film, "sampler": {"type": "independent", "sample_count": int(spp)}}
+    out = {"film": film, "sampler": {"type": SAMPLER_DEFAULT, "sample_count": int(spp)}}
     a, b = proj[2, 2], proj[2, 3]
     if proj[3, 3] == 1.0:  # orthographic: x' = x / half_x + offset
         half_x, half_y = 1.0 / proj[0, 0], 1.0 / proj[1, 1]

@@ -1,6 +1,7 @@
 """The named choices the kernel offers, which the settings parse and the kernel reads: feature-line
 tests and modes with the parsed line group (`LineSettings`; kernel/lines.py), emitter-sampling modes
-(kernel/emitter_sampler.py)."""
+(kernel/emitter_sampler.py), the sampler styletrace's own scenes use
+(kernel/owen_sobol_sampler.py)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -36,6 +37,13 @@ class LineSettings:
         return (f"lines(width={self.width}, samples={self.samples}, depth={self.depth}, "
                 f"tests={','.join(self.tests)})")
 
+
+#: the sampler of the built-in scenes, Blender's exporter and viewport: a padded Owen-scrambled
+#: Sobol sequence per pixel (kernel/owen_sobol_sampler.py); a scene file's own is kept
+SAMPLER_DEFAULT = "owen_sobol"
+#: the samplers a built-in scene can be asked for: the default, and independent numbers (the
+#: paper's protocols; the images of renders before the default changed)
+SAMPLERS = (SAMPLER_DEFAULT, "independent")
 
 EMITTER_MODES = ("uniform", "power")
 EMITTER_DEFAULT = "uniform"

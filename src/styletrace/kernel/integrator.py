@@ -26,6 +26,7 @@ from styletrace.kernel.expansion import moments as pass_moments
 from styletrace.kernel.lane_sampler import LaneSampler
 from styletrace.kernel.line_hooks import CameraSample, camera_edge, line_problem, walk_lines
 from styletrace.kernel.line_hooks import lifted as lifted_lines
+from styletrace.kernel.owen_sobol_sampler import OwenSobolSampler
 from styletrace.kernel.path import (
     NO_HOOKS,
     Hooks,
@@ -200,13 +201,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
 
         Args:
             level: the stylized level of x (0: the first).
-            sampler: the lane's random stream. site: the vertex x.
+            sampler: the lane's random stream (the child draws from its `split()`). site: the
+                vertex x.
             active: the lanes that draw (mi.Bool).
 
         Returns:
             mi.Spectrum.
         """
         s = self.settings
+        # a stream of its own where the sampler has streams (SequenceSampler.split)
+        sampler = sampler.split()
         if level + 1 >= s.stylize_depth:
             start = Start(site.pi, site.ray, site.depth, opaque=True, medium=site.medium,
                           collision=site.collision)
@@ -410,8 +414,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         camera_ray, spp = ray, sampler.sample_count()
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
-        # every random decision below the camera ray comes from an independent stream per lane
-        sampler = LaneSampler.seeded_from(sampler, dr.width(ray.d))
+        # every random decision below the camera ray: the sequence the camera sample came from
+        # (`owen_sobol`), else an independent stream per lane
+        sampler = (sampler.lanes() if isinstance(sampler, OwenSobolSampler)
+                   else LaneSampler.seeded_from(sampler, dr.width(ray.d)))
         m = self.settings.expansion_pass
         # the lane's pixel's moments from the expansion pass (none while that pass itself
         # is rendered)

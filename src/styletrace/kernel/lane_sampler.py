@@ -39,6 +39,15 @@ class LaneSampler:
         state = (mi.UInt64(hi) << 32) | mi.UInt64(lo)
         return LaneSampler(mi.PCG32(width, initstate=state, initseq=dr.arange(mi.UInt64, width)))
 
+    def split(self) -> "LaneSampler":
+        """The stream the next child draws from: this one (its numbers follow the previous
+        child's; `sequence_sampler.SequenceSampler.split` gives each child a stream of its own).
+
+        Returns:
+            LaneSampler (self).
+        """
+        return self
+
     def next_1d(self, active=True) -> mi.Float:
         """One uniform number per lane, in [0, 1).
 

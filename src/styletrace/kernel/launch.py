@@ -16,25 +16,54 @@ the light is hard").
 """
 from __future__ import annotations
 
+import contextlib
+
 from styletrace.gate import dr, mi
+from styletrace.kernel.owen_sobol_sampler import OwenSobolSampler, Sequence
 
 
-def render_pass(scene: mi.Scene, integrator, spp: int, seed: int):
+@contextlib.contextmanager
+def in_sequence(sensor, sequence: Sequence | None):
+    """While the context lasts, an `owen_sobol` sampler of the sensor continues `sequence` (other
+    samplers: nothing changes).
+
+    Args:
+        sensor: the mi.Sensor. sequence: the launch's place in its render's sequence; None: the
+            launch is a sequence of its own.
+    """
+    sampler = sensor.sampler()
+    if not isinstance(sampler, OwenSobolSampler):
+        yield
+        return
+    before = sampler.sequence
+    sampler.sequence = sequence
+    try:
+        yield
+    finally:
+        sampler.sequence = before
+
+
+def render_pass(scene: mi.Scene, integrator, spp: int, seed: int,
+                sequence: Sequence | None = None):
     """`mi.render(scene, integrator=integrator, spp=spp, seed=seed)`, evaluated, with the first
     sensor's sampler left at its own sample count.
 
     Args:
         scene: the scene (its first sensor renders). integrator: the integrator to launch.
         spp: camera samples per pixel of this launch. seed: its seed.
+        sequence: where the launch sits in its render's sequence (`owen_sobol` samplers only);
+            None: a sequence of its own, keyed by `seed`.
 
     Returns:
         mi.render's image (a TensorXf), evaluated.
     """
-    sampler = scene.sensors()[0].sampler()
+    sensor = scene.sensors()[0]
+    sampler = sensor.sampler()
     count = int(sampler.sample_count())
     try:
-        img = mi.render(scene, integrator=integrator, spp=int(spp), seed=int(seed))
-        dr.eval(img)
+        with in_sequence(sensor, sequence):
+            img = mi.render(scene, integrator=integrator, spp=int(spp), seed=int(seed))
+            dr.eval(img)
         return img
     finally:
         sampler.set_sample_count(count)
@@ -67,7 +96,8 @@ def seeded_positions(sensor, spp: int, seed: int, border: int = 0, offset=(0, 0)
     return sampler, mi.Vector2f(corner) + sampler.next_2d()
 
 
-def render_pixel_pass(scene: mi.Scene, integrator, spp: int, seed: int):
+def render_pixel_pass(scene: mi.Scene, integrator, spp: int, seed: int,
+                      sequence: Sequence | None = None):
     """The mean of `spp` camera samples inside each pixel of the film's crop window, as a film with
     a box filter would develop them: Mitsuba's render loop's rays (its sampler seeded alike, the
     aperture, shutter and differential scaling as it draws them), `integrator.sample` on each.
@@ -77,6 +107,7 @@ def render_pixel_pass(scene: mi.Scene, integrator, spp: int, seed: int):
         integrator: a sampling integrator whose `sample` is the whole of its render (not one that
             replaces `render`, such as reuse=pixels).
         spp: camera samples per pixel of this launch. seed: its seed.
+        sequence: as `render_pass`'s.
 
     Returns:
         H x W x 3 float32 numpy array, RGB.
@@ -87,7 +118,9 @@ def render_pixel_pass(scene: mi.Scene, integrator, spp: int, seed: int):
     film = sensor.film()
     (w, h), offset = (int(v) for v in film.crop_size()), [int(v) for v in film.crop_offset()]
     # the seed as a kernel input, as Mitsuba's loop has it: each pass reuses the compiled kernel
-    sampler, pos = seeded_positions(sensor, int(spp), dr.opaque(mi.UInt32, int(seed)), 0, offset)
+    with in_sequence(sensor, sequence):
+        sampler, pos = seeded_positions(sensor, int(spp), dr.opaque(mi.UInt32, int(seed)), 0,
+                                        offset)
     aperture = sampler.next_2d() if sensor.needs_aperture_sample() else mi.Point2f(0.5)
     time = mi.Float(sensor.shutter_open())
     if sensor.shutter_open_time() > 0.0:
@@ -105,4 +138,4 @@ def render_pixel_pass(scene: mi.Scene, integrator, spp: int, seed: int):
     return np.stack([np.asarray(m, dtype=np.float32) for m in means], -1).reshape(h, w, 3)
 
 
-__all__ = ["render_pass", "render_pixel_pass", "seeded_positions"]
+__all__ = ["in_sequence", "render_pass", "render_pixel_pass", "seeded_positions"]

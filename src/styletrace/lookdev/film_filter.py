@@ -20,7 +20,7 @@ import numpy as np
 
 from styletrace.errors import SceneError
 from styletrace.gate import dr, mi
-from styletrace.kernel.launch import seeded_positions
+from styletrace.kernel.launch import in_sequence, seeded_positions
 
 BOX = {"type": "box"}
 #: Mitsuba class -> (plugin name, parameters read from its radius or description)
@@ -163,13 +163,15 @@ def filtered_pixels(image: np.ndarray, rfilter) -> np.ndarray:
     return out.astype(np.float32)
 
 
-def positions(sensor, spp: int, seed: int, device: bool = False):
+def positions(sensor, spp: int, seed: int, device: bool = False, sequence=None):
     """Each camera sample's film position in a pass, bit for bit the render's.
 
     Args:
         sensor: the mi.Sensor, its film as it is set now (crop window, border sampling).
         spp, seed: the pass's camera samples per pixel and seed.
         device: return the Dr.Jit array (a recording keeps it there: `buffer.Arrays`).
+        sequence: the pass's place in its render's sequence (`passes.unit_sequence`), as the
+            render launched it (`owen_sobol` samplers).
 
     Returns:
         2 x lanes float32 positions in pixels of the full film (crop offset included): numpy, or
@@ -177,7 +179,8 @@ def positions(sensor, spp: int, seed: int, device: bool = False):
     """
     film = sensor.film()
     b = int(film.rfilter().border_size()) if film.sample_border() else 0
-    _, pos = seeded_positions(sensor, spp, seed, b, [int(v) for v in film.crop_offset()])
+    with in_sequence(sensor, sequence):
+        _, pos = seeded_positions(sensor, spp, seed, b, [int(v) for v in film.crop_offset()])
     pos = mi.Point2f(pos)
     dr.eval(pos)
     if device:

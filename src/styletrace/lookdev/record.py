@@ -496,7 +496,8 @@ def record(
         arrays = _pass_arrays(rec.kept, prog.pass_spp, rec.settings.stylize, rec.recorder)
         if filtered and "pos" not in arrays:  # where Mitsuba put each sample
             seed_i = pass_loop.pass_seed(seed, index)
-            arrays["pos"] = film_filter.positions(sensor, prog.pass_spp, seed_i, device=True)
+            arrays["pos"] = film_filter.positions(sensor, prog.pass_spp, seed_i, device=True,
+                                                  sequence=pass_loop.unit_sequence(seed, prog.unit))
         tiled = len(prog.layout) > 1  # the crop windows `pipeline.passes` renders, one per pass
         if tiled:
             buf.header["tiles"] = len(prog.layout)

@@ -22,6 +22,7 @@ from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.jit import no_collection
 from styletrace.kernel.launch import render_pass, render_pixel_pass
+from styletrace.kernel.owen_sobol_sampler import Sequence
 from styletrace.scene.arguments import check_passes_args
 from styletrace.scene.defaults import ScenePilot
 from styletrace.scene.defaults import resolve_defaults as resolve_defaults
@@ -66,6 +67,20 @@ def pass_seed(seed: int, index: int) -> int:
         A 32-bit seed.
     """
     return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
+
+
+def unit_sequence(seed: int, unit: "Unit") -> Sequence:
+    """Where a unit sits in its render's low-discrepancy sequence (`owen_sobol` samplers), keyed
+    by the render's first pass seed: a render of one pass draws what `mi.render` with that seed
+    draws, and so do the guides of its footprint (`denoise.guides.first_hit`).
+
+    Args:
+        seed: the render's seed. unit: the launch.
+
+    Returns:
+        kernel.owen_sobol_sampler.Sequence.
+    """
+    return Sequence(seed=pass_seed(seed, 0), tile=unit.tile, offset=unit.offset)
 
 
 def expansion_seed(seed: int, tile: int) -> int:
@@ -127,13 +142,16 @@ class Unit:
     Args:
         index: the launch number, round * tiles + tile. tile: its tile's index in the layout.
         round: how many launches of that tile came before it. spp: its camera samples per pixel.
-        seed: its seed, `pass_seed(the render's seed, index)`.
+        seed: its seed, `pass_seed(the render's seed, index)`. offset: the camera samples per
+        pixel of its tile's launches before it (where it continues the low-discrepancy sequence:
+        `unit_sequence`).
     """
     index: int
     tile: int
     round: int
     spp: int
     seed: int
+    offset: int = 0
 
 
 @dataclass(frozen=True)
@@ -437,7 +455,8 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
         while counts[-1] < spp:
             for t, tile in enumerate(layout):
                 n = min(per_pass, spp - int(counts[t]))
-                unit = Unit(index, t, index // len(layout), n, pass_seed(seed, index))
+                unit = Unit(index, t, index // len(layout), n, pass_seed(seed, index),
+                            int(counts[t]))
                 if len(layout) > 1:
                     crop.set(tile.offset, tile.size)
                 if expand is not None:
@@ -445,7 +464,7 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
                 # recorded and launched with no scene finalised meanwhile (jit.no_collection)
                 with no_collection():
                     launch = render_pixel_pass if in_pixels else render_pass
-                    img = launch(scene, integrator, n, unit.seed)
+                    img = launch(scene, integrator, n, unit.seed, unit_sequence(seed, unit))
                     arr = np.asarray(img, dtype=np.float32)[..., :channels + extra]
                 with lock:
                     total[tile.dest] += arr[tile.keep] * np.float32(n)
@@ -477,6 +496,7 @@ __all__ = [
     "TILE_SIDE",
     "LANE_BYTES",
     "pass_seed",
+    "unit_sequence",
     "expansion_seed",
     "Shot",
     "PassSplit",

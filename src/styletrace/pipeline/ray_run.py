@@ -19,6 +19,7 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from styletrace.errors import StyletraceError, UsageError
+from styletrace.pipeline import passes as pass_loop
 from styletrace.pipeline.passes import Progress
 from styletrace.pipeline.ray_checkpoint import Checkpoint, Checkpoints
 from styletrace.pipeline.ray_cluster import connect, cpus
@@ -135,7 +136,8 @@ class Render:
                 while todo and len(running) < window:
                     u = todo.pop()
                     tile = self.layout[u.tile]
-                    running[task.remote(job, u.spp, u.seed, tile.offset, tile.size)] = u
+                    running[task.remote(job, u.spp, u.seed, tile.offset, tile.size,
+                                        pass_loop.unit_sequence(self.seed, u))] = u
                 done, _ = ray.wait(list(running), num_returns=1)
                 for ref in done:
                     unit = running.pop(ref)

@@ -1,6 +1,7 @@
 """What Ray workers run: one (tile, pass) unit of a render.
 
-    ref = render_unit.options(num_cpus=1, max_retries=3).remote(job, spp, seed, offset, size)
+    ref = render_unit.options(num_cpus=1, max_retries=3).remote(job, spp, seed, offset, size,
+                                                                 sequence)
 
 A worker is a long-lived process: `ray_describe.load_on_worker` keeps the scene and the integrator
 it built, so only a worker's first task loads anything. Each task first sets Dr.Jit's thread count
@@ -62,12 +63,15 @@ def _camera(sensor, to_world):
 
 
 @ray.remote
-def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int]):
+def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int],
+                sequence=None):
     """Render one unit's crop window in a worker.
 
     Args:
         job: the render's `RayJob`. spp: camera samples per pixel. seed: the unit's seed.
         offset, size: the crop window, relative to the film's own crop, in pixels.
+        sequence: the unit's place in the render's sequence (`passes.unit_sequence`; None: its
+            own).
 
     Returns:
         (the float32 window, h x w x 3; this worker's process id).
@@ -81,7 +85,7 @@ def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size:
         if tuple(size) != crop.full:  # as the pass loop does for its tiles
             crop.set(offset, size)
         with no_collection():  # as the pass loop: no scene finalised while the pass is recorded
-            img = render_pass(scene, integrator, spp, seed)
+            img = render_pass(scene, integrator, spp, seed, sequence)
             arr = np.array(img, dtype=np.float32)[..., :3]
     return arr, os.getpid()
 

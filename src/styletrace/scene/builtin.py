@@ -6,13 +6,15 @@
 - `lines`: the dragon with a mirror behind and a glass sphere in front (docs/lines.md).
 - `furnace`: a diffuse sphere of albedo rho under a constant environment E (exitant rho*E).
 
-All use the `independent` sampler and a box pixel filter (docs/design/builtin_scenes.md).
+All use the `owen_sobol` sampler (`config.choices.SAMPLER_DEFAULT`; `scene.loading.scene_dict(...,
+sampler=...)` picks another) and a box pixel filter (docs/design/builtin_scenes.md).
 """
 from __future__ import annotations
 
 from importlib import resources
 from typing import Any, Callable
 
+from styletrace.config.choices import SAMPLER_DEFAULT as SAMPLER
 from styletrace.gate import mi
 
 FURNACE_ALBEDO = (0.8, 0.5, 0.3)
@@ -27,7 +29,7 @@ def _film(width: int, height: int) -> dict[str, Any]:
 def _sensor(origin, target, fov: float, width: int, height: int, up=(0, 1, 0)) -> dict[str, Any]:
     return {"type": "perspective", "fov": fov, "fov_axis": "smaller",
             "to_world": mi.ScalarTransform4f().look_at(origin=origin, target=target, up=up),
-            "sampler": {"type": "independent", "sample_count": 16}, "film": _film(width, height)}
+            "sampler": {"type": SAMPLER, "sample_count": 16}, "film": _film(width, height)}
 
 
 def cornell_box(width: int = 256, height: int = 256) -> dict[str, Any]:
@@ -42,7 +44,7 @@ def cornell_box(width: int = 256, height: int = 256) -> dict[str, Any]:
     scene = mi.cornell_box()
     scene.pop("integrator", None)
     scene["sensor"]["film"] = _film(width, height)
-    scene["sensor"]["sampler"] = {"type": "independent", "sample_count": 16}
+    scene["sensor"]["sampler"] = {"type": SAMPLER, "sample_count": 16}
     return scene
 
 

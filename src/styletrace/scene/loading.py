@@ -14,6 +14,7 @@ import re
 import warnings
 from typing import Any
 
+from styletrace.config.choices import SAMPLERS
 from styletrace.errors import SceneError
 from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
@@ -44,23 +45,31 @@ def _size(width, height, keys=("width", "height")) -> dict[str, int]:
     return {k: v for k, v in zip(keys, (width, height)) if v}
 
 
-def scene_dict(name: str, width: int | None = None, height: int | None = None) -> dict[str, Any]:
+def scene_dict(name: str, width: int | None = None, height: int | None = None,
+               sampler: str | None = None) -> dict[str, Any]:
     """The dict of a built-in scene.
 
     Args:
         name: a key of `builtin.BUILTIN`.
         width, height: the film's size in pixels; None (or 0) keeps the scene's default.
+        sampler: one of `config.choices.SAMPLERS`; None: the scene's own (`owen_sobol`).
 
     Returns:
         The Mitsuba scene dict.
 
     Raises:
-        SceneError: an unknown name.
+        SceneError: an unknown name or sampler.
     """
     if name not in BUILTIN:
         raise SceneError(f"unknown built-in scene '{name}': available are "
                          f"{', '.join(sorted(BUILTIN))}")
-    return BUILTIN[name](**_size(width, height))
+    if sampler is not None and sampler not in SAMPLERS:
+        raise SceneError(f"bad sampler {sampler!r} for built-in scene '{name}': expected one of "
+                         f"{', '.join(SAMPLERS)}")
+    scene = BUILTIN[name](**_size(width, height))
+    if sampler is not None:
+        scene["sensor"]["sampler"]["type"] = sampler
+    return scene
 
 
 def canonical_scene_normals(scene: mi.Scene) -> mi.Scene:
@@ -78,13 +87,15 @@ def canonical_scene_normals(scene: mi.Scene) -> mi.Scene:
 
 
 def load_scene(scene: Any = None, width: int | None = None, height: int | None = None,
-               defines: dict[str, Any] | None = None) -> mi.Scene:
+               defines: dict[str, Any] | None = None, sampler: str | None = None) -> mi.Scene:
     """Load a scene, checked renderable, its normals canonical (module doc).
 
     Args:
         scene: a built-in name (None: DEFAULT), a Mitsuba XML path, a scene dict or an mi.Scene.
         width, height: a new film size (built-in scenes and XML files; an mi.Scene must match).
         defines: an XML file's `<default>` parameters, as `mitsuba -D name=value`.
+        sampler: a built-in scene's sampler (`scene_dict`); files, dicts and scenes keep their
+            own.
 
     Returns:
         The mi.Scene; an XML integrator type Mitsuba lacks is replaced, with a `SceneWarning`.
@@ -97,6 +108,10 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         scene = DEFAULT
     if defines and not (isinstance(scene, (str, os.PathLike)) and os.fspath(scene) not in BUILTIN):
         raise SceneError("defines apply to XML scene files (their <default> parameters) only")
+    if sampler is not None and not (isinstance(scene, (str, os.PathLike))
+                                    and os.fspath(scene) in BUILTIN):
+        raise SceneError(f"sampler={sampler!r} applies to built-in scenes only; a scene file or "
+                         "dict names its own sampler")
     if isinstance(scene, mi.Scene):
         check_scene(scene, "the mi.Scene")
         if width or height:
@@ -125,7 +140,10 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
     name = os.fspath(scene)
     if name in BUILTIN:
         try:
-            return canonical_scene_normals(mi.load_dict(scene_dict(name, width, height)))
+            loaded = mi.load_dict(scene_dict(name, width, height, sampler))
+            return canonical_scene_normals(loaded)
+        except SceneError:
+            raise
         except Exception as exc:
             raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
