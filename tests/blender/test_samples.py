@@ -79,7 +79,7 @@ def test_the_advanced_sub_panel_holds_the_split():
     main = [name for _, name in panels.layout_rows(st)]
     assert "samples" in main and not {"spp", "inner_samples", "pass_spp"} & set(main)
     assert [name for _, name in panels.layout_rows(st, advanced=True)] == [
-        "spp", "inner_samples", "pass_spp"]
+        "spp", "inner_samples", "pass_spp", "sampler"]
     rna = st.bl_rna.properties
     assert (rna["samples"].name, rna["samples"].default, rna["samples"].hard_min) == (
         "Samples", 16, 1)

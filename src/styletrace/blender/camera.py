@@ -47,11 +47,25 @@ def _fit_x(cam, width: int, height: int) -> bool:
     return cam.sensor_fit == "HORIZONTAL"
 
 
+def sampler_of(scene) -> str:
+    """The sampler type the scene's styletrace settings ask for (Sampling pattern).
+
+    Args:
+        scene: the `bpy.types.Scene`.
+
+    Returns:
+        A Mitsuba sampler type, `config.choices.SAMPLER_DEFAULT` where none is set.
+    """
+    settings = getattr(scene, "styletrace", None)
+    return str(getattr(settings, "sampler", SAMPLER_DEFAULT) or SAMPLER_DEFAULT)
+
+
 def sensor(scene, spp: int, obj=None, warn=print) -> dict:
     """The Mitsuba sensor (with its film and sampler) of the scene's active camera.
 
     Args:
-        scene: the `bpy.types.Scene` (its render settings). spp: the sampler's sample count.
+        scene: the `bpy.types.Scene` (its render settings and Sampling pattern). spp: the
+            sampler's sample count.
         obj: the camera object (None: the scene's active camera). warn: called with a warning
             line (a shift ignored under depth of field).
 
@@ -75,7 +89,7 @@ def sensor(scene, spp: int, obj=None, warn=print) -> dict:
         "near_clip": float(cam.clip_start),
         "far_clip": float(cam.clip_end),
         "film": film,
-        "sampler": {"type": SAMPLER_DEFAULT, "sample_count": int(spp)},
+        "sampler": {"type": sampler_of(scene), "sample_count": int(spp)},
     }
     if cam.type == "ORTHO":
         half_x = cam.ortho_scale / 2.0 if fit_x else cam.ortho_scale / 2.0 * width / height

@@ -29,7 +29,7 @@ RENDER_ROWS = (
     "firefly_k",
 )
 #: the sub-panel Advanced sampling (closed by default): the split of Samples, given by hand
-ADVANCED_ROWS = ("spp", "inner_samples", "pass_spp")
+ADVANCED_ROWS = ("spp", "inner_samples", "pass_spp", "sampler")
 
 
 def style_rows(settings) -> list[tuple[object, str]]:

@@ -19,6 +19,7 @@ import bpy
 from styletrace.blender.registered import VARIANT  # noqa: F401
 from styletrace.config import estimator_registry
 from styletrace.config import settings as S
+from styletrace.config.choices import SAMPLER_DEFAULT
 from styletrace.denoise.oidn import QUALITIES
 from styletrace.pipeline.denoising import default_method
 from styletrace.styles import registry
@@ -219,6 +220,19 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="camera samples per pixel in one pass: cancel, progress and the viewport's "
         "images act between passes; the same seed and split give the same image "
         "(`styletrace render --pass-spp`)",
+    )
+    sampler: bpy.props.EnumProperty(
+        name="Sampling pattern",
+        default=SAMPLER_DEFAULT,
+        items=[
+            ("owen_sobol", "Owen-scrambled Sobol",
+             "a low-discrepancy sequence over each pixel's samples, every child of a stylized "
+             "vertex on a stream of its own (docs/design/sequence_sampler.md)"),
+            ("independent", "Independent",
+             "independent random numbers for every sample: the paper's protocols; the error "
+             "passes' Variance is then exact (with the sequence it is an upper bound)"),
+        ],
+        description="where the samples' random numbers come from (the scene's `sampler`)",
     )
     max_depth: bpy.props.IntProperty(name="Max depth", default=-1, min=-1)
     seed: bpy.props.IntProperty(name="Seed", default=0, min=0)

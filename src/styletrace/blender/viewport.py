@@ -47,6 +47,8 @@ TURNS = Turns()
 #: the render settings that are not the style's: a change starts new passes
 PASS_KEYS = ("samples", "spp", "seed", "pass_spp")
 DENOISE_KEYS = ("denoise", "denoise_quality", "denoise_footprint")
+#: settings whose change starts new passes, strings (the sampler type)
+SAMPLER_KEYS = ("sampler",)
 
 
 def snapshot(settings) -> dict:
@@ -58,11 +60,11 @@ def snapshot(settings) -> dict:
     Returns:
         `style` (the style slot's values, `style_values`), `integrator` (the `stylized`
         integrator's), `samples`, `spp` (0: auto), `seed`, `pass_spp` (ints), `denoise`,
-        `denoise_quality`, `denoise_footprint` (strings).
+        `denoise_quality`, `denoise_footprint`, `sampler` (strings).
     """
     return {"style": style_values(settings), "integrator": settings_integrator_values(settings),
             **{k: int(getattr(settings, k)) for k in PASS_KEYS},
-            **{k: str(getattr(settings, k)) for k in DENOISE_KEYS}}
+            **{k: str(getattr(settings, k)) for k in DENOISE_KEYS + SAMPLER_KEYS}}
 
 
 def load_view_scene(description: dict):
@@ -357,7 +359,7 @@ class Viewport:
             pass
         elif synced["objects"] or entry["world"]:
             entry["kind"] = "objects"
-        elif (any(old[k] != values[k] for k in PASS_KEYS + DENOISE_KEYS)
+        elif (any(old[k] != values[k] for k in PASS_KEYS + DENOISE_KEYS + SAMPLER_KEYS)
               or _rest(old) != _rest(values)):
             entry["kind"] = "settings"
         elif old["style"] != values["style"]:
@@ -444,7 +446,7 @@ class Viewport:
             return
         film = self.sensor["film"]
         w, h = film["width"], film["height"]
-        sensor = dict(self.sensor, sampler={"type": SAMPLER_DEFAULT,
+        sensor = dict(self.sensor, sampler={"type": self.values.get("sampler", SAMPLER_DEFAULT),
                                             "sample_count": self.values["samples"]})
         # both films' dicts are made now, on the main thread: the sync changes after this call
         desc = {size: self.sync.scene_dict(dict(sensor, film=dict(film, width=size[0],

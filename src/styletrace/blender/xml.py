@@ -32,6 +32,7 @@ TAGS = {
     "hdrfilm": "film",
     "box": "rfilter",
     "independent": "sampler",
+    "owen_sobol": "sampler",
     "stylized": "integrator",
 }
 POINTS = {"position"}
