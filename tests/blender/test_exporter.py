@@ -76,3 +76,19 @@ def test_material_mapping_and_unsupported_nodes():
     toon = next(w for w in warnings if "ShaderNodeBsdfToon" in w)
     assert "odd1" in toon and "odd2" in toon and "grey diffuse" in toon
     assert any("ShaderNodeTexNoise" in w and "leaf" in w for w in warnings)
+
+
+def test_a_light_portal_is_left_out_with_a_note():
+    """A Cycles portal emits nothing (it only steers Cycles' sampling of the world): it must not
+    become a light; the area light beside it still does."""
+    S.reset(16)
+    S.camera((0, -5, 0), (np.pi / 2, 0, 0))
+    window = S.light("AREA", (0, 0, 2), energy=100.0, size=1.0)
+    window.data.cycles.is_portal = True
+    S.light("AREA", (2, 0, 2), energy=10.0, size=0.3)
+    warnings = []
+    desc = export(warnings)
+    emitting = [v for v in desc.values() if isinstance(v, dict) and "emitter" in v]
+    assert len(emitting) == 1
+    assert emitting[0]["to_world"][0][3] == 2.0  # the lamp at x = 2, not the window at x = 0
+    assert [w for w in warnings if "light portal" in w and window.data.name in w]

@@ -175,11 +175,13 @@ def test_samples_per_pass_is_refused(value):
 
 
 def test_emitter_sampling_is_a_setting():
-    assert settings.parse({}).emitter_sampling == "uniform"
+    assert settings.parse({}).emitter_sampling == "auto"
     assert settings.parse({"emitter_sampling": "power"}).emitter_sampling == "power"
+    assert settings.parse({"emitter_sampling": "spatial"}).emitter_sampling == "spatial"
     with pytest.raises(
         SettingsError,
-        match="bad value 'loud' for 'emitter_sampling': expected one of uniform, power",
+        match="bad value 'loud' for 'emitter_sampling': expected one of auto, uniform, power, "
+              "spatial",
     ):
         settings.parse({"emitter_sampling": "loud"})
 
@@ -195,6 +197,6 @@ def test_the_integrator_samples_emitters_the_way_it_is_told(monkeypatch):
     monkeypatch.setattr(
         module, "EmitterSampler", lambda scene, mode: modes.append(mode) or real(scene, mode)
     )
-    for mode in ("uniform", "power"):
+    for mode in ("uniform", "power", "spatial"):
         styletrace.render("mixed", width=8, height=8, spp=1, inner=1, emitter_sampling=mode)
-    assert modes == ["uniform", "power"]
+    assert modes == ["uniform", "power", "spatial"]

@@ -91,10 +91,11 @@ def test_surfaces_without_a_style_are_denoised_too(auto):
     (64 paths per pixel): raw, the floor's noise between two seeds would be sqrt(16 / 64) = 0.5 of
     a 16-sample render's without denoising (identity: one path per camera sample). Denoised with
     the guides (`expectation.denoise_before`) it must be under half of that: 0.25 (measured 0.19;
-    0.53 without)."""
+    0.53 without). Independent samples: the square roots above count independent paths."""
     def scene():
         d = mixed(128, 128)
         d["ground"]["bsdf"] = d["ground"]["bsdf"]["bsdf"]  # the floor without its style
+        d["sensor"]["sampler"]["type"] = "independent"
         return d
     kw = dict(style="identity", stylize="first_object_hit")
     floor = (slice(100, 128), slice(0, 60))  # in front of the dragon, left of the glass sphere

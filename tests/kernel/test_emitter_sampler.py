@@ -64,14 +64,16 @@ def test_selection_order_does_not_depend_on_the_list_order():
         assert all(a is b for a, b in zip(selection_order(list(perm)), want))
 
 
-@pytest.mark.parametrize("mode", ["uniform", "power"])
+@pytest.mark.parametrize("mode", ["uniform", "power", "spatial"])
 def test_scenes_listed_differently_select_alike(mode):
-    """Two loads of one scene agree on the selection order and probabilities, whatever Mitsuba
-    listed."""
+    """Two loads of one scene agree on the selection order and probabilities (for `spatial`: on
+    what it knows of each emitter), whatever Mitsuba listed."""
     a, b = mi.load_dict(lights_scene()), mi.load_dict(scene_with_lights_swapped(lights_scene()))
     sa, sb = EmitterSampler(a, mode), EmitterSampler(b, mode)
     assert sa.keys == sb.keys
     assert sa.probabilities == sb.probabilities
+    if mode == "spatial":
+        assert sa.bounds == sb.bounds
 
 
 def test_uniform_and_power_probabilities():
@@ -97,11 +99,20 @@ def test_uniform_and_power_probabilities():
 
 
 def test_unknown_mode_is_refused():
-    with pytest.raises(SettingsError, match="'brightest'"):
+    with pytest.raises(SettingsError,
+                       match="'brightest': expected one of auto, uniform, power, spatial"):
         EmitterSampler(mi.load_dict(lights_scene()), "brightest")
 
 
-@pytest.mark.parametrize("mode", ["uniform", "power"])
+def test_spatial_probabilities_need_a_point():
+    """`spatial` has no probability per emitter alone: asking for one is an error, not a guess."""
+    sampler = EmitterSampler(mi.load_dict(lights_scene()), "spatial")
+    assert sampler.probabilities is None
+    with pytest.raises(ValueError, match="pdf_direction"):
+        sampler.selection_probability(sampler.table, mi.Bool(True))
+
+
+@pytest.mark.parametrize("mode", ["uniform", "power", "spatial"])
 def test_hit_density_matches_the_sampling_density(mode):
     """For directions next-event estimation samples from points on the floor, `pdf_direction`
     (the density MIS uses when a BSDF sample hits the emitter) must equal the density the sample
@@ -124,8 +135,19 @@ def test_hit_density_matches_the_sampling_density(mode):
     m = np.asarray(area)
     assert m.sum() > n / 4
     np.testing.assert_allclose(got[m], want[m], rtol=1e-5)
+    if mode == "spatial":  # its picks against its probabilities: tests/kernel/test_spatial_*
+        return
     # and every emitter is chosen about as often as its probability says
     ids = np.asarray(dr.reinterpret_array(mi.UInt32, ds.emitter))
     for e, p in zip(sorted(scene.emitters(), key=stable_key), sampler.probabilities):
         k = (ids == dr.reinterpret_array(mi.UInt32, mi.EmitterPtr(e))[0]).sum()
         assert abs(k - n * p) < 5 * math.sqrt(n * p * (1 - p)) + 1, (k, n * p)
+
+
+def test_auto_is_spatial_with_the_sequence_and_several_lights_else_uniform():
+    """`auto`: `spatial` for the built-in scenes' `owen_sobol` sampler with several lights; the
+    same scene with independent samples, or one light, keeps `uniform` (today's images)."""
+    from styletrace.frontends import api
+    assert EmitterSampler(api.load_scene("dragon", 8, 8), "auto").mode == "spatial"
+    assert EmitterSampler(api.load_scene("dragon", 8, 8, sampler="independent")).mode == "uniform"
+    assert EmitterSampler(api.load_scene("cornell-box", 8, 8)).mode == "uniform"

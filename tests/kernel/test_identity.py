@@ -79,9 +79,9 @@ def two_lights(res):
     }
 
 
-@pytest.mark.parametrize("mode", ["uniform", "power"])
+@pytest.mark.parametrize("mode", ["uniform", "power", "spatial"])
 def test_identity_matches_path_with_lights_of_very_different_power(mode):
-    """Our emitter selection (either mode) against Mitsuba's, with the same tests as above."""
+    """Our emitter selection (every mode) against Mitsuba's, with the same tests as above."""
     integrator = make_integrator("identity", inner=INNER, emitter_sampling=mode)
     assert integrator.settings.emitter_sampling == mode
     assert_matches_path(mi.load_dict(two_lights(RES)), integrator)

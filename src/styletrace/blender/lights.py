@@ -6,7 +6,10 @@ becomes Mitsuba's linear ramp in angle (beam_width) that emits the same power (`
 tests/blender/test_units.py). Suns are directional (their angle is ignored). Area lights are Mitsuba
 `rectangle`s or `disk`s turned to emit along the light's -Z, carrying an `area` emitter on a black
 surface (unlike Cycles' lights, it blocks what reaches its back); ellipses become disks of the mean
-diameter (with a warning).
+diameter (with a warning). A Cycles light portal (an area light with `cycles.is_portal`) emits
+nothing: it only steers Cycles' sampling of the world towards a window, which changes the noise and
+not the image, so it is left out (with a note); the world still lights the room through it, found by
+BSDF sampling.
 """
 from __future__ import annotations
 
@@ -70,6 +73,19 @@ def spot_beam(half: float, blend: float) -> float:
     return (lo + hi) / 2
 
 
+def is_portal(light) -> bool:
+    """Whether a Blender light is a Cycles light portal.
+
+    Args:
+        light: a `bpy.types.Light` (its Cycles settings, where the Cycles add-on registered them).
+
+    Returns:
+        bool.
+    """
+    cycles = getattr(light, "cycles", None)
+    return bool(getattr(cycles, "is_portal", False))
+
+
 def convert_light(light, matrix, warn) -> dict | None:
     """The emitter (or emitting shape) description of a `bpy.types.Light` (see the module doc).
 
@@ -78,10 +94,15 @@ def convert_light(light, matrix, warn) -> dict | None:
         warn: called with a warning line (an ellipse rendered as a disk, an unsupported type).
 
     Returns:
-        The description, or None for an unsupported light type (left out, with a warning).
+        The description, or None for an unsupported light type or a light portal (left out, with
+        a warning).
     """
     m = np.array(matrix, dtype=np.float64)
     kind = light.type
+    if kind == "AREA" and is_portal(light):
+        warn(f"styletrace: area light '{light.name}' is a light portal: left out (it emits "
+             "nothing; the world lights the scene through it without it, with more noise)")
+        return None
     if kind == "POINT":
         return {"type": "point", "position": m[:3, 3].tolist(),
                 "intensity": _rgb(light, units.point_intensity(light.energy))}

@@ -45,5 +45,8 @@ SAMPLER_DEFAULT = "owen_sobol"
 #: paper's protocols; the images of renders before the default changed)
 SAMPLERS = (SAMPLER_DEFAULT, "independent")
 
-EMITTER_MODES = ("uniform", "power")
-EMITTER_DEFAULT = "uniform"
+#: next-event estimation's choice of light (kernel/emitter_sampler.py); `auto`: `spatial` where
+#: the scene's sampler is `owen_sobol` and it has several emitters, else `uniform` (so a scene that
+#: asks for independent samples renders as before, bit for bit)
+EMITTER_MODES = ("auto", "uniform", "power", "spatial")
+EMITTER_DEFAULT = "auto"

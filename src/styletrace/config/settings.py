@@ -191,9 +191,12 @@ PROPERTIES = (
         "emitter_sampling",
         EMITTER_DEFAULT,
         "string",
-        "how next-event estimation picks a light: uniform (as Mitsuba) or power (by estimated "
-        "emitted power: better with lights of very different strengths, worse where a sky "
-        "dominates the estimate; BENCHMARKS.md)",
+        "how next-event estimation picks a light: auto (spatial where the scene's sampler is "
+        "owen_sobol and it has several lights, else uniform), uniform (as Mitsuba), power (by "
+        "estimated emitted power: better with lights of very different strengths, worse where a "
+        "sky dominates the estimate) or spatial (per shading point, by power, distance and "
+        "orientation: for rooms with many lights; docs/design/spatial_emitter_selection.md); "
+        "BENCHMARKS.md",
         "--emitter-sampling",
         "MODE",
         choices=tuple(EMITTER_MODES),

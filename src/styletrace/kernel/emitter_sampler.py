@@ -1,13 +1,16 @@
 """Emitter selection for next-event estimation, independent of the order Mitsuba lists the
 emitters in (it changes from one load to the next): ordered by `stable_key`, what each emitter is.
 
-Selection (`mode`): `uniform`, proportional to each emitter's `sampling_weight` (1 by default), as
-Mitsuba; `power`, proportional to `sampling_weight` times the emitted power Phi estimated as the
-mean weight of `Emitter.sample_ray` (no estimated power: never chosen by next-event estimation,
-still reached by BSDF samples; unbiased). `sample_direction` matches
-`Scene.sample_emitter_direction`; `pdf_direction` is its solid-angle density of a direction that
-reached an emitter (the emitter's own density times its selection probability, one gather).
-Design: docs/design/emitter_order.md.
+Selection (`mode`): `auto` (the default), `spatial` where the scene's sampler is `owen_sobol` and
+it has several emitters, else `uniform` (`auto_mode`); `uniform`, proportional to each emitter's
+`sampling_weight` (1 by default), as Mitsuba; `power`, proportional to `sampling_weight` times the
+emitted power Phi estimated as the mean weight of `Emitter.sample_ray` (no estimated power: never
+chosen by next-event estimation, still reached by BSDF samples; unbiased); `spatial`, per shading
+point by power, distance and orientation (`spatial_selection.SpatialSelection`).
+`sample_direction` matches `Scene.sample_emitter_direction`; `pdf_direction` is its solid-angle
+density of a direction that reached an emitter (the emitter's own density times its selection
+probability: one gather, or for `spatial` one walk over the emitters from the same point).
+Design: docs/design/emitter_order.md, docs/design/spatial_emitter_selection.md.
 """
 from __future__ import annotations
 
@@ -15,6 +18,8 @@ from styletrace.config.choices import EMITTER_DEFAULT as DEFAULT_MODE  # noqa: F
 from styletrace.config.choices import EMITTER_MODES as MODES
 from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
+from styletrace.kernel.emitter_bounds import emitter_bounds
+from styletrace.kernel.spatial_selection import SpatialSelection
 
 #: samples of `sample_ray` per emitter for the power estimate (fixed, so the estimate is
 #: deterministic)
@@ -81,12 +86,30 @@ def selection_order(emitters) -> list:
     return sorted(emitters, key=stable_key)
 
 
+def auto_mode(scene: mi.Scene) -> str:
+    """What `auto` selects in a scene: `spatial` where its sampler is `owen_sobol` (the built-in
+    scenes', Blender's) and it has several emitters, else `uniform`: a scene that asks for
+    independent samples keeps the selection it had before `spatial` existed.
+
+    Args:
+        scene: the scene.
+
+    Returns:
+        'spatial' or 'uniform'.
+    """
+    from styletrace.kernel.owen_sobol_sampler import OwenSobolSampler
+    sensors = scene.sensors()
+    sequenced = bool(sensors) and isinstance(sensors[0].sampler(), OwenSobolSampler)
+    return "spatial" if sequenced and len(scene.emitters()) > 1 else "uniform"
+
+
 class EmitterSampler:
     """Next-event estimation's choice of emitter in one scene (module docstring).
 
     Args:
         scene: the scene whose emitters are chosen from.
-        mode: 'uniform' or 'power' (`emitter_sampling`); None: the default.
+        mode: 'auto', 'uniform', 'power' or 'spatial' (`emitter_sampling`); None: the default
+            (`auto_mode` resolves 'auto').
 
     Raises:
         SettingsError: an unknown mode.
@@ -96,13 +119,21 @@ class EmitterSampler:
         if mode not in MODES:
             raise SettingsError(f"emitter sampling '{mode}': expected one of {', '.join(MODES)}")
         emitters = selection_order(scene.emitters())
+        if mode == "auto":
+            mode = auto_mode(scene)
+        self.mode = mode
         self.scene = scene
         self.keys = [stable_key(e) for e in emitters]  # the selection order, for tests and reports
         self.count = len(emitters)
+        self.spatial = None
         if not emitters:
             return
         ids = [emitter_id(mi.EmitterPtr(e))[0] for e in emitters]
         weights = [e.sampling_weight() for e in emitters]
+        self.table = dr.reinterpret_array(mi.EmitterPtr, mi.UInt32(ids))
+        if mode == "spatial":
+            self._set_up_spatial(scene, emitters, ids, weights)
+            return
         if mode == "power":
             powered = [w * estimated_power(e) for w, e in zip(weights, emitters)]
             if sum(powered) > 0:
@@ -110,13 +141,25 @@ class EmitterSampler:
         if not sum(weights) > 0:
             weights = [1.0] * len(emitters)
         total = sum(weights)
-        self.table = dr.reinterpret_array(mi.EmitterPtr, mi.UInt32(ids))
         self.distr = mi.DiscreteDistribution(mi.Float(weights))
         prob = [0.0] * (max(ids) + 1)
         for i, w in zip(ids, weights):
             prob[i] = w / total
         self.prob_by_id = mi.Float(prob)
         self.probabilities = [w / total for w in weights]  # in key order, for tests and reports
+
+    def _set_up_spatial(self, scene: mi.Scene, emitters: list, ids: list, weights: list):
+        """The `spatial` mode's state: each emitter's bounds (`bounds`, in key order, for tests and
+        reports), the SpatialSelection over them, and the selection index by registry id."""
+        sphere = scene.bbox().bounding_sphere()
+        radius = float(sphere.radius) if float(sphere.radius) > 0 else 1.0
+        self.bounds = [emitter_bounds(e, radius) for e in emitters]
+        self.spatial = SpatialSelection(self.bounds, weights, radius)
+        index = [0] * (max(ids) + 1)
+        for k, i in enumerate(ids):
+            index[i] = k
+        self.index_by_id = mi.UInt32(index)
+        self.probabilities = None  # they depend on the shading point
 
     def sample_direction(
         self, si: mi.SurfaceInteraction3f, sample: mi.Point2f, active: mi.Bool, visible: bool = True
@@ -134,7 +177,11 @@ class EmitterSampler:
         """
         if self.count == 0:
             return dr.zeros(mi.DirectionSample3f), mi.Spectrum(0.0)
-        index, x, pmf = self.distr.sample_reuse_pmf(sample.x, active)
+        if self.spatial is None:
+            index, x, pmf = self.distr.sample_reuse_pmf(sample.x, active)
+        else:
+            index, x, pmf = self.spatial.sample(si, sample.x, active)
+            active &= pmf > 0.0
         emitter = dr.gather(mi.EmitterPtr, self.table, index, active)
         ds, weight = emitter.sample_direction(si, mi.Point2f(x, sample.y), active)
         ds.pdf *= pmf
@@ -147,14 +194,22 @@ class EmitterSampler:
         return ds, dr.select(occluded, 0.0, weight)
 
     def selection_probability(self, emitter, active: mi.Bool) -> mi.Float:
-        """The probability with which each lane's emitter is chosen.
+        """The probability with which each lane's emitter is chosen, wherever the shading point
+        (`uniform` and `power`).
 
         Args:
             emitter: the lanes' emitters (mi.EmitterPtr; None: 0). active: the lanes asked.
 
         Returns:
             mi.Float.
+
+        Raises:
+            ValueError: in `spatial` mode, whose probabilities depend on the point
+                (`pdf_direction` has it).
         """
+        if self.spatial is not None:
+            raise ValueError("spatial emitter selection has no probability without a point: "
+                             "use pdf_direction")
         if self.count == 0:
             return mi.Float(0.0)
         return dr.gather(mi.Float, self.prob_by_id, emitter_id(emitter), active & (emitter != None))  # noqa: E711
@@ -174,6 +229,10 @@ class EmitterSampler:
         """
         if self.count == 0:
             return mi.Float(0.0)
-        return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(
-            ds.emitter, active
-        )
+        if self.spatial is None:
+            return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(
+                ds.emitter, active
+            )
+        known = active & (ds.emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
+        index = dr.gather(mi.UInt32, self.index_by_id, emitter_id(ds.emitter), known)
+        return ds.emitter.pdf_direction(ref, ds, active) * self.spatial.pmf(ref, index, known)
