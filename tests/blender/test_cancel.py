@@ -25,8 +25,10 @@ def test_cancel_keeps_finished_passes(tmp_path, monkeypatch):
         return state["pressed"] is not None
 
     monkeypatch.setattr(engine.StyletraceEngine, "stop_requested", test_break)
+    # independent samples: passes of 4 (with the default pattern they double: test_progress.py)
     out = S.styletrace(
-        str(tmp_path / "cancelled.exr"), 1024, seed=5, pass_spp=4, style="identity", aovs=True
+        str(tmp_path / "cancelled.exr"), 1024, seed=5, pass_spp=4, style="identity", aovs=True,
+        sampler="independent"
     )
     after_press = time.perf_counter() - state["pressed"]
     done = engine.LAST["spp_done"]
@@ -36,7 +38,8 @@ def test_cancel_keeps_finished_passes(tmp_path, monkeypatch):
     assert np.isfinite(out["Variance"]).all() and "Bias" in out
     monkeypatch.undo()
     again = S.styletrace(
-        str(tmp_path / "short.exr"), done, seed=5, pass_spp=4, style="identity", aovs=True
+        str(tmp_path / "short.exr"), done, seed=5, pass_spp=4, style="identity", aovs=True,
+        sampler="independent"
     )
     np.testing.assert_allclose(
         out["Combined"][..., :3], again["Combined"][..., :3], rtol=1e-6, atol=1e-7

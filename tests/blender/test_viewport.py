@@ -160,14 +160,15 @@ def test_denoised_passes_end_at_f12s_denoised_image(method, tmp_path):
     out = S.styletrace(str(tmp_path / "f12.exr"), SPP, seed=SEED, pass_spp=PASS_SPP,
                        **{**SETTINGS, "denoise": method})
     f12, noisy = out["Combined"][..., :3], out["Noisy"][..., :3]
-    # the same finisher on the same passes (same scene, seed, kernels and OIDN filter): equal bits
-    np.testing.assert_array_equal(images[-1][1], f12)
+    # the same finisher on the same samples (same scene, seed, kernels and OIDN filter); F12's
+    # passes grow (`f12.job`) where the viewport's stay even, so the sums round differently
+    np.testing.assert_allclose(images[-1][1], f12, rtol=1e-5, atol=1e-6)
     vp.close()
     # the undenoised passes of the same run: Denoise off with the firefly control a denoised
     # render gets (their last image is F12's Noisy pass); each image shown is closer to the final
     # image than the raw pass it was made from, and than the image before it
     plain, _, plain_images = run_viewport(denoise="off", firefly="on")
-    np.testing.assert_array_equal(plain_images[-1][1], noisy)
+    np.testing.assert_allclose(plain_images[-1][1], noisy, rtol=1e-5, atol=1e-6)
     by_label = dict(plain_images)
     errors = []
     for label, img in images[1:-1]:

@@ -219,7 +219,9 @@ class SceneSettings(bpy.types.PropertyGroup):
         min=1,
         description="camera samples per pixel in one pass: cancel, progress and the viewport's "
         "images act between passes; the same seed and split give the same image "
-        "(`styletrace render --pass-spp`)",
+        "(`styletrace render --pass-spp`). With the Owen-scrambled Sobol pattern F12's passes "
+        "start here and double, up to the pass loop's size (the image does not depend on the "
+        "split)",
     )
     sampler: bpy.props.EnumProperty(
         name="Sampling pattern",

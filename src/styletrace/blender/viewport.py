@@ -185,7 +185,8 @@ class ViewportSession:
         v = self.values
         integ = api.make_integrator_from({**v["integrator"], "aovs": False})
         settings = SimpleNamespace(**{k: v[k] for k in (*PASS_KEYS, *DENOISE_KEYS)})
-        return f12.job(sc, integ, settings)
+        # the viewport's passes stay even: its schedule shows and counts them
+        return f12.job(sc, integ, settings, grow=False)
 
     def plan_draft(self):
         """The draft's run: one camera sample of the render's children at the draft's size,

@@ -21,7 +21,7 @@ from styletrace.pipeline.resolve import Resolved
 
 
 def split_of(resolved: Resolved) -> PassSplit:
-    """The pass split of a resolved job: its lanes per launch and its job's pass_spp.
+    """The pass split of a resolved job: its lanes per launch, its job's pass_spp and growth.
 
     Args:
         resolved: the resolved job.
@@ -29,7 +29,7 @@ def split_of(resolved: Resolved) -> PassSplit:
     Returns:
         The PassSplit.
     """
-    return PassSplit(resolved.lanes, resolved.job.pass_spp)
+    return PassSplit(resolved.lanes, resolved.job.pass_spp, resolved.job.pass_growth)
 
 
 def shot_of(resolved: Resolved) -> Shot:

@@ -36,7 +36,8 @@ class Job:
         spp: camera samples per pixel (None: chosen from samples, `pipeline.budget`); seed: the
             render's seed.
         pass_spp, lanes_per_pass: the pass split, camera samples per pixel per pass and lanes per
-            launch (None: the device's, `sizing`).
+            launch (None: the device's, `sizing`). pass_growth: each round of passes twice the
+            one before, from pass_spp (`passes.PassSplit.rounds`).
         samples: paths per pixel, the render's cost whatever the style (None: the scene sampler's
             count), split into spp x children by `pipeline.budget`.
         denoising: the denoising asked for (`pipeline.denoising.Denoising`; default off: a plain
@@ -58,6 +59,7 @@ class Job:
     seed: int = 0
     pass_spp: int | None = None
     lanes_per_pass: int | None = None
+    pass_growth: bool = False
     samples: int | None = None
     denoising: Denoising = OFF
     max_camera_samples: int | None = None

@@ -11,7 +11,6 @@ image whose buffers cannot fit.
 from __future__ import annotations
 
 import contextlib
-import math
 from dataclasses import dataclass
 from typing import Any, Iterator
 
@@ -119,9 +118,13 @@ class PassSplit:
     Args:
         lanes_per_pass: camera samples per pass (one kernel launch).
         pass_spp: a fixed number of camera samples per pixel per pass (None, 0: from the lanes).
+        grow: each round of passes twice the one before, from pass_spp up to what the lanes
+            allow (`rounds`); for samplers whose image does not depend on the split
+            (`owen_sobol`: its passes continue one sequence).
     """
     lanes_per_pass: int = LANES_PER_PASS
     pass_spp: int | None = None
+    grow: bool = False
 
     def size(self, width: int, height: int, spp: int) -> tuple[list["Tile"], int]:
         """`pass_size` of this split.
@@ -133,6 +136,33 @@ class PassSplit:
             (the tiles, the camera samples per pixel of one pass, within [1, spp]).
         """
         return pass_size(width, height, spp, self.lanes_per_pass, self.pass_spp)
+
+    def rounds(self, width: int, height: int, spp: int) -> tuple[list["Tile"], list[int]]:
+        """The tiles, and the camera samples per pixel of each round of passes (a pass per tile).
+
+        Uniform: `size`'s count each round, the last one what is left. With `grow`, the first
+        round has `size`'s count and each next one twice the one before, up to the passes the
+        lanes allow (as without pass_spp): an early first image, then few launches (each launch
+        costs its trace; docs/design/sequence_sampler.md).
+
+        Args:
+            width, height: the film's size. spp: the render's camera samples per pixel.
+
+        Returns:
+            (the tiles, the rounds' camera samples per pixel, summing to spp).
+        """
+        layout, first = self.size(width, height, spp)
+        cap = first
+        if self.grow:
+            tw, th = layout[0].size
+            cap = max(first, self.lanes_per_pass // (tw * th))
+        sizes, done, n = [], 0, first
+        while done < spp:
+            k = min(n, cap, spp - done)
+            sizes.append(k)
+            done += k
+            n = 2 * n if self.grow else n
+        return layout, sizes
 
 
 @dataclass(frozen=True)
@@ -433,7 +463,7 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
     check_memory(width, height)
-    layout, per_pass = split.size(width, height, spp)
+    layout, rounds = split.rounds(width, height, spp)
     # the film's own: RGB, Y, XYZ, with alpha or not
     channels = len(PIXEL_FORMATS[film_format(scene)])
     # error AOVs (StylizedIntegrator.aov_names), after the film's channels
@@ -454,7 +484,7 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
     with Crop(sensor) as crop:
         while counts[-1] < spp:
             for t, tile in enumerate(layout):
-                n = min(per_pass, spp - int(counts[t]))
+                n = rounds[index // len(layout)]
                 unit = Unit(index, t, index // len(layout), n, pass_seed(seed, index),
                             int(counts[t]))
                 if len(layout) > 1:
@@ -475,20 +505,22 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
 
 
 def pass_count(
-    scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None
+    scene: mi.Scene, spp: int, lanes_per_pass: int = LANES_PER_PASS, pass_spp: int | None = None,
+    grow: bool = False
 ) -> int:
     """How many kernel launches `passes` makes: tiles times passes per tile.
 
     Args:
         scene: the scene (its film's crop size). spp: camera samples per pixel.
-        lanes_per_pass, pass_spp: the pass split (`pass_size`).
+        lanes_per_pass, pass_spp, grow: the pass split (`PassSplit`).
 
     Returns:
         The number of launches.
     """
     size = scene.sensors()[0].film().crop_size()
-    layout, per_pass = pass_size(int(size[0]), int(size[1]), spp, lanes_per_pass, pass_spp)
-    return len(layout) * math.ceil(spp / per_pass)
+    layout, rounds = PassSplit(lanes_per_pass, pass_spp, grow).rounds(int(size[0]), int(size[1]),
+                                                                      spp)
+    return len(layout) * len(rounds)
 
 
 __all__ = [

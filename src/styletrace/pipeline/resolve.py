@@ -77,7 +77,8 @@ class Resolved:
     def launches(self) -> int:
         """How many kernel launches the passes make (`passes.pass_count`): what a progress bar
         counts."""
-        return pass_count(self.scene, self.spp, self.lanes, pass_spp=self.job.pass_spp)
+        return pass_count(self.scene, self.spp, self.lanes, pass_spp=self.job.pass_spp,
+                          grow=self.job.pass_growth)
 
 
 def job_integrator_values(scene: mi.Scene, job: Job) -> dict[str, Any] | None:
