@@ -21,7 +21,11 @@ Protocol, the same for both renderers (scenes at --size square, Cycles on the CP
   as styletrace's film, 64 bounces); styletrace cel by direct application at that large inner count
   (as benchmarks/denoise.py's pixel reference: the look g(E[L]) that cel converges to, up to the
   smearing of band edges by a mean of 256 children, which the two references share and the
-  estimate does not cancel). The noise left in one reference: mean((r1 - r2)^2) / 2, as a PSNR
+  estimate does not cancel). On these interiors it has not converged: the children of a full
+  path are so noisy against cel's narrow auto bands (window: thresholds 0.089 and 0.152) that the
+  mean of 256 still flips bands from pixel to pixel (a speckled image with no flat band), so
+  cel's goal is judged against the defaults at Samples 1024 (`Plan.ref_limit`) as well. The noise
+  left in one reference: mean((r1 - r2)^2) / 2, as a PSNR
   ("one reference" rows). Cycles' references are as noisy as its 1024-sample render: the estimate
   needs them independent, not clean, and its standard error says what their noise costs.
 - Raw error per sample: no denoising, `Plan.raw_spp` (64 and 1024) samples per pixel
@@ -634,10 +638,14 @@ def report(results: dict, size: int, plan: Plan, code: str) -> str:
         f"(their noise cancels in expectation), every image clipped to [0, {PEAK:g}] (linear; "
         f"peak {PEAK:g}); PSNR = 10 log10(peak^2 / error), +- one standard error. Converged: "
         "identity and Cycles without denoising or clamping; cel by direct application at a large "
-        "inner count. Raw: Denoise Off, the Samples given, other settings the add-on's defaults "
+        "inner count, which has not converged on these interiors (its mean of 256 children still "
+        "flips cel's narrow auto bands from pixel to pixel), so cel is also judged against the "
+        f"defaults at Samples {plan.ref_limit}. Raw: Denoise Off, the Samples given, other "
+        "settings the add-on's defaults "
         "(cel's error includes its children's bias at band edges). Equal time: styletrace's F12 "
-        f"at the add-on's defaults (Samples {st.samples}, Denoise {st.denoise}, pass of "
-        f"{st.pass_spp}), median time of {len(plan.equal_seeds)} seed(s); Cycles at its F12 "
+        f"at the add-on's defaults (Samples {st.samples}, Denoise {st.denoise}, passes from "
+        f"{st.pass_spp} camera samples, doubling with the {st.sampler} pattern), median time "
+        f"of {len(plan.equal_seeds)} seed(s); Cycles at its F12 "
         "defaults (adaptive, clamp, OIDN) with its time limit set to styletrace identity's time "
         "(sampling only: wall time shown), a one-pixel box filter and 64 bounces as its "
         "reference. Also for styletrace's equal-time images: the error against the same defaults "
