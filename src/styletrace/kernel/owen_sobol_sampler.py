@@ -44,8 +44,7 @@ class OwenSobolSampler(mi.Sampler):
     """The `owen_sobol` sampler (module docstring).
 
     Args:
-        props: Mitsuba properties: sample_count (default 4) and seed (default 0), as Mitsuba's
-            samplers.
+        props: Mitsuba properties: sample_count (default 4), as Mitsuba's samplers.
     """
 
     def __init__(self, props: mi.Properties):
@@ -55,6 +54,12 @@ class OwenSobolSampler(mi.Sampler):
         self._camera_dims = 0
 
     def seed(self, seed, wavefront_size):
+        """Key each lane by its pixel and number it within the pixel (module docstring).
+
+        Args:
+            seed: the launch's seed (used where no `sequence` is set). wavefront_size: the
+                launch's lanes, sample_count per pixel side by side.
+        """
         super().seed(seed, wavefront_size)
         n = int(wavefront_size)
         spp = max(int(self.sample_count()), 1)
@@ -72,10 +77,12 @@ class OwenSobolSampler(mi.Sampler):
         self._camera_dims = 0
 
     def next_1d(self, active=True):
+        """The camera sample's next dimension (Mitsuba's render loop: time, wavelengths)."""
         self._camera_dims += 1
         return self._lanes.next_1d(active)
 
     def next_2d(self, active=True):
+        """The camera sample's next dimension pair (film position, aperture)."""
         self._camera_dims += 1
         return self._lanes.next_2d(active)
 
@@ -90,6 +97,8 @@ class OwenSobolSampler(mi.Sampler):
                                counter(0, lanes.key))
 
     def clone(self):
+        """A sampler of the same count and sequence (Mitsuba and `launch.seeded_positions` seed
+        clones as the render loop seeds its own)."""
         other = OwenSobolSampler(mi.Properties())
         other.set_sample_count(self.sample_count())
         other.sequence = self.sequence
