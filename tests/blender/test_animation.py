@@ -144,7 +144,7 @@ def test_esc_during_a_frame_ends_the_sequence(tmp_path, monkeypatch):
 
     monkeypatch.setattr(engine.StyletraceEngine, "_render", render)
     monkeypatch.setattr(engine.StyletraceEngine, "stop_requested", test_break)
-    done = 2 * PASS_SPP
+    done = PASS_SPP + 2 * PASS_SPP  # two passes, F12's doubling (`f12.job`)
     with pytest.raises(RuntimeError, match=f"cancelled during frame {FRAMES[1]} after {done} of "
                                            f"{SPP} spp: Render Animation stops here"):
         render_animation(s, tmp_path, ext)
