@@ -151,3 +151,27 @@ def test_auto_is_spatial_with_the_sequence_and_several_lights_else_uniform():
     assert EmitterSampler(api.load_scene("dragon", 8, 8), "auto").mode == "spatial"
     assert EmitterSampler(api.load_scene("dragon", 8, 8, sampler="independent")).mode == "uniform"
     assert EmitterSampler(api.load_scene("cornell-box", 8, 8)).mode == "uniform"
+
+
+def test_power_compares_an_area_light_with_a_spot():
+    """A spot's sampled weight varies, an area light's is one constant: both count per sample
+    (the estimate once divided the constant by its 4096 samples, and the spot won 4000 times over).
+    Analytic powers: the area light pi L A; the spot (cutoff 20 deg, beam width 20 deg: constant
+    inside) I 2 pi (1 - cos 20 deg)."""
+    T = mi.ScalarTransform4f
+    scene = mi.load_dict({
+        "type": "scene",
+        "area": {"type": "rectangle", "to_world": T().translate([0, 2, 0]) @ T().scale(0.25),
+                 "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1.0] * 3}}},
+        "spot": {"type": "spot", "to_world": T().look_at(origin=[0, 3, 0], target=[0, 0, 0],
+                                                         up=[0, 0, 1]),
+                 "intensity": {"type": "rgb", "value": [5.0] * 3},
+                 "cutoff_angle": 20.0, "beam_width": 20.0},
+    })
+    power = EmitterSampler(scene, "power")
+    kinds = ["area" if e.get_shape() else "spot"
+             for e in sorted(scene.emitters(), key=stable_key)]
+    p = dict(zip(kinds, power.probabilities))
+    phi_area = math.pi * 1.0 * 0.25
+    phi_spot = 5.0 * 2 * math.pi * (1 - math.cos(math.radians(20.0)))
+    assert p["area"] == pytest.approx(phi_area / (phi_area + phi_spot), rel=0.02), p

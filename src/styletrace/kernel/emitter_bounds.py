@@ -153,8 +153,9 @@ def ray_samples(emitter: mi.Emitter, n: int = POWER_SAMPLES):
 
 def emitted_power(emitter: mi.Emitter) -> float:
     """Phi estimated as the mean weight of POWER_SAMPLES fixed `sample_ray` samples (averaged over
-    the channels; non-finite weights count 0). Unlike `emitter_sampler.estimated_power`, a weight
-    Mitsuba returns as one constant counts once per sample, so that emitters of every kind compare.
+    the channels; non-finite weights count 0). A weight Mitsuba returns as one constant counts once
+    per sample, so that emitters of every kind compare (the `power` mode's estimate once divided
+    such a constant by POWER_SAMPLES: a spot outweighed an area light 4000 times).
 
     Args:
         emitter: an emitter of the scene.

@@ -18,12 +18,8 @@ from styletrace.config.choices import EMITTER_DEFAULT as DEFAULT_MODE  # noqa: F
 from styletrace.config.choices import EMITTER_MODES as MODES
 from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
-from styletrace.kernel.emitter_bounds import emitter_bounds
+from styletrace.kernel.emitter_bounds import emitted_power, emitter_bounds
 from styletrace.kernel.spatial_selection import SpatialSelection
-
-#: samples of `sample_ray` per emitter for the power estimate (fixed, so the estimate is
-#: deterministic)
-POWER_SAMPLES = 1 << 12
 
 
 def emitter_id(ptr) -> mi.UInt32:
@@ -53,25 +49,6 @@ def stable_key(emitter: mi.Emitter) -> tuple:
     if shape is None:
         return (str(emitter), "", "")
     return (str(emitter), str(shape), str(shape.bbox()))
-
-
-def estimated_power(emitter: mi.Emitter) -> float:
-    """Phi estimated as the mean weight of `sample_ray` (averaged over the channels) over
-    POWER_SAMPLES fixed samples; non-finite weights count 0.
-
-    Args:
-        emitter: an emitter of the scene.
-
-    Returns:
-        float, >= 0.
-    """
-    n = POWER_SAMPLES
-    rng = mi.PCG32(n, initseq=dr.arange(mi.UInt64, n))
-    u = [rng.next_float32() for _ in range(5)]
-    _, weight = emitter.sample_ray(0.0, u[0], mi.Point2f(u[1], u[2]), mi.Point2f(u[3], u[4]))
-    w = mi.Color3f(weight)
-    total = dr.sum(dr.select(dr.isfinite(w.x + w.y + w.z), (w.x + w.y + w.z) / 3.0, 0.0))
-    return max(float(total[0] if dr.is_array_v(total) else total) / n, 0.0)
 
 
 def selection_order(emitters) -> list:
@@ -135,7 +112,7 @@ class EmitterSampler:
             self._set_up_spatial(scene, emitters, ids, weights)
             return
         if mode == "power":
-            powered = [w * estimated_power(e) for w, e in zip(weights, emitters)]
+            powered = [w * emitted_power(e) for w, e in zip(weights, emitters)]
             if sum(powered) > 0:
                 weights = powered
         if not sum(weights) > 0:
