@@ -17,7 +17,6 @@ import numpy as np
 
 from styletrace.blender import build, exporter
 from styletrace.blender.properties import settings_integrator_values
-from styletrace.config.choices import SAMPLER_DEFAULT
 from styletrace.config.line_types import without_colours
 from styletrace.frontends import api
 
@@ -134,16 +133,17 @@ def job(sc, integ, settings, denoise: bool = True, grow: bool | None = None):
     Args:
         sc: the loaded scene. integ: the integrator. settings: the scene's styletrace settings.
         denoise: False: not denoised, whatever Denoise says (`denoising`).
-        grow: the passes grow (`passes.PassSplit.rounds`); None: with the Owen-scrambled Sobol
-            pattern (the settings' `sampler`).
+        grow: the passes grow (`passes.PassSplit.rounds`); None: where the loaded scene's
+            sampler is `owen_sobol` (`owen_sobol_sampler.sequenced`).
 
     Returns:
         The `pipeline.job.Job`.
     """
+    from styletrace.kernel.owen_sobol_sampler import sequenced
     from styletrace.pipeline.job import Job
     from styletrace.pipeline.terms import BLENDER
     if grow is None:
-        grow = getattr(settings, "sampler", SAMPLER_DEFAULT) == SAMPLER_DEFAULT
+        grow = sequenced(sc)
     return Job(scene=sc, integrator=integ, seed=settings.seed, pass_spp=settings.pass_spp,
                lanes_per_pass=api.LANES_PER_PASS, pass_growth=grow,
                denoising=denoising(settings, denoise), terms=BLENDER, **sampling(settings, integ))

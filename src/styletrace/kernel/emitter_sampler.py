@@ -19,6 +19,7 @@ from styletrace.config.choices import EMITTER_MODES as MODES
 from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
 from styletrace.kernel.emitter_bounds import emitted_power, emitter_bounds
+from styletrace.kernel.owen_sobol_sampler import sequenced
 from styletrace.kernel.spatial_selection import SpatialSelection
 
 
@@ -74,10 +75,7 @@ def auto_mode(scene: mi.Scene) -> str:
     Returns:
         'spatial' or 'uniform'.
     """
-    from styletrace.kernel.owen_sobol_sampler import OwenSobolSampler
-    sensors = scene.sensors()
-    sequenced = bool(sensors) and isinstance(sensors[0].sampler(), OwenSobolSampler)
-    return "spatial" if sequenced and len(scene.emitters()) > 1 else "uniform"
+    return "spatial" if sequenced(scene) and len(scene.emitters()) > 1 else "uniform"
 
 
 class EmitterSampler:

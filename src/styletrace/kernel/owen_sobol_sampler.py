@@ -8,9 +8,9 @@ Mitsuba's render loop seeds it and draws the camera sample from it (film positio
 time); the `stylized` integrator then takes the lanes' sequences (`lanes`) from the next dimension
 on (`sequence_sampler.SequenceSampler`). Lane i of a launch of spp camera samples per pixel is
 sample offset + i mod spp of pixel i // spp (Mitsuba's pixel-major layout). A render in passes
-continues one sequence: the pass loop tells the sampler the render's seed, the tile and how many
-camera samples of the pixel came before (`Sequence`, `launch.render_pass`); without one, a launch
-is a sequence of its own, keyed by its seed.
+continues one sequence: the pass loop tells the sampler the seed of the render's first pass, the
+tile and how many camera samples of the pixel came before (`Sequence`, `launch.render_pass`);
+without one, a launch is a sequence of its own, keyed by its seed.
 
 Other integrators (Mitsuba's `path`) draw from it as from any Mitsuba sampler: its lanes' state
 is a Dr.Jit struct, which their symbolic loops carry, so each bounce draws new dimensions
@@ -32,8 +32,9 @@ NAME = "owen_sobol"
 class Sequence:
     """Where a launch sits in its render's sequence.
 
-    seed: the render's seed (not the pass's: every pass continues one sequence); tile: the tile's
-    index (its own pixels' keys); offset: the camera samples per pixel launched before it.
+    seed: the seed that keys the sequence, the same for every pass of a render
+    (`passes.unit_sequence`: its first pass's); tile: the tile's index (its own pixels' keys);
+    offset: the camera samples per pixel launched before it.
     """
     seed: int = 0
     tile: int = 0
@@ -108,6 +109,20 @@ class OwenSobolSampler(mi.Sampler):
         return f"OwenSobolSampler[sample_count={int(self.sample_count())}]"
 
 
+def sequenced(scene: mi.Scene) -> bool:
+    """Whether the scene's first sensor samples with `owen_sobol` (its passes continue one
+    sequence, so the pass split cannot change its samples).
+
+    Args:
+        scene: the mi.Scene.
+
+    Returns:
+        bool.
+    """
+    sensors = scene.sensors()
+    return bool(sensors) and isinstance(sensors[0].sampler(), OwenSobolSampler)
+
+
 def register() -> None:
     """Register `owen_sobol` with Mitsuba for the active variant.
 
@@ -117,4 +132,4 @@ def register() -> None:
     mi.register_sampler(NAME, lambda props: OwenSobolSampler(props))
 
 
-__all__ = ["NAME", "Sequence", "OwenSobolSampler", "register"]
+__all__ = ["NAME", "Sequence", "OwenSobolSampler", "sequenced", "register"]

@@ -43,15 +43,15 @@ def plan_units(plan: Plan) -> tuple[list[pass_loop.Tile], list[Unit]]:
 
     Returns:
         (tiles, units): round r of tile t is launch index r * tiles + t, seeded with
-        `pass_loop.pass_seed(seed, index)`, of min(per_pass, spp - r * per_pass) camera samples per
-        pixel, continuing its tile's sequence at r * per_pass.
+        `pass_loop.pass_seed(seed, index)`, of the split's round r camera samples per pixel
+        (`PassSplit.rounds`, as the pass loop), continuing its tile's sequence after the rounds
+        before it.
     """
-    spp, seed = plan.spp, plan.seed
-    layout, per_pass = plan.split.size(plan.width, plan.height, spp)
-    rounds = -(-spp // per_pass)
-    units = [Unit(r * len(layout) + t, t, r, min(per_pass, spp - r * per_pass),
-                  pass_loop.pass_seed(seed, r * len(layout) + t), r * per_pass)
-             for r in range(rounds) for t in range(len(layout))]
+    layout, rounds = plan.split.rounds(plan.width, plan.height, plan.spp)
+    starts = [sum(rounds[:r]) for r in range(len(rounds))]
+    units = [Unit(r * len(layout) + t, t, r, n, pass_loop.pass_seed(plan.seed, r * len(layout) + t),
+                  starts[r])
+             for r, n in enumerate(rounds) for t in range(len(layout))]
     return layout, units
 
 

@@ -139,11 +139,9 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
                          f"mi.Scene")
     name = os.fspath(scene)
     if name in BUILTIN:
+        description = scene_dict(name, width, height, sampler)
         try:
-            loaded = mi.load_dict(scene_dict(name, width, height, sampler))
-            return canonical_scene_normals(loaded)
-        except SceneError:
-            raise
+            return canonical_scene_normals(mi.load_dict(description))
         except Exception as exc:
             raise SceneError(f"cannot load built-in scene '{name}': {first_line(exc)}") from None
     if not name.lower().endswith(".xml") and not os.path.exists(name):
