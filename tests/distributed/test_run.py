@@ -14,8 +14,8 @@ from styletrace.pipeline.ray_run import Render, job_for
 STYLE = {"style": "cel", "inner": 2, "max_depth": 3}
 
 
-def local(scene, width, height, spp, seed, pass_spp, style=STYLE):
-    sc = api.load_scene(scene, width, height)
+def local(scene, width, height, spp, seed, pass_spp, style=STYLE, sampler=None):
+    sc = api.load_scene(scene, width, height, sampler=sampler)
     integ = api.make_integrator(**style)
     image = None
     for prog in api.passes(sc, integ, spp, seed, pass_spp=pass_spp):
@@ -32,6 +32,14 @@ def test_cluster_render_is_bit_identical_to_the_local_one(ray_cluster):
     assert np.array_equal(got, ref)
     # another seed draws other samples: the comparison can tell images apart
     assert not np.array_equal(local("cornell-box", 40, 24, 8, 8, 2), ref)
+
+
+def test_a_builtin_scenes_sampler_travels_to_the_workers(ray_cluster):
+    ref = local("cornell-box", 40, 24, 4, 7, 2, sampler="independent")
+    got = styletrace.render("cornell-box", spp=4, seed=7, width=40, height=24, pass_spp=2,
+                            cluster=ray_cluster, sampler="independent", **STYLE)
+    assert np.array_equal(got, ref)
+    assert not np.array_equal(local("cornell-box", 40, 24, 4, 7, 2), ref)
 
 
 def test_tiled_image_on_the_cluster_equals_api_passes(ray_cluster):

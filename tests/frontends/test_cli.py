@@ -88,6 +88,19 @@ def test_same_seed_same_image(tmp_path):
     assert not np.array_equal(read(a), read(c))
 
 
+def test_sampler_flag_picks_a_builtin_scenes_sample_pattern(tmp_path):
+    out = {k: tmp_path / f"{k}.exr" for k in ("independent", "owen_sobol", "default")}
+    for name, path in out.items():
+        flag = [] if name == "default" else ["--sampler", name]
+        assert main(["render", "--style", "identity", *SMALL, "--denoise", "off", *flag,
+                     "-o", str(path)]) == 0
+    independent = styletrace.render("cornell-box", style="identity", spp=4, inner=2,
+                                    width=24, height=16, denoise="off", sampler="independent")
+    np.testing.assert_allclose(read(out["independent"]), independent, rtol=1e-6, atol=0)
+    assert np.array_equal(read(out["owen_sobol"]), read(out["default"]))
+    assert not np.array_equal(read(out["independent"]), read(out["default"]))
+
+
 def test_progress_bar_for_multi_pass_renders(tmp_path):
     r = run_cli(
         "render",
@@ -196,6 +209,20 @@ value="$resy"/>
     u = img.mean(axis=2)
     np.testing.assert_allclose(u[5:7, 4:6], 0.2, atol=1e-5)
     np.testing.assert_allclose(u[0, 0], 1.0, atol=1e-5)
+
+
+def test_sampler_flag_with_a_scene_file_is_one_line_and_exit_2(tmp_path, capsys):
+    path = tmp_path / "s.xml"
+    path.write_text('<scene version="3.0.0"><shape type="sphere"/></scene>')
+    assert main(["render", "-q", str(path), "--sampler", "independent",
+                 "-o", str(tmp_path / "o.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "bad sampler choice 'independent'" in err and "built-in scenes only" in err
+    assert "\n" not in err and not (tmp_path / "o.exr").exists()
+    with pytest.raises(SystemExit) as stop:
+        main(["render", "-q", "--sampler", "halton"])
+    assert stop.value.code == 2
+    assert "--sampler: invalid choice: 'halton'" in capsys.readouterr().err
 
 
 def interrupt(out, pass_spp, ctrl_c, sig=signal.SIGINT):

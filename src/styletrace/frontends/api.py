@@ -52,6 +52,7 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
            spp: int | None = None, inner: Any = None, estimator: str | None = None, seed: int = 0,
            width: int | None = None, height: int | None = None,
            defines: dict[str, Any] | None = None, integrator: Any = None,
+           sampler: str | None = None,
            pass_spp: int | None = None, denoise: str | None = None, denoise_quality: str = "high",
            coverage: int | str = "auto", denoise_uncertainty: float | None = None,
            denoise_footprint: str = "pixel", cluster: str | None = None,
@@ -75,6 +76,8 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
         estimator: the estimator of g(E[L]) (None: direct). seed: the render's seed.
         width, height: the film's size (None: the scene's). defines: an XML file's `<default>`
             values. integrator: a prebuilt integrator, used as it is (not with style or params).
+        sampler: a built-in scene's sampler, owen_sobol or independent (None: owen_sobol, the
+            built-in scenes'); a scene file or dict names its own.
         pass_spp: camera samples per pixel per pass (None: by memory).
         denoise: auto, expectation, image or off (None: $STYLETRACE_DENOISE, else auto).
         denoise_quality, coverage, denoise_uncertainty, denoise_footprint: the denoiser's options
@@ -101,7 +104,8 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
                           denoise_footprint)
     job = python_job(scene, style=style, samples=samples, spp=spp, inner=inner,
                      estimator=estimator, seed=seed, width=width, height=height, defines=defines,
-                     integrator=integrator, pass_spp=pass_spp, denoising=denoising, **params)
+                     integrator=integrator, sampler=sampler, pass_spp=pass_spp,
+                     denoising=denoising, **params)
     runner = plan(job, executor_for(cluster))
     if runner.resolved.note:
         import warnings

@@ -20,6 +20,7 @@ import sys
 import warnings
 from typing import Mapping, Sequence
 
+from styletrace.config.choices import SAMPLERS
 from styletrace.errors import StyletraceError, UsageError
 from styletrace.frontends.status import Status
 from styletrace.images import IMAGE_TYPES, check_target
@@ -228,11 +229,11 @@ def plan_with_status(job, executor, buffer, status):
     # Dr.Jit picks its libLLVM when first imported: choose it (and the variant) before that
     backend()
     from styletrace.denoise.finishers import Recording, plan
-    from styletrace.scene.loading import SceneWarning, load_scene
+    from styletrace.scene.loading import SceneWarning
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", SceneWarning)
         with status.phase(f"loading scene {one_line(job.scene or 'cornell-box')}"):
-            loaded = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
+            loaded = job.load()
         with status.phase(
             "measuring the scene for its auto values: compiling and rendering a pilot"
         ):
@@ -405,6 +406,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME=VALUE",
         help="value of a <default> parameter of the scene file ($NAME), as Mitsuba's -D; "
              "repeatable",
+    )
+    r.add_argument(
+        "--sampler", choices=SAMPLERS, default=None,
+        help="a built-in scene's sample pattern: owen_sobol (the default: an Owen-scrambled "
+        "Sobol sequence) or independent (the paper's protocol); a scene file names its own "
+        "(<sampler type=...>; docs/design/sequence_sampler.md)",
     )
     r.add_argument(
         "--seed", type=int, default=0,

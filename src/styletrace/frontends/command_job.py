@@ -77,6 +77,7 @@ def job_of(
         defines=dict(defines or {}),
         width=args.width,
         height=args.height,
+        sampler=getattr(args, "sampler", None),
         given=given_flags(args, params),
         default_style=settings.COMMAND_LINE_STYLE,
         spp=args.spp,

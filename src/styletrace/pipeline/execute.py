@@ -62,6 +62,8 @@ def ray_job(resolved: Resolved, camera: Any = None):
     from styletrace.pipeline.ray_run import job_for
     job = resolved.job
     load = {"defines": dict(job.defines)} if job.defines else {}
+    if job.sampler is not None:
+        load["sampler"] = job.sampler
     return job_for(job.scene, resolved.integrator, job.width, job.height, camera, **load)
 
 

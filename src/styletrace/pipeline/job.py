@@ -30,6 +30,8 @@ class Job:
     Args:
         scene: a built-in name, an XML path, a scene dict or an mi.Scene (None: the default scene).
         defines: the XML file's `<default>` parameters. width, height: the film (None: the scene's).
+        sampler: a built-in scene's sampler (`config.choices.SAMPLERS`; None: the scene's own;
+            a file or dict names its own: `scene.loading.load_scene`).
         given: integrator values, laid over the scene's own `stylized` integrator, else over its
             carried settings with `default_style` (PYTHON_STYLE by default).
         integrator: a prebuilt integrator, used as it is (with `given` too: a UsageError).
@@ -52,6 +54,7 @@ class Job:
     defines: Mapping[str, Any] = field(default_factory=dict)
     width: int | None = None
     height: int | None = None
+    sampler: str | None = None
     given: Mapping[str, Any] = field(default_factory=dict)
     default_style: str = PYTHON_STYLE
     integrator: Any = None
@@ -72,6 +75,22 @@ class Job:
                 f"bad arguments: integrator= is used as it is, so {', '.join(sorted(self.given))} "
                 f"cannot refine it; pass either a prebuilt integrator or style= and parameters"
             )
+
+    def load(self, width: int | None = None, height: int | None = None):
+        """The job's scene, loaded (`scene.loading.load_scene`).
+
+        Args:
+            width, height: a film size in place of the job's (a draft's); None: the job's.
+
+        Returns:
+            The mi.Scene.
+
+        Raises:
+            SceneError: a scene that cannot be found, loaded, resized or rendered.
+        """
+        from styletrace.scene.loading import load_scene
+        return load_scene(self.scene, width or self.width, height or self.height,
+                          dict(self.defines) or None, self.sampler)
 
     @property
     def cap(self) -> int:
@@ -113,7 +132,7 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
                spp: int | None = None, inner: Any = None, estimator: str | None = None,
                seed: int = 0, width: int | None = None, height: int | None = None,
                integrator: Any = None, defines: Mapping[str, Any] | None = None,
-               pass_spp: int | None = None, denoising: Denoising = OFF,
+               sampler: str | None = None, pass_spp: int | None = None, denoising: Denoising = OFF,
                max_camera_samples: int | None = None, **params: Any) -> Job:
     """The Job of the Python API's keywords: the one place that reads them (`styletrace.render`,
     `render_buffer` and the other calls build on it).
@@ -123,7 +142,7 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
 
     Args:
         scene: a built-in name, an XML path, a scene dict or an mi.Scene.
-        samples, spp, seed, width, height, integrator, defines, pass_spp, denoising,
+        samples, spp, seed, width, height, integrator, defines, sampler, pass_spp, denoising,
             max_camera_samples: as `Job`'s fields.
         style, inner, estimator, **params: the integrator values given (`given_values`: None
             leaves a value out).
@@ -135,9 +154,9 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
         UsageError: a prebuilt `integrator` together with values to refine it.
     """
     return Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
-               given=given_values(style, inner, estimator, **params), integrator=integrator,
-               spp=spp, seed=seed, pass_spp=pass_spp, samples=samples, denoising=denoising,
-               max_camera_samples=max_camera_samples, terms=PYTHON)
+               sampler=sampler, given=given_values(style, inner, estimator, **params),
+               integrator=integrator, spp=spp, seed=seed, pass_spp=pass_spp, samples=samples,
+               denoising=denoising, max_camera_samples=max_camera_samples, terms=PYTHON)
 
 
 def check_counts(*named: tuple[str, Any]) -> None:

@@ -137,11 +137,11 @@ def load_on_worker(spec: SceneSpec, values: dict, variant: str):
     from styletrace.kernel.integrator import StylizedIntegrator
     from styletrace.pipeline.job import Job
     from styletrace.pipeline.resolve import resolve
-    unknown = sorted(set(spec.load_kwargs) - {"defines"})
+    unknown = sorted(set(spec.load_kwargs) - {"defines", "sampler"})
     if unknown:
         raise UsageError(
             f"bad scene arguments {', '.join(unknown)} for a cluster render: a scene takes defines "
-            "only"
+            "and a sampler only"
         )
     scene = _decode(spec.scene) if isinstance(spec.scene, dict) else spec.scene
     # the render pipeline's resolve, with the driver's resolved values as the integrator: the same
@@ -152,6 +152,7 @@ def load_on_worker(spec: SceneSpec, values: dict, variant: str):
         width=spec.width,
         height=spec.height,
         defines=dict(spec.load_kwargs.get("defines") or {}),
+        sampler=spec.load_kwargs.get("sampler"),
         integrator=StylizedIntegrator.from_values(values),
         lanes_per_pass=1,
     )

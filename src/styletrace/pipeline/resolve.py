@@ -34,7 +34,7 @@ from styletrace.pipeline.passes import pass_count, pin_auto_values
 from styletrace.pipeline.sizing import lanes_per_pass
 from styletrace.scene.arguments import SEED_MAX, SPP_MAX, check_integrator, whole
 from styletrace.scene.defaults import ScenePilot, pin_firefly, unique_styled
-from styletrace.scene.loading import load_scene, scene_spp
+from styletrace.scene.loading import scene_spp
 from styletrace.scene.plugins import init
 
 
@@ -237,7 +237,7 @@ def resolve(job: Job, scene: mi.Scene | None = None, local: bool = True) -> Reso
     if job.samples is not None:
         whole(t.name("samples"), job.samples, 1, SPP_MAX)
     if scene is None:
-        scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
+        scene = job.load()
     chosen = choose_integrator(scene, job)
     request = budget_request(job, chosen, scene_spp(scene), scene)
     method, note = choose_method(scene, chosen, request, job.denoising, local, job.cap)

@@ -26,7 +26,6 @@ from styletrace.pipeline.job import Job
 from styletrace.pipeline.resolve import Resolved, resolve
 from styletrace.pipeline.terms import COMMAND_LINE
 from styletrace.progressive.rules import DRAFT_QUALITY, PREVIEW_K, PREVIEW_QUALITY, draft_size
-from styletrace.scene.loading import load_scene
 
 #: a built-in scene's film where the caller names no size
 DEFAULT_SIZE = 256
@@ -95,7 +94,7 @@ def prepare(job: Job) -> Prepared:
         StyletraceError: a refusal of the render (one line, naming the preview's flags), or a split
             over the buffer's cap.
     """
-    scene = load_scene(job.scene, job.width, job.height, dict(job.defines) or None)
+    scene = job.load()
     page = resolve(job, scene)
     w, h = page.size
     if w * h * page.spp > job.cap:
@@ -110,8 +109,7 @@ def prepare(job: Job) -> Prepared:
     dw, dh = draft_size(w, h)
     draft = recording.with_(draft=True, width=dw, height=dh, denoising=Denoising(
         "auto", quality=DRAFT_QUALITY, footprint="film"))
-    draft_scene = scene if (dw, dh) == (w, h) else load_scene(job.scene, dw, dh,
-                                                              dict(job.defines) or None)
+    draft_scene = scene if (dw, dh) == (w, h) else job.load(dw, dh)
     return Prepared(page, recording, draft, scene, draft_scene, scene_label(job.scene))
 
 

@@ -110,8 +110,8 @@ def load_scene(scene: Any = None, width: int | None = None, height: int | None =
         raise SceneError("defines apply to XML scene files (their <default> parameters) only")
     if sampler is not None and not (isinstance(scene, (str, os.PathLike))
                                     and os.fspath(scene) in BUILTIN):
-        raise SceneError(f"sampler={sampler!r} applies to built-in scenes only; a scene file or "
-                         "dict names its own sampler")
+        raise SceneError(f"bad sampler choice {sampler!r}: it applies to built-in scenes only; a "
+                         "scene file or dict names its own (<sampler type=...>)")
     if isinstance(scene, mi.Scene):
         check_scene(scene, "the mi.Scene")
         if width or height:
