@@ -392,8 +392,10 @@ def attach(
     uncertainty: float = 0.0,
     cache: dict | None = None,
     pilot=None,
+    history=None,
 ):
-    """Denoise the buffer's expectation: M formed, denoised into D, g's points placed.
+    """Denoise the buffer's expectation: M formed (blended with the frames' history where one is
+    given), denoised into D, g's points placed.
 
     Args:
         buf: the recorded buffer of means. shot: its scene, the render's integrator (read for
@@ -405,6 +407,8 @@ def attach(
             same values as made anew); None: nothing kept.
         pilot: the render's scene-defaults pilot (`scene.defaults.ScenePilot`) for the points'
             buffer, or None: traced anew.
+        history: the frames' `denoise.temporal.History` (its `blend`; the caller commits), or
+            None.
 
     Returns:
         (D per pixel H x W x 3, None) for k = 0; (D, the points' buffer) for k > 0. The arrays
@@ -418,11 +422,20 @@ def attach(
         raise UsageError(
             "--denoise expectation needs a buffer of children means (direct or affine estimator)"
         )
-    g = _guides(scene, spp, seed, cache)  # M's footprint
+    # a still shot's frames share their guides and points (`temporal.History.shared`): only the
+    # estimate changes from one frame to the next
+    view_seed = seed if history is None else history.shared("seed", seed)
+    g = _guides(scene, spp, view_seed, cache)  # M's footprint
     own = _own_device(scene, buf, cache)
     # the reflected part: each sample's own emission goes back in at_samples
     refl = _reflected(buf, own[1])
-    m = _expectation(buf, refl)
+    if history is None:
+        m = _expectation(buf, refl)
+    else:  # each pixel's M with its variance and samples, for the frames' weights and test
+        count, mean, var = _sample_moments(buf, refl)
+        hw3 = (buf.height, buf.width, 3)
+        m = history.blend(mean.T.reshape(hw3), var.T.reshape(hw3),
+                          count.reshape(buf.height, buf.width))
     d = oidn.denoise_oidn(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
     header = {"method": "expectation", "quality": quality,
@@ -433,7 +446,7 @@ def attach(
         rel = _spread(buf, refl, uncertainty) if uncertainty > 0 else None
         if rel is not None:
             lookup.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
-        cover = coverage_module.points(scene, integrator, lookup, k, seed, pilot=pilot)
+        cover = coverage_module.points(scene, integrator, lookup, k, view_seed, pilot=pilot)
         if rel is not None:  # per point, its pixel's: restyles average g over it too
             cover.arrays[SPREAD] = dr.gather(mi.Float, lookup.spread,
                                              mi.UInt32(cover.arrays["pixel"]))
@@ -710,6 +723,8 @@ class ExpectationJob:
         self.buffer: Buffer | None = None
         #: what `attach` keeps between a preview and the next preview or `finish` (`attach`'s)
         self._cache: dict = {}
+        #: the frames' temporal history (`denoise.temporal`), committed by `finish`, or None
+        self.history = denoising.history
         #: the scene-defaults pilot of the passes and the points (traced once, where first used)
         self.pilot = (pilot if pilot is not None and pilot.serves(shot.scene, integrator.settings)
                       else ScenePilot(shot.scene, integrator.settings))
@@ -743,7 +758,10 @@ class ExpectationJob:
             UsageError: not every pixel has a camera sample yet (a render cancelled in its first
                 round of tiles; one line).
         """
-        return self._finish(self.buffer, self.k, self.quality)
+        out = self._finish(self.buffer, self.k, self.quality)
+        if self.history is not None:
+            self.history.commit()
+        return out
 
     def preview(self, k: int | str = 1, quality: str = "fast") -> tuple[np.ndarray, Buffer]:
         """A quick denoised image of the passes so far, for a viewport; `finish` is not changed.
@@ -779,7 +797,8 @@ class ExpectationJob:
             raise UsageError("nothing to denoise: no pass of the render finished")
         # the guides of as many camera samples as the buffer holds (a preview's: fewer)
         shot = replace(self.shot, spp=buf.spp)
-        _, cover = attach(buf, shot, quality, k, self.uncertainty, self._cache, self.pilot)
+        _, cover = attach(buf, shot, quality, k, self.uncertainty, self._cache, self.pilot,
+                          self.history)
         if cover is None:
             return image_of(buf), buf
         image = np.asarray(cover.image, dtype=np.float32)[..., :3]

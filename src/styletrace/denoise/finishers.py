@@ -89,7 +89,8 @@ class Denoised(Finisher):
         return prog is not None and prog.spp_done >= 1
 
     def write_plain(self, prog, output: str, pixel_format: str) -> str:
-        return save_safely(prog.image[..., :3], output, pixel_format, None, plain=True)
+        return save_safely(prog.image[..., :3], output, pixel_format, self.channels(None),
+                           plain=True)
 
 
 class Expectation(Denoised):
@@ -156,12 +157,14 @@ class Expectation(Denoised):
     def result(self, prog):
         from styletrace.denoise.expectation import aovs
         image, buf = self._finish()
-        return (image, aovs(buf, image)) if self.aovs else image
+        extra = self.channels(aovs(buf, image) if self.aovs else None)
+        return (image, extra) if extra is not None else image
 
     def write(self, prog, output: str, pixel_format: str) -> Written:
         from styletrace.denoise.expectation import aovs
         image, buf = self._finish()
-        out = save_safely(image, output, pixel_format, aovs(buf, image) if self.aovs else None)
+        out = save_safely(image, output, pixel_format,
+                          self.channels(aovs(buf, image) if self.aovs else None))
         if self.buffer is not None:
             buf.save(self.buffer)
         points = buf.header.get("denoise", {}).get("coverage")
@@ -233,7 +236,16 @@ class Image(Denoised):
 
     def _finish(self, prog):
         from styletrace.denoise.image import finish_denoised_image
-        return finish_denoised_image(self.scene, prog, self.seed, self.quality)
+        history = self.denoising.history
+        if history is None:
+            return finish_denoised_image(self.scene, prog, self.seed, self.quality)
+        # the frame joins the history once, however often its result is asked for
+        done = getattr(self, "_done", None)
+        if done is None or done[0] is not prog:
+            out = finish_denoised_image(self.scene, prog, self.seed, self.quality, history)
+            history.commit()
+            self._done = done = (prog, out)
+        return done[1]
 
     def denoiser(self, prog) -> Callable:
         """What denoises an image of the passes up to `prog` as `result` does: OIDN with the
@@ -252,11 +264,13 @@ class Image(Denoised):
 
     def result(self, prog):
         out, _, errs = self._finish(prog)
-        return (out, errs) if self.aovs else out
+        extra = self.channels(errs if self.aovs else None)
+        return (out, extra) if extra is not None else out
 
     def write(self, prog, output: str, pixel_format: str) -> Written:
         out, _, errs = self._finish(prog)
-        return Written(save_safely(out, output, pixel_format, errs), (), out, ", denoised: image")
+        return Written(save_safely(out, output, pixel_format, self.channels(errs)), (), out,
+                       ", denoised: image")
 
 
 def finisher_for(resolved: Resolved, recording: Recording = NOTHING) -> Finisher:

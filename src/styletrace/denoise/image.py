@@ -93,7 +93,7 @@ def in_pixels(scene, integrator) -> bool:
 
 
 def finish_denoised_image(
-    scene, prog: Progress, seed: int = 0, quality: str = "high"
+    scene, prog: Progress, seed: int = 0, quality: str = "high", history=None
 ) -> tuple[np.ndarray, np.ndarray, dict | None]:
     """The denoised result of the passes' last progress (also the finished passes of a stopped
     render: the guides take as many camera samples per pixel as they did).
@@ -101,6 +101,8 @@ def finish_denoised_image(
     Args:
         scene: the scene rendered. prog: the last finished pass's `Progress`.
         seed: the render's seed (the guides use its first pass's). quality: OIDN's quality.
+        history: the frames' `denoise.temporal.History`: OIDN denoises the noisy image blended
+            with it (its `blend`; the caller commits), or None.
 
     Returns:
         (denoised, noisy, aovs), H x W x 3 float32 images; aovs None, or with aovs=True the noisy
@@ -111,7 +113,12 @@ def finish_denoised_image(
     pixels = getattr(prog, "in_pixels", False)
     g = guides.first_hit(scene, prog.spp_done, pass_seed(seed, 0),
                          footprint="pixel" if pixels else "film")
-    out = oidn.denoise_oidn(noisy, g.albedo, g.normal, quality, guides.to_sensor(scene))
+    before = noisy
+    if history is not None:  # the pixels' variance where the error AOVs give it, else local
+        var = None if prog.aovs is None else prog.aovs["variance"]
+        before = noisy.copy()
+        before[..., :3] = history.blend(noisy[..., :3], var, prog.spp_done)
+    out = oidn.denoise_oidn(before, g.albedo, g.normal, quality, guides.to_sensor(scene))
     if pixels:
         out = filtered_pixels(out, scene.sensors()[0].film().rfilter())
     errs = prog.aovs

@@ -13,7 +13,8 @@ coverage, uncertainty and footprint, are `denoise/`'s. Design: docs/design/denoi
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 from styletrace.errors import UsageError
 
@@ -65,6 +66,9 @@ class Denoising:
             square; `denoise.coverage.check_k`).
         uncertainty: `denoise.expectation.spread`'s factor (None: its default).
         footprint: what the image denoiser denoises, "pixel" or "film" (`denoise.image`).
+        history: the frames' temporal history (`denoise.temporal.History`): the estimate OIDN
+            meets is blended with it and, once the result is final, kept in it; None: none (not
+            compared: two options that differ only in it are equal).
 
     Raises:
         UsageError: an unknown method (one line); the other values are checked by the finisher
@@ -75,6 +79,7 @@ class Denoising:
     coverage: int | str = "auto"
     uncertainty: float | None = None
     footprint: str = "pixel"
+    history: Any = field(default=None, compare=False)
 
     def __post_init__(self):
         method = default_method() if self.method is None else self.method

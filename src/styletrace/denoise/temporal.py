@@ -1,0 +1,253 @@
+"""Temporal reuse: the frames of a still shot accumulate the estimate the denoiser meets.
+
+    history = History()
+    for frame in frames:                       # each frame its own seed
+        history.start(key)                     # what the view is
+        m = history.blend(m_frame, var, count)  # before OIDN
+        ...                                    # OIDN, the style
+        history.commit()                       # once the frame's result is final
+
+What accumulates is the per-pixel estimate OIDN denoises: the expectation M at the stylized vertex
+(`denoise.expectation.attach`), or the noisy image (`denoise.image.finish_denoised_image`). Frame
+k of a still shot then meets an estimate of about k frames' samples, so its error against the
+converged image falls with k, and what changes from one frame to the next shrinks as 1/k: a step
+style's band edges settle instead of crawling. The frames are independent estimates of the same
+expectation (their seeds differ), so their weighted mean is unbiased where the view is the same.
+
+The caller says what "the same view" is with `start(key)` (Blender: the exported scene and the
+settings but the seed): a new key starts the history again, and that frame is exactly the frame
+without reuse. Within one key each pixel is also tested: where the frame's 3 x 3 mean differs from
+the history's by more than Z standard errors in brightness (the light or a material changed
+without the key noticing), the pixel starts again; a pixel without an estimate in a frame (no
+stylized vertex: a light seen directly) keeps its history. The history's weight is capped at CAP
+times the frame's, so a change the test misses fades within CAP frames. The frames of one view
+share the seed of their guides and of the points where the style meets the estimate (`shared`),
+so that only the estimate changes from one frame to the next. Design and measurements:
+docs/temporal.md.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+#: a pixel starts again where its 3 x 3 mean moved by more than Z standard errors (4: about 6e-5
+#: of a still shot's pixels per frame by chance, Gaussian tails)
+Z = 4.0
+#: the history weighs at most CAP times the frame: a still shot converges over CAP frames
+CAP = 255.0
+
+
+@dataclass
+class Accumulated:
+    """The accumulated estimate of one view, per pixel.
+
+    Args:
+        mean: H x W x C, the weighted mean of the frames' estimates.
+        var: H x W x C, its variance (NaN: unknown).
+        weight: H x W, its weight (camera samples).
+        frames: H x W, how many frames it holds.
+    """
+    mean: np.ndarray
+    var: np.ndarray
+    weight: np.ndarray
+    frames: np.ndarray
+
+
+def box3(x: np.ndarray) -> np.ndarray:
+    """The 3 x 3 mean of each pixel (edges repeated).
+
+    Args:
+        x: H x W or H x W x C.
+
+    Returns:
+        The same shape, float64.
+    """
+    pad = [(1, 1), (1, 1)] + [(0, 0)] * (x.ndim - 2)
+    p = np.pad(np.asarray(x, np.float64), pad, mode="edge")
+    h, w = x.shape[:2]
+    return sum(p[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)) / 9.0
+
+
+def local_variance(image: np.ndarray) -> np.ndarray:
+    """A stand-in for a pixel's variance where its samples' spread is not known: the variance of
+    its 3 x 3 neighbourhood. The image's own variation counts as noise, so the test of `History`
+    is looser there (it starts pixels again less often), never stricter.
+
+    Args:
+        image: H x W x C.
+
+    Returns:
+        H x W x C float64.
+    """
+    mean = box3(image)
+    return np.maximum(box3(np.asarray(image, np.float64) ** 2) - mean * mean, 0.0)
+
+
+class History:
+    """The accumulated estimate of the frames of one view (module doc).
+
+    Args:
+        cap: the history's most weight, in multiples of a frame's (CAP).
+        z: the per-pixel test's threshold, in standard errors (Z).
+
+    Raises:
+        ValueError: cap < 0 or z <= 0.
+    """
+
+    def __init__(self, cap: float = CAP, z: float = Z):
+        if not cap >= 0:
+            raise ValueError(f"bad history cap {cap!r}: expected a number >= 0")
+        if not z > 0:
+            raise ValueError(f"bad history threshold {z!r}: expected a number > 0")
+        self.cap, self.z = float(cap), float(z)
+        self.key: Any = None
+        self.state: Accumulated | None = None
+        self._pending: Accumulated | None = None
+        self._shared: dict = {}
+
+    def start(self, key: Any) -> bool:
+        """Begin a frame of the view `key`: a key other than the last frame's forgets the
+        history.
+
+        Args:
+            key: what the view is (anything comparable with ==).
+
+        Returns:
+            Whether the frame has a history to blend with.
+        """
+        if key != self.key:
+            self.key, self.state, self._shared = key, None, {}
+        self._pending = None
+        return self.state is not None
+
+    def shared(self, name: str, value: Any) -> Any:
+        """A value the frames of one view share: the first frame's `value` of `name`, kept until
+        the view changes (the seed of the points where a style meets the estimate: points that
+        stay put from frame to frame leave only the estimate to change).
+
+        Args:
+            name: what the value is. value: this frame's.
+
+        Returns:
+            The view's value.
+        """
+        return self._shared.setdefault(name, value)
+
+    def blend(self, m: np.ndarray, var: np.ndarray | None, count) -> np.ndarray:
+        """This frame's estimate merged with the history (nothing kept until `commit`).
+
+        Args:
+            m: H x W x C, the frame's estimate. var: its variance per pixel, the same shape (NaN
+                or None: unknown, `local_variance` of m stands in). count: its weight, a number
+                or H x W (0: no estimate in that pixel: the history's value, else the frame's).
+
+        Returns:
+            H x W x C float32: m itself (its values, bit for bit) where the history starts
+            again, the weighted mean where it goes on, the history's mean where the frame has
+            no estimate.
+        """
+        m = np.asarray(m)
+        shape = m.shape[:2]
+        c = np.broadcast_to(np.asarray(count, np.float64), shape)
+        v = local_variance(m) if var is None else np.asarray(var, np.float64)
+        v = np.where(np.isfinite(v), v, local_variance(m))
+        s = self.state
+        if s is None or s.mean.shape != m.shape:
+            self._pending = Accumulated(m.astype(np.float64), v, c.copy(),
+                                        (c > 0).astype(np.int64))
+            return np.array(m, dtype=np.float32, copy=True)
+        valid = (c > 0) & (s.weight > 0)
+        keep = valid & ~self.changed(m, v, s, valid)
+        restart = (c > 0) & ~keep  # a pixel without an estimate this frame keeps its history
+        w_h = np.where(keep, np.minimum(s.weight, self.cap * c), 0.0)
+        total = w_h + c
+        safe = np.where(total > 0, total, 1.0)[..., None]  # total 0: no estimate, m kept
+        mean = (w_h[..., None] * s.mean + c[..., None] * m) / safe
+        var_out = (w_h[..., None] ** 2 * s.var + c[..., None] ** 2 * v) / safe ** 2
+        # a pixel without an estimate this frame (its samples found no vertex, a frame's chance at
+        # an edge of the view) shows its history's
+        idle = (c <= 0) & (s.weight > 0)
+        out = np.where(keep[..., None], mean, np.where(idle[..., None], s.mean, m))
+        self._pending = Accumulated(
+            np.where(keep[..., None], mean, np.where(restart[..., None], m, s.mean)),
+            np.where(keep[..., None], var_out, np.where(restart[..., None], v, s.var)),
+            np.where(keep | restart, total, s.weight),
+            np.where(keep, s.frames + 1, np.where(restart, 1, s.frames)))
+        return out.astype(np.float32)
+
+    def changed(self, m: np.ndarray, var: np.ndarray, s: Accumulated,
+                valid: np.ndarray) -> np.ndarray:
+        """Where the brightness of the frame's 3 x 3 neighbourhood differs from the history's by
+        more than z standard errors (over the neighbours where both have an estimate; the
+        channels' variances averaged, as if fully correlated: grey light).
+
+        Args:
+            m, var: the frame's estimate and variance (H x W x C). s: the history.
+            valid: H x W, where both have an estimate.
+
+        Returns:
+            H x W bool.
+        """
+        diff = np.where(valid, (m - s.mean).mean(axis=-1), 0.0)
+        v = np.where(valid, (var + np.nan_to_num(s.var, nan=np.inf)).mean(axis=-1), 0.0)
+        n = np.maximum(box3(valid) * 9.0, 1.0)
+        d = box3(diff) * 9.0 / n
+        se2 = box3(v) * 9.0 / (n * n)
+        return valid & (d * d > self.z * self.z * se2)
+
+    def commit(self) -> None:
+        """Keep what the last `blend` made: the next frame blends with it."""
+        if self._pending is not None:
+            self.state, self._pending = self._pending, None
+
+    @property
+    def frames(self) -> np.ndarray | None:
+        """How many frames each pixel's history holds (None before the first commit)."""
+        return None if self.state is None else self.state.frames
+
+
+def _feed(h, value: Any) -> None:
+    """Feed `value` into the hash `h` by its content (`view_key`)."""
+    if isinstance(value, dict):
+        h.update(b"{")
+        for k in sorted(value, key=repr):
+            _feed(h, k)
+            _feed(h, value[k])
+        h.update(b"}")
+    elif isinstance(value, (list, tuple)):
+        h.update(b"[")
+        for v in value:
+            _feed(h, v)
+        h.update(b"]")
+    elif isinstance(value, np.ndarray):
+        h.update(f"nd{value.dtype.str}{value.shape}".encode())
+        h.update(np.ascontiguousarray(value).tobytes())
+    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
+        h.update(type(value).__name__.encode())
+        _feed(h, {f.name: getattr(value, f.name) for f in dataclasses.fields(value)})
+    else:  # numbers, strings, None and what prints its whole content
+        h.update(f"{type(value).__name__}:{value!r};".encode())
+
+
+def view_key(*parts: Any) -> str:
+    """A digest of what a view is, for `History.start`: its parts hashed by content (dicts by
+    sorted key, sequences in order, numpy arrays by dtype, shape and bytes, dataclasses by their
+    fields, anything else by its repr), so that two frames of the same scene and settings give
+    the same key and any change of a vertex, a texel or a setting another.
+
+    Args:
+        *parts: the view's description (a scene description, the settings but the seed, ...).
+
+    Returns:
+        A hex string.
+    """
+    h = hashlib.sha256()
+    _feed(h, parts)
+    return h.hexdigest()
+
+
+__all__ = ["History", "Accumulated", "box3", "local_variance", "view_key", "Z", "CAP"]

@@ -1,0 +1,140 @@
+"""Temporal reuse (denoise/temporal.py): the frames of one view accumulate their estimates.
+
+- The first frame of a view, and the first after its key changed, is the frame itself, bit for bit.
+- Frames of independent noise around one mean: frame k's squared error is the single frame's over
+  k (equal weights), within the spread of a mean of 12288 squared Gaussians (relative standard
+  error sqrt(2 / 12288) = 1.3%; the tolerance is 5 of them).
+- The cap bounds the history's weight: with cap 1 the error stops at half a frame's.
+- A change of the light inside a region (a 12-sigma step of the mean) starts those pixels again;
+  elsewhere almost none start again (Z = 4: about 6e-5 of them by chance).
+- Pixels without an estimate (count 0) show and keep their history (the frame's value where they
+  have none); the variance given is used where known, a local stand-in where not.
+- The view key changes with any vertex, texel or setting, and not with the order of a dict.
+- The pipeline's denoisers blend with the history and commit once per frame; without one they are
+  what they were.
+"""
+import numpy as np
+import pytest
+
+from styletrace.denoise.temporal import CAP, History, box3, local_variance, view_key
+from styletrace.pipeline.denoising import Denoising
+
+SHAPE = (64, 64, 3)
+SIGMA = 0.05
+
+
+def frames(n, mean=0.5, seed=1):
+    rng = np.random.default_rng(seed)
+    return [mean + SIGMA * rng.standard_normal(SHAPE) for _ in range(n)]
+
+
+def run(history, images, var=SIGMA ** 2, count=4, key="still"):
+    out = []
+    for img in images:
+        history.start(key)
+        out.append(history.blend(img, np.full(SHAPE, var), count))
+        history.commit()
+    return out
+
+
+def test_the_first_frame_is_the_frame_itself_bit_for_bit():
+    img = frames(1)[0].astype(np.float32)
+    h = History()
+    assert not h.start("a")
+    out = h.blend(img, None, 4)
+    assert out.dtype == np.float32 and np.array_equal(out, img)
+    h.commit()
+    assert h.start("a")
+    h.start("b")  # another view: forgotten
+    assert h.state is None
+    assert np.array_equal(h.blend(img, None, 4), img)
+
+
+def test_a_still_shots_error_falls_as_one_over_the_frames():
+    out = run(History(), frames(8))
+    tol = 5 * np.sqrt(2 / np.prod(SHAPE))
+    for k, img in enumerate(out, start=1):
+        mse = np.mean((img - 0.5) ** 2)
+        assert abs(mse * k / SIGMA ** 2 - 1) < tol, (k, mse)
+
+
+def test_the_history_weighs_at_most_cap_times_the_frame():
+    out = run(History(cap=1.0), frames(8))
+    tol = 5 * np.sqrt(2 / np.prod(SHAPE))
+    # weights 1:1 from the second frame on: the variance settles at
+    # v = (v_prev + s^2) / 4 -> s^2 / 3
+    mse = np.mean((out[-1] - 0.5) ** 2)
+    assert abs(mse / (SIGMA ** 2 / 3) - 1) < 3 * tol
+    with pytest.raises(ValueError, match="bad history cap -1"):
+        History(cap=-1)
+    with pytest.raises(ValueError, match="bad history threshold 0"):
+        History(z=0)
+    assert CAP >= 64  # a still shot converges over at least 64 frames
+
+
+def test_a_change_of_the_light_starts_its_pixels_again():
+    h = History()
+    run(h, frames(8))
+    lit = frames(1, seed=9)[0]
+    lit[16:48, 16:48] += 12 * SIGMA
+    h.start("still")
+    out = h.blend(lit, np.full(SHAPE, SIGMA ** 2), 4)
+    # inside the region (away from its border, where the 3 x 3 test sees both sides): the frame
+    assert np.array_equal(out[18:46, 18:46], lit[18:46, 18:46].astype(np.float32))
+    outside = np.ones(SHAPE[:2], bool)
+    outside[14:50, 14:50] = False
+    h.commit()
+    restarted = (h.frames == 1) & outside
+    assert restarted.sum() <= 2  # 4032 pixels at 6e-5 each: 0.24 expected
+
+
+def test_pixels_without_an_estimate_show_and_keep_their_history():
+    h = History()
+    run(h, frames(3))
+    img = frames(1, seed=5)[0]
+    count = np.full(SHAPE[:2], 4.0)
+    count[:8] = 0
+    h.start("still")
+    out = h.blend(img, None, count)
+    # its history's value, and its history kept for the next frame
+    assert np.array_equal(out[:8], h.state.mean[:8].astype(np.float32))
+    assert not np.array_equal(out[8:], img[8:].astype(np.float32))
+    h.commit()
+    assert (h.frames[:8] == 3).all() and (h.frames[8:] == 4).all()
+    fresh = History()
+    fresh.start("still")
+    assert np.array_equal(fresh.blend(img, None, count), img.astype(np.float32))
+
+
+def test_local_variance_is_the_3x3_neighbourhoods():
+    rng = np.random.default_rng(3)
+    img = rng.random((5, 6, 3))
+    v = local_variance(img)
+    p = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    y, x = 2, 3
+    assert np.allclose(v[y, x], p[y:y + 3, x:x + 3].reshape(9, 3).var(axis=0))
+    assert np.allclose(box3(img)[y, x], p[y:y + 3, x:x + 3].reshape(9, 3).mean(axis=0))
+
+
+def test_denoising_options_that_differ_only_in_history_are_equal():
+    assert Denoising("image", history=History()) == Denoising("image")
+
+
+def test_the_view_key_follows_every_vertex_texel_and_setting():
+    from dataclasses import dataclass
+
+    @dataclass
+    class Part:
+        positions: np.ndarray
+
+    verts = np.zeros((1000, 3), np.float32)
+    scene = {"mesh": Part(verts), "sky": np.ones((4, 8, 3)), "camera": [0.0, 1.0, 2.0]}
+    key = view_key(scene, {"style": "cel", "samples": 16})
+    moved = verts.copy()
+    moved[500, 1] = 1e-6  # one vertex of a thousand, far inside numpy's summarized repr
+    assert view_key({**scene, "mesh": Part(moved)}, {"style": "cel", "samples": 16}) != key
+    assert view_key(scene, {"style": "cel", "samples": 32}) != key
+    assert view_key({**scene, "sky": np.ones((4, 8, 3)) * 1.0001}, {"style": "cel",
+                                                                     "samples": 16}) != key
+    same = {"camera": [0.0, 1.0, 2.0], "sky": np.ones((4, 8, 3)), "mesh": Part(verts.copy())}
+    assert view_key(same, {"samples": 16, "style": "cel"}) == key
