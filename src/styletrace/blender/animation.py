@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from styletrace.blender.overridden import Overridden
+from styletrace.denoise.temporal import History, view_key
 
 #: seeds are 32-bit (`scene.arguments.SEED_MAX`)
 SEEDS = 1 << 32
@@ -38,6 +39,57 @@ def at_frame(settings: Any, frame: int) -> Overridden:
         An `Overridden` view of `settings`.
     """
     return Overridden(settings, seed=frame_seed(settings.seed, frame))
+
+
+#: Render Animation's history of denoised estimates (`denoise.temporal`): one animation renders
+#: at a time in a Blender process
+HISTORY = History()
+
+
+def settings_values(owner: Any, skip: tuple[str, ...] = ("rna_type", "seed")) -> dict:
+    """Every value of a settings block, its nested blocks (the style's parameters) included, but
+    those of `skip`.
+
+    Args:
+        owner: Blender settings (a PropertyGroup, or an `Overridden` view of one).
+        skip: property names left out (the seed: each frame has its own).
+
+    Returns:
+        {name: value}, lists as tuples and nested blocks as dicts.
+    """
+    out: dict = {}
+    for prop in owner.bl_rna.properties:
+        name = prop.identifier
+        if name in skip or prop.type == "COLLECTION":
+            continue
+        value = getattr(owner, name)
+        if prop.type == "POINTER":
+            value = None if value is None else settings_values(value, skip)
+        elif not isinstance(value, str) and hasattr(value, "__len__"):
+            value = tuple(value)
+        out[name] = value
+    return out
+
+
+def frame_history(settings: Any, description: dict, first: bool) -> History | None:
+    """The history a frame of Render Animation blends with: HISTORY, started at this frame's view
+    (the scene description and every setting but the seed: a frame whose scene or settings differ
+    from the frame before starts it again, and renders as without it), or None where Temporal
+    reuse is off. Only denoised renders use it (docs/temporal.md).
+
+    Args:
+        settings: the frame's render settings. description: its exported scene (`f12.description`).
+        first: the animation's first frame: an earlier animation's history is forgotten.
+
+    Returns:
+        The History, or None.
+    """
+    if not settings.temporal_reuse:
+        return None
+    if first:
+        HISTORY.start(None)
+    HISTORY.start(view_key(description, settings_values(settings)))
+    return HISTORY
 
 
 def stop_message(frame: int, spp_done: int, spp_total: int) -> str:

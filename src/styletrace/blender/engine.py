@@ -114,13 +114,18 @@ class StyletraceEngine(bpy.types.RenderEngine):
     def _render(self, depsgraph):
         st = self._settings(depsgraph)
         self.update_stats("", "styletrace: exporting the scene")
-        sc = f12.scene(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m))
+        desc = f12.description(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m))
+        sc = f12.load(desc)
+        # Render Animation's frames of a still shot accumulate (docs/temporal.md); F12 alone not
+        scene = depsgraph.scene
+        history = (animation.frame_history(st, desc, scene.frame_current == scene.frame_start)
+                   if self.is_animation and not self.is_preview else None)
         size = sc.sensors()[0].film().crop_size()
         w, h = int(size[0]), int(size[1])
         aovs = f12.error_passes(st)
         if not self.is_preview:  # a preview keeps the user's recorded buffer
             restyle.forget()
-        runner = f12.run_f12(sc, st, aovs, restyle.keep if st.record_buffer else None)
+        runner = f12.run_f12(sc, st, aovs, restyle.keep if st.record_buffer else None, history)
         if runner.resolved.note:
             self._report({"WARNING"}, f"styletrace: {runner.resolved.note}")
         denoised = isinstance(runner.finisher, Denoised)

@@ -25,6 +25,38 @@ LINE_MASK = "LineMask"
 NOISY = "Noisy"
 AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"),
               "children": ("Children", 1, "X")}
+#: the data passes (`kernel.data_passes`) as Cycles declares them: Blender's name, channels,
+#: channel ids, pass type, and the view layer's property that asks for it
+DATA_PASSES = {"depth": ("Depth", 1, "Z", "VALUE", "use_pass_z"),
+               "normal": ("Normal", 3, "XYZ", "VECTOR", "use_pass_normal"),
+               "vector": ("Vector", 4, "XYZW", "VECTOR", "use_pass_vector")}
+
+
+def data_passes_of(view_layer) -> tuple[str, ...]:
+    """The data passes a view layer asks for (its Z, Normal and Vector switches, Cycles' own).
+
+    Args:
+        view_layer: the `bpy.types.ViewLayer`.
+
+    Returns:
+        Their keys in `DATA_PASSES` order (empty: none, and nothing is traced for them).
+    """
+    return tuple(key for key, (*_, prop) in DATA_PASSES.items() if getattr(view_layer, prop))
+
+
+def data_passes(runner, names: tuple[str, ...], motion=None) -> dict:
+    """F12's data passes, with the run's camera samples per pixel and seed.
+
+    Args:
+        runner: F12's `pipeline.runner.Runner` (`run_f12`). names: `data_passes_of`'s keys.
+        motion: the frames around (`motion.frames_around`), or None.
+
+    Returns:
+        {key: float32 array} (`kernel.data_passes.render_data_passes`).
+    """
+    from styletrace.kernel.data_passes import render_data_passes
+    r = runner.resolved
+    return render_data_passes(r.scene, names, r.spp, r.job.seed, motion)
 
 
 def error_passes(settings) -> bool:
@@ -41,18 +73,20 @@ def error_passes(settings) -> bool:
     return bool(settings.aovs and not settings.record_buffer and settings.denoise == "off")
 
 
-def description(depsgraph, settings, warn: Callable[[str], None] = print) -> dict:
+def description(depsgraph, settings, warn: Callable[[str], None] = print,
+                placements: dict | None = None) -> dict:
     """The scene description of the depsgraph (`exporter.export`), its sampler's sample count the
     settings' Samples (the budget a command line render of its XML spends).
 
     Args:
         depsgraph: the evaluated depsgraph. settings: the scene's styletrace settings.
         warn: called with each warning line.
+        placements: a dict to fill with each shape's placement (the Vector pass's), or None.
 
     Returns:
         The description.
     """
-    return exporter.export(depsgraph, spp=settings.samples, warn=warn)
+    return exporter.export(depsgraph, spp=settings.samples, warn=warn, placements=placements)
 
 
 def scene(depsgraph, settings, warn: Callable[[str], None] = print):
@@ -66,7 +100,19 @@ def scene(depsgraph, settings, warn: Callable[[str], None] = print):
     Returns:
         The mi.Scene.
     """
-    return api.load_scene(build.description_scene_dict(description(depsgraph, settings, warn)))
+    return load(description(depsgraph, settings, warn))
+
+
+def load(desc: dict):
+    """The loaded `mi.Scene` of a scene description (`description`).
+
+    Args:
+        desc: the description.
+
+    Returns:
+        The mi.Scene.
+    """
+    return api.load_scene(build.description_scene_dict(desc))
 
 
 def integrator(settings, aovs: bool | None = None, **override):
@@ -105,12 +151,13 @@ def sampling(settings, integ) -> dict:
     return {"samples": None if given else int(settings.samples), "spp": spp}
 
 
-def denoising(settings, denoise: bool = True):
+def denoising(settings, denoise: bool = True, history=None):
     """The render settings' denoising options (`pipeline.denoising.Denoising`).
 
     Args:
         settings: the scene's styletrace settings (Denoise, its quality and footprint).
         denoise: False: off, whatever Denoise says (the line mask's renders).
+        history: the frames' temporal history (`animation.frame_history`), or None.
 
     Returns:
         The Denoising.
@@ -119,10 +166,10 @@ def denoising(settings, denoise: bool = True):
     if not denoise:
         return OFF
     return Denoising(settings.denoise, quality=settings.denoise_quality,
-                     footprint=settings.denoise_footprint)
+                     footprint=settings.denoise_footprint, history=history)
 
 
-def job(sc, integ, settings, denoise: bool = True, grow: bool | None = None):
+def job(sc, integ, settings, denoise: bool = True, grow: bool | None = None, history=None):
     """The pipeline's Job of F12: the loaded scene, the settings' integrator as it is, their
     sampling (`sampling`; the pass split of `pass_spp`, tiles of the pass loop's own size) and
     denoising, in Blender's terms (`pipeline.terms.BLENDER`: errors name the fields' labels).
@@ -135,6 +182,7 @@ def job(sc, integ, settings, denoise: bool = True, grow: bool | None = None):
         denoise: False: not denoised, whatever Denoise says (`denoising`).
         grow: the passes grow (`passes.PassSplit.rounds`); None: where the loaded scene's
             sampler is `owen_sobol` (`owen_sobol_sampler.sequenced`).
+        history: the frames' temporal history (`denoising`), or None.
 
     Returns:
         The `pipeline.job.Job`.
@@ -146,16 +194,19 @@ def job(sc, integ, settings, denoise: bool = True, grow: bool | None = None):
         grow = sequenced(sc)
     return Job(scene=sc, integrator=integ, seed=settings.seed, pass_spp=settings.pass_spp,
                lanes_per_pass=api.LANES_PER_PASS, pass_growth=grow,
-               denoising=denoising(settings, denoise), terms=BLENDER, **sampling(settings, integ))
+               denoising=denoising(settings, denoise, history), terms=BLENDER,
+               **sampling(settings, integ))
 
 
-def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
+def run_f12(sc, settings, aovs: bool, keep: Callable | None = None, history=None):
     """F12's run: the job's `denoise.finishers.plan` (every front end's), the Denoise setting's
     finisher.
 
     Args:
         sc: the loaded scene. settings: the scene's styletrace settings. aovs: the error AOVs.
         keep: called with the buffer to restyle (Record buffer), or None.
+        history: the frames' temporal history (Render Animation's, `animation.frame_history`),
+            or None.
 
     Returns:
         The `pipeline.runner.Runner` (`runner.resolved.note`: why Denoise auto could not denoise).
@@ -166,7 +217,7 @@ def run_f12(sc, settings, aovs: bool, keep: Callable | None = None):
     """
     from styletrace.denoise.finishers import Image, Recording, plan
     from styletrace.errors import UsageError
-    runner = plan(job(sc, integrator(settings, aovs=aovs), settings), scene=sc,
+    runner = plan(job(sc, integrator(settings, aovs=aovs), settings, history=history), scene=sc,
                   recording=Recording(label="<blender>", keep=keep))
     if isinstance(runner.finisher, Image) and keep is not None:
         raise UsageError("Record buffer with Denoise 'image': restyles of the noisy buffer would "

@@ -25,6 +25,7 @@ RENDER_ROWS = (
     "denoise",
     "denoise_quality",
     "denoise_footprint",
+    "temporal_reuse",
     "firefly",
     "firefly_k",
 )

@@ -246,6 +246,13 @@ class SceneSettings(bpy.types.PropertyGroup):
         description="keep the look-development buffer of the last render; style changes then "
                     "restyle it",
     )
+    temporal_reuse: bpy.props.BoolProperty(
+        name="Temporal reuse",
+        default=True,
+        description="Render Animation, denoised: the frames of a still shot accumulate the "
+                    "estimate the denoiser meets, so they converge and settle; any change to the "
+                    "scene or the settings starts again (docs/temporal.md)",
+    )
     denoise: bpy.props.EnumProperty(
         name="Denoise",
         default=default_method(),
