@@ -1,0 +1,246 @@
+"""Animation (issue 47): how much a still shot's frames flicker, with and without temporal reuse
+(docs/temporal.md), against Cycles. Run with the Blender venv (bpy as a module), on an otherwise
+idle machine:
+
+    .venv-blender/bin/python benchmarks/temporal.py [--size 256] [--frames 5] [--quick]
+        [--no-write] [--no-figure]
+
+Protocol: the tests' interior lit through a window (tests/blender/scenes.py `interior`: a sun and a
+sky through the window, a small area lamp, a glossy floor, a mirror), nothing animated, rendered
+with Render Animation (`bpy.ops.render.render(animation=True)`) over frames 1..F into EXR files:
+- styletrace at the add-on's defaults (Samples 16, Denoise auto, seed per frame) for identity, cel,
+  hatching and colour map, with Temporal reuse off (the frames as before) and on;
+- Cycles at 16 samples, OIDN, animated seed, 2 threads, its other defaults.
+Measures, each over the F - 1 pairs of consecutive frames:
+- flicker, two ways: the share of pixels whose display-space brightness (the luminance of the
+  sRGB-encoded image) changes by more than 10% of the larger of the two (brightness below 0.05
+  counts as 0.05, so that near-black noise is not a change); and the share of pixels one of whose
+  display-space channels changes by more than 0.1 (of the display's range);
+- the error of frame k against the converged image (styletrace: two renders of the same defaults
+  at Samples REF_SAMPLES with their own seeds, mean((d - r1)(d - r2)) over clipped linear pixels,
+  so that the references' noise cancels; as PSNR);
+- seconds per frame: the animation's wall time over F (reuse on and off in the same run).
+Goals (issue 47, still shot): cel and colour map at most 0.5% of pixels changing by more than 10%
+per frame, hatching at most 1%, identity at most Cycles'; cost per frame at most 1.1x without reuse;
+the first frame unchanged (it has no earlier frame; the table gives the largest difference of its
+pixels between the two runs, OIDN's float rounding from run to run). Temporal reuse's constants
+(Z, CAP) were chosen on the Cornell box (tests/denoise/test_temporal_frames.py), not on this
+scene. Moving shots (warping error) need reprojection, which is not built: not measured here.
+
+Writes the section "temporal" of BENCHMARKS.md unless --no-write, and docs/temporal.png (two
+consecutive cel frames and their difference, without and with reuse) unless --no-figure.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "tests", "blender"))
+
+import bpy  # noqa: E402
+import numpy as np  # noqa: E402
+import scenes as S  # noqa: E402
+from _report import machine_description, write_section  # noqa: E402
+
+import styletrace.blender as addon  # noqa: E402
+from styletrace.measures import srgb  # noqa: E402
+
+STYLES = ("identity", "cel", "hatching", "color_map")
+#: the references' Samples (the defaults' method converged at that budget) and seeds
+REF_SAMPLES = 512
+REF_SEEDS = (1001, 1002)
+SEED = 0
+GOALS = {"cel": 0.005, "color_map": 0.005, "hatching": 0.01}
+
+
+def say(*args) -> None:
+    print("temporal:", *args, flush=True)
+
+
+def luminance(img: np.ndarray) -> np.ndarray:
+    return img[..., 0] * 0.2126 + img[..., 1] * 0.7152 + img[..., 2] * 0.0722
+
+
+def flicker(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """(relative, absolute) shares of pixels that changed between two frames (module doc).
+
+    Args:
+        a, b: H x W x 3 linear frames.
+
+    Returns:
+        Two floats in [0, 1].
+    """
+    da, db = srgb(a[..., :3]), srgb(b[..., :3])
+    la, lb = luminance(da), luminance(db)
+    top = np.maximum(np.maximum(la, lb), 0.05)
+    rel = float(np.mean(np.abs(la - lb) > 0.1 * top))
+    absolute = float(np.mean(np.abs(da - db).max(axis=-1) > 0.1))
+    return rel, absolute
+
+
+def error(img, r1, r2) -> float:
+    c = lambda x: np.clip(x[..., :3], 0.0, 1.0)  # noqa: E731
+    return float(np.mean((c(img) - c(r1)) * (c(img) - c(r2))))
+
+
+def psnr(mse: float) -> str:
+    return "inf" if mse <= 0 else f"{10 * np.log10(1.0 / mse):.1f}"
+
+
+def scene(size: int, frames: int):
+    s = S.interior(size)
+    s.frame_start, s.frame_end = 1, frames
+    return s
+
+
+def animate(s, folder: str, frames: int) -> tuple[list[np.ndarray], float]:
+    """Render Animation into `folder`: (the frames, seconds per frame)."""
+    s.render.filepath = os.path.join(folder, "frame_####")
+    start = time.perf_counter()
+    bpy.ops.render.render(animation=True)
+    seconds = (time.perf_counter() - start) / frames
+    images = [S.read_exr(s.render.frame_path(frame=f))["Combined"][..., :3]
+              for f in range(1, frames + 1)]
+    return images, seconds
+
+
+def styletrace_frames(size, frames, style, reuse, folder):
+    s = scene(size, frames)
+    s.render.engine = "STYLETRACE"
+    st = s.styletrace
+    st.style, st.seed, st.temporal_reuse = style, SEED, reuse
+    return animate(s, folder, frames)
+
+
+def cycles_frames(size, frames, folder):
+    s = scene(size, frames)
+    s.render.engine = "CYCLES"
+    c = s.cycles
+    c.device, c.samples, c.seed, c.use_animated_seed = "CPU", 16, SEED, True
+    c.use_denoising, c.denoiser = True, "OPENIMAGEDENOISE"
+    return animate(s, folder, frames)
+
+
+def references(size, style, folder):
+    out = []
+    for seed in REF_SEEDS:
+        s = scene(size, 1)
+        s.render.engine = "STYLETRACE"
+        st = s.styletrace
+        st.style, st.seed, st.samples = style, seed, REF_SAMPLES
+        path = os.path.join(folder, f"ref_{style}_{seed}")
+        s.render.filepath = path
+        bpy.ops.render.render(write_still=True)
+        out.append(S.read_exr(path + ".exr")["Combined"][..., :3])
+    return out
+
+
+def summary(images) -> dict:
+    pairs = [flicker(a, b) for a, b in zip(images, images[1:])]
+    return {"rel": float(np.mean([p[0] for p in pairs])),
+            "abs": float(np.mean([p[1] for p in pairs])),
+            "rel_pairs": [p[0] for p in pairs]}
+
+
+def figure(plain, reused, path: str) -> None:
+    from PIL import Image
+    rows = []
+    for frames in (plain, reused):
+        a, b = srgb(frames[-2]), srgb(frames[-1])
+        diff = np.clip(np.abs(a - b).max(axis=-1, keepdims=True) * 4.0, 0, 1).repeat(3, -1)
+        rows.append(np.concatenate([a, b, diff], axis=1))
+    img = (np.concatenate(rows, axis=0) * 255 + 0.5).astype(np.uint8)
+    tmp = path + ".tmp.png"
+    Image.fromarray(img).save(tmp)
+    os.replace(tmp, path)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--size", type=int, default=None)
+    p.add_argument("--frames", type=int, default=None)
+    p.add_argument("--quick", action="store_true", help="a smoke run (48 x 48, 3 frames)")
+    p.add_argument("--no-write", action="store_true")
+    p.add_argument("--no-figure", action="store_true")
+    a = p.parse_args()
+    size = a.size or (48 if a.quick else 256)
+    frames = a.frames or (3 if a.quick else 5)
+    addon.register()
+    rows, figure_frames = [], {}
+    with tempfile.TemporaryDirectory() as tmp:
+        say("Cycles")
+        cy, cy_s = cycles_frames(size, frames, os.path.join(tmp, "cycles"))
+        cycles_row = {"name": "Cycles, 16 samples, OIDN, animated seed", **summary(cy),
+                      "seconds": cy_s, "errors": None}
+        for style in STYLES:
+            say(style, "references")
+            r1, r2 = references(size, style, tmp)
+            for reuse in (False, True):
+                say(style, "reuse" if reuse else "no reuse")
+                imgs, secs = styletrace_frames(size, frames, style, reuse,
+                                               os.path.join(tmp, f"{style}_{reuse}"))
+                rows.append({"style": style, "reuse": reuse, **summary(imgs), "seconds": secs,
+                             "errors": [error(i, r1, r2) for i in imgs], "first": imgs[0]})
+                if style == "cel":
+                    figure_frames[reuse] = imgs
+    by = {(r["style"], r["reuse"]): r for r in rows}
+    for style in STYLES:  # the first frame has no earlier frame: it must be unchanged
+        off, on = by[(style, False)]["first"], by[(style, True)]["first"]
+        by[(style, True)]["first_diff"] = float(np.abs(off - on).max())
+    text = report(rows, cycles_row, size, frames)
+    print(text)
+    if not a.quick and not a.no_write:
+        write_section("temporal", text)
+    if not a.no_figure and not a.quick:
+        figure(figure_frames[False], figure_frames[True],
+               os.path.join(os.path.dirname(HERE), "docs", "temporal.png"))
+
+
+def report(rows, cycles_row, size, frames) -> str:
+    lines = [
+        "## Animation: a still shot's flicker, with and without temporal reuse",
+        "",
+        f"`benchmarks/temporal.py`: the tests' interior lit through a window, {size} x {size}, "
+        f"Render Animation of frames 1 to {frames}, nothing animated; styletrace at the add-on's "
+        "defaults (Samples 16, Denoise auto, a seed per frame) with Temporal reuse off (the frames "
+        "as before) and on (docs/temporal.md); Cycles at 16 samples with OIDN and an animated "
+        "seed. "
+        "Flicker: the mean over consecutive pairs of the share of pixels whose display-space "
+        "brightness changes by more than 10% of the larger (below 0.05 as 0.05), and of the share "
+        "whose display-space channels change by more than 0.1. Error of frame k: against two "
+        f"renders of the same defaults at Samples {REF_SAMPLES} (their noise cancels), as PSNR. "
+        "Temporal reuse's constants were chosen on the Cornell box, not on this scene. "
+        + machine_description(),
+        "",
+        "| renderer, style | temporal reuse | pixels changing > 10% per frame | display change > "
+        "0.1 | per pair (> 10%) | PSNR of frames 1..k | seconds a frame | goal |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    cy = cycles_row
+    lines.append(f"| {cy['name']} | - | {cy['rel']:.2%} | {cy['abs']:.2%} | "
+                 f"{' / '.join(f'{v:.1%}' for v in cy['rel_pairs'])} | - | {cy['seconds']:.2f} |"
+                 " - |")
+    by = {(r["style"], r["reuse"]): r for r in rows}
+    for r in rows:
+        goal = "-"
+        if r["reuse"]:
+            limit = GOALS.get(r["style"], cy["rel"])
+            met = r["rel"] <= limit
+            cost = r["seconds"] / by[(r["style"], False)]["seconds"]
+            goal = (f"{'met' if met else 'NOT met'} (<= {limit:.1%}); cost {cost:.2f}x; first "
+                    f"frame's largest difference {r['first_diff']:.1e}")
+        lines.append(
+            f"| styletrace {r['style']} | {'on' if r['reuse'] else 'off'} | {r['rel']:.2%} | "
+            f"{r['abs']:.2%} | {' / '.join(f'{v:.1%}' for v in r['rel_pairs'])} | "
+            f"{' '.join(psnr(e) for e in r['errors'])} | {r['seconds']:.2f} | {goal} |")
+    lines += ["", "![Two consecutive cel frames and their difference (x4), without reuse (top) "
+              "and with it (bottom)](docs/temporal.png)", ""]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    main()
