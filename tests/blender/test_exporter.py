@@ -2,6 +2,7 @@
 shape per material slot, the material mapping, and one warning per unsupported node."""
 import bpy
 import numpy as np
+import pytest
 import scenes as S
 
 from styletrace.blender import build, exporter
@@ -78,17 +79,43 @@ def test_material_mapping_and_unsupported_nodes():
     assert any("ShaderNodeTexNoise" in w and "leaf" in w for w in warnings)
 
 
-def test_a_light_portal_is_left_out_with_a_note():
-    """A Cycles portal emits nothing (it only steers Cycles' sampling of the world): it must not
-    become a light; the area light beside it still does."""
+def test_a_light_portal_becomes_a_portal_emitter():
+    """A Cycles portal emits nothing; it becomes the `portal` emitter over the light's rectangle,
+    facing into the room along the light's -Z, and the area light beside it is still a light. A
+    disk portal is sampled through its bounding square (with a note); one of zero size is left out
+    (with a note), where loading it would refuse the scene."""
     S.reset(16)
     S.camera((0, -5, 0), (np.pi / 2, 0, 0))
-    window = S.light("AREA", (0, 0, 2), energy=100.0, size=1.0)
+    # a window in the wall y = 2, 1.5 wide and 0.8 tall, the room on its -y side: the light
+    # turned to face -y (its -Z along -y)
+    window = S.light("AREA", (0, 2, 1), (-np.pi / 2, 0, 0), shape="RECTANGLE", size=1.5,
+                     size_y=0.8)
     window.data.cycles.is_portal = True
+    round_one = S.light("AREA", (0, -3, 1), (np.pi / 2, 0, 0), shape="DISK", size=0.5)
+    round_one.data.cycles.is_portal = True
+    flat = S.light("AREA", (0, 0, 3), size=0.0)
+    flat.data.cycles.is_portal = True
     S.light("AREA", (2, 0, 2), energy=10.0, size=0.3)
     warnings = []
     desc = export(warnings)
     emitting = [v for v in desc.values() if isinstance(v, dict) and "emitter" in v]
     assert len(emitting) == 1
-    assert emitting[0]["to_world"][0][3] == 2.0  # the lamp at x = 2, not the window at x = 0
-    assert [w for w in warnings if "light portal" in w and window.data.name in w]
+    assert emitting[0]["to_world"][0][3] == 2.0  # the lamp at x = 2, not a portal
+    portals = [v for v in desc.values() if isinstance(v, dict) and v.get("type") == "portal"]
+    assert len(portals) == 2
+    import styletrace
+    from styletrace.kernel.portal import is_portal
+    scene = styletrace.frontends.api.load_scene(build.description_scene_dict(desc))
+    built = sorted((e for e in scene.emitters() if is_portal(e)), key=lambda e: e.center[1])
+    disk, wall = built
+    np.testing.assert_allclose(wall.center, [0, 2, 1], atol=1e-6)
+    np.testing.assert_allclose(wall.normal, [0, -1, 0], atol=1e-6)  # into the room
+    assert wall.area == pytest.approx(1.5 * 0.8, rel=1e-6)
+    np.testing.assert_allclose(sorted(np.abs([wall.edge_x[0], wall.edge_y[2]])), [0.4, 0.75],
+                               atol=1e-6)
+    np.testing.assert_allclose(disk.normal, [0, 1, 0], atol=1e-6)
+    assert disk.area == pytest.approx(0.5 * 0.5, rel=1e-6)
+    assert [w for w in warnings if "light portal" in w and f"'{round_one.data.name}'" in w
+            and "bounding rectangle" in w]
+    assert [w for w in warnings if f"'{flat.data.name}'" in w and "zero size" in w]
+    assert not [w for w in warnings if f"'{window.data.name}'" in w]

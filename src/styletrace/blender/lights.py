@@ -7,9 +7,10 @@ tests/blender/test_units.py). Suns are directional (their angle is ignored). Are
 `rectangle`s or `disk`s turned to emit along the light's -Z, carrying an `area` emitter on a black
 surface (unlike Cycles' lights, it blocks what reaches its back); ellipses become disks of the mean
 diameter (with a warning). A Cycles light portal (an area light with `cycles.is_portal`) emits
-nothing: it only steers Cycles' sampling of the world towards a window, which changes the noise and
-not the image, so it is left out (with a note); the world still lights the room through it, found by
-BSDF sampling.
+nothing: it steers the sampling of the world towards a window, which changes the noise and not the
+image. It becomes styletrace's `portal` emitter (kernel/portal.py) with the light's placement and
+size, facing into the room along the light's -Z as in Cycles; a disk or ellipse portal becomes its
+bounding rectangle (size_x by size_y; with a note), which only widens where samples are sent.
 """
 from __future__ import annotations
 
@@ -86,6 +87,35 @@ def is_portal(light) -> bool:
     return bool(getattr(cycles, "is_portal", False))
 
 
+def convert_portal(light, matrix, warn) -> dict | None:
+    """The `portal` emitter of a Cycles light portal: the area light's rectangle, turned so that
+    its +z (the portal's side of the room) is the light's -Z; a disk or ellipse becomes its
+    bounding rectangle, with a note.
+
+    Args:
+        light: the portal's light data (an area light). matrix: its placement, 4x4.
+        warn: called with a note line (a round portal made rectangular, one of zero size left
+            out).
+
+    Returns:
+        The emitter description; None for a portal of zero size (which would sample nothing).
+    """
+    m = np.array(matrix, dtype=np.float64)
+    # as an area light's: the sizes times the object's scale along the light's x and y
+    sx, sy = np.linalg.norm(m[:3, 0]), np.linalg.norm(m[:3, 1])
+    size_y = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
+    hx, hy = light.size * sx / 2.0, size_y * sy / 2.0
+    if not hx * hy > 0.0:
+        warn(f"styletrace: light portal '{light.name}' has zero size "
+             f"({2 * hx:.3g} x {2 * hy:.3g}): left out")
+        return None
+    if light.shape in ("DISK", "ELLIPSE"):
+        warn(f"styletrace: light portal '{light.name}' is a {light.shape.lower()}: sampled "
+             f"through its bounding rectangle ({2 * hx:.3g} x {2 * hy:.3g})")
+    return {"type": "portal",
+            "to_world": _unscaled_light(m) @ np.diag([hx, hy, 1.0, 1.0]) @ TURN}
+
+
 def convert_light(light, matrix, warn) -> dict | None:
     """The emitter (or emitting shape) description of a `bpy.types.Light` (see the module doc).
 
@@ -94,15 +124,12 @@ def convert_light(light, matrix, warn) -> dict | None:
         warn: called with a warning line (an ellipse rendered as a disk, an unsupported type).
 
     Returns:
-        The description, or None for an unsupported light type or a light portal (left out, with
-        a warning).
+        The description, or None for an unsupported light type (left out, with a warning).
     """
     m = np.array(matrix, dtype=np.float64)
     kind = light.type
     if kind == "AREA" and is_portal(light):
-        warn(f"styletrace: area light '{light.name}' is a light portal: left out (it emits "
-             "nothing; the world lights the scene through it without it, with more noise)")
-        return None
+        return convert_portal(light, m, warn)
     if kind == "POINT":
         return {"type": "point", "position": m[:3, 3].tolist(),
                 "intensity": _rgb(light, units.point_intensity(light.energy))}

@@ -23,6 +23,7 @@ TAGS = {
     "area": "emitter",
     "constant": "emitter",
     "envmap": "emitter",
+    "portal": "emitter",
     "rectangle": "shape",
     "disk": "shape",
     "blender_mesh": "shape",

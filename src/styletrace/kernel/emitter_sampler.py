@@ -10,7 +10,15 @@ point by power, distance and orientation (`spatial_selection.SpatialSelection`).
 `sample_direction` matches `Scene.sample_emitter_direction`; `pdf_direction` is its solid-angle
 density of a direction that reached an emitter (the emitter's own density times its selection
 probability: one gather, or for `spatial` one walk over the emitters from the same point).
-Design: docs/design/emitter_order.md, docs/design/spatial_emitter_selection.md.
+
+Light portals (`portal` emitters, kernel/portal.py) emit nothing and are never chosen: every mode
+chooses among the other emitters (`selectable`), and `auto` counts only those. Where the scene
+has portals and an environment, a lane that chose the environment draws its direction from
+`PortalGuide`'s mixture, half through the portals the point is inside of, half by the
+environment's own sampling (kernel/portal_guide.py), and `pdf_direction` of an escaped direction is
+that mixture's density: the same function computes both. A scene without portals runs exactly the
+code it ran before they existed. Design: docs/design/emitter_order.md,
+docs/design/spatial_emitter_selection.md, docs/design/portals.md.
 """
 from __future__ import annotations
 
@@ -20,6 +28,8 @@ from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
 from styletrace.kernel.emitter_bounds import emitted_power, emitter_bounds
 from styletrace.kernel.owen_sobol_sampler import sequenced
+from styletrace.kernel.portal import is_portal, portals
+from styletrace.kernel.portal_guide import PortalGuide
 from styletrace.kernel.spatial_selection import SpatialSelection
 
 
@@ -64,10 +74,23 @@ def selection_order(emitters) -> list:
     return sorted(emitters, key=stable_key)
 
 
+def selectable(scene: mi.Scene) -> list:
+    """The scene's emitters that next-event estimation chooses from: all but its light portals
+    (`portal`, which emit nothing), in the order Mitsuba lists them.
+
+    Args:
+        scene: the scene.
+
+    Returns:
+        list[mi.Emitter].
+    """
+    return [e for e in scene.emitters() if not is_portal(e)]
+
+
 def auto_mode(scene: mi.Scene) -> str:
     """What `auto` selects in a scene: `spatial` where its sampler is `owen_sobol` (the built-in
-    scenes', Blender's) and it has several emitters, else `uniform`: a scene that asks for
-    independent samples keeps the selection it had before `spatial` existed.
+    scenes', Blender's) and it has several emitters (light portals not counted), else `uniform`: a
+    scene that asks for independent samples keeps the selection it had before `spatial` existed.
 
     Args:
         scene: the scene.
@@ -75,7 +98,7 @@ def auto_mode(scene: mi.Scene) -> str:
     Returns:
         'spatial' or 'uniform'.
     """
-    return "spatial" if sequenced(scene) and len(scene.emitters()) > 1 else "uniform"
+    return "spatial" if sequenced(scene) and len(selectable(scene)) > 1 else "uniform"
 
 
 class EmitterSampler:
@@ -93,7 +116,7 @@ class EmitterSampler:
         mode = DEFAULT_MODE if mode is None else mode
         if mode not in MODES:
             raise SettingsError(f"emitter sampling '{mode}': expected one of {', '.join(MODES)}")
-        emitters = selection_order(scene.emitters())
+        emitters = selection_order(selectable(scene))
         if mode == "auto":
             mode = auto_mode(scene)
         self.mode = mode
@@ -101,8 +124,15 @@ class EmitterSampler:
         self.keys = [stable_key(e) for e in emitters]  # the selection order, for tests and reports
         self.count = len(emitters)
         self.spatial = None
+        # the environment sampled through the scene's portals (None: no portal, or nothing they
+        # could guide); without one, every step below is the one before portals existed
+        self.guide = None
         if not emitters:
             return
+        env, found = scene.environment(), portals(scene)
+        if env is not None and found:
+            # in the stable order too: the portals' sums and choice do not follow Mitsuba's list
+            self.guide = PortalGuide(selection_order(found), env)
         ids = [emitter_id(mi.EmitterPtr(e))[0] for e in emitters]
         weights = [e.sampling_weight() for e in emitters]
         self.table = dr.reinterpret_array(mi.EmitterPtr, mi.UInt32(ids))
@@ -158,7 +188,14 @@ class EmitterSampler:
             index, x, pmf = self.spatial.sample(si, sample.x, active)
             active &= pmf > 0.0
         emitter = dr.gather(mi.EmitterPtr, self.table, index, active)
-        ds, weight = emitter.sample_direction(si, mi.Point2f(x, sample.y), active)
+        if self.guide is None:
+            ds, weight = emitter.sample_direction(si, mi.Point2f(x, sample.y), active)
+        else:
+            sky = active & (emitter == self.guide.env_ptr)
+            ds, weight = emitter.sample_direction(si, mi.Point2f(x, sample.y), active & ~sky)
+            ds_sky, weight_sky = self.guide.sample(si, x, sample.y, sky)
+            ds = dr.select(sky, ds_sky, ds)
+            weight = dr.select(sky, weight_sky, weight)
         ds.pdf *= pmf
         weight *= dr.rcp(pmf)
         active &= ds.pdf != 0.0
@@ -205,9 +242,18 @@ class EmitterSampler:
         if self.count == 0:
             return mi.Float(0.0)
         if self.spatial is None:
-            return ds.emitter.pdf_direction(ref, ds, active) * self.selection_probability(
+            return self._own_density(ref, ds, active) * self.selection_probability(
                 ds.emitter, active
             )
         known = active & (ds.emitter != None)  # noqa: E711  (a Dr.Jit pointer comparison)
         index = dr.gather(mi.UInt32, self.index_by_id, emitter_id(ds.emitter), known)
-        return ds.emitter.pdf_direction(ref, ds, active) * self.spatial.pmf(ref, index, known)
+        return self._own_density(ref, ds, active) * self.spatial.pmf(ref, index, known)
+
+    def _own_density(self, ref, ds, active) -> mi.Float:
+        """The density with which the emitter ds reached samples ds.d once chosen: its own, or for
+        the environment of a scene with portals the mixture's (`PortalGuide.density`)."""
+        if self.guide is None:
+            return ds.emitter.pdf_direction(ref, ds, active)
+        sky = active & (ds.emitter == self.guide.env_ptr)
+        own = ds.emitter.pdf_direction(ref, ds, active & ~sky)
+        return dr.select(sky, self.guide.density(ref, ds, sky), own)

@@ -6,10 +6,11 @@
 `jit.backend()` picks a working libLLVM and the Mitsuba variant (one the user set before is kept);
 every module that imports Dr.Jit or Mitsuba when it loads calls it first (through `styletrace.gate`;
 `images` itself), because Dr.Jit chooses its libLLVM at import time. `init()` does that and
-registers the plugins for the active variant: the integrator `stylized`, the BSDF `styled` and the
-sampler `owen_sobol`. The command line, the API entry points and the tests
-call `init()`; a script that loads Mitsuba XML naming `stylized` calls it before `mi.load_file`.
-`import styletrace` alone does neither: it loads no Dr.Jit, no Mitsuba.
+registers the plugins for the active variant: the integrator `stylized`, the BSDF `styled`, the
+sampler `owen_sobol` and the emitter `portal` (a light portal: kernel/portal.py). The command
+line, the API entry points and the tests call `init()`; a script that loads Mitsuba XML naming
+`stylized` (or `portal`) calls it before `mi.load_file`. `import styletrace` alone does neither:
+it loads no Dr.Jit, no Mitsuba.
 """
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ _registered: set[str] = set()
 
 def init(variant: str | None = None) -> str:
     """Choose the backend (`jit.backend`), then register styletrace's Mitsuba plugins `stylized`
-    and `styled` and the sampler `owen_sobol` for the active variant, once per variant.
+    and `styled`, the sampler `owen_sobol` and the emitter `portal` for the active variant, once
+    per variant.
 
     Args:
         variant: a variant to switch to; None keeps the active one or chooses one.
@@ -35,7 +37,7 @@ def init(variant: str | None = None) -> str:
     if active not in _registered:
         import mitsuba as mi
 
-        from styletrace.kernel import owen_sobol_sampler
+        from styletrace.kernel import owen_sobol_sampler, portal
         from styletrace.kernel.styled_bsdf import StyledBSDF
         from styletrace.scene.standalone import from_properties
 
@@ -44,6 +46,7 @@ def init(variant: str | None = None) -> str:
         mi.register_integrator("stylized", lambda props: from_properties(props))
         mi.register_bsdf("styled", lambda props: StyledBSDF(props))
         owen_sobol_sampler.register()
+        portal.register()
         _registered.add(active)
     return active
 
