@@ -15,7 +15,9 @@ from styletrace.frontends import cli
 COUNT = re.compile(r"(\w+)\s+samples per (pixel|pass)", re.IGNORECASE)
 #: where a name holds "samples", what it may be
 NAMES = {"samples", "inner_samples", "line_samples", "camera_samples", "max_camera_samples",
-         "cap_camera_samples", "scene_samples", "least_camera_samples"}
+         "cap_camera_samples", "scene_samples", "least_camera_samples",
+         # not a count: what draws the random numbers (Mitsuba's word; Blender's "Sampling pattern")
+         "sampler"}
 
 
 def unqualified_counts(text: str) -> list[str]:
@@ -42,7 +44,7 @@ def test_the_command_line_says_samples_for_paths_per_pixel_only():
         if "--spp" in flags:
             assert text.startswith("camera samples per pixel"), (command, text)
         for flag in flags:
-            assert "sample" not in flag or flag == "--samples", flag
+            assert "sample" not in flag or flag in ("--samples", "--sampler"), flag
     assert {c for c, f, _ in rows if "--samples" in f} == {"render", "preview"}
 
 

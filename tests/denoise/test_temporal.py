@@ -9,6 +9,8 @@
   elsewhere almost none start again (Z = 4: about 6e-5 of them by chance).
 - Pixels without an estimate (count 0) show and keep their history (the frame's value where they
   have none); the variance given is used where known, a local stand-in where not.
+- The hold shows the last frame's value where the new one moved less than its margin, the new
+  one beyond it, after a restart and without a hold.
 - The view key changes with any vertex, texel or setting, and not with the order of a dict.
 - The pipeline's denoisers blend with the history and commit once per frame; without one they are
   what they were.
@@ -138,3 +140,39 @@ def test_the_view_key_follows_every_vertex_texel_and_setting():
                                                                      "samples": 16}) != key
     same = {"camera": [0.0, 1.0, 2.0], "sky": np.ones((4, 8, 3)), "mesh": Part(verts.copy())}
     assert view_key(same, {"samples": 16, "style": "cel"}) == key
+
+
+def shown_frames(history, images):
+    for img in images:
+        history.start("still")
+        history.hold(history.blend(img, np.full(SHAPE, SIGMA ** 2), 4))
+        history.commit()
+
+
+def test_hold_keeps_the_last_frames_value_within_its_margin():
+    h = History(hold=1.0)
+    shown_frames(h, frames(2))
+    h.start("still")
+    m = frames(1, seed=11)[0]
+    h.blend(m, np.full(SHAPE, SIGMA ** 2), 4)
+    shown = h.state.shown
+    margin = np.sqrt(h._pending.var.mean(axis=-1))
+    d = shown + 0.5 * margin[..., None]  # moved half a margin: held
+    d[:4] = shown[:4] + 2.0 * margin[:4, :, None]  # moved two: shown
+    out = h.hold(d)
+    assert np.array_equal(out[4:], shown[4:].astype(np.float32))
+    assert np.array_equal(out[:4], d[:4].astype(np.float32))
+    h.commit()
+    assert np.array_equal(h.state.shown, out)
+    # a view's first frame and a history without hold show the frame's own value
+    fresh = History()
+    fresh.start("v")
+    fresh.blend(m, None, 4)
+    assert np.array_equal(fresh.hold(d), d.astype(np.float32))
+    none = History(hold=0.0)
+    shown_frames(none, frames(2))
+    none.start("still")
+    none.blend(m, None, 4)
+    assert np.array_equal(none.hold(d), d.astype(np.float32))
+    with pytest.raises(ValueError, match="bad history hold -1"):
+        History(hold=-1)

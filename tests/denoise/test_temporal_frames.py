@@ -4,11 +4,12 @@ A still shot of the Cornell box (48 x 48, Samples 16, each frame its own seed), 
 expectation denoiser and identity through the image denoiser:
 - the first frame with a history is the render without one, bit for bit;
 - the error of frame k against the converged image (two renders of the same method at Samples
-  1024, mean((d - r1)(d - r2)), so that their noise cancels) falls with k: at frame 6 it is under
-  0.65 of the mean error of frames without reuse (measured: about 1/2 for both styles; the
-  denoiser's bias, which reuse does not remove, is part of both);
+  1024, mean((d - r1)(d - r2)), so that their noise cancels) falls with k: at frame 8 it is under
+  0.75 of the mean error of frames without reuse (measured: 0.62 for cel, whose denoised values
+  are also held (`History.hold`), about 1/2 for identity; the denoiser's bias, which reuse does
+  not remove, is part of both);
 - a frame changes less from the one before than without reuse (display-space pixels that change by
-  more than 0.1: measured 3% to 0.2% for cel, frames 5 to 6).
+  more than 0.1: measured 6.3% without and 0.1% with, for cel, frames 7 to 8).
 """
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ from styletrace.pipeline.denoising import Denoising
 from styletrace.pipeline.job import python_job
 
 SIZE = 48
-FRAMES = 6
+FRAMES = 8
 
 
 def render(style, seed, samples=16, history=None):
@@ -54,6 +55,6 @@ def test_a_still_shots_frames_converge_and_settle(style, method):
     assert np.array_equal(reused[0], plain[0])
     error = [float(np.mean((img - r1) * (img - r2))) for img in reused]
     alone = [float(np.mean((img - r1) * (img - r2))) for img in plain]
-    assert error[-1] < 0.65 * np.mean(alone), (error, alone)
+    assert error[-1] < 0.75 * np.mean(alone), (error, alone)
     assert changed(reused[-2], reused[-1]) < 0.5 * changed(plain[-2], plain[-1]) or (
         changed(reused[-2], reused[-1]) == 0.0)

@@ -14,8 +14,8 @@ Design: docs/design/expectation_denoising.md.
 from __future__ import annotations
 
 import copy
-from dataclasses import replace
-from typing import Callable, Iterator
+from dataclasses import dataclass, replace
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -384,15 +384,31 @@ def below_resolution(d: np.ndarray, m: np.ndarray) -> np.ndarray:
     return np.maximum(out, 0.0)
 
 
+@dataclass(frozen=True)
+class Carried:
+    """What the calls of `attach` for one render share.
+
+    Args:
+        cache: a dict kept between calls on one growing buffer (`ExpectationJob`'s), in which the
+            guides of each spp and the own albedo and emission of each pass are made once (the
+            same values as made anew); None: nothing kept.
+        pilot: the render's scene-defaults pilot (`scene.defaults.ScenePilot`) for the points'
+            buffer, or None: traced anew.
+        history: the frames' `denoise.temporal.History` (M blended with it, D held by it; the
+            caller commits), or None.
+    """
+    cache: dict | None = None
+    pilot: Any = None
+    history: Any = None
+
+
 def attach(
     buf: Buffer,
     shot: Shot,
     quality: str = "high",
     k: int = 0,
     uncertainty: float = 0.0,
-    cache: dict | None = None,
-    pilot=None,
-    history=None,
+    carried: Carried = Carried(),
 ):
     """Denoise the buffer's expectation: M formed (blended with the frames' history where one is
     given), denoised into D, g's points placed.
@@ -402,13 +418,7 @@ def attach(
             k > 0 only), camera samples per pixel (the guides') and seed.
         quality: OIDN's. uncertainty: `spread`'s (> 0).
         k: 0: D kept at each camera sample in the buffer; > 0: g at k points (`coverage.points`).
-        cache: a dict kept between calls on one growing buffer (`ExpectationJob`'s), in which the
-            guides of each spp and the own albedo and emission of each pass are made once (the
-            same values as made anew); None: nothing kept.
-        pilot: the render's scene-defaults pilot (`scene.defaults.ScenePilot`) for the points'
-            buffer, or None: traced anew.
-        history: the frames' `denoise.temporal.History` (its `blend`; the caller commits), or
-            None.
+        carried: the render's cache, pilot and frames' history (`Carried`).
 
     Returns:
         (D per pixel H x W x 3, None) for k = 0; (D, the points' buffer) for k > 0. The arrays
@@ -418,6 +428,7 @@ def attach(
         UsageError: a buffer that does not store means.
     """
     scene, integrator, spp, seed = shot.scene, shot.integrator, shot.spp, shot.seed
+    cache, history = carried.cache, carried.history
     if buf.stores != "mean":
         raise UsageError(
             "--denoise expectation needs a buffer of children means (direct or affine estimator)"
@@ -429,15 +440,11 @@ def attach(
     own = _own_device(scene, buf, cache)
     # the reflected part: each sample's own emission goes back in at_samples
     refl = _reflected(buf, own[1])
-    if history is None:
-        m = _expectation(buf, refl)
-    else:  # each pixel's M with its variance and samples, for the frames' weights and test
-        count, mean, var = _sample_moments(buf, refl)
-        hw3 = (buf.height, buf.width, 3)
-        m = history.blend(mean.T.reshape(hw3), var.T.reshape(hw3),
-                          count.reshape(buf.height, buf.width))
+    m = _expectation(buf, refl) if history is None else _blended(buf, refl, history)
     d = oidn.denoise_oidn(m, g.albedo, g.normal, quality, guides.to_sensor(scene))
     d = below_resolution(d, m)
+    if history is not None:
+        d = history.hold(d)
     header = {"method": "expectation", "quality": quality,
               "guides": "albedo and shading normal through specular chains (guides.first_hit)",
               "at_samples": "guided bilinear interpolation of D at each sample's film position"}
@@ -446,7 +453,8 @@ def attach(
         rel = _spread(buf, refl, uncertainty) if uncertainty > 0 else None
         if rel is not None:
             lookup.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
-        cover = coverage_module.points(scene, integrator, lookup, k, view_seed, pilot=pilot)
+        cover = coverage_module.points(scene, integrator, lookup, k, view_seed,
+                                       pilot=carried.pilot)
         if rel is not None:  # per point, its pixel's: restyles average g over it too
             cover.arrays[SPREAD] = dr.gather(mi.Float, lookup.spread,
                                              mi.UInt32(cover.arrays["pixel"]))
@@ -461,6 +469,16 @@ def attach(
     buf.header["denoise"] = header
     buf.device.clear()  # the Dr.Jit copy must pick up the denoised means
     return d, None
+
+
+def _blended(buf: Buffer, refl: np.ndarray, history) -> np.ndarray:
+    """M blended with the frames' history (`temporal.History.blend`): each pixel's mean of its
+    samples' reflected parts (3 x N, `_reflected`) with its variance and count, the frames'
+    weights and test."""
+    count, mean, var = _sample_moments(buf, refl)
+    hw3 = (buf.height, buf.width, 3)
+    return history.blend(mean.T.reshape(hw3), var.T.reshape(hw3),
+                         count.reshape(buf.height, buf.width))
 
 
 def denoise_before(cover: Buffer, g: guides.Guides, quality: str, scene) -> None:
@@ -797,8 +815,8 @@ class ExpectationJob:
             raise UsageError("nothing to denoise: no pass of the render finished")
         # the guides of as many camera samples as the buffer holds (a preview's: fewer)
         shot = replace(self.shot, spp=buf.spp)
-        _, cover = attach(buf, shot, quality, k, self.uncertainty, self._cache, self.pilot,
-                          self.history)
+        _, cover = attach(buf, shot, quality, k, self.uncertainty,
+                          Carried(self._cache, self.pilot, self.history))
         if cover is None:
             return image_of(buf), buf
         image = np.asarray(cover.image, dtype=np.float32)[..., :3]
