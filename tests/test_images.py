@@ -267,6 +267,29 @@ def test_the_plain_encoder_keeps_the_aov_channels(tmp_path):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
 
 
+@pytest.mark.parametrize("plain", [False, True])
+def test_the_data_passes_follow_the_aovs_under_blenders_names(tmp_path, plain):
+    """Depth, Normal and Vector are written after the image and the AOVs present, each channel
+    named pass.channel as Blender names them; a PNG has no room for them."""
+    rng = np.random.default_rng(5)
+    img = rng.random((4, 6, 3)).astype(np.float32)
+    extra = {"vector": rng.random((4, 6, 4)), "depth": rng.random((4, 6)),
+             "children": rng.random((4, 6))}
+    write_image(img, str(tmp_path / "a.exr"), "rgb", extra, plain=plain)
+    bmp = mi.Bitmap(str(tmp_path / "a.exr"))
+    arr = np.array(bmp)
+    names = [bmp.struct_()[i].name for i in range(bmp.channel_count())]
+    assert set(names) == {"R", "G", "B", "children", "Depth.Z", "Vector.X", "Vector.Y",
+                          "Vector.Z", "Vector.W"}, names
+    for i, c in enumerate("XYZW"):
+        np.testing.assert_array_equal(arr[..., names.index(f"Vector.{c}")],
+                                      extra["vector"][..., i].astype(np.float32))
+    np.testing.assert_array_equal(arr[..., names.index("Depth.Z")],
+                                  extra["depth"].astype(np.float32))
+    with pytest.raises(ValueError, match="data passes are written to .exr files only"):
+        write_image(img, str(tmp_path / "a.png"), "rgb", {"depth": extra["depth"]}, plain=plain)
+
+
 @pytest.mark.skipif(not os.path.isdir("/sys"), reason="needs Linux's /sys")
 def test_a_folder_that_refuses_new_files_is_refused_before_the_render():
     """/sys passes `os.access(W_OK)` for root but refuses file creation: the check makes a file

@@ -22,7 +22,8 @@ from styletrace.scene.plugins import init
 __version__ = "0.1.0"
 
 #: names served by `styletrace.frontends.api`, loaded (and the backend initialised) on first use
-_API = ("render", "load_scene", "scene_dict", "make_integrator", "passes", "write_image")
+_API = ("render", "load_scene", "scene_dict", "make_integrator", "passes", "write_image",
+        "Motion")
 #: names served by `styletrace.lookdev` (module, name), loaded the same way
 _LOOKDEV = {"render_buffer": "record", "restyle": "restyle", "load_buffer": "buffer", "fit": "fit",
             "Buffer": "buffer"}

@@ -221,7 +221,7 @@ def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None =
 
     Args:
         image, ext, pixel_format: as for `encode`.
-        aovs: the error AOVs to add as EXR channels (`with_aovs`), or None.
+        aovs: the error AOVs and data passes to add as EXR channels (`with_aovs`), or None.
 
     Returns:
         The file's contents: an uncompressed float32 EXR, or a PNG of `srgb8`'s bytes.
@@ -236,7 +236,8 @@ def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None =
     check_format(pixel_format, ext)
     if ext == ".png":
         if aovs is not None:
-            raise ValueError(f"error AOVs are written to .exr files only, not {ext!r}")
+            raise ValueError(f"error AOVs and data passes are written to .exr files only, not "
+                             f"{ext!r}")
         data = srgb8(image)
         if name.endswith("A"):  # as `encode`: coverage is quantized linearly
             data[..., -1] = np.round(
@@ -263,23 +264,33 @@ DENOISED_AOV_CHANNELS = (
 )
 
 
+#: the data passes (`kernel.data_passes`: docs/passes.md), after the AOVs, under Blender's pass and
+#: channel names (a multilayer reader sees the passes Depth, Normal and Vector). Only the keys
+#: present are written.
+DATA_CHANNELS = (("depth", ("Depth.Z",)), ("normal", ("Normal.X", "Normal.Y", "Normal.Z")),
+                 ("vector", ("Vector.X", "Vector.Y", "Vector.Z", "Vector.W")))
+
+
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
-    """Lay out an image and its error AOVs as both EXR writers write them.
+    """Lay out an image, its error AOVs and its data passes as both EXR writers write them.
 
     Args:
         image: H x W x C pixels; names: its channel names ('R', 'G', 'B', ...).
         aovs: H x W (x k) arrays by key: with 'variance', every key of AOV_CHANNELS; else the
-            keys of DENOISED_AOV_CHANNELS present. Empty: the image alone.
+            keys of DENOISED_AOV_CHANNELS present; then the keys of DATA_CHANNELS present. Empty:
+            the image alone.
 
     Returns:
-        (one float32 H x W x C' array, its channel names): the image's channels, then the AOVs'.
+        (one float32 H x W x C' array, its channel names): the image's channels, then the AOVs',
+        then the data passes'.
 
     Raises:
         KeyError: a key of AOV_CHANNELS missing where 'variance' is given.
     """
     layers = [image]
-    table = (AOV_CHANNELS if "variance" in aovs
+    table = (list(AOV_CHANNELS) if "variance" in aovs
              else [(k, c) for k, c in DENOISED_AOV_CHANNELS if k in aovs])
+    table += [(k, c) for k, c in DATA_CHANNELS if k in aovs]
     for key, channels in table if aovs else ():
         arr = np.asarray(aovs[key], dtype=np.float32)
         layers.append(arr.reshape(arr.shape[:2] + (len(channels),)))
@@ -293,7 +304,8 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
 
     Args:
         image, pixel_format: H x W x C linear pixels, and their film's format (see `encode`).
-        aovs: the error AOVs by key, laid out after the image's channels (`with_aovs`).
+        aovs: the error AOVs and data passes by key, laid out after the image's channels
+            (`with_aovs`).
 
     Returns:
         The EXR file's contents.
@@ -434,7 +446,7 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
         image: H x W x C linear pixels.
         path: the destination; its extension chooses the format.
         pixel_format: the film's pixel format (see `encode`).
-        aovs: the error AOVs as extra channels (EXR only), or None.
+        aovs: the error AOVs and data passes as extra channels (EXR only), or None.
         plain: encode with `encode_plain` (no Mitsuba: a kernel may be running).
 
     Raises:
@@ -447,7 +459,8 @@ def write_image(image, path: str, pixel_format: str = "rgb", aovs: dict | None =
         return
     if aovs is not None:
         if ext != ".exr":
-            raise ValueError(f"error AOVs are written to .exr files only, not {ext!r}")
+            raise ValueError(f"error AOVs and data passes are written to .exr files only, not "
+                             f"{ext!r}")
         write_bytes_atomically(encode_with_aovs(image, aovs, pixel_format), path)
         return
     write_bytes_atomically(encode(image, ext, pixel_format), path)
@@ -540,6 +553,7 @@ __all__ = [
     "IMAGE_TYPES",
     "PIXEL_FORMATS",
     "AOV_CHANNELS",
+    "DATA_CHANNELS",
     "bitmap_format",
     "check_format",
     "nonfinite_pixels",

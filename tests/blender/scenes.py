@@ -307,7 +307,7 @@ def read_exr(path: str) -> dict[str, np.ndarray]:
         parts = name.split(".")
         layer_pass = parts[-2] if len(parts) >= 2 else "Combined"
         out.setdefault(layer_pass, []).append((parts[-1], arr[..., i]))
-    order = "RGBAXYZ"
+    order = "RGBAXYZW"  # Vector is X, Y, Z, W
     return {
         k: np.stack([a for _, a in sorted(v, key=lambda t: order.find(t[0]))], axis=-1)
         for k, v in out.items()

@@ -105,6 +105,33 @@ def test_turntable_frames_are_numbered_and_frame_zero_is_the_still(ray_cluster, 
     assert not np.array_equal(frames[1], frames[0])
 
 
+def test_turntable_frames_carry_their_data_passes(ray_cluster, tmp_path):
+    """`--passes depth,vector` on a turntable: each numbered EXR has the channels; frame 0's are a
+    still's (its camera), and its vector is the turn's (the orbit's frame -1 and frame 1)."""
+    out = str(tmp_path / "spin.exr")
+    r = render_cli("cornell-box", "--frames", "2", "--orbit", "20", "--passes", "depth,vector",
+                   "-o", out, "--ray", ray_cluster)
+    assert r.returncode == 0, r.stderr
+    still = str(tmp_path / "still.exr")
+    assert render_cli("cornell-box", "--passes", "depth", "-o", still).returncode == 0
+
+    def channels(path):
+        bmp = mi.Bitmap(path)
+        names = [bmp.struct_()[i].name for i in range(bmp.channel_count())]
+        return dict(zip(names, np.moveaxis(np.array(bmp), -1, 0)))
+
+    frames = [channels(str(tmp_path / f"spin_{k:04d}.exr")) for k in range(2)]
+    alone = channels(still)
+    for name in ("R", "G", "B", "Depth.Z"):
+        assert np.array_equal(frames[0][name], alone[name]), name
+    assert not np.array_equal(frames[1]["Depth.Z"], frames[0]["Depth.Z"])
+    for ch in frames:
+        seen = ch["Depth.Z"] < 1e9
+        # a turn about the up axis through the target: sideways, more the farther from it
+        for c in ("Vector.X", "Vector.Z"):
+            assert seen.mean() > 0.5 and np.mean(np.abs(ch[c][seen]) > 0.1) > 0.5, c
+
+
 def test_bad_frame_arguments_are_one_line(tmp_path):
     r = render_cli("cornell-box", "--orbit", "90", "-o", str(tmp_path / "a.png"))
     assert (

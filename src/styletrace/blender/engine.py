@@ -3,7 +3,9 @@
 F12 is one pipeline run (`f12.run_f12`): progress after each pass (`update_progress`), the image so
 far shown, `test_break` asked between passes (a cancel keeps the finished passes). Render passes:
 the error AOVs (`aovs`), a line mask with lines, a Noisy pass where Denoise is on (then no error
-passes). "Record buffer" keeps the look-development buffer for restyles (`restyle`). Each render
+passes), and the data passes Depth, Normal and Vector where the view layer asks for them (Cycles'
+switches; `f12.DATA_PASSES`, docs/passes.md). "Record buffer" keeps the look-development buffer for
+restyles (`restyle`). Each render
 uses its frame's seed; a cancel during Render Animation ends it (`animation`). Previews render
 Blender's preview scene at their own budget (`preview`); Rendered shading is `viewport`'s. Errors
 the user can cause are one-line Blender error reports. Docs: docs/blender.md.
@@ -16,7 +18,7 @@ import traceback
 import bpy
 import numpy as np
 
-from styletrace.blender import animation, f12, preview, restyle, viewport_hooks
+from styletrace.blender import animation, f12, motion, preview, restyle, viewport_hooks
 from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
 
@@ -29,10 +31,11 @@ PREVIEW: dict = {}
 
 
 def _rows(image: np.ndarray, channels: int) -> np.ndarray:
-    """H x W x C (top row first) -> Blender's pixel rows (bottom row first), `channels` wide."""
+    """H x W x C (top row first) -> Blender's pixel rows (bottom row first), `channels` wide; RGB
+    gets an alpha of 1."""
     h, w = image.shape[:2]
     img = image.reshape(h, w, -1)[::-1]
-    if channels == 4:
+    if channels == 4 and img.shape[-1] < 4:
         out = np.ones((h, w, 4), np.float32)
         out[..., :3] = img[..., :3]
         return out.reshape(-1, 4)
@@ -88,6 +91,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self.register_pass(scene, renderlayer, f12.NOISY, 3, "RGB", "COLOR")
         if st.lines:
             self.register_pass(scene, renderlayer, f12.LINE_MASK, 1, "X", "VALUE")
+        for key in f12.data_passes_of(renderlayer):
+            name, channels, ids, kind, _ = f12.DATA_PASSES[key]
+            self.register_pass(scene, renderlayer, name, channels, ids, kind)
 
     def render(self, depsgraph):
         try:
@@ -114,8 +120,13 @@ class StyletraceEngine(bpy.types.RenderEngine):
     def _render(self, depsgraph):
         st = self._settings(depsgraph)
         self.update_stats("", "styletrace: exporting the scene")
-        desc = f12.description(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m))
+        data = () if self.is_preview else f12.data_passes_of(depsgraph.view_layer)
+        placements = {} if "vector" in data else None  # each shape's object, for its motion
+        desc = f12.description(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m),
+                               placements=placements)
         sc = f12.load(desc)
+        moves = (motion.frames_around(self, depsgraph, sc, placements)
+                 if placements is not None else None)
         # Render Animation's frames of a still shot accumulate (docs/temporal.md); F12 alone not
         scene = depsgraph.scene
         history = (animation.frame_history(st, desc, scene.frame_current == scene.frame_start)
@@ -136,6 +147,11 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self.add_pass(f12.NOISY, 3, "RGB")
         if st.lines:
             self.add_pass(f12.LINE_MASK, 1, "X")
+        extra = {}  # Blender's pass name: (H x W (x C) values, channels)
+        for key, value in f12.data_passes(runner, data, moves).items():
+            name, channels, ids, *_ = f12.DATA_PASSES[key]
+            self.add_pass(name, channels, ids)
+            extra[name] = (value, channels)
         start = time.perf_counter()
         source = runner.passes()
         prog = None
@@ -159,16 +175,17 @@ class StyletraceEngine(bpy.types.RenderEngine):
                 depsgraph.scene.frame_current, done["spp_done"], spp))
         if prog is None:
             return
-        mask = None
         if st.lines and not self.stop_requested():
             mask = f12.line_mask(sc, st, self.stop_requested)
+            if mask is not None:
+                extra[f12.LINE_MASK] = (mask, 1)
         image, noisy = None, (prog.image if denoised else None)
         # (cancelled before every tile had a pass: noisy)
         if noisy is not None and runner.finisher.ready(prog):
             self.progress(prog.spp_done / prog.spp_total, "styletrace: denoising")
             image = runner.finish(prog)
             LAST["seconds"] = time.perf_counter() - start
-        self._write(prog, aovs, mask, w, h, image, noisy)
+        self._write(prog, aovs, extra, w, h, image, noisy)
 
     def _show(self, image, w, h):
         result = self.begin_result(0, 0, w, h)
@@ -176,7 +193,10 @@ class StyletraceEngine(bpy.types.RenderEngine):
         self.update_result(result)
         self.end_result(result)
 
-    def _write(self, prog, aovs, mask, w, h, image=None, noisy=None):
+    def _write(self, prog, aovs, extra, w, h, image=None, noisy=None):
+        """The render result: Combined (the image, else the passes' average), Noisy, the error
+        AOVs, and `extra`'s passes ({Blender's pass name: (values, channels)}: the line mask, the
+        data passes)."""
         result = self.begin_result(0, 0, w, h)
         layer = result.layers[0]
         layer.passes[COMBINED].rect = _rows(prog.image if image is None else image, 4)
@@ -186,8 +206,10 @@ class StyletraceEngine(bpy.types.RenderEngine):
             for key, (name, channels, _) in f12.AOV_PASSES.items():
                 value = np.nan_to_num(prog.aovs[key])
                 layer.passes[name].rect = _rows(value, channels)
-        if mask is not None:
-            layer.passes[f12.LINE_MASK].rect = _rows(mask, 1)
+        for name, (value, channels) in extra.items():
+            # foreach_set takes the buffer at once (assigning `rect` walks it value by value:
+            # 10 ms a pass at 128 x 128)
+            layer.passes[name].rect.foreach_set(_rows(value, channels).ravel())
         self.end_result(result)
 
 

@@ -1,5 +1,6 @@
 """The style panels, drawn from the registries: Render Properties -> styletrace (and its
-Advanced sampling sub-panel), Material Properties -> styletrace style. `layout_rows` lists what a
+Advanced sampling sub-panel), Material Properties -> styletrace style; View Layer Properties ->
+Passes (the data passes, Cycles' switches). `layout_rows` lists what a
 panel shows (the same walk as `draw`), so the layout can be checked and documented headless, where
 Blender draws no UI."""
 from __future__ import annotations
@@ -172,7 +173,40 @@ class STYLETRACE_PT_material(bpy.types.Panel):
         _draw(self.layout, layout_rows(context.material.styletrace, material=True))
 
 
-CLASSES = (STYLETRACE_PT_render, STYLETRACE_PT_render_advanced, STYLETRACE_PT_material)
+def pass_rows(view_layer) -> list[tuple[object, str]]:
+    """(owner, property name) of the view layer's data pass switches the engine reads: Cycles'
+    own (`f12.DATA_PASSES`), so a scene keeps its passes when it changes engine.
+
+    Args:
+        view_layer: the `bpy.types.ViewLayer`.
+
+    Returns:
+        The rows, in drawing order.
+    """
+    from styletrace.blender.f12 import DATA_PASSES
+    return [(view_layer, prop) for *_, prop in DATA_PASSES.values()]
+
+
+class STYLETRACE_PT_passes(bpy.types.Panel):
+    bl_label = "Passes"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "view_layer"
+    COMPAT_ENGINES = {"STYLETRACE"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        column = self.layout.column(heading="Data")
+        for owner, name in pass_rows(context.view_layer):
+            column.prop(owner, name)
+
+
+CLASSES = (STYLETRACE_PT_render, STYLETRACE_PT_render_advanced, STYLETRACE_PT_material,
+           STYLETRACE_PT_passes)
 
 
 def register_panels():

@@ -16,6 +16,7 @@ from typing import Any, Callable
 
 from styletrace.errors import SceneError, UsageError
 from styletrace.images import PIXEL_FORMATS, save_safely, write_image
+from styletrace.kernel.data_passes import Motion
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.pipeline.carried import carried_settings
 from styletrace.pipeline.job import given_values
@@ -56,6 +57,7 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
            pass_spp: int | None = None, denoise: str | None = None, denoise_quality: str = "high",
            coverage: int | str = "auto", denoise_uncertainty: float | None = None,
            denoise_footprint: str = "pixel", cluster: str | None = None,
+           passes: Any = None, motion: Any = None,
            callback: Callable[[Progress], None] | None = None, **params: Any):
     """`styletrace.render`: a scene rendered with a style, denoised at defaults (docs/python.md).
 
@@ -83,11 +85,16 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
         denoise_quality, coverage, denoise_uncertainty, denoise_footprint: the denoiser's options
             (`pipeline.denoising.Denoising`, docs/denoise.md).
         cluster: "local" or a Ray address: the passes as Ray tasks (not denoised); None: here.
+        passes: data passes beside the image: 'depth,normal,vector' or a list of those names
+            (None: none; `kernel.data_passes`, docs/passes.md).
+        motion: the neighbouring frames of the vector pass (`kernel.data_passes.Motion`: the
+            camera's to_world one frame before and after, moving shapes); None: a still (0).
         callback: called with each pass's `Progress`.
         **params: the style's parameters and the integrator's other properties, by name.
 
     Returns:
-        The image, float32 H x W x C, linear; or (image, aovs) with aovs=True.
+        The image, float32 H x W x C, linear; or (image, aovs) with aovs=True or data passes
+        asked for (aovs: {name: array}, the error AOVs and the passes 'depth', 'normal', 'vector').
 
     Raises:
         StyletraceError: a bad value or a refused combination (one line), before rendering.
@@ -105,7 +112,7 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
     job = python_job(scene, style=style, samples=samples, spp=spp, inner=inner,
                      estimator=estimator, seed=seed, width=width, height=height, defines=defines,
                      integrator=integrator, sampler=sampler, pass_spp=pass_spp,
-                     denoising=denoising, **params)
+                     denoising=denoising, passes=passes, motion=motion, **params)
     runner = plan(job, executor_for(cluster))
     if runner.resolved.note:
         import warnings
@@ -149,7 +156,7 @@ def make_integrator_from(values: dict[str, Any]) -> StylizedIntegrator:
 
 __all__ = ["render", "load_scene", "carried_settings", "film_format", "scene_spp", "SceneWarning",
            "make_integrator", "make_integrator_from", "passes", "resolve_defaults", "pass_count",
-           "SceneError", "Progress", "StylizedIntegrator", "write_image", "save_safely",
+           "SceneError", "Progress", "StylizedIntegrator", "write_image", "save_safely", "Motion",
            # re-exported under their established names (the module docstring)
            "UsageError", "PIXEL_FORMATS", "LANE_BYTES", "LANES_PER_PASS", "TILE_SIDE", "Tile",
            "check_memory", "expansion_seed", "memory_available", "memory_needed", "pass_seed",

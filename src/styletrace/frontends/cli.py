@@ -378,6 +378,14 @@ def build_parser() -> argparse.ArgumentParser:
         "the EXR output (refused with a PNG output); docs/adaptive.md",
     )
     r.add_argument(
+        "--passes",
+        default=None,
+        metavar="LIST",
+        help="also write data passes as channels of the EXR output (refused with a PNG output): "
+        "a comma-separated list of depth, normal, vector, Blender's Depth, Normal and Vector (the "
+        "vector is 0 but in the frames of --frames/--orbit); docs/passes.md",
+    )
+    r.add_argument(
         "--samples",
         type=int,
         default=None,

@@ -61,7 +61,8 @@ def job_of(
     """The job of `styletrace render`, in the command line's terms (`pipeline.terms`).
 
     Args:
-        args: its parsed arguments (size, samples, spp, seed, pass split, setting flags, denoising).
+        args: its parsed arguments (size, samples, spp, seed, pass split, setting flags, denoising,
+            data passes).
         params: the `--set` values. defines: the `-D` values, or None.
         scene: one of several scene arguments (None: `args.scene`, its first where a list).
 
@@ -86,6 +87,7 @@ def job_of(
         samples=getattr(args, "samples", None),
         denoising=denoising_of(args),
         terms=COMMAND_LINE,
+        data_passes=getattr(args, "passes", None) or (),
     )
 
 

@@ -76,6 +76,28 @@ def frame_paths(output: str, count: int) -> list[str]:
     return [f"{stem}_{i:04d}{ext}" for i in range(count)]
 
 
+def turntable_frames(resolved, count: int, degrees: float) -> list[tuple]:
+    """A turntable's frames: (the resolved job, the frame's camera) each; with a Vector pass each
+    frame's job carries the cameras of the frames before and after it (`Job.motion`; the turn
+    goes on past the first and the last frame).
+
+    Args:
+        resolved: the scene's resolved job. count: how many frames. degrees: the whole turn.
+
+    Returns:
+        [(Resolved, 4x4 sensor to_world)] in frame order.
+    """
+    from dataclasses import replace
+
+    from styletrace.kernel.data_passes import Motion
+    from styletrace.pipeline.orbit import turntable
+    if "vector" not in resolved.job.data_passes:
+        return [(resolved, m) for m in turntable(resolved.scene, count, degrees)]
+    cams = turntable(resolved.scene, count, degrees, -1, count + 1)
+    return [(replace(resolved, job=resolved.job.with_(motion=Motion(cams[k], cams[k + 2]))),
+             cams[k + 1]) for k in range(count)]
+
+
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`, on Ray.
 
@@ -94,7 +116,6 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     from styletrace.pipeline.execute import OnRay, ray_job
     from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
-    from styletrace.pipeline.orbit import turntable
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
     from styletrace.pipeline.signals import one_line
@@ -133,11 +154,12 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         if resolved.auto and not args.quiet:  # as a single image's run says them, to pin them
             which = f"{one_line(name)}: " if len(scenes) > 1 else ""
             say(f"styletrace: auto values: {which}{resolved.auto}")
-        Runner(resolved, OnRay(cluster))  # the refusals of its frames' runs, before any renders
+        # the refusals of its frames' runs (the output's too), before any renders
+        Runner(resolved, OnRay(cluster)).check_output(paths[0])
         job = ray_job(resolved)
         if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
             degrees = 360.0 if args.orbit is None else args.orbit
-            frames = [(resolved, m) for m in turntable(resolved.scene, count, degrees)]
+            frames = turntable_frames(resolved, count, degrees)
         else:  # a file's frame: its job with the integrator pinned here, loaded again when it comes
             frames.append((resolved.job.with_(given={}, integrator=resolved.integrator), None))
         values.append(job.values)
@@ -169,4 +191,4 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {spp})")
     return 0
 
-__all__ = ["cluster_of", "executor_of", "frame_paths", "frames_command"]
+__all__ = ["cluster_of", "executor_of", "frame_paths", "turntable_frames", "frames_command"]

@@ -68,8 +68,10 @@ def ray_job(resolved: Resolved, camera: Any = None):
 
 
 class InProcess:
-    """The passes in this process (`passes.run_passes`: tiles, pass seeds, the float32 sum)."""
+    """The passes in this process (`passes.run_passes`: tiles, pass seeds, the float32 sum), on the
+    scene's own camera (`camera` None)."""
     local = True
+    camera = None
 
     def source(self, resolved: Resolved, lock: Any = contextlib.nullcontext(),
                in_pixels: bool = False) -> Iterator[Progress]:

@@ -110,7 +110,8 @@ def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: flo
         variant: the Mitsuba variant.
 
     Returns:
-        The settings, a dict (`samples` only where given: manifests written before it resume).
+        The settings, a dict (`samples` and `passes` only where given: manifests written before
+        them resume).
     """
     settings = {"kind": kind, "scenes": scenes, "integrators": values, "spp": job.spp,
                 "seed": job.seed, "frames": count, "orbit": orbit,
@@ -119,6 +120,9 @@ def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: flo
     # the split `samples` makes is in the integrators' values only where n moved
     if job.samples is not None:
         settings["samples"] = job.samples
+    if job.data_passes:  # the frames' channels
+        from styletrace.kernel.data_passes import parse_passes
+        settings["passes"] = list(parse_passes(job.data_passes))
     return settings
 
 

@@ -49,6 +49,10 @@ class Job:
         terms: how the caller names the settings, for errors (`pipeline.terms`).
         draft: a glimpse of this render: one camera sample of the children its split gives
             (`resolve` asks the budget for that smaller request, `budget.draft_request`).
+        data_passes: the data passes asked for beside the image (`kernel.data_passes`: depth,
+            normal, vector; a comma-separated string or names), checked by `resolve`.
+        motion: the neighbouring frames of the Vector pass (`kernel.data_passes.Motion`), or None
+            (a still: its vector is 0).
     """
     scene: Any = None
     defines: Mapping[str, Any] = field(default_factory=dict)
@@ -68,6 +72,8 @@ class Job:
     max_camera_samples: int | None = None
     terms: Terms = PYTHON
     draft: bool = False
+    data_passes: Any = ()
+    motion: Any = None
 
     def __post_init__(self):
         if self.integrator is not None and self.given:
@@ -133,7 +139,8 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
                seed: int = 0, width: int | None = None, height: int | None = None,
                integrator: Any = None, defines: Mapping[str, Any] | None = None,
                sampler: str | None = None, pass_spp: int | None = None, denoising: Denoising = OFF,
-               max_camera_samples: int | None = None, **params: Any) -> Job:
+               max_camera_samples: int | None = None, passes: Any = None, motion: Any = None,
+               **params: Any) -> Job:
     """The Job of the Python API's keywords: the one place that reads them (`styletrace.render`,
     `render_buffer` and the other calls build on it).
 
@@ -143,7 +150,7 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
     Args:
         scene: a built-in name, an XML path, a scene dict or an mi.Scene.
         samples, spp, seed, width, height, integrator, defines, sampler, pass_spp, denoising,
-            max_camera_samples: as `Job`'s fields.
+            max_camera_samples, motion: as `Job`'s fields. passes: `Job.data_passes`.
         style, inner, estimator, **params: the integrator values given (`given_values`: None
             leaves a value out).
 
@@ -156,7 +163,8 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
     return Job(scene=scene, defines=dict(defines or {}), width=width, height=height,
                sampler=sampler, given=given_values(style, inner, estimator, **params),
                integrator=integrator, spp=spp, seed=seed, pass_spp=pass_spp, samples=samples,
-               denoising=denoising, max_camera_samples=max_camera_samples, terms=PYTHON)
+               denoising=denoising, max_camera_samples=max_camera_samples, terms=PYTHON,
+               data_passes=() if passes is None else passes, motion=motion)
 
 
 def check_counts(*named: tuple[str, Any]) -> None:

@@ -64,19 +64,21 @@ def rotation(axis: np.ndarray, degrees: float) -> np.ndarray:
 
 
 def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int,
-          degrees: float) -> list[np.ndarray]:
+          degrees: float, first: int = 0, stop: int | None = None) -> list[np.ndarray]:
     """The sensor's to_world for each frame: T(target) R(up, angle) T(-target) to_world.
 
     Args:
         to_world: the sensor's to_world (4x4). target: the point turned about (3).
         up: the rotation axis (3). frames: how many frames.
         degrees: the whole turn; frame k turns by degrees * k / frames (360 loops without a repeat).
+        first, stop: the frames k in [first, stop) (default: 0 to frames; -1 and frames are the
+            neighbours of the first and the last, for the Vector pass).
 
     Returns:
-        One 4x4 matrix per frame.
+        One 4x4 matrix per frame k.
     """
     out = []
-    for k in range(frames):
+    for k in range(first, frames if stop is None else stop):
         about = np.eye(4)
         r = rotation(up, degrees * k / frames)
         about[:3, :3] = r
@@ -85,18 +87,20 @@ def orbit(to_world: np.ndarray, target: np.ndarray, up: np.ndarray, frames: int,
     return out
 
 
-def turntable(scene, frames: int, degrees: float) -> list[np.ndarray]:
+def turntable(scene, frames: int, degrees: float, first: int = 0,
+              stop: int | None = None) -> list[np.ndarray]:
     """A scene's turntable: its camera turned about its own up vector (local +Y) through
     `camera_target`.
 
     Args:
         scene: the loaded mi.Scene. frames: how many frames. degrees: the whole turn.
+        first, stop: the frames k in [first, stop) (`orbit`; default: all of them).
 
     Returns:
         One 4x4 sensor to_world per frame (`orbit`).
     """
     m = sensor_to_world(scene)
-    return orbit(m, camera_target(scene), m[:3, 1], frames, degrees)
+    return orbit(m, camera_target(scene), m[:3, 1], frames, degrees, first, stop)
 
 
 __all__ = ["camera_target", "rotation", "orbit", "turntable", "sensor_to_world"]

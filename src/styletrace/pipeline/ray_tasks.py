@@ -11,7 +11,6 @@ while the unit renders.
 """
 from __future__ import annotations
 
-import contextlib
 import os
 from dataclasses import dataclass
 
@@ -44,24 +43,6 @@ def _prepare(job: RayJob):
     return scene, integrator
 
 
-@contextlib.contextmanager
-def _camera(sensor, to_world):
-    """The sensor's to_world replaced by the 4x4 `to_world` in the block (None: left as it is)."""
-    if to_world is None:
-        yield
-        return
-    from styletrace.gate import mi
-    params = mi.traverse(sensor)
-    own = np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
-    params["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64))
-    params.update()
-    try:
-        yield
-    finally:
-        params["to_world"] = mi.ScalarTransform4f(own)
-        params.update()
-
-
 @ray.remote
 def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size: tuple[int, int],
                 sequence=None):
@@ -78,10 +59,11 @@ def render_unit(job: RayJob, spp: int, seed: int, offset: tuple[int, int], size:
     """
     scene, integrator = _prepare(job)
     # deliberately here: after `load` chose the driver's variant
+    from styletrace.kernel.data_passes import placed
     from styletrace.kernel.launch import render_pass
     from styletrace.pipeline.passes import Crop
     sensor = scene.sensors()[0]
-    with _camera(sensor, job.camera), Crop(sensor) as crop:
+    with placed(sensor, job.camera), Crop(sensor) as crop:
         if tuple(size) != crop.full:  # as the pass loop does for its tiles
             crop.set(offset, size)
         with no_collection():  # as the pass loop: no scene finalised while the pass is recorded

@@ -25,6 +25,7 @@ from typing import Any
 
 from styletrace.config import settings as S
 from styletrace.gate import mi
+from styletrace.kernel.data_passes import parse_passes
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.pipeline.budget import Request, Split, draft_request, split
 from styletrace.pipeline.carried import carried_settings, nested_stylized
@@ -226,10 +227,12 @@ def resolve(job: Job, scene: mi.Scene | None = None, local: bool = True) -> Reso
         The `Resolved` job.
 
     Raises:
-        UsageError: a bad spp, samples, seed or integrator, in the job's terms, or samples, spp and
-            inner that disagree (`budget.split`).
+        UsageError: a bad spp, samples, seed, integrator or data pass, in the job's terms, or
+            samples, spp and inner that disagree (`budget.split`).
     """
     t = job.terms
+    # the data passes' names checked once, here: the run reads them as a tuple
+    job = replace(job, data_passes=parse_passes(job.data_passes, t.name("passes")))
     if job.spp is not None:
         whole(t.name("spp"), job.spp, 1, SPP_MAX)
     whole(t.name("seed"), job.seed, 0, SEED_MAX)

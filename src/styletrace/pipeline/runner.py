@@ -45,10 +45,25 @@ class Finisher:
 
     `how`: words for a stopped run's line (", denoised,"); `local`: why it needs the passes in this
     process ('' where it does not); `plain_note`: what a write that cannot wait for the pass under
-    way leaves out."""
+    way leaves out; `data`: the run's data passes by key (`kernel.data_passes`), which the runner
+    sets before the passes and every result and file carries beside the error AOVs (`channels`)."""
     how = ""
     local = ""
     plain_note = ""
+    data: dict | None = None
+
+    def channels(self, aovs: dict | None) -> dict | None:
+        """The extra channels of a result or a file: the error AOVs, then the run's data passes.
+
+        Args:
+            aovs: the error AOVs by key (None: none).
+
+        Returns:
+            The AOVs with the data passes added; None where there are neither.
+        """
+        if not self.data:
+            return aovs
+        return {**(aovs or {}), **self.data}
 
     def check(self, resolved: Resolved, executor: Any) -> None:
         """Refusals of this finisher (one line each), before anything renders.
@@ -90,12 +105,15 @@ class Finisher:
             prog: the last finished pass's `Progress`.
 
         Returns:
-            The image, or (image, aovs) where the integrator has error AOVs.
+            The image, or (image, aovs) where the integrator has error AOVs or the run has data
+            passes (`channels`).
         """
-        return (prog.image, prog.aovs) if prog.aovs is not None else prog.image
+        aovs = self.channels(prog.aovs)
+        return (prog.image, aovs) if aovs is not None else prog.image
 
     def write(self, prog: Progress, output: str, pixel_format: str) -> Written:
-        """Write the result of the finished passes (the base: the image, with its error AOVs).
+        """Write the result of the finished passes (the base: the image, with its error AOVs and
+        data passes).
 
         Args:
             prog: the last finished pass's `Progress`. output: the image's path.
@@ -104,7 +122,8 @@ class Finisher:
         Returns:
             What was written (`Written`: another path where the target could not be replaced).
         """
-        return Written(save_safely(prog.image, output, pixel_format, prog.aovs), image=prog.image)
+        return Written(save_safely(prog.image, output, pixel_format, self.channels(prog.aovs)),
+                       image=prog.image)
 
     def write_plain(self, prog: Progress, output: str, pixel_format: str) -> str:
         """The finished passes as they are, written without Mitsuba (its writer waits for a running
@@ -117,11 +136,12 @@ class Finisher:
         Returns:
             The path written.
         """
-        return save_safely(prog.image, output, pixel_format, prog.aovs, plain=True)
+        return save_safely(prog.image, output, pixel_format, self.channels(prog.aovs), plain=True)
 
 
 class Plain(Finisher):
-    """The average of the finished passes, with its error AOVs where the integrator has them."""
+    """The average of the finished passes, with its error AOVs where the integrator has them (and
+    the run's data passes)."""
 
 
 @dataclass
@@ -149,6 +169,7 @@ class Runner:
         self.finisher = finisher if finisher is not None else Plain()
         #: what the last `write` wrote of a run that finished every pass (None: stopped or failed)
         self.written: Written | None = None
+        self._data: dict | None = None
         self.check()
 
     @property
@@ -169,6 +190,25 @@ class Runner:
         if self.aovs and not self.executor.local:
             raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the "
                              "image only")
+        if "vector" in self.resolved.job.data_passes:  # a camera no pixel map projects
+            from styletrace.kernel.data_passes import View
+            View.of(self.resolved.scene.sensors()[0])
+
+    def data_passes(self) -> dict:
+        """The job's data passes (Depth, Normal, Vector: `kernel.data_passes`), traced once, in
+        this process, with the render's camera samples per pixel and seed; on the frame's camera
+        where the executor renders one (a turntable's, `execute.OnRay.camera`).
+
+        Returns:
+            {key: float32 array}; empty where none were asked for.
+        """
+        if self._data is None:
+            from styletrace.kernel.data_passes import render_data_passes
+            r = self.resolved
+            self._data = render_data_passes(r.scene, r.job.data_passes, r.spp, r.job.seed,
+                                            r.job.motion,
+                                            camera=getattr(self.executor, "camera", None))
+        return self._data
 
     def check_output(self, output: str) -> str:
         """Refusals of the output file (its format, the memory of its write).
@@ -180,7 +220,8 @@ class Runner:
             The film's pixel format.
 
         Raises:
-            UsageError: a format the film cannot be written in, too little memory, aovs but no .exr.
+            UsageError: a format the film cannot be written in, too little memory, aovs or data
+                passes but no .exr.
         """
         fmt = film_format(self.resolved.scene)
         ext = os.path.splitext(output)[1].lower()
@@ -192,6 +233,10 @@ class Runner:
         if self.aovs and ext != ".exr":
             raise UsageError(f"bad output {output!r}: --aovs writes its channels into an .exr; a "
                              f"{ext} image has no room for them")
+        if self.resolved.job.data_passes and ext != ".exr":
+            passes = self.resolved.job.terms.name("passes")
+            raise UsageError(f"bad output {output!r}: {passes} writes its channels into an .exr; "
+                             f"a {ext} image has no room for them")
         return fmt
 
     def passes(self, lock: Any = contextlib.nullcontext()) -> Iterator[Progress]:
@@ -212,7 +257,8 @@ class Runner:
             prog: the last finished pass's `Progress`.
 
         Returns:
-            The finisher's result: the image, or (image, aovs).
+            The finisher's result: the image, or (image, aovs); the data passes are in it only
+            after `result` or `write` (a caller with its own loop takes them from `data_passes`).
         """
         return self.finisher.result(prog)
 
@@ -223,8 +269,9 @@ class Runner:
             callback: called with the `Progress` after each pass, or None.
 
         Returns:
-            The finisher's result (`finish`).
+            The finisher's result (`finish`), with the data passes asked for.
         """
+        self.finisher.data = self.data_passes()
         prog = None
         for prog in self.passes():
             if callback is not None:
@@ -250,6 +297,8 @@ class Runner:
         status = voice.status if voice.status is not None else _Silent()
         r, finisher = self.resolved, self.finisher
         fmt = self.check_output(output)
+        # before the passes: a stopped run writes them too, with no kernel to wait for
+        finisher.data = self.data_passes()
         if r.auto and not voice.quiet:  # scene-relative defaults, printed to pin them
             say(f"styletrace: auto values: {r.auto}")
         if r.lanes_note and not voice.quiet:

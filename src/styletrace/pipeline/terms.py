@@ -7,7 +7,8 @@
 Every front end builds its `pipeline.job.Job` with its terms (`Job.terms`); the budget, `resolve`
 and the runner name a bad or conflicting count through them. The keys are the Job's own names:
 `samples` (paths per pixel), `spp` (camera samples per pixel), `inner` (children per stylized
-vertex), `pass_spp` (camera samples per pass), `seed`, `width`, `height`.
+vertex), `pass_spp` (camera samples per pass), `seed`, `width`, `height`, `passes` (the data
+passes).
 """
 from __future__ import annotations
 
@@ -51,10 +52,11 @@ class Terms:
 #: `styletrace render`'s flags
 COMMAND_LINE = Terms({"samples": "--samples", "spp": "--spp", "inner": "--inner",
                       "pass_spp": "--pass-spp", "seed": "--seed", "width": "--width",
-                      "height": "--height"}, "flag")
+                      "height": "--height", "passes": "--passes"}, "flag")
 #: `styletrace.render`'s keywords (and `render_buffer`'s)
 PYTHON = Terms({}, "keyword")
 #: the Blender add-on's render settings, by their labels
 BLENDER = Terms({"samples": "Samples", "spp": "Camera samples", "inner": "Inner samples",
-                 "pass_spp": "Camera samples per pass", "seed": "Seed"}, "label")
+                 "pass_spp": "Camera samples per pass", "seed": "Seed",
+                 "passes": "Passes"}, "label")
 __all__ = ["Terms", "COMMAND_LINE", "PYTHON", "BLENDER"]
