@@ -119,3 +119,21 @@ def test_a_light_portal_becomes_a_portal_emitter():
             and "bounding rectangle" in w]
     assert [w for w in warnings if f"'{flat.data.name}'" in w and "zero size" in w]
     assert not [w for w in warnings if f"'{window.data.name}'" in w]
+
+
+def test_instanced_objects_with_dots_in_their_names_load():
+    """Blender names copies 'Cube.001'; Mitsuba refuses a '.' in an id, so the shape group's id
+    keeps letters, digits and underscores and a digest of the name (two names that differ only
+    in a '.' stay apart)."""
+    S.instanced(16)
+    cube = next(o for o in bpy.data.objects if o.type == "MESH" and "Cube" in o.name)
+    sphere = next(o for o in bpy.data.objects if o.type == "MESH" and "Sphere" in o.name)
+    cube.name, sphere.name = "Cube.001", "Cube_001"
+    desc = exporter.export(bpy.context.evaluated_depsgraph_get())
+    groups = sorted(k for k in desc if k.startswith("group_"))
+    assert groups == sorted([exporter.group_id("Cube.001"), exporter.group_id("Cube_001")])
+    assert len(set(groups)) == 2 and all("." not in g for g in groups)
+    scene = build.description_scene_dict(desc)
+    from styletrace.frontends import api
+    sc = api.load_scene(scene)
+    assert len(sc.shapes()) >= 3  # the floor and the instances

@@ -10,11 +10,46 @@ per placement.
 """
 from __future__ import annotations
 
+import hashlib
+import re
 from typing import Callable
 
 import numpy as np
 
 from styletrace.blender import camera, lights, materials, mesh, world
+
+
+def placement_key(inst) -> tuple:
+    """What names one drawn placement of an object across frames: the object, or for an instance
+    its instancer, the instanced object and Blender's persistent id of the instance.
+
+    Args:
+        inst: a `bpy.types.DepsgraphObjectInstance`.
+
+    Returns:
+        A tuple of strings and ints.
+    """
+    if inst.is_instance:
+        parent = inst.parent.name if inst.parent is not None else ""
+        return ("instance", parent, inst.object.name, tuple(inst.persistent_id))
+    return ("object", inst.object.name)
+
+
+def group_id(name: str) -> str:
+    """The Mitsuba id of the shapegroup of the object `name`: its letters, digits and underscores,
+    the rest as underscores (Mitsuba refuses an id with a dot, and Blender's copies are named
+    'Cube.001'), and a digest of the whole name, so that two names that differ only there stay
+    apart.
+
+    Args:
+        name: the object's name.
+
+    Returns:
+        The id, 'group_<name>_<8 hex digits>'.
+    """
+    clean = re.sub(r"[^A-Za-z0-9_]", "_", name)
+    digest = hashlib.sha1(name.encode("utf-8")).hexdigest()[:8]
+    return f"group_{clean}_{digest}"
 
 
 def _material_style(material) -> dict | None:
@@ -31,8 +66,11 @@ class Exporter:
     Args:
         depsgraph: the evaluated depsgraph. spp: the sensor's sample count.
         warn: called with each warning line (an unsupported light, node or camera setting).
+    `placements` names, after `export`, the placement (`placement_key`) each mesh shape and
+    instance of the description came from, by its key in the description.
     """
     def __init__(self, depsgraph, spp: int = 16, warn: Callable[[str], None] = print):
+        self.placements: dict[str, tuple] = {}
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene_eval
         self.spp = spp
@@ -101,17 +139,19 @@ class Exporter:
                     if groups[key]:
                         desc[f"instance_{n}"] = {
                             "type": "instance",
-                            "shapegroup": {"type": "ref", "id": f"group_{key}"},
+                            "shapegroup": {"type": "ref", "id": group_id(key)},
                             "to_world": matrix,
                         }
+                        self.placements[f"instance_{n}"] = placement_key(inst)
                         n += 1
                 else:
                     for shape in self._shapes(obj, matrix):
                         desc[f"shape_{n}"] = shape
+                        self.placements[f"shape_{n}"] = placement_key(inst)
                         n += 1
         for key, shapes in groups.items():
             if shapes:
-                desc[f"group_{key}"] = {
+                desc[group_id(key)] = {
                     "type": "shapegroup",
                     **{f"part_{i}": s for i, s in enumerate(shapes)},
                 }
@@ -122,14 +162,20 @@ class Exporter:
         return desc
 
 
-def export(depsgraph, spp: int = 16, warn: Callable[[str], None] = print) -> dict:
+def export(depsgraph, spp: int = 16, warn: Callable[[str], None] = print,
+           placements: dict | None = None) -> dict:
     """The scene description of an evaluated depsgraph (see the module docstring).
 
     Args:
         depsgraph: the evaluated depsgraph. spp: the sensor's sample count.
         warn: called with each warning line.
+        placements: a dict to fill with `Exporter.placements` (the Vector pass's objects), or None.
 
     Returns:
         The description: a Mitsuba scene dict with `mesh.Part`s and numpy images.
     """
-    return Exporter(depsgraph, spp, warn).export()
+    exporter = Exporter(depsgraph, spp, warn)
+    desc = exporter.export()
+    if placements is not None:
+        placements.update(exporter.placements)
+    return desc

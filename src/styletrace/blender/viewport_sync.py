@@ -256,9 +256,10 @@ class SceneSync:
         for kind, name, matrix in self.order:
             if kind == "instance":
                 if self.groups[name].built:
+                    ref = {"type": "ref", "id": exporter.group_id(name)}
                     desc[f"instance_{n}"] = {"type": "instance",
                                              "to_world": mi.ScalarTransform4f(matrix.tolist()),
-                                             "shapegroup": {"type": "ref", "id": f"group_{name}"}}
+                                             "shapegroup": ref}
                     n += 1
                 continue
             for what, made in self.entries[name].built:
@@ -266,7 +267,7 @@ class SceneSync:
                 n += 1
         for name, entry in self.groups.items():
             if entry.built:
-                desc[f"group_{name}"] = {"type": "shapegroup",
+                desc[exporter.group_id(name)] = {"type": "shapegroup",
                                          **{f"part_{i}": m for i, (_, m) in enumerate(entry.built)}}
         if self.world_emitter is not None:
             desc["world"] = self.world_emitter

@@ -24,6 +24,7 @@ from styletrace.denoise import guides, oidn
 from styletrace.denoise.probe import Probe
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.lookdev.buffer import DENOISED, MAX_CAMERA_SAMPLES, SPREAD, Buffer
 from styletrace.lookdev.record import record, scene_label
@@ -114,7 +115,7 @@ def raster(scene, p) -> np.ndarray:
         N x 2 float64.
     """
     uv = _raster(scene, p if not isinstance(p, np.ndarray) else
-                 mi.Point3f(*(mi.Float(np.ascontiguousarray(p[i], np.float32)) for i in range(3))))
+                 mi.Point3f(*(mi.Float(aligned(p[i])) for i in range(3))))
     return np.stack([np.asarray(uv.x, dtype=np.float64), np.asarray(uv.y, dtype=np.float64)], -1)
 
 
@@ -150,7 +151,7 @@ def _color(x) -> mi.Color3f:
     """A mi.Color3f of an N x 3 host array (float32 on the device), or of a Dr.Jit one."""
     if not isinstance(x, np.ndarray):
         return mi.Color3f(x)
-    return mi.Color3f(*(mi.Float(np.ascontiguousarray(x[:, i], np.float32)) for i in range(3)))
+    return mi.Color3f(*(mi.Float(aligned(x[:, i])) for i in range(3)))
 
 
 def at_samples_on_device(buf: Buffer, d: np.ndarray, scene, g: guides.Guides,
@@ -214,7 +215,7 @@ class Field:
         self.spread = None
 
         def image(a):
-            return mi.Float(np.ascontiguousarray(a, np.float32).ravel())
+            return mi.Float(aligned(np.ravel(a)))
         self.h, self.w = d.shape[:2]
         self.diag = float(diag)
         self.D, self.A, self.NRM, self.POS = (
@@ -318,7 +319,7 @@ def own_surface(scene, a) -> tuple[np.ndarray, np.ndarray]:
     if hasattr(a, "parts"):
         p, wo = field(a, "p"), field(a, "wo")
     else:
-        p, wo = (mi.Vector3f(*(mi.Float(np.ascontiguousarray(a[k][i], np.float32))
+        p, wo = (mi.Vector3f(*(mi.Float(aligned(a[k][i]))
                                for i in range(3))) for k in ("p", "wo"))
     albedo, emission = own_on_device(scene, p, wo)
     return np.asarray(albedo, dtype=np.float64).T, np.asarray(emission, dtype=np.float64).T
@@ -452,12 +453,12 @@ def attach(
         lookup = Field(d, g, float(np.linalg.norm(np.asarray(scene.bbox().extents()))))
         rel = _spread(buf, refl, uncertainty) if uncertainty > 0 else None
         if rel is not None:
-            lookup.spread = mi.Float(np.ascontiguousarray(rel.ravel(), dtype=np.float32))
+            lookup.spread = mi.Float(aligned(rel.ravel()))
         cover = coverage_module.points(scene, integrator, lookup, k, view_seed,
                                        pilot=carried.pilot)
         if rel is not None:  # per point, its pixel's: restyles average g over it too
             cover.arrays[SPREAD] = dr.gather(mi.Float, lookup.spread,
-                                             mi.UInt32(cover.arrays["pixel"]))
+                                             mi.UInt32(aligned(cover.arrays["pixel"], np.uint32)))
         cover.header["denoise"] = {**header, "coverage": k, "uncertainty": float(uncertainty)}
         cover.header["scene"] = buf.header.get("scene", "")  # the points keep the render's name
         if cover.stylize == "first_object_hit":

@@ -17,6 +17,7 @@ import numpy as np
 
 from styletrace.errors import SettingsError
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 from styletrace.jit import no_collection
 from styletrace.kernel.launch import render_pass
 
@@ -191,7 +192,7 @@ class Moments:
         # (rows, cols, 3) each
         self.host = [(m1.astype(np.float32), m2.astype(np.float32)) for m1, m2 in sets]
         self.device = [
-            (mi.Float(np.ascontiguousarray(m1).ravel()), mi.Float(np.ascontiguousarray(m2).ravel()))
+            (mi.Float(aligned(np.ravel(m1))), mi.Float(aligned(np.ravel(m2))))
             for m1, m2 in self.host
         ]
         self.pixels = pixel_count(key)

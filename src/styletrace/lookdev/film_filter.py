@@ -20,6 +20,7 @@ import numpy as np
 
 from styletrace.errors import SceneError
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 from styletrace.kernel.launch import in_sequence, seeded_positions
 
 BOX = {"type": "box"}
@@ -74,7 +75,7 @@ def describe_filter(rfilter) -> dict:
     Raises:
         SceneError: a filter that cannot be rebuilt so (one line).
     """
-    xs = mi.Float(np.linspace(-4.0, 4.0, 257, dtype=np.float32))
+    xs = mi.Float(aligned(np.linspace(-4.0, 4.0, 257)))
     want = np.asarray(rfilter.eval(xs))
     for spec in _candidates(rfilter):
         try:
@@ -214,7 +215,8 @@ def develop(buffer, values) -> mi.Float:
     base = buffer.header.get("crop_offset", [0, 0])
     layout = buffer.header["layout"]
     if "keep_index" not in d:
-        d["keep_index"] = [tuple(mi.UInt32(a) for a in _keep_index(t, w)) for t in layout]
+        d["keep_index"] = [tuple(mi.UInt32(aligned(a, np.uint32)) for a in _keep_index(t, w))
+                           for t in layout]
     llvm = mi.variant().startswith("llvm")
     total = dr.zeros(mi.Float, w * h * 3)
     spp = np.zeros(w * h, dtype=np.float32)
@@ -237,7 +239,7 @@ def develop(buffer, values) -> mi.Float:
             value = dr.gather(mi.Float, data, src * 4 + c) / weight * n
             dr.scatter_reduce(dr.ReduceOp.Add, total, value, dst * 3 + c)
         spp[_keep_index(tile, w)[1]] += n
-    return total / mi.Float(np.repeat(np.maximum(spp, 1.0), 3))
+    return total / mi.Float(aligned(np.repeat(np.maximum(spp, 1.0), 3)))
 
 
 __all__ = ["describe_filter", "build_filter", "rebuild", "is_box", "positions", "develop", "BOX",

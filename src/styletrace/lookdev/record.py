@@ -25,6 +25,7 @@ from styletrace.config.estimator_registry import (
 )
 from styletrace.errors import SceneError, SettingsError, UsageError
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 from styletrace.images import save_safely
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.kernel.vertex import emission
@@ -186,7 +187,7 @@ def to_film(arrays: dict[str, Any], tile: pass_loop.Tile, width: int,
             out[k] = a[..., keep]
         else:  # on the device: gathered there
             if index is None:
-                index = mi.UInt32(np.flatnonzero(keep).astype(np.uint32))
+                index = mi.UInt32(aligned(np.flatnonzero(keep), np.uint32))
             out[k] = dr.gather(type(a), a, index)
     fx, fy = lx[keep] + tile.offset[0], ly[keep] + tile.offset[1]
     out["pixel"] = (fy * width + fx).astype(np.uint32)
@@ -397,7 +398,7 @@ def _pass_arrays(kept: dict, spp: int, stylize: str,
         out.update(recorder.collect())
     if stylize == "first_object_hit":
         out["beta"] = kept["beta"]
-        out["depth"] = mi.UInt32(kept["depth"])
+        out["depth"] = mi.UInt32(aligned(kept["depth"], np.uint32))
     return out
 
 
@@ -592,7 +593,7 @@ class Recorded(Finisher):
         return self.recorded
 
     def write(self, prog, output: str, pixel_format: str) -> Written:
-        out = save_safely(prog.image, output, pixel_format)
+        out = save_safely(prog.image, output, pixel_format, self.channels(None))
         buf = self.recorded
         buf.save(self.buffer)
         return Written(out, (self.buffer,), prog.image,

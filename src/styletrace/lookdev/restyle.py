@@ -27,6 +27,7 @@ from styletrace.errors import StyletraceError, UsageError
 from styletrace.estimators import apply_linear
 from styletrace.estimators.arrays import const_like
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 from styletrace.lookdev import film_filter
 from styletrace.lookdev.buffer import (
     DENOISED,
@@ -218,10 +219,10 @@ def _on_device(part, kind: str):
     T = getattr(mi, kind)
     if not isinstance(part, np.ndarray):
         return T(part)
+    # aligned: one kernel code whatever numpy's allocation (host_arrays)
     if kind in _SCALAR:
-        return T(np.ascontiguousarray(part, dtype=_SCALAR[kind]))
-    return T(*(mi.Float(np.ascontiguousarray(part[i], dtype=np.float32))
-               for i in range(part.shape[0])))
+        return T(aligned(part, _SCALAR[kind]))
+    return T(*(mi.Float(aligned(part[i])) for i in range(part.shape[0])))
 
 
 def field(buffer: Buffer | Arrays, name: str):
@@ -309,7 +310,7 @@ def device(buffer: Buffer) -> dict[str, Any]:
         d["spread"] = field(buffer, SPREAD)
     d["slot"] = field(buffer, "slot")
     pixel = a["pixel"]
-    d["pixel"] = mi.UInt32(pixel)
+    d["pixel"] = mi.UInt32(aligned(pixel, np.uint32))
     if "beta" in a:
         d["beta"], d["depth"] = field(buffer, "beta"), field(buffer, "depth")
     else:
@@ -327,7 +328,7 @@ def device(buffer: Buffer) -> dict[str, Any]:
                          mi.UInt32(np.argsort(pixel, kind="stable").astype(np.uint32)))
         d["per_pixel"] = int(counts[0])
     counts = counts.astype(np.float32)
-    d["inv_weight"] = mi.Float(np.repeat(1.0 / np.maximum(counts, 1.0), 3).astype(np.float32))
+    d["inv_weight"] = mi.Float(aligned(np.repeat(1.0 / np.maximum(counts, 1.0), 3)))
     dr.eval(*[x for x in d.values() if x is not None and not isinstance(x, int)])
     return d
 
@@ -609,7 +610,7 @@ def per_pixel(buffer: Any, point: int = 0) -> Buffer:
         order = candidates[np.argsort(pixel[candidates], kind="stable")]
         starts = np.cumsum(counts) - counts
         index = order[(starts + point)[counts > point]]
-    taken = mi.UInt32(index.astype(np.uint32))
+    taken = mi.UInt32(aligned(index, np.uint32))
     names = [k for k in fields_for(buf.stylize, "mean") + (DENOISED, SPREAD) if k in a]
     arrays: dict[str, Any] = {}
     for k in names:

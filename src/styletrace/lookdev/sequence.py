@@ -17,6 +17,7 @@ import numpy as np
 
 from styletrace.config.estimator_registry import SERIES_MAX_TERMS, make_estimator
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 
 #: most children (on average over a pass) and uniforms (each) per camera sample; bounds the pass's
 #: scratch (28 bytes per place) and the stored sequence (13 bytes per child, 5 per uniform)
@@ -172,13 +173,13 @@ def device_arrays(arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     pad = lambda a: np.concatenate([a, np.zeros(a.shape[:-1] + (1,), a.dtype)], axis=-1)  # noqa: E731
     child = pad(arrays["child"])
     return {
-        "ev_start": mi.UInt32(ev[:-1].astype(np.uint32)),
-        "ev_end": mi.UInt32(ev[1:].astype(np.uint32)),
-        "ch_start": mi.UInt32(ch[:-1].astype(np.uint32)),
-        "un_start": mi.UInt32(un[:-1].astype(np.uint32)),
-        "kind": mi.UInt32(pad(arrays["seq_kind"]).astype(np.uint32)),
-        "child": mi.Color3f(*(mi.Float(np.ascontiguousarray(child[i])) for i in range(3))),
-        "uniform": mi.Float(pad(arrays["uniform"])),
+        "ev_start": mi.UInt32(aligned(ev[:-1], np.uint32)),
+        "ev_end": mi.UInt32(aligned(ev[1:], np.uint32)),
+        "ch_start": mi.UInt32(aligned(ch[:-1], np.uint32)),
+        "un_start": mi.UInt32(aligned(un[:-1], np.uint32)),
+        "kind": mi.UInt32(aligned(pad(arrays["seq_kind"]), np.uint32)),
+        "child": mi.Color3f(*(mi.Float(aligned(child[i])) for i in range(3))),
+        "uniform": mi.Float(aligned(pad(arrays["uniform"]))),
     }
 
 

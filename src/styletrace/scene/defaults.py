@@ -21,6 +21,7 @@ import numpy as np
 from styletrace.config import settings as S
 from styletrace.errors import StyleError
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 from styletrace.jit import no_collection
 from styletrace.kernel.emitter_sampler import EmitterSampler
 from styletrace.kernel.integrator import StylizedIntegrator
@@ -111,7 +112,7 @@ class ScenePilot:
         ray, _ = sensor.sample_ray(
             mi.Float(0.0),
             mi.Float(0.5),
-            mi.Point2f(ux.astype(np.float32), uy.astype(np.float32)),
+            mi.Point2f(aligned(ux), aligned(uy)),  # one kernel code (host_arrays)
             mi.Point2f(0.5, 0.5),
         )
         si = scene.ray_intersect(ray)
