@@ -190,4 +190,4 @@ def test_frames_without_spp_print_the_auto_values_and_the_resolved_spp(ray_clust
     auto = [line for line in r.stderr.splitlines() if line.startswith("styletrace: auto values:")]
     assert len(auto) == 1 and "samples=4: spp=1 x 4 children" in auto[0], r.stderr
     summary = r.stderr.strip().splitlines()[-1]
-    assert summary.startswith("wrote 2 frames") and summary.endswith("spp 1)"), summary
+    assert summary.startswith("wrote 2 frames") and summary.endswith("spp 1, on Ray, not denoised)"), summary

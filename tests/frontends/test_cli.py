@@ -887,3 +887,22 @@ def test_the_cel_example_shows_three_bands_on_the_cornell_box(tmp_path):
     band = np.argmin(np.abs(u[..., None] - levels), axis=2)[u > 0.01]  # the box's black frame out
     shares = [float((band == j).sum()) / u.size for j in range(len(levels))]
     assert np.allclose(shares, [0.29, 0.38, 0.28], atol=0.03), shares
+
+
+def test_frames_render_here_denoised_as_a_still(tmp_path, capsys):
+    """Without --ray a turntable's frames render in this process, each denoised as a still is:
+    frame 0 (the scene's own camera) is the denoised still bit for bit, and frame 1 differs from
+    the same frame with --denoise off (the denoiser ran on the moved camera too)."""
+    common = ["render", "--style", "cel", "--width", "24", "--height", "24", "-q"]
+    # (the suite's environment makes --denoise default to off: tests/conftest.py)
+    assert main([*common, "--frames", "2", "--orbit", "30", "--denoise", "auto",
+                 "-o", str(tmp_path / "on.exr")]) == 0
+    assert main([*common, "--frames", "2", "--orbit", "30", "--denoise", "off",
+                 "-o", str(tmp_path / "off.exr")]) == 0
+    assert main([*common, "--denoise", "auto", "-o", str(tmp_path / "still.exr")]) == 0
+    on = [read(tmp_path / f"on_{k:04d}.exr") for k in range(2)]
+    off = [read(tmp_path / f"off_{k:04d}.exr") for k in range(2)]
+    assert np.array_equal(on[0], read(tmp_path / "still.exr"))
+    assert not np.array_equal(on[1], off[1]) and not np.array_equal(on[0], on[1])
+    manifest = (tmp_path / "on.exr.frames.json").read_text()
+    assert '"denoise": "auto"' in manifest and '"done": [\n  0,\n  1\n ]' in manifest

@@ -189,15 +189,18 @@ def cmd_render(args) -> int:
             "the style meets the denoised expectation)"
         )
     several = len(args.scene) > 1 or args.frames is not None or args.orbit is not None
-    if several and method in ("expectation", "image"):
+    on_ray = args.ray is not None
+    if several and on_ray and method in ("expectation", "image"):
         raise UsageError(
-            "--denoise renders one image locally: not with several scenes, --frames or --orbit"
+            "--denoise renders each frame in this process: not with --ray (frames on Ray are "
+            "not denoised); drop --ray"
         )
-    if several:  # numbered images, on Ray
-        if method == "auto" and not args.quiet:
-            from styletrace.pipeline.denoising import why_not
-            say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
-        args.denoise = "off"
+    if several:  # numbered images: here, denoised as a still; on Ray, not denoised
+        if on_ray:
+            if method == "auto" and not args.quiet:
+                from styletrace.pipeline.denoising import why_not
+                say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
+            args.denoise = "off"
         from styletrace.frontends.ray_command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     scene = args.scene[0] if args.scene else "cornell-box"

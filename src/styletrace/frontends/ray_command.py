@@ -99,7 +99,8 @@ def turntable_frames(resolved, count: int, degrees: float) -> list[tuple]:
 
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
-    """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`, on Ray.
+    """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`: in this
+    process, each frame denoised as a still is (`--denoise`); with `--ray`, on Ray, not denoised.
 
     Args:
         args: the parsed arguments. parse_set, parse_defines: the parsers of --set and -D.
@@ -112,8 +113,9 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         UsageError: bad flags or counts, a bad output or scene, or a refusal of the frames' runs,
             before any frame renders (each scene is resolved first, `pipeline.resolve`).
     """
+    from styletrace.denoise.finishers import finisher_for
     from styletrace.frontends.command_job import job_of
-    from styletrace.pipeline.execute import OnRay, ray_job
+    from styletrace.pipeline.execute import InProcess, OnRay, ray_job
     from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
     from styletrace.pipeline.resolve import resolve
@@ -141,7 +143,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         check_target(path)
     params = parse_set(args.set)
     defines = parse_defines(args.define)
-    cluster = cluster_of(args)
+    cluster = cluster_of(args) if args.ray is not None else None  # None: in this process
     variant = init()
     lanes, note = lanes_per_pass(variant)
     if note and not args.quiet:
@@ -149,13 +151,16 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     frames, values, specs, spps = [], [], [], []
     for name in scenes:  # each file resolved here once: a broken one fails before any frame renders
         asked = job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes)
-        resolved = resolve(asked)
+        resolved = resolve(asked, local=cluster is None)
         spps.append(resolved.spp)
         if resolved.auto and not args.quiet:  # as a single image's run says them, to pin them
             which = f"{one_line(name)}: " if len(scenes) > 1 else ""
             say(f"styletrace: auto values: {which}{resolved.auto}")
         # the refusals of its frames' runs (the output's too), before any renders
-        Runner(resolved, OnRay(cluster)).check_output(paths[0])
+        if cluster is None:
+            Runner(resolved, InProcess(), finisher_for(resolved)).check_output(paths[0])
+        else:
+            Runner(resolved, OnRay(cluster)).check_output(paths[0])
         job = ray_job(resolved)
         if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
             degrees = 360.0 if args.orbit is None else args.orbit
@@ -174,7 +179,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         bar = tqdm(total=count, unit="frame", desc="rendering", file=sys.stderr)
     try:
         written, status = render_frames(frames, paths, cluster, manifest, resume=args.resume,
-                                        on_frame=lambda i, out: bar.update(1) if bar else None)
+                                        on_frame=lambda i, out: bar.update(1) if bar else None,
+                                        finisher=finisher_for)
     except KeyboardInterrupt:  # between two frames' runs (a run stops on its own)
         status = 130
     finally:
@@ -188,7 +194,9 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     if not args.quiet:
         # the resolved split's camera samples (--spp may be absent), one value per distinct count
         spp = ", ".join(str(n) for n in sorted(set(spps)))
-        say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {spp})")
+        where = "" if cluster is None else ", on Ray, not denoised"
+        say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {spp}"
+            f"{where})")
     return 0
 
 __all__ = ["cluster_of", "executor_of", "frame_paths", "turntable_frames", "frames_command"]

@@ -1,14 +1,15 @@
-"""Frames on Ray: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
+"""Frames: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
 
     written, status = render_frames(frames, paths, cluster, manifest)   # out_0000.png, ...
 
-Each frame is a run of the render pipeline (`pipeline.runner.Runner`) whose passes are Ray tasks
-(`pipeline.execute.OnRay`, with the frame's camera): the runner owns its pass loop, its checks, its
-stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own path is recorded in a
-manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet written. Every frame
-uses the render's seed: the noise pattern stays put from frame to frame instead of flickering. A
-stop ends the sequence after the frame under way (its finished passes written, as the runner writes
-them); the frames recorded stay.
+Each frame is a run of the render pipeline (`pipeline.runner.Runner`): in this process, denoised
+as a still with the scene's camera placed at the frame's, or with its passes as Ray tasks
+(`pipeline.execute.OnRay`, with the frame's camera, not denoised): the runner owns its pass loop,
+its checks, its stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own path is
+recorded in a manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet
+written. Every frame uses the render's seed: the noise pattern stays put from frame to frame
+instead of flickering. A stop ends the sequence after the frame under way (its finished passes
+written, as the runner writes them); the frames recorded stay.
 """
 from __future__ import annotations
 
@@ -17,7 +18,8 @@ from typing import Any, Callable
 
 from styletrace.errors import UsageError
 from styletrace.images import write_bytes_atomically
-from styletrace.pipeline.execute import OnRay
+from styletrace.kernel.data_passes import placed
+from styletrace.pipeline.execute import InProcess, OnRay
 from styletrace.pipeline.resolve import Resolved, resolve
 from styletrace.pipeline.runner import Runner, Voice
 
@@ -61,18 +63,23 @@ class Manifest:
         write_bytes_atomically(json.dumps(body, indent=1, sort_keys=True).encode(), self.path)
 
 
-def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str, manifest: Manifest,
-                  resume: bool = False, on_frame: Callable[[int, str], None] | None = None
-                  ) -> tuple[list[int], int]:
-    """Render each frame through its runner into its path, in order.
+def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str | None,
+                  manifest: Manifest, resume: bool = False,
+                  on_frame: Callable[[int, str], None] | None = None,
+                  finisher: Callable[[Resolved], Any] | None = None) -> tuple[list[int], int]:
+    """Render each frame through its runner into its path, in order: in this process with the
+    job's denoising (the scene's camera placed at the frame's for the whole run, so that the
+    denoiser's guides and points see it too), or with a cluster as Ray tasks.
 
     Args:
         frames: (job, camera) per frame. job: a `Resolved` job, or a `pipeline.job.Job` whose
             integrator is pinned already, resolved when its first frame comes (one scene loaded at a
             time); camera: the sensor's to_world (4x4) or None.
-        paths, cluster, manifest: the frames' images, the Ray cluster, the written frames'
-            manifest.
+        paths, cluster, manifest: the frames' images, the Ray cluster (None: this process), the
+            written frames' manifest.
         resume: skip the frames the manifest names. on_frame: called with (frame, path written).
+        finisher: the finisher of a resolved frame in this process (`denoise.finishers
+            .finisher_for`); None: the plain one.
 
     Returns:
         (the frames written by this call, 0 or the exit status of the frame that stopped or failed).
@@ -85,9 +92,15 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str,
             continue
         if frame_job is not job:
             job = frame_job
-            resolved = job if isinstance(job, Resolved) else resolve(job)
-        runner = Runner(resolved, OnRay(cluster, camera))
-        status = runner.write(paths[i], Voice(quiet=True))
+            resolved = job if isinstance(job, Resolved) else resolve(job, local=cluster is None)
+        if cluster is None:
+            with placed(resolved.scene.sensors()[0], camera):
+                runner = Runner(resolved, InProcess(),
+                                finisher(resolved) if finisher is not None else None)
+                status = runner.write(paths[i], Voice(quiet=True))
+        else:
+            runner = Runner(resolved, OnRay(cluster, camera))
+            status = runner.write(paths[i], Voice(quiet=True))
         if runner.written is None:  # stopped, or a pass failed: its finished passes were written
             return written, status
         if runner.written.path == paths[i]:
@@ -120,6 +133,8 @@ def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: flo
     # the split `samples` makes is in the integrators' values only where n moved
     if job.samples is not None:
         settings["samples"] = job.samples
+    if job.denoising.method != "off":  # frames in this process are denoised
+        settings["denoise"] = job.denoising.method
     if job.data_passes:  # the frames' channels
         from styletrace.kernel.data_passes import parse_passes
         settings["passes"] = list(parse_passes(job.data_passes))
