@@ -46,10 +46,10 @@ REFUSED = [
     ),
     (["--denoise", "expectation", "--inner", "2:8"], "adaptive counts"),
     (["--denoise", "expectation", "--style", "acp"], "style 'acp'"),
-    (["--denoise", "image", "--ray"], "renders locally"),
+    (["--denoise", "expectation", "--ray"], "renders in this process"),
     (["--denoise", "image", "--buffer", "x.npz"], "--buffer with --denoise image"),
     (["--denoise", "expectation", "--frames", "2", "--orbit", "10", "--ray"],
-     "not with --ray (frames on Ray are not denoised)"),
+     "not with --ray (the driver of a Ray render denoises the merged image"),
     (["--denoise", "sharpen"], "invalid choice"),
     (["--denoise", "image", "--denoise-quality", "best"], "invalid choice"),
     (["--denoise", "expectation", "--coverage", "5"], "bad value '5' for coverage"),
@@ -102,7 +102,8 @@ def test_python_api_refuses_the_same(monkeypatch):
     with pytest.raises(UsageError, match="bad value 'median' for denoise"):
         styletrace.render("cornell-box", spp=1, width=8, height=8, denoise="median")
     with pytest.raises(UsageError, match="cluster"):
-        styletrace.render("cornell-box", spp=1, width=8, height=8, denoise="image", cluster="local")
+        styletrace.render("cornell-box", spp=1, width=8, height=8, denoise="expectation",
+                          cluster="local")
     monkeypatch.setitem(sys.modules, "pyoidn", None)  # import pyoidn now raises ImportError
     with pytest.raises(UsageError, match=r"styletrace\[denoise\]"):
         styletrace.render("cornell-box", spp=1, width=8, height=8, denoise="image")

@@ -11,6 +11,9 @@
   have none); the variance given is used where known, a local stand-in where not.
 - The hold shows the last frame's value where the new one moved less than its margin, the new
   one beyond it, after a restart and without a hold.
+- Reprojection: a whole-pixel shift carries the history exactly, a half-pixel one bilinearly (a
+  constant stays constant); a surface uncovered by a moving object gets no history (its depth
+  differs), so nothing ghosts; the views come from Blender's Vector pass with y up.
 - The view key changes with any vertex, texel or setting, and not with the order of a dict.
 - The pipeline's denoisers blend with the history and commit once per frame; without one they are
   what they were.
@@ -18,7 +21,14 @@
 import numpy as np
 import pytest
 
-from styletrace.denoise.temporal import CAP, History, box3, local_variance, view_key
+from styletrace.denoise.temporal import (
+    CAP,
+    FrameView,
+    History,
+    box3,
+    local_variance,
+    view_key,
+)
 from styletrace.pipeline.denoising import Denoising
 
 SHAPE = (64, 64, 3)
@@ -176,3 +186,77 @@ def test_hold_keeps_the_last_frames_value_within_its_margin():
     assert np.array_equal(none.hold(d), d.astype(np.float32))
     with pytest.raises(ValueError, match="bad history hold -1"):
         History(hold=-1)
+
+
+# ---- reprojection ---------------------------------------------------------------------------
+
+H, W = 32, 40
+
+
+def flat_view(shift=(0.0, 0.0), depth=None):
+    """A view whose every pixel saw its surface `shift` (columns, rows) away one frame before."""
+    cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    previous = np.stack([cols + shift[0], rows + shift[1]], axis=-1)
+    d = np.full((H, W), 2.0) if depth is None else depth
+    normal = np.zeros((H, W, 3))
+    normal[..., 2] = 1.0
+    return FrameView(previous, d, normal)
+
+
+def test_a_whole_pixel_shift_carries_the_history_exactly():
+    texture = np.random.default_rng(4).random((H, W, 3))
+    h = History()
+    h.start("v", flat_view())
+    h.blend(texture, np.full((H, W, 3), 1e-4), 4)
+    h.commit()
+    h.start("v", flat_view(shift=(3.0, -2.0)))
+    s = h.state
+    # pixel (r, c) saw, one frame before, what pixel (r - 2, c + 3) saw
+    np.testing.assert_allclose(s.mean[2:, :W - 3], texture[:H - 2, 3:], atol=1e-12)
+    assert (s.weight[:2] == 0).all() and (s.weight[:, W - 3:] == 0).all()  # from outside
+    assert (s.weight[2:, :W - 3] == 4).all()
+
+
+def test_a_half_pixel_shift_is_bilinear_and_keeps_a_constant():
+    h = History()
+    h.start("v", flat_view())
+    h.blend(np.full((H, W, 3), 0.25), np.full((H, W, 3), 1e-4), 4)
+    h.commit()
+    h.start("v", flat_view(shift=(0.5, 0.5)))
+    inner = h.state.mean[:H - 1, :W - 1]
+    np.testing.assert_allclose(inner, 0.25, atol=1e-12)
+
+
+def test_an_uncovered_surface_gets_no_history():
+    """A square in front (depth 1) moves 4 pixels right over a wall (depth 5): where the wall is
+    uncovered its history (the square's) is refused; on the square it is carried along."""
+    depth0 = np.full((H, W), 5.0)
+    depth0[8:24, 8:20] = 1.0
+    colour = np.full((H, W, 3), 0.2)
+    colour[8:24, 8:20] = 0.9
+    h = History()
+    h.start("v", flat_view(depth=depth0))
+    h.blend(colour, np.full((H, W, 3), 1e-4), 4)
+    h.commit()
+    depth1 = np.full((H, W), 5.0)
+    depth1[8:24, 12:24] = 1.0
+    view = flat_view(depth=depth1)
+    view.previous[8:24, 12:24, 0] -= 4.0  # the square's pixels saw it 4 columns to the left
+    h.start("v", view)
+    s = h.state
+    assert (s.weight[8:24, 8:12] == 0).all()  # the wall behind the square's old place
+    np.testing.assert_allclose(s.mean[8:24, 12:24], 0.9, atol=1e-12)  # the square, carried
+    np.testing.assert_allclose(s.mean[:8], 0.2, atol=1e-12)  # the wall elsewhere, kept
+    frame = np.full((H, W, 3), 0.2)
+    frame[8:24, 12:24] = 0.9
+    out = h.blend(frame, np.full((H, W, 3), 1e-4), 4)
+    np.testing.assert_array_equal(out[8:24, 8:12], frame[8:24, 8:12].astype(np.float32))
+
+
+def test_views_from_the_vector_pass():
+    """Blender's Vector: (x_prev - x, y_prev - y) with y up; a point that moved 2 pixels right
+    and 1 up since the last frame was 2 columns left and 1 row lower."""
+    vector = np.zeros((H, W, 4))
+    vector[..., 0], vector[..., 1] = -2.0, -1.0
+    v = FrameView.from_passes(np.ones((H, W)), np.zeros((H, W, 3)), vector)
+    assert tuple(v.previous[5, 7]) == (7.5 - 2.0, 5.5 + 1.0)

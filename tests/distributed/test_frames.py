@@ -105,6 +105,24 @@ def test_turntable_frames_are_numbered_and_frame_zero_is_the_still(ray_cluster, 
     assert not np.array_equal(frames[1], frames[0])
 
 
+def test_turntable_frames_on_ray_are_denoised_by_the_driver(ray_cluster, tmp_path):
+    """With --denoise image each frame's merged passes are denoised by the driver, with the
+    guides of the frame's own camera: frame 0 is the denoised still (to OIDN's rounding), and
+    frame 1 is not frame 1 undenoised."""
+    out, raw = str(tmp_path / "spin.exr"), str(tmp_path / "raw.exr")
+    for path, how in ((out, "image"), (raw, "off")):
+        r = render_cli("cornell-box", "--style", "identity", "--frames", "2", "--orbit", "40",
+                       "--denoise", how, "-o", path, "--ray", ray_cluster)
+        assert r.returncode == 0, r.stderr
+    still = str(tmp_path / "still.exr")
+    assert render_cli("cornell-box", "--style", "identity", "--denoise", "image",
+                      "-o", still).returncode == 0
+    frame = [np.array(mi.Bitmap(str(tmp_path / f"spin_{k:04d}.exr"))) for k in range(2)]
+    noisy = np.array(mi.Bitmap(str(tmp_path / "raw_0001.exr")))
+    np.testing.assert_allclose(frame[0], np.array(mi.Bitmap(still)), rtol=1e-5, atol=1e-6)
+    assert not np.allclose(frame[1], noisy, rtol=1e-3, atol=1e-3)
+
+
 def test_turntable_frames_carry_their_data_passes(ray_cluster, tmp_path):
     """`--passes depth,vector` on a turntable: each numbered EXR has the channels; frame 0's are a
     still's (its camera), and its vector is the turn's (the orbit's frame -1 and frame 1)."""
@@ -190,4 +208,4 @@ def test_frames_without_spp_print_the_auto_values_and_the_resolved_spp(ray_clust
     auto = [line for line in r.stderr.splitlines() if line.startswith("styletrace: auto values:")]
     assert len(auto) == 1 and "samples=4: spp=1 x 4 children" in auto[0], r.stderr
     summary = r.stderr.strip().splitlines()[-1]
-    assert summary.startswith("wrote 2 frames") and summary.endswith("spp 1, on Ray, not denoised)"), summary
+    assert summary.startswith("wrote 2 frames") and summary.endswith("spp 1, on Ray)"), summary

@@ -75,3 +75,18 @@ def test_a_killed_worker_is_retried_and_the_image_is_unchanged(ray_cluster):
         pass
     assert killed and run.progress().spp_done == spp
     assert np.array_equal(run.progress().image, ref)
+
+
+def test_a_ray_render_is_denoised_by_its_driver_as_here(ray_cluster):
+    """The driver of a Ray render has the merged image of the passes, the same as a render here
+    (bit for bit: the test above), and denoises it with the image denoiser as a render here does:
+    the same image, to OIDN's float rounding from one call to the next. Auto picks that denoiser
+    on Ray (the expectation denoiser needs every camera sample in one process)."""
+    args = dict(style="identity", spp=8, seed=7, width=40, height=24, pass_spp=2)
+    here = styletrace.render("cornell-box", denoise="image", **args)
+    there = styletrace.render("cornell-box", denoise="image", cluster=ray_cluster, **args)
+    np.testing.assert_allclose(there, here, rtol=1e-5, atol=1e-6)
+    noisy = styletrace.render("cornell-box", denoise="off", cluster=ray_cluster, **args)
+    assert not np.allclose(there, noisy, rtol=1e-3, atol=1e-3)  # it was denoised
+    auto = styletrace.render("cornell-box", denoise="auto", cluster=ray_cluster, **args)
+    np.testing.assert_allclose(auto, here, rtol=1e-5, atol=1e-6)

@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from styletrace.blender.overridden import Overridden
-from styletrace.denoise.temporal import History, view_key
+from styletrace.denoise.temporal import FrameView, History, view_key
 
 #: seeds are 32-bit (`scene.arguments.SEED_MAX`)
 SEEDS = 1 << 32
@@ -44,6 +44,8 @@ def at_frame(settings: Any, frame: int) -> Overridden:
 #: Render Animation's history of denoised estimates (`denoise.temporal`): one animation renders
 #: at a time in a Blender process
 HISTORY = History()
+#: the data passes each frame traces for it: where its pixels' surfaces were, and what they are
+REUSE_PASSES = ("depth", "normal", "vector")
 
 
 def settings_values(owner: Any, skip: tuple[str, ...] = ("rna_type", "seed")) -> dict:
@@ -71,24 +73,26 @@ def settings_values(owner: Any, skip: tuple[str, ...] = ("rna_type", "seed")) ->
     return out
 
 
-def frame_history(settings: Any, description: dict, first: bool) -> History | None:
-    """The history a frame of Render Animation blends with: HISTORY, started at this frame's view
-    (the scene description and every setting but the seed: a frame whose scene or settings differ
-    from the frame before starts it again, and renders as without it), or None where Temporal
-    reuse is off. Only denoised renders use it (docs/temporal.md).
+def frame_history(settings: Any, passes: dict, first: bool) -> History:
+    """Start HISTORY at a frame of Render Animation: the history of the frames before, carried
+    to where this frame sees their surfaces (its Depth, Normal and Vector, REUSE_PASSES: a surface
+    uncovered, or seen from outside the last image, starts again), kept while every setting but
+    the seed stays (another setting starts it again, and that frame renders as without it).
+    Changes the settings do not show (a light, a material) start their pixels again by the
+    history's own test. Only denoised renders blend with it (docs/temporal.md).
 
     Args:
-        settings: the frame's render settings. description: its exported scene (`f12.description`).
+        settings: the frame's render settings. passes: its data passes of REUSE_PASSES
+            (`f12.data_passes`, with the frames around).
         first: the animation's first frame: an earlier animation's history is forgotten.
 
     Returns:
-        The History, or None.
+        HISTORY.
     """
-    if not settings.temporal_reuse:
-        return None
     if first:
         HISTORY.start(None)
-    HISTORY.start(view_key(description, settings_values(settings)))
+    view = FrameView.from_passes(passes["depth"], passes["normal"], passes["vector"])
+    HISTORY.start(view_key(settings_values(settings)), view)
     return HISTORY
 
 

@@ -121,16 +121,17 @@ class StyletraceEngine(bpy.types.RenderEngine):
         st = self._settings(depsgraph)
         self.update_stats("", "styletrace: exporting the scene")
         data = () if self.is_preview else f12.data_passes_of(depsgraph.view_layer)
-        placements = {} if "vector" in data else None  # each shape's object, for its motion
+        # Render Animation's frames accumulate, carried along the motion (docs/temporal.md); F12
+        # alone does not
+        reuse = self.is_animation and not self.is_preview and bool(st.temporal_reuse)
+        traced = animation.REUSE_PASSES if reuse else data  # the frame's, and the view layer's
+        placements = {} if "vector" in traced else None  # each shape's object, for its motion
         desc = f12.description(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m),
                                placements=placements)
         sc = f12.load(desc)
         moves = (motion.frames_around(self, depsgraph, sc, placements)
                  if placements is not None else None)
-        # Render Animation's frames of a still shot accumulate (docs/temporal.md); F12 alone not
-        scene = depsgraph.scene
-        history = (animation.frame_history(st, desc, scene.frame_current == scene.frame_start)
-                   if self.is_animation and not self.is_preview else None)
+        history = animation.HISTORY if reuse else None
         size = sc.sensors()[0].film().crop_size()
         w, h = int(size[0]), int(size[1])
         aovs = f12.error_passes(st)
@@ -148,10 +149,14 @@ class StyletraceEngine(bpy.types.RenderEngine):
         if st.lines:
             self.add_pass(f12.LINE_MASK, 1, "X")
         extra = {}  # Blender's pass name: (H x W (x C) values, channels)
-        for key, value in f12.data_passes(runner, data, moves).items():
+        frame_passes = f12.data_passes(runner, traced, moves)
+        if reuse:
+            scene = depsgraph.scene
+            animation.frame_history(st, frame_passes, scene.frame_current == scene.frame_start)
+        for key in data:
             name, channels, ids, *_ = f12.DATA_PASSES[key]
             self.add_pass(name, channels, ids)
-            extra[name] = (value, channels)
+            extra[name] = (frame_passes[key], channels)
         start = time.perf_counter()
         source = runner.passes()
         prog = None

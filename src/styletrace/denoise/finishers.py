@@ -54,9 +54,9 @@ class Recording:
 #: nothing kept
 NOTHING = Recording()
 
-#: why a denoiser needs the whole image in one process
-LOCAL = ("--denoise renders locally: the denoiser needs the whole image in one process (no --ray, "
-         "no cluster=)")
+#: why a denoiser needs its passes in this process
+LOCAL = ("--denoise renders in this process: the denoiser needs every camera sample here (no "
+         "--ray, no cluster=)")
 NOT_DENOISED = ", NOT denoised (the pass under way did not end)"
 
 
@@ -174,7 +174,9 @@ class Expectation(Denoised):
 
 
 class Image(Denoised):
-    """The average of the finished passes denoised (`denoise.image`), the baseline.
+    """The average of the finished passes denoised (`denoise.image`), the baseline; on Ray too,
+    the driver denoising the merged image (not with each sample kept in its pixel, nor a recorded
+    buffer: `local`).
 
     Args:
         denoising, buffer: as `Denoised`'s; the denoising's footprint: "pixel" (each sample kept in
@@ -212,6 +214,10 @@ class Image(Denoised):
                                  "'film' on a film whose filter is not a box")
             check_recordable(resolved.integrator.settings, [])
             self.label = self.label or scene_label(resolved.job.scene)
+        # the merged image of the passes, wherever they ran, is all this denoiser needs (on Ray
+        # the driver denoises it); each pixel's own samples, or a recorded buffer, are this
+        # process's only
+        self.local = LOCAL if (self.record or self.in_pixels) else ""
 
     def source(self, resolved, executor, lock):
         """The executor's passes; on a film whose filter is not a box, each sample kept in its

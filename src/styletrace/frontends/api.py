@@ -84,7 +84,8 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
         denoise: auto, expectation, image or off (None: $STYLETRACE_DENOISE, else auto).
         denoise_quality, coverage, denoise_uncertainty, denoise_footprint: the denoiser's options
             (`pipeline.denoising.Denoising`, docs/denoise.md).
-        cluster: "local" or a Ray address: the passes as Ray tasks (not denoised); None: here.
+        cluster: "local" or a Ray address: the passes as Ray tasks (the merged image denoised
+            here by the image denoiser); None: here.
         passes: data passes beside the image: 'depth,normal,vector' or a list of those names
             (None: none; `kernel.data_passes`, docs/passes.md).
         motion: the neighbouring frames of the vector pass (`kernel.data_passes.Motion`: the

@@ -190,17 +190,12 @@ def cmd_render(args) -> int:
         )
     several = len(args.scene) > 1 or args.frames is not None or args.orbit is not None
     on_ray = args.ray is not None
-    if several and on_ray and method in ("expectation", "image"):
+    if several and on_ray and method == "expectation":
         raise UsageError(
-            "--denoise renders each frame in this process: not with --ray (frames on Ray are "
-            "not denoised); drop --ray"
+            "--denoise expectation renders each frame in this process: not with --ray (the driver "
+            "of a Ray render denoises the merged image: --denoise image or auto); drop --ray"
         )
-    if several:  # numbered images: here, denoised as a still; on Ray, not denoised
-        if on_ray:
-            if method == "auto" and not args.quiet:
-                from styletrace.pipeline.denoising import why_not
-                say(f"styletrace: not denoised: {why_not(None, None, local=False)}")
-            args.denoise = "off"
+    if several:  # numbered images, each denoised as a still: here, or on Ray by the driver
         from styletrace.frontends.ray_command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     scene = args.scene[0] if args.scene else "cornell-box"

@@ -100,7 +100,8 @@ def turntable_frames(resolved, count: int, degrees: float) -> list[tuple]:
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`: in this
-    process, each frame denoised as a still is (`--denoise`); with `--ray`, on Ray, not denoised.
+    process, each frame denoised as a still is (`--denoise`); with `--ray`, each frame's passes on
+    Ray and the merged image denoised by this process (the image denoiser: auto's choice there).
 
     Args:
         args: the parsed arguments. parse_set, parse_defines: the parsers of --set and -D.
@@ -157,10 +158,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             which = f"{one_line(name)}: " if len(scenes) > 1 else ""
             say(f"styletrace: auto values: {which}{resolved.auto}")
         # the refusals of its frames' runs (the output's too), before any renders
-        if cluster is None:
-            Runner(resolved, InProcess(), finisher_for(resolved)).check_output(paths[0])
-        else:
-            Runner(resolved, OnRay(cluster)).check_output(paths[0])
+        executor = InProcess() if cluster is None else OnRay(cluster)
+        Runner(resolved, executor, finisher_for(resolved)).check_output(paths[0])
         job = ray_job(resolved)
         if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
             degrees = 360.0 if args.orbit is None else args.orbit
@@ -194,7 +193,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     if not args.quiet:
         # the resolved split's camera samples (--spp may be absent), one value per distinct count
         spp = ", ".join(str(n) for n in sorted(set(spps)))
-        where = "" if cluster is None else ", on Ray, not denoised"
+        where = "" if cluster is None else ", on Ray"
         say(f"wrote {len(written)} frames {paths[0]} ... {paths[-1]} ({variant}, spp {spp}"
             f"{where})")
     return 0

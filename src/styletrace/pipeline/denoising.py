@@ -159,19 +159,24 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
             "image".
 
     Returns:
-        One line saying why not (Ray or several images, no OIDN, a film other than rgb, and for
-        expectation its refusals: `expectation_refusal`), or '' where it can.
+        One line saying why not (for expectation Ray, for image Ray with a film filter other
+        than a box; no OIDN, a film other than rgb, and for expectation its refusals:
+        `expectation_refusal`), or '' where it can.
     """
     from styletrace.kernel.integrator import StylizedIntegrator
     from styletrace.scene.loading import film_format
-    if not local:
-        return ("the render runs on Ray or as several images; the denoiser needs the whole image "
-                "in one process")
+    if not local and method == "expectation":
+        return ("the render runs on Ray; the expectation denoiser needs every camera sample in one "
+                "process")
     if not oidn_installed():
         return "Intel Open Image Denoise is not installed (pip install 'styletrace[denoise]')"
     if film_format(scene) != "rgb":
         return f"the film's pixel_format is '{film_format(scene)}', not rgb"
     if method == "image":
+        if not local and scene is not None and not scene.sensors()[0].film().rfilter() \
+                .is_box_filter():
+            return ("the render runs on Ray with a film filter other than a box; the image "
+                    "denoiser needs each pixel's own samples in one process")
         return ""
     if not isinstance(integrator, StylizedIntegrator):
         return f"the integrator is Mitsuba's {type(integrator).__name__}, not stylized"

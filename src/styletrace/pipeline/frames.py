@@ -2,11 +2,11 @@
 
     written, status = render_frames(frames, paths, cluster, manifest)   # out_0000.png, ...
 
-Each frame is a run of the render pipeline (`pipeline.runner.Runner`): in this process, denoised
-as a still with the scene's camera placed at the frame's, or with its passes as Ray tasks
-(`pipeline.execute.OnRay`, with the frame's camera, not denoised): the runner owns its pass loop,
-its checks, its stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own path is
-recorded in a manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet
+Each frame is a run of the render pipeline (`pipeline.runner.Runner`), denoised as a still with
+the scene's camera placed at the frame's: in this process, or with its passes as Ray tasks
+(`pipeline.execute.OnRay`, with the frame's camera; the driver denoises). The runner owns its pass
+loop, its checks, its stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own
+path is recorded in a manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet
 written. Every frame uses the render's seed: the noise pattern stays put from frame to frame
 instead of flickering. A stop ends the sequence after the frame under way (its finished passes
 written, as the runner writes them); the frames recorded stay.
@@ -67,9 +67,9 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str 
                   manifest: Manifest, resume: bool = False,
                   on_frame: Callable[[int, str], None] | None = None,
                   finisher: Callable[[Resolved], Any] | None = None) -> tuple[list[int], int]:
-    """Render each frame through its runner into its path, in order: in this process with the
-    job's denoising (the scene's camera placed at the frame's for the whole run, so that the
-    denoiser's guides and points see it too), or with a cluster as Ray tasks.
+    """Render each frame through its runner into its path, in order, denoised as the job asks (the
+    scene's camera placed at the frame's for the whole run, so that the denoiser's guides and
+    points see it too): in this process, or with a cluster, its passes as Ray tasks.
 
     Args:
         frames: (job, camera) per frame. job: a `Resolved` job, or a `pipeline.job.Job` whose
@@ -93,13 +93,12 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str 
         if frame_job is not job:
             job = frame_job
             resolved = job if isinstance(job, Resolved) else resolve(job, local=cluster is None)
-        if cluster is None:
-            with placed(resolved.scene.sensors()[0], camera):
-                runner = Runner(resolved, InProcess(),
-                                finisher(resolved) if finisher is not None else None)
-                status = runner.write(paths[i], Voice(quiet=True))
-        else:
-            runner = Runner(resolved, OnRay(cluster, camera))
+        executor = InProcess() if cluster is None else OnRay(cluster, camera)
+        # the scene's own camera placed at the frame's for the whole run: the passes here, and
+        # the denoiser's guides and points (the driver's, for a Ray render) see the frame's
+        with placed(resolved.scene.sensors()[0], camera):
+            runner = Runner(resolved, executor,
+                            finisher(resolved) if finisher is not None else None)
             status = runner.write(paths[i], Voice(quiet=True))
         if runner.written is None:  # stopped, or a pass failed: its finished passes were written
             return written, status
