@@ -20,12 +20,21 @@ Measures, each over the F - 1 pairs of consecutive frames:
   at Samples REF_SAMPLES with their own seeds, mean((d - r1)(d - r2)) over clipped linear pixels,
   so that the references' noise cancels; as PSNR);
 - seconds per frame: the animation's wall time over F (reuse on and off in the same run).
+Moving shots (unless --no-moving): the still life (benchmarks/_accuracy_scenes.py) with the camera
+orbiting its target by ORBIT_DEG a frame, and the interior with a sphere rolling across the floor
+by ROLL a frame; warping error (Lai et al., "Learning Blind Video Temporal Consistency", ECCV
+2018): the mean over consecutive frames and over the pixels seen in both of the squared difference
+between frame t and frame t - 1 warped to it along the renderer's own Vector pass (bilinear; a
+pixel whose surface was behind another one in frame t - 1, by the Depth pass, 10% apart, is left
+out), display-space values; for hatching also on its tone (both frames blurred over its line
+spacing, 8 pixels: its pattern stays on the screen by design).
 Goals (issue 47, still shot): cel and colour map at most 0.5% of pixels changing by more than 10%
 per frame, hatching at most 1%, identity at most Cycles'; cost per frame at most 1.1x without reuse;
 the first frame unchanged (it has no earlier frame; the table gives the largest difference of its
 pixels between the two runs, OIDN's float rounding from run to run). Temporal reuse's constants
 (Z, CAP) were chosen on the Cornell box (tests/denoise/test_temporal_frames.py), not on this
-scene. Moving shots (warping error) need reprojection, which is not built: not measured here.
+scene. Moving shots: warping error of cel and colour map at most 1.2x identity's and at most half
+of today's (reuse off); hatching the same on its tone.
 
 Writes the section "temporal" of BENCHMARKS.md unless --no-write, and docs/temporal.png (two
 consecutive cel frames and their difference, without and with reuse) unless --no-figure.
@@ -55,6 +64,11 @@ REF_SAMPLES = 512
 REF_SEEDS = (1001, 1002)
 SEED = 0
 GOALS = {"cel": 0.005, "color_map": 0.005, "hatching": 0.01}
+#: the moving shots: the camera's turn about the still life's target per frame, the sphere's roll
+ORBIT_DEG = 1.5
+ROLL = 0.15
+#: hatching's tone: the blur over its default line spacing (pixels)
+TONE = 8
 
 
 def say(*args) -> None:
@@ -80,6 +94,56 @@ def flicker(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     rel = float(np.mean(np.abs(la - lb) > 0.1 * top))
     absolute = float(np.mean(np.abs(da - db).max(axis=-1) > 0.1))
     return rel, absolute
+
+
+def warped(prev: np.ndarray, vector: np.ndarray, depth_prev: np.ndarray, depth: np.ndarray):
+    """Frame t - 1 carried to frame t along t's Vector pass (Blender's: x_prev - x, y_prev - y in
+    pixels, y up), bilinear, and where it is seen in both (inside frame t - 1, a surface in t, and
+    its depth in t - 1 within 10% of t's: not behind another surface).
+
+    Returns:
+        (the warped frame H x W x C, the mask H x W).
+    """
+    h, w = depth.shape
+    cols, rows = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    x, y = cols + vector[..., 0], rows - vector[..., 1]
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = x - x0, y - y0
+    out = np.zeros(prev.shape)
+    dep = np.zeros((h, w))
+    inside = (x0 >= 0) & (x0 < w - 1) & (y0 >= 0) & (y0 < h - 1)
+    xc, yc = np.clip(x0, 0, w - 2), np.clip(y0, 0, h - 2)
+    for dx, dy, c in ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)), (0, 1, (1 - fx) * fy),
+                      (1, 1, fx * fy)):
+        out += c[..., None] * prev[yc + dy, xc + dx]
+        dep += c * depth_prev[yc + dy, xc + dx]
+    seen = inside & (depth < 1e9) & (np.abs(dep - depth) <= 0.1 * depth)
+    return out, seen
+
+
+def box_blur(img: np.ndarray, size: int) -> np.ndarray:
+    k = np.ones(size) / size
+    out = np.apply_along_axis(lambda v: np.convolve(v, k, mode="same"), 0, img)
+    return np.apply_along_axis(lambda v: np.convolve(v, k, mode="same"), 1, out)
+
+
+def warp_error(frames: list, tone: bool = False) -> float:
+    """The warping error of a moving shot's frames (module doc), display space.
+
+    Args:
+        frames: [(image, vector, depth)] in order. tone: both frames blurred over TONE first.
+
+    Returns:
+        The mean squared difference over pixels seen in both, over consecutive pairs.
+    """
+    errs = []
+    for (a, _, da), (b, vb, db) in zip(frames, frames[1:]):
+        pa, pb = srgb(a[..., :3]), srgb(b[..., :3])
+        if tone:
+            pa, pb = box_blur(pa, TONE), box_blur(pb, TONE)
+        w, seen = warped(pa, vb, da, db)
+        errs.append(float(np.mean(((pb - w) ** 2)[seen])))
+    return float(np.mean(errs))
 
 
 def error(img, r1, r2) -> float:
@@ -125,6 +189,71 @@ def cycles_frames(size, frames, folder):
     return animate(s, folder, frames)
 
 
+def orbit_shot(size: int, frames: int):
+    """The still life, the camera turning about its target by ORBIT_DEG a frame."""
+    import math
+
+    import _accuracy_scenes as A
+    s = A.still_life(size)
+    cam = s.camera
+    target = np.array((0.0, 0.2, 0.45))
+    eye = np.array(cam.location)
+    for f in range(1, frames + 1):
+        a = math.radians(ORBIT_DEG * (f - 1))
+        d = eye - target
+        p = target + np.array((d[0] * math.cos(a) - d[1] * math.sin(a),
+                               d[0] * math.sin(a) + d[1] * math.cos(a), d[2]))
+        cam.location = tuple(p)
+        cam.rotation_euler = S.look(tuple(p), tuple(target))
+        cam.keyframe_insert("location", frame=f)
+        cam.keyframe_insert("rotation_euler", frame=f)
+    s.frame_start, s.frame_end = 1, frames
+    return s
+
+
+def roll_shot(size: int, frames: int):
+    """The interior, an orange sphere rolling across the floor by ROLL a frame."""
+    s = S.interior(size)
+    mat, _ = S.material("ball", "ShaderNodeBsdfPrincipled",
+                        **{"Base Color": (0.9, 0.4, 0.1, 1.0), "Roughness": 0.4})
+    ball = S.sphere(0.3, (-1.2, -0.6, 0.3), mat=mat)
+    for f in range(1, frames + 1):
+        ball.location = (-1.2 + ROLL * (f - 1), -0.6, 0.3)
+        ball.keyframe_insert("location", frame=f)
+    s.frame_start, s.frame_end = 1, frames
+    return s
+
+
+MOVING = {"orbit": orbit_shot, "roll": roll_shot}
+
+
+def moving_frames(name: str, size: int, frames: int, folder: str, engine: str,
+                  style: str | None = None, reuse: bool = False):
+    """A moving shot rendered by Render Animation with its Vector and Depth passes:
+    ([(image, vector, depth)], seconds per frame)."""
+    s = MOVING[name](size, frames)
+    layer = s.view_layers[0]
+    layer.use_pass_vector, layer.use_pass_z = True, True
+    s.render.engine = engine
+    if engine == "CYCLES":
+        c = s.cycles
+        c.device, c.samples, c.seed, c.use_animated_seed = "CPU", 16, SEED, True
+        c.use_denoising, c.denoiser = True, "OPENIMAGEDENOISE"
+    else:
+        st = s.styletrace
+        st.style, st.seed, st.temporal_reuse = style, SEED, reuse
+    s.render.filepath = os.path.join(folder, "frame_####")
+    start = time.perf_counter()
+    bpy.ops.render.render(animation=True)
+    seconds = (time.perf_counter() - start) / frames
+    out = []
+    for f in range(1, frames + 1):
+        p = S.read_exr(s.render.frame_path(frame=f))
+        depth = np.asarray(p["Depth"])
+        out.append((p["Combined"][..., :3], p["Vector"], depth.reshape(depth.shape[:2])))
+    return out, seconds
+
+
 def references(size, style, folder):
     out = []
     for seed in REF_SEEDS:
@@ -166,6 +295,8 @@ def main() -> None:
     p.add_argument("--quick", action="store_true", help="a smoke run (48 x 48, 3 frames)")
     p.add_argument("--no-write", action="store_true")
     p.add_argument("--no-figure", action="store_true")
+    p.add_argument("--no-moving", action="store_true", help="leave out the moving shots")
+    p.add_argument("--moving-size", type=int, default=None, help="the moving shots' side")
     a = p.parse_args()
     size = a.size or (48 if a.quick else 256)
     frames = a.frames or (3 if a.quick else 5)
@@ -187,11 +318,31 @@ def main() -> None:
                              "errors": [error(i, r1, r2) for i in imgs], "first": imgs[0]})
                 if style == "cel":
                     figure_frames[reuse] = imgs
+    moving = []
+    msize = a.moving_size or (32 if a.quick else 128)
+    if not a.no_moving:
+        with tempfile.TemporaryDirectory() as tmp:
+            for name in MOVING:
+                say(name, "Cycles")
+                fr, secs = moving_frames(name, msize, frames, os.path.join(tmp, f"{name}_cy"),
+                                         "CYCLES")
+                moving.append({"shot": name, "style": "Cycles", "reuse": None,
+                               "warp": warp_error(fr), "seconds": secs})
+                for style in STYLES:
+                    for reuse in (False, True):
+                        say(name, style, "reuse" if reuse else "no reuse")
+                        fr, secs = moving_frames(name, msize, frames,
+                                                 os.path.join(tmp, f"{name}_{style}_{reuse}"),
+                                                 "STYLETRACE", style, reuse)
+                        moving.append({"shot": name, "style": style, "reuse": reuse,
+                                       "warp": warp_error(fr), "seconds": secs,
+                                       "tone": warp_error(fr, tone=True)
+                                       if style == "hatching" else None})
     by = {(r["style"], r["reuse"]): r for r in rows}
     for style in STYLES:  # the first frame has no earlier frame: it must be unchanged
         off, on = by[(style, False)]["first"], by[(style, True)]["first"]
         by[(style, True)]["first_diff"] = float(np.abs(off - on).max())
-    text = report(rows, cycles_row, size, frames)
+    text = report(rows, cycles_row, size, frames) + moving_report(moving, msize, frames)
     print(text)
     if not a.quick and not a.no_write:
         write_section("temporal", text)
@@ -240,6 +391,40 @@ def report(rows, cycles_row, size, frames) -> str:
     lines += ["", "![Two consecutive cel frames and their difference (x4), without reuse (top) "
               "and with it (bottom)](docs/temporal.png)", ""]
     return "\n".join(lines)
+
+
+def moving_report(rows: list, size: int, frames: int) -> str:
+    """The moving shots' table and goals (module doc)."""
+    if not rows:
+        return ""
+    lines = ["", "### Moving shots: warping error", "",
+             f"{size} x {size}, {frames} frames: the still life with the camera turning "
+             f"{ORBIT_DEG} degrees a frame about its target (orbit), the interior with a sphere "
+             f"rolling {ROLL} a frame (roll); the same renderers and defaults. Warping error x "
+             "1e-3 (display space; lower is steadier; hatching also on its tone, blurred over "
+             f"{TONE} pixels).", "",
+             "| shot | renderer, style | temporal reuse | warping error (x 1e-3) | on the tone | "
+             "seconds a frame | goal |", "|---|---|---|---|---|---|---|"]
+    key = {(r["shot"], r["style"], r["reuse"]): r for r in rows}
+    for r in rows:
+        goal = "-"
+        if r["reuse"] and r["style"] != "identity":
+            own = r["tone"] if r["style"] == "hatching" else r["warp"]
+            before = key[(r["shot"], r["style"], False)]
+            before_v = before["tone"] if r["style"] == "hatching" else before["warp"]
+            ident = key[(r["shot"], "identity", True)]["warp"]
+            ok = own <= 1.2 * ident and own <= 0.5 * before_v
+            goal = (f"{'met' if ok else 'NOT met'}: {own / ident:.2f}x identity's, "
+                    f"{own / before_v:.2f}x without reuse")
+        elif r["reuse"]:
+            before = key[(r["shot"], "identity", False)]["warp"]
+            goal = f"{r['warp'] / before:.2f}x without reuse"
+        reuse = "-" if r["reuse"] is None else ("on" if r["reuse"] else "off")
+        tone = "-" if r.get("tone") is None else f"{1e3 * r['tone']:.3f}"
+        name = r["style"] if r["style"] == "Cycles" else f"styletrace {r['style']}"
+        lines.append(f"| {r['shot']} | {name} | {reuse} | {1e3 * r['warp']:.3f} | {tone} | "
+                     f"{r['seconds']:.2f} | {goal} |")
+    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":
