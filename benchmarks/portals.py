@@ -22,7 +22,9 @@ seconds at q = 0.25 and 0.75 over q = 0.5's.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
+import sys
 import time
 
 import numpy as np
@@ -32,6 +34,10 @@ import styletrace
 from styletrace.frontends.api import make_integrator, passes
 from styletrace.gate import mi
 from styletrace.kernel import portal_guide
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                                "tests"))
+from helpers.window_room import rectangle as rect  # noqa: E402  (the tests' window rooms')
 
 styletrace.init()
 
@@ -46,11 +52,6 @@ def diffuse(rgb, two_sided=True) -> dict:
     return {"type": "twosided", "bsdf": bsdf} if two_sided else bsdf
 
 
-def rect(center, turns, half, bsdf) -> dict:
-    t = T().translate(center)
-    for axis, degrees in turns:
-        t = t @ T().rotate(axis, degrees)
-    return {"type": "rectangle", "to_world": t @ T().scale([half[0], half[1], 1.0]), "bsdf": bsdf}
 
 
 def box(lo, hi, bsdf) -> dict:

@@ -148,15 +148,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self.add_pass(f12.NOISY, 3, "RGB")
         if st.lines:
             self.add_pass(f12.LINE_MASK, 1, "X")
-        extra = {}  # Blender's pass name: (H x W (x C) values, channels)
-        frame_passes = f12.data_passes(runner, traced, moves)
-        if reuse:
-            scene = depsgraph.scene
-            animation.frame_history(st, frame_passes, scene.frame_current == scene.frame_start)
         for key in data:
             name, channels, ids, *_ = f12.DATA_PASSES[key]
             self.add_pass(name, channels, ids)
-            extra[name] = (frame_passes[key], channels)
         start = time.perf_counter()
         source = runner.passes()
         prog = None
@@ -180,6 +174,16 @@ class StyletraceEngine(bpy.types.RenderEngine):
                 depsgraph.scene.frame_current, done["spp_done"], spp))
         if prog is None:
             return
+        # the data passes after the render's passes (a cancelled render traces none), before the
+        # finish, which blends with the history they carry
+        extra = {}  # Blender's pass name: (H x W (x C) values, channels)
+        frame_passes = f12.data_passes(runner, traced, moves)
+        if reuse:  # before the finish, which blends with the history
+            scene = depsgraph.scene
+            animation.frame_history(st, frame_passes, scene.frame_current == scene.frame_start)
+        for key in data:
+            name, channels, *_ = f12.DATA_PASSES[key]
+            extra[name] = (frame_passes[key], channels)
         if st.lines and not self.stop_requested():
             mask = f12.line_mask(sc, st, self.stop_requested)
             if mask is not None:

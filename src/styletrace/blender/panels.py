@@ -120,16 +120,21 @@ def _draw(layout, rows):
             layout.prop(owner, name)
 
 
-class STYLETRACE_PT_render(bpy.types.Panel):
-    bl_label = "styletrace"
+class EnginePanel:
+    """What every styletrace panel of the Properties editor shares: its place and its engine (a
+    mixin before `bpy.types.Panel`)."""
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
-    bl_context = "render"
     COMPAT_ENGINES = {"STYLETRACE"}
 
     @classmethod
     def poll(cls, context):
         return context.engine in cls.COMPAT_ENGINES
+
+
+class STYLETRACE_PT_render(EnginePanel, bpy.types.Panel):
+    bl_label = "styletrace"
+    bl_context = "render"
 
     def draw(self, context):
         self.layout.use_property_split = True
@@ -139,30 +144,20 @@ class STYLETRACE_PT_render(bpy.types.Panel):
             self.layout.operator("styletrace.restyle")
 
 
-class STYLETRACE_PT_render_advanced(bpy.types.Panel):
+class STYLETRACE_PT_render_advanced(EnginePanel, bpy.types.Panel):
     bl_label = "Advanced sampling"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
     bl_context = "render"
     bl_parent_id = "STYLETRACE_PT_render"
     bl_options = {"DEFAULT_CLOSED"}
-    COMPAT_ENGINES = {"STYLETRACE"}
-
-    @classmethod
-    def poll(cls, context):
-        return context.engine in cls.COMPAT_ENGINES
 
     def draw(self, context):
         self.layout.use_property_split = True
         _draw(self.layout, layout_rows(context.scene.styletrace, advanced=True))
 
 
-class STYLETRACE_PT_material(bpy.types.Panel):
+class STYLETRACE_PT_material(EnginePanel, bpy.types.Panel):
     bl_label = "styletrace style"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
     bl_context = "material"
-    COMPAT_ENGINES = {"STYLETRACE"}
 
     @classmethod
     def poll(cls, context):
@@ -187,16 +182,9 @@ def pass_rows(view_layer) -> list[tuple[object, str]]:
     return [(view_layer, prop) for *_, prop in DATA_PASSES.values()]
 
 
-class STYLETRACE_PT_passes(bpy.types.Panel):
+class STYLETRACE_PT_passes(EnginePanel, bpy.types.Panel):
     bl_label = "Passes"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
     bl_context = "view_layer"
-    COMPAT_ENGINES = {"STYLETRACE"}
-
-    @classmethod
-    def poll(cls, context):
-        return context.engine in cls.COMPAT_ENGINES
 
     def draw(self, context):
         self.layout.use_property_split = True
