@@ -43,11 +43,11 @@ CAP = 255.0
 #: (relative) and its normal within NORMAL_COSINE of it: a surface seen before, not one uncovered
 DEPTH_TOLERANCE = 0.1
 NORMAL_COSINE = 0.8
-#: a pixel's denoised value stays the last frame's while it moved less than HOLD standard errors
+#: a pixel's shown value moves only by what its denoised value moved beyond HOLD standard errors
 #: of the blended estimate (`History.hold`; chosen on the Cornell box, 8 frames of cel and
-#: hatching: 0.3, 0.6 and 1.0 gave cel's mean change per frame 0.75%, 0.55%, 0.36% against 0.96%
-#: without, and its error at frame 8 1.1x, 1.3x, 1.6x that without; docs/temporal.md)
-HOLD = 0.6
+#: hatching, docs/temporal.md: 0.3 gave cel a mean change per frame of 0.21% against 0.96%
+#: without, and an error at frame 8 1.4x that without)
+HOLD = 0.3
 
 
 @dataclass
@@ -245,12 +245,14 @@ class History:
         return {} if v is None else {"depth": v.depth, "normal": v.normal}
 
     def hold(self, d: np.ndarray) -> np.ndarray:
-        """The frame's denoised value (after `blend`), held at the last frame's where it moved
-        less than `hold` standard errors of the blended estimate (in brightness) and the pixel
-        continued its history: a step style's decision near a threshold then changes when the
-        estimate has moved, not with every frame's noise. The margin falls as the frames
-        accumulate, so a still shot still converges; where the history started again the value
-        is the frame's own.
+        """The value a frame shows (after `blend`): the last frame's shown value, moved towards
+        this frame's denoised one by what that moved beyond a margin of `hold` standard errors of
+        the blended estimate (in brightness; the variance's 3 x 3 mean), where the pixel
+        continued its history. A step style's decision near a threshold then changes when the
+        estimate has moved, not with every frame's noise, and neighbouring pixels move together
+        (a soft dead zone: an edge stays as smooth as the denoiser made it). The margin falls as
+        the frames accumulate, so a still shot still converges; where the history started again
+        the value is the frame's own.
 
         Args:
             d: H x W x C, the denoised estimate (or image) of this frame.
@@ -265,10 +267,15 @@ class History:
         out = d
         if (s is not None and s.shown is not None and s.shown.shape == d.shape
                 and p.kept is not None and self.margin > 0):
-            margin = self.margin * np.sqrt(np.nan_to_num(p.var.mean(axis=-1), nan=0.0))
-            moved = np.abs(d.mean(axis=-1) - s.shown.mean(axis=-1))
-            keep = p.kept & (moved < margin)
-            out = np.where(keep[..., None], s.shown, d).astype(np.float32)
+            # the margin from the 3 x 3 mean of the variance, and a soft dead zone: the shown
+            # value moves by what the new one moved beyond the margin, so neighbouring pixels
+            # move together and an edge stays as smooth as the denoiser made it
+            margin = self.margin * np.sqrt(box3(np.nan_to_num(p.var.mean(axis=-1), nan=0.0)))
+            delta = d - s.shown
+            moved = np.abs(delta.mean(axis=-1))
+            share = np.where(moved > margin, 1.0 - margin / np.maximum(moved, 1e-30), 0.0)
+            share = np.where(p.kept, share, 1.0)
+            out = (s.shown + share[..., None] * delta).astype(np.float32)
         p.shown = out
         return out
 
