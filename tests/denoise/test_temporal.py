@@ -14,7 +14,6 @@
 - Reprojection: a whole-pixel shift carries the history exactly, a half-pixel one bilinearly (a
   constant stays constant); a surface uncovered by a moving object gets no history (its depth
   differs), so nothing ghosts; the views come from Blender's Vector pass with y up.
-- The view key changes with any vertex, texel or setting, and not with the order of a dict.
 - The pipeline's denoisers blend with the history and commit once per frame; without one they are
   what they were.
 """
@@ -27,7 +26,6 @@ from styletrace.denoise.temporal import (
     History,
     box3,
     local_variance,
-    view_key,
 )
 from styletrace.pipeline.denoising import Denoising
 
@@ -130,26 +128,6 @@ def test_local_variance_is_the_3x3_neighbourhoods():
 
 def test_denoising_options_that_differ_only_in_history_are_equal():
     assert Denoising("image", history=History()) == Denoising("image")
-
-
-def test_the_view_key_follows_every_vertex_texel_and_setting():
-    from dataclasses import dataclass
-
-    @dataclass
-    class Part:
-        positions: np.ndarray
-
-    verts = np.zeros((1000, 3), np.float32)
-    scene = {"mesh": Part(verts), "sky": np.ones((4, 8, 3)), "camera": [0.0, 1.0, 2.0]}
-    key = view_key(scene, {"style": "cel", "samples": 16})
-    moved = verts.copy()
-    moved[500, 1] = 1e-6  # one vertex of a thousand, far inside numpy's summarized repr
-    assert view_key({**scene, "mesh": Part(moved)}, {"style": "cel", "samples": 16}) != key
-    assert view_key(scene, {"style": "cel", "samples": 32}) != key
-    assert view_key({**scene, "sky": np.ones((4, 8, 3)) * 1.0001}, {"style": "cel",
-                                                                     "samples": 16}) != key
-    same = {"camera": [0.0, 1.0, 2.0], "sky": np.ones((4, 8, 3)), "mesh": Part(verts.copy())}
-    assert view_key(same, {"samples": 16, "style": "cel"}) == key
 
 
 def shown_frames(history, images):

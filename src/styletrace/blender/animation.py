@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 from styletrace.blender.overridden import Overridden
-from styletrace.denoise.temporal import FrameView, History, view_key
+from styletrace.denoise.temporal import FrameView, History
 
 #: seeds are 32-bit (`scene.arguments.SEED_MAX`)
 SEEDS = 1 << 32
@@ -92,7 +92,7 @@ def frame_history(settings: Any, passes: dict, first: bool) -> History:
     if first:
         HISTORY.start(None)
     view = FrameView.from_passes(passes["depth"], passes["normal"], passes["vector"])
-    HISTORY.start(view_key(settings_values(settings)), view)
+    HISTORY.start(settings_values(settings), view)  # compared by value
     return HISTORY
 
 

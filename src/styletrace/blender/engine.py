@@ -124,8 +124,8 @@ class StyletraceEngine(bpy.types.RenderEngine):
         # Render Animation's frames accumulate, carried along the motion (docs/temporal.md); F12
         # alone does not
         reuse = self.is_animation and not self.is_preview and bool(st.temporal_reuse)
-        traced = animation.REUSE_PASSES if reuse else data  # the frame's, and the view layer's
-        placements = {} if "vector" in traced else None  # each shape's object, for its motion
+        # each shape's object, for its motion (the view layer's Vector, or the history's)
+        placements = {} if reuse or "vector" in data else None
         desc = f12.description(depsgraph, st, warn=lambda m: self._report({"WARNING"}, m),
                                placements=placements)
         sc = f12.load(desc)
@@ -175,10 +175,11 @@ class StyletraceEngine(bpy.types.RenderEngine):
         if prog is None:
             return
         # the data passes after the render's passes (a cancelled render traces none), before the
-        # finish, which blends with the history they carry
+        # finish, which blends with the history they carry (a render not denoised has none)
+        reuse = reuse and denoised
         extra = {}  # Blender's pass name: (H x W (x C) values, channels)
-        frame_passes = f12.data_passes(runner, traced, moves)
-        if reuse:  # before the finish, which blends with the history
+        frame_passes = f12.data_passes(runner, animation.REUSE_PASSES if reuse else data, moves)
+        if reuse:
             scene = depsgraph.scene
             animation.frame_history(st, frame_passes, scene.frame_current == scene.frame_start)
         for key in data:

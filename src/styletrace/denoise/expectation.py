@@ -22,6 +22,7 @@ import numpy as np
 from styletrace.denoise import coverage as coverage_module
 from styletrace.denoise import guides, oidn
 from styletrace.denoise.probe import Probe
+from styletrace.denoise.temporal import box3
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.host_arrays import aligned
@@ -610,10 +611,7 @@ def _spread(buf: Buffer, refl: np.ndarray, uncertainty: float) -> np.ndarray:
     mean, var_of_mean = mean[0], np.nan_to_num(var[0])  # below 2 samples: 0
     floor = 1e-3 * max(float(np.abs(mean).mean()), 1e-12)
     rel2 = (var_of_mean / np.maximum(np.abs(mean), floor) ** 2).reshape(buf.height, buf.width)
-    padded = np.pad(rel2, 1, mode="edge")
-    h, w = rel2.shape
-    local = sum(padded[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3)) / 9.0
-    return np.minimum(uncertainty * np.sqrt(local), 1.0)
+    return np.minimum(uncertainty * np.sqrt(box3(rel2)), 1.0)
 
 
 def _own(scene, buf: Buffer) -> tuple[np.ndarray, np.ndarray]:

@@ -243,15 +243,10 @@ class Image(Denoised):
     def _finish(self, prog):
         from styletrace.denoise.image import finish_denoised_image
         history = self.denoising.history
-        if history is None:
-            return finish_denoised_image(self.scene, prog, self.seed, self.quality)
-        # the frame joins the history once, however often its result is asked for
-        done = getattr(self, "_done", None)
-        if done is None or done[0] is not prog:
-            out = finish_denoised_image(self.scene, prog, self.seed, self.quality, history)
+        out = finish_denoised_image(self.scene, prog, self.seed, self.quality, history)
+        if history is not None:  # a run finishes once (`Runner`), as ExpectationJob.finish
             history.commit()
-            self._done = done = (prog, out)
-        return done[1]
+        return out
 
     def denoiser(self, prog) -> Callable:
         """What denoises an image of the passes up to `prog` as `result` does: OIDN with the

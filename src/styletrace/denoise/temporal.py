@@ -1,34 +1,33 @@
-"""Temporal reuse: the frames of a still shot accumulate the estimate the denoiser meets.
+"""Temporal reuse: the frames accumulate the estimate the denoiser meets, carried along the motion.
 
     history = History()
     for frame in frames:                       # each frame its own seed
-        history.start(key)                     # what the view is
+        history.start(key, view)               # what the view is; where its surfaces were
         m = history.blend(m_frame, var, count)  # before OIDN
-        ...                                    # OIDN, the style
+        d = history.hold(denoised(m))          # the value the style meets (expectation only)
         history.commit()                       # once the frame's result is final
 
 What accumulates is the per-pixel estimate OIDN denoises: the expectation M at the stylized vertex
 (`denoise.expectation.attach`), or the noisy image (`denoise.image.finish_denoised_image`). Frame
 k of a still shot then meets an estimate of about k frames' samples, so its error against the
-converged image falls with k, and what changes from one frame to the next shrinks as 1/k: a step
-style's band edges settle instead of crawling. The frames are independent estimates of the same
-expectation (their seeds differ), so their weighted mean is unbiased where the view is the same.
+converged image falls with k, and what changes from one frame to the next shrinks as 1/k. The
+frames are independent estimates of the same expectation (their seeds differ), so their weighted
+mean is unbiased where the view is the same. With a `FrameView` (a frame's Depth, Normal and
+Vector) the history is first carried to where each pixel's surface was (`reprojected`); a surface
+seen for the first time starts afresh.
 
-The caller says what "the same view" is with `start(key)` (Blender: the exported scene and the
-settings but the seed): a new key starts the history again, and that frame is exactly the frame
-without reuse. Within one key each pixel is also tested: where the frame's 3 x 3 mean differs from
-the history's by more than Z standard errors in brightness (the light or a material changed
-without the key noticing), the pixel starts again; a pixel without an estimate in a frame (no
+A key other than the last frame's starts the history again (Blender: every setting but the seed),
+and that frame is exactly the frame without reuse. Within one key each pixel is also tested: where
+the frame's 3 x 3 mean differs from the history's by more than Z standard errors in brightness (the
+light or a material changed), the pixel starts again; a pixel without an estimate in a frame (no
 stylized vertex: a light seen directly) keeps its history. The history's weight is capped at CAP
 times the frame's, so a change the test misses fades within CAP frames. The frames of one view
 share the seed of their guides and of the points where the style meets the estimate (`shared`),
-so that only the estimate changes from one frame to the next. Design and measurements:
-docs/temporal.md.
+and `hold` moves the shown value only beyond a margin of its error, so that a step style's edges
+stay put. Design and measurements: docs/temporal.md.
 """
 from __future__ import annotations
 
-import dataclasses
-import hashlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -61,6 +60,8 @@ class Accumulated:
         frames: H x W, how many frames it holds.
         kept: H x W, where the frame continued the history (not started again).
         shown: H x W x C, the denoised value the frame showed (`History.hold`), or None.
+        depth, normal: H x W and H x W x 3, what the frame's pixels saw (`FrameView`), for the
+            next frame's reprojection; None without a view.
     """
     mean: np.ndarray
     var: np.ndarray
@@ -79,7 +80,7 @@ class FrameView:
     Args:
         previous: H x W x 2, where the surface point the pixel sees was in the previous frame's
             image: (column, row) in pixels, the image's top left corner at (0, 0), pixel centres
-            at +0.5 (from the Vector pass: `from_vector`).
+            at +0.5 (from the Vector pass: `from_passes`).
         depth: H x W, the distance along the view axis to that point (the Depth pass).
         normal: H x W x 3, its world-space shading normal (the Normal pass).
     """
@@ -210,8 +211,10 @@ class History:
         m = np.asarray(m)
         shape = m.shape[:2]
         c = np.broadcast_to(np.asarray(count, np.float64), shape)
-        v = local_variance(m) if var is None else np.asarray(var, np.float64)
-        v = np.where(np.isfinite(v), v, local_variance(m))
+        v = None if var is None else np.asarray(var, np.float64)
+        if v is None or not np.isfinite(v).all():  # the stand-in, made once where it is needed
+            local = local_variance(m)
+            v = local if v is None else np.where(np.isfinite(v), v, local)
         s = self.state
         if s is None or s.mean.shape != m.shape:
             self._pending = Accumulated(m.astype(np.float64), v, c.copy(),
@@ -357,45 +360,5 @@ def reprojected(s: Accumulated, view: FrameView) -> Accumulated:
                        out.get("shown"), view.depth, view.normal)
 
 
-def _feed(h, value: Any) -> None:
-    """Feed `value` into the hash `h` by its content (`view_key`)."""
-    if isinstance(value, dict):
-        h.update(b"{")
-        for k in sorted(value, key=repr):
-            _feed(h, k)
-            _feed(h, value[k])
-        h.update(b"}")
-    elif isinstance(value, (list, tuple)):
-        h.update(b"[")
-        for v in value:
-            _feed(h, v)
-        h.update(b"]")
-    elif isinstance(value, np.ndarray):
-        h.update(f"nd{value.dtype.str}{value.shape}".encode())
-        h.update(np.ascontiguousarray(value).tobytes())
-    elif dataclasses.is_dataclass(value) and not isinstance(value, type):
-        h.update(type(value).__name__.encode())
-        _feed(h, {f.name: getattr(value, f.name) for f in dataclasses.fields(value)})
-    else:  # numbers, strings, None and what prints its whole content
-        h.update(f"{type(value).__name__}:{value!r};".encode())
-
-
-def view_key(*parts: Any) -> str:
-    """A digest of what a view is, for `History.start`: its parts hashed by content (dicts by
-    sorted key, sequences in order, numpy arrays by dtype, shape and bytes, dataclasses by their
-    fields, anything else by its repr), so that two frames of the same scene and settings give
-    the same key and any change of a vertex, a texel or a setting another.
-
-    Args:
-        *parts: the view's description (a scene description, the settings but the seed, ...).
-
-    Returns:
-        A hex string.
-    """
-    h = hashlib.sha256()
-    _feed(h, parts)
-    return h.hexdigest()
-
-
-__all__ = ["History", "Accumulated", "FrameView", "reprojected", "box3", "local_variance",
-           "view_key", "Z", "CAP", "HOLD", "DEPTH_TOLERANCE", "NORMAL_COSINE"]
+__all__ = ["History", "Accumulated", "FrameView", "reprojected", "box3", "local_variance", "Z",
+           "CAP", "HOLD", "DEPTH_TOLERANCE", "NORMAL_COSINE"]
