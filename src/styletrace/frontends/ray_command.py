@@ -116,7 +116,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """
     from styletrace.denoise.finishers import finisher_for
     from styletrace.frontends.command_job import job_of
-    from styletrace.pipeline.execute import InProcess, OnRay, ray_job
+    from styletrace.pipeline.execute import executor_for, ray_job
     from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
     from styletrace.pipeline.resolve import resolve
@@ -158,8 +158,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             which = f"{one_line(name)}: " if len(scenes) > 1 else ""
             say(f"styletrace: auto values: {which}{resolved.auto}")
         # the refusals of its frames' runs (the output's too), before any renders
-        executor = InProcess() if cluster is None else OnRay(cluster)
-        Runner(resolved, executor, finisher_for(resolved)).check_output(paths[0])
+        Runner(resolved, executor_for(cluster), finisher_for(resolved)).check_output(paths[0])
         job = ray_job(resolved)
         if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
             degrees = 360.0 if args.orbit is None else args.orbit

@@ -76,8 +76,16 @@ def parse_passes(value: Any, name: str = "passes") -> tuple[str, ...]:
     return tuple(p for p in DATA_PASSES if p in asked)
 
 
-def _matrix(transform) -> np.ndarray:
-    return np.array(transform.matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
+def to_world_of(sensor) -> np.ndarray:
+    """A sensor's to_world.
+
+    Args:
+        sensor: the mi.Sensor.
+
+    Returns:
+        The 4x4 float64 matrix.
+    """
+    return np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4, -1)[..., 0]
 
 
 @dataclass(frozen=True)
@@ -113,7 +121,7 @@ class View:
             SceneError: a sensor whose rays are not a pinhole's or parallel (a spherical camera,
                 a radiance meter), which no pixel map projects.
         """
-        to_world = _matrix(sensor.world_transform())
+        to_world = to_world_of(sensor)
         size = tuple(int(v) for v in sensor.film().crop_size())
         corners = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [0.5, 0.5], [0.25, 0.75]])
         ray, _ = sensor.sample_ray(mi.Float(sensor.shutter_open()), mi.Float(0.5),
@@ -318,7 +326,7 @@ def placed(sensor, to_world):
         yield
         return
     params = mi.traverse(sensor)
-    own = _matrix(sensor.world_transform())
+    own = to_world_of(sensor)
     params["to_world"] = mi.ScalarTransform4f(np.asarray(to_world, dtype=np.float64))
     params.update()
     try:
@@ -364,7 +372,7 @@ def _render(scene, sensor, names, spp, seed, motion, lanes) -> dict[str, np.ndar
     pass reduced over its pixels' samples (module doc) in the kernel, only pixels copied out."""
     w, h = (int(v) for v in sensor.film().crop_size())
     view = View.of(sensor) if "vector" in names else None
-    to_world = _matrix(sensor.world_transform())
+    to_world = to_world_of(sensor)
     out = {name: np.zeros((h * w, CHANNELS[name]), np.float32) for name in names}
     step = max(1, int(lanes) // spp)
     for first in range(0, w * h, step):
@@ -401,4 +409,4 @@ def _render(scene, sensor, names, spp, seed, motion, lanes) -> dict[str, np.ndar
 
 
 __all__ = ["DATA_PASSES", "CHANNELS", "BACKGROUND_DEPTH", "parse_passes", "View", "Motion",
-           "shape_key", "view_depth", "placed", "render_data_passes"]
+           "shape_key", "view_depth", "placed", "render_data_passes", "to_world_of"]

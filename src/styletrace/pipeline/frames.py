@@ -19,7 +19,7 @@ from typing import Any, Callable
 from styletrace.errors import UsageError
 from styletrace.images import write_bytes_atomically
 from styletrace.kernel.data_passes import placed
-from styletrace.pipeline.execute import InProcess, OnRay
+from styletrace.pipeline.execute import executor_for
 from styletrace.pipeline.resolve import Resolved, resolve
 from styletrace.pipeline.runner import Runner, Voice
 
@@ -78,8 +78,8 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str 
         paths, cluster, manifest: the frames' images, the Ray cluster (None: this process), the
             written frames' manifest.
         resume: skip the frames the manifest names. on_frame: called with (frame, path written).
-        finisher: the finisher of a resolved frame in this process (`denoise.finishers
-            .finisher_for`); None: the plain one.
+        finisher: the finisher of a resolved frame (`denoise.finishers.finisher_for`); None:
+            the plain one.
 
     Returns:
         (the frames written by this call, 0 or the exit status of the frame that stopped or failed).
@@ -93,7 +93,7 @@ def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str 
         if frame_job is not job:
             job = frame_job
             resolved = job if isinstance(job, Resolved) else resolve(job, local=cluster is None)
-        executor = InProcess() if cluster is None else OnRay(cluster, camera)
+        executor = executor_for(cluster, camera=camera)
         # the scene's own camera placed at the frame's for the whole run: the passes here, and
         # the denoiser's guides and points (the driver's, for a Ray render) see the frame's
         with placed(resolved.scene.sensors()[0], camera):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from styletrace.gate import mi
+from styletrace.kernel.data_passes import to_world_of
 
 
 def sensor_to_world(scene) -> np.ndarray:
@@ -25,8 +26,7 @@ def sensor_to_world(scene) -> np.ndarray:
     Returns:
         The 4x4 float64 matrix.
     """
-    m = scene.sensors()[0].world_transform().matrix
-    return np.array(m, dtype=np.float64).reshape(4, 4, -1)[..., 0]
+    return to_world_of(scene.sensors()[0])
 
 
 def camera_target(scene) -> np.ndarray:
