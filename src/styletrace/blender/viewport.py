@@ -7,7 +7,9 @@
     image, label = vp.session.latest()                 # the newest image, drawn with `gpu`
 
 A `ViewportSession` is a thin adapter around the one progressive schedule
-(`progressive.schedule.Schedule`, the browser preview's too): its draft (`Job.draft` at
+(`progressive.schedule.Schedule`, the browser preview's too): its first step traces the view's
+surfaces at the draft's size and, after a camera move, shows the image of the view before carried
+to the new one (`viewport_carry`); its draft (`Job.draft` at
 `rules.draft_size`), then F12's job (`f12.job`: the same samples, seed, pass split and Denoise,
 `denoise.finishers.plan`), its previews and final image, then the warm-up of the restyle kernels.
 The session shows each frame, restyled where the style changed since the passes started. A style
@@ -26,6 +28,7 @@ import numpy as np
 
 from styletrace.blender import f12
 from styletrace.blender.properties import settings_integrator_values, style_values
+from styletrace.blender.viewport_carry import Surfaces, carried, surfaces
 from styletrace.blender.viewport_sync import SceneSync, changes_of, view_sensor
 from styletrace.config.choices import SAMPLER_DEFAULT
 from styletrace.denoise.finishers import Expectation, Recording, plan
@@ -99,13 +102,19 @@ class ViewportSession:
         on_image: called (in the worker) after each new image; None: nothing is called.
         draft: render the draft first.
         clock: the schedule's clock (`progressive.schedule.Schedule`; default time.perf_counter).
+        before: the session of the view before a camera move, whose image this one shows carried
+            to its view until its draft (`carry`); None: nothing is carried.
 
     `schedule`: the schedule (its `stats`: `draft_s`, `first_s`, `final_s`, `pass_s`, `denoise_s`);
-    `error`: a refusal's line (None without one)."""
+    `error`: a refusal's line (None without one); `surfaces`: what the view's pixels see at the
+    draft's size (`viewport_carry.Surfaces`, after the first step; None where it was skipped or
+    the camera has no pixel map); `carry_s`: seconds from the start to the carried image, `kept`:
+    where it was carried, not filled (H x W bool), both None without one."""
 
     def __init__(self, scene_dict: Callable[[int, int], dict], size: tuple[int, int],
                  values: dict, on_image: Callable[[], None] | None = None, draft: bool = True,
-                 clock: Callable[[], float] = time.perf_counter):
+                 clock: Callable[[], float] = time.perf_counter,
+                 before: "ViewportSession | None" = None):
         self.scene_dict, self.size, self.values = scene_dict, tuple(size), values
         self.on_image = on_image or (lambda: None)
         self.image: np.ndarray | None = None
@@ -114,9 +123,15 @@ class ViewportSession:
         self.buffer = None
         self.recorded = False  # the passes record a buffer (restyles need no new pass)
         self.style: dict | None = None  # a restyled style: later frames are shown restyled
+        self.before = before
+        self.surfaces: Surfaces | None = None
+        self.carry_s: float | None = None
+        self.kept: np.ndarray | None = None
+        self._draft_scene = None  # the first step's scene, which the draft renders
         self._lock = threading.Lock()
         self.schedule = Schedule(self.plan, self.plan_draft if draft else None, clock=clock,
-                                 turns=TURNS, on_frame=self._on_frame, warm=self._warm)
+                                 turns=TURNS, on_frame=self._on_frame, warm=self._warm,
+                                 first=self.carry)
 
     # ---- the schedule's view ------------------------------------------------------------------
 
@@ -188,11 +203,41 @@ class ViewportSession:
         # the viewport's passes stay even: its schedule shows and counts them
         return f12.job(sc, integ, settings, grow=False)
 
+    def carry(self) -> None:
+        """The first step (under the schedule's lock): load the scene at the draft's size (the
+        draft renders it), trace its surfaces (`viewport_carry.surfaces`: one camera ray per
+        pixel) and, where a session before this one has an image and surfaces of the same size,
+        show that image carried to this view (`viewport_carry.carried`: pixels the view before did
+        not see are filled from the nearest carried ones), labelled "reprojected". Skipped where
+        the session was stopped before it ran (a newer view replaced it): that newer session then
+        carries from the session before this one."""
+        if self.schedule.stopped:
+            return
+        w, h = draft_size(*self.size)
+        sc = self._draft_scene = load_view_scene(self.scene_dict(w, h))
+        source = self.before
+        # a session replaced before its first step has no surfaces: carry from the one before it
+        while source is not None and (source.surfaces is None or source.latest()[0] is None):
+            source = source.before
+        self.before = None  # the chain of replaced sessions is let go
+        try:
+            self.surfaces, view = surfaces(sc, None if source is None else source.surfaces)
+        except StyletraceError:  # a camera no pixel map projects: nothing to carry, ever
+            return
+        if view is None:
+            return
+        image, kept = carried(source.latest()[0], source.surfaces, view)
+        self.kept = kept
+        self.carry_s = self.schedule.clock() - self.schedule.started
+        self._show(image, f"reprojected ({w}x{h})")
+
     def plan_draft(self):
         """The draft's run: one camera sample of the render's children at the draft's size,
         denoised as auto would, whatever Denoise says (a glimpse, not F12's image)."""
         w, h = draft_size(*self.size)
-        sc = load_view_scene(self.scene_dict(w, h))
+        sc, self._draft_scene = self._draft_scene, None
+        if sc is None:
+            sc = load_view_scene(self.scene_dict(w, h))
         job = self._job(sc)
         job = job.with_(draft=True, denoising=Denoising(
             "auto", quality=DRAFT_QUALITY, footprint=job.denoising.footprint))
@@ -202,6 +247,7 @@ class ViewportSession:
         """F12's run of the settings, recording the buffer to restyle where it can: the passes'
         (Denoise off) or the denoised one (expectation); over the buffer's cap, or for a render it
         cannot record, unrecorded (a style change then traces new passes)."""
+        self._draft_scene = None  # a session without a draft: the first step's scene is done
         sc = load_view_scene(self.scene_dict(*self.size))
         job = self._job(sc)
         try:
@@ -322,15 +368,19 @@ class Viewport:
         start: start each session's worker; False: the caller drives its schedule step by step
             (`session.schedule.step()`: tests, benchmarks).
         clock: each session's schedule's clock (default time.perf_counter).
+        carry: after a camera move, show the image of the view before carried to the new view
+            until the new session's draft (`ViewportSession.carry`); False: nothing is shown
+            before the draft (benchmarks compare the two).
 
     `log`: one dict per update (`kind`: first, objects, camera, settings, restyle or none;
     `objects`: names re-exported; `world`; `seconds`; `restyle_s` after a style change)."""
 
     def __init__(self, on_image: Callable[[], None] | None = None, draft: bool = True,
                  warn: Callable[[str], None] = print, start: bool = True,
-                 clock: Callable[[], float] = time.perf_counter):
+                 clock: Callable[[], float] = time.perf_counter, carry: bool = True):
         self.sync = SceneSync(warn)
         self.on_image, self.draft, self.threaded, self.clock = on_image, draft, start, clock
+        self.carry = carry
         self.values: dict | None = None
         self.view: tuple | None = None
         self.sensor: dict | None = None
@@ -434,15 +484,21 @@ class Viewport:
         self.sensor = sensor
         start = time.perf_counter()
         if self.values is not None:
-            self.restart()
+            self.restart(moved=True)
             self.log.append({"kind": "camera", "objects": [], "world": False,
                              "seconds": time.perf_counter() - start})
         return True
 
-    def restart(self) -> None:
-        """Stop the running session and start one on the kept objects and the current view."""
-        if self.session is not None:
-            self.session.stop()
+    def restart(self, moved: bool = False) -> None:
+        """Stop the running session and start one on the kept objects and the current view.
+
+        Args:
+            moved: the view moved (nothing else changed): the new session shows the old one's
+                image carried to the new view until its draft (where `carry`).
+        """
+        old = self.session
+        if old is not None:
+            old.stop()
         if self.sensor is None or self.values is None:
             return
         film = self.sensor["film"]
@@ -455,7 +511,7 @@ class Viewport:
                 for size in ((w, h), draft_size(w, h))}
         self.session = ViewportSession(
             lambda width, height: desc[(width, height)], (w, h), self.values, self.on_image,
-            self.draft, self.clock,
+            self.draft, self.clock, before=old if moved and self.carry else None,
         )
         if self.threaded:
             self.session.start()

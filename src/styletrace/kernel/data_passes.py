@@ -32,6 +32,7 @@ import numpy as np
 
 from styletrace.errors import SceneError, UsageError
 from styletrace.gate import dr, mi
+from styletrace.host_arrays import aligned
 
 #: the data passes, in the order they are written
 DATA_PASSES = ("depth", "normal", "vector")
@@ -124,8 +125,10 @@ class View:
         to_world = to_world_of(sensor)
         size = tuple(int(v) for v in sensor.film().crop_size())
         corners = np.array([[0, 0], [1, 0], [0, 1], [1, 1], [0.5, 0.5], [0.25, 0.75]])
-        ray, _ = sensor.sample_ray(mi.Float(sensor.shutter_open()), mi.Float(0.5),
-                                   mi.Point2f(corners[:, 0], corners[:, 1]), mi.Point2f(0.5, 0.5))
+        # aligned: one kernel code whatever numpy's allocator gives (host_arrays)
+        at = mi.Point2f(aligned(corners[:, 0]), aligned(corners[:, 1]))
+        ray, _ = sensor.sample_ray(mi.Float(sensor.shutter_open()), mi.Float(0.5), at,
+                                   mi.Point2f(0.5, 0.5))
         shape = (len(corners), 3)  # (one ray only where the sensor ignores the film position)
         o = np.broadcast_to(np.array(ray.o, dtype=np.float64).reshape(3, -1).T, shape)
         d = np.broadcast_to(np.array(ray.d, dtype=np.float64).reshape(3, -1).T, shape)

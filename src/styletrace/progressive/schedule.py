@@ -8,6 +8,8 @@
 A schedule renders a job's passes (`denoise.finishers.plan`, the run every front end makes) and
 decides which images a view shows, in this order:
 
+0. an adapter's **first** step (where given: the viewport shows the image of the view before,
+   carried to the new one, `blender.viewport_carry`);
 1. the **draft** (where given): one camera sample of the render's children, at the draft's size
    (`rules.draft_size`), denoised as auto would (`Job.draft`: the budget's own smaller request);
 2. after each **pass**: undenoised, the raw image of the passes so far; denoised, where
@@ -135,6 +137,12 @@ class Schedule:
             render thread), or None.
         warm: called under the lock once the final image is shown (the adapter's warm-up), or
             None.
+        first: called under the lock as the first step, before the draft (the viewport's
+            carried image, which the adapter shows itself: no Frame), or None.
+
+    Takes more than 7 parameters: after the plan and the draft, each is an adapter's hook into one
+    moment of the steps (the clock, the lock, a frame, every step, the end, the start), all
+    keywords, each optional.
 
     `frames`: every Frame shown; `stats`: `draft_s`, `first_s`, `final_s` (seconds from the start
     to those images), `pass_s` (each pass's seconds), `denoise_s` (each denoising's); `spp_done`;
@@ -145,8 +153,9 @@ class Schedule:
                  clock: Callable[[], float] = time.perf_counter, turns: Turns | None = None,
                  on_frame: Callable[[Frame], None] | None = None,
                  after_step: Callable[[], None] | None = None,
-                 warm: Callable[[], None] | None = None):
-        self._plan, self._draft = plan, draft
+                 warm: Callable[[], None] | None = None,
+                 first: Callable[[], None] | None = None):
+        self._plan, self._draft, self._first = plan, draft, first
         self.clock = clock
         self.turns = turns if turns is not None else Turns()
         self.on_frame, self.after_step, self.warm = on_frame, after_step, warm
@@ -272,6 +281,13 @@ class Schedule:
 
     def _all_steps(self) -> Iterator[Frame | None]:
         """The steps, each computed under the lock (the generator yields outside it)."""
+        if self._first is not None:
+            with self.turns:
+                self._first()
+                self._after()
+            yield None
+            if self._stop.is_set():
+                return
         if self._draft is not None:
             with self.turns:
                 frame = self._draft_frame()

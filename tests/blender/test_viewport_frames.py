@@ -1,0 +1,117 @@
+"""Frames in Rendered shading (issue 47). The viewport renders every frame with the Seed setting
+(not Render Animation's `animation.frame_seed`): scrubbing the timeline over a still scene starts
+nothing and the image on screen stays the same, bit for bit; frames seen through an animated
+camera start sessions (each showing the image before carried to its view) that compile no kernel
+(Dr.Jit's kernel history: every launch an in-memory cache hit, as test_viewport_seed.py reads it);
+an animated object still moves, rendered with the same seed."""
+import bpy
+import drjit as dr
+import numpy as np
+import scenes as S
+
+from styletrace.blender import camera
+from styletrace.blender.viewport import Viewport
+
+
+def room():
+    S.room(32)
+    st = bpy.context.scene.styletrace
+    st.style, st.seed, st.denoise, st.spp, st.pass_spp = "cel", 0, "auto", 4, 2
+    return st
+
+
+def start(st) -> Viewport:
+    """A viewport through the scene camera at frame 1, its first session run to its end."""
+    bpy.context.scene.frame_set(1)
+    vp = Viewport(start=False, clock=lambda: 0.0)
+    dg = bpy.context.evaluated_depsgraph_get()
+    vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
+    vp.update(dg, st)
+    finish(vp)
+    return vp
+
+
+def update(vp, st, frame: int) -> dict:
+    """Go to `frame` and hand the viewport the depsgraph, as Blender's view_update does."""
+    bpy.context.scene.frame_set(frame)
+    return vp.update(bpy.context.evaluated_depsgraph_get(), st)
+
+
+def finish(vp) -> np.ndarray:
+    s = vp.session
+    while not s.done:
+        s.schedule.step()
+    assert s.error is None
+    return s.latest()[0]
+
+
+def compiled_kernels() -> tuple[list, int]:
+    """The kernels launched since the last call that were not in-memory cache hits, and how many
+    were launched."""
+    launches = [k for k in dr.kernel_history() if "cache_hit" in k]
+    return [(k["hash"], k["operation_count"], k["size"]) for k in launches
+            if not k["cache_hit"] or k["cache_disk"]], len(launches)
+
+
+def test_scrubbing_a_still_scene_starts_nothing_and_keeps_its_image():
+    st = room()
+    vp = start(st)
+    shown, session = vp.session.latest()[0], vp.session
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()
+        for frame in (2, 5, 3, 1):
+            assert update(vp, st, frame)["kind"] == "none"
+            assert vp.session is session
+            assert np.array_equal(finish(vp), shown)
+        assert compiled_kernels() == ([], 0)
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+        vp.close()
+
+
+def test_frames_through_an_animated_camera_compile_nothing():
+    st = room()
+    cam = bpy.data.objects["camera"]
+    cam.keyframe_insert("location", frame=1)
+    cam.location.x += 0.5
+    cam.keyframe_insert("location", frame=5)
+    vp = start(st)
+    first = vp.session.latest()[0]
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        for frame in (3, 5, 2):
+            dr.kernel_history()  # reading it empties it
+            update(vp, st, frame)
+            # view_draw through the camera: the region's view moved
+            vp.set_sensor(camera.sensor(bpy.context.evaluated_depsgraph_get().scene_eval,
+                                        st.samples))
+            vp.session.schedule.step()
+            assert vp.session.latest()[1].startswith("reprojected")
+            image = finish(vp)
+            compiled, launched = compiled_kernels()
+            assert launched and not compiled, (frame, compiled)
+            assert not np.array_equal(image, first)
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+        vp.close()
+
+
+def test_an_animated_object_moves_with_the_same_seed():
+    st = room()
+    cube = bpy.data.objects["Cube"]
+    cube.keyframe_insert("location", frame=1)
+    cube.location.x -= 0.6
+    cube.keyframe_insert("location", frame=5)
+    vp = start(st)
+    shown, before = vp.session.latest()[0], vp.session.surfaces.depth
+    try:
+        assert update(vp, st, 5)["kind"] == "objects"
+        image, now = finish(vp), vp.session
+        assert now.values["seed"] == st.seed == 0
+    finally:
+        vp.close()
+    # what the view sees changed where the cube was and where it is, and the image with it
+    moved = np.abs(now.surfaces.depth - before) > 0.1
+    assert 20 <= moved.sum() <= 0.5 * moved.size
+    assert np.abs(image - shown)[moved].mean() > 0.05
