@@ -32,6 +32,10 @@ caps (16 per pixel at 512 x 512), the mean of 4 such renders (seeds 99 to 102).
 Cost: each style's render at the defaults through F12, the command line, Python and the preview,
 against the identity style's; the viewport's from the timelines.
 
+--camera-move measures only what a camera move shows (`camera_move_rows`): the seconds from the
+moved view to the first image, the draft and the first pass, with the image before carried to the
+new view (`Viewport.carry`) and without; it writes the section "interactive_camera".
+
 Cycles: Debian's Blender 3.4 (the only windowed Blender here) is built without OIDN, so Cycles'
 viewport denoiser cannot run in a window on this machine. Its viewport is measured as F12 renders
 with the viewport's settings instead (bpy 5.0): CPU, adaptive sampling at the viewport's threshold
@@ -222,6 +226,89 @@ def children(S, name: str, size: int, style: str) -> int:
     return int(r.budget.children[0])
 
 
+# ---- a camera move: the image carried to the new view -----------------------------------------
+
+#: timed camera moves per scene and setting (carried and not), alternating; the camera's pan (m)
+MOVE_RUNS, PAN = 5, 0.05
+
+
+def camera_move_rows(S, name: str, size: int, style: str = "cel") -> list[dict]:
+    """Seconds from a camera move (`Viewport.set_sensor`, as view_draw gives a moved view) to the
+    first image shown, to the draft and to the first pass's image, with and without the carried
+    image (`Viewport.carry`); medians of MOVE_RUNS moves each, alternating, after an untimed
+    session and an untimed move of each kind (kernels compiled)."""
+    scene, st = build(S, name, size, style, SEEDS[0])
+    dg = bpy.context.evaluated_depsgraph_get()
+    vp = Viewport()
+    cam = scene.camera
+    times: dict = {True: [], False: []}
+    events: list = []
+    vp.on_image = lambda: events.append((time.perf_counter(), vp.session.latest()[1]))
+    vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
+    vp.update(dg, st)
+    vp.session.join(600)
+    for k in range(2 * (MOVE_RUNS + 1)):
+        carry = k % 2 == 0
+        vp.carry = carry
+        cam.location.x += PAN if k % 4 < 2 else -PAN
+        sensor = camera.sensor(bpy.context.evaluated_depsgraph_get().scene_eval, st.samples)
+        events.clear()
+        start = time.perf_counter()
+        vp.set_sensor(sensor)
+        while not any(label.startswith("pass") for _, label in events) and not vp.session.done:
+            time.sleep(0.002)
+        vp.session.stop(600)
+        if vp.session.error:
+            raise SystemExit(f"viewport failed: {vp.session.error}")
+        shown = [(t - start, label) for t, label in events]
+        if k >= 2:  # the first move of each kind compiles what it needs
+            times[carry].append({
+                "first": shown[0][0],
+                "draft": next(t for t, label in shown if label.startswith("draft")),
+                "pass": next(t for t, label in shown if label.startswith("pass"))})
+    vp.close()
+    return [{"scene": name, "carry": carry,
+             **{key: statistics.median(r[key] for r in runs) for key in ("first", "draft", "pass")}}
+            for carry, runs in times.items()]
+
+
+def camera_table(rows: list[dict]) -> str:
+    out = ["| scene | after a camera move | first image | draft | first pass |",
+           "|---|---|---|---|---|"]
+    for r in rows:
+        how = "the image before, reprojected" if r["carry"] else "nothing until the draft"
+        out.append(f"| {r['scene']} | {how} | {fmt(r['first'])} | {fmt(r['draft'])} | "
+                   f"{fmt(r['pass'])} |")
+    return "\n".join(out)
+
+
+def camera_main(args) -> None:
+    """The camera-move measurement alone: BENCHMARKS.md's section "interactive_camera"."""
+    S = scenes_module()
+    addon.register()
+    rows = []
+    for name in args.scenes.split(","):
+        rows.extend(camera_move_rows(S, name, args.size))
+        say(camera_table(rows[-2:]))
+    body = [
+        "## Interactive: a camera move (`benchmarks/interactive.py --camera-move`)",
+        "",
+        machine_description(),
+        "",
+        f"{args.size}x{args.size}, cel at the add-on's defaults (Samples 16, Denoise auto), 2 "
+        f"threads, kernels compiled; the scene camera pans {PAN} m and the time counts from the "
+        f"moved view (`Viewport.set_sensor`). Medians of {MOVE_RUNS} moves per row, the two rows "
+        "of a scene alternating. With the carried image the first image is the image before, "
+        "reprojected to the new view at the draft's size (`blender/viewport_carry.py`); without "
+        "it the first image is the draft. " + (args.note or ""),
+        "",
+        camera_table(rows),
+    ]
+    say("\n".join(body))
+    if not args.no_write:
+        write_section("interactive_camera", "\n".join(body))
+
+
 # ---- Cycles ----------------------------------------------------------------------------------
 
 def cycles_setup(S, name: str, size: int, samples: int, seed: int, converged: bool = False):
@@ -398,7 +485,14 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--no-cycles", action="store_true", help="leave Cycles out (a quick run)")
     ap.add_argument("--no-cost", action="store_true", help="leave the cost table out")
+    ap.add_argument("--camera-move", action="store_true",
+                    help="only the time to the images after a camera move, with and without the "
+                         "carried image (section interactive_camera)")
+    ap.add_argument("--note", default="", help="a sentence added to the camera-move section")
     args = ap.parse_args()
+    if args.camera_move:
+        camera_main(args)
+        return
     S = scenes_module()
     addon.register()
     rows, costs = [], {}
