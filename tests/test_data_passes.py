@@ -9,7 +9,12 @@ from styletrace.frontends.cli import main
 from styletrace.frontends.ray_command import turntable_frames
 from styletrace.gate import mi
 from styletrace.images import DATA_CHANNELS
-from styletrace.kernel.data_passes import BACKGROUND_DEPTH, Motion, render_data_passes
+from styletrace.kernel.data_passes import (
+    BACKGROUND_DEPTH,
+    DATA_PASSES,
+    Motion,
+    render_data_passes,
+)
 from styletrace.pipeline.execute import OnRay
 from styletrace.pipeline.job import Job
 from styletrace.pipeline.orbit import turntable
@@ -18,7 +23,8 @@ from styletrace.pipeline.runner import Runner
 
 styletrace.init()
 SMALL = ["--width", "16", "--height", "12", "--spp", "2", "--inner", "2", "-q"]
-ALL = "depth,normal,vector"
+#: every data pass: the image must not change with any of them
+ALL = ",".join(DATA_PASSES)
 
 
 def channels(path):

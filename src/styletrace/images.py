@@ -265,10 +265,15 @@ DENOISED_AOV_CHANNELS = (
 
 
 #: the data passes (`kernel.data_passes`: docs/passes.md), after the AOVs, under Blender's pass and
-#: channel names (a multilayer reader sees the passes Depth, Normal and Vector). Only the keys
+#: channel names (a multilayer reader sees the passes under Cycles' names). Only the keys
 #: present are written.
 DATA_CHANNELS = (("depth", ("Depth.Z",)), ("normal", ("Normal.X", "Normal.Y", "Normal.Z")),
-                 ("vector", ("Vector.X", "Vector.Y", "Vector.Z", "Vector.W")))
+                 ("vector", ("Vector.X", "Vector.Y", "Vector.Z", "Vector.W")),
+                 ("position", ("Position.X", "Position.Y", "Position.Z")),
+                 ("uv", ("UV.U", "UV.V", "UV.A")), ("mist", ("Mist.Z",)),
+                 ("object_index", ("Object Index.X",)), ("material_index", ("Material Index.X",)),
+                 ("albedo", ("Denoising Albedo.R", "Denoising Albedo.G", "Denoising Albedo.B")),
+                 ("emission", ("Emission.R", "Emission.G", "Emission.B")))
 
 
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:

@@ -57,7 +57,7 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
            pass_spp: int | None = None, denoise: str | None = None, denoise_quality: str = "high",
            coverage: int | str = "auto", denoise_uncertainty: float | None = None,
            denoise_footprint: str = "pixel", cluster: str | None = None,
-           passes: Any = None, motion: Any = None,
+           passes: Any = None, motion: Any = None, mist: Any = None,
            callback: Callable[[Progress], None] | None = None, **params: Any):
     """`styletrace.render`: a scene rendered with a style, denoised at defaults (docs/python.md).
 
@@ -86,16 +86,18 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
             (`pipeline.denoising.Denoising`, docs/denoise.md).
         cluster: "local" or a Ray address: the passes as Ray tasks (the merged image denoised
             here by the image denoiser); None: here.
-        passes: data passes beside the image: 'depth,normal,vector' or a list of those names
-            (None: none; `kernel.data_passes`, docs/passes.md).
+        passes: data passes beside the image: 'depth,normal,vector' or a list of the names of
+            `kernel.data_passes.DATA_PASSES` (None: none; docs/passes.md).
         motion: the neighbouring frames of the vector pass (`kernel.data_passes.Motion`: the
             camera's to_world one frame before and after, moving shapes); None: a still (0).
+        mist: the mist pass's (start, depth, falloff) or 'START,DEPTH,FALLOFF' (None: a new
+            Blender World's 5, 25, 'quadratic'; `kernel.mist`).
         callback: called with each pass's `Progress`.
         **params: the style's parameters and the integrator's other properties, by name.
 
     Returns:
         The image, float32 H x W x C, linear; or (image, aovs) with aovs=True or data passes
-        asked for (aovs: {name: array}, the error AOVs and the passes 'depth', 'normal', 'vector').
+        asked for (aovs: {name: array}, the error AOVs and the data passes by name).
 
     Raises:
         StyletraceError: a bad value or a refused combination (one line), before rendering.
@@ -113,7 +115,8 @@ def render(scene: Any = None, *, style: str | None = None, samples: int | None =
     job = python_job(scene, style=style, samples=samples, spp=spp, inner=inner,
                      estimator=estimator, seed=seed, width=width, height=height, defines=defines,
                      integrator=integrator, sampler=sampler, pass_spp=pass_spp,
-                     denoising=denoising, passes=passes, motion=motion, **params)
+                     denoising=denoising, passes=passes, motion=motion, mist=mist,
+                     **params)
     runner = plan(job, executor_for(cluster))
     if runner.resolved.note:
         import warnings

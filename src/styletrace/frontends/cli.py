@@ -380,8 +380,18 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="LIST",
         help="also write data passes as channels of the EXR output (refused with a PNG output): "
-        "a comma-separated list of depth, normal, vector, Blender's Depth, Normal and Vector (the "
-        "vector is 0 but in the frames of --frames/--orbit); docs/passes.md",
+        "a comma-separated list of depth, normal, vector, position, uv, mist, object_index, "
+        "material_index, albedo, emission, Blender's Depth, Normal, Vector, Position, UV, Mist, "
+        "Object Index, Material Index, Denoising Albedo and Emission (the vector is 0 but in the "
+        "frames of --frames/--orbit); docs/passes.md",
+    )
+    r.add_argument(
+        "--mist",
+        default=None,
+        metavar="START,DEPTH,FALLOFF",
+        help="the mist pass's settings, as Blender's World: where it starts, over what distance "
+        "it rises to 1, and its falloff quadratic, linear or inverse_quadratic (default "
+        "5,25,quadratic, a new World's); docs/passes.md",
     )
     r.add_argument(
         "--samples",

@@ -88,6 +88,7 @@ def job_of(
         denoising=denoising_of(args),
         terms=COMMAND_LINE,
         data_passes=getattr(args, "passes", None) or (),
+        mist=getattr(args, "mist", None),
     )
 
 

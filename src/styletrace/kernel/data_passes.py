@@ -1,5 +1,6 @@
-"""Data passes: Depth, Normal and Vector of the first surface each camera sample sees, per pixel,
-in Blender's conventions (the compositor's Vector Blur and Z Combine read them unchanged).
+"""Data passes: Depth, Normal, Vector, Position, UV, Mist, Object and Material Index, Denoising
+Albedo and Emission of the first surface each camera sample sees, per pixel, in Blender's
+conventions (the compositor's Vector Blur, Z Combine, ID Mask and Mist read them unchanged).
 
     names = parse_passes("depth,vector")              # ('depth', 'vector'); bad names refused
     view = View.of(scene.sensors()[0])                # a camera's world -> pixel map
@@ -19,7 +20,18 @@ Cycles 5.0, tests/blender/test_data_passes.py):
 - vector: (x_prev - x, y_prev - y, x - x_next, y - y_next) in pixels, x to the right and y up, of
   the hit point as the previous and the next frame's camera see it, where it sits in that frame
   (`Motion`); averaged over the samples that hit a surface; 0 where none does, and 0 everywhere
-  without motion.
+  without motion;
+- position: the world-space hit point of the pixel's first sample (0 where it hits nothing);
+- uv: (u, v, a): the hit's texture coordinates in Blender's orientation (u, 1 - v of Mitsuba's
+  `si.uv`: Blender's v runs up the image), averaged over all samples (a miss as 0), and a, the
+  share of samples that hit a surface;
+- mist: `kernel.mist`'s amount at the hit, averaged over all samples, a miss as 1;
+- object_index, material_index: the pass indices of the shape the first sample hits
+  (`kernel.pass_indices`, carried in its id), 0 where it hits nothing or carries none;
+- albedo: the denoiser's albedo guide (`denoise.guides.first_hit`, a pixel's box mean of rays of
+  its own, with this seed);
+- emission: the radiance the hit's own emitter sends to the camera (an area light's surface, an
+  emitting mesh), averaged over all samples, a miss as 0 (the world is not in it).
 Docs: docs/passes.md.
 """
 from __future__ import annotations
@@ -33,11 +45,15 @@ import numpy as np
 from styletrace.errors import SceneError, UsageError
 from styletrace.gate import dr, mi
 from styletrace.host_arrays import aligned
+from styletrace.kernel.mist import parse_mist
+from styletrace.kernel.pass_indices import IndexTable
 
 #: the data passes, in the order they are written
-DATA_PASSES = ("depth", "normal", "vector")
+DATA_PASSES = ("depth", "normal", "vector", "position", "uv", "mist", "object_index",
+               "material_index", "albedo", "emission")
 #: channels of each pass
-CHANNELS = {"depth": 1, "normal": 3, "vector": 4}
+CHANNELS = {"depth": 1, "normal": 3, "vector": 4, "position": 3, "uv": 3, "mist": 1,
+            "object_index": 1, "material_index": 1, "albedo": 3, "emission": 3}
 #: Depth where the first sample hits nothing: Cycles' value (1e10)
 BACKGROUND_DEPTH = 1e10
 #: camera samples traced at once (bounds the memory of a launch and of its numpy copies)
@@ -269,7 +285,8 @@ def _hits(scene, sensor, first: int, count: int, spp: int, seed: int):
 
     Returns:
         (valid (mi.Bool), the hit points (mi.Point3f, the origin where none), the shading normals
-        turned towards the camera (mi.Vector3f), the hit's registry id (`shape_key`'s, mi.UInt32)).
+        turned towards the camera (mi.Vector3f), the hit's registry id (`shape_key`'s, mi.UInt32),
+        the hits themselves (mi.SurfaceInteraction3f)).
     """
     w, h = (int(v) for v in sensor.film().crop_size())
     n = count * spp
@@ -295,7 +312,7 @@ def _hits(scene, sensor, first: int, count: int, spp: int, seed: int):
     inst = dr.reinterpret_array(mi.UInt32, si.instance)
     key = dr.select(inst != 0, inst, dr.reinterpret_array(mi.UInt32, si.shape))
     # a lane that hits nothing gets the origin: no inf reaches the projections
-    return valid, dr.select(valid, si.p, mi.Point3f(0.0)), normal, key
+    return valid, dr.select(valid, si.p, mi.Point3f(0.0)), normal, key, si
 
 
 def _then(view: View, where: Any) -> View:
@@ -341,7 +358,7 @@ def placed(sensor, to_world):
 
 def render_data_passes(scene, names: Iterable[str], spp: int, seed: int = 0,
                        motion: Motion | None = None, lanes: int = LANES,
-                       camera=None) -> dict[str, np.ndarray]:
+                       camera=None, mist: Any = None) -> dict[str, np.ndarray]:
     """The data passes of the scene's first sensor, over its film's crop window (module doc).
 
     Args:
@@ -351,36 +368,76 @@ def render_data_passes(scene, names: Iterable[str], spp: int, seed: int = 0,
         lanes: camera samples per launch (whole pixels; at least one pixel).
         camera: the sensor's to_world (4x4) in place of the scene's while they are traced (a
             turntable's frame), or None.
+        mist: the mist settings (`kernel.mist.parse_mist`'s values; None: Blender's defaults).
 
     Returns:
-        {name: float32 array}: depth H x W, normal H x W x 3, vector H x W x 4 (an empty dict for
-        no names).
+        {name: float32 array}: H x W for the passes of one channel, else H x W x `CHANNELS`
+        (an empty dict for no names).
 
     Raises:
         SceneError: vector with a sensor no pixel map projects (`View.of`).
-        UsageError: spp below 1.
+        UsageError: spp below 1, or bad mist settings.
     """
     names = parse_passes(tuple(names))
     if not names:
         return {}
     if int(spp) < 1:
         raise UsageError(f"bad value {spp} for the data passes' camera samples: expected >= 1")
+    mist = parse_mist(mist)
     sensor = scene.sensors()[0]
     with placed(sensor, camera):
-        return _render(scene, sensor, names, int(spp), seed, motion, lanes)
+        out = _render(scene, sensor, names, int(spp), seed, motion, lanes, mist)
+        if "albedo" in names:  # the denoiser's own guide, its rays its own
+            from styletrace.denoise.guides import first_hit
+            out["albedo"] = first_hit(scene, int(spp), seed, footprint="pixel",
+                                      lanes_per_launch=lanes).albedo
+    return {name: out[name] for name in names}
 
 
-def _render(scene, sensor, names, spp, seed, motion, lanes) -> dict[str, np.ndarray]:
-    """`render_data_passes` on the sensor as it is placed now: launches of whole pixels, each
-    pass reduced over its pixels' samples (module doc) in the kernel, only pixels copied out."""
+def parallel(sensor) -> bool:
+    """Whether the sensor's rays are parallel (an orthographic camera), from two of its rays.
+
+    Args:
+        sensor: the mi.Sensor.
+
+    Returns:
+        True where the rays through two corners of the film have one direction.
+    """
+    at = mi.Point2f(aligned(np.array([0.1, 0.9])), aligned(np.array([0.1, 0.9])))
+    ray, _ = sensor.sample_ray(mi.Float(sensor.shutter_open()), mi.Float(0.5), at,
+                               mi.Point2f(0.5, 0.5))
+    d = np.broadcast_to(np.array(ray.d, dtype=np.float64).reshape(3, -1).T, (2, 3))
+    return bool(np.abs(d[0] - d[1]).max() < 1e-6)
+
+
+def _distance(to_world: np.ndarray, ortho: bool, p):
+    """Distance from the camera to p (mi.Point3f), as the mist measures it (`kernel.mist`)."""
+    if ortho:
+        return dr.abs(view_depth(to_world, p))
+    return dr.norm(p - _opaque_point(to_world[:3, 3]))
+
+
+def _first(values, count: int, spp: int) -> list:
+    """The pixels' first samples' values (a list of mi.Float, one lane per camera sample)."""
+    return [dr.gather(mi.Float, v, dr.arange(mi.UInt32, count) * spp) for v in values]
+
+
+def _render(scene, sensor, names, spp, seed, motion, lanes, mist) -> dict[str, np.ndarray]:
+    """`render_data_passes` on the sensor as it is placed now, but albedo: launches of whole
+    pixels, each pass reduced over its pixels' samples (module doc) in the kernel, only pixels
+    copied out."""
     w, h = (int(v) for v in sensor.film().crop_size())
     view = View.of(sensor) if "vector" in names else None
     to_world = to_world_of(sensor)
-    out = {name: np.zeros((h * w, CHANNELS[name]), np.float32) for name in names}
+    ortho = parallel(sensor) if "mist" in names else False
+    table = (IndexTable.of(scene) if {"object_index", "material_index"} & set(names)
+             else None)
+    out = {name: np.zeros((h * w, CHANNELS[name]), np.float32) for name in names
+           if name != "albedo"}
     step = max(1, int(lanes) // spp)
     for first in range(0, w * h, step):
         count = min(step, w * h - first)
-        valid, p, normal, key = _hits(scene, sensor, first, count, spp, seed)
+        valid, p, normal, key, si = _hits(scene, sensor, first, count, spp, seed)
         hit = mi.Float(valid)
         # every lane's values in one kernel first: a reduction or a gather of values not yet
         # evaluated would trace the rays again for each
@@ -392,17 +449,33 @@ def _render(scene, sensor, names, spp, seed, motion, lanes) -> dict[str, np.ndar
         if "vector" in out:
             lane["vector"] = ([hit * c for c in _vectors(p, key, view, motion)]
                               if motion is not None else [])
+        if "position" in out:
+            lane["position"] = list(p)
+        if "uv" in out:
+            # Blender's v runs up the image, Mitsuba's texture v down it (the exporter flips it)
+            lane["uv"] = [hit * si.uv.x, hit * (1.0 - si.uv.y), hit]
+        if "mist" in out:
+            lane["mist"] = [dr.select(valid, mist.amount(_distance(to_world, ortho, p)), 1.0)]
+        if table is not None:
+            lane["object_index"], lane["material_index"] = ([c] for c in table.lookup(si, valid))
+        if "emission" in out:
+            # a lane whose shape emits nothing holds a null emitter: its call gives 0
+            radiance = si.emitter(scene, valid).eval(si, valid)
+            lane["emission"] = [dr.select(valid, c, 0.0) for c in radiance]
         dr.eval(hit, lane)
         found = {}
         if "depth" in out:  # the pixel's first sample's
-            found["depth"] = [dr.gather(mi.Float, lane["depth"][0],
-                                        dr.arange(mi.UInt32, count) * spp)]
-        if "normal" in out:  # every sample's, a miss as 0
-            found["normal"] = [dr.block_sum(c, spp) / spp for c in lane["normal"]]
+            found["depth"] = _first(lane["depth"], count, spp)
+        for name in ("normal", "uv", "mist", "emission"):  # every sample's
+            if name in out:
+                found[name] = [dr.block_sum(c, spp) / spp for c in lane[name]]
         if "vector" in out:  # the samples that hit a surface
             hits = dr.block_sum(hit, spp)
             found["vector"] = [dr.select(hits > 0, dr.block_sum(c, spp) / hits, 0.0)
                                for c in lane["vector"]] or [dr.zeros(mi.Float, count)] * 4
+        for name in ("position", "object_index", "material_index"):  # the first sample's
+            if name in out:
+                found[name] = _first(lane[name], count, spp)
         dr.eval(found)
         for name, columns in found.items():
             out[name][first:first + count] = np.stack(
@@ -412,4 +485,4 @@ def _render(scene, sensor, names, spp, seed, motion, lanes) -> dict[str, np.ndar
 
 
 __all__ = ["DATA_PASSES", "CHANNELS", "BACKGROUND_DEPTH", "parse_passes", "View", "Motion",
-           "shape_key", "view_depth", "placed", "render_data_passes", "to_world_of"]
+           "shape_key", "view_depth", "placed", "render_data_passes", "to_world_of", "parallel"]

@@ -137,6 +137,10 @@ def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: flo
     if job.data_passes:  # the frames' channels
         from styletrace.kernel.data_passes import parse_passes
         settings["passes"] = list(parse_passes(job.data_passes))
+        if "mist" in settings["passes"] and job.mist is not None:  # the mist's own settings
+            from styletrace.kernel.mist import parse_mist
+            m = parse_mist(job.mist)
+            settings["mist"] = [m.start, m.depth, m.falloff]
     return settings
 
 

@@ -53,6 +53,8 @@ class Job:
             normal, vector; a comma-separated string or names), checked by `resolve`.
         motion: the neighbouring frames of the Vector pass (`kernel.data_passes.Motion`), or None
             (a still: its vector is 0).
+        mist: the Mist pass's settings (`kernel.mist.parse_mist`'s values: (start, depth,
+            falloff), 'START,DEPTH,FALLOFF'; None: Blender's defaults), checked by `resolve`.
     """
     scene: Any = None
     defines: Mapping[str, Any] = field(default_factory=dict)
@@ -74,6 +76,7 @@ class Job:
     draft: bool = False
     data_passes: Any = ()
     motion: Any = None
+    mist: Any = None
 
     def __post_init__(self):
         if self.integrator is not None and self.given:
@@ -140,7 +143,7 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
                integrator: Any = None, defines: Mapping[str, Any] | None = None,
                sampler: str | None = None, pass_spp: int | None = None, denoising: Denoising = OFF,
                max_camera_samples: int | None = None, passes: Any = None, motion: Any = None,
-               **params: Any) -> Job:
+               mist: Any = None, **params: Any) -> Job:
     """The Job of the Python API's keywords: the one place that reads them (`styletrace.render`,
     `render_buffer` and the other calls build on it).
 
@@ -150,7 +153,7 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
     Args:
         scene: a built-in name, an XML path, a scene dict or an mi.Scene.
         samples, spp, seed, width, height, integrator, defines, sampler, pass_spp, denoising,
-            max_camera_samples, motion: as `Job`'s fields. passes: `Job.data_passes`.
+            max_camera_samples, motion, mist: as `Job`'s fields. passes: `Job.data_passes`.
         style, inner, estimator, **params: the integrator values given (`given_values`: None
             leaves a value out).
 
@@ -164,7 +167,7 @@ def python_job(scene: Any = None, *, style: str | None = None, samples: int | No
                sampler=sampler, given=given_values(style, inner, estimator, **params),
                integrator=integrator, spp=spp, seed=seed, pass_spp=pass_spp, samples=samples,
                denoising=denoising, max_camera_samples=max_camera_samples, terms=PYTHON,
-               data_passes=() if passes is None else passes, motion=motion)
+               data_passes=() if passes is None else passes, motion=motion, mist=mist)
 
 
 def check_counts(*named: tuple[str, Any]) -> None:

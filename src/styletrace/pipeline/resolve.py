@@ -27,6 +27,7 @@ from styletrace.config import settings as S
 from styletrace.gate import mi
 from styletrace.kernel.data_passes import parse_passes
 from styletrace.kernel.integrator import StylizedIntegrator
+from styletrace.kernel.mist import parse_mist
 from styletrace.pipeline.budget import Request, Split, draft_request, split
 from styletrace.pipeline.carried import carried_settings, nested_stylized
 from styletrace.pipeline.denoising import FIREFLY_K, choose_method
@@ -232,7 +233,8 @@ def resolve(job: Job, scene: mi.Scene | None = None, local: bool = True) -> Reso
     """
     t = job.terms
     # the data passes' names checked once, here: the run reads them as a tuple
-    job = replace(job, data_passes=parse_passes(job.data_passes, t.name("passes")))
+    job = replace(job, data_passes=parse_passes(job.data_passes, t.name("passes")),
+                  mist=parse_mist(job.mist, t.name("mist")))
     if job.spp is not None:
         whole(t.name("spp"), job.spp, 1, SPP_MAX)
     whole(t.name("seed"), job.seed, 0, SEED_MAX)

@@ -195,7 +195,7 @@ class Runner:
             View.of(self.resolved.scene.sensors()[0])
 
     def data_passes(self) -> dict:
-        """The job's data passes (Depth, Normal, Vector: `kernel.data_passes`), traced once, in
+        """The job's data passes (Depth, Normal, Vector, ...: `kernel.data_passes`), traced once, in
         this process, with the render's camera samples per pixel and seed; on the frame's camera
         where the executor renders one (a turntable's, `execute.OnRay.camera`).
 
@@ -207,7 +207,8 @@ class Runner:
             r = self.resolved
             self._data = render_data_passes(r.scene, r.job.data_passes, r.spp, r.job.seed,
                                             r.job.motion,
-                                            camera=getattr(self.executor, "camera", None))
+                                            camera=getattr(self.executor, "camera", None),
+                                            mist=r.job.mist)
         return self._data
 
     def check_output(self, output: str) -> str:

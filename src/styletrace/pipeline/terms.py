@@ -52,7 +52,8 @@ class Terms:
 #: `styletrace render`'s flags
 COMMAND_LINE = Terms({"samples": "--samples", "spp": "--spp", "inner": "--inner",
                       "pass_spp": "--pass-spp", "seed": "--seed", "width": "--width",
-                      "height": "--height", "passes": "--passes"}, "flag")
+                      "height": "--height", "passes": "--passes",
+                      "mist": "--mist"}, "flag")
 #: `styletrace.render`'s keywords (and `render_buffer`'s)
 PYTHON = Terms({}, "keyword")
 #: the Blender add-on's render settings, by their labels
