@@ -3,8 +3,9 @@
 F12 is one pipeline run (`f12.run_f12`): progress after each pass (`update_progress`), the image so
 far shown, `test_break` asked between passes (a cancel keeps the finished passes). Render passes:
 the error AOVs (`aovs`), a line mask with lines, a Noisy pass where Denoise is on (then no error
-passes), and the data passes Depth, Normal and Vector where the view layer asks for them (Cycles'
-switches; `f12.DATA_PASSES`, docs/passes.md). "Record buffer" keeps the look-development buffer for
+passes), and the data passes (Depth, Normal, Vector, Position, UV, Mist, the indices,
+Denoising Albedo, Emission) where the view layer asks for them (Cycles' switches; `f12.DATA_PASSES`,
+docs/passes.md). "Record buffer" keeps the look-development buffer for
 restyles (`restyle`). Each render
 uses its frame's seed; a cancel during Render Animation ends it (`animation`). Previews render
 Blender's preview scene at their own budget (`preview`); Rendered shading is `viewport`'s. Errors
@@ -185,7 +186,10 @@ class StyletraceEngine(bpy.types.RenderEngine):
         # finish, which blends with the history they carry (a render not denoised has none)
         reuse = reuse and denoised
         extra = {}  # Blender's pass name: (H x W (x C) values, channels)
-        frame_passes = f12.data_passes(runner, animation.REUSE_PASSES if reuse else data, moves)
+        # the history's passes and the view layer's, each once
+        traced = tuple(dict.fromkeys(animation.REUSE_PASSES + data)) if reuse else data
+        frame_passes = f12.data_passes(runner, traced, moves,
+                                       f12.mist_of(depsgraph.scene))
         if reuse:
             scene = depsgraph.scene
             animation.frame_history(st, frame_passes, scene.frame_current == scene.frame_start)

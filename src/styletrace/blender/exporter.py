@@ -7,6 +7,10 @@ Objects are visited through `depsgraph.object_instances`. A mesh placed once is 
 space, one shape per material slot. A mesh that is drawn as an instance (collection instances,
 particles, geometry nodes instances) becomes one `shapegroup` in its local space and one `instance`
 per placement.
+
+A shape's id carries its object's and its material's pass index where they are not 0
+(`kernel.pass_indices.shape_id`: 'shape_3__ob7__ma5'), for the Object and Material Index passes;
+the XML file keeps those ids (docs/scenes.md).
 """
 from __future__ import annotations
 
@@ -17,6 +21,7 @@ from typing import Callable
 import numpy as np
 
 from styletrace.blender import camera, lights, materials, mesh, world
+from styletrace.kernel.pass_indices import shape_id
 
 
 def placement_key(inst) -> tuple:
@@ -87,7 +92,8 @@ class Exporter:
         return self._bsdfs[key]
 
     def _shapes(self, obj, matrix) -> list[dict]:
-        """The shape descriptions of an evaluated mesh object (world space if `matrix` is given)."""
+        """The shape descriptions of an evaluated mesh object (world space if `matrix` is given),
+        each with its pass indices in "indices" (object's, material's; popped by `export`)."""
         try:
             data = obj.to_mesh()
         except RuntimeError:
@@ -108,6 +114,7 @@ class Exporter:
                 "part": part,
                 "bsdf": bsdf,
                 "name": f"{obj.name}.{part.slot}",
+                "indices": (int(obj.pass_index), int(mat.pass_index) if mat is not None else 0),
             }
             if emitter is not None:
                 shape["emitter"] = emitter
@@ -146,20 +153,26 @@ class Exporter:
                         n += 1
                 else:
                     for shape in self._shapes(obj, matrix):
-                        desc[f"shape_{n}"] = shape
-                        self.placements[f"shape_{n}"] = placement_key(inst)
+                        key = shape_id(f"shape_{n}", *shape.pop("indices"))
+                        desc[key] = shape
+                        self.placements[key] = placement_key(inst)
                         n += 1
         for key, shapes in groups.items():
             if shapes:
-                desc[group_id(key)] = {
-                    "type": "shapegroup",
-                    **{f"part_{i}": s for i, s in enumerate(shapes)},
-                }
+                desc[group_id(key)] = {"type": "shapegroup", **{
+                    _part_id(group_id(key), i, s.pop("indices")): s
+                    for i, s in enumerate(shapes)}}
         env = world.convert_world(self.scene.world, self.ctx)
         if env is not None:
             desc["world"] = env
         self.ctx.flush()
         return desc
+
+
+def _part_id(group: str, i: int, indices: tuple[int, int]) -> str:
+    """The id of part i of a shapegroup: 'part_i', or with pass indices the group's id in front
+    (an XML file's ids are one namespace)."""
+    return shape_id(f"{group}_{i}", *indices) if any(indices) else f"part_{i}"
 
 
 def export(depsgraph, spp: int = 16, warn: Callable[[str], None] = print,

@@ -25,15 +25,44 @@ LINE_MASK = "LineMask"
 NOISY = "Noisy"
 AOV_PASSES = {"variance": ("Variance", 3, "RGB"), "bias": ("Bias", 1, "X"),
               "children": ("Children", 1, "X")}
-#: the data passes (`kernel.data_passes`) as Cycles declares them: Blender's name, channels,
-#: channel ids, pass type, and the view layer's property that asks for it
+#: the data passes (`kernel.data_passes`) as Cycles 5.0 declares them: Blender's name, channels,
+#: channel ids, pass type, and the view layer's property that asks for it (a dotted path: Cycles'
+#: own add-on's settings of the view layer)
 DATA_PASSES = {"depth": ("Depth", 1, "Z", "VALUE", "use_pass_z"),
                "normal": ("Normal", 3, "XYZ", "VECTOR", "use_pass_normal"),
-               "vector": ("Vector", 4, "XYZW", "VECTOR", "use_pass_vector")}
+               "vector": ("Vector", 4, "XYZW", "VECTOR", "use_pass_vector"),
+               "position": ("Position", 3, "XYZ", "VECTOR", "use_pass_position"),
+               "uv": ("UV", 3, "UVA", "VECTOR", "use_pass_uv"),
+               "mist": ("Mist", 1, "Z", "VALUE", "use_pass_mist"),
+               "object_index": ("Object Index", 1, "X", "VALUE", "use_pass_object_index"),
+               "material_index": ("Material Index", 1, "X", "VALUE", "use_pass_material_index"),
+               # Cycles' Denoising Data switch: it also adds Denoising Normal and Depth, which
+               # styletrace does not write
+               "albedo": ("Denoising Albedo", 3, "RGB", "COLOR", "cycles.denoising_store_passes"),
+               "emission": ("Emission", 3, "RGB", "COLOR", "use_pass_emit")}
+
+
+def switch(view_layer, prop: str) -> tuple[object, str] | None:
+    """The owner and the name of a data pass's switch (`DATA_PASSES`' last field).
+
+    Args:
+        view_layer: the `bpy.types.ViewLayer`. prop: the property's path ('use_pass_z',
+            'cycles.denoising_store_passes').
+
+    Returns:
+        (owner, property name), or None where the owner is missing (Cycles' add-on is off).
+    """
+    *path, name = prop.split(".")
+    owner = view_layer
+    for part in path:
+        owner = getattr(owner, part, None)
+        if owner is None:
+            return None
+    return owner, name
 
 
 def data_passes_of(view_layer) -> tuple[str, ...]:
-    """The data passes a view layer asks for (its Z, Normal and Vector switches, Cycles' own).
+    """The data passes a view layer asks for (its Data and Light pass switches, Cycles' own).
 
     Args:
         view_layer: the `bpy.types.ViewLayer`.
@@ -41,22 +70,40 @@ def data_passes_of(view_layer) -> tuple[str, ...]:
     Returns:
         Their keys in `DATA_PASSES` order (empty: none, and nothing is traced for them).
     """
-    return tuple(key for key, (*_, prop) in DATA_PASSES.items() if getattr(view_layer, prop))
+    found = ((key, switch(view_layer, prop)) for key, (*_, prop) in DATA_PASSES.items())
+    return tuple(key for key, where in found if where is not None and getattr(*where))
 
 
-def data_passes(runner, names: tuple[str, ...], motion=None) -> dict:
+def mist_of(scene):
+    """The Mist pass's settings of a scene: its World's mist (Blender's defaults without a World).
+
+    Args:
+        scene: the `bpy.types.Scene`.
+
+    Returns:
+        The `kernel.mist.Mist`.
+    """
+    from styletrace.kernel.mist import Mist
+    if scene.world is None:
+        return Mist()
+    m = scene.world.mist_settings
+    return Mist(float(m.start), float(m.depth), m.falloff.lower())
+
+
+def data_passes(runner, names: tuple[str, ...], motion=None, mist=None) -> dict:
     """F12's data passes, with the run's camera samples per pixel and seed.
 
     Args:
         runner: F12's `pipeline.runner.Runner` (`run_f12`). names: `data_passes_of`'s keys.
         motion: the frames around (`motion.frames_around`), or None.
+        mist: the Mist pass's settings (`mist_of`), or None (Blender's defaults).
 
     Returns:
         {key: float32 array} (`kernel.data_passes.render_data_passes`).
     """
     from styletrace.kernel.data_passes import render_data_passes
     r = runner.resolved
-    return render_data_passes(r.scene, names, r.spp, r.job.seed, motion)
+    return render_data_passes(r.scene, names, r.spp, r.job.seed, motion, mist=mist)
 
 
 def error_passes(settings) -> bool:

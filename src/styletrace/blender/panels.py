@@ -178,8 +178,9 @@ def pass_rows(view_layer) -> list[tuple[object, str]]:
     Returns:
         The rows, in drawing order.
     """
-    from styletrace.blender.f12 import DATA_PASSES
-    return [(view_layer, prop) for *_, prop in DATA_PASSES.values()]
+    from styletrace.blender.f12 import DATA_PASSES, switch
+    rows = (switch(view_layer, prop) for *_, prop in DATA_PASSES.values())
+    return [row for row in rows if row is not None]
 
 
 class STYLETRACE_PT_passes(EnginePanel, bpy.types.Panel):

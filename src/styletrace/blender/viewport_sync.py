@@ -190,6 +190,8 @@ class SceneSync:
             built = [] if desc is None else [("light", _made(desc))]
             return Entry(built, matrix, data, mats)
         shapes = ex._shapes(obj, matrix)
+        for s in shapes:  # the viewport writes no index passes
+            s.pop("indices")
         return Entry([("shape", build.node(s)) for s in shapes], matrix, data, mats)
 
     def sync(self, depsgraph, changes: Changes | None = None) -> dict:

@@ -13,6 +13,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from styletrace.kernel.pass_indices import indices_of
+
 TAGS = {
     "perspective": "sensor",
     "orthographic": "sensor",
@@ -69,7 +71,8 @@ class Writer:
             flat = " ".join(repr(float(v)) for v in value.reshape(-1))
             self._emit(depth, f'<transform name={n}><matrix value="{flat}"/></transform>')
         elif isinstance(value, dict):
-            self._object(value, depth, name)
+            # a shape in a shapegroup keeps an id that carries pass indices
+            self._object(value, depth, name, ident=name if any(indices_of(name)) else "")
         elif isinstance(value, bool):
             self._emit(depth, f'<boolean name={n} value="{str(value).lower()}"/>')
         elif isinstance(value, (int, np.integer)):
@@ -142,7 +145,9 @@ class Writer:
         for key, value in desc.items():
             if key == "type":
                 continue
-            self._object(value, 1, ident=key if value.get("type") == "shapegroup" else "")
+            # a shapegroup's id is referenced; a shape's carries its pass indices
+            kept = value.get("type") == "shapegroup" or any(indices_of(key))
+            self._object(value, 1, ident=key if kept else "")
         self.lines.append("</scene>")
         tmp = self.path + ".tmp"
         with open(tmp, "w", encoding="utf-8") as f:
