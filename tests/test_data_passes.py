@@ -68,6 +68,8 @@ def test_the_exr_carries_the_passes_and_the_image_is_unchanged(tmp_path, extra):
     [
         (["--passes", "depth", "-o", "x.png"], "--passes writes its channels into an .exr"),
         (["--passes", "depth,zdepth", "-o", "x.exr"], "bad value 'zdepth' for --passes"),
+        (["--passes", "mist", "--mist", "5,0,linear", "-o", "x.exr"],
+         "bad value '5,0,linear' for --mist"),
     ],
 )
 def test_refusals_are_one_line(tmp_path, capsys, extra, why):

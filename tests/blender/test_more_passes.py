@@ -130,3 +130,20 @@ def test_mist_falloffs_match_cycles(tmp_path, falloff):
     assert err[one].max() <= 0.02 and np.median(err[one]) < 0.003 and share > 0.9
     empty = st["UV"][..., 2] == 0  # no sample met a surface: the world's mist is 1
     assert empty.sum() > 10 and (st["Mist"][empty] == 1).all()
+
+
+def test_an_exported_xml_keeps_the_indices(tmp_path):
+    """The XML export carries the pass indices in its shapes' ids: the command line's Object and
+    Material Index passes of the file are F12's."""
+    build()
+    st = S.styletrace(str(tmp_path / "st.exr"), 4, seed=2, denoise="off", style="identity")
+    xml = str(tmp_path / "scene.xml")
+    assert S.bpy.ops.styletrace.export_xml(filepath=xml) == {"FINISHED"}
+    from styletrace.frontends.api import load_scene
+    from styletrace.kernel.data_passes import render_data_passes
+    sc = load_scene(xml)
+    ids = sorted(s.id() for s in sc.shapes())
+    assert any(i.endswith("__ob3__ma5") for i in ids) and any(i.endswith("__ob7__ma9") for i in ids)
+    mine = render_data_passes(sc, ["object_index", "material_index"], 4, 2)
+    for key, name in (("object_index", "Object Index"), ("material_index", "Material Index")):
+        assert np.array_equal(mine[key], st[name][..., 0]), key
