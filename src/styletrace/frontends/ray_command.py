@@ -5,8 +5,11 @@
 
 `--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this
 executor: its loop, progress bar and signal handling, and `save()` before it abandons a render on a
-second Ctrl-C, so the checkpoint holds every finished pass. Frames are runs of the same runner, one
-per frame, in turn (`frames.render_frames`).
+second Ctrl-C, so the checkpoint holds every finished pass. Frames (`--frames`, several files) are
+runs of the same runner in this process's pipeline, in chunks of `--chunk` with the temporal reuse
+of `--temporal-reuse` (`pipeline.frame_chunks`): here one chunk after the other
+(`pipeline.frames.render_frames`), with `--ray` each chunk one Ray task
+(`pipeline.ray_frames.render_frames_on_ray`).
 """
 from __future__ import annotations
 
