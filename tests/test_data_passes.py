@@ -123,15 +123,22 @@ def test_python_motion_moves_the_camera():
 def test_a_turntables_frames_carry_their_neighbours_cameras():
     """Frame k of `--frames 4 --orbit 40` renders on frame k's camera, its Vector towards the
     cameras of frames k - 1 and k + 1 (the turn continued past both ends)."""
+    from dataclasses import replace
+
+    from styletrace.pipeline.frame_chunks import FrameScene
     resolved = resolve(Job(scene="cornell-box", width=12, height=8, spp=2,
                            data_passes="depth,vector"))
-    frames = turntable_frames(resolved, 4, 40.0)
+    frames = turntable_frames(FrameScene.of(resolved, "llvm_ad_rgb"), resolved.scene, 4, 40.0,
+                              motion=True)
     cams = turntable(resolved.scene, 4, 40.0, -1, 5)
     depths = []
-    for k, (job, cam) in enumerate(frames):
+    for k, frame in enumerate(frames):
+        cam = np.array(frame.camera)
         assert np.array_equal(cam, cams[k + 1])
-        assert np.array_equal(job.job.motion.previous, cams[k])
-        assert np.array_equal(job.job.motion.next, cams[k + 2])
+        assert np.array_equal(np.array(frame.motion[0]), cams[k])
+        assert np.array_equal(np.array(frame.motion[1]), cams[k + 2])
+        job = replace(resolved, job=resolved.job.with_(motion=Motion(*map(np.array,
+                                                                          frame.motion))))
         out = Runner(job, OnRay("local", cam)).data_passes()  # traced here: no cluster needed
         want = render_data_passes(job.scene, ("depth", "vector"), 2, 0,
                                   Motion(cams[k], cams[k + 2]), camera=cam)
@@ -144,6 +151,10 @@ def test_a_turntables_frames_carry_their_neighbours_cameras():
     still = Runner(resolve(Job(scene="cornell-box", width=12, height=8, spp=2,
                                data_passes="depth")), OnRay("local")).data_passes()
     assert np.array_equal(still["depth"], depths[0])
+    # without motion asked for, the same cameras and none around them
+    plain = turntable_frames(frames[0].scene, resolved.scene, 4, 40.0, motion=False)
+    assert [f.camera for f in plain] == [f.camera for f in frames]
+    assert all(f.motion is None for f in plain)
 
 
 def test_a_stopped_run_writes_the_passes_too(tmp_path):

@@ -48,8 +48,6 @@ REFUSED = [
     (["--denoise", "expectation", "--style", "acp"], "style 'acp'"),
     (["--denoise", "expectation", "--ray"], "renders in this process"),
     (["--denoise", "image", "--buffer", "x.npz"], "--buffer with --denoise image"),
-    (["--denoise", "expectation", "--frames", "2", "--orbit", "10", "--ray"],
-     "not with --ray (the driver of a Ray render denoises the merged image"),
     (["--denoise", "sharpen"], "invalid choice"),
     (["--denoise", "image", "--denoise-quality", "best"], "invalid choice"),
     (["--denoise", "expectation", "--coverage", "5"], "bad value '5' for coverage"),

@@ -906,3 +906,34 @@ def test_frames_render_here_denoised_as_a_still(tmp_path, capsys):
     assert not np.array_equal(on[1], off[1]) and not np.array_equal(on[0], on[1])
     manifest = (tmp_path / "on.exr.frames.json").read_text()
     assert '"denoise": "auto"' in manifest and '"done": [\n  0,\n  1\n ]' in manifest
+
+
+def test_frames_with_temporal_reuse_off_are_each_the_still(tmp_path, capsys):
+    """`--orbit 0`: every frame on the still's camera. With `--temporal-reuse off` every frame is
+    the denoised still bit for bit (the same seed, no history: the frames before reuse); with it
+    on (the default) frame 0 is still the still (no history yet) and the frames after it differ
+    (their own seeds, blended). The manifest names reuse and chunk only where reuse applies, so
+    a resume with other ones is refused in one line."""
+    common = ["render", "--style", "cel", "--width", "16", "--height", "16", "--samples", "4",
+              "--denoise", "auto", "-q"]
+    assert main([*common, "--frames", "3", "--orbit", "0", "--temporal-reuse", "off",
+                 "-o", str(tmp_path / "off.exr")]) == 0
+    assert main([*common, "--frames", "3", "--orbit", "0", "--chunk", "2",
+                 "-o", str(tmp_path / "on.exr")]) == 0
+    assert main([*common, "-o", str(tmp_path / "still.exr")]) == 0
+    still = read(tmp_path / "still.exr")
+    off = [read(tmp_path / f"off_{k:04d}.exr") for k in range(3)]
+    on = [read(tmp_path / f"on_{k:04d}.exr") for k in range(3)]
+    assert all(np.array_equal(f, still) for f in off)
+    assert np.array_equal(on[0], still) and not np.array_equal(on[1], still)
+    assert not np.array_equal(on[1], on[2])
+    assert '"chunk"' not in (tmp_path / "off.exr.frames.json").read_text()
+    assert '"chunk": 2' in (tmp_path / "on.exr.frames.json").read_text()
+    capsys.readouterr()
+    assert main([*common, "--frames", "3", "--orbit", "0", "--resume",
+                 "-o", str(tmp_path / "on.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "cannot resume" in err and "other settings" in err and err.count("\n") == 0
+    assert main([*common, "--frames", "3", "--chunk", "0", "-o", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "bad value 0 for --chunk" in err and err.count("\n") == 0

@@ -174,7 +174,7 @@ def cmd_render(args) -> int:
 
     Raises:
         UsageError: flags that do not go together (--coverage or --denoise-uncertainty without
-            expectation, --denoise with frames), bad values, or a refusal of the run (one line).
+            expectation), bad values, or a refusal of the run (one line).
     """
     from styletrace.frontends.command_job import denoising_of, job_of
     method = denoising_of(args).method
@@ -189,13 +189,7 @@ def cmd_render(args) -> int:
             "the style meets the denoised expectation)"
         )
     several = len(args.scene) > 1 or args.frames is not None or args.orbit is not None
-    on_ray = args.ray is not None
-    if several and on_ray and method == "expectation":
-        raise UsageError(
-            "--denoise expectation renders each frame in this process: not with --ray (the driver "
-            "of a Ray render denoises the merged image: --denoise image or auto); drop --ray"
-        )
-    if several:  # numbered images, each denoised as a still: here, or on Ray by the driver
+    if several:  # numbered images in chunks: here, or each chunk a Ray task of the same pipeline
         from styletrace.frontends.ray_command import frames_command
         return frames_command(args, _parse_set, _parse_defines, check_output, say)
     scene = args.scene[0] if args.scene else "cornell-box"
@@ -356,7 +350,7 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="*",
         default=[],
         help=f"built-in scene ({builtin_scenes()}) or a Mitsuba XML file "
-        "(default: cornell-box); several XML files render as numbered frames on Ray",
+        "(default: cornell-box); several XML files render as numbered frames",
     )
     r.add_argument(
         "--set",
@@ -523,13 +517,15 @@ def add_ray_flags(parser) -> None:
         const="local",
         default=None,
         metavar="ADDRESS",
-        help="render the passes as Ray tasks: on a local Ray instance, or on the cluster at "
-        "ADDRESS (HOST:PORT, as printed by `ray start --head`); give it after the scene",
+        help="render the passes as Ray tasks (frames: each chunk of frames one task): on a local "
+        "Ray instance, or on the cluster at ADDRESS (HOST:PORT, as printed by `ray start "
+        "--head`); give it after the scene",
     )
     parser.add_argument(
         "--resume",
         action="store_true",
-        help="continue an interrupted --ray render of the same output from its checkpoint",
+        help="continue an interrupted --ray render of the same output from its checkpoint "
+        "(frames: render the frames not yet written, here or with --ray)",
     )
     parser.add_argument(
         "--checkpoint-every",
@@ -543,10 +539,27 @@ def add_ray_flags(parser) -> None:
         type=int,
         default=None,
         metavar="N",
-        help="render N frames of a turntable around the camera's target (numbered images, on Ray)",
+        help="render N frames of a turntable around the camera's target (numbered images; with "
+        "--ray each chunk of frames is one Ray task)",
     )
     parser.add_argument("--orbit", type=float, default=None, metavar="DEGREES",
                         help="the turntable's total rotation about the up axis (default 360)")
+    parser.add_argument(
+        "--temporal-reuse",
+        choices=("on", "off"),
+        default="on",
+        help="frames that are denoised: each its own seed, blended with the frames before it in "
+        "its chunk (docs/temporal.md); off: every frame the same seed, denoised alone "
+        "(default on)",
+    )
+    parser.add_argument(
+        "--chunk",
+        type=int,
+        default=None,
+        metavar="N",
+        help="frames per chunk (default 8): temporal reuse starts afresh at each chunk's first "
+        "frame; with --ray each chunk is one task",
+    )
 
 
 def add_setting_flags(parser) -> None:

@@ -5,8 +5,11 @@
 
 `--ray` renders one image through the pipeline's runner (`pipeline.runner.Runner`) with this
 executor: its loop, progress bar and signal handling, and `save()` before it abandons a render on a
-second Ctrl-C, so the checkpoint holds every finished pass. Frames are runs of the same runner, one
-per frame, in turn (`frames.render_frames`).
+second Ctrl-C, so the checkpoint holds every finished pass. Frames (`--frames`, several files) are
+runs of the same runner in this process's pipeline, in chunks of `--chunk` with the temporal reuse
+of `--temporal-reuse` (`pipeline.frame_chunks`): here one chunk after the other
+(`pipeline.frames.render_frames`), with `--ray` each chunk one Ray task
+(`pipeline.ray_frames.render_frames_on_ray`).
 """
 from __future__ import annotations
 
@@ -76,47 +79,71 @@ def frame_paths(output: str, count: int) -> list[str]:
     return [f"{stem}_{i:04d}{ext}" for i in range(count)]
 
 
-def turntable_frames(resolved, count: int, degrees: float) -> list[tuple]:
-    """A turntable's frames: (the resolved job, the frame's camera) each; with a Vector pass each
-    frame's job carries the cameras of the frames before and after it (`Job.motion`; the turn
-    goes on past the first and the last frame).
+def turntable_frames(scene, loaded, count: int, degrees: float, motion: bool) -> list:
+    """A turntable's frames: each on its camera; with `motion` (a Vector pass asked for, or
+    temporal reuse) each also carries the cameras of the frames before and after it (the turn goes
+    on past the first and the last frame).
 
     Args:
-        resolved: the scene's resolved job. count: how many frames. degrees: the whole turn.
+        scene: the frames' `pipeline.frame_chunks.FrameScene`. loaded: its loaded mi.Scene (the
+            camera the turn starts from). count: how many frames. degrees: the whole turn.
+        motion: give each frame the cameras around it.
 
     Returns:
-        [(Resolved, 4x4 sensor to_world)] in frame order.
+        [`pipeline.frame_chunks.Frame`] in frame order.
     """
-    from dataclasses import replace
-
-    from styletrace.kernel.data_passes import Motion
+    from styletrace.pipeline.frame_chunks import Frame, rows
     from styletrace.pipeline.orbit import turntable
-    if "vector" not in resolved.job.data_passes:
-        return [(resolved, m) for m in turntable(resolved.scene, count, degrees)]
-    cams = turntable(resolved.scene, count, degrees, -1, count + 1)
-    return [(replace(resolved, job=resolved.job.with_(motion=Motion(cams[k], cams[k + 2]))),
-             cams[k + 1]) for k in range(count)]
+    if not motion:
+        return [Frame(scene, rows(m)) for m in turntable(loaded, count, degrees)]
+    cams = turntable(loaded, count, degrees, -1, count + 1)
+    return [Frame(scene, rows(cams[k + 1]), (rows(cams[k]), rows(cams[k + 2])))
+            for k in range(count)]
+
+
+def check_chunk(chunk) -> int:
+    """`--chunk N`: frames per chunk (`pipeline.frame_chunks.CHUNK` where not given).
+
+    Args:
+        chunk: the parsed value, or None.
+
+    Returns:
+        The frames per chunk.
+
+    Raises:
+        UsageError: a value below 1.
+    """
+    from styletrace.pipeline.frame_chunks import CHUNK
+    if chunk is None:
+        return CHUNK
+    if chunk < 1:
+        raise UsageError(f"bad value {chunk} for --chunk: expected a whole number of frames >= 1")
+    return chunk
 
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
-    """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`: in this
-    process, each frame denoised as a still is (`--denoise`); with `--ray`, each frame's passes on
-    Ray and the merged image denoised by this process (the image denoiser: auto's choice there).
+    """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`: the
+    frames in chunks of `--chunk` (`pipeline.frame_chunks`), each frame denoised as `--denoise`
+    asks and, with `--temporal-reuse on` (the default), blended with its chunk's frames before
+    it; in this process, or with `--ray` each chunk one Ray task running the same pipeline.
 
     Args:
         args: the parsed arguments. parse_set, parse_defines: the parsers of --set and -D.
         check_output: the check of an output path. say: the one-line messages.
 
     Returns:
-        The exit status: 0, or that of the frame that stopped or failed (130: Ctrl-C between two).
+        The exit status: 0, or that of the frame that stopped or failed (130: Ctrl-C between two,
+        or on Ray).
 
     Raises:
         UsageError: bad flags or counts, a bad output or scene, or a refusal of the frames' runs,
-            before any frame renders (each scene is resolved first, `pipeline.resolve`).
+            before any frame renders (each scene is resolved first, `pipeline.resolve`); a
+            refusal in a frame's run (on Ray too) after the frames before it are written.
     """
     from styletrace.denoise.finishers import finisher_for
     from styletrace.frontends.command_job import job_of
-    from styletrace.pipeline.execute import executor_for, ray_job
+    from styletrace.pipeline.execute import InProcess
+    from styletrace.pipeline.frame_chunks import Frame, FrameScene, chunks_of
     from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
     from styletrace.pipeline.resolve import resolve
@@ -134,6 +161,8 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
         raise UsageError("--orbit needs --frames N (how many frames the rotation is split into)")
     check_counts(("--width", args.width), ("--height", args.height), ("--spp", args.spp),
                  ("--samples", args.samples), ("--pass-spp", args.pass_spp))
+    chunk = check_chunk(args.chunk)
+    reuse = args.temporal_reuse == "on"
     for scene in scenes:
         check_output(args.output, scene)
     count = args.frames if len(scenes) == 1 else len(scenes)
@@ -149,37 +178,52 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     lanes, note = lanes_per_pass(variant)
     if note and not args.quiet:
         say(f"styletrace: {note}")
-    frames, values, specs, spps = [], [], [], []
+    frames, values, specs, spps, methods = [], [], [], [], []
     for name in scenes:  # each file resolved here once: a broken one fails before any frame renders
         asked = job_of(args, params, defines, scene=name).with_(lanes_per_pass=lanes)
-        resolved = resolve(asked, local=cluster is None)
+        # in this process or in a Ray worker alike, each frame is a run of this process's pipeline
+        resolved = resolve(asked)
         spps.append(resolved.spp)
+        methods.append(resolved.method)
         if resolved.auto and not args.quiet:  # as a single image's run says them, to pin them
             which = f"{one_line(name)}: " if len(scenes) > 1 else ""
             say(f"styletrace: auto values: {which}{resolved.auto}")
         # the refusals of its frames' runs (the output's too), before any renders
-        Runner(resolved, executor_for(cluster), finisher_for(resolved)).check_output(paths[0])
-        job = ray_job(resolved)
-        if len(scenes) == 1:  # a turntable: every frame a run of this resolved job, with its camera
+        Runner(resolved, InProcess(), finisher_for(resolved)).check_output(paths[0])
+        scene = FrameScene.of(resolved, variant)
+        if len(scenes) == 1:  # a turntable: every frame of this scene, each on its camera
             degrees = 360.0 if args.orbit is None else args.orbit
-            frames = turntable_frames(resolved, count, degrees)
-        else:  # a file's frame: its job with the integrator pinned here, loaded again when it comes
-            frames.append((resolved.job.with_(given={}, integrator=resolved.integrator), None))
-        values.append(job.values)
-        specs.append(job.spec.describe())
+            moves = "vector" in resolved.job.data_passes or (reuse and resolved.method != "off")
+            frames = turntable_frames(scene, resolved.scene, count, degrees, moves)
+        else:  # a file's frame: no motion known (its vector 0), loaded again when it comes
+            frames.append(Frame(scene))
+        values.append(scene.values)
+        specs.append(scene.spec.describe())
         del resolved
+    # reuse changes only the frames that are denoised: the manifest says so only where it does
+    reused = reuse and any(m != "off" for m in methods)
     settings = frame_settings("orbit" if len(scenes) == 1 else "files", specs, values, count,
-                              args.orbit, asked, variant)
+                              args.orbit, asked, variant, chunk if reused else None)
     manifest = Manifest(args.output, settings)
+    chunks = chunks_of(frames, chunk, reuse)
     bar = None
     if not args.quiet:
         from tqdm import tqdm
         bar = tqdm(total=count, unit="frame", desc="rendering", file=sys.stderr)
+
+    def on_frame(i, out):
+        if bar is not None:
+            bar.update(1)
+
     try:
-        written, status = render_frames(frames, paths, cluster, manifest, resume=args.resume,
-                                        on_frame=lambda i, out: bar.update(1) if bar else None,
-                                        finisher=finisher_for)
-    except KeyboardInterrupt:  # between two frames' runs (a run stops on its own)
+        if cluster is None:
+            written, status = render_frames(chunks, paths, manifest, resume=args.resume,
+                                            on_frame=on_frame)
+        else:
+            from styletrace.pipeline.ray_frames import render_frames_on_ray
+            written, status, _ = render_frames_on_ray(chunks, paths, manifest, cluster,
+                                                      resume=args.resume, on_frame=on_frame)
+    except KeyboardInterrupt:  # between two frames' runs, or on Ray (a run here stops on its own)
         status = 130
     finally:
         if bar is not None:
@@ -197,4 +241,6 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             f"{where})")
     return 0
 
-__all__ = ["cluster_of", "executor_of", "frame_paths", "turntable_frames", "frames_command"]
+
+__all__ = ["cluster_of", "executor_of", "frame_paths", "turntable_frames", "check_chunk",
+           "frames_command"]

@@ -128,22 +128,20 @@ class OnRay:
                       lock=lock)
 
 
-def executor_for(cluster: str | None = None, checkpoints: Checkpoints = Checkpoints(),
-                 camera: Any = None):
-    """The executor of a run: in this process, or on Ray.
+def executor_for(cluster: str | None = None, checkpoints: Checkpoints = Checkpoints()):
+    """The executor of a run: in this process, or on Ray (the passes of one image; frames run
+    in chunks, `pipeline.frame_chunks`).
 
     Args:
         cluster: "local" or a Ray address; None renders in process unless resuming.
         checkpoints: a render on Ray's checkpoints (`OnRay`).
-        camera: the Ray workers' sensor to_world (a frame of a turntable, `OnRay`), or None; in
-            this process the caller places the scene's own camera.
 
     Returns:
         InProcess, or OnRay where a cluster is named or `checkpoints.resume` is set.
     """
     if cluster is None and not checkpoints.resume:
         return InProcess()
-    return OnRay(cluster, camera, checkpoints)
+    return OnRay(cluster, checkpoints=checkpoints)
 
 
 __all__ = ["InProcess", "OnRay", "executor_for", "ray_job", "shot_of", "split_of"]

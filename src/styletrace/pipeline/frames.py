@@ -1,27 +1,27 @@
 """Frames: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
 
-    written, status = render_frames(frames, paths, cluster, manifest)   # out_0000.png, ...
+    written, status = render_frames(chunks_of(frames, 8, reuse=True), paths, manifest)
+    # out_0000.png, out_0001.png, ...; on Ray: pipeline.ray_frames.render_frames_on_ray
 
-Each frame is a run of the render pipeline (`pipeline.runner.Runner`), denoised as a still with
-the scene's camera placed at the frame's: in this process, or with its passes as Ray tasks
-(`pipeline.execute.OnRay`, with the frame's camera; the driver denoises). The runner owns its pass
-loop, its checks, its stop on Ctrl-C or SIGTERM and its atomic write. A frame written to its own
-path is recorded in a manifest (`OUT.frames.json`), so `--resume` renders only the frames not yet
-written. Every frame uses the render's seed: the noise pattern stays put from frame to frame
-instead of flickering. A stop ends the sequence after the frame under way (its finished passes
-written, as the runner writes them); the frames recorded stay.
+Frames render in chunks of consecutive frames (`pipeline.frame_chunks`): each frame a run of the
+render pipeline (`pipeline.runner.Runner`, in this process) with the scene's camera placed at the
+frame's, denoised as the job asks and, with temporal reuse, blended with the history of its
+chunk's frames before it. Here the chunks render one after the other; on Ray each is one task
+(`pipeline.ray_frames`), the same frames bit for bit. A frame written to its own path is recorded in
+a manifest (`OUT.frames.json`, with the settings a resume must match: `frame_settings`), so
+`--resume` renders only the chunks not yet written whole (a chunk partly written renders from its
+first frame where its history needs the frames before, and writes only the missing ones). A stop
+ends the sequence after the frame under way (its finished passes written, as the runner writes
+them); the frames recorded stay.
 """
 from __future__ import annotations
 
 import json
-from typing import Any, Callable
+from typing import Callable
 
 from styletrace.errors import UsageError
 from styletrace.images import write_bytes_atomically
-from styletrace.kernel.data_passes import placed
-from styletrace.pipeline.execute import executor_for
-from styletrace.pipeline.resolve import Resolved, resolve
-from styletrace.pipeline.runner import Runner, Voice
+from styletrace.pipeline.frame_chunks import FrameStopped, render_chunk
 
 
 class Manifest:
@@ -63,55 +63,40 @@ class Manifest:
         write_bytes_atomically(json.dumps(body, indent=1, sort_keys=True).encode(), self.path)
 
 
-def render_frames(frames: list[tuple[Any, Any]], paths: list[str], cluster: str | None,
-                  manifest: Manifest, resume: bool = False,
-                  on_frame: Callable[[int, str], None] | None = None,
-                  finisher: Callable[[Resolved], Any] | None = None) -> tuple[list[int], int]:
-    """Render each frame through its runner into its path, in order, denoised as the job asks (the
-    scene's camera placed at the frame's for the whole run, so that the denoiser's guides and
-    points see it too): in this process, or with a cluster, its passes as Ray tasks.
+def render_frames(chunks: list, paths: list[str], manifest: Manifest, resume: bool = False,
+                  on_frame: Callable[[int, str], None] | None = None) -> tuple[list[int], int]:
+    """Render the chunks' frames in this process, chunk after chunk (`frame_chunks.render_chunk`),
+    each frame into its path and recorded in the manifest as it is written.
 
     Args:
-        frames: (job, camera) per frame. job: a `Resolved` job, or a `pipeline.job.Job` whose
-            integrator is pinned already, resolved when its first frame comes (one scene loaded at a
-            time); camera: the sensor's to_world (4x4) or None.
-        paths, cluster, manifest: the frames' images, the Ray cluster (None: this process), the
-            written frames' manifest.
-        resume: skip the frames the manifest names. on_frame: called with (frame, path written).
-        finisher: the finisher of a resolved frame (`denoise.finishers.finisher_for`); None:
-            the plain one.
+        chunks: the `frame_chunks.Chunk`s, in order. paths: every frame's image.
+        manifest: the written frames' manifest.
+        resume: skip the frames the manifest names (a chunk they all fill is skipped whole).
+        on_frame: called with (frame, path written) after each frame.
 
     Returns:
-        (the frames written by this call, 0 or the exit status of the frame that stopped or failed).
+        (the frames written by this call, 0 or the exit status of the frame that stopped).
+
+    Raises:
+        UsageError: a refusal of a frame's run (one line); the frames written before stay.
     """
     skip = manifest.load() if resume else set()
     written: list[int] = []
-    job, resolved = None, None
-    for i, (frame_job, camera) in enumerate(frames):
-        if i in skip:
-            continue
-        if frame_job is not job:
-            job = frame_job
-            resolved = job if isinstance(job, Resolved) else resolve(job, local=cluster is None)
-        executor = executor_for(cluster, camera=camera)
-        # the scene's own camera placed at the frame's for the whole run: the passes here, and
-        # the denoiser's guides and points (the driver's, for a Ray render) see the frame's
-        with placed(resolved.scene.sensors()[0], camera):
-            runner = Runner(resolved, executor,
-                            finisher(resolved) if finisher is not None else None)
-            status = runner.write(paths[i], Voice(quiet=True))
-        if runner.written is None:  # stopped, or a pass failed: its finished passes were written
-            return written, status
-        if runner.written.path == paths[i]:
-            manifest.add(i)
-        written.append(i)
-        if on_frame is not None:
-            on_frame(i, runner.written.path)
+    for chunk in chunks:
+        try:
+            for i, path in render_chunk(chunk, {i: paths[i] for i in chunk.indices}, skip):
+                if path == paths[i]:
+                    manifest.add(i)
+                written.append(i)
+                if on_frame is not None:
+                    on_frame(i, path)
+        except FrameStopped as stop:
+            return written, stop.status
     return written, 0
 
 
 def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: float | None,
-                   job, variant: str) -> dict:
+                   job, variant: str, chunk: int | None = None) -> dict:
     """The settings a frames manifest records: what a `--resume` must match.
 
     Args:
@@ -120,10 +105,12 @@ def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: flo
         job: the frames' `pipeline.job.Job` (any frame's: they share its spp, seed, `samples`
             (the paths per pixel given, or None) and pass split, `lanes_per_pass` set).
         variant: the Mitsuba variant.
+        chunk: frames per chunk where temporal reuse applies to the frames (their seeds and
+            history depend on it), else None.
 
     Returns:
-        The settings, a dict (`samples` and `passes` only where given: manifests written before
-        them resume).
+        The settings, a dict (`samples`, `passes`, `temporal_reuse` and `chunk` only where given:
+        manifests written before them resume).
     """
     settings = {"kind": kind, "scenes": scenes, "integrators": values, "spp": job.spp,
                 "seed": job.seed, "frames": count, "orbit": orbit,
@@ -141,6 +128,9 @@ def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: flo
             from styletrace.kernel.mist import parse_mist
             m = parse_mist(job.mist)
             settings["mist"] = [m.start, m.depth, m.falloff]
+    if chunk is not None:  # each frame its own seed, and a history within its chunk
+        settings["temporal_reuse"] = "on"
+        settings["chunk"] = chunk
     return settings
 
 
