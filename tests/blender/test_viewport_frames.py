@@ -3,7 +3,9 @@
 nothing and the image on screen stays the same, bit for bit; frames seen through an animated
 camera start sessions (each showing the image before carried to its view) that compile no kernel
 (Dr.Jit's kernel history: every launch an in-memory cache hit, as test_viewport_seed.py reads it);
-an animated object still moves, rendered with the same seed."""
+an animated object still moves, rendered with the same seed, and its moves (keyframed or plain)
+compile no kernel either: the moved mesh keeps its Mitsuba objects (and so Dr.Jit's registry ids,
+which Dr.Jit's code for method calls depends on), and renders as a fresh export of it would."""
 import bpy
 import drjit as dr
 import numpy as np
@@ -20,9 +22,11 @@ def room():
     return st
 
 
-def start(st) -> Viewport:
-    """A viewport through the scene camera at frame 1, its first session run to its end."""
-    bpy.context.scene.frame_set(1)
+def start(st, frame: int | None = 1) -> Viewport:
+    """A viewport through the scene camera at `frame` (None: the current one), its first session
+    run to its end."""
+    if frame is not None:
+        bpy.context.scene.frame_set(frame)
     vp = Viewport(start=False, clock=lambda: 0.0)
     dg = bpy.context.evaluated_depsgraph_get()
     vp.set_sensor(camera.sensor(dg.scene_eval, st.samples))
@@ -115,3 +119,50 @@ def test_an_animated_object_moves_with_the_same_seed():
     moved = np.abs(now.surfaces.depth - before) > 0.1
     assert 20 <= moved.sum() <= 0.5 * moved.size
     assert np.abs(image - shown)[moved].mean() > 0.05
+
+
+def test_object_moves_compile_nothing_and_render_as_a_fresh_export():
+    st = room()
+    cube = bpy.data.objects["Cube"]
+    cube.keyframe_insert("location", frame=1)
+    cube.location.x -= 0.6
+    cube.keyframe_insert("location", frame=5)
+    vp = start(st)
+    kept = [made for _, made in vp.sync.entries["Cube"].built]
+    images = [vp.session.latest()[0]]
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        for step in (3, 5, 2, "plain", "plain"):
+            dr.kernel_history()  # reading it empties it
+            if step == "plain":  # a move by hand, the animation gone
+                cube.animation_data_clear()
+                cube.location.x += 0.25
+                cube.location.y -= 0.1
+                entry = vp.update(bpy.context.evaluated_depsgraph_get(), st)
+            else:
+                entry = update(vp, st, step)
+            assert entry["kind"] == "objects" and entry["objects"] == ["Cube"], (step, entry)
+            images.append(finish(vp))
+            compiled, launched = compiled_kernels()
+            assert launched and not compiled, (step, compiled)
+            assert not np.array_equal(images[-1], images[-2]), step
+        assert [made for _, made in vp.sync.entries["Cube"].built] == kept
+        assert vp.sync.moved == 5 and not vp.sync.pending
+        # the control: a kernel this process has not compiled yet (no other test restyles to
+        # tie_dye) is counted
+        dr.kernel_history()
+        st.style = "tie_dye"
+        vp.update(bpy.context.evaluated_depsgraph_get(), st)
+        finish(vp)
+        assert compiled_kernels()[0], "the check could not see a new kernel"
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+        vp.close()
+    # a fresh export of the scene as it is now renders the image of the moved one, bit for bit
+    st.style = "cel"
+    fresh = start(st, frame=None)
+    try:
+        assert fresh.sync.moved == 0
+        assert np.array_equal(fresh.session.latest()[0], images[-1])
+    finally:
+        fresh.close()

@@ -93,7 +93,18 @@ class Exporter:
 
     def _shapes(self, obj, matrix) -> list[dict]:
         """The shape descriptions of an evaluated mesh object (world space if `matrix` is given),
-        each with its pass indices in "indices" (object's, material's; popped by `export`)."""
+        each with its pass indices in "indices" (`shapes_of`)."""
+        return self.shapes_of(obj, self.parts(obj, matrix))
+
+    def parts(self, obj, matrix) -> list:
+        """The `mesh.Part`s of an evaluated mesh object, one per material slot.
+
+        Args:
+            obj: the evaluated object. matrix: 4x4 to world space (None: keep local).
+
+        Returns:
+            Its parts ([] where it has no mesh or no triangles).
+        """
         try:
             data = obj.to_mesh()
         except RuntimeError:
@@ -101,9 +112,20 @@ class Exporter:
         if data is None:
             return []
         try:
-            parts = mesh.read(data, matrix)
+            return mesh.read(data, matrix)
         finally:
             obj.to_mesh_clear()
+
+    def shapes_of(self, obj, parts: list) -> list[dict]:
+        """The shape descriptions of `obj`'s `parts` (`parts`), each with its slot's material.
+
+        Args:
+            obj: the evaluated object. parts: its parts.
+
+        Returns:
+            One "blender_mesh" description per part, its pass indices in "indices" (object's,
+            material's; popped by `export`, dropped by the viewport).
+        """
         shapes = []
         slots = obj.material_slots
         for part in parts:

@@ -143,6 +143,34 @@ def to_mitsuba(part: Part, name: str, bsdf=None, emitter=None):
         props["emitter"] = emitter
     mesh = mi.Mesh(name, len(part.positions), len(part.faces), props=props, has_vertex_normals=True,
                    has_vertex_texcoords=part.uvs is not None)
+    place(mesh, part)
+    return mesh
+
+
+def fits(mesh, part: Part) -> bool:
+    """Whether `part` can be written into `mesh` (`place`): as many vertices and faces, and
+    texture coordinates on both or neither.
+
+    Args:
+        mesh: an `mi.Mesh` of `to_mitsuba`. part: the part.
+
+    Returns:
+        True where it fits.
+    """
+    return (mesh.vertex_count() == len(part.positions) and mesh.face_count() == len(part.faces)
+            and mesh.has_vertex_texcoords() == (part.uvs is not None))
+
+
+def place(mesh, part: Part) -> None:
+    """Write `part`'s vertices and faces into `mesh` (one that `fits` it), as `to_mitsuba` does
+    into a new one: the mesh keeps its BSDF and emitter objects, and so their Dr.Jit registry ids
+    (a moved object's new objects would raise the registry's id bound, which Dr.Jit's code for
+    method calls depends on: docs/design/viewport.md, "Object moves").
+
+    Args:
+        mesh: the `mi.Mesh`. part: the part.
+    """
+    import mitsuba as mi
     params = mi.traverse(mesh)
     params["vertex_positions"] = mi.Float(part.positions.reshape(-1))
     params["vertex_normals"] = mi.Float(part.normals.reshape(-1))
@@ -150,4 +178,3 @@ def to_mitsuba(part: Part, name: str, bsdf=None, emitter=None):
         params["vertex_texcoords"] = mi.Float(part.uvs.reshape(-1))
     params["faces"] = mi.UInt32(part.faces.reshape(-1))
     params.update()
-    return mesh

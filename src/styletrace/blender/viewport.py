@@ -509,8 +509,16 @@ class Viewport:
         desc = {size: self.sync.scene_dict(dict(sensor, film=dict(film, width=size[0],
                                                                    height=size[1])))
                 for size in ((w, h), draft_size(w, h))}
+        sync = self.sync
+
+        def scene_dict(width: int, height: int) -> dict:
+            # called by the session under TURNS: no scene made from the kept meshes is traced
+            # while the moved ones take their new vertices
+            sync.place_moved()
+            return desc[(width, height)]
+
         self.session = ViewportSession(
-            lambda width, height: desc[(width, height)], (w, h), self.values, self.on_image,
+            scene_dict, (w, h), self.values, self.on_image,
             self.draft, self.clock, before=old if moved and self.carry else None,
         )
         if self.threaded:

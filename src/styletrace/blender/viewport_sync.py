@@ -13,6 +13,7 @@ scene equals F12's (`exporter.Exporter.export`) and renders the same image with 
 """
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable
@@ -21,6 +22,7 @@ import bpy
 import numpy as np
 
 from styletrace.blender import build, camera, exporter, lights, world
+from styletrace.blender.mesh import fits, place
 from styletrace.config.choices import SAMPLER_DEFAULT
 from styletrace.frontends import api
 from styletrace.gate import mi
@@ -147,11 +149,13 @@ def view_sensor(view_matrix, window_matrix, width: int, height: int, spp: int) -
 @dataclass
 class Entry:
     """One Blender object's exported part: its Mitsuba objects (`built`, (kind, object) pairs),
-    the world matrix and the datablocks it was made from."""
+    the world matrix and the datablocks it was made from; `slots`: a mesh's material slot of each
+    built shape."""
     built: list
     matrix: np.ndarray
     data: str = ""
     materials: frozenset = frozenset()
+    slots: tuple = ()
 
 
 class SceneSync:
@@ -161,7 +165,11 @@ class SceneSync:
         warn: takes the export's warnings, one line each (default: print).
 
     `last` after each `sync`: `objects` (names re-exported, sorted), `world` (re-exported),
-    `seconds`. `exported` counts every object export since creation."""
+    `seconds`. `exported` counts every object export since creation, `moved` those of them that
+    kept their Mitsuba objects: a mesh re-read with the same vertex and face counts and the same
+    materials, none of them edited (a move, or a deformation), keeps its meshes, BSDFs and
+    emitters, and its new vertices wait in `pending` until `place_moved` writes them (no new
+    Dr.Jit registry ids: docs/design/viewport.md, "Object moves")."""
 
     def __init__(self, warn: Callable[[str], None] = print):
         self.warn = warn
@@ -172,6 +180,9 @@ class SceneSync:
         self.world_done = False
         self.last: dict = {}
         self.exported = 0
+        self.moved = 0
+        self.pending: dict[tuple[str, int], tuple[Any, Any]] = {}  # (name, i): (mi.Mesh, Part)
+        self._pending_lock = threading.Lock()  # sync (main thread) and place_moved (a worker)
 
     def _dirty(self, name: str, entry: Entry | None, matrix, ch: Changes) -> bool:
         if entry is None or ch.everything or name in ch.objects or entry.data in ch.data:
@@ -180,7 +191,8 @@ class SceneSync:
             return True
         return bool(entry.materials & ch.materials) or (ch.all_materials and bool(entry.materials))
 
-    def _export(self, ex: exporter.Exporter, obj, matrix) -> Entry:
+    def _export(self, ex: exporter.Exporter, obj, matrix, ch: Changes,
+                kept: Entry | None = None) -> Entry:
         self.exported += 1
         slots = getattr(obj, "material_slots", ())
         mats = frozenset(s.material.name for s in slots if s.material is not None)
@@ -189,10 +201,49 @@ class SceneSync:
             desc = lights.convert_light(obj.data, matrix, self.warn)
             built = [] if desc is None else [("light", _made(desc))]
             return Entry(built, matrix, data, mats)
-        shapes = ex._shapes(obj, matrix)
+        parts = ex.parts(obj, matrix)
+        name = obj.name
+        if matrix is not None:  # a placed object (an instanced one keeps no vertices pending)
+            with self._pending_lock:
+                for key in [k for k in self.pending if k[0] == name]:
+                    del self.pending[key]
+                if kept is not None and self._keeps(kept, parts, data, mats, ch):
+                    self.moved += 1
+                    for i, (part, (_, made)) in enumerate(zip(parts, kept.built)):
+                        self.pending[(name, i)] = (made, part)
+                    return Entry(kept.built, matrix, data, mats, kept.slots)
+        shapes = ex.shapes_of(obj, parts)
         for s in shapes:  # the viewport writes no index passes
             s.pop("indices")
-        return Entry([("shape", build.node(s)) for s in shapes], matrix, data, mats)
+        return Entry([("shape", build.node(s)) for s in shapes], matrix, data, mats,
+                     tuple(p.slot for p in parts))
+
+    @staticmethod
+    def _keeps(kept: Entry, parts: list, data: str, mats: frozenset, ch: Changes) -> bool:
+        """Whether the kept meshes take `parts` in place: the same datablock and materials, none
+        edited (their BSDFs and emitters would be made alike), a part per kept mesh, each with
+        its slot and vertex and face counts."""
+        if ch.everything or kept.data != data or kept.materials != mats:
+            return False
+        if kept.materials & ch.materials or (ch.all_materials and kept.materials):
+            return False
+        return (len(parts) == len(kept.built) == len(kept.slots)
+                and all(p.slot == slot and what == "shape" and fits(made, p)
+                        for p, slot, (what, made) in zip(parts, kept.slots, kept.built)))
+
+    def place_moved(self) -> int:
+        """Write the vertices of the objects re-read since the last call (`pending`) into their
+        kept meshes. Call it under Dr.Jit's lock (`viewport.TURNS`) before loading a scene of the
+        kept objects: a scene loaded before from those meshes must not be traced again.
+
+        Returns:
+            How many meshes were written.
+        """
+        with self._pending_lock:
+            moves, self.pending = list(self.pending.values()), {}
+        for made, part in moves:
+            place(made, part)
+        return len(moves)
 
     def sync(self, depsgraph, changes: Changes | None = None) -> dict:
         """Export what `changes` touched (everything when None), and any object whose world
@@ -220,17 +271,21 @@ class SceneSync:
                 if name not in seen_groups:
                     seen_groups.add(name)
                     if self._dirty(name, self.groups.get(name), None, ch):
-                        self.groups[name] = self._export(ex, obj, None)
+                        self.groups[name] = self._export(ex, obj, None, ch)
                         done.append(name)
                 order.append(("instance", name, matrix))
             elif not inst.is_instance and name not in seen:
                 seen.add(name)
-                if self._dirty(name, self.entries.get(name), matrix, ch):
-                    self.entries[name] = self._export(ex, obj, matrix)
+                kept = self.entries.get(name)
+                if self._dirty(name, kept, matrix, ch):
+                    self.entries[name] = self._export(ex, obj, matrix, ch, kept)
                     done.append(name)
                 order.append(("object", name, None))
         for gone in set(self.entries) - seen:
             del self.entries[gone]
+            with self._pending_lock:
+                for key in [k for k in self.pending if k[0] == gone]:
+                    del self.pending[key]
         for gone in set(self.groups) - seen_groups:
             del self.groups[gone]
         self.order = order
@@ -251,7 +306,8 @@ class SceneSync:
             sensor: a sensor description (e.g. `view_sensor`'s); `build.node` converts it.
 
         Returns:
-            The scene dict; its Mitsuba objects are the kept ones, shared with earlier dicts.
+            The scene dict; its Mitsuba objects are the kept ones, shared with earlier dicts (a
+            moved object's meshes have their new vertices once `place_moved` wrote them).
         """
         desc: dict = {"type": "scene", "sensor": build.node(sensor)}
         n = 0
@@ -276,7 +332,8 @@ class SceneSync:
         return desc
 
     def scene(self, sensor: dict):
-        """The loaded `mi.Scene` (`api.load_scene` checks it as F12's).
+        """The loaded `mi.Scene` (`api.load_scene` checks it as F12's), moved meshes placed first
+        (`place_moved`).
 
         Args:
             sensor: a sensor description, as for `scene_dict`.
@@ -287,6 +344,7 @@ class SceneSync:
         Raises:
             SceneError: a scene `api.load_scene` refuses (let through).
         """
+        self.place_moved()
         return api.load_scene(self.scene_dict(sensor))
 
 
