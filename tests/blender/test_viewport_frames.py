@@ -6,6 +6,8 @@ camera start sessions (each showing the image before carried to its view) that c
 an animated object still moves, rendered with the same seed, and its moves (keyframed or plain)
 compile no kernel either: the moved mesh keeps its Mitsuba objects (and so Dr.Jit's registry ids,
 which Dr.Jit's code for method calls depends on), and renders as a fresh export of it would."""
+import gc
+
 import bpy
 import drjit as dr
 import numpy as np
@@ -75,6 +77,11 @@ def test_scrubbing_a_still_scene_starts_nothing_and_keeps_its_image():
 
 
 def test_frames_through_an_animated_camera_compile_nothing():
+    """Each frame's session compiles nothing. Dr.Jit compiles every live Mitsuba object of a
+    class into a kernel's calls (docs/design/viewport.md, "Garbage and Dr.Jit's registry"), so
+    objects of earlier tests or of the first session, freed by the garbage collector at its own
+    time, would change the kernels' code while this test runs: the garbage is collected before
+    each frame, as the viewport collects it between sessions, and one frame settles it first."""
     st = room()
     cam = bpy.data.objects["camera"]
     cam.keyframe_insert("location", frame=1)
@@ -84,7 +91,8 @@ def test_frames_through_an_animated_camera_compile_nothing():
     first = vp.session.latest()[0]
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:
-        for frame in (3, 5, 2):
+        for k, frame in enumerate((4, 3, 5, 2)):
+            gc.collect()
             dr.kernel_history()  # reading it empties it
             update(vp, st, frame)
             # view_draw through the camera: the region's view moved
@@ -94,7 +102,7 @@ def test_frames_through_an_animated_camera_compile_nothing():
             assert vp.session.latest()[1].startswith("reprojected")
             image = finish(vp)
             compiled, launched = compiled_kernels()
-            assert launched and not compiled, (frame, compiled)
+            assert launched and (k == 0 or not compiled), (frame, compiled)
             assert not np.array_equal(image, first)
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
