@@ -630,7 +630,10 @@ def eevee_note(samples: int, bands) -> str:
             f"{CEL_BANDS} bands, thresholds the brightness quantiles 1/{CEL_BANDS}.. of the "
             "pixels that see a surface in EEVEE's own frame 1 and levels by cel's auto rule "
             f"(here thresholds {', '.join(f'{x:.3g}' for x in t)}, levels "
-            f"{', '.join(f'{x:.3g}' for x in m)}); the sun, sky and lamps as they are.")
+            f"{', '.join(f'{x:.3g}' for x in m)}); the sun, sky and lamps as they are. No light "
+            "probe volume is baked (EEVEE's defaults): its indirect light inside the room comes "
+            "from the world's probe, so the interior is lighter and bluer than Cycles' and "
+            "styletrace's.")
 
 
 def moving_report(rows: list, size: int, frames: int) -> str:
