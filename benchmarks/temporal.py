@@ -14,7 +14,7 @@ with Render Animation (`bpy.ops.render.render(animation=True)`) over frames 1..F
 - EEVEE (Blender 5.0's EEVEE Next) at its defaults, with the scene's own materials, and toon:
   every material's surface through Shader to RGB and a constant ColorRamp into an Emission, with
   cel's default bands read off EEVEE's own first frame (`cel_bands`, `toon_materials`); each after
-  one render of frame 1 that compiles its shaders, outside the timed animation.
+  one render of frame 1 timed apart (`eevee`).
 Measures, each over the F - 1 pairs of consecutive frames:
 - flicker, two ways: the share of pixels whose display-space brightness (the luminance of the
   sRGB-encoded image) changes by more than 10% of the larger of the two (brightness below 0.05
@@ -345,12 +345,14 @@ def toon_materials(thresholds, levels) -> None:
 
 def eevee(s, folder: str, bands=None) -> float:
     """Switch `s` to EEVEE (Blender 5.0's EEVEE Next, its defaults) with its Depth pass, with the
-    toon materials where `bands` is given (`toon_materials`), and render frame 1 once so that
-    the shaders are compiled before the timed animation (software OpenGL takes most of a minute
-    for a scene's first frame; a GPU far less).
+    toon materials where `bands` is given (`toon_materials`), and render frame 1 once before the
+    timed animation, so that a scene's first render, which may differ in cost from the later
+    ones (shader compilation), is timed apart. Measured here with software OpenGL it is the other
+    way round: the first render took 4 s at 64 x 64 and each later one, frame 1 again included,
+    about 30 s (the same image).
 
     Returns:
-        The seconds of that first render (the compilation with one frame).
+        The seconds of that first render.
     """
     s.render.engine = "BLENDER_EEVEE"
     s.view_layers[0].use_pass_z = True
@@ -615,17 +617,16 @@ def report(rows, others, size, frames) -> str:
 
 
 def first_note(row: dict) -> str:
-    return f"- (the first render, compiling the shaders first: {row['first']:.1f} s)"
+    return f"- (a render of frame 1 before the animation: {row['first']:.1f} s)"
 
 
 def eevee_note(samples: int, bands) -> str:
     """What EEVEE's rows are: its Render Samples, the still shot's bands."""
     t, m = bands
     return (f"{EEVEE_NAME}: Render Samples {samples}, no motion blur, after one render of frame 1 "
-            "that "
-            "compiles the shaders (not counted in seconds a frame: its time is in the goal "
-            f"column). {TOON_NAME}: every material's surface through Shader to RGB, then a "
-            "ColorRamp with constant interpolation on its brightness u = (r + g + b) / 3 into "
+            f"timed apart (in the goal column). {TOON_NAME}: every material's surface through "
+            "Shader to RGB, then a ColorRamp with constant interpolation on its brightness "
+            "u = (r + g + b) / 3 into "
             "an Emission of colour x level / u (black where u = 0; cel: grey), as styletrace's cel "
             "with its defaults: "
             f"{CEL_BANDS} bands, thresholds the brightness quantiles 1/{CEL_BANDS}.. of the "
