@@ -5,14 +5,16 @@ The room, 40 x 40, cel at Samples 16, Denoise auto (the expectation denoiser), f
   frames are not their F12s, and the last frame changes less from the one before than with reuse
   off (display-space pixels changing by more than 0.1);
 - with Temporal reuse off, every written frame is the F12 of its frame (today's frames);
-- a cube that moves every frame: the wall it uncovers carries no trace of it (the history is
-  carried along the Vector pass and refused where the depth differs);
+- a cube that moves every frame, in front of the plain walls and of a back wall of random grey
+  texels: the wall it uncovers carries no trace of it (the history is carried along the Vector
+  pass and refused where the depth differs);
 - a second Render Animation of the same still shot starts again at its first frame.
 """
 import os
 
 import bpy
 import numpy as np
+import pytest
 import scenes as S
 
 from styletrace.measures import srgb
@@ -21,8 +23,27 @@ FRAMES = (1, 2, 3, 4, 5)
 SIZE = 40
 
 
-def shot(moving: bool = False, reuse: bool = True):
+def texel_wall():
+    """The room's back wall covered with 16 x 16 random grey texels (no blueness of its own)."""
+    img = bpy.data.images.new("texels", 16, 16)
+    px = np.ones((16, 16, 4), np.float32)
+    px[..., :3] = np.random.default_rng(7).uniform(0.15, 0.9, (16, 16, 1))
+    img.pixels.foreach_set(px.reshape(-1))
+    img.pack()
+    mat, node = S.material("texels")
+    tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    tex.image, tex.interpolation = img, "Closest"
+    mat.node_tree.links.new(tex.outputs["Color"], node.inputs["Color"])
+    wall = next(o for o in bpy.data.objects
+                if o.type == "MESH" and tuple(round(v, 3) for v in o.location) == (0, 2, 2))
+    wall.data.materials.clear()
+    wall.data.materials.append(mat)
+
+
+def shot(moving: bool = False, reuse: bool = True, textured: bool = False):
     s = S.room(SIZE)
+    if textured:
+        texel_wall()
     blue, _ = S.material("blue", "ShaderNodeBsdfDiffuse", Color=(0.05, 0.1, 0.9))
     cube = S.cube(0.6, (-0.8, 0.0, 0.3), mat=blue)
     if moving:
@@ -76,12 +97,14 @@ def blueness(img):
     return img[..., 2] - 0.5 * (img[..., 0] + img[..., 1])
 
 
-def test_a_moving_cube_leaves_no_trace_where_it_was(tmp_path):
+@pytest.mark.parametrize("textured", [False, True], ids=["plain", "texels"])
+def test_a_moving_cube_leaves_no_trace_where_it_was(tmp_path, textured):
     """The blue cube moves across the room: the wall it uncovers in frame k (blue in frame k - 1's
     F12, not in frame k's) is carried no history of the cube (its depth differs), so the
     reused frame is no bluer there than frame k's own F12 (within a tenth of the cube's
-    blueness), while on the cube itself the history is carried along."""
-    s = shot(moving=True, reuse=True)
+    blueness), while on the cube itself the history is carried along; the same in front of a
+    wall of random grey texels."""
+    s = shot(moving=True, reuse=True, textured=textured)
     written = animation(s, tmp_path / "anim")
     np.testing.assert_allclose(written[0], f12(s, FRAMES[0], str(tmp_path / "f12_1")),
                                rtol=1e-6, atol=1e-7)
