@@ -132,6 +132,21 @@ def room(size: int = 64):
     return s
 
 
+def texel_material(name: str, seed: int, grey: bool = False, size: int = 16):
+    """A diffuse material of `size` x `size` random texels in [0.1, 0.9] (grey: the same in every
+    channel), drawn without interpolation (Closest), so that a shift of the view shows."""
+    img = bpy.data.images.new(name, size, size)
+    px = np.ones((size, size, 4), np.float32)
+    px[..., :3] = np.random.default_rng(seed).uniform(0.1, 0.9, (size, size, 1 if grey else 3))
+    img.pixels.foreach_set(px.reshape(-1))
+    img.pack()
+    mat, node = material(name)
+    tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    tex.image, tex.interpolation = img, "Closest"
+    mat.node_tree.links.new(tex.outputs["Color"], node.inputs["Color"])
+    return mat
+
+
 def checker_image(name="checker", size=32):
     """An 8-bit sRGB texture, asymmetric in v (blue rising, red-green falling) and periodic in u
     (red and green alternating), so that it tiles without a seam. Smooth: Cycles interpolates

@@ -25,15 +25,7 @@ SIZE = 40
 
 def texel_wall():
     """The room's back wall covered with 16 x 16 random grey texels (no blueness of its own)."""
-    img = bpy.data.images.new("texels", 16, 16)
-    px = np.ones((16, 16, 4), np.float32)
-    px[..., :3] = np.random.default_rng(7).uniform(0.15, 0.9, (16, 16, 1))
-    img.pixels.foreach_set(px.reshape(-1))
-    img.pack()
-    mat, node = S.material("texels")
-    tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
-    tex.image, tex.interpolation = img, "Closest"
-    mat.node_tree.links.new(tex.outputs["Color"], node.inputs["Color"])
+    mat = S.texel_material("texels", seed=7, grey=True)
     wall = next(o for o in bpy.data.objects
                 if o.type == "MESH" and tuple(round(v, 3) for v in o.location) == (0, 2, 2))
     wall.data.materials.clear()

@@ -109,13 +109,19 @@ def test_frames_through_an_animated_camera_compile_nothing():
         vp.close()
 
 
-def test_an_animated_object_moves_with_the_same_seed():
+def animated_cube_room():
+    """The room, its cube keyframed from frame 1 to 0.6 to the left at frame 5, and a viewport
+    at frame 1 (`start`): (settings, viewport)."""
     st = room()
     cube = bpy.data.objects["Cube"]
     cube.keyframe_insert("location", frame=1)
     cube.location.x -= 0.6
     cube.keyframe_insert("location", frame=5)
-    vp = start(st)
+    return st, start(st)
+
+
+def test_an_animated_object_moves_with_the_same_seed():
+    st, vp = animated_cube_room()
     shown, before = vp.session.latest()[0], vp.session.surfaces.depth
     try:
         assert update(vp, st, 5)["kind"] == "objects"
@@ -130,12 +136,8 @@ def test_an_animated_object_moves_with_the_same_seed():
 
 
 def test_object_moves_compile_nothing_and_render_as_a_fresh_export():
-    st = room()
+    st, vp = animated_cube_room()
     cube = bpy.data.objects["Cube"]
-    cube.keyframe_insert("location", frame=1)
-    cube.location.x -= 0.6
-    cube.keyframe_insert("location", frame=5)
-    vp = start(st)
     kept = [made for _, made in vp.sync.entries["Cube"].built]
     images = [vp.session.latest()[0]]
     dr.set_flag(dr.JitFlag.KernelHistory, True)

@@ -26,16 +26,7 @@ def wall_scene():
     s = S.reset(SIZE)
     background = s.world.node_tree.nodes["Background"].inputs
     background["Color"].default_value, background["Strength"].default_value = (1, 1, 1, 1), 1.0
-    img = bpy.data.images.new("texels", 16, 16)
-    px = np.ones((16, 16, 4), np.float32)
-    px[..., :3] = np.random.default_rng(5).uniform(0.1, 0.9, (16, 16, 3))
-    img.pixels.foreach_set(px.reshape(-1))
-    img.pack()
-    mat, node = S.material("wall")
-    tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
-    tex.image, tex.interpolation = img, "Closest"
-    mat.node_tree.links.new(tex.outputs["Color"], node.inputs["Color"])
-    S.plane(8, (0, 2, 1), (math.pi / 2, 0, 0), mat=mat)
+    S.plane(8, (0, 2, 1), (math.pi / 2, 0, 0), mat=S.texel_material("wall", seed=5))
     red, _ = S.material("red", Color=(0.8, 0.05, 0.05))
     S.cube(0.6, (0.3, -1.0, 1.0), mat=red)
     S.camera((0, -4, 1), (math.pi / 2, 0, 0), lens=35)
