@@ -158,3 +158,22 @@ def test_the_compositors_cryptomatte_node_picks_each_object(tmp_path):
         assert np.array_equal(mine[whole], mask[whole]), name
         assert iou(mine, mask) >= (0.8 if mask.sum() < 100 else 0.93), name
         assert theirs.sum() > 0 and iou(mine, theirs) >= 0.9, name
+
+
+def test_an_exported_xml_keeps_the_names(tmp_path, both):
+    """The XML export carries each shape's names in its id: the command line's Cryptomatte
+    passes of the file name Blender's objects and materials, and rank F12's ids."""
+    from styletrace.frontends.api import load_scene
+    from styletrace.kernel.data_passes import MANIFEST, render_data_passes
+    build()
+    xml = str(tmp_path / "scene.xml")
+    assert S.bpy.ops.styletrace.export_xml(filepath=xml) == {"FINISHED"}
+    out = render_data_passes(load_scene(xml), ["crypto_object", "crypto_material"], SPP, 1)
+    _, st_meta = both["STYLETRACE"]
+    f12 = {v for k, v in st_meta.items() if k.endswith("/manifest")}
+    mine = {json.dumps(m, separators=(",", ":"), ensure_ascii=False)
+            for m in out[MANIFEST].values()}
+    assert mine == f12
+    st, _ = both["STYLETRACE"]
+    ids = {f"{v:08x}" for v in np.unique(out["crypto_object"][..., 0].view(np.uint32))}
+    assert ids == {f"{v:08x}" for v in np.unique(st["CryptoObject00"][..., 0].view(np.uint32))}
