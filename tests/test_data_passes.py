@@ -186,3 +186,41 @@ def test_a_frames_manifest_names_the_passes_only_where_given():
     plain = frame_settings("orbit", ["cornell-box"], [{}], 4, 90.0, asked.with_(data_passes=()),
                            "llvm_ad_rgb")
     assert "passes" not in plain
+
+
+def header(path) -> dict:
+    meta = mi.Bitmap(str(path)).metadata()
+    return {k: meta[k] for k in meta.keys() if k.startswith("cryptomatte/")}
+
+
+def test_cryptomatte_channels_and_manifests_at_the_front_ends(tmp_path):
+    """`--passes crypto_object,crypto_material` writes Cycles' channels and the standard's
+    header; Python returns the same manifests; a stopped run's plain writer keeps them."""
+    import json
+
+    from styletrace.cryptomatte import type_key
+    from styletrace.kernel.data_passes import MANIFEST
+    out = tmp_path / "c.exr"
+    asked = ["--passes", "crypto_object,crypto_material"]
+    assert main(["render", "cornell-box", *SMALL, *asked, "-o", str(out)]) == 0
+    ch, meta = channels(out), header(out)
+    kinds = ("CryptoObject", "CryptoMaterial")
+    assert {f"{t}{k:02d}.{c}" for t in kinds for k in range(3) for c in "rgba"} <= set(ch)
+    _, extra = styletrace.render("cornell-box", style="cel", spp=2, inner=2, width=16,
+                                 height=12, passes=asked[1])
+    for kind in kinds:
+        key = f"cryptomatte/{type_key(kind)}/"
+        assert meta[key + "name"] == kind and meta[key + "hash"] == "MurmurHash3_32"
+        assert meta[key + "conversion"] == "uint32_to_float32"
+        names = json.loads(meta[key + "manifest"])
+        assert names == extra[MANIFEST][kind]
+        ids = {f"{v:08x}" for v in np.unique(ch[f"{kind}00.r"].view(np.uint32))} - {"00000000"}
+        assert ids and ids <= set(names.values())
+    assert set(extra[MANIFEST]["CryptoMaterial"]) == {"white", "red", "green"}
+    from types import SimpleNamespace
+
+    from styletrace.pipeline.runner import Plain
+    finisher = Plain()
+    finisher.data = dict(extra)
+    prog = SimpleNamespace(image=np.zeros((12, 16, 3), np.float32), aovs=None)
+    assert header(finisher.write_plain(prog, str(tmp_path / "stopped.exr"), "rgb")) == meta

@@ -20,6 +20,7 @@ import zlib
 
 import numpy as np
 
+from styletrace.cryptomatte import exr_metadata
 from styletrace.errors import UsageError
 
 IMAGE_TYPES = (".exr", ".png")
@@ -165,9 +166,10 @@ def _exr_attribute(name: str, kind: str, value: bytes) -> bytes:
     return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
 
 
-def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
-    """A single-part scanline OpenEXR file, float32 channels, no compression, one line per block.
-    The format stores channels sorted by name, each line channel after channel."""
+def _plain_exr(data: np.ndarray, names: list[str], strings: dict | None = None) -> bytes:
+    """A single-part scanline OpenEXR file, float32 channels, no compression, one line per block,
+    `strings` as string attributes of its header. The format stores channels sorted by name,
+    each line channel after channel."""
     height, width = data.shape[:2]
     order = sorted(range(len(names)), key=lambda i: names[i])
     chlist = b"".join(names[i].encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1)
@@ -181,7 +183,9 @@ def _plain_exr(data: np.ndarray, names: list[str]) -> bytes:
               + _exr_attribute("lineOrder", "lineOrder", b"\0")
               + _exr_attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0))
               + _exr_attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
-              + _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+              + _exr_attribute("screenWindowWidth", "float", struct.pack("<f", 1.0))
+              + b"".join(_exr_attribute(k, "string", v.encode("utf-8"))
+                         for k, v in (strings or {}).items()) + b"\0")
     # every line: y, byte count, then the channels' values (sorted channel order, little-endian
     # float32)
     lines = np.ascontiguousarray(data[..., order].transpose(0, 2, 1),
@@ -246,7 +250,7 @@ def encode_plain(image, ext: str, pixel_format: str = "rgb", aovs: dict | None =
     if ext != ".exr":
         raise ValueError(f"unknown image type {ext!r}: expected one of {', '.join(IMAGE_TYPES)}")
     data, names = with_aovs(image, list(name), aovs or {})
-    return _plain_exr(data, names)
+    return _plain_exr(data, names, header_of(aovs))
 
 
 #: the EXR channels of the error AOVs, after the image's own (R, G, B[, A]); see `api.Progress.aovs`
@@ -273,7 +277,26 @@ DATA_CHANNELS = (("depth", ("Depth.Z",)), ("normal", ("Normal.X", "Normal.Y", "N
                  ("uv", ("UV.U", "UV.V", "UV.A")), ("mist", ("Mist.Z",)),
                  ("object_index", ("Object Index.X",)), ("material_index", ("Material Index.X",)),
                  ("albedo", ("Denoising Albedo.R", "Denoising Albedo.G", "Denoising Albedo.B")),
-                 ("emission", ("Emission.R", "Emission.G", "Emission.B")))
+                 ("emission", ("Emission.R", "Emission.G", "Emission.B")),
+                 # Cycles' names: the standard's lower-case channels, two ranks to a layer
+                 *((key, tuple(f"{kind}{k:02d}.{c}" for k in range(3) for c in "rgba"))
+                   for key, kind in (("crypto_object", "CryptoObject"),
+                                     ("crypto_material", "CryptoMaterial"))))
+#: the data passes' entry of the Cryptomatte manifests ({type name: {name: hex}}), written as the
+#: standard's EXR header attributes (`cryptomatte.exr_metadata`)
+MANIFEST = "manifest"
+
+
+def header_of(aovs: dict | None) -> dict[str, str]:
+    """The EXR header attributes the channels bring: the Cryptomatte types' metadata.
+
+    Args:
+        aovs: the error AOVs and data passes by key, or None.
+
+    Returns:
+        {attribute name: string value}; empty without a Cryptomatte manifest.
+    """
+    return exr_metadata((aovs or {}).get(MANIFEST) or {})
 
 
 def with_aovs(image: np.ndarray, names: list[str], aovs: dict) -> tuple[np.ndarray, list[str]]:
@@ -325,6 +348,9 @@ def encode_with_aovs(image, aovs: dict, pixel_format: str = "rgb") -> bytes:
     image = np.asarray(image, dtype=np.float32)
     data, names = with_aovs(image, list(bitmap_format(pixel_format, image.shape[-1])), aovs)
     bmp = mi.Bitmap(data, pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
+    metadata = bmp.metadata()
+    for key, value in header_of(aovs).items():  # the OpenEXR writer stores them as strings
+        metadata[key] = value
     stream = mi.MemoryStream()
     bmp.write(stream, mi.Bitmap.FileFormat.OpenEXR)
     del bmp

@@ -4,12 +4,12 @@ F12 is one pipeline run (`f12.run_f12`): progress after each pass (`update_progr
 far shown, `test_break` asked between passes (a cancel keeps the finished passes). Render passes:
 the error AOVs (`aovs`), a line mask with lines, a Noisy pass where Denoise is on (then no error
 passes), and the data passes (Depth, Normal, Vector, Position, UV, Mist, the indices,
-Denoising Albedo, Emission) where the view layer asks for them (Cycles' switches; `f12.DATA_PASSES`,
-docs/passes.md). "Record buffer" keeps the look-development buffer for
-restyles (`restyle`). Each render
-uses its frame's seed; a cancel during Render Animation ends it (`animation`). Previews render
-Blender's preview scene at their own budget (`preview`); Rendered shading is `viewport`'s. Errors
-the user can cause are one-line Blender error reports. Docs: docs/blender.md.
+Denoising Albedo, Emission, Cryptomatte object and material, their manifests in the result's
+metadata) where the view layer asks for them (Cycles' switches; `f12.switches`,
+docs/passes.md). "Record buffer" keeps the look-development buffer for restyles (`restyle`).
+Each render uses its frame's seed; a cancel during Render Animation ends it (`animation`).
+Previews render Blender's preview scene at their own budget (`preview`); Rendered shading is
+`viewport`'s. Errors the user can cause are one-line Blender error reports. Docs: docs/blender.md.
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ import numpy as np
 from styletrace.blender import animation, f12, motion, preview, restyle, viewport_hooks
 from styletrace.denoise.finishers import Denoised
 from styletrace.errors import StyletraceError
+from styletrace.kernel.data_passes import MANIFEST
 
 COMBINED = "Combined"
 #: what the last render did: camera samples per pixel finished and asked for, whether it was
@@ -100,8 +101,8 @@ class StyletraceEngine(bpy.types.RenderEngine):
         if st.lines:
             self.register_pass(scene, renderlayer, f12.LINE_MASK, 1, "X", "VALUE")
         for key in f12.data_passes_of(renderlayer):
-            name, channels, ids, kind, _ = f12.DATA_PASSES[key]
-            self.register_pass(scene, renderlayer, name, channels, ids, kind)
+            for name, channels, ids, kind in f12.render_passes(key):
+                self.register_pass(scene, renderlayer, name, channels, ids, kind)
 
     def render(self, depsgraph):
         try:
@@ -157,8 +158,8 @@ class StyletraceEngine(bpy.types.RenderEngine):
         if st.lines:
             self.add_pass(f12.LINE_MASK, 1, "X")
         for key in data:
-            name, channels, ids, *_ = f12.DATA_PASSES[key]
-            self.add_pass(name, channels, ids)
+            for name, channels, ids, _ in f12.render_passes(key):
+                self.add_pass(name, channels, ids)
         start = time.perf_counter()
         source = runner.passes()
         prog = None
@@ -194,8 +195,11 @@ class StyletraceEngine(bpy.types.RenderEngine):
             scene = depsgraph.scene
             animation.frame_history(st, frame_passes, scene.frame_current == scene.frame_start)
         for key in data:
-            name, channels, *_ = f12.DATA_PASSES[key]
-            extra[name] = (frame_passes[key], channels)
+            for name, values, channels in f12.pass_values(key, frame_passes[key]):
+                extra[name] = (values, channels)
+        # the Cryptomatte manifests, where the compositor's Cryptomatte node finds them
+        stamps = f12.stamp_fields(depsgraph.view_layer.name,
+                                  frame_passes.get(MANIFEST, {}))
         if st.lines and not self.stop_requested():
             mask = f12.line_mask(sc, st, self.stop_requested)
             if mask is not None:
@@ -206,7 +210,7 @@ class StyletraceEngine(bpy.types.RenderEngine):
             self.progress(prog.spp_done / prog.spp_total, "styletrace: denoising")
             image = runner.finish(prog)
             LAST["seconds"] = time.perf_counter() - start
-        self._write(prog, aovs, extra, w, h, image, noisy)
+        self._write(prog, aovs, extra, w, h, image, noisy, stamps)
 
     def _show(self, image, w, h):
         result = self.begin_result(0, 0, w, h)
@@ -214,10 +218,14 @@ class StyletraceEngine(bpy.types.RenderEngine):
         self.update_result(result)
         self.end_result(result)
 
-    def _write(self, prog, aovs, extra, w, h, image=None, noisy=None):
+    def _write(self, prog, aovs, extra, w, h, image=None, noisy=None, stamps=None):
         """The render result: Combined (the image, else the passes' average), Noisy, the error
-        AOVs, and `extra`'s passes ({Blender's pass name: (values, channels)}: the line mask, the
-        data passes)."""
+        AOVs, `extra`'s passes ({Blender's pass name: (values, channels)}: the line mask, the
+        data passes), and `stamps` ({field: value}) in its metadata."""
+        if stamps:  # into the whole render's result (a begun one's metadata is not kept)
+            final = self.get_result()
+            for field, value in stamps.items():
+                final.stamp_data_add_field(field, value)
         result = self.begin_result(0, 0, w, h)
         layer = result.layers[0]
         _put(layer.passes[COMBINED], prog.image if image is None else image, 4)

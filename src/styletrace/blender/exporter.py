@@ -8,9 +8,10 @@ space, one shape per material slot. A mesh that is drawn as an instance (collect
 particles, geometry nodes instances) becomes one `shapegroup` in its local space and one `instance`
 per placement.
 
-A shape's id carries its object's and its material's pass index where they are not 0
-(`kernel.pass_indices.shape_id`: 'shape_3__ob7__ma5'), for the Object and Material Index passes;
-the XML file keeps those ids (docs/scenes.md).
+A shape's id carries its object's and its material's names (`kernel.asset_names.named_id`, for
+the Cryptomatte passes) and their pass indices where they are not 0
+(`kernel.pass_indices.shape_id`: 'shape_3__cm..._...__ob7__ma5', for the Object and Material Index
+passes); the XML file keeps those ids (docs/scenes.md).
 """
 from __future__ import annotations
 
@@ -21,7 +22,12 @@ from typing import Callable
 import numpy as np
 
 from styletrace.blender import camera, lights, materials, mesh, world
+from styletrace.kernel.asset_names import named_id
 from styletrace.kernel.pass_indices import shape_id
+
+#: the material name of a slot without a material: Cycles' default surface shader's (measured:
+#: Cycles 5.0's Cryptomatte manifest names such a mesh's material so)
+NO_MATERIAL = "default_surface"
 
 
 def placement_key(inst) -> tuple:
@@ -93,7 +99,7 @@ class Exporter:
 
     def _shapes(self, obj, matrix) -> list[dict]:
         """The shape descriptions of an evaluated mesh object (world space if `matrix` is given),
-        each with its pass indices in "indices" (`shapes_of`)."""
+        each with its pass indices in "indices" and its names in "names" (`shapes_of`)."""
         return self.shapes_of(obj, self.parts(obj, matrix))
 
     def parts(self, obj, matrix) -> list:
@@ -123,8 +129,9 @@ class Exporter:
             obj: the evaluated object. parts: its parts.
 
         Returns:
-            One "blender_mesh" description per part, its pass indices in "indices" (object's,
-            material's; popped by `export`, dropped by the viewport).
+            One "blender_mesh" description per part, its pass indices in "indices" and its
+            object's and material's names in "names" (object's, material's; popped by `export`,
+            dropped by the viewport).
         """
         shapes = []
         slots = obj.material_slots
@@ -137,6 +144,8 @@ class Exporter:
                 "bsdf": bsdf,
                 "name": f"{obj.name}.{part.slot}",
                 "indices": (int(obj.pass_index), int(mat.pass_index) if mat is not None else 0),
+                # what Cycles hashes: the object's and the material's names (their manifests)
+                "names": (obj.name, mat.name if mat is not None else NO_MATERIAL),
             }
             if emitter is not None:
                 shape["emitter"] = emitter
@@ -175,14 +184,15 @@ class Exporter:
                         n += 1
                 else:
                     for shape in self._shapes(obj, matrix):
-                        key = shape_id(f"shape_{n}", *shape.pop("indices"))
+                        key = shape_id(named_id(f"shape_{n}", *shape.pop("names")),
+                                       *shape.pop("indices"))
                         desc[key] = shape
                         self.placements[key] = placement_key(inst)
                         n += 1
         for key, shapes in groups.items():
             if shapes:
                 desc[group_id(key)] = {"type": "shapegroup", **{
-                    _part_id(group_id(key), i, s.pop("indices")): s
+                    _part_id(group_id(key), i, s.pop("indices"), s.pop("names")): s
                     for i, s in enumerate(shapes)}}
         env = world.convert_world(self.scene.world, self.ctx)
         if env is not None:
@@ -191,10 +201,10 @@ class Exporter:
         return desc
 
 
-def _part_id(group: str, i: int, indices: tuple[int, int]) -> str:
-    """The id of part i of a shapegroup: 'part_i', or with pass indices the group's id in front
-    (an XML file's ids are one namespace)."""
-    return shape_id(f"{group}_{i}", *indices) if any(indices) else f"part_{i}"
+def _part_id(group: str, i: int, indices: tuple[int, int], names: tuple[str, str]) -> str:
+    """The id of part i of a shapegroup: the group's id in front (an XML file's ids are one
+    namespace), then its names and pass indices."""
+    return shape_id(named_id(f"{group}_{i}", *names), *indices)
 
 
 def export(depsgraph, spp: int = 16, warn: Callable[[str], None] = print,

@@ -40,6 +40,69 @@ DATA_PASSES = {"depth": ("Depth", 1, "Z", "VALUE", "use_pass_z"),
                # styletrace does not write
                "albedo": ("Denoising Albedo", 3, "RGB", "COLOR", "cycles.denoising_store_passes"),
                "emission": ("Emission", 3, "RGB", "COLOR", "use_pass_emit")}
+#: the Cryptomatte passes (`kernel.data_passes`' crypto_object and crypto_material): Cycles' type
+#: name, its passes '<type>00', '<type>01', ... (RGBA, two ranks each), and the view layer's switch
+CRYPTO_PASSES = {"crypto_object": ("CryptoObject", "use_pass_cryptomatte_object"),
+                 "crypto_material": ("CryptoMaterial", "use_pass_cryptomatte_material")}
+
+
+def switches() -> list[tuple[str, str]]:
+    """Every pass the view layer can ask for and its switch, in the order they are written.
+
+    Returns:
+        [(key, the switch's path)]: `DATA_PASSES`' then `CRYPTO_PASSES`'.
+    """
+    return ([(key, v[-1]) for key, v in DATA_PASSES.items()]
+            + [(key, v[-1]) for key, v in CRYPTO_PASSES.items()])
+
+
+def render_passes(key: str) -> tuple[tuple[str, int, str, str], ...]:
+    """The render passes of a data pass, as Cycles 5.0 declares them.
+
+    Args:
+        key: a key of `DATA_PASSES` or `CRYPTO_PASSES`.
+
+    Returns:
+        ((Blender's pass name, channels, channel ids, pass type), ...): one for a data pass, one
+        RGBA layer per two ranks of a Cryptomatte pass ('CryptoObject00' ...).
+    """
+    if key in CRYPTO_PASSES:
+        from styletrace.kernel.crypto_ranks import LEVELS
+        kind = CRYPTO_PASSES[key][0]
+        return tuple((f"{kind}{k:02d}", 4, "RGBA", "COLOR") for k in range(LEVELS // 2))
+    name, channels, ids, kind, _ = DATA_PASSES[key]
+    return ((name, channels, ids, kind),)
+
+
+def pass_values(key: str, values: np.ndarray) -> list[tuple[str, np.ndarray, int]]:
+    """A data pass's values cut into its render passes (`render_passes`).
+
+    Args:
+        key: the pass's key. values: its H x W (x C) array (`kernel.data_passes`).
+
+    Returns:
+        [(Blender's pass name, H x W (x channels) values, channels)].
+    """
+    passes = render_passes(key)
+    if len(passes) == 1:
+        return [(passes[0][0], values, passes[0][1])]
+    return [(name, values[..., 4 * k:4 * k + 4], 4) for k, (name, *_) in enumerate(passes)]
+
+
+def stamp_fields(view_layer_name: str, manifests: dict[str, dict[str, str]]) -> dict[str, str]:
+    """The render result's metadata of the Cryptomatte passes, as Cycles writes them: the
+    standard's keys of the type '<view layer>.<type>' (the name the compositor's Cryptomatte node
+    looks for).
+
+    Args:
+        view_layer_name: the view layer's name. manifests: {type name: manifest}
+            (`kernel.data_passes.MANIFEST`'s entry).
+
+    Returns:
+        {'cryptomatte/<key>/name' ...: value} (`cryptomatte.exr_metadata`).
+    """
+    from styletrace.cryptomatte import exr_metadata
+    return exr_metadata({f"{view_layer_name}.{kind}": names for kind, names in manifests.items()})
 
 
 def switch(view_layer, prop: str) -> tuple[object, str] | None:
@@ -62,15 +125,16 @@ def switch(view_layer, prop: str) -> tuple[object, str] | None:
 
 
 def data_passes_of(view_layer) -> tuple[str, ...]:
-    """The data passes a view layer asks for (its Data and Light pass switches, Cycles' own).
+    """The data passes a view layer asks for (its Data, Light and Cryptomatte pass switches,
+    Cycles' own).
 
     Args:
         view_layer: the `bpy.types.ViewLayer`.
 
     Returns:
-        Their keys in `DATA_PASSES` order (empty: none, and nothing is traced for them).
+        Their keys in `switches` order (empty: none, and nothing is traced for them).
     """
-    found = ((key, switch(view_layer, prop)) for key, (*_, prop) in DATA_PASSES.items())
+    found = ((key, switch(view_layer, prop)) for key, prop in switches())
     return tuple(key for key, where in found if where is not None and getattr(*where))
 
 

@@ -170,7 +170,8 @@ class STYLETRACE_PT_material(EnginePanel, bpy.types.Panel):
 
 def pass_rows(view_layer) -> list[tuple[object, str]]:
     """(owner, property name) of the view layer's data pass switches the engine reads: Cycles'
-    own (`f12.DATA_PASSES`), so a scene keeps its passes when it changes engine.
+    own (`f12.switches`: the data passes', then Cryptomatte's), so a scene keeps its passes when
+    it changes engine.
 
     Args:
         view_layer: the `bpy.types.ViewLayer`.
@@ -178,8 +179,8 @@ def pass_rows(view_layer) -> list[tuple[object, str]]:
     Returns:
         The rows, in drawing order.
     """
-    from styletrace.blender.f12 import DATA_PASSES, switch
-    rows = (switch(view_layer, prop) for *_, prop in DATA_PASSES.values())
+    from styletrace.blender.f12 import switch, switches
+    rows = (switch(view_layer, prop) for _, prop in switches())
     return [row for row in rows if row is not None]
 
 

@@ -213,8 +213,9 @@ class SceneSync:
                         self.pending[(name, i)] = (made, part)
                     return Entry(kept.built, matrix, data, mats, kept.slots)
         shapes = ex.shapes_of(obj, parts)
-        for s in shapes:  # the viewport writes no index passes
+        for s in shapes:  # the viewport writes no index or Cryptomatte passes
             s.pop("indices")
+            s.pop("names")
         return Entry([("shape", build.node(s)) for s in shapes], matrix, data, mats,
                      tuple(p.slot for p in parts))
 

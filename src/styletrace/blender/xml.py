@@ -13,6 +13,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from styletrace.kernel.asset_names import names_in
 from styletrace.kernel.pass_indices import indices_of
 
 TAGS = {
@@ -41,6 +42,12 @@ TAGS = {
 POINTS = {"position"}
 VECTORS = {"direction"}
 
+
+
+def _marked(key: str) -> bool:
+    """Whether a description's key is an id the XML file keeps: it carries a shape's names
+    (`kernel.asset_names`) or pass indices (`kernel.pass_indices`)."""
+    return names_in(key) is not None or any(indices_of(key))
 
 class Writer:
     """Writes one description as a Mitsuba XML file, its meshes and images in `<name>_files/`.
@@ -71,8 +78,8 @@ class Writer:
             flat = " ".join(repr(float(v)) for v in value.reshape(-1))
             self._emit(depth, f'<transform name={n}><matrix value="{flat}"/></transform>')
         elif isinstance(value, dict):
-            # a shape in a shapegroup keeps an id that carries pass indices
-            self._object(value, depth, name, ident=name if any(indices_of(name)) else "")
+            # a shape in a shapegroup keeps an id that carries its names or pass indices
+            self._object(value, depth, name, ident=name if _marked(name) else "")
         elif isinstance(value, bool):
             self._emit(depth, f'<boolean name={n} value="{str(value).lower()}"/>')
         elif isinstance(value, (int, np.integer)):
@@ -145,8 +152,8 @@ class Writer:
         for key, value in desc.items():
             if key == "type":
                 continue
-            # a shapegroup's id is referenced; a shape's carries its pass indices
-            kept = value.get("type") == "shapegroup" or any(indices_of(key))
+            # a shapegroup's id is referenced; a shape's carries its names and pass indices
+            kept = value.get("type") == "shapegroup" or _marked(key)
             self._object(value, 1, ident=key if kept else "")
         self.lines.append("</scene>")
         tmp = self.path + ".tmp"

@@ -31,7 +31,12 @@ Cycles 5.0, tests/blender/test_data_passes.py):
 - albedo: the denoiser's albedo guide (`denoise.guides.first_hit`, a pixel's box mean of rays of
   its own, with this seed);
 - emission: the radiance the hit's own emitter sends to the camera (an area light's surface, an
-  emitting mesh), averaged over all samples, a miss as 0 (the world is not in it).
+  emitting mesh), averaged over all samples, a miss as 0 (the world is not in it);
+- crypto_object, crypto_material: the Cryptomatte standard's ranks of the hit shapes' object and
+  material ids (`kernel.asset_names`, `kernel.crypto_ranks`): per pixel, the `LEVELS` ids that
+  cover most of its samples, each with its share (a miss covers none), as 3 RGBA layers
+  (id, coverage, id, coverage); the result's `MANIFEST` entry names them
+  ({'CryptoObject' | 'CryptoMaterial': {name: 8 hex digits}}).
 Docs: docs/passes.md.
 """
 from __future__ import annotations
@@ -45,15 +50,22 @@ import numpy as np
 from styletrace.errors import SceneError, UsageError
 from styletrace.gate import dr, mi
 from styletrace.host_arrays import aligned
+from styletrace.kernel.asset_names import MATERIAL, OBJECT, NameTable
+from styletrace.kernel.crypto_ranks import LEVELS, ranks
 from styletrace.kernel.mist import parse_mist
 from styletrace.kernel.pass_indices import IndexTable
 
 #: the data passes, in the order they are written
 DATA_PASSES = ("depth", "normal", "vector", "position", "uv", "mist", "object_index",
-               "material_index", "albedo", "emission")
-#: channels of each pass
+               "material_index", "albedo", "emission", "crypto_object", "crypto_material")
+#: channels of each pass (a Cryptomatte pass: `LEVELS` (id, coverage) pairs)
 CHANNELS = {"depth": 1, "normal": 3, "vector": 4, "position": 3, "uv": 3, "mist": 1,
-            "object_index": 1, "material_index": 1, "albedo": 3, "emission": 3}
+            "object_index": 1, "material_index": 1, "albedo": 3, "emission": 3,
+            "crypto_object": 2 * LEVELS, "crypto_material": 2 * LEVELS}
+#: the Cryptomatte types of the Cryptomatte passes, as Cycles names them
+CRYPTO = {"crypto_object": OBJECT, "crypto_material": MATERIAL}
+#: the result's entry of the Cryptomatte passes' manifests (present only where one is asked for)
+MANIFEST = "manifest"
 #: Depth where the first sample hits nothing: Cycles' value (1e10)
 BACKGROUND_DEPTH = 1e10
 #: camera samples traced at once (bounds the memory of a launch and of its numpy copies)
@@ -372,7 +384,8 @@ def render_data_passes(scene, names: Iterable[str], spp: int, seed: int = 0,
 
     Returns:
         {name: float32 array}: H x W for the passes of one channel, else H x W x `CHANNELS`
-        (an empty dict for no names).
+        (an empty dict for no names); with a Cryptomatte pass, also `MANIFEST`: {type name
+        ('CryptoObject', 'CryptoMaterial'): its manifest} for the types asked for.
 
     Raises:
         SceneError: vector with a sensor no pixel map projects (`View.of`).
@@ -391,7 +404,10 @@ def render_data_passes(scene, names: Iterable[str], spp: int, seed: int = 0,
             from styletrace.denoise.guides import first_hit
             out["albedo"] = first_hit(scene, int(spp), seed, footprint="pixel",
                                       lanes_per_launch=lanes).albedo
-    return {name: out[name] for name in names}
+    result = {name: out[name] for name in names}
+    if MANIFEST in out:
+        result[MANIFEST] = out[MANIFEST]
+    return result
 
 
 def parallel(sensor) -> bool:
@@ -432,6 +448,8 @@ def _render(scene, sensor, names, spp, seed, motion, lanes, mist) -> dict[str, n
     ortho = parallel(sensor) if "mist" in names else False
     table = (IndexTable.of(scene) if {"object_index", "material_index"} & set(names)
              else None)
+    crypto = [name for name in names if name in CRYPTO]
+    named = NameTable.of(scene) if crypto else None
     out = {name: np.zeros((h * w, CHANNELS[name]), np.float32) for name in names
            if name != "albedo"}
     step = max(1, int(lanes) // spp)
@@ -462,7 +480,8 @@ def _render(scene, sensor, names, spp, seed, motion, lanes, mist) -> dict[str, n
             # a lane whose shape emits nothing holds a null emitter: its call gives 0
             radiance = si.emitter(scene, valid).eval(si, valid)
             lane["emission"] = [dr.select(valid, c, 0.0) for c in radiance]
-        dr.eval(hit, lane)
+        ids = dict(zip(CRYPTO, named.lookup(si, valid))) if named is not None else {}
+        dr.eval(hit, lane, ids)
         found = {}
         if "depth" in out:  # the pixel's first sample's
             found["depth"] = _first(lane["depth"], count, spp)
@@ -480,9 +499,16 @@ def _render(scene, sensor, names, spp, seed, motion, lanes, mist) -> dict[str, n
         for name, columns in found.items():
             out[name][first:first + count] = np.stack(
                 [np.array(c, dtype=np.float32) for c in columns], -1)
-    return {name: arr.reshape(h, w, -1) if CHANNELS[name] > 1 else arr.reshape(h, w)
+        for name in crypto:  # ranked on the host: a pixel's samples are a row
+            out[name][first:first + count] = ranks(
+                np.array(ids[name], dtype=np.uint32).reshape(count, spp))
+    done = {name: arr.reshape(h, w, -1) if CHANNELS[name] > 1 else arr.reshape(h, w)
             for name, arr in out.items()}
+    if crypto:
+        done[MANIFEST] = {CRYPTO[name]: named.manifests[CRYPTO[name]] for name in crypto}
+    return done
 
 
-__all__ = ["DATA_PASSES", "CHANNELS", "BACKGROUND_DEPTH", "parse_passes", "View", "Motion",
+__all__ = ["DATA_PASSES", "CHANNELS", "CRYPTO", "MANIFEST", "BACKGROUND_DEPTH",
+           "parse_passes", "View", "Motion",
            "shape_key", "view_depth", "placed", "render_data_passes", "to_world_of", "parallel"]
