@@ -20,6 +20,7 @@ from typing import Any, Callable
 
 from styletrace.errors import UsageError
 from styletrace.images import save_safely
+from styletrace.kernel.error_aovs import has_error_aovs
 from styletrace.pipeline.denoising import Denoising, check_expectation
 from styletrace.pipeline.resolve import Resolved, resolve
 from styletrace.pipeline.runner import Finisher, Plain, Runner, Written
@@ -203,7 +204,7 @@ class Image(Denoised):
             raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, "
                              "which image denoising leaves noisy; use --denoise expectation")
         self.scene, self.seed = resolved.scene, resolved.job.seed
-        self.aovs = bool(resolved.integrator.aov_names())
+        self.aovs = has_error_aovs(resolved.integrator)
         from styletrace.denoise.image import in_pixels
         self.in_pixels = (self.footprint == "pixel"
                           and in_pixels(resolved.scene, resolved.integrator))

@@ -101,6 +101,31 @@ class GroupTable:
         return [L + dr.select(k == i, value, 0.0) for i, L in enumerate(Lg)]
 
 
+def check_scene(scene: mi.Scene, groups: tuple, graph=None) -> GroupTable | None:
+    """Refuse what light groups do not support yet in a scene (participating media, objects with a
+    `styled` BSDF) and marks that do not match the groups (`GroupTable`).
+
+    Args:
+        scene: the scene. groups: the parsed light groups (() : nothing to check).
+        graph: its scene_graph.SceneGraph, if built already.
+
+    Returns:
+        The scene's GroupTable, or None without groups.
+
+    Raises:
+        SceneError: one line naming what is not supported or the bad mark.
+    """
+    if not groups:
+        return None
+    from styletrace.kernel.scene_graph import SceneGraph
+    graph = SceneGraph(scene) if graph is None else graph
+    if graph.has_media or graph.styled:
+        what = "participating media" if graph.has_media else "objects with a 'styled' BSDF"
+        raise SceneError(f"a scene with {what} and light_groups: not yet supported with light "
+                         "groups; render it without light_groups")
+    return GroupTable(scene, groups)
+
+
 def _protocol(est):
     """(estimator, sample map, scale, offset) of a registry estimator (`Transformed`)."""
     inner = getattr(est, "inner", est)
@@ -163,4 +188,4 @@ def run_groups(estimators: list, draw, carry, uniform, active, like) -> tuple[li
     return values, carry
 
 
-__all__ = ["GroupTable", "emitter_group", "run_groups"]
+__all__ = ["GroupTable", "check_scene", "emitter_group", "run_groups"]

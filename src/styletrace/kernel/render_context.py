@@ -18,7 +18,7 @@ from styletrace.gate import mi
 from styletrace.kernel.anchors import Tone
 from styletrace.kernel.emitter_sampler import EmitterSampler
 from styletrace.kernel.lifted_lines import Lifted
-from styletrace.kernel.light_groups import GroupTable
+from styletrace.kernel.light_groups import check_scene as check_groups
 from styletrace.kernel.lines import Lines
 from styletrace.kernel.path import WalkConfig
 from styletrace.kernel.scene_graph import SceneGraph
@@ -79,12 +79,8 @@ class RenderContext:
                 else None
             )
             groups = settings.light_groups
-            if groups and (len(integ.targets) > 1 or integ.media):
-                what = "participating media" if integ.media else "objects with a 'styled' BSDF"
-                raise SceneError(f"a scene with {what} and light_groups: not yet supported with "
-                                 "light groups; drop light_groups or render without them")
             # each emitter's light group (None: no group declared, nothing of them is traced)
-            integ.light_table = GroupTable(scene, groups) if groups else None
+            integ.light_table = check_groups(scene, groups, graph)
             styles = [t.slot.style for t in integ.targets] + [g.slot.style for g in groups[1:]]
             wants = any(getattr(style, "wants_coordinate", False) for style in styles)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
