@@ -20,7 +20,6 @@ from typing import Any, Callable
 
 from styletrace.errors import UsageError
 from styletrace.images import save_safely
-from styletrace.kernel.error_aovs import has_error_aovs
 from styletrace.pipeline.denoising import Denoising, check_expectation
 from styletrace.pipeline.resolve import Resolved, resolve
 from styletrace.pipeline.runner import Finisher, Plain, Runner, Written
@@ -204,7 +203,9 @@ class Image(Denoised):
             raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, "
                              "which image denoising leaves noisy; use --denoise expectation")
         self.scene, self.seed = resolved.scene, resolved.job.seed
-        self.aovs = has_error_aovs(resolved.integrator)
+        # the error AOVs only (a stylized integrator's; light groups' AOVs are no error AOVs)
+        settings = getattr(resolved.integrator, "settings", None)
+        self.aovs = bool(settings is not None and settings.aovs)
         from styletrace.denoise.image import in_pixels
         self.in_pixels = (self.footprint == "pixel"
                           and in_pixels(resolved.scene, resolved.integrator))

@@ -323,6 +323,8 @@ def check_memory(width: int, height: int, ext: str = ".exr") -> None:
 
 class Progress:
     """State after a pass; `image` is the average of the finished passes, computed when asked for.
+    Takes more than 7 parameters: each is one fact of the pass loop's state that the properties
+    read, none of them travels with another.
 
     Args:
         spp_total: the render's camera samples per pixel.
