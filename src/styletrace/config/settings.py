@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
 from styletrace.config import estimator_registry
+from styletrace.config import light_groups as LG
 from styletrace.config.choices import DEFAULT_TESTS as LINE_TESTS_DEFAULT
 from styletrace.config.choices import EMITTER_DEFAULT, EMITTER_MODES, LineSettings
 from styletrace.config.choices import MODES as LINE_MODES
@@ -161,6 +162,16 @@ PROPERTIES = (
         "firefly control: the brightness below which a child is never an "
         "outlier; auto: the scene's median first-hit brightness (the pilot)",
         low=0.0,
+    ),
+    Property(
+        "light_groups",
+        "",
+        "string",
+        "light groups and their styles, `name:style;name:style` (`key:cel;fill:identity`); an "
+        "emitter joins one by `__lg_<name>` in its id, `<name>.<param>` sets a group's style "
+        "parameters, estimator, inner_samples (docs/light_groups.md)",
+        "--light-groups",
+        "SPEC",
     ),
     Property(
         "stylize",
@@ -539,6 +550,9 @@ class Settings:
     #: declared properties that no field above holds (`declare`): parsed by their declaration,
     #: read as attributes
     extra: Mapping[str, Any] = field(default_factory=dict)
+    #: the light groups (`config.light_groups`): () where none is declared, else `default` (the
+    #: integrator's slot) first
+    light_groups: tuple = ()
 
     def __getattr__(self, name: str) -> Any:
         extra = self.__dict__.get("extra", {})
@@ -753,7 +767,9 @@ def parse(values: Mapping[str, Any]) -> Settings:
             f"`--pass-spp` (command line) or passes(lanes_per_pass=...) (Python) instead"
         )
     own = tuple(p.name for p in PROPERTIES if p.name not in SLOT_KEYS)
-    slot = parse_slot(values, extra_keys=own + BASE_KEYS)
+    grouped = LG.group_keys(values)  # `<group>.<key>`: a light group's, parsed below
+    slot = parse_slot({k: v for k, v in values.items() if k not in grouped},
+                      extra_keys=own + BASE_KEYS)
     get_ = lambda key: values.get(key, DEFAULTS[key])  # noqa: E731
     stylize = value("stylize", values)
     depth = integer("stylize_depth", get_("stylize_depth"), 1, MAX_STYLIZE_DEPTH)
@@ -800,7 +816,7 @@ def parse(values: Mapping[str, Any]) -> Settings:
     if firefly is not None and 0.0 < firefly < 1.0:
         raise SettingsError(f"bad value {firefly!r} for 'firefly': expected 0 (off) or a number >= "
                             "1")
-    return Settings(
+    settings = Settings(
         slot=slot,
         stylize=stylize,
         stylize_depth=depth,
@@ -821,7 +837,10 @@ def parse(values: Mapping[str, Any]) -> Settings:
         reuse_k2=k2,
         expansion_pass=expansion,
         extra={p.name: value(p.name, values) for p in PROPERTIES if p.name not in GROUPED},
+        light_groups=LG.parse_groups(values, parse_slot, slot),
     )
+    LG.check_supported(settings.light_groups, settings)
+    return settings
 
 
 def parse_expansion(values: Mapping[str, Any], slot: StyleSlot) -> int:

@@ -203,7 +203,9 @@ class Image(Denoised):
             raise UsageError("--buffer with --denoise image: the buffer keeps the expectation, "
                              "which image denoising leaves noisy; use --denoise expectation")
         self.scene, self.seed = resolved.scene, resolved.job.seed
-        self.aovs = bool(resolved.integrator.aov_names())
+        # the error AOVs only (a stylized integrator's; light groups' AOVs are no error AOVs)
+        settings = getattr(resolved.integrator, "settings", None)
+        self.aovs = bool(settings is not None and settings.aovs)
         from styletrace.denoise.image import in_pixels
         self.in_pixels = (self.footprint == "pixel"
                           and in_pixels(resolved.scene, resolved.integrator))

@@ -10,6 +10,18 @@ from styletrace.gate import dr, mi
 AOV_NAMES = ("sq.R", "sq.G", "sq.B", "bias", "children")
 
 
+def has_error_aovs(integrator) -> bool:
+    """Whether an integrator's AOVs are the error AOVs (its other AOVs: light groups' Combined).
+
+    Args:
+        integrator: any Mitsuba integrator.
+
+    Returns:
+        bool.
+    """
+    return AOV_NAMES[0] in integrator.aov_names()
+
+
 def error_aovs(value, stats: list) -> list:
     """One camera sample's AOVs in AOV_NAMES' order: its value squared per channel (the film's
     average of it gives the pixel's second moment), and at the first stylized vertex the Eq. 21

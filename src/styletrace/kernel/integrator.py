@@ -9,7 +9,8 @@ on a styled object, at any depth). Properties (XML, dict, the CLI's --set) are p
 `config.settings`. With first_hit a camera ray's first real collision in a medium is stylized
 too (volume.Collision). Escaped rays see the environment unstylized; with `hide_emitters` camera
 rays pass through area lights. Media: volume.py; lines: line_hooks.py; expansion pass:
-expansion.py.
+expansion.py; light groups (each group's light its own expectation, styled by its own style):
+light_groups.py, `stylized_groups`.
 Design: docs/design/stylized_integrator.md.
 """
 from __future__ import annotations
@@ -24,6 +25,7 @@ from styletrace.kernel.error_aovs import AOV_NAMES, error_aovs
 from styletrace.kernel.expansion import Expansion
 from styletrace.kernel.expansion import moments as pass_moments
 from styletrace.kernel.lane_sampler import LaneSampler
+from styletrace.kernel.light_groups import run_groups
 from styletrace.kernel.line_hooks import CameraSample, camera_edge, line_problem, walk_lines
 from styletrace.kernel.line_hooks import lifted as lifted_lines
 from styletrace.kernel.owen_sobol_sampler import OwenSobolSampler
@@ -104,6 +106,10 @@ class StylizedIntegrator(mi.SamplingIntegrator):
     tone = None          # anchors.Tone where a style reads image coordinates (Vertex.s), else None
     # anchors.ToneState at the vertex of each stylized level (-1: the camera), while tracing
     tone_states = {}
+    # light_groups.GroupTable of the scene being traced where light groups are declared, else None
+    light_table = None
+    # each group's value at the first stylized vertex of the camera sample being traced
+    group_values = None
     #: lanes where a line fired on the camera ray trace nothing more (False only to measure the
     #: saving: benchmarks/lines_cost.py)
     line_short_circuit = True
@@ -303,6 +309,8 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         Returns:
             mi.Spectrum, 0 where not active or where no target applies.
         """
+        if self.light_table is not None:
+            return self.stylized_groups(level, sampler, site, active)
         si, ray, depth = site.si, site.ray, site.depth
         v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
                    depth=mi.UInt32(depth))
@@ -319,6 +327,50 @@ class StylizedIntegrator(mi.SamplingIntegrator):
             total = dr.select(
                 here, self.estimate(target.slot, level, sampler, site, here, v), total
             )
+        return total
+
+    def stylized_groups(self, level: int, sampler, site: Site, active) -> mi.Spectrum:
+        """The sum over light groups of g_k(E[L_k]) at `site` (first_hit, one target: the
+        settings and render_context refuse the rest): one child walk per draw, its radiance split
+        by group, each group's estimator fed its own part (light_groups.run_groups). Keeps each
+        group's value in `group_values` for the AOVs.
+
+        Args:
+            level: the stylized level (0). sampler: the lane's random stream. site: the vertex.
+            active: the lanes at a vertex to stylize (mi.Bool).
+
+        Returns:
+            mi.Spectrum, 0 where not active.
+        """
+        si, ray = site.si, site.ray
+        v = Vertex(p=si.p, n=mi.Vector3f(si.sh_frame.n), wo=-ray.d, view=mi.Vector3f(self.view),
+                   depth=mi.UInt32(site.depth))
+        if self.tone is not None:  # as in `stylized`
+            v.s, v.method = self.tone.coordinate(self.walk_config.scene, si, ray, site.depth,
+                                                 self.tone_states.get(level), active)
+        # the integrator's slot as pinned (scene.defaults replaces it), then the groups' own
+        slots = [self.settings.slot] + [g.slot for g in self.settings.light_groups[1:]]
+        start = Start(site.pi, site.ray, site.depth, opaque=True)
+        hooks = Hooks(groups=self.light_table)
+
+        def draw(carry):
+            (smp,) = carry
+            xs = self._walk(smp.split(), start, active, hooks).Lg
+            xs = [slot.style.apply(x, v) if slot.style.per_sample else x
+                  for slot, x in zip(slots, xs)]
+            return xs, (smp,)
+
+        def uniform(carry):
+            (smp,) = carry
+            return smp.next_1d(), (smp,)
+
+        estimators = [make_estimator(slot, level, v, self.settings) for slot in slots]
+        values, _ = run_groups(estimators, draw, (sampler,), uniform, active, like=mi.Color3f)
+        values = [dr.select(active, x, 0.0) for x in values]
+        self.group_values = values
+        total = values[0]
+        for x in values[1:]:
+            total = total + x
         return total
 
     def estimate(self, slot: S.StyleSlot, level, sampler, site: Site, active, v) -> mi.Spectrum:
@@ -406,11 +458,16 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         value, valid, _ = self._radiance(scene, sampler, ray, active, medium)
         aovs = error_aovs(value, self._stats) if self.settings.aovs else []
         self._stats = []
+        if self.light_table is not None:  # each group's Combined (its channels: `aov_names`)
+            aovs = [c for x in self.group_values for c in (x.x, x.y, x.z)]
+            self.group_values = None
         return value, valid, aovs
 
     def _radiance(self, scene, sampler, ray, active, medium=None):
         for t in self.targets:
             t.slot.style.prepare(scene)
+        for g in self.settings.light_groups[1:]:
+            g.slot.style.prepare(scene)
         camera_ray, spp = ray, sampler.sample_count()
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
@@ -479,13 +536,26 @@ class StylizedIntegrator(mi.SamplingIntegrator):
         si = pi.compute_surface_interaction(ray, ray_flags=mi.RayFlags.All, active=active)
         hit = active & si.is_valid()
         value = self.stylized(0, sampler, Site(pi, si, ray, mi.UInt32(0)), hit)
-        value = dr.select(hit, value, 0.0 if hide else environment(scene, si, active))
+        sky = 0.0 if hide else environment(scene, si, active)
+        value = dr.select(hit, value, sky)
         if self.nulls:
             value = front.beta * value
+        if self.light_table is not None:  # the environment seen directly: its group's
+            env = self.light_table.environment
+            self.group_values = [
+                (front.beta if self.nulls else 1.0) * dr.select(hit, x, sky if k == env else 0.0)
+                for k, x in enumerate(self.group_values)
+            ]
         return value, valid, []
 
     def aov_names(self):
+        if self.settings.light_groups:  # each group's Combined, R G B (`group_names` order)
+            return [f"{g}.{c}" for g in self.group_names() for c in "RGB"]
         return list(AOV_NAMES) if self.settings.aovs else []
+
+    def group_names(self) -> list[str]:
+        """The light groups' names, `default` first (their AOVs' order); [] without groups."""
+        return [g.name for g in self.settings.light_groups]
 
     def to_string(self):
         return f"StylizedIntegrator[{self.settings.describe()}]"

@@ -47,13 +47,15 @@ class Hooks:
     lights that next-event estimation leaves out; lines: (lines.Lines, lines.LineState at the start
     vertex); tone: anchors.ToneState at the start vertex. Volume walks only: halt_in_medium:
     halt_in_medium(depth) -> Bool, lanes that halt at a real scattering collision in a medium
-    (the Walk's `collision`).
+    (the Walk's `collision`). groups: light_groups.GroupTable, the radiance also split by the
+    group of the emitter each contribution ends on (the Walk's `Lg`; surface walks only).
     """
     stop: Optional[Callable] = None
     skip_emitter: Optional[Callable] = None
     lines: Optional[tuple] = None
     tone: Optional[Any] = None
     halt_in_medium: Optional[Callable] = None
+    groups: Optional[Any] = None
 
 
 NO_HOOKS = Hooks()
@@ -157,6 +159,8 @@ class PathState:
     lines: Optional[Any] = None              # lines.LineState where feature lines are on (lines.py)
     # anchors.ToneState where a style reads image coordinates
     tone: Optional[Any] = None
+    # L split by light group (one mi.Spectrum per group) where the walk has Hooks.groups
+    Lg: Optional[list] = None
 
 
 @dataclass
@@ -173,6 +177,8 @@ class Walk:
     tone: Optional[Any] = None      # anchors.ToneState at the halting vertex (where tone is on)
     # volume.Collision: lanes halted in a medium rather than at `pi` (Hooks.halt_in_medium only)
     collision: Optional[Any] = None
+    # L split by light group, in the groups' order (Hooks.groups only)
+    Lg: Optional[list] = None
 
 
 def exitant(cfg: WalkConfig, sampler, start: Start, active: mi.Bool) -> mi.Spectrum:
@@ -203,6 +209,7 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
     """
     scene, emitters, nulls = cfg.scene, cfg.emitters, cfg.nulls
     stop, skip_emitter, lines, tone = hooks.stop, hooks.skip_emitter, hooks.lines, hooks.tone
+    groups = hooks.groups
     opaque_start, came_from, rr_depth = start.opaque, start.came_from, cfg.rr_depth
     ctx = mi.BSDFContext()
     limit = depth_limit(cfg.max_depth)
@@ -230,13 +237,17 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
         first=mi.Bool(True) if nulls and opaque_start else None,
         lines=None if lines is None else lines[1],
         tone=tone,
+        Lg=None if groups is None else groups.zeros(),
     )
 
     def body(s: PathState):
         si = s.pi.compute_surface_interaction(s.ray, ray_flags=mi.RayFlags.All, active=s.active)
         bsdf = si.bsdf(s.ray)
         here, passes, w_pass = halt_at(s, si, bsdf, s.active, stop, nulls)
-        s.L += mis_emission(scene, emitters, s, si, here)
+        emitted = mis_emission(scene, emitters, s, si, here)
+        s.L += emitted
+        if groups is not None:  # the light of the emitter it ends on: that emitter's group
+            s.Lg = groups.split(s.Lg, si.emitter(scene), emitted, here)
 
         active_next = here & si.is_valid() & (s.depth + 1 < limit)
 
@@ -269,7 +280,10 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
         w_nee = dr.select(ds.delta, 1.0, mis_power(ds.pdf, bsdf_pdf))
         if nulls and stop is not None:
             active_em &= ~passes
-        s.L += dr.select(active_em, s.beta * scale * w_nee * bsdf_val * em_weight, 0.0)
+        direct = dr.select(active_em, s.beta * scale * w_nee * bsdf_val * em_weight, 0.0)
+        s.L += direct
+        if groups is not None:
+            s.Lg = groups.split(s.Lg, ds.emitter, direct, active_em)
 
         # Continue the path along the sampled direction (halted lanes keep their vertex).
         beta_next = s.beta * bsdf_weight
@@ -323,7 +337,8 @@ def walk(cfg: WalkConfig, sampler, start: Start, active: mi.Bool, hooks: Hooks =
     # dropping them costs a bias no larger than their probability times their true value; the causes
     # known are fixed at their source (`mis_power`), this keeps an unknown one from destroying
     # a render.
-    return finished(out, lines=out.lines, tone=out.tone)
+    extra = {} if groups is None else {"Lg": out.Lg}
+    return finished(out, lines=out.lines, tone=out.tone, **extra)
 
 
 def finished(out, **extra) -> Walk:
@@ -339,6 +354,8 @@ def finished(out, **extra) -> Walk:
         Walk.
     """
     finite = dr.all(dr.isfinite(out.L)) & (~out.halted | dr.all(dr.isfinite(out.beta)))
+    if extra.get("Lg") is not None:  # dropped with L, whose parts they are
+        extra["Lg"] = [dr.select(finite, L, 0.0) for L in extra["Lg"]]
     return Walk(
         L=dr.select(finite, out.L, 0.0),
         beta=dr.select(finite, out.beta, 0.0),

@@ -18,6 +18,7 @@ from styletrace.gate import mi
 from styletrace.kernel.anchors import Tone
 from styletrace.kernel.emitter_sampler import EmitterSampler
 from styletrace.kernel.lifted_lines import Lifted
+from styletrace.kernel.light_groups import check_scene as check_groups
 from styletrace.kernel.lines import Lines
 from styletrace.kernel.path import WalkConfig
 from styletrace.kernel.scene_graph import SceneGraph
@@ -77,7 +78,11 @@ class RenderContext:
                 if lifted and scene.sensors()
                 else None
             )
-            wants = any(getattr(t.slot.style, "wants_coordinate", False) for t in integ.targets)
+            groups = settings.light_groups
+            # each emitter's light group (None: no group declared, nothing of them is traced)
+            integ.light_table = check_groups(scene, groups, graph)
+            styles = [t.slot.style for t in integ.targets] + [g.slot.style for g in groups[1:]]
+            wants = any(getattr(style, "wants_coordinate", False) for style in styles)
             integ.tone = Tone(scene) if wants and scene.sensors() else None
             integ.tone_states = {}
             # emitter selection in an order of the scene's own (its emitter list changes order
@@ -104,6 +109,7 @@ class RenderContext:
         integ.tone, integ.tone_states = None, {}
         integ._lane_moments = None
         integ._stats = []
+        integ.light_table, integ.group_values = None, None
 
     def __exit__(self, *exc) -> bool:
         self.release()

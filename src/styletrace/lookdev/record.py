@@ -86,6 +86,11 @@ def check_recordable(settings: S.Settings, slots) -> None:
             "feature lines (lines=true) cannot be buffered: a buffer keeps the radiance before g, "
             "not where lines replaced it; record without lines"
         )
+    if settings.light_groups:
+        raise SettingsError(
+            f"bad value {','.join(g.name for g in settings.light_groups[1:])!r} for "
+            "'light_groups': a buffer of light groups is not yet supported; record without them"
+        )
     if settings.aovs:
         raise SettingsError(
             "bad value True for 'aovs': a buffer keeps the children's means, not the error AOVs; "

@@ -168,6 +168,8 @@ def why_not(scene, integrator, local: bool = True, method: str = "expectation") 
     if not local and method == "expectation":
         return ("the render runs on Ray; the expectation denoiser needs every camera sample in one "
                 "process")
+    if isinstance(integrator, StylizedIntegrator) and integrator.settings.light_groups:
+        return ("light groups are not yet denoised (docs/light_groups.md); use denoise off")
     if not oidn_installed():
         return "Intel Open Image Denoise is not installed (pip install 'styletrace[denoise]')"
     if film_format(scene) != "rgb":
@@ -198,7 +200,12 @@ def choose_method(scene, integrator, request, denoising: Denoising, local: bool 
     Returns:
         (expectation | image | off, the one-line note where auto could not denoise, else '').
     """
+    from styletrace.kernel.integrator import StylizedIntegrator
     from styletrace.pipeline.budget import averages_children
+    grouped = isinstance(integrator, StylizedIntegrator) and integrator.settings.light_groups
+    if grouped and denoising.method not in ("auto", "off"):
+        raise UsageError(f"bad value {denoising.method!r} for denoise with light_groups: light "
+                         "groups are not yet denoised; use off")
     if denoising.method != "auto":
         return denoising.method, ""
     why = why_not(scene, integrator, local, "expectation")

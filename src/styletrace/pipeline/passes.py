@@ -323,6 +323,8 @@ def check_memory(width: int, height: int, ext: str = ".exr") -> None:
 
 class Progress:
     """State after a pass; `image` is the average of the finished passes, computed when asked for.
+    Takes more than 7 parameters: each is one fact of the pass loop's state that the properties
+    read, none of them travels with another.
 
     Args:
         spp_total: the render's camera samples per pixel.
@@ -332,6 +334,9 @@ class Progress:
         unit: the launch just done (a recording maps its lanes to the film's pixels with its tile
             and camera samples per pixel: `lookdev.record`), or None.
         in_pixels: the passes kept each sample in its own pixel (`run_passes`' in_pixels).
+        groups: the light groups whose Combined follows the image's channels, R G B each
+            (`StylizedIntegrator.group_names`); empty: the channels after the image's are the
+            error AOVs, if any.
     """
 
     def __init__(
@@ -343,7 +348,9 @@ class Progress:
         channels: int | None = None,
         unit: Unit | None = None,
         in_pixels: bool = False,
+        groups: tuple = (),
     ):
+        self.groups = tuple(groups)
         #: camera samples per pixel every pixel has at least (a tile may have one pass more)
         self.spp_done = int(counts.min())
         self.spp_total = spp_total
@@ -383,7 +390,7 @@ class Progress:
         direct-application bias of Eq. 21, g''(<I>_n) s^2 / (2n), at the first stylized vertex,
         averaged over the pixel's samples (0 where no child was drawn). `children`: the children
         used there, averaged (n for a fixed count)."""
-        if self._channels == self._total.shape[-1]:
+        if self._channels == self._total.shape[-1] or self.groups:
             return None
         mean = self._mean().astype(np.float64)
         c = self._channels
@@ -396,6 +403,18 @@ class Progress:
         var[counts < 2] = np.nan
         return {"variance": var.astype(np.float32), "bias": mean[..., c + 3].astype(np.float32),
                 "children": mean[..., c + 4].astype(np.float32)}
+
+
+    @property
+    def light_groups(self) -> dict[str, np.ndarray] | None:
+        """Each light group's Combined (an integrator with light_groups, else None): its styled
+        light at the first hit, the environment seen directly in the environment's group; float32
+        H x W x 3 by group name, `default` first. Their sum is the image (within float rounding)."""
+        if not self.groups:
+            return None
+        mean, c = self._mean(), self._channels
+        return {g: np.ascontiguousarray(mean[..., c + 3 * k:c + 3 * k + 3])
+                for k, g in enumerate(self.groups)}
 
 
 def pass_size(width: int, height: int, spp: int, lanes_per_pass: int = LANES_PER_PASS,
@@ -474,6 +493,7 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
             f"{film_format(scene)!r}"
         )
     total = np.zeros((height, width, channels + extra), dtype=np.float32)
+    groups = tuple(getattr(integrator, "group_names", list)())
     counts = np.zeros(len(layout), dtype=np.int64)
     index = 0
     # the expansion pass (expansion_pass > 0): once per tile and render, before the tile's
@@ -501,7 +521,7 @@ def run_passes(shot: Shot, split: PassSplit = PassSplit(), lock: Any = contextli
                     counts[t] += n
                 del img, arr
                 index += 1
-                yield Progress(spp, total, counts, layout, channels, unit, in_pixels)
+                yield Progress(spp, total, counts, layout, channels, unit, in_pixels, groups)
 
 
 def pass_count(

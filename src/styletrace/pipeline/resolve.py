@@ -26,6 +26,7 @@ from typing import Any
 from styletrace.config import settings as S
 from styletrace.gate import mi
 from styletrace.kernel.data_passes import parse_passes
+from styletrace.kernel.error_aovs import has_error_aovs
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.kernel.mist import parse_mist
 from styletrace.pipeline.budget import Request, Split, draft_request, split
@@ -143,7 +144,7 @@ def budget_request(job: Job, integrator: mi.Integrator, scene_samples: int,
         integrator of another class; an integrator without styles draws no children. With error
         AOVs an auto spp is at least 2 (their variance; `runner.Runner.check`).
     """
-    least = 2 if integrator.aov_names() else 1
+    least = 2 if has_error_aovs(integrator) else 1
     counts = dict(scene_samples=scene_samples, samples=job.samples, camera_samples=job.spp,
                   least_camera_samples=least, terms=job.terms)
     if not isinstance(integrator, StylizedIntegrator):

@@ -23,6 +23,7 @@ import numpy as np
 from styletrace.errors import UsageError
 from styletrace.gate import mi
 from styletrace.images import check_format, nonfinite_pixels, save_safely
+from styletrace.kernel.error_aovs import has_error_aovs
 from styletrace.pipeline.passes import Progress, check_memory, pass_count
 from styletrace.pipeline.resolve import Resolved
 from styletrace.pipeline.signals import Passes, StopSignals, say
@@ -174,7 +175,7 @@ class Runner:
 
     @property
     def aovs(self) -> bool:
-        return bool(self.resolved.integrator.aov_names())
+        return has_error_aovs(self.resolved.integrator)
 
     def check(self) -> None:
         """The refusals that depend on the job, the executor and the finisher, one copy each."""
@@ -187,9 +188,9 @@ class Runner:
                              f"least 2 camera samples per pixel")
         if self.finisher.local and not self.executor.local:
             raise UsageError(self.finisher.local)
-        if self.aovs and not self.executor.local:
-            raise UsageError("aovs=True renders without cluster=/--ray: the Ray passes keep the "
-                             "image only")
+        if self.resolved.integrator.aov_names() and not self.executor.local:
+            raise UsageError("aovs=True and light_groups render without cluster=/--ray: the Ray "
+                             "passes keep the image only")
         if "vector" in self.resolved.job.data_passes:  # a camera no pixel map projects
             from styletrace.kernel.data_passes import View
             View.of(self.resolved.scene.sensors()[0])

@@ -105,6 +105,9 @@ def check_passes_args(scene: Any, integrator: Any, spp: Any, seed: Any) -> None:
             raise SceneError(problem)
         # line_objects names shapes of this scene (else refused)
         Lines(integrator.settings.lines, scene)
+    if isinstance(integrator, StylizedIntegrator) and integrator.settings.light_groups:
+        from styletrace.kernel.light_groups import check_scene as check_groups
+        check_groups(scene, integrator.settings.light_groups)  # marks, media, styled objects
 
 
 @functools.cache

@@ -412,6 +412,7 @@ def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator,
             integrator = StylizedIntegrator(mi.Properties(), pinned,
                                             {**integrator.values, **chosen})
             notes.append(describe_defaults(style, chosen))
+    integrator = _pin_groups(scene, integrator, pilot, notes)
     for k, bsdf in enumerate(unique_styled(scene), start=1):
         style = bsdf.slot.style
         chosen = auto_values(style, Facts(scene, pilot, k))
@@ -419,6 +420,25 @@ def resolve_defaults(scene: mi.Scene, integrator: mi.Integrator,
             bsdf.slot = replace(bsdf.slot, style=style.pinned(chosen))
             notes.append(f"{describe_defaults(style, chosen)} (styled BSDF {bsdf.id() or k})")
     return integrator, "; ".join(n for n in notes if n)
+
+
+def _pin_groups(scene, integrator, pilot, notes: list):
+    """The light groups' styles with their auto values pinned as the integrator's own are (from
+    the first-hit brightness of all the light: a group's own is not measured yet); `notes` gains
+    the account of each."""
+    groups = list(integrator.settings.light_groups)
+    values = {}
+    for i, g in enumerate(groups[1:], start=1):
+        chosen = auto_values(g.slot.style, Facts(scene, pilot, 0))
+        if chosen:
+            groups[i] = replace(g, slot=replace(g.slot, style=g.slot.style.pinned(chosen)))
+            values.update({f"{g.name}.{k}": v for k, v in chosen.items()})
+            notes.append(f"{describe_defaults(g.slot.style, chosen)} (light group {g.name})")
+    if not values:
+        return integrator
+    return StylizedIntegrator(mi.Properties(),
+                              replace(integrator.settings, light_groups=tuple(groups)),
+                              {**integrator.values, **values})
 
 
 def pin_firefly(scene: mi.Scene, integrator: StylizedIntegrator, pilot: ScenePilot | None,
