@@ -1204,7 +1204,8 @@ def timing(size: int = 512, runs: int = 3) -> dict:
     the whole `attach` (guides + OIDN high + interpolation), against the render of the noisy
     buffer itself."""
     from styletrace.denoise import expectation as X
-    from styletrace.denoise import guides, oidn
+    from styletrace.denoise import oidn
+    from styletrace.kernel import guides
     from styletrace.pipeline.passes import Shot
     scene = load("cornell-box", size)
     integ = api.make_integrator(style="cel", inner=8)

@@ -32,8 +32,9 @@ styletrace.init()
 
 from styletrace.denoise import coverage as C  # noqa: E402
 from styletrace.denoise import expectation as X  # noqa: E402
-from styletrace.denoise import guides, oidn  # noqa: E402
+from styletrace.denoise import oidn  # noqa: E402
 from styletrace.denoise.finishers import plan  # noqa: E402
+from styletrace.kernel import guides  # noqa: E402
 from styletrace.lookdev import buffer as B  # noqa: E402
 from styletrace.lookdev import record as R  # noqa: E402
 from styletrace.lookdev import restyle as RS  # noqa: E402

@@ -277,8 +277,8 @@ def inside(mask: np.ndarray, period: int) -> np.ndarray:
 
 def stylized_pixels(path: Path, size: tuple[int, int]) -> tuple[np.ndarray, float]:
     """Where the camera's specular chain ends at a surface or in a medium (the guides' normal is
-    not 0: `denoise.guides.first_hit`, 16 rays a pixel); returns (H x W x 3 of 0 and 1, seconds)."""
-    from styletrace.denoise import guides
+    not 0: `kernel.guides.first_hit`, 16 rays a pixel); returns (H x W x 3 of 0 and 1, seconds)."""
+    from styletrace.kernel import guides
     from styletrace.scene.loading import load_scene
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

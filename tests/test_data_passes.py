@@ -125,7 +125,7 @@ def test_a_turntables_frames_carry_their_neighbours_cameras():
     cameras of frames k - 1 and k + 1 (the turn continued past both ends)."""
     from dataclasses import replace
 
-    from styletrace.pipeline.frame_chunks import FrameScene
+    from styletrace.animation.frame_chunks import FrameScene
     resolved = resolve(Job(scene="cornell-box", width=12, height=8, spp=2,
                            data_passes="depth,vector"))
     frames = turntable_frames(FrameScene.of(resolved, "llvm_ad_rgb"), resolved.scene, 4, 40.0,
@@ -179,7 +179,7 @@ def test_a_stopped_run_writes_the_passes_too(tmp_path):
 def test_a_frames_manifest_names_the_passes_only_where_given():
     """`--resume` must not mix frames with and without the passes' channels; a manifest of a run
     without passes stays as it was (older manifests resume)."""
-    from styletrace.pipeline.frames import frame_settings
+    from styletrace.animation.frames import frame_settings
     asked = Job(scene="cornell-box", data_passes="vector, depth")
     settings = frame_settings("orbit", ["cornell-box"], [{}], 4, 90.0, asked, "llvm_ad_rgb")
     assert settings["passes"] == ["depth", "vector"]

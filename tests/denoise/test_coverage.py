@@ -128,7 +128,7 @@ def test_points_read_d_at_their_own_film_position(scale):
     each point's D is that linear function at the point's own film position (bilinear
     interpolation reproduces it), found by projecting the point back through the sensor; for
     scale 2 the lookup lands in the right sub-pixel (`benchmarks/denoise_subpixel.py` uses it)."""
-    from styletrace.denoise.guides import Guides
+    from styletrace.kernel.guides import Guides
 
     scene = plane()
     n = RES * scale

@@ -247,9 +247,10 @@ def test_the_switch_off_is_oidn_on_the_films_image_bit_for_bit():
     One thread, so that the film's splats add up in the same order in every render."""
     from helpers.look_scenes import sky_room
 
-    from styletrace.denoise import guides, oidn
+    from styletrace.denoise import oidn
     from styletrace.frontends import api
     from styletrace.gate import dr
+    from styletrace.kernel import guides
     from styletrace.pipeline.passes import pass_seed
     threads = dr.thread_count()
     dr.set_thread_count(1)

@@ -41,7 +41,7 @@ def test_a_vertex_on_a_silhouette_takes_its_own_surface_s_neighbour():
     while the neighbours were compared with the pixel's mean albedo."""
     import mitsuba as mi
 
-    from styletrace.denoise.guides import Guides
+    from styletrace.kernel.guides import Guides
     a_bright, a_dark = 0.8, 0.1
     # albedo x irradiance: the dark surface is also in shadow
     e_bright, e_dark = a_bright * 1.0, a_dark * 0.05

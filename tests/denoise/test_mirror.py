@@ -56,7 +56,7 @@ def scene():
 
 
 def mirror_pixels(sc):
-    from styletrace.denoise import guides
+    from styletrace.kernel import guides
     normal = guides.first_hit(sc, 1, api.pass_seed(0, 0)).surface_normal
     # the mirror's normal, (0, sin 25, cos 25)
     return (normal[..., 2] > 0.85) & (np.abs(normal[..., 0]) < 0.05)

@@ -215,9 +215,9 @@ def test_frames_without_spp_print_the_auto_values_and_the_resolved_spp(ray_clust
 
 def turntable_chunks(seed, count, chunk):
     """A cel turntable through the expectation denoiser (16 x 16, Samples 4), with reuse."""
+    from styletrace.animation.frame_chunks import FrameScene, chunks_of
     from styletrace.frontends.ray_command import turntable_frames
     from styletrace.pipeline.denoising import Denoising
-    from styletrace.pipeline.frame_chunks import FrameScene, chunks_of
     from styletrace.pipeline.job import python_job
     from styletrace.pipeline.resolve import resolve
     resolved = resolve(python_job("cornell-box", style="cel", samples=4, seed=seed, width=16,
@@ -233,8 +233,8 @@ def test_frames_on_ray_are_the_local_frames_bit_for_bit_and_resume(ray_cluster, 
     worker (the pids it reports are not this process's), and every frame equals the frame
     rendered in this process, bit for bit; a resume on Ray writes a missing frame alone, the
     same again."""
-    from styletrace.pipeline.frames import Manifest, render_frames
-    from styletrace.pipeline.ray_frames import render_frames_on_ray
+    from styletrace.animation.frames import Manifest, render_frames
+    from styletrace.animation.ray_frames import render_frames_on_ray
     chunks = turntable_chunks(3, 5, 2)
     here = [str(tmp_path / f"here_{k:04d}.exr") for k in range(5)]
     there = [str(tmp_path / f"ray_{k:04d}.exr") for k in range(5)]

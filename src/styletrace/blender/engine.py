@@ -221,7 +221,9 @@ class StyletraceEngine(bpy.types.RenderEngine):
     def _write(self, prog, aovs, extra, w, h, image=None, noisy=None, stamps=None):
         """The render result: Combined (the image, else the passes' average), Noisy, the error
         AOVs, `extra`'s passes ({Blender's pass name: (values, channels)}: the line mask, the
-        data passes), and `stamps` ({field: value}) in its metadata."""
+        data passes), and `stamps` ({field: value}) in its metadata.
+        Takes more than 7 parameters: each is one part of the result, gathered apart by
+        `_render`."""
         if stamps:  # into the whole render's result (a begun one's metadata is not kept)
             final = self.get_result()
             for field, value in stamps.items():

@@ -6,7 +6,7 @@
 - `image` (`denoise.image`): render as usual and denoise the final image; the baseline.
 
 Both use OIDN (`pyoidn`, the `styletrace[denoise]` extra) with albedo and normal guides through
-mirrors and glass (`denoise.guides`), or Mitsuba's OptiX denoiser on CUDA (`denoise.oidn`,
+mirrors and glass (`kernel.guides`), or Mitsuba's OptiX denoiser on CUDA (`denoise.oidn`,
 untested). Which method a render gets is chosen when it is resolved
 (`pipeline.denoising.choose_method`); `finishers` runs it as the pipeline's finisher (`plan`: the
 run of a job, every front end's). Method, bias and the supported combinations: docs/denoise.md.

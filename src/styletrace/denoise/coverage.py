@@ -13,10 +13,10 @@ from __future__ import annotations
 
 import math
 
-from styletrace.denoise import guides
 from styletrace.denoise.probe import Probe
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
+from styletrace.kernel import guides
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.lookdev.buffer import MAX_CAMERA_SAMPLES, Buffer
 from styletrace.lookdev.record import RecordingIntegrator, inputs, record

@@ -20,12 +20,13 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from styletrace.denoise import coverage as coverage_module
-from styletrace.denoise import guides, oidn
+from styletrace.denoise import oidn
 from styletrace.denoise.probe import Probe
 from styletrace.denoise.temporal import box3
 from styletrace.errors import UsageError
 from styletrace.gate import dr, mi
 from styletrace.host_arrays import aligned
+from styletrace.kernel import guides
 from styletrace.kernel.integrator import StylizedIntegrator
 from styletrace.lookdev.buffer import DENOISED, MAX_CAMERA_SAMPLES, SPREAD, Buffer
 from styletrace.lookdev.record import record, scene_label

@@ -19,8 +19,9 @@ from typing import Callable
 
 import numpy as np
 
-from styletrace.denoise import guides, oidn
+from styletrace.denoise import oidn
 from styletrace.errors import UsageError
+from styletrace.kernel import guides
 from styletrace.lookdev.film_filter import filtered_pixels
 from styletrace.pipeline.denoising import Denoising
 from styletrace.pipeline.passes import PassSplit, Progress, Shot, pass_seed, run_passes

@@ -7,9 +7,9 @@
 executor: its loop, progress bar and signal handling, and `save()` before it abandons a render on a
 second Ctrl-C, so the checkpoint holds every finished pass. Frames (`--frames`, several files) are
 runs of the same runner in this process's pipeline, in chunks of `--chunk` with the temporal reuse
-of `--temporal-reuse` (`pipeline.frame_chunks`): here one chunk after the other
-(`pipeline.frames.render_frames`), with `--ray` each chunk one Ray task
-(`pipeline.ray_frames.render_frames_on_ray`).
+of `--temporal-reuse` (`animation.frame_chunks`): here one chunk after the other
+(`animation.frames.render_frames`), with `--ray` each chunk one Ray task
+(`animation.ray_frames.render_frames_on_ray`).
 """
 from __future__ import annotations
 
@@ -85,14 +85,14 @@ def turntable_frames(scene, loaded, count: int, degrees: float, motion: bool) ->
     on past the first and the last frame).
 
     Args:
-        scene: the frames' `pipeline.frame_chunks.FrameScene`. loaded: its loaded mi.Scene (the
+        scene: the frames' `animation.frame_chunks.FrameScene`. loaded: its loaded mi.Scene (the
             camera the turn starts from). count: how many frames. degrees: the whole turn.
         motion: give each frame the cameras around it.
 
     Returns:
-        [`pipeline.frame_chunks.Frame`] in frame order.
+        [`animation.frame_chunks.Frame`] in frame order.
     """
-    from styletrace.pipeline.frame_chunks import Frame, rows
+    from styletrace.animation.frame_chunks import Frame, rows
     from styletrace.pipeline.orbit import turntable
     if not motion:
         return [Frame(scene, rows(m)) for m in turntable(loaded, count, degrees)]
@@ -102,7 +102,7 @@ def turntable_frames(scene, loaded, count: int, degrees: float, motion: bool) ->
 
 
 def check_chunk(chunk) -> int:
-    """`--chunk N`: frames per chunk (`pipeline.frame_chunks.CHUNK` where not given).
+    """`--chunk N`: frames per chunk (`animation.frame_chunks.CHUNK` where not given).
 
     Args:
         chunk: the parsed value, or None.
@@ -113,7 +113,7 @@ def check_chunk(chunk) -> int:
     Raises:
         UsageError: a value below 1.
     """
-    from styletrace.pipeline.frame_chunks import CHUNK
+    from styletrace.animation.frame_chunks import CHUNK
     if chunk is None:
         return CHUNK
     if chunk < 1:
@@ -123,7 +123,7 @@ def check_chunk(chunk) -> int:
 
 def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
     """`styletrace render SCENE --frames N [--orbit DEGREES]`, or `render A.xml B.xml ...`: the
-    frames in chunks of `--chunk` (`pipeline.frame_chunks`), each frame denoised as `--denoise`
+    frames in chunks of `--chunk` (`animation.frame_chunks`), each frame denoised as `--denoise`
     asks and, with `--temporal-reuse on` (the default), blended with its chunk's frames before
     it; in this process, or with `--ray` each chunk one Ray task running the same pipeline.
 
@@ -140,11 +140,11 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             before any frame renders (each scene is resolved first, `pipeline.resolve`); a
             refusal in a frame's run (on Ray too) after the frames before it are written.
     """
+    from styletrace.animation.frame_chunks import Frame, FrameScene, chunks_of
+    from styletrace.animation.frames import Manifest, frame_settings, render_frames
     from styletrace.denoise.finishers import finisher_for
     from styletrace.frontends.command_job import job_of
     from styletrace.pipeline.execute import InProcess
-    from styletrace.pipeline.frame_chunks import Frame, FrameScene, chunks_of
-    from styletrace.pipeline.frames import Manifest, frame_settings, render_frames
     from styletrace.pipeline.job import check_counts
     from styletrace.pipeline.resolve import resolve
     from styletrace.pipeline.runner import Runner
@@ -220,7 +220,7 @@ def frames_command(args, parse_set, parse_defines, check_output, say) -> int:
             written, status = render_frames(chunks, paths, manifest, resume=args.resume,
                                             on_frame=on_frame)
         else:
-            from styletrace.pipeline.ray_frames import render_frames_on_ray
+            from styletrace.animation.ray_frames import render_frames_on_ray
             written, status, _ = render_frames_on_ray(chunks, paths, manifest, cluster,
                                                       resume=args.resume, on_frame=on_frame)
     except KeyboardInterrupt:  # between two frames' runs, or on Ray (a run here stops on its own)

@@ -28,7 +28,7 @@ Cycles 5.0, tests/blender/test_data_passes.py):
 - mist: `kernel.mist`'s amount at the hit, averaged over all samples, a miss as 1;
 - object_index, material_index: the pass indices of the shape the first sample hits
   (`kernel.pass_indices`, carried in its id), 0 where it hits nothing or carries none;
-- albedo: the denoiser's albedo guide (`denoise.guides.first_hit`, a pixel's box mean of rays of
+- albedo: the denoiser's albedo guide (`kernel.guides.first_hit`, a pixel's box mean of rays of
   its own, with this seed);
 - emission: the radiance the hit's own emitter sends to the camera (an area light's surface, an
   emitting mesh), averaged over all samples, a miss as 0 (the world is not in it);
@@ -401,7 +401,7 @@ def render_data_passes(scene, names: Iterable[str], spp: int, seed: int = 0,
     with placed(sensor, camera):
         out = _render(scene, sensor, names, int(spp), seed, motion, lanes, mist)
         if "albedo" in names:  # the denoiser's own guide, its rays its own
-            from styletrace.denoise.guides import first_hit
+            from styletrace.kernel.guides import first_hit
             out["albedo"] = first_hit(scene, int(spp), seed, footprint="pixel",
                                       lanes_per_launch=lanes).albedo
     result = {name: out[name] for name in names}

@@ -21,6 +21,22 @@ import contextlib
 from styletrace.gate import dr, mi
 from styletrace.kernel.owen_sobol_sampler import OwenSobolSampler, Sequence
 
+#: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred
+#: bytes each).
+LANES_PER_PASS = 1 << 20
+
+
+def pass_seed(seed: int, index: int) -> int:
+    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams.
+
+    Args:
+        seed: the render's seed. index: the launch number (round * tiles + tile).
+
+    Returns:
+        A 32-bit seed.
+    """
+    return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
+
 
 @contextlib.contextmanager
 def in_sequence(sensor, sequence: Sequence | None):
@@ -138,4 +154,5 @@ def render_pixel_pass(scene: mi.Scene, integrator, spp: int, seed: int,
     return np.stack([np.asarray(m, dtype=np.float32) for m in means], -1).reshape(h, w, 3)
 
 
-__all__ = ["in_sequence", "render_pass", "render_pixel_pass", "seeded_positions"]
+__all__ = ["LANES_PER_PASS", "pass_seed", "in_sequence", "render_pass", "render_pixel_pass",
+           "seeded_positions"]

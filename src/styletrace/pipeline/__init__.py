@@ -7,7 +7,7 @@ camera samples x children), `carried` (what a scene's Mitsuba integrator shares 
 `resolve` (load, merge, choose the denoising, split once, pin `auto` values), `passes` (the pass
 loop), `execute` (the passes in process or on Ray), `runner` (one run: checks, passes, stops,
 writes), `signals` (Ctrl-C, SIGTERM, the progress bar), `sizing` (camera samples per pass), `ray_*`
-(rendering on Ray), `frames` and `orbit` (sequences of frames).
+(rendering on Ray), `orbit` (a turntable's cameras; the frames themselves: `styletrace.animation`).
 
 Importing this package needs the backend chosen (`styletrace.init()`): its modules import Mitsuba.
 Design: docs/design/render_pipeline.md.

@@ -130,7 +130,7 @@ class OnRay:
 
 def executor_for(cluster: str | None = None, checkpoints: Checkpoints = Checkpoints()):
     """The executor of a run: in this process, or on Ray (the passes of one image; frames run
-    in chunks, `pipeline.frame_chunks`).
+    in chunks, `animation.frame_chunks`).
 
     Args:
         cluster: "local" or a Ray address; None renders in process unless resuming.

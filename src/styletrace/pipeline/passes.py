@@ -20,16 +20,13 @@ from styletrace.errors import UsageError
 from styletrace.gate import mi
 from styletrace.images import PIXEL_FORMATS
 from styletrace.jit import no_collection
-from styletrace.kernel.launch import render_pass, render_pixel_pass
+from styletrace.kernel.launch import LANES_PER_PASS, pass_seed, render_pass, render_pixel_pass
 from styletrace.kernel.owen_sobol_sampler import Sequence
 from styletrace.scene.arguments import check_passes_args
 from styletrace.scene.defaults import ScenePilot
 from styletrace.scene.defaults import resolve_defaults as resolve_defaults
 from styletrace.scene.loading import film_format
 
-#: Camera samples per pass: bounds the memory of the megakernel's state (~ a few hundred
-#: bytes each).
-LANES_PER_PASS = 1 << 20
 #: Width of a tile when an image has more than LANES_PER_PASS pixels (a tile is 1024 x 1024 then).
 TILE_SIDE = 1024
 #: Host memory per lane of a pass (the film's block, the output, the sampler), for the up-front
@@ -56,22 +53,10 @@ def pin_auto_values(
     return resolve_defaults(scene, integrator, pilot)
 
 
-def pass_seed(seed: int, index: int) -> int:
-    """Seed of pass `index`: distinct passes and distinct user seeds get unrelated sample streams.
-
-    Args:
-        seed: the render's seed. index: the launch number (round * tiles + tile).
-
-    Returns:
-        A 32-bit seed.
-    """
-    return (seed * 0x9E3779B1 + index * 0x85EBCA6B + 0x27D4EB2F) & 0xFFFFFFFF
-
-
 def unit_sequence(seed: int, unit: "Unit") -> Sequence:
     """Where a unit sits in its render's low-discrepancy sequence (`owen_sobol` samplers), keyed
     by the render's first pass seed: a render of one pass draws what `mi.render` with that seed
-    draws, and so do the guides of its footprint (`denoise.guides.first_hit`).
+    draws, and so do the guides of its footprint (`kernel.guides.first_hit`).
 
     Args:
         seed: the render's seed. unit: the launch.

@@ -141,7 +141,7 @@ class Render:
                 done, _ = ray.wait(list(running), num_returns=1)
                 for ref in done:
                     unit = running.pop(ref)
-                    arr, pid = _result(ray, ref)
+                    arr, pid = task_result(ray, ref)
                     with self.lock:
                         self.merge.add(unit, arr)
                     self.worker_pids.add(pid)
@@ -159,7 +159,7 @@ class Render:
                 self.save()
 
 
-def _result(ray, ref) -> tuple[np.ndarray, int]:
+def task_result(ray, ref) -> tuple[np.ndarray, int]:
     """A task's result; its styletrace error as that error (one line), any other failure as
     RuntimeError."""
     try:
@@ -200,4 +200,4 @@ def job_for(scene: Any, integrator: Any, width: int | None = None, height: int |
     return RayJob(SceneSpec.of(scene, width, height, **load_kwargs), dict(values), init(), rows)
 
 
-__all__ = ["Render", "job_for", "settings_of", "MAX_RETRIES"]
+__all__ = ["Render", "job_for", "settings_of", "task_result", "MAX_RETRIES"]

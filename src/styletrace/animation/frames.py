@@ -1,14 +1,14 @@
 """Frames: a turntable of one scene (`--frames N --orbit DEGREES`) or a list of XML files.
 
     written, status = render_frames(chunks_of(frames, 8, reuse=True), paths, manifest)
-    # out_0000.png, out_0001.png, ...; on Ray: pipeline.ray_frames.render_frames_on_ray
+    # out_0000.png, out_0001.png, ...; on Ray: animation.ray_frames.render_frames_on_ray
 
-Frames render in chunks of consecutive frames (`pipeline.frame_chunks`): each frame a run of the
+Frames render in chunks of consecutive frames (`animation.frame_chunks`): each frame a run of the
 render pipeline (`pipeline.runner.Runner`, in this process) with the scene's camera placed at the
-frame's, denoised as the job asks and, with temporal reuse, blended with the history of its
-chunk's frames before it. Here the chunks render one after the other; on Ray each is one task
-(`pipeline.ray_frames`), the same frames bit for bit. A frame written to its own path is recorded in
-a manifest (`OUT.frames.json`, with the settings a resume must match: `frame_settings`), so
+frame's, denoised as the job asks and, with temporal reuse, blended with the history of its chunk's
+frames before it. Here the chunks render one after the other; on Ray each is one task
+(`animation.ray_frames`), the same frames bit for bit. A frame written to its own path is recorded
+in a manifest (`OUT.frames.json`, with the settings a resume must match: `frame_settings`), so
 `--resume` renders only the chunks not yet written whole (a chunk partly written renders from its
 first frame where its history needs the frames before, and writes only the missing ones). A stop
 ends the sequence after the frame under way (its finished passes written, as the runner writes
@@ -19,9 +19,9 @@ from __future__ import annotations
 import json
 from typing import Callable
 
+from styletrace.animation.frame_chunks import FrameStopped, render_chunk
 from styletrace.errors import UsageError
 from styletrace.images import write_bytes_atomically
-from styletrace.pipeline.frame_chunks import FrameStopped, render_chunk
 
 
 class Manifest:
@@ -98,6 +98,8 @@ def render_frames(chunks: list, paths: list[str], manifest: Manifest, resume: bo
 def frame_settings(kind: str, scenes: list, values: list, count: int, orbit: float | None,
                    job, variant: str, chunk: int | None = None) -> dict:
     """The settings a frames manifest records: what a `--resume` must match.
+    Takes more than 7 parameters: each is one of the recorded settings, from a different source
+    (the scenes, the job, the backend, the command's flags).
 
     Args:
         kind: "orbit" or "files". scenes: the scenes' descriptions. values: their integrator values.

@@ -6,7 +6,7 @@
         for i, path in render_chunk(chunk, paths, skip): ...  # each frame written, in order
 
 A chunk is the unit of work of command-line frames: in this process one after the other
-(`pipeline.frames.render_frames`), on Ray one task each (`pipeline.ray_frames`), and both run
+(`animation.frames.render_frames`), on Ray one task each (`animation.ray_frames`), and both run
 `render_chunk`, so a frame is the same bit for bit wherever its chunk ran. Every frame is a run of
 the render pipeline (`pipeline.runner.Runner`, in this process, the finisher of its method:
 `denoise.finishers.finisher_for`) with the scene's camera placed at the frame's.

@@ -1,4 +1,4 @@
-"""The guides see through mirrors (`denoise.guides.through_delta`): at a mirror's pixels the albedo
+"""The guides see through mirrors (`kernel.guides.through_delta`): at a mirror's pixels the albedo
 guide is the albedo of the surface the mirror shows, and the normal guide that surface's normal.
 
 Truth from Mitsuba's own `aov` integrator: a camera looks straight at a mirror that fills its
@@ -8,9 +8,9 @@ the same picture flipped left to right, and Mitsuba's `albedo` AOV of that pictu
 Pixels on a checker edge are left out (the two renders' sub-pixel samples differ there)."""
 import numpy as np
 
-from styletrace.denoise import guides
 from styletrace.frontends import api
 from styletrace.gate import mi
+from styletrace.kernel import guides
 
 RES = 32
 WALL = {

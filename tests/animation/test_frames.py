@@ -1,13 +1,13 @@
-"""Command-line frames in chunks (pipeline/frame_chunks.py, pipeline/frames.py): temporal reuse
+"""Command-line frames in chunks (animation/frame_chunks.py, animation/frames.py): temporal reuse
 within a chunk, a fresh history at the next, and resume per frame."""
 import numpy as np
 import pytest
 
+from styletrace.animation.frame_chunks import Frame, FrameScene, chunks_of, frame_seed, render_chunk
+from styletrace.animation.frames import Manifest, render_frames
 from styletrace.denoise.finishers import plan
 from styletrace.gate import mi
 from styletrace.pipeline.denoising import Denoising
-from styletrace.pipeline.frame_chunks import Frame, FrameScene, chunks_of, frame_seed, render_chunk
-from styletrace.pipeline.frames import Manifest, render_frames
 from styletrace.pipeline.job import python_job
 from styletrace.pipeline.resolve import resolve
 from styletrace.pipeline.runner import Runner

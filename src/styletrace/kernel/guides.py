@@ -18,8 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from styletrace.gate import dr, mi
-from styletrace.kernel.launch import render_pass, seeded_positions
-from styletrace.pipeline.passes import LANES_PER_PASS, pass_seed
+from styletrace.kernel.launch import LANES_PER_PASS, pass_seed, render_pass, seeded_positions
 
 #: specular bounces followed before the chain stops (a pair of facing mirrors would go on forever);
 #: a chain still specular after them keeps its specular weight as albedo

@@ -2,8 +2,8 @@
 
     written, status = render_frames_on_ray(chunks, paths, manifest, "local", on_frame=...)
 
-A chunk (`pipeline.frame_chunks.Chunk`) runs in a worker exactly as it runs in this process
-(`ray_tasks.render_chunk_task`: the runner in process, the finisher of its method, the chunk's
+A chunk (`animation.frame_chunks.Chunk`) runs in a worker exactly as it runs in this process
+(`ray_chunk_task.render_chunk_task`: the runner in process, the finisher of its method, the chunk's
 history), so a frame is the same bit for bit wherever it rendered. The task is a Ray streaming
 generator: each frame's file comes back as soon as the worker wrote it, and this process writes it
 atomically to its numbered path and records it in the manifest. At most as many chunks run at once
@@ -16,10 +16,10 @@ from __future__ import annotations
 import os
 from typing import Callable
 
+from styletrace.animation.frame_chunks import FrameStopped
 from styletrace.images import write_bytes_atomically
-from styletrace.pipeline.frame_chunks import FrameStopped
 from styletrace.pipeline.ray_cluster import connect, cpus
-from styletrace.pipeline.ray_run import MAX_RETRIES, _result
+from styletrace.pipeline.ray_run import MAX_RETRIES, task_result
 
 
 def render_frames_on_ray(chunks: list, paths: list[str], manifest, cluster: str,
@@ -48,7 +48,7 @@ def render_frames_on_ray(chunks: list, paths: list[str], manifest, cluster: str,
     if not todo:
         return [], 0, set()
     ray = connect(cluster)
-    from styletrace.pipeline.ray_tasks import render_chunk_task
+    from styletrace.animation.ray_chunk_task import render_chunk_task
     task = render_chunk_task.options(num_cpus=cpus_per_task, num_returns="streaming",
                                      max_retries=MAX_RETRIES)
     window = max(1, cpus() // max(1, cpus_per_task))
@@ -70,7 +70,7 @@ def render_frames_on_ray(chunks: list, paths: list[str], manifest, cluster: str,
                 except StopIteration:  # the chunk is done
                     running.remove(gen)
                     continue
-                i, data, pid = _result(ray, ref)
+                i, data, pid = task_result(ray, ref)
                 pids.add(pid)
                 if i in skip or i in written:  # a retried task's frames come again
                     continue
