@@ -558,7 +558,8 @@ GROUPS = {
     "guide": ["docs/guide.md"],     # the gallery: about 40 s with its kernels not yet compiled
     "methods": ["docs/adaptive.md", "docs/estimators.md", "docs/lines.md", "docs/llat.md",
                 "docs/reuse.md", "docs/ray.md", "docs/real_scenes.md", "docs/how_it_works.md",
-                "docs/architecture.md", "docs/passes.md", "docs/temporal.md"],
+                "docs/architecture.md", "docs/passes.md", "docs/temporal.md",
+                "docs/light_groups.md"],
 }
 
 

@@ -121,3 +121,14 @@ def test_scene_marks_must_match_the_groups(mark, named):
     with pytest.raises(SceneError) as err:
         last(two_light_box(mark), integ, spp=1)
     assert named in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_dotted_key_of_no_declared_group_is_the_styles_and_refused_by_it():
+    """`fill.levels` without a group `fill` is the style's key, refused by name; a composed style's
+    own dotted keys (`contrast.c`) are not taken for a group's."""
+    from styletrace.config import settings as S
+    from styletrace.errors import SettingsError
+    with pytest.raises(SettingsError, match="unknown property 'fill.levels'"):
+        S.parse({"style": "cel", "light_groups": "key:identity", "fill.levels": "0.1,0.2,0.3"})
+    parsed = S.parse({"style": "contrast+sepia", "contrast.c": 1.6})
+    assert parsed.light_groups == ()

@@ -147,10 +147,10 @@ class Property(Declaration):
 
     def show_default(self) -> str:
         """The default as the docs show it: None is the style's own count (inner_samples) or
-        auto."""
+        auto; an empty string is none."""
         if self.default is None:
             return "style's" if self.name == "inner_samples" else "auto"
-        return str(self.default)
+        return "none" if self.default == "" else str(self.default)
 
     def bounds(self) -> tuple[float, float]:
         if self.kind == "int":

@@ -50,15 +50,21 @@ def group_mark(ident: str | None) -> str:
 
 
 def group_keys(values: Mapping[str, Any]) -> list[str]:
-    """The `<group>.<key>` names among property values (every name with a dot).
+    """The `<group>.<key>` names among property values: the names with a dot whose part before
+    it is a group `light_groups` declares (other dotted names are the style's own: a composed
+    style's `contrast.c`).
 
     Args:
         values: property name -> raw value.
 
     Returns:
         The names, in the mapping's order.
+
+    Raises:
+        SettingsError: a bad `light_groups` spec.
     """
-    return [k for k in values if isinstance(k, str) and "." in k]
+    names = {n for n, _ in _spec(values.get("light_groups"))}
+    return [k for k in values if isinstance(k, str) and k.split(".", 1)[0] in names]
 
 
 def _spec(raw: Any) -> list[tuple[str, str]]:
@@ -100,16 +106,11 @@ def parse_groups(values: Mapping[str, Any], parse_slot: Callable, default_slot) 
         tuple[LightGroup, ...].
 
     Raises:
-        SettingsError: a bad spec, or a `<group>.<key>` of no declared group.
+        SettingsError: a bad spec (a `<name>.<key>` of no declared group is the style's, which
+            refuses a key it does not know).
         StyleError: an unknown style or a bad value of its parameters.
     """
     spec = _spec(values.get("light_groups"))
-    names = [n for n, _ in spec]
-    for key in group_keys(values):
-        group = key.split(".", 1)[0]
-        if group not in names:
-            raise SettingsError(f"unknown property {key!r}: {group!r} is no light group; declared "
-                                f"in 'light_groups' are {', '.join(names) or 'none'}")
     if not spec:
         return ()
     groups = [LightGroup(DEFAULT, default_slot)]
