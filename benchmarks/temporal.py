@@ -97,8 +97,10 @@ ROLL = 0.15
 TONE = 8
 #: the moving shots' converged frames (the measure's floor): Samples, reuse off
 REF_SAMPLES_MOVING = 256
-#: the seeds of the two renders whose noise cancels in the floor (`clean_warp_error`)
-FLOOR_SEEDS = (1001, 1002)
+#: the seeds of the two renders whose noise cancels in the floor (`clean_warp_error`): frame f
+#: renders with seed + f - 1, so they are far apart (seeds 1001 and 1002 gave run 2's frame f - 1
+#: run 1's frame f's seed: their noise, the same at every still pixel, did not cancel)
+FLOOR_SEEDS = (1001, 5001)
 #: styles on the still shot only (their flicker): the other step styles
 STILL_ONLY = ("halftone", "tie_dye")
 #: EEVEE renders this many frames by default (it is deterministic, and slow on software OpenGL)

@@ -333,31 +333,37 @@ def reprojected(s: Accumulated, view: FrameView) -> Accumulated:
     y = view.previous[..., 1] - 0.5
     x0, y0 = np.floor(x).astype(np.int64), np.floor(y).astype(np.int64)
     fx, fy = x - x0, y - y0
+    # every field in one array, so that each corner gathers once (the arithmetic per channel is
+    # the same as field by field)
+    parts = [s.mean, s.var, s.weight[..., None], s.frames[..., None].astype(np.float64)]
+    if s.shown is not None:
+        parts.append(s.shown)
+    sizes = [p.shape[-1] for p in parts]
+    table = np.concatenate(parts, axis=-1).reshape(h * w, -1)
+    depths, normals, weights = s.depth.ravel(), s.normal.reshape(h * w, 3), s.weight.ravel()
     total = np.zeros((h, w))
-    fields = {"mean": s.mean, "var": s.var, "weight": s.weight, "frames": s.frames,
-              "shown": s.shown}
-    acc = {k: 0.0 for k, v in fields.items() if v is not None}
-    for dx, dy, corner in ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)),
-                           (0, 1, (1 - fx) * fy), (1, 1, fx * fy)):
+    acc = np.zeros((h, w, table.shape[1]))
+    corners = ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)), (0, 1, (1 - fx) * fy),
+               (1, 1, fx * fy))
+    if not (fx.any() or fy.any()):  # every surface where it was: only the pixel itself weighs
+        corners = corners[:1]
+    for dx, dy, corner in corners:
         xi, yi = x0 + dx, y0 + dy
         inside = (xi >= 0) & (xi < w) & (yi >= 0) & (yi < h)
-        xc, yc = np.clip(xi, 0, w - 1), np.clip(yi, 0, h - 1)
-        depth, normal = s.depth[yc, xc], s.normal[yc, xc]
-        same = (np.abs(depth - view.depth) <= DEPTH_TOLERANCE * np.abs(view.depth)) & (
-            np.sum(normal * view.normal, axis=-1) >= NORMAL_COSINE)
-        ok = inside & same & (s.weight[yc, xc] > 0) & (corner > 0)
+        at = np.clip(yi, 0, h - 1) * w + np.clip(xi, 0, w - 1)
+        same = (np.abs(depths[at] - view.depth) <= DEPTH_TOLERANCE * np.abs(view.depth)) & (
+            np.sum(normals[at] * view.normal, axis=-1) >= NORMAL_COSINE)
+        ok = inside & same & (weights[at] > 0) & (corner > 0)
         c = np.where(ok, corner, 0.0)
         total += c
-        for k in acc:
-            v = fields[k][yc, xc]
-            acc[k] = acc[k] + (c[..., None] * v if v.ndim == 3 else c * v)
+        acc += c[..., None] * table[at]
     found = total > 1e-6
-    norm = np.where(found, total, 1.0)
-    out = {k: (v / norm[..., None] if np.ndim(v) == 3 else v / norm) for k, v in acc.items()}
-    weight = np.where(found, out["weight"], 0.0)
-    frames = np.where(found, np.rint(out["frames"]), 0).astype(np.int64)
-    return Accumulated(out["mean"], out["var"], weight, frames, np.zeros((h, w), bool),
-                       out.get("shown"), view.depth, view.normal)
+    acc /= np.where(found, total, 1.0)[..., None]
+    mean, var, weight, frames, *shown = np.split(acc, np.cumsum(sizes)[:-1], axis=-1)
+    weight = np.where(found, weight[..., 0], 0.0)
+    frames = np.where(found, np.rint(frames[..., 0]), 0).astype(np.int64)
+    return Accumulated(mean, var, weight, frames, np.zeros((h, w), bool),
+                       shown[0] if shown else None, view.depth, view.normal)
 
 
 __all__ = ["History", "Accumulated", "FrameView", "reprojected", "box3", "local_variance", "Z",
