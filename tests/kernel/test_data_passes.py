@@ -67,7 +67,8 @@ def test_names_are_parsed_in_order_and_bad_ones_refused():
         parse_passes("depth,zdepth", "--passes")
     assert str(info.value) == ("bad value 'zdepth' for --passes: expected a comma-separated list "
                                "of depth, normal, vector, position, uv, mist, object_index, "
-                               "material_index, albedo, emission")
+                               "material_index, albedo, emission, crypto_object, "
+                               "crypto_material")
     with pytest.raises(UsageError, match="bad value 3 for passes"):
         parse_passes([3])
 
