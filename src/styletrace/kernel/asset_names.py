@@ -21,8 +21,9 @@ import re
 import numpy as np
 
 from styletrace.cryptomatte import id_bits, manifest
-from styletrace.gate import dr, mi
-from styletrace.kernel.pass_indices import INDEX, shape_registry_id
+from styletrace.gate import mi
+from styletrace.kernel.pass_indices import INDEX
+from styletrace.kernel.shape_tables import gather_columns, rows_by_shape, table_of
 
 #: the names' mark in a shape's id: '__cm', the object's name, '_', the material's, each as the
 #: lower-case hex digits of its UTF-8 bytes (an id keeps letters, digits and underscores only)
@@ -103,11 +104,9 @@ class NameTable:
         Returns:
             The NameTable.
         """
-        from styletrace.kernel.scene_graph import all_shapes
-        rows = {shape_registry_id(s): names_of(s) for s in all_shapes(scene)}
-        bits = np.zeros((max(rows, default=0) + 1, 2), np.uint32)
-        for k, (ob, ma) in rows.items():
-            bits[k] = id_bits(ob), id_bits(ma)
+        rows = rows_by_shape(scene, names_of)
+        bits = table_of({k: (id_bits(ob), id_bits(ma)) for k, (ob, ma) in rows.items()},
+                        np.uint32)
         return cls(bits, {OBJECT: manifest(ob for ob, _ in rows.values()),
                           MATERIAL: manifest(ma for _, ma in rows.values())})
 
@@ -120,11 +119,7 @@ class NameTable:
         Returns:
             Two mi.UInt32: the float32 bits of the hit shape's ids, 0 where `valid` is false.
         """
-        key = dr.reinterpret_array(mi.UInt32, si.shape)
-        inside = valid & (key < len(self.bits))
-        # the table as opaque arrays: another scene's reuses the compiled kernel
-        return tuple(dr.gather(mi.UInt32, mi.UInt32(np.ascontiguousarray(self.bits[:, c])),
-                               key, inside) for c in range(2))
+        return gather_columns(self.bits, mi.UInt32, si, valid)
 
 
 __all__ = ["NAMES", "OBJECT", "MATERIAL", "named_id", "names_in", "names_of", "NameTable"]

@@ -16,6 +16,7 @@ import re
 import numpy as np
 
 from styletrace.gate import dr, mi
+from styletrace.kernel.shape_tables import gather_columns, rows_by_shape, table_of
 
 #: the object index's and the material index's marks at the end of a shape's id
 INDEX = re.compile(r"__ob(\d+)(?:__ma(\d+))?$|__ma(\d+)$")
@@ -52,19 +53,6 @@ def indices_of(ident: str) -> tuple[int, int]:
     return int(ob or 0), int(ma or ma_alone or 0)
 
 
-def shape_registry_id(shape) -> int:
-    """The registry id a hit on `shape` reports in `si.shape` (an instanced shape's own, not its
-    instance's).
-
-    Args:
-        shape: an mi.Shape.
-
-    Returns:
-        The id, an int.
-    """
-    return int(dr.reinterpret_array(mi.UInt32, mi.ShapePtr(shape))[0])
-
-
 class IndexTable:
     """The pass indices of a loaded scene's shapes, by the registry id of `si.shape`.
 
@@ -86,15 +74,9 @@ class IndexTable:
         Returns:
             The IndexTable.
         """
-        from styletrace.kernel.scene_graph import all_shapes
-        rows = {shape_registry_id(s): indices_of(s.id()) for s in all_shapes(scene)}
+        rows = rows_by_shape(scene, lambda s: indices_of(s.id()))
         rows = {k: v for k, v in rows.items() if v != (0, 0)}
-        if not rows:
-            return cls(None)
-        values = np.zeros((max(rows) + 1, 2), np.float32)
-        for k, v in rows.items():
-            values[k] = v
-        return cls(values)
+        return cls(table_of(rows, np.float32) if rows else None)
 
     def lookup(self, si, valid) -> tuple:
         """Each lane's (object index, material index).
@@ -106,14 +88,10 @@ class IndexTable:
             Two mi.Float: the hit shape's indices, 0 where `valid` is false or the shape carries
             none.
         """
-        n = dr.width(valid)
         if self.values is None:
+            n = dr.width(valid)
             return dr.zeros(mi.Float, n), dr.zeros(mi.Float, n)
-        key = dr.reinterpret_array(mi.UInt32, si.shape)
-        inside = valid & (key < len(self.values))
-        # the values as opaque arrays: another scene's table reuses the compiled kernel
-        return tuple(dr.gather(mi.Float, mi.Float(self.values[:, c]), key, inside)
-                     for c in range(2))
+        return gather_columns(self.values, mi.Float, si, valid)
 
 
-__all__ = ["INDEX", "shape_id", "indices_of", "shape_registry_id", "IndexTable"]
+__all__ = ["INDEX", "shape_id", "indices_of", "IndexTable"]
